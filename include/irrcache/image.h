@@ -1,0 +1,69 @@
+/*
+ * irrcache/image.h — images in and out, and the error metrics every quality claim uses.
+ *
+ * An ic_image is linear RGB float, row-major, top row first, 3 floats per pixel. Reading picks the
+ * format from the file's content/extension: OpenEXR (.exr), PFM (.pfm), Radiance RGBE (.hdr), and
+ * 8-bit PNG/JPEG (sRGB, converted to linear). Writing picks the format from the extension:
+ * .exr (linear half/float RGB), .pfm, .hdr (linear), .png (exposure, then sRGB, clamped). Files are
+ * written to a temporary name and renamed, so a failed write never leaves a partial file.
+ *
+ * Ownership: ic_image_create / ic_image_read allocate pixels; ic_image_free releases them
+ * (ic_image_free on a zeroed image is a no-op).
+ */
+#ifndef IRRCACHE_IMAGE_H
+#define IRRCACHE_IMAGE_H
+
+#include "irrcache/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Linear RGB float image. */
+typedef struct ic_image {
+    int width, height;
+    float *rgb;            /* width*height*3 floats */
+} ic_image;
+
+/* Write options; zero means default. */
+typedef struct ic_image_write_options {
+    float exposure;        /* stops applied before tone mapping LDR outputs (default 0) */
+    int exr_half;          /* 1: EXR as 16-bit half, 0 (default): 32-bit float */
+} ic_image_write_options;
+
+/* Allocates a zero-filled w×h image. */
+ic_result ic_image_create(ic_image *img, int width, int height);
+/* Releases pixels and zeroes the struct. */
+void ic_image_free(ic_image *img);
+/* Reads an image (EXR, PFM, HDR, PNG, JPEG) as linear RGB. */
+ic_result ic_image_read(const char *path, ic_image *out, ic_error *err);
+/* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. */
+ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
+/* Nonzero if the extension of path is one ic_image_write knows. */
+int ic_image_is_writable_format(const char *path);
+
+/* Linear → 8-bit sRGB of one channel value after exposure scaling (clamped). */
+uint8_t ic_linear_to_srgb8(float v);
+/* 8-bit sRGB → linear. */
+float ic_srgb8_to_linear(uint8_t v);
+
+/* Error metrics of an image against a reference of the same size. */
+typedef struct ic_image_metrics {
+    double rmse;           /* root-mean-square error over all channels, linear HDR */
+    double relmse;         /* mean of (a-r)^2 / (r^2 + 0.01) over all channels (pbrt/Rousselle convention) */
+    double psnr_hdr;       /* 10 log10(peak^2 / MSE), peak = max reference channel value, linear HDR */
+    double psnr_ldr;       /* PSNR of the 8-bit sRGB images (peak 255), as the seeds report */
+    double ssim;           /* mean SSIM of the luma of the 8-bit sRGB images (8×8 windows, Wang et al. 2004 constants) */
+} ic_image_metrics;
+
+/* Compares img against ref (same size) and fills m. */
+ic_result ic_image_compare(const ic_image *img, const ic_image *ref, ic_image_metrics *m, ic_error *err);
+
+/* False-colour map of per-pixel relative error |a-r| / (|r| + 0.01) (luma), 0 → blue … ≥ max_err → red
+ * (max_err 0 = the 99th percentile); written into out (allocated). */
+ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,33 @@
+/*
+ * atomic_file.h — write a file under a temporary name and rename it into place.
+ *
+ * Nothing is ever left half-written: readers see either the old file or the complete new one.
+ * Usage: ic_atomic_file f; ic_atomic_file_open(&f, path, err) → write to f.fp →
+ * ic_atomic_file_commit(&f, err) (flushes, checks for write errors, renames) or
+ * ic_atomic_file_abort(&f) (removes the temporary file).
+ */
+#ifndef IC_CORE_ATOMIC_FILE_H
+#define IC_CORE_ATOMIC_FILE_H
+
+#include "irrcache/common.h"
+
+#include <stdio.h>
+
+typedef struct ic_atomic_file {
+    FILE *fp;              /* write here */
+    char path[4096];       /* final destination */
+    char tmp_path[4096];   /* temporary sibling: <path>.tmp.<pid>.<n> */
+} ic_atomic_file;
+
+/* Opens a temporary file beside path for binary writing. */
+ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err);
+/* Closes the temporary file and renames it to path; on any error removes it and reports. */
+ic_result ic_atomic_file_commit(ic_atomic_file *f, ic_error *err);
+/* Closes and removes the temporary file. Safe to call twice. */
+void ic_atomic_file_abort(ic_atomic_file *f);
+/* Builds a temporary sibling name for path (for writers that need a path, not a FILE*). */
+void ic_atomic_temp_name(const char *path, char *out, size_t out_size);
+/* Renames tmp to path, removing tmp on failure. */
+ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err);
+
+#endif

@@ -1,0 +1,61 @@
+/*
+ * sampling.h — warps from the unit square to directions and points, with their pdfs and inverses.
+ *
+ * Each warp has an inverse so tests can check warp(inverse(x)) = x, and a pdf that integrates to 1
+ * (tests/unit/test_sampling.c). Formulas: Shirley & Chiu 1997 (concentric disk), Malley's method for
+ * the cosine hemisphere, Pharr/Jakob/Humphreys PBR 3rd ed. §13.6 for the others.
+ */
+#ifndef IC_CORE_SAMPLING_H
+#define IC_CORE_SAMPLING_H
+
+#include "vecmath.h"
+
+/* Concentric map of [0,1)^2 onto the unit disk. */
+ic_vec3 ic_warp_concentric_disk(float u1, float u2);
+/* Inverse of the concentric map (disk point (x, y) → square). */
+void ic_warp_concentric_disk_inv(ic_vec3 p, float *u1, float *u2);
+
+/* Cosine-weighted hemisphere about +z; pdf = cos(theta)/pi. */
+ic_vec3 ic_warp_cosine_hemisphere(float u1, float u2);
+float ic_warp_cosine_hemisphere_pdf(ic_vec3 d);
+void ic_warp_cosine_hemisphere_inv(ic_vec3 d, float *u1, float *u2);
+
+/* Uniform hemisphere about +z; pdf = 1/(2 pi). */
+ic_vec3 ic_warp_uniform_hemisphere(float u1, float u2);
+float ic_warp_uniform_hemisphere_pdf(ic_vec3 d);
+void ic_warp_uniform_hemisphere_inv(ic_vec3 d, float *u1, float *u2);
+
+/* Uniform sphere; pdf = 1/(4 pi). */
+ic_vec3 ic_warp_uniform_sphere(float u1, float u2);
+float ic_warp_uniform_sphere_pdf(ic_vec3 d);
+void ic_warp_uniform_sphere_inv(ic_vec3 d, float *u1, float *u2);
+
+/* Normalized Phong lobe cos^n about +z; pdf = (n+1)/(2 pi) cos^n(theta). */
+ic_vec3 ic_warp_phong_lobe(float u1, float u2, float exponent);
+float ic_warp_phong_lobe_pdf(ic_vec3 d, float exponent);
+void ic_warp_phong_lobe_inv(ic_vec3 d, float exponent, float *u1, float *u2);
+
+/* Uniform barycentrics (b1, b2) on a triangle (Heitz 2019 low-distortion map is not needed here:
+ * the square-root parameterisation, PBR §13.6.4); b0 = 1 - b1 - b2. */
+void ic_warp_triangle(float u1, float u2, float *b1, float *b2);
+void ic_warp_triangle_inv(float b1, float b2, float *u1, float *u2);
+
+/* Balance-free power heuristic (beta = 2) for MIS with one sample from each strategy. */
+static inline float ic_power_heuristic(float pdf_a, float pdf_b)
+{
+    float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
+    return (a + b) > 0.0f ? a / (a + b) : 0.0f;
+}
+
+/* Radical inverse base 2 (van der Corput), for Hammersley sets. */
+static inline float ic_radical_inverse2(uint32_t i)
+{
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
+    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
+    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
+    i = ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
+    return (float)(i >> 8) * (1.0f / 16777216.0f);
+}
+
+#endif

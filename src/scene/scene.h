@@ -1,0 +1,175 @@
+/*
+ * scene.h — the renderer's scene: one flattened triangle soup, materials, lights, camera, settings.
+ *
+ * Loaded from a JSON scene file (scene_json.c, cJSON) or a bare mesh (.obj .gltf .glb .ply, through
+ * assimp in mesh_import.c). Instances are flattened at load: every triangle lives in world space in
+ * the arrays below, so the accelerator (src/geom) builds one Embree geometry and a hit's primitive
+ * id indexes these arrays directly. Read-only once loaded; shared by all threads.
+ *
+ * Lights: emissive triangles (material with non-zero `emission`), point lights, a directional sun
+ * and an environment (constant radiance or an equirectangular image). Light sampling: lights.c.
+ */
+#ifndef IC_SCENE_SCENE_H
+#define IC_SCENE_SCENE_H
+
+#include "core/vecmath.h"
+#include "irrcache/common.h"
+#include "irrcache/image.h"
+
+#include <stdint.h>
+
+/* Texture: linear RGB float texels (sRGB 8-bit files are linearised at load), repeat wrap, bilinear. */
+typedef struct ic_texture {
+    char path[1024];       /* resolved path, for messages */
+    int width, height;
+    float *rgb;            /* width*height*3 */
+} ic_texture;
+
+typedef enum ic_material_type {
+    IC_MAT_DIFFUSE = 0,    /* Lambertian: kd (× texture) */
+    IC_MAT_GLOSSY,         /* Lambertian kd + normalized modified Phong lobe ks, exponent ns */
+    IC_MAT_MIRROR,         /* ideal specular reflection, tint ks */
+    IC_MAT_GLASS           /* dielectric: Fresnel-weighted ideal reflection/refraction, index ior */
+} ic_material_type;
+
+typedef struct ic_material {
+    char name[128];
+    ic_material_type type;
+    ic_vec3 kd;            /* diffuse albedo (linear RGB) */
+    int32_t kd_texture;    /* index into scene.textures, or -1 */
+    ic_vec3 ks;            /* specular albedo (glossy lobe or mirror tint) */
+    float ns;              /* Phong exponent (glossy) */
+    ic_vec3 emission;      /* emitted radiance (one-sided, along the geometric normal's side the
+                              triangle's winding gives; see `two_sided_emission`) */
+    int two_sided_emission;/* 1: emits from both sides */
+    float ior;             /* index of refraction (glass), default 1.5 */
+} ic_material;
+
+/* Emissive triangle as a light. */
+typedef struct ic_tri_light {
+    uint32_t triangle;     /* index into scene.triangles */
+    float area;
+    float power;           /* pi * area * luminance(emission) (× 2 if two-sided): selection weight */
+} ic_tri_light;
+
+typedef struct ic_point_light {
+    ic_vec3 position;
+    ic_vec3 intensity;     /* W/sr per channel (radiant intensity) */
+} ic_point_light;
+
+typedef struct ic_sun_light {
+    int enabled;
+    ic_vec3 direction;     /* unit vector from the scene towards the sun */
+    ic_vec3 irradiance;    /* irradiance on a surface facing the sun (RGB) */
+} ic_sun_light;
+
+typedef struct ic_environment {
+    int enabled;
+    ic_vec3 radiance;      /* constant radiance, or a multiplier on the image */
+    ic_image image;        /* equirectangular lat-long map (width 0 if constant); +y is up,
+                              u = 0.5 + atan2(d.x, -d.z)/(2 pi), v = acos(d.y)/pi */
+    float rotation_deg;    /* rotation about +y */
+    /* importance sampling of the image (filled at load when image.width > 0) */
+    float *marginal_cdf;   /* height+1 */
+    float *conditional_cdf;/* height*(width+1) */
+    float total_weight;    /* sum over texels of lum * sin(theta) */
+} ic_environment;
+
+typedef struct ic_camera {
+    ic_vec3 eye, target, up;
+    float fov_y_deg;       /* vertical full angle (horizontal fov is converted at load) */
+    int width, height;     /* image resolution */
+} ic_camera;
+
+/* Render settings a scene file may give; 0 means "not given" (the CLI or defaults decide). */
+typedef struct ic_scene_settings {
+    int spp;
+    int max_depth;
+    uint64_t seed;
+    float exposure;
+    int has_exposure;
+} ic_scene_settings;
+
+typedef struct ic_scene {
+    char path[1024];       /* the file it was loaded from */
+    /* geometry, world space */
+    ic_vec3 *positions;    /* vertex_count */
+    ic_vec3 *normals;      /* vertex_count, unit shading normals, or NULL (flat shading) */
+    float *uvs;            /* vertex_count*2, or NULL */
+    uint32_t vertex_count;
+    uint32_t *triangles;   /* triangle_count*3 vertex indices */
+    uint32_t *triangle_material; /* triangle_count material indices */
+    uint32_t triangle_count;
+    ic_vec3 bounds_min, bounds_max;
+    /* appearance */
+    ic_material *materials;
+    uint32_t material_count;
+    ic_texture *textures;
+    uint32_t texture_count;
+    /* lights */
+    ic_tri_light *tri_lights;
+    float *tri_light_cdf;  /* tri_light_count+1, by power */
+    uint32_t tri_light_count;
+    int32_t *triangle_light; /* triangle_count: index into tri_lights, or -1 */
+    ic_point_light *point_lights;
+    uint32_t point_light_count;
+    ic_sun_light sun;
+    ic_environment env;
+    /* view and settings */
+    ic_camera camera;
+    ic_scene_settings settings;
+} ic_scene;
+
+/* Options for loading; zero means default. */
+typedef struct ic_scene_load_options {
+    const char *shared_scenes_dir; /* where "shared:" mesh paths resolve (default: $IRRCACHE_SCENES,
+                                      else <scene dir>/../../shared/scenes … see scene_json.c) */
+    int width, height;     /* override camera resolution (0: keep) */
+} ic_scene_load_options;
+
+/* Loads a JSON scene file or a bare mesh; on failure *out is NULL and err names file:line and a fix. */
+ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_scene **out, ic_error *err);
+/* Frees a scene (NULL is a no-op). */
+void ic_scene_free(ic_scene *scene);
+
+/* --- queries used by integrators (scene_query.c / lights.c) --- */
+
+/* Surface attributes at barycentrics (u, v) of triangle tri (b0 = 1-u-v on vertex 0, u on v1, v on v2,
+ * as Embree reports them). */
+typedef struct ic_surface {
+    ic_vec3 p;             /* position */
+    ic_vec3 ng;            /* unit geometric normal (winding order) */
+    ic_vec3 ns;            /* unit shading normal (= ng if no normals), flipped to ng's side */
+    float uv[2];           /* texture coordinates (0 if none) */
+    uint32_t material;
+    uint32_t triangle;
+} ic_surface;
+
+/* Fills s for triangle tri at barycentrics (u, v). */
+void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_surface *s);
+/* Diffuse albedo at a surface (kd × texture). */
+ic_vec3 ic_scene_albedo(const ic_scene *scene, const ic_surface *s);
+/* Emitted radiance leaving surface s towards direction wo (unit, pointing away from the surface). */
+ic_vec3 ic_scene_emission(const ic_scene *scene, const ic_surface *s, ic_vec3 wo);
+/* Environment radiance arriving from direction d (unit, pointing away from the scene); 0 if none. */
+ic_vec3 ic_scene_env_radiance(const ic_scene *scene, ic_vec3 d);
+
+/* A light sample as seen from a shading point. */
+typedef struct ic_light_sample {
+    ic_vec3 wi;            /* unit direction from the point towards the light */
+    float dist;            /* distance to the light point (INFINITY for sun/environment) */
+    ic_vec3 radiance;      /* emitted radiance along -wi (area/env), or intensity/dist^2 for points,
+                              or irradiance for the sun: the integrand numerator */
+    float pdf;             /* solid-angle pdf including light selection; 0 = failed sample */
+    int is_delta;          /* point or sun: no MIS with BSDF sampling */
+} ic_light_sample;
+
+/* Samples one light for point p (u0 chooses the light, u1,u2 the point on it). */
+int ic_scene_sample_light(const ic_scene *scene, ic_vec3 p, float u0, float u1, float u2, ic_light_sample *ls);
+/* Solid-angle pdf with which ic_scene_sample_light would pick the point on emissive triangle tri seen from
+ * p along wi at distance dist (for MIS when a BSDF-sampled ray hits an emitter). */
+float ic_scene_light_pdf_triangle(const ic_scene *scene, ic_vec3 p, uint32_t tri, ic_vec3 wi, float dist);
+/* Solid-angle pdf of sampling the environment in direction wi (for MIS when a ray escapes). */
+float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
+
+#endif
