@@ -46,6 +46,10 @@ int ic_image_is_writable_format(const char *path);
 uint8_t ic_linear_to_srgb8(float v);
 /* 8-bit sRGB → linear. */
 float ic_srgb8_to_linear(uint8_t v);
+/* sRGB transfer function on [0,1] (IEC 61966-2-1), both directions; values outside [0,1] are clamped,
+ * NaN maps to 0. */
+float ic_linear_to_srgb(float v);
+float ic_srgb_to_linear(float v);
 
 /* Error metrics of an image against a reference of the same size. */
 typedef struct ic_image_metrics {
@@ -54,13 +58,16 @@ typedef struct ic_image_metrics {
     double psnr_hdr;       /* 10 log10(peak^2 / MSE), peak = max reference channel value, linear HDR */
     double psnr_ldr;       /* PSNR of the 8-bit sRGB images (peak 255), as the seeds report */
     double ssim;           /* mean SSIM of the luma of the 8-bit sRGB images (8×8 windows, Wang et al. 2004 constants) */
+    long nonfinite;        /* channel values (of img or ref) that were NaN or ±Inf; they count as 0 above */
 } ic_image_metrics;
 
-/* Compares img against ref (same size) and fills m. */
+/* Compares img against ref (same size) and fills m. Identical images give rmse 0, ssim 1 and
+ * psnr_* = +INFINITY. An all-zero reference uses peak 1 for psnr_hdr. */
 ic_result ic_image_compare(const ic_image *img, const ic_image *ref, ic_image_metrics *m, ic_error *err);
 
 /* False-colour map of per-pixel relative error |a-r| / (|r| + 0.01) (luma), 0 → blue … ≥ max_err → red
- * (max_err 0 = the 99th percentile); written into out (allocated). */
+ * (max_err 0 = the 99th percentile); written into out (allocated). The colours are linear so that an
+ * sRGB output (PNG) shows the ramp as designed; pixels where either image is NaN/Inf are magenta. */
 ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err);
 
 #ifdef __cplusplus

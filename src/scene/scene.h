@@ -15,6 +15,7 @@
 #include "core/vecmath.h"
 #include "irrcache/common.h"
 #include "irrcache/image.h"
+#include "irrcache/render.h"
 
 #include <stdint.h>
 
@@ -75,6 +76,12 @@ typedef struct ic_environment {
     float total_weight;    /* sum over texels of lum * sin(theta) */
 } ic_environment;
 
+/* Probability with which ic_scene_sample_light picks each class of light; they sum to 1 (all 0 when
+ * the scene has no light). Proportional to each class's estimated power (lights.c, docs/scene-format.md). */
+typedef struct ic_light_selection {
+    float tri, point, sun, env;
+} ic_light_selection;
+
 typedef struct ic_camera {
     ic_vec3 eye, target, up;
     float fov_y_deg;       /* vertical full angle (horizontal fov is converted at load) */
@@ -90,7 +97,7 @@ typedef struct ic_scene_settings {
     int has_exposure;
 } ic_scene_settings;
 
-typedef struct ic_scene {
+struct ic_scene {
     char path[1024];       /* the file it was loaded from */
     /* geometry, world space */
     ic_vec3 *positions;    /* vertex_count */
@@ -106,31 +113,25 @@ typedef struct ic_scene {
     uint32_t material_count;
     ic_texture *textures;
     uint32_t texture_count;
+    uint32_t dropped_degenerate; /* zero-area triangles dropped at load (not an error) */
     /* lights */
     ic_tri_light *tri_lights;
     float *tri_light_cdf;  /* tri_light_count+1, by power */
     uint32_t tri_light_count;
     int32_t *triangle_light; /* triangle_count: index into tri_lights, or -1 */
+    float tri_light_power; /* sum of tri_lights[].power */
     ic_point_light *point_lights;
+    float *point_light_cdf;/* point_light_count+1, by power 4 pi lum(intensity) */
     uint32_t point_light_count;
     ic_sun_light sun;
     ic_environment env;
+    ic_light_selection light_select; /* fixed light-class probabilities (lights.c) */
     /* view and settings */
     ic_camera camera;
     ic_scene_settings settings;
-} ic_scene;
+};
 
-/* Options for loading; zero means default. */
-typedef struct ic_scene_load_options {
-    const char *shared_scenes_dir; /* where "shared:" mesh paths resolve (default: $IRRCACHE_SCENES,
-                                      else <scene dir>/../../shared/scenes … see scene_json.c) */
-    int width, height;     /* override camera resolution (0: keep) */
-} ic_scene_load_options;
-
-/* Loads a JSON scene file or a bare mesh; on failure *out is NULL and err names file:line and a fix. */
-ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_scene **out, ic_error *err);
-/* Frees a scene (NULL is a no-op). */
-void ic_scene_free(ic_scene *scene);
+/* Loading (ic_scene_load, ic_scene_load_options, ic_scene_free) is declared in irrcache/render.h. */
 
 /* --- queries used by integrators (scene_query.c / lights.c) --- */
 

@@ -1,0 +1,349 @@
+/*
+ * render.c — `irrcache render SCENE -o OUT [options]`.
+ *
+ * Options are described once, in the table below, which drives both parsing and --help, so the help
+ * text can never fall out of step with what is accepted. Every output path is checked for a known
+ * format and a writable folder before rendering starts, so a long render is never lost to a typo.
+ */
+#include "cli.h"
+
+#include "core/atomic_file.h"
+#include "irrcache/render.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#define MAX_OUTPUTS 8
+
+typedef struct render_args {
+    const char *scene;
+    const char *outputs[MAX_OUTPUTS];
+    int output_count;
+    const char *stats_path;
+    const char *scenes_dir;
+    const char *integrator;
+    int width, height, spp, threads, max_depth;
+    long long seed;
+    int has_seed;
+    double time_budget, exposure;
+    int has_exposure;
+    int quiet;
+} render_args;
+
+typedef enum opt_kind { OPT_INT, OPT_SEED, OPT_DOUBLE, OPT_STRING, OPT_OUTPUT, OPT_FLAG } opt_kind;
+
+typedef struct opt_def {
+    const char *name;
+    const char *alias;
+    opt_kind kind;
+    size_t offset;
+    double min_value;      /* numeric options: smallest accepted value */
+    const char *value_name;
+    const char *default_text;
+    const char *help;
+} opt_def;
+
+#define OFF(f) offsetof(render_args, f)
+
+static const opt_def options[] = {
+    {"--output", "-o", OPT_OUTPUT, 0, 0, "PATH", "(required)",
+     "output image; format from the extension: .exr (linear float), .png (tone-mapped sRGB), .pfm, .hdr; repeatable"},
+    {"--width", NULL, OPT_INT, OFF(width), 1, "N", "scene file, else 512", "image width in pixels"},
+    {"--height", NULL, OPT_INT, OFF(height), 1, "N", "scene file, else 512", "image height in pixels"},
+    {"--spp", NULL, OPT_INT, OFF(spp), 1, "N", "scene file, else 16", "samples per pixel (with --time: the most to take)"},
+    {"--time", NULL, OPT_DOUBLE, OFF(time_budget), 0, "SECONDS", "none",
+     "wall-time budget: progressive passes until it is spent (equal-time comparisons)"},
+    {"--integrator", NULL, OPT_STRING, OFF(integrator), 0, "pt", "pt", "pt: path-traced reference"},
+    {"--max-depth", NULL, OPT_INT, OFF(max_depth), 1, "N", "scene file, else 8", "maximum number of bounces"},
+    {"--threads", NULL, OPT_INT, OFF(threads), 0, "N", "0 (all cores)", "worker threads; the image does not depend on it"},
+    {"--seed", NULL, OPT_SEED, OFF(seed), 0, "N", "scene file, else 1", "random seed; same seed, same image"},
+    {"--exposure", NULL, OPT_DOUBLE, OFF(exposure), -100, "STOPS", "scene file, else 0", "exposure applied to .png outputs"},
+    {"--stats", NULL, OPT_STRING, OFF(stats_path), 0, "FILE.json", "none",
+     "write run statistics: seconds, rays, rays per second, per-phase times"},
+    {"--scenes-dir", NULL, OPT_STRING, OFF(scenes_dir), 0, "DIR", "$IRRCACHE_SCENES, else ../shared/scenes",
+     "where 'shared:' mesh paths in scene files resolve"},
+    {"--quiet", "-q", OPT_FLAG, OFF(quiet), 0, NULL, "off", "no progress line"},
+    {"--help", "-h", OPT_FLAG, 0, 0, NULL, NULL, "show this help"},
+};
+#define OPTION_COUNT (sizeof options / sizeof options[0])
+
+static void print_help(FILE *f)
+{
+    fprintf(f, "usage: irrcache render SCENE -o OUT [options]\n\n"
+               "SCENE is a JSON scene file (docs/scene-format.md) or a mesh (.obj .gltf .glb .ply).\n\noptions:\n");
+    for (size_t i = 0; i < OPTION_COUNT; ++i) {
+        const opt_def *o = &options[i];
+        char left[64];
+        snprintf(left, sizeof left, "%s%s%s%s%s", o->alias ? o->alias : "", o->alias ? ", " : "", o->name,
+                 o->value_name ? " " : "", o->value_name ? o->value_name : "");
+        fprintf(f, "  %-26s %s", left, o->help);
+        if (o->default_text)
+            fprintf(f, " [default: %s]", o->default_text);
+        fputc('\n', f);
+    }
+}
+
+static const opt_def *find_option(const char *arg)
+{
+    for (size_t i = 0; i < OPTION_COUNT; ++i)
+        if (!strcmp(arg, options[i].name) || (options[i].alias && !strcmp(arg, options[i].alias)))
+            return &options[i];
+    return NULL;
+}
+
+/* Returns 0 on success, 2 on a usage error (message printed), -1 for --help. */
+static int parse_args(int argc, char **argv, render_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->integrator = "pt";
+    for (int i = 1; i < argc; ++i) {
+        const char *arg = argv[i];
+        if (arg[0] != '-' || !arg[1]) {
+            if (a->scene) {
+                fprintf(stderr, "irrcache render: unexpected argument '%s'; give one scene file\n", arg);
+                return 2;
+            }
+            a->scene = arg;
+            continue;
+        }
+        const opt_def *o = find_option(arg);
+        if (!o) {
+            fprintf(stderr, "irrcache render: unknown option '%s'; see irrcache render --help\n", arg);
+            return 2;
+        }
+        if (!strcmp(o->name, "--help"))
+            return -1;
+        char *field = (char *)a + o->offset;
+        if (o->kind == OPT_FLAG) {
+            *(int *)field = 1;
+            continue;
+        }
+        if (i + 1 >= argc) {
+            fprintf(stderr, "irrcache render: %s needs a value (%s)\n", o->name, o->value_name);
+            return 2;
+        }
+        const char *val = argv[++i];
+        char *end = NULL;
+        errno = 0;
+        switch (o->kind) {
+        case OPT_INT:
+        case OPT_SEED: {
+            long long v = strtoll(val, &end, 10);
+            if (errno || !*val || *end || v < (long long)o->min_value || (o->kind == OPT_INT && v > 1000000000LL)) {
+                fprintf(stderr, "irrcache render: %s %s: expected an integer >= %g\n", o->name, val, o->min_value);
+                return 2;
+            }
+            if (o->kind == OPT_SEED) {
+                *(long long *)field = v;
+                a->has_seed = 1;
+            } else {
+                *(int *)field = (int)v;
+            }
+            break;
+        }
+        case OPT_DOUBLE: {
+            double v = strtod(val, &end);
+            if (errno || !*val || *end || !isfinite(v) || v < o->min_value) {
+                fprintf(stderr, "irrcache render: %s %s: expected a number >= %g\n", o->name, val, o->min_value);
+                return 2;
+            }
+            *(double *)field = v;
+            if (o->offset == OFF(exposure))
+                a->has_exposure = 1;
+            break;
+        }
+        case OPT_STRING:
+            *(const char **)field = val;
+            break;
+        case OPT_OUTPUT:
+            if (a->output_count == MAX_OUTPUTS) {
+                fprintf(stderr, "irrcache render: at most %d outputs\n", MAX_OUTPUTS);
+                return 2;
+            }
+            a->outputs[a->output_count++] = val;
+            break;
+        case OPT_FLAG:
+            break;
+        }
+    }
+    if (!a->scene) {
+        fprintf(stderr, "irrcache render: no scene given; usage: irrcache render SCENE -o OUT (see --help)\n");
+        return 2;
+    }
+    if (a->output_count == 0) {
+        fprintf(stderr, "irrcache render: no output given; add -o out.exr (or .png, .pfm, .hdr)\n");
+        return 2;
+    }
+    for (int i = 0; i < a->output_count; ++i) {
+        if (!ic_image_is_writable_format(a->outputs[i])) {
+            fprintf(stderr, "irrcache render: %s: unknown image format; use .exr, .png, .pfm or .hdr\n", a->outputs[i]);
+            return 2;
+        }
+    }
+    if (strcmp(a->integrator, "pt") != 0) {
+        fprintf(stderr, "irrcache render: --integrator %s: unknown integrator; use pt\n", a->integrator);
+        return 2;
+    }
+    return 0;
+}
+
+/* Fails early (before a long render) if path's folder cannot take a new file. */
+static int check_writable(const char *path)
+{
+    ic_atomic_file f;
+    ic_error err;
+    if (ic_atomic_file_open(&f, path, &err) != IC_OK) {
+        fprintf(stderr, "irrcache render: %s\n", err.message);
+        return 0;
+    }
+    ic_atomic_file_abort(&f);
+    return 1;
+}
+
+typedef struct progress_state {
+    int enabled;
+    double start, last;
+    const char *last_phase;
+} progress_state;
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void on_progress(void *user, const char *phase, double fraction)
+{
+    progress_state *p = user;
+    if (!p->enabled)
+        return;
+    double t = now_seconds();
+    int new_phase = p->last_phase != phase;
+    if (!new_phase && t - p->last < 0.1 && fraction < 1.0)
+        return;
+    p->last = t;
+    p->last_phase = phase;
+    double el = t - p->start;
+    if (fraction > 0.0 && fraction <= 1.0) {
+        double eta = el / fraction - el;
+        fprintf(stderr, "\r%-16s %5.1f%%  elapsed %6.1fs  ETA %6.1fs ", phase, 100.0 * fraction, el, eta);
+    } else {
+        fprintf(stderr, "\r%-16s  elapsed %6.1fs ", phase, el);
+    }
+    fflush(stderr);
+}
+
+static int write_stats(const char *path, const render_args *a, int w, int h, const ic_render_stats *st)
+{
+    ic_atomic_file f;
+    ic_error err;
+    if (ic_atomic_file_open(&f, path, &err) != IC_OK) {
+        fprintf(stderr, "irrcache render: %s\n", err.message);
+        return 0;
+    }
+    FILE *o = f.fp;
+    fprintf(o, "{\n  \"scene\": \"");
+    for (const char *c = a->scene; *c; ++c) {
+        if (*c == '"' || *c == '\\')
+            fputc('\\', o);
+        fputc(*c, o);
+    }
+    fprintf(o, "\",\n  \"integrator\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n", a->integrator, w, h);
+    fprintf(o, "  \"spp\": %d,\n  \"threads\": %d,\n  \"seconds\": %.6f,\n  \"rays\": %llu,\n", st->spp, st->threads,
+            st->seconds, (unsigned long long)st->rays);
+    fprintf(o, "  \"rays_per_second\": %.1f,\n  \"phases\": {", st->rays_per_second);
+    for (int i = 0; i < st->phase_count; ++i)
+        fprintf(o, "%s\"%s\": %.6f", i ? ", " : "", st->phases[i].name, st->phases[i].seconds);
+    fprintf(o, "}\n}\n");
+    if (ic_atomic_file_commit(&f, &err) != IC_OK) {
+        fprintf(stderr, "irrcache render: %s\n", err.message);
+        return 0;
+    }
+    return 1;
+}
+
+int ic_cli_render(int argc, char **argv)
+{
+    render_args a;
+    int rc = parse_args(argc, argv, &a);
+    if (rc == -1) {
+        print_help(stdout);
+        return 0;
+    }
+    if (rc)
+        return rc;
+    for (int i = 0; i < a.output_count; ++i)
+        if (!check_writable(a.outputs[i]))
+            return 1;
+    if (a.stats_path && !check_writable(a.stats_path))
+        return 1;
+
+    progress_state prog = {0};
+    prog.enabled = !a.quiet && isatty(fileno(stderr));
+    prog.start = now_seconds();
+
+    ic_error err = {0};
+    ic_scene_load_options lo = {0};
+    lo.shared_scenes_dir = a.scenes_dir;
+    lo.width = a.width;
+    lo.height = a.height;
+    ic_scene *scene = NULL;
+    double t_load = now_seconds();
+    if (ic_scene_load(a.scene, &lo, &scene, &err) != IC_OK) {
+        fprintf(stderr, "irrcache render: %s\n", err.message);
+        return 1;
+    }
+    t_load = now_seconds() - t_load;
+
+    ic_render_options opt = {0};
+    opt.integrator = IC_INTEGRATOR_PT;
+    opt.spp = a.spp;
+    opt.max_depth = a.max_depth;
+    opt.threads = a.threads;
+    opt.seed = (uint64_t)a.seed;
+    opt.has_seed = a.has_seed;
+    opt.time_budget = a.time_budget;
+    opt.progress = on_progress;
+    opt.progress_user = &prog;
+    ic_image img = {0};
+    ic_render_stats st;
+    ic_result r = ic_render(scene, &opt, &img, &st, &err);
+    if (prog.enabled)
+        fputc('\n', stderr);
+    if (r != IC_OK) {
+        fprintf(stderr, "irrcache render: %s: %s\n", a.scene, err.message);
+        ic_scene_free(scene);
+        return 1;
+    }
+    /* Loading counts as a phase of the run too. */
+    if (st.phase_count < IC_MAX_PHASES) {
+        memmove(&st.phases[1], &st.phases[0], sizeof st.phases[0] * (size_t)st.phase_count);
+        st.phases[0].name = "load";
+        st.phases[0].seconds = t_load;
+        ++st.phase_count;
+    }
+    int w = img.width, h = img.height;
+    ic_image_write_options wo = {0};
+    wo.exposure = a.has_exposure ? (float)a.exposure : ic_scene_exposure(scene);
+    int ok = 1;
+    for (int i = 0; i < a.output_count && ok; ++i) {
+        if (ic_image_write(a.outputs[i], &img, &wo, &err) != IC_OK) {
+            fprintf(stderr, "irrcache render: %s\n", err.message);
+            ok = 0;
+        }
+    }
+    ic_image_free(&img);
+    ic_scene_free(scene);
+    if (ok && a.stats_path)
+        ok = write_stats(a.stats_path, &a, w, h, &st);
+    if (ok && !a.quiet)
+        fprintf(stderr, "irrcache: %dx%d, %d spp, %.2fs, %.2f Mrays/s\n", w, h, st.spp, st.seconds,
+                st.rays_per_second * 1e-6);
+    return ok ? 0 : 1;
+}

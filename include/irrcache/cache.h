@@ -1,0 +1,218 @@
+/*
+ * irrcache/cache.h — the irradiance cache: records, weights, interpolation, radius clamps, a
+ * multiple-reference octree, point queries over record positions, and the cache file.
+ *
+ * The cache depends on nothing but the C library and irrcache's core (no Embree, no scene), so any
+ * renderer, light-map baker or engine can embed it. Methods and where they come from:
+ *   - weights and interpolation: seed 000 (Křivánek et al. 2006) §3, eq. 1; Tabellion–Lamorlette 2004;
+ *   - gradient-magnitude clamping: seed 000 §5.1, eq. 2;  neighbor clamping: seed 000 §5.2;
+ *   - validity-radius clamping and the multiple-reference octree with stackless look-up:
+ *     seed 004 (Frolov et al. 2012) §4.2–4.3;
+ *   - gradient-difference scaling: seed 003 (Castaño 2014).
+ *
+ * USAGE
+ *   1. ic_cache_params params = {0};            zero means default for every field
+ *      params.accuracy = 0.15f;                 set only what you need
+ *   2. ic_cache *cache; ic_cache_create(&params, &cache, &err);
+ *   3. Fill ic_record values (position, normal, tangent, irradiance, gradients,
+ *      harmonic_mean_dist, optionally sigma, pixel_footprint, accuracy, bounce) and insert them:
+ *      ic_cache_insert (one record: lazy caching) or ic_cache_insert_batch (many: batch caching).
+ *      Insertion applies the radius clamps (see "Clamps" below) and fills record.radius.
+ *   4. Look up: ic_cache_lookup q = {.position = p, .normal = n}; ic_cache_estimate e;
+ *      if (ic_cache_query(cache, &q, &e)) use e.irradiance, else gather a new record.
+ *      For the final render set q.acceptance = IC_ACCEPT_FINAL (looser, final_accuracy_scale).
+ *   5. Optionally ic_cache_save(cache, path, scene_hash, &err); later ic_cache_load(path, &params,
+ *      scene_hash, &cache, &err) refuses files made for another scene or other parameters.
+ *   6. ic_cache_destroy(cache).
+ *
+ * OWNERSHIP AND THREADS
+ *   The caller that creates a cache destroys it; destroy(NULL) is a no-op. Records are copied in and
+ *   out; records are referenced by uint32_t index (insertion order), never by pointer. Queries
+ *   (ic_cache_query, _knn, _radius_query, _get_record …) are const and may run concurrently from any
+ *   number of threads; insertion and the record setters must not overlap any other call on the same
+ *   cache. No call allocates on the query path; none prints or exits.
+ *
+ * RADII
+ *   R_i (record.radius) is the clamped harmonic-mean distance used in the weights. The influence
+ *   radius — the sphere outside which a record never contributes — is a_i·R_i for both weights:
+ *   Ward, w_i > 1/a_i  ⇒  |p−p_i|/R_i < a_i;  Tabellion–Lamorlette with κ_i = 1/a_i, w_i > 0 ⇒
+ *   |p−p_i|/R_i < 1/κ_i = a_i. With IC_ACCEPT_FINAL both use s·a_i (s = final_accuracy_scale).
+ *
+ * CLAMPS (applied in this order, every step deterministic and independent of the thread count)
+ *   1. per record: R := harmonic_mean_dist; gradient-magnitude clamp (seed 000 eq. 2, on luminance:
+ *      if |∇t Y|/Y > 1/R then R := Y/|∇t Y|); then R bounds: R := clamp(R, lo, hi) with
+ *      lo = max(min_radius, min_radius_pixels·footprint), hi = min(max_radius,
+ *      max_radius_pixels·footprint). The R_min floor is the only step that can raise R.
+ *   2. validity-radius clamp (seed 004 §4.2): influence radius ≤ distance to the farthest of the k
+ *      nearest records in distinct tangent-plane directions (new records only).
+ *   3. gradient-difference scaling (seed 003): shrink pairs whose luminance gradients differ.
+ *   4. neighbor clamping (seed 000 §5.2), to a fixed point: |R_i − R_j| ≤ |p_i − p_j| for every pair
+ *      within reach.
+ *   Two records i, j are "within reach" when |p_i − p_j| < max(a_i·R_i, a_j·R_j): one's position
+ *   lies inside the other's (construction) influence sphere. Steps 2–4 only ever shrink radii, of new
+ *   and existing records alike.
+ */
+#ifndef IRRCACHE_CACHE_H
+#define IRRCACHE_CACHE_H
+
+#include "irrcache/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Opaque cache handle: records, octree, point index. */
+typedef struct ic_cache ic_cache;
+
+/* Weighting function of the interpolation. */
+typedef enum ic_weight_kind {
+    IC_WEIGHT_WARD = 0,       /* w = 1 / (|p−p_i|/R_i + sqrt(1 − n·n_i)), accept w > 1/a_i (seed 000 §3) */
+    IC_WEIGHT_TABELLION = 1   /* w = 1 − κ_i·max(|p−p_i|/R_i, sqrt(1−n·n_i)/sqrt(1−cos 10°)), κ_i = 1/a_i, accept w > 0 */
+} ic_weight_kind;
+
+/* A switch where zero keeps the documented default. */
+typedef enum ic_cache_switch {
+    IC_CACHE_DEFAULT = 0,     /* the field's documented default */
+    IC_CACHE_ON = 1,          /* enabled */
+    IC_CACHE_OFF = 2          /* disabled */
+} ic_cache_switch;
+
+/* Cache options. Zero means default in every field. */
+typedef struct ic_cache_params {
+    ic_weight_kind weight;            /* default Ward */
+    float accuracy;                   /* a: default 0.2 (Ward), 1.0 (Tabellion–Lamorlette, κ = 1/a = 1) */
+    float final_accuracy_scale;       /* s ≥ 1: final render accepts with s·a_i; default 1 */
+    float behind_tolerance;           /* ε of the behind test as a fraction of a_i·R_i; default 0.05 */
+    float min_radius;                 /* R floor in world units; default 0 (none) */
+    float max_radius;                 /* R ceiling in world units; default +inf (none) */
+    float min_radius_pixels;          /* R floor in primary-hit pixel footprints; default 0 (none) */
+    float max_radius_pixels;          /* R ceiling in primary-hit pixel footprints; default 0 (none) */
+    ic_cache_switch gradient_clamp;   /* seed 000 §5.1 eq. 2; default on */
+    ic_cache_switch neighbor_clamp;   /* seed 000 §5.2; default on */
+    ic_cache_switch validity_clamp;   /* seed 004 §4.2; default on */
+    uint32_t validity_k;              /* neighbours in distinct directions, 1…16; default 6 */
+    float validity_angle_deg;         /* minimum angle between taken directions; default 30 */
+    ic_cache_switch gradient_difference; /* seed 003; default off */
+    float gradient_difference_threshold; /* τ of the criterion (see cache_clamp.c); default 0.1 */
+    uint32_t leaf_capacity;           /* octree: split leaves holding more refs than this; default 12 */
+    uint32_t max_depth;               /* octree depth limit, ≤ 32; default 20 */
+    int threads;                      /* threads for batch insertion; default all cores */
+} ic_cache_params;
+
+/* Record flags. */
+enum {
+    IC_RECORD_DISABLED = 1u << 0      /* never contributes to look-ups (kept for indices and files) */
+};
+
+/* One irradiance record (public, copied in and out; the cache stores it split hot/cold). */
+typedef struct ic_record {
+    ic_vec3 position;                 /* p_i, world space */
+    ic_vec3 normal;                   /* n_i, unit (normalised on insertion) */
+    ic_vec3 tangent;                  /* first tangent of the record frame; bitangent = n × t */
+    ic_vec3 irradiance;               /* E_i, RGB */
+    ic_vec3 grad_rot[3];              /* ∇r E_i per channel (R, G, B): world-space vectors */
+    ic_vec3 grad_trans[3];            /* ∇t E_i per channel (R, G, B): world-space vectors */
+    ic_vec3 sigma;                    /* Monte Carlo σ of E_i per channel (seed 000 §4.3), 0 if unknown */
+    float harmonic_mean_dist;         /* R from hemisphere sampling (> 0): input of the clamps */
+    float radius;                     /* R_i after clamping: output (ignored on insertion) */
+    float accuracy;                   /* a_i; 0 on insertion means params.accuracy */
+    float pixel_footprint;            /* world size of one pixel at the primary hit; 0 = unknown */
+    uint32_t change_count;            /* times a_i or R_i changed after insertion */
+    uint8_t bounce;                   /* bounce level the record serves (0 = first indirect bounce) */
+    uint8_t flags;                    /* IC_RECORD_* */
+} ic_record;
+
+/* Which acceptance a look-up uses. */
+typedef enum ic_cache_acceptance {
+    IC_ACCEPT_CONSTRUCTION = 0,       /* w_i > 1/a_i (Ward) or w_i > 0 (T–L): decides whether to gather */
+    IC_ACCEPT_FINAL = 1               /* looser: a_i scaled by final_accuracy_scale */
+} ic_cache_acceptance;
+
+/* One record's contribution to a look-up (for adaptive caching: weights, values, σ via the index). */
+typedef struct ic_cache_contribution {
+    uint32_t record;                  /* record index */
+    float weight;                     /* w_i(p) */
+    ic_vec3 value;                    /* E_i extrapolated to p with both gradients, clamped ≥ 0 */
+} ic_cache_contribution;
+
+/* A look-up request. */
+typedef struct ic_cache_lookup {
+    ic_vec3 position;                 /* p */
+    ic_vec3 normal;                   /* n, unit */
+    ic_cache_acceptance acceptance;   /* construction (default) or final */
+    uint32_t bounce;                  /* only records of this bounce level contribute */
+    ic_cache_contribution *contributions; /* optional caller buffer, NULL for none */
+    uint32_t contribution_capacity;   /* entries available in contributions */
+} ic_cache_lookup;
+
+/* A look-up result. */
+typedef struct ic_cache_estimate {
+    ic_vec3 irradiance;               /* Σ w_i E_i(p) / Σ w_i; zero when no record contributes */
+    float weight_sum;                 /* Σ w_i */
+    uint32_t contributor_count;       /* |S| (may exceed contributions_written) */
+    uint32_t contributions_written;   /* entries written to lookup.contributions */
+    uint32_t records_tested;          /* references examined (leaf length; cost diagnostics) */
+} ic_cache_estimate;
+
+/* Fills out with params where every zero field is replaced by its default; checks ranges. */
+ic_result ic_cache_params_resolve(const ic_cache_params *params, ic_cache_params *out, ic_error *err);
+
+/* Creates an empty cache (params may be NULL for all defaults). */
+ic_result ic_cache_create(const ic_cache_params *params, ic_cache **out, ic_error *err);
+/* Frees a cache and everything it owns; NULL is a no-op. */
+void ic_cache_destroy(ic_cache *cache);
+
+/* The resolved parameters the cache runs with. */
+const ic_cache_params *ic_cache_get_params(const ic_cache *cache);
+/* Number of records. */
+uint32_t ic_cache_count(const ic_cache *cache);
+/* Bytes of record storage per record (hot + cold arrays; octree references not included). */
+size_t ic_cache_bytes_per_record(void);
+/* Bytes the cache holds now: records, octree nodes and references, point index. */
+size_t ic_cache_memory_bytes(const ic_cache *cache);
+
+/* Inserts one record (clamps as documented above); its index goes to *out_index (may be NULL). */
+ic_result ic_cache_insert(ic_cache *cache, const ic_record *record, uint32_t *out_index, ic_error *err);
+/* Inserts count records as one batch; they get indices first…first+count−1 in array order.
+ * All-or-nothing: an invalid record leaves the cache unchanged. */
+ic_result ic_cache_insert_batch(ic_cache *cache, const ic_record *records, uint32_t count, uint32_t *out_first,
+                                ic_error *err);
+
+/* Interpolates at q->position; returns 1 if at least one record contributes, else 0. */
+int ic_cache_query(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);
+/* Same result as ic_cache_query by a linear scan over all records: the O(N) reference for tests. */
+int ic_cache_query_linear(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);
+
+/* Copies record index into *out; IC_ERR_INVALID_ARG if index ≥ count. */
+ic_result ic_cache_get_record(const ic_cache *cache, uint32_t index, ic_record *out);
+/* Lowers a_i of record index (adaptive caching); raising it is refused. Counts a change. */
+ic_result ic_cache_set_record_accuracy(ic_cache *cache, uint32_t index, float accuracy);
+/* Sets or clears IC_RECORD_* flags of record index. */
+ic_result ic_cache_set_record_flags(ic_cache *cache, uint32_t index, uint8_t flags);
+/* Rebuilds the octree from the current radii (they only shrink, so references go stale-large). */
+ic_result ic_cache_rebuild_index(ic_cache *cache, ic_error *err);
+
+/* k nearest record positions to p, nearest first (ties by index); returns how many (≤ k) were
+ * written to indices and (if non-NULL) squared distances; with dist2 NULL, k is capped at 256. */
+uint32_t ic_cache_knn(const ic_cache *cache, ic_vec3 p, uint32_t k, uint32_t *indices, float *dist2);
+/* Records with |p_i − p| < radius; writes up to capacity indices and returns the total number
+ * (call again with a larger buffer when the result exceeds capacity). */
+uint32_t ic_cache_radius_query(const ic_cache *cache, ic_vec3 p, float radius, uint32_t *indices,
+                               uint32_t capacity);
+
+/* Writes the cache to path atomically: magic, version, parameters, scene hash, records, checksum. */
+ic_result ic_cache_save(const ic_cache *cache, const char *path, uint64_t scene_hash, ic_error *err);
+/* Reads a cache file. Refuses (with a one-line message naming the file): wrong magic (IC_ERR_PARSE),
+ * other format version or other scene hash or other parameters (IC_ERR_MISMATCH), truncation or a
+ * bad checksum (IC_ERR_CORRUPT). params may be NULL for defaults. */
+ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_t scene_hash, ic_cache **out,
+                        ic_error *err);
+
+/* FNV-1a 64-bit hash of bytes, continuing from h (start with IC_FNV64_OFFSET); for scene hashes too. */
+uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size);
+#define IC_FNV64_OFFSET 0xcbf29ce484222325ULL
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,139 @@
+/*
+ * irrcache/gather.h — hemisphere gathering for irradiance-cache records (DESIGN.md §6).
+ *
+ * Given a shading point (position, unit normal, a 64-bit record key), a gather samples the
+ * cosine-weighted hemisphere, traces the rays through a caller-supplied callback, and returns the
+ * irradiance E, its rotational and translational gradients, the harmonic-mean and minimum hit
+ * distances, and a Monte Carlo error estimate σ. Two samplers:
+ *
+ *   - stratified  : M×N jittered strata, Ward & Heckbert 1992 gradients, translational gradient in the
+ *                   original WH92 form or the improved Křivánek et al. 2005 form (default);
+ *   - progressive : Hammersley point sets in rounds (4096 → 16384 → 65536 rays by default) until the
+ *                   odd/even estimates agree (seed 004 §4.1, seed 000 §4.3); many points per call, only
+ *                   the still-active ones are traced in each round.
+ *
+ * The library knows nothing about geometry: it calls ic_trace_fn with batches of rays and reads back
+ * hit distances and incoming radiance. Everything random is a pure function of (opts.seed, point key,
+ * round), so results never depend on the thread count, on how points are split into calls, or on
+ * the batch size the callback sees.
+ *
+ * Usage:
+ *     ic_gather_opts o = {0};                      // zero means default everywhere
+ *     ic_gatherer *g;
+ *     if (ic_gatherer_create(&o, my_trace, my_scene, &g, &err) != IC_OK) ...
+ *     ic_gather_point pt = {position, normal, key};
+ *     ic_gather_result r;
+ *     ic_gather_stratified(g, &pt, &r);             // or ic_gather_progressive(g, pts, n, results)
+ *     ic_gatherer_destroy(g);
+ * or, for many points on several threads, ic_gather_batch(&o, my_trace, my_scene, 0, pts, n, results, &err).
+ *
+ * Ownership and threads: the creator destroys; ic_gatherer_destroy(NULL) is a no-op. A gatherer owns
+ * its scratch buffers (sized once at creation: no allocation per ray, one small allocation per
+ * progressive call) and is used by one thread at a time; use one gatherer per thread. `user` is
+ * borrowed and must outlive the gatherer. The trace callback must be safe to call from several
+ * threads at once when ic_gather_batch runs with more than one thread.
+ *
+ * Units and conventions: irradiance is ∫ L cosθ dω over the hemisphere (a uniform sky of radiance L
+ * gives E = πL). Gradients are world-space vectors, one per colour channel: grad[c] is the gradient of
+ * channel c (0 = R, 1 = G, 2 = B). They are meant for the interpolation of DESIGN.md §4:
+ *     E_c(p, n) ≈ E_c + (n_i × n) · rot_grad[c] + (p − p_i) · trans_grad[c].
+ */
+#ifndef IRRCACHE_GATHER_H
+#define IRRCACHE_GATHER_H
+
+#include "irrcache/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Traces `count` rays (origins[i] + t·dirs[i], t > 0, dirs unit length). For each ray writes the hit
+ * distance to hit_dist[i] (INFINITY on a miss; values <= 0 or NaN are treated as misses) and the
+ * incoming RGB radiance along the ray to radiance[i] (non-finite values are treated as black). */
+typedef void (*ic_trace_fn)(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count,
+                            float *hit_dist, ic_vec3 *radiance);
+
+/* Which hemisphere sampler a gatherer uses by default (ic_gather_batch). */
+typedef enum ic_gather_method {
+    IC_GATHER_STRATIFIED = 0,   /* M×N jittered cosine-weighted strata (default) */
+    IC_GATHER_PROGRESSIVE = 1   /* Hammersley rounds with odd/even convergence (seed 004 §4.1) */
+} ic_gather_method;
+
+/* Which formula estimates the translational gradient from the stratified cells. */
+typedef enum ic_gather_tgrad {
+    IC_GATHER_TGRAD_IMPROVED = 0,     /* Křivánek, Gautron, Bouatouch, Pattanaik 2005 (default) */
+    IC_GATHER_TGRAD_WARD_HECKBERT = 1 /* Ward & Heckbert 1992 (original form; for comparison) */
+} ic_gather_tgrad;
+
+/* Gather options; zero means default for every field. */
+typedef struct ic_gather_opts {
+    ic_gather_method method;       /* sampler used by ic_gather_batch (default stratified) */
+    uint64_t seed;                 /* global seed, combined with each point's key (default 0) */
+    uint32_t theta_strata;         /* stratified: M, strata in sin²θ (default 16) */
+    uint32_t phi_strata;           /* stratified: N, strata in φ (default round(π·M)) */
+    ic_gather_tgrad tgrad;         /* translational-gradient formula (default improved) */
+    uint32_t first_round_rays;     /* progressive: rays of round 0, a power of two ≥ 64 (default 4096) */
+    uint32_t max_rays;             /* progressive: rays of the last round, a power of two (default 65536);
+                                      rounds are independent sets, so a point that never converges
+                                      traces 4096 + 16384 + 65536 = 86016 rays by default */
+    uint32_t round_growth;         /* progressive: ray-count factor per round, a power of two ≥ 2 (default 4) */
+    float threshold;               /* progressive: stop when |Y_odd − Y_even| / Y < threshold
+                                      (default 0.02; negative: never stop early) */
+    uint32_t batch_rays;           /* most rays handed to one trace call (default 4096; rounded down to a
+                                      multiple of 32 so coherent groups stay whole) */
+} ic_gather_opts;
+
+/* A point to gather at. */
+typedef struct ic_gather_point {
+    ic_vec3 position;              /* ray origin (offset it off the surface, or let the tracer skip self-hits) */
+    ic_vec3 normal;                /* unit surface normal; the hemisphere is around it */
+    uint64_t key;                  /* record key (e.g. candidate index or pixel): seeds all its random numbers */
+} ic_gather_point;
+
+/* What one gather returns. */
+typedef struct ic_gather_result {
+    ic_vec3 irradiance;            /* E, RGB */
+    ic_vec3 rot_grad[3];           /* rotational gradient per channel (world space, ⟂ normal) */
+    ic_vec3 trans_grad[3];         /* translational gradient per channel (world space, ⟂ normal) */
+    float harmonic_mean_dist;      /* n / Σ_hits 1/d_i over all n rays: a miss counts as d = ∞ and adds 0
+                                      to the sum; INFINITY if no ray hit */
+    float min_dist;                /* smallest hit distance; INFINITY if no ray hit */
+    ic_vec3 sigma;                 /* σ = |E − E'| per channel, E' from half of the rays (seed 000 §4.3) */
+    uint32_t ray_count;            /* rays traced for this point (all rounds) */
+    uint32_t hit_count;            /* rays that hit something */
+    int is_converged;              /* progressive: 1 if it stopped on the threshold, 0 if it hit max_rays;
+                                      stratified: always 1 */
+} ic_gather_result;
+
+/* Opaque per-thread gatherer: resolved options, trace callback, scratch buffers. */
+typedef struct ic_gatherer ic_gatherer;
+
+/* Creates a gatherer (opts may be NULL: all defaults). Fails with IC_ERR_INVALID_ARG on bad options
+ * (non-power-of-two round sizes, more than 2^24 rays per round…) and IC_ERR_OOM. */
+ic_result ic_gatherer_create(const ic_gather_opts *opts, ic_trace_fn trace, void *user, ic_gatherer **out,
+                             ic_error *err);
+/* Releases a gatherer; NULL is a no-op. */
+void ic_gatherer_destroy(ic_gatherer *g);
+/* The options in effect, defaults filled in. */
+const ic_gather_opts *ic_gatherer_opts(const ic_gatherer *g);
+
+/* Fills `defaults` with every default made explicit (what zero means). */
+void ic_gather_opts_default(ic_gather_opts *defaults);
+
+/* Stratified M×N gather at one point. IC_ERR_INVALID_ARG on a zero-length normal or NULL arguments. */
+ic_result ic_gather_stratified(ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out);
+
+/* Progressive gather at `count` points: round by round, only points whose estimate has not converged
+ * are traced again. out[i] belongs to pts[i]. Allocates one small per-call state array (IC_ERR_OOM). */
+ic_result ic_gather_progressive(ic_gatherer *g, const ic_gather_point *pts, uint32_t count,
+                                ic_gather_result *out);
+
+/* Gathers `count` points on `threads` threads (0 = all cores) with opts->method, one gatherer per
+ * thread; out[i] belongs to pts[i] and is identical for any thread count. */
+ic_result ic_gather_batch(const ic_gather_opts *opts, ic_trace_fn trace, void *user, int threads,
+                          const ic_gather_point *pts, uint32_t count, ic_gather_result *out, ic_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,128 @@
+/*
+ * irrcache/render.h — load a scene and render it: the renderer's public entry points.
+ *
+ * Usage:
+ *   1. ic_scene *scene; ic_scene_load("scene.json", NULL, &scene, &err);   (JSON scene or bare mesh)
+ *   2. ic_render_options opt = {0}; opt.spp = 64;                           (zero fields = defaults)
+ *   3. ic_image img = {0}; ic_render_stats st; ic_render(scene, &opt, &img, &st, &err);
+ *   4. ic_image_write("out.exr", &img, NULL, &err); ic_image_free(&img); ic_scene_free(scene);
+ *
+ * Ownership: the caller owns the scene (ic_scene_free) and the image (ic_image_free). ic_render
+ * borrows the scene for the duration of the call and may run on several threads. The library never
+ * prints; progress goes to opt.progress (called from one thread at a time).
+ */
+#ifndef IRRCACHE_RENDER_H
+#define IRRCACHE_RENDER_H
+
+#include "irrcache/cache.h"
+#include "irrcache/common.h"
+#include "irrcache/gather.h"
+#include "irrcache/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A loaded scene (opaque to users of the public API). */
+typedef struct ic_scene ic_scene;
+
+/* Options for loading; zero means default. */
+typedef struct ic_scene_load_options {
+    const char *shared_scenes_dir; /* where "shared:" mesh paths resolve (default: $IRRCACHE_SCENES,
+                                      else ../shared/scenes next to the project) */
+    int width, height;     /* override camera resolution (0: keep) */
+} ic_scene_load_options;
+
+/* Loads a JSON scene file or a bare mesh (.obj .gltf .glb .ply); on failure *out is NULL and err
+ * holds "file:line: problem; what to do". opt may be NULL. */
+ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_scene **out, ic_error *err);
+/* Frees a scene (NULL is a no-op). */
+void ic_scene_free(ic_scene *scene);
+
+/* Which estimator renders the image. */
+typedef enum ic_integrator {
+    IC_INTEGRATOR_PT = 0,  /* path tracing: the reference */
+    IC_INTEGRATOR_IC       /* irradiance caching */
+} ic_integrator;
+
+/* How the irradiance cache is built (DESIGN.md §7). */
+typedef enum ic_strategy {
+    IC_STRATEGY_BATCH = 0, /* Frolov et al. 2012 (seed 004 §3): passes of candidates, parallel gathering,
+                              batch insertion; the default */
+    IC_STRATEGY_LAZY       /* Ward 1988: shading points in raster order, gather on a miss (serial reference) */
+} ic_strategy;
+
+/* Irradiance-cache options; zero means the renderer's default (given in brackets). */
+typedef struct ic_ic_options {
+    ic_strategy strategy;
+    ic_cache_params cache; /* weights, accuracy [0.25], clamps; the renderer's defaults for radius bounds are
+                              min_radius_pixels [1.5], max_radius_pixels [24], max_radius [scene diagonal/8];
+                              a negative value switches a bound off */
+    ic_gather_opts gather; /* hemisphere sampling [stratified, 16×50 = 800 rays] */
+    int no_gradients;      /* 1: records carry no gradients (interpolation is a weighted average) */
+    int bounces;           /* indirect bounces in the radiance a hemisphere ray returns [3] */
+    int max_passes;        /* batch: most construction passes [12] */
+    int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
+    int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */
+    float dither_threshold;/* batch: need at which dithering goes from 32- to 16-pixel spacing [0.5] */
+    float normal_weight;   /* batch: k of k·normDiff + posDiff (seed 004 §3.1.1) [4] */
+    int world_stride;      /* batch: world stage traces one eye path per stride×stride pixels [2] */
+    float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene diagonal [0.02] */
+} ic_ic_options;
+
+/* Extra images an irradiance-cache render can return (each allocated only if asked for). */
+typedef struct ic_render_aovs {
+    int want_indirect, want_records, want_density;
+    ic_image indirect;     /* indirect diffuse radiance from the cache at the first shading point */
+    ic_image records;      /* the image with record positions (dots) and influence radii (circles) */
+    ic_image density;      /* number of records contributing at each pixel centre (grey level) */
+} ic_render_aovs;
+
+/* Render options; zero means default (or the scene file's value where it gives one). */
+typedef struct ic_render_options {
+    ic_integrator integrator;
+    int spp;               /* samples per pixel (default: scene file, else 16) */
+    int max_depth;         /* max scattering events (default: scene file, else 8) */
+    int threads;           /* 0 = all cores */
+    uint64_t seed;         /* random seed (default: scene file, else 1) */
+    int has_seed;          /* 1: use `seed` even if it is 0 */
+    double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent */
+    ic_progress_fn progress;
+    void *progress_user;
+    ic_ic_options ic;      /* irradiance caching (integrator IC) */
+    ic_render_aovs *aovs;  /* optional diagnostics (integrator IC); caller frees the images */
+} ic_render_options;
+
+#define IC_MAX_PHASES 8
+
+/* What a render cost. */
+typedef struct ic_render_stats {
+    double seconds;        /* wall time of ic_render */
+    uint64_t rays;         /* rays traced (camera, shadow, bounce, gathering) */
+    double rays_per_second;
+    int spp;               /* samples per pixel taken */
+    int threads;           /* threads used */
+    uint32_t records;      /* cache records (integrator IC) */
+    int passes;            /* construction passes (integrator IC) */
+    uint32_t records_per_pass[32];
+    uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */
+    int phase_count;
+    struct {
+        const char *name;  /* "accel", "render", … */
+        double seconds;
+    } phases[IC_MAX_PHASES];
+} ic_render_stats;
+
+/* Renders scene with opt into out (allocated here). stats may be NULL. */
+ic_result ic_render(const ic_scene *scene, const ic_render_options *opt, ic_image *out, ic_render_stats *stats,
+                    ic_error *err);
+
+/* Camera resolution of a loaded scene. */
+void ic_scene_resolution(const ic_scene *scene, int *width, int *height);
+/* Exposure (stops) the scene file asks for LDR outputs, 0 if none. */
+float ic_scene_exposure(const ic_scene *scene);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,439 @@
+/*
+ * cache.c — the irradiance cache: parameters, record store, insertion and interpolation
+ * (include/irrcache/cache.h).
+ *
+ * Interpolation is seed 000 §3 eq. 1 for irradiance:
+ *   E(p) = Σ_{i∈S} w_i(p) E_i(p) / Σ_{i∈S} w_i(p),
+ *   E_i(p) = E_i + (n_i × n)·∇r E_i + (p − p_i)·∇t E_i   (per channel, clamped ≥ 0),
+ * with Ward's or Tabellion–Lamorlette's weight (cache_internal.h: ic_record_weight). The set S comes
+ * from a single root-to-leaf descent of the multiple-reference octree (seed 004 §4.3).
+ *
+ * Insertion (one record or a batch) runs the clamp steps of cache.h in a fixed order; records keep
+ * the caller's order as their indices, and every parallel step writes per-record slots only, so the
+ * cache never depends on the thread count.
+ */
+#include "cache_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *out, ic_error *err)
+{
+    ic_cache_params p;
+    if (in)
+        p = *in;
+    else
+        memset(&p, 0, sizeof p);
+    if (p.weight != IC_WEIGHT_WARD && p.weight != IC_WEIGHT_TABELLION)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: unknown weight kind %d; use IC_WEIGHT_WARD or "
+                            "IC_WEIGHT_TABELLION", (int)p.weight);
+    if (p.accuracy == 0.0f)
+        p.accuracy = p.weight == IC_WEIGHT_WARD ? 0.2f : 1.0f;
+    if (p.final_accuracy_scale == 0.0f)
+        p.final_accuracy_scale = 1.0f;
+    if (p.behind_tolerance == 0.0f)
+        p.behind_tolerance = 0.05f;
+    if (p.max_radius == 0.0f)
+        p.max_radius = INFINITY;
+    if (p.validity_k == 0)
+        p.validity_k = 6;
+    if (p.validity_angle_deg == 0.0f)
+        p.validity_angle_deg = 30.0f;
+    if (p.gradient_difference_threshold == 0.0f)
+        p.gradient_difference_threshold = 0.1f;
+    if (p.leaf_capacity == 0)
+        p.leaf_capacity = 12;
+    if (p.max_depth == 0)
+        p.max_depth = 20;
+    if (p.gradient_clamp == IC_CACHE_DEFAULT)
+        p.gradient_clamp = IC_CACHE_ON;
+    if (p.neighbor_clamp == IC_CACHE_DEFAULT)
+        p.neighbor_clamp = IC_CACHE_ON;
+    if (p.validity_clamp == IC_CACHE_DEFAULT)
+        p.validity_clamp = IC_CACHE_ON;
+    if (p.gradient_difference == IC_CACHE_DEFAULT)
+        p.gradient_difference = IC_CACHE_OFF;
+
+    if (!(p.accuracy > 0.0f && isfinite(p.accuracy)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: accuracy %g must be positive", (double)p.accuracy);
+    if (!(p.final_accuracy_scale >= 1.0f && isfinite(p.final_accuracy_scale)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: final_accuracy_scale %g must be at least 1",
+                            (double)p.final_accuracy_scale);
+    if (!(p.behind_tolerance >= 0.0f && isfinite(p.behind_tolerance)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: behind_tolerance %g must not be negative",
+                            (double)p.behind_tolerance);
+    if (!(p.min_radius >= 0.0f && isfinite(p.min_radius)) || !(p.max_radius >= p.min_radius))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: radius bounds [%g, %g] are not an interval",
+                            (double)p.min_radius, (double)p.max_radius);
+    if (!(p.min_radius_pixels >= 0.0f && p.max_radius_pixels >= 0.0f && isfinite(p.max_radius_pixels)) ||
+        (p.max_radius_pixels > 0.0f && p.max_radius_pixels < p.min_radius_pixels))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: pixel radius bounds [%g, %g] are not an interval",
+                            (double)p.min_radius_pixels, (double)p.max_radius_pixels);
+    const ic_cache_switch sw[4] = {p.gradient_clamp, p.neighbor_clamp, p.validity_clamp, p.gradient_difference};
+    for (int k = 0; k < 4; ++k)
+        if (sw[k] != IC_CACHE_ON && sw[k] != IC_CACHE_OFF)
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: a clamp switch has value %d; use IC_CACHE_ON "
+                                "or IC_CACHE_OFF", (int)sw[k]);
+    if (p.validity_k > 16)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: validity_k %u must be in 1…16", p.validity_k);
+    if (!(p.validity_angle_deg > 0.0f && p.validity_angle_deg < 180.0f))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: validity_angle_deg %g must be in (0, 180)",
+                            (double)p.validity_angle_deg);
+    if (!(p.gradient_difference_threshold > 0.0f && isfinite(p.gradient_difference_threshold)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: gradient_difference_threshold must be positive");
+    if (p.max_depth > IC_OCTREE_MAX_DEPTH)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: max_depth %u exceeds %d", p.max_depth,
+                            IC_OCTREE_MAX_DEPTH);
+    if (p.threads < 0)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: threads %d must not be negative", p.threads);
+    *out = p;
+    return IC_OK;
+}
+
+ic_result ic_cache_create(const ic_cache_params *params, ic_cache **out, ic_error *err)
+{
+    if (!out)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no output handle");
+    *out = NULL;
+    ic_cache_params p;
+    ic_result rc = ic_cache_params_resolve(params, &p, err);
+    if (rc != IC_OK)
+        return rc;
+    ic_cache *c = calloc(1, sizeof *c);
+    if (!c)
+        return ic_error_set(err, IC_ERR_OOM, "cache: out of memory");
+    c->params = p;
+    c->tree_scale = fmaxf(1.0f, p.final_accuracy_scale);
+    ic_octree_init(&c->tree, p.leaf_capacity, p.max_depth);
+    /* Points: small buckets keep k-nearest searches short; depth as deep as allowed. */
+    ic_octree_init(&c->points, 8, IC_OCTREE_MAX_DEPTH);
+    *out = c;
+    return IC_OK;
+}
+
+void ic_cache_destroy(ic_cache *c)
+{
+    if (!c)
+        return;
+    ic_octree_free(&c->tree);
+    ic_octree_free(&c->points);
+    free(c->sphere);
+    free(c->normal);
+    free(c->cold);
+    free(c->scratch);
+    free(c);
+}
+
+const ic_cache_params *ic_cache_get_params(const ic_cache *c) { return &c->params; }
+uint32_t ic_cache_count(const ic_cache *c) { return c ? c->count : 0; }
+size_t ic_cache_bytes_per_record(void) { return 2 * sizeof(ic_float4) + sizeof(ic_record_cold); }
+
+size_t ic_cache_memory_bytes(const ic_cache *c)
+{
+    return sizeof *c + (size_t)c->cap * ic_cache_bytes_per_record() + ic_octree_bytes(&c->tree) +
+           ic_octree_bytes(&c->points) + (size_t)c->scratch_cap * sizeof(uint32_t);
+}
+
+ic_result ic_cache_reserve(ic_cache *c, uint32_t n)
+{
+    if (n <= c->cap)
+        return IC_OK;
+    uint32_t cap = c->cap ? c->cap : 256;
+    while (cap < n)
+        cap = cap > UINT32_MAX / 2 ? UINT32_MAX : cap * 2;
+    ic_float4 *s = realloc(c->sphere, (size_t)cap * sizeof *s);
+    if (!s)
+        return IC_ERR_OOM;
+    c->sphere = s;
+    ic_float4 *nn = realloc(c->normal, (size_t)cap * sizeof *nn);
+    if (!nn)
+        return IC_ERR_OOM;
+    c->normal = nn;
+    ic_record_cold *cd = realloc(c->cold, (size_t)cap * sizeof *cd);
+    if (!cd)
+        return IC_ERR_OOM;
+    c->cold = cd;
+    c->cap = cap;
+    return IC_OK;
+}
+
+static int vec_finite(ic_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+/* Checks record k of a batch; writes its step-1 radius to *radius. */
+static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k, float *radius, ic_error *err)
+{
+    int ok = vec_finite(r->position) && vec_finite(r->normal) && v3_len2(r->normal) > 0.0f &&
+             vec_finite(r->irradiance) && vec_finite(r->tangent) && vec_finite(r->sigma);
+    for (int ch = 0; ch < 3 && ok; ++ch)
+        ok = vec_finite(r->grad_rot[ch]) && vec_finite(r->grad_trans[ch]);
+    if (!ok)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has a non-finite field or a "
+                            "zero normal", k);
+    if (!(r->accuracy >= 0.0f && isfinite(r->accuracy)) || !(r->pixel_footprint >= 0.0f) ||
+        !isfinite(r->pixel_footprint))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has a negative accuracy or "
+                            "pixel footprint", k);
+    if (!(r->harmonic_mean_dist > 0.0f))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has harmonic_mean_dist %g; "
+                            "it must be positive", k, (double)r->harmonic_mean_dist);
+    *radius = ic_cache_clamp_record(&c->params, r);
+    if (!(*radius > 0.0f && isfinite(*radius)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has an infinite radius; "
+                            "cap ray misses in the gatherer or set max_radius", k);
+    return IC_OK;
+}
+
+static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radius)
+{
+    ic_vec3 n = v3_norm(r->normal);
+    float a = r->accuracy > 0.0f ? r->accuracy : c->params.accuracy;
+    c->sphere[i] = (ic_float4){r->position.x, r->position.y, r->position.z, radius};
+    c->normal[i] = (ic_float4){n.x, n.y, n.z, a};
+    ic_record_cold *cd = &c->cold[i];
+    memset(cd, 0, sizeof *cd);
+    cd->irradiance = r->irradiance;
+    memcpy(cd->grad_rot, r->grad_rot, sizeof cd->grad_rot);
+    memcpy(cd->grad_trans, r->grad_trans, sizeof cd->grad_trans);
+    /* A missing tangent gets the canonical frame of the normal. */
+    cd->tangent = v3_len2(r->tangent) > 0.0f ? v3_norm(r->tangent) : ic_frame_from_normal(n).t;
+    cd->sigma = r->sigma;
+    cd->harmonic_mean_dist = r->harmonic_mean_dist;
+    cd->pixel_footprint = r->pixel_footprint;
+    cd->change_count = 0;
+    cd->bounce = r->bounce;
+    cd->flags = r->flags;
+}
+
+/* Undo a failed insertion (out of memory half-way): drop the new records and rebuild both trees. */
+static void roll_back(ic_cache *c, uint32_t first)
+{
+    c->count = first;
+    ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
+    ic_octree_build(&c->points, &pts, first);
+    ic_octree_build(&c->tree, &sph, first);
+}
+
+/* Shared by the single and the batch entry points: a single insertion is a batch of one. */
+static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, uint32_t *out_first, ic_error *err)
+{
+    if (!c || (!recs && n))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no cache or no records");
+    if (n > UINT32_MAX - 1 - c->count)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: too many records (the index is 32-bit)");
+    uint32_t first = c->count;
+    if (out_first)
+        *out_first = first;
+    if (n == 0)
+        return IC_OK;
+    if (ic_cache_reserve(c, first + n) != IC_OK)
+        return ic_error_set(err, IC_ERR_OOM, "cache: out of memory for %u records", first + n);
+    /* Validate everything before touching the cache: all-or-nothing. */
+    for (uint32_t k = 0; k < n; ++k) {
+        float radius = 0.0f;
+        ic_result rc = check_record(c, &recs[k], k, &radius, err);
+        if (rc != IC_OK)
+            return rc;
+        store_record(c, first + k, &recs[k], radius);
+    }
+    c->count = first + n;
+
+    ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
+    ic_result rc = IC_OK;
+    for (uint32_t k = 0; k < n && rc == IC_OK; ++k)
+        rc = ic_octree_insert(&c->points, &pts, first + k);
+    if (rc == IC_OK && c->params.validity_clamp == IC_CACHE_ON)
+        rc = ic_cache_validity_clamp(c, first);
+    /* Steps 3 and 4 find "records whose sphere holds p_i" in the sphere octree, so the new records
+     * go in now, with their radii after step 2; later shrinking leaves their references
+     * conservative, never wrong. */
+    for (uint32_t k = 0; k < n && rc == IC_OK; ++k)
+        rc = ic_octree_insert(&c->tree, &sph, first + k);
+    if (rc == IC_OK && c->params.gradient_difference == IC_CACHE_ON)
+        rc = ic_cache_gradient_difference(c, first);
+    if (rc == IC_OK && c->params.neighbor_clamp == IC_CACHE_ON)
+        rc = ic_cache_neighbor_clamp(c, first);
+    /* A large batch rebuilds the octree to fit the final radii (deterministic rule); small ones only
+     * compact dead reference segments. */
+    if (rc == IC_OK && n > 1 && (uint64_t)n * 8 >= c->count)
+        rc = ic_octree_build(&c->tree, &sph, c->count);
+    if (rc == IC_OK)
+        rc = ic_octree_compact(&c->tree);
+    if (rc == IC_OK)
+        rc = ic_octree_compact(&c->points);
+    if (rc != IC_OK) {
+        roll_back(c, first);
+        return ic_error_set(err, rc, "cache: out of memory inserting %u records; they were dropped", n);
+    }
+    return IC_OK;
+}
+
+ic_result ic_cache_insert(ic_cache *c, const ic_record *record, uint32_t *out_index, ic_error *err)
+{
+    return insert_records(c, record, record ? 1 : 0, out_index, err);
+}
+
+ic_result ic_cache_insert_batch(ic_cache *c, const ic_record *records, uint32_t count, uint32_t *out_first,
+                                ic_error *err)
+{
+    return insert_records(c, records, count, out_first, err);
+}
+
+ic_result ic_cache_rebuild_index(ic_cache *c, ic_error *err)
+{
+    ic_octree_items sph = ic_cache_tree_items(c);
+    ic_result rc = ic_octree_build(&c->tree, &sph, c->count);
+    if (rc == IC_OK)
+        rc = ic_octree_compact(&c->tree);
+    if (rc != IC_OK)
+        return ic_error_set(err, rc, "cache: out of memory rebuilding the octree");
+    return IC_OK;
+}
+
+/* Accumulates record i (already accepted with weight w, offset dp = p − p_i) into the estimate. */
+static inline void accumulate(const ic_cache *c, uint32_t i, ic_vec3 n, float w, ic_vec3 dp, const ic_cache_lookup *q,
+                              ic_cache_estimate *e, float acc[3])
+{
+    const ic_record_cold *cd = &c->cold[i];
+    const ic_float4 *ni = &c->normal[i];
+    /* (n_i × n): the rotation that takes the record's normal to ours (seed 000 §3). */
+    ic_vec3 rot = v3_cross(v3(ni->x, ni->y, ni->z), n);
+    float e3[3] = {cd->irradiance.x, cd->irradiance.y, cd->irradiance.z};
+    for (int ch = 0; ch < 3; ++ch) {
+        float v = e3[ch] + v3_dot(rot, cd->grad_rot[ch]) + v3_dot(dp, cd->grad_trans[ch]);
+        /* Extrapolation with large gradients can go negative; irradiance cannot. */
+        e3[ch] = fmaxf(v, 0.0f);
+        acc[ch] += w * e3[ch];
+    }
+    e->weight_sum += w;
+    if (e->contributor_count < q->contribution_capacity && q->contributions) {
+        ic_cache_contribution *o = &q->contributions[e->contributor_count];
+        o->record = i;
+        o->weight = w;
+        o->value = v3(e3[0], e3[1], e3[2]);
+        e->contributions_written = e->contributor_count + 1;
+    }
+    ++e->contributor_count;
+}
+
+static int finish(ic_cache_estimate *e, const float acc[3])
+{
+    if (e->weight_sum > 0.0f) {
+        float inv = 1.0f / e->weight_sum;
+        e->irradiance = v3(acc[0] * inv, acc[1] * inv, acc[2] * inv);
+    }
+    return e->contributor_count > 0;
+}
+
+/* Records of the wrong bounce level or disabled ones are skipped after the weight test: the test only
+ * reads the hot arrays, and such records are rare. */
+static inline int eligible(const ic_cache *c, uint32_t i, const ic_cache_lookup *q)
+{
+    const ic_record_cold *cd = &c->cold[i];
+    return cd->bounce == q->bounce && !(cd->flags & IC_RECORD_DISABLED);
+}
+
+int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
+{
+    float acc[3] = {0.0f, 0.0f, 0.0f};
+    memset(out, 0, sizeof *out);
+    float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
+    ic_vec3 p = q->position, n = q->normal;
+    uint32_t leaf = ic_octree_find_leaf(&c->tree, p.x, p.y, p.z);
+    if (leaf == IC_OCTREE_NONE)
+        return 0;
+    const ic_octree_node *node = &c->tree.nodes[leaf];
+    const uint32_t *refs = c->tree.refs + node->begin;
+    out->records_tested = node->count;
+    for (uint32_t k = 0; k < node->count; ++k) {
+        uint32_t i = refs[k];
+        float w;
+        ic_vec3 dp;
+        if (ic_record_weight(c, i, p, n, s, &w, &dp) && eligible(c, i, q))
+            accumulate(c, i, n, w, dp, q, out, acc);
+    }
+    return finish(out, acc);
+}
+
+int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
+{
+    float acc[3] = {0.0f, 0.0f, 0.0f};
+    memset(out, 0, sizeof *out);
+    float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
+    out->records_tested = c->count;
+    for (uint32_t i = 0; i < c->count; ++i) {
+        float w;
+        ic_vec3 dp;
+        if (ic_record_weight(c, i, q->position, q->normal, s, &w, &dp) && eligible(c, i, q))
+            accumulate(c, i, q->normal, w, dp, q, out, acc);
+    }
+    return finish(out, acc);
+}
+
+ic_result ic_cache_get_record(const ic_cache *c, uint32_t i, ic_record *out)
+{
+    if (!c || !out || i >= c->count)
+        return IC_ERR_INVALID_ARG;
+    const ic_float4 *s = &c->sphere[i], *n = &c->normal[i];
+    const ic_record_cold *cd = &c->cold[i];
+    memset(out, 0, sizeof *out);
+    out->position = v3(s->x, s->y, s->z);
+    out->normal = v3(n->x, n->y, n->z);
+    out->tangent = cd->tangent;
+    out->irradiance = cd->irradiance;
+    memcpy(out->grad_rot, cd->grad_rot, sizeof out->grad_rot);
+    memcpy(out->grad_trans, cd->grad_trans, sizeof out->grad_trans);
+    out->sigma = cd->sigma;
+    out->harmonic_mean_dist = cd->harmonic_mean_dist;
+    out->radius = s->w;
+    out->accuracy = n->w;
+    out->pixel_footprint = cd->pixel_footprint;
+    out->change_count = cd->change_count;
+    out->bounce = cd->bounce;
+    out->flags = cd->flags;
+    return IC_OK;
+}
+
+ic_result ic_cache_set_record_accuracy(ic_cache *c, uint32_t i, float accuracy)
+{
+    /* Raising a_i would grow the influence sphere past the octree's references: refused. */
+    if (!c || i >= c->count || !(accuracy > 0.0f) || accuracy > c->normal[i].w)
+        return IC_ERR_INVALID_ARG;
+    if (accuracy < c->normal[i].w) {
+        c->normal[i].w = accuracy;
+        ++c->cold[i].change_count;
+    }
+    return IC_OK;
+}
+
+ic_result ic_cache_set_record_flags(ic_cache *c, uint32_t i, uint8_t flags)
+{
+    if (!c || i >= c->count)
+        return IC_ERR_INVALID_ARG;
+    c->cold[i].flags = flags;
+    return IC_OK;
+}
+
+uint32_t ic_cache_knn(const ic_cache *c, ic_vec3 p, uint32_t k, uint32_t *indices, float *dist2)
+{
+    if (!c || !indices || k == 0)
+        return 0;
+    if (dist2) {
+        ic_octree_items it = ic_cache_point_items(c);
+        return ic_octree_knn(&c->points, &it, p, k, indices, dist2);
+    }
+    /* The search needs the distances; without a caller buffer use a bounded local one in chunks. */
+    float local[256];
+    if (k > 256)
+        k = 256;
+    ic_octree_items it = ic_cache_point_items(c);
+    return ic_octree_knn(&c->points, &it, p, k, indices, local);
+}
+
+uint32_t ic_cache_radius_query(const ic_cache *c, ic_vec3 p, float radius, uint32_t *indices, uint32_t capacity)
+{
+    if (!c)
+        return 0;
+    ic_octree_items it = ic_cache_point_items(c);
+    return ic_octree_radius(&c->points, &it, p, radius, indices, capacity);
+}

@@ -1,0 +1,374 @@
+/*
+ * cache_clamp.c — the radius clamps of the irradiance cache, in the order cache.h documents.
+ *
+ *   1. gradient-magnitude clamp, seed 000 (Křivánek et al. 2006) §5.1 eq. 2, then R bounds;
+ *   2. validity-radius clamp, seed 004 (Frolov et al. 2012) §4.2;
+ *   3. gradient-difference scaling, seed 003 (Castaño 2014);
+ *   4. neighbor clamping, seed 000 §5.2.
+ *
+ * Radii here are R_i (the value in the weights); the influence radius is r_i = a_i·R_i (cache.h).
+ * "Within reach" (steps 3, 4): |p_i − p_j| < max(r_i, r_j). Steps 2–4 only ever lower R, and each is
+ * deterministic: step 2 writes per-record slots from read-only inputs (so it runs in parallel),
+ * step 3 computes every target from the radii before the step and then takes minima, step 4 is a
+ * sequential label-correcting pass ordered by (R, index).
+ */
+#include "cache_internal.h"
+
+#include "core/threads.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Luminance and the luminance gradient (a linear combination of the channel gradients). */
+static float lum3(ic_vec3 e) { return v3_lum(e); }
+static ic_vec3 lum_gradient(const ic_vec3 g[3])
+{
+    return v3_add(v3_add(v3_scale(g[0], 0.2126f), v3_scale(g[1], 0.7152f)), v3_scale(g[2], 0.0722f));
+}
+
+float ic_cache_clamp_record(const ic_cache_params *p, const ic_record *r)
+{
+    float R = r->harmonic_mean_dist;
+    if (p->gradient_clamp == IC_CACHE_ON) {
+        /* Seed 000 §5.1 eq. 2 on luminance Y: if |∇t Y|/Y > 1/R then R := Y/|∇t Y|. The split-sphere
+         * model bounds the gradient by Y/R; a measured gradient above that bound means the field
+         * changes faster than the geometry suggests, so the record must be smaller. */
+        float Y = lum3(r->irradiance), g = v3_len(lum_gradient(r->grad_trans));
+        if (Y > 0.0f && g * R > Y)
+            R = Y / g;
+    }
+    /* Bounds after the gradient clamp (as Radiance does), so R_min also caps gradient noise. */
+    float lo = p->min_radius, hi = p->max_radius;
+    if (r->pixel_footprint > 0.0f) {
+        if (p->min_radius_pixels > 0.0f)
+            lo = fmaxf(lo, p->min_radius_pixels * r->pixel_footprint);
+        if (p->max_radius_pixels > 0.0f)
+            hi = fminf(hi, p->max_radius_pixels * r->pixel_footprint);
+    }
+    if (lo > hi)
+        lo = hi; /* contradictory world and pixel bounds: the ceiling wins */
+    return fminf(fmaxf(R, lo), hi);
+}
+
+static float influence(const ic_cache *c, uint32_t i) { return c->normal[i].w * c->sphere[i].w; }
+
+static ic_result grow_scratch(ic_cache *c, uint32_t need)
+{
+    if (need <= c->scratch_cap)
+        return IC_OK;
+    uint32_t cap = c->scratch_cap ? c->scratch_cap : 256;
+    while (cap < need)
+        cap *= 2;
+    uint32_t *s = realloc(c->scratch, (size_t)cap * sizeof *s);
+    if (!s)
+        return IC_ERR_OOM;
+    c->scratch = s;
+    c->scratch_cap = cap;
+    return IC_OK;
+}
+
+uint32_t ic_cache_reach(ic_cache *c, uint32_t i)
+{
+    const ic_float4 *si = &c->sphere[i];
+    ic_vec3 p = v3(si->x, si->y, si->z);
+    float ri = influence(c, i), ri2 = ri * ri;
+    ic_octree_items pts = ic_cache_point_items(c);
+    /* j inside i's sphere: a radius query over positions. */
+    uint32_t n = ic_octree_radius(&c->points, &pts, p, ri, c->scratch, c->scratch_cap);
+    if (n > c->scratch_cap) {
+        if (grow_scratch(c, n) != IC_OK)
+            return UINT32_MAX;
+        n = ic_octree_radius(&c->points, &pts, p, ri, c->scratch, c->scratch_cap);
+    }
+    /* Drop i itself (distance 0 is inside its own sphere). */
+    uint32_t m = 0;
+    for (uint32_t k = 0; k < n; ++k)
+        if (c->scratch[k] != i)
+            c->scratch[m++] = c->scratch[k];
+    /* i inside j's sphere: exactly the records the octree leaf at p_i references whose sphere holds
+     * p_i; those already found above are skipped by the complementary distance test. */
+    uint32_t leaf = ic_octree_find_leaf(&c->tree, p.x, p.y, p.z);
+    if (leaf == IC_OCTREE_NONE)
+        return m;
+    const ic_octree_node *node = &c->tree.nodes[leaf];
+    for (uint32_t k = 0; k < node->count; ++k) {
+        uint32_t j = c->tree.refs[node->begin + k];
+        if (j == i)
+            continue;
+        const ic_float4 *sj = &c->sphere[j];
+        float d2 = ic_dist2(p.x, p.y, p.z, sj->x, sj->y, sj->z), rj = influence(c, j);
+        if (!(d2 < ri2) && d2 < rj * rj) {
+            if (grow_scratch(c, m + 1) != IC_OK)
+                return UINT32_MAX;
+            c->scratch[m++] = j;
+        }
+    }
+    return m;
+}
+
+static float distance(const ic_cache *c, uint32_t i, uint32_t j)
+{
+    const ic_float4 *a = &c->sphere[i], *b = &c->sphere[j];
+    return sqrtf(ic_dist2(a->x, a->y, a->z, b->x, b->y, b->z));
+}
+
+/* ---- Step 2: validity-radius clamping (seed 004 §4.2) ----------------------------------------- */
+
+/* Candidates examined per record: the 8·k nearest. Enough for k distinct directions on any surface
+ * patch; a record on the rim of the cached region may find fewer and is then left alone. */
+#define VALIDITY_CANDIDATES_PER_K 8
+#define VALIDITY_MAX_CANDIDATES (VALIDITY_CANDIDATES_PER_K * 16 + 1)
+
+typedef struct validity_job {
+    ic_cache *c;
+    uint32_t first;
+    uint32_t k;
+    float cos_min_angle;
+} validity_job;
+
+static void validity_one(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    validity_job *job = ctx;
+    ic_cache *c = job->c;
+    uint32_t i = job->first + (uint32_t)item;
+    uint32_t idx[VALIDITY_MAX_CANDIDATES];
+    float d2[VALIDITY_MAX_CANDIDATES];
+    ic_vec3 dirs[16];
+    const ic_float4 *si = &c->sphere[i], *ni = &c->normal[i];
+    ic_vec3 p = v3(si->x, si->y, si->z), n = v3(ni->x, ni->y, ni->z);
+    ic_octree_items pts = ic_cache_point_items(c);
+    /* +1: the record itself is its own nearest neighbour. */
+    uint32_t m = ic_octree_knn(&c->points, &pts, p, job->k * VALIDITY_CANDIDATES_PER_K + 1, idx, d2);
+    uint32_t taken = 0;
+    float farthest2 = 0.0f;
+    for (uint32_t q = 0; q < m && taken < job->k; ++q) {
+        if (idx[q] == i || !(d2[q] > 0.0f))
+            continue; /* itself, or a coincident record: no direction */
+        const ic_float4 *sj = &c->sphere[idx[q]];
+        ic_vec3 delta = v3(sj->x - p.x, sj->y - p.y, sj->z - p.z);
+        /* Direction in the tangent plane; a neighbour straight above keeps its 3-D direction. */
+        ic_vec3 v = v3_madd(delta, n, -v3_dot(delta, n));
+        if (!(v3_len2(v) > 1e-12f * v3_len2(delta)))
+            v = delta;
+        v = v3_norm(v);
+        int distinct = 1;
+        for (uint32_t t = 0; t < taken && distinct; ++t)
+            distinct = v3_dot(v, dirs[t]) <= job->cos_min_angle;
+        if (distinct) {
+            dirs[taken++] = v;
+            farthest2 = d2[q];
+        }
+    }
+    if (taken < job->k)
+        return;
+    /* Clamp the influence radius a_i·R_i to the farthest of the k; R moves with it. */
+    float far = sqrtf(farthest2);
+    if (ni->w * si->w > far)
+        c->sphere[i].w = far / ni->w;
+}
+
+ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first)
+{
+    validity_job job = {c, first, c->params.validity_k,
+                        cosf(c->params.validity_angle_deg * (IC_PI / 180.0f))};
+    uint32_t n = c->count - first;
+    /* Each item reads positions only and writes its own radius: any thread count, same result. */
+    if (n < 64) {
+        for (uint32_t k = 0; k < n; ++k)
+            validity_one(&job, k, 0);
+        return IC_OK;
+    }
+    return ic_parallel_for(c->params.threads, n, validity_one, &job);
+}
+
+/* ---- Step 3: gradient-difference scaling (seed 003) ------------------------------------------- */
+
+/*
+ * Criterion. For records i, j within reach, on the same smooth surface (n_i·n_j ≥ cos 30°), with
+ * luminances Y_i, Y_j > 0, luminance gradients g_i, g_j (the translational gradients mixed with the
+ * Rec. 709 weights) and d = |p_i − p_j|:
+ *     Δ_ij = |g_i − g_j| · d / min(Y_i, Y_j).
+ * Δ bounds the sum of the two first-order prediction errors, |E_i + g_i·(p_j−p_i) − E_j| +
+ * |E_j + g_j·(p_i−p_j) − E_i| ≥ |(g_i − g_j)·(p_j − p_i)|, relative to the smaller irradiance: a
+ * second-order change between the records that neither gradient sees. If Δ_ij > τ
+ * (gradient_difference_threshold) both radii are scaled by f = d / (r_i + r_j), so the influence
+ * spheres stop overlapping and a later pass places records between them; f is floored at 0.25 so
+ * near-coincident records are not erased. Targets are computed from the radii before the step and
+ * each record keeps the smallest, so the result does not depend on the order of pairs.
+ */
+#define GRADDIFF_MIN_COS 0.8660254f
+#define GRADDIFF_MIN_SCALE 0.25f
+
+typedef struct target {
+    uint32_t record;
+    float radius;
+} target;
+
+ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first)
+{
+    target *list = NULL;
+    size_t len = 0, cap = 0;
+    float tau = c->params.gradient_difference_threshold;
+    for (uint32_t i = first; i < c->count; ++i) {
+        uint32_t n = ic_cache_reach(c, i);
+        if (n == UINT32_MAX) {
+            free(list);
+            return IC_ERR_OOM;
+        }
+        const ic_record_cold *ci = &c->cold[i];
+        float Yi = lum3(ci->irradiance);
+        ic_vec3 gi = lum_gradient(ci->grad_trans);
+        for (uint32_t k = 0; k < n; ++k) {
+            uint32_t j = c->scratch[k];
+            const ic_record_cold *cj = &c->cold[j];
+            const ic_float4 *ni = &c->normal[i], *nj = &c->normal[j];
+            if (ni->x * nj->x + ni->y * nj->y + ni->z * nj->z < GRADDIFF_MIN_COS)
+                continue;
+            float Yj = lum3(cj->irradiance), Ymin = fminf(Yi, Yj);
+            if (!(Ymin > 0.0f))
+                continue;
+            float d = distance(c, i, j);
+            float delta = v3_len(v3_sub(gi, lum_gradient(cj->grad_trans))) * d / Ymin;
+            if (!(delta > tau))
+                continue;
+            float f = fmaxf(d / (influence(c, i) + influence(c, j)), GRADDIFF_MIN_SCALE);
+            if (len + 2 > cap) {
+                size_t nc = cap ? cap * 2 : 256;
+                target *t = realloc(list, nc * sizeof *t);
+                if (!t) {
+                    free(list);
+                    return IC_ERR_OOM;
+                }
+                list = t;
+                cap = nc;
+            }
+            list[len++] = (target){i, c->sphere[i].w * f};
+            list[len++] = (target){j, c->sphere[j].w * f};
+        }
+    }
+    for (size_t k = 0; k < len; ++k) {
+        uint32_t r = list[k].record;
+        if (list[k].radius < c->sphere[r].w) {
+            c->sphere[r].w = list[k].radius;
+            if (r < first)
+                ++c->cold[r].change_count;
+        }
+    }
+    free(list);
+    return IC_OK;
+}
+
+/* ---- Step 4: neighbor clamping (seed 000 §5.2) ------------------------------------------------ */
+
+/*
+ * The paper clamps a new record by its neighbours, R_i := min(R_i, R_j + |p_i − p_j|), then the
+ * neighbours by it, R_j := min(R_j, R_i + |p_i − p_j|). Lowering R_j can break the same constraint
+ * between j and its own neighbours, so this runs to a fixed point: a label-correcting pass over a
+ * min-heap keyed by (R, index). The heap starts with the new records; a popped record first pulls
+ * (clamps itself by its neighbours), then pushes (clamps its neighbours, queueing those that
+ * changed). Radii only decrease, so it terminates, and at the end every pair within reach satisfies
+ * |R_i − R_j| ≤ |p_i − p_j| — the triangle-inequality argument of the paper's Fig. 3.
+ */
+typedef struct heap_entry {
+    float radius;
+    uint32_t record;
+} heap_entry;
+
+static int heap_less(heap_entry a, heap_entry b)
+{
+    return a.radius < b.radius || (a.radius == b.radius && a.record < b.record);
+}
+
+typedef struct heap {
+    heap_entry *v;
+    size_t len, cap;
+} heap;
+
+static int heap_push(heap *h, heap_entry e)
+{
+    if (h->len == h->cap) {
+        size_t nc = h->cap ? h->cap * 2 : 256;
+        heap_entry *v = realloc(h->v, nc * sizeof *v);
+        if (!v)
+            return 0;
+        h->v = v;
+        h->cap = nc;
+    }
+    size_t k = h->len++;
+    while (k > 0 && heap_less(e, h->v[(k - 1) / 2])) {
+        h->v[k] = h->v[(k - 1) / 2];
+        k = (k - 1) / 2;
+    }
+    h->v[k] = e;
+    return 1;
+}
+
+static heap_entry heap_pop(heap *h)
+{
+    heap_entry top = h->v[0], last = h->v[--h->len];
+    size_t k = 0;
+    for (;;) {
+        size_t l = 2 * k + 1, m = k;
+        heap_entry best = last;
+        if (l < h->len && heap_less(h->v[l], best)) {
+            m = l;
+            best = h->v[l];
+        }
+        if (l + 1 < h->len && heap_less(h->v[l + 1], best))
+            m = l + 1;
+        if (m == k)
+            break;
+        h->v[k] = h->v[m];
+        k = m;
+    }
+    if (h->len)
+        h->v[k] = last;
+    return top;
+}
+
+ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first)
+{
+    heap h = {NULL, 0, 0};
+    ic_result rc = IC_OK;
+    for (uint32_t i = first; i < c->count && rc == IC_OK; ++i)
+        if (!heap_push(&h, (heap_entry){c->sphere[i].w, i}))
+            rc = IC_ERR_OOM;
+    while (rc == IC_OK && h.len > 0) {
+        heap_entry e = heap_pop(&h);
+        uint32_t i = e.record;
+        if (e.radius != c->sphere[i].w)
+            continue; /* stale: i was lowered and queued again */
+        uint32_t n = ic_cache_reach(c, i);
+        if (n == UINT32_MAX) {
+            rc = IC_ERR_OOM;
+            break;
+        }
+        /* Pull: R_i := min(R_i, R_j + d_ij). */
+        float Ri = c->sphere[i].w;
+        for (uint32_t k = 0; k < n; ++k) {
+            uint32_t j = c->scratch[k];
+            Ri = fminf(Ri, c->sphere[j].w + distance(c, i, j));
+        }
+        if (Ri < c->sphere[i].w) {
+            c->sphere[i].w = Ri;
+            if (i < first)
+                ++c->cold[i].change_count;
+        }
+        /* Push: R_j := min(R_j, R_i + d_ij), queueing every record that changed. */
+        for (uint32_t k = 0; k < n && rc == IC_OK; ++k) {
+            uint32_t j = c->scratch[k];
+            float bound = Ri + distance(c, i, j);
+            if (bound < c->sphere[j].w) {
+                c->sphere[j].w = bound;
+                if (j < first)
+                    ++c->cold[j].change_count;
+                if (!heap_push(&h, (heap_entry){bound, j}))
+                    rc = IC_ERR_OOM;
+            }
+        }
+    }
+    free(h.v);
+    return rc;
+}

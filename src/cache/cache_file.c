@@ -1,0 +1,386 @@
+/*
+ * cache_file.c — the cache file (DESIGN.md §10): versioned, checksummed, tied to one scene and one
+ * set of cache parameters, written atomically (core/atomic_file.h).
+ *
+ * Layout, all little-endian, floats as IEEE-754 bit patterns (so a round trip is bit-exact):
+ *   0   char[8]  magic "IRRCACHE"
+ *   8   u32      format version (IC_CACHE_FILE_VERSION)
+ *   12  u32      bytes of the parameter block (PARAM_BYTES)
+ *   16  u64      scene hash (caller-supplied)
+ *   24  …        parameter block: the parameters that shaped the records (weight, accuracy, radius
+ *                bounds, clamp switches and their parameters); look-up-only settings (final
+ *                acceptance, behind tolerance, octree shape, threads) are free to change
+ *   80  u64      record count N
+ *   88  N × 156  records: p (3f), R, n (3f), a, E (3f), ∇r E (9f), ∇t E (9f), tangent (3f), σ (3f),
+ *                harmonic-mean distance, pixel footprint, change count (u32), bounce (u8), flags (u8),
+ *                2 zero bytes
+ *   end u64      FNV-1a 64 of every byte before it
+ * The octree is not stored: loading rebuilds it from the records.
+ */
+#include "cache_internal.h"
+
+#include "core/atomic_file.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define IC_CACHE_FILE_VERSION 1u
+#define MAGIC "IRRCACHE"
+#define PARAM_BYTES 56u
+#define HEADER_BYTES (24u + PARAM_BYTES + 8u)
+#define RECORD_BYTES 156u
+#define REBUILD_HINT "delete it or re-render with --cache-rebuild"
+
+uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
+{
+    const unsigned char *p = data;
+    for (size_t k = 0; k < size; ++k) {
+        h ^= p[k];
+        h *= 0x100000001b3ULL;
+    }
+    return h;
+}
+
+/* ---- little-endian encoding ------------------------------------------------------------------- */
+
+static void put_u32(unsigned char *b, uint32_t v)
+{
+    for (int k = 0; k < 4; ++k)
+        b[k] = (unsigned char)(v >> (8 * k));
+}
+static void put_u64(unsigned char *b, uint64_t v)
+{
+    for (int k = 0; k < 8; ++k)
+        b[k] = (unsigned char)(v >> (8 * k));
+}
+static void put_f32(unsigned char *b, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    put_u32(b, v);
+}
+static uint32_t get_u32(const unsigned char *b)
+{
+    uint32_t v = 0;
+    for (int k = 0; k < 4; ++k)
+        v |= (uint32_t)b[k] << (8 * k);
+    return v;
+}
+static uint64_t get_u64(const unsigned char *b)
+{
+    uint64_t v = 0;
+    for (int k = 0; k < 8; ++k)
+        v |= (uint64_t)b[k] << (8 * k);
+    return v;
+}
+static float get_f32(const unsigned char *b)
+{
+    uint32_t v = get_u32(b);
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+
+/* Fields of the parameter block, in file order, with their names for mismatch messages. */
+enum { N_PARAM_FIELDS = 14 };
+typedef struct param_field {
+    const char *name;
+    int is_float;
+    float f;
+    uint32_t u;
+} param_field;
+
+static void param_fields(const ic_cache_params *p, param_field out[N_PARAM_FIELDS])
+{
+    const param_field f[N_PARAM_FIELDS] = {
+        {"weight", 0, 0.0f, (uint32_t)p->weight},
+        {"accuracy", 1, p->accuracy, 0},
+        {"min_radius", 1, p->min_radius, 0},
+        {"max_radius", 1, p->max_radius, 0},
+        {"min_radius_pixels", 1, p->min_radius_pixels, 0},
+        {"max_radius_pixels", 1, p->max_radius_pixels, 0},
+        {"gradient_clamp", 0, 0.0f, (uint32_t)p->gradient_clamp},
+        {"neighbor_clamp", 0, 0.0f, (uint32_t)p->neighbor_clamp},
+        {"validity_clamp", 0, 0.0f, (uint32_t)p->validity_clamp},
+        {"validity_k", 0, 0.0f, p->validity_k},
+        {"validity_angle_deg", 1, p->validity_angle_deg, 0},
+        {"gradient_difference", 0, 0.0f, (uint32_t)p->gradient_difference},
+        {"gradient_difference_threshold", 1, p->gradient_difference_threshold, 0},
+        {"reserved", 0, 0.0f, 0},
+    };
+    memcpy(out, f, sizeof f);
+}
+
+static void encode_params(const ic_cache_params *p, unsigned char *b)
+{
+    param_field f[N_PARAM_FIELDS];
+    param_fields(p, f);
+    for (int k = 0; k < N_PARAM_FIELDS; ++k) {
+        if (f[k].is_float)
+            put_f32(b + 4 * k, f[k].f);
+        else
+            put_u32(b + 4 * k, f[k].u);
+    }
+}
+
+static void encode_record(const ic_cache *c, uint32_t i, unsigned char *b)
+{
+    const ic_float4 *s = &c->sphere[i], *n = &c->normal[i];
+    const ic_record_cold *cd = &c->cold[i];
+    float f[37] = {s->x, s->y, s->z, s->w, n->x, n->y, n->z, n->w, cd->irradiance.x, cd->irradiance.y,
+                   cd->irradiance.z};
+    int k = 11;
+    for (int ch = 0; ch < 3; ++ch) {
+        f[k++] = cd->grad_rot[ch].x;
+        f[k++] = cd->grad_rot[ch].y;
+        f[k++] = cd->grad_rot[ch].z;
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+        f[k++] = cd->grad_trans[ch].x;
+        f[k++] = cd->grad_trans[ch].y;
+        f[k++] = cd->grad_trans[ch].z;
+    }
+    f[k++] = cd->tangent.x;
+    f[k++] = cd->tangent.y;
+    f[k++] = cd->tangent.z;
+    f[k++] = cd->sigma.x;
+    f[k++] = cd->sigma.y;
+    f[k++] = cd->sigma.z;
+    f[k++] = cd->harmonic_mean_dist;
+    f[k++] = cd->pixel_footprint;
+    for (k = 0; k < 37; ++k)
+        put_f32(b + 4 * k, f[k]);
+    put_u32(b + 148, cd->change_count);
+    b[152] = cd->bounce;
+    b[153] = cd->flags;
+    b[154] = b[155] = 0;
+}
+
+/* Returns 1 if the decoded record is usable (finite, positive radius and accuracy, unit-ish normal). */
+static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b)
+{
+    float f[37];
+    for (int k = 0; k < 37; ++k)
+        f[k] = get_f32(b + 4 * k);
+    for (int k = 0; k < 37; ++k)
+        if (!isfinite(f[k]))
+            return 0;
+    c->sphere[i] = (ic_float4){f[0], f[1], f[2], f[3]};
+    c->normal[i] = (ic_float4){f[4], f[5], f[6], f[7]};
+    ic_record_cold *cd = &c->cold[i];
+    memset(cd, 0, sizeof *cd);
+    cd->irradiance = v3(f[8], f[9], f[10]);
+    int k = 11;
+    for (int ch = 0; ch < 3; ++ch, k += 3)
+        cd->grad_rot[ch] = v3(f[k], f[k + 1], f[k + 2]);
+    for (int ch = 0; ch < 3; ++ch, k += 3)
+        cd->grad_trans[ch] = v3(f[k], f[k + 1], f[k + 2]);
+    cd->tangent = v3(f[k], f[k + 1], f[k + 2]);
+    cd->sigma = v3(f[k + 3], f[k + 4], f[k + 5]);
+    cd->harmonic_mean_dist = f[k + 6];
+    cd->pixel_footprint = f[k + 7];
+    cd->change_count = get_u32(b + 148);
+    cd->bounce = b[152];
+    cd->flags = b[153];
+    float nl = f[4] * f[4] + f[5] * f[5] + f[6] * f[6];
+    return f[3] > 0.0f && f[7] > 0.0f && fabsf(nl - 1.0f) < 1e-3f;
+}
+
+/* ---- save ------------------------------------------------------------------------------------- */
+
+typedef struct writer {
+    FILE *fp;
+    uint64_t hash;
+    size_t len;
+    unsigned char buf[1 << 16];
+} writer;
+
+static void w_flush(writer *w)
+{
+    /* A short write sets the stream's error flag; ic_atomic_file_commit checks it. */
+    if (w->len)
+        (void)fwrite(w->buf, 1, w->len, w->fp);
+    w->len = 0;
+}
+
+static void w_bytes(writer *w, const unsigned char *b, size_t n)
+{
+    w->hash = ic_fnv1a64(w->hash, b, n);
+    if (w->len + n > sizeof w->buf)
+        w_flush(w);
+    memcpy(w->buf + w->len, b, n);
+    w->len += n;
+}
+
+ic_result ic_cache_save(const ic_cache *c, const char *path, uint64_t scene_hash, ic_error *err)
+{
+    if (!c || !path)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no cache or no path to save to");
+    ic_atomic_file f;
+    ic_result rc = ic_atomic_file_open(&f, path, err);
+    if (rc != IC_OK)
+        return rc;
+    writer *w = malloc(sizeof *w);
+    if (!w) {
+        ic_atomic_file_abort(&f);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory while saving", path);
+    }
+    w->fp = f.fp;
+    w->hash = IC_FNV64_OFFSET;
+    w->len = 0;
+
+    unsigned char head[HEADER_BYTES];
+    memcpy(head, MAGIC, 8);
+    put_u32(head + 8, IC_CACHE_FILE_VERSION);
+    put_u32(head + 12, PARAM_BYTES);
+    put_u64(head + 16, scene_hash);
+    encode_params(&c->params, head + 24);
+    put_u64(head + 24 + PARAM_BYTES, c->count);
+    w_bytes(w, head, sizeof head);
+    unsigned char rec[RECORD_BYTES];
+    for (uint32_t i = 0; i < c->count; ++i) {
+        encode_record(c, i, rec);
+        w_bytes(w, rec, sizeof rec);
+    }
+    unsigned char tail[8];
+    put_u64(tail, w->hash);
+    w_bytes(w, tail, sizeof tail);
+    w_flush(w);
+    free(w);
+    /* commit checks the stream for write errors and removes the temporary file on any failure. */
+    return ic_atomic_file_commit(&f, err);
+}
+
+/* ---- load ------------------------------------------------------------------------------------- */
+
+static ic_result read_all(const char *path, unsigned char **out, size_t *size, ic_error *err)
+{
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return ic_error_set(err, IC_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
+    unsigned char *data = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len == cap) {
+            size_t nc = cap ? cap * 2 : 1 << 16;
+            unsigned char *d = realloc(data, nc);
+            if (!d) {
+                free(data);
+                fclose(fp);
+                return ic_error_set(err, IC_ERR_OOM, "%s: out of memory reading the cache file", path);
+            }
+            data = d;
+            cap = nc;
+        }
+        size_t got = fread(data + len, 1, cap - len, fp);
+        len += got;
+        if (got == 0)
+            break;
+    }
+    int bad = ferror(fp);
+    fclose(fp);
+    if (bad) {
+        free(data);
+        return ic_error_set(err, IC_ERR_IO, "%s: read error", path);
+    }
+    *out = data;
+    *size = len;
+    return IC_OK;
+}
+
+static ic_result check_params(const char *path, const unsigned char *block, const ic_cache_params *p,
+                              ic_error *err)
+{
+    param_field f[N_PARAM_FIELDS];
+    param_fields(p, f);
+    for (int k = 0; k < N_PARAM_FIELDS; ++k) {
+        uint32_t have = get_u32(block + 4 * k), want;
+        if (f[k].is_float)
+            memcpy(&want, &f[k].f, 4);
+        else
+            want = f[k].u;
+        if (have == want)
+            continue;
+        if (f[k].is_float)
+            return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with other cache parameters (%s %g in the file, "
+                                "%g now); " REBUILD_HINT, path, f[k].name, (double)get_f32(block + 4 * k),
+                                (double)f[k].f);
+        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with other cache parameters (%s %u in the file, %u "
+                            "now); " REBUILD_HINT, path, f[k].name, have, want);
+    }
+    return IC_OK;
+}
+
+ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_t scene_hash, ic_cache **out,
+                        ic_error *err)
+{
+    if (!path || !out)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no path or no output handle");
+    *out = NULL;
+    ic_cache_params p;
+    ic_result rc = ic_cache_params_resolve(params, &p, err);
+    if (rc != IC_OK)
+        return rc;
+    unsigned char *data = NULL;
+    size_t size = 0;
+    rc = read_all(path, &data, &size, err);
+    if (rc != IC_OK)
+        return rc;
+
+    if (size >= 8 && memcmp(data, MAGIC, 8) != 0)
+        rc = ic_error_set(err, IC_ERR_PARSE, "%s: not an irrcache cache file; " REBUILD_HINT, path);
+    else if (size < HEADER_BYTES + 8)
+        rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: truncated (%zu bytes); " REBUILD_HINT, path, size);
+    else if (get_u32(data + 8) != IC_CACHE_FILE_VERSION)
+        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: cache format version %u, this build reads %u; " REBUILD_HINT,
+                          path, get_u32(data + 8), IC_CACHE_FILE_VERSION);
+    else if (get_u32(data + 12) != PARAM_BYTES)
+        rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: corrupt header; " REBUILD_HINT, path);
+    if (rc != IC_OK) {
+        free(data);
+        return rc;
+    }
+    uint64_t count = get_u64(data + 24 + PARAM_BYTES);
+    uint64_t max_count = (size - HEADER_BYTES - 8) / RECORD_BYTES;
+    if (count > max_count || size != HEADER_BYTES + 8 + count * RECORD_BYTES)
+        rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: %s (%zu bytes for %llu records); " REBUILD_HINT, path,
+                          count > max_count ? "truncated" : "wrong length", size, (unsigned long long)count);
+    else if (ic_fnv1a64(IC_FNV64_OFFSET, data, size - 8) != get_u64(data + size - 8))
+        rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: checksum mismatch, the file is corrupt; " REBUILD_HINT, path);
+    else if (get_u64(data + 16) != scene_hash)
+        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (hash %016llx, this scene %016llx); "
+                          REBUILD_HINT, path, (unsigned long long)get_u64(data + 16),
+                          (unsigned long long)scene_hash);
+    else if (count >= UINT32_MAX)
+        rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: too many records", path);
+    else
+        rc = check_params(path, data + 24, &p, err);
+    if (rc != IC_OK) {
+        free(data);
+        return rc;
+    }
+
+    ic_cache *c = NULL;
+    rc = ic_cache_create(&p, &c, err);
+    if (rc == IC_OK && ic_cache_reserve(c, (uint32_t)count) != IC_OK)
+        rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory for %llu records", path, (unsigned long long)count);
+    for (uint32_t i = 0; rc == IC_OK && i < count; ++i)
+        if (!decode_record(c, i, data + HEADER_BYTES + (size_t)i * RECORD_BYTES))
+            rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: record %u is invalid; " REBUILD_HINT, path, i);
+    free(data);
+    if (rc == IC_OK) {
+        c->count = (uint32_t)count;
+        ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
+        if (ic_octree_build(&c->points, &pts, c->count) != IC_OK || ic_octree_build(&c->tree, &sph, c->count) != IC_OK)
+            rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory building the octree", path);
+    }
+    if (rc != IC_OK) {
+        ic_cache_destroy(c);
+        return rc;
+    }
+    *out = c;
+    return IC_OK;
+}

@@ -1,0 +1,117 @@
+/*
+ * cache_internal.h — the cache's storage and the weight test shared by cache.c, cache_clamp.c and
+ * cache_file.c. Not a public header.
+ *
+ * Storage is split hot/cold (DESIGN.md §4, STYLE.md "Data layout"): the look-up loop touches only
+ * `sphere` (position, R_i) and `normal` (n_i, a_i), 32 bytes per record in two 16-byte-aligned
+ * arrays; irradiance, gradients and the rest are read only for records that pass the weight test.
+ */
+#ifndef IC_CACHE_INTERNAL_H
+#define IC_CACHE_INTERNAL_H
+
+#include "irrcache/cache.h"
+#include "octree.h"
+
+#include "core/vecmath.h"
+
+/* Cold part of a record: read for contributors only. */
+typedef struct ic_record_cold {
+    ic_vec3 irradiance;          /* E_i */
+    ic_vec3 grad_rot[3];         /* ∇r E_i per channel */
+    ic_vec3 grad_trans[3];       /* ∇t E_i per channel */
+    ic_vec3 tangent;             /* frame tangent */
+    ic_vec3 sigma;               /* Monte Carlo σ per channel */
+    float harmonic_mean_dist;    /* R before clamping */
+    float pixel_footprint;       /* primary-hit pixel size, 0 = unknown */
+    uint32_t change_count;       /* changes of a_i or R_i after insertion */
+    uint8_t bounce;              /* bounce level */
+    uint8_t flags;               /* IC_RECORD_* */
+} ic_record_cold;
+
+struct ic_cache {
+    ic_cache_params params;      /* resolved */
+    uint32_t count, cap;
+    ic_float4 *sphere;           /* p_i, R_i */
+    ic_float4 *normal;           /* n_i, a_i */
+    ic_record_cold *cold;
+    ic_octree tree;              /* spheres of radius a_i·R_i·max(1, s): look-ups */
+    ic_octree points;            /* positions: k-nearest and radius queries */
+    float tree_scale;            /* max(1, final_accuracy_scale) */
+    /* Insertion scratch (insertion is single-threaded with respect to the cache). */
+    uint32_t *scratch;
+    uint32_t scratch_cap;
+};
+
+static inline ic_octree_items ic_cache_tree_items(const ic_cache *c)
+{
+    ic_octree_items it = {c->sphere, c->normal, c->tree_scale};
+    return it;
+}
+static inline ic_octree_items ic_cache_point_items(const ic_cache *c)
+{
+    ic_octree_items it = {c->sphere, c->normal, 0.0f};
+    return it;
+}
+
+/* 1 / sqrt(1 − cos 10°): normalises the normal term of Tabellion–Lamorlette so 10° weighs like d = R. */
+#define IC_TL_NORMAL_SCALE 8.1131404f
+
+/*
+ * The weight of record i at (p, n) with acceptance scale s; returns 0 if the record is rejected,
+ * else writes w_i(p) to *w and p − p_i to *dp. Each rejection test is labelled (after Radiance's
+ * ambient.c habit). The first test is the influence sphere a_i·s·R_i of both weights; the octree
+ * holds every sphere a point lies in, so the octree and a linear scan accept the same records.
+ */
+static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, float s, float *w,
+                                   ic_vec3 *dp)
+{
+    const ic_float4 *sp = &c->sphere[i], *np = &c->normal[i];
+    ic_vec3 d = v3(p.x - sp->x, p.y - sp->y, p.z - sp->z);
+    float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    float a = np->w * s, R = sp->w, r = a * R;
+    /* Outside the influence sphere: too far for either weight. */
+    if (!(d2 < r * r))
+        return 0;
+    float ndot = n.x * np->x + n.y * np->y + n.z * np->z;
+    /* Facing away: surfaces with opposite orientation never share irradiance. */
+    if (ndot <= 0.0f)
+        return 0;
+    /* Behind the record: p lies below the record's tangent plane (averaged with ours). */
+    float behind = 0.5f * (d.x * (n.x + np->x) + d.y * (n.y + np->y) + d.z * (n.z + np->z));
+    if (behind < -c->params.behind_tolerance * r)
+        return 0;
+    float dist = sqrtf(d2) / R, ndev = sqrtf(fmaxf(0.0f, 1.0f - ndot));
+    if (c->params.weight == IC_WEIGHT_WARD) {
+        /* Ward, seed 000 §3: accept w > 1/a ⇔ denominator < a. */
+        float denom = dist + ndev;
+        if (!(denom < a))
+            return 0;
+        *w = 1.0f / fmaxf(denom, 1e-6f);
+    } else {
+        /* Tabellion–Lamorlette 2004 with κ = 1/a: accept w > 0. */
+        float ww = 1.0f - fmaxf(dist, ndev * IC_TL_NORMAL_SCALE) / a;
+        if (!(ww > 0.0f))
+            return 0;
+        *w = ww;
+    }
+    *dp = d;
+    return 1;
+}
+
+/* Neighbor enumeration for the clamps: records j ≠ i within reach of i (see cache.h). Returns the
+ * count, the indices are in c->scratch (grown as needed); IC_ERR_OOM → UINT32_MAX. */
+uint32_t ic_cache_reach(ic_cache *c, uint32_t i);
+
+/* Clamp step 1 for one record (gradient-magnitude clamp, then R bounds); returns R. */
+float ic_cache_clamp_record(const ic_cache_params *p, const ic_record *r);
+/* Step 2: validity-radius clamp of records first…count−1 (needs them in the point tree). */
+ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first);
+/* Step 3: gradient-difference scaling of records first…count−1 against all (needs both trees). */
+ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first);
+/* Step 4: neighbor clamping to a fixed point, seeded by records first…count−1 (needs both trees). */
+ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first);
+
+/* Grows the record arrays to hold at least n records. */
+ic_result ic_cache_reserve(ic_cache *c, uint32_t n);
+
+#endif

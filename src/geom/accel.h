@@ -1,0 +1,65 @@
+/*
+ * accel.h — ray tracing against the scene. The only module that talks to Embree (accel.c includes
+ * <embree3/rtcore.h>; nothing else may). Hits come back as the renderer's own ic_hit.
+ *
+ * Robustness: the BVH is built with RTC_SCENE_FLAG_ROBUST (no rays slipping through shared edges,
+ * DESIGN.md §3), and secondary rays start from ic_offset_ray_origin(), which moves the origin off
+ * the surface along the geometric normal by an amount that scales with the coordinates' magnitude
+ * (Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems
+ * ch. 6), so there is neither acne nor light leaking through corners.
+ *
+ * Ray counting is the caller's job (per-thread counters), to keep atomics off the per-ray path.
+ */
+#ifndef IC_GEOM_ACCEL_H
+#define IC_GEOM_ACCEL_H
+
+#include "scene/scene.h"
+
+typedef struct ic_accel ic_accel;
+
+/* A ray: origin, unit direction, [tnear, tfar]. */
+typedef struct ic_ray {
+    ic_vec3 org, dir;
+    float tnear, tfar;
+} ic_ray;
+
+/* Hit record: triangle index (UINT32_MAX on a miss), distance, Embree barycentrics. */
+typedef struct ic_hit {
+    uint32_t triangle;
+    float t;
+    float u, v;
+} ic_hit;
+
+#define IC_NO_HIT UINT32_MAX
+
+/* Builds the acceleration structure over scene (which must outlive it). */
+ic_result ic_accel_create(const ic_scene *scene, ic_accel **out, ic_error *err);
+/* Releases it (NULL is a no-op). */
+void ic_accel_destroy(ic_accel *accel);
+/* Closest hit of one ray. */
+void ic_accel_intersect1(const ic_accel *accel, const ic_ray *ray, ic_hit *hit);
+/* 1 if anything blocks the ray within (tnear, tfar). */
+int ic_accel_occluded1(const ic_accel *accel, const ic_ray *ray);
+/* Closest hits of many rays at once (Embree ray stream, coherent flag when `coherent`). */
+void ic_accel_intersect_n(const ic_accel *accel, const ic_ray *rays, ic_hit *hits, uint32_t count, int coherent);
+/* Occlusion of many rays at once; occluded[i] = 1 if blocked. */
+void ic_accel_occluded_n(const ic_accel *accel, const ic_ray *rays, uint8_t *occluded, uint32_t count, int coherent);
+
+/* Origin moved off a surface at p with geometric normal ng towards the side of direction dir. */
+static inline ic_vec3 ic_offset_ray_origin(ic_vec3 p, ic_vec3 ng, ic_vec3 dir)
+{
+    /* Offset proportional to the coordinate magnitude (float ulp growth), plus a floor near 0. */
+    const float origin_eps = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
+    ic_vec3 n = v3_dot(ng, dir) < 0.0f ? v3_neg(ng) : ng;
+    float pc[3] = {p.x, p.y, p.z}, nc[3] = {n.x, n.y, n.z}, out[3];
+    for (int i = 0; i < 3; ++i) {
+        int of = (int)(int_scale * nc[i]);
+        union { float f; int32_t i; } u;
+        u.f = pc[i];
+        u.i += (pc[i] < 0.0f) ? -of : of;
+        out[i] = fabsf(pc[i]) < origin_eps ? pc[i] + float_scale * nc[i] : u.f;
+    }
+    return v3(out[0], out[1], out[2]);
+}
+
+#endif

@@ -1,0 +1,278 @@
+/*
+ * exr.c — OpenEXR read and write through the OpenEXR Core C API (libOpenEXRCore, 3.1).
+ *
+ * Writing: one scanline part, channels R, G, B as 32-bit float or 16-bit half, ZIP compression
+ * (lossless, so float round trips are bit-exact), written to a temporary name and renamed.
+ * Reading: the first part of a scanline file; the data window becomes the image; R, G, B (missing
+ * ones read as 0) or, failing those, Y (grey); half and float channels are converted to float by the
+ * library's unpacker. Tiled, deep, sub-sampled and UINT images are refused with a message.
+ * The library's own error printing is silenced: this module only reports through ic_error.
+ */
+#include "image_internal.h"
+
+#include "core/atomic_file.h"
+
+#include <OpenEXR/openexr.h>
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The library would print to stderr; we report through the result codes instead. */
+static void silent_error_handler(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    (void)ctxt;
+    (void)code;
+    (void)msg;
+}
+
+static exr_context_initializer_t context_initializer(void)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = silent_error_handler;
+    init.flags = EXR_CONTEXT_FLAG_SILENT_HEADER_PARSE | EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
+    return init;
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* Reading                                                                                        */
+
+/* Which channel of our RGB triple an EXR channel feeds: 0..2, or -1 to skip it. */
+static int rgb_slot(const char *name, int grey)
+{
+    if (grey)
+        return strcmp(name, "Y") == 0 ? 0 : -1;
+    if (strcmp(name, "R") == 0)
+        return 0;
+    if (strcmp(name, "G") == 0)
+        return 1;
+    if (strcmp(name, "B") == 0)
+        return 2;
+    return -1;
+}
+
+static ic_result exr_read_failed(const char *path, exr_result_t rv, ic_error *err)
+{
+    const char *why = exr_get_default_error_message(rv);
+    if (rv == EXR_ERR_FILE_ACCESS)
+        return ic_error_set(err, IC_ERR_IO, "%s: cannot read (%s); check the path and its permissions", path, why);
+    if (rv == EXR_ERR_OUT_OF_MEMORY)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory reading OpenEXR; free memory or use a smaller image",
+                            path);
+    return ic_error_set(err, IC_ERR_CORRUPT, "%s: cannot read OpenEXR (%s); the file is truncated or corrupt, re-create it",
+                        path, why);
+}
+
+/* Checks the part's layout and finds whether it is RGB or grey. */
+static ic_result check_layout(const char *path, exr_const_context_t ctxt, int *grey, ic_error *err)
+{
+    exr_storage_t storage;
+    exr_result_t rv = exr_get_storage(ctxt, 0, &storage);
+    if (rv != EXR_ERR_SUCCESS)
+        return exr_read_failed(path, rv, err);
+    if (storage != EXR_STORAGE_SCANLINE)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                            "%s: tiled or deep OpenEXR is not supported; save it as a scanline OpenEXR", path);
+
+    const exr_attr_chlist_t *channels = NULL;
+    rv = exr_get_channels(ctxt, 0, &channels);
+    if (rv != EXR_ERR_SUCCESS)
+        return exr_read_failed(path, rv, err);
+    int has_rgb = 0, has_y = 0;
+    for (int i = 0; i < channels->num_channels; ++i) {
+        const exr_attr_chlist_entry_t *ch = &channels->entries[i];
+        int is_rgb = rgb_slot(ch->name.str, 0) >= 0, is_y = rgb_slot(ch->name.str, 1) >= 0;
+        if (!is_rgb && !is_y)
+            continue;
+        if (ch->pixel_type == EXR_PIXEL_UINT || ch->x_sampling != 1 || ch->y_sampling != 1)
+            return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                                "%s: channel %s is UINT or sub-sampled, which is not supported; save it as half or float "
+                                "without sub-sampling",
+                                path, ch->name.str);
+        has_rgb |= is_rgb;
+        has_y |= is_y;
+    }
+    if (!has_rgb && !has_y)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: no R, G, B or Y channel in the first part; save the colour "
+                            "as R, G, B channels", path);
+    *grey = !has_rgb;
+    return IC_OK;
+}
+
+/* Decodes every chunk of part 0 into img (rows relative to the data window's top). */
+static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const exr_attr_box2i_t *window, int grey,
+                               ic_image *img, ic_error *err)
+{
+    int lines_per_chunk = 0;
+    exr_result_t rv = exr_get_scanlines_per_chunk(ctxt, 0, &lines_per_chunk);
+    if (rv != EXR_ERR_SUCCESS || lines_per_chunk <= 0)
+        return exr_read_failed(path, rv != EXR_ERR_SUCCESS ? rv : EXR_ERR_BAD_CHUNK_LEADER, err);
+
+    exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+    int initialized = 0;
+    const size_t line_floats = (size_t)img->width * 3;
+    for (int y = window->min.y; y <= window->max.y && rv == EXR_ERR_SUCCESS; y += lines_per_chunk) {
+        exr_chunk_info_t chunk;
+        rv = exr_read_scanline_chunk_info(ctxt, 0, y, &chunk);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        rv = initialized ? exr_decoding_update(ctxt, 0, &chunk, &decoder)
+                         : exr_decoding_initialize(ctxt, 0, &chunk, &decoder);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        initialized = 1;
+        /* A chunk may start above the window (line groups are aligned to the file's origin). */
+        const int row = chunk.start_y - window->min.y;
+        if (row < 0 || row + chunk.height > img->height) {
+            rv = EXR_ERR_BAD_CHUNK_LEADER;
+            break;
+        }
+        for (int c = 0; c < decoder.channel_count; ++c) {
+            exr_coding_channel_info_t *ch = &decoder.channels[c];
+            int slot = rgb_slot(ch->channel_name, grey);
+            if (slot < 0) {
+                ch->decode_to_ptr = NULL; /* skipped */
+                continue;
+            }
+            ch->decode_to_ptr = (uint8_t *)(img->rgb + (size_t)row * line_floats + (size_t)slot);
+            ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
+            ch->user_line_stride = (int32_t)(line_floats * sizeof(float));
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+            ch->user_bytes_per_element = (int16_t)sizeof(float);
+        }
+        rv = exr_decoding_choose_default_routines(ctxt, 0, &decoder);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_decoding_run(ctxt, 0, &decoder);
+    }
+    if (initialized)
+        exr_decoding_destroy(ctxt, &decoder);
+    if (rv != EXR_ERR_SUCCESS)
+        return exr_read_failed(path, rv, err);
+
+    if (grey)
+        for (size_t i = 0; i < (size_t)img->width * (size_t)img->height; ++i)
+            img->rgb[3 * i + 1] = img->rgb[3 * i + 2] = img->rgb[3 * i];
+    return IC_OK;
+}
+
+ic_result ic_image_read_exr(const char *path, ic_image *out, ic_error *err)
+{
+    memset(out, 0, sizeof *out);
+    exr_context_initializer_t init = context_initializer();
+    exr_context_t ctxt = NULL;
+    exr_result_t rv = exr_start_read(&ctxt, path, &init);
+    if (rv != EXR_ERR_SUCCESS) {
+        exr_finish(&ctxt);
+        return exr_read_failed(path, rv, err);
+    }
+
+    int grey = 0;
+    exr_attr_box2i_t window;
+    ic_result r = check_layout(path, ctxt, &grey, err);
+    if (r == IC_OK) {
+        rv = exr_get_data_window(ctxt, 0, &window);
+        r = rv == EXR_ERR_SUCCESS ? IC_OK : exr_read_failed(path, rv, err);
+    }
+    if (r == IC_OK) {
+        /* 64-bit arithmetic: a corrupt window could overflow int. */
+        int64_t width = (int64_t)window.max.x - window.min.x + 1, height = (int64_t)window.max.y - window.min.y + 1;
+        if (width <= 0 || height <= 0 || width > IC_IMAGE_MAX_SIDE || height > IC_IMAGE_MAX_SIDE)
+            r = ic_error_set(err, IC_ERR_PARSE, "%s: OpenEXR data window is empty or too large; check the file", path);
+        else
+            r = ic_image_create_for_file(path, out, (int)width, (int)height, err);
+    }
+    if (r == IC_OK) {
+        r = decode_chunks(path, ctxt, &window, grey, out, err);
+        if (r != IC_OK)
+            ic_image_free(out);
+    }
+    exr_finish(&ctxt);
+    return r;
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* Writing                                                                                        */
+
+/* Writes img to the (temporary) file `file`; returns the first library error (and, when the file could
+ * not be created, the system's errno in *open_errno). */
+static exr_result_t write_part(const char *file, const ic_image *img, int is_half, int *open_errno)
+{
+    const float *rgb = img->rgb;
+    exr_context_initializer_t init = context_initializer();
+    init.flags = 0; /* the read-only flags are not valid for writing */
+    exr_context_t ctxt = NULL;
+    errno = 0;
+    exr_result_t rv = exr_start_write(&ctxt, file, EXR_WRITE_FILE_DIRECTLY, &init);
+    *open_errno = errno;
+    if (rv != EXR_ERR_SUCCESS) {
+        exr_finish(&ctxt);
+        return rv;
+    }
+    int part = 0;
+    const exr_pixel_type_t type = is_half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+    rv = exr_add_part(ctxt, NULL, EXR_STORAGE_SCANLINE, &part);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_initialize_required_attr_simple(ctxt, part, img->width, img->height, EXR_COMPRESSION_ZIP);
+    static const char *const names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; ++c)
+        rv = exr_add_channel(ctxt, part, names[c], type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_write_header(ctxt);
+
+    int lines_per_chunk = 0;
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_get_scanlines_per_chunk(ctxt, part, &lines_per_chunk);
+    exr_encode_pipeline_t encoder = EXR_ENCODE_PIPELINE_INITIALIZER;
+    int initialized = 0;
+    const size_t line_floats = (size_t)img->width * 3;
+    for (int y = 0; y < img->height && rv == EXR_ERR_SUCCESS; y += lines_per_chunk) {
+        exr_chunk_info_t chunk;
+        rv = exr_write_scanline_chunk_info(ctxt, part, y, &chunk);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        rv = initialized ? exr_encoding_update(ctxt, part, &chunk, &encoder)
+                         : exr_encoding_initialize(ctxt, part, &chunk, &encoder);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        initialized = 1;
+        for (int c = 0; c < encoder.channel_count; ++c) {
+            exr_coding_channel_info_t *ch = &encoder.channels[c];
+            int slot = rgb_slot(ch->channel_name, 0);
+            ch->encode_from_ptr = (const uint8_t *)(rgb + (size_t)y * line_floats + (size_t)(slot < 0 ? 0 : slot));
+            ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
+            ch->user_line_stride = (int32_t)(line_floats * sizeof(float));
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+            ch->user_bytes_per_element = (int16_t)sizeof(float);
+        }
+        rv = exr_encoding_choose_default_routines(ctxt, part, &encoder);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_encoding_run(ctxt, part, &encoder);
+    }
+    if (initialized)
+        exr_encoding_destroy(ctxt, &encoder);
+    exr_result_t finish = exr_finish(&ctxt);
+    return rv != EXR_ERR_SUCCESS ? rv : finish;
+}
+
+ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half, ic_error *err)
+{
+    char tmp[4096];
+    if (strlen(path) + 32 >= sizeof tmp)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: output path too long; use a shorter path", path);
+    ic_atomic_temp_name(path, tmp, sizeof tmp);
+
+    int open_errno = 0;
+    exr_result_t rv = write_part(tmp, img, is_half, &open_errno);
+    if (rv != EXR_ERR_SUCCESS) {
+        remove(tmp); /* the library deletes it on most errors; make sure */
+        if (rv == EXR_ERR_FILE_ACCESS)
+            return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
+                                path, open_errno ? strerror(open_errno) : exr_get_default_error_message(rv));
+        if (rv == EXR_ERR_OUT_OF_MEMORY)
+            return ic_error_set(err, IC_ERR_OOM, "%s: out of memory writing OpenEXR; free memory and retry", path);
+        return ic_error_set(err, IC_ERR_IO, "%s: writing OpenEXR failed (%s); check free disk space and retry", path,
+                            exr_get_default_error_message(rv));
+    }
+    return ic_atomic_rename(tmp, path, err);
+}

@@ -1,0 +1,41 @@
+/*
+ * image_internal.h — the per-format readers and writers behind ic_image_read / ic_image_write.
+ *
+ * Each reader fills a fresh ic_image (the caller frees it on success; on failure the image is left
+ * zeroed) and each writer writes through a temporary file that is renamed into place only when the
+ * whole file was written. Messages follow common.h: "<path>: <what went wrong>; <what to do>".
+ */
+#ifndef IC_IMAGE_INTERNAL_H
+#define IC_IMAGE_INTERNAL_H
+
+#include "irrcache/image.h"
+
+/* Largest image accepted anywhere; keeps width*height*3*sizeof(float) far from overflow and stops a
+ * corrupt header from asking for gigabytes. */
+#define IC_IMAGE_MAX_SIDE 65536
+#define IC_IMAGE_MAX_PIXELS ((size_t)1 << 28)
+
+/* ic_image_create for a reader: reports a bad size or a failed allocation against path. */
+ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, ic_error *err);
+
+/* OpenEXR (Core C API): first part, scanline, R/G/B (A ignored) or Y, half or float. */
+ic_result ic_image_read_exr(const char *path, ic_image *out, ic_error *err);
+/* OpenEXR: RGB channels as 16-bit half (is_half) or 32-bit float, ZIP compressed (lossless). */
+ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half, ic_error *err);
+
+/* Portable float map ("PF" colour, "Pf" grey), either byte order; rows are stored bottom first. */
+ic_result ic_image_read_pfm(const char *path, ic_image *out, ic_error *err);
+/* Portable float map, little-endian, colour. */
+ic_result ic_image_write_pfm(const char *path, const ic_image *img, ic_error *err);
+
+/* Radiance RGBE (.hdr): flat and run-length encoded scanlines, "-Y h +X w" orientation. */
+ic_result ic_image_read_hdr(const char *path, ic_image *out, ic_error *err);
+/* Radiance RGBE (.hdr), flat (not run-length encoded) scanlines. */
+ic_result ic_image_write_hdr(const char *path, const ic_image *img, ic_error *err);
+
+/* Through stb_image: 8/16-bit PNG and JPEG (sRGB, converted to linear). */
+ic_result ic_image_read_stb(const char *path, ic_image *out, ic_error *err);
+/* 8-bit sRGB PNG after scaling by 2^exposure. */
+ic_result ic_image_write_png(const char *path, const ic_image *img, float exposure, ic_error *err);
+
+#endif

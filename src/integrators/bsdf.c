@@ -1,0 +1,179 @@
+/* bsdf.c — Lambert, normalized modified Phong, mirror, smooth dielectric (bsdf.h). */
+#include "bsdf.h"
+
+#include "core/sampling.h"
+
+void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec3 wo)
+{
+    const ic_material *m = &scene->materials[s->material];
+    b->type = m->type;
+    b->kd = ic_scene_albedo(scene, s);
+    b->ks = m->ks;
+    b->ns = m->ns > 0.0f ? m->ns : 1.0f;
+    b->ior = m->ior > 0.0f ? m->ior : 1.5f;
+    b->ng = s->ng;
+    ic_vec3 n = s->ns;
+    /* Opaque materials shade on the side the viewer is on. */
+    if (b->type != IC_MAT_GLASS && v3_dot(wo, s->ng) < 0.0f) {
+        n = v3_neg(n);
+        b->ng = v3_neg(s->ng);
+    }
+    b->frame = ic_frame_from_normal(n);
+    float ld = v3_lum(b->kd), ls = v3_lum(b->ks);
+    b->p_diffuse = (b->type == IC_MAT_GLOSSY) ? (ld + ls > 0.0f ? ld / (ld + ls) : 1.0f) : 1.0f;
+}
+
+static float phong_cos(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
+{
+    ic_vec3 r = v3_reflect(wo, b->frame.n);
+    return fmaxf(0.0f, v3_dot(r, wi));
+}
+
+void ic_bsdf_eval_lobes(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *diffuse, ic_vec3 *glossy)
+{
+    *diffuse = *glossy = v3s(0.0f);
+    if (!ic_bsdf_has_smooth(b) || v3_dot(wo, b->frame.n) <= 0.0f || v3_dot(wi, b->frame.n) <= 0.0f ||
+        v3_dot(wi, b->ng) <= 0.0f)
+        return;
+    *diffuse = v3_scale(b->kd, IC_INV_PI);
+    if (b->type == IC_MAT_GLOSSY)
+        *glossy = v3_scale(b->ks, (b->ns + 2.0f) / (2.0f * IC_PI) * powf(phong_cos(b, wo, wi), b->ns));
+}
+
+float ic_bsdf_pdf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
+{
+    if (!ic_bsdf_has_glossy(b) || v3_dot(wi, b->frame.n) <= 0.0f || v3_dot(wo, b->frame.n) <= 0.0f)
+        return 0.0f;
+    return (b->ns + 1.0f) / (2.0f * IC_PI) * powf(phong_cos(b, wo, wi), b->ns);
+}
+
+int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_bsdf_sample *out)
+{
+    out->is_specular = 0;
+    if (!ic_bsdf_has_glossy(b) || v3_dot(wo, b->frame.n) <= 0.0f)
+        return 0;
+    ic_frame rf = ic_frame_from_normal(v3_reflect(wo, b->frame.n));
+    out->wi = ic_frame_to_world(&rf, ic_warp_phong_lobe(u1, u2, b->ns));
+    float cos_i = v3_dot(out->wi, b->frame.n);
+    if (cos_i <= 0.0f || v3_dot(out->wi, b->ng) <= 0.0f)
+        return 0;
+    out->pdf = ic_bsdf_pdf_glossy(b, wo, out->wi);
+    /* f/pdf of the normalized Phong lobe sampled exactly: ks·(n+2)/(n+1)·cos θ_i. */
+    out->weight = v3_scale(b->ks, (b->ns + 2.0f) / (b->ns + 1.0f) * cos_i);
+    return out->pdf > 0.0f;
+}
+
+ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
+{
+    float cos_o = v3_dot(wo, b->frame.n), cos_i = v3_dot(wi, b->frame.n);
+    /* Both directions in the upper hemisphere of the shading normal and on the same side of the
+     * geometric normal (prevents light leaking through shading-normal interpolation). */
+    if (cos_o <= 0.0f || cos_i <= 0.0f || v3_dot(wi, b->ng) <= 0.0f)
+        return v3s(0.0f);
+    switch (b->type) {
+    case IC_MAT_DIFFUSE:
+        return v3_scale(b->kd, IC_INV_PI);
+    case IC_MAT_GLOSSY: {
+        float c = phong_cos(b, wo, wi);
+        float lobe = (b->ns + 2.0f) / (2.0f * IC_PI) * powf(c, b->ns);
+        return v3_add(v3_scale(b->kd, IC_INV_PI), v3_scale(b->ks, lobe));
+    }
+    default:
+        return v3s(0.0f);
+    }
+}
+
+float ic_bsdf_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
+{
+    float cos_i = v3_dot(wi, b->frame.n);
+    if (cos_i <= 0.0f || v3_dot(wo, b->frame.n) <= 0.0f)
+        return 0.0f;
+    switch (b->type) {
+    case IC_MAT_DIFFUSE:
+        return cos_i * IC_INV_PI;
+    case IC_MAT_GLOSSY: {
+        float c = phong_cos(b, wo, wi);
+        float pd = cos_i * IC_INV_PI;
+        float ps = (b->ns + 1.0f) / (2.0f * IC_PI) * powf(c, b->ns);
+        return b->p_diffuse * pd + (1.0f - b->p_diffuse) * ps;
+    }
+    default:
+        return 0.0f;
+    }
+}
+
+float ic_fresnel_dielectric(float cos_i, float eta)
+{
+    cos_i = ic_clampf(cos_i, -1.0f, 1.0f);
+    if (cos_i < 0.0f) {
+        eta = 1.0f / eta;
+        cos_i = -cos_i;
+    }
+    float sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
+    if (sin2_t >= 1.0f)
+        return 1.0f; /* total internal reflection */
+    float cos_t = sqrtf(1.0f - sin2_t);
+    float rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    float rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u2, ic_bsdf_sample *out)
+{
+    out->is_specular = 0;
+    switch (b->type) {
+    case IC_MAT_MIRROR:
+        out->wi = v3_reflect(wo, b->frame.n);
+        out->weight = b->ks;
+        out->pdf = 1.0f;
+        out->is_specular = 1;
+        return v3_dot(out->wi, b->ng) > 0.0f;
+    case IC_MAT_GLASS: {
+        ic_vec3 n = b->frame.n;
+        float cos_o = v3_dot(wo, n);
+        float F = ic_fresnel_dielectric(cos_o, b->ior);
+        out->is_specular = 1;
+        out->pdf = 1.0f;
+        if (u0 < F) {
+            out->wi = v3_reflect(wo, n);
+            out->weight = v3s(1.0f);
+            return 1;
+        }
+        /* Refraction: eta relative to the side wo is on. */
+        float eta = cos_o > 0.0f ? 1.0f / b->ior : b->ior; /* n_i / n_t */
+        ic_vec3 nn = cos_o > 0.0f ? n : v3_neg(n);
+        float ci = fabsf(cos_o);
+        float sin2_t = eta * eta * (1.0f - ci * ci);
+        if (sin2_t >= 1.0f)
+            return 0;
+        float ct = sqrtf(1.0f - sin2_t);
+        out->wi = v3_add(v3_scale(v3_neg(wo), eta), v3_scale(nn, eta * ci - ct));
+        out->wi = v3_norm(out->wi);
+        /* Radiance changes by (n_t/n_i)^2 across the interface, but the factors cancel over a closed
+         * dielectric (in, then out), and light sources are never inside glass in our scenes; weight 1
+         * keeps the estimator energy-consistent with the eye-side convention of most renderers. */
+        out->weight = v3s(1.0f);
+        return 1;
+    }
+    case IC_MAT_DIFFUSE:
+    case IC_MAT_GLOSSY: {
+        if (v3_dot(wo, b->frame.n) <= 0.0f)
+            return 0;
+        if (u0 < b->p_diffuse) {
+            out->wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
+        } else {
+            ic_vec3 r = v3_reflect(wo, b->frame.n);
+            ic_frame rf = ic_frame_from_normal(r);
+            out->wi = ic_frame_to_world(&rf, ic_warp_phong_lobe(u1, u2, b->ns));
+        }
+        out->pdf = ic_bsdf_pdf(b, wo, out->wi);
+        if (out->pdf <= 0.0f)
+            return 0;
+        ic_vec3 f = ic_bsdf_eval(b, wo, out->wi);
+        float cos_i = v3_dot(out->wi, b->frame.n);
+        out->weight = v3_scale(f, cos_i / out->pdf);
+        return !v3_is_black(out->weight);
+    }
+    }
+    return 0;
+}

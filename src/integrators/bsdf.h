@@ -1,0 +1,54 @@
+/*
+ * bsdf.h — the scattering models of the materials in scene.h, in one place.
+ *
+ * Lambertian (kd/π), the normalized modified Phong lobe (Lafortune & Willems 1994: ks·(n+2)/(2π)·cos^n α,
+ * α between the mirror direction of wo and wi), the ideal mirror and the smooth dielectric (Fresnel
+ * reflection/refraction, Schlick-free exact dielectric Fresnel). All directions are world space and
+ * point away from the surface; `ns` is the shading normal on the side of wo for opaque materials.
+ */
+#ifndef IC_INTEGRATORS_BSDF_H
+#define IC_INTEGRATORS_BSDF_H
+
+#include "scene/scene.h"
+
+/* A material evaluated at one surface point. */
+typedef struct ic_bsdf {
+    ic_material_type type;
+    ic_vec3 kd;            /* diffuse albedo (texture applied) */
+    ic_vec3 ks;            /* specular albedo */
+    float ns;              /* Phong exponent */
+    float ior;             /* glass */
+    float p_diffuse;       /* probability of sampling the diffuse lobe (glossy) */
+    ic_frame frame;        /* around the shading normal */
+    ic_vec3 ng;            /* geometric normal */
+} ic_bsdf;
+
+typedef struct ic_bsdf_sample {
+    ic_vec3 wi;            /* sampled direction */
+    ic_vec3 weight;        /* f·|cos|/pdf */
+    float pdf;             /* solid-angle pdf (0 for a failed sample; meaningless if is_specular) */
+    int is_specular;       /* delta lobe: no MIS, no NEE */
+} ic_bsdf_sample;
+
+/* Sets up the BSDF at surface s seen from direction wo. */
+void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec3 wo);
+/* 1 if the material has a non-delta lobe (light sampling makes sense). */
+static inline int ic_bsdf_has_smooth(const ic_bsdf *b) { return b->type == IC_MAT_DIFFUSE || b->type == IC_MAT_GLOSSY; }
+/* f(wo, wi) of the non-delta lobes (0 for delta materials). */
+ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
+/* Solid-angle pdf of ic_bsdf_sample choosing wi. */
+float ic_bsdf_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
+/* Samples wi; returns 0 if the sample failed (absorbed). */
+int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u2, ic_bsdf_sample *out);
+/* The two non-delta lobes of f(wo, wi) separately: diffuse kd/π and the glossy Phong lobe. */
+void ic_bsdf_eval_lobes(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *diffuse, ic_vec3 *glossy);
+/* 1 if the material has a glossy lobe. */
+static inline int ic_bsdf_has_glossy(const ic_bsdf *b) { return b->type == IC_MAT_GLOSSY && v3_maxc(b->ks) > 0.0f; }
+/* Solid-angle pdf of sampling wi from the glossy lobe alone. */
+float ic_bsdf_pdf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
+/* Samples the glossy lobe alone (weight = f_glossy·cos/pdf_glossy); 0 if it fails. */
+int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_bsdf_sample *out);
+/* Exact Fresnel reflectance of a dielectric for cos of the incident angle and eta = n_t / n_i. */
+float ic_fresnel_dielectric(float cos_i, float eta);
+
+#endif

@@ -1,0 +1,948 @@
+/*
+ * ic.c — irradiance-cache construction (lazy and batch) and the final render (ic.h).
+ *
+ * Batch construction follows seed 004_b98c0b87c8321936.txt §3.1 step by step:
+ *   pass 0      primary position/normal buffers → geometry discontinuity on a mip pyramid → blend →
+ *               deterministic dithering → candidates (ic_screen.c);
+ *   passes 1…n  screen stage (first `screen_passes` passes): irradiance discontinuity of the current
+ *               cache look-ups, same pyramid and dithering, pixels that already made a record dropped;
+ *               world stage: eye paths, hit points on every bounce where no record is valid, Morton
+ *               sort, clusters bounded by a box size, several candidates with distinct normals per
+ *               cluster (ic_world.c);
+ *   each stage's candidates are gathered in parallel (ic_gather_batch: results do not depend on the
+ *   thread count) and inserted in one transaction (ic_cache_insert_batch: validity-radius clamping,
+ *   neighbour clamping, in a fixed order). Stop at max_passes or when a pass finds fewer than
+ *   min_candidates. A last coverage sweep adds records for any pixel centre still uncovered, so every
+ *   primary shading point has at least one contributing record.
+ * Lazy construction (Ward 1988) visits the pixel centres' shading points in raster order, looks up,
+ * and on a miss gathers and inserts one record: serial, the reference for the others.
+ */
+#include "ic.h"
+
+#include "core/sampling.h"
+#include "core/threads.h"
+#include "integrators/ic_screen.h"
+#include "integrators/ic_world.h"
+#include "render/render.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_SPECULAR_CHAIN 8
+#define WORLD_PATH_BOUNCES 3
+#define WORLD_SLOTS (WORLD_PATH_BOUNCES + 1)
+
+typedef struct ic_ctx {
+    const ic_tracer *tr;       /* scene, accel, path-tracing parameters of the final render */
+    ic_tracer gather_tr;       /* same scene; max_depth set for record radiance (bounces) */
+    ic_ic_options o;           /* resolved options */
+    ic_cache *cache;
+    uint64_t seed;
+    int threads;
+    float pixel_angle;
+    float scene_diag;
+    atomic_ullong rays;        /* gathering rays (added once per trace call) */
+    ic_gbuffer g;
+    uint8_t *has_record;       /* per pixel: a screen-space record was made here */
+} ic_ctx;
+
+/* ---------------------------------------------------------------- record radiance (trace callback) */
+
+/* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
+ * is seeded from the ray itself (origin and direction bits), so it does not depend on which batch or
+ * thread traced it. */
+static void gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
+                         ic_vec3 *radiance)
+{
+    ic_ctx *c = user;
+    const ic_tracer *tr = &c->gather_tr;
+    enum { CHUNK = 256 };
+    ic_ray rays[CHUNK];
+    ic_hit hits[CHUNK];
+    uint64_t nrays = 0;
+    for (uint32_t base = 0; base < count; base += CHUNK) {
+        uint32_t n = count - base < CHUNK ? count - base : CHUNK;
+        for (uint32_t i = 0; i < n; ++i) {
+            rays[i].org = origins[base + i];
+            rays[i].dir = dirs[base + i];
+            rays[i].tnear = 0.0f;
+            rays[i].tfar = INFINITY;
+        }
+        ic_accel_intersect_n(tr->accel, rays, hits, n, 0);
+        nrays += n;
+        for (uint32_t i = 0; i < n; ++i) {
+            uint32_t j = base + i;
+            if (hits[i].triangle == IC_NO_HIT) {
+                hit_dist[j] = INFINITY;
+                radiance[j] = ic_scene_env_radiance(tr->scene, rays[i].dir);
+                continue;
+            }
+            hit_dist[j] = hits[i].t;
+            union { float f[6]; uint32_t u[6]; } bits;
+            bits.f[0] = rays[i].org.x;
+            bits.f[1] = rays[i].org.y;
+            bits.f[2] = rays[i].org.z;
+            bits.f[3] = rays[i].dir.x;
+            bits.f[4] = rays[i].dir.y;
+            bits.f[5] = rays[i].dir.z;
+            ic_rng rng = ic_rng_make(c->seed ^ 0x6761746865720000ULL, ((uint64_t)bits.u[0] << 32) | bits.u[1],
+                                     ((uint64_t)bits.u[2] << 32) | bits.u[3], ((uint64_t)bits.u[4] << 32) | bits.u[5]);
+            /* The hit is the path's second vertex (the record is the first): depth 1. Its emission is
+             * direct light of the record's point, delivered by NEE in the final render. */
+            ic_path_start st = {1, 0.0f, 1, 1};
+            radiance[j] = ic_pt_li_hit(tr, rays[i], &hits[i], &st, &rng, &nrays);
+        }
+    }
+    atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
+}
+
+/* ---------------------------------------------------------------- shading points */
+
+typedef struct shading_point {
+    int valid;
+    ic_surface s;
+    ic_vec3 n;                 /* shading normal facing the incoming ray */
+    float t_primary;           /* distance of the primary hit (pixel footprint) */
+} shading_point;
+
+/* Follows a camera ray through ideal specular surfaces to the first surface with a smooth lobe.
+ * Glass takes the more likely branch (refraction unless Fresnel reflection dominates): the shading
+ * points of the cache must be a deterministic function of the pixel. */
+static shading_point find_shading_point(const ic_tracer *tr, ic_ray ray, uint64_t *rays)
+{
+    shading_point sp;
+    memset(&sp, 0, sizeof sp);
+    for (int k = 0; k <= MAX_SPECULAR_CHAIN; ++k) {
+        ic_hit hit;
+        ++*rays;
+        ic_accel_intersect1(tr->accel, &ray, &hit);
+        if (hit.triangle == IC_NO_HIT)
+            return sp;
+        if (k == 0)
+            sp.t_primary = hit.t;
+        ic_surface s;
+        ic_scene_surface(tr->scene, hit.triangle, hit.u, hit.v, &s);
+        ic_vec3 wo = v3_neg(ray.dir);
+        ic_bsdf b;
+        ic_bsdf_init(&b, tr->scene, &s, wo);
+        if (ic_bsdf_has_smooth(&b)) {
+            sp.valid = 1;
+            sp.s = s;
+            sp.n = b.frame.n;
+            return sp;
+        }
+        ic_bsdf_sample bs;
+        float F = b.type == IC_MAT_GLASS ? ic_fresnel_dielectric(v3_dot(wo, b.frame.n), b.ior) : 1.0f;
+        if (!ic_bsdf_sample_dir(&b, wo, F > 0.5f ? 0.0f : 0.999f, 0.5f, 0.5f, &bs))
+            return sp;
+        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
+        ray.dir = bs.wi;
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+    }
+    return sp;
+}
+
+typedef struct gbuffer_job {
+    ic_ctx *c;
+    uint64_t *rays;            /* per thread, padded */
+} gbuffer_job;
+
+#define PAD 8
+
+static void gbuffer_row(void *p, int64_t y, int thread)
+{
+    gbuffer_job *j = p;
+    ic_ctx *c = j->c;
+    const ic_camera *cam = &c->tr->scene->camera;
+    for (int x = 0; x < cam->width; ++x) {
+        size_t i = (size_t)y * cam->width + x;
+        ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
+        shading_point sp = find_shading_point(c->tr, ray, &j->rays[thread * PAD]);
+        c->g.valid[i] = (uint8_t)sp.valid;
+        if (sp.valid) {
+            c->g.p[i] = sp.s.p;
+            c->g.n[i] = sp.n;
+            c->g.footprint[i] = sp.t_primary * c->pixel_angle;
+        }
+    }
+}
+
+static ic_result build_gbuffer(ic_ctx *c, ic_error *err)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    size_t n = (size_t)cam->width * cam->height;
+    c->g.width = cam->width;
+    c->g.height = cam->height;
+    c->g.p = calloc(n, sizeof *c->g.p);
+    c->g.n = calloc(n, sizeof *c->g.n);
+    c->g.footprint = calloc(n, sizeof *c->g.footprint);
+    c->g.valid = calloc(n, 1);
+    c->has_record = calloc(n, 1);
+    uint64_t *rays = calloc((size_t)c->threads * PAD, sizeof *rays);
+    if (!c->g.p || !c->g.n || !c->g.footprint || !c->g.valid || !c->has_record || !rays) {
+        free(rays);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the shading-point buffers");
+    }
+    gbuffer_job j = {c, rays};
+    ic_result r = ic_parallel_for(c->threads, cam->height, gbuffer_row, &j);
+    for (int t = 0; t < c->threads; ++t)
+        atomic_fetch_add(&c->rays, rays[t * PAD]);
+    free(rays);
+    return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
+}
+
+static void free_gbuffer(ic_ctx *c)
+{
+    free(c->g.p);
+    free(c->g.n);
+    free(c->g.footprint);
+    free(c->g.valid);
+    free(c->has_record);
+}
+
+/* ---------------------------------------------------------------- gathering and insertion */
+
+static void record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec)
+{
+    memset(rec, 0, sizeof *rec);
+    rec->position = cand->p;
+    rec->normal = cand->n;
+    rec->tangent = ic_frame_from_normal(cand->n).t;
+    rec->irradiance = gr->irradiance;
+    if (!c->o.no_gradients) {
+        for (int k = 0; k < 3; ++k) {
+            rec->grad_rot[k] = gr->rot_grad[k];
+            rec->grad_trans[k] = gr->trans_grad[k];
+        }
+    }
+    rec->sigma = gr->sigma;
+    /* A record that sees nothing (open sky) has an infinite harmonic-mean distance: its radius is
+     * then set by the upper bounds. */
+    rec->harmonic_mean_dist = isfinite(gr->harmonic_mean_dist) && gr->harmonic_mean_dist > 0.0f
+                                  ? gr->harmonic_mean_dist
+                                  : c->scene_diag;
+    rec->pixel_footprint = cand->footprint;
+}
+
+static ic_gather_point gather_point_of(const ic_candidate *cand)
+{
+    ic_gather_point gp;
+    gp.position = ic_offset_ray_origin(cand->p, cand->n, cand->n);
+    gp.normal = cand->n;
+    gp.key = cand->key;
+    return gp;
+}
+
+typedef struct phase_times {
+    double gather, insert;
+} phase_times;
+
+/* Gathers all candidates in parallel and inserts them as one batch. */
+static ic_result gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt,
+                                   ic_error *err)
+{
+    if (count == 0)
+        return IC_OK;
+    ic_gather_point *pts = malloc(sizeof *pts * count);
+    ic_gather_result *res = malloc(sizeof *res * count);
+    ic_record *recs = malloc(sizeof *recs * count);
+    ic_result r = IC_OK;
+    if (!pts || !res || !recs) {
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u cache candidates", count);
+        goto done;
+    }
+    for (uint32_t i = 0; i < count; ++i)
+        pts[i] = gather_point_of(&cand[i]);
+    double t0 = ic_seconds();
+    r = ic_gather_batch(&c->o.gather, gather_trace, c, c->threads, pts, count, res, err);
+    double t1 = ic_seconds();
+    pt->gather += t1 - t0;
+    if (r != IC_OK)
+        goto done;
+    for (uint32_t i = 0; i < count; ++i)
+        record_from_gather(c, &cand[i], &res[i], &recs[i]);
+    r = ic_cache_insert_batch(c->cache, recs, count, NULL, err);
+    pt->insert += ic_seconds() - t1;
+done:
+    free(pts);
+    free(res);
+    free(recs);
+    return r;
+}
+
+static ic_candidate candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag)
+{
+    ic_candidate cd;
+    cd.p = c->g.p[pixel];
+    cd.n = c->g.n[pixel];
+    cd.footprint = c->g.footprint[pixel];
+    cd.key = ((uint64_t)pixel << 8) | tag;
+    return cd;
+}
+
+/* ---------------------------------------------------------------- screen-space stage */
+
+typedef struct lookup_job {
+    ic_ctx *c;
+    float *lum;                /* per pixel luminance of the look-up */
+    uint8_t *covered;          /* per pixel: some record contributes */
+    ic_cache_acceptance acceptance;
+} lookup_job;
+
+static void lookup_row(void *p, int64_t y, int thread)
+{
+    (void)thread;
+    lookup_job *j = p;
+    const ic_gbuffer *g = &j->c->g;
+    for (int x = 0; x < g->width; ++x) {
+        size_t i = (size_t)y * g->width + x;
+        j->covered[i] = 0;
+        j->lum[i] = 0.0f;
+        if (!g->valid[i])
+            continue;
+        ic_cache_lookup q;
+        memset(&q, 0, sizeof q);
+        q.position = g->p[i];
+        q.normal = g->n[i];
+        q.acceptance = j->acceptance;
+        ic_cache_estimate e;
+        j->covered[i] = (uint8_t)ic_cache_query(j->c->cache, &q, &e);
+        j->lum[i] = v3_lum(e.irradiance);
+    }
+}
+
+static ic_result lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc)
+{
+    lookup_job j = {c, lum, covered, acc};
+    return ic_parallel_for(c->threads, c->g.height, lookup_row, &j);
+}
+
+/* ---------------------------------------------------------------- world-space stage */
+
+typedef struct world_job {
+    ic_ctx *c;
+    int pass;
+    ic_candidate *slots;       /* WORLD_SLOTS per traced pixel */
+    uint8_t *slot_count;
+    int stride, cols, rows;
+    uint64_t *rays;
+} world_job;
+
+/* One eye path per stride×stride block: every smooth hit where no record is valid becomes a
+ * candidate (seed 004 §3.1.3). Paths bounce diffusely (cosine) to reach indirectly seen surfaces. */
+static void world_path(void *p, int64_t item, int thread)
+{
+    world_job *j = p;
+    ic_ctx *c = j->c;
+    const ic_camera *cam = &c->tr->scene->camera;
+    int bx = (int)(item % j->cols), by = (int)(item / j->cols);
+    ic_rng rng = ic_rng_make(c->seed, (uint64_t)item, (uint64_t)j->pass, 0x776f726c64ULL);
+    int x = bx * j->stride + (int)ic_rng_below(&rng, (uint32_t)j->stride);
+    int y = by * j->stride + (int)ic_rng_below(&rng, (uint32_t)j->stride);
+    if (x >= cam->width)
+        x = cam->width - 1;
+    if (y >= cam->height)
+        y = cam->height - 1;
+    uint32_t pixel = (uint32_t)(y * cam->width + x);
+    ic_ray ray = ic_camera_ray(cam, (float)x + ic_rng_float(&rng), (float)y + ic_rng_float(&rng));
+    ic_candidate *out = &j->slots[item * WORLD_SLOTS];
+    int n = 0;
+    uint64_t *rays = &j->rays[thread * PAD];
+    for (int bounce = 0; bounce <= WORLD_PATH_BOUNCES; ++bounce) {
+        ic_hit hit;
+        ++*rays;
+        ic_accel_intersect1(c->tr->accel, &ray, &hit);
+        if (hit.triangle == IC_NO_HIT)
+            break;
+        ic_surface s;
+        ic_scene_surface(c->tr->scene, hit.triangle, hit.u, hit.v, &s);
+        ic_vec3 wo = v3_neg(ray.dir);
+        ic_bsdf b;
+        ic_bsdf_init(&b, c->tr->scene, &s, wo);
+        ic_vec3 wi;
+        if (ic_bsdf_has_smooth(&b)) {
+            ic_cache_lookup q;
+            memset(&q, 0, sizeof q);
+            q.position = s.p;
+            q.normal = b.frame.n;
+            ic_cache_estimate e;
+            if (!ic_cache_query(c->cache, &q, &e) && n < WORLD_SLOTS) {
+                out[n].p = s.p;
+                out[n].n = b.frame.n;
+                out[n].footprint = bounce == 0 ? hit.t * c->pixel_angle : 0.0f;
+                out[n].key = ((uint64_t)pixel << 8) | (uint64_t)(0x80 | (j->pass & 0x1f) << 2 | (bounce & 3));
+                ++n;
+            }
+            wi = ic_frame_to_world(&b.frame, ic_warp_cosine_hemisphere(ic_rng_float(&rng), ic_rng_float(&rng)));
+        } else {
+            ic_bsdf_sample bs;
+            if (!ic_bsdf_sample_dir(&b, wo, ic_rng_float(&rng), ic_rng_float(&rng), ic_rng_float(&rng), &bs))
+                break;
+            wi = bs.wi;
+        }
+        ray.org = ic_offset_ray_origin(s.p, s.ng, wi);
+        ray.dir = wi;
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+    }
+    j->slot_count[item] = (uint8_t)n;
+}
+
+/* Collects world-stage candidates in item order (deterministic), then clusters and selects. */
+static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *out_count, ic_error *err)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    world_job j;
+    memset(&j, 0, sizeof j);
+    j.c = c;
+    j.pass = pass;
+    j.stride = c->o.world_stride;
+    j.cols = (cam->width + j.stride - 1) / j.stride;
+    j.rows = (cam->height + j.stride - 1) / j.stride;
+    int64_t items = (int64_t)j.cols * j.rows;
+    j.slots = malloc(sizeof *j.slots * (size_t)items * WORLD_SLOTS);
+    j.slot_count = calloc((size_t)items, 1);
+    j.rays = calloc((size_t)c->threads * PAD, sizeof *j.rays);
+    if (!j.slots || !j.slot_count || !j.rays) {
+        free(j.slots);
+        free(j.slot_count);
+        free(j.rays);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for world-space candidates");
+    }
+    ic_result r = ic_parallel_for(c->threads, items, world_path, &j);
+    for (int t = 0; t < c->threads; ++t)
+        atomic_fetch_add(&c->rays, j.rays[t * PAD]);
+    uint32_t n = 0;
+    for (int64_t i = 0; i < items; ++i)
+        for (int k = 0; k < j.slot_count[i]; ++k)
+            j.slots[n++] = j.slots[i * WORLD_SLOTS + k];
+    const ic_scene *sc = c->tr->scene;
+    *out_count = ic_world_select(j.slots, n, sc->bounds_min, sc->bounds_max, c->o.cluster_size * c->scene_diag, 3,
+                                 30.0f);
+    *out = j.slots;
+    free(j.slot_count);
+    free(j.rays);
+    return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
+}
+
+/* ---------------------------------------------------------------- strategies */
+
+static void report(const ic_render_options *opt, const char *phase, double f)
+{
+    if (opt->progress)
+        opt->progress(opt->progress_user, phase, f);
+}
+
+/* Candidates from dithering a need map; pixels that already made a record are dropped. */
+static uint32_t dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix, ic_candidate *cand, uint64_t tag)
+{
+    uint32_t np = ic_screen_dither(&c->g, need, c->o.dither_threshold, pix);
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < np; ++i) {
+        if (c->has_record[pix[i]])
+            continue;
+        c->has_record[pix[i]] = 1;
+        cand[n++] = candidate_at_pixel(c, pix[i], tag);
+    }
+    return n;
+}
+
+/* Adds records at pixel centres that no record covers (construction acceptance), clustered so that
+ * one record serves a whole uncovered patch; repeats until every shading point is covered. */
+static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_candidate *cand, phase_times *pt,
+                                uint32_t *added, ic_error *err)
+{
+    *added = 0;
+    size_t npix = (size_t)c->g.width * c->g.height;
+    for (int round = 0; round < 16; ++round) {
+        ic_result r = lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+        if (r != IC_OK)
+            return ic_error_set(err, r, "could not start threads");
+        uint32_t n = 0;
+        for (size_t i = 0; i < npix; ++i)
+            if (c->g.valid[i] && !covered[i])
+                cand[n++] = candidate_at_pixel(c, (uint32_t)i, 0x40 | (uint64_t)round);
+        if (n == 0)
+            return IC_OK;
+        /* Small clusters: each selected record covers at least its own pixel, so this terminates. */
+        const ic_scene *sc = c->tr->scene;
+        n = ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->scene_diag, 3,
+                            30.0f);
+        r = gather_and_insert(c, cand, n, pt, err);
+        if (r != IC_OK)
+            return r;
+        *added += n;
+    }
+    return IC_OK;
+}
+
+static ic_result build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                             ic_error *err)
+{
+    size_t npix = (size_t)c->g.width * c->g.height;
+    float *need = malloc(sizeof *need * npix);
+    float *lum = malloc(sizeof *lum * npix);
+    uint8_t *covered = malloc(npix);
+    uint32_t *pix = malloc(sizeof *pix * npix);
+    ic_candidate *cand = malloc(sizeof *cand * npix);
+    ic_result r = IC_OK;
+    if (!need || !lum || !covered || !pix || !cand) {
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the construction buffers");
+        goto done;
+    }
+    /* Pass 0: geometry discontinuity. */
+    report(opt, "cache pass 0", 0.0);
+    r = ic_screen_geometry_need(&c->g, c->o.normal_weight, need);
+    if (r != IC_OK) {
+        ic_error_set(err, r, "out of memory for the discontinuity map");
+        goto done;
+    }
+    uint32_t n = dithered_candidates(c, need, pix, cand, 0);
+    r = gather_and_insert(c, cand, n, pt, err);
+    if (r != IC_OK)
+        goto done;
+    st->records_per_pass[0] = n;
+    st->passes = 1;
+    for (int pass = 1; pass <= c->o.max_passes; ++pass) {
+        report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
+        uint32_t found = 0, before = ic_cache_count(c->cache);
+        if (pass <= c->o.screen_passes) {
+            r = lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+            if (r != IC_OK) {
+                ic_error_set(err, r, "could not start threads");
+                goto done;
+            }
+            r = ic_screen_value_need(&c->g, lum, need);
+            if (r != IC_OK) {
+                ic_error_set(err, r, "out of memory for the discontinuity map");
+                goto done;
+            }
+            /* Pixels no record covers need one at the finest spacing. */
+            for (size_t i = 0; i < npix; ++i)
+                if (c->g.valid[i] && !covered[i])
+                    need[i] = 1e30f;
+            n = dithered_candidates(c, need, pix, cand, (uint64_t)pass);
+            found += n;
+            r = gather_and_insert(c, cand, n, pt, err);
+            if (r != IC_OK)
+                goto done;
+        }
+        ic_candidate *wc = NULL;
+        uint32_t wn = 0;
+        r = world_stage(c, pass, &wc, &wn, err);
+        if (r == IC_OK)
+            r = gather_and_insert(c, wc, wn, pt, err);
+        free(wc);
+        if (r != IC_OK)
+            goto done;
+        found += wn;
+        if (pass < 32)
+            st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
+        st->passes = pass + 1;
+        if ((int)found < c->o.min_candidates)
+            break;
+    }
+    uint32_t added;
+    r = coverage_sweep(c, lum, covered, cand, pt, &added, err);
+done:
+    free(need);
+    free(lum);
+    free(covered);
+    free(pix);
+    free(cand);
+    return r;
+}
+
+static ic_result build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                            ic_error *err)
+{
+    ic_gatherer *g = NULL;
+    ic_result r = ic_gatherer_create(&c->o.gather, gather_trace, c, &g, err);
+    if (r != IC_OK)
+        return r;
+    size_t npix = (size_t)c->g.width * c->g.height;
+    for (size_t i = 0; i < npix && r == IC_OK; ++i) {
+        if ((i & 4095) == 0)
+            report(opt, "lazy cache", (double)i / (double)npix);
+        if (!c->g.valid[i])
+            continue;
+        ic_cache_lookup q;
+        memset(&q, 0, sizeof q);
+        q.position = c->g.p[i];
+        q.normal = c->g.n[i];
+        ic_cache_estimate e;
+        if (ic_cache_query(c->cache, &q, &e))
+            continue;
+        ic_candidate cd = candidate_at_pixel(c, (uint32_t)i, 0);
+        ic_gather_point gp = gather_point_of(&cd);
+        ic_gather_result gr;
+        double t0 = ic_seconds();
+        r = c->o.gather.method == IC_GATHER_PROGRESSIVE ? ic_gather_progressive(g, &gp, 1, &gr)
+                                                        : ic_gather_stratified(g, &gp, &gr);
+        double t1 = ic_seconds();
+        pt->gather += t1 - t0;
+        if (r != IC_OK) {
+            ic_error_set(err, r, "gathering failed at pixel %zu", i);
+            break;
+        }
+        ic_record rec;
+        record_from_gather(c, &cd, &gr, &rec);
+        r = ic_cache_insert(c->cache, &rec, NULL, err);
+        pt->insert += ic_seconds() - t1;
+    }
+    ic_gatherer_destroy(g);
+    st->passes = 1;
+    st->records_per_pass[0] = ic_cache_count(c->cache);
+    return r;
+}
+
+/* ---------------------------------------------------------------- final render */
+
+/* Indirect diffuse irradiance at a shading point: the cache (final acceptance), or, where no record
+ * reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one cosine-
+ * distributed hemisphere ray that returns what a record's ray would: E ≈ π·L. */
+static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, ic_rng *rng, uint64_t *rays,
+                                 int *from_cache)
+{
+    ic_cache_lookup q;
+    memset(&q, 0, sizeof q);
+    q.position = s->p;
+    q.normal = n;
+    q.acceptance = IC_ACCEPT_FINAL;
+    ic_cache_estimate e;
+    if (ic_cache_query(c->cache, &q, &e)) {
+        *from_cache = 1;
+        return e.irradiance;
+    }
+    *from_cache = 0;
+    ic_frame f = ic_frame_from_normal(n);
+    ic_vec3 d = ic_frame_to_world(&f, ic_warp_cosine_hemisphere(ic_rng_float(rng), ic_rng_float(rng)));
+    ic_ray ray;
+    ray.org = ic_offset_ray_origin(s->p, s->ng, d);
+    ray.dir = d;
+    ray.tnear = 0.0f;
+    ray.tfar = INFINITY;
+    ic_hit hit;
+    ++*rays;
+    ic_accel_intersect1(c->tr->accel, &ray, &hit);
+    if (hit.triangle == IC_NO_HIT)
+        return v3_scale(ic_scene_env_radiance(c->tr->scene, d), IC_PI);
+    ic_path_start st = {1, 0.0f, 1, 1};
+    return v3_scale(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), IC_PI);
+}
+
+/* Direct light for the final render: one light sample; the environment is in the cache and is
+ * skipped here. The diffuse lobe takes the full light sample (it is never BSDF-sampled in this
+ * integrator); the glossy lobe is MIS-weighted against its own lobe sampling. */
+static ic_vec3 final_direct(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                            uint64_t *rays)
+{
+    float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+    ic_light_sample ls;
+    if (!ic_scene_sample_light(c->tr->scene, s->p, u0, u1, u2, &ls) || ls.pdf <= 0.0f)
+        return v3s(0.0f);
+    if (!ls.is_delta && isinf(ls.dist))
+        return v3s(0.0f); /* environment: cached */
+    ic_vec3 fd, fg;
+    ic_bsdf_eval_lobes(b, wo, ls.wi, &fd, &fg);
+    float wg = ls.is_delta ? 1.0f : ic_power_heuristic(ls.pdf, ic_bsdf_pdf_glossy(b, wo, ls.wi));
+    ic_vec3 f = v3_add(fd, v3_scale(fg, wg));
+    if (v3_is_black(f) || v3_is_black(ls.radiance))
+        return v3s(0.0f);
+    ic_ray shadow;
+    shadow.org = ic_offset_ray_origin(s->p, s->ng, ls.wi);
+    shadow.dir = ls.wi;
+    shadow.tnear = 0.0f;
+    shadow.tfar = isinf(ls.dist) ? INFINITY : ls.dist * (1.0f - 1e-4f);
+    ++*rays;
+    if (ic_accel_occluded1(c->tr->accel, &shadow))
+        return v3s(0.0f);
+    return v3_scale(v3_mul(f, ls.radiance), fabsf(v3_dot(ls.wi, b->frame.n)) / ls.pdf);
+}
+
+typedef struct final_ctx {
+    const ic_ctx *c;
+    int indirect_only;         /* AOV: indirect diffuse at the first shading point only */
+} final_ctx;
+
+static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic_rng *rng, int thread,
+                            uint64_t *rays)
+{
+    (void)pixel;
+    (void)thread;
+    const final_ctx *fc = p;
+    const ic_ctx *c = fc->c;
+    const ic_scene *scene = c->tr->scene;
+    ic_ray ray = *camera_ray;
+    ic_vec3 L = v3s(0.0f), beta = v3s(1.0f);
+    int prev_glossy = 0; /* 0: camera or delta lobe, emission counts fully */
+    float prev_pdf = 0.0f;
+    ic_vec3 prev_p = ray.org;
+    for (int depth = 0; depth <= c->tr->pt.max_depth; ++depth) {
+        ic_hit hit;
+        ++*rays;
+        ic_accel_intersect1(c->tr->accel, &ray, &hit);
+        if (hit.triangle == IC_NO_HIT) {
+            /* The environment is never light-sampled in this integrator: full weight. */
+            if (!fc->indirect_only)
+                L = v3_add(L, v3_mul(beta, ic_scene_env_radiance(scene, ray.dir)));
+            break;
+        }
+        ic_surface s;
+        ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+        ic_vec3 wo = v3_neg(ray.dir);
+        ic_vec3 le = ic_scene_emission(scene, &s, wo);
+        if (!v3_is_black(le) && !fc->indirect_only) {
+            float w = prev_glossy ? ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle(scene, prev_p, hit.triangle,
+                                                                                            ray.dir, hit.t))
+                                  : 1.0f;
+            L = v3_add(L, v3_scale(v3_mul(beta, le), w));
+        }
+        ic_bsdf b;
+        ic_bsdf_init(&b, scene, &s, wo);
+        ic_bsdf_sample bs;
+        if (!ic_bsdf_has_smooth(&b)) {
+            if (!ic_bsdf_sample_dir(&b, wo, ic_rng_float(rng), ic_rng_float(rng), ic_rng_float(rng), &bs))
+                break;
+            beta = v3_mul(beta, bs.weight);
+            prev_glossy = 0;
+        } else {
+            int from_cache;
+            ic_vec3 E = cached_irradiance(c, &s, b.frame.n, rng, rays, &from_cache);
+            ic_vec3 indirect = v3_mul(v3_scale(b.kd, IC_INV_PI), E);
+            if (fc->indirect_only)
+                return v3_mul(beta, indirect);
+            L = v3_add(L, v3_mul(beta, v3_add(indirect, final_direct(c, &s, &b, wo, rng, rays))));
+            if (!ic_bsdf_has_glossy(&b) ||
+                !ic_bsdf_sample_glossy(&b, wo, ic_rng_float(rng), ic_rng_float(rng), &bs))
+                break;
+            beta = v3_mul(beta, bs.weight);
+            prev_glossy = 1;
+            prev_pdf = bs.pdf;
+        }
+        prev_p = s.p;
+        if (depth + 1 >= c->tr->pt.rr_depth) {
+            float q = fmaxf(0.05f, 1.0f - v3_maxc(beta));
+            if (ic_rng_float(rng) < q)
+                break;
+            beta = v3_scale(beta, 1.0f / (1.0f - q));
+        }
+        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
+        ray.dir = bs.wi;
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+    }
+    return L;
+}
+
+/* ---------------------------------------------------------------- diagnostics */
+
+static int project(const ic_camera *cam, ic_vec3 p, float *fx, float *fy, float *depth)
+{
+    ic_vec3 fwd = v3_norm(v3_sub(cam->target, cam->eye));
+    ic_vec3 right = v3_norm(v3_cross(fwd, cam->up));
+    ic_vec3 up = v3_cross(right, fwd);
+    ic_vec3 d = v3_sub(p, cam->eye);
+    float z = v3_dot(d, fwd);
+    if (z <= 0.0f)
+        return 0;
+    float th = tanf(0.5f * cam->fov_y_deg * IC_PI / 180.0f), aspect = (float)cam->width / (float)cam->height;
+    float sx = v3_dot(d, right) / (z * th * aspect), sy = v3_dot(d, up) / (z * th);
+    *fx = (sx + 1.0f) * 0.5f * (float)cam->width;
+    *fy = (1.0f - sy) * 0.5f * (float)cam->height;
+    *depth = z;
+    return 1;
+}
+
+static void put(ic_image *img, int x, int y, ic_vec3 c)
+{
+    if (x < 0 || y < 0 || x >= img->width || y >= img->height)
+        return;
+    float *px = &img->rgb[3 * ((size_t)y * img->width + x)];
+    px[0] = c.x;
+    px[1] = c.y;
+    px[2] = c.z;
+}
+
+/* Records seen from the camera (the G-buffer point at their pixel is near them) are drawn as a dot
+ * with a circle of their influence radius a_i·R_i, over a darkened copy of the image. */
+static ic_result draw_records(const ic_ctx *c, const ic_image *beauty, ic_image *out)
+{
+    ic_result r = ic_image_create(out, beauty->width, beauty->height);
+    if (r != IC_OK)
+        return r;
+    size_t n = (size_t)beauty->width * beauty->height * 3;
+    for (size_t i = 0; i < n; ++i)
+        out->rgb[i] = 0.5f * beauty->rgb[i];
+    const ic_camera *cam = &c->tr->scene->camera;
+    uint32_t count = ic_cache_count(c->cache);
+    for (uint32_t i = 0; i < count; ++i) {
+        ic_record rec;
+        if (ic_cache_get_record(c->cache, i, &rec) != IC_OK)
+            continue;
+        float fx, fy, z;
+        if (!project(cam, rec.position, &fx, &fy, &z))
+            continue;
+        int px = (int)fx, py = (int)fy;
+        if (px < 0 || py < 0 || px >= cam->width || py >= cam->height)
+            continue;
+        size_t gi = (size_t)py * cam->width + px;
+        if (!c->g.valid[gi] || v3_len(v3_sub(c->g.p[gi], rec.position)) > 4.0f * c->g.footprint[gi] + 1e-4f * c->scene_diag)
+            continue; /* hidden or seen only indirectly */
+        float rad_px = rec.accuracy * rec.radius / (z * c->pixel_angle);
+        ic_vec3 ring = v3(0.1f, 1.0f, 0.2f), dot = v3(1.0f, 0.15f, 0.1f);
+        int steps = (int)(6.3f * rad_px) + 8;
+        for (int k = 0; k < steps && rad_px >= 1.0f; ++k) {
+            float a = 2.0f * IC_PI * (float)k / (float)steps;
+            put(out, (int)(fx + rad_px * cosf(a)), (int)(fy + rad_px * sinf(a)), ring);
+        }
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+                put(out, px + dx, py + dy, dot);
+    }
+    return IC_OK;
+}
+
+static ic_result density_image(ic_ctx *c, ic_image *out)
+{
+    ic_result r = ic_image_create(out, c->g.width, c->g.height);
+    if (r != IC_OK)
+        return r;
+    for (int y = 0; y < c->g.height; ++y) {
+        for (int x = 0; x < c->g.width; ++x) {
+            size_t i = (size_t)y * c->g.width + x;
+            if (!c->g.valid[i])
+                continue;
+            ic_cache_lookup q;
+            memset(&q, 0, sizeof q);
+            q.position = c->g.p[i];
+            q.normal = c->g.n[i];
+            q.acceptance = IC_ACCEPT_FINAL;
+            ic_cache_estimate e;
+            ic_cache_query(c->cache, &q, &e);
+            out->rgb[3 * i] = out->rgb[3 * i + 1] = out->rgb[3 * i + 2] = (float)e.contributor_count;
+        }
+    }
+    return IC_OK;
+}
+
+/* ---------------------------------------------------------------- entry point */
+
+static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *scene)
+{
+    ic_ic_options o = *in;
+    if (o.bounces <= 0)
+        o.bounces = 3;
+    if (o.max_passes <= 0)
+        o.max_passes = 12;
+    if (o.min_candidates <= 0)
+        o.min_candidates = 16;
+    if (o.screen_passes <= 0)
+        o.screen_passes = 3;
+    if (o.dither_threshold <= 0.0f)
+        o.dither_threshold = 0.5f;
+    if (o.normal_weight <= 0.0f)
+        o.normal_weight = 4.0f;
+    if (o.world_stride <= 0)
+        o.world_stride = 2;
+    if (o.cluster_size <= 0.0f)
+        o.cluster_size = 0.02f;
+    if (o.cache.accuracy == 0.0f)
+        o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? 1.0f : 0.25f;
+    /* Radius bounds: 0 means the renderer's default, negative switches the bound off. */
+    float diag = v3_len(v3_sub(scene->bounds_max, scene->bounds_min));
+    o.cache.min_radius_pixels = o.cache.min_radius_pixels == 0.0f ? 1.5f : fmaxf(o.cache.min_radius_pixels, 0.0f);
+    o.cache.max_radius_pixels = o.cache.max_radius_pixels == 0.0f ? 24.0f : fmaxf(o.cache.max_radius_pixels, 0.0f);
+    o.cache.max_radius = o.cache.max_radius == 0.0f ? diag / 8.0f : (o.cache.max_radius < 0.0f ? INFINITY : o.cache.max_radius);
+    o.cache.min_radius = fmaxf(o.cache.min_radius, 0.0f);
+    c->o = o;
+    c->scene_diag = diag > 0.0f ? diag : 1.0f;
+}
+
+ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_image *out, ic_render_stats *st,
+                       ic_error *err)
+{
+    ic_ctx *c = calloc(1, sizeof *c);
+    if (!c)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory");
+    c->tr = tr;
+    c->seed = opt->seed;
+    c->threads = ic_resolve_threads(opt->threads);
+    c->pixel_angle = ic_camera_pixel_angle(&tr->scene->camera);
+    atomic_init(&c->rays, 0);
+    resolve_options(c, &opt->ic, tr->scene);
+    c->gather_tr = *tr;
+    c->gather_tr.pt.max_depth = c->o.bounces + 1;
+    c->o.gather.seed ^= opt->seed;
+    c->o.cache.threads = opt->threads;
+    phase_times pt = {0, 0};
+    ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);
+    if (r != IC_OK)
+        goto done;
+    double t0 = ic_seconds();
+    r = build_gbuffer(c, err);
+    if (r != IC_OK)
+        goto done;
+    double t_gbuffer = ic_seconds() - t0;
+    r = c->o.strategy == IC_STRATEGY_LAZY ? build_lazy(c, opt, st, &pt, err) : build_batch(c, opt, st, &pt, err);
+    if (r != IC_OK)
+        goto done;
+    st->records = ic_cache_count(c->cache);
+    st->gather_rays = atomic_load(&c->rays);
+
+    ic_image_loop loop;
+    memset(&loop, 0, sizeof loop);
+    loop.camera = &tr->scene->camera;
+    loop.spp = opt->spp;
+    loop.time_budget = opt->time_budget;
+    loop.threads = opt->threads;
+    loop.seed = opt->seed;
+    loop.phase = "final render";
+    loop.progress = opt->progress;
+    loop.progress_user = opt->progress_user;
+    final_ctx fc = {c, 0};
+    ic_image_loop_result lr;
+    r = ic_render_image(&loop, final_sample, &fc, out, &lr, err);
+    if (r != IC_OK)
+        goto done;
+    st->spp = lr.spp_done;
+    st->rays = lr.rays + st->gather_rays;
+    if (st->phase_count + 4 <= IC_MAX_PHASES) {
+        st->phases[st->phase_count].name = "shading points";
+        st->phases[st->phase_count++].seconds = t_gbuffer;
+        st->phases[st->phase_count].name = "gathering";
+        st->phases[st->phase_count++].seconds = pt.gather;
+        st->phases[st->phase_count].name = "insertion";
+        st->phases[st->phase_count++].seconds = pt.insert;
+        st->phases[st->phase_count].name = "final render";
+        st->phases[st->phase_count++].seconds = lr.seconds;
+    }
+    if (opt->aovs) {
+        ic_render_aovs *a = opt->aovs;
+        if (a->want_indirect) {
+            fc.indirect_only = 1;
+            loop.phase = "indirect AOV";
+            loop.time_budget = 0.0;
+            loop.spp = lr.spp_done;
+            ic_image_loop_result lr2;
+            r = ic_render_image(&loop, final_sample, &fc, &a->indirect, &lr2, err);
+            if (r != IC_OK)
+                goto done;
+        }
+        if (a->want_records && (r = draw_records(c, out, &a->records)) != IC_OK) {
+            ic_error_set(err, r, "out of memory for the records AOV");
+            goto done;
+        }
+        if (a->want_density && (r = density_image(c, &a->density)) != IC_OK) {
+            ic_error_set(err, r, "out of memory for the density AOV");
+            goto done;
+        }
+    }
+done:
+    ic_cache_destroy(c->cache);
+    free_gbuffer(c);
+    free(c);
+    return r;
+}

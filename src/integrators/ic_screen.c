@@ -1,0 +1,186 @@
+/* ic_screen.c — discontinuity maps, mip pyramid, blend and dithering (ic_screen.h; seed 004 §3.1). */
+#include "ic_screen.h"
+
+#include "core/vecmath.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_LEVELS 6 /* 1, 2, 4, 8, 16, 32 pixels: the dithering spacings */
+
+typedef struct level {
+    int w, h;
+    ic_vec3 *p, *n;
+    float *fp, *val;
+    uint8_t *valid;
+} level;
+
+static void level_free(level *l)
+{
+    free(l->p);
+    free(l->n);
+    free(l->fp);
+    free(l->val);
+    free(l->valid);
+    memset(l, 0, sizeof *l);
+}
+
+static int level_alloc(level *l, int w, int h)
+{
+    size_t n = (size_t)w * (size_t)h;
+    l->w = w;
+    l->h = h;
+    l->p = calloc(n, sizeof *l->p);
+    l->n = calloc(n, sizeof *l->n);
+    l->fp = calloc(n, sizeof *l->fp);
+    l->val = calloc(n, sizeof *l->val);
+    l->valid = calloc(n, 1);
+    return l->p && l->n && l->fp && l->val && l->valid;
+}
+
+/* Level l+1 averages the valid pixels of each 2×2 block of level l. */
+static void downsample(const level *a, level *b)
+{
+    for (int y = 0; y < b->h; ++y) {
+        for (int x = 0; x < b->w; ++x) {
+            ic_vec3 p = v3s(0), n = v3s(0);
+            float fp = 0, val = 0;
+            int cnt = 0;
+            for (int dy = 0; dy < 2; ++dy) {
+                for (int dx = 0; dx < 2; ++dx) {
+                    int sx = 2 * x + dx, sy = 2 * y + dy;
+                    if (sx >= a->w || sy >= a->h)
+                        continue;
+                    size_t i = (size_t)sy * a->w + sx;
+                    if (!a->valid[i])
+                        continue;
+                    p = v3_add(p, a->p[i]);
+                    n = v3_add(n, a->n[i]);
+                    fp += a->fp[i];
+                    val += a->val[i];
+                    ++cnt;
+                }
+            }
+            size_t o = (size_t)y * b->w + x;
+            if (cnt) {
+                float inv = 1.0f / (float)cnt;
+                b->p[o] = v3_scale(p, inv);
+                b->n[o] = v3_norm(n);
+                b->fp[o] = fp * inv;
+                b->val[o] = val * inv;
+                b->valid[o] = 1;
+            }
+        }
+    }
+}
+
+typedef float (*disc_fn)(const level *l, size_t i, size_t j, int lev, float k);
+
+static float geometry_disc(const level *l, size_t i, size_t j, int lev, float k)
+{
+    float nd = 1.0f - ic_clampf(v3_dot(l->n[i], l->n[j]), -1.0f, 1.0f);
+    float pixel = l->fp[i] * (float)(1 << lev);
+    float off = fabsf(v3_dot(l->n[i], v3_sub(l->p[j], l->p[i])));
+    return k * nd + (pixel > 0.0f ? off / pixel : 0.0f);
+}
+
+static float value_disc(const level *l, size_t i, size_t j, int lev, float k)
+{
+    (void)lev;
+    (void)k;
+    float a = l->val[i], b = l->val[j];
+    float m = fmaxf(fmaxf(a, b), 1e-6f);
+    return fabsf(a - b) / m;
+}
+
+static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc, float k, float *need)
+{
+    level lv[MAX_LEVELS];
+    memset(lv, 0, sizeof lv);
+    int nlev = 0;
+    ic_result r = IC_OK;
+    if (!level_alloc(&lv[0], g->width, g->height)) {
+        r = IC_ERR_OOM;
+        goto done;
+    }
+    size_t npix = (size_t)g->width * g->height;
+    memcpy(lv[0].p, g->p, npix * sizeof *g->p);
+    memcpy(lv[0].n, g->n, npix * sizeof *g->n);
+    memcpy(lv[0].fp, g->footprint, npix * sizeof *g->footprint);
+    memcpy(lv[0].valid, g->valid, npix);
+    if (values)
+        memcpy(lv[0].val, values, npix * sizeof *values);
+    nlev = 1;
+    while (nlev < MAX_LEVELS && lv[nlev - 1].w > 1 && lv[nlev - 1].h > 1) {
+        if (!level_alloc(&lv[nlev], (lv[nlev - 1].w + 1) / 2, (lv[nlev - 1].h + 1) / 2)) {
+            r = IC_ERR_OOM;
+            goto done;
+        }
+        downsample(&lv[nlev - 1], &lv[nlev]);
+        ++nlev;
+    }
+    memset(need, 0, npix * sizeof *need);
+    /* Blend of the up-scaled levels (nearest up-scaling; each level weighs the same). */
+    for (int l = 0; l < nlev; ++l) {
+        const level *L = &lv[l];
+        for (int y = 0; y < g->height; ++y) {
+            for (int x = 0; x < g->width; ++x) {
+                size_t o = (size_t)y * g->width + x;
+                if (!g->valid[o])
+                    continue;
+                int lx = x >> l, ly = y >> l;
+                size_t i = (size_t)ly * L->w + lx;
+                if (!L->valid[i])
+                    continue;
+                float d = 0.0f;
+                const int nx[4] = {-1, 1, 0, 0}, ny[4] = {0, 0, -1, 1};
+                for (int q = 0; q < 4; ++q) {
+                    int ax = lx + nx[q], ay = ly + ny[q];
+                    if (ax < 0 || ay < 0 || ax >= L->w || ay >= L->h)
+                        continue;
+                    size_t j = (size_t)ay * L->w + ax;
+                    if (L->valid[j])
+                        d = fmaxf(d, disc(L, i, j, l, k));
+                }
+                need[o] += d;
+            }
+        }
+    }
+done:
+    for (int l = 0; l < MAX_LEVELS; ++l)
+        level_free(&lv[l]);
+    return r;
+}
+
+ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, float *need)
+{
+    return need_map(g, NULL, geometry_disc, k_normal, need);
+}
+
+ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, float *need)
+{
+    return need_map(g, luminance, value_disc, 0.0f, need);
+}
+
+uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, uint32_t *pixels)
+{
+    uint32_t count = 0;
+    for (int y = 0; y < g->height; ++y) {
+        for (int x = 0; x < g->width; ++x) {
+            size_t o = (size_t)y * g->width + x;
+            if (!g->valid[o] || (x & 1) || (y & 1))
+                continue;
+            /* Coarsest of the nested grids {x % s == 0, y % s == 0}, s = 2..32, this pixel lies on. */
+            int grid = 2;
+            while (grid < 32 && x % (2 * grid) == 0 && y % (2 * grid) == 0)
+                grid *= 2;
+            /* Spacing this pixel's need asks for. */
+            int want = 32;
+            for (int i = 0; i < 4 && need[o] >= threshold * (float)(1 << i); ++i)
+                want = 16 >> i;
+            if (want <= grid)
+                pixels[count++] = (uint32_t)o;
+        }
+    }
+    return count;
+}

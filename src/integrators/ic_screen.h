@@ -1,0 +1,42 @@
+/*
+ * ic_screen.h — the screen-space candidate selection of seed 004_b98c0b87c8321936.txt §3.1.1–3.1.2:
+ * a discontinuity map (geometry in the first pass, irradiance in later passes) evaluated on every
+ * level of a mip pyramid, the up-scaled levels blended into one "need" map, and deterministic
+ * dithering that picks every 32nd, 16th, 8th, 4th or 2nd pixel by local need.
+ *
+ * Geometry discontinuity (seed 004 §3.1.1, surfDisc = k·normDiff + worldPosDiff): at pyramid level l,
+ * for each pixel, the largest over its 4 neighbours of
+ *     k · (1 − n·n')  +  |n · (p' − p)| / (2^l · footprint)
+ * i.e. the normal change plus the distance of the neighbour from this pixel's tangent plane measured
+ * in pixels of that level. Measuring the position difference off the tangent plane and in pixels makes
+ * the map independent of world scale and blind to in-plane motion (a slanted wall is not a
+ * discontinuity); the seed leaves k "depending on world scale", which this normalisation removes.
+ * Irradiance discontinuity (§3.1.2): the relative luminance difference |Y − Y'| / max(Y, Y', ε) of
+ * the current cache look-ups, on the same pyramid.
+ */
+#ifndef IC_INTEGRATORS_IC_SCREEN_H
+#define IC_INTEGRATORS_IC_SCREEN_H
+
+#include "irrcache/common.h"
+
+#include <stdint.h>
+
+/* Per-pixel shading-point buffers (one sample at each pixel centre). */
+typedef struct ic_gbuffer {
+    int width, height;
+    ic_vec3 *p;            /* shading point (first non-specular hit) */
+    ic_vec3 *n;            /* its shading normal, facing the viewer */
+    float *footprint;      /* world-space width of the pixel at the primary hit */
+    uint8_t *valid;        /* 1 if the pixel has a shading point */
+} ic_gbuffer;
+
+/* Need map from geometry: w*h floats (0 where invalid). k_normal weights the normal term. */
+ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, float *need);
+/* Need map from per-pixel luminance values (e.g. cache look-ups); invalid pixels ignored. */
+ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, float *need);
+/* Deterministic dithering: pixel (x, y) on the grid of spacing s ∈ {32,16,8,4,2} (the coarsest grid it
+ * lies on) is chosen if its need asks for spacing ≤ s; need ≥ threshold·2^(i) asks for spacing 16 >> i
+ * (i = 0..3), anything valid asks for 32. Writes chosen pixel indices in raster order; returns count. */
+uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, uint32_t *pixels);
+
+#endif

@@ -1,0 +1,118 @@
+/*
+ * pt.c — unidirectional path tracing with next-event estimation and MIS (Veach 1997, ch. 9: power
+ * heuristic, one light sample and one BSDF sample per vertex), Russian roulette on throughput.
+ */
+#include "pt.h"
+
+#include "core/sampling.h"
+
+ic_pt_params ic_pt_params_resolve(ic_pt_params p)
+{
+    if (p.max_depth <= 0)
+        p.max_depth = 8;
+    if (p.rr_depth <= 0)
+        p.rr_depth = 3;
+    return p;
+}
+
+ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                        uint64_t *rays)
+{
+    float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+    if (!ic_bsdf_has_smooth(b))
+        return v3s(0.0f);
+    ic_light_sample ls;
+    if (!ic_scene_sample_light(tr->scene, s->p, u0, u1, u2, &ls) || ls.pdf <= 0.0f)
+        return v3s(0.0f);
+    ic_vec3 f = ic_bsdf_eval(b, wo, ls.wi);
+    if (v3_is_black(f) || v3_is_black(ls.radiance))
+        return v3s(0.0f);
+    ic_ray shadow;
+    shadow.org = ic_offset_ray_origin(s->p, s->ng, ls.wi);
+    shadow.dir = ls.wi;
+    shadow.tnear = 0.0f;
+    shadow.tfar = isinf(ls.dist) ? INFINITY : ls.dist * (1.0f - 1e-4f);
+    ++*rays;
+    if (ic_accel_occluded1(tr->accel, &shadow))
+        return v3s(0.0f);
+    float cos_i = fabsf(v3_dot(ls.wi, b->frame.n));
+    float w = ls.is_delta ? 1.0f : ic_power_heuristic(ls.pdf, ic_bsdf_pdf(b, wo, ls.wi));
+    return v3_scale(v3_mul(f, ls.radiance), cos_i * w / ls.pdf);
+}
+
+ic_vec3 ic_pt_li_from(const ic_tracer *tr, ic_ray ray, const ic_path_start *st, ic_rng *rng, uint64_t *rays)
+{
+    return ic_pt_li_hit(tr, ray, NULL, st, rng, rays);
+}
+
+ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, const ic_path_start *st, ic_rng *rng,
+                     uint64_t *rays)
+{
+    const ic_scene *scene = tr->scene;
+    ic_vec3 L = v3s(0.0f), beta = v3s(1.0f);
+    float prev_pdf = st->pdf;
+    int prev_specular = st->is_specular;
+    int skip_emission = st->skip_first_emission;
+    ic_vec3 prev_p = ray.org;
+    for (int depth = st->depth;; ++depth) {
+        ic_hit hit;
+        if (first_hit) {
+            hit = *first_hit;
+            first_hit = NULL;
+        } else {
+            ++*rays;
+            ic_accel_intersect1(tr->accel, &ray, &hit);
+        }
+        if (hit.triangle == IC_NO_HIT) {
+            ic_vec3 le = ic_scene_env_radiance(scene, ray.dir);
+            if (!v3_is_black(le)) {
+                float w = 1.0f;
+                if (!prev_specular && prev_pdf > 0.0f)
+                    w = ic_power_heuristic(prev_pdf, ic_scene_light_pdf_env(scene, ray.dir));
+                L = v3_add(L, v3_scale(v3_mul(beta, le), w));
+            }
+            break;
+        }
+        ic_surface s;
+        ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+        ic_vec3 wo = v3_neg(ray.dir);
+        ic_vec3 le = skip_emission ? v3s(0.0f) : ic_scene_emission(scene, &s, wo);
+        skip_emission = 0;
+        if (!v3_is_black(le)) {
+            float w = 1.0f;
+            if (!prev_specular && prev_pdf > 0.0f)
+                w = ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle(scene, prev_p, hit.triangle, ray.dir, hit.t));
+            L = v3_add(L, v3_scale(v3_mul(beta, le), w));
+        }
+        if (depth >= tr->pt.max_depth)
+            break;
+        ic_bsdf b;
+        ic_bsdf_init(&b, scene, &s, wo);
+        L = v3_add(L, v3_mul(beta, ic_direct_light(tr, &s, &b, wo, rng, rays)));
+        ic_bsdf_sample bs;
+        float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+        if (!ic_bsdf_sample_dir(&b, wo, u0, u1, u2, &bs))
+            break;
+        beta = v3_mul(beta, bs.weight);
+        prev_pdf = bs.pdf;
+        prev_specular = bs.is_specular;
+        prev_p = s.p;
+        if (depth + 1 >= tr->pt.rr_depth) {
+            float q = fmaxf(0.05f, 1.0f - v3_maxc(beta));
+            if (ic_rng_float(rng) < q)
+                break;
+            beta = v3_scale(beta, 1.0f / (1.0f - q));
+        }
+        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
+        ray.dir = bs.wi;
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+    }
+    return L;
+}
+
+ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, ic_rng *rng, uint64_t *rays)
+{
+    ic_path_start st = {0, 0.0f, 1, 0};
+    return ic_pt_li_from(tr, ray, &st, rng, rays);
+}

@@ -1,0 +1,53 @@
+/*
+ * pt.h — the path-traced reference (DESIGN.md §9): next-event estimation with multiple importance
+ * sampling (power heuristic), Russian roulette, a maximum depth. Also the pieces the cache
+ * integrators reuse: direct light at a surface, and the radiance arriving along a ray.
+ */
+#ifndef IC_INTEGRATORS_PT_H
+#define IC_INTEGRATORS_PT_H
+
+#include "core/rng.h"
+#include "geom/accel.h"
+#include "integrators/bsdf.h"
+
+typedef struct ic_pt_params {
+    int max_depth;         /* maximum number of scattering events (default 8) */
+    int rr_depth;          /* Russian roulette starts after this many bounces (default 3) */
+} ic_pt_params;
+
+/* What a tracer needs: scene, accelerator, parameters. All read-only and shared by threads. */
+typedef struct ic_tracer {
+    const ic_scene *scene;
+    const ic_accel *accel;
+    ic_pt_params pt;
+} ic_tracer;
+
+/* Radiance arriving at the ray's origin along a camera ray (path traced). *rays counts traced rays. */
+ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, ic_rng *rng, uint64_t *rays);
+
+/* How a path continues from a vertex that was not the camera. */
+typedef struct ic_path_start {
+    int depth;             /* scattering events already made (counts towards max_depth and RR) */
+    float pdf;             /* solid-angle pdf that chose the ray at the previous vertex (MIS weight of the
+                              emission it finds against light sampling) */
+    int is_specular;       /* the previous vertex was a delta lobe (or the camera): emission counts fully */
+    int skip_first_emission; /* the first hit's emission is not counted at all (it is direct light,
+                                computed elsewhere: hemisphere rays of the irradiance cache) */
+} ic_path_start;
+
+/* Path-traced radiance arriving at the ray's origin along ray, continuing a path described by st. */
+ic_vec3 ic_pt_li_from(const ic_tracer *tr, ic_ray ray, const ic_path_start *st, ic_rng *rng, uint64_t *rays);
+
+/* Same, when the ray's first hit is already known (first_hit may be NULL: it is traced). */
+ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, const ic_path_start *st, ic_rng *rng,
+                     uint64_t *rays);
+
+/* Direct light reflected at surface s towards wo from one light sample (NEE, MIS-weighted against
+ * BSDF sampling). */
+ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                        uint64_t *rays);
+
+/* Default parameters filled into zero fields. */
+ic_pt_params ic_pt_params_resolve(ic_pt_params p);
+
+#endif

@@ -1,0 +1,49 @@
+/*
+ * render.h — the image loop shared by every integrator: camera rays with a tent pixel filter
+ * (filter importance sampling), tiles handed to all threads, progressive passes under an optional
+ * wall-time budget, progress reports, and per-phase statistics.
+ *
+ * Determinism: sample s of pixel i draws from the counter-based stream (seed, i, s), so the image
+ * never depends on the thread count or on which thread rendered a tile.
+ */
+#ifndef IC_RENDER_RENDER_H
+#define IC_RENDER_RENDER_H
+
+#include "core/rng.h"
+#include "geom/accel.h"
+#include "irrcache/image.h"
+
+/* Estimates the radiance of one camera sample. `thread` indexes per-thread scratch; rays counts rays. */
+typedef ic_vec3 (*ic_sample_fn)(void *ctx, const ic_ray *camera_ray, uint32_t pixel, ic_rng *rng, int thread,
+                                uint64_t *rays);
+
+typedef struct ic_image_loop {
+    const ic_camera *camera;
+    int spp;               /* samples per pixel (0 with a time budget: as many as fit) */
+    double time_budget;    /* seconds; 0 = none */
+    int threads;           /* 0 = all cores */
+    uint64_t seed;
+    const char *phase;     /* progress phase name */
+    ic_progress_fn progress;
+    void *progress_user;
+} ic_image_loop;
+
+typedef struct ic_image_loop_result {
+    int spp_done;          /* samples per pixel actually taken */
+    uint64_t rays;         /* rays traced by the sample function */
+    double seconds;
+} ic_image_loop_result;
+
+/* Primary ray through film position (fx, fy) in pixels (0,0 = top-left corner). */
+ic_ray ic_camera_ray(const ic_camera *cam, float fx, float fy);
+/* Width of one pixel's footprint at distance 1 along the view axis (for pixel-sized radii). */
+float ic_camera_pixel_angle(const ic_camera *cam);
+
+/* Renders into out (allocated here, width×height of the camera). */
+ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *ctx, ic_image *out,
+                          ic_image_loop_result *res, ic_error *err);
+
+/* Monotonic clock in seconds. */
+double ic_seconds(void);
+
+#endif

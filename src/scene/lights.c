@@ -1,0 +1,426 @@
+/*
+ * lights.c — light tables and light sampling for next-event estimation.
+ *
+ * One sample picks one light class with a fixed probability proportional to an estimate of the power
+ * each class brings into the scene (computed once at load; docs/scene-format.md, "Light sampling"):
+ *   triangles   Σ π·A·lum(Le) (× 2 if two-sided)          — emitted power
+ *   points      Σ 4π·lum(I)                               — emitted power
+ *   sun         π·r²·lum(E)                               — power crossing the scene's bounding sphere
+ *   environment 4π²·r²·mean lum(L) over the sphere         — same, for radiance arriving from all sides
+ * (r = bounding-sphere radius). Within a class: triangles ∝ power (CDF, then a uniform point on the
+ * triangle, PBR 3rd ed. §13.6.4), points ∝ power, the environment image ∝ lum·sin θ of texels (PBR 3rd
+ * ed. §14.2.4; each texel's weight is the maximum over its 3×3 neighbourhood so that the bilinear
+ * look-up never returns radiance where the pdf is zero), a constant sky uniformly over the sphere.
+ * The pdf functions below reproduce exactly the densities the sampler uses, for MIS.
+ */
+#include "scene/scene_internal.h"
+
+#include "core/sampling.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ------------------------------------------------------------------------------------------------ */
+/* environment mapping: direction <-> (u, v) of the lat-long image (scene.h) */
+
+static ic_vec3 rotate_y(ic_vec3 d, float deg)
+{
+    if (deg == 0.0f)
+        return d;
+    float a = deg * IC_PI / 180.0f, c = cosf(a), s = sinf(a);
+    return v3(c * d.x + s * d.z, d.y, -s * d.x + c * d.z);
+}
+
+/* World direction → image (u, v) in [0,1]; the map is rotated by rotation_deg about +y. */
+static void env_dir_to_uv(const ic_environment *env, ic_vec3 d, float *u, float *v)
+{
+    ic_vec3 m = rotate_y(d, -env->rotation_deg);
+    *u = 0.5f + atan2f(m.x, -m.z) * (0.5f * IC_INV_PI);
+    *v = acosf(ic_clampf(m.y, -1.0f, 1.0f)) * IC_INV_PI;
+}
+
+static ic_vec3 env_uv_to_dir(const ic_environment *env, float u, float v)
+{
+    float phi = (u - 0.5f) * 2.0f * IC_PI, theta = v * IC_PI;
+    float st = sinf(theta);
+    ic_vec3 m = v3(st * sinf(phi), cosf(theta), -st * cosf(phi));
+    return rotate_y(m, env->rotation_deg);
+}
+
+static const float *texel(const ic_image *img, int x, int y)
+{
+    x %= img->width;
+    if (x < 0)
+        x += img->width;
+    y = y < 0 ? 0 : (y >= img->height ? img->height - 1 : y);
+    return img->rgb + 3 * ((size_t)y * (size_t)img->width + (size_t)x);
+}
+
+ic_vec3 ic_scene_env_radiance(const ic_scene *scene, ic_vec3 d)
+{
+    const ic_environment *env = &scene->env;
+    if (!env->enabled)
+        return v3s(0.0f);
+    if (env->image.width <= 0)
+        return env->radiance;
+    float u, v;
+    env_dir_to_uv(env, d, &u, &v);
+    /* bilinear between texel centres; wraps in u, clamps in v */
+    float x = u * (float)env->image.width - 0.5f, y = v * (float)env->image.height - 0.5f;
+    int x0 = (int)floorf(x), y0 = (int)floorf(y);
+    float fx = x - (float)x0, fy = y - (float)y0;
+    const float *a = texel(&env->image, x0, y0), *b = texel(&env->image, x0 + 1, y0);
+    const float *c = texel(&env->image, x0, y0 + 1), *e = texel(&env->image, x0 + 1, y0 + 1);
+    ic_vec3 r;
+    float *out = &r.x;
+    for (int k = 0; k < 3; ++k)
+        out[k] = (1.0f - fy) * ((1.0f - fx) * a[k] + fx * b[k]) + fy * ((1.0f - fx) * c[k] + fx * e[k]);
+    return v3_mul(r, env->radiance);
+}
+
+/* Sampling weight of texel (x, y): max luminance over its 3×3 neighbourhood × sin θ of its centre. */
+static float env_texel_weight(const ic_environment *env, int x, int y)
+{
+    float lum = 0.0f;
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            const float *t = texel(&env->image, x + dx, y + dy);
+            lum = fmaxf(lum, v3_lum(v3_mul(v3(t[0], t[1], t[2]), env->radiance)));
+        }
+    float theta = ((float)y + 0.5f) / (float)env->image.height * IC_PI;
+    return (isfinite(lum) ? lum : 0.0f) * sinf(theta);
+}
+
+static ic_result build_env_tables(ic_scene *scene, ic_error *err)
+{
+    ic_environment *env = &scene->env;
+    int w = env->image.width, h = env->image.height;
+    env->marginal_cdf = malloc(sizeof(float) * ((size_t)h + 1));
+    env->conditional_cdf = malloc(sizeof(float) * (size_t)h * ((size_t)w + 1));
+    if (!env->marginal_cdf || !env->conditional_cdf)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for the environment map's sampling tables",
+                            scene->path);
+    double total = 0.0;
+    env->marginal_cdf[0] = 0.0f;
+    for (int y = 0; y < h; ++y) {
+        float *row = env->conditional_cdf + (size_t)y * ((size_t)w + 1);
+        double sum = 0.0;
+        row[0] = 0.0f;
+        for (int x = 0; x < w; ++x) {
+            sum += env_texel_weight(env, x, y);
+            row[x + 1] = (float)sum;
+        }
+        for (int x = 1; x <= w; ++x) /* normalise; an all-black row stays uniform (never picked) */
+            row[x] = sum > 0.0 ? (float)(row[x] / sum) : (float)x / (float)w;
+        row[w] = 1.0f;
+        total += sum;
+        env->marginal_cdf[y + 1] = (float)total;
+    }
+    for (int y = 1; y <= h; ++y)
+        env->marginal_cdf[y] = total > 0.0 ? (float)(env->marginal_cdf[y] / total) : (float)y / (float)h;
+    env->marginal_cdf[h] = 1.0f;
+    env->total_weight = (float)total;
+    return IC_OK;
+}
+
+/* Index i with cdf[i] <= u < cdf[i+1] among n intervals (cdf has n+1 entries, cdf[n] = 1), skipping
+ * empty intervals. */
+static uint32_t cdf_find(const float *cdf, uint32_t n, float u)
+{
+    uint32_t lo = 0, hi = n; /* invariant: answer in [lo, hi) */
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (cdf[mid] <= u)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    while (lo + 1 < n && cdf[lo + 1] <= cdf[lo])
+        ++lo; /* u landed on an empty interval's boundary */
+    return lo;
+}
+
+/* Weight (pdf in (u, v) up to 1/total) of the texel the direction falls in. */
+static float env_pdf_image(const ic_environment *env, ic_vec3 d)
+{
+    if (!(env->total_weight > 0.0f))
+        return 0.0f;
+    float u, v;
+    env_dir_to_uv(env, d, &u, &v);
+    int w = env->image.width, h = env->image.height;
+    int x = (int)(u * (float)w), y = (int)(v * (float)h);
+    x = x < 0 ? 0 : (x >= w ? w - 1 : x);
+    y = y < 0 ? 0 : (y >= h ? h - 1 : y);
+    float sin_theta = sinf(v * IC_PI);
+    if (!(sin_theta > 0.0f))
+        return 0.0f;
+    const float *row = env->conditional_cdf + (size_t)y * ((size_t)w + 1);
+    float p_row = env->marginal_cdf[y + 1] - env->marginal_cdf[y];
+    float p_col = row[x + 1] - row[x];
+    float pdf_uv = p_row * p_col * (float)w * (float)h;
+    return pdf_uv / (2.0f * IC_PI * IC_PI * sin_theta);
+}
+
+float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi)
+{
+    const ic_environment *env = &scene->env;
+    if (!env->enabled || !(scene->light_select.env > 0.0f))
+        return 0.0f;
+    if (env->image.width <= 0)
+        return scene->light_select.env * (0.25f * IC_INV_PI);
+    return scene->light_select.env * env_pdf_image(env, wi);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* building */
+
+static float tri_area(const ic_scene *s, uint32_t t)
+{
+    ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
+            p2 = s->positions[s->triangles[3 * t + 2]];
+    return 0.5f * v3_len(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+}
+
+/* Mean luminance of the environment over the sphere (radiance scale included). */
+static float env_mean_lum(const ic_environment *env)
+{
+    if (env->image.width <= 0)
+        return v3_lum(env->radiance);
+    int w = env->image.width, h = env->image.height;
+    double sum = 0.0, wsum = 0.0;
+    for (int y = 0; y < h; ++y) {
+        double st = sin(((double)y + 0.5) / h * 3.14159265358979323846);
+        for (int x = 0; x < w; ++x) {
+            const float *t = texel(&env->image, x, y);
+            float l = v3_lum(v3_mul(v3(t[0], t[1], t[2]), env->radiance));
+            sum += (isfinite(l) ? l : 0.0) * st;
+            wsum += st;
+        }
+    }
+    return wsum > 0.0 ? (float)(sum / wsum) : 0.0f;
+}
+
+ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
+{
+    /* triangle lights */
+    uint32_t count = 0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t)
+        if (!v3_is_black(s->materials[s->triangle_material[t]].emission))
+            ++count;
+    s->triangle_light = malloc(sizeof *s->triangle_light * (s->triangle_count ? s->triangle_count : 1));
+    s->tri_lights = malloc(sizeof *s->tri_lights * (count ? count : 1));
+    s->tri_light_cdf = malloc(sizeof *s->tri_light_cdf * (count + 1));
+    if (!s->triangle_light || !s->tri_lights || !s->tri_light_cdf)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for the light tables", s->path);
+    double total = 0.0;
+    s->tri_light_count = 0;
+    s->tri_light_cdf[0] = 0.0f;
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        const ic_material *m = &s->materials[s->triangle_material[t]];
+        s->triangle_light[t] = -1;
+        if (v3_is_black(m->emission))
+            continue;
+        ic_tri_light *l = &s->tri_lights[s->tri_light_count];
+        l->triangle = t;
+        l->area = tri_area(s, t);
+        l->power = IC_PI * l->area * v3_lum(m->emission) * (m->two_sided_emission ? 2.0f : 1.0f);
+        total += l->power;
+        s->triangle_light[t] = (int32_t)s->tri_light_count++;
+        s->tri_light_cdf[s->tri_light_count] = (float)total;
+    }
+    for (uint32_t i = 1; i <= s->tri_light_count; ++i)
+        s->tri_light_cdf[i] = total > 0.0 ? (float)(s->tri_light_cdf[i] / total) : (float)i / (float)s->tri_light_count;
+    if (s->tri_light_count)
+        s->tri_light_cdf[s->tri_light_count] = 1.0f;
+    s->tri_light_power = (float)total;
+
+    /* point lights */
+    s->point_light_cdf = malloc(sizeof *s->point_light_cdf * (s->point_light_count + 1));
+    if (!s->point_light_cdf)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for the light tables", s->path);
+    double point_power = 0.0;
+    s->point_light_cdf[0] = 0.0f;
+    for (uint32_t i = 0; i < s->point_light_count; ++i) {
+        point_power += 4.0 * IC_PI * v3_lum(s->point_lights[i].intensity);
+        s->point_light_cdf[i + 1] = (float)point_power;
+    }
+    for (uint32_t i = 1; i <= s->point_light_count; ++i)
+        s->point_light_cdf[i] = point_power > 0.0 ? (float)(s->point_light_cdf[i] / point_power)
+                                                  : (float)i / (float)s->point_light_count;
+    if (s->point_light_count)
+        s->point_light_cdf[s->point_light_count] = 1.0f;
+
+    /* environment */
+    if (s->env.enabled && s->env.image.width > 0) {
+        ic_result r = build_env_tables(s, err);
+        if (r != IC_OK)
+            return r;
+    }
+
+    /* class selection */
+    float radius = 0.5f * v3_len(v3_sub(s->bounds_max, s->bounds_min));
+    if (!(radius > 0.0f) || !isfinite(radius))
+        radius = 1.0f;
+    double w_tri = total;
+    double w_point = point_power;
+    double w_sun = s->sun.enabled ? IC_PI * radius * radius * v3_lum(s->sun.irradiance) : 0.0;
+    double w_env = 0.0;
+    if (s->env.enabled && (s->env.image.width <= 0 || s->env.total_weight > 0.0f))
+        w_env = 4.0 * IC_PI * IC_PI * radius * radius * env_mean_lum(&s->env);
+    double sum = w_tri + w_point + w_sun + w_env;
+    memset(&s->light_select, 0, sizeof s->light_select);
+    if (sum > 0.0 && isfinite(sum)) {
+        s->light_select.tri = (float)(w_tri / sum);
+        s->light_select.point = (float)(w_point / sum);
+        s->light_select.sun = (float)(w_sun / sum);
+        s->light_select.env = (float)(w_env / sum);
+    }
+    return IC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* sampling */
+
+float ic_scene_light_pdf_triangle(const ic_scene *scene, ic_vec3 p, uint32_t tri, ic_vec3 wi, float dist)
+{
+    (void)p;
+    if (tri >= scene->triangle_count || !(scene->tri_light_power > 0.0f))
+        return 0.0f;
+    int32_t li = scene->triangle_light[tri];
+    if (li < 0)
+        return 0.0f;
+    const ic_tri_light *l = &scene->tri_lights[li];
+    const ic_material *m = &scene->materials[scene->triangle_material[tri]];
+    ic_vec3 p0 = scene->positions[scene->triangles[3 * tri]], p1 = scene->positions[scene->triangles[3 * tri + 1]],
+            p2 = scene->positions[scene->triangles[3 * tri + 2]];
+    ic_vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    float cos_l = -v3_dot(ng, wi);
+    if (!m->two_sided_emission && cos_l <= 0.0f)
+        return 0.0f;
+    cos_l = fabsf(cos_l);
+    if (!(cos_l > 0.0f) || !(l->area > 0.0f))
+        return 0.0f;
+    float select = scene->light_select.tri * (l->power / scene->tri_light_power);
+    return select * dist * dist / (l->area * cos_l);
+}
+
+static int sample_triangle(const ic_scene *s, ic_vec3 p, float u0, float u1, float u2, ic_light_sample *ls)
+{
+    uint32_t li = cdf_find(s->tri_light_cdf, s->tri_light_count, u0);
+    const ic_tri_light *l = &s->tri_lights[li];
+    uint32_t t = l->triangle;
+    ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
+            p2 = s->positions[s->triangles[3 * t + 2]];
+    float b1, b2;
+    ic_warp_triangle(u1, u2, &b1, &b2);
+    ic_vec3 x = v3_add(v3_add(v3_scale(p0, 1.0f - b1 - b2), v3_scale(p1, b1)), v3_scale(p2, b2));
+    ic_vec3 d = v3_sub(x, p);
+    float dist2 = v3_len2(d);
+    if (!(dist2 > 0.0f))
+        return 0;
+    float dist = sqrtf(dist2);
+    ls->wi = v3_scale(d, 1.0f / dist);
+    ls->dist = dist;
+    ls->is_delta = 0;
+    const ic_material *m = &s->materials[s->triangle_material[t]];
+    ic_vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    float cos_l = -v3_dot(ng, ls->wi);
+    if ((!m->two_sided_emission && cos_l <= 0.0f) || cos_l == 0.0f)
+        return 0; /* the point sees the back of a one-sided emitter */
+    float select = s->light_select.tri * (l->power / s->tri_light_power);
+    ls->pdf = select * dist2 / (l->area * fabsf(cos_l));
+    ls->radiance = m->emission;
+    return ls->pdf > 0.0f && isfinite(ls->pdf);
+}
+
+static int sample_point(const ic_scene *s, ic_vec3 p, float u0, ic_light_sample *ls)
+{
+    uint32_t i = cdf_find(s->point_light_cdf, s->point_light_count, u0);
+    const ic_point_light *l = &s->point_lights[i];
+    ic_vec3 d = v3_sub(l->position, p);
+    float dist2 = v3_len2(d);
+    if (!(dist2 > 0.0f))
+        return 0;
+    float dist = sqrtf(dist2);
+    ls->wi = v3_scale(d, 1.0f / dist);
+    ls->dist = dist;
+    ls->radiance = v3_scale(l->intensity, 1.0f / dist2);
+    ls->pdf = s->light_select.point * (s->point_light_cdf[i + 1] - s->point_light_cdf[i]);
+    ls->is_delta = 1;
+    return ls->pdf > 0.0f;
+}
+
+static int sample_env(const ic_scene *s, float u1, float u2, ic_light_sample *ls)
+{
+    const ic_environment *env = &s->env;
+    ls->dist = INFINITY;
+    ls->is_delta = 0;
+    if (env->image.width <= 0) {
+        ls->wi = ic_warp_uniform_sphere(u1, u2);
+        ls->pdf = s->light_select.env * (0.25f * IC_INV_PI);
+        ls->radiance = env->radiance;
+        return 1;
+    }
+    int w = env->image.width, h = env->image.height;
+    uint32_t y = cdf_find(env->marginal_cdf, (uint32_t)h, u1);
+    float dy = env->marginal_cdf[y + 1] - env->marginal_cdf[y];
+    float fy = dy > 0.0f ? (u1 - env->marginal_cdf[y]) / dy : 0.5f;
+    const float *row = env->conditional_cdf + (size_t)y * ((size_t)w + 1);
+    uint32_t x = cdf_find(row, (uint32_t)w, u2);
+    float dx = row[x + 1] - row[x];
+    float fx = dx > 0.0f ? (u2 - row[x]) / dx : 0.5f;
+    float u = ((float)x + ic_clampf(fx, 0.0f, 0.99999f)) / (float)w;
+    float v = ((float)y + ic_clampf(fy, 0.0f, 0.99999f)) / (float)h;
+    float sin_theta = sinf(v * IC_PI);
+    if (!(sin_theta > 0.0f))
+        return 0;
+    ls->wi = env_uv_to_dir(env, u, v);
+    ls->pdf = s->light_select.env * dy * dx * (float)w * (float)h / (2.0f * IC_PI * IC_PI * sin_theta);
+    ls->radiance = ic_scene_env_radiance(s, ls->wi);
+    return ls->pdf > 0.0f && isfinite(ls->pdf);
+}
+
+int ic_scene_sample_light(const ic_scene *scene, ic_vec3 p, float u0, float u1, float u2, ic_light_sample *ls)
+{
+    const ic_light_selection *sel = &scene->light_select;
+    memset(ls, 0, sizeof *ls);
+    /* pick the class with u0, then stretch the rest of u0's interval back to [0,1) for the light */
+    float prob[4] = {sel->tri, sel->point, sel->sun, sel->env};
+    float edge[4] = {sel->tri, sel->tri + sel->point, sel->tri + sel->point + sel->sun, 1.0f};
+    for (int k = 3; k > 0 && prob[k] == 0.0f; --k)
+        edge[k - 1] = 1.0f; /* rounding must not leave u0 near 1 to a class that has no light */
+    float lo = 0.0f;
+    int cls = 0;
+    while (cls < 3 && u0 >= edge[cls]) {
+        lo = edge[cls];
+        ++cls;
+    }
+    float width = edge[cls] - lo;
+    float ur = width > 0.0f ? ic_clampf((u0 - lo) / width, 0.0f, 0.99999994f) : 0.0f;
+    int ok = 0;
+    switch (cls) {
+    case 0:
+        ok = sel->tri > 0.0f && sample_triangle(scene, p, ur, u1, u2, ls);
+        break;
+    case 1:
+        ok = sel->point > 0.0f && sample_point(scene, p, ur, ls);
+        break;
+    case 2:
+        if (sel->sun > 0.0f) {
+            ls->wi = scene->sun.direction;
+            ls->dist = INFINITY;
+            ls->radiance = scene->sun.irradiance;
+            ls->pdf = sel->sun;
+            ls->is_delta = 1;
+            ok = 1;
+        }
+        break;
+    default:
+        ok = sel->env > 0.0f && sample_env(scene, u1, u2, ls);
+        break;
+    }
+    if (!ok)
+        ls->pdf = 0.0f;
+    return ok;
+}

@@ -1,0 +1,413 @@
+/*
+ * mesh_import.c — mesh files (OBJ+MTL, glTF 2.0 / .glb, PLY, anything assimp reads) into the scene.
+ *
+ * assimp triangulates, joins identical vertices and pre-transforms the node hierarchy, so each file
+ * arrives as flat meshes in file space; we apply the scene's transform and append to the world-space
+ * triangle soup. Normals are not generated: a mesh without them is shaded flat (a zero normal at a
+ * vertex means "use the geometric normal", see scene_query.c). Zero-area triangles are dropped and
+ * counted: Embree would never hit them and they have no normal.
+ *
+ * Materials map to the renderer's four types (docs/scene-format.md, "Materials from mesh files"):
+ * - OBJ/MTL (and other Phong-style formats): illum 4/6/7, or d < 1 with Ni > 1, is glass (ior Ni);
+ *   illum 3/5 with Ks > 0 and Ns >= 10000 is a mirror tinted Ks; Ks > 0 and Ns > 0 is glossy
+ *   (Lambert Kd + normalized modified Phong Ks, exponent Ns); otherwise diffuse. Ke is emission.
+ * - glTF: base colour (factor × texture), metallic m and roughness r: kd = base (1 - m),
+ *   ks = mix(0.04, base, m), Phong exponent n = 2/α² - 2 with α = r², clamped to [1, 10000]; a
+ *   metal (m > 0.5) with n at the clamp is a mirror; KHR_materials_transmission > 0 is glass;
+ *   emission = emissiveFactor × KHR_materials_emissive_strength; doubleSided emits both ways.
+ */
+#include "scene/scene_internal.h"
+
+#include "core/vecmath.h"
+
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Phong exponents at or above this are treated as ideal mirrors (illum 3/5, glTF metals). */
+#define MIRROR_EXPONENT 10000.0f
+
+/* OBJ files: assimp keeps NaN/Inf but renumbers vertices, so find the first bad `v` line ourselves to
+ * report its line number and its 1-based vertex number as the file counts them. */
+static ic_result check_obj_vertices(const char *path, ic_error *err)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp)
+        return IC_OK; /* assimp will report it */
+    char line[4096];
+    long line_no = 0, vertex_no = 0;
+    ic_result r = IC_OK;
+    while (fgets(line, sizeof line, fp)) {
+        ++line_no;
+        const char *c = line;
+        while (*c == ' ' || *c == '\t')
+            ++c;
+        if (c[0] != 'v' || (c[1] != ' ' && c[1] != '\t'))
+            continue;
+        ++vertex_no;
+        c += 2;
+        for (int k = 0; k < 3; ++k) {
+            char *end;
+            float f = strtof(c, &end);
+            if (end == c)
+                break;
+            if (!isfinite(f)) {
+                r = ic_error_set(err, IC_ERR_PARSE,
+                                 "%s:%ld: vertex %ld has a non-finite coordinate; fix or remove it", path,
+                                 line_no, vertex_no);
+                break;
+            }
+            c = end;
+        }
+        if (r != IC_OK)
+            break;
+        /* a line longer than the buffer: skip its tail so it is not counted as lines */
+        while (!strchr(line, '\n') && fgets(line, sizeof line, fp)) {
+        }
+    }
+    fclose(fp);
+    return r;
+}
+
+static ic_vec3 color_or(const struct aiMaterial *am, const char *key, ic_vec3 fallback)
+{
+    struct aiColor4D c;
+    if (aiGetMaterialColor(am, key, 0, 0, &c) == aiReturn_SUCCESS)
+        return v3(c.r, c.g, c.b);
+    return fallback;
+}
+
+static float float_or(const struct aiMaterial *am, const char *key, float fallback)
+{
+    ai_real f;
+    unsigned int n = 1;
+    if (aiGetMaterialFloatArray(am, key, 0, 0, &f, &n) == aiReturn_SUCCESS && n == 1)
+        return (float)f;
+    return fallback;
+}
+
+static int int_or(const struct aiMaterial *am, const char *key, int fallback)
+{
+    int v;
+    unsigned int n = 1;
+    if (aiGetMaterialIntegerArray(am, key, 0, 0, &v, &n) == aiReturn_SUCCESS && n == 1)
+        return v;
+    return fallback;
+}
+
+/* First texture of type t, or 0. */
+static int texture_path(const struct aiMaterial *am, enum aiTextureType t, char *out, size_t size)
+{
+    struct aiString s;
+    if (aiGetMaterialTextureCount(am, t) == 0)
+        return 0;
+    if (aiGetMaterialTexture(am, t, 0, &s, NULL, NULL, NULL, NULL, NULL, NULL) != aiReturn_SUCCESS)
+        return 0;
+    if (s.length == 0)
+        return 0;
+    snprintf(out, size, "%s", s.data);
+    return 1;
+}
+
+static ic_vec3 clamp_color(ic_vec3 c)
+{
+    return v3(ic_clampf(isfinite(c.x) ? c.x : 0.0f, 0.0f, INFINITY), ic_clampf(isfinite(c.y) ? c.y : 0.0f, 0.0f, INFINITY),
+              ic_clampf(isfinite(c.z) ? c.z : 0.0f, 0.0f, INFINITY));
+}
+
+static void convert_phong(const struct aiMaterial *am, ic_material *m)
+{
+    m->kd = color_or(am, "$clr.diffuse", v3s(0.6f));
+    m->ks = color_or(am, "$clr.specular", v3s(0.0f));
+    m->ns = float_or(am, "$mat.shininess", 0.0f);
+    m->emission = color_or(am, "$clr.emissive", v3s(0.0f));
+    int illum = int_or(am, "$mat.illum", 2);
+    float d = float_or(am, "$mat.opacity", 1.0f);
+    float ni = float_or(am, "$mat.refracti", 1.0f);
+    int has_ks = v3_maxc(m->ks) > 0.0f;
+    if (illum == 4 || illum == 6 || illum == 7 || (d < 1.0f && ni > 1.0f)) {
+        m->type = IC_MAT_GLASS;
+        m->ior = ni > 1.0f ? ni : 1.5f;
+        if (!has_ks)
+            m->ks = v3s(1.0f);
+    } else if ((illum == 3 || illum == 5) && has_ks && m->ns >= MIRROR_EXPONENT) {
+        m->type = IC_MAT_MIRROR;
+    } else if (has_ks && m->ns > 0.0f) {
+        m->type = IC_MAT_GLOSSY;
+        m->ns = ic_clampf(m->ns, 1.0f, MIRROR_EXPONENT);
+    } else {
+        m->type = IC_MAT_DIFFUSE;
+    }
+}
+
+static void convert_gltf(const struct aiMaterial *am, ic_material *m)
+{
+    ic_vec3 base = color_or(am, "$clr.base", color_or(am, "$clr.diffuse", v3s(1.0f)));
+    float metal = ic_clampf(float_or(am, "$mat.metallicFactor", 1.0f), 0.0f, 1.0f);
+    float rough = ic_clampf(float_or(am, "$mat.roughnessFactor", 1.0f), 0.0f, 1.0f);
+    float alpha = rough * rough;
+    float n = alpha > 0.0f ? 2.0f / (alpha * alpha) - 2.0f : MIRROR_EXPONENT;
+    m->ns = ic_clampf(n, 1.0f, MIRROR_EXPONENT);
+    m->ks = v3_lerp(v3s(0.04f), base, metal);
+    m->kd = v3_scale(base, 1.0f - metal);
+    m->kd = v3(fminf(m->kd.x, 1.0f - m->ks.x), fminf(m->kd.y, 1.0f - m->ks.y), fminf(m->kd.z, 1.0f - m->ks.z));
+    m->kd = clamp_color(m->kd);
+    float strength = float_or(am, "$mat.emissiveIntensity", 1.0f);
+    m->emission = v3_scale(color_or(am, "$clr.emissive", v3s(0.0f)), strength);
+    m->two_sided_emission = int_or(am, "$mat.twosided", 0) != 0;
+    float transmission = float_or(am, "$mat.transmission.factor", 0.0f);
+    float ior = float_or(am, "$mat.refracti", 1.5f);
+    if (transmission > 0.0f) {
+        m->type = IC_MAT_GLASS;
+        m->ior = ior > 1.0f ? ior : 1.5f;
+        m->ks = v3s(1.0f);
+    } else if (metal > 0.5f && m->ns >= MIRROR_EXPONENT) {
+        m->type = IC_MAT_MIRROR;
+    } else {
+        m->type = IC_MAT_GLOSSY;
+    }
+}
+
+static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, int is_gltf, const char *mesh_path,
+                                  const char *mesh_dir, ic_material *m, ic_error *err)
+{
+    memset(m, 0, sizeof *m);
+    struct aiString name;
+    if (aiGetMaterialString(am, "?mat.name", 0, 0, &name) == aiReturn_SUCCESS)
+        snprintf(m->name, sizeof m->name, "%.127s", name.data);
+    m->kd_texture = -1;
+    m->ior = 1.5f;
+    if (is_gltf)
+        convert_gltf(am, m);
+    else
+        convert_phong(am, m);
+    m->kd = clamp_color(m->kd);
+    m->ks = clamp_color(m->ks);
+    m->emission = clamp_color(m->emission);
+
+    char rel[IC_SCENE_PATH_MAX], full[IC_SCENE_PATH_MAX], owner[IC_SCENE_PATH_MAX + 160];
+    if (texture_path(am, aiTextureType_BASE_COLOR, rel, sizeof rel) ||
+        texture_path(am, aiTextureType_DIFFUSE, rel, sizeof rel)) {
+        snprintf(owner, sizeof owner, "%s: material '%s'", mesh_path, m->name);
+        if (rel[0] == '*')
+            return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                                "%s: embedded texture '%s' is not supported; export the textures as separate files",
+                                owner, rel);
+        if (!ic_path_join(mesh_dir, rel, full, sizeof full))
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
+        return ic_scene_texture_load(scene, full, owner, &m->kd_texture, err);
+    }
+    return IC_OK;
+}
+
+static int grow(void **p, size_t elem, size_t count)
+{
+    void *q = realloc(*p, elem * (count ? count : 1));
+    if (!q)
+        return 0;
+    *p = q;
+    return 1;
+}
+
+/* Grows per-vertex arrays for `add` more vertices; allocates normals/uvs (zero-filled for vertices
+ * that had none) the first time a mesh brings them. */
+static int grow_vertices(ic_scene *s, uint32_t add, int want_normals, int want_uvs)
+{
+    size_t old = s->vertex_count, total = old + add;
+    if (!grow((void **)&s->positions, sizeof *s->positions, total))
+        return 0;
+    if (want_normals || s->normals) {
+        int fresh = s->normals == NULL;
+        if (!grow((void **)&s->normals, sizeof *s->normals, total))
+            return 0;
+        if (fresh)
+            memset(s->normals, 0, sizeof *s->normals * old);
+    }
+    if (want_uvs || s->uvs) {
+        int fresh = s->uvs == NULL;
+        if (!grow((void **)&s->uvs, sizeof *s->uvs * 2, total))
+            return 0;
+        if (fresh)
+            memset(s->uvs, 0, sizeof *s->uvs * 2 * old);
+    }
+    return 1;
+}
+
+/* Inverse transpose of the upper 3x3 of a row-major 4x4 (for normals), and its determinant. */
+static float normal_matrix(const float m[16], float n[9])
+{
+    float a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
+    float det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+    /* cofactor matrix = det · inverse transpose; the scale does not matter as normals are renormalized */
+    n[0] = e * i - f * h;
+    n[1] = -(d * i - f * g);
+    n[2] = d * h - e * g;
+    n[3] = -(b * i - c * h);
+    n[4] = a * i - c * g;
+    n[5] = -(a * h - b * g);
+    n[6] = b * f - c * e;
+    n[7] = -(a * f - c * d);
+    n[8] = a * e - b * d;
+    return det;
+}
+
+static ic_vec3 xform_point(const float m[16], struct aiVector3D p)
+{
+    return v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+              m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+
+static ic_vec3 xform_normal(const float n[9], struct aiVector3D v)
+{
+    ic_vec3 r = v3(n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
+                   n[6] * v.x + n[7] * v.y + n[8] * v.z);
+    float l = v3_len(r);
+    return (l > 0.0f && isfinite(l)) ? v3_scale(r, 1.0f / l) : v3s(0.0f);
+}
+
+static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
+                               const float m4[16], uint32_t material_base, ic_error *err)
+{
+    ic_scene *s = b->scene;
+    size_t add_vertices = 0, add_faces = 0;
+    int any_normals = 0, any_uvs = 0;
+    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
+        const struct aiMesh *mesh = ai->mMeshes[i];
+        add_vertices += mesh->mNumVertices;
+        add_faces += mesh->mNumFaces;
+        any_normals |= mesh->mNormals != NULL;
+        any_uvs |= mesh->mTextureCoords[0] != NULL;
+    }
+    if (s->vertex_count + add_vertices > UINT32_MAX / 4 || s->triangle_count + add_faces > UINT32_MAX / 4)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: too many vertices or triangles; split the scene",
+                            mesh_path);
+    if (!grow_vertices(s, (uint32_t)add_vertices, any_normals, any_uvs) ||
+        !grow((void **)&s->triangles, sizeof *s->triangles * 3, s->triangle_count + add_faces) ||
+        !grow((void **)&s->triangle_material, sizeof *s->triangle_material, s->triangle_count + add_faces))
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its geometry", mesh_path);
+
+    float nm[9];
+    float det = normal_matrix(m4, nm);
+    int flip = det < 0.0f; /* a mirroring transform reverses winding: swap to keep the front side */
+
+    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
+        const struct aiMesh *mesh = ai->mMeshes[i];
+        uint32_t base = s->vertex_count;
+        for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+            struct aiVector3D p = mesh->mVertices[v];
+            if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z))
+                return ic_error_set(err, IC_ERR_PARSE,
+                                    "%s: vertex %u of mesh '%s' has a non-finite coordinate; fix or remove it",
+                                    mesh_path, v + 1, mesh->mName.data);
+            s->positions[base + v] = xform_point(m4, p);
+            if (s->normals)
+                s->normals[base + v] = mesh->mNormals ? xform_normal(nm, mesh->mNormals[v]) : v3s(0.0f);
+            if (s->uvs) {
+                const struct aiVector3D *uv = mesh->mTextureCoords[0];
+                s->uvs[2 * (base + v) + 0] = uv && isfinite(uv[v].x) ? uv[v].x : 0.0f;
+                s->uvs[2 * (base + v) + 1] = uv && isfinite(uv[v].y) ? uv[v].y : 0.0f;
+            }
+        }
+        s->vertex_count += mesh->mNumVertices;
+        uint32_t mat = material_base + mesh->mMaterialIndex;
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            const struct aiFace *face = &mesh->mFaces[f];
+            if (face->mNumIndices != 3)
+                continue; /* points and lines have no surface */
+            uint32_t i0 = base + face->mIndices[0], i1 = base + face->mIndices[flip ? 2 : 1],
+                     i2 = base + face->mIndices[flip ? 1 : 2];
+            ic_vec3 p0 = s->positions[i0];
+            ic_vec3 c = v3_cross(v3_sub(s->positions[i1], p0), v3_sub(s->positions[i2], p0));
+            float len2 = v3_len2(c);
+            /* the same test ic_scene_surface relies on: a normalizable geometric normal */
+            if (!(len2 > 0.0f) || !isfinite(len2)) {
+                ++s->dropped_degenerate;
+                ++b->material_dropped[mat];
+                continue;
+            }
+            uint32_t t = s->triangle_count++;
+            s->triangles[3 * t + 0] = i0;
+            s->triangles[3 * t + 1] = i1;
+            s->triangles[3 * t + 2] = i2;
+            s->triangle_material[t] = mat;
+            ++b->material_tris[mat];
+        }
+    }
+    return IC_OK;
+}
+
+ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, ic_error *err)
+{
+    ic_scene *s = b->scene;
+    char ext[16], dir[IC_SCENE_PATH_MAX];
+    ic_path_extension(mesh_path, ext, sizeof ext);
+    ic_path_dirname(mesh_path, dir, sizeof dir);
+    int is_gltf = !strcmp(ext, ".gltf") || !strcmp(ext, ".glb");
+    if (!strcmp(ext, ".obj")) {
+        ic_result r = check_obj_vertices(mesh_path, err);
+        if (r != IC_OK)
+            return r;
+    }
+    const struct aiScene *ai = aiImportFile(
+        mesh_path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+    if (!ai)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: cannot import the mesh (%s); check that it is a valid OBJ, glTF "
+                                               "or PLY file",
+                            mesh_path, aiGetErrorString());
+    ic_result r = IC_OK;
+    if ((ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || ai->mNumMeshes == 0) {
+        r = ic_error_set(err, IC_ERR_PARSE, "%s: the file holds no triangle mesh; export the geometry as triangles",
+                         mesh_path);
+        goto done;
+    }
+
+    uint32_t material_base = s->material_count;
+    uint32_t nmat = ai->mNumMaterials ? ai->mNumMaterials : 1;
+    char *path_copy = malloc(strlen(mesh_path) + 1);
+    if (path_copy)
+        memcpy(path_copy, mesh_path, strlen(mesh_path) + 1);
+    if (!path_copy || !grow((void **)&b->mesh_paths, sizeof *b->mesh_paths, b->mesh_count + 1)) {
+        free(path_copy);
+        r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory", mesh_path);
+        goto done;
+    }
+    b->mesh_paths[b->mesh_count++] = path_copy;
+    if (!grow((void **)&s->materials, sizeof *s->materials, material_base + nmat) ||
+        !grow((void **)&b->material_dropped, sizeof *b->material_dropped, material_base + nmat) ||
+        !grow((void **)&b->material_tris, sizeof *b->material_tris, material_base + nmat) ||
+        !grow((void **)&b->material_mesh, sizeof *b->material_mesh, material_base + nmat)) {
+        r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its materials", mesh_path);
+        goto done;
+    }
+    for (uint32_t i = 0; i < nmat; ++i) {
+        ic_material *m = &s->materials[material_base + i];
+        b->material_dropped[material_base + i] = 0;
+        b->material_tris[material_base + i] = 0;
+        b->material_mesh[material_base + i] = b->mesh_count - 1;
+        if (ai->mNumMaterials == 0) {
+            memset(m, 0, sizeof *m);
+            snprintf(m->name, sizeof m->name, "default");
+            m->kd = v3s(0.6f);
+            m->kd_texture = -1;
+            m->ior = 1.5f;
+        } else {
+            r = convert_material(s, ai->mMaterials[i], is_gltf, mesh_path, dir, m, err);
+            if (r != IC_OK)
+                goto done;
+        }
+        ++s->material_count;
+    }
+
+    float identity[16];
+    ic_mat4_identity(identity);
+    r = append_meshes(b, ai, mesh_path, xform ? xform : identity, material_base, err);
+done:
+    aiReleaseImport(ai);
+    return r;
+}

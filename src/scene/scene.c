@@ -1,0 +1,348 @@
+/*
+ * scene.c — loading entry point, scene lifetime, final validation, default camera, textures, paths.
+ *
+ * ic_scene_load picks the front end by extension: ".json" goes to scene_json.c, a bare mesh
+ * (.obj .gltf .glb .ply) is imported as is and gets a fitted camera and, when it has no emitter, a
+ * constant white sky (radiance 1), so any mesh renders without a scene file (DESIGN.md §10).
+ * Everything else here is shared by both front ends.
+ */
+#ifndef _DEFAULT_SOURCE
+#define _DEFAULT_SOURCE /* realpath() */
+#endif
+#include "scene/scene_internal.h"
+
+#include "core/vecmath.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ------------------------------------------------------------------------------------------------ */
+/* paths */
+
+int ic_path_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+void ic_path_dirname(const char *path, char *dir, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        snprintf(dir, size, ".");
+    } else if (slash == path) {
+        snprintf(dir, size, "/");
+    } else {
+        snprintf(dir, size, "%.*s", (int)(slash - path), path);
+    }
+}
+
+int ic_path_join(const char *dir, const char *rel, char *out, size_t size)
+{
+    char fixed[IC_SCENE_PATH_MAX];
+    if (snprintf(fixed, sizeof fixed, "%s", rel) >= (int)sizeof fixed)
+        return 0;
+    for (char *c = fixed; *c; ++c)
+        if (*c == '\\')
+            *c = '/';
+    int n;
+    if (fixed[0] == '/' || !dir || !*dir || !strcmp(dir, "."))
+        n = snprintf(out, size, "%s", fixed);
+    else
+        n = snprintf(out, size, "%s/%s", dir, fixed);
+    return n >= 0 && (size_t)n < size;
+}
+
+/* Removes "." and "name/.." components of an absolute path in place (lexically). */
+static void normalize_absolute(char *path)
+{
+    char in[IC_SCENE_PATH_MAX];
+    snprintf(in, sizeof in, "%s", path);
+    char *end = path + 1; /* path[0] stays '/'; end is one past the last written char */
+    char *save = NULL;
+    for (char *comp = strtok_r(in, "/", &save); comp; comp = strtok_r(NULL, "/", &save)) {
+        if (!strcmp(comp, "."))
+            continue;
+        if (!strcmp(comp, "..")) {
+            if (end > path + 1) { /* drop the last component and its slash */
+                --end;
+                while (end > path + 1 && end[-1] != '/')
+                    --end;
+            }
+            continue;
+        }
+        size_t n = strlen(comp);
+        memcpy(end, comp, n);
+        end += n;
+        *end++ = '/';
+    }
+    if (end > path + 1)
+        --end; /* no trailing slash */
+    *end = '\0';
+}
+
+void ic_path_absolute(const char *path, char *out, size_t size)
+{
+    char dir[IC_SCENE_PATH_MAX], real[PATH_MAX];
+    ic_path_dirname(path, dir, sizeof dir);
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    if (realpath(dir, real)) {
+        snprintf(out, size, "%s%s%s", real, strcmp(real, "/") ? "/" : "", base);
+    } else if (path[0] != '/' && getcwd(real, sizeof real)) {
+        snprintf(out, size, "%s/%s", real, path);
+    } else {
+        snprintf(out, size, "%s", path);
+    }
+    if (out[0] == '/')
+        normalize_absolute(out);
+}
+
+void ic_path_extension(const char *path, char *ext, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(path, '.');
+    if (!dot || (slash && dot < slash)) {
+        snprintf(ext, size, "%s", "");
+        return;
+    }
+    size_t i = 0;
+    for (; dot[i] && i + 1 < size; ++i)
+        ext[i] = (char)((dot[i] >= 'A' && dot[i] <= 'Z') ? dot[i] - 'A' + 'a' : dot[i]);
+    ext[i] = '\0';
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* matrices */
+
+void ic_mat4_identity(float m[16])
+{
+    for (int i = 0; i < 16; ++i)
+        m[i] = (i % 5 == 0) ? 1.0f : 0.0f;
+}
+
+void ic_mat4_mul(const float a[16], const float b[16], float out[16])
+{
+    float r[16];
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+            float s = 0.0f;
+            for (int k = 0; k < 4; ++k)
+                s += a[4 * i + k] * b[4 * k + j];
+            r[4 * i + j] = s;
+        }
+    memcpy(out, r, sizeof r);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* textures */
+
+ic_result ic_scene_texture_load(ic_scene *scene, const char *path, const char *owner, int32_t *index,
+                                ic_error *err)
+{
+    for (uint32_t i = 0; i < scene->texture_count; ++i)
+        if (!strcmp(scene->textures[i].path, path)) {
+            *index = (int32_t)i;
+            return IC_OK;
+        }
+    if (!ic_path_exists(path)) {
+        char abs_path[IC_SCENE_PATH_MAX];
+        ic_path_absolute(path, abs_path, sizeof abs_path);
+        return ic_error_set(err, IC_ERR_IO, "%s: texture '%s' not found (resolved to %s); check the path", owner,
+                            path, abs_path);
+    }
+    ic_image img;
+    ic_error ierr;
+    ic_result r = ic_image_read(path, &img, &ierr);
+    if (r != IC_OK)
+        return ic_error_set(err, r, "%s: %s", owner, ierr.message);
+    ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));
+    if (!grown) {
+        ic_image_free(&img);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory loading texture '%s'", owner, path);
+    }
+    scene->textures = grown;
+    ic_texture *t = &scene->textures[scene->texture_count];
+    memset(t, 0, sizeof *t);
+    snprintf(t->path, sizeof t->path, "%.1023s", path);
+    t->width = img.width;
+    t->height = img.height;
+    t->rgb = img.rgb; /* ownership moves to the scene; released with ic_image_free in ic_scene_free */
+    *index = (int32_t)scene->texture_count++;
+    return IC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* camera */
+
+void ic_scene_fit_camera(ic_scene *scene, int width, int height)
+{
+    ic_camera *cam = &scene->camera;
+    ic_vec3 lo = scene->bounds_min, hi = scene->bounds_max;
+    if (scene->triangle_count == 0) {
+        lo = v3s(-1.0f);
+        hi = v3s(1.0f);
+    }
+    ic_vec3 centre = v3_scale(v3_add(lo, hi), 0.5f);
+    float radius = 0.5f * v3_len(v3_sub(hi, lo));
+    if (!(radius > 0.0f))
+        radius = 1.0f;
+    cam->width = width;
+    cam->height = height;
+    cam->fov_y_deg = 45.0f;
+    /* fit the bounding sphere into the narrower of the two fields of view */
+    float half_y = 0.5f * cam->fov_y_deg * IC_PI / 180.0f;
+    float half_x = atanf(tanf(half_y) * (float)width / (float)height);
+    float half = fminf(half_x, half_y);
+    float dist = radius / sinf(half);
+    cam->target = centre;
+    cam->eye = v3_add(centre, v3(0.0f, 0.0f, dist));
+    cam->up = v3(0.0f, 1.0f, 0.0f);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* finalize */
+
+ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
+{
+    ic_scene *s = b->scene;
+    /* an emitter all of whose triangles were degenerate cannot emit: almost surely an export bug */
+    for (uint32_t m = 0; m < s->material_count; ++m) {
+        if (v3_is_black(s->materials[m].emission))
+            continue;
+        if (b->material_tris[m] == 0 && b->material_dropped[m] > 0)
+            return ic_error_set(err, IC_ERR_PARSE,
+                                "%s: emissive material '%s' has zero total area (all %u of its triangles are "
+                                "degenerate); fix the light's geometry or remove its emission",
+                                b->mesh_paths[b->material_mesh[m]], s->materials[m].name, b->material_dropped[m]);
+    }
+    if (s->triangle_count > 0) {
+        ic_vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
+        for (uint32_t i = 0; i < 3 * s->triangle_count; ++i) {
+            ic_vec3 p = s->positions[s->triangles[i]];
+            lo = v3_min(lo, p);
+            hi = v3_max(hi, p);
+        }
+        s->bounds_min = lo;
+        s->bounds_max = hi;
+    }
+    return ic_scene_build_lights(s, err);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* load / free */
+
+void ic_scene_builder_release(ic_scene_builder *b)
+{
+    free(b->material_dropped);
+    free(b->material_tris);
+    free(b->material_mesh);
+    for (uint32_t i = 0; i < b->mesh_count; ++i)
+        free(b->mesh_paths[i]);
+    free(b->mesh_paths);
+    memset(b, 0, sizeof *b);
+}
+
+static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt,
+                                ic_error *err)
+{
+    if (!ic_path_exists(path)) {
+        char abs_path[IC_SCENE_PATH_MAX];
+        ic_path_absolute(path, abs_path, sizeof abs_path);
+        return ic_error_set(err, IC_ERR_IO, "%s: mesh not found (resolved to %s); check the path", path, abs_path);
+    }
+    ic_result r = ic_mesh_import(b, path, NULL, err);
+    if (r != IC_OK)
+        return r;
+    ic_scene *s = b->scene;
+    int has_emitter = 0;
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        if (!v3_is_black(s->materials[m].emission) && b->material_tris[m] > 0)
+            has_emitter = 1;
+    if (!has_emitter) {
+        s->env.enabled = 1;
+        s->env.radiance = v3s(1.0f);
+    }
+    r = ic_scene_finalize(b, err);
+    if (r != IC_OK)
+        return r;
+    ic_scene_fit_camera(s, opt->width > 0 ? opt->width : 512, opt->height > 0 ? opt->height : 512);
+    return IC_OK;
+}
+
+ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_scene **out, ic_error *err)
+{
+    static const ic_scene_load_options defaults = {0};
+    if (!out)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_scene_load: no output pointer given");
+    *out = NULL;
+    if (!path || !*path)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "empty scene path; give a .json scene or a mesh file");
+    if (!opt)
+        opt = &defaults;
+    if (opt->width < 0 || opt->height < 0)
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s: resolution override %dx%d is negative; give positive width and height", path,
+                            opt->width, opt->height);
+    if (strlen(path) >= sizeof((ic_scene *)0)->path)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: path too long; use a shorter path", path);
+
+    ic_scene *s = calloc(1, sizeof *s);
+    if (!s)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    snprintf(s->path, sizeof s->path, "%s", path);
+    ic_scene_builder b;
+    memset(&b, 0, sizeof b);
+    b.scene = s;
+
+    char ext[16];
+    ic_path_extension(path, ext, sizeof ext);
+    ic_result r;
+    if (!strcmp(ext, ".json")) {
+        r = ic_scene_load_json(&b, path, opt, err);
+    } else if (!strcmp(ext, ".obj") || !strcmp(ext, ".gltf") || !strcmp(ext, ".glb") || !strcmp(ext, ".ply")) {
+        r = load_bare_mesh(&b, path, opt, err);
+    } else {
+        r = ic_error_set(err, IC_ERR_UNSUPPORTED,
+                         "%s: unknown scene type '%s'; give a .json scene or a .obj, .gltf, .glb or .ply mesh",
+                         path, ext);
+    }
+    ic_scene_builder_release(&b);
+    if (r != IC_OK) {
+        ic_scene_free(s);
+        return r;
+    }
+    *out = s;
+    return IC_OK;
+}
+
+void ic_scene_free(ic_scene *s)
+{
+    if (!s)
+        return;
+    free(s->positions);
+    free(s->normals);
+    free(s->uvs);
+    free(s->triangles);
+    free(s->triangle_material);
+    free(s->materials);
+    for (uint32_t i = 0; i < s->texture_count; ++i) {
+        ic_image img = {s->textures[i].width, s->textures[i].height, s->textures[i].rgb};
+        ic_image_free(&img);
+    }
+    free(s->textures);
+    free(s->tri_lights);
+    free(s->tri_light_cdf);
+    free(s->triangle_light);
+    free(s->point_lights);
+    free(s->point_light_cdf);
+    ic_image_free(&s->env.image);
+    free(s->env.marginal_cdf);
+    free(s->env.conditional_cdf);
+    free(s);
+}

@@ -1,0 +1,68 @@
+/*
+ * scene_internal.h — what the scene module's files share and nobody else needs.
+ *
+ * Loading runs in three steps: the front end (scene_json.c for a JSON file, scene.c for a bare mesh)
+ * appends meshes through mesh_import.c into a builder, edits materials and lights, and finally
+ * ic_scene_finalize() validates what only the whole scene can tell (emitters of zero area), computes
+ * bounds and builds the light-sampling tables (lights.c).
+ */
+#ifndef IC_SCENE_INTERNAL_H
+#define IC_SCENE_INTERNAL_H
+
+#include "scene/scene.h"
+
+#include <stddef.h>
+
+/* Longest path the loader handles. */
+#define IC_SCENE_PATH_MAX 4096
+
+/* State kept while a scene is being assembled. */
+typedef struct ic_scene_builder {
+    ic_scene *scene;
+    uint32_t *material_dropped; /* per material: degenerate triangles dropped (material_count) */
+    uint32_t *material_tris;    /* per material: triangles kept (material_count) */
+    uint32_t *material_mesh;    /* per material: index into mesh_paths of the file that defined it */
+    char **mesh_paths;          /* every imported mesh file, for messages (mesh_count) */
+    uint32_t mesh_count;
+} ic_scene_builder;
+
+/* Releases the builder's own arrays (not the scene). */
+void ic_scene_builder_release(ic_scene_builder *b);
+
+/* Appends every triangle and material of a mesh file (assimp) to the scene, transformed by the
+ * row-major 4x4 matrix xform (NULL: identity). Degenerate triangles are dropped and counted. */
+ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, ic_error *err);
+
+/* Loads (or finds already loaded) the texture at path into scene->textures; *index receives its
+ * index. `owner` names who asked for it in messages ("mesh.obj: material 'wood'"). */
+ic_result ic_scene_texture_load(ic_scene *scene, const char *path, const char *owner, int32_t *index,
+                                ic_error *err);
+
+/* Validates, computes bounds and builds the light tables. `where` names the scene for messages. */
+ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err);
+
+/* Builds tri_lights, the CDFs, the environment importance tables and the light selection (lights.c). */
+ic_result ic_scene_build_lights(ic_scene *scene, ic_error *err);
+
+/* Camera looking at the bounds' centre from +z, vertical fov 45°, framing the bounding sphere. */
+void ic_scene_fit_camera(ic_scene *scene, int width, int height);
+
+/* JSON front end (scene_json.c): fills b->scene from the scene file at path. */
+ic_result ic_scene_load_json(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt,
+                             ic_error *err);
+
+/* Path helpers (scene.c). */
+int ic_path_exists(const char *path);                  /* regular file that can be opened */
+void ic_path_dirname(const char *path, char *dir, size_t size); /* "." for a bare name */
+/* dir/rel unless rel is absolute; backslashes in rel become slashes. Returns 0 if it does not fit. */
+int ic_path_join(const char *dir, const char *rel, char *out, size_t size);
+/* Absolute form of path for messages (directory part resolved with realpath where it exists). */
+void ic_path_absolute(const char *path, char *out, size_t size);
+/* Lower-case extension including the dot ("" if none). */
+void ic_path_extension(const char *path, char *ext, size_t size);
+
+/* Row-major 4x4 matrix helpers for transforms. */
+void ic_mat4_identity(float m[16]);
+void ic_mat4_mul(const float a[16], const float b[16], float out[16]);
+
+#endif

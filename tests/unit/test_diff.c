@@ -1,0 +1,173 @@
+/*
+ * test_diff.c — the `irrcache diff` sub-command: JSON and table output, exit codes, error lines
+ * and the heat map.
+ *
+ * cli/diff.c is compiled into this test (it depends on the image library only), so the command is
+ * tested without building the whole renderer; stdout and stderr are captured through files.
+ */
+#include "../../cli/diff.c"
+
+#include "test_util.h"
+
+#include <errno.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#ifndef IC_TEST_TMP
+#define IC_TEST_TMP "/tmp"
+#endif
+#define SCRATCH IC_TEST_TMP "/diff"
+
+static char out_text[8192], err_text[8192];
+
+static void slurp(const char *path, char *buf, size_t size)
+{
+    buf[0] = '\0';
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return;
+    size_t n = fread(buf, 1, size - 1, fp);
+    buf[n] = '\0';
+    fclose(fp);
+}
+
+/* Runs ic_cli_diff with the given arguments (after "diff"), capturing stdout and stderr. */
+static int run_diff(int count, const char *const *args)
+{
+    char *argv[16];
+    argv[0] = (char *)"diff";
+    for (int i = 0; i < count && i < 15; ++i)
+        argv[i + 1] = (char *)args[i];
+    fflush(stdout);
+    fflush(stderr);
+    int saved_out = dup(STDOUT_FILENO), saved_err = dup(STDERR_FILENO);
+    FILE *out = fopen(SCRATCH "/stdout.txt", "wb"), *err = fopen(SCRATCH "/stderr.txt", "wb");
+    if (saved_out < 0 || saved_err < 0 || !out || !err) {
+        fprintf(stderr, "cannot capture output\n");
+        exit(1);
+    }
+    dup2(fileno(out), STDOUT_FILENO);
+    dup2(fileno(err), STDERR_FILENO);
+    int status = ic_cli_diff(count + 1, argv);
+    fflush(stdout);
+    fflush(stderr);
+    dup2(saved_out, STDOUT_FILENO);
+    dup2(saved_err, STDERR_FILENO);
+    close(saved_out);
+    close(saved_err);
+    fclose(out);
+    fclose(err);
+    slurp(SCRATCH "/stdout.txt", out_text, sizeof out_text);
+    slurp(SCRATCH "/stderr.txt", err_text, sizeof err_text);
+    return status;
+}
+
+/* Value of "key": in a one-line JSON object, NAN if absent. */
+static double json_value(const char *json, const char *key)
+{
+    char pattern[64];
+    snprintf(pattern, sizeof pattern, "\"%s\":", key);
+    const char *at = strstr(json, pattern);
+    return at ? strtod(at + strlen(pattern), NULL) : NAN;
+}
+
+static void write_constant(const char *path, int w, int h, float v)
+{
+    ic_image img;
+    ic_error err;
+    ic_image_create(&img, w, h);
+    for (size_t i = 0; i < (size_t)w * (size_t)h * 3; ++i)
+        img.rgb[i] = v;
+    if (ic_image_write(path, &img, NULL, &err) != IC_OK)
+        fprintf(stderr, "%s\n", err.message);
+    ic_image_free(&img);
+}
+
+static int one_line(const char *s)
+{
+    const char *nl = strchr(s, '\n');
+    return nl && nl[1] == '\0';
+}
+
+int main(void)
+{
+    if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
+        perror(IC_TEST_TMP);
+    if (mkdir(SCRATCH, 0755) != 0 && errno != EEXIST)
+        perror(SCRATCH);
+    const char *ref = SCRATCH "/ref.exr", *same = SCRATCH "/same.pfm", *off = SCRATCH "/off.exr",
+               *small = SCRATCH "/small.exr", *heat = SCRATCH "/heat.png";
+    write_constant(ref, 16, 12, 0.5f);
+    write_constant(same, 16, 12, 0.5f);
+    write_constant(off, 16, 12, 0.6f);
+    write_constant(small, 8, 8, 0.5f);
+    remove(heat);
+
+    /* Identical images: one JSON object, infinite PSNR as 999.0. */
+    const char *identical[] = {same, ref, "--json"};
+    CHECK(run_diff(3, identical) == 0, "identical: %s", err_text);
+    CHECK(out_text[0] == '{' && one_line(out_text) && strstr(out_text, "}\n"), "not one JSON line: %s", out_text);
+    CHECK(json_value(out_text, "rmse") == 0.0 && json_value(out_text, "relmse") == 0.0 &&
+              json_value(out_text, "ssim") == 1.0 && json_value(out_text, "width") == 16.0 &&
+              json_value(out_text, "height") == 12.0,
+          "identical JSON: %s", out_text);
+    CHECK(strstr(out_text, "\"psnr_hdr\":999.0") && strstr(out_text, "\"psnr_ldr\":999.0"), "infinite PSNR: %s",
+          out_text);
+    CHECK(err_text[0] == '\0', "stderr not empty: %s", err_text);
+
+    /* Constant offset: known values; a heat map is written. */
+    const char *offset[] = {off, ref, "--json", "--heatmap", heat, "--max-error=0.5"};
+    CHECK(run_diff(6, offset) == 0, "offset: %s", err_text);
+    double d = (double)0.6f - 0.5;
+    CHECK_NEAR(json_value(out_text, "rmse"), d, 1e-8, "rmse");
+    CHECK_NEAR(json_value(out_text, "psnr_hdr"), 10.0 * log10(0.25 / (d * d)), 1e-6, "psnr_hdr");
+    ic_image map = {0};
+    ic_error err;
+    CHECK(ic_image_read(heat, &map, &err) == IC_OK && map.width == 16 && map.height == 12, "heat map: %s",
+          err.message);
+    ic_image_free(&map);
+
+    /* The table. */
+    const char *table[] = {off, ref};
+    CHECK(run_diff(2, table) == 0, "table: %s", err_text);
+    CHECK(strstr(out_text, "RMSE") && strstr(out_text, "PSNR LDR") && strstr(out_text, "SSIM") &&
+              strstr(out_text, "off.exr"),
+          "table: %s", out_text);
+
+    /* Help lists every option with its default. */
+    const char *help[] = {"--help"};
+    CHECK(run_diff(1, help) == 0, "help exit");
+    CHECK(strstr(out_text, "--json") && strstr(out_text, "--heatmap") && strstr(out_text, "--max-error") &&
+              strstr(out_text, "default") && strstr(out_text, "999.0"),
+          "help: %s", out_text);
+
+    /* Usage errors: exit 2, one line on stderr naming the culprit, nothing on stdout. */
+    const char *unknown[] = {off, ref, "--bogus"};
+    CHECK(run_diff(3, unknown) == 2 && one_line(err_text) && strstr(err_text, "irrcache diff: --bogus:") &&
+              out_text[0] == '\0',
+          "unknown option: %s", err_text);
+    const char *one[] = {off};
+    CHECK(run_diff(1, one) == 2 && one_line(err_text), "one image: %s", err_text);
+    const char *three[] = {off, ref, ref};
+    CHECK(run_diff(3, three) == 2 && one_line(err_text), "three images: %s", err_text);
+    const char *no_value[] = {off, ref, "--heatmap"};
+    CHECK(run_diff(3, no_value) == 2 && strstr(err_text, "--heatmap"), "missing value: %s", err_text);
+    const char *bad_format[] = {off, ref, "--heatmap", SCRATCH "/heat.jpg"};
+    CHECK(run_diff(4, bad_format) == 2 && strstr(err_text, "heat.jpg"), "heat-map format: %s", err_text);
+    const char *bad_max[] = {off, ref, "--max-error", "lots"};
+    CHECK(run_diff(4, bad_max) == 2 && strstr(err_text, "lots"), "bad --max-error: %s", err_text);
+
+    /* I/O and format errors: exit 1. */
+    const char *missing[] = {SCRATCH "/missing.exr", ref, "--json"};
+    CHECK(run_diff(3, missing) == 1 && one_line(err_text) && strstr(err_text, "irrcache diff: ") &&
+              strstr(err_text, "missing.exr:") && out_text[0] == '\0',
+          "missing file: %s", err_text);
+    const char *mismatch[] = {small, ref};
+    CHECK(run_diff(2, mismatch) == 1 && one_line(err_text) && strstr(err_text, "small.exr") &&
+              strstr(err_text, "8x8") && strstr(err_text, "16x12"),
+          "size mismatch: %s", err_text);
+    const char *unwritable[] = {off, ref, "--heatmap", SCRATCH "/no-such-dir/heat.png"};
+    CHECK(run_diff(4, unwritable) == 1 && one_line(err_text) && strstr(err_text, "heat.png"),
+          "unwritable heat map: %s", err_text);
+    TEST_MAIN_END();
+}

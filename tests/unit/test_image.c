@@ -1,0 +1,554 @@
+/*
+ * test_image.c — image I/O round trips, metrics against hand-computed values, heat maps, and bad
+ * input (missing, truncated, garbage and unwritable files) for src/image.
+ */
+#include "irrcache/image.h"
+#include "test_util.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#ifndef IC_TEST_TMP
+#define IC_TEST_TMP "/tmp"
+#endif
+#define SCRATCH IC_TEST_TMP "/image"
+
+static const char *scratch(const char *name)
+{
+    static char path[4][512]; /* a few paths alive at once */
+    static int next;
+    char *p = path[next++ % 4];
+    snprintf(p, sizeof path[0], "%s/%s", SCRATCH, name);
+    return p;
+}
+
+/* Deterministic test pattern: gradients, HDR highlights, exact zeros; odd sizes. */
+static ic_image pattern(int w, int h, float peak)
+{
+    ic_image img;
+    ic_image_create(&img, w, h);
+    uint32_t s = 12345u;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float *p = img.rgb + 3 * ((size_t)y * (size_t)w + (size_t)x);
+            s = s * 1664525u + 1013904223u;
+            float noise = (float)(s >> 8) / 16777216.0f;
+            p[0] = peak * (float)x / (float)(w - 1);
+            p[1] = peak * (float)y / (float)(h - 1) * noise;
+            p[2] = (x + y) % 7 == 0 ? 0.0f : peak * noise * noise;
+        }
+    return img;
+}
+
+static int file_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* Nonzero if a temporary sibling "<name>.tmp.*" of SCRATCH/<name> is left over. */
+static int temp_left_behind(const char *name)
+{
+    char prefix[256];
+    snprintf(prefix, sizeof prefix, "%s.tmp.", name);
+    DIR *d = opendir(SCRATCH);
+    if (!d)
+        return 0;
+    int found = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        if (strncmp(e->d_name, prefix, strlen(prefix)) == 0)
+            found = 1;
+    closedir(d);
+    return found;
+}
+
+static void write_bytes(const char *path, const void *data, size_t n)
+{
+    FILE *fp = fopen(path, "wb");
+    if (fp) {
+        fwrite(data, 1, n, fp);
+        fclose(fp);
+    }
+}
+
+static void test_create_free(void)
+{
+    ic_image img = {0};
+    ic_image_free(&img); /* zeroed: no-op */
+    ic_image_free(NULL);
+    CHECK(ic_image_create(&img, 0, 5) == IC_ERR_INVALID_ARG, "zero width accepted");
+    CHECK(ic_image_create(&img, 4, -1) == IC_ERR_INVALID_ARG, "negative height accepted");
+    CHECK(ic_image_create(&img, 3, 2) == IC_OK && img.rgb && img.width == 3 && img.height == 2, "create 3x2");
+    int zero = 1;
+    for (int i = 0; i < 18; ++i)
+        zero &= img.rgb[i] == 0.0f;
+    CHECK(zero, "create does not zero-fill");
+    ic_image_free(&img);
+    CHECK(img.rgb == NULL && img.width == 0, "free does not zero the struct");
+
+    CHECK(ic_image_is_writable_format("a/b.EXR") && ic_image_is_writable_format("x.pfm") &&
+              ic_image_is_writable_format("x.hdr") && ic_image_is_writable_format("x.png"),
+          "known extensions");
+    CHECK(!ic_image_is_writable_format("x.jpg") && !ic_image_is_writable_format("x") &&
+              !ic_image_is_writable_format("dir.png/x") && !ic_image_is_writable_format(NULL),
+          "unknown extensions");
+}
+
+static void test_srgb(void)
+{
+    CHECK(ic_linear_to_srgb8(0.0f) == 0 && ic_linear_to_srgb8(1.0f) == 255 && ic_linear_to_srgb8(7.0f) == 255,
+          "srgb8 ends");
+    CHECK(ic_linear_to_srgb8(-1.0f) == 0 && ic_linear_to_srgb8(NAN) == 0, "srgb8 of negative/NaN");
+    CHECK_NEAR(ic_linear_to_srgb(0.5f), 0.735357f, 1e-5, "sRGB(0.5)");
+    CHECK_NEAR(ic_srgb_to_linear(0.5f), 0.214041f, 1e-5, "linear(0.5)");
+    int exact = 1;
+    for (int v = 0; v < 256; ++v)
+        exact &= ic_linear_to_srgb8(ic_srgb8_to_linear((uint8_t)v)) == v;
+    CHECK(exact, "8-bit sRGB does not round-trip through linear");
+}
+
+static int bit_equal(const ic_image *a, const ic_image *b)
+{
+    return a->width == b->width && a->height == b->height &&
+           memcmp(a->rgb, b->rgb, (size_t)a->width * (size_t)a->height * 3 * sizeof(float)) == 0;
+}
+
+static void test_round_trips(void)
+{
+    ic_error err = {0};
+    ic_image src = pattern(37, 23, 1000.0f), back = {0};
+    src.rgb[5] = 1e-30f; /* denormal-ish and tiny values survive float formats */
+    src.rgb[7] = -2.5f;  /* negative values too */
+
+    /* EXR float: lossless. */
+    CHECK(ic_image_write(scratch("rt_float.exr"), &src, NULL, &err) == IC_OK, "write exr: %s", err.message);
+    CHECK(ic_image_read(scratch("rt_float.exr"), &back, &err) == IC_OK, "read exr: %s", err.message);
+    CHECK(bit_equal(&src, &back), "EXR float round trip is not bit-exact");
+    ic_image_free(&back);
+
+    /* EXR half: within half precision (11-bit significand) for values in half's normal range. */
+    ic_image_write_options half = {.exr_half = 1};
+    ic_image hsrc = pattern(37, 23, 1000.0f);
+    CHECK(ic_image_write(scratch("rt_half.exr"), &hsrc, &half, &err) == IC_OK, "write half exr: %s", err.message);
+    CHECK(ic_image_read(scratch("rt_half.exr"), &back, &err) == IC_OK, "read half exr: %s", err.message);
+    if (back.rgb) {
+        int ok = back.width == 37 && back.height == 23;
+        double worst = 0.0;
+        for (size_t i = 0; ok && i < 37 * 23 * 3; ++i) {
+            double tol = fmax(fabs(hsrc.rgb[i]) / 2048.0, 6e-8);
+            worst = fmax(worst, fabs(hsrc.rgb[i] - back.rgb[i]) / tol);
+        }
+        CHECK(ok && worst <= 1.0, "EXR half error %.3g × half precision", worst);
+        /* Half files are smaller than float ones. */
+        struct stat sh, sf;
+        CHECK(stat(scratch("rt_half.exr"), &sh) == 0 && stat(scratch("rt_float.exr"), &sf) == 0 &&
+                  sh.st_size < sf.st_size,
+              "half EXR is not smaller than float EXR");
+    }
+    ic_image_free(&back);
+    ic_image_free(&hsrc);
+
+    /* EXR over several chunks (ZIP groups 16 lines) and one-pixel images. */
+    ic_image tall = pattern(3, 100, 4.0f), one = pattern(1, 1, 1.0f);
+    one.rgb[0] = 0.25f;
+    CHECK(ic_image_write(scratch("tall.exr"), &tall, NULL, &err) == IC_OK, "write tall exr: %s", err.message);
+    CHECK(ic_image_read(scratch("tall.exr"), &back, &err) == IC_OK && bit_equal(&tall, &back), "tall EXR: %s",
+          err.message);
+    ic_image_free(&back);
+    CHECK(ic_image_write(scratch("one.exr"), &one, NULL, &err) == IC_OK, "write 1x1 exr: %s", err.message);
+    CHECK(ic_image_read(scratch("one.exr"), &back, &err) == IC_OK && bit_equal(&one, &back), "1x1 EXR: %s",
+          err.message);
+    ic_image_free(&back);
+    ic_image_free(&tall);
+    ic_image_free(&one);
+
+    /* PFM: lossless, and stored bottom row first. */
+    CHECK(ic_image_write(scratch("rt.pfm"), &src, NULL, &err) == IC_OK, "write pfm: %s", err.message);
+    CHECK(ic_image_read(scratch("rt.pfm"), &back, &err) == IC_OK, "read pfm: %s", err.message);
+    CHECK(bit_equal(&src, &back), "PFM round trip is not bit-exact");
+    ic_image_free(&back);
+    FILE *fp = fopen(scratch("rt.pfm"), "rb");
+    if (fp) {
+        char header[64] = {0};
+        size_t header_len = strlen("PF\n37 23\n-1.0\n");
+        float first[3] = {0};
+        size_t got = fread(header, 1, header_len, fp);
+        got += fread(first, sizeof(float), 3, fp);
+        fclose(fp);
+        CHECK(got == header_len + 3 && strcmp(header, "PF\n37 23\n-1.0\n") == 0, "PFM header: %s", header);
+        CHECK(memcmp(first, src.rgb + (size_t)22 * 37 * 3, sizeof first) == 0, "PFM does not start with the bottom row");
+    }
+
+    /* Radiance HDR: within RGBE precision (1/128 of the pixel's largest channel; 1% asked). */
+    CHECK(ic_image_write(scratch("rt.hdr"), &src, NULL, &err) == IC_OK, "write hdr: %s", err.message);
+    CHECK(ic_image_read(scratch("rt.hdr"), &back, &err) == IC_OK, "read hdr: %s", err.message);
+    if (back.rgb) {
+        int ok = back.width == 37 && back.height == 23;
+        double worst = 0.0;
+        for (size_t p = 0; ok && p < 37 * 23; ++p) {
+            float biggest = fmaxf(src.rgb[3 * p], fmaxf(src.rgb[3 * p + 1], src.rgb[3 * p + 2]));
+            for (int c = 0; c < 3; ++c) {
+                double want = fmax(src.rgb[3 * p + (size_t)c], 0.0); /* negative is written as 0 */
+                if (biggest > 1e-20f)
+                    worst = fmax(worst, fabs(want - back.rgb[3 * p + (size_t)c]) / biggest);
+            }
+        }
+        CHECK(ok && worst <= 0.01, "HDR relative error %.4g", worst);
+    }
+    ic_image_free(&back);
+
+    /* PNG: within one 8-bit sRGB step; exposure doubles per stop. */
+    ic_image ldr = pattern(37, 23, 1.0f);
+    CHECK(ic_image_write(scratch("rt.png"), &ldr, NULL, &err) == IC_OK, "write png: %s", err.message);
+    CHECK(ic_image_read(scratch("rt.png"), &back, &err) == IC_OK, "read png: %s", err.message);
+    if (back.rgb) {
+        double worst = 0.0;
+        for (size_t i = 0; i < 37 * 23 * 3; ++i)
+            worst = fmax(worst, fabs(ic_linear_to_srgb(ldr.rgb[i]) - ic_linear_to_srgb(back.rgb[i])));
+        CHECK(back.width == 37 && back.height == 23 && worst <= 0.5 / 255.0 + 1e-6, "PNG sRGB error %.4g", worst);
+    }
+    ic_image_free(&back);
+    ic_image quarter;
+    ic_image_create(&quarter, 2, 2);
+    for (int i = 0; i < 12; ++i)
+        quarter.rgb[i] = 0.25f;
+    ic_image_write_options bright = {.exposure = 1.0f};
+    CHECK(ic_image_write(scratch("exposure.png"), &quarter, &bright, &err) == IC_OK, "write png: %s", err.message);
+    CHECK(ic_image_read(scratch("exposure.png"), &back, &err) == IC_OK && back.rgb &&
+              ic_linear_to_srgb8(back.rgb[0]) == ic_linear_to_srgb8(0.5f),
+          "PNG exposure +1 of 0.25 should read back as 0.5");
+    ic_image_free(&back);
+    ic_image_free(&quarter);
+    ic_image_free(&ldr);
+
+    /* The format comes from the content, not the name. */
+    rename(scratch("rt.pfm"), scratch("renamed.dat"));
+    CHECK(ic_image_read(scratch("renamed.dat"), &back, &err) == IC_OK && bit_equal(&src, &back),
+          "PFM content under another extension: %s", err.message);
+    ic_image_free(&back);
+    ic_image_free(&src);
+}
+
+static void test_pfm_variants(void)
+{
+    ic_error err = {0};
+    ic_image img = {0};
+    /* Grey, big-endian ("Pf", positive scale), 2x1: values 1.0 and 2.0. */
+    const unsigned char grey_be[] = {'P', 'f', '\n', '2', ' ', '1', '\n', '1', '.', '0', '\n',
+                                     0x3f, 0x80, 0x00, 0x00, 0x40, 0x00, 0x00, 0x00};
+    write_bytes(scratch("grey_be.pfm"), grey_be, sizeof grey_be);
+    CHECK(ic_image_read(scratch("grey_be.pfm"), &img, &err) == IC_OK, "grey big-endian PFM: %s", err.message);
+    CHECK(img.rgb && img.width == 2 && img.height == 1 && img.rgb[0] == 1.0f && img.rgb[2] == 1.0f &&
+              img.rgb[3] == 2.0f && img.rgb[5] == 2.0f,
+          "grey big-endian PFM values");
+    ic_image_free(&img);
+
+    /* NaN and Inf pixels read without trouble, bit for bit. */
+    float pixels[6] = {NAN, 1.0f, INFINITY, 0.5f, -INFINITY, 0.25f};
+    unsigned char file[64];
+    const char *header = "PF\n2 1\n-1.0\n";
+    size_t n = strlen(header);
+    memcpy(file, header, n);
+    memcpy(file + n, pixels, sizeof pixels); /* the test host is little-endian (x86-64, arm64) */
+    write_bytes(scratch("nan.pfm"), file, n + sizeof pixels);
+    CHECK(ic_image_read(scratch("nan.pfm"), &img, &err) == IC_OK, "NaN PFM: %s", err.message);
+    if (img.rgb) {
+        CHECK(isnan(img.rgb[0]) && isinf(img.rgb[2]) && img.rgb[1] == 1.0f, "NaN/Inf values");
+        /* And the other writers and the metrics cope with them. */
+        CHECK(ic_image_write(scratch("nan.hdr"), &img, NULL, &err) == IC_OK, "HDR with NaN: %s", err.message);
+        CHECK(ic_image_write(scratch("nan.png"), &img, NULL, &err) == IC_OK, "PNG with NaN: %s", err.message);
+        CHECK(ic_image_write(scratch("nan.exr"), &img, NULL, &err) == IC_OK, "EXR with NaN: %s", err.message);
+        ic_image ref, heat = {0};
+        ic_image_create(&ref, 2, 1);
+        ic_image_metrics m;
+        CHECK(ic_image_compare(&img, &ref, &m, &err) == IC_OK, "compare with NaN: %s", err.message);
+        CHECK(m.nonfinite == 3 && isfinite(m.rmse) && isfinite(m.relmse) && isfinite(m.psnr_hdr) &&
+                  isfinite(m.psnr_ldr) && isfinite(m.ssim),
+              "metrics with NaN: nonfinite %ld rmse %g ssim %g", m.nonfinite, m.rmse, m.ssim);
+        CHECK(ic_image_heatmap(&img, &ref, 0.0f, &heat, &err) == IC_OK && heat.rgb && heat.rgb[0] == 1.0f &&
+                  heat.rgb[1] == 0.0f && heat.rgb[2] == 1.0f,
+              "NaN pixel is magenta in the heat map");
+        ic_image_free(&heat);
+        ic_image_free(&ref);
+    }
+    ic_image_free(&img);
+}
+
+/* Run-length encoded Radiance pictures (what rpict and most tools write), and EXPOSURE. */
+static void test_hdr_variants(void)
+{
+    ic_error err = {0};
+    ic_image img = {0};
+    /* 8x2, new-style RLE: row 0 = one run per component (R 128, G 64, B 0, E 129), row 1 = literals. */
+    const char *header = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\nEXPOSURE=2\n\n-Y 2 +X 8\n";
+    unsigned char file[256];
+    size_t n = strlen(header);
+    memcpy(file, header, n);
+    const unsigned char row0[] = {2, 2, 0, 8, 128 + 8, 128, 128 + 8, 64, 128 + 8, 0, 128 + 8, 129};
+    memcpy(file + n, row0, sizeof row0);
+    n += sizeof row0;
+    const unsigned char row1[] = {2, 2, 0, 8, 8, 128, 129, 130, 131, 132, 133, 134, 135, 128 + 8, 0, 128 + 8, 0,
+                                  128 + 8, 128};
+    memcpy(file + n, row1, sizeof row1);
+    n += sizeof row1;
+    write_bytes(scratch("rle.hdr"), file, n);
+    CHECK(ic_image_read(scratch("rle.hdr"), &img, &err) == IC_OK, "RLE hdr: %s", err.message);
+    if (img.rgb) {
+        /* (m + 0.5) · 2^(e − 136) / EXPOSURE */
+        CHECK_NEAR(img.rgb[0], 128.5 / 128.0 / 2.0, 1e-7, "R of row 0");
+        CHECK_NEAR(img.rgb[7 * 3 + 1], 64.5 / 128.0 / 2.0, 1e-7, "G of row 0");
+        CHECK_NEAR(img.rgb[7 * 3 + 2], 0.5 / 128.0 / 2.0, 1e-7, "B of row 0");
+        CHECK_NEAR(img.rgb[(8 + 5) * 3], 133.5 / 256.0 / 2.0, 1e-7, "R of row 1, pixel 5");
+    }
+    ic_image_free(&img);
+    /* The same file cut inside the second row. */
+    write_bytes(scratch("rle-cut.hdr"), file, n - 5);
+    CHECK(ic_image_read(scratch("rle-cut.hdr"), &img, &err) == IC_ERR_CORRUPT && strstr(err.message, "rle-cut.hdr"),
+          "cut RLE hdr: %s", err.message);
+    ic_image_free(&img);
+
+    /* Old-style runs: (1,1,1,n) repeats the previous pixel. */
+    const char *old_header = "#?RGBE\n\n-Y 1 +X 5\n";
+    n = strlen(old_header);
+    memcpy(file, old_header, n);
+    const unsigned char old_rle[] = {128, 0, 0, 129, 1, 1, 1, 3, 0, 0, 0, 0};
+    memcpy(file + n, old_rle, sizeof old_rle);
+    write_bytes(scratch("old-rle.hdr"), file, n + sizeof old_rle);
+    CHECK(ic_image_read(scratch("old-rle.hdr"), &img, &err) == IC_OK, "old RLE hdr: %s", err.message);
+    CHECK(img.rgb && img.rgb[3 * 3] == img.rgb[0] && img.rgb[0] > 0.9f && img.rgb[4 * 3] == 0.0f,
+          "old RLE values");
+    ic_image_free(&img);
+}
+
+static ic_image constant(int w, int h, float v)
+{
+    ic_image img;
+    ic_image_create(&img, w, h);
+    for (size_t i = 0; i < (size_t)w * (size_t)h * 3; ++i)
+        img.rgb[i] = v;
+    return img;
+}
+
+static void test_metrics(void)
+{
+    ic_error err = {0};
+    ic_image_metrics m;
+
+    /* Identical images. */
+    ic_image a = pattern(40, 30, 3.0f);
+    CHECK(ic_image_compare(&a, &a, &m, &err) == IC_OK, "compare: %s", err.message);
+    CHECK(m.rmse == 0.0 && m.relmse == 0.0 && m.ssim == 1.0 && m.nonfinite == 0, "identical: rmse %g ssim %.17g",
+          m.rmse, m.ssim);
+    CHECK(isinf(m.psnr_hdr) && m.psnr_hdr > 0 && isinf(m.psnr_ldr) && m.psnr_ldr > 0, "identical: PSNR not +inf");
+
+    /* Constant offset: 0.6 against 0.5. */
+    ic_image ref = constant(20, 10, 0.5f), img = constant(20, 10, 0.6f);
+    CHECK(ic_image_compare(&img, &ref, &m, &err) == IC_OK, "compare: %s", err.message);
+    double d = (double)0.6f - (double)0.5f;
+    CHECK_NEAR(m.rmse, d, 1e-12, "rmse of constant offset");
+    CHECK_NEAR(m.relmse, d * d / (0.25 + 0.01), 1e-12, "relmse of constant offset");
+    CHECK_NEAR(m.psnr_hdr, 10.0 * log10(0.25 / (d * d)), 1e-9, "psnr_hdr of constant offset");
+    double d8 = (double)ic_linear_to_srgb8(0.6f) - (double)ic_linear_to_srgb8(0.5f);
+    CHECK_NEAR(m.psnr_ldr, 20.0 * log10(255.0 / d8), 1e-9, "psnr_ldr of constant offset");
+    /* SSIM of two flat images: only the luminance term (2 mx my + C1) / (mx² + my² + C1) is left. */
+    double mx = ic_linear_to_srgb8(0.6f), my = ic_linear_to_srgb8(0.5f), c1 = (0.01 * 255) * (0.01 * 255);
+    CHECK_NEAR(m.ssim, (2 * mx * my + c1) / (mx * mx + my * my + c1), 1e-6, "ssim of flat images");
+    ic_image_free(&img);
+    ic_image_free(&ref);
+
+    /* All-black reference: PSNR uses peak 1. */
+    ref = constant(4, 4, 0.0f);
+    img = constant(4, 4, 0.1f);
+    CHECK(ic_image_compare(&img, &ref, &m, &err) == IC_OK && fabs(m.psnr_hdr - 20.0) < 1e-5,
+          "psnr against black: %g", m.psnr_hdr);
+    ic_image_free(&img);
+    ic_image_free(&ref);
+
+    /* SSIM falls as noise grows; PSNR too. */
+    ic_image n1 = pattern(40, 30, 3.0f), n2 = pattern(40, 30, 3.0f);
+    uint32_t s = 99u;
+    for (size_t i = 0; i < 40 * 30 * 3; ++i) {
+        s = s * 1664525u + 1013904223u;
+        float u = (float)(s >> 8) / 16777216.0f - 0.5f;
+        n1.rgb[i] = fmaxf(n1.rgb[i] + 0.02f * u, 0.0f);
+        n2.rgb[i] = fmaxf(n2.rgb[i] + 0.2f * u, 0.0f);
+    }
+    ic_image_metrics m1, m2;
+    CHECK(ic_image_compare(&n1, &a, &m1, &err) == IC_OK && ic_image_compare(&n2, &a, &m2, &err) == IC_OK, "compare");
+    CHECK(m1.ssim < 1.0 && m2.ssim < m1.ssim && m2.psnr_ldr < m1.psnr_ldr && m2.rmse > m1.rmse,
+          "noise: ssim %g then %g, psnr %g then %g", m1.ssim, m2.ssim, m1.psnr_ldr, m2.psnr_ldr);
+    CHECK(m1.ssim > 0.0 && m2.ssim > -1.0, "ssim range");
+
+    /* Images smaller than the SSIM window. */
+    ic_image tiny = pattern(3, 2, 1.0f);
+    CHECK(ic_image_compare(&tiny, &tiny, &m, &err) == IC_OK && m.ssim == 1.0, "3x2 ssim %g", m.ssim);
+
+    /* Size mismatch. */
+    CHECK(ic_image_compare(&tiny, &a, &m, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "40x30"),
+          "size mismatch: %s", err.message);
+
+    ic_image_free(&tiny);
+    ic_image_free(&n1);
+    ic_image_free(&n2);
+    ic_image_free(&a);
+}
+
+static void test_heatmap(void)
+{
+    ic_error err = {0};
+    ic_image ref = constant(8, 4, 1.0f), img = constant(8, 4, 1.0f), heat = {0};
+    CHECK(ic_image_heatmap(&img, &ref, 0.0f, &heat, &err) == IC_OK, "heatmap: %s", err.message);
+    int same = heat.rgb != NULL && heat.width == 8 && heat.height == 4;
+    for (size_t i = 0; same && i < 32 * 3; ++i)
+        same = heat.rgb[i] == heat.rgb[i % 3];
+    CHECK(same && heat.rgb[2] > heat.rgb[0], "identical images: uniform blue-ish heat map");
+    float low[3] = {heat.rgb[0], heat.rgb[1], heat.rgb[2]};
+    ic_image_free(&heat);
+
+    /* One pixel off by 100%: with max 0.5 it saturates (red end); the rest stays at the low end. */
+    for (int c = 0; c < 3; ++c)
+        img.rgb[3 * 9 + c] = 2.0f;
+    CHECK(ic_image_heatmap(&img, &ref, 0.5f, &heat, &err) == IC_OK, "heatmap: %s", err.message);
+    if (heat.rgb) {
+        const float *hot = heat.rgb + 3 * 9;
+        CHECK(hot[0] > hot[1] && hot[0] > hot[2], "saturated pixel is not red: %g %g %g", hot[0], hot[1], hot[2]);
+        CHECK(heat.rgb[0] == low[0] && heat.rgb[1] == low[1] && heat.rgb[2] == low[2], "exact pixel not at low end");
+    }
+    ic_image_free(&heat);
+    CHECK(ic_image_heatmap(&img, &ref, -1.0f, &heat, &err) == IC_ERR_INVALID_ARG, "negative max_err accepted");
+    ic_image_free(&img);
+    ic_image_free(&ref);
+}
+
+static void test_bad_input(void)
+{
+    ic_error err = {0};
+    ic_image img = {0};
+
+    /* Missing file. */
+    const char *missing = scratch("does-not-exist.exr");
+    CHECK(ic_image_read(missing, &img, &err) == IC_ERR_IO && strstr(err.message, "does-not-exist.exr"),
+          "missing file: %s", err.message);
+    CHECK(img.rgb == NULL, "failed read left pixels");
+
+    /* Truncated EXR: the first half of a valid file. */
+    ic_image src = pattern(64, 64, 2.0f);
+    CHECK(ic_image_write(scratch("whole.exr"), &src, NULL, &err) == IC_OK, "write: %s", err.message);
+    FILE *fp = fopen(scratch("whole.exr"), "rb");
+    static unsigned char bytes[1 << 20];
+    size_t n = fp ? fread(bytes, 1, sizeof bytes, fp) : 0;
+    if (fp)
+        fclose(fp);
+    CHECK(n > 1000, "EXR file too small (%zu bytes)", n);
+    write_bytes(scratch("truncated.exr"), bytes, n / 2);
+    ic_result r = ic_image_read(scratch("truncated.exr"), &img, &err);
+    CHECK(r != IC_OK && strstr(err.message, "truncated.exr"), "truncated EXR: %s (%s)", ic_result_name(r), err.message);
+    CHECK(img.rgb == NULL, "failed read left pixels");
+    /* Only the header survives. */
+    write_bytes(scratch("header-only.exr"), bytes, 40);
+    r = ic_image_read(scratch("header-only.exr"), &img, &err);
+    CHECK(r != IC_OK && strstr(err.message, "header-only.exr"), "header-only EXR: %s", err.message);
+    ic_image_free(&img);
+
+    /* Garbage PFM headers. */
+    const char *garbage[] = {"PF\nabc def\n-1.0\n", "PF\n2 2\n0\n", "PF\n-3 2\n-1.0\n", "PF\n2 2\n-1.0"};
+    for (size_t i = 0; i < sizeof garbage / sizeof garbage[0]; ++i) {
+        write_bytes(scratch("garbage.pfm"), garbage[i], strlen(garbage[i]));
+        r = ic_image_read(scratch("garbage.pfm"), &img, &err);
+        CHECK(r == IC_ERR_PARSE && strstr(err.message, "garbage.pfm"), "garbage PFM %zu: %s (%s)", i,
+              ic_result_name(r), err.message);
+    }
+    /* A header promising more pixels than the file holds (and a huge size). */
+    const char *short_pfm = "PF\n4 4\n-1.0\n\x01\x02\x03\x04";
+    write_bytes(scratch("short.pfm"), short_pfm, strlen(short_pfm));
+    CHECK(ic_image_read(scratch("short.pfm"), &img, &err) == IC_ERR_CORRUPT && strstr(err.message, "short.pfm"),
+          "short PFM: %s", err.message);
+    const char *huge_pfm = "PF\n60000 60000\n-1.0\n\x01\x02\x03\x04";
+    write_bytes(scratch("huge.pfm"), huge_pfm, strlen(huge_pfm));
+    CHECK(ic_image_read(scratch("huge.pfm"), &img, &err) == IC_ERR_CORRUPT, "huge PFM: %s", err.message);
+
+    /* Not an image at all; empty; a PNG signature followed by junk. */
+    write_bytes(scratch("junk.bin"), "hello, world", 12);
+    CHECK(ic_image_read(scratch("junk.bin"), &img, &err) == IC_ERR_UNSUPPORTED && strstr(err.message, "junk.bin"),
+          "junk: %s", err.message);
+    write_bytes(scratch("empty.png"), "", 0);
+    CHECK(ic_image_read(scratch("empty.png"), &img, &err) == IC_ERR_PARSE && strstr(err.message, "empty.png"),
+          "empty: %s", err.message);
+    write_bytes(scratch("bad.png"), "\x89PNG\r\n\x1a\nnot really", 18);
+    CHECK(ic_image_read(scratch("bad.png"), &img, &err) == IC_ERR_PARSE && strstr(err.message, "bad.png"),
+          "bad png: %s", err.message);
+    const char *hdr_no_pixels = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 10 +X 10\n";
+    write_bytes(scratch("bad.hdr"), hdr_no_pixels, strlen(hdr_no_pixels));
+    CHECK(ic_image_read(scratch("bad.hdr"), &img, &err) == IC_ERR_CORRUPT && strstr(err.message, "bad.hdr"),
+          "truncated hdr: %s", err.message);
+    CHECK(img.rgb == NULL, "failed read left pixels");
+    ic_image_free(&img);
+    const char *hdr_xyze = "#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 1 +X 1\n\x80\x80\x80\x80";
+    write_bytes(scratch("xyze.hdr"), hdr_xyze, strlen(hdr_xyze));
+    CHECK(ic_image_read(scratch("xyze.hdr"), &img, &err) == IC_ERR_UNSUPPORTED && strstr(err.message, "xyze.hdr"),
+          "xyze hdr: %s", err.message);
+    const char *hdr_flipped = "#?RADIANCE\n\n+Y 1 +X 1\n\x80\x80\x80\x80";
+    write_bytes(scratch("flipped.hdr"), hdr_flipped, strlen(hdr_flipped));
+    CHECK(ic_image_read(scratch("flipped.hdr"), &img, &err) == IC_ERR_UNSUPPORTED && strstr(err.message, "flipped.hdr"),
+          "+Y hdr: %s", err.message);
+
+    /* Unwritable outputs: a folder that does not exist, and a path that is a folder. Every format;
+     * no temporary file may stay behind. */
+    mkdir(scratch("isdir.exr"), 0755);
+    mkdir(scratch("isdir.pfm"), 0755);
+    mkdir(scratch("isdir.hdr"), 0755);
+    mkdir(scratch("isdir.png"), 0755);
+    const char *formats[] = {"exr", "pfm", "hdr", "png"};
+    for (int i = 0; i < 4; ++i) {
+        char name[64];
+        snprintf(name, sizeof name, "no-such-dir/out.%s", formats[i]);
+        r = ic_image_write(scratch(name), &src, NULL, &err);
+        CHECK(r == IC_ERR_IO && strstr(err.message, name) && strstr(err.message, "writable"), "%s: %s (%s)", name,
+              ic_result_name(r), err.message);
+        snprintf(name, sizeof name, "isdir.%s", formats[i]);
+        r = ic_image_write(scratch(name), &src, NULL, &err);
+        CHECK(r == IC_ERR_IO && strstr(err.message, name), "%s: %s (%s)", name, ic_result_name(r), err.message);
+        CHECK(!temp_left_behind(name), "a temporary file of %s was left behind", name);
+    }
+    CHECK(!file_exists(scratch("no-such-dir")), "no-such-dir was created");
+    CHECK(ic_image_write(scratch("out.tiff"), &src, NULL, &err) == IC_ERR_UNSUPPORTED && strstr(err.message, "out.tiff"),
+          "unknown extension: %s", err.message);
+    CHECK(!file_exists(scratch("out.tiff")), "out.tiff written");
+    ic_image empty = {0};
+    CHECK(ic_image_write(scratch("empty.exr"), &empty, NULL, &err) == IC_ERR_INVALID_ARG, "empty image written");
+    ic_image_free(&src);
+
+    /* A good write replaces an existing file and leaves no temporary behind. */
+    ic_image small = constant(2, 2, 0.5f);
+    CHECK(ic_image_write(scratch("replace.exr"), &small, NULL, &err) == IC_OK, "write: %s", err.message);
+    small.rgb[0] = 0.75f;
+    CHECK(ic_image_write(scratch("replace.exr"), &small, NULL, &err) == IC_OK, "rewrite: %s", err.message);
+    CHECK(ic_image_read(scratch("replace.exr"), &img, &err) == IC_OK && img.rgb && img.rgb[0] == 0.75f,
+          "rewritten file not replaced");
+    CHECK(!temp_left_behind("replace.exr"), "temporary left after a good write");
+    ic_image_free(&img);
+    ic_image_free(&small);
+}
+
+int main(void)
+{
+    if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
+        perror(IC_TEST_TMP);
+    if (mkdir(SCRATCH, 0755) != 0 && errno != EEXIST)
+        perror(SCRATCH);
+    test_create_free();
+    test_srgb();
+    test_round_trips();
+    test_pfm_variants();
+    test_hdr_variants();
+    test_metrics();
+    test_heatmap();
+    test_bad_input();
+    TEST_MAIN_END();
+}

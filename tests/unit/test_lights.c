@@ -1,0 +1,295 @@
+/*
+ * test_lights.c — light sampling against analytic answers and against its own pdfs.
+ *
+ * - Irradiance below a rectangular emitter (parallel, receiver under its centre) estimated with
+ *   ic_scene_sample_light matches the point-to-rectangle form factor; for a tilted receiver it matches
+ *   brute-force cosine-hemisphere sampling; the back of a one-sided emitter gives nothing.
+ * - For every sample, ic_scene_light_pdf_triangle / ic_scene_light_pdf_env return the sampler's pdf,
+ *   and light classes are picked with the documented probabilities.
+ * - An environment image: its pdf integrates to 1 over the sphere, importance sampling integrates the
+ *   radiance to the same value as uniform sampling, and rotation_deg turns the map about +y.
+ */
+#include "core/sampling.h"
+#include "irrcache/image.h"
+#include "scene/scene.h"
+#include "test_util.h"
+
+#include <stdint.h>
+#include <string.h>
+
+#define SCENES IC_SOURCE_DIR "/tests/scenes/"
+
+/* xorshift64* → [0, 1) */
+static float rnd(uint64_t *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return (float)((*s * 2685821657736338717ULL) >> 40) * (1.0f / 16777216.0f);
+}
+
+static ic_scene *load(const char *path)
+{
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    ic_result r = ic_scene_load(path, NULL, &s, &err);
+    CHECK(r == IC_OK, "%s: %s", path, err.message);
+    return s;
+}
+
+/* Point-to-parallel-rectangle form factor, receiver under a corner of an a × b rectangle at height c. */
+static double form_factor_corner(double a, double b, double c)
+{
+    double A = a / c, B = b / c, sa = sqrt(1 + A * A), sb = sqrt(1 + B * B);
+    return (A / sa * atan(B / sa) + B / sb * atan(A / sb)) / (2 * 3.14159265358979323846);
+}
+
+/* Möller–Trumbore distance along d from o to triangle t, or -1. */
+static float ray_triangle(const ic_scene *s, uint32_t t, ic_vec3 o, ic_vec3 d)
+{
+    ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
+            p2 = s->positions[s->triangles[3 * t + 2]];
+    ic_vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0), pv = v3_cross(d, e2);
+    float det = v3_dot(e1, pv);
+    if (fabsf(det) < 1e-12f)
+        return -1.0f;
+    ic_vec3 tv = v3_sub(o, p0);
+    float u = v3_dot(tv, pv) / det;
+    ic_vec3 qv = v3_cross(tv, e1);
+    float v = v3_dot(d, qv) / det;
+    if (u < -1e-4f || v < -1e-4f || u + v > 1.0001f)
+        return -1.0f;
+    return v3_dot(e2, qv) / det;
+}
+
+/* The emissive triangle the sample points at (distance matches), or UINT32_MAX. */
+static uint32_t sampled_triangle(const ic_scene *s, ic_vec3 p, const ic_light_sample *ls)
+{
+    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+        uint32_t t = s->tri_lights[i].triangle;
+        float d = ray_triangle(s, t, p, ls->wi);
+        if (d > 0.0f && fabsf(d - ls->dist) <= 1e-3f * ls->dist)
+            return t;
+    }
+    return UINT32_MAX;
+}
+
+static void test_rectangle_irradiance(void)
+{
+    ic_scene *s = load(SCENES "quad_light.obj");
+    if (!s)
+        return;
+    CHECK(s->tri_light_count == 2 && s->light_select.tri == 1.0f, "one quad light");
+    const double L = 2.0; /* Ke 2 2 2 */
+    uint64_t seed = 0x9e3779b97f4a7c15ULL;
+
+    /* parallel: receiver at the origin facing up, emitter 1 × 0.5 at height 1 centred above */
+    ic_vec3 p = v3(0, 0, 0), n = v3(0, 1, 0);
+    double analytic = 3.14159265358979323846 * L * 4 * form_factor_corner(0.5, 0.25, 1.0);
+    const int N = 200000;
+    double sum = 0.0;
+    int pdf_mismatch = 0, unmatched = 0;
+    for (int i = 0; i < N; ++i) {
+        ic_light_sample ls;
+        if (!ic_scene_sample_light(s, p, rnd(&seed), rnd(&seed), rnd(&seed), &ls))
+            continue;
+        CHECK(!ls.is_delta && ls.pdf > 0, "area sample");
+        sum += ls.radiance.x * fmax(0.0, v3_dot(n, ls.wi)) / ls.pdf;
+        uint32_t t = sampled_triangle(s, p, &ls);
+        if (t == UINT32_MAX) {
+            ++unmatched;
+            continue;
+        }
+        float pdf = ic_scene_light_pdf_triangle(s, p, t, ls.wi, ls.dist);
+        pdf_mismatch += fabsf(pdf - ls.pdf) > 1e-4f * ls.pdf;
+    }
+    CHECK_NEAR(sum / N, analytic, 0.005 * analytic, "irradiance under a parallel rectangle (form factor)");
+    CHECK(unmatched == 0, "%d samples off the light", unmatched);
+    CHECK(pdf_mismatch == 0, "%d samples where pdf_triangle differs from the sampler", pdf_mismatch);
+
+    /* tilted receiver off to the side: light sampling vs brute-force cosine-hemisphere sampling */
+    p = v3(0.8f, 0.3f, 0.1f);
+    n = v3_norm(v3(-1, 1, 0.3f));
+    double est = 0.0;
+    for (int i = 0; i < N; ++i) {
+        ic_light_sample ls;
+        if (ic_scene_sample_light(s, p, rnd(&seed), rnd(&seed), rnd(&seed), &ls))
+            est += ls.radiance.x * fmax(0.0, v3_dot(n, ls.wi)) / ls.pdf;
+    }
+    est /= N;
+    ic_frame f = ic_frame_from_normal(n);
+    const int M = 2000000;
+    long hits = 0;
+    for (int i = 0; i < M; ++i) {
+        ic_vec3 d = ic_frame_to_world(&f, ic_warp_cosine_hemisphere(rnd(&seed), rnd(&seed)));
+        if (d.y <= 0.0f)
+            continue; /* the emitter's front faces down: only upward rays see it */
+        float t = (1.0f - p.y) / d.y;
+        float x = p.x + t * d.x, z = p.z + t * d.z;
+        hits += fabsf(x) <= 0.5f && fabsf(z) <= 0.25f;
+    }
+    double brute = 3.14159265358979323846 * L * (double)hits / M;
+    CHECK_NEAR(est, brute, 0.01 * brute, "tilted receiver: light sampling vs hemisphere brute force");
+
+    /* above the emitter: its back faces the point, so nothing can be sampled and the pdf is 0 */
+    p = v3(0, 2, 0);
+    int ok = 0;
+    for (int i = 0; i < 1000; ++i) {
+        ic_light_sample ls;
+        ok += ic_scene_sample_light(s, p, rnd(&seed), rnd(&seed), rnd(&seed), &ls);
+    }
+    CHECK(ok == 0, "one-sided emitter is dark from behind (%d samples)", ok);
+    CHECK(ic_scene_light_pdf_triangle(s, p, s->tri_lights[0].triangle, v3(0, -1, 0), 1.0f) == 0.0f,
+          "pdf 0 from behind");
+    for (uint32_t t = 0; t < s->triangle_count; ++t)
+        if (s->triangle_light[t] < 0)
+            CHECK(ic_scene_light_pdf_triangle(s, v3(0, 0.5f, 0), t, v3(0, -1, 0), 0.5f) == 0.0f,
+                  "pdf 0 for a non-emitter");
+    CHECK(ic_scene_light_pdf_env(s, v3(0, 1, 0)) == 0.0f, "no environment");
+    ic_scene_free(s);
+}
+
+static void test_mixed_selection(void)
+{
+    ic_scene *s = load(SCENES "transformed.json");
+    if (!s)
+        return;
+    /* just below the quad emitter (front faces down, at y = -4); the Cornell light is two-sided */
+    ic_vec3 p = v3(0, -4.5f, 0);
+    uint64_t seed = 12345;
+    const int N = 200000;
+    int count[4] = {0, 0, 0, 0}, failed = 0, bad_pdf = 0, bad_radiance = 0;
+    for (int i = 0; i < N; ++i) {
+        ic_light_sample ls;
+        if (!ic_scene_sample_light(s, p, rnd(&seed), rnd(&seed), rnd(&seed), &ls)) {
+            ++failed;
+            continue;
+        }
+        if (ls.is_delta && isinf(ls.dist)) { /* sun */
+            ++count[2];
+            bad_pdf += ls.pdf != s->light_select.sun;
+            bad_radiance += ls.radiance.x != 3.0f || ls.wi.y != 1.0f;
+        } else if (ls.is_delta) { /* point */
+            ++count[1];
+            bad_pdf += ls.pdf != s->light_select.point;
+            float d2 = v3_len2(v3_sub(v3(0, 3, 0), p));
+            bad_radiance += fabsf(ls.radiance.x - 5.0f / d2) > 1e-5f;
+        } else if (isinf(ls.dist)) { /* environment */
+            ++count[3];
+            bad_pdf += fabsf(ls.pdf - ic_scene_light_pdf_env(s, ls.wi)) > 1e-6f * ls.pdf;
+            bad_pdf += fabsf(ls.pdf - s->light_select.env / (4 * IC_PI)) > 1e-6f * ls.pdf;
+            bad_radiance += ls.radiance.y != 0.2f;
+        } else {
+            ++count[0];
+            uint32_t t = sampled_triangle(s, p, &ls);
+            bad_pdf += t == UINT32_MAX || fabsf(ic_scene_light_pdf_triangle(s, p, t, ls.wi, ls.dist) - ls.pdf) >
+                                              1e-4f * ls.pdf;
+        }
+    }
+    CHECK(failed == 0, "%d failed samples", failed);
+    CHECK(bad_pdf == 0, "%d samples whose pdf disagrees with the pdf functions", bad_pdf);
+    CHECK(bad_radiance == 0, "%d samples with wrong radiance", bad_radiance);
+    const float expect[4] = {s->light_select.tri, s->light_select.point, s->light_select.sun, s->light_select.env};
+    for (int k = 0; k < 4; ++k)
+        CHECK_NEAR((double)count[k] / N, expect[k], 0.005, "class selection frequency");
+    ic_scene_free(s);
+}
+
+static int write_text(const char *path, const char *text)
+{
+    FILE *fp = fopen(path, "w");
+    if (!fp)
+        return 0;
+    fputs(text, fp);
+    return fclose(fp) == 0;
+}
+
+static void test_environment_map(void)
+{
+    /* 64 × 32 lat-long map: a vertical gradient and a small bright block */
+    ic_image img;
+    ic_error err;
+    if (ic_image_create(&img, 64, 32) != IC_OK) {
+        CHECK(0, "ic_image_create");
+        return;
+    }
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                int bright = x >= 40 && x < 43 && y >= 10 && y < 12;
+                img.rgb[3 * (y * img.width + x) + c] = bright ? 50.0f : 0.2f + 0.3f * (float)y / (float)img.height;
+            }
+    const char *map = IC_TEST_TMP "/scene_env.pfm", *json = IC_TEST_TMP "/scene_env.json";
+    CHECK(ic_image_write(map, &img, NULL, &err) == IC_OK, "write env map: %s", err.message);
+    ic_image_free(&img);
+    CHECK(write_text(json, "{\n \"meshes\": [{\"path\": \"" IC_SOURCE_DIR "/tests/scenes/plain_quad.obj\"}],\n"
+                           " \"environment\": {\"map\": \"scene_env.pfm\", \"scale\": 2, \"rotation_deg\": 30}\n}\n"),
+          "write scene");
+    ic_scene *s = load(json);
+    if (!s)
+        return;
+    CHECK(s->env.enabled && s->env.image.width == 64 && s->light_select.env == 1.0f, "env map is the only light");
+
+    /* the pdf integrates to 1 over the sphere (stratified uniform directions) */
+    const int G = 800;
+    uint64_t seed = 99;
+    double pdf_sum = 0.0, lum_uniform = 0.0;
+    for (int i = 0; i < G; ++i)
+        for (int j = 0; j < G; ++j) {
+            ic_vec3 d = ic_warp_uniform_sphere((i + rnd(&seed)) / G, (j + rnd(&seed)) / G);
+            pdf_sum += ic_scene_light_pdf_env(s, d);
+            lum_uniform += v3_lum(ic_scene_env_radiance(s, d));
+        }
+    CHECK_NEAR(pdf_sum * 4 * IC_PI / ((double)G * G), 1.0, 0.01, "env pdf integrates to 1");
+    lum_uniform *= 4 * IC_PI / ((double)G * G);
+
+    /* importance sampling: pdfs agree with ic_scene_light_pdf_env and the integral of L matches */
+    const int N = 400000;
+    double lum_is = 0.0;
+    int mismatch = 0, failed = 0;
+    for (int i = 0; i < N; ++i) {
+        ic_light_sample ls;
+        if (!ic_scene_sample_light(s, v3(0, 0, 0), rnd(&seed), rnd(&seed), rnd(&seed), &ls)) {
+            ++failed;
+            continue;
+        }
+        lum_is += v3_lum(ls.radiance) / ls.pdf;
+        float pdf = ic_scene_light_pdf_env(s, ls.wi);
+        mismatch += fabsf(pdf - ls.pdf) > 1e-3f * ls.pdf;
+        if (i < 1000)
+            CHECK(v3_len(v3_sub(ls.radiance, ic_scene_env_radiance(s, ls.wi))) < 1e-5f, "radiance = look-up");
+    }
+    lum_is /= N;
+    CHECK(failed < N / 10000, "%d failed env samples", failed);
+    CHECK(mismatch < N / 1000, "%d env samples whose pdf disagrees (texel boundaries)", mismatch);
+    CHECK_NEAR(lum_is, lum_uniform, 0.02 * lum_uniform, "importance-sampled integral of L");
+
+    /* rotation: the block's centre (u = 41.5/64, v = 11/32) is seen rotated by +30° about +y */
+    float u = 41.5f / 64.0f, v = 11.0f / 32.0f;
+    float phi = (u - 0.5f) * 2 * IC_PI, theta = v * IC_PI;
+    ic_vec3 dm = v3(sinf(theta) * sinf(phi), cosf(theta), -sinf(theta) * cosf(phi));
+    float a = 30.0f * IC_PI / 180.0f;
+    ic_vec3 dw = v3(cosf(a) * dm.x + sinf(a) * dm.z, dm.y, -sinf(a) * dm.x + cosf(a) * dm.z);
+    CHECK_NEAR(ic_scene_env_radiance(s, dw).x, 100.0, 1e-3, "bright block after rotation (x scale 2)");
+    CHECK(ic_scene_env_radiance(s, dm).x < 2.0f, "not where the unrotated map has it");
+    ic_scene_free(s);
+
+    /* constant sky: uniform over the sphere */
+    s = load(SCENES "plain_quad.obj");
+    if (s) {
+        ic_light_sample ls;
+        CHECK(ic_scene_sample_light(s, v3(0, 0, 0), 0.5f, 0.3f, 0.7f, &ls), "constant sky sample");
+        CHECK_NEAR(ls.pdf, 1.0 / (4 * IC_PI), 1e-7, "uniform sphere pdf");
+        CHECK_NEAR(ic_scene_light_pdf_env(s, v3(0, -1, 0)), 1.0 / (4 * IC_PI), 1e-7, "pdf_env");
+        CHECK(ls.radiance.x == 1.0f && isinf(ls.dist) && !ls.is_delta, "white sky radiance 1");
+    }
+    ic_scene_free(s);
+}
+
+int main(void)
+{
+    test_rectangle_irradiance();
+    test_mixed_selection();
+    test_environment_map();
+    TEST_MAIN_END();
+}

@@ -1,0 +1,258 @@
+/*
+ * test_scene.c — loading good scenes: the bundled Cornell box, transforms, material overrides, lights,
+ * environment and render settings from JSON, fov_x conversion, "shared:" paths, bare meshes with a
+ * fitted camera, dropped degenerate triangles, and the surface queries (barycentrics, normals, uvs,
+ * bilinear textures, one-sided emission).
+ */
+#include "scene/scene.h"
+#include "test_util.h"
+
+#include <string.h>
+
+#define SCENES IC_SOURCE_DIR "/tests/scenes/"
+
+static ic_scene *load(const char *path, const ic_scene_load_options *opt)
+{
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    ic_result r = ic_scene_load(path, opt, &s, &err);
+    CHECK(r == IC_OK && s, "%s: %s %s", path, ic_result_name(r), err.message);
+    return r == IC_OK ? s : NULL;
+}
+
+static ic_vec3 tri_normal(const ic_scene *s, uint32_t t)
+{
+    ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
+            p2 = s->positions[s->triangles[3 * t + 2]];
+    return v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+}
+
+static int32_t find_material(const ic_scene *s, const char *name)
+{
+    for (uint32_t i = 0; i < s->material_count; ++i)
+        if (!strcmp(s->materials[i].name, name))
+            return (int32_t)i;
+    return -1;
+}
+
+/* Total area of the tri lights whose material is `name`. */
+static double light_area(const ic_scene *s, const char *name)
+{
+    double a = 0.0;
+    for (uint32_t i = 0; i < s->tri_light_count; ++i)
+        if (!strcmp(s->materials[s->triangle_material[s->tri_lights[i].triangle]].name, name))
+            a += s->tri_lights[i].area;
+    return a;
+}
+
+static void test_cornell_box(void)
+{
+    ic_scene *s = load(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", NULL);
+    if (!s)
+        return;
+    CHECK(s->triangle_count == 36, "Cornell box triangles: %u", s->triangle_count);
+    CHECK(s->dropped_degenerate == 0, "dropped %u", s->dropped_degenerate);
+    CHECK(s->normals == NULL && s->uvs == NULL, "the OBJ has no normals or uvs");
+    CHECK(s->tri_light_count == 2, "one emissive quad = 2 triangles, got %u", s->tri_light_count);
+    /* the MTL's light quad spans x in [-0.24, 0.23], z in [-0.22, 0.16] at y = 1.98 */
+    CHECK_NEAR(light_area(s, "light"), 0.47 * 0.38, 1e-5, "light area");
+    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+        uint32_t t = s->tri_lights[i].triangle;
+        CHECK(s->triangle_light[t] == (int32_t)i, "triangle_light maps back");
+        CHECK_NEAR(tri_normal(s, t).y, -1.0, 1e-5, "the light faces down into the box");
+        CHECK_NEAR(s->tri_lights[i].power, IC_PI * s->tri_lights[i].area * v3_lum(v3(17, 12, 4)), 1e-3,
+                   "power = pi A lum(Le)");
+    }
+    CHECK_NEAR(s->tri_light_cdf[s->tri_light_count], 1.0, 0, "cdf ends at 1");
+    int32_t light = find_material(s, "light");
+    CHECK(light >= 0 && s->materials[light].emission.x == 17.0f && s->materials[light].emission.z == 4.0f,
+          "Ke 17 12 4");
+    int32_t left = find_material(s, "leftWall");
+    CHECK(left >= 0 && s->materials[left].type == IC_MAT_DIFFUSE && fabsf(s->materials[left].kd.x - 0.63f) < 1e-6f,
+          "leftWall is red diffuse");
+    CHECK(s->light_select.tri == 1.0f && s->light_select.env == 0.0f, "only triangle lights");
+    CHECK(!s->env.enabled && !s->sun.enabled && s->point_light_count == 0, "no other lights");
+    CHECK(s->camera.width == 512 && s->camera.height == 512, "resolution %dx%d", s->camera.width, s->camera.height);
+    CHECK_NEAR(s->camera.fov_y_deg, 39.3, 1e-5, "fov_y");
+    CHECK_NEAR(s->camera.eye.z, 3.9, 1e-6, "eye z");
+    CHECK_NEAR(s->bounds_max.y, 1.99, 1e-6, "bounds");
+    CHECK_NEAR(s->bounds_min.x, -1.02, 1e-6, "bounds");
+    ic_scene_free(s);
+
+    ic_scene_load_options opt = {0};
+    opt.width = 64;
+    opt.height = 32;
+    s = load(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", &opt);
+    if (s) {
+        CHECK(s->camera.width == 64 && s->camera.height == 32, "resolution override");
+        CHECK_NEAR(s->camera.fov_y_deg, 39.3, 1e-5, "fov_y kept under override");
+    }
+    ic_scene_free(s);
+}
+
+static void test_transformed(void)
+{
+    ic_scene *s = load(SCENES "transformed.json", NULL);
+    if (!s)
+        return;
+    CHECK(s->triangle_count == 36 + 4, "two meshes: %u", s->triangle_count);
+    /* Cornell box: scale 2, rotate 90° about y (x' = z, z' = -x), translate x + 10 */
+    CHECK_NEAR(s->bounds_max.x, 10.0 + 2 * 0.99, 1e-4, "max x = 10 + 2 max z");
+    CHECK_NEAR(s->bounds_max.z, 2 * 1.02, 1e-4, "max z = -2 min x");
+    CHECK_NEAR(s->bounds_max.y, 2 * 1.99, 1e-4, "max y = 2 max y");
+    CHECK_NEAR(s->bounds_min.y, -5.0, 1e-5, "the quad mesh moved down by 5 (matrix)");
+    CHECK_NEAR(light_area(s, "light"), 4 * 0.47 * 0.38, 1e-4, "light area scaled by 4");
+    CHECK_NEAR(light_area(s, "emitter"), 0.5, 1e-5, "quad emitter area");
+    int found_vertex = 0; /* light corner (-0.24, 1.98, 0.16) → (10.32, 3.96, 0.48) */
+    for (uint32_t i = 0; i < s->vertex_count; ++i)
+        found_vertex |= v3_len(v3_sub(s->positions[i], v3(10.32f, 3.96f, 0.48f))) < 1e-4f;
+    CHECK(found_vertex, "transformed light corner present");
+    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+        uint32_t t = s->tri_lights[i].triangle;
+        const char *name = s->materials[s->triangle_material[t]].name;
+        CHECK_NEAR(tri_normal(s, t).y, -1.0, 1e-5, "rotation keeps the lights facing down");
+        if (!strcmp(name, "emitter"))
+            CHECK_NEAR(s->positions[s->triangles[3 * t]].y, -4.0, 1e-6, "emitter moved to y = -4");
+    }
+
+    int32_t floor_m = find_material(s, "floor"), tall = find_material(s, "tallBox"), light = find_material(s, "light");
+    CHECK(floor_m >= 0 && s->materials[floor_m].type == IC_MAT_GLOSSY && s->materials[floor_m].ns == 50.0f &&
+              s->materials[floor_m].ks.y == 0.2f && fabsf(s->materials[floor_m].kd.x - 0.725f) < 1e-6f,
+          "floor override: glossy ks 0.2 ns 50, kd kept");
+    CHECK(tall >= 0 && s->materials[tall].type == IC_MAT_MIRROR && s->materials[tall].ks.x == 1.0f,
+          "tallBox override: mirror, white tint");
+    CHECK(light >= 0 && s->materials[light].emission.y == 2.0f && s->materials[light].two_sided_emission,
+          "light override: emission and two-sided");
+    for (uint32_t i = 0; i < s->tri_light_count; ++i)
+        if (s->triangle_material[s->tri_lights[i].triangle] == (uint32_t)light)
+            CHECK_NEAR(s->tri_lights[i].power, 2.0 * IC_PI * s->tri_lights[i].area * v3_lum(v3(1, 2, 3)), 1e-3,
+                       "two-sided power doubles");
+
+    CHECK(s->point_light_count == 1 && s->point_lights[0].position.y == 3.0f && s->point_lights[0].intensity.x == 5.0f,
+          "point light");
+    CHECK(s->sun.enabled && s->sun.direction.y == 1.0f && s->sun.irradiance.z == 3.0f, "sun normalized, grey");
+    CHECK(s->env.enabled && s->env.image.width == 0 && s->env.radiance.z == 0.3f, "constant sky");
+    ic_light_selection ls = s->light_select;
+    CHECK_NEAR(ls.tri + ls.point + ls.sun + ls.env, 1.0, 1e-6, "selection sums to 1");
+    CHECK(ls.tri > 0 && ls.point > 0 && ls.sun > 0 && ls.env > 0, "every class can be picked");
+    CHECK_NEAR(ls.point / ls.tri, 4 * IC_PI * 5 / s->tri_light_power, 1e-4, "point vs triangle by power");
+    CHECK(s->settings.spp == 16 && s->settings.max_depth == 4 && s->settings.seed == 7 && s->settings.has_exposure &&
+              s->settings.exposure == -1.5f,
+          "render settings");
+    CHECK(s->camera.width == 512 && s->camera.fov_y_deg == 45.0f, "no camera: fitted default");
+    ic_scene_free(s);
+}
+
+static void test_fov_x_and_shared(void)
+{
+    ic_scene *s = load(SCENES "fov_x.json", NULL);
+    if (s) {
+        /* fov_x 90 at 200x100: tan(fy/2) = tan(45°)·100/200 */
+        CHECK_NEAR(s->camera.fov_y_deg, 2.0 * atan(0.5) * 180.0 / 3.14159265358979, 1e-4, "fov_x → fov_y");
+        CHECK(s->camera.width == 200 && s->camera.height == 100, "resolution");
+    }
+    ic_scene_free(s);
+
+    ic_scene_load_options opt = {0};
+    opt.shared_scenes_dir = IC_SOURCE_DIR "/tests/scenes";
+    s = load(SCENES "shared_mesh.json", &opt);
+    if (s)
+        CHECK(s->triangle_count == 4 && s->tri_light_count == 2, "shared: mesh loaded (%u)", s->triangle_count);
+    ic_scene_free(s);
+}
+
+static void test_degenerate_dropped(void)
+{
+    ic_scene *s = load(SCENES "degenerate.json", NULL);
+    if (s) {
+        CHECK(s->triangle_count == 2, "kept %u", s->triangle_count);
+        CHECK(s->dropped_degenerate == 1, "dropped %u", s->dropped_degenerate);
+    }
+    ic_scene_free(s);
+    s = load(SCENES "degenerate.obj", NULL);
+    if (s)
+        CHECK(s->dropped_degenerate == 1, "bare mesh too");
+    ic_scene_free(s);
+}
+
+static void test_bare_mesh_and_queries(void)
+{
+    ic_scene *s = load(SCENES "plain_quad.obj", NULL);
+    if (!s)
+        return;
+    CHECK(s->triangle_count == 2 && s->uvs && s->normals, "textured quad with normals");
+    CHECK(s->env.enabled && s->env.radiance.x == 1.0f && s->env.image.width == 0, "no emitter: white sky");
+    CHECK(s->light_select.env == 1.0f, "the sky is the only light");
+    CHECK_NEAR(s->camera.target.x, 0.5, 1e-6, "fitted camera looks at the centre");
+    CHECK_NEAR(s->camera.target.y, 0.5, 1e-6, "fitted camera looks at the centre");
+    CHECK(s->camera.eye.z > 1.0f && s->camera.fov_y_deg == 45.0f, "from +z, fov 45");
+    /* distance fits the bounding sphere (radius sqrt(2)/2) in the 45° field of view */
+    CHECK_NEAR(s->camera.eye.z, (sqrt(2.0) / 2) / sin(22.5 * 3.14159265358979 / 180), 1e-4, "fitted distance");
+    CHECK(s->texture_count == 1 && s->textures[0].width == 2, "checker texture loaded");
+
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        ic_surface srf;
+        float u = 0.2f, v = 0.3f;
+        ic_scene_surface(s, t, u, v, &srf);
+        const uint32_t *idx = s->triangles + 3 * t;
+        ic_vec3 expect = v3_add(v3_add(v3_scale(s->positions[idx[0]], 1 - u - v), v3_scale(s->positions[idx[1]], u)),
+                                v3_scale(s->positions[idx[2]], v));
+        CHECK(v3_len(v3_sub(srf.p, expect)) < 1e-6f, "Embree barycentrics");
+        CHECK_NEAR(srf.ng.z, 1.0, 1e-6, "ng from winding");
+        CHECK_NEAR(srf.ns.z, 1.0, 1e-6, "ns from vertex normals");
+        CHECK_NEAR(srf.uv[0], srf.p.x, 1e-6, "uv = xy on this quad");
+        CHECK_NEAR(srf.uv[1], srf.p.y, 1e-6, "uv = xy on this quad");
+        CHECK(srf.triangle == t && srf.material == s->triangle_material[t], "ids");
+    }
+
+    /* checker: top row red, green; bottom row blue, white; uv (0,0) = bottom-left */
+    ic_surface srf;
+    memset(&srf, 0, sizeof srf);
+    srf.material = s->triangle_material[0];
+    struct { float u, v, r, g, b; } probes[] = {
+        {0.25f, 0.75f, 1, 0, 0},     {0.75f, 0.75f, 0, 1, 0},    {0.25f, 0.25f, 0, 0, 1},
+        {0.75f, 0.25f, 1, 1, 1},     {0.5f, 0.5f, 0.5f, 0.5f, 0.5f}, {1.25f, -0.25f, 1, 0, 0},
+        {0.5f, 0.75f, 0.5f, 0.5f, 0}, /* halfway between red and green */
+    };
+    for (size_t i = 0; i < sizeof probes / sizeof probes[0]; ++i) {
+        srf.uv[0] = probes[i].u;
+        srf.uv[1] = probes[i].v;
+        ic_vec3 a = ic_scene_albedo(s, &srf);
+        CHECK(fabsf(a.x - probes[i].r) < 1e-5f && fabsf(a.y - probes[i].g) < 1e-5f && fabsf(a.z - probes[i].b) < 1e-5f,
+              "albedo at uv (%g, %g) = (%g, %g, %g)", probes[i].u, probes[i].v, a.x, a.y, a.z);
+    }
+    ic_scene_free(s);
+
+    s = load(SCENES "flipped_normal.obj", NULL);
+    if (s) {
+        ic_surface f;
+        ic_scene_surface(s, 0, 0.3f, 0.3f, &f);
+        CHECK(f.ng.z > 0.99f && f.ns.z > 0.99f, "shading normal flipped to the ng side (%g)", f.ns.z);
+    }
+    ic_scene_free(s);
+
+    s = load(SCENES "quad_light.obj", NULL);
+    if (s) {
+        CHECK(!s->env.enabled, "a mesh with an emitter gets no sky");
+        for (uint32_t t = 0; t < s->triangle_count; ++t) {
+            if (s->triangle_light[t] < 0)
+                continue;
+            ic_surface e;
+            ic_scene_surface(s, t, 0.25f, 0.25f, &e);
+            CHECK(ic_scene_emission(s, &e, v3(0, -1, 0)).x == 2.0f, "emits on its front (down)");
+            CHECK(ic_scene_emission(s, &e, v3(0, 1, 0)).x == 0.0f, "dark on its back");
+        }
+    }
+    ic_scene_free(s);
+    ic_scene_free(NULL);
+}
+
+int main(void)
+{
+    test_cornell_box();
+    test_transformed();
+    test_fov_x_and_shared();
+    test_degenerate_dropped();
+    test_bare_mesh_and_queries();
+    TEST_MAIN_END();
+}

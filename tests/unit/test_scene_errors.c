@@ -1,0 +1,81 @@
+/*
+ * test_scene_errors.c — every class of bad scene input gives the right ic_result and a one-line message
+ * that names the file, the line (JSON and OBJ) and what to do; *out stays NULL and nothing leaks.
+ */
+#include "scene/scene.h"
+#include "test_util.h"
+
+#include <string.h>
+
+#define SCENES IC_SOURCE_DIR "/tests/scenes/"
+
+/* Loads path and checks the result code and that the message contains each of up to three strings. */
+static void expect_error(const char *path, const ic_scene_load_options *opt, ic_result code, const char *s1,
+                         const char *s2, const char *s3)
+{
+    ic_scene *scene = (ic_scene *)&scene; /* non-NULL: the loader must reset it */
+    ic_error err;
+    memset(&err, 0, sizeof err);
+    ic_result r = ic_scene_load(path, opt, &scene, &err);
+    CHECK(r == code, "%s: expected %s, got %s (%s)", path, ic_result_name(code), ic_result_name(r), err.message);
+    CHECK(err.code == r, "%s: err.code matches", path);
+    CHECK(scene == NULL, "%s: *out is NULL on failure", path);
+    const char *want[3] = {s1, s2, s3};
+    for (int i = 0; i < 3; ++i)
+        if (want[i])
+            CHECK(strstr(err.message, want[i]) != NULL, "%s: message lacks '%s': %s", path, want[i], err.message);
+    CHECK(strchr(err.message, '\n') == NULL, "%s: one line", path);
+    CHECK(strstr(err.message, "; ") != NULL, "%s: says what to do: %s", path, err.message);
+    if (r == IC_OK)
+        ic_scene_free(scene);
+}
+
+int main(void)
+{
+    /* JSON syntax: the missing comma after line 4 is found where "fov_y" starts, line 5 */
+    expect_error(SCENES "malformed.json", NULL, IC_ERR_PARSE, "malformed.json:5:", "malformed JSON", NULL);
+    /* a mesh that does not exist: the line of its "path" and the absolute path it resolved to */
+    expect_error(SCENES "missing_mesh.json", NULL, IC_ERR_IO, "missing_mesh.json:5:",
+                 "mesh 'does-not-exist.obj' not found", IC_SOURCE_DIR "/tests/scenes/does-not-exist.obj");
+    expect_error(SCENES "shared_missing.json", NULL, IC_ERR_IO, "shared_missing.json:3:", "IRRCACHE_SCENES",
+                 "no-such-scene/model.obj");
+    /* a texture named by the MTL that does not exist: names the texture and the mesh */
+    expect_error(SCENES "missing_texture.json", NULL, IC_ERR_IO, "missing_texture.obj", "no-such-wood.png",
+                 "not found");
+    /* a NaN vertex: the OBJ line and the vertex number as the file counts them */
+    expect_error(SCENES "nan_vertex.json", NULL, IC_ERR_PARSE, "nan_vertex.obj:6:", "vertex 4 has a non-finite",
+                 "fix or remove it");
+    expect_error(SCENES "nan_vertex.obj", NULL, IC_ERR_PARSE, "nan_vertex.obj:6:", "vertex 4", NULL);
+    /* an emitter whose only triangle is degenerate */
+    expect_error(SCENES "zero_area_light.json", NULL, IC_ERR_PARSE, "zero_area_light.obj", "'lamp'",
+                 "zero total area");
+    /* overrides: unknown material name, unknown type */
+    expect_error(SCENES "unknown_material.json", NULL, IC_ERR_INVALID_ARG, "unknown_material.json:5:", "'marble'",
+                 "'grey'");
+    expect_error(SCENES "bad_material_type.json", NULL, IC_ERR_INVALID_ARG, "bad_material_type.json:6:", "'plastic'",
+                 "diffuse");
+    /* camera: negative and zero resolution, fov out of (0, 180) */
+    expect_error(SCENES "bad_resolution.json", NULL, IC_ERR_INVALID_ARG, "bad_resolution.json:6:", "'height' is -480",
+                 NULL);
+    expect_error(SCENES "zero_resolution.json", NULL, IC_ERR_INVALID_ARG, "zero_resolution.json:3:", "'width' is 0",
+                 NULL);
+    expect_error(SCENES "bad_fov.json", NULL, IC_ERR_INVALID_ARG, "bad_fov.json:6:", "'fov_y' = 180", "(0, 180)");
+    /* unknown keys list the valid ones; unknown light type */
+    expect_error(SCENES "unknown_key.json", NULL, IC_ERR_PARSE, "unknown_key.json:6:", "'samples'",
+                 "valid keys: spp, max_depth, seed, exposure");
+    expect_error(SCENES "bad_light.json", NULL, IC_ERR_INVALID_ARG, "bad_light.json:5:", "'spot'", NULL);
+    expect_error(SCENES "env_missing.json", NULL, IC_ERR_IO, "env_missing.json:3:", "no-such-sky.exr", NULL);
+    /* files and options */
+    expect_error(SCENES "no-such-scene.json", NULL, IC_ERR_IO, "no-such-scene.json", "check the path", NULL);
+    expect_error(SCENES "no-such-mesh.obj", NULL, IC_ERR_IO, "no-such-mesh.obj", "not found", NULL);
+    expect_error(SCENES "checker2x2.pfm", NULL, IC_ERR_UNSUPPORTED, "checker2x2.pfm", ".json", NULL);
+    ic_scene_load_options opt = {0};
+    opt.width = -1;
+    expect_error(SCENES "quad_light.obj", &opt, IC_ERR_INVALID_ARG, "quad_light.obj", "negative", NULL);
+
+    ic_scene *s = NULL;
+    ic_error err;
+    CHECK(ic_scene_load(NULL, NULL, &s, &err) == IC_ERR_INVALID_ARG && s == NULL, "NULL path");
+    CHECK(ic_scene_load(SCENES "quad_light.obj", NULL, NULL, NULL) == IC_ERR_INVALID_ARG, "NULL out, NULL err");
+    TEST_MAIN_END();
+}
