@@ -33,6 +33,11 @@ typedef struct render_args {
     double time_budget, exposure;
     int has_exposure;
     int quiet;
+    /* irradiance caching */
+    const char *strategy, *weight, *gather, *aov;
+    double accuracy, min_radius, max_radius, min_radius_px, max_radius_px, final_scale;
+    int rays, bounces, max_passes, min_candidates;
+    int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference;
 } render_args;
 
 typedef enum opt_kind { OPT_INT, OPT_SEED, OPT_DOUBLE, OPT_STRING, OPT_OUTPUT, OPT_FLAG } opt_kind;
@@ -58,7 +63,8 @@ static const opt_def options[] = {
     {"--spp", NULL, OPT_INT, OFF(spp), 1, "N", "scene file, else 16", "samples per pixel (with --time: the most to take)"},
     {"--time", NULL, OPT_DOUBLE, OFF(time_budget), 0, "SECONDS", "none",
      "wall-time budget: progressive passes until it is spent (equal-time comparisons)"},
-    {"--integrator", NULL, OPT_STRING, OFF(integrator), 0, "pt", "pt", "pt: path-traced reference"},
+    {"--integrator", NULL, OPT_STRING, OFF(integrator), 0, "pt|ic", "pt",
+     "pt: path-traced reference; ic: irradiance caching (indirect diffuse from the cache)"},
     {"--max-depth", NULL, OPT_INT, OFF(max_depth), 1, "N", "scene file, else 8", "maximum number of bounces"},
     {"--threads", NULL, OPT_INT, OFF(threads), 0, "N", "0 (all cores)", "worker threads; the image does not depend on it"},
     {"--seed", NULL, OPT_SEED, OFF(seed), 0, "N", "scene file, else 1", "random seed; same seed, same image"},
@@ -68,6 +74,36 @@ static const opt_def options[] = {
     {"--scenes-dir", NULL, OPT_STRING, OFF(scenes_dir), 0, "DIR", "$IRRCACHE_SCENES, else ../shared/scenes",
      "where 'shared:' mesh paths in scene files resolve"},
     {"--quiet", "-q", OPT_FLAG, OFF(quiet), 0, NULL, "off", "no progress line"},
+    {"--strategy", NULL, OPT_STRING, OFF(strategy), 0, "batch|lazy", "batch",
+     "ic: cache construction: batch (Frolov 2012, parallel multi-pass) or lazy (Ward 1988, serial)"},
+    {"--accuracy", "-a", OPT_DOUBLE, OFF(accuracy), 0.001, "A", "0.25 (Ward), 1 (T-L)",
+     "ic: error bound a of the weights; smaller = more records"},
+    {"--weight", NULL, OPT_STRING, OFF(weight), 0, "ward|tl", "ward", "ic: Ward or Tabellion-Lamorlette weights"},
+    {"--rays", NULL, OPT_INT, OFF(rays), 16, "N", "800", "ic: hemisphere rays per record (stratified M x N)"},
+    {"--gather", NULL, OPT_STRING, OFF(gather), 0, "stratified|progressive", "stratified",
+     "ic: hemisphere sampler; progressive = Hammersley rounds 4096..65536 until converged"},
+    {"--bounces", NULL, OPT_INT, OFF(bounces), 1, "N", "3", "ic: indirect bounces in the light a record gathers"},
+    {"--min-radius", NULL, OPT_DOUBLE, OFF(min_radius), 0, "R", "0", "ic: smallest record radius, world units"},
+    {"--max-radius", NULL, OPT_DOUBLE, OFF(max_radius), 0, "R", "scene diagonal / 8",
+     "ic: largest record radius, world units"},
+    {"--min-radius-px", NULL, OPT_DOUBLE, OFF(min_radius_px), 0, "P", "1.5",
+     "ic: smallest influence radius a*R of a record, in pixels at its primary hit"},
+    {"--max-radius-px", NULL, OPT_DOUBLE, OFF(max_radius_px), 0, "P", "48",
+     "ic: largest influence radius a*R of a record, in pixels at its primary hit"},
+    {"--final-accuracy-scale", NULL, OPT_DOUBLE, OFF(final_scale), 1, "S", "1",
+     "ic: the final render accepts records up to S times the construction error bound"},
+    {"--no-gradients", NULL, OPT_FLAG, OFF(no_gradients), 0, NULL, "off", "ic: interpolate without gradients"},
+    {"--no-neighbor-clamp", NULL, OPT_FLAG, OFF(no_neighbor_clamp), 0, NULL, "off",
+     "ic: disable neighbor clamping (Krivanek 2006 sec. 5.2)"},
+    {"--no-validity-clamp", NULL, OPT_FLAG, OFF(no_validity_clamp), 0, NULL, "off",
+     "ic: disable validity-radius clamping (Frolov 2012 sec. 4.2)"},
+    {"--gradient-difference", NULL, OPT_FLAG, OFF(gradient_difference), 0, NULL, "off",
+     "ic: enable gradient-difference record scaling (Castano 2014)"},
+    {"--max-passes", NULL, OPT_INT, OFF(max_passes), 1, "N", "12", "ic batch: most construction passes"},
+    {"--min-candidates", NULL, OPT_INT, OFF(min_candidates), 1, "N", "16",
+     "ic batch: stop construction when a pass finds fewer new candidates"},
+    {"--aov", NULL, OPT_STRING, OFF(aov), 0, "LIST", "none",
+     "ic: extra images next to the first output, comma-separated: indirect (.exr), records (.png), density (.exr)"},
     {"--help", "-h", OPT_FLAG, 0, 0, NULL, NULL, "show this help"},
 };
 #define OPTION_COUNT (sizeof options / sizeof options[0])
@@ -185,8 +221,50 @@ static int parse_args(int argc, char **argv, render_args *a)
             return 2;
         }
     }
-    if (strcmp(a->integrator, "pt") != 0) {
-        fprintf(stderr, "irrcache render: --integrator %s: unknown integrator; use pt\n", a->integrator);
+    if (strcmp(a->integrator, "pt") != 0 && strcmp(a->integrator, "ic") != 0) {
+        fprintf(stderr, "irrcache render: --integrator %s: unknown integrator; use pt or ic\n", a->integrator);
+        return 2;
+    }
+    const struct { const char *name, *value, *choices; } choices[] = {
+        {"--strategy", a->strategy, "batch lazy"},
+        {"--weight", a->weight, "ward tl"},
+        {"--gather", a->gather, "stratified progressive"},
+    };
+    for (size_t i = 0; i < sizeof choices / sizeof choices[0]; ++i) {
+        if (!choices[i].value)
+            continue;
+        char list[64];
+        snprintf(list, sizeof list, " %s ", choices[i].choices);
+        char want[40];
+        snprintf(want, sizeof want, " %s ", choices[i].value);
+        if (strlen(choices[i].value) > 30 || !strstr(list, want)) {
+            fprintf(stderr, "irrcache render: %s %s: unknown value; use one of: %s\n", choices[i].name,
+                    choices[i].value, choices[i].choices);
+            return 2;
+        }
+    }
+    if (a->aov) {
+        char buf[256];
+        snprintf(buf, sizeof buf, "%s", a->aov);
+        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+            if (strcmp(tok, "indirect") && strcmp(tok, "records") && strcmp(tok, "density")) {
+                fprintf(stderr, "irrcache render: --aov %s: unknown AOV '%s'; use indirect, records, density\n",
+                        a->aov, tok);
+                return 2;
+            }
+        }
+    }
+    int ic_only = a->strategy || a->weight || a->gather || a->aov || a->accuracy > 0 || a->rays || a->bounces ||
+                  a->min_radius > 0 || a->max_radius > 0 || a->min_radius_px > 0 || a->max_radius_px > 0 ||
+                  a->final_scale > 0 || a->max_passes || a->min_candidates || a->no_gradients ||
+                  a->no_neighbor_clamp || a->no_validity_clamp || a->gradient_difference;
+    if (ic_only && strcmp(a->integrator, "ic") != 0) {
+        fprintf(stderr, "irrcache render: irradiance-cache options need --integrator ic\n");
+        return 2;
+    }
+    if (a->min_radius > 0 && a->max_radius > 0 && a->min_radius > a->max_radius) {
+        fprintf(stderr, "irrcache render: --min-radius %g is larger than --max-radius %g\n", a->min_radius,
+                a->max_radius);
         return 2;
     }
     return 0;
@@ -257,13 +335,80 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
     fprintf(o, "\",\n  \"integrator\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n", a->integrator, w, h);
     fprintf(o, "  \"spp\": %d,\n  \"threads\": %d,\n  \"seconds\": %.6f,\n  \"rays\": %llu,\n", st->spp, st->threads,
             st->seconds, (unsigned long long)st->rays);
-    fprintf(o, "  \"rays_per_second\": %.1f,\n  \"phases\": {", st->rays_per_second);
+    fprintf(o, "  \"rays_per_second\": %.1f,\n", st->rays_per_second);
+    if (!strcmp(a->integrator, "ic")) {
+        fprintf(o, "  \"strategy\": \"%s\",\n  \"records\": %u,\n  \"passes\": %d,\n  \"gather_rays\": %llu,\n",
+                a->strategy ? a->strategy : "batch", st->records, st->passes, (unsigned long long)st->gather_rays);
+        fprintf(o, "  \"records_per_pass\": [");
+        for (int i = 0; i < st->passes && i < 32; ++i)
+            fprintf(o, "%s%u", i ? ", " : "", st->records_per_pass[i]);
+        fprintf(o, "],\n");
+    }
+    fprintf(o, "  \"phases\": {");
     for (int i = 0; i < st->phase_count; ++i)
         fprintf(o, "%s\"%s\": %.6f", i ? ", " : "", st->phases[i].name, st->phases[i].seconds);
     fprintf(o, "}\n}\n");
     if (ic_atomic_file_commit(&f, &err) != IC_OK) {
         fprintf(stderr, "irrcache render: %s\n", err.message);
         return 0;
+    }
+    return 1;
+}
+
+static void fill_ic_options(const render_args *a, ic_ic_options *o)
+{
+    memset(o, 0, sizeof *o);
+    if (a->strategy && !strcmp(a->strategy, "lazy"))
+        o->strategy = IC_STRATEGY_LAZY;
+    if (a->weight && !strcmp(a->weight, "tl"))
+        o->cache.weight = IC_WEIGHT_TABELLION;
+    o->cache.accuracy = (float)a->accuracy;
+    o->cache.min_radius = (float)a->min_radius;
+    o->cache.max_radius = (float)a->max_radius;
+    o->cache.min_radius_pixels = (float)a->min_radius_px;
+    o->cache.max_radius_pixels = (float)a->max_radius_px;
+    o->cache.final_accuracy_scale = (float)a->final_scale;
+    o->cache.neighbor_clamp = a->no_neighbor_clamp ? IC_CACHE_OFF : IC_CACHE_DEFAULT;
+    o->cache.validity_clamp = a->no_validity_clamp ? IC_CACHE_OFF : IC_CACHE_DEFAULT;
+    o->cache.gradient_difference = a->gradient_difference ? IC_CACHE_ON : IC_CACHE_DEFAULT;
+    if (a->gather && !strcmp(a->gather, "progressive"))
+        o->gather.method = IC_GATHER_PROGRESSIVE;
+    if (a->rays > 0) {
+        /* M×N strata with N ≈ π·M (Ward's recommendation): M = sqrt(rays/π). */
+        int m = (int)lround(sqrt(a->rays / 3.14159265358979));
+        if (m < 2)
+            m = 2;
+        o->gather.theta_strata = (uint32_t)m;
+        o->gather.phi_strata = (uint32_t)((a->rays + m / 2) / m);
+    }
+    o->no_gradients = a->no_gradients;
+    o->bounces = a->bounces;
+    o->max_passes = a->max_passes;
+    o->min_candidates = a->min_candidates;
+}
+
+/* AOVs go next to the first output: <stem>.<aov>.<ext>, with .exr for linear data and .png for the
+ * overlay. */
+static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_image_write_options *wo)
+{
+    char stem[4096];
+    snprintf(stem, sizeof stem, "%s", first);
+    char *dot = strrchr(stem, '.');
+    char *slash = strrchr(stem, '/');
+    if (dot && (!slash || dot > slash))
+        *dot = 0;
+    const struct { const ic_image *img; const char *suffix; } list[] = {
+        {&aovs->indirect, ".indirect.exr"}, {&aovs->records, ".records.png"}, {&aovs->density, ".density.exr"}};
+    for (size_t i = 0; i < sizeof list / sizeof list[0]; ++i) {
+        if (!list[i].img->rgb)
+            continue;
+        char path[4200];
+        snprintf(path, sizeof path, "%s%s", stem, list[i].suffix);
+        ic_error err;
+        if (ic_image_write(path, list[i].img, wo, &err) != IC_OK) {
+            fprintf(stderr, "irrcache render: %s\n", err.message);
+            return 0;
+        }
     }
     return 1;
 }
@@ -311,6 +456,18 @@ int ic_cli_render(int argc, char **argv)
     opt.time_budget = a.time_budget;
     opt.progress = on_progress;
     opt.progress_user = &prog;
+    ic_render_aovs aovs;
+    memset(&aovs, 0, sizeof aovs);
+    if (!strcmp(a.integrator, "ic")) {
+        opt.integrator = IC_INTEGRATOR_IC;
+        fill_ic_options(&a, &opt.ic);
+        if (a.aov) {
+            aovs.want_indirect = strstr(a.aov, "indirect") != NULL;
+            aovs.want_records = strstr(a.aov, "records") != NULL;
+            aovs.want_density = strstr(a.aov, "density") != NULL;
+            opt.aovs = &aovs;
+        }
+    }
     ic_image img = {0};
     ic_render_stats st;
     ic_result r = ic_render(scene, &opt, &img, &st, &err);
@@ -338,12 +495,21 @@ int ic_cli_render(int argc, char **argv)
             ok = 0;
         }
     }
+    if (ok && opt.aovs)
+        ok = write_aovs(a.outputs[0], &aovs, &wo);
     ic_image_free(&img);
+    ic_image_free(&aovs.indirect);
+    ic_image_free(&aovs.records);
+    ic_image_free(&aovs.density);
     ic_scene_free(scene);
     if (ok && a.stats_path)
         ok = write_stats(a.stats_path, &a, w, h, &st);
-    if (ok && !a.quiet)
-        fprintf(stderr, "irrcache: %dx%d, %d spp, %.2fs, %.2f Mrays/s\n", w, h, st.spp, st.seconds,
+    if (ok && !a.quiet) {
+        fprintf(stderr, "irrcache: %dx%d, %d spp, %.2fs, %.2f Mrays/s", w, h, st.spp, st.seconds,
                 st.rays_per_second * 1e-6);
+        if (opt.integrator == IC_INTEGRATOR_IC)
+            fprintf(stderr, ", %u records in %d passes", st.records, st.passes);
+        fputc('\n', stderr);
+    }
     return ok ? 0 : 1;
 }

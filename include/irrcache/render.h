@@ -55,8 +55,9 @@ typedef enum ic_strategy {
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
 typedef struct ic_ic_options {
     ic_strategy strategy;
-    ic_cache_params cache; /* weights, accuracy [0.25], clamps; the renderer's defaults for radius bounds are
-                              min_radius_pixels [1.5], max_radius_pixels [24], max_radius [scene diagonal/8];
+    ic_cache_params cache; /* weights, accuracy [0.25], clamps. Unlike the cache library, here
+                              min_radius_pixels [1.5] and max_radius_pixels [48] bound the influence radius
+                              a·R on screen; max_radius [scene diagonal/8] bounds R in world units;
                               a negative value switches a bound off */
     ic_gather_opts gather; /* hemisphere sampling [stratified, 16×50 = 800 rays] */
     int no_gradients;      /* 1: records carry no gradients (interpolation is a weighted average) */
@@ -67,7 +68,7 @@ typedef struct ic_ic_options {
     float dither_threshold;/* batch: need at which dithering goes from 32- to 16-pixel spacing [0.5] */
     float normal_weight;   /* batch: k of k·normDiff + posDiff (seed 004 §3.1.1) [4] */
     int world_stride;      /* batch: world stage traces one eye path per stride×stride pixels [2] */
-    float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene diagonal [0.02] */
+    float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene diagonal [0.05] */
 } ic_ic_options;
 
 /* Extra images an irradiance-cache render can return (each allocated only if asked for). */

@@ -519,10 +519,11 @@ static ic_result build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_
                 ic_error_set(err, r, "out of memory for the discontinuity map");
                 goto done;
             }
-            /* Pixels no record covers need one at the finest spacing. */
+            /* Pixels no record covers ask for at least the 16-pixel spacing; later passes (and the
+             * world stage, which clusters uncovered hits) fill what remains. */
             for (size_t i = 0; i < npix; ++i)
                 if (c->g.valid[i] && !covered[i])
-                    need[i] = 1e30f;
+                    need[i] = fmaxf(need[i], c->o.dither_threshold);
             n = dithered_candidates(c, need, pix, cand, (uint64_t)pass);
             found += n;
             r = gather_and_insert(c, cand, n, pt, err);
@@ -848,13 +849,17 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
     if (o.world_stride <= 0)
         o.world_stride = 2;
     if (o.cluster_size <= 0.0f)
-        o.cluster_size = 0.02f;
+        o.cluster_size = 0.05f;
     if (o.cache.accuracy == 0.0f)
         o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? 1.0f : 0.25f;
-    /* Radius bounds: 0 means the renderer's default, negative switches the bound off. */
+    /* Radius bounds: 0 means the renderer's default, negative switches the bound off. The pixel bounds
+     * given to the renderer bound a record's influence radius a·R on screen (what a user sees: "a record
+     * covers between 1.5 and 48 pixels"); the cache clamps R itself, hence the division by a. */
     float diag = v3_len(v3_sub(scene->bounds_max, scene->bounds_min));
-    o.cache.min_radius_pixels = o.cache.min_radius_pixels == 0.0f ? 1.5f : fmaxf(o.cache.min_radius_pixels, 0.0f);
-    o.cache.max_radius_pixels = o.cache.max_radius_pixels == 0.0f ? 24.0f : fmaxf(o.cache.max_radius_pixels, 0.0f);
+    float min_px = o.cache.min_radius_pixels == 0.0f ? 1.5f : fmaxf(o.cache.min_radius_pixels, 0.0f);
+    float max_px = o.cache.max_radius_pixels == 0.0f ? 48.0f : fmaxf(o.cache.max_radius_pixels, 0.0f);
+    o.cache.min_radius_pixels = min_px / o.cache.accuracy;
+    o.cache.max_radius_pixels = max_px / o.cache.accuracy;
     o.cache.max_radius = o.cache.max_radius == 0.0f ? diag / 8.0f : (o.cache.max_radius < 0.0f ? INFINITY : o.cache.max_radius);
     o.cache.min_radius = fmaxf(o.cache.min_radius, 0.0f);
     c->o = o;

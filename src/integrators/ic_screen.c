@@ -81,7 +81,8 @@ static float geometry_disc(const level *l, size_t i, size_t j, int lev, float k)
     float nd = 1.0f - ic_clampf(v3_dot(l->n[i], l->n[j]), -1.0f, 1.0f);
     float pixel = l->fp[i] * (float)(1 << lev);
     float off = fabsf(v3_dot(l->n[i], v3_sub(l->p[j], l->p[i])));
-    return k * nd + (pixel > 0.0f ? off / pixel : 0.0f);
+    /* A depth step of many pixels is no more a discontinuity than a right-angle crease: cap at k. */
+    return fminf(k * nd + (pixel > 0.0f ? off / pixel : 0.0f), k);
 }
 
 static float value_disc(const level *l, size_t i, size_t j, int lev, float k)
@@ -120,7 +121,10 @@ static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc
         ++nlev;
     }
     memset(need, 0, npix * sizeof *need);
-    /* Blend of the up-scaled levels (nearest up-scaling; each level weighs the same). */
+    /* Blend of the up-scaled levels (nearest up-scaling). A discontinuity found at level l lies within
+     * about 2^l pixels, so level l is weighted 2^-l: near an edge the need is high and asks for the
+     * finest spacing, and it decays with the distance to the edge rather than flooding the whole
+     * 32×32 block that a coarse level's texel covers. */
     for (int l = 0; l < nlev; ++l) {
         const level *L = &lv[l];
         for (int y = 0; y < g->height; ++y) {
@@ -142,7 +146,7 @@ static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc
                     if (L->valid[j])
                         d = fmaxf(d, disc(L, i, j, l, k));
                 }
-                need[o] += d;
+                need[o] += d / (float)(1 << l);
             }
         }
     }

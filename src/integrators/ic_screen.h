@@ -11,6 +11,8 @@
  * in pixels of that level. Measuring the position difference off the tangent plane and in pixels makes
  * the map independent of world scale and blind to in-plane motion (a slanted wall is not a
  * discontinuity); the seed leaves k "depending on world scale", which this normalisation removes.
+ * The term is capped at k (a depth step is no worse than a right-angle crease), and level l enters the
+ * blend with weight 2^-l (see need_map in ic_screen.c).
  * Irradiance discontinuity (§3.1.2): the relative luminance difference |Y − Y'| / max(Y, Y', ε) of
  * the current cache look-ups, on the same pyramid.
  */

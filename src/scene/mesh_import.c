@@ -15,6 +15,7 @@
  *   ks = mix(0.04, base, m), Phong exponent n = 2/α² - 2 with α = r², clamped to [1, 10000]; a
  *   metal (m > 0.5) with n at the clamp is a mirror; KHR_materials_transmission > 0 is glass;
  *   emission = emissiveFactor × KHR_materials_emissive_strength; doubleSided emits both ways.
+ *   (assimp 5.2 drops KHR_materials_emissive_strength, so we read it from the file's JSON ourselves.)
  */
 #include "scene/scene_internal.h"
 
@@ -24,6 +25,7 @@
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <cjson/cJSON.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -146,7 +148,48 @@ static void convert_phong(const struct aiMaterial *am, ic_material *m)
     }
 }
 
-static void convert_gltf(const struct aiMaterial *am, ic_material *m)
+/* KHR_materials_emissive_strength of each glTF material (1 where absent), read from the file's JSON
+ * (.gltf text, or the JSON chunk of a .glb): assimp 5.2 does not pass it on. Returns NULL if the
+ * file cannot be read; strengths[i] belongs to glTF material i, which is assimp material i. */
+static float *gltf_emissive_strengths(const char *path, unsigned count)
+{
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return NULL;
+    char *text = NULL;
+    size_t len = 0;
+    unsigned char head[20];
+    if (fread(head, 1, sizeof head, fp) == sizeof head && !memcmp(head, "glTF", 4)) {
+        /* .glb: 12-byte header, then chunk 0 = (length, "JSON", bytes) */
+        uint32_t chunk = (uint32_t)head[12] | (uint32_t)head[13] << 8 | (uint32_t)head[14] << 16 |
+                         (uint32_t)head[15] << 24;
+        if (!memcmp(head + 16, "JSON", 4) && chunk < (64u << 20) && (text = malloc(chunk + 1u)) != NULL)
+            len = fread(text, 1, chunk, fp);
+    } else if (fseek(fp, 0, SEEK_END) == 0) {
+        long size = ftell(fp);
+        if (size > 0 && size < (64L << 20) && fseek(fp, 0, SEEK_SET) == 0 && (text = malloc((size_t)size + 1)) != NULL)
+            len = fread(text, 1, (size_t)size, fp);
+    }
+    fclose(fp);
+    float *out = NULL;
+    cJSON *root = text ? cJSON_ParseWithLength(text, len) : NULL;
+    free(text);
+    if (root && (out = malloc(sizeof *out * (count ? count : 1))) != NULL) {
+        const cJSON *mats = cJSON_GetObjectItemCaseSensitive(root, "materials");
+        for (unsigned i = 0; i < count; ++i) {
+            const cJSON *m = cJSON_IsArray(mats) ? cJSON_GetArrayItem(mats, (int)i) : NULL;
+            const cJSON *ext = m ? cJSON_GetObjectItemCaseSensitive(m, "extensions") : NULL;
+            const cJSON *es = ext ? cJSON_GetObjectItemCaseSensitive(ext, "KHR_materials_emissive_strength") : NULL;
+            const cJSON *v = es ? cJSON_GetObjectItemCaseSensitive(es, "emissiveStrength") : NULL;
+            out[i] = (cJSON_IsNumber(v) && v->valuedouble >= 0.0 && isfinite(v->valuedouble)) ? (float)v->valuedouble
+                                                                                              : 1.0f;
+        }
+    }
+    cJSON_Delete(root);
+    return out;
+}
+
+static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_material *m)
 {
     ic_vec3 base = color_or(am, "$clr.base", color_or(am, "$clr.diffuse", v3s(1.0f)));
     float metal = ic_clampf(float_or(am, "$mat.metallicFactor", 1.0f), 0.0f, 1.0f);
@@ -158,7 +201,8 @@ static void convert_gltf(const struct aiMaterial *am, ic_material *m)
     m->kd = v3_scale(base, 1.0f - metal);
     m->kd = v3(fminf(m->kd.x, 1.0f - m->ks.x), fminf(m->kd.y, 1.0f - m->ks.y), fminf(m->kd.z, 1.0f - m->ks.z));
     m->kd = clamp_color(m->kd);
-    float strength = float_or(am, "$mat.emissiveIntensity", 1.0f);
+    /* a newer assimp passes the strength on; otherwise use what we read from the file */
+    float strength = float_or(am, "$mat.emissiveIntensity", file_strength);
     m->emission = v3_scale(color_or(am, "$clr.emissive", v3s(0.0f)), strength);
     m->two_sided_emission = int_or(am, "$mat.twosided", 0) != 0;
     float transmission = float_or(am, "$mat.transmission.factor", 0.0f);
@@ -174,8 +218,8 @@ static void convert_gltf(const struct aiMaterial *am, ic_material *m)
     }
 }
 
-static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, int is_gltf, const char *mesh_path,
-                                  const char *mesh_dir, ic_material *m, ic_error *err)
+static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, const float *gltf_strength,
+                                  const char *mesh_path, const char *mesh_dir, ic_material *m, ic_error *err)
 {
     memset(m, 0, sizeof *m);
     struct aiString name;
@@ -183,8 +227,8 @@ static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, 
         snprintf(m->name, sizeof m->name, "%.127s", name.data);
     m->kd_texture = -1;
     m->ior = 1.5f;
-    if (is_gltf)
-        convert_gltf(am, m);
+    if (gltf_strength)
+        convert_gltf(am, *gltf_strength, m);
     else
         convert_phong(am, m);
     m->kd = clamp_color(m->kd);
@@ -361,6 +405,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
                                                "or PLY file",
                             mesh_path, aiGetErrorString());
     ic_result r = IC_OK;
+    float *strengths = NULL;
     if ((ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || ai->mNumMeshes == 0) {
         r = ic_error_set(err, IC_ERR_PARSE, "%s: the file holds no triangle mesh; export the geometry as triangles",
                          mesh_path);
@@ -369,6 +414,8 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
 
     uint32_t material_base = s->material_count;
     uint32_t nmat = ai->mNumMaterials ? ai->mNumMaterials : 1;
+    if (is_gltf)
+        strengths = gltf_emissive_strengths(mesh_path, ai->mNumMaterials);
     char *path_copy = malloc(strlen(mesh_path) + 1);
     if (path_copy)
         memcpy(path_copy, mesh_path, strlen(mesh_path) + 1);
@@ -397,7 +444,9 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
             m->kd_texture = -1;
             m->ior = 1.5f;
         } else {
-            r = convert_material(s, ai->mMaterials[i], is_gltf, mesh_path, dir, m, err);
+            float one = 1.0f;
+            const float *strength = !is_gltf ? NULL : (strengths ? &strengths[i] : &one);
+            r = convert_material(s, ai->mMaterials[i], strength, mesh_path, dir, m, err);
             if (r != IC_OK)
                 goto done;
         }
@@ -408,6 +457,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     ic_mat4_identity(identity);
     r = append_meshes(b, ai, mesh_path, xform ? xform : identity, material_base, err);
 done:
+    free(strengths);
     aiReleaseImport(ai);
     return r;
 }

@@ -88,12 +88,12 @@ static void test_rectangle_irradiance(void)
     double analytic = 3.14159265358979323846 * L * 4 * form_factor_corner(0.5, 0.25, 1.0);
     const int N = 200000;
     double sum = 0.0;
-    int pdf_mismatch = 0, unmatched = 0;
+    int pdf_mismatch = 0, unmatched = 0, not_area = 0;
     for (int i = 0; i < N; ++i) {
         ic_light_sample ls;
         if (!ic_scene_sample_light(s, p, rnd(&seed), rnd(&seed), rnd(&seed), &ls))
             continue;
-        CHECK(!ls.is_delta && ls.pdf > 0, "area sample");
+        not_area += ls.is_delta || !(ls.pdf > 0.0f);
         sum += ls.radiance.x * fmax(0.0, v3_dot(n, ls.wi)) / ls.pdf;
         uint32_t t = sampled_triangle(s, p, &ls);
         if (t == UINT32_MAX) {
@@ -105,6 +105,7 @@ static void test_rectangle_irradiance(void)
     }
     CHECK_NEAR(sum / N, analytic, 0.005 * analytic, "irradiance under a parallel rectangle (form factor)");
     CHECK(unmatched == 0, "%d samples off the light", unmatched);
+    CHECK(not_area == 0, "%d samples not from an area light", not_area);
     CHECK(pdf_mismatch == 0, "%d samples where pdf_triangle differs from the sampler", pdf_mismatch);
 
     /* tilted receiver off to the side: light sampling vs brute-force cosine-hemisphere sampling */
@@ -246,7 +247,7 @@ static void test_environment_map(void)
     /* importance sampling: pdfs agree with ic_scene_light_pdf_env and the integral of L matches */
     const int N = 400000;
     double lum_is = 0.0;
-    int mismatch = 0, failed = 0;
+    int mismatch = 0, failed = 0, bad_radiance = 0;
     for (int i = 0; i < N; ++i) {
         ic_light_sample ls;
         if (!ic_scene_sample_light(s, v3(0, 0, 0), rnd(&seed), rnd(&seed), rnd(&seed), &ls)) {
@@ -256,11 +257,11 @@ static void test_environment_map(void)
         lum_is += v3_lum(ls.radiance) / ls.pdf;
         float pdf = ic_scene_light_pdf_env(s, ls.wi);
         mismatch += fabsf(pdf - ls.pdf) > 1e-3f * ls.pdf;
-        if (i < 1000)
-            CHECK(v3_len(v3_sub(ls.radiance, ic_scene_env_radiance(s, ls.wi))) < 1e-5f, "radiance = look-up");
+        bad_radiance += v3_len(v3_sub(ls.radiance, ic_scene_env_radiance(s, ls.wi))) > 1e-5f;
     }
     lum_is /= N;
     CHECK(failed < N / 10000, "%d failed env samples", failed);
+    CHECK(bad_radiance == 0, "%d samples whose radiance is not the look-up", bad_radiance);
     CHECK(mismatch < N / 1000, "%d env samples whose pdf disagrees (texel boundaries)", mismatch);
     CHECK_NEAR(lum_is, lum_uniform, 0.02 * lum_uniform, "importance-sampled integral of L");
 

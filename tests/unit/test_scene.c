@@ -247,6 +247,39 @@ static void test_bare_mesh_and_queries(void)
     ic_scene_free(NULL);
 }
 
+/* glTF metallic/roughness and emission mapping; PLY geometry */
+static void test_gltf_and_ply(void)
+{
+    ic_scene *s = load(SCENES "triangle.gltf", NULL);
+    if (s) {
+        int32_t m = find_material(s, "lamp_pbr");
+        CHECK(s->triangle_count == 1 && m >= 0, "glTF triangle and material");
+        if (m >= 0) {
+            const ic_material *mat = &s->materials[m];
+            /* base (0.8, 0.6, 0.4), metallic 0.2, roughness 0.5: alpha 0.25, n = 2/0.0625 - 2 = 30 */
+            CHECK(mat->type == IC_MAT_GLOSSY, "dielectric-ish glTF material is glossy");
+            CHECK_NEAR(mat->ns, 30.0, 1e-3, "Phong exponent from roughness");
+            CHECK_NEAR(mat->kd.x, 0.8 * 0.8, 1e-6, "kd = base (1 - m)");
+            CHECK_NEAR(mat->ks.x, 0.04 * 0.8 + 0.8 * 0.2, 1e-6, "ks = mix(0.04, base, m)");
+            /* emissiveFactor (1, 0.5, 0.25) × KHR_materials_emissive_strength 4 */
+            CHECK(mat->emission.x == 4.0f && mat->emission.y == 2.0f && mat->emission.z == 1.0f,
+                  "emission with strength: %g %g %g", mat->emission.x, mat->emission.y, mat->emission.z);
+            CHECK(mat->two_sided_emission, "doubleSided emits both ways");
+        }
+        CHECK(s->tri_light_count == 1 && !s->env.enabled, "an emitter: no default sky");
+        CHECK_NEAR(s->positions[s->triangles[0]].z, -2.0, 1e-6, "node translation applied");
+    }
+    ic_scene_free(s);
+    s = load(SCENES "triangle.ply", NULL);
+    if (s) {
+        CHECK(s->triangle_count == 1 && s->tri_light_count == 0 && s->env.enabled, "PLY triangle under a white sky");
+        ic_surface srf;
+        ic_scene_surface(s, 0, 0.25f, 0.25f, &srf);
+        CHECK_NEAR(srf.ng.z, 1.0, 1e-6, "PLY winding");
+    }
+    ic_scene_free(s);
+}
+
 int main(void)
 {
     test_cornell_box();
@@ -254,5 +287,6 @@ int main(void)
     test_fov_x_and_shared();
     test_degenerate_dropped();
     test_bare_mesh_and_queries();
+    test_gltf_and_ply();
     TEST_MAIN_END();
 }

@@ -1,0 +1,890 @@
+/*
+ * test_cache.c — the irradiance cache library (include/irrcache/cache.h), linked with irrcache_cache
+ * and ic_core only.
+ *
+ * Properties checked:
+ *   - octree look-up equals a linear scan over 100k random records (contributor sets exactly, E to
+ *     float rounding) for both weights, with no clamp, each clamp alone, and all of them;
+ *   - the weights and the extrapolation follow the formulas of seed 000 §3 and Tabellion–Lamorlette
+ *     (checked against hand-computed values), and a linear irradiance field is reproduced exactly;
+ *   - clamps never raise a radius (new or existing records); after neighbor clamping (seed 000 §5.2)
+ *     |R_i − R_j| ≤ |p_i − p_j| for every pair within reach; validity clamping (seed 004 §4.2) leaves
+ *     no influence radius above the k-th distinct-direction neighbour distance, recomputed here by
+ *     brute force; gradient-difference scaling (seed 003) separates records with different gradients;
+ *   - batch insertion gives the same cache on 1 and 2 threads;
+ *   - k-nearest and radius queries equal brute force;
+ *   - the cache file round-trips bit-exactly and refuses truncated, corrupted and mismatched files.
+ */
+#include "irrcache/cache.h"
+
+#include "core/rng.h"
+#include "core/threads.h"
+#include "core/vecmath.h"
+#include "test_util.h"
+
+#include <dirent.h>
+#include <stdint.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ---- random records ---------------------------------------------------------------------------- */
+
+static ic_vec3 random_unit(ic_rng *r)
+{
+    float z = 2.0f * ic_rng_float(r) - 1.0f, phi = 2.0f * IC_PI * ic_rng_float(r);
+    float s = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    return v3(s * cosf(phi), s * sinf(phi), z);
+}
+
+static ic_vec3 random_in_plane(ic_rng *r, ic_vec3 n, float scale)
+{
+    ic_frame f = ic_frame_from_normal(n);
+    float u = 2.0f * ic_rng_float(r) - 1.0f, v = 2.0f * ic_rng_float(r) - 1.0f;
+    return v3_add(v3_scale(f.t, u * scale), v3_scale(f.b, v * scale));
+}
+
+/* Records in a 20³ box: three quarters on three axis planes, a quarter anywhere with any normal.
+ * R is log-uniform in [0.05, 2]; gradients are random and sometimes steep enough for eq. 2. */
+static void make_record(ic_record *rec, uint64_t seed, uint32_t i)
+{
+    ic_rng r = ic_rng_make(seed, i, 0, 0);
+    memset(rec, 0, sizeof *rec);
+    float u = 20.0f * ic_rng_float(&r), v = 20.0f * ic_rng_float(&r), w = 20.0f * ic_rng_float(&r);
+    switch (i % 4) {
+    case 0: rec->position = v3(u, v, 1.0f); rec->normal = v3(0, 0, 1); break;
+    case 1: rec->position = v3(3.0f, u, v); rec->normal = v3(-1, 0, 0); break;
+    case 2: rec->position = v3(u, 7.0f, v); rec->normal = v3(0, 1, 0); break;
+    default: rec->position = v3(u, v, w); rec->normal = random_unit(&r); break;
+    }
+    rec->tangent = ic_frame_from_normal(rec->normal).t;
+    rec->irradiance = v3(0.2f + 1.8f * ic_rng_float(&r), 0.2f + 1.8f * ic_rng_float(&r), 0.2f + 1.8f * ic_rng_float(&r));
+    rec->harmonic_mean_dist = expf(logf(0.05f) + ic_rng_float(&r) * logf(40.0f));
+    float steep = 2.0f * ic_rng_float(&r) / rec->harmonic_mean_dist;
+    for (int ch = 0; ch < 3; ++ch) {
+        rec->grad_trans[ch] = random_in_plane(&r, rec->normal, steep * v3_get(rec->irradiance, ch));
+        rec->grad_rot[ch] = random_in_plane(&r, rec->normal, 0.3f * v3_get(rec->irradiance, ch));
+    }
+    rec->sigma = v3s(0.01f * ic_rng_float(&r));
+    rec->pixel_footprint = 0.01f;
+}
+
+static ic_record *make_records(uint32_t n, uint64_t seed)
+{
+    ic_record *r = malloc((size_t)n * sizeof *r);
+    for (uint32_t i = 0; i < n; ++i)
+        make_record(&r[i], seed, i);
+    return r;
+}
+
+/* Inserts through every path: one big batch, many small batches, single records. */
+static ic_cache *build_cache(const ic_cache_params *p, const ic_record *recs, uint32_t n)
+{
+    ic_cache *c = NULL;
+    ic_error err;
+    CHECK(ic_cache_create(p, &c, &err) == IC_OK, "create: %s", err.message);
+    uint32_t big = n / 2, small_end = n - n / 10, first = 0;
+    CHECK(ic_cache_insert_batch(c, recs, big, &first, &err) == IC_OK && first == 0, "batch: %s", err.message);
+    for (uint32_t i = big; i < small_end; i += 1000) {
+        uint32_t m = small_end - i < 1000 ? small_end - i : 1000;
+        CHECK(ic_cache_insert_batch(c, recs + i, m, &first, &err) == IC_OK && first == i, "batch: %s", err.message);
+    }
+    for (uint32_t i = small_end; i < n; ++i) {
+        uint32_t idx = 0;
+        if (ic_cache_insert(c, &recs[i], &idx, &err) != IC_OK || idx != i) {
+            CHECK(0, "insert %u: %s", i, err.message);
+            break;
+        }
+    }
+    CHECK(ic_cache_count(c) == n, "count %u", ic_cache_count(c));
+    return c;
+}
+
+/* A query near a random record: inside (or just outside) its influence, normal slightly tilted. */
+static void make_query(const ic_cache *c, uint64_t seed, uint32_t q, ic_vec3 *p, ic_vec3 *n)
+{
+    ic_rng r = ic_rng_make(seed, q, 1, 0);
+    ic_record rec;
+    ic_cache_get_record(c, ic_rng_below(&r, ic_cache_count(c)), &rec);
+    float reach = 1.3f * rec.accuracy * rec.radius * ic_cache_get_params(c)->final_accuracy_scale;
+    *p = v3_add(rec.position, random_in_plane(&r, rec.normal, reach));
+    *p = v3_madd(*p, rec.normal, (ic_rng_float(&r) - 0.5f) * 0.1f * reach);
+    *n = v3_norm(v3_add(rec.normal, v3_scale(random_unit(&r), 0.15f * ic_rng_float(&r))));
+    if (q % 16 == 0) { /* now and then a point anywhere */
+        *p = v3(20.0f * ic_rng_float(&r), 20.0f * ic_rng_float(&r), 20.0f * ic_rng_float(&r));
+        *n = random_unit(&r);
+    }
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* ---- look-up equals linear scan ---------------------------------------------------------------- */
+
+#define MAX_CONTRIB 4096
+
+typedef struct compare_job {
+    const ic_cache *cache;
+    uint64_t seed;
+    ic_cache_acceptance acceptance;
+    unsigned char *bad;         /* per query: 1 = sets differ, 2 = values differ */
+    uint32_t *contributors;     /* per query */
+} compare_job;
+
+static void compare_one(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    compare_job *job = ctx;
+    ic_cache_contribution *a = malloc(MAX_CONTRIB * sizeof *a), *b = malloc(MAX_CONTRIB * sizeof *b);
+    uint32_t *ia = malloc(MAX_CONTRIB * sizeof *ia), *ib = malloc(MAX_CONTRIB * sizeof *ib);
+    ic_cache_lookup q = {0};
+    make_query(job->cache, job->seed, (uint32_t)item, &q.position, &q.normal);
+    q.acceptance = job->acceptance;
+    q.contribution_capacity = MAX_CONTRIB;
+    ic_cache_estimate ea, eb;
+    q.contributions = a;
+    int ha = ic_cache_query(job->cache, &q, &ea);
+    q.contributions = b;
+    int hb = ic_cache_query_linear(job->cache, &q, &eb);
+    unsigned char bad = 0;
+    if (ha != hb || ea.contributor_count != eb.contributor_count || ea.contributions_written != ea.contributor_count) {
+        bad = 1;
+    } else {
+        for (uint32_t k = 0; k < ea.contributor_count; ++k) {
+            ia[k] = a[k].record;
+            ib[k] = b[k].record;
+        }
+        qsort(ia, ea.contributor_count, sizeof *ia, cmp_u32);
+        qsort(ib, eb.contributor_count, sizeof *ib, cmp_u32);
+        if (memcmp(ia, ib, ea.contributor_count * sizeof *ia) != 0)
+            bad = 1;
+        float tol = 1e-4f * (1.0f + v3_maxc(eb.irradiance));
+        if (!bad && (fabsf(ea.irradiance.x - eb.irradiance.x) > tol || fabsf(ea.irradiance.y - eb.irradiance.y) > tol ||
+                     fabsf(ea.irradiance.z - eb.irradiance.z) > tol ||
+                     fabsf(ea.weight_sum - eb.weight_sum) > 1e-4f * eb.weight_sum))
+            bad = 2;
+    }
+    job->bad[item] = bad;
+    job->contributors[item] = eb.contributor_count;
+    free(a);
+    free(b);
+    free(ia);
+    free(ib);
+}
+
+static void check_lookup_equals_linear(const ic_cache *c, uint32_t queries, const char *what)
+{
+    for (int acc = 0; acc < 2; ++acc) {
+        compare_job job = {c, 77, acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION, calloc(queries, 1),
+                           calloc(queries, sizeof(uint32_t))};
+        ic_parallel_for(0, queries, compare_one, &job);
+        uint32_t set_bad = 0, val_bad = 0, hit = 0;
+        uint64_t total = 0;
+        for (uint32_t q = 0; q < queries; ++q) {
+            set_bad += job.bad[q] == 1;
+            val_bad += job.bad[q] == 2;
+            hit += job.contributors[q] > 0;
+            total += job.contributors[q];
+        }
+        CHECK(set_bad == 0 && val_bad == 0, "%s (%s): %u queries with other contributors, %u with other values",
+              what, acc ? "final" : "construction", set_bad, val_bad);
+        /* The comparison means something only if most queries find records. */
+        CHECK(hit > queries / 2, "%s: only %u of %u queries found records", what, hit, queries);
+        printf("  %-34s %-12s %u queries, %.1f%% hit, %.2f contributors on average\n", what,
+               acc ? "final" : "construction", queries, 100.0 * hit / queries, (double)total / queries);
+        free(job.bad);
+        free(job.contributors);
+    }
+}
+
+static ic_cache_params clamp_config(ic_weight_kind weight, int which)
+{
+    ic_cache_params p = {0};
+    p.weight = weight;
+    if (weight == IC_WEIGHT_TABELLION)
+        p.accuracy = 0.4f; /* κ = 2.5: keeps spheres (and the test) small */
+    p.final_accuracy_scale = 1.5f;
+    p.gradient_clamp = which == 1 || which == 5 ? IC_CACHE_ON : IC_CACHE_OFF;
+    p.neighbor_clamp = which == 2 || which == 5 ? IC_CACHE_ON : IC_CACHE_OFF;
+    p.validity_clamp = which == 3 || which == 5 ? IC_CACHE_ON : IC_CACHE_OFF;
+    p.gradient_difference = which == 4 || which == 5 ? IC_CACHE_ON : IC_CACHE_OFF;
+    if (which == 5) {
+        p.min_radius = 0.02f;
+        p.max_radius_pixels = 150.0f; /* footprint 0.01 → R ≤ 1.5 */
+    }
+    return p;
+}
+
+static const char *clamp_name[6] = {"no clamps", "gradient clamp", "neighbor clamp", "validity clamp",
+                                    "gradient difference", "all clamps + bounds"};
+
+static void test_lookup_vs_linear(void)
+{
+    const uint32_t n = 100000;
+    ic_record *recs = make_records(n, 1);
+    for (int wk = 0; wk < 2; ++wk) {
+        for (int which = 0; which < 6; ++which) {
+            ic_cache_params p = clamp_config(wk ? IC_WEIGHT_TABELLION : IC_WEIGHT_WARD, which);
+            ic_cache *c = build_cache(&p, recs, n);
+            char what[96];
+            snprintf(what, sizeof what, "%s, %s", wk ? "T-L" : "Ward", clamp_name[which]);
+            /* 20k queries for the full configurations, fewer for the single clamps (time). */
+            check_lookup_equals_linear(c, which == 0 || which == 5 ? 20000 : 4000, what);
+            /* Clamps never raise R above the input (bounds off except in config 5). */
+            uint32_t raised = 0;
+            for (uint32_t i = 0; i < n; ++i) {
+                ic_record r;
+                ic_cache_get_record(c, i, &r);
+                float lo = which == 5 ? 0.02f : 0.0f;
+                raised += r.radius > fmaxf(recs[i].harmonic_mean_dist, lo);
+                if (which == 5)
+                    raised += r.radius > 1.5f * 1.00001f;
+            }
+            CHECK(raised == 0, "%s: %u radii above their input or bounds", what, raised);
+            ic_cache_destroy(c);
+        }
+    }
+    free(recs);
+}
+
+/* ---- formulas ---------------------------------------------------------------------------------- */
+
+static ic_record plane_record(ic_vec3 p, float R)
+{
+    ic_record r;
+    memset(&r, 0, sizeof r);
+    r.position = p;
+    r.normal = v3(0, 0, 1);
+    r.tangent = v3(1, 0, 0);
+    r.irradiance = v3(1.0f, 2.0f, 3.0f);
+    r.harmonic_mean_dist = R;
+    return r;
+}
+
+static ic_cache_params no_clamps(ic_weight_kind w, float a)
+{
+    ic_cache_params p = {0};
+    p.weight = w;
+    p.accuracy = a;
+    p.gradient_clamp = p.neighbor_clamp = p.validity_clamp = p.gradient_difference = IC_CACHE_OFF;
+    return p;
+}
+
+static void test_weights(void)
+{
+    ic_error err;
+    for (int wk = 0; wk < 2; ++wk) {
+        float a = wk ? 0.5f : 0.3f;
+        ic_cache_params p = no_clamps(wk ? IC_WEIGHT_TABELLION : IC_WEIGHT_WARD, a);
+        p.final_accuracy_scale = 2.0f;
+        ic_cache *c;
+        ic_cache_create(&p, &c, &err);
+        ic_record r = plane_record(v3(0, 0, 0), 2.0f);
+        r.grad_rot[0] = v3(0.0f, 0.5f, 0.0f);
+        r.grad_trans[1] = v3(0.25f, 0.0f, 0.0f);
+        ic_cache_insert(c, &r, NULL, &err);
+        /* Query at distance 0.3 along x with the normal tilted by 20° about x. */
+        float th = 20.0f * IC_PI / 180.0f;
+        ic_vec3 n = v3(0.0f, -sinf(th), cosf(th));
+        ic_cache_contribution con[4];
+        ic_cache_lookup q = {v3(0.3f, 0.0f, 0.0f), n, IC_ACCEPT_CONSTRUCTION, 0, con, 4};
+        ic_cache_estimate e;
+        float dist = 0.3f / 2.0f, ndev = sqrtf(1.0f - cosf(th));
+        float w_expect = wk ? 1.0f - fmaxf(dist, ndev / sqrtf(1.0f - cosf(10.0f * IC_PI / 180.0f))) / a
+                            : 1.0f / (dist + ndev);
+        int accept = wk ? w_expect > 0.0f : w_expect > 1.0f / a;
+        int got = ic_cache_query(c, &q, &e);
+        CHECK(got == accept, "%s: accepted %d, expected %d (w %g)", wk ? "T-L" : "Ward", got, accept,
+              (double)w_expect);
+        /* The final acceptance (s = 2) must accept it either way. */
+        q.acceptance = IC_ACCEPT_FINAL;
+        got = ic_cache_query(c, &q, &e);
+        float w_final = wk ? 1.0f - fmaxf(dist, ndev / sqrtf(1.0f - cosf(10.0f * IC_PI / 180.0f))) / (2.0f * a)
+                           : w_expect;
+        CHECK(got == 1, "%s: final acceptance rejected", wk ? "T-L" : "Ward");
+        CHECK_NEAR(con[0].weight, w_final, 1e-5, "weight");
+        /* E_i(p) = E_i + (n_i × n)·∇r E_i + (p − p_i)·∇t E_i, channel by channel. */
+        ic_vec3 rot = v3_cross(v3(0, 0, 1), n);
+        CHECK_NEAR(con[0].value.x, 1.0f + v3_dot(rot, r.grad_rot[0]), 1e-5, "value R (rotational)");
+        CHECK_NEAR(con[0].value.y, 2.0f + 0.3f * 0.25f, 1e-5, "value G (translational)");
+        CHECK_NEAR(con[0].value.z, 3.0f, 1e-6, "value B");
+        CHECK_NEAR(e.irradiance.y, con[0].value.y, 1e-6, "single-record interpolation");
+        /* Behind the record: a point below its plane is rejected, just above is accepted. */
+        q.position = v3(0.05f, 0.0f, -0.05f);
+        q.normal = v3(0, 0, 1);
+        CHECK(!ic_cache_query(c, &q, &e), "point behind the record accepted");
+        q.position = v3(0.05f, 0.0f, 0.001f);
+        CHECK(ic_cache_query(c, &q, &e), "point just above the record rejected");
+        /* Opposite normal: rejected. */
+        q.normal = v3(0, 0, -1);
+        CHECK(!ic_cache_query(c, &q, &e), "opposite normal accepted");
+        /* Other bounce level: ignored. */
+        q.normal = v3(0, 0, 1);
+        q.bounce = 1;
+        CHECK(!ic_cache_query(c, &q, &e), "record of another bounce level used");
+        /* Negative extrapolations clamp to zero. */
+        ic_cache_destroy(c);
+    }
+}
+
+static void test_linear_field(void)
+{
+    ic_error err;
+    /* E(p) = e0 + B p per channel on the plane z = 0: records carry ∇t E = B's rows. */
+    const ic_vec3 e0 = v3(5.0f, 6.0f, 7.0f);
+    const ic_vec3 B[3] = {v3(0.10f, -0.05f, 0), v3(-0.08f, 0.12f, 0), v3(0.02f, 0.03f, 0)};
+    for (int wk = 0; wk < 2; ++wk) {
+        ic_cache_params p = no_clamps(wk ? IC_WEIGHT_TABELLION : IC_WEIGHT_WARD, wk ? 0.8f : 0.4f);
+        ic_cache *c;
+        ic_cache_create(&p, &c, &err);
+        ic_rng r = ic_rng_make(5, 0, 0, 0);
+        for (int i = 0; i < 400; ++i) {
+            ic_vec3 pos = v3(10.0f * ic_rng_float(&r), 10.0f * ic_rng_float(&r), 0.0f);
+            ic_record rec = plane_record(pos, 1.0f + 2.0f * ic_rng_float(&r));
+            rec.irradiance = v3(e0.x + v3_dot(B[0], pos), e0.y + v3_dot(B[1], pos), e0.z + v3_dot(B[2], pos));
+            for (int ch = 0; ch < 3; ++ch)
+                rec.grad_trans[ch] = B[ch];
+            ic_cache_insert(c, &rec, NULL, &err);
+        }
+        double worst = 0.0;
+        int hits = 0;
+        for (int k = 0; k < 2000; ++k) {
+            ic_vec3 pos = v3(1.0f + 8.0f * ic_rng_float(&r), 1.0f + 8.0f * ic_rng_float(&r), 0.0f);
+            ic_cache_lookup q = {pos, v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
+            ic_cache_estimate e;
+            if (!ic_cache_query(c, &q, &e))
+                continue;
+            ++hits;
+            ic_vec3 want = v3(e0.x + v3_dot(B[0], pos), e0.y + v3_dot(B[1], pos), e0.z + v3_dot(B[2], pos));
+            worst = fmax(worst, fabs(e.irradiance.x - want.x) / want.x);
+            worst = fmax(worst, fabs(e.irradiance.y - want.y) / want.y);
+            worst = fmax(worst, fabs(e.irradiance.z - want.z) / want.z);
+        }
+        CHECK(hits > 1000, "linear field: only %d hits", hits);
+        CHECK(worst < 2e-5, "%s: linear field reproduced with relative error %g", wk ? "T-L" : "Ward", worst);
+        ic_cache_destroy(c);
+    }
+}
+
+/* ---- clamps ------------------------------------------------------------------------------------ */
+
+/* Records on a few planes in a 4³ box, dense enough for many neighbours. */
+static ic_record *make_dense(uint32_t n, uint64_t seed)
+{
+    ic_record *recs = make_records(n, seed);
+    for (uint32_t i = 0; i < n; ++i) {
+        recs[i].position = v3_scale(recs[i].position, 0.2f);
+        recs[i].harmonic_mean_dist *= 1.5f;
+    }
+    return recs;
+}
+
+static void test_neighbor_clamp(void)
+{
+    const uint32_t n = 6000;
+    ic_record *recs = make_dense(n, 11);
+    ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.3f);
+    p.neighbor_clamp = IC_CACHE_ON;
+    for (int round = 0; round < 2; ++round) {
+        if (round == 1)
+            p.gradient_clamp = p.validity_clamp = p.gradient_difference = IC_CACHE_ON;
+        ic_cache *c = NULL;
+        ic_error err;
+        ic_cache_create(&p, &c, &err);
+        /* Half in one batch, then singles: existing radii must never grow. */
+        ic_cache_insert_batch(c, recs, n / 2, NULL, &err);
+        float *before = malloc(n * sizeof *before);
+        uint32_t raised = 0;
+        for (uint32_t i = n / 2; i < n; ++i) {
+            if (i % 500 == 0)
+                for (uint32_t j = 0; j < i; ++j) {
+                    ic_record r;
+                    ic_cache_get_record(c, j, &r);
+                    before[j] = r.radius;
+                }
+            ic_cache_insert(c, &recs[i], NULL, &err);
+            if (i % 500 == 0)
+                for (uint32_t j = 0; j < i; ++j) {
+                    ic_record r;
+                    ic_cache_get_record(c, j, &r);
+                    raised += r.radius > before[j];
+                }
+        }
+        CHECK(raised == 0, "insertion raised %u existing radii", raised);
+        ic_record *fin = malloc(n * sizeof *fin);
+        for (uint32_t i = 0; i < n; ++i)
+            ic_cache_get_record(c, i, &fin[i]);
+        uint64_t pairs = 0, bad = 0, clamped = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            clamped += fin[i].radius < recs[i].harmonic_mean_dist;
+            float ri = fin[i].accuracy * fin[i].radius;
+            for (uint32_t j = i + 1; j < n; ++j) {
+                float d = v3_len(v3_sub(fin[i].position, fin[j].position));
+                float rj = fin[j].accuracy * fin[j].radius;
+                if (!(d < fmaxf(ri, rj)))
+                    continue;
+                ++pairs;
+                bad += fabsf(fin[i].radius - fin[j].radius) > d + 1e-5f * fmaxf(fin[i].radius, fin[j].radius);
+            }
+        }
+        CHECK(pairs > 1000 && bad == 0, "neighbor clamp: %llu of %llu pairs within reach break |Ri-Rj| <= d",
+              (unsigned long long)bad, (unsigned long long)pairs);
+        CHECK(clamped > n / 10, "neighbor clamp changed only %llu radii", (unsigned long long)clamped);
+        printf("  neighbor clamp%s: %llu pairs within reach, %llu radii clamped\n", round ? " (+ all clamps)" : "",
+               (unsigned long long)pairs, (unsigned long long)clamped);
+        free(fin);
+        free(before);
+        ic_cache_destroy(c);
+    }
+    free(recs);
+}
+
+/* Independent recomputation of seed 004 §4.2 for record i of set recs (positions, normals). */
+static int kth_distinct_distance(const ic_record *fin, uint32_t n, uint32_t i, uint32_t k, float cos_min, float *out)
+{
+    enum { M = 6 * 8 + 1 };
+    uint32_t idx[M];
+    float d2[M];
+    uint32_t found = 0;
+    for (uint32_t j = 0; j < n; ++j) {
+        float dx = fin[i].position.x - fin[j].position.x, dy = fin[i].position.y - fin[j].position.y,
+              dz = fin[i].position.z - fin[j].position.z;
+        float d = dx * dx + dy * dy + dz * dz;
+        if (found == M && !(d < d2[M - 1] || (d == d2[M - 1] && j < idx[M - 1])))
+            continue;
+        uint32_t pos = found < M ? found++ : M - 1;
+        while (pos > 0 && (d < d2[pos - 1] || (d == d2[pos - 1] && j < idx[pos - 1]))) {
+            d2[pos] = d2[pos - 1];
+            idx[pos] = idx[pos - 1];
+            --pos;
+        }
+        d2[pos] = d;
+        idx[pos] = j;
+    }
+    ic_vec3 dirs[16];
+    uint32_t taken = 0;
+    float far = 0.0f;
+    for (uint32_t q = 0; q < found && taken < k; ++q) {
+        if (idx[q] == i || d2[q] <= 0.0f)
+            continue;
+        ic_vec3 delta = v3_sub(fin[idx[q]].position, fin[i].position);
+        ic_vec3 v = v3_sub(delta, v3_scale(fin[i].normal, v3_dot(delta, fin[i].normal)));
+        if (!(v3_len2(v) > 1e-12f * v3_len2(delta)))
+            v = delta;
+        v = v3_norm(v);
+        int ok = 1;
+        for (uint32_t t = 0; t < taken; ++t)
+            ok = ok && v3_dot(v, dirs[t]) <= cos_min;
+        if (ok) {
+            dirs[taken++] = v;
+            far = sqrtf(d2[q]);
+        }
+    }
+    *out = far;
+    return taken == k;
+}
+
+static void test_validity_clamp(void)
+{
+    const uint32_t n = 6000;
+    ic_record *recs = make_dense(n, 12);
+    ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.5f);
+    p.validity_clamp = IC_CACHE_ON;
+    p.validity_k = 6;
+    p.validity_angle_deg = 30.0f;
+    ic_cache *c = NULL;
+    ic_error err;
+    ic_cache_create(&p, &c, &err);
+    ic_cache_insert_batch(c, recs, n, NULL, &err);
+    ic_record *fin = malloc(n * sizeof *fin);
+    for (uint32_t i = 0; i < n; ++i)
+        ic_cache_get_record(c, i, &fin[i]);
+    uint32_t bad = 0, exact_bad = 0, defined = 0, clamped = 0;
+    float cos_min = cosf(30.0f * IC_PI / 180.0f);
+    for (uint32_t i = 0; i < n; ++i) {
+        float dk;
+        float r = fin[i].accuracy * fin[i].radius, r0 = fin[i].accuracy * recs[i].harmonic_mean_dist;
+        clamped += fin[i].radius < recs[i].harmonic_mean_dist;
+        if (!kth_distinct_distance(fin, n, i, 6, cos_min, &dk)) {
+            exact_bad += fin[i].radius != recs[i].harmonic_mean_dist; /* undefined: must be untouched */
+            continue;
+        }
+        ++defined;
+        bad += r > dk * 1.00001f;
+        /* With validity the only clamp, the result is exactly min(r0, d_k). */
+        exact_bad += fabsf(r - fminf(r0, dk)) > 1e-5f * r0;
+    }
+    CHECK(bad == 0, "validity clamp: %u of %u records exceed their k-th distinct-direction distance", bad, defined);
+    CHECK(exact_bad == 0, "validity clamp: %u records differ from min(r, d_k)", exact_bad);
+    CHECK(defined > n / 2 && clamped > n / 10, "validity clamp: %u defined, %u clamped", defined, clamped);
+    printf("  validity clamp: %u of %u records have k distinct neighbours, %u clamped\n", defined, n, clamped);
+    free(fin);
+    ic_cache_destroy(c);
+    free(recs);
+}
+
+static void test_gradient_clamps(void)
+{
+    ic_error err;
+    /* Gradient magnitude (seed 000 eq. 2): |∇Y|/Y = 2 > 1/R = 0.5 → R = Y/|∇Y| = 0.5. */
+    ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.2f);
+    p.gradient_clamp = IC_CACHE_ON;
+    ic_cache *c;
+    ic_cache_create(&p, &c, &err);
+    ic_record r = plane_record(v3(0, 0, 0), 2.0f);
+    r.irradiance = v3s(1.0f);
+    for (int ch = 0; ch < 3; ++ch)
+        r.grad_trans[ch] = v3(2.0f, 0.0f, 0.0f);
+    ic_cache_insert(c, &r, NULL, &err);
+    r.position = v3(5, 5, 0);
+    r.grad_trans[0] = r.grad_trans[1] = r.grad_trans[2] = v3(0.1f, 0.0f, 0.0f); /* below the bound: kept */
+    ic_cache_insert(c, &r, NULL, &err);
+    ic_record out;
+    ic_cache_get_record(c, 0, &out);
+    CHECK_NEAR(out.radius, 0.5f, 1e-6, "gradient clamp R");
+    CHECK_NEAR(out.harmonic_mean_dist, 2.0f, 0, "harmonic mean kept");
+    ic_cache_get_record(c, 1, &out);
+    CHECK_NEAR(out.radius, 2.0f, 0, "gradient below the bound leaves R");
+    ic_cache_destroy(c);
+
+    /* Pixel bounds: R within [2, 10] footprints of 0.01. */
+    p = no_clamps(IC_WEIGHT_WARD, 0.2f);
+    p.min_radius_pixels = 2.0f;
+    p.max_radius_pixels = 10.0f;
+    ic_cache_create(&p, &c, &err);
+    r = plane_record(v3(0, 0, 0), 2.0f);
+    r.pixel_footprint = 0.01f;
+    ic_cache_insert(c, &r, NULL, &err);
+    r.position = v3(3, 0, 0);
+    r.harmonic_mean_dist = 0.001f;
+    ic_cache_insert(c, &r, NULL, &err);
+    ic_cache_get_record(c, 0, &out);
+    CHECK_NEAR(out.radius, 0.1f, 1e-7, "pixel ceiling");
+    ic_cache_get_record(c, 1, &out);
+    CHECK_NEAR(out.radius, 0.02f, 1e-7, "pixel floor");
+    ic_cache_destroy(c);
+
+    /* Gradient difference (seed 003): two overlapping records whose gradients differ strongly end up
+     * with disjoint spheres; two with equal gradients keep their radii. */
+    p = no_clamps(IC_WEIGHT_WARD, 0.5f);
+    p.gradient_difference = IC_CACHE_ON;
+    p.gradient_difference_threshold = 0.1f;
+    ic_cache_create(&p, &c, &err);
+    ic_record pair[4];
+    for (int k = 0; k < 4; ++k) {
+        pair[k] = plane_record(v3(k < 2 ? 0.6f * (float)k : 10.0f + 0.6f * (float)(k - 2), 0, 0), 2.0f);
+        pair[k].irradiance = v3s(1.0f);
+        for (int ch = 0; ch < 3; ++ch)
+            pair[k].grad_trans[ch] = k == 1 ? v3(0.3f, 0, 0) : v3(0.0f, 0.05f, 0);
+    }
+    ic_cache_insert_batch(c, pair, 4, NULL, &err);
+    ic_record o[4];
+    for (uint32_t k = 0; k < 4; ++k)
+        ic_cache_get_record(c, k, &o[k]);
+    CHECK(o[0].accuracy * o[0].radius + o[1].accuracy * o[1].radius <= 0.6f * 1.00001f,
+          "gradient difference: spheres still overlap (%g + %g > 0.6)", (double)(o[0].accuracy * o[0].radius),
+          (double)(o[1].accuracy * o[1].radius));
+    CHECK(o[2].radius == 2.0f && o[3].radius == 2.0f, "gradient difference shrank equal-gradient records");
+    ic_cache_destroy(c);
+}
+
+static void test_thread_independence(void)
+{
+    const uint32_t n = 20000;
+    ic_record *recs = make_dense(n, 13);
+    ic_cache_params p = {0};
+    p.gradient_difference = IC_CACHE_ON;
+    float *radius[2];
+    for (int t = 0; t < 2; ++t) {
+        p.threads = t + 1;
+        ic_cache *c;
+        ic_error err;
+        ic_cache_create(&p, &c, &err);
+        ic_cache_insert_batch(c, recs, n / 2, NULL, &err);
+        ic_cache_insert_batch(c, recs + n / 2, n / 2, NULL, &err);
+        radius[t] = malloc(n * sizeof(float));
+        for (uint32_t i = 0; i < n; ++i) {
+            ic_record r;
+            ic_cache_get_record(c, i, &r);
+            radius[t][i] = r.radius;
+        }
+        ic_cache_destroy(c);
+    }
+    CHECK(memcmp(radius[0], radius[1], n * sizeof(float)) == 0, "batch insertion depends on the thread count");
+    free(radius[0]);
+    free(radius[1]);
+    free(recs);
+}
+
+/* ---- k-nearest and radius queries -------------------------------------------------------------- */
+
+static void test_point_queries(void)
+{
+    const uint32_t n = 100000, queries = 2000, K = 16;
+    ic_record *recs = make_records(n, 3);
+    /* Duplicated positions exercise ties (broken by index). */
+    for (uint32_t i = 0; i < 200; ++i)
+        recs[n - 1 - i].position = recs[i].position;
+    ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.2f);
+    ic_cache *c = build_cache(&p, recs, n);
+    uint32_t knn_bad = 0, rad_bad = 0, cap = 4096;
+    uint32_t *got = malloc(cap * sizeof *got), *want = malloc(cap * sizeof *want);
+    for (uint32_t q = 0; q < queries; ++q) {
+        ic_rng r = ic_rng_make(9, q, 0, 0);
+        ic_vec3 pq = q % 3 == 0 ? recs[ic_rng_below(&r, n)].position
+                                : v3(20.0f * ic_rng_float(&r), 20.0f * ic_rng_float(&r), 20.0f * ic_rng_float(&r));
+        uint32_t idx[16], bidx[16];
+        float d2[16], bd2[16];
+        uint32_t m = ic_cache_knn(c, pq, K, idx, d2), found = 0;
+        for (uint32_t j = 0; j < n; ++j) {
+            float dx = pq.x - recs[j].position.x, dy = pq.y - recs[j].position.y, dz = pq.z - recs[j].position.z;
+            float d = dx * dx + dy * dy + dz * dz;
+            if (found == K && !(d < bd2[K - 1] || (d == bd2[K - 1] && j < bidx[K - 1])))
+                continue;
+            uint32_t pos = found < K ? found++ : K - 1;
+            while (pos > 0 && (d < bd2[pos - 1] || (d == bd2[pos - 1] && j < bidx[pos - 1]))) {
+                bd2[pos] = bd2[pos - 1];
+                bidx[pos] = bidx[pos - 1];
+                --pos;
+            }
+            bd2[pos] = d;
+            bidx[pos] = j;
+        }
+        knn_bad += m != K || memcmp(idx, bidx, sizeof idx) != 0 || memcmp(d2, bd2, sizeof d2) != 0;
+        float radius = 0.05f + 0.5f * ic_rng_float(&r);
+        uint32_t total = ic_cache_radius_query(c, pq, radius, got, cap), bn = 0;
+        for (uint32_t j = 0; j < n; ++j) {
+            float dx = pq.x - recs[j].position.x, dy = pq.y - recs[j].position.y, dz = pq.z - recs[j].position.z;
+            if (dx * dx + dy * dy + dz * dz < radius * radius)
+                want[bn++] = j;
+        }
+        qsort(got, total < cap ? total : cap, sizeof *got, cmp_u32);
+        rad_bad += total != bn || memcmp(got, want, bn * sizeof *got) != 0;
+    }
+    CHECK(knn_bad == 0, "knn differs from brute force in %u of %u queries", knn_bad, queries);
+    CHECK(rad_bad == 0, "radius query differs from brute force in %u of %u queries", rad_bad, queries);
+    /* Capacity smaller than the result: total still reported. */
+    uint32_t small[2];
+    uint32_t total = ic_cache_radius_query(c, recs[0].position, 1.0f, small, 2);
+    CHECK(total > 2, "radius query total %u", total);
+    free(got);
+    free(want);
+    ic_cache_destroy(c);
+    free(recs);
+}
+
+/* ---- cache file -------------------------------------------------------------------------------- */
+
+static int read_file(const char *path, unsigned char **data, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    fseek(f, 0, SEEK_END);
+    *size = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    *data = malloc(*size + 1);
+    size_t got = fread(*data, 1, *size, f);
+    fclose(f);
+    return got == *size;
+}
+
+static void write_file(const char *path, const unsigned char *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    fwrite(data, 1, size, f);
+    fclose(f);
+}
+
+static void expect_refusal(const char *path, const ic_cache_params *p, uint64_t hash, ic_result code, const char *what)
+{
+    ic_cache *c = (ic_cache *)1;
+    ic_error err = {0};
+    ic_result rc = ic_cache_load(path, p, hash, &c, &err);
+    CHECK(rc == code && c == NULL, "%s: got %s, expected %s (%s)", what, ic_result_name(rc), ic_result_name(code),
+          err.message);
+    CHECK(strstr(err.message, path) != NULL && !strchr(err.message, '\n'), "%s: message \"%s\" does not name %s",
+          what, err.message, path);
+}
+
+static int count_temporaries(const char *dir, const char *stem)
+{
+    DIR *d = opendir(dir);
+    int n = 0;
+    struct dirent *e;
+    while (d && (e = readdir(d)))
+        n += strncmp(e->d_name, stem, strlen(stem)) == 0 && strstr(e->d_name, ".tmp.") != NULL;
+    if (d)
+        closedir(d);
+    return n;
+}
+
+static void test_file(void)
+{
+    const char *path = IC_TEST_TMP "/test_cache.icc", *path2 = IC_TEST_TMP "/test_cache2.icc",
+               *bad = IC_TEST_TMP "/test_cache_bad.icc";
+    const uint64_t hash = 0x1234abcd5678ef90ULL;
+    const uint32_t n = 5000;
+    ic_record *recs = make_records(n, 21);
+    ic_cache_params p = {0};
+    p.accuracy = 0.25f;
+    p.gradient_difference = IC_CACHE_ON;
+    ic_cache *c = build_cache(&p, recs, n);
+    ic_cache_set_record_flags(c, 7, IC_RECORD_DISABLED);
+    ic_cache_set_record_accuracy(c, 8, 0.1f);
+    ic_error err;
+    CHECK(ic_cache_save(c, path, hash, &err) == IC_OK, "save: %s", err.message);
+    ic_cache *l = NULL;
+    CHECK(ic_cache_load(path, &p, hash, &l, &err) == IC_OK, "load: %s", err.message);
+    if (!l) {
+        ic_cache_destroy(c);
+        free(recs);
+        return;
+    }
+    CHECK(ic_cache_count(l) == n, "loaded %u records", ic_cache_count(l));
+    uint32_t differ = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        ic_record a, b;
+        ic_cache_get_record(c, i, &a);
+        ic_cache_get_record(l, i, &b);
+        differ += memcmp(&a, &b, sizeof a) != 0;
+    }
+    CHECK(differ == 0, "%u records differ after a round trip", differ);
+    /* The loaded cache answers look-ups identically and saves to the same bytes. */
+    uint32_t qdiff = 0;
+    for (uint32_t q = 0; q < 2000; ++q) {
+        ic_cache_lookup lk = {0};
+        make_query(c, 5, q, &lk.position, &lk.normal);
+        ic_cache_estimate ea, eb;
+        ic_cache_query(c, &lk, &ea);
+        ic_cache_query_linear(l, &lk, &eb);
+        qdiff += ea.contributor_count != eb.contributor_count ||
+                 fabsf(ea.irradiance.x - eb.irradiance.x) > 1e-4f * (1.0f + eb.irradiance.x);
+    }
+    CHECK(qdiff == 0, "%u look-ups differ after a round trip", qdiff);
+    CHECK(ic_cache_save(l, path2, hash, &err) == IC_OK, "save again: %s", err.message);
+    unsigned char *d1 = NULL, *d2 = NULL;
+    size_t s1 = 0, s2 = 0;
+    CHECK(read_file(path, &d1, &s1) && read_file(path2, &d2, &s2), "read back");
+    CHECK(s1 == s2 && memcmp(d1, d2, s1) == 0, "second save is not bit-identical (%zu vs %zu bytes)", s1, s2);
+    CHECK(s1 == 88 + (size_t)n * 156 + 8, "file size %zu", s1);
+
+    /* Truncated, corrupted, foreign files. */
+    write_file(bad, d1, s1 - 10);
+    expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "truncated records");
+    write_file(bad, d1, 40);
+    expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "truncated header");
+    write_file(bad, d1, 0);
+    expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "empty file");
+    d1[s1 / 2] ^= 0x10;
+    write_file(bad, d1, s1);
+    expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "flipped byte in records");
+    d1[s1 / 2] ^= 0x10;
+    d1[20] ^= 0x01; /* inside the scene hash: the checksum catches it first */
+    write_file(bad, d1, s1);
+    expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "flipped byte in header");
+    d1[20] ^= 0x01;
+    d1[0] = 'X';
+    write_file(bad, d1, s1);
+    expect_refusal(bad, &p, hash, IC_ERR_PARSE, "wrong magic");
+    d1[0] = 'I';
+    d1[8] = 99;
+    write_file(bad, d1, s1);
+    expect_refusal(bad, &p, hash, IC_ERR_MISMATCH, "other version");
+    d1[8] = 1;
+    expect_refusal(path, &p, hash ^ 1, IC_ERR_MISMATCH, "other scene");
+    {
+        ic_cache *x = NULL;
+        ic_cache_load(path, &p, hash ^ 1, &x, &err);
+        CHECK(strstr(err.message, "made for another scene") && strstr(err.message, "--cache-rebuild"),
+              "scene message: %s", err.message);
+    }
+    ic_cache_params other = p;
+    other.accuracy = 0.3f;
+    expect_refusal(path, &other, hash, IC_ERR_MISMATCH, "other accuracy");
+    other = p;
+    other.neighbor_clamp = IC_CACHE_OFF;
+    expect_refusal(path, &other, hash, IC_ERR_MISMATCH, "other clamp switch");
+    /* Look-up-only settings may change. */
+    other = p;
+    other.final_accuracy_scale = 1.5f;
+    other.leaf_capacity = 5;
+    ic_cache *x = NULL;
+    CHECK(ic_cache_load(path, &other, hash, &x, &err) == IC_OK, "look-up settings refused: %s", err.message);
+    ic_cache_destroy(x);
+    expect_refusal(IC_TEST_TMP "/no_such_cache.icc", &p, hash, IC_ERR_IO, "missing file");
+
+    /* Failed writes leave nothing behind: a missing folder, and a path that is a folder. */
+    CHECK(ic_cache_save(c, IC_TEST_TMP "/no_such_dir/x.icc", hash, &err) == IC_ERR_IO, "save into missing folder");
+    const char *dir = IC_TEST_TMP "/test_cache_dir.icc";
+    mkdir(dir, 0755);
+    ic_result rc = ic_cache_save(c, dir, hash, &err);
+    CHECK(rc == IC_ERR_IO && strstr(err.message, dir), "save onto a folder: %s (%s)", ic_result_name(rc), err.message);
+    CHECK(count_temporaries(IC_TEST_TMP, "test_cache_dir.icc") == 0, "temporary file left after a failed save");
+    rmdir(dir);
+
+    free(d1);
+    free(d2);
+    remove(path);
+    remove(path2);
+    remove(bad);
+    ic_cache_destroy(l);
+    ic_cache_destroy(c);
+    free(recs);
+}
+
+static void test_api_edges(void)
+{
+    ic_error err;
+    ic_cache_params p = {0};
+    p.accuracy = -1.0f;
+    ic_cache *c = (ic_cache *)1;
+    CHECK(ic_cache_create(&p, &c, &err) == IC_ERR_INVALID_ARG && c == NULL, "negative accuracy accepted");
+    ic_cache_destroy(NULL);
+    CHECK(ic_cache_create(NULL, &c, &err) == IC_OK, "default create");
+    CHECK(ic_cache_get_params(c)->accuracy == 0.2f && ic_cache_get_params(c)->validity_k == 6, "defaults");
+    ic_cache_lookup q = {v3(0, 0, 0), v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
+    ic_cache_estimate e;
+    CHECK(!ic_cache_query(c, &q, &e) && e.contributor_count == 0, "empty cache answered");
+    uint32_t idx[4];
+    CHECK(ic_cache_knn(c, v3(0, 0, 0), 4, idx, NULL) == 0, "knn on an empty cache");
+    /* All-or-nothing batches. */
+    ic_record r[3] = {plane_record(v3(0, 0, 0), 1.0f), plane_record(v3(1, 0, 0), 0.0f), plane_record(v3(2, 0, 0), 1.0f)};
+    CHECK(ic_cache_insert_batch(c, r, 3, NULL, &err) == IC_ERR_INVALID_ARG && ic_cache_count(c) == 0,
+          "invalid batch partly inserted");
+    r[1].harmonic_mean_dist = 1.0f;
+    r[1].irradiance.x = NAN;
+    CHECK(ic_cache_insert_batch(c, r, 3, NULL, &err) == IC_ERR_INVALID_ARG, "NaN accepted");
+    r[1].irradiance.x = 1.0f;
+    r[1].harmonic_mean_dist = INFINITY;
+    CHECK(ic_cache_insert_batch(c, r, 3, NULL, &err) == IC_ERR_INVALID_ARG, "infinite R accepted without max_radius");
+    r[1].harmonic_mean_dist = 1.0f;
+    CHECK(ic_cache_insert_batch(c, r, 3, NULL, &err) == IC_OK && ic_cache_count(c) == 3, "valid batch");
+    CHECK(ic_cache_set_record_accuracy(c, 0, 0.5f) == IC_ERR_INVALID_ARG, "raising a_i accepted");
+    CHECK(ic_cache_set_record_accuracy(c, 0, 0.1f) == IC_OK, "lowering a_i refused");
+    ic_record o;
+    ic_cache_get_record(c, 0, &o);
+    CHECK(o.accuracy == 0.1f && o.change_count == 1, "a_i %g, changes %u", (double)o.accuracy, o.change_count);
+    CHECK(ic_cache_get_record(c, 3, &o) == IC_ERR_INVALID_ARG, "out-of-range record");
+    printf("  bytes per record: %zu; memory for 3 records: %zu\n", ic_cache_bytes_per_record(),
+           ic_cache_memory_bytes(c));
+    ic_cache_destroy(c);
+}
+
+int main(void)
+{
+    test_api_edges();
+    test_weights();
+    test_linear_field();
+    test_gradient_clamps();
+    test_neighbor_clamp();
+    test_validity_clamp();
+    test_thread_independence();
+    test_point_queries();
+    test_file();
+    test_lookup_vs_linear();
+    TEST_MAIN_END();
+}
