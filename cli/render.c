@@ -34,9 +34,10 @@ typedef struct render_args {
     int has_exposure;
     int quiet;
     /* irradiance caching */
-    const char *strategy, *weight, *gather, *aov;
+    const char *strategy, *weight, *gather, *aov, *records_json;
     double accuracy, min_radius, max_radius, min_radius_px, max_radius_px, final_scale;
-    int rays, bounces, max_passes, min_candidates;
+    double weber, adaptive_growth;
+    int rays, bounces, max_passes, min_candidates, light_samples;
     int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference;
 } render_args;
 
@@ -74,15 +75,18 @@ static const opt_def options[] = {
     {"--scenes-dir", NULL, OPT_STRING, OFF(scenes_dir), 0, "DIR", "$IRRCACHE_SCENES, else ../shared/scenes",
      "where 'shared:' mesh paths in scene files resolve"},
     {"--quiet", "-q", OPT_FLAG, OFF(quiet), 0, NULL, "off", "no progress line"},
-    {"--strategy", NULL, OPT_STRING, OFF(strategy), 0, "batch|lazy", "batch",
-     "ic: cache construction: batch (Frolov 2012, parallel multi-pass) or lazy (Ward 1988, serial)"},
+    {"--strategy", NULL, OPT_STRING, OFF(strategy), 0, "batch|lazy|adaptive", "batch",
+     "ic: cache construction: batch (Frolov 2012, parallel multi-pass), lazy (Ward 1988, serial) or adaptive "
+     "(Krivanek 2006: per-record a refined until no discontinuity is visible)"},
     {"--accuracy", "-a", OPT_DOUBLE, OFF(accuracy), 0.001, "A", "0.25 (Ward), 1 (T-L)",
      "ic: error bound a of the weights; smaller = more records"},
     {"--weight", NULL, OPT_STRING, OFF(weight), 0, "ward|tl", "ward", "ic: Ward or Tabellion-Lamorlette weights"},
     {"--rays", NULL, OPT_INT, OFF(rays), 16, "N", "800", "ic: hemisphere rays per record (stratified M x N)"},
     {"--gather", NULL, OPT_STRING, OFF(gather), 0, "stratified|progressive", "stratified",
      "ic: hemisphere sampler; progressive = Hammersley rounds 4096..65536 until converged"},
-    {"--bounces", NULL, OPT_INT, OFF(bounces), 1, "N", "3", "ic: indirect bounces in the light a record gathers"},
+    {"--bounces", NULL, OPT_INT, OFF(bounces), 1, "N", "max-depth - 1", "ic: indirect bounces in the light a record gathers"},
+    {"--light-samples", NULL, OPT_INT, OFF(light_samples), 1, "N", "4",
+     "ic: light samples per shading point in the final render (direct light)"},
     {"--min-radius", NULL, OPT_DOUBLE, OFF(min_radius), 0, "R", "0", "ic: smallest record radius, world units"},
     {"--max-radius", NULL, OPT_DOUBLE, OFF(max_radius), 0, "R", "scene diagonal / 8",
      "ic: largest record radius, world units"},
@@ -102,8 +106,15 @@ static const opt_def options[] = {
     {"--max-passes", NULL, OPT_INT, OFF(max_passes), 1, "N", "12", "ic batch: most construction passes"},
     {"--min-candidates", NULL, OPT_INT, OFF(min_candidates), 1, "N", "16",
      "ic batch: stop construction when a pass finds fewer new candidates"},
+    {"--weber", NULL, OPT_DOUBLE, OFF(weber), 0.0001, "F", "0.02",
+     "ic adaptive: Weber fraction of the discontinuity test; smaller = more records"},
+    {"--adaptive-growth", NULL, OPT_DOUBLE, OFF(adaptive_growth), 1, "F", "1.4",
+     "ic adaptive: a new record starts from the nearest record's a times F (at most --accuracy)"},
+    {"--records-json", NULL, OPT_STRING, OFF(records_json), 0, "FILE", "none",
+     "ic: write every record (position, radius, a, image position, visibility) as JSON"},
     {"--aov", NULL, OPT_STRING, OFF(aov), 0, "LIST", "none",
-     "ic: extra images next to the first output, comma-separated: indirect (.exr), records (.png), density (.exr)"},
+     "ic: extra images next to the first output, comma-separated: indirect (.exr), records (.png), density (.exr), "
+     "amap (.png: a of the heaviest record, blue = --accuracy ... red = accuracy/32)"},
     {"--help", "-h", OPT_FLAG, 0, 0, NULL, NULL, "show this help"},
 };
 #define OPTION_COUNT (sizeof options / sizeof options[0])
@@ -226,7 +237,7 @@ static int parse_args(int argc, char **argv, render_args *a)
         return 2;
     }
     const struct { const char *name, *value, *choices; } choices[] = {
-        {"--strategy", a->strategy, "batch lazy"},
+        {"--strategy", a->strategy, "batch lazy adaptive"},
         {"--weight", a->weight, "ward tl"},
         {"--gather", a->gather, "stratified progressive"},
     };
@@ -247,17 +258,18 @@ static int parse_args(int argc, char **argv, render_args *a)
         char buf[256];
         snprintf(buf, sizeof buf, "%s", a->aov);
         for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-            if (strcmp(tok, "indirect") && strcmp(tok, "records") && strcmp(tok, "density")) {
-                fprintf(stderr, "irrcache render: --aov %s: unknown AOV '%s'; use indirect, records, density\n",
+            if (strcmp(tok, "indirect") && strcmp(tok, "records") && strcmp(tok, "density") && strcmp(tok, "amap")) {
+                fprintf(stderr, "irrcache render: --aov %s: unknown AOV '%s'; use indirect, records, density, amap\n",
                         a->aov, tok);
                 return 2;
             }
         }
     }
-    int ic_only = a->strategy || a->weight || a->gather || a->aov || a->accuracy > 0 || a->rays || a->bounces ||
+    int ic_only = a->strategy || a->weight || a->gather || a->aov || a->accuracy > 0 || a->rays || a->bounces || a->light_samples ||
                   a->min_radius > 0 || a->max_radius > 0 || a->min_radius_px > 0 || a->max_radius_px > 0 ||
                   a->final_scale > 0 || a->max_passes || a->min_candidates || a->no_gradients ||
-                  a->no_neighbor_clamp || a->no_validity_clamp || a->gradient_difference;
+                  a->no_neighbor_clamp || a->no_validity_clamp || a->gradient_difference || a->records_json ||
+                  a->weber > 0 || a->adaptive_growth > 0;
     if (ic_only && strcmp(a->integrator, "ic") != 0) {
         fprintf(stderr, "irrcache render: irradiance-cache options need --integrator ic\n");
         return 2;
@@ -343,6 +355,8 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         for (int i = 0; i < st->passes && i < 32; ++i)
             fprintf(o, "%s%u", i ? ", " : "", st->records_per_pass[i]);
         fprintf(o, "],\n");
+        if (a->strategy && !strcmp(a->strategy, "adaptive"))
+            fprintf(o, "  \"refinements\": %u,\n", st->refinements);
     }
     fprintf(o, "  \"phases\": {");
     for (int i = 0; i < st->phase_count; ++i)
@@ -360,6 +374,10 @@ static void fill_ic_options(const render_args *a, ic_ic_options *o)
     memset(o, 0, sizeof *o);
     if (a->strategy && !strcmp(a->strategy, "lazy"))
         o->strategy = IC_STRATEGY_LAZY;
+    if (a->strategy && !strcmp(a->strategy, "adaptive"))
+        o->strategy = IC_STRATEGY_ADAPTIVE;
+    o->weber = (float)a->weber;
+    o->adaptive_growth = (float)a->adaptive_growth;
     if (a->weight && !strcmp(a->weight, "tl"))
         o->cache.weight = IC_WEIGHT_TABELLION;
     o->cache.accuracy = (float)a->accuracy;
@@ -383,6 +401,7 @@ static void fill_ic_options(const render_args *a, ic_ic_options *o)
     }
     o->no_gradients = a->no_gradients;
     o->bounces = a->bounces;
+    o->light_samples = a->light_samples;
     o->max_passes = a->max_passes;
     o->min_candidates = a->min_candidates;
 }
@@ -398,7 +417,8 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
     if (dot && (!slash || dot > slash))
         *dot = 0;
     const struct { const ic_image *img; const char *suffix; } list[] = {
-        {&aovs->indirect, ".indirect.exr"}, {&aovs->records, ".records.png"}, {&aovs->density, ".density.exr"}};
+        {&aovs->indirect, ".indirect.exr"}, {&aovs->records, ".records.png"}, {&aovs->density, ".density.exr"},
+        {&aovs->amap, ".amap.png"}};
     for (size_t i = 0; i < sizeof list / sizeof list[0]; ++i) {
         if (!list[i].img->rgb)
             continue;
@@ -409,6 +429,31 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
             fprintf(stderr, "irrcache render: %s\n", err.message);
             return 0;
         }
+    }
+    return 1;
+}
+
+static int write_records_json(const char *path, const ic_render_aovs *aovs)
+{
+    ic_atomic_file f;
+    ic_error err;
+    if (ic_atomic_file_open(&f, path, &err) != IC_OK) {
+        fprintf(stderr, "irrcache render: %s\n", err.message);
+        return 0;
+    }
+    fprintf(f.fp, "[\n");
+    for (uint32_t i = 0; i < aovs->record_view_count; ++i) {
+        const ic_record_view *v = &aovs->record_views[i];
+        fprintf(f.fp,
+                "  {\"x\": %.6g, \"y\": %.6g, \"z\": %.6g, \"radius\": %.6g, \"a\": %.6g, \"px\": %.2f, "
+                "\"py\": %.2f, \"radius_px\": %.2f, \"visible\": %s}%s\n",
+                v->position.x, v->position.y, v->position.z, v->radius, v->accuracy, v->px, v->py, v->radius_px,
+                v->visible ? "true" : "false", i + 1 < aovs->record_view_count ? "," : "");
+    }
+    fprintf(f.fp, "]\n");
+    if (ic_atomic_file_commit(&f, &err) != IC_OK) {
+        fprintf(stderr, "irrcache render: %s\n", err.message);
+        return 0;
     }
     return 1;
 }
@@ -461,10 +506,19 @@ int ic_cli_render(int argc, char **argv)
     if (!strcmp(a.integrator, "ic")) {
         opt.integrator = IC_INTEGRATOR_IC;
         fill_ic_options(&a, &opt.ic);
+        if (a.records_json) {
+            if (!check_writable(a.records_json)) {
+                ic_scene_free(scene);
+                return 1;
+            }
+            aovs.want_record_list = 1;
+            opt.aovs = &aovs;
+        }
         if (a.aov) {
             aovs.want_indirect = strstr(a.aov, "indirect") != NULL;
             aovs.want_records = strstr(a.aov, "records") != NULL;
             aovs.want_density = strstr(a.aov, "density") != NULL;
+            aovs.want_amap = strstr(a.aov, "amap") != NULL;
             opt.aovs = &aovs;
         }
     }
@@ -497,10 +551,14 @@ int ic_cli_render(int argc, char **argv)
     }
     if (ok && opt.aovs)
         ok = write_aovs(a.outputs[0], &aovs, &wo);
+    if (ok && a.records_json)
+        ok = write_records_json(a.records_json, &aovs);
+    free(aovs.record_views);
     ic_image_free(&img);
     ic_image_free(&aovs.indirect);
     ic_image_free(&aovs.records);
     ic_image_free(&aovs.density);
+    ic_image_free(&aovs.amap);
     ic_scene_free(scene);
     if (ok && a.stats_path)
         ok = write_stats(a.stats_path, &a, w, h, &st);

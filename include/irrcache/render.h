@@ -49,7 +49,9 @@ typedef enum ic_integrator {
 typedef enum ic_strategy {
     IC_STRATEGY_BATCH = 0, /* Frolov et al. 2012 (seed 004 §3): passes of candidates, parallel gathering,
                               batch insertion; the default */
-    IC_STRATEGY_LAZY       /* Ward 1988: shading points in raster order, gather on a miss (serial reference) */
+    IC_STRATEGY_LAZY,      /* Ward 1988: shading points in raster order, gather on a miss (serial reference) */
+    IC_STRATEGY_ADAPTIVE   /* Křivánek et al. 2006 (seed 000 §4): per-record a_i refined until no shading point
+                              sees a discernible discontinuity (docs/adaptive.md) */
 } ic_strategy;
 
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
@@ -61,7 +63,8 @@ typedef struct ic_ic_options {
                               a negative value switches a bound off */
     ic_gather_opts gather; /* hemisphere sampling [stratified, 16×50 = 800 rays] */
     int no_gradients;      /* 1: records carry no gradients (interpolation is a weighted average) */
-    int bounces;           /* indirect bounces in the radiance a hemisphere ray returns [3] */
+    int bounces;           /* indirect bounces in the radiance a hemisphere ray returns [max_depth − 1] */
+    int light_samples;     /* final render: light samples per shading point and pixel sample [4] */
     int max_passes;        /* batch: most construction passes [12] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */
@@ -69,14 +72,33 @@ typedef struct ic_ic_options {
     float normal_weight;   /* batch: k of k·normDiff + posDiff (seed 004 §3.1.1) [4] */
     int world_stride;      /* batch: world stage traces one eye path per stride×stride pixels [2] */
     float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene diagonal [0.05] */
+    float weber;           /* adaptive: Weber fraction of the discernibility test (seed 000 §4.3) [0.02] */
+    float adaptive_growth; /* adaptive: a new record's a = growth × a of the nearest record, ≤ accuracy [1.4] */
+    int adaptive_max_passes; /* adaptive: safety bound on convergence passes [64] */
 } ic_ic_options;
+
+/* A cache record as the camera sees it (for overlays and reports). */
+typedef struct ic_record_view {
+    ic_vec3 position;      /* world space */
+    float radius;          /* clamped R_i */
+    float accuracy;        /* a_i; the influence radius is a_i·R_i */
+    float px, py;          /* image position in pixels (top-left origin) */
+    float radius_px;       /* influence radius in pixels at the record's depth */
+    int visible;           /* 1 if the record lies on a surface the camera sees directly */
+} ic_record_view;
 
 /* Extra images an irradiance-cache render can return (each allocated only if asked for). */
 typedef struct ic_render_aovs {
     int want_indirect, want_records, want_density;
+    int want_amap;         /* a_i map (see amap) */
+    int want_record_list;  /* fill record_views (malloc'd; the caller frees it) */
+    ic_record_view *record_views;
+    uint32_t record_view_count;
     ic_image indirect;     /* indirect diffuse radiance from the cache at the first shading point */
     ic_image records;      /* the image with record positions (dots) and influence radii (circles) */
     ic_image density;      /* number of records contributing at each pixel centre (grey level) */
+    ic_image amap;         /* a_i of the heaviest record at each pixel centre on a colour ramp: blue = --accuracy,
+                              red = accuracy/32 or less (log scale; seed 000 figs. 7–9) */
 } ic_render_aovs;
 
 /* Render options; zero means default (or the scene file's value where it gives one). */
@@ -105,6 +127,7 @@ typedef struct ic_render_stats {
     int threads;           /* threads used */
     uint32_t records;      /* cache records (integrator IC) */
     int passes;            /* construction passes (integrator IC) */
+    uint32_t refinements;  /* adaptive: times a record's a_i was lowered */
     uint32_t records_per_pass[32];
     uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */
     int phase_count;

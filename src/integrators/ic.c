@@ -17,7 +17,7 @@
  * Lazy construction (Ward 1988) visits the pixel centres' shading points in raster order, looks up,
  * and on a miss gathers and inserts one record: serial, the reference for the others.
  */
-#include "ic.h"
+#include "ic_internal.h"
 
 #include "core/sampling.h"
 #include "core/threads.h"
@@ -29,30 +29,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_SPECULAR_CHAIN 8
-#define WORLD_PATH_BOUNCES 3
-#define WORLD_SLOTS (WORLD_PATH_BOUNCES + 1)
-
-typedef struct ic_ctx {
-    const ic_tracer *tr;       /* scene, accel, path-tracing parameters of the final render */
-    ic_tracer gather_tr;       /* same scene; max_depth set for record radiance (bounces) */
-    ic_ic_options o;           /* resolved options */
-    ic_cache *cache;
-    uint64_t seed;
-    int threads;
-    float pixel_angle;
-    float scene_diag;
-    atomic_ullong rays;        /* gathering rays (added once per trace call) */
-    ic_gbuffer g;
-    uint8_t *has_record;       /* per pixel: a screen-space record was made here */
-} ic_ctx;
-
 /* ---------------------------------------------------------------- record radiance (trace callback) */
 
 /* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
  * is seeded from the ray itself (origin and direction bits), so it does not depend on which batch or
  * thread traced it. */
-static void gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
+void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
                          ic_vec3 *radiance)
 {
     ic_ctx *c = user;
@@ -204,7 +186,7 @@ static void free_gbuffer(ic_ctx *c)
 
 /* ---------------------------------------------------------------- gathering and insertion */
 
-static void record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec)
+void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec)
 {
     memset(rec, 0, sizeof *rec);
     rec->position = cand->p;
@@ -212,9 +194,25 @@ static void record_from_gather(const ic_ctx *c, const ic_candidate *cand, const 
     rec->tangent = ic_frame_from_normal(cand->n).t;
     rec->irradiance = gr->irradiance;
     if (!c->o.no_gradients) {
+        /* Gradient-magnitude clamping (seed 000 §5.1, eq. 2) bounds the extrapolated change by shrinking
+         * R to Y/|∇t Y|; where the R floor (R_min, pixel bound) stops that, the linear model would be
+         * extrapolated beyond its validity (seen as bright blotches in concave corners, where 1/r of
+         * close hits makes |∇t E| huge). There the gradient itself is scaled so |∇t Y|·R_floor ≤ Y.
+         * Likewise the rotational term is kept below Y for the largest normal change the weights accept
+         * (|n_i × n| ≲ √2·a). */
+        float y = v3_lum(gr->irradiance);
+        ic_vec3 gt = v3_add(v3_add(v3_scale(gr->trans_grad[0], 0.2126f), v3_scale(gr->trans_grad[1], 0.7152f)),
+                            v3_scale(gr->trans_grad[2], 0.0722f));
+        ic_vec3 grt = v3_add(v3_add(v3_scale(gr->rot_grad[0], 0.2126f), v3_scale(gr->rot_grad[1], 0.7152f)),
+                             v3_scale(gr->rot_grad[2], 0.0722f));
+        float floor_r = fmaxf(c->o.cache.min_radius, c->o.cache.min_radius_pixels * cand->footprint);
+        float gt_len = v3_len(gt), grt_len = v3_len(grt);
+        float st = (gt_len * floor_r > y && gt_len > 0.0f) ? y / (gt_len * floor_r) : 1.0f;
+        float rot_limit = y / (1.4142f * c->o.cache.accuracy);
+        float sr = grt_len > rot_limit && grt_len > 0.0f ? rot_limit / grt_len : 1.0f;
         for (int k = 0; k < 3; ++k) {
-            rec->grad_rot[k] = gr->rot_grad[k];
-            rec->grad_trans[k] = gr->trans_grad[k];
+            rec->grad_rot[k] = v3_scale(gr->rot_grad[k], sr);
+            rec->grad_trans[k] = v3_scale(gr->trans_grad[k], st);
         }
     }
     rec->sigma = gr->sigma;
@@ -226,7 +224,7 @@ static void record_from_gather(const ic_ctx *c, const ic_candidate *cand, const 
     rec->pixel_footprint = cand->footprint;
 }
 
-static ic_gather_point gather_point_of(const ic_candidate *cand)
+ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand)
 {
     ic_gather_point gp;
     gp.position = ic_offset_ray_origin(cand->p, cand->n, cand->n);
@@ -235,12 +233,8 @@ static ic_gather_point gather_point_of(const ic_candidate *cand)
     return gp;
 }
 
-typedef struct phase_times {
-    double gather, insert;
-} phase_times;
-
 /* Gathers all candidates in parallel and inserts them as one batch. */
-static ic_result gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt,
+ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt,
                                    ic_error *err)
 {
     if (count == 0)
@@ -254,15 +248,15 @@ static ic_result gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t
         goto done;
     }
     for (uint32_t i = 0; i < count; ++i)
-        pts[i] = gather_point_of(&cand[i]);
+        pts[i] = ic_ic_gather_point_of(&cand[i]);
     double t0 = ic_seconds();
-    r = ic_gather_batch(&c->o.gather, gather_trace, c, c->threads, pts, count, res, err);
+    r = ic_gather_batch(&c->o.gather, ic_ic_gather_trace, c, c->threads, pts, count, res, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     if (r != IC_OK)
         goto done;
     for (uint32_t i = 0; i < count; ++i)
-        record_from_gather(c, &cand[i], &res[i], &recs[i]);
+        ic_ic_record_from_gather(c, &cand[i], &res[i], &recs[i]);
     r = ic_cache_insert_batch(c->cache, recs, count, NULL, err);
     pt->insert += ic_seconds() - t1;
 done:
@@ -272,7 +266,7 @@ done:
     return r;
 }
 
-static ic_candidate candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag)
+ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag)
 {
     ic_candidate cd;
     cd.p = c->g.p[pixel];
@@ -313,7 +307,7 @@ static void lookup_row(void *p, int64_t y, int thread)
     }
 }
 
-static ic_result lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc)
+ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc)
 {
     lookup_job j = {c, lum, covered, acc};
     return ic_parallel_for(c->threads, c->g.height, lookup_row, &j);
@@ -330,8 +324,11 @@ typedef struct world_job {
     uint64_t *rays;
 } world_job;
 
-/* One eye path per stride×stride block: every smooth hit where no record is valid becomes a
- * candidate (seed 004 §3.1.3). Paths bounce diffusely (cosine) to reach indirectly seen surfaces. */
+/* One eye path per stride×stride block (seed 004 §3.1.3): the path visits the points where the final
+ * render will look the cache up — the first surface with a smooth lobe after ideal specular chains,
+ * then the surfaces reached through glossy lobes — and every such point where no record is valid
+ * becomes a candidate. (The seed collects hits on every bounce because its final render fetches the
+ * cache along whole paths; ours path-traces record radiance, so deeper diffuse bounces never look up.) */
 static void world_path(void *p, int64_t item, int thread)
 {
     world_job *j = p;
@@ -348,42 +345,45 @@ static void world_path(void *p, int64_t item, int thread)
     uint32_t pixel = (uint32_t)(y * cam->width + x);
     ic_ray ray = ic_camera_ray(cam, (float)x + ic_rng_float(&rng), (float)y + ic_rng_float(&rng));
     ic_candidate *out = &j->slots[item * WORLD_SLOTS];
-    int n = 0;
+    int n = 0, smooth_hits = 0;
+    float t_primary = 0.0f;
     uint64_t *rays = &j->rays[thread * PAD];
-    for (int bounce = 0; bounce <= WORLD_PATH_BOUNCES; ++bounce) {
+    for (int bounce = 0; bounce <= MAX_SPECULAR_CHAIN && smooth_hits < WORLD_SLOTS; ++bounce) {
         ic_hit hit;
         ++*rays;
         ic_accel_intersect1(c->tr->accel, &ray, &hit);
         if (hit.triangle == IC_NO_HIT)
             break;
+        if (bounce == 0)
+            t_primary = hit.t;
         ic_surface s;
         ic_scene_surface(c->tr->scene, hit.triangle, hit.u, hit.v, &s);
         ic_vec3 wo = v3_neg(ray.dir);
         ic_bsdf b;
         ic_bsdf_init(&b, c->tr->scene, &s, wo);
-        ic_vec3 wi;
+        ic_bsdf_sample bs;
         if (ic_bsdf_has_smooth(&b)) {
             ic_cache_lookup q;
             memset(&q, 0, sizeof q);
             q.position = s.p;
             q.normal = b.frame.n;
             ic_cache_estimate e;
-            if (!ic_cache_query(c->cache, &q, &e) && n < WORLD_SLOTS) {
+            if (!ic_cache_query(c->cache, &q, &e)) {
                 out[n].p = s.p;
                 out[n].n = b.frame.n;
-                out[n].footprint = bounce == 0 ? hit.t * c->pixel_angle : 0.0f;
-                out[n].key = ((uint64_t)pixel << 8) | (uint64_t)(0x80 | (j->pass & 0x1f) << 2 | (bounce & 3));
+                /* Pixel-based radius bounds only hold for what the camera sees directly. */
+                out[n].footprint = smooth_hits == 0 ? t_primary * c->pixel_angle : 0.0f;
+                out[n].key = ((uint64_t)pixel << 8) | (uint64_t)(0x80 | (j->pass & 0x1f) << 2 | (smooth_hits & 3));
                 ++n;
             }
-            wi = ic_frame_to_world(&b.frame, ic_warp_cosine_hemisphere(ic_rng_float(&rng), ic_rng_float(&rng)));
-        } else {
-            ic_bsdf_sample bs;
-            if (!ic_bsdf_sample_dir(&b, wo, ic_rng_float(&rng), ic_rng_float(&rng), ic_rng_float(&rng), &bs))
+            ++smooth_hits;
+            if (!ic_bsdf_sample_glossy(&b, wo, ic_rng_float(&rng), ic_rng_float(&rng), &bs))
                 break;
-            wi = bs.wi;
+        } else if (!ic_bsdf_sample_dir(&b, wo, ic_rng_float(&rng), ic_rng_float(&rng), ic_rng_float(&rng), &bs)) {
+            break;
         }
-        ray.org = ic_offset_ray_origin(s.p, s.ng, wi);
-        ray.dir = wi;
+        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
+        ray.dir = bs.wi;
         ray.tnear = 0.0f;
         ray.tfar = INFINITY;
     }
@@ -429,7 +429,7 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
 
 /* ---------------------------------------------------------------- strategies */
 
-static void report(const ic_render_options *opt, const char *phase, double f)
+void ic_ic_report(const ic_render_options *opt, const char *phase, double f)
 {
     if (opt->progress)
         opt->progress(opt->progress_user, phase, f);
@@ -444,7 +444,7 @@ static uint32_t dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix,
         if (c->has_record[pix[i]])
             continue;
         c->has_record[pix[i]] = 1;
-        cand[n++] = candidate_at_pixel(c, pix[i], tag);
+        cand[n++] = ic_ic_candidate_at_pixel(c, pix[i], tag);
     }
     return n;
 }
@@ -457,20 +457,20 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_cand
     *added = 0;
     size_t npix = (size_t)c->g.width * c->g.height;
     for (int round = 0; round < 16; ++round) {
-        ic_result r = lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+        ic_result r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
         if (r != IC_OK)
             return ic_error_set(err, r, "could not start threads");
         uint32_t n = 0;
         for (size_t i = 0; i < npix; ++i)
             if (c->g.valid[i] && !covered[i])
-                cand[n++] = candidate_at_pixel(c, (uint32_t)i, 0x40 | (uint64_t)round);
+                cand[n++] = ic_ic_candidate_at_pixel(c, (uint32_t)i, 0x40 | (uint64_t)round);
         if (n == 0)
             return IC_OK;
         /* Small clusters: each selected record covers at least its own pixel, so this terminates. */
         const ic_scene *sc = c->tr->scene;
         n = ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->scene_diag, 3,
                             30.0f);
-        r = gather_and_insert(c, cand, n, pt, err);
+        r = ic_ic_gather_and_insert(c, cand, n, pt, err);
         if (r != IC_OK)
             return r;
         *added += n;
@@ -493,23 +493,23 @@ static ic_result build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_
         goto done;
     }
     /* Pass 0: geometry discontinuity. */
-    report(opt, "cache pass 0", 0.0);
+    ic_ic_report(opt, "cache pass 0", 0.0);
     r = ic_screen_geometry_need(&c->g, c->o.normal_weight, need);
     if (r != IC_OK) {
         ic_error_set(err, r, "out of memory for the discontinuity map");
         goto done;
     }
     uint32_t n = dithered_candidates(c, need, pix, cand, 0);
-    r = gather_and_insert(c, cand, n, pt, err);
+    r = ic_ic_gather_and_insert(c, cand, n, pt, err);
     if (r != IC_OK)
         goto done;
     st->records_per_pass[0] = n;
     st->passes = 1;
     for (int pass = 1; pass <= c->o.max_passes; ++pass) {
-        report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
+        ic_ic_report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
         uint32_t found = 0, before = ic_cache_count(c->cache);
         if (pass <= c->o.screen_passes) {
-            r = lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+            r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
             if (r != IC_OK) {
                 ic_error_set(err, r, "could not start threads");
                 goto done;
@@ -526,7 +526,7 @@ static ic_result build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_
                     need[i] = fmaxf(need[i], c->o.dither_threshold);
             n = dithered_candidates(c, need, pix, cand, (uint64_t)pass);
             found += n;
-            r = gather_and_insert(c, cand, n, pt, err);
+            r = ic_ic_gather_and_insert(c, cand, n, pt, err);
             if (r != IC_OK)
                 goto done;
         }
@@ -534,7 +534,7 @@ static ic_result build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_
         uint32_t wn = 0;
         r = world_stage(c, pass, &wc, &wn, err);
         if (r == IC_OK)
-            r = gather_and_insert(c, wc, wn, pt, err);
+            r = ic_ic_gather_and_insert(c, wc, wn, pt, err);
         free(wc);
         if (r != IC_OK)
             goto done;
@@ -560,13 +560,13 @@ static ic_result build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_s
                             ic_error *err)
 {
     ic_gatherer *g = NULL;
-    ic_result r = ic_gatherer_create(&c->o.gather, gather_trace, c, &g, err);
+    ic_result r = ic_gatherer_create(&c->o.gather, ic_ic_gather_trace, c, &g, err);
     if (r != IC_OK)
         return r;
     size_t npix = (size_t)c->g.width * c->g.height;
     for (size_t i = 0; i < npix && r == IC_OK; ++i) {
         if ((i & 4095) == 0)
-            report(opt, "lazy cache", (double)i / (double)npix);
+            ic_ic_report(opt, "lazy cache", (double)i / (double)npix);
         if (!c->g.valid[i])
             continue;
         ic_cache_lookup q;
@@ -576,8 +576,8 @@ static ic_result build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_s
         ic_cache_estimate e;
         if (ic_cache_query(c->cache, &q, &e))
             continue;
-        ic_candidate cd = candidate_at_pixel(c, (uint32_t)i, 0);
-        ic_gather_point gp = gather_point_of(&cd);
+        ic_candidate cd = ic_ic_candidate_at_pixel(c, (uint32_t)i, 0);
+        ic_gather_point gp = ic_ic_gather_point_of(&cd);
         ic_gather_result gr;
         double t0 = ic_seconds();
         r = c->o.gather.method == IC_GATHER_PROGRESSIVE ? ic_gather_progressive(g, &gp, 1, &gr)
@@ -589,7 +589,7 @@ static ic_result build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_s
             break;
         }
         ic_record rec;
-        record_from_gather(c, &cd, &gr, &rec);
+        ic_ic_record_from_gather(c, &cd, &gr, &rec);
         r = ic_cache_insert(c->cache, &rec, NULL, err);
         pt->insert += ic_seconds() - t1;
     }
@@ -637,7 +637,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
 /* Direct light for the final render: one light sample; the environment is in the cache and is
  * skipped here. The diffuse lobe takes the full light sample (it is never BSDF-sampled in this
  * integrator); the glossy lobe is MIS-weighted against its own lobe sampling. */
-static ic_vec3 final_direct(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                             uint64_t *rays)
 {
     float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
@@ -715,7 +715,13 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
             ic_vec3 indirect = v3_mul(v3_scale(b.kd, IC_INV_PI), E);
             if (fc->indirect_only)
                 return v3_mul(beta, indirect);
-            L = v3_add(L, v3_mul(beta, v3_add(indirect, final_direct(c, &s, &b, wo, rng, rays))));
+            /* Several light samples per shading point: with indirect light from the cache, the direct
+             * light's noise is what is left, and shadow rays are the cheapest rays there are. */
+            ic_vec3 direct = v3s(0.0f);
+            for (int k = 0; k < c->o.light_samples; ++k)
+                direct = v3_add(direct, ic_ic_direct_light(c, &s, &b, wo, rng, rays));
+            direct = v3_scale(direct, 1.0f / (float)c->o.light_samples);
+            L = v3_add(L, v3_mul(beta, v3_add(indirect, direct)));
             if (!ic_bsdf_has_glossy(&b) ||
                 !ic_bsdf_sample_glossy(&b, wo, ic_rng_float(rng), ic_rng_float(rng), &bs))
                 break;
@@ -767,8 +773,46 @@ static void put(ic_image *img, int x, int y, ic_vec3 c)
     px[2] = c.z;
 }
 
-/* Records seen from the camera (the G-buffer point at their pixel is near them) are drawn as a dot
- * with a circle of their influence radius a_i·R_i, over a darkened copy of the image. */
+/* Where a record appears in the image, and whether the camera sees its surface directly (the G-buffer
+ * point at its pixel is next to it). */
+static ic_record_view view_of(const ic_ctx *c, const ic_record *rec)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    ic_record_view v;
+    memset(&v, 0, sizeof v);
+    v.position = rec->position;
+    v.radius = rec->radius;
+    v.accuracy = rec->accuracy;
+    float z;
+    if (!project(cam, rec->position, &v.px, &v.py, &z))
+        return v;
+    v.radius_px = rec->accuracy * rec->radius / (z * c->pixel_angle);
+    int px = (int)v.px, py = (int)v.py;
+    if (px < 0 || py < 0 || px >= cam->width || py >= cam->height)
+        return v;
+    size_t gi = (size_t)py * cam->width + px;
+    v.visible = c->g.valid[gi] &&
+                v3_len(v3_sub(c->g.p[gi], rec->position)) <= 4.0f * c->g.footprint[gi] + 1e-4f * c->scene_diag;
+    return v;
+}
+
+static ic_result record_views(const ic_ctx *c, ic_record_view **out, uint32_t *count)
+{
+    uint32_t n = ic_cache_count(c->cache);
+    *out = malloc(sizeof **out * (n ? n : 1));
+    *count = 0;
+    if (!*out)
+        return IC_ERR_OOM;
+    for (uint32_t i = 0; i < n; ++i) {
+        ic_record rec;
+        if (ic_cache_get_record(c->cache, i, &rec) == IC_OK)
+            (*out)[(*count)++] = view_of(c, &rec);
+    }
+    return IC_OK;
+}
+
+/* Records the camera sees are drawn as a dot with a circle of their influence radius a_i·R_i, over a
+ * darkened copy of the image. */
 static ic_result draw_records(const ic_ctx *c, const ic_image *beauty, ic_image *out)
 {
     ic_result r = ic_image_create(out, beauty->width, beauty->height);
@@ -777,31 +821,23 @@ static ic_result draw_records(const ic_ctx *c, const ic_image *beauty, ic_image 
     size_t n = (size_t)beauty->width * beauty->height * 3;
     for (size_t i = 0; i < n; ++i)
         out->rgb[i] = 0.5f * beauty->rgb[i];
-    const ic_camera *cam = &c->tr->scene->camera;
     uint32_t count = ic_cache_count(c->cache);
     for (uint32_t i = 0; i < count; ++i) {
         ic_record rec;
         if (ic_cache_get_record(c->cache, i, &rec) != IC_OK)
             continue;
-        float fx, fy, z;
-        if (!project(cam, rec.position, &fx, &fy, &z))
+        ic_record_view v = view_of(c, &rec);
+        if (!v.visible)
             continue;
-        int px = (int)fx, py = (int)fy;
-        if (px < 0 || py < 0 || px >= cam->width || py >= cam->height)
-            continue;
-        size_t gi = (size_t)py * cam->width + px;
-        if (!c->g.valid[gi] || v3_len(v3_sub(c->g.p[gi], rec.position)) > 4.0f * c->g.footprint[gi] + 1e-4f * c->scene_diag)
-            continue; /* hidden or seen only indirectly */
-        float rad_px = rec.accuracy * rec.radius / (z * c->pixel_angle);
         ic_vec3 ring = v3(0.1f, 1.0f, 0.2f), dot = v3(1.0f, 0.15f, 0.1f);
-        int steps = (int)(6.3f * rad_px) + 8;
-        for (int k = 0; k < steps && rad_px >= 1.0f; ++k) {
+        int steps = (int)(6.3f * v.radius_px) + 8;
+        for (int k = 0; k < steps && v.radius_px >= 1.0f; ++k) {
             float a = 2.0f * IC_PI * (float)k / (float)steps;
-            put(out, (int)(fx + rad_px * cosf(a)), (int)(fy + rad_px * sinf(a)), ring);
+            put(out, (int)(v.px + v.radius_px * cosf(a)), (int)(v.py + v.radius_px * sinf(a)), ring);
         }
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx)
-                put(out, px + dx, py + dy, dot);
+                put(out, (int)v.px + dx, (int)v.py + dy, dot);
     }
     return IC_OK;
 }
@@ -834,8 +870,12 @@ static ic_result density_image(ic_ctx *c, ic_image *out)
 static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *scene)
 {
     ic_ic_options o = *in;
+    /* Records gather as many bounces as the path tracer follows (max_depth scattering events in all,
+     * the record's own point being the first): truncating earlier darkens the image measurably. */
     if (o.bounces <= 0)
-        o.bounces = 3;
+        o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
+    if (o.light_samples <= 0)
+        o.light_samples = 4;
     if (o.max_passes <= 0)
         o.max_passes = 12;
     if (o.min_candidates <= 0)
@@ -866,9 +906,10 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
     c->scene_diag = diag > 0.0f ? diag : 1.0f;
 }
 
-ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_image *out, ic_render_stats *st,
-                       ic_error *err)
+ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, double *gbuffer_seconds,
+                           ic_error *err)
 {
+    *out = NULL;
     ic_ctx *c = calloc(1, sizeof *c);
     if (!c)
         return ic_error_set(err, IC_ERR_OOM, "out of memory");
@@ -882,16 +923,41 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     c->gather_tr.pt.max_depth = c->o.bounces + 1;
     c->o.gather.seed ^= opt->seed;
     c->o.cache.threads = opt->threads;
-    phase_times pt = {0, 0};
     ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);
-    if (r != IC_OK)
-        goto done;
     double t0 = ic_seconds();
-    r = build_gbuffer(c, err);
+    if (r == IC_OK)
+        r = build_gbuffer(c, err);
+    if (gbuffer_seconds)
+        *gbuffer_seconds = ic_seconds() - t0;
+    if (r != IC_OK) {
+        ic_ic_ctx_destroy(c);
+        return r;
+    }
+    *out = c;
+    return IC_OK;
+}
+
+void ic_ic_ctx_destroy(ic_ctx *c)
+{
+    if (!c)
+        return;
+    ic_cache_destroy(c->cache);
+    free_gbuffer(c);
+    free(c);
+}
+
+ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_image *out, ic_render_stats *st,
+                       ic_error *err)
+{
+    ic_ctx *c = NULL;
+    double t_gbuffer = 0.0;
+    phase_times pt = {0, 0};
+    ic_result r = ic_ic_ctx_create(tr, opt, &c, &t_gbuffer, err);
     if (r != IC_OK)
-        goto done;
-    double t_gbuffer = ic_seconds() - t0;
-    r = c->o.strategy == IC_STRATEGY_LAZY ? build_lazy(c, opt, st, &pt, err) : build_batch(c, opt, st, &pt, err);
+        return r;
+    r = c->o.strategy == IC_STRATEGY_LAZY       ? build_lazy(c, opt, st, &pt, err)
+        : c->o.strategy == IC_STRATEGY_ADAPTIVE ? ic_ic_build_adaptive(c, opt, st, &pt, err)
+                                                : build_batch(c, opt, st, &pt, err);
     if (r != IC_OK)
         goto done;
     st->records = ic_cache_count(c->cache);
@@ -940,14 +1006,20 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
             ic_error_set(err, r, "out of memory for the records AOV");
             goto done;
         }
+        if (a->want_record_list && (r = record_views(c, &a->record_views, &a->record_view_count)) != IC_OK) {
+            ic_error_set(err, r, "out of memory for the record list");
+            goto done;
+        }
         if (a->want_density && (r = density_image(c, &a->density)) != IC_OK) {
             ic_error_set(err, r, "out of memory for the density AOV");
             goto done;
         }
+        if (a->want_amap && (r = ic_ic_amap_image(c, &a->amap)) != IC_OK) {
+            ic_error_set(err, r, "out of memory for the amap AOV");
+            goto done;
+        }
     }
 done:
-    ic_cache_destroy(c->cache);
-    free_gbuffer(c);
-    free(c);
+    ic_ic_ctx_destroy(c);
     return r;
 }

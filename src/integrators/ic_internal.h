@@ -1,0 +1,90 @@
+/*
+ * ic_internal.h — what the construction strategies of the irradiance-cache integrator share
+ * (ic.c: lazy, batch and the final render; further strategies in files of their own).
+ */
+#ifndef IC_INTEGRATORS_IC_INTERNAL_H
+#define IC_INTEGRATORS_IC_INTERNAL_H
+
+#include "integrators/ic.h"
+#include "integrators/ic_screen.h"
+#include "integrators/ic_world.h"
+
+#include <stdatomic.h>
+
+#define MAX_SPECULAR_CHAIN 8
+#define WORLD_SLOTS 4 /* look-up points kept per world-stage eye path */
+
+typedef struct ic_ctx {
+    const ic_tracer *tr;       /* scene, accel, path-tracing parameters of the final render */
+    ic_tracer gather_tr;       /* same scene; max_depth set for record radiance (bounces) */
+    ic_ic_options o;           /* resolved options */
+    ic_cache *cache;
+    uint64_t seed;
+    int threads;
+    float pixel_angle;
+    float scene_diag;
+    atomic_ullong rays;        /* gathering rays (added once per trace call) */
+    ic_gbuffer g;
+    uint8_t *has_record;       /* per pixel: a screen-space record was made here */
+} ic_ctx;
+
+typedef struct phase_times {
+    double gather, insert;
+} phase_times;
+
+/* Trace callback of hemisphere gathering (ic_trace_fn; user = ic_ctx): see ic.h for what it returns. */
+void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
+                        ic_vec3 *radiance);
+/* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
+void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
+/* Gather point (offset origin, normal, key) of a candidate. */
+ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);
+/* Gathers count candidates in parallel and inserts them as one batch. */
+ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err);
+/* Candidate at a pixel's shading point; tag distinguishes keys of different stages. */
+ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
+/* Looks up every valid pixel: luminance of the estimate and whether any record contributes. */
+ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc);
+/* Progress report, if the caller asked for it. */
+void ic_ic_report(const ic_render_options *opt, const char *phase, double fraction);
+/* Direct light of the final render at s (NEE; the environment is cached, not sampled here). */
+ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                           uint64_t *rays);
+
+/* Sets up a context for tr and opt: resolved options, an empty cache, the shading-point buffers (used by
+ * ic_render_ic and by tests that run construction alone). gbuffer_seconds may be NULL. */
+ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, double *gbuffer_seconds,
+                           ic_error *err);
+/* Frees a context, its cache (unless the caller took it and set c->cache = NULL) and buffers; NULL is a no-op. */
+void ic_ic_ctx_destroy(ic_ctx *c);
+
+/* ---- adaptive caching (ic_adaptive.c; seed 000 §4) */
+
+/* Builds the cache with Algorithm 1 of seed 000 over the G-buffer shading points (strategy adaptive). */
+ic_result ic_ic_build_adaptive(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                               ic_error *err);
+/* The amap AOV: a_i of the heaviest contributing record per pixel centre on a colour ramp (log scale
+ * from --accuracy, blue, down to accuracy / IC_AMAP_RANGE, red). */
+ic_result ic_ic_amap_image(const ic_ctx *c, ic_image *out);
+#define IC_AMAP_RANGE 32.0f
+
+/* What a test needs to check convergence independently: the converged cache and the shading points
+ * with the inputs of the discernibility test. */
+typedef struct ic_adaptive_probe {
+    ic_cache *cache;           /* owned by the probe */
+    uint32_t point_count;
+    ic_vec3 *position, *normal;
+    ic_vec3 *albedo;           /* ρ/π per channel */
+    float *direct;             /* Y of the stored direct light */
+    float weber, accuracy;     /* resolved options */
+    int passes, converged;
+    uint64_t refinements;
+    uint32_t unresolved;       /* refinements that found no positive a_i (coincident records) */
+} ic_adaptive_probe;
+/* Runs shading-point setup and adaptive construction only (no final render) on scene with opt. */
+ic_result ic_ic_adaptive_probe_run(const ic_scene *scene, const ic_render_options *opt, ic_adaptive_probe *out,
+                                   ic_error *err);
+/* Frees what a probe holds; a zeroed probe is a no-op. */
+void ic_ic_adaptive_probe_free(ic_adaptive_probe *p);
+
+#endif

@@ -1,0 +1,193 @@
+#!/usr/bin/env python3
+"""Unit tests of bench/report (no rendering): the PNG decoder against every row filter, crops, the
+equal-quality interpolation and extrapolation against an exact 1/spp curve, the BENCHMARKS.md marker
+rewrite (text outside the markers untouched), the SVG plots, and the consistency checks catching a bad run.
+Run: python3 tests/bench/test_bench_tools.py (CTest: bench_tools)."""
+
+import os
+import struct
+import sys
+import tempfile
+import unittest
+import zlib
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+
+from report import analysis, check, plot, pngio  # noqa: E402
+
+
+def encode_with_filters(width, height, channels, pixels, filters):
+    """A PNG whose row y uses filter filters[y % len(filters)] (the decoder must undo all five)."""
+    stride = width * channels
+    prev = bytearray(stride)
+    raw = bytearray()
+    for y in range(height):
+        line = pixels[y * stride:(y + 1) * stride]
+        ft = filters[y % len(filters)]
+        out = bytearray(stride)
+        for i in range(stride):
+            left = line[i - channels] if i >= channels else 0
+            up = prev[i]
+            ul = prev[i - channels] if i >= channels else 0
+            pred = [0, left, up, (left + up) >> 1, pngio._paeth(left, up, ul)][ft]
+            out[i] = (line[i] - pred) & 255
+        raw += bytes([ft]) + out
+        prev = bytearray(line)
+
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+    ctype = {1: 0, 3: 2, 4: 6}[channels]
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, ctype, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(bytes(raw))) + chunk(b"IEND", b""))
+
+
+class PngTest(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="ic-bench-test-")
+
+    def test_every_filter_decodes(self):
+        w, h, c = 13, 10, 3
+        pixels = bytes((x * 37 + y * 11 + k * 101 + (x * y) % 7) & 255 for y in range(h) for x in range(w)
+                       for k in range(c))
+        path = os.path.join(self.tmp, "f.png")
+        with open(path, "wb") as f:
+            f.write(encode_with_filters(w, h, c, pixels, [0, 1, 2, 3, 4]))
+        img = pngio.read_png(path)
+        self.assertEqual((img.width, img.height, img.channels), (w, h, c))
+        self.assertEqual(img.pixels, pixels)
+
+    def test_write_read_round_trip_and_crop(self):
+        w, h = 20, 10
+        pixels = bytes((x + 3 * y + k) & 255 for y in range(h) for x in range(w) for k in range(4))
+        path = os.path.join(self.tmp, "rgba.png")
+        pngio.write_png(path, pngio.Image(w, h, 4, pixels))
+        img = pngio.read_png(path)
+        self.assertEqual(img.pixels, pixels)
+        c = pngio.crop_fraction(img, (0.5, 0.5, 1.0, 1.0))
+        self.assertEqual((c.width, c.height), (10, 5))
+        self.assertEqual(c.pixels[:4], pixels[(5 * w + 10) * 4:(5 * w + 10) * 4 + 4])
+
+    def test_blank_image_has_no_variance(self):
+        mean, var, distinct = pngio.luma_stats(pngio.Image(4, 4, 3, bytes([200, 200, 200]) * 16))
+        self.assertEqual((round(mean), var, distinct), (200, 0.0, 1))
+
+    def test_not_a_png(self):
+        path = os.path.join(self.tmp, "x.png")
+        with open(path, "wb") as f:
+            f.write(b"GIF89a")
+        with self.assertRaises(pngio.PngError):
+            pngio.read_png(path)
+
+
+def exact_curve(c=0.2, fixed=0.1, per_spp=0.01, spps=(1, 2, 4, 8, 16)):
+    return [{"spp": s, "seconds": fixed + per_spp * s, "render_seconds": per_spp * s, "relmse": c / s} for s in spps]
+
+
+class EqualQualityTest(unittest.TestCase):
+    def test_measured_point_is_hit(self):
+        r = analysis.equal_quality_time(exact_curve(), 0.2 / 4)
+        self.assertEqual(r["method"], "interpolated")
+        self.assertAlmostEqual(r["seconds"], 0.14, places=9)
+        self.assertAlmostEqual(r["spp"], 4, places=9)
+
+    def test_interpolation_is_between_neighbours(self):
+        r = analysis.equal_quality_time(exact_curve(), 0.2 / 6)
+        self.assertEqual(r["method"], "interpolated")
+        self.assertTrue(0.14 < r["seconds"] < 0.18)
+        self.assertAlmostEqual(r["spp"], 6, places=9)  # exact: the curve is a straight line in log-log
+
+    def test_extrapolation_follows_one_over_spp(self):
+        r = analysis.equal_quality_time(exact_curve(), 0.2 / 64)
+        self.assertEqual(r["method"], "extrapolated")
+        self.assertAlmostEqual(r["spp"], 64, places=9)
+        self.assertAlmostEqual(r["seconds"], 0.1 + 0.01 * 64, places=9)
+
+    def test_worse_than_one_sample(self):
+        r = analysis.equal_quality_time(exact_curve(), 0.4)
+        self.assertEqual(r["method"], "extrapolated (<1 spp)")
+        self.assertAlmostEqual(r["spp"], 0.5, places=9)
+        self.assertAlmostEqual(r["seconds"], 0.105, places=9)
+
+    def test_reference_floor_is_flagged(self):
+        self.assertTrue(analysis.equal_quality_time(exact_curve(), 0.0003, spp_ref=1024)["below_reference_floor"])
+        self.assertFalse(analysis.equal_quality_time(exact_curve(), 0.01, spp_ref=1024)["below_reference_floor"])
+
+    def test_unusable_input(self):
+        self.assertIsNone(analysis.equal_quality_time([], 0.1))
+        self.assertIsNone(analysis.equal_quality_time(exact_curve(), float("nan")))
+        self.assertIsNone(analysis.equal_quality_time(exact_curve(), 0))
+
+
+class MarkerTest(unittest.TestCase):
+    def test_replaces_only_between_markers(self):
+        text = "# Benchmarks\n\nintro by someone else\n\n<!-- bench:begin -->\nold\n<!-- bench:end -->\n\n## Other\nkeep\n"
+        new = analysis.replace_marked_section(text, "new table\n")
+        self.assertEqual(new, text.replace("old", "new table"))
+        self.assertEqual(analysis.replace_marked_section(new, "new table\n"), new)
+
+    def test_appends_when_absent(self):
+        new = analysis.replace_marked_section("# Benchmarks\n\nother text", "body")
+        self.assertTrue(new.startswith("# Benchmarks\n\nother text\n\n<!-- bench:begin -->\nbody\n<!-- bench:end -->"))
+        self.assertTrue(analysis.replace_marked_section("", "b").startswith("# Benchmarks\n"))
+
+    def test_lone_marker_is_an_error(self):
+        with self.assertRaises(ValueError):
+            analysis.replace_marked_section("<!-- bench:begin -->\nx\n", "body")
+
+    def test_file_update(self):
+        path = os.path.join(tempfile.mkdtemp(prefix="ic-bench-test-"), "BENCHMARKS.md")
+        with open(path, "w") as f:
+            f.write("# B\n\nmine\n")
+        analysis.update_marked_file(path, "table")
+        analysis.update_marked_file(path, "table 2")
+        with open(path) as f:
+            self.assertEqual(f.read(), "# B\n\nmine\n\n<!-- bench:begin -->\ntable 2\n<!-- bench:end -->\n")
+
+
+class PlotTest(unittest.TestCase):
+    def test_series_are_drawn(self):
+        svg = plot.loglog_svg([{"label": "pt", "points": [(0.1, 1), (1, 0.1)]},
+                               {"label": "ic", "points": [(0.5, 0.05), (float("nan"), 1), (0, 2)]}], "s", "e", "t")
+        self.assertEqual(svg.count('class="series"'), 2)
+        self.assertIn("<svg", svg)
+
+    def test_no_data(self):
+        self.assertIn("no data", plot.loglog_svg([{"label": "x", "points": []}], "s", "e", "t"))
+
+
+def fake_results(out_dir, pt_errors=(0.2, 0.1, 0.05), records=10):
+    png = os.path.join(out_dir, "x.png")
+    pngio.write_png(png, pngio.Image(2, 2, 3, bytes(12)))
+    with open(os.path.join(out_dir, "report.html"), "w") as f:
+        f.write('<svg class="plot"></svg><img src="x.png">')
+    m = lambda e: {"rmse": e, "relmse": e, "psnr_hdr": 30.0, "psnr_ldr": 30.0, "ssim": 0.9, "nonfinite": 0}  # noqa
+    curve = [{"label": "%d spp" % (1 << i), "spp": 1 << i, "metrics": m(e)} for i, e in enumerate(pt_errors)]
+    cache = [{"tag": "lazy-default", "records": records, "seconds": 1.0, "metrics": m(0.04),
+              "equal_quality": {"speedup": 1.5, "method": "extrapolated"},
+              "equal_time": {"pt": {"metrics": m(0.05)}, "relmse_ratio": 1.25}}]
+    return {"scenes": [{"name": "s", "reference": {"self_diff": {"rmse": 0, "relmse": 0}}, "pt_curve": curve,
+                        "cache": cache}]}
+
+
+class CheckTest(unittest.TestCase):
+    def setUp(self):
+        self.out = tempfile.mkdtemp(prefix="ic-bench-test-")
+
+    def test_consistent_run_passes(self):
+        self.assertEqual(check.check_results(fake_results(self.out), self.out), [])
+
+    def test_rising_pt_error_and_missing_records_fail(self):
+        problems = check.check_results(fake_results(self.out, pt_errors=(0.2, 0.3, 0.05), records=0), self.out)
+        self.assertTrue(any("does not fall" in p for p in problems), problems)
+        self.assertTrue(any("records" in p for p in problems), problems)
+
+    def test_broken_link_fails(self):
+        r = fake_results(self.out)
+        with open(os.path.join(self.out, "report.html"), "a") as f:
+            f.write('<img src="missing.png">')
+        self.assertTrue(any("missing.png" in p for p in check.check_results(r, self.out)))
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=1)
