@@ -39,7 +39,7 @@ if [ ! -f "$OUT/ref.indirect.exr" ]; then
 fi
 echo "# reference: $(field "$OUT/ref.json" records) records (one per pixel centre)"
 printf 'strategy\ta\textra\trecords\tpasses\trefinements\tgather_s\tinsert_s\tconvergence_s\trmse\trelmse\n'
-for a in 0.1 0.15 0.25 0.4 0.6; do
+for a in 0.1 0.15 0.25 0.4 0.6 1.0 1.5; do
     run "lazy-$a" lazy "$a"
     run "batch-$a" batch "$a"
 done

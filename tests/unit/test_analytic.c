@@ -9,21 +9,10 @@
  */
 #include "test_util.h"
 
-#include "irrcache/render.h"
+#include "test_render_util.h"
 
 #include <stdio.h>
 #include <string.h>
-
-static void write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) {
-        fprintf(stderr, "cannot write %s\n", path);
-        exit(1);
-    }
-    fputs(text, f);
-    fclose(f);
-}
 
 /* UV sphere of radius r, triangles wound so their front (emitting) side faces the centre. */
 static void write_inward_sphere(const char *path, const char *mtl_name, float r, int nu, int nv)
@@ -52,40 +41,11 @@ static void write_inward_sphere(const char *path, const char *mtl_name, float r,
     fclose(f);
 }
 
-static double image_mean(const ic_image *img, int *finite)
-{
-    double s = 0.0;
-    *finite = 1;
-    size_t n = (size_t)img->width * img->height * 3;
-    for (size_t i = 0; i < n; ++i) {
-        if (!isfinite(img->rgb[i]))
-            *finite = 0;
-        s += img->rgb[i];
-    }
-    return s / (double)n;
-}
-
-static int render_file(const char *scene_path, const ic_render_options *opt, ic_image *img)
-{
-    ic_error err = {0};
-    ic_scene *scene = NULL;
-    if (ic_scene_load(scene_path, NULL, &scene, &err) != IC_OK) {
-        fprintf(stderr, "load %s: %s\n", scene_path, err.message);
-        return 0;
-    }
-    ic_render_stats st;
-    ic_result r = ic_render(scene, opt, img, &st, &err);
-    if (r != IC_OK)
-        fprintf(stderr, "render %s: %s\n", scene_path, err.message);
-    ic_scene_free(scene);
-    return r == IC_OK;
-}
-
 static void test_furnace(void)
 {
-    write_file(IC_TEST_TMP "/furnace.mtl", "newmtl glow\nKd 0.5 0.5 0.5\nKe 0.5 0.5 0.5\n");
+    test_write_file(IC_TEST_TMP "/furnace.mtl", "newmtl glow\nKd 0.5 0.5 0.5\nKe 0.5 0.5 0.5\n");
     write_inward_sphere(IC_TEST_TMP "/furnace.obj", "glow", 1.0f, 48, 24);
-    write_file(IC_TEST_TMP "/furnace.json",
+    test_write_file(IC_TEST_TMP "/furnace.json",
                "{\n"
                "  \"camera\": {\"eye\": [0.1, 0.05, 0.02], \"target\": [1, 0.2, 0.3], \"up\": [0, 1, 0],\n"
                "             \"fov_y\": 90, \"width\": 24, \"height\": 24},\n"
@@ -95,11 +55,11 @@ static void test_furnace(void)
     opt.spp = 64;
     opt.max_depth = 64;
     ic_image img = {0};
-    CHECK(render_file(IC_TEST_TMP "/furnace.json", &opt, &img), "furnace renders");
+    CHECK(test_render(IC_TEST_TMP "/furnace.json", 0, 0, &opt, &img, NULL), "furnace renders");
     if (!img.rgb)
         return;
     int finite;
-    double mean = image_mean(&img, &finite);
+    double mean = test_image_mean(&img, &finite);
     CHECK(finite, "furnace: all pixels finite");
     /* Truncation at depth 64 costs 0.5^65: negligible. Noise: 36864 samples, σ per sample < 1. */
     CHECK_NEAR(mean, 1.0, 0.02, "furnace mean radiance (expected Le/(1-rho) = 1)");
@@ -108,12 +68,12 @@ static void test_furnace(void)
 
 static void test_open_plane(void)
 {
-    write_file(IC_TEST_TMP "/plane.mtl", "newmtl ground\nKd 0.5 0.5 0.5\n");
-    write_file(IC_TEST_TMP "/plane.obj",
+    test_write_file(IC_TEST_TMP "/plane.mtl", "newmtl ground\nKd 0.5 0.5 0.5\n");
+    test_write_file(IC_TEST_TMP "/plane.obj",
                "mtllib plane.mtl\nusemtl ground\n"
                "v -1000 0 -1000\nv 1000 0 -1000\nv 1000 0 1000\nv -1000 0 1000\n"
                "f 1 3 2\nf 1 4 3\n");
-    write_file(IC_TEST_TMP "/plane.json",
+    test_write_file(IC_TEST_TMP "/plane.json",
                "{\n"
                "  \"camera\": {\"eye\": [0, 1, 0], \"target\": [0, 0, 0.001], \"up\": [0, 0, -1],\n"
                "             \"fov_y\": 60, \"width\": 24, \"height\": 24},\n"
@@ -123,11 +83,11 @@ static void test_open_plane(void)
     ic_render_options opt = {0};
     opt.spp = 64;
     ic_image img = {0};
-    CHECK(render_file(IC_TEST_TMP "/plane.json", &opt, &img), "open plane renders");
+    CHECK(test_render(IC_TEST_TMP "/plane.json", 0, 0, &opt, &img, NULL), "open plane renders");
     if (!img.rgb)
         return;
     int finite;
-    double mean = image_mean(&img, &finite);
+    double mean = test_image_mean(&img, &finite);
     CHECK(finite, "open plane: all pixels finite");
     /* E = pi * L_sky = 2 pi; radiance = rho/pi * E = 0.5 * 2 = 1. */
     CHECK_NEAR(mean, 1.0, 0.02, "open plane radiance (expected rho * L_sky = 1)");
@@ -155,7 +115,7 @@ static void test_thread_independence(void)
     CHECK(a.rgb && b.rgb && memcmp(a.rgb, b.rgb, sizeof(float) * 3 * 64 * 64) == 0,
           "1 and 2 threads give bit-identical images");
     int finite;
-    double mean = a.rgb ? image_mean(&a, &finite) : 0.0;
+    double mean = a.rgb ? test_image_mean(&a, &finite) : 0.0;
     CHECK(mean > 0.05, "the Cornell box is lit (mean %g)", mean);
     ic_image_free(&a);
     ic_image_free(&b);

@@ -1,0 +1,249 @@
+/*
+ * test_ic.c — rendering with the irradiance cache (integrator IC) against the path-traced reference:
+ *   1. the Cornell box: IC (batch, with and without gradients; lazy) within stated relMSE and LDR PSNR
+ *      bounds of a path-traced reference, and every shading point covered after construction;
+ *   2. batch and lazy: 1 and 2 threads give bit-identical images;
+ *   3. a scene built to leak (a wall with a small gap above the floor, a bright light on the far side):
+ *      without neighbor clamping (seed 000 §5.2–5.3) records next to the gap extrapolate wrong light
+ *      over the dark floor; with it the error near the gap falls;
+ *   4. a thin step lit from the side: with neighbor clamping the step's indirect light is captured
+ *      (the error next to the step falls).
+ * The reference images are rendered here with the path tracer at high sample counts.
+ */
+#include "test_util.h"
+
+#include "test_render_util.h"
+
+#include "irrcache/image.h"
+
+#include <string.h>
+
+#define CORNELL IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
+
+static ic_render_options ic_options(void)
+{
+    ic_render_options o = {0};
+    o.integrator = IC_INTEGRATOR_IC;
+    o.spp = 16;
+    return o;
+}
+
+static void compare(const ic_image *img, const ic_image *ref, ic_image_metrics *m)
+{
+    ic_error err;
+    memset(m, 0, sizeof *m);
+    if (ic_image_compare(img, ref, m, &err) != IC_OK)
+        fprintf(stderr, "compare: %s\n", err.message);
+}
+
+static void test_cornell(void)
+{
+    const int W = 64, H = 64;
+    ic_render_options pt = {0};
+    pt.spp = 1024;
+    ic_image ref = {0}, ptlow = {0};
+    CHECK(test_render(CORNELL, W, H, &pt, &ref, NULL), "reference renders");
+    pt.spp = 16;
+    CHECK(test_render(CORNELL, W, H, &pt, &ptlow, NULL), "16-spp path tracing renders");
+    ic_image_metrics mpt;
+    compare(&ptlow, &ref, &mpt);
+    printf("cornell %dx%d: PT 16 spp relMSE %.5f PSNR-LDR %.2f\n", W, H, mpt.relmse, mpt.psnr_ldr);
+
+    struct {
+        const char *name;
+        int strategy, no_gradients;
+        double max_relmse, min_psnr_ldr;
+    } cases[] = {
+        {"batch", IC_STRATEGY_BATCH, 0, 0.012, 33.0},
+        {"batch, no gradients", IC_STRATEGY_BATCH, 1, 0.012, 33.0},
+        {"lazy", IC_STRATEGY_LAZY, 0, 0.012, 33.0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        ic_render_options o = ic_options();
+        o.ic.strategy = cases[k].strategy;
+        o.ic.no_gradients = cases[k].no_gradients;
+        ic_render_aovs aovs = {0};
+        aovs.want_density = 1;
+        o.aovs = &aovs;
+        ic_image img = {0};
+        ic_render_stats st;
+        if (!test_render(CORNELL, W, H, &o, &img, &st)) {
+            CHECK(0, "%s renders", cases[k].name);
+            continue;
+        }
+        ic_image_metrics m;
+        compare(&img, &ref, &m);
+        printf("cornell %dx%d: IC %-20s records %5u passes %2d relMSE %.5f PSNR-LDR %.2f\n", W, H, cases[k].name,
+               st.records, st.passes, m.relmse, m.psnr_ldr);
+        CHECK(m.relmse < cases[k].max_relmse, "%s: relMSE %.5f < %.4f", cases[k].name, m.relmse, cases[k].max_relmse);
+        CHECK(m.psnr_ldr > cases[k].min_psnr_ldr, "%s: PSNR LDR %.2f > %.1f", cases[k].name, m.psnr_ldr,
+              cases[k].min_psnr_ldr);
+        /* IC at 16 spp is closer to the reference than the path tracer at 16 spp. */
+        CHECK(m.relmse < mpt.relmse, "%s beats PT at equal spp (%.5f vs %.5f)", cases[k].name, m.relmse, mpt.relmse);
+        CHECK(st.records > 10 && st.records < (uint32_t)(W * H / 2), "%s: %u records", cases[k].name, st.records);
+        /* Coverage: every pixel whose centre sees a surface has a contributing record. A pixel surely
+         * sees one when it and its 8 neighbours are lit in the reference (the pixel filter spreads light
+         * one pixel beyond silhouettes). */
+        int uncovered = 0;
+        for (int y = 1; y < H - 1 && aovs.density.rgb; ++y) {
+            for (int x = 1; x < W - 1; ++x) {
+                int lit = 1;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const float *r = &ref.rgb[3 * ((y + dy) * W + x + dx)];
+                        lit &= r[0] + r[1] + r[2] > 0.0f;
+                    }
+                if (lit && aovs.density.rgb[3 * (y * W + x)] < 1.0f)
+                    ++uncovered;
+            }
+        }
+        CHECK(aovs.density.rgb && uncovered == 0, "%s: %d shading points without a record", cases[k].name, uncovered);
+        ic_image_free(&aovs.density);
+        ic_image_free(&img);
+    }
+    ic_image_free(&ref);
+    ic_image_free(&ptlow);
+}
+
+static void test_threads(void)
+{
+    for (int strategy = IC_STRATEGY_BATCH; strategy <= IC_STRATEGY_LAZY; ++strategy) {
+        ic_image a = {0}, b = {0};
+        ic_render_options o = ic_options();
+        o.spp = 2;
+        o.ic.strategy = (ic_strategy)strategy;
+        o.threads = 1;
+        int ok = test_render(CORNELL, 48, 48, &o, &a, NULL);
+        o.threads = 2;
+        ok &= test_render(CORNELL, 48, 48, &o, &b, NULL);
+        CHECK(ok && memcmp(a.rgb, b.rgb, sizeof(float) * 3 * 48 * 48) == 0,
+              "strategy %d: 1 and 2 threads give identical images", strategy);
+        ic_image_free(&a);
+        ic_image_free(&b);
+    }
+}
+
+static double lum_at(const ic_image *img, int x, int y)
+{
+    const float *p = &img->rgb[3 * ((size_t)y * img->width + x)];
+    return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+}
+
+/* Mean luminance over rows [y0, y1). */
+static double rows_mean(const ic_image *img, int y0, int y1)
+{
+    double s = 0.0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < img->width; ++x)
+            s += lum_at(img, x, y);
+    return s / ((double)(y1 - y0) * img->width);
+}
+
+/* Mean absolute luminance error over rows [y0, y1). */
+static double rows_error(const ic_image *img, const ic_image *ref, int y0, int y1)
+{
+    double s = 0.0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < img->width; ++x)
+            s += fabs(lum_at(img, x, y) - lum_at(ref, x, y));
+    return s / ((double)(y1 - y0) * img->width);
+}
+
+/* Renders scene with the path tracer (reference) and with IC (lazy: Ward's serial order, where a
+ * record's radius comes from its own rays alone) with and without neighbor clamping. */
+static int clamp_pair(const char *scene, int W, int H, ic_image *ref, ic_image *on, ic_image *off)
+{
+    ic_render_options pt = {0};
+    pt.spp = 256;
+    int ok = test_render(scene, W, H, &pt, ref, NULL);
+    ic_render_options o = ic_options();
+    o.ic.strategy = IC_STRATEGY_LAZY;
+    ok &= test_render(scene, W, H, &o, on, NULL);
+    o.ic.cache.neighbor_clamp = IC_CACHE_OFF;
+    ok &= test_render(scene, W, H, &o, off, NULL);
+    CHECK(ok, "%s renders", scene);
+    return ok;
+}
+
+static void test_leak(void)
+{
+    /* Seed 000 §5.3, fig. 5: a wall polygon that stops 0.02 above the floor polygon, a bright lamp on
+     * the far side lighting the floor there, the camera on the dark side looking at the wall's foot.
+     * Records next to the gap whose rays pass under the wall get large R-values and extrapolate the
+     * gap's light over the dark floor; neighbor clamping bounds them by their neighbours' R. */
+    test_write_file(IC_TEST_TMP "/leak.mtl", "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl lamp\nKd 0 0 0\nKe 40 40 40\n");
+    test_write_file(IC_TEST_TMP "/leak.obj",
+                    "mtllib leak.mtl\nusemtl grey\n"
+                    "v -4 0 -3\nv 4 0 -3\nv 4 0 3\nv -4 0 3\nf 1 3 2\nf 1 4 3\n"
+                    "v 0 0.02 -3\nv 0 1.5 -3\nv 0 1.5 3\nv 0 0.02 3\nf 5 6 7\nf 5 7 8\n"
+                    "usemtl lamp\n"
+                    "v 2 1.4 -0.5\nv 3 1.4 -0.5\nv 3 1.4 0.5\nv 2 1.4 0.5\nf 9 10 11\nf 9 11 12\n");
+    test_write_file(IC_TEST_TMP "/leak.json",
+                    "{\n  \"camera\": {\"eye\": [-1.2, 1.2, 0], \"target\": [0, 0, 0], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 50, \"width\": 96, \"height\": 96},\n"
+                    "  \"meshes\": [{\"path\": \"leak.obj\"}]\n}\n");
+    ic_image ref = {0}, on = {0}, off = {0};
+    if (clamp_pair(IC_TEST_TMP "/leak.json", 96, 96, &ref, &on, &off)) {
+        /* The gap shows as the brightest row; the region is the dark side's 12 rows next to it. */
+        int gap = 0;
+        for (int y = 1; y < ref.height; ++y)
+            if (rows_mean(&ref, y, y + 1) > rows_mean(&ref, gap, gap + 1))
+                gap = y;
+        int y0 = gap - 14, y1 = gap - 2;
+        double r = rows_mean(&ref, y0, y1);
+        double bias_on = rows_mean(&on, y0, y1) - r, bias_off = rows_mean(&off, y0, y1) - r;
+        printf("leak: gap at row %d, reference %.5f, IC bias with neighbor clamping %+.5f, without %+.5f\n", gap, r,
+               bias_on, bias_off);
+        CHECK(fabs(bias_off) > 0.1 * r, "without neighbor clamping the light near the gap is wrong (%+.5f of %.5f)",
+              bias_off, r);
+        CHECK(fabs(bias_on) < 0.4 * fabs(bias_off), "neighbor clamping removes the error near the gap (%+.5f vs %+.5f)",
+              bias_on, bias_off);
+    }
+    ic_image_free(&ref);
+    ic_image_free(&on);
+    ic_image_free(&off);
+}
+
+static void test_step(void)
+{
+    /* Seed 000 §5.2, fig. 4: a thin step (height 0.06) on a floor, lit from the side by a low sun; the
+     * floor next to the step receives light bounced off the step's lit face, a feature the random
+     * rays of distant records miss. */
+    test_write_file(IC_TEST_TMP "/step.mtl", "newmtl grey\nKd 0.7 0.7 0.7\n");
+    test_write_file(IC_TEST_TMP "/step.obj",
+                    "mtllib step.mtl\nusemtl grey\n"
+                    "v -6 0 -6\nv 6 0 -6\nv 6 0 6\nv -6 0 6\nf 1 3 2\nf 1 4 3\n"
+                    /* the step: a box x in [0, 2], y in [0, 0.06], z in [-3, 3] */
+                    "v 0 0 -3\nv 2 0 -3\nv 2 0 3\nv 0 0 3\nv 0 0.06 -3\nv 2 0.06 -3\nv 2 0.06 3\nv 0 0.06 3\n"
+                    "f 9 11 10\nf 9 12 11\n"  /* top */
+                    "f 5 8 12\nf 5 12 9\n"    /* x = 0 face */
+                    "f 6 10 11\nf 6 11 7\n"   /* x = 2 face */
+                    "f 5 9 10\nf 5 10 6\n"    /* z = -3 face */
+                    "f 8 7 11\nf 8 11 12\n"); /* z = 3 face */
+    test_write_file(IC_TEST_TMP "/step.json",
+                    "{\n  \"camera\": {\"eye\": [-1.2, 0.9, 0], \"target\": [0.2, 0, 0], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 45, \"width\": 64, \"height\": 64},\n"
+                    "  \"meshes\": [{\"path\": \"step.obj\"}],\n"
+                    "  \"lights\": [{\"type\": \"sun\", \"direction\": [-1, 0.35, 0], \"irradiance\": [3, 3, 3]}]\n}\n");
+    ic_image ref = {0}, on = {0}, off = {0};
+    if (clamp_pair(IC_TEST_TMP "/step.json", 64, 64, &ref, &on, &off)) {
+        /* Rows 24–48: the floor in front of the step and the step's foot. */
+        double e_on = rows_error(&on, &ref, 24, 48), e_off = rows_error(&off, &ref, 24, 48);
+        printf("step: reference %.4f, error with neighbor clamping %.4f, without %.4f\n", rows_mean(&ref, 24, 48),
+               e_on, e_off);
+        CHECK(e_on < 0.9 * e_off, "neighbor clamping captures the step's indirect light (error %.4f vs %.4f)", e_on,
+              e_off);
+    }
+    ic_image_free(&ref);
+    ic_image_free(&on);
+    ic_image_free(&off);
+}
+
+int main(void)
+{
+    test_cornell();
+    test_threads();
+    test_leak();
+    test_step();
+    TEST_MAIN_END();
+}

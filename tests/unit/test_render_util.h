@@ -1,0 +1,62 @@
+/*
+ * test_render_util.h — helpers for tests that write small scenes and render them through the public
+ * API (irrcache/render.h), exactly as the command does.
+ */
+#ifndef IC_TEST_RENDER_UTIL_H
+#define IC_TEST_RENDER_UTIL_H
+
+#include "irrcache/render.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+/* Writes text to path or aborts the test program. */
+static inline void test_write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "cannot write %s\n", path);
+        exit(1);
+    }
+    fputs(text, f);
+    fclose(f);
+}
+
+/* Loads scene_path (with an optional resolution override) and renders it with opt into img.
+ * Returns 1 on success; on failure prints the error and returns 0. */
+static inline int test_render(const char *scene_path, int width, int height, const ic_render_options *opt,
+                              ic_image *img, ic_render_stats *stats)
+{
+    ic_error err = {0};
+    ic_scene *scene = NULL;
+    ic_scene_load_options lo = {0};
+    lo.width = width;
+    lo.height = height;
+    if (ic_scene_load(scene_path, &lo, &scene, &err) != IC_OK) {
+        fprintf(stderr, "load %s: %s\n", scene_path, err.message);
+        return 0;
+    }
+    ic_render_stats local;
+    ic_result r = ic_render(scene, opt, img, stats ? stats : &local, &err);
+    if (r != IC_OK)
+        fprintf(stderr, "render %s: %s\n", scene_path, err.message);
+    ic_scene_free(scene);
+    return r == IC_OK;
+}
+
+/* Mean of all channels; *finite is 0 if any value is NaN or infinite. */
+static inline double test_image_mean(const ic_image *img, int *finite)
+{
+    double s = 0.0;
+    *finite = 1;
+    size_t n = (size_t)img->width * img->height * 3;
+    for (size_t i = 0; i < n; ++i) {
+        if (!isfinite(img->rgb[i]))
+            *finite = 0;
+        s += img->rgb[i];
+    }
+    return s / (double)n;
+}
+
+#endif
