@@ -1,0 +1,130 @@
+/*
+ * test_cli.c — the irrcache command on bad input, one test per class (issue "Foundation", item 10):
+ * malformed JSON, a missing mesh or texture, an unknown material or option, NaN vertices, a zero-area
+ * light, impossible option values, an unwritable output. Each must give a non-zero exit, a single
+ * line on stderr that names the file (and line where there is one), no crash, and no output file;
+ * an existing output is left untouched. Also: degenerate triangles are dropped (not an error), and a
+ * good render writes every requested output and the stats JSON.
+ */
+#include "test_util.h"
+
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#define CLI IC_CLI_PATH
+#define SCENES IC_SOURCE_DIR "/tests/scenes/"
+#define OUT IC_TEST_TMP "/cli_out.exr"
+#define ERR IC_TEST_TMP "/cli_stderr.txt"
+
+static char err_text[8192];
+
+/* Runs the command line (stderr captured); returns the exit status, or -1 if it crashed. */
+static int run(const char *args)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s %s 2>%s >/dev/null", CLI, args, ERR);
+    int st = system(cmd);
+    FILE *f = fopen(ERR, "r");
+    size_t n = f ? fread(err_text, 1, sizeof err_text - 1, f) : 0;
+    err_text[n] = 0;
+    if (f)
+        fclose(f);
+    if (st == -1 || !WIFEXITED(st))
+        return -1;
+    return WEXITSTATUS(st);
+}
+
+static int file_exists(const char *p)
+{
+    struct stat s;
+    return stat(p, &s) == 0;
+}
+
+static int line_count(const char *s)
+{
+    int n = 0;
+    for (; *s; ++s)
+        n += *s == '\n';
+    return n;
+}
+
+typedef struct bad_case {
+    const char *what;
+    const char *args;       /* after "render" */
+    int exit_code;
+    const char *must_name;  /* text the message must contain (file name, file:line) */
+} bad_case;
+
+static void check_bad(const bad_case *c)
+{
+    remove(OUT);
+    char args[2048];
+    snprintf(args, sizeof args, "render %s -q", c->args);
+    int rc = run(args);
+    CHECK(rc == c->exit_code, "%s: exit %d, expected %d (stderr: %s)", c->what, rc, c->exit_code, err_text);
+    CHECK(line_count(err_text) == 1, "%s: one line on stderr, got: %s", c->what, err_text);
+    CHECK(strstr(err_text, c->must_name) != NULL, "%s: message names '%s': %s", c->what, c->must_name, err_text);
+    CHECK(!file_exists(OUT), "%s: no output written", c->what);
+}
+
+int main(void)
+{
+    const bad_case cases[] = {
+        {"malformed JSON", SCENES "malformed.json -o " OUT, 1, "malformed.json:5:"},
+        {"missing mesh", SCENES "missing_mesh.json -o " OUT, 1, "missing_mesh.json:"},
+        {"missing texture", SCENES "missing_texture.obj -o " OUT, 1, "missing_texture"},
+        {"unknown material", SCENES "unknown_material.json -o " OUT, 1, "unknown_material.json:"},
+        {"unknown key", SCENES "unknown_key.json -o " OUT, 1, "unknown_key.json:"},
+        {"NaN vertex", SCENES "nan_vertex.json -o " OUT, 1, "nan_vertex.obj:6:"},
+        {"zero-area light", SCENES "zero_area_light.json -o " OUT, 1, "zero_area_light"},
+        {"bad resolution in scene", SCENES "bad_resolution.json -o " OUT, 1, "bad_resolution.json:"},
+        {"missing scene file", SCENES "no_such_scene.json -o " OUT, 1, "no_such_scene.json"},
+        {"unknown option", SCENES "plain_quad.obj -o " OUT " --frobnicate", 2, "--frobnicate"},
+        {"zero spp", SCENES "plain_quad.obj -o " OUT " --spp 0", 2, "--spp"},
+        {"non-numeric width", SCENES "plain_quad.obj -o " OUT " --width abc", 2, "--width"},
+        {"negative time", SCENES "plain_quad.obj -o " OUT " --time -1", 2, "--time"},
+        {"unknown integrator", SCENES "plain_quad.obj -o " OUT " --integrator xyz", 2, "xyz"},
+        {"unknown strategy", SCENES "plain_quad.obj -o " OUT " --integrator ic --strategy xyz", 2, "xyz"},
+        {"cache option without ic", SCENES "plain_quad.obj -o " OUT " --accuracy 0.2", 2, "--integrator ic"},
+        {"unknown output format", SCENES "plain_quad.obj -o " IC_TEST_TMP "/x.bmp", 2, "x.bmp"},
+        {"unwritable output", SCENES "plain_quad.obj -o " IC_TEST_TMP "/no/such/dir/x.exr", 1, "no/such/dir/x.exr"},
+        {"no output", SCENES "plain_quad.obj", 2, "-o"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i)
+        check_bad(&cases[i]);
+
+    /* Nothing lost: a failed render leaves an existing output as it was. */
+    FILE *f = fopen(OUT, "w");
+    fputs("precious", f);
+    fclose(f);
+    run("render " SCENES "malformed.json -o " OUT " -q");
+    f = fopen(OUT, "r");
+    char buf[16] = {0};
+    CHECK(f && fread(buf, 1, 15, f) == 8 && !strcmp(buf, "precious"), "existing output untouched after a failure");
+    if (f)
+        fclose(f);
+
+    /* A good render: every output and the stats, degenerate triangles dropped without an error. */
+    remove(OUT);
+    int rc = run("render " SCENES "degenerate.json -o " OUT " -o " IC_TEST_TMP "/cli_out.png --spp 2 --width 16 "
+                 "--height 16 -q --stats " IC_TEST_TMP "/cli_stats.json");
+    CHECK(rc == 0, "degenerate triangles are not an error (exit %d: %s)", rc, err_text);
+    CHECK(file_exists(OUT) && file_exists(IC_TEST_TMP "/cli_out.png"), "both outputs written");
+    f = fopen(IC_TEST_TMP "/cli_stats.json", "r");
+    char stats[4096] = {0};
+    if (f) {
+        size_t n = fread(stats, 1, sizeof stats - 1, f);
+        stats[n] = 0;
+        fclose(f);
+    }
+    CHECK(strstr(stats, "\"seconds\"") && strstr(stats, "\"rays\"") && strstr(stats, "\"rays_per_second\"") &&
+              strstr(stats, "\"phases\""),
+          "stats JSON has seconds, rays, rays_per_second, phases: %s", stats);
+
+    /* Help lists every option with its default. */
+    rc = run("render --help >" IC_TEST_TMP "/cli_help.txt");
+    CHECK(rc == 0, "render --help exits 0");
+    TEST_MAIN_END();
+}
