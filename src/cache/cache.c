@@ -122,6 +122,7 @@ void ic_cache_destroy(ic_cache *c)
     free(c->normal);
     free(c->cold);
     free(c->scratch);
+    free(c->changed);
     free(c);
 }
 
@@ -240,6 +241,7 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
 
     ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
     ic_result rc = IC_OK;
+    c->changed_len = 0;
     for (uint32_t k = 0; k < n && rc == IC_OK; ++k)
         rc = ic_octree_insert(&c->points, &pts, first + k);
     if (rc == IC_OK && c->params.validity_clamp == IC_CACHE_ON)
@@ -302,7 +304,7 @@ static inline void accumulate(const ic_cache *c, uint32_t i, ic_vec3 n, float w,
     for (int ch = 0; ch < 3; ++ch) {
         float v = e3[ch] + v3_dot(rot, cd->grad_rot[ch]) + v3_dot(dp, cd->grad_trans[ch]);
         /* Extrapolation with large gradients can go negative; irradiance cannot. */
-        e3[ch] = fmaxf(v, 0.0f);
+        e3[ch] = v > 0.0f ? v : 0.0f;
         acc[ch] += w * e3[ch];
     }
     e->weight_sum += w;

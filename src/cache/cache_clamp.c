@@ -201,6 +201,21 @@ ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first)
 #define GRADDIFF_MIN_COS 0.8660254f
 #define GRADDIFF_MIN_SCALE 0.25f
 
+/* Remembers an existing record lowered by step 3: its neighbours may now violate step 4. */
+static ic_result note_changed(ic_cache *c, uint32_t r)
+{
+    if (c->changed_len == c->changed_cap) {
+        uint32_t cap = c->changed_cap ? c->changed_cap * 2 : 64;
+        uint32_t *v = realloc(c->changed, (size_t)cap * sizeof *v);
+        if (!v)
+            return IC_ERR_OOM;
+        c->changed = v;
+        c->changed_cap = cap;
+    }
+    c->changed[c->changed_len++] = r;
+    return IC_OK;
+}
+
 typedef struct target {
     uint32_t record;
     float radius;
@@ -248,16 +263,19 @@ ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first)
             list[len++] = (target){j, c->sphere[j].w * f};
         }
     }
-    for (size_t k = 0; k < len; ++k) {
+    ic_result rc = IC_OK;
+    for (size_t k = 0; k < len && rc == IC_OK; ++k) {
         uint32_t r = list[k].record;
         if (list[k].radius < c->sphere[r].w) {
             c->sphere[r].w = list[k].radius;
-            if (r < first)
+            if (r < first) {
                 ++c->cold[r].change_count;
+                rc = note_changed(c, r);
+            }
         }
     }
     free(list);
-    return IC_OK;
+    return rc;
 }
 
 /* ---- Step 4: neighbor clamping (seed 000 §5.2) ------------------------------------------------ */
@@ -268,7 +286,7 @@ ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first)
  * between j and its own neighbours, so this runs to a fixed point: a label-correcting pass over a
  * min-heap keyed by (R, index). The heap starts with the new records; a popped record first pulls
  * (clamps itself by its neighbours), then pushes (clamps its neighbours, queueing those that
- * changed). Radii only decrease, so it terminates, and at the end every pair within reach satisfies
+ * changed); existing records lowered by step 3 are seeds too. Radii only decrease, so it terminates, and at the end every pair within reach satisfies
  * |R_i − R_j| ≤ |p_i − p_j| — the triangle-inequality argument of the paper's Fig. 3.
  */
 typedef struct heap_entry {
@@ -332,8 +350,12 @@ ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first)
 {
     heap h = {NULL, 0, 0};
     ic_result rc = IC_OK;
+    /* Seeds: the new records, and existing ones that step 3 lowered. */
     for (uint32_t i = first; i < c->count && rc == IC_OK; ++i)
         if (!heap_push(&h, (heap_entry){c->sphere[i].w, i}))
+            rc = IC_ERR_OOM;
+    for (uint32_t k = 0; k < c->changed_len && rc == IC_OK; ++k)
+        if (!heap_push(&h, (heap_entry){c->sphere[c->changed[k]].w, c->changed[k]}))
             rc = IC_ERR_OOM;
     while (rc == IC_OK && h.len > 0) {
         heap_entry e = heap_pop(&h);
@@ -349,7 +371,8 @@ ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first)
         float Ri = c->sphere[i].w;
         for (uint32_t k = 0; k < n; ++k) {
             uint32_t j = c->scratch[k];
-            Ri = fminf(Ri, c->sphere[j].w + distance(c, i, j));
+            float bound = c->sphere[j].w + distance(c, i, j);
+            Ri = bound < Ri ? bound : Ri;
         }
         if (Ri < c->sphere[i].w) {
             c->sphere[i].w = Ri;

@@ -40,6 +40,8 @@ struct ic_cache {
     /* Insertion scratch (insertion is single-threaded with respect to the cache). */
     uint32_t *scratch;
     uint32_t scratch_cap;
+    uint32_t *changed;           /* existing records lowered by step 3: they seed step 4 too */
+    uint32_t changed_len, changed_cap;
 };
 
 static inline ic_octree_items ic_cache_tree_items(const ic_cache *c)
@@ -80,16 +82,17 @@ static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_
     float behind = 0.5f * (d.x * (n.x + np->x) + d.y * (n.y + np->y) + d.z * (n.z + np->z));
     if (behind < -c->params.behind_tolerance * r)
         return 0;
-    float dist = sqrtf(d2) / R, ndev = sqrtf(fmaxf(0.0f, 1.0f - ndot));
+    float dev = 1.0f - ndot, dist = sqrtf(d2) / R, ndev = sqrtf(dev > 0.0f ? dev : 0.0f);
     if (c->params.weight == IC_WEIGHT_WARD) {
         /* Ward, seed 000 §3: accept w > 1/a ⇔ denominator < a. */
         float denom = dist + ndev;
         if (!(denom < a))
             return 0;
-        *w = 1.0f / fmaxf(denom, 1e-6f);
+        *w = 1.0f / (denom > 1e-6f ? denom : 1e-6f);
     } else {
         /* Tabellion–Lamorlette 2004 with κ = 1/a: accept w > 0. */
-        float ww = 1.0f - fmaxf(dist, ndev * IC_TL_NORMAL_SCALE) / a;
+        float nt = ndev * IC_TL_NORMAL_SCALE;
+        float ww = 1.0f - (dist > nt ? dist : nt) / a;
         if (!(ww > 0.0f))
             return 0;
         *w = ww;

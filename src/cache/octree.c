@@ -40,12 +40,16 @@ static unsigned point_octant(cube c, float x, float y, float z)
     return (unsigned)(x >= c.cx) | (unsigned)(y >= c.cy) << 1 | (unsigned)(z >= c.cz) << 2;
 }
 
+/* max without fmaxf's NaN rules, which keep gcc from inlining it. */
+static inline float maxf(float a, float b) { return a > b ? a : b; }
+static inline float minf(float a, float b) { return a < b ? a : b; }
+
 /* Squared distance from p to the closed cube (0 inside). */
 static float cube_dist2(cube c, float x, float y, float z)
 {
-    float ex = fmaxf(fabsf(x - c.cx) - c.h, 0.0f);
-    float ey = fmaxf(fabsf(y - c.cy) - c.h, 0.0f);
-    float ez = fmaxf(fabsf(z - c.cz) - c.h, 0.0f);
+    float ex = maxf(fabsf(x - c.cx) - c.h, 0.0f);
+    float ey = maxf(fabsf(y - c.cy) - c.h, 0.0f);
+    float ez = maxf(fabsf(z - c.cz) - c.h, 0.0f);
     return ex * ex + ey * ey + ez * ez;
 }
 
@@ -149,12 +153,18 @@ static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t n
     if (leaf.count <= t->leaf_capacity || depth >= t->max_depth)
         return IC_OK;
     uint32_t partial = 0;
+    float rmin = INFINITY;
     for (uint32_t k = 0; k < leaf.count; ++k) {
         uint32_t i = t->refs[leaf.begin + k];
         float r = item_radius(it, i);
         partial += r <= 0.0f || !covers_cube(it, i, r, c);
+        rmin = minf(rmin, r);
     }
-    if (2 * partial <= leaf.count)
+    /* Splitting is pointless when most spheres cover the whole leaf, and wasteful once the leaf is
+     * small against every sphere in it: a leaf of half side h holds the spheres within r + h·√3 of
+     * its points, so below h = r/4 the list shrinks little while the references multiply (and the
+     * thin shells where many sphere caps end would be refined to the depth limit). */
+    if (2 * partial <= leaf.count || (rmin > 0.0f && c.h <= 0.25f * rmin))
         return IC_OK;
 
     /* Count per child, then lay the 8 segments out at the end of refs. */

@@ -634,33 +634,51 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     return v3_scale(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), IC_PI);
 }
 
-/* Direct light for the final render: one light sample; the environment is in the cache and is
- * skipped here. The diffuse lobe takes the full light sample (it is never BSDF-sampled in this
- * integrator); the glossy lobe is MIS-weighted against its own lobe sampling. */
-ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
-                            uint64_t *rays)
+/* Shadow-tested contribution of one light sample (weight for the glossy lobe's MIS given by wg). */
+static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, const ic_light_sample *ls,
+                           int mis_glossy, uint64_t *rays)
 {
-    float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
-    ic_light_sample ls;
-    if (!ic_scene_sample_light(c->tr->scene, s->p, u0, u1, u2, &ls) || ls.pdf <= 0.0f)
-        return v3s(0.0f);
-    if (!ls.is_delta && isinf(ls.dist))
-        return v3s(0.0f); /* environment: cached */
     ic_vec3 fd, fg;
-    ic_bsdf_eval_lobes(b, wo, ls.wi, &fd, &fg);
-    float wg = ls.is_delta ? 1.0f : ic_power_heuristic(ls.pdf, ic_bsdf_pdf_glossy(b, wo, ls.wi));
+    ic_bsdf_eval_lobes(b, wo, ls->wi, &fd, &fg);
+    float wg = mis_glossy ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
     ic_vec3 f = v3_add(fd, v3_scale(fg, wg));
-    if (v3_is_black(f) || v3_is_black(ls.radiance))
+    if (v3_is_black(f) || v3_is_black(ls->radiance))
         return v3s(0.0f);
     ic_ray shadow;
-    shadow.org = ic_offset_ray_origin(s->p, s->ng, ls.wi);
-    shadow.dir = ls.wi;
+    shadow.org = ic_offset_ray_origin(s->p, s->ng, ls->wi);
+    shadow.dir = ls->wi;
     shadow.tnear = 0.0f;
-    shadow.tfar = isinf(ls.dist) ? INFINITY : ls.dist * (1.0f - 1e-4f);
+    shadow.tfar = isinf(ls->dist) ? INFINITY : ls->dist * (1.0f - 1e-4f);
     ++*rays;
     if (ic_accel_occluded1(c->tr->accel, &shadow))
         return v3s(0.0f);
-    return v3_scale(v3_mul(f, ls.radiance), fabsf(v3_dot(ls.wi, b->frame.n)) / ls.pdf);
+    return v3_scale(v3_mul(f, ls->radiance), fabsf(v3_dot(ls->wi, b->frame.n)) / ls->pdf);
+}
+
+/* Direct light for the final render. The environment is in the records and is not sampled here; the
+ * sun, a single delta light, is taken every time (choosing it among the lights would only add noise);
+ * triangle and point lights are sampled once by power. The diffuse lobe takes the full light sample
+ * (it is never BSDF-sampled in this integrator); the glossy lobe is MIS-weighted against its own lobe
+ * sampling. */
+ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                           uint64_t *rays)
+{
+    float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+    ic_vec3 L = v3s(0.0f);
+    const ic_scene *scene = c->tr->scene;
+    if (scene->sun.enabled) {
+        ic_light_sample sun;
+        sun.wi = scene->sun.direction;
+        sun.dist = INFINITY;
+        sun.radiance = scene->sun.irradiance;
+        sun.pdf = 1.0f;
+        sun.is_delta = 1;
+        L = shade_light(c, s, b, wo, &sun, 0, rays);
+    }
+    ic_light_sample ls;
+    if (ic_scene_sample_light_sel(scene, &c->light_sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
+        L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, rays));
+    return L;
 }
 
 typedef struct final_ctx {
@@ -696,8 +714,8 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
         ic_vec3 wo = v3_neg(ray.dir);
         ic_vec3 le = ic_scene_emission(scene, &s, wo);
         if (!v3_is_black(le) && !fc->indirect_only) {
-            float w = prev_glossy ? ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle(scene, prev_p, hit.triangle,
-                                                                                            ray.dir, hit.t))
+            float w = prev_glossy ? ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle_sel(
+                                                                     scene, &c->light_sel, prev_p, hit.triangle, ray.dir, hit.t))
                                   : 1.0f;
             L = v3_add(L, v3_scale(v3_mul(beta, le), w));
         }
@@ -919,6 +937,11 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     c->pixel_angle = ic_camera_pixel_angle(&tr->scene->camera);
     atomic_init(&c->rays, 0);
     resolve_options(c, &opt->ic, tr->scene);
+    float sel_sum = tr->scene->light_select.tri + tr->scene->light_select.point;
+    if (sel_sum > 0.0f) {
+        c->light_sel.tri = tr->scene->light_select.tri / sel_sum;
+        c->light_sel.point = tr->scene->light_select.point / sel_sum;
+    }
     c->gather_tr = *tr;
     c->gather_tr.pt.max_depth = c->o.bounces + 1;
     c->o.gather.seed ^= opt->seed;

@@ -284,6 +284,12 @@ ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
 
 float ic_scene_light_pdf_triangle(const ic_scene *scene, ic_vec3 p, uint32_t tri, ic_vec3 wi, float dist)
 {
+    return ic_scene_light_pdf_triangle_sel(scene, &scene->light_select, p, tri, wi, dist);
+}
+
+float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_selection *sel, ic_vec3 p, uint32_t tri,
+                                      ic_vec3 wi, float dist)
+{
     (void)p;
     if (tri >= scene->triangle_count || !(scene->tri_light_power > 0.0f))
         return 0.0f;
@@ -301,11 +307,12 @@ float ic_scene_light_pdf_triangle(const ic_scene *scene, ic_vec3 p, uint32_t tri
     cos_l = fabsf(cos_l);
     if (!(cos_l > 0.0f) || !(l->area > 0.0f))
         return 0.0f;
-    float select = scene->light_select.tri * (l->power / scene->tri_light_power);
+    float select = sel->tri * (l->power / scene->tri_light_power);
     return select * dist * dist / (l->area * cos_l);
 }
 
-static int sample_triangle(const ic_scene *s, ic_vec3 p, float u0, float u1, float u2, ic_light_sample *ls)
+static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_vec3 p, float u0, float u1, float u2,
+                           ic_light_sample *ls)
 {
     uint32_t li = cdf_find(s->tri_light_cdf, s->tri_light_count, u0);
     const ic_tri_light *l = &s->tri_lights[li];
@@ -328,13 +335,13 @@ static int sample_triangle(const ic_scene *s, ic_vec3 p, float u0, float u1, flo
     float cos_l = -v3_dot(ng, ls->wi);
     if ((!m->two_sided_emission && cos_l <= 0.0f) || cos_l == 0.0f)
         return 0; /* the point sees the back of a one-sided emitter */
-    float select = s->light_select.tri * (l->power / s->tri_light_power);
+    float select = sel->tri * (l->power / s->tri_light_power);
     ls->pdf = select * dist2 / (l->area * fabsf(cos_l));
     ls->radiance = m->emission;
     return ls->pdf > 0.0f && isfinite(ls->pdf);
 }
 
-static int sample_point(const ic_scene *s, ic_vec3 p, float u0, ic_light_sample *ls)
+static int sample_point(const ic_scene *s, const ic_light_selection *sel, ic_vec3 p, float u0, ic_light_sample *ls)
 {
     uint32_t i = cdf_find(s->point_light_cdf, s->point_light_count, u0);
     const ic_point_light *l = &s->point_lights[i];
@@ -346,19 +353,19 @@ static int sample_point(const ic_scene *s, ic_vec3 p, float u0, ic_light_sample 
     ls->wi = v3_scale(d, 1.0f / dist);
     ls->dist = dist;
     ls->radiance = v3_scale(l->intensity, 1.0f / dist2);
-    ls->pdf = s->light_select.point * (s->point_light_cdf[i + 1] - s->point_light_cdf[i]);
+    ls->pdf = sel->point * (s->point_light_cdf[i + 1] - s->point_light_cdf[i]);
     ls->is_delta = 1;
     return ls->pdf > 0.0f;
 }
 
-static int sample_env(const ic_scene *s, float u1, float u2, ic_light_sample *ls)
+static int sample_env(const ic_scene *s, const ic_light_selection *sel, float u1, float u2, ic_light_sample *ls)
 {
     const ic_environment *env = &s->env;
     ls->dist = INFINITY;
     ls->is_delta = 0;
     if (env->image.width <= 0) {
         ls->wi = ic_warp_uniform_sphere(u1, u2);
-        ls->pdf = s->light_select.env * (0.25f * IC_INV_PI);
+        ls->pdf = sel->env * (0.25f * IC_INV_PI);
         ls->radiance = env->radiance;
         return 1;
     }
@@ -376,14 +383,19 @@ static int sample_env(const ic_scene *s, float u1, float u2, ic_light_sample *ls
     if (!(sin_theta > 0.0f))
         return 0;
     ls->wi = env_uv_to_dir(env, u, v);
-    ls->pdf = s->light_select.env * dy * dx * (float)w * (float)h / (2.0f * IC_PI * IC_PI * sin_theta);
+    ls->pdf = sel->env * dy * dx * (float)w * (float)h / (2.0f * IC_PI * IC_PI * sin_theta);
     ls->radiance = ic_scene_env_radiance(s, ls->wi);
     return ls->pdf > 0.0f && isfinite(ls->pdf);
 }
 
 int ic_scene_sample_light(const ic_scene *scene, ic_vec3 p, float u0, float u1, float u2, ic_light_sample *ls)
 {
-    const ic_light_selection *sel = &scene->light_select;
+    return ic_scene_sample_light_sel(scene, &scene->light_select, p, u0, u1, u2, ls);
+}
+
+int ic_scene_sample_light_sel(const ic_scene *scene, const ic_light_selection *sel, ic_vec3 p, float u0, float u1,
+                              float u2, ic_light_sample *ls)
+{
     memset(ls, 0, sizeof *ls);
     /* pick the class with u0, then stretch the rest of u0's interval back to [0,1) for the light */
     float prob[4] = {sel->tri, sel->point, sel->sun, sel->env};
@@ -401,10 +413,10 @@ int ic_scene_sample_light(const ic_scene *scene, ic_vec3 p, float u0, float u1, 
     int ok = 0;
     switch (cls) {
     case 0:
-        ok = sel->tri > 0.0f && sample_triangle(scene, p, ur, u1, u2, ls);
+        ok = sel->tri > 0.0f && sample_triangle(scene, sel, p, ur, u1, u2, ls);
         break;
     case 1:
-        ok = sel->point > 0.0f && sample_point(scene, p, ur, ls);
+        ok = sel->point > 0.0f && sample_point(scene, sel, p, ur, ls);
         break;
     case 2:
         if (sel->sun > 0.0f) {
@@ -417,7 +429,7 @@ int ic_scene_sample_light(const ic_scene *scene, ic_vec3 p, float u0, float u1, 
         }
         break;
     default:
-        ok = sel->env > 0.0f && sample_env(scene, u1, u2, ls);
+        ok = sel->env > 0.0f && sample_env(scene, sel, u1, u2, ls);
         break;
     }
     if (!ok)

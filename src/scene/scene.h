@@ -170,6 +170,13 @@ int ic_scene_sample_light(const ic_scene *scene, ic_vec3 p, float u0, float u1, 
 /* Solid-angle pdf with which ic_scene_sample_light would pick the point on emissive triangle tri seen from
  * p along wi at distance dist (for MIS when a BSDF-sampled ray hits an emitter). */
 float ic_scene_light_pdf_triangle(const ic_scene *scene, ic_vec3 p, uint32_t tri, ic_vec3 wi, float dist);
+/* The same two functions with class probabilities of the caller's choice instead of scene->light_select
+ * (e.g. an integrator that handles the sun or the environment another way sets those classes to 0
+ * and renormalises the rest). */
+int ic_scene_sample_light_sel(const ic_scene *scene, const ic_light_selection *sel, ic_vec3 p, float u0, float u1,
+                              float u2, ic_light_sample *ls);
+float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_selection *sel, ic_vec3 p, uint32_t tri,
+                                      ic_vec3 wi, float dist);
 /* Solid-angle pdf of sampling the environment in direction wi (for MIS when a ray escapes). */
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
 

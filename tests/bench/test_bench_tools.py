@@ -12,6 +12,7 @@ import unittest
 import zlib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.dont_write_bytecode = True  # no __pycache__ folders in the source tree
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 
 from report import analysis, check, plot, pngio  # noqa: E402
@@ -168,6 +169,38 @@ def fake_results(out_dir, pt_errors=(0.2, 0.1, 0.05), records=10):
               "equal_time": {"pt": {"metrics": m(0.05)}, "relmse_ratio": 1.25}}]
     return {"scenes": [{"name": "s", "reference": {"self_diff": {"rmse": 0, "relmse": 0}}, "pt_curve": curve,
                         "cache": cache}]}
+
+
+def load_bench_run():
+    import importlib.machinery
+    import importlib.util
+    loader = importlib.machinery.SourceFileLoader("bench_run", os.path.join(ROOT, "bench", "run"))
+    spec = importlib.util.spec_from_loader("bench_run", loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+class SceneFilesTest(unittest.TestCase):
+    def test_dependencies_and_missing_meshes(self):
+        run = load_bench_run()
+        d = tempfile.mkdtemp(prefix="ic-bench-test-")
+        os.makedirs(os.path.join(d, "tex"))
+        files = {"box.obj": "mtllib box.mtl\nv 0 0 0\n", "box.mtl": "newmtl m\nmap_Kd tex\\wood.png\n",
+                 "tex/wood.png": "x", "scene.json": '{"meshes": [{"path": "box.obj"}, {"path": "shared:nope/x.obj"}],'
+                                                  ' "_about": "not a path"}'}
+        for name, text in files.items():
+            with open(os.path.join(d, name), "w") as f:
+                f.write(text)
+        found, missing = run.scene_files(os.path.join(d, "scene.json"), os.path.join(d, "no-such-dir"))
+        self.assertEqual([os.path.relpath(p, d) for p in found], ["scene.json", "box.obj", "box.mtl", "tex/wood.png"])
+        self.assertEqual(missing, ["shared:nope/x.obj"])
+        key = run.reference_key(found, {"spp": 4})
+        self.assertEqual(key, run.reference_key(found, {"spp": 4}))
+        self.assertNotEqual(key, run.reference_key(found, {"spp": 8}))
+        with open(os.path.join(d, "tex/wood.png"), "w") as f:
+            f.write("y")
+        self.assertNotEqual(key, run.reference_key(found, {"spp": 4}))
 
 
 class CheckTest(unittest.TestCase):
