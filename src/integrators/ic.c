@@ -81,49 +81,35 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
 
 /* ---------------------------------------------------------------- shading points */
 
-typedef struct shading_point {
-    int valid;
-    ic_surface s;
-    ic_vec3 n;                 /* shading normal facing the incoming ray */
-    float t_primary;           /* distance of the primary hit (pixel footprint) */
-} shading_point;
-
 /* Follows a camera ray through ideal specular surfaces to the first surface with a smooth lobe.
  * Glass takes the more likely branch (refraction unless Fresnel reflection dominates): the shading
  * points of the cache must be a deterministic function of the pixel. */
-static shading_point find_shading_point(const ic_tracer *tr, ic_ray ray, uint64_t *rays)
+int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf *b, ic_vec3 *wo, float *t_primary,
+                        uint64_t *rays)
 {
-    shading_point sp;
-    memset(&sp, 0, sizeof sp);
     for (int k = 0; k <= MAX_SPECULAR_CHAIN; ++k) {
         ic_hit hit;
         ++*rays;
         ic_accel_intersect1(tr->accel, &ray, &hit);
         if (hit.triangle == IC_NO_HIT)
-            return sp;
-        if (k == 0)
-            sp.t_primary = hit.t;
-        ic_surface s;
-        ic_scene_surface(tr->scene, hit.triangle, hit.u, hit.v, &s);
-        ic_vec3 wo = v3_neg(ray.dir);
-        ic_bsdf b;
-        ic_bsdf_init(&b, tr->scene, &s, wo);
-        if (ic_bsdf_has_smooth(&b)) {
-            sp.valid = 1;
-            sp.s = s;
-            sp.n = b.frame.n;
-            return sp;
-        }
+            return 0;
+        if (k == 0 && t_primary)
+            *t_primary = hit.t;
+        ic_scene_surface(tr->scene, hit.triangle, hit.u, hit.v, s);
+        *wo = v3_neg(ray.dir);
+        ic_bsdf_init(b, tr->scene, s, *wo);
+        if (ic_bsdf_has_smooth(b))
+            return 1;
         ic_bsdf_sample bs;
-        float F = b.type == IC_MAT_GLASS ? ic_fresnel_dielectric(v3_dot(wo, b.frame.n), b.ior) : 1.0f;
-        if (!ic_bsdf_sample_dir(&b, wo, F > 0.5f ? 0.0f : 0.999f, 0.5f, 0.5f, &bs))
-            return sp;
-        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
+        float F = b->type == IC_MAT_GLASS ? ic_fresnel_dielectric(v3_dot(*wo, b->frame.n), b->ior) : 1.0f;
+        if (!ic_bsdf_sample_dir(b, *wo, F > 0.5f ? 0.0f : 0.999f, 0.5f, 0.5f, &bs))
+            return 0;
+        ray.org = ic_offset_ray_origin(s->p, s->ng, bs.wi);
         ray.dir = bs.wi;
         ray.tnear = 0.0f;
         ray.tfar = INFINITY;
     }
-    return sp;
+    return 0;
 }
 
 typedef struct gbuffer_job {
@@ -141,12 +127,15 @@ static void gbuffer_row(void *p, int64_t y, int thread)
     for (int x = 0; x < cam->width; ++x) {
         size_t i = (size_t)y * cam->width + x;
         ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
-        shading_point sp = find_shading_point(c->tr, ray, &j->rays[thread * PAD]);
-        c->g.valid[i] = (uint8_t)sp.valid;
-        if (sp.valid) {
-            c->g.p[i] = sp.s.p;
-            c->g.n[i] = sp.n;
-            c->g.footprint[i] = sp.t_primary * c->pixel_angle;
+        ic_surface s;
+        ic_bsdf b;
+        ic_vec3 wo;
+        float t_primary = 0.0f;
+        c->g.valid[i] = (uint8_t)ic_ic_shading_point(c->tr, ray, &s, &b, &wo, &t_primary, &j->rays[thread * PAD]);
+        if (c->g.valid[i]) {
+            c->g.p[i] = s.p;
+            c->g.n[i] = b.frame.n;
+            c->g.footprint[i] = t_primary * c->pixel_angle;
         }
     }
 }

@@ -114,36 +114,14 @@ typedef struct adaptive {
 
 /* ---------------------------------------------------------------- shading points */
 
-/* The surface of a pixel's shading point: the pixel-centre camera ray followed through ideal specular
- * surfaces exactly as the G-buffer does (ic.c, find_shading_point), so position and normal agree with
- * c->g; this pass also needs the BSDF for the albedo and the direct light. */
+/* The surface of a pixel's shading point, found exactly as the G-buffer finds it (same ray, same
+ * specular chain), so position and normal agree with c->g; this pass also needs the BSDF. */
 static int surface_at_pixel(const ic_ctx *c, uint32_t pixel, ic_surface *s, ic_bsdf *b, ic_vec3 *wo, uint64_t *rays)
 {
-    const ic_tracer *tr = c->tr;
-    const ic_camera *cam = &tr->scene->camera;
+    const ic_camera *cam = &c->tr->scene->camera;
     ic_ray ray = ic_camera_ray(cam, (float)(pixel % (uint32_t)cam->width) + 0.5f,
                                (float)(pixel / (uint32_t)cam->width) + 0.5f);
-    for (int k = 0; k <= MAX_SPECULAR_CHAIN; ++k) {
-        ic_hit hit;
-        ++*rays;
-        ic_accel_intersect1(tr->accel, &ray, &hit);
-        if (hit.triangle == IC_NO_HIT)
-            return 0;
-        ic_scene_surface(tr->scene, hit.triangle, hit.u, hit.v, s);
-        *wo = v3_neg(ray.dir);
-        ic_bsdf_init(b, tr->scene, s, *wo);
-        if (ic_bsdf_has_smooth(b))
-            return 1;
-        ic_bsdf_sample bs;
-        float F = b->type == IC_MAT_GLASS ? ic_fresnel_dielectric(v3_dot(*wo, b->frame.n), b->ior) : 1.0f;
-        if (!ic_bsdf_sample_dir(b, *wo, F > 0.5f ? 0.0f : 0.999f, 0.5f, 0.5f, &bs))
-            return 0;
-        ray.org = ic_offset_ray_origin(s->p, s->ng, bs.wi);
-        ray.dir = bs.wi;
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-    }
-    return 0;
+    return ic_ic_shading_point(c->tr, ray, s, b, wo, NULL, rays);
 }
 
 typedef struct point_job {

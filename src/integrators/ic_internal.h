@@ -34,6 +34,12 @@ typedef struct phase_times {
     double gather, insert;
 } phase_times;
 
+/* The shading point of a camera ray: the first surface with a smooth lobe after ideal specular
+ * surfaces (glass takes its more likely branch, so the point is a deterministic function of the ray).
+ * Fills the surface, its BSDF and the direction towards the viewer; t_primary (may be NULL) gets the
+ * primary hit's distance. Returns 0 if the ray escapes or is absorbed. */
+int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf *b, ic_vec3 *wo, float *t_primary,
+                        uint64_t *rays);
 /* Trace callback of hemisphere gathering (ic_trace_fn; user = ic_ctx): see ic.h for what it returns. */
 void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
                         ic_vec3 *radiance);
