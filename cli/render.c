@@ -34,7 +34,7 @@ typedef struct render_args {
     int has_exposure;
     int quiet;
     /* irradiance caching */
-    const char *strategy, *weight, *gather, *aov, *records_json;
+    const char *strategy, *weight, *gather, *aov, *records_json, *load_cache, *save_cache;
     double accuracy, min_radius, max_radius, min_radius_px, max_radius_px, final_scale;
     double weber, adaptive_growth;
     int rays, bounces, max_passes, min_candidates, light_samples;
@@ -110,6 +110,10 @@ static const opt_def options[] = {
      "ic adaptive: Weber fraction of the discontinuity test; smaller = more records"},
     {"--adaptive-growth", NULL, OPT_DOUBLE, OFF(adaptive_growth), 1, "F", "1.4",
      "ic adaptive: a new record starts from the nearest record's a times F (at most --accuracy)"},
+    {"--save-cache", NULL, OPT_STRING, OFF(save_cache), 0, "FILE", "none",
+     "ic: write the cache records to FILE (versioned, checksummed) for re-use"},
+    {"--load-cache", NULL, OPT_STRING, OFF(load_cache), 0, "FILE", "none",
+     "ic: render with the records in FILE instead of building them; refused if made for another scene or settings"},
     {"--records-json", NULL, OPT_STRING, OFF(records_json), 0, "FILE", "none",
      "ic: write every record (position, radius, a, image position, visibility) as JSON"},
     {"--aov", NULL, OPT_STRING, OFF(aov), 0, "LIST", "none",
@@ -401,6 +405,8 @@ static void fill_ic_options(const render_args *a, ic_ic_options *o)
     }
     o->no_gradients = a->no_gradients;
     o->bounces = a->bounces;
+    o->load_cache = a->load_cache;
+    o->save_cache = a->save_cache;
     o->light_samples = a->light_samples;
     o->max_passes = a->max_passes;
     o->min_candidates = a->min_candidates;
@@ -471,7 +477,7 @@ int ic_cli_render(int argc, char **argv)
     for (int i = 0; i < a.output_count; ++i)
         if (!check_writable(a.outputs[i]))
             return 1;
-    if (a.stats_path && !check_writable(a.stats_path))
+    if ((a.stats_path && !check_writable(a.stats_path)) || (a.save_cache && !check_writable(a.save_cache)))
         return 1;
 
     progress_state prog = {0};

@@ -183,6 +183,11 @@ int ic_cache_query(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_est
 /* Same result as ic_cache_query by a linear scan over all records: the O(N) reference for tests. */
 int ic_cache_query_linear(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);
 
+/* The weight test alone for one record (no bounce or flag filter): 1 and *weight = w_i(p, n) if
+ * the record is accepted at (p, n) under the given acceptance, else 0. */
+int ic_cache_record_weight(const ic_cache *cache, uint32_t index, ic_vec3 p, ic_vec3 n, ic_cache_acceptance acceptance,
+                           float *weight);
+
 /* Copies record index into *out; IC_ERR_INVALID_ARG if index ≥ count. */
 ic_result ic_cache_get_record(const ic_cache *cache, uint32_t index, ic_record *out);
 /* Lowers a_i of record index (adaptive caching); raising it is refused. Counts a change. */

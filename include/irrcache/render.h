@@ -72,6 +72,9 @@ typedef struct ic_ic_options {
     float normal_weight;   /* batch: k of k·normDiff + posDiff (seed 004 §3.1.1) [4] */
     int world_stride;      /* batch: world stage traces one eye path per stride×stride pixels [2] */
     float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene diagonal [0.05] */
+    const char *load_cache;/* read the records from this cache file instead of building them (must match
+                              the scene, the gathering settings and the cache parameters) */
+    const char *save_cache;/* write the records to this cache file after construction (atomically) */
     float weber;           /* adaptive: Weber fraction of the discernibility test (seed 000 §4.3) [0.02] */
     float adaptive_growth; /* adaptive: a new record's a = growth × a of the nearest record, ≤ accuracy [1.4] */
     int adaptive_max_passes; /* adaptive: safety bound on convergence passes [64] */

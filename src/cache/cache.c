@@ -372,6 +372,17 @@ int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_
     return finish(out, acc);
 }
 
+int ic_cache_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, ic_cache_acceptance acceptance,
+                           float *weight)
+{
+    float w = 0.0f, s = acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
+    ic_vec3 dp;
+    int ok = i < c->count && ic_record_weight(c, i, p, n, s, &w, &dp);
+    if (weight)
+        *weight = ok ? w : 0.0f;
+    return ok;
+}
+
 ic_result ic_cache_get_record(const ic_cache *c, uint32_t i, ic_record *out)
 {
     if (!c || !out || i >= c->count)

@@ -958,6 +958,37 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     free(c);
 }
 
+/* Hash of everything a record's value depends on besides the cache parameters (which the cache file
+ * records itself): geometry, materials, textures' sizes, lights, environment, and how records gather. */
+static uint64_t records_hash(const ic_ctx *c)
+{
+    const ic_scene *s = c->tr->scene;
+    uint64_t h = IC_FNV64_OFFSET;
+    h = ic_fnv1a64(h, s->positions, sizeof *s->positions * s->vertex_count);
+    h = ic_fnv1a64(h, s->triangles, sizeof *s->triangles * 3 * (size_t)s->triangle_count);
+    h = ic_fnv1a64(h, s->triangle_material, sizeof *s->triangle_material * s->triangle_count);
+    for (uint32_t i = 0; i < s->material_count; ++i) {
+        const ic_material *m = &s->materials[i];
+        float f[14] = {m->kd.x, m->kd.y, m->kd.z, m->ks.x, m->ks.y, m->ks.z, m->ns, m->emission.x, m->emission.y,
+                       m->emission.z, m->ior, (float)m->type, (float)m->kd_texture, (float)m->two_sided_emission};
+        h = ic_fnv1a64(h, f, sizeof f);
+    }
+    for (uint32_t i = 0; i < s->texture_count; ++i)
+        h = ic_fnv1a64(h, s->textures[i].rgb, sizeof(float) * 3 * (size_t)s->textures[i].width * s->textures[i].height);
+    h = ic_fnv1a64(h, s->point_lights, sizeof *s->point_lights * s->point_light_count);
+    float env[12] = {(float)s->sun.enabled, s->sun.direction.x, s->sun.direction.y, s->sun.direction.z,
+                     s->sun.irradiance.x, s->sun.irradiance.y, s->sun.irradiance.z, (float)s->env.enabled,
+                     s->env.radiance.x, s->env.radiance.y, s->env.radiance.z, s->env.rotation_deg};
+    h = ic_fnv1a64(h, env, sizeof env);
+    if (s->env.image.rgb)
+        h = ic_fnv1a64(h, s->env.image.rgb, sizeof(float) * 3 * (size_t)s->env.image.width * s->env.image.height);
+    int32_t g[8] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
+                    (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
+                    (int32_t)c->o.strategy};
+    h = ic_fnv1a64(h, g, sizeof g);
+    return ic_fnv1a64(h, &c->seed, sizeof c->seed);
+}
+
 ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_image *out, ic_render_stats *st,
                        ic_error *err)
 {
@@ -967,10 +998,25 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     ic_result r = ic_ic_ctx_create(tr, opt, &c, &t_gbuffer, err);
     if (r != IC_OK)
         return r;
-    r = c->o.strategy == IC_STRATEGY_LAZY       ? build_lazy(c, opt, st, &pt, err)
-        : c->o.strategy == IC_STRATEGY_ADAPTIVE ? ic_ic_build_adaptive(c, opt, st, &pt, err)
-                                                : build_batch(c, opt, st, &pt, err);
-    if (r != IC_OK)
+    if (c->o.load_cache) {
+        /* Records from an earlier run: refused (with the cache library's message) when they were made
+         * for another scene, other gathering settings or other cache parameters. */
+        ic_cache *loaded = NULL;
+        double t0 = ic_seconds();
+        r = ic_cache_load(c->o.load_cache, &c->o.cache, records_hash(c), &loaded, err);
+        if (r != IC_OK)
+            goto done;
+        ic_cache_destroy(c->cache);
+        c->cache = loaded;
+        pt.insert += ic_seconds() - t0;
+    } else {
+        r = c->o.strategy == IC_STRATEGY_LAZY       ? build_lazy(c, opt, st, &pt, err)
+            : c->o.strategy == IC_STRATEGY_ADAPTIVE ? ic_ic_build_adaptive(c, opt, st, &pt, err)
+                                                    : build_batch(c, opt, st, &pt, err);
+        if (r != IC_OK)
+            goto done;
+    }
+    if (c->o.save_cache && (r = ic_cache_save(c->cache, c->o.save_cache, records_hash(c), err)) != IC_OK)
         goto done;
     st->records = ic_cache_count(c->cache);
     st->gather_rays = atomic_load(&c->rays);

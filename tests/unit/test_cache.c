@@ -106,10 +106,10 @@ static void make_query(const ic_cache *c, uint64_t seed, uint32_t q, ic_vec3 *p,
     ic_rng r = ic_rng_make(seed, q, 1, 0);
     ic_record rec;
     ic_cache_get_record(c, ic_rng_below(&r, ic_cache_count(c)), &rec);
-    float reach = 1.3f * rec.accuracy * rec.radius * ic_cache_get_params(c)->final_accuracy_scale;
+    float reach = 1.1f * rec.accuracy * rec.radius * ic_cache_get_params(c)->final_accuracy_scale;
     *p = v3_add(rec.position, random_in_plane(&r, rec.normal, reach));
     *p = v3_madd(*p, rec.normal, (ic_rng_float(&r) - 0.5f) * 0.1f * reach);
-    *n = v3_norm(v3_add(rec.normal, v3_scale(random_unit(&r), 0.15f * ic_rng_float(&r))));
+    *n = v3_norm(v3_add(rec.normal, v3_scale(random_unit(&r), 0.1f * ic_rng_float(&r))));
     if (q % 16 == 0) { /* now and then a point anywhere */
         *p = v3(20.0f * ic_rng_float(&r), 20.0f * ic_rng_float(&r), 20.0f * ic_rng_float(&r));
         *n = random_unit(&r);
@@ -122,64 +122,111 @@ static int cmp_u32(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* ---- look-up equals linear scan ---------------------------------------------------------------- */
+/* ---- look-up equals brute force ---------------------------------------------------------------- */
 
+/*
+ * The reference: every record is tested (a vectorisable distance pre-filter over flat arrays, with a
+ * generous margin, then the library's per-record weight test), and the interpolated value is
+ * recomputed here from the record fields with seed 000 eq. 1 — independent of the octree and of the
+ * library's accumulation code.
+ */
 #define MAX_CONTRIB 4096
 
 typedef struct compare_job {
     const ic_cache *cache;
+    const ic_record *fin;       /* records as stored */
+    const float *x, *y, *z, *r2; /* pre-filter: squared influence radius with margin */
+    uint32_t n;
     uint64_t seed;
     ic_cache_acceptance acceptance;
     unsigned char *bad;         /* per query: 1 = sets differ, 2 = values differ */
     uint32_t *contributors;     /* per query */
 } compare_job;
 
+static ic_vec3 extrapolate(const ic_record *r, ic_vec3 p, ic_vec3 n)
+{
+    ic_vec3 rot = v3_cross(r->normal, n), dp = v3_sub(p, r->position);
+    float e[3];
+    for (int ch = 0; ch < 3; ++ch)
+        e[ch] = fmaxf(0.0f, v3_get(r->irradiance, ch) + v3_dot(rot, r->grad_rot[ch]) + v3_dot(dp, r->grad_trans[ch]));
+    return v3(e[0], e[1], e[2]);
+}
+
 static void compare_one(void *ctx, int64_t item, int thread)
 {
     (void)thread;
     compare_job *job = ctx;
-    ic_cache_contribution *a = malloc(MAX_CONTRIB * sizeof *a), *b = malloc(MAX_CONTRIB * sizeof *b);
+    ic_cache_contribution *a = malloc(MAX_CONTRIB * sizeof *a);
     uint32_t *ia = malloc(MAX_CONTRIB * sizeof *ia), *ib = malloc(MAX_CONTRIB * sizeof *ib);
     ic_cache_lookup q = {0};
     make_query(job->cache, job->seed, (uint32_t)item, &q.position, &q.normal);
     q.acceptance = job->acceptance;
     q.contribution_capacity = MAX_CONTRIB;
-    ic_cache_estimate ea, eb;
     q.contributions = a;
+    ic_cache_estimate ea;
     int ha = ic_cache_query(job->cache, &q, &ea);
-    q.contributions = b;
-    int hb = ic_cache_query_linear(job->cache, &q, &eb);
+    /* Brute force. */
+    uint32_t nb = 0;
+    double sum_w = 0.0, sum[3] = {0.0, 0.0, 0.0};
+    const float px = q.position.x, py = q.position.y, pz = q.position.z;
+    const float *x = job->x, *y = job->y, *z = job->z, *r2 = job->r2;
+    for (uint32_t i = 0; i < job->n; ++i) {
+        float dx = x[i] - px, dy = y[i] - py, dz = z[i] - pz;
+        if (!(dx * dx + dy * dy + dz * dz < r2[i]))
+            continue;
+        float w;
+        if (!ic_cache_record_weight(job->cache, i, q.position, q.normal, job->acceptance, &w) ||
+            (job->fin[i].flags & IC_RECORD_DISABLED) || job->fin[i].bounce != q.bounce)
+            continue;
+        if (nb < MAX_CONTRIB)
+            ib[nb] = i;
+        ++nb;
+        ic_vec3 e = extrapolate(&job->fin[i], q.position, q.normal);
+        sum_w += w;
+        sum[0] += w * e.x;
+        sum[1] += w * e.y;
+        sum[2] += w * e.z;
+    }
     unsigned char bad = 0;
-    if (ha != hb || ea.contributor_count != eb.contributor_count || ea.contributions_written != ea.contributor_count) {
+    if (ha != (nb > 0) || ea.contributor_count != nb || ea.contributions_written != nb) {
         bad = 1;
-    } else {
-        for (uint32_t k = 0; k < ea.contributor_count; ++k) {
+    } else if (nb) {
+        for (uint32_t k = 0; k < nb; ++k)
             ia[k] = a[k].record;
-            ib[k] = b[k].record;
-        }
-        qsort(ia, ea.contributor_count, sizeof *ia, cmp_u32);
-        qsort(ib, eb.contributor_count, sizeof *ib, cmp_u32);
-        if (memcmp(ia, ib, ea.contributor_count * sizeof *ia) != 0)
+        qsort(ia, nb, sizeof *ia, cmp_u32);
+        if (memcmp(ia, ib, nb * sizeof *ia) != 0)
             bad = 1;
-        float tol = 1e-4f * (1.0f + v3_maxc(eb.irradiance));
-        if (!bad && (fabsf(ea.irradiance.x - eb.irradiance.x) > tol || fabsf(ea.irradiance.y - eb.irradiance.y) > tol ||
-                     fabsf(ea.irradiance.z - eb.irradiance.z) > tol ||
-                     fabsf(ea.weight_sum - eb.weight_sum) > 1e-4f * eb.weight_sum))
+        double want[3] = {sum[0] / sum_w, sum[1] / sum_w, sum[2] / sum_w};
+        double tol = 1e-4 * (1.0 + fmax(want[0], fmax(want[1], want[2])));
+        if (!bad && (fabs(ea.irradiance.x - want[0]) > tol || fabs(ea.irradiance.y - want[1]) > tol ||
+                     fabs(ea.irradiance.z - want[2]) > tol || fabs(ea.weight_sum - sum_w) > 1e-4 * sum_w))
             bad = 2;
     }
     job->bad[item] = bad;
-    job->contributors[item] = eb.contributor_count;
+    job->contributors[item] = nb;
     free(a);
-    free(b);
     free(ia);
     free(ib);
 }
 
-static void check_lookup_equals_linear(const ic_cache *c, uint32_t queries, const char *what)
+static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries, const char *what)
 {
+    uint32_t n = ic_cache_count(c);
+    ic_record *fin = malloc(n * sizeof *fin);
+    float *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *z = malloc(n * sizeof *z),
+          *r2 = malloc(n * sizeof *r2);
     for (int acc = 0; acc < 2; ++acc) {
-        compare_job job = {c, 77, acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION, calloc(queries, 1),
-                           calloc(queries, sizeof(uint32_t))};
+        float s = acc ? ic_cache_get_params(c)->final_accuracy_scale : 1.0f;
+        for (uint32_t i = 0; i < n; ++i) {
+            ic_cache_get_record(c, i, &fin[i]);
+            x[i] = fin[i].position.x;
+            y[i] = fin[i].position.y;
+            z[i] = fin[i].position.z;
+            float r = 1.01f * s * fin[i].accuracy * fin[i].radius;
+            r2[i] = r * r;
+        }
+        compare_job job = {c, fin, x, y, z, r2, n, 77, acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION,
+                           calloc(queries, 1), calloc(queries, sizeof(uint32_t))};
         ic_parallel_for(0, queries, compare_one, &job);
         uint32_t set_bad = 0, val_bad = 0, hit = 0;
         uint64_t total = 0;
@@ -191,13 +238,18 @@ static void check_lookup_equals_linear(const ic_cache *c, uint32_t queries, cons
         }
         CHECK(set_bad == 0 && val_bad == 0, "%s (%s): %u queries with other contributors, %u with other values",
               what, acc ? "final" : "construction", set_bad, val_bad);
-        /* The comparison means something only if most queries find records. */
-        CHECK(hit > queries / 2, "%s: only %u of %u queries found records", what, hit, queries);
-        printf("  %-34s %-12s %u queries, %.1f%% hit, %.2f contributors on average\n", what,
+        /* The comparison means something only if many queries find records. */
+        CHECK(hit > queries / 5, "%s: only %u of %u queries found records", what, hit, queries);
+        printf("  %-30s %-12s %5u queries, %5.1f%% hit, %5.2f contributors on average\n", what,
                acc ? "final" : "construction", queries, 100.0 * hit / queries, (double)total / queries);
         free(job.bad);
         free(job.contributors);
     }
+    free(fin);
+    free(x);
+    free(y);
+    free(z);
+    free(r2);
 }
 
 static ic_cache_params clamp_config(ic_weight_kind weight, int which)
@@ -221,7 +273,7 @@ static ic_cache_params clamp_config(ic_weight_kind weight, int which)
 static const char *clamp_name[6] = {"no clamps", "gradient clamp", "neighbor clamp", "validity clamp",
                                     "gradient difference", "all clamps + bounds"};
 
-static void test_lookup_vs_linear(void)
+static void test_lookup_vs_brute_force(void)
 {
     const uint32_t n = 100000;
     ic_record *recs = make_records(n, 1);
@@ -232,7 +284,7 @@ static void test_lookup_vs_linear(void)
             char what[96];
             snprintf(what, sizeof what, "%s, %s", wk ? "T-L" : "Ward", clamp_name[which]);
             /* 20k queries for the full configurations, fewer for the single clamps (time). */
-            check_lookup_equals_linear(c, which == 0 || which == 5 ? 20000 : 4000, what);
+            check_lookup_equals_brute_force(c, 20000, what);
             /* Clamps never raise R above the input (bounds off except in config 5). */
             uint32_t raised = 0;
             for (uint32_t i = 0; i < n; ++i) {
@@ -431,7 +483,7 @@ static void test_neighbor_clamp(void)
                 bad += fabsf(fin[i].radius - fin[j].radius) > d + 1e-5f * fmaxf(fin[i].radius, fin[j].radius);
             }
         }
-        CHECK(pairs > 1000 && bad == 0, "neighbor clamp: %llu of %llu pairs within reach break |Ri-Rj| <= d",
+        CHECK(pairs > 200 && bad == 0, "neighbor clamp: %llu of %llu pairs within reach break |Ri-Rj| <= d",
               (unsigned long long)bad, (unsigned long long)pairs);
         CHECK(clamped > n / 10, "neighbor clamp changed only %llu radii", (unsigned long long)clamped);
         printf("  neighbor clamp%s: %llu pairs within reach, %llu radii clamped\n", round ? " (+ all clamps)" : "",
@@ -895,6 +947,6 @@ int main(void)
     RUN(test_thread_independence);
     RUN(test_point_queries);
     RUN(test_file);
-    if (getenv("IC_TEST_FULL")) RUN(test_lookup_vs_linear);
+    RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }

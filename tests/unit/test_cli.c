@@ -123,6 +123,41 @@ int main(void)
               strstr(stats, "\"phases\""),
           "stats JSON has seconds, rays, rays_per_second, phases: %s", stats);
 
+    /* Cache files: records saved by one run render the same image when loaded by the next; a file made
+     * with other gathering settings, or a truncated one, is refused without writing an output. */
+    const char *ic = "render " IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json --integrator ic --width 24 "
+                     "--height 24 --spp 2 -q ";
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "%s -o %s/ic_a.pfm --save-cache %s/ic.icc", ic, IC_TEST_TMP, IC_TEST_TMP);
+    CHECK(run(cmd) == 0, "render and save the cache: %s", err_text);
+    snprintf(cmd, sizeof cmd, "%s -o %s/ic_b.pfm --load-cache %s/ic.icc", ic, IC_TEST_TMP, IC_TEST_TMP);
+    CHECK(run(cmd) == 0, "render from the saved cache: %s", err_text);
+    FILE *fa = fopen(IC_TEST_TMP "/ic_a.pfm", "rb"), *fb = fopen(IC_TEST_TMP "/ic_b.pfm", "rb");
+    static char ba[1 << 16], bb[1 << 16];
+    size_t na = fa ? fread(ba, 1, sizeof ba, fa) : 0, nb = fb ? fread(bb, 1, sizeof bb, fb) : 1;
+    CHECK(na > 0 && na == nb && memcmp(ba, bb, na) == 0, "loaded cache renders the identical image");
+    if (fa)
+        fclose(fa);
+    if (fb)
+        fclose(fb);
+    remove(OUT);
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --rays 100", ic, OUT, IC_TEST_TMP);
+    CHECK(run(cmd) == 1 && strstr(err_text, "ic.icc") && line_count(err_text) == 1 && !file_exists(OUT),
+          "cache made with other settings refused: %s", err_text);
+    FILE *full = fopen(IC_TEST_TMP "/ic.icc", "rb"), *cut = fopen(IC_TEST_TMP "/ic_cut.icc", "wb");
+    if (full && cut) {
+        char chunk[512];
+        size_t n = fread(chunk, 1, sizeof chunk, full);
+        fwrite(chunk, 1, n, cut);
+    }
+    if (full)
+        fclose(full);
+    if (cut)
+        fclose(cut);
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic_cut.icc", ic, OUT, IC_TEST_TMP);
+    CHECK(run(cmd) == 1 && strstr(err_text, "ic_cut.icc") && !file_exists(OUT), "truncated cache refused: %s",
+          err_text);
+
     /* Help lists every option with its default. */
     rc = run("render --help >" IC_TEST_TMP "/cli_help.txt");
     CHECK(rc == 0, "render --help exits 0");
