@@ -57,14 +57,14 @@ typedef enum ic_strategy {
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
 typedef struct ic_ic_options {
     ic_strategy strategy;
-    ic_cache_params cache; /* weights, accuracy [0.25], clamps. Unlike the cache library, here
+    ic_cache_params cache; /* weights, accuracy [0.3], clamps. Unlike the cache library, here
                               min_radius_pixels [1.5] and max_radius_pixels [48] bound the influence radius
                               a·R on screen; max_radius [scene diagonal/8] bounds R in world units;
                               a negative value switches a bound off */
     ic_gather_opts gather; /* hemisphere sampling [stratified, 16×50 = 800 rays] */
     int no_gradients;      /* 1: records carry no gradients (interpolation is a weighted average) */
     int bounces;           /* indirect bounces in the radiance a hemisphere ray returns [max_depth − 1] */
-    int light_samples;     /* final render: light samples per shading point and pixel sample [4] */
+    int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     int max_passes;        /* batch: most construction passes [12] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */
@@ -107,7 +107,7 @@ typedef struct ic_render_aovs {
 /* Render options; zero means default (or the scene file's value where it gives one). */
 typedef struct ic_render_options {
     ic_integrator integrator;
-    int spp;               /* samples per pixel (default: scene file, else 16) */
+    int spp;               /* samples per pixel (default: scene file, else 16; 64 for integrator IC) */
     int max_depth;         /* max scattering events (default: scene file, else 8) */
     int threads;           /* 0 = all cores */
     uint64_t seed;         /* random seed (default: scene file, else 1) */

@@ -882,7 +882,7 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
     if (o.bounces <= 0)
         o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
     if (o.light_samples <= 0)
-        o.light_samples = 4;
+        o.light_samples = 1;
     if (o.max_passes <= 0)
         o.max_passes = 12;
     if (o.min_candidates <= 0)
@@ -898,7 +898,7 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
     if (o.cluster_size <= 0.0f)
         o.cluster_size = 0.05f;
     if (o.cache.accuracy == 0.0f)
-        o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? 1.0f : 0.25f;
+        o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? 1.0f : 0.3f;
     /* Radius bounds: 0 means the renderer's default, negative switches the bound off. The pixel bounds
      * given to the renderer bound a record's influence radius a·R on screen (what a user sees: "a record
      * covers between 1.5 and 48 pixels"); the cache clamps R itself, hence the division by a. */

@@ -48,8 +48,12 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     memset(st, 0, sizeof *st);
     if (opt.spp < 0 || opt.max_depth < 0 || opt.threads < 0 || opt.time_budget < 0.0)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "negative --spp, --max-depth, --threads or --time; give values >= 0");
+    /* A cache render's samples are cheap (a camera ray, a light sample, a look-up): it defaults to more. */
     if (opt.spp == 0)
-        opt.spp = scene->settings.spp > 0 ? scene->settings.spp : (opt.time_budget > 0.0 ? 0 : 16);
+        opt.spp = scene->settings.spp > 0       ? scene->settings.spp
+                  : opt.time_budget > 0.0         ? 0
+                  : opt.integrator == IC_INTEGRATOR_IC ? 64
+                                                  : 16;
     if (opt.max_depth == 0)
         opt.max_depth = scene->settings.max_depth > 0 ? scene->settings.max_depth : 8;
     if (!opt.has_seed && opt.seed == 0)

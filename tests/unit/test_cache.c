@@ -28,6 +28,14 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <time.h>
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
 /* ---- random records ---------------------------------------------------------------------------- */
 
 static ic_vec3 random_unit(ic_rng *r)
@@ -280,7 +288,9 @@ static void test_lookup_vs_brute_force(void)
     for (int wk = 0; wk < 2; ++wk) {
         for (int which = 0; which < 6; ++which) {
             ic_cache_params p = clamp_config(wk ? IC_WEIGHT_TABELLION : IC_WEIGHT_WARD, which);
+            double t0 = now();
             ic_cache *c = build_cache(&p, recs, n);
+            printf("  build %.2f s\n", now() - t0);
             char what[96];
             snprintf(what, sizeof what, "%s, %s", wk ? "T-L" : "Ward", clamp_name[which]);
             /* 20k queries for the full configurations, fewer for the single clamps (time). */
@@ -927,13 +937,6 @@ static void test_api_edges(void)
     ic_cache_destroy(c);
 }
 
-#include <time.h>
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec + 1e-9 * t.tv_nsec;
-}
 #define RUN(f) do { double t0 = now(); f(); printf("%-28s %.2f s\n", #f, now() - t0); fflush(stdout); } while (0)
 
 int main(void)

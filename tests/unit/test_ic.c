@@ -151,13 +151,14 @@ static double rows_error(const ic_image *img, const ic_image *ref, int y0, int y
 
 /* Renders scene with the path tracer (reference) and with IC (lazy: Ward's serial order, where a
  * record's radius comes from its own rays alone) with and without neighbor clamping. */
-static int clamp_pair(const char *scene, int W, int H, ic_image *ref, ic_image *on, ic_image *off)
+static int clamp_pair(const char *scene, int W, int H, float accuracy, ic_image *ref, ic_image *on, ic_image *off)
 {
     ic_render_options pt = {0};
     pt.spp = 256;
     int ok = test_render(scene, W, H, &pt, ref, NULL);
     ic_render_options o = ic_options();
     o.ic.strategy = IC_STRATEGY_LAZY;
+    o.ic.cache.accuracy = accuracy;
     ok &= test_render(scene, W, H, &o, on, NULL);
     o.ic.cache.neighbor_clamp = IC_CACHE_OFF;
     ok &= test_render(scene, W, H, &o, off, NULL);
@@ -183,7 +184,7 @@ static void test_leak(void)
                     "             \"fov_y\": 50, \"width\": 96, \"height\": 96},\n"
                     "  \"meshes\": [{\"path\": \"leak.obj\"}]\n}\n");
     ic_image ref = {0}, on = {0}, off = {0};
-    if (clamp_pair(IC_TEST_TMP "/leak.json", 96, 96, &ref, &on, &off)) {
+    if (clamp_pair(IC_TEST_TMP "/leak.json", 96, 96, 0.0f, &ref, &on, &off)) {
         /* The gap shows as the brightest row; the region is the dark side's 12 rows next to it. */
         int gap = 0;
         for (int y = 1; y < ref.height; ++y)
@@ -226,13 +227,19 @@ static void test_step(void)
                     "  \"meshes\": [{\"path\": \"step.obj\"}],\n"
                     "  \"lights\": [{\"type\": \"sun\", \"direction\": [-1, 0.35, 0], \"irradiance\": [3, 3, 3]}]\n}\n");
     ic_image ref = {0}, on = {0}, off = {0};
-    if (clamp_pair(IC_TEST_TMP "/step.json", 64, 64, &ref, &on, &off)) {
-        /* Rows 24–48: the floor in front of the step and the step's foot. */
-        double e_on = rows_error(&on, &ref, 24, 48), e_off = rows_error(&off, &ref, 24, 48);
-        printf("step: reference %.4f, error with neighbor clamping %.4f, without %.4f\n", rows_mean(&ref, 24, 48),
-               e_on, e_off);
-        CHECK(e_on < 0.9 * e_off, "neighbor clamping captures the step's indirect light (error %.4f vs %.4f)", e_on,
+    /* A coarse accuracy (a = 0.5) leaves few records on the floor, so whether the step is noticed
+     * depends on neighbor clamping (seed 000 §5.2: without it many more records are needed). */
+    if (clamp_pair(IC_TEST_TMP "/step.json", 64, 64, 0.5f, &ref, &on, &off)) {
+        /* Rows 36–48: the step's foot and the floor in front of it, lit by the step's face. */
+        double e_on = rows_error(&on, &ref, 36, 48), e_off = rows_error(&off, &ref, 36, 48);
+        double bias_on = rows_mean(&on, 36, 48) - rows_mean(&ref, 36, 48);
+        double bias_off = rows_mean(&off, 36, 48) - rows_mean(&ref, 36, 48);
+        printf("step: reference %.4f, error with neighbor clamping %.4f (bias %+.4f), without %.4f (bias %+.4f)\n",
+               rows_mean(&ref, 36, 48), e_on, bias_on, e_off, bias_off);
+        CHECK(e_on < 0.75 * e_off, "neighbor clamping captures the step's indirect light (error %.4f vs %.4f)", e_on,
               e_off);
+        CHECK(fabs(bias_on) < 0.5 * fabs(bias_off), "the step's light is no longer missing (bias %+.4f vs %+.4f)",
+              bias_on, bias_off);
     }
     ic_image_free(&ref);
     ic_image_free(&on);
