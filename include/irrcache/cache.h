@@ -151,7 +151,7 @@ typedef struct ic_cache_estimate {
     float weight_sum;                 /* Σ w_i */
     uint32_t contributor_count;       /* |S| (may exceed contributions_written) */
     uint32_t contributions_written;   /* entries written to lookup.contributions */
-    uint32_t records_tested;          /* references examined (leaf length; cost diagnostics) */
+    uint32_t records_tested;          /* references examined on the octree path (cost diagnostics) */
 } ic_cache_estimate;
 
 /* Fills out with params where every zero field is replaced by its default; checks ranges. */

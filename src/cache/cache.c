@@ -341,18 +341,27 @@ int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimat
     memset(out, 0, sizeof *out);
     float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
     ic_vec3 p = q->position, n = q->normal;
-    uint32_t leaf = ic_octree_find_leaf(&c->tree, p.x, p.y, p.z);
-    if (leaf == IC_OCTREE_NONE)
-        return 0;
-    const ic_octree_node *node = &c->tree.nodes[leaf];
-    const uint32_t *refs = c->tree.refs + node->begin;
-    out->records_tested = node->count;
-    for (uint32_t k = 0; k < node->count; ++k) {
-        uint32_t i = refs[k];
-        float w;
-        ic_vec3 dp;
-        if (ic_record_weight(c, i, p, n, s, &w, &dp) && eligible(c, i, q))
-            accumulate(c, i, n, w, dp, q, out, acc);
+    uint32_t path[IC_OCTREE_MAX_DEPTH + 1];
+    uint32_t len = ic_octree_path(&c->tree, p.x, p.y, p.z, path);
+    /* Reference radii are a·R·tree_scale (conservative); scale them to this acceptance. */
+    float ref_scale = s / c->tree_scale;
+    for (uint32_t l = 0; l < len; ++l) {
+        const ic_octree_node *node = &c->tree.nodes[path[l]];
+        const ic_octree_ref *refs = c->tree.refs + node->begin;
+        out->records_tested += node->count;
+        for (uint32_t k = 0; k < node->count; ++k) {
+            /* Pre-test from the reference alone: most references fail here, and the record's own
+             * arrays are never touched for them. */
+            const ic_octree_ref *ref = &refs[k];
+            float rr = ref->r * ref_scale;
+            if (!(ic_dist2(p.x, p.y, p.z, ref->x, ref->y, ref->z) < rr * rr))
+                continue;
+            uint32_t i = ref->index;
+            float w;
+            ic_vec3 dp;
+            if (ic_record_weight(c, i, p, n, s, &w, &dp) && eligible(c, i, q))
+                accumulate(c, i, n, w, dp, q, out, acc);
+        }
     }
     return finish(out, acc);
 }

@@ -86,22 +86,23 @@ uint32_t ic_cache_reach(ic_cache *c, uint32_t i)
     for (uint32_t k = 0; k < n; ++k)
         if (c->scratch[k] != i)
             c->scratch[m++] = c->scratch[k];
-    /* i inside j's sphere: exactly the records the octree leaf at p_i references whose sphere holds
-     * p_i; those already found above are skipped by the complementary distance test. */
-    uint32_t leaf = ic_octree_find_leaf(&c->tree, p.x, p.y, p.z);
-    if (leaf == IC_OCTREE_NONE)
-        return m;
-    const ic_octree_node *node = &c->tree.nodes[leaf];
-    for (uint32_t k = 0; k < node->count; ++k) {
-        uint32_t j = c->tree.refs[node->begin + k];
-        if (j == i)
-            continue;
-        const ic_float4 *sj = &c->sphere[j];
-        float d2 = ic_dist2(p.x, p.y, p.z, sj->x, sj->y, sj->z), rj = influence(c, j);
-        if (!(d2 < ri2) && d2 < rj * rj) {
-            if (grow_scratch(c, m + 1) != IC_OK)
-                return UINT32_MAX;
-            c->scratch[m++] = j;
+    /* i inside j's sphere: exactly the records the octree path through p_i references whose sphere
+     * holds p_i; those already found above are skipped by the complementary distance test. */
+    uint32_t path[IC_OCTREE_MAX_DEPTH + 1];
+    uint32_t len = ic_octree_path(&c->tree, p.x, p.y, p.z, path);
+    for (uint32_t l = 0; l < len; ++l) {
+        const ic_octree_node *node = &c->tree.nodes[path[l]];
+        for (uint32_t k = 0; k < node->count; ++k) {
+            uint32_t j = c->tree.refs[node->begin + k].index;
+            if (j == i)
+                continue;
+            const ic_float4 *sj = &c->sphere[j];
+            float d2 = ic_dist2(p.x, p.y, p.z, sj->x, sj->y, sj->z), rj = influence(c, j);
+            if (!(d2 < ri2) && d2 < rj * rj) {
+                if (grow_scratch(c, m + 1) != IC_OK)
+                    return UINT32_MAX;
+                c->scratch[m++] = j;
+            }
         }
     }
     return m;

@@ -62,13 +62,15 @@ static int item_in_child(const ic_octree_items *it, uint32_t i, float r, cube pa
     return cube_dist2(child_cube(parent, octant), s->x, s->y, s->z) <= r * r;
 }
 
-/* Does the sphere cover the whole cube (its farthest corner)? */
-static int covers_cube(const ic_octree_items *it, uint32_t i, float r, cube c)
+static ic_octree_ref make_ref(const ic_octree_items *it, uint32_t i, float r)
 {
     const ic_float4 *s = &it->sphere[i];
-    float dx = fabsf(s->x - c.cx) + c.h, dy = fabsf(s->y - c.cy) + c.h, dz = fabsf(s->z - c.cz) + c.h;
-    return dx * dx + dy * dy + dz * dz <= r * r;
+    ic_octree_ref ref = {s->x, s->y, s->z, r, i};
+    return ref;
 }
+
+/* A sphere stays at a node whose half side is at most its radius (cache.h: octree). */
+static int stays_at(float r, float h) { return r > 0.0f && h <= 0.5f * r; }
 
 void ic_octree_init(ic_octree *t, uint32_t leaf_capacity, uint32_t max_depth)
 {
@@ -90,7 +92,7 @@ void ic_octree_free(ic_octree *t)
 
 size_t ic_octree_bytes(const ic_octree *t)
 {
-    return (size_t)t->node_cap * sizeof(ic_octree_node) + t->ref_cap * sizeof(uint32_t);
+    return (size_t)t->node_cap * sizeof(ic_octree_node) + t->ref_cap * sizeof(ic_octree_ref);
 }
 
 static ic_result reserve_refs(ic_octree *t, size_t extra)
@@ -100,7 +102,7 @@ static ic_result reserve_refs(ic_octree *t, size_t extra)
     size_t cap = t->ref_cap ? t->ref_cap : 1024;
     while (cap < t->ref_end + extra)
         cap *= 2;
-    uint32_t *r = realloc(t->refs, cap * sizeof *r);
+    ic_octree_ref *r = realloc(t->refs, cap * sizeof *r);
     if (!r)
         return IC_ERR_OOM;
     t->refs = r;
@@ -146,35 +148,27 @@ static ic_result reset_root(ic_octree *t, cube c)
     return IC_OK;
 }
 
-/* Splits leaf `node` (cube c, depth d) if that helps, recursively. */
+/* Splits leaf `node` (cube c, depth d) if that helps, recursively. References to spheres at least
+ * as large as a child stay in the node; the others move to the children they overlap. */
 static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t node, cube c, uint32_t depth)
 {
     ic_octree_node leaf = t->nodes[node];
-    if (leaf.count <= t->leaf_capacity || depth >= t->max_depth)
+    if (leaf.child || leaf.count <= t->leaf_capacity || depth >= t->max_depth)
         return IC_OK;
-    uint32_t partial = 0;
-    float rmin = INFINITY;
+    float hc = 0.5f * c.h;
+    uint32_t counts[8] = {0}, down = 0;
     for (uint32_t k = 0; k < leaf.count; ++k) {
-        uint32_t i = t->refs[leaf.begin + k];
+        uint32_t i = t->refs[leaf.begin + k].index;
         float r = item_radius(it, i);
-        partial += r <= 0.0f || !covers_cube(it, i, r, c);
-        rmin = minf(rmin, r);
-    }
-    /* Splitting is pointless when most spheres cover the whole leaf, and wasteful once the leaf is
-     * small against every sphere in it: a leaf of half side h holds the spheres within r + h·√3 of
-     * its points, so below h = r/4 the list shrinks little while the references multiply (and the
-     * thin shells where many sphere caps end would be refined to the depth limit). */
-    if (2 * partial <= leaf.count || (rmin > 0.0f && c.h <= 0.25f * rmin))
-        return IC_OK;
-
-    /* Count per child, then lay the 8 segments out at the end of refs. */
-    uint32_t counts[8] = {0};
-    for (uint32_t k = 0; k < leaf.count; ++k) {
-        uint32_t i = t->refs[leaf.begin + k];
-        float r = item_radius(it, i);
+        if (stays_at(r, hc))
+            continue;
+        ++down;
         for (unsigned o = 0; o < 8; ++o)
             counts[o] += (uint32_t)item_in_child(it, i, r, c, o);
     }
+    /* Nothing would move down: the leaf is full of spheres as large as its children. */
+    if (down == 0)
+        return IC_OK;
     size_t need = 0;
     uint32_t caps[8];
     for (unsigned o = 0; o < 8; ++o) {
@@ -194,18 +188,22 @@ static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t n
         t->ref_end += caps[o];
         t->ref_live += caps[o];
     }
+    uint32_t kept = 0;
     for (uint32_t k = 0; k < leaf.count; ++k) {
-        uint32_t i = t->refs[leaf.begin + k];
+        uint32_t i = t->refs[leaf.begin + k].index;
         float r = item_radius(it, i);
+        if (stays_at(r, hc)) {
+            t->refs[leaf.begin + kept++] = make_ref(it, i, r); /* compacted in place, order kept */
+            continue;
+        }
         for (unsigned o = 0; o < 8; ++o)
             if (item_in_child(it, i, r, c, o)) {
                 ic_octree_node *ch = &t->nodes[first + o];
-                t->refs[ch->begin + ch->count++] = i;
+                t->refs[ch->begin + ch->count++] = make_ref(it, i, r);
             }
     }
-    t->ref_live -= leaf.cap;
     t->nodes[node].child = first;
-    t->nodes[node].count = t->nodes[node].cap = t->nodes[node].begin = 0;
+    t->nodes[node].count = kept;
     for (unsigned o = 0; o < 8; ++o) {
         rc = maybe_split(t, it, first + o, child_cube(c, o), depth + 1);
         if (rc != IC_OK)
@@ -214,7 +212,7 @@ static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t n
     return IC_OK;
 }
 
-static ic_result leaf_append(ic_octree *t, uint32_t node, uint32_t item)
+static ic_result leaf_append(ic_octree *t, uint32_t node, ic_octree_ref item)
 {
     ic_octree_node *n = &t->nodes[node];
     if (n->count == n->cap) {
@@ -224,7 +222,7 @@ static ic_result leaf_append(ic_octree *t, uint32_t node, uint32_t item)
         if (rc != IC_OK)
             return rc;
         n = &t->nodes[node];
-        memcpy(&t->refs[t->ref_end], &t->refs[n->begin], (size_t)n->count * sizeof(uint32_t));
+        memcpy(&t->refs[t->ref_end], &t->refs[n->begin], (size_t)n->count * sizeof(ic_octree_ref));
         t->ref_live += cap - n->cap;
         n->begin = (uint32_t)t->ref_end;
         n->cap = cap;
@@ -279,7 +277,7 @@ static ic_result insert_item(ic_octree *t, const ic_octree_items *it, uint32_t i
     while (top > 0) {
         struct entry e = stack[--top];
         uint32_t child = t->nodes[e.node].child;
-        if (child) {
+        if (child && !stays_at(r, e.c.h)) {
             if (r <= 0.0f) {
                 unsigned o = point_octant(e.c, s->x, s->y, s->z);
                 stack[top++] = (struct entry){child_cube(e.c, o), child + o, e.depth + 1};
@@ -292,7 +290,7 @@ static ic_result insert_item(ic_octree *t, const ic_octree_items *it, uint32_t i
             }
             continue;
         }
-        ic_result rc = leaf_append(t, e.node, index);
+        ic_result rc = leaf_append(t, e.node, make_ref(it, index, r));
         if (rc == IC_OK)
             rc = maybe_split(t, it, e.node, e.c, e.depth);
         if (rc != IC_OK)
@@ -326,13 +324,13 @@ ic_result ic_octree_compact(ic_octree *t)
 {
     if (t->ref_end <= 2 * t->ref_live + 4096)
         return IC_OK;
-    uint32_t *fresh = malloc((t->ref_live ? t->ref_live : 1) * sizeof *fresh);
+    ic_octree_ref *fresh = malloc((t->ref_live ? t->ref_live : 1) * sizeof *fresh);
     if (!fresh)
         return IC_ERR_OOM;
     size_t end = 0;
     for (uint32_t n = 0; n < t->node_count; ++n) {
         ic_octree_node *node = &t->nodes[n];
-        if (node->child || node->cap == 0)
+        if (node->cap == 0)
             continue;
         memcpy(&fresh[end], &t->refs[node->begin], (size_t)node->count * sizeof *fresh);
         node->begin = (uint32_t)end;
@@ -356,6 +354,7 @@ uint32_t ic_octree_knn(const ic_octree *t, const ic_octree_items *items, ic_vec3
         uint32_t node;
         float mind2;
     } stack[STACK_SIZE];
+    (void)items; /* positions come from the references */
     if (!t->has_root || k == 0)
         return 0;
     uint32_t found = 0;
@@ -370,8 +369,8 @@ uint32_t ic_octree_knn(const ic_octree *t, const ic_octree_items *items, ic_vec3
         const ic_octree_node *n = &t->nodes[e.node];
         if (!n->child) {
             for (uint32_t j = 0; j < n->count; ++j) {
-                uint32_t i = t->refs[n->begin + j];
-                const ic_float4 *s = &items->sphere[i];
+                const ic_octree_ref *s = &t->refs[n->begin + j];
+                uint32_t i = s->index;
                 float d = ic_dist2(p.x, p.y, p.z, s->x, s->y, s->z);
                 if (found == k && !closer(d, i, d2[k - 1], idx[k - 1]))
                     continue;
@@ -413,6 +412,7 @@ uint32_t ic_octree_radius(const ic_octree *t, const ic_octree_items *items, ic_v
         cube c;
         uint32_t node;
     } stack[STACK_SIZE];
+    (void)items; /* positions come from the references */
     if (!t->has_root || !(radius > 0.0f))
         return 0;
     float r2 = radius * radius, prune = r2 * 1.00001f;
@@ -424,11 +424,10 @@ uint32_t ic_octree_radius(const ic_octree *t, const ic_octree_items *items, ic_v
         const ic_octree_node *n = &t->nodes[e.node];
         if (!n->child) {
             for (uint32_t j = 0; j < n->count; ++j) {
-                uint32_t i = t->refs[n->begin + j];
-                const ic_float4 *s = &items->sphere[i];
+                const ic_octree_ref *s = &t->refs[n->begin + j];
                 if (ic_dist2(p.x, p.y, p.z, s->x, s->y, s->z) < r2) {
                     if (total < capacity)
-                        idx[total] = i;
+                        idx[total] = s->index;
                     ++total;
                 }
             }

@@ -3,15 +3,22 @@
  * and the auxiliary point octree for k-nearest and radius queries (seed 004 §4.2–4.3).
  *
  * One structure serves both (STYLE.md: one routine, not two variants). Items are spheres
- * (center, radius = R·a·scale); a point tree is the special case scale = 0. A sphere is referenced
- * from every leaf whose cube it overlaps, so finding all spheres that contain p is a single stackless
- * descent from the root to the leaf holding p, then a loop over that leaf's references
- * (seed 004 §4.3). Nodes live in one array; the 8 children of a node are contiguous and found by
- * index; each leaf owns a segment [begin, begin+count) of one reference array (capacity cap, segments
- * move to the end of the array when they grow, and the array is compacted when more than half of it
- * is dead). Leaves split when they hold more than leaf_capacity references, the depth limit is not
- * reached and at least half of the references only partly cover the leaf — splitting a leaf whose
- * spheres all cover it entirely would copy every reference into all 8 children and gain nothing.
+ * (center, radius = R·a·scale); a point tree is the special case scale = 0.
+ *
+ * Multiple references, stackless look-up (seed 004 §4.3): a sphere is referenced from every node it
+ * overlaps on the level that matches its size — the first nodes on the way down whose half side is
+ * at most its radius — or from the leaves above that level. Finding every sphere that holds p is
+ * then one root-to-leaf descent with no stack and no backtracking, scanning the reference list of
+ * each node on the path (almost always only the leaf's and one or two above it). Pure leaf storage,
+ * as in the seed, is the special case where all records are alike in size (which validity clamping
+ * brings about); with mixed sizes it would copy a large sphere into every tiny leaf that small
+ * neighbours caused, (r/h)² references each — storing by size bounds a record to at most 27 nodes.
+ *
+ * Nodes live in one array; the 8 children of a node are contiguous and found by index; each node
+ * owns a segment [begin, begin+count) of one reference array (index, center and radius: 20 bytes) (capacity cap; a segment moves to the
+ * end of the array when it grows, and the array is compacted when more than half of it is dead).
+ * A leaf splits when it holds more than leaf_capacity references, the depth limit is not reached,
+ * and some reference is smaller than the children (only those move down).
  */
 #ifndef IC_CACHE_OCTREE_H
 #define IC_CACHE_OCTREE_H
@@ -39,6 +46,14 @@ typedef struct ic_octree_items {
     float scale;               /* 0: a point tree */
 } ic_octree_items;
 
+/* A reference: the item's index plus a copy of its center and (conservative) radius, so a look-up
+ * rejects most references from the node's contiguous segment without touching the record arrays. */
+typedef struct ic_octree_ref {
+    float x, y, z;             /* item center */
+    float r;                   /* item radius when referenced (radii only shrink: an upper bound) */
+    uint32_t index;            /* item index */
+} ic_octree_ref;
+
 typedef struct ic_octree_node {
     uint32_t child;            /* first of 8 contiguous children; 0 = leaf (the root is never a child) */
     uint32_t begin;            /* leaf: first reference in refs */
@@ -49,7 +64,7 @@ typedef struct ic_octree_node {
 typedef struct ic_octree {
     ic_octree_node *nodes;
     uint32_t node_count, node_cap;
-    uint32_t *refs;            /* item indices, one segment per leaf */
+    ic_octree_ref *refs;       /* references, one segment per node */
     size_t ref_end, ref_cap;   /* used / allocated length of refs */
     size_t ref_live;           /* sum of leaf capacities (the rest of ref_end is dead) */
     float cx, cy, cz, half;    /* root cube: center and half side */
@@ -70,26 +85,29 @@ ic_result ic_octree_compact(ic_octree *t);
 /* Bytes held by the tree. */
 size_t ic_octree_bytes(const ic_octree *t);
 
-/* Leaf whose cube holds p (stackless root-to-leaf descent), or IC_OCTREE_NONE outside the root. */
-static inline uint32_t ic_octree_find_leaf(const ic_octree *t, float px, float py, float pz)
+/* Nodes on the root-to-leaf path through p (stackless descent), root first; returns how many
+ * (0 when p lies outside the root cube). path must hold IC_OCTREE_MAX_DEPTH + 1 entries. */
+static inline uint32_t ic_octree_path(const ic_octree *t, float px, float py, float pz, uint32_t *path)
 {
     float cx = t->cx, cy = t->cy, cz = t->cz, h = t->half;
     if (!t->has_root || !(px >= cx - h && px <= cx + h && py >= cy - h && py <= cy + h && pz >= cz - h &&
                           pz <= cz + h))
-        return IC_OCTREE_NONE;
-    uint32_t node = 0;
+        return 0;
+    uint32_t node = 0, len = 0;
     const ic_octree_node *nodes = t->nodes;
+    path[len++] = 0;
     while (nodes[node].child) {
-        /* The same child-cube arithmetic as the split (octree.c: child_center), so a point always
-         * lands in the leaf its references were distributed to. */
+        /* The same child-cube arithmetic as insertion (octree.c: child_cube), so a point always
+         * follows the cells its references were distributed to. */
         h *= 0.5f;
         unsigned ox = px >= cx, oy = py >= cy, oz = pz >= cz;
         cx = ox ? cx + h : cx - h;
         cy = oy ? cy + h : cy - h;
         cz = oz ? cz + h : cz - h;
         node = nodes[node].child + (ox | oy << 1 | oz << 2);
+        path[len++] = node;
     }
-    return node;
+    return len;
 }
 
 /* Squared distance in float, computed one way everywhere (queries and brute-force checks agree). */

@@ -104,10 +104,7 @@ int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf 
         float F = b->type == IC_MAT_GLASS ? ic_fresnel_dielectric(v3_dot(*wo, b->frame.n), b->ior) : 1.0f;
         if (!ic_bsdf_sample_dir(b, *wo, F > 0.5f ? 0.0f : 0.999f, 0.5f, 0.5f, &bs))
             return 0;
-        ray.org = ic_offset_ray_origin(s->p, s->ng, bs.wi);
-        ray.dir = bs.wi;
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
+        ray = ic_spawn_ray(s, bs.wi);
     }
     return 0;
 }
@@ -371,10 +368,7 @@ static void world_path(void *p, int64_t item, int thread)
         } else if (!ic_bsdf_sample_dir(&b, wo, ic_rng_float(&rng), ic_rng_float(&rng), ic_rng_float(&rng), &bs)) {
             break;
         }
-        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
-        ray.dir = bs.wi;
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
+        ray = ic_spawn_ray(&s, bs.wi);
     }
     j->slot_count[item] = (uint8_t)n;
 }
@@ -609,11 +603,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     *from_cache = 0;
     ic_frame f = ic_frame_from_normal(n);
     ic_vec3 d = ic_frame_to_world(&f, ic_warp_cosine_hemisphere(ic_rng_float(rng), ic_rng_float(rng)));
-    ic_ray ray;
-    ray.org = ic_offset_ray_origin(s->p, s->ng, d);
-    ray.dir = d;
-    ray.tnear = 0.0f;
-    ray.tfar = INFINITY;
+    ic_ray ray = ic_spawn_ray(s, d);
     ic_hit hit;
     ++*rays;
     ic_accel_intersect1(c->tr->accel, &ray, &hit);
@@ -633,11 +623,7 @@ static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
     ic_vec3 f = v3_add(fd, v3_scale(fg, wg));
     if (v3_is_black(f) || v3_is_black(ls->radiance))
         return v3s(0.0f);
-    ic_ray shadow;
-    shadow.org = ic_offset_ray_origin(s->p, s->ng, ls->wi);
-    shadow.dir = ls->wi;
-    shadow.tnear = 0.0f;
-    shadow.tfar = isinf(ls->dist) ? INFINITY : ls->dist * (1.0f - 1e-4f);
+    ic_ray shadow = ic_shadow_ray(s, ls);
     ++*rays;
     if (ic_accel_occluded1(c->tr->accel, &shadow))
         return v3s(0.0f);
@@ -737,16 +723,9 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
             prev_pdf = bs.pdf;
         }
         prev_p = s.p;
-        if (depth + 1 >= c->tr->pt.rr_depth) {
-            float q = fmaxf(0.05f, 1.0f - v3_maxc(beta));
-            if (ic_rng_float(rng) < q)
-                break;
-            beta = v3_scale(beta, 1.0f / (1.0f - q));
-        }
-        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
-        ray.dir = bs.wi;
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
+        if (!ic_russian_roulette(&beta, depth, c->tr->pt.rr_depth, rng))
+            break;
+        ray = ic_spawn_ray(&s, bs.wi);
     }
     return L;
 }

@@ -27,11 +27,7 @@ ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf 
     ic_vec3 f = ic_bsdf_eval(b, wo, ls.wi);
     if (v3_is_black(f) || v3_is_black(ls.radiance))
         return v3s(0.0f);
-    ic_ray shadow;
-    shadow.org = ic_offset_ray_origin(s->p, s->ng, ls.wi);
-    shadow.dir = ls.wi;
-    shadow.tnear = 0.0f;
-    shadow.tfar = isinf(ls.dist) ? INFINITY : ls.dist * (1.0f - 1e-4f);
+    ic_ray shadow = ic_shadow_ray(s, &ls);
     ++*rays;
     if (ic_accel_occluded1(tr->accel, &shadow))
         return v3s(0.0f);
@@ -97,16 +93,9 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
         prev_pdf = bs.pdf;
         prev_specular = bs.is_specular;
         prev_p = s.p;
-        if (depth + 1 >= tr->pt.rr_depth) {
-            float q = fmaxf(0.05f, 1.0f - v3_maxc(beta));
-            if (ic_rng_float(rng) < q)
-                break;
-            beta = v3_scale(beta, 1.0f / (1.0f - q));
-        }
-        ray.org = ic_offset_ray_origin(s.p, s.ng, bs.wi);
-        ray.dir = bs.wi;
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
+        if (!ic_russian_roulette(&beta, depth, tr->pt.rr_depth, rng))
+            break;
+        ray = ic_spawn_ray(&s, bs.wi);
     }
     return L;
 }

@@ -47,6 +47,38 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
 ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                         uint64_t *rays);
 
+/* A ray leaving surface s in direction dir, its origin moved off the surface (no self-hits). */
+static inline ic_ray ic_spawn_ray(const ic_surface *s, ic_vec3 dir)
+{
+    ic_ray r;
+    r.org = ic_offset_ray_origin(s->p, s->ng, dir);
+    r.dir = dir;
+    r.tnear = 0.0f;
+    r.tfar = INFINITY;
+    return r;
+}
+
+/* The shadow ray from surface s towards a light sample, stopping just short of the light. */
+static inline ic_ray ic_shadow_ray(const ic_surface *s, const ic_light_sample *ls)
+{
+    ic_ray r = ic_spawn_ray(s, ls->wi);
+    r.tfar = isinf(ls->dist) ? INFINITY : ls->dist * (1.0f - 1e-4f);
+    return r;
+}
+
+/* Russian roulette on path throughput after `depth` bounces: returns 0 if the path ends, else scales
+ * beta so the estimate stays unbiased. */
+static inline int ic_russian_roulette(ic_vec3 *beta, int depth, int rr_depth, ic_rng *rng)
+{
+    if (depth + 1 < rr_depth)
+        return 1;
+    float q = fmaxf(0.05f, 1.0f - v3_maxc(*beta));
+    if (ic_rng_float(rng) < q)
+        return 0;
+    *beta = v3_scale(*beta, 1.0f / (1.0f - q));
+    return 1;
+}
+
 /* Default parameters filled into zero fields. */
 ic_pt_params ic_pt_params_resolve(ic_pt_params p);
 

@@ -109,12 +109,12 @@ static ic_cache *build_cache(const ic_cache_params *p, const ic_record *recs, ui
 }
 
 /* A query near a random record: inside (or just outside) its influence, normal slightly tilted. */
-static void make_query(const ic_cache *c, uint64_t seed, uint32_t q, ic_vec3 *p, ic_vec3 *n)
+static void make_query(const ic_cache *c, uint64_t seed, uint32_t q, float scale, ic_vec3 *p, ic_vec3 *n)
 {
     ic_rng r = ic_rng_make(seed, q, 1, 0);
     ic_record rec;
     ic_cache_get_record(c, ic_rng_below(&r, ic_cache_count(c)), &rec);
-    float reach = 1.1f * rec.accuracy * rec.radius * ic_cache_get_params(c)->final_accuracy_scale;
+    float reach = 1.1f * rec.accuracy * rec.radius * scale;
     *p = v3_add(rec.position, random_in_plane(&r, rec.normal, reach));
     *p = v3_madd(*p, rec.normal, (ic_rng_float(&r) - 0.5f) * 0.1f * reach);
     *n = v3_norm(v3_add(rec.normal, v3_scale(random_unit(&r), 0.1f * ic_rng_float(&r))));
@@ -133,17 +133,20 @@ static int cmp_u32(const void *a, const void *b)
 /* ---- look-up equals brute force ---------------------------------------------------------------- */
 
 /*
- * The reference: every record is tested (a vectorisable distance pre-filter over flat arrays, with a
- * generous margin, then the library's per-record weight test), and the interpolated value is
- * recomputed here from the record fields with seed 000 eq. 1 — independent of the octree and of the
- * library's accumulation code.
+ * The reference tests every record that could possibly contribute: records sorted by x, the slab
+ * |x − p.x| ≤ max influence radius found by binary search (nothing outside it can reach p), then a
+ * vectorisable distance pre-filter with a generous margin over the slab, then the library's
+ * per-record weight test. The interpolated value is recomputed here from the record fields with
+ * seed 000 eq. 1 — independent of the octree and of the library's accumulation code.
  */
 #define MAX_CONTRIB 4096
 
 typedef struct compare_job {
     const ic_cache *cache;
     const ic_record *fin;       /* records as stored */
-    const float *x, *y, *z, *r2; /* pre-filter: squared influence radius with margin */
+    const float *x, *y, *z, *r2; /* sorted by x; r2: squared influence radius with margin */
+    const uint32_t *order;      /* record index of each sorted entry */
+    float rmax;                 /* largest influence radius with margin */
     uint32_t n;
     uint64_t seed;
     ic_cache_acceptance acceptance;
@@ -167,34 +170,53 @@ static void compare_one(void *ctx, int64_t item, int thread)
     ic_cache_contribution *a = malloc(MAX_CONTRIB * sizeof *a);
     uint32_t *ia = malloc(MAX_CONTRIB * sizeof *ia), *ib = malloc(MAX_CONTRIB * sizeof *ib);
     ic_cache_lookup q = {0};
-    make_query(job->cache, job->seed, (uint32_t)item, &q.position, &q.normal);
+    make_query(job->cache, job->seed, (uint32_t)item,
+               job->acceptance == IC_ACCEPT_FINAL ? ic_cache_get_params(job->cache)->final_accuracy_scale : 1.0f,
+               &q.position, &q.normal);
     q.acceptance = job->acceptance;
     q.contribution_capacity = MAX_CONTRIB;
     q.contributions = a;
     ic_cache_estimate ea;
     int ha = ic_cache_query(job->cache, &q, &ea);
-    /* Brute force. */
+    /* Brute force over the slab. */
     uint32_t nb = 0;
     double sum_w = 0.0, sum[3] = {0.0, 0.0, 0.0};
     const float px = q.position.x, py = q.position.y, pz = q.position.z;
     const float *x = job->x, *y = job->y, *z = job->z, *r2 = job->r2;
-    for (uint32_t i = 0; i < job->n; ++i) {
-        float dx = x[i] - px, dy = y[i] - py, dz = z[i] - pz;
-        if (!(dx * dx + dy * dy + dz * dz < r2[i]))
-            continue;
-        float w;
-        if (!ic_cache_record_weight(job->cache, i, q.position, q.normal, job->acceptance, &w) ||
-            (job->fin[i].flags & IC_RECORD_DISABLED) || job->fin[i].bounce != q.bounce)
-            continue;
-        if (nb < MAX_CONTRIB)
-            ib[nb] = i;
-        ++nb;
-        ic_vec3 e = extrapolate(&job->fin[i], q.position, q.normal);
-        sum_w += w;
-        sum[0] += w * e.x;
-        sum[1] += w * e.y;
-        sum[2] += w * e.z;
+    uint32_t lo = 0, hi = job->n;
+    while (lo < hi) { /* first entry with x ≥ px − rmax */
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (x[mid] < px - job->rmax)
+            lo = mid + 1;
+        else
+            hi = mid;
     }
+    unsigned char flag[1024];
+    for (uint32_t base = lo; base < job->n && x[base] <= px + job->rmax; base += 1024) {
+        uint32_t m = job->n - base < 1024 ? job->n - base : 1024;
+        for (uint32_t k = 0; k < m; ++k) {
+            float dx = x[base + k] - px, dy = y[base + k] - py, dz = z[base + k] - pz;
+            flag[k] = dx * dx + dy * dy + dz * dz < r2[base + k];
+        }
+        for (uint32_t k = 0; k < m; ++k) {
+            if (!flag[k])
+                continue;
+            uint32_t i = job->order[base + k];
+            float w;
+            if (!ic_cache_record_weight(job->cache, i, q.position, q.normal, job->acceptance, &w) ||
+                (job->fin[i].flags & IC_RECORD_DISABLED) || job->fin[i].bounce != q.bounce)
+                continue;
+            if (nb < MAX_CONTRIB)
+                ib[nb] = i;
+            ++nb;
+            ic_vec3 e = extrapolate(&job->fin[i], q.position, q.normal);
+            sum_w += w;
+            sum[0] += w * e.x;
+            sum[1] += w * e.y;
+            sum[2] += w * e.z;
+        }
+    }
+    qsort(ib, nb < MAX_CONTRIB ? nb : MAX_CONTRIB, sizeof *ib, cmp_u32);
     unsigned char bad = 0;
     if (ha != (nb > 0) || ea.contributor_count != nb || ea.contributions_written != nb) {
         bad = 1;
@@ -217,23 +239,39 @@ static void compare_one(void *ctx, int64_t item, int thread)
     free(ib);
 }
 
+static const float *sort_key;
+static int cmp_by_key(const void *a, const void *b)
+{
+    float x = sort_key[*(const uint32_t *)a], y = sort_key[*(const uint32_t *)b];
+    return x < y ? -1 : x > y;
+}
+
 static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries, const char *what)
 {
     uint32_t n = ic_cache_count(c);
     ic_record *fin = malloc(n * sizeof *fin);
-    float *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *z = malloc(n * sizeof *z),
-          *r2 = malloc(n * sizeof *r2);
+    float *px = malloc(n * sizeof *px), *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y),
+          *z = malloc(n * sizeof *z), *r2 = malloc(n * sizeof *r2);
+    uint32_t *order = malloc(n * sizeof *order);
+    for (uint32_t i = 0; i < n; ++i) {
+        ic_cache_get_record(c, i, &fin[i]);
+        px[i] = fin[i].position.x;
+        order[i] = i;
+    }
+    sort_key = px;
+    qsort(order, n, sizeof *order, cmp_by_key);
     for (int acc = 0; acc < 2; ++acc) {
-        float s = acc ? ic_cache_get_params(c)->final_accuracy_scale : 1.0f;
-        for (uint32_t i = 0; i < n; ++i) {
-            ic_cache_get_record(c, i, &fin[i]);
-            x[i] = fin[i].position.x;
-            y[i] = fin[i].position.y;
-            z[i] = fin[i].position.z;
-            float r = 1.01f * s * fin[i].accuracy * fin[i].radius;
-            r2[i] = r * r;
+        float s = acc ? ic_cache_get_params(c)->final_accuracy_scale : 1.0f, rmax = 0.0f;
+        for (uint32_t k = 0; k < n; ++k) {
+            const ic_record *rec = &fin[order[k]];
+            x[k] = rec->position.x;
+            y[k] = rec->position.y;
+            z[k] = rec->position.z;
+            float r = 1.01f * s * rec->accuracy * rec->radius;
+            r2[k] = r * r;
+            rmax = fmaxf(rmax, r);
         }
-        compare_job job = {c, fin, x, y, z, r2, n, 77, acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION,
+        compare_job job = {c, fin, x, y, z, r2, order, rmax, n, 77, acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION,
                            calloc(queries, 1), calloc(queries, sizeof(uint32_t))};
         ic_parallel_for(0, queries, compare_one, &job);
         uint32_t set_bad = 0, val_bad = 0, hit = 0;
@@ -247,17 +285,19 @@ static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries,
         CHECK(set_bad == 0 && val_bad == 0, "%s (%s): %u queries with other contributors, %u with other values",
               what, acc ? "final" : "construction", set_bad, val_bad);
         /* The comparison means something only if many queries find records. */
-        CHECK(hit > queries / 5, "%s: only %u of %u queries found records", what, hit, queries);
+        CHECK(hit > queries / 8, "%s: only %u of %u queries found records", what, hit, queries);
         printf("  %-30s %-12s %5u queries, %5.1f%% hit, %5.2f contributors on average\n", what,
                acc ? "final" : "construction", queries, 100.0 * hit / queries, (double)total / queries);
         free(job.bad);
         free(job.contributors);
     }
     free(fin);
+    free(px);
     free(x);
     free(y);
     free(z);
     free(r2);
+    free(order);
 }
 
 static ic_cache_params clamp_config(ic_weight_kind weight, int which)
@@ -288,9 +328,7 @@ static void test_lookup_vs_brute_force(void)
     for (int wk = 0; wk < 2; ++wk) {
         for (int which = 0; which < 6; ++which) {
             ic_cache_params p = clamp_config(wk ? IC_WEIGHT_TABELLION : IC_WEIGHT_WARD, which);
-            double t0 = now();
             ic_cache *c = build_cache(&p, recs, n);
-            printf("  build %.2f s\n", now() - t0);
             char what[96];
             snprintf(what, sizeof what, "%s, %s", wk ? "T-L" : "Ward", clamp_name[which]);
             /* 20k queries for the full configurations, fewer for the single clamps (time). */
@@ -820,7 +858,7 @@ static void test_file(void)
     uint32_t qdiff = 0;
     for (uint32_t q = 0; q < 2000; ++q) {
         ic_cache_lookup lk = {0};
-        make_query(c, 5, q, &lk.position, &lk.normal);
+        make_query(c, 5, q, 1.0f, &lk.position, &lk.normal);
         ic_cache_estimate ea, eb;
         ic_cache_query(c, &lk, &ea);
         ic_cache_query_linear(l, &lk, &eb);
