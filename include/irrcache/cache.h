@@ -44,7 +44,8 @@
  *      lo = max(min_radius, min_radius_pixels·footprint), hi = min(max_radius,
  *      max_radius_pixels·footprint). The R_min floor is the only step that can raise R.
  *   2. validity-radius clamp (seed 004 §4.2): influence radius ≤ distance to the farthest of the k
- *      nearest records in distinct tangent-plane directions (new records only).
+ *      nearest records in distinct tangent-plane directions, scanning the 8·k nearest (new records
+ *      only; a record with fewer than k distinct directions there is left alone).
  *   3. gradient-difference scaling (seed 003): shrink pairs whose luminance gradients differ.
  *   4. neighbor clamping (seed 000 §5.2), to a fixed point: |R_i − R_j| ≤ |p_i − p_j| for every pair
  *      within reach.
