@@ -32,7 +32,7 @@
 #define PARAM_BYTES 56u
 #define HEADER_BYTES (24u + PARAM_BYTES + 8u)
 #define RECORD_BYTES 156u
-#define REBUILD_HINT "delete it or re-render with --cache-rebuild"
+#define REBUILD_HINT "delete it and build the cache again"
 
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
 {

@@ -900,7 +900,7 @@ static void test_file(void)
     {
         ic_cache *x = NULL;
         ic_cache_load(path, &p, hash ^ 1, &x, &err);
-        CHECK(strstr(err.message, "made for another scene") && strstr(err.message, "--cache-rebuild"),
+        CHECK(strstr(err.message, "made for another scene") && strstr(err.message, "build the cache again"),
               "scene message: %s", err.message);
     }
     ic_cache_params other = p;
