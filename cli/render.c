@@ -38,7 +38,7 @@ typedef struct render_args {
     double accuracy, min_radius, max_radius, min_radius_px, max_radius_px, final_scale;
     double weber, adaptive_growth;
     int rays, bounces, max_passes, min_candidates, light_samples;
-    int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference;
+    int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference, recursive;
 } render_args;
 
 typedef enum opt_kind { OPT_INT, OPT_SEED, OPT_DOUBLE, OPT_STRING, OPT_OUTPUT, OPT_FLAG } opt_kind;
@@ -86,6 +86,8 @@ static const opt_def options[] = {
     {"--gather", NULL, OPT_STRING, OFF(gather), 0, "stratified|progressive", "stratified",
      "ic: hemisphere sampler; progressive = Hammersley rounds 4096..65536 until converged"},
     {"--bounces", NULL, OPT_INT, OFF(bounces), 1, "N", "max-depth - 1", "ic: indirect bounces in the light a record gathers"},
+    {"--recursive", NULL, OPT_FLAG, OFF(recursive), 0, NULL, "off",
+     "ic lazy: one cache level per bounce, as Radiance's -ab (--bounces levels), instead of path tracing"},
     {"--light-samples", NULL, OPT_INT, OFF(light_samples), 1, "N", "1",
      "ic: light samples per shading point in the final render (direct light)"},
     {"--min-radius", NULL, OPT_DOUBLE, OFF(min_radius), 0, "R", "0", "ic: smallest record radius, world units"},
@@ -273,10 +275,14 @@ static int parse_args(int argc, char **argv, render_args *a)
     int ic_only = a->strategy || a->weight || a->gather || a->aov || a->accuracy > 0 || a->rays || a->bounces || a->light_samples ||
                   a->min_radius > 0 || a->max_radius > 0 || a->min_radius_px > 0 || a->max_radius_px > 0 ||
                   a->final_scale > 0 || a->max_passes || a->min_candidates || a->no_gradients ||
-                  a->no_neighbor_clamp || a->no_validity_clamp || a->gradient_difference || a->records_json ||
+                  a->no_neighbor_clamp || a->no_validity_clamp || a->gradient_difference || a->recursive || a->records_json ||
                   a->weber > 0 || a->adaptive_growth > 0;
     if (ic_only && strcmp(a->integrator, "ic") != 0) {
         fprintf(stderr, "irrcache render: irradiance-cache options need --integrator ic\n");
+        return 2;
+    }
+    if (a->recursive && (!a->strategy || strcmp(a->strategy, "lazy") != 0)) {
+        fprintf(stderr, "irrcache render: --recursive builds its levels lazily; add --strategy lazy\n");
         return 2;
     }
     if (a->min_radius > 0 && a->max_radius > 0 && a->min_radius > a->max_radius) {
@@ -406,6 +412,7 @@ static void fill_ic_options(const render_args *a, ic_ic_options *o)
     }
     o->no_gradients = a->no_gradients;
     o->bounces = a->bounces;
+    o->recursive = a->recursive;
     o->load_cache = a->load_cache;
     o->save_cache = a->save_cache;
     o->light_samples = a->light_samples;

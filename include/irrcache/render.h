@@ -64,6 +64,8 @@ typedef struct ic_ic_options {
     ic_gather_opts gather; /* hemisphere sampling [stratified, 16×50 = 800 rays] */
     int no_gradients;      /* 1: records carry no gradients (interpolation is a weighted average) */
     int bounces;           /* indirect bounces in the radiance a hemisphere ray returns [max_depth − 1] */
+    int recursive;         /* lazy: one cache level per bounce (Radiance's -ab) instead of path-traced bounces
+                              behind each hemisphere ray; then `bounces` is the number of levels */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     int max_passes;        /* batch: most construction passes [12] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */

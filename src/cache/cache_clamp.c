@@ -81,10 +81,12 @@ uint32_t ic_cache_reach(ic_cache *c, uint32_t i)
             return UINT32_MAX;
         n = ic_octree_radius(&c->points, &pts, p, ri, c->scratch, c->scratch_cap);
     }
-    /* Drop i itself (distance 0 is inside its own sphere). */
+    /* Drop i itself (distance 0 is inside its own sphere) and records of other bounce levels: levels are
+     * separate caches that never interpolate together, so they do not clamp each other either. */
+    uint8_t level = c->cold[i].bounce;
     uint32_t m = 0;
     for (uint32_t k = 0; k < n; ++k)
-        if (c->scratch[k] != i)
+        if (c->scratch[k] != i && c->cold[c->scratch[k]].bounce == level)
             c->scratch[m++] = c->scratch[k];
     /* i inside j's sphere: exactly the records the octree path through p_i references whose sphere
      * holds p_i; those already found above are skipped by the complementary distance test. */
@@ -94,7 +96,7 @@ uint32_t ic_cache_reach(ic_cache *c, uint32_t i)
         const ic_octree_node *node = &c->tree.nodes[path[l]];
         for (uint32_t k = 0; k < node->count; ++k) {
             uint32_t j = c->tree.refs[node->begin + k].index;
-            if (j == i)
+            if (j == i || c->cold[j].bounce != level)
                 continue;
             const ic_float4 *sj = &c->sphere[j];
             float d2 = ic_dist2(p.x, p.y, p.z, sj->x, sj->y, sj->z), rj = influence(c, j);
@@ -145,8 +147,8 @@ static void validity_one(void *ctx, int64_t item, int thread)
     uint32_t taken = 0;
     float farthest2 = 0.0f;
     for (uint32_t q = 0; q < m && taken < job->k; ++q) {
-        if (idx[q] == i || !(d2[q] > 0.0f))
-            continue; /* itself, or a coincident record: no direction */
+        if (idx[q] == i || !(d2[q] > 0.0f) || c->cold[idx[q]].bounce != c->cold[i].bounce)
+            continue; /* itself, a coincident record (no direction), or another bounce level's cache */
         const ic_float4 *sj = &c->sphere[idx[q]];
         ic_vec3 delta = v3(sj->x - p.x, sj->y - p.y, sj->z - p.z);
         /* Direction in the tangent plane; a neighbour straight above keeps its 3-D direction. */

@@ -196,7 +196,8 @@ ic_result ic_image_read_exr(const char *path, ic_image *out, ic_error *err)
 
 /* Writes img to the (temporary) file `file`; returns the first library error (and, when the file could
  * not be created, the system's errno in *open_errno). */
-static exr_result_t write_part(const char *file, const ic_image *img, int is_half, int *open_errno)
+static exr_result_t write_part(const char *file, const ic_image *img, int is_half, exr_compression_t compression,
+                               int *ambiguous, int *open_errno)
 {
     const float *rgb = img->rgb;
     exr_context_initializer_t init = context_initializer();
@@ -213,7 +214,7 @@ static exr_result_t write_part(const char *file, const ic_image *img, int is_hal
     const exr_pixel_type_t type = is_half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
     rv = exr_add_part(ctxt, NULL, EXR_STORAGE_SCANLINE, &part);
     if (rv == EXR_ERR_SUCCESS)
-        rv = exr_initialize_required_attr_simple(ctxt, part, img->width, img->height, EXR_COMPRESSION_ZIP);
+        rv = exr_initialize_required_attr_simple(ctxt, part, img->width, img->height, compression);
     static const char *const names[3] = {"R", "G", "B"};
     for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; ++c)
         rv = exr_add_channel(ctxt, part, names[c], type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
@@ -248,6 +249,14 @@ static exr_result_t write_part(const char *file, const ic_image *img, int is_hal
         rv = exr_encoding_choose_default_routines(ctxt, part, &encoder);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_encoding_run(ctxt, part, &encoder);
+        /* OpenEXR before 3.4.8 (Debian 12 ships 3.1.5) stores zlib output whose size equals the raw
+         * chunk's as if it were raw, and readers decode garbage (openexr issue #2306). A compressed
+         * chunk the size of the raw one is ambiguous: the caller then writes the file uncompressed. */
+        if (rv == EXR_ERR_SUCCESS && compression != EXR_COMPRESSION_NONE &&
+            encoder.compressed_bytes == encoder.packed_bytes) {
+            *ambiguous = 1;
+            break;
+        }
     }
     if (initialized)
         exr_encoding_destroy(ctxt, &encoder);
@@ -262,8 +271,12 @@ ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half,
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: output path too long; use a shorter path", path);
     ic_atomic_temp_name(path, tmp, sizeof tmp);
 
-    int open_errno = 0;
-    exr_result_t rv = write_part(tmp, img, is_half, &open_errno);
+    int open_errno = 0, ambiguous = 0;
+    exr_result_t rv = write_part(tmp, img, is_half, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);
+    if (rv == EXR_ERR_SUCCESS && ambiguous) {
+        remove(tmp);
+        rv = write_part(tmp, img, is_half, EXR_COMPRESSION_NONE, &ambiguous, &open_errno);
+    }
     if (rv != EXR_ERR_SUCCESS) {
         remove(tmp); /* the library deletes it on most errors; make sure */
         if (rv == EXR_ERR_FILE_ACCESS)

@@ -51,17 +51,20 @@ static void test_cornell(void)
 
     struct {
         const char *name;
-        int strategy, no_gradients;
+        int strategy, no_gradients, recursive, bounces;
         double max_relmse, min_psnr_ldr;
     } cases[] = {
-        {"batch", IC_STRATEGY_BATCH, 0, 0.012, 33.0},
-        {"batch, no gradients", IC_STRATEGY_BATCH, 1, 0.012, 33.0},
-        {"lazy", IC_STRATEGY_LAZY, 0, 0.012, 33.0},
+        {"batch", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0},
+        {"batch, no gradients", IC_STRATEGY_BATCH, 1, 0, 0, 0.012, 33.0},
+        {"lazy", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0},
+        {"lazy, recursive (5 levels)", IC_STRATEGY_LAZY, 0, 1, 5, 0.012, 33.0},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         ic_render_options o = ic_options();
         o.ic.strategy = cases[k].strategy;
         o.ic.no_gradients = cases[k].no_gradients;
+        o.ic.recursive = cases[k].recursive;
+        o.ic.bounces = cases[k].bounces;
         ic_render_aovs aovs = {0};
         aovs.want_density = 1;
         o.aovs = &aovs;
@@ -80,7 +83,9 @@ static void test_cornell(void)
               cases[k].min_psnr_ldr);
         /* IC at 16 spp is closer to the reference than the path tracer at 16 spp. */
         CHECK(m.relmse < mpt.relmse, "%s beats PT at equal spp (%.5f vs %.5f)", cases[k].name, m.relmse, mpt.relmse);
-        CHECK(st.records > 10 && st.records < (uint32_t)(W * H / 2), "%s: %u records", cases[k].name, st.records);
+        /* Recursive caching adds the records of the deeper levels (off screen too). */
+        CHECK(st.records > 10 && st.records < (uint32_t)(cases[k].recursive ? 20 * W * H : W * H / 2), "%s: %u records",
+              cases[k].name, st.records);
         /* Coverage: every pixel whose centre sees a surface has a contributing record. A pixel surely
          * sees one when it and its 8 neighbours are lit in the reference (the pixel filter spreads light
          * one pixel beyond silhouettes). */
@@ -107,17 +112,20 @@ static void test_cornell(void)
 
 static void test_threads(void)
 {
-    for (int strategy = IC_STRATEGY_BATCH; strategy <= IC_STRATEGY_LAZY; ++strategy) {
+    for (int variant = 0; variant < 3; ++variant) {
+        int strategy = variant == 0 ? IC_STRATEGY_BATCH : IC_STRATEGY_LAZY;
         ic_image a = {0}, b = {0};
         ic_render_options o = ic_options();
         o.spp = 2;
         o.ic.strategy = (ic_strategy)strategy;
+        o.ic.recursive = variant == 2;
+        o.ic.bounces = variant == 2 ? 3 : 0;
         o.threads = 1;
         int ok = test_render(CORNELL, 48, 48, &o, &a, NULL);
         o.threads = 2;
         ok &= test_render(CORNELL, 48, 48, &o, &b, NULL);
         CHECK(ok && memcmp(a.rgb, b.rgb, sizeof(float) * 3 * 48 * 48) == 0,
-              "strategy %d: 1 and 2 threads give identical images", strategy);
+              "variant %d: 1 and 2 threads give identical images", variant);
         ic_image_free(&a);
         ic_image_free(&b);
     }
