@@ -13,6 +13,7 @@
  */
 #include "irrcache/cache.h"
 
+#include "core/morton.h"
 #include "core/rng.h"
 #include "core/threads.h"
 #include "core/vecmath.h"
@@ -36,20 +37,11 @@ typedef struct surface_point {
 
 /* 30-bit Morton code of a point in the 64³ world: sorting look-ups by it mimics the coherence of
  * a renderer's pixel order (neighbouring pixels hit neighbouring surface points). */
-static uint32_t spread10(uint32_t v)
-{
-    v &= 1023u;
-    v = (v | (v << 16)) & 0x030000FFu;
-    v = (v | (v << 8)) & 0x0300F00Fu;
-    v = (v | (v << 4)) & 0x030C30C3u;
-    v = (v | (v << 2)) & 0x09249249u;
-    return v;
-}
 static uint32_t morton(ic_vec3 p)
 {
     uint32_t x = (uint32_t)ic_clampf(p.x * 16.0f, 0.0f, 1023.0f), y = (uint32_t)ic_clampf(p.y * 16.0f, 0.0f, 1023.0f),
              z = (uint32_t)ic_clampf(p.z * 16.0f, 0.0f, 1023.0f);
-    return spread10(x) | spread10(y) << 1 | spread10(z) << 2;
+    return ic_morton3_cells(x, y, z);
 }
 
 static double now(void)

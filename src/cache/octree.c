@@ -7,6 +7,8 @@
  */
 #include "octree.h"
 
+#include "core/morton.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -299,16 +301,6 @@ static ic_result insert_item(ic_octree *t, const ic_octree_items *it, uint32_t i
     return IC_OK;
 }
 
-/* 10-bit spread for 30-bit Morton codes. */
-static uint32_t spread10(uint32_t v)
-{
-    v &= 1023u;
-    v = (v | (v << 16)) & 0x030000FFu;
-    v = (v | (v << 8)) & 0x0300F00Fu;
-    v = (v | (v << 4)) & 0x030C30C3u;
-    v = (v | (v << 2)) & 0x09249249u;
-    return v;
-}
 
 typedef struct keyed {
     uint32_t key, index;
@@ -346,7 +338,7 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
         uint32_t q[3];
         for (int a = 0; a < 3; ++a)
             q[a] = u[a] <= 0.0f ? 0u : (u[a] >= 1023.0f ? 1023u : (uint32_t)u[a]);
-        order[i] = (keyed){spread10(q[0]) | spread10(q[1]) << 1 | spread10(q[2]) << 2, i};
+        order[i] = (keyed){ic_morton3_cells(q[0], q[1], q[2]), i};
     }
     qsort(order, count, sizeof *order, cmp_keyed);
     for (uint32_t k = 0; k < count && rc == IC_OK; ++k)

@@ -738,12 +738,16 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
 
 /* Shadow-tested contribution of one light sample (weight for the glossy lobe's MIS given by wg). */
 static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, const ic_light_sample *ls,
-                           int mis_glossy, uint64_t *rays)
+                           int mis, uint64_t *rays)
 {
     ic_vec3 fd, fg;
     ic_bsdf_eval_lobes(b, wo, ls->wi, &fd, &fg);
-    float wg = mis_glossy ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
-    ic_vec3 f = v3_add(fd, v3_scale(fg, wg));
+    /* Each lobe is MIS-weighted against its own sampling: the diffuse lobe's cosine sample in
+     * ic_ic_direct_light, the glossy lobe's in the final render's path. */
+    float cos_pdf = fmaxf(v3_dot(ls->wi, b->frame.n), 0.0f) * IC_INV_PI;
+    float wd = mis ? ic_power_heuristic(ls->pdf, cos_pdf) : 1.0f;
+    float wg = mis ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
+    ic_vec3 f = v3_add(v3_scale(fd, wd), v3_scale(fg, wg));
     if (v3_is_black(f) || v3_is_black(ls->radiance))
         return v3s(0.0f);
     ic_ray shadow = ic_shadow_ray(s, ls);
@@ -753,11 +757,40 @@ static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
     return v3_scale(v3_mul(f, ls->radiance), fabsf(v3_dot(ls->wi, b->frame.n)) / ls->pdf);
 }
 
+/* The diffuse lobe's half of the MIS pair for emitting triangles: a cosine-distributed ray that counts
+ * the emission it finds, weighted against light sampling. Light sampling alone is noisy next to small
+ * emitters (a close point sees a small light under a large solid angle, which the area pdf samples
+ * poorly); the records exclude this emission, so nothing is counted twice. */
+static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_rng *rng,
+                                       uint64_t *rays)
+{
+    float u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+    if (!(c->light_sel.tri > 0.0f) || v3_is_black(b->kd))
+        return v3s(0.0f);
+    ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
+    float cos_i = v3_dot(wi, b->frame.n);
+    if (cos_i <= 0.0f || v3_dot(wi, b->ng) <= 0.0f)
+        return v3s(0.0f);
+    ic_ray ray = ic_spawn_ray(s, wi);
+    ic_hit hit;
+    ++*rays;
+    ic_accel_intersect1(c->tr->accel, &ray, &hit);
+    if (hit.triangle == IC_NO_HIT || c->tr->scene->triangle_light[hit.triangle] < 0)
+        return v3s(0.0f);
+    ic_surface hs;
+    ic_scene_surface(c->tr->scene, hit.triangle, hit.u, hit.v, &hs);
+    ic_vec3 le = ic_scene_emission(c->tr->scene, &hs, v3_neg(wi));
+    if (v3_is_black(le))
+        return v3s(0.0f);
+    float pl = ic_scene_light_pdf_triangle_sel(c->tr->scene, &c->light_sel, s->p, hit.triangle, wi, hit.t);
+    /* f_d·cos/p_cos = kd for the cosine-sampled Lambertian lobe. */
+    return v3_scale(v3_mul(b->kd, le), ic_power_heuristic(cos_i * IC_INV_PI, pl));
+}
+
 /* Direct light for the final render. The environment is in the records and is not sampled here; the
  * sun, a single delta light, is taken every time (choosing it among the lights would only add noise);
- * triangle and point lights are sampled once by power. The diffuse lobe takes the full light sample
- * (it is never BSDF-sampled in this integrator); the glossy lobe is MIS-weighted against its own lobe
- * sampling. */
+ * triangle and point lights are sampled once by power, and emitting triangles once more through the
+ * diffuse lobe (MIS, power heuristic); the glossy lobe's BSDF sample is the final render's path. */
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                            uint64_t *rays)
 {
@@ -776,7 +809,7 @@ ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
     ic_light_sample ls;
     if (ic_scene_sample_light_sel(scene, &c->light_sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
         L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, rays));
-    return L;
+    return v3_add(L, diffuse_emission_sample(c, s, b, rng, rays));
 }
 
 typedef struct final_ctx {
@@ -1060,6 +1093,13 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     free(c);
 }
 
+ic_result ic_ic_build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt, ic_error *err)
+{
+    return c->o.strategy == IC_STRATEGY_LAZY       ? build_lazy(c, opt, st, pt, err)
+           : c->o.strategy == IC_STRATEGY_ADAPTIVE ? ic_ic_build_adaptive(c, opt, st, pt, err)
+                                                   : build_batch(c, opt, st, pt, err);
+}
+
 /* Hash of everything a record's value depends on besides the cache parameters (which the cache file
  * records itself): geometry, materials, textures' sizes, lights, environment, and how records gather. */
 static uint64_t records_hash(const ic_ctx *c)
@@ -1116,9 +1156,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
         c->cache = loaded;
         pt.insert += ic_seconds() - t0;
     } else {
-        r = c->o.strategy == IC_STRATEGY_LAZY       ? build_lazy(c, opt, st, &pt, err)
-            : c->o.strategy == IC_STRATEGY_ADAPTIVE ? ic_ic_build_adaptive(c, opt, st, &pt, err)
-                                                    : build_batch(c, opt, st, &pt, err);
+        r = ic_ic_build(c, opt, st, &pt, err);
         if (r != IC_OK)
             goto done;
     }

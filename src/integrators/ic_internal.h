@@ -65,6 +65,8 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
                            ic_error *err);
 /* Frees a context, its cache (unless the caller took it and set c->cache = NULL) and buffers; NULL is a no-op. */
 void ic_ic_ctx_destroy(ic_ctx *c);
+/* Builds the cache of c with the strategy of its options (construction only, no final render). */
+ic_result ic_ic_build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt, ic_error *err);
 
 /* ---- adaptive caching (ic_adaptive.c; seed 000 §4) */
 

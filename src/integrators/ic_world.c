@@ -1,19 +1,10 @@
 /* ic_world.c — Morton sort, bounding-box clustering, distinct-normal selection (seed 004 §3.1.3). */
 #include "ic_world.h"
 
+#include "core/morton.h"
 #include "core/vecmath.h"
 
 #include <stdlib.h>
-
-static uint32_t spread10(uint32_t v)
-{
-    v &= 0x3ffu;
-    v = (v | (v << 16)) & 0x030000ffu;
-    v = (v | (v << 8)) & 0x0300f00fu;
-    v = (v | (v << 4)) & 0x030c30c3u;
-    v = (v | (v << 2)) & 0x09249249u;
-    return v;
-}
 
 uint32_t ic_morton3(ic_vec3 p, ic_vec3 lo, ic_vec3 hi)
 {
@@ -24,7 +15,7 @@ uint32_t ic_morton3(ic_vec3 p, ic_vec3 lo, ic_vec3 hi)
         float t = ext > 0.0f ? (c[i] - l[i]) / ext : 0.0f;
         q[i] = (uint32_t)(ic_clampf(t, 0.0f, 1.0f) * 1023.0f);
     }
-    return spread10(q[0]) | (spread10(q[1]) << 1) | (spread10(q[2]) << 2);
+    return ic_morton3_cells(q[0], q[1], q[2]);
 }
 
 typedef struct keyed {
