@@ -34,6 +34,7 @@ typedef struct render_args {
     int has_exposure;
     int quiet;
     /* irradiance caching */
+    const char *sampler;
     const char *strategy, *weight, *gather, *aov, *records_json, *load_cache, *save_cache;
     double accuracy, min_radius, max_radius, min_radius_px, max_radius_px, final_scale;
     double weber, adaptive_growth;
@@ -70,6 +71,8 @@ static const opt_def options[] = {
     {"--max-depth", NULL, OPT_INT, OFF(max_depth), 1, "N", "scene file, else 8", "maximum number of bounces"},
     {"--threads", NULL, OPT_INT, OFF(threads), 0, "N", "0 (all cores)", "worker threads; the image does not depend on it"},
     {"--seed", NULL, OPT_SEED, OFF(seed), 0, "N", "scene file, else 1", "random seed; same seed, same image"},
+    {"--sampler", NULL, OPT_STRING, OFF(sampler), 0, "sobol|random", "sobol",
+     "pixel, light and BSDF sample pairs: Owen-scrambled Sobol' per pixel (less noise) or independent random"},
     {"--exposure", NULL, OPT_DOUBLE, OFF(exposure), -100, "STOPS", "scene file, else 0", "exposure applied to .png outputs"},
     {"--stats", NULL, OPT_STRING, OFF(stats_path), 0, "FILE.json", "none",
      "write run statistics: seconds, rays, rays per second, per-phase times"},
@@ -244,6 +247,7 @@ static int parse_args(int argc, char **argv, render_args *a)
         return 2;
     }
     const struct { const char *name, *value, *choices; } choices[] = {
+        {"--sampler", a->sampler, "sobol random"},
         {"--strategy", a->strategy, "batch lazy adaptive"},
         {"--weight", a->weight, "ward tl"},
         {"--gather", a->gather, "stratified progressive"},
@@ -513,6 +517,7 @@ int ic_cli_render(int argc, char **argv)
     opt.seed = (uint64_t)a.seed;
     opt.has_seed = a.has_seed;
     opt.time_budget = a.time_budget;
+    opt.sampler = a.sampler && !strcmp(a.sampler, "random") ? IC_SAMPLER_RANDOM : IC_SAMPLER_SOBOL;
     opt.progress = on_progress;
     opt.progress_user = &prog;
     ic_render_aovs aovs;

@@ -92,6 +92,12 @@ typedef struct ic_record_view {
     int visible;           /* 1 if the record lies on a surface the camera sees directly */
 } ic_record_view;
 
+/* Where the 2-D sample pairs of a pixel's samples come from. */
+typedef enum ic_sampler {
+    IC_SAMPLER_SOBOL = 0,  /* Owen-scrambled Sobol' pairs per pixel (src/core/rng.h): lower variance, default */
+    IC_SAMPLER_RANDOM      /* independent random numbers */
+} ic_sampler;
+
 /* Extra images an irradiance-cache render can return (each allocated only if asked for). */
 typedef struct ic_render_aovs {
     int want_indirect, want_records, want_density;
@@ -115,6 +121,7 @@ typedef struct ic_render_options {
     uint64_t seed;         /* random seed (default: scene file, else 1) */
     int has_seed;          /* 1: use `seed` even if it is 0 */
     double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent */
+    ic_sampler sampler;    /* pixel, light and BSDF sample pairs [IC_SAMPLER_SOBOL] */
     ic_progress_fn progress;
     void *progress_user;
     ic_ic_options ic;      /* irradiance caching (integrator IC) */

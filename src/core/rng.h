@@ -27,10 +27,14 @@ static inline uint64_t ic_hash4(uint64_t a, uint64_t b, uint64_t c, uint64_t d)
     return ic_mix64(h ^ (d + 0xa0761d6478bd642fULL));
 }
 
-/* A stream: fixed key, running counter. Copyable, 16 bytes, no allocation. */
+/* A stream: fixed key, running counter, and optionally a low-discrepancy sequence for its 2-D draws
+ * (ic_rng_2d). Copyable, 32 bytes, no allocation. */
 typedef struct ic_rng {
     uint64_t key;
     uint64_t counter;
+    uint64_t lds_key;          /* 0: ic_rng_2d draws plain random pairs */
+    uint32_t lds_index;        /* this stream's point in the sequence (the pixel's sample number) */
+    uint32_t lds_dim;          /* 2-D dimensions drawn so far */
 } ic_rng;
 
 /* Stream for (seed, a, b, c), e.g. (seed, pixel, sample, purpose). */
@@ -39,6 +43,9 @@ static inline ic_rng ic_rng_make(uint64_t seed, uint64_t a, uint64_t b, uint64_t
     ic_rng r;
     r.key = ic_hash4(seed, a, b, c);
     r.counter = 0;
+    r.lds_key = 0;
+    r.lds_index = 0;
+    r.lds_dim = 0;
     return r;
 }
 
@@ -52,5 +59,84 @@ static inline double ic_rng_double(ic_rng *r) { return (double)(ic_rng_u64(r) >>
 
 /* Uniform integer in [0, n), n > 0 (Lemire's multiply-shift; bias below 2^-32 for n < 2^32). */
 static inline uint32_t ic_rng_below(ic_rng *r, uint32_t n) { return (uint32_t)(((ic_rng_u64(r) >> 32) * (uint64_t)n) >> 32); }
+
+/* ---------------------------------------------------------------- low-discrepancy pairs
+ *
+ * Scrambled, shuffled Sobol' points in 2-D (Burley 2020, "Practical Hash-based Owen Scrambling",
+ * JCGT 9(4)): the first two Sobol' dimensions form a (0,2)-sequence, so every aligned block of 2^k
+ * consecutive indices is a (0,k,2)-net — each of the 2^k elementary intervals of any shape holds
+ * one point. Nested uniform (Owen) scrambling by the Laine–Karras hash makes every point uniformly
+ * distributed (estimates stay unbiased) while keeping the net; scrambling the index with another
+ * key decorrelates the pairs of one sample from each other ("padding"). A pixel's samples
+ * 0…spp−1 then cover its pixel area, its light-sample square and its BSDF square evenly, which
+ * lowers the variance of low-dimensional integrands (pixel filter, direct light) far below that of
+ * independent draws, at the same cost. */
+
+static inline uint32_t ic_reverse_bits32(uint32_t i)
+{
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
+    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
+    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
+    return ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
+}
+
+/* Owen scrambling of a 32-bit binary fraction: bit b flips by a hash of the bits above it. The
+ * Laine–Karras permutation (constants from Burley 2020) lets each bit depend only on lower bits;
+ * applied to the reversed value, it acts on the digits below each digit, as Owen's tree does. */
+static inline uint32_t ic_owen_scramble(uint32_t x, uint32_t seed)
+{
+    x = ic_reverse_bits32(x);
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return ic_reverse_bits32(x);
+}
+
+/* Second Sobol' dimension (primitive polynomial x + 1: v_k = v_{k-1} xor v_{k-1} >> 1), as a 32-bit fraction. */
+static inline uint32_t ic_sobol_dim1(uint32_t i)
+{
+    uint32_t r = 0;
+    for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
+        if (i & 1u)
+            r ^= v;
+    return r;
+}
+
+/* Point `index` of the Sobol' pair scrambled by `key`, in [0,1)^2 (24-bit floats, never 1.0). */
+static inline void ic_sobol2d(uint32_t index, uint64_t key, float *u, float *v)
+{
+    uint64_t h = ic_mix64(key);
+    uint32_t i = ic_owen_scramble(index, (uint32_t)h);
+    uint32_t x = ic_owen_scramble(ic_reverse_bits32(i), (uint32_t)(h >> 32));
+    uint32_t y = ic_owen_scramble(ic_sobol_dim1(i), (uint32_t)ic_mix64(h ^ 0x5851f42d4c957f2dULL));
+    *u = (float)(x >> 8) * (1.0f / 16777216.0f);
+    *v = (float)(y >> 8) * (1.0f / 16777216.0f);
+}
+
+/* Pairs per sample taken from the sequence; later pairs (deep path vertices) are plain random. */
+#define IC_RNG_LDS_PAIRS 24
+
+/* Makes the stream's 2-D draws points of per-`key` scrambled sequences, this stream being point
+ * `index` (e.g. key = hash of the pixel, index = sample number). */
+static inline void ic_rng_enable_lds(ic_rng *r, uint64_t key, uint32_t index)
+{
+    r->lds_key = key | 1u;
+    r->lds_index = index;
+    r->lds_dim = 0;
+}
+
+/* A uniform pair in [0,1)^2: the next low-discrepancy dimension when enabled, else two draws. */
+static inline void ic_rng_2d(ic_rng *r, float *u, float *v)
+{
+    if (r->lds_key && r->lds_dim < IC_RNG_LDS_PAIRS) {
+        ic_sobol2d(r->lds_index, r->lds_key + 0x9e3779b97f4a7c15ULL * ++r->lds_dim, u, v);
+        return;
+    }
+    *u = ic_rng_float(r);
+    *v = ic_rng_float(r);
+}
 
 #endif

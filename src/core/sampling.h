@@ -8,6 +8,7 @@
 #ifndef IC_CORE_SAMPLING_H
 #define IC_CORE_SAMPLING_H
 
+#include "rng.h"
 #include "vecmath.h"
 
 /* Concentric map of [0,1)^2 onto the unit disk. */
@@ -48,14 +49,6 @@ static inline float ic_power_heuristic(float pdf_a, float pdf_b)
 }
 
 /* Radical inverse base 2 (van der Corput), for Hammersley sets. */
-static inline float ic_radical_inverse2(uint32_t i)
-{
-    i = (i << 16) | (i >> 16);
-    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
-    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
-    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
-    i = ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
-    return (float)(i >> 8) * (1.0f / 16777216.0f);
-}
+static inline float ic_radical_inverse2(uint32_t i) { return (float)(ic_reverse_bits32(i) >> 8) * (1.0f / 16777216.0f); }
 
 #endif

@@ -764,7 +764,8 @@ static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
 static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_rng *rng,
                                        uint64_t *rays)
 {
-    float u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+    float u1, u2;
+    ic_rng_2d(rng, &u1, &u2);
     if (!(c->light_sel.tri > 0.0f) || v3_is_black(b->kd))
         return v3s(0.0f);
     ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
@@ -794,7 +795,8 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_surface *s, con
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                            uint64_t *rays)
 {
-    float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+    float u0 = ic_rng_float(rng), u1, u2;
+    ic_rng_2d(rng, &u1, &u2);
     ic_vec3 L = v3s(0.0f);
     const ic_scene *scene = c->tr->scene;
     if (scene->sun.enabled) {
@@ -854,7 +856,9 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
         ic_bsdf_init(&b, scene, &s, wo);
         ic_bsdf_sample bs;
         if (!ic_bsdf_has_smooth(&b)) {
-            if (!ic_bsdf_sample_dir(&b, wo, ic_rng_float(rng), ic_rng_float(rng), ic_rng_float(rng), &bs))
+            float u0 = ic_rng_float(rng), u1, u2;
+            ic_rng_2d(rng, &u1, &u2);
+            if (!ic_bsdf_sample_dir(&b, wo, u0, u1, u2, &bs))
                 break;
             beta = v3_mul(beta, bs.weight);
             prev_glossy = 0;
@@ -871,8 +875,9 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
                 direct = v3_add(direct, ic_ic_direct_light(c, &s, &b, wo, rng, rays));
             direct = v3_scale(direct, 1.0f / (float)c->o.light_samples);
             L = v3_add(L, v3_mul(beta, v3_add(indirect, direct)));
-            if (!ic_bsdf_has_glossy(&b) ||
-                !ic_bsdf_sample_glossy(&b, wo, ic_rng_float(rng), ic_rng_float(rng), &bs))
+            float u1, u2;
+            ic_rng_2d(rng, &u1, &u2);
+            if (!ic_bsdf_has_glossy(&b) || !ic_bsdf_sample_glossy(&b, wo, u1, u2, &bs))
                 break;
             beta = v3_mul(beta, bs.weight);
             prev_glossy = 1;
@@ -1177,6 +1182,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     loop.time_budget = opt->time_budget;
     loop.threads = opt->threads;
     loop.seed = opt->seed;
+    loop.random_sampler = opt->sampler == IC_SAMPLER_RANDOM;
     loop.phase = "final render";
     loop.progress = opt->progress;
     loop.progress_user = opt->progress_user;

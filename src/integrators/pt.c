@@ -18,7 +18,8 @@ ic_pt_params ic_pt_params_resolve(ic_pt_params p)
 ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                         uint64_t *rays)
 {
-    float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+    float u0 = ic_rng_float(rng), u1, u2;
+    ic_rng_2d(rng, &u1, &u2);
     if (!ic_bsdf_has_smooth(b))
         return v3s(0.0f);
     ic_light_sample ls;
@@ -86,7 +87,8 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
         ic_bsdf_init(&b, scene, &s, wo);
         L = v3_add(L, v3_mul(beta, ic_direct_light(tr, &s, &b, wo, rng, rays)));
         ic_bsdf_sample bs;
-        float u0 = ic_rng_float(rng), u1 = ic_rng_float(rng), u2 = ic_rng_float(rng);
+        float u0 = ic_rng_float(rng), u1, u2;
+        ic_rng_2d(rng, &u1, &u2);
         if (!ic_bsdf_sample_dir(&b, wo, u0, u1, u2, &bs))
             break;
         beta = v3_mul(beta, bs.weight);

@@ -48,6 +48,8 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     memset(st, 0, sizeof *st);
     if (opt.spp < 0 || opt.max_depth < 0 || opt.threads < 0 || opt.time_budget < 0.0)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "negative --spp, --max-depth, --threads or --time; give values >= 0");
+    if (opt.sampler != IC_SAMPLER_SOBOL && opt.sampler != IC_SAMPLER_RANDOM)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "unknown sampler %d; use sobol or random", (int)opt.sampler);
     /* A cache render's samples are cheap (a camera ray, a light sample, a look-up): it defaults to more. */
     if (opt.spp == 0)
         opt.spp = scene->settings.spp > 0       ? scene->settings.spp
@@ -81,6 +83,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     loop.time_budget = opt.time_budget;
     loop.threads = opt.threads;
     loop.seed = opt.seed;
+    loop.random_sampler = opt.sampler == IC_SAMPLER_RANDOM;
     loop.progress = opt.progress;
     loop.progress_user = opt.progress_user;
     ic_image_loop_result lr;

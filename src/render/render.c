@@ -89,8 +89,14 @@ static void render_tile(void *p, int64_t item, int thread)
             double sum[3] = {0, 0, 0};
             for (int s = c->s_begin; s < c->s_end; ++s) {
                 ic_rng rng = ic_rng_make(c->loop->seed, pixel, (uint64_t)s, 0);
-                float fx = (float)x + 0.5f + tent_sample(ic_rng_float(&rng));
-                float fy = (float)y + 0.5f + tent_sample(ic_rng_float(&rng));
+                /* The sample number indexes the pixel's sequence across passes too, so every
+                 * power-of-two prefix of a pixel's samples stays a net (time-budgeted passes). */
+                if (!c->loop->random_sampler)
+                    ic_rng_enable_lds(&rng, ic_hash4(c->loop->seed, pixel, 0x736f626f6cULL, 0), (uint32_t)s);
+                float u, v;
+                ic_rng_2d(&rng, &u, &v);
+                float fx = (float)x + 0.5f + tent_sample(u);
+                float fy = (float)y + 0.5f + tent_sample(v);
                 ic_ray ray = ic_camera_ray(cam, fx, fy);
                 ic_vec3 L = c->fn(c->user, &ray, pixel, &rng, thread, &rays);
                 /* A NaN or Inf sample would poison the pixel forever: drop it. */

@@ -23,6 +23,7 @@ typedef struct ic_image_loop {
     double time_budget;    /* seconds; 0 = none */
     int threads;           /* 0 = all cores */
     uint64_t seed;
+    int random_sampler;    /* 1: independent draws; 0: scrambled Sobol' pairs per pixel */
     const char *phase;     /* progress phase name */
     ic_progress_fn progress;
     void *progress_user;

@@ -311,10 +311,15 @@ float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_sele
     return select * dist * dist / (l->area * cos_l);
 }
 
-static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_vec3 p, float u0, float u1, float u2,
+static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_vec3 p, float u1, float u2,
                            ic_light_sample *ls)
 {
-    uint32_t li = cdf_find(s->tri_light_cdf, s->tri_light_count, u0);
+    /* The triangle is chosen with u1 and u1 is stretched back over [0,1) inside its interval, so a
+     * well-spread (u1, u2) set stays well spread over the union of the emitters (a stratified
+     * sequence loses its structure when a third, independent number picks the triangle). */
+    uint32_t li = cdf_find(s->tri_light_cdf, s->tri_light_count, u1);
+    float lo = s->tri_light_cdf[li], width = s->tri_light_cdf[li + 1] - lo;
+    u1 = width > 0.0f ? ic_clampf((u1 - lo) / width, 0.0f, 0.99999994f) : 0.0f;
     const ic_tri_light *l = &s->tri_lights[li];
     uint32_t t = l->triangle;
     ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
@@ -413,7 +418,7 @@ int ic_scene_sample_light_sel(const ic_scene *scene, const ic_light_selection *s
     int ok = 0;
     switch (cls) {
     case 0:
-        ok = sel->tri > 0.0f && sample_triangle(scene, sel, p, ur, u1, u2, ls);
+        ok = sel->tri > 0.0f && sample_triangle(scene, sel, p, u1, u2, ls);
         break;
     case 1:
         ok = sel->point > 0.0f && sample_point(scene, sel, p, ur, ls);

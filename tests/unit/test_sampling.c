@@ -8,6 +8,8 @@
 #include "core/rng.h"
 #include "core/sampling.h"
 
+#include <string.h>
+
 typedef ic_vec3 (*warp_fn)(float, float, float);
 typedef float (*pdf_fn)(ic_vec3, float);
 typedef void (*inv_fn)(ic_vec3, float, float *, float *);
@@ -152,6 +154,84 @@ static void check_rng(void)
         CHECK(abs((int)counts[k] - 10000) < 500, "ic_rng_below bucket %d = %u", k, counts[k]);
 }
 
+/* The scrambled Sobol' pairs (rng.h): nets, uniformity, decorrelated pairs, lower variance. */
+static void check_lds(void)
+{
+    /* Every power-of-two prefix of a pixel's sequence is a (0,k,2)-net: for each split of the unit
+     * square into 2^a × 2^(k−a) equal boxes, every box holds exactly one of the first 2^k points. */
+    for (uint64_t key = 1; key <= 5; ++key) {
+        for (int k = 1; k <= 10; ++k) {
+            uint32_t n = 1u << k;
+            int ok = 1;
+            for (int a = 0; a <= k && ok; ++a) {
+                static unsigned char hits[1024];
+                memset(hits, 0, n);
+                for (uint32_t i = 0; i < n; ++i) {
+                    float u, v;
+                    ic_sobol2d(i, key * 7919u, &u, &v);
+                    uint32_t cx = (uint32_t)(u * (float)(1u << a)), cy = (uint32_t)(v * (float)(1u << (k - a)));
+                    ++hits[cx * (1u << (k - a)) + cy];
+                }
+                for (uint32_t c = 0; c < n; ++c)
+                    ok &= hits[c] == 1;
+            }
+            CHECK(ok, "key %llu: first %u points form a (0,%d,2)-net", (unsigned long long)key, n, k);
+        }
+    }
+    /* Scrambling makes each point uniform over keys: point 5's u and v fall evenly into 8 bins. */
+    uint32_t bu[8] = {0}, bv[8] = {0};
+    for (uint64_t key = 0; key < 16000; ++key) {
+        float u, v;
+        ic_sobol2d(5, key, &u, &v);
+        ++bu[(int)(u * 8.0f)];
+        ++bv[(int)(v * 8.0f)];
+    }
+    for (int b = 0; b < 8; ++b)
+        CHECK(abs((int)bu[b] - 2000) < 200 && abs((int)bv[b] - 2000) < 200, "point 5 uniform over keys, bin %d: %u %u",
+              b, bu[b], bv[b]);
+    /* Pairs of one stream are decorrelated: the first and second pair's u over 256 samples. */
+    double sxy = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
+    for (uint32_t i = 0; i < 256; ++i) {
+        ic_rng r = ic_rng_make(9, 0, i, 0);
+        ic_rng_enable_lds(&r, 12345, i);
+        float u0, v0, u1, v1;
+        ic_rng_2d(&r, &u0, &v0);
+        ic_rng_2d(&r, &u1, &v1);
+        sx += u0, sy += u1, sxx += (double)u0 * u0, syy += (double)u1 * u1, sxy += (double)u0 * u1;
+    }
+    double cov = sxy / 256 - sx / 256 * sy / 256;
+    double corr = cov / sqrt((sxx / 256 - sx * sx / 65536) * (syy / 256 - sy * sy / 65536));
+    CHECK(fabs(corr) < 0.2, "pairs 1 and 2 uncorrelated (r = %.3f)", corr);
+    /* An unbiased and much less noisy estimator: the fraction of the unit square inside a disk of
+     * radius 0.8 about the origin (π·0.64/4) from 64 points, over 2000 keys, against random points. */
+    const double truth = IC_PI * 0.64 / 4.0;
+    double mean_s = 0, mse_s = 0, mse_r = 0;
+    for (uint64_t key = 0; key < 2000; ++key) {
+        ic_rng rr = ic_rng_make(77, key, 0, 0);
+        int in_s = 0, in_r = 0;
+        for (uint32_t i = 0; i < 64; ++i) {
+            float u, v;
+            ic_sobol2d(i, key + 1000, &u, &v);
+            in_s += u * u + v * v < 0.64f;
+            u = ic_rng_float(&rr);
+            v = ic_rng_float(&rr);
+            in_r += u * u + v * v < 0.64f;
+        }
+        double es = in_s / 64.0, er = in_r / 64.0;
+        mean_s += es / 2000.0;
+        mse_s += (es - truth) * (es - truth) / 2000.0;
+        mse_r += (er - truth) * (er - truth) / 2000.0;
+    }
+    CHECK_NEAR(mean_s, truth, 4.0 * sqrt(mse_s / 2000.0) + 1e-4, "Sobol' disk estimate unbiased");
+    printf("disk from 64 points: Sobol MSE %.3g, random MSE %.3g, pair correlation %.3f\n", mse_s, mse_r, corr);
+    CHECK(mse_s < 0.25 * mse_r, "Sobol' MSE %.3g below a quarter of random's %.3g", mse_s, mse_r);
+    /* Beyond IC_RNG_LDS_PAIRS pairs, and without enabling, draws are the stream's random numbers. */
+    ic_rng a = ic_rng_make(3, 1, 4, 1), b = a;
+    float u, v;
+    ic_rng_2d(&a, &u, &v);
+    CHECK(u == ic_rng_float(&b) && v == ic_rng_float(&b), "disabled stream: pairs are plain draws");
+}
+
 int main(void)
 {
     const warp_case cases[] = {
@@ -167,5 +247,6 @@ int main(void)
     check_disk_and_triangle();
     check_frames();
     check_rng();
+    check_lds();
     TEST_MAIN_END();
 }
