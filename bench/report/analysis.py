@@ -5,14 +5,17 @@ Equal quality. The path tracer is rendered at 1, 2, 4, ... samples per pixel; ea
 relMSE). To find the time the path tracer needs to reach a cache render's relMSE e:
   * "interpolated": e lies between two measured points; straight-line interpolation of log(seconds)
     against log(relMSE) between them (the curve is close to a line of slope -1 there);
-  * "extrapolated": e is below the lowest measured error; MSE is proportional to 1/spp, so the path
-    tracer needs spp* = spp_last * e_last / e samples, and its time grows by the per-sample render time of
-    the last point: t = t_last + (spp* - spp_last) * render_seconds_per_spp;
+  * "extrapolated": e is below the lowest measured error; MSE is proportional to spp^-s, s fitted to the
+    last three points and kept in [1, 2] (1 = plain Monte Carlo; low-discrepancy sampling can do better), so
+    the path tracer needs spp* = spp_last * (e_last / e)^(1/s) samples, and its time grows by the per-sample
+    render time of the last point: t = t_last + (spp* - spp_last) * render_seconds_per_spp;
   * "extrapolated (<1 spp)": e is above the 1-spp error; the same law below 1 spp, from the fixed cost
     (load + acceleration structure) plus a fraction of one sample's time.
 The speed-up is that time divided by the cache render's time. Errors are against a path-traced reference
-with finite samples, so measured errors carry its noise (about e_last * spp_last / spp_ref); errors near that
-floor make the speed-up unreliable, and the result says so.
+with finite samples, so measured errors carry its noise. bench/run measures that noise with a second
+reference of another seed (half the relMSE between the two) and also gives noise-corrected speed-ups, with
+the noise subtracted from every error (see equal_quality_time); errors near the noise are unreliable either
+way, and the result says so.
 """
 
 import math
@@ -31,30 +34,66 @@ def is_finite_number(x):
     return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
 
 
-def equal_quality_time(curve, error, spp_ref=None):
+def _fitted_slope(pts):
+    """Convergence order s of MSE ∝ spp^-s from the last three points (least squares in log-log), kept in
+    [1, 2]: never slower than Monte Carlo's 1/spp, which would favour the cache."""
+    tail = pts[-3:]
+    if len(tail) < 2:
+        return 1.0
+    xs = [math.log(p["spp"]) for p in tail]
+    ys = [math.log(p["relmse"]) for p in tail]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    sxx = sum((x - mx) ** 2 for x in xs)
+    if sxx <= 0:
+        return 1.0
+    slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx
+    return min(2.0, max(1.0, -slope))
+
+
+def equal_quality_time(curve, error, spp_ref=None, ref_noise=None):
     """Time the path tracer needs to reach `error` (relMSE).
 
     curve: list of dicts with spp, seconds, relmse and render_seconds (the render phase only), in
     increasing spp. Returns a dict: seconds, spp (the estimated sample count), method ("interpolated",
-    "extrapolated", "extrapolated (<1 spp)") and below_reference_floor (bool), or None when the curve has
-    no usable points or error is not a positive finite number.
+    "extrapolated", "extrapolated (<1 spp)"), below_reference_floor (bool) and lower_bound (bool), or None
+    when the curve has no usable points or error is not a positive finite number.
+
+    ref_noise: the reference's own noise (its relMSE against the truth, measured from a second reference
+    with another seed). Every measured error is the render's error plus that noise (the render and the
+    reference are independent), so with ref_noise given, it is subtracted from the curve and from `error`
+    before comparing: the noise-corrected estimate. An error that falls below a quarter of the noise
+    after the subtraction cannot be resolved; it is raised to that quarter and the result marked
+    lower_bound (the speed-up is at least the figure given).
     """
     pts = [p for p in curve if is_finite_number(p.get("relmse")) and p["relmse"] > 0 and p["seconds"] > 0]
     if not pts or not is_finite_number(error) or error <= 0:
         return None
     pts.sort(key=lambda p: p["spp"])
+    result = {"below_reference_floor": False, "lower_bound": False}
+    if is_finite_number(ref_noise) and ref_noise > 0:
+        result["below_reference_floor"] = error < 2.0 * ref_noise
+        resolvable = 0.25 * ref_noise
+        pts = [dict(p, relmse=p["relmse"] - ref_noise) for p in pts if p["relmse"] - ref_noise > resolvable]
+        if not pts:
+            return None
+        error -= ref_noise
+        if error < resolvable:
+            error, result["lower_bound"] = resolvable, True
+    else:
+        last = pts[-1]
+        floor = last["relmse"] * last["spp"] / spp_ref if spp_ref else 0.0
+        result["below_reference_floor"] = bool(floor and error < 2.0 * floor)
     first, last = pts[0], pts[-1]
-    floor = last["relmse"] * last["spp"] / spp_ref if spp_ref else 0.0
-    result = {"below_reference_floor": bool(floor and error < 2.0 * floor)}
 
     def per_spp(p):
         render = p.get("render_seconds")
         return (render if is_finite_number(render) and render > 0 else p["seconds"]) / p["spp"]
 
     if error < min(p["relmse"] for p in pts):
-        spp = last["spp"] * last["relmse"] / error
+        order = _fitted_slope(pts)
+        spp = last["spp"] * (last["relmse"] / error) ** (1.0 / order)
         result.update(seconds=last["seconds"] + (spp - last["spp"]) * per_spp(last), spp=spp,
-                      method="extrapolated")
+                      method="extrapolated", order=order)
         return result
     if error > first["relmse"]:
         spp = first["spp"] * first["relmse"] / error

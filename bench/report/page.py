@@ -68,6 +68,16 @@ def _eq_quality(c):
         _num(eq.get("speedup"), "%.2f×")
 
 
+def _eq_corrected(c):
+    eq = c.get("equal_quality_corrected")
+    if not eq:
+        return "–", "–"
+    speed = _num(eq.get("speedup"), "%.2f×")
+    if eq.get("lower_bound"):
+        speed = "≥ " + speed
+    return _num(eq.get("relmse")), speed
+
+
 def _eq_time(c):
     et = c.get("equal_time") or {}
     if "pt" not in et:
@@ -77,8 +87,8 @@ def _eq_time(c):
 
 PT_COLUMNS = ["spp", "seconds", "rays/s", "relMSE", "RMSE", "PSNR HDR", "PSNR LDR", "SSIM"]
 CACHE_COLUMNS = ["strategy", "accuracy", "seconds", "records", "passes", "rays", "relMSE", "PSNR HDR", "PSNR LDR",
-                 "SSIM", "PT time to equal relMSE", "equal-quality speed-up", "PT relMSE at equal time",
-                 "equal-time error ratio"]
+                 "SSIM", "PT time to equal relMSE", "equal-quality speed-up", "relMSE, noise-corrected",
+                 "speed-up, noise-corrected", "PT relMSE at equal time", "equal-time error ratio"]
 
 
 def _pt_row(c):
@@ -94,9 +104,10 @@ def _cache_row(c):
     m = c["metrics"]
     eq_t, eq_s = _eq_quality(c)
     et_e, et_r = _eq_time(c)
+    cr_e, cr_s = _eq_corrected(c)
     return [c["strategy"], acc, _num(c["seconds"], "%.3f"), str(c.get("records", "–")), str(c.get("passes", "–")),
             _num(c["rays"], "%.3g"), _num(m["relmse"]), _psnr(m["psnr_hdr"]), _psnr(m["psnr_ldr"]),
-            _num(m["ssim"], "%.4f"), eq_t, eq_s, et_e, et_r]
+            _num(m["ssim"], "%.4f"), eq_t, eq_s, cr_e, cr_s, et_e, et_r]
 
 
 def _md_table(columns, rows):
@@ -118,10 +129,15 @@ METHOD_NOTE = (
     "a path-traced reference with its own seed; relMSE = mean of (a−b)²/(b²+0.01), PSNR HDR on linear values, "
     "PSNR LDR and SSIM on the 8-bit sRGB images (`irrcache diff`). **Equal-quality speed-up**: the time the path "
     "tracer needs to reach the cache render's relMSE — *interpolated* on the log-log curve of its measured points, "
-    "or *extrapolated* with MSE ∝ 1/spp beyond them (the column says which) — divided by the cache render's time. "
+    "or *extrapolated* beyond them (the column says which; see below) — divided by the cache render's time. "
     "**Equal-time error ratio**: relMSE of the path tracer given the cache render's time (`--time`) divided by the "
     "cache render's relMSE (above 1: the cache is better). \"below reference noise\" marks errors under twice the "
-    "reference's own estimated noise, where the speed-up is unreliable.")
+    "reference's own noise, where the speed-up is unreliable. **Noise-corrected**: the reference has noise of its "
+    "own, which adds to every measured error (render and reference are independent); a second reference with "
+    "another seed measures it (half the relMSE between the two), and the corrected columns subtract it from the "
+    "cache render's error and from the path tracer's curve before comparing. Beyond the measured curve the path "
+    "tracer is extrapolated with MSE ∝ spp^-s, s fitted to its last three points and kept in [1, 2]; \"≥\" marks "
+    "corrected errors below a quarter of the reference's noise, which are raised to that quarter (a lower bound).")
 
 
 def markdown_section(results):
@@ -138,7 +154,10 @@ def markdown_section(results):
                     s.get("skipped") or s.get("error"), ""]
             continue
         ref = s["reference"]
-        out += ["### %s — %d×%d, reference %d spp" % (s["name"], s["width"], s["height"], ref["spp"]), "",
+        noise = ref.get("noise_relmse")
+        out += ["### %s — %d×%d, reference %d spp%s" % (
+                    s["name"], s["width"], s["height"], ref["spp"],
+                    ", its own noise relMSE %.3g" % noise if noise is not None else ""), "",
                 "Path tracer:", "", _md_table(PT_COLUMNS, [_pt_row(c) for c in s["pt_curve"]]), "",
                 "Irradiance cache:", "", _md_table(CACHE_COLUMNS, [_cache_row(c) for c in s["cache"]]), ""]
     return "\n".join(out).rstrip("\n") + "\n"

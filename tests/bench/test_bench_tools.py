@@ -114,6 +114,38 @@ class EqualQualityTest(unittest.TestCase):
         self.assertTrue(analysis.equal_quality_time(exact_curve(), 0.0003, spp_ref=1024)["below_reference_floor"])
         self.assertFalse(analysis.equal_quality_time(exact_curve(), 0.01, spp_ref=1024)["below_reference_floor"])
 
+    def test_extrapolation_uses_a_faster_fitted_order(self):
+        # a curve converging as 1/spp^1.5: extrapolating with that order, not 1/spp
+        curve = [dict(p, relmse=0.2 / p["spp"] ** 1.5) for p in exact_curve()]
+        r = analysis.equal_quality_time(curve, 0.2 / 64 ** 1.5)
+        self.assertAlmostEqual(r["order"], 1.5, places=9)
+        self.assertAlmostEqual(r["spp"], 64, places=6)
+
+    def test_order_is_never_below_one(self):
+        # a curve flattening on a noise floor must not be extrapolated slower than 1/spp
+        curve = [dict(p, relmse=0.2 / p["spp"] ** 0.5) for p in exact_curve()]
+        r = analysis.equal_quality_time(curve, 0.2 / 4 ** 0.5 / 16)
+        self.assertEqual(r["order"], 1.0)
+
+    def test_reference_noise_is_subtracted(self):
+        # every measured error carries the reference's noise n: with n given, the exact curve is recovered
+        n = 0.001
+        noisy = [dict(p, relmse=p["relmse"] + n) for p in exact_curve()]
+        r = analysis.equal_quality_time(noisy, 0.2 / 64 + n, ref_noise=n)
+        self.assertEqual(r["method"], "extrapolated")
+        self.assertAlmostEqual(r["spp"], 64, places=6)
+        self.assertFalse(r["lower_bound"])
+        # without the correction the same numbers give a smaller speed-up
+        self.assertLess(analysis.equal_quality_time(noisy, 0.2 / 64 + n)["spp"], 64)
+
+    def test_unresolvable_error_gives_a_lower_bound(self):
+        n = 0.001
+        noisy = [dict(p, relmse=p["relmse"] + n) for p in exact_curve()]
+        r = analysis.equal_quality_time(noisy, n * 1.1, ref_noise=n)
+        self.assertTrue(r["lower_bound"])
+        self.assertTrue(r["below_reference_floor"])
+        self.assertAlmostEqual(r["spp"], 0.2 / (0.25 * n), places=3)
+
     def test_unusable_input(self):
         self.assertIsNone(analysis.equal_quality_time([], 0.1))
         self.assertIsNone(analysis.equal_quality_time(exact_curve(), float("nan")))
