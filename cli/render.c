@@ -96,7 +96,7 @@ static const opt_def options[] = {
     {"--min-radius", NULL, OPT_DOUBLE, OFF(min_radius), 0, "R", "0", "ic: smallest record radius, world units"},
     {"--max-radius", NULL, OPT_DOUBLE, OFF(max_radius), 0, "R", "scene diagonal / 8",
      "ic: largest record radius, world units"},
-    {"--min-radius-px", NULL, OPT_DOUBLE, OFF(min_radius_px), 0, "P", "1.5",
+    {"--min-radius-px", NULL, OPT_DOUBLE, OFF(min_radius_px), 0, "P", "3",
      "ic: smallest influence radius a*R of a record, in pixels at its primary hit"},
     {"--max-radius-px", NULL, OPT_DOUBLE, OFF(max_radius_px), 0, "P", "48",
      "ic: largest influence radius a*R of a record, in pixels at its primary hit"},

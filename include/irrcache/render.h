@@ -58,7 +58,7 @@ typedef enum ic_strategy {
 typedef struct ic_ic_options {
     ic_strategy strategy;
     ic_cache_params cache; /* weights, accuracy [0.3], clamps. Unlike the cache library, here
-                              min_radius_pixels [1.5] and max_radius_pixels [48] bound the influence radius
+                              min_radius_pixels [3] and max_radius_pixels [48] bound the influence radius
                               a·R on screen; max_radius [scene diagonal/8] bounds R in world units;
                               a negative value switches a bound off */
     ic_gather_opts gather; /* hemisphere sampling [stratified, 16×50 = 800 rays] */

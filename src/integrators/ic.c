@@ -1041,9 +1041,11 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? 1.0f : 0.3f;
     /* Radius bounds: 0 means the renderer's default, negative switches the bound off. The pixel bounds
      * given to the renderer bound a record's influence radius a·R on screen (what a user sees: "a record
-     * covers between 1.5 and 48 pixels"); the cache clamps R itself, hence the division by a. */
+     * covers between 3 and 48 pixels"); the cache clamps R itself, hence the division by a. The floor of
+     * 3 pixels, not 1.5: records closer than that mostly average their own Monte Carlo noise; on Sponza
+     * at 448×252 it cut records by a quarter and lowered the error (BENCHMARKS.md). */
     float diag = v3_len(v3_sub(scene->bounds_max, scene->bounds_min));
-    float min_px = o.cache.min_radius_pixels == 0.0f ? 1.5f : fmaxf(o.cache.min_radius_pixels, 0.0f);
+    float min_px = o.cache.min_radius_pixels == 0.0f ? 3.0f : fmaxf(o.cache.min_radius_pixels, 0.0f);
     float max_px = o.cache.max_radius_pixels == 0.0f ? 48.0f : fmaxf(o.cache.max_radius_pixels, 0.0f);
     o.cache.min_radius_pixels = min_px / o.cache.accuracy;
     o.cache.max_radius_pixels = max_px / o.cache.accuracy;
