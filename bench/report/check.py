@@ -37,6 +37,13 @@ def check_results(results, out_dir):
             problems.append("%s: the reference diffed with itself is not exact (rmse %r, relmse %r)"
                             % (name, self_diff.get("rmse"), self_diff.get("relmse")))
         curve = s["pt_curve"]
+        noise = s["reference"].get("noise_relmse")
+        if not (is_finite_number(noise) and noise >= 0):
+            problems.append("%s: the reference's measured noise is %r, not a number >= 0" % (name, noise))
+        elif curve and is_finite_number(curve[-1]["metrics"]["relmse"]) and not noise < curve[-1]["metrics"]["relmse"]:
+            problems.append("%s: the reference's noise (relMSE %.4g) is not below the path tracer's at %d spp (%.4g); "
+                            "the reference has too few samples" % (name, noise, curve[-1]["spp"],
+                                                                   curve[-1]["metrics"]["relmse"]))
         if len(curve) < 3:
             problems.append("%s: the path tracer curve has %d points; need at least 3" % (name, len(curve)))
         for c in curve:

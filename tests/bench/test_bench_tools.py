@@ -199,7 +199,7 @@ def fake_results(out_dir, pt_errors=(0.2, 0.1, 0.05), records=10):
     cache = [{"tag": "lazy-default", "records": records, "seconds": 1.0, "metrics": m(0.04),
               "equal_quality": {"speedup": 1.5, "method": "extrapolated"},
               "equal_time": {"pt": {"metrics": m(0.05)}, "relmse_ratio": 1.25}}]
-    return {"scenes": [{"name": "s", "reference": {"self_diff": {"rmse": 0, "relmse": 0}}, "pt_curve": curve,
+    return {"scenes": [{"name": "s", "reference": {"self_diff": {"rmse": 0, "relmse": 0}, "noise_relmse": 0.001}, "pt_curve": curve,
                         "cache": cache}]}
 
 
@@ -246,6 +246,13 @@ class CheckTest(unittest.TestCase):
         problems = check.check_results(fake_results(self.out, pt_errors=(0.2, 0.3, 0.05), records=0), self.out)
         self.assertTrue(any("does not fall" in p for p in problems), problems)
         self.assertTrue(any("records" in p for p in problems), problems)
+
+    def test_noisy_reference_fails(self):
+        r = fake_results(self.out)
+        r["scenes"][0]["reference"]["noise_relmse"] = 1.0  # noisier than the path tracer's last point
+        self.assertTrue(any("too few samples" in p for p in check.check_results(r, self.out)))
+        r["scenes"][0]["reference"]["noise_relmse"] = float("nan")
+        self.assertTrue(any("measured noise" in p for p in check.check_results(r, self.out)))
 
     def test_broken_link_fails(self):
         r = fake_results(self.out)
