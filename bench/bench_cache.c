@@ -7,7 +7,9 @@
  * same input records are then inserted again as one batch with and without validity-radius
  * clamping (seed 004 §4.2), and in batches of 10k (a batch-strategy pass), timing batch insertion.
  * Look-ups at 1M random surface points run on one thread (per-core rate; median of 5 runs) with the
- * construction and the final acceptance, and on all threads.
+ * construction and the final acceptance, and on all threads; after ic_cache_rebuild_index each cache
+ * is timed through its octree (thawed), its frozen layout, and the frozen layout with a hint
+ * (cache.h: FROZEN LOOK-UPS), back to back in one run.
  *
  * Usage: bench_cache [records] (default 300000). Prints a table; asserts nothing.
  */
@@ -113,7 +115,10 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-static lookup_stats time_lookups(const ic_cache *c, const surface_point *q, ic_cache_acceptance acc)
+/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint. */
+typedef enum path_kind { PATH_OCTREE, PATH_FROZEN, PATH_HINTED } path_kind;
+
+static lookup_stats time_lookups(const ic_cache *c, const surface_point *q, ic_cache_acceptance acc, int hinted)
 {
     lookup_stats st = {0, 0, 0, 0};
     double rates[REPS];
@@ -121,11 +126,12 @@ static lookup_stats time_lookups(const ic_cache *c, const surface_point *q, ic_c
     float sink = 0.0f;
     for (int rep = 0; rep < REPS; ++rep) {
         tested = contributors = hits = 0;
+        ic_cache_hint hint = {0};
         double t0 = now();
         for (int k = 0; k < QUERIES; ++k) {
             ic_cache_lookup l = {q[k].p, q[k].n, acc, 0, NULL, 0};
             ic_cache_estimate e;
-            hits += (uint64_t)ic_cache_query(c, &l, &e);
+            hits += (uint64_t)ic_cache_query_hinted(c, &l, hinted ? &hint : NULL, &e);
             tested += e.records_tested;
             contributors += e.contributor_count;
             sink += e.irradiance.x;
@@ -152,10 +158,11 @@ static void mt_chunk(void *ctx, int64_t item, int thread)
 {
     mt_job *job = ctx;
     float s = 0.0f;
+    ic_cache_hint hint = {0}; /* per chunk: the result never depends on how chunks meet threads */
     for (int64_t k = item * 10000; k < (item + 1) * 10000; ++k) {
         ic_cache_lookup l = {job->q[k].p, job->q[k].n, IC_ACCEPT_FINAL, 0, NULL, 0};
         ic_cache_estimate e;
-        ic_cache_query(job->c, &l, &e);
+        ic_cache_query_hinted(job->c, &l, &hint, &e);
         s += e.irradiance.x;
     }
     job->sink[thread] += s;
@@ -211,11 +218,52 @@ static int cmp_key(const void *a, const void *b)
 static void print_row(const char *cache, const char *order, const ic_cache *c, const surface_point *q,
                       ic_cache_acceptance acc)
 {
-    lookup_stats st = time_lookups(c, q, acc);
+    lookup_stats st = time_lookups(c, q, acc, 0);
     char label[128];
     snprintf(label, sizeof label, "%s, %s, %s", cache, order, acc == IC_ACCEPT_FINAL ? "final" : "constr.");
     printf("| %-52s | %8.2f | %6.2f | %6.2f | %5.1f%% |\n", label, st.per_second * 1e-6, st.tested, st.contributors,
            100.0 * st.hit);
+}
+
+/* One row per look-up path on a rebuilt cache (octree path thawed, then frozen, then frozen with a
+ * hint), the same queries, timed back to back; speed-ups are ratios within this run. */
+static void print_paths(const char *cache, const char *order, ic_cache *c, const surface_point *q,
+                        ic_cache_acceptance acc)
+{
+    static const char *name[3] = {"octree", "frozen", "frozen+hint"};
+    lookup_stats st[3];
+    ic_error err;
+    ic_cache_thaw(c);
+    st[PATH_OCTREE] = time_lookups(c, q, acc, 0);
+    if (ic_cache_freeze(c, &err) != IC_OK) {
+        fprintf(stderr, "bench_cache: %s\n", err.message);
+        exit(1);
+    }
+    st[PATH_FROZEN] = time_lookups(c, q, acc, 0);
+    st[PATH_HINTED] = time_lookups(c, q, acc, 1);
+    for (int k = 0; k < 3; ++k) {
+        char label[128];
+        snprintf(label, sizeof label, "%s, %s, %s, %s", cache, order, acc == IC_ACCEPT_FINAL ? "final" : "constr.",
+                 name[k]);
+        printf("| %-58s | %8.2f | %5.2fx | %6.2f | %6.2f | %5.1f%% |\n", label, st[k].per_second * 1e-6,
+               st[k].per_second / st[PATH_OCTREE].per_second, st[k].tested, st[k].contributors, 100.0 * st[k].hit);
+    }
+}
+
+/* Freezing time and the layout's size per record. */
+static void print_freeze(const char *cache, ic_cache *c)
+{
+    ic_error err;
+    ic_cache_thaw(c);
+    size_t thawed = ic_cache_memory_bytes(c);
+    double t0 = now();
+    if (ic_cache_freeze(c, &err) != IC_OK) {
+        fprintf(stderr, "bench_cache: %s\n", err.message);
+        exit(1);
+    }
+    double t = now() - t0;
+    printf("freeze, %s: %.3f s, frozen layout %.0f bytes per record (cache without it %.0f)\n", cache, t,
+           (double)(ic_cache_memory_bytes(c) - thawed) / ic_cache_count(c), (double)thawed / ic_cache_count(c));
 }
 
 int main(int argc, char **argv)
@@ -290,6 +338,7 @@ int main(int argc, char **argv)
     printf("irrcache cache benchmark: %u records on %d boxes' faces (60^3 world), Ward a = 0.2, final scale 1.5,\n"
            "gradient + neighbor clamps on; %d look-ups per run on 1 thread, median of %d runs\n\n",
            n, BOXES, QUERIES, REPS);
+    printf("Incrementally grown octree (construction phase; never frozen):\n\n");
     printf("| %-52s | %8s | %6s | %6s | %6s |\n", "cache, look-up order, acceptance", "M look/s", "refs", "contrib",
            "hit");
     printf("|%s|%s|%s|%s|%s|\n", "------------------------------------------------------", "----------", "--------",
@@ -300,20 +349,30 @@ int main(int argc, char **argv)
     double t_rebuild0 = now();
     ic_cache_rebuild_index(lazy, &err);
     double t_rebuild = now() - t_rebuild0;
-    print_row("lazy, after ic_cache_rebuild_index", "coherent", lazy, qc, IC_ACCEPT_CONSTRUCTION);
-    print_row("lazy, after ic_cache_rebuild_index", "coherent", lazy, qc, IC_ACCEPT_FINAL);
-    print_row("lazy, after ic_cache_rebuild_index", "random", lazy, q, IC_ACCEPT_FINAL);
-    print_row("batch, no validity clamp", "coherent", without_v, qc, IC_ACCEPT_CONSTRUCTION);
-    print_row("batch, no validity clamp", "coherent", without_v, qc, IC_ACCEPT_FINAL);
-    print_row("batch, no validity clamp", "random", without_v, q, IC_ACCEPT_FINAL);
-    print_row("batch, validity clamp (k=6, 30 deg)", "coherent", with_v, qc, IC_ACCEPT_CONSTRUCTION);
-    print_row("batch, validity clamp (k=6, 30 deg)", "coherent", with_v, qc, IC_ACCEPT_FINAL);
-    print_row("batch, validity clamp (k=6, 30 deg)", "random", with_v, q, IC_ACCEPT_FINAL);
-    printf("\n%d threads, coherent, final: no validity %.2f M/s, validity %.2f M/s\n", ic_hardware_threads(),
-           time_lookups_mt(without_v, qc) * 1e-6, time_lookups_mt(with_v, qc) * 1e-6);
+    /* The batch caches' octrees were rebuilt by their (large) batch; rebuild anyway for equal footing. */
+    ic_cache_rebuild_index(without_v, &err);
+    ic_cache_rebuild_index(with_v, &err);
+    printf("\nAfter ic_cache_rebuild_index: octree path (thawed) vs frozen layout vs frozen + hint, same queries;\n"
+           "speed-up = rate / octree rate of the same cache, order and acceptance:\n\n");
+    printf("| %-58s | %8s | %6s | %6s | %6s | %6s |\n", "cache, order, acceptance, path", "M look/s", "speed",
+           "refs", "contrib", "hit");
+    printf("|%s|%s|%s|%s|%s|%s|\n", "------------------------------------------------------------", "----------",
+           "--------", "--------", "--------", "--------");
+    const char *cname[3] = {"lazy", "batch, no validity", "batch, validity"};
+    ic_cache *caches[3] = {lazy, without_v, with_v};
+    for (int k = 0; k < 3; ++k) {
+        print_paths(cname[k], "coherent", caches[k], qc, IC_ACCEPT_CONSTRUCTION);
+        print_paths(cname[k], "coherent", caches[k], qc, IC_ACCEPT_FINAL);
+        print_paths(cname[k], "random", caches[k], q, IC_ACCEPT_FINAL);
+    }
+    printf("\n");
+    for (int k = 0; k < 3; ++k)
+        print_freeze(cname[k], caches[k]);
+    printf("\n%d threads, coherent, final, frozen + hint: no validity %.2f M/s, validity %.2f M/s\n",
+           ic_hardware_threads(), time_lookups_mt(without_v, qc) * 1e-6, time_lookups_mt(with_v, qc) * 1e-6);
     printf("\ninsertion: incremental (lazy, %llu candidates) %.0f records/s (insertion only; whole loop %.2f s);\n"
            "  one batch of %u: %.0f records/s (validity on), %.0f records/s (off); batches of 10k: %.0f records/s;\n"
-           "  octree rebuild of the lazy cache: %.3f s\n",
+           "  octree rebuild + freeze of the lazy cache: %.3f s\n",
            (unsigned long long)candidates, n / t_insert, t_lazy, n, n / t_batch_v, n / t_batch_nv, n / t_batch10k,
            t_rebuild);
     printf("memory: %zu bytes per record (record arrays); whole cache incl. octree and point index: %.0f (lazy), "

@@ -3,8 +3,9 @@
  * scene, queried at the scene's own shading points (one per pixel centre, raster order, as the final
  * render queries them), with and without validity-radius clamping (seed 004 §4.2, Table 1).
  *
- * usage: bench_lookup SCENE [width height] — prints one row per setting; asserts nothing.
- * Single thread (= per core), median of 5 passes over all shading points.
+ * usage: bench_lookup SCENE [width height] — prints one row per setting and look-up path (the octree
+ * with the cache thawed, the frozen layout, the frozen layout with a caller hint; cache.h: FROZEN
+ * LOOK-UPS); asserts nothing. Single thread (= per core), median of 5 passes over all shading points.
  */
 #include "geom/accel.h"
 #include "integrators/ic_internal.h"
@@ -21,34 +22,65 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint. */
+enum { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATHS };
+
+/* One pass over all shading points in raster order; returns seconds, counts into *refs and *contrib. */
+static double pass(const ic_ctx *c, int hinted, double *refs, double *contrib, size_t *points)
+{
+    size_t npix = (size_t)c->g.width * c->g.height;
+    ic_cache_hint hint = {0};
+    *refs = *contrib = 0.0;
+    *points = 0;
+    double t0 = ic_seconds();
+    for (size_t i = 0; i < npix; ++i) {
+        if (!c->g.valid[i])
+            continue;
+        ic_cache_lookup q;
+        memset(&q, 0, sizeof q);
+        q.position = c->g.p[i];
+        q.normal = c->g.n[i];
+        q.acceptance = IC_ACCEPT_FINAL;
+        ic_cache_estimate e;
+        ic_cache_query_hinted(c->cache, &q, hinted ? &hint : NULL, &e);
+        ++*points;
+        *refs += e.records_tested;
+        *contrib += e.contributor_count;
+    }
+    return ic_seconds() - t0;
+}
+
+/* Median of 5 passes per path; the paths alternate within each repetition so that load on a shared
+ * machine hits them alike. */
 static void measure(const char *label, const ic_ctx *c, double build_seconds)
 {
-    size_t npix = (size_t)c->g.width * c->g.height, points = 0;
-    double runs[5], refs = 0.0, contrib = 0.0;
-    for (int r = 0; r < 5; ++r) {
-        double t0 = ic_seconds();
-        for (size_t i = 0; i < npix; ++i) {
-            if (!c->g.valid[i])
-                continue;
-            ic_cache_lookup q;
-            memset(&q, 0, sizeof q);
-            q.position = c->g.p[i];
-            q.normal = c->g.n[i];
-            q.acceptance = IC_ACCEPT_FINAL;
-            ic_cache_estimate e;
-            ic_cache_query(c->cache, &q, &e);
-            if (r == 0) {
-                ++points;
-                refs += e.records_tested;
-                contrib += e.contributor_count;
+    static const char *name[PATHS] = {"octree", "frozen", "frozen+hint"};
+    double runs[PATHS][5], refs[PATHS] = {0}, contrib = 0.0;
+    size_t points = 0;
+    ic_cache *cache = c->cache;
+    for (int r = 0; r < 5; ++r)
+        for (int k = 0; k < PATHS; ++k) {
+            ic_error err;
+            if (k == PATH_OCTREE)
+                ic_cache_thaw(cache);
+            else if (!ic_cache_is_frozen(cache) && ic_cache_freeze(cache, &err) != IC_OK) {
+                fprintf(stderr, "bench_lookup: %s\n", err.message);
+                exit(1);
             }
+            runs[k][r] = pass(c, k == PATH_HINTED, &refs[k], &contrib, &points);
         }
-        runs[r] = ic_seconds() - t0;
-    }
-    qsort(runs, 5, sizeof runs[0], cmp_double);
-    printf("%-22s %8u records  build %7.2f s  %7.2f M look-ups/s/core  %6.1f refs/look-up  %5.2f contributors\n",
-           label, ic_cache_count(c->cache), build_seconds, (double)points / runs[2] * 1e-6, refs / (double)points,
-           contrib / (double)points);
+    for (int k = 0; k < PATHS; ++k)
+        qsort(runs[k], 5, sizeof runs[k][0], cmp_double);
+    for (int k = 0; k < PATHS; ++k)
+        printf("%-19s %-12s %6u records  build %6.2f s  %6.2f M look-ups/s/core  x%.2f  %5.1f refs/look-up  "
+               "%4.2f contributors\n",
+               label, name[k], ic_cache_count(cache), build_seconds, (double)points / runs[k][2] * 1e-6,
+               runs[PATH_OCTREE][2] / runs[k][2], refs[k] / (double)points, contrib / (double)points);
+    size_t frozen = ic_cache_memory_bytes(cache);
+    ic_cache_thaw(cache);
+    size_t thawed = ic_cache_memory_bytes(cache);
+    printf("%-19s memory: cache %.0f bytes/record, frozen layout %.0f more\n", label,
+           (double)thawed / ic_cache_count(cache), (double)(frozen - thawed) / ic_cache_count(cache));
 }
 
 int main(int argc, char **argv)

@@ -52,6 +52,19 @@
  *   Two records i, j are "within reach" when |p_i − p_j| < max(a_i·R_i, a_j·R_j): one's position
  *   lies inside the other's (construction) influence sphere. Steps 2–4 only ever shrink radii, of new
  *   and existing records alike.
+ *
+ * FROZEN LOOK-UPS (for the read-only final render)
+ *   ic_cache_freeze (called by ic_cache_rebuild_index and ic_cache_load) copies the octree into a
+ *   compact read-only layout: 4-byte nodes in depth-first order; per leaf, one contiguous list of the
+ *   references on its root-to-leaf path whose sphere can reach the leaf, in path order, with the hot
+ *   fields of their records (position, R_i, a_i, normal, bounce, flags) side by side four at a time,
+ *   so the distance and facing tests run four-wide and a rejected candidate touches no other memory;
+ *   the interpolation data of the records in the order the lists first use them. A look-up descends
+ *   (or, with a hint, stays in the previous leaf), tests one list and weighs the records that pass.
+ *   Results are bit-identical to the octree path: the same contributors in the same order with the
+ *   same arithmetic. Any change to the records (insertion, ic_cache_set_record_accuracy,
+ *   ic_cache_set_record_flags) thaws the cache: look-ups go through the octree again, with the same
+ *   results, until the next freeze. Memory: see ic_cache_memory_bytes.
  */
 #ifndef IRRCACHE_CACHE_H
 #define IRRCACHE_CACHE_H
@@ -97,6 +110,7 @@ typedef struct ic_cache_params {
     float gradient_difference_threshold; /* τ of the criterion (see cache_clamp.c); default 0.1 */
     uint32_t leaf_capacity;           /* octree: split leaves holding more refs than this; default 12 */
     uint32_t max_depth;               /* octree depth limit, ≤ 32; default 20 */
+    ic_cache_switch freeze;           /* ic_cache_rebuild_index and ic_cache_load freeze the cache; default on */
     int threads;                      /* threads for batch insertion; default all cores */
 } ic_cache_params;
 
@@ -136,6 +150,14 @@ typedef struct ic_cache_contribution {
     ic_vec3 value;                    /* E_i extrapolated to p with both gradients, clamped ≥ 0 */
 } ic_cache_contribution;
 
+/* Caller-owned hint for coherent look-ups on a frozen cache: one per thread, zero-initialised = no
+ * hint. It remembers the leaf of the previous look-up; a look-up whose point lies in that leaf's cell
+ * skips the descent. It changes speed only, never a result: any value is safe, as the look-up checks
+ * the cell. Ignored (and left alone) while the cache is not frozen. */
+typedef struct ic_cache_hint {
+    uint32_t leaf;                    /* opaque: 1 + leaf of the previous look-up, 0 = none */
+} ic_cache_hint;
+
 /* A look-up request. */
 typedef struct ic_cache_lookup {
     ic_vec3 position;                 /* p */
@@ -152,7 +174,7 @@ typedef struct ic_cache_estimate {
     float weight_sum;                 /* Σ w_i */
     uint32_t contributor_count;       /* |S| (may exceed contributions_written) */
     uint32_t contributions_written;   /* entries written to lookup.contributions */
-    uint32_t records_tested;          /* references examined on the octree path (cost diagnostics) */
+    uint32_t records_tested;          /* references examined: octree path, or the frozen leaf's list (cost diagnostics) */
 } ic_cache_estimate;
 
 /* Fills out with params where every zero field is replaced by its default; checks ranges. */
@@ -181,6 +203,10 @@ ic_result ic_cache_insert_batch(ic_cache *cache, const ic_record *records, uint3
 
 /* Interpolates at q->position; returns 1 if at least one record contributes, else 0. */
 int ic_cache_query(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);
+/* ic_cache_query with a caller-owned hint (one per thread; NULL = none) that it reads and updates:
+ * the same result, faster for coherent look-ups on a frozen cache. */
+int ic_cache_query_hinted(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_hint *hint,
+                          ic_cache_estimate *out);
 /* Same result as ic_cache_query by a linear scan over all records: the O(N) reference for tests. */
 int ic_cache_query_linear(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);
 
@@ -195,8 +221,15 @@ ic_result ic_cache_get_record(const ic_cache *cache, uint32_t index, ic_record *
 ic_result ic_cache_set_record_accuracy(ic_cache *cache, uint32_t index, float accuracy);
 /* Sets or clears IC_RECORD_* flags of record index. */
 ic_result ic_cache_set_record_flags(ic_cache *cache, uint32_t index, uint8_t flags);
-/* Rebuilds the octree from the current radii (they only shrink, so references go stale-large). */
+/* Rebuilds the octree from the current radii (they only shrink, so references go stale-large), then
+ * freezes the cache (ic_cache_freeze) unless params.freeze is IC_CACHE_OFF. */
 ic_result ic_cache_rebuild_index(ic_cache *cache, ic_error *err);
+/* Builds the frozen look-up layout from the current octree (see FROZEN LOOK-UPS); replaces an old one. */
+ic_result ic_cache_freeze(ic_cache *cache, ic_error *err);
+/* Drops the frozen layout: look-ups go through the octree again (same results). */
+void ic_cache_thaw(ic_cache *cache);
+/* 1 while the cache holds a current frozen layout, else 0. */
+int ic_cache_is_frozen(const ic_cache *cache);
 
 /* k nearest record positions to p, nearest first (ties by index); returns how many (≤ k) were
  * written to indices and (if non-NULL) squared distances; with dist2 NULL, k is capped at 256. */

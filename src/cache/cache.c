@@ -18,6 +18,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *out, ic_error *err)
 {
     ic_cache_params p;
@@ -54,6 +58,8 @@ ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *ou
         p.validity_clamp = IC_CACHE_ON;
     if (p.gradient_difference == IC_CACHE_DEFAULT)
         p.gradient_difference = IC_CACHE_OFF;
+    if (p.freeze == IC_CACHE_DEFAULT)
+        p.freeze = IC_CACHE_ON;
 
     if (!(p.accuracy > 0.0f && isfinite(p.accuracy)))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: accuracy %g must be positive", (double)p.accuracy);
@@ -70,10 +76,11 @@ ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *ou
         (p.max_radius_pixels > 0.0f && p.max_radius_pixels < p.min_radius_pixels))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: pixel radius bounds [%g, %g] are not an interval",
                             (double)p.min_radius_pixels, (double)p.max_radius_pixels);
-    const ic_cache_switch sw[4] = {p.gradient_clamp, p.neighbor_clamp, p.validity_clamp, p.gradient_difference};
-    for (int k = 0; k < 4; ++k)
+    const ic_cache_switch sw[5] = {p.gradient_clamp, p.neighbor_clamp, p.validity_clamp, p.gradient_difference,
+                                   p.freeze};
+    for (int k = 0; k < 5; ++k)
         if (sw[k] != IC_CACHE_ON && sw[k] != IC_CACHE_OFF)
-            return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: a clamp switch has value %d; use IC_CACHE_ON "
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: a switch (clamp or freeze) has value %d; use IC_CACHE_ON "
                                 "or IC_CACHE_OFF", (int)sw[k]);
     if (p.validity_k > 16)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: validity_k %u must be in 1…16", p.validity_k);
@@ -118,6 +125,7 @@ void ic_cache_destroy(ic_cache *c)
         return;
     ic_octree_free(&c->tree);
     ic_octree_free(&c->points);
+    ic_frozen_free(&c->frozen);
     free(c->sphere);
     free(c->normal);
     free(c->cold);
@@ -133,7 +141,7 @@ size_t ic_cache_bytes_per_record(void) { return 2 * sizeof(ic_float4) + sizeof(i
 size_t ic_cache_memory_bytes(const ic_cache *c)
 {
     return sizeof *c + (size_t)c->cap * ic_cache_bytes_per_record() + ic_octree_bytes(&c->tree) +
-           ic_octree_bytes(&c->points) + (size_t)c->scratch_cap * sizeof(uint32_t);
+           ic_octree_bytes(&c->points) + (size_t)c->scratch_cap * sizeof(uint32_t) + ic_frozen_bytes(&c->frozen);
 }
 
 ic_result ic_cache_reserve(ic_cache *c, uint32_t n)
@@ -229,6 +237,9 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
         return IC_OK;
     if (ic_cache_reserve(c, first + n) != IC_OK)
         return ic_error_set(err, IC_ERR_OOM, "cache: out of memory for %u records", first + n);
+    /* New records are in no frozen list and the clamps change radii: thaw (before any check can fail,
+     * so a refused batch thaws too — the rule stays simple: an insertion call thaws). */
+    ic_frozen_free(&c->frozen);
     /* Validate everything before touching the cache: all-or-nothing. */
     for (uint32_t k = 0; k < n; ++k) {
         float radius = 0.0f;
@@ -283,26 +294,47 @@ ic_result ic_cache_insert_batch(ic_cache *c, const ic_record *records, uint32_t 
 
 ic_result ic_cache_rebuild_index(ic_cache *c, ic_error *err)
 {
+    if (!c)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no cache");
+    ic_frozen_free(&c->frozen);
     ic_octree_items sph = ic_cache_tree_items(c);
     ic_result rc = ic_octree_build(&c->tree, &sph, c->count);
     if (rc == IC_OK)
         rc = ic_octree_compact(&c->tree);
     if (rc != IC_OK)
         return ic_error_set(err, rc, "cache: out of memory rebuilding the octree");
+    return c->params.freeze == IC_CACHE_ON ? ic_cache_freeze(c, err) : IC_OK;
+}
+
+ic_result ic_cache_freeze(ic_cache *c, ic_error *err)
+{
+    if (!c)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no cache");
+    if (ic_frozen_build(c) != IC_OK)
+        return ic_error_set(err, IC_ERR_OOM, "cache: out of memory freezing the look-up layout (the cache "
+                            "stays usable through its octree)");
     return IC_OK;
 }
 
-/* Accumulates record i (already accepted with weight w, offset dp = p − p_i) into the estimate. */
-static inline void accumulate(const ic_cache *c, uint32_t i, ic_vec3 n, float w, ic_vec3 dp, const ic_cache_lookup *q,
+void ic_cache_thaw(ic_cache *c)
+{
+    if (c)
+        ic_frozen_free(&c->frozen);
+}
+
+int ic_cache_is_frozen(const ic_cache *c) { return c && c->frozen.is_valid; }
+
+/* Accumulates record i (already accepted with weight w, offset dp = p − p_i; ni: its normal; E, gr, gt:
+ * its irradiance and rotation and translation gradients) into the estimate. */
+static inline void accumulate(uint32_t i, const ic_float4 *ni, const ic_vec3 *E, const ic_vec3 gr[3],
+                              const ic_vec3 gt[3], ic_vec3 n, float w, ic_vec3 dp, const ic_cache_lookup *q,
                               ic_cache_estimate *e, float acc[3])
 {
-    const ic_record_cold *cd = &c->cold[i];
-    const ic_float4 *ni = &c->normal[i];
     /* (n_i × n): the rotation that takes the record's normal to ours (seed 000 §3). */
     ic_vec3 rot = v3_cross(v3(ni->x, ni->y, ni->z), n);
-    float e3[3] = {cd->irradiance.x, cd->irradiance.y, cd->irradiance.z};
+    float e3[3] = {E->x, E->y, E->z};
     for (int ch = 0; ch < 3; ++ch) {
-        float v = e3[ch] + v3_dot(rot, cd->grad_rot[ch]) + v3_dot(dp, cd->grad_trans[ch]);
+        float v = e3[ch] + v3_dot(rot, gr[ch]) + v3_dot(dp, gt[ch]);
         /* Extrapolation with large gradients can go negative; irradiance cannot. */
         e3[ch] = v > 0.0f ? v : 0.0f;
         acc[ch] += w * e3[ch];
@@ -316,6 +348,14 @@ static inline void accumulate(const ic_cache *c, uint32_t i, ic_vec3 n, float w,
         e->contributions_written = e->contributor_count + 1;
     }
     ++e->contributor_count;
+}
+
+/* accumulate() from the cache's own arrays. */
+static inline void accumulate_record(const ic_cache *c, uint32_t i, ic_vec3 n, float w, ic_vec3 dp,
+                                     const ic_cache_lookup *q, ic_cache_estimate *e, float acc[3])
+{
+    const ic_record_cold *cd = &c->cold[i];
+    accumulate(i, &c->normal[i], &cd->irradiance, cd->grad_rot, cd->grad_trans, n, w, dp, q, e, acc);
 }
 
 static int finish(ic_cache_estimate *e, const float acc[3])
@@ -335,8 +375,105 @@ static inline int eligible(const ic_cache *c, uint32_t i, const ic_cache_lookup 
     return cd->bounce == q->bounce && !(cd->flags & IC_RECORD_DISABLED);
 }
 
+/* Frozen layout: the leaf whose cell holds p — the hint's when p is still in its cell, else found by
+ * descent, which updates the hint; NULL outside the root. */
+static inline const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic_vec3 p, ic_cache_hint *hint)
+{
+    if (hint && hint->leaf - 1u < f->leaf_count) {
+        const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
+        if (p.x >= l->lo[0] && p.x < l->hi[0] && p.y >= l->lo[1] && p.y < l->hi[1] && p.z >= l->lo[2] &&
+            p.z < l->hi[2])
+            return l;
+    }
+    float cx = f->cx, cy = f->cy, cz = f->cz, h = f->half;
+    if (!f->has_root ||
+        !(p.x >= cx - h && p.x <= cx + h && p.y >= cy - h && p.y <= cy + h && p.z >= cz - h && p.z <= cz + h))
+        return NULL;
+    const uint32_t *node = f->node;
+    uint32_t v = node[0];
+    while (!(v & IC_FROZEN_LEAF)) {
+        /* The octree's descent arithmetic (octree.h: ic_octree_path): the same leaf, bit for bit. */
+        h *= 0.5f;
+        unsigned ox = p.x >= cx, oy = p.y >= cy, oz = p.z >= cz;
+        cx = ox ? cx + h : cx - h;
+        cy = oy ? cy + h : cy - h;
+        cz = oz ? cz + h : cz - h;
+        v = node[v + (ox | oy << 1 | oz << 2)];
+    }
+    const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + (v & ~IC_FROZEN_LEAF));
+    if (hint)
+        hint->leaf = l->id + 1u;
+    return l;
+}
+
+/* Bit k set: entry k of the block passes the first two tests of ic_weight_test — inside the
+ * influence sphere, not facing away — computed with the same operations, so the same decisions. */
+static inline unsigned block_candidates(const ic_frozen_block *b, ic_vec3 p, ic_vec3 n, float s)
+{
+#if defined(__SSE2__)
+    __m128 dx = _mm_sub_ps(_mm_set1_ps(p.x), _mm_loadu_ps(b->x));
+    __m128 dy = _mm_sub_ps(_mm_set1_ps(p.y), _mm_loadu_ps(b->y));
+    __m128 dz = _mm_sub_ps(_mm_set1_ps(p.z), _mm_loadu_ps(b->z));
+    __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    __m128 r = _mm_mul_ps(_mm_mul_ps(_mm_loadu_ps(b->a), _mm_set1_ps(s)), _mm_loadu_ps(b->R));
+    __m128 ndot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(n.x), _mm_loadu_ps(b->nx)),
+                                        _mm_mul_ps(_mm_set1_ps(n.y), _mm_loadu_ps(b->ny))),
+                             _mm_mul_ps(_mm_set1_ps(n.z), _mm_loadu_ps(b->nz)));
+    /* !(ndot <= 0), not ndot > 0: a NaN goes on to the weight test, as in the scalar code. */
+    __m128 pass = _mm_and_ps(_mm_cmplt_ps(d2, _mm_mul_ps(r, r)), _mm_cmpnle_ps(ndot, _mm_setzero_ps()));
+    return (unsigned)_mm_movemask_ps(pass);
+#else
+    unsigned mask = 0;
+    for (unsigned k = 0; k < 4; ++k) {
+        float d2 = ic_dist2(p.x, p.y, p.z, b->x[k], b->y[k], b->z[k]), r = b->a[k] * s * b->R[k];
+        float ndot = n.x * b->nx[k] + n.y * b->ny[k] + n.z * b->nz[k];
+        mask |= (unsigned)(d2 < r * r && !(ndot <= 0.0f)) << k;
+    }
+    return mask;
+#endif
+}
+
+/* ic_cache_query on the frozen layout: one list, four entries at a time. */
+static int query_frozen(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
+{
+    const ic_frozen *f = &c->frozen;
+    float acc[3] = {0.0f, 0.0f, 0.0f};
+    memset(out, 0, sizeof *out);
+    ic_vec3 p = q->position, n = q->normal;
+    const ic_frozen_leaf *leaf = frozen_leaf(f, p, hint);
+    if (!leaf)
+        return 0;
+    float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
+    const ic_frozen_block *blk = (const ic_frozen_block *)(leaf + 1);
+    uint32_t blocks = (leaf->count + 3) / 4;
+    out->records_tested = leaf->count;
+    for (uint32_t b = 0; b < blocks; ++b) {
+        const ic_frozen_block *o = &blk[b];
+        unsigned mask = block_candidates(o, p, n, s);
+        for (unsigned k = 0; mask; ++k, mask >>= 1) {
+            if (!(mask & 1u) || o->bounce[k] != q->bounce || (o->flags[k] & IC_RECORD_DISABLED))
+                continue;
+            ic_float4 sp = {o->x[k], o->y[k], o->z[k], o->R[k]}, np = {o->nx[k], o->ny[k], o->nz[k], o->a[k]};
+            float w;
+            ic_vec3 dp;
+            if (ic_weight_test(&c->params, &sp, &np, p, n, s, &w, &dp)) {
+                const ic_frozen_record *r = &f->record[o->slot[k]];
+                accumulate(r->index, &np, &r->irradiance, r->grad_rot, r->grad_trans, n, w, dp, q, out, acc);
+            }
+        }
+    }
+    return finish(out, acc);
+}
+
 int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
 {
+    return ic_cache_query_hinted(c, q, NULL, out);
+}
+
+int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
+{
+    if (c->frozen.is_valid)
+        return query_frozen(c, q, hint, out);
     float acc[3] = {0.0f, 0.0f, 0.0f};
     memset(out, 0, sizeof *out);
     float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
@@ -360,7 +497,7 @@ int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimat
             float w;
             ic_vec3 dp;
             if (ic_record_weight(c, i, p, n, s, &w, &dp) && eligible(c, i, q))
-                accumulate(c, i, n, w, dp, q, out, acc);
+                accumulate_record(c, i, n, w, dp, q, out, acc);
         }
     }
     return finish(out, acc);
@@ -376,7 +513,7 @@ int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_
         float w;
         ic_vec3 dp;
         if (ic_record_weight(c, i, q->position, q->normal, s, &w, &dp) && eligible(c, i, q))
-            accumulate(c, i, q->normal, w, dp, q, out, acc);
+            accumulate_record(c, i, q->normal, w, dp, q, out, acc);
     }
     return finish(out, acc);
 }
@@ -424,6 +561,7 @@ ic_result ic_cache_set_record_accuracy(ic_cache *c, uint32_t i, float accuracy)
     if (accuracy < c->normal[i].w) {
         c->normal[i].w = accuracy;
         ++c->cold[i].change_count;
+        ic_frozen_free(&c->frozen); /* the lists hold copies of a_i */
     }
     return IC_OK;
 }
@@ -432,6 +570,8 @@ ic_result ic_cache_set_record_flags(ic_cache *c, uint32_t i, uint8_t flags)
 {
     if (!c || i >= c->count)
         return IC_ERR_INVALID_ARG;
+    if (c->cold[i].flags != flags)
+        ic_frozen_free(&c->frozen); /* the lists hold copies of the flags */
     c->cold[i].flags = flags;
     return IC_OK;
 }

@@ -376,6 +376,9 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
         ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
         if (ic_octree_build(&c->points, &pts, c->count) != IC_OK || ic_octree_build(&c->tree, &sph, c->count) != IC_OK)
             rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory building the octree", path);
+        /* Loaded caches serve final renders: freeze, as ic_cache_rebuild_index does. */
+        if (rc == IC_OK && c->params.freeze == IC_CACHE_ON && ic_cache_freeze(c, NULL) != IC_OK)
+            rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory freezing the look-up layout", path);
     }
     if (rc != IC_OK) {
         ic_cache_destroy(c);

@@ -28,6 +28,70 @@ typedef struct ic_record_cold {
     uint8_t flags;               /* IC_RECORD_* */
 } ic_record_cold;
 
+/*
+ * The frozen look-up layout (cache.h: FROZEN LOOK-UPS; built by cache_frozen.c). What a look-up
+ * touches before it finds a contributor sits in two compact arrays, both in depth-first order:
+ *   node — 4 bytes a node: the first of its 8 contiguous children, or IC_FROZEN_LEAF | the offset of
+ *          the leaf in `list` (8-byte units);
+ *   list — per leaf a header (its cell and entry count) followed by its entries, four to a block,
+ *          with every hot field a rejection test reads (position, R_i, a_i, normal, bounce, flags)
+ *          side by side: the distance and the facing test run four entries at a time, and a
+ *          rejected candidate costs no other memory access;
+ *   record — the interpolation data of the records (irradiance, gradients), in the order the lists
+ *          first use them, read for contributors only.
+ * Records are copied into each list that uses them (the octree's multiple references), so any
+ * change to a record thaws the layout.
+ */
+#define IC_FROZEN_LEAF 0x80000000u
+
+/* Four list entries. Padding entries have R = a = 0: no distance passes. */
+typedef struct ic_frozen_block {
+    float x[4], y[4], z[4];      /* p_i */
+    float R[4];                  /* R_i */
+    float a[4];                  /* a_i */
+    float nx[4], ny[4], nz[4];   /* n_i */
+    uint32_t slot[4];            /* index into ic_frozen.record */
+    uint8_t bounce[4];           /* bounce level */
+    uint8_t flags[4];            /* IC_RECORD_* */
+} ic_frozen_block;
+
+/* A leaf's header in `list`; its ⌈count/4⌉ blocks follow it. */
+typedef struct ic_frozen_leaf {
+    float lo[3];                 /* a point descends here iff lo ≤ p < hi on every axis */
+    float hi[3];
+    uint32_t count;              /* entries */
+    uint32_t id;                 /* leaf number (the hint's value − 1) */
+} ic_frozen_leaf;
+
+typedef struct ic_frozen_record {
+    ic_vec3 irradiance;          /* E_i */
+    ic_vec3 grad_rot[3];         /* ∇r E_i per channel */
+    ic_vec3 grad_trans[3];       /* ∇t E_i per channel */
+    uint32_t index;              /* record index */
+} ic_frozen_record;
+
+typedef struct ic_frozen {
+    int is_valid;                /* 0: thawed, look-ups use the octree */
+    int has_root;                /* 0: empty cache */
+    float cx, cy, cz, half;      /* root cube, as in the octree */
+    uint32_t *node;
+    uint32_t node_count;
+    uint64_t *list;              /* leaf headers and blocks, addressed in 8-byte units */
+    size_t list_len;             /* units in use */
+    uint32_t *leaf_at;           /* leaf number → offset of its header in list */
+    uint32_t leaf_count;
+    size_t entry_count;          /* list entries in all leaves */
+    ic_frozen_record *record;
+    uint32_t record_count;
+} ic_frozen;
+
+/* Builds c->frozen from c->tree (replacing it); IC_ERR_OOM leaves the cache thawed. */
+ic_result ic_frozen_build(ic_cache *c);
+/* Frees the layout; the cache is thawed. */
+void ic_frozen_free(ic_frozen *f);
+/* Bytes the layout holds. */
+size_t ic_frozen_bytes(const ic_frozen *f);
+
 struct ic_cache {
     ic_cache_params params;      /* resolved */
     uint32_t count, cap;
@@ -37,6 +101,7 @@ struct ic_cache {
     ic_octree tree;              /* spheres of radius a_i·R_i·max(1, s): look-ups */
     ic_octree points;            /* positions: k-nearest and radius queries */
     float tree_scale;            /* max(1, final_accuracy_scale) */
+    ic_frozen frozen;            /* read-only look-up layout, valid between a freeze and the next insertion */
     /* Insertion scratch (insertion is single-threaded with respect to the cache). */
     uint32_t *scratch;
     uint32_t scratch_cap;
@@ -59,15 +124,14 @@ static inline ic_octree_items ic_cache_point_items(const ic_cache *c)
 #define IC_TL_NORMAL_SCALE 8.1131404f
 
 /*
- * The weight of record i at (p, n) with acceptance scale s; returns 0 if the record is rejected,
+ * The weight of a record (sp: position and R_i, np: normal and a_i) at (p, n) with acceptance scale s; returns 0 if the record is rejected,
  * else writes w_i(p) to *w and p − p_i to *dp. Each rejection test is labelled (after Radiance's
  * ambient.c habit). The first test is the influence sphere a_i·s·R_i of both weights; the octree
  * holds every sphere a point lies in, so the octree and a linear scan accept the same records.
  */
-static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, float s, float *w,
-                                   ic_vec3 *dp)
+static inline int ic_weight_test(const ic_cache_params *params, const ic_float4 *sp, const ic_float4 *np,
+                                 ic_vec3 p, ic_vec3 n, float s, float *w, ic_vec3 *dp)
 {
-    const ic_float4 *sp = &c->sphere[i], *np = &c->normal[i];
     ic_vec3 d = v3(p.x - sp->x, p.y - sp->y, p.z - sp->z);
     float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
     float a = np->w * s, R = sp->w, r = a * R;
@@ -80,10 +144,10 @@ static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_
         return 0;
     /* Behind the record: p lies below the record's tangent plane (averaged with ours). */
     float behind = 0.5f * (d.x * (n.x + np->x) + d.y * (n.y + np->y) + d.z * (n.z + np->z));
-    if (behind < -c->params.behind_tolerance * r)
+    if (behind < -params->behind_tolerance * r)
         return 0;
     float dev = 1.0f - ndot, dist = sqrtf(d2) / R, ndev = sqrtf(dev > 0.0f ? dev : 0.0f);
-    if (c->params.weight == IC_WEIGHT_WARD) {
+    if (params->weight == IC_WEIGHT_WARD) {
         /* Ward, seed 000 §3: accept w > 1/a ⇔ denominator < a. */
         float denom = dist + ndev;
         if (!(denom < a))
@@ -99,6 +163,13 @@ static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_
     }
     *dp = d;
     return 1;
+}
+
+/* The weight of record i (ic_weight_test on the cache's own arrays). */
+static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, float s, float *w,
+                                   ic_vec3 *dp)
+{
+    return ic_weight_test(&c->params, &c->sphere[i], &c->normal[i], p, n, s, w, dp);
 }
 
 /* Neighbor enumeration for the clamps: records j ≠ i within reach of i (see cache.h). Returns the

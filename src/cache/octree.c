@@ -13,19 +13,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Margin on sphere radii: a record accepted by the weight test in float arithmetic must be found in
- * the leaf, even when the test and the overlap test round differently. */
-#define RADIUS_MARGIN 1.0001f
 #define STACK_SIZE (8 * (IC_OCTREE_MAX_DEPTH + 2))
 
 typedef struct cube {
     float cx, cy, cz, h;
 } cube;
 
-static float item_radius(const ic_octree_items *it, uint32_t i)
-{
-    return it->scale > 0.0f ? it->sphere[i].w * it->normal[i].w * it->scale * RADIUS_MARGIN : 0.0f;
-}
+static float item_radius(const ic_octree_items *it, uint32_t i) { return ic_octree_item_radius(it, i); }
 
 static cube child_cube(cube c, unsigned octant)
 {

@@ -46,6 +46,16 @@ typedef struct ic_octree_items {
     float scale;               /* 0: a point tree */
 } ic_octree_items;
 
+/* Margin on sphere radii: a record accepted by the weight test in float arithmetic must be found in
+ * the leaf, even when the test and the overlap test round differently. */
+#define IC_OCTREE_RADIUS_MARGIN 1.0001f
+
+/* Item i's sphere radius as the tree stores it: R·a·scale with the margin (0 for a point tree). */
+static inline float ic_octree_item_radius(const ic_octree_items *it, uint32_t i)
+{
+    return it->scale > 0.0f ? it->sphere[i].w * it->normal[i].w * it->scale * IC_OCTREE_RADIUS_MARGIN : 0.0f;
+}
+
 /* A reference: the item's index plus a copy of its center and (conservative) radius, so a look-up
  * rejects most references from the node's contiguous segment without touching the record arrays. */
 typedef struct ic_octree_ref {

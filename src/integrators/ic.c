@@ -710,8 +710,8 @@ static ic_result build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_s
 /* Indirect diffuse irradiance at a shading point: the cache (final acceptance), or, where no record
  * reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one cosine-
  * distributed hemisphere ray that returns what a record's ray would: E ≈ π·L. */
-static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, ic_rng *rng, uint64_t *rays,
-                                 int *from_cache)
+static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, ic_cache_hint *hint, ic_rng *rng,
+                                 uint64_t *rays, int *from_cache)
 {
     ic_cache_lookup q;
     memset(&q, 0, sizeof q);
@@ -719,7 +719,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     q.normal = n;
     q.acceptance = IC_ACCEPT_FINAL;
     ic_cache_estimate e;
-    if (ic_cache_query(c->cache, &q, &e)) {
+    if (ic_cache_query_hinted(c->cache, &q, hint, &e)) {
         *from_cache = 1;
         return e.irradiance;
     }
@@ -817,14 +817,17 @@ ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
 typedef struct final_ctx {
     const ic_ctx *c;
     int indirect_only;         /* AOV: indirect diffuse at the first shading point only */
+    ic_cache_hint *hints;      /* one per render thread: consecutive samples of a tile share leaves */
+    int hint_count;            /* entries in hints (0: none) */
 } final_ctx;
 
 static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic_rng *rng, int thread,
                             uint64_t *rays)
 {
     (void)pixel;
-    (void)thread;
     const final_ctx *fc = p;
+    /* Hints change speed only, never a result (cache.h), so images stay thread-count independent. */
+    ic_cache_hint *hint = thread >= 0 && thread < fc->hint_count ? &fc->hints[thread] : NULL;
     const ic_ctx *c = fc->c;
     const ic_scene *scene = c->tr->scene;
     ic_ray ray = *camera_ray;
@@ -864,7 +867,7 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
             prev_glossy = 0;
         } else {
             int from_cache;
-            ic_vec3 E = cached_irradiance(c, &s, b.frame.n, rng, rays, &from_cache);
+            ic_vec3 E = cached_irradiance(c, &s, b.frame.n, hint, rng, rays, &from_cache);
             ic_vec3 indirect = v3_mul(v3_scale(b.kd, IC_INV_PI), E);
             if (fc->indirect_only)
                 return v3_mul(beta, indirect);
@@ -994,6 +997,7 @@ static ic_result density_image(ic_ctx *c, ic_image *out)
     ic_result r = ic_image_create(out, c->g.width, c->g.height);
     if (r != IC_OK)
         return r;
+    ic_cache_hint hint = {0}; /* raster order: neighbouring pixels mostly share a leaf */
     for (int y = 0; y < c->g.height; ++y) {
         for (int x = 0; x < c->g.width; ++x) {
             size_t i = (size_t)y * c->g.width + x;
@@ -1005,7 +1009,7 @@ static ic_result density_image(ic_ctx *c, ic_image *out)
             q.normal = c->g.n[i];
             q.acceptance = IC_ACCEPT_FINAL;
             ic_cache_estimate e;
-            ic_cache_query(c->cache, &q, &e);
+            ic_cache_query_hinted(c->cache, &q, &hint, &e);
             out->rgb[3 * i] = out->rgb[3 * i + 1] = out->rgb[3 * i + 2] = (float)e.contributor_count;
         }
     }
@@ -1142,6 +1146,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
                        ic_error *err)
 {
     ic_ctx *c = NULL;
+    ic_cache_hint *hints = NULL;
     double t_gbuffer = 0.0;
     phase_times pt = {0, 0};
     ic_result r = ic_ic_ctx_create(tr, opt, &c, &t_gbuffer, err);
@@ -1188,7 +1193,9 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     loop.phase = "final render";
     loop.progress = opt->progress;
     loop.progress_user = opt->progress_user;
-    final_ctx fc = {c, 0};
+    int hint_count = ic_resolve_threads(loop.threads);
+    hints = calloc((size_t)hint_count, sizeof *hints);
+    final_ctx fc = {c, 0, hints, hints ? hint_count : 0}; /* no hints: slower, the same image */
     ic_image_loop_result lr;
     r = ic_render_image(&loop, final_sample, &fc, out, &lr, err);
     if (r != IC_OK)
@@ -1235,6 +1242,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
         }
     }
 done:
+    free(hints);
     ic_ic_ctx_destroy(c);
     return r;
 }

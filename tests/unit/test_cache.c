@@ -5,6 +5,10 @@
  * Properties checked:
  *   - octree look-up equals a linear scan over 100k random records (contributor sets exactly, E to
  *     float rounding) for both weights, with no clamp, each clamp alone, and all of them;
+ *   - the frozen layout (cache.h: FROZEN LOOK-UPS) answers bit-identically to the octree path (same
+ *     contributors in the same order, same sums) with and without hints — hints in query order, left
+ *     over from far-away look-ups, garbage — and at points outside the root, and equals the linear
+ *     scan too; insertions and record changes thaw it and look-ups stay exact; a rebuild re-freezes;
  *   - the weights and the extrapolation follow the formulas of seed 000 §3 and Tabellion–Lamorlette
  *     (checked against hand-computed values), and a linear irradiance field is reproduced exactly;
  *   - clamps never raise a radius (new or existing records); after neighbor clamping (seed 000 §5.2)
@@ -150,6 +154,7 @@ typedef struct compare_job {
     uint32_t n;
     uint64_t seed;
     ic_cache_acceptance acceptance;
+    ic_cache_hint *hints;       /* per thread, left over from that thread's previous query; NULL: none */
     unsigned char *bad;         /* per query: 1 = sets differ, 2 = values differ */
     uint32_t *contributors;     /* per query */
 } compare_job;
@@ -165,7 +170,6 @@ static ic_vec3 extrapolate(const ic_record *r, ic_vec3 p, ic_vec3 n)
 
 static void compare_one(void *ctx, int64_t item, int thread)
 {
-    (void)thread;
     compare_job *job = ctx;
     ic_cache_contribution *a = malloc(MAX_CONTRIB * sizeof *a);
     uint32_t *ia = malloc(MAX_CONTRIB * sizeof *ia), *ib = malloc(MAX_CONTRIB * sizeof *ib);
@@ -177,7 +181,7 @@ static void compare_one(void *ctx, int64_t item, int thread)
     q.contribution_capacity = MAX_CONTRIB;
     q.contributions = a;
     ic_cache_estimate ea;
-    int ha = ic_cache_query(job->cache, &q, &ea);
+    int ha = ic_cache_query_hinted(job->cache, &q, job->hints ? &job->hints[thread] : NULL, &ea);
     /* Brute force over the slab. */
     uint32_t nb = 0;
     double sum_w = 0.0, sum[3] = {0.0, 0.0, 0.0};
@@ -248,6 +252,8 @@ static int cmp_by_key(const void *a, const void *b)
 
 static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries, const char *what)
 {
+    ic_cache_hint hints[64];
+    memset(hints, 0, sizeof hints);
     uint32_t n = ic_cache_count(c);
     ic_record *fin = malloc(n * sizeof *fin);
     float *px = malloc(n * sizeof *px), *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y),
@@ -272,7 +278,7 @@ static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries,
             rmax = fmaxf(rmax, r);
         }
         compare_job job = {c, fin, x, y, z, r2, order, rmax, n, 77, acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION,
-                           calloc(queries, 1), calloc(queries, sizeof(uint32_t))};
+                           ic_cache_is_frozen(c) ? hints : NULL, calloc(queries, 1), calloc(queries, sizeof(uint32_t))};
         ic_parallel_for(0, queries, compare_one, &job);
         uint32_t set_bad = 0, val_bad = 0, hit = 0;
         uint64_t total = 0;
@@ -286,8 +292,9 @@ static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries,
               what, acc ? "final" : "construction", set_bad, val_bad);
         /* The comparison means something only if many queries find records. */
         CHECK(hit > queries / 8, "%s: only %u of %u queries found records", what, hit, queries);
-        printf("  %-30s %-12s %5u queries, %5.1f%% hit, %5.2f contributors on average\n", what,
-               acc ? "final" : "construction", queries, 100.0 * hit / queries, (double)total / queries);
+        printf("  %-30s %-12s %-6s %5u queries, %5.1f%% hit, %5.2f contributors on average\n", what,
+               acc ? "final" : "construction", ic_cache_is_frozen(c) ? "frozen" : "octree", queries,
+               100.0 * hit / queries, (double)total / queries);
         free(job.bad);
         free(job.contributors);
     }
@@ -298,6 +305,93 @@ static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries,
     free(z);
     free(r2);
     free(order);
+}
+
+/* ---- frozen layout equals the octree path, bit for bit ------------------------------------------ */
+
+#define ID_CONTRIB 512
+
+typedef struct answer {
+    int hit;
+    ic_cache_estimate e;
+    ic_cache_contribution con[ID_CONTRIB];
+} answer;
+
+static void ask(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, answer *a)
+{
+    ic_cache_lookup l = *q;
+    l.contributions = a->con;
+    l.contribution_capacity = ID_CONTRIB;
+    memset(a->con, 0, sizeof a->con);
+    a->hit = ic_cache_query_hinted(c, &l, hint, &a->e);
+}
+
+/* Same contributors in the same order with the same weights and values, same sums (bitwise). */
+static int same_answer(const answer *a, const answer *b)
+{
+    if (a->hit != b->hit || a->e.contributor_count != b->e.contributor_count ||
+        a->e.contributions_written != b->e.contributions_written ||
+        memcmp(&a->e.irradiance, &b->e.irradiance, sizeof a->e.irradiance) != 0 ||
+        memcmp(&a->e.weight_sum, &b->e.weight_sum, sizeof a->e.weight_sum) != 0)
+        return 0;
+    return memcmp(a->con, b->con, a->e.contributions_written * sizeof a->con[0]) == 0;
+}
+
+/* Queries as in the brute-force check, each followed by a neighbour 10⁻³ away (a renderer's next
+ * pixel: the hint hits), plus points outside the root and with odd coordinates; asked in that order
+ * with one hint, in a scrambled order (hints left over from far-away look-ups), with no hint and with
+ * garbage hints. The cache is thawed on entry and frozen on exit. */
+static void check_frozen_identical(ic_cache *c, uint32_t pairs, const char *what)
+{
+    uint32_t total = 2 * pairs + 64;
+    ic_cache_lookup *q = calloc(total, sizeof *q);
+    answer *want = malloc(total * sizeof *want), *got = malloc(sizeof *got);
+    for (uint32_t k = 0; k < pairs; ++k) {
+        make_query(c, 91, k, ic_cache_get_params(c)->final_accuracy_scale, &q[2 * k].position, &q[2 * k].normal);
+        q[2 * k + 1] = q[2 * k];
+        q[2 * k + 1].position = v3_add(q[2 * k].position, v3(1e-3f, -0.5e-3f, 0.7e-3f));
+    }
+    for (uint32_t k = 2 * pairs; k < total; ++k) { /* far outside, on the far side, huge, tiny, NaN */
+        float far[8] = {-1e6f, 1e6f, 1e30f, -40.0f, 60.0f, 1e-30f, NAN, INFINITY};
+        q[k].position = v3(far[k % 8], 10.0f, far[(k / 8) % 8]);
+        q[k].normal = v3(0, 0, 1);
+    }
+    uint32_t differ[2][4] = {{0}}, hint_hits = 0;
+    for (int acc = 0; acc < 2; ++acc) {
+        ic_cache_thaw(c);
+        for (uint32_t k = 0; k < total; ++k) {
+            q[k].acceptance = acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION;
+            ask(c, &q[k], NULL, &want[k]);
+        }
+        ic_error err;
+        CHECK(ic_cache_freeze(c, &err) == IC_OK && ic_cache_is_frozen(c), "freeze: %s", err.message);
+        ic_cache_hint in_order = {0}, scrambled = {0};
+        for (uint32_t k = 0; k < total; ++k) {
+            ask(c, &q[k], NULL, got);
+            differ[acc][0] += !same_answer(got, &want[k]);
+            uint32_t before = in_order.leaf;
+            ask(c, &q[k], &in_order, got);
+            differ[acc][1] += !same_answer(got, &want[k]);
+            hint_hits += before != 0 && in_order.leaf == before;
+            uint32_t j = (uint32_t)(((uint64_t)k * 7919u) % total);
+            ask(c, &q[j], &scrambled, got);
+            differ[acc][2] += !same_answer(got, &want[j]);
+            ic_cache_hint garbage = {k * 2654435761u};
+            ask(c, &q[k], &garbage, got);
+            differ[acc][3] += !same_answer(got, &want[k]);
+        }
+    }
+    for (int acc = 0; acc < 2; ++acc)
+        CHECK(differ[acc][0] + differ[acc][1] + differ[acc][2] + differ[acc][3] == 0,
+              "%s (%s): frozen differs from the octree path: %u without hint, %u with hints in order, %u with "
+              "hints scrambled, %u with garbage hints", what, acc ? "final" : "construction", differ[acc][0],
+              differ[acc][1], differ[acc][2], differ[acc][3]);
+    /* The hint must actually be used for the test to mean something (both acceptances: 2·pairs
+     * neighbours). */
+    CHECK(hint_hits > pairs, "%s: neighbours kept their leaf only %u times of %u", what, hint_hits, 2 * pairs);
+    free(q);
+    free(want);
+    free(got);
 }
 
 static ic_cache_params clamp_config(ic_weight_kind weight, int which)
@@ -333,6 +427,8 @@ static void test_lookup_vs_brute_force(void)
             snprintf(what, sizeof what, "%s, %s", wk ? "T-L" : "Ward", clamp_name[which]);
             /* 20k queries for the full configurations, fewer for the single clamps (time). */
             check_lookup_equals_brute_force(c, 20000, what);
+            check_frozen_identical(c, 5000, what);
+            check_lookup_equals_brute_force(c, 10000, what);
             /* Clamps never raise R above the input (bounds off except in config 5). */
             uint32_t raised = 0;
             for (uint32_t i = 0; i < n; ++i) {
@@ -846,6 +942,7 @@ static void test_file(void)
         return;
     }
     CHECK(ic_cache_count(l) == n, "loaded %u records", ic_cache_count(l));
+    CHECK(ic_cache_is_frozen(l), "a loaded cache is not frozen");
     uint32_t differ = 0;
     for (uint32_t i = 0; i < n; ++i) {
         ic_record a, b;
@@ -937,6 +1034,70 @@ static void test_file(void)
     free(recs);
 }
 
+/* A freeze stays exact across the cache's life: insertions and record changes thaw it (look-ups go
+ * through the octree, still equal to brute force), a rebuild re-freezes it, and a loaded cache is
+ * frozen and answers like the one saved. */
+static void test_freeze_lifecycle(void)
+{
+    const uint32_t n = 100000, first = 90000;
+    ic_record *recs = make_records(n, 5);
+    ic_cache_params p = clamp_config(IC_WEIGHT_WARD, 5);
+    ic_cache *c = build_cache(&p, recs, first);
+    ic_error err;
+    CHECK(!ic_cache_is_frozen(c), "frozen without a rebuild");
+    CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild did not freeze");
+    check_lookup_equals_brute_force(c, 5000, "frozen");
+    /* Incremental insertions after the freeze: single records and a batch. */
+    for (uint32_t i = first; i < first + 100; ++i)
+        CHECK(ic_cache_insert(c, &recs[i], NULL, &err) == IC_OK, "insert: %s", err.message);
+    CHECK(!ic_cache_is_frozen(c), "an insertion left the cache frozen");
+    CHECK(ic_cache_insert_batch(c, recs + first + 100, n - first - 100, NULL, &err) == IC_OK, "batch: %s",
+          err.message);
+    check_lookup_equals_brute_force(c, 5000, "inserted after a freeze");
+    CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild did not re-freeze");
+    check_lookup_equals_brute_force(c, 5000, "re-frozen");
+    /* Record changes thaw; the next rebuild freezes again. */
+    CHECK(ic_cache_set_record_flags(c, 3, 0) == IC_OK && ic_cache_is_frozen(c), "unchanged flags thawed");
+    for (uint32_t i = 0; i < n; i += 7)
+        ic_cache_set_record_flags(c, i, IC_RECORD_DISABLED);
+    CHECK(!ic_cache_is_frozen(c), "set_record_flags left the cache frozen");
+    CHECK(ic_cache_freeze(c, &err) == IC_OK, "freeze: %s", err.message);
+    for (uint32_t i = 1; i < n; i += 5) {
+        ic_record r;
+        ic_cache_get_record(c, i, &r);
+        ic_cache_set_record_accuracy(c, i, 0.5f * r.accuracy);
+    }
+    CHECK(!ic_cache_is_frozen(c), "set_record_accuracy left the cache frozen");
+    check_lookup_equals_brute_force(c, 5000, "changed records, thawed");
+    CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild did not re-freeze");
+    check_lookup_equals_brute_force(c, 5000, "changed records, frozen");
+    check_frozen_identical(c, 5000, "changed records");
+    /* freeze = off: rebuilds leave the cache thawed; an explicit freeze still works. */
+    ic_cache_params off = p;
+    off.freeze = IC_CACHE_OFF;
+    ic_cache *o = build_cache(&off, recs, 2000);
+    CHECK(ic_cache_rebuild_index(o, &err) == IC_OK && !ic_cache_is_frozen(o), "freeze = off froze");
+    CHECK(ic_cache_freeze(o, &err) == IC_OK && ic_cache_is_frozen(o), "explicit freeze refused");
+    ic_cache_thaw(o);
+    CHECK(!ic_cache_is_frozen(o) && ic_cache_memory_bytes(o) > 0, "thaw");
+    ic_cache_destroy(o);
+    ic_cache_destroy(c);
+    /* An empty cache freezes and answers nothing; a one-record cache (the root is a leaf) freezes too. */
+    ic_cache *e = NULL;
+    CHECK(ic_cache_create(NULL, &e, &err) == IC_OK && ic_cache_rebuild_index(e, &err) == IC_OK &&
+          ic_cache_is_frozen(e), "empty cache did not freeze");
+    ic_cache_lookup q = {recs[0].position, recs[0].normal, IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
+    ic_cache_estimate est;
+    ic_cache_hint hint = {0};
+    CHECK(!ic_cache_query_hinted(e, &q, &hint, &est) && hint.leaf == 0, "empty frozen cache answered");
+    CHECK(ic_cache_insert(e, &recs[0], NULL, &err) == IC_OK && ic_cache_rebuild_index(e, &err) == IC_OK,
+          "one record: %s", err.message);
+    CHECK(ic_cache_query_hinted(e, &q, &hint, &est) && est.contributor_count == 1 && hint.leaf == 1,
+          "one-record frozen cache: %u contributors, hint %u", est.contributor_count, hint.leaf);
+    ic_cache_destroy(e);
+    free(recs);
+}
+
 static void test_api_edges(void)
 {
     ic_error err;
@@ -988,6 +1149,7 @@ int main(void)
     RUN(test_thread_independence);
     RUN(test_point_queries);
     RUN(test_file);
+    RUN(test_freeze_lifecycle);
     RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }
