@@ -39,7 +39,7 @@ typedef struct render_args {
     double accuracy, min_radius, max_radius, min_radius_px, max_radius_px, final_scale;
     double weber, adaptive_growth;
     int rays, bounces, max_passes, min_candidates, light_samples;
-    int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference, recursive;
+    int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference, recursive, path_traced_gather;
 } render_args;
 
 typedef enum opt_kind { OPT_INT, OPT_SEED, OPT_DOUBLE, OPT_STRING, OPT_OUTPUT, OPT_FLAG } opt_kind;
@@ -103,6 +103,8 @@ static const opt_def options[] = {
     {"--final-accuracy-scale", NULL, OPT_DOUBLE, OFF(final_scale), 1, "S", "1",
      "ic: the final render accepts records up to S times the construction error bound"},
     {"--no-gradients", NULL, OPT_FLAG, OFF(no_gradients), 0, NULL, "off", "ic: interpolate without gradients"},
+    {"--path-traced-gather", NULL, OPT_FLAG, OFF(path_traced_gather), 0, NULL, "off",
+     "ic: hemisphere rays path-trace every bounce after their hit instead of taking it from records that cover it"},
     {"--no-neighbor-clamp", NULL, OPT_FLAG, OFF(no_neighbor_clamp), 0, NULL, "off",
      "ic: disable neighbor clamping (Krivanek 2006 sec. 5.2)"},
     {"--no-validity-clamp", NULL, OPT_FLAG, OFF(no_validity_clamp), 0, NULL, "off",
@@ -278,7 +280,7 @@ static int parse_args(int argc, char **argv, render_args *a)
     }
     int ic_only = a->strategy || a->weight || a->gather || a->aov || a->accuracy > 0 || a->rays || a->bounces || a->light_samples ||
                   a->min_radius > 0 || a->max_radius > 0 || a->min_radius_px > 0 || a->max_radius_px > 0 ||
-                  a->final_scale > 0 || a->max_passes || a->min_candidates || a->no_gradients ||
+                  a->final_scale > 0 || a->max_passes || a->min_candidates || a->no_gradients || a->path_traced_gather ||
                   a->no_neighbor_clamp || a->no_validity_clamp || a->gradient_difference || a->recursive || a->records_json ||
                   a->weber > 0 || a->adaptive_growth > 0;
     if (ic_only && strcmp(a->integrator, "ic") != 0) {
@@ -415,6 +417,7 @@ static void fill_ic_options(const render_args *a, ic_ic_options *o)
         o->gather.phi_strata = (uint32_t)((a->rays + m / 2) / m);
     }
     o->no_gradients = a->no_gradients;
+    o->path_traced_gather = a->path_traced_gather;
     o->bounces = a->bounces;
     o->recursive = a->recursive;
     o->load_cache = a->load_cache;

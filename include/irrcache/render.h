@@ -66,6 +66,9 @@ typedef struct ic_ic_options {
     int bounces;           /* indirect bounces in the radiance a hemisphere ray returns [max_depth − 1] */
     int recursive;         /* lazy: one cache level per bounce (Radiance's -ab) instead of path-traced bounces
                               behind each hemisphere ray; then `bounces` is the number of levels */
+    int path_traced_gather;/* 1: hemisphere rays path-trace every bounce after their hit; default: where
+                              records already cover a diffuse hit, they give its indirect light (ic.c:
+                              hit_from_cache) and only its direct light is sampled */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     int max_passes;        /* batch: most construction passes [12] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */

@@ -31,6 +31,38 @@
 
 /* ---------------------------------------------------------------- record radiance (trace callback) */
 
+/* Radiance leaving a hemisphere ray's hit towards the record, with the cache standing in for the
+ * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light by
+ * the final render's estimator (records hold no emitter light; ic_ic_direct_light adds it). This is
+ * Ward's multiple-bounce scheme (the ambient value of a point is its records' interpolation, Radiance's
+ * -ab) inside the batch passes: a pass's records serve the next passes' rays, and the world-space
+ * stage puts records where these rays land (seed 004 §3.1.3), which is what makes the look-ups hit;
+ * it cuts record cost, which seed 004 §4.6 measures as most of the construction time. Only purely
+ * diffuse hits are taken (a glossy hit needs its lobe traced); returns 0 where no record reaches, and
+ * the caller path-traces. Deterministic: within a pass the cache is read-only. */
+static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
+                          ic_vec3 *radiance)
+{
+    const ic_scene *scene = c->tr->scene;
+    ic_surface s;
+    ic_scene_surface(scene, hit->triangle, hit->u, hit->v, &s);
+    ic_vec3 wo = v3_neg(ray->dir);
+    ic_bsdf b;
+    ic_bsdf_init(&b, scene, &s, wo);
+    if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
+        return 0;
+    ic_cache_lookup q;
+    memset(&q, 0, sizeof q);
+    q.position = s.p;
+    q.normal = b.frame.n;
+    q.acceptance = IC_ACCEPT_FINAL;
+    ic_cache_estimate e;
+    if (!ic_cache_query(c->cache, &q, &e))
+        return 0;
+    *radiance = v3_add(v3_mul(v3_scale(b.kd, IC_INV_PI), e.irradiance), ic_ic_direct_light(c, &s, &b, wo, rng, rays));
+    return 1;
+}
+
 /* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
  * is seeded from the ray itself (origin and direction bits), so it does not depend on which batch or
  * thread traced it. */
@@ -70,6 +102,8 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             bits.f[5] = rays[i].dir.z;
             ic_rng rng = ic_rng_make(c->seed ^ 0x6761746865720000ULL, ((uint64_t)bits.u[0] << 32) | bits.u[1],
                                      ((uint64_t)bits.u[2] << 32) | bits.u[3], ((uint64_t)bits.u[4] << 32) | bits.u[5]);
+            if (c->hit_lookups && hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, &radiance[j]))
+                continue;
             /* The hit is the path's second vertex (the record is the first): depth 1. Its emission is
              * direct light of the record's point, delivered by NEE in the final render. */
             ic_path_start st = {1, 0.0f, 1, 1};
@@ -1079,6 +1113,8 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     }
     c->gather_tr = *tr;
     c->gather_tr.pt.max_depth = c->o.bounces + 1;
+    /* With one bounce a hemisphere ray returns its hit's direct light alone; records hold more. */
+    c->hit_lookups = !c->o.path_traced_gather && !c->o.recursive && c->o.bounces > 1;
     c->o.gather.seed ^= opt->seed;
     c->o.cache.threads = opt->threads;
     ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);
@@ -1135,9 +1171,9 @@ static uint64_t records_hash(const ic_ctx *c)
     h = ic_fnv1a64(h, env, sizeof env);
     if (s->env.image.rgb)
         h = ic_fnv1a64(h, s->env.image.rgb, sizeof(float) * 3 * (size_t)s->env.image.width * s->env.image.height);
-    int32_t g[8] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
+    int32_t g[9] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
                     (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
-                    (int32_t)c->o.strategy};
+                    (int32_t)c->o.strategy, c->hit_lookups};
     h = ic_fnv1a64(h, g, sizeof g);
     return ic_fnv1a64(h, &c->seed, sizeof c->seed);
 }

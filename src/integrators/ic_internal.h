@@ -26,6 +26,7 @@ typedef struct ic_ctx {
     atomic_ullong rays;        /* gathering rays (added once per trace call) */
     ic_gbuffer g;
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */
+    int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
     ic_light_selection light_sel; /* final render: triangle and point lights only (the sun is taken
                                      every time, the environment is in the records) */
 } ic_ctx;

@@ -195,6 +195,10 @@ static int clamp_pair(const char *scene, int W, int H, float accuracy, ic_image 
     ic_render_options o = ic_options();
     o.ic.strategy = IC_STRATEGY_LAZY;
     o.ic.cache.accuracy = accuracy;
+    /* Ward's record evaluation (every bounce path-traced): with look-ups at the rays' hits, records
+     * take the step's light from their neighbours and the effect of clamping is no longer isolated
+     * (test_step checks that default separately). */
+    o.ic.path_traced_gather = 1;
     ok &= test_render(scene, W, H, &o, on, NULL);
     o.ic.cache.neighbor_clamp = IC_CACHE_OFF;
     ok &= test_render(scene, W, H, &o, off, NULL);
@@ -276,6 +280,17 @@ static void test_step(void)
               e_off);
         CHECK(fabs(bias_on) < 0.5 * fabs(bias_off), "the step's light is no longer missing (bias %+.4f vs %+.4f)",
               bias_on, bias_off);
+        /* The default record evaluation (look-ups at the hemisphere rays' hits) captures it too. */
+        ic_render_options o = ic_options();
+        o.ic.strategy = IC_STRATEGY_LAZY;
+        o.ic.cache.accuracy = 0.5f;
+        ic_image dflt = {0};
+        if (test_render(IC_TEST_TMP "/step.json", 64, 64, &o, &dflt, NULL)) {
+            double e = rows_error(&dflt, &ref, 36, 48);
+            printf("step: default record evaluation, error %.4f\n", e);
+            CHECK(e < 1.25 * e_on, "default evaluation captures the step (error %.4f vs %.4f)", e, e_on);
+        }
+        ic_image_free(&dflt);
     }
     ic_image_free(&ref);
     ic_image_free(&on);
