@@ -59,7 +59,7 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_cache_estimate e;
     if (!ic_cache_query(c->cache, &q, &e))
         return 0;
-    *radiance = v3_add(v3_mul(v3_scale(b.kd, IC_INV_PI), e.irradiance), ic_ic_direct_light(c, &s, &b, wo, rng, rays));
+    *radiance = v3_add(v3_mul(v3_scale(b.kd, IC_INV_PI), e.irradiance), ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays));
     return 1;
 }
 
@@ -106,7 +106,7 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
                 continue;
             /* The hit is the path's second vertex (the record is the first): depth 1. Its emission is
              * direct light of the record's point, delivered by NEE in the final render. */
-            ic_path_start st = {1, 0.0f, 1, 1};
+            ic_path_start st = {1, 0.0f, 1, 1, NULL};
             radiance[j] = ic_pt_li_hit(tr, rays[i], &hits[i], &st, &rng, &nrays);
         }
     }
@@ -627,7 +627,7 @@ static void recursive_trace(void *user, const ic_vec3 *origins, const ic_vec3 *d
             continue; /* mirrors and glass seen by hemisphere rays: not followed (as Radiance's ambient) */
         ic_rng rng = ic_rng_make(c->seed, (uint64_t)lv->level, hit.triangle,
                                  ((uint64_t)(uint32_t)(hit.u * 4294967040.0f) << 32) | (uint32_t)(hit.v * 4294967040.0f));
-        ic_vec3 L = ic_ic_direct_light(c, &s, &b, wo, &rng, &nrays);
+        ic_vec3 L = ic_ic_direct_light(c, &s, &b, wo, NULL, &rng, &nrays);
         if (lv->level + 1 < ls->level_count && ls->status == IC_OK) {
             /* Deeper levels get the footprint of a pixel 1/128 of the scene wide, so the pixel bounds
              * keep their records at least ~diagonal/85 apart (Radiance's -ar 128 plays this part). */
@@ -766,7 +766,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     ic_accel_intersect1(c->tr->accel, &ray, &hit);
     if (hit.triangle == IC_NO_HIT)
         return v3_scale(ic_scene_env_radiance(c->tr->scene, d), IC_PI);
-    ic_path_start st = {1, 0.0f, 1, 1};
+    ic_path_start st = {1, 0.0f, 1, 1, NULL};
     return v3_scale(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), IC_PI);
 }
 
@@ -795,12 +795,12 @@ static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
  * the emission it finds, weighted against light sampling. Light sampling alone is noisy next to small
  * emitters (a close point sees a small light under a large solid angle, which the area pdf samples
  * poorly); the records exclude this emission, so nothing is counted twice. */
-static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_rng *rng,
-                                       uint64_t *rays)
+static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_light_selection *sel, const ic_surface *s,
+                                       const ic_bsdf *b, ic_rng *rng, uint64_t *rays)
 {
     float u1, u2;
     ic_rng_2d(rng, &u1, &u2);
-    if (!(c->light_sel.tri > 0.0f) || v3_is_black(b->kd))
+    if (!(sel->tri > 0.0f) || v3_is_black(b->kd))
         return v3s(0.0f);
     ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
     float cos_i = v3_dot(wi, b->frame.n);
@@ -817,7 +817,7 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_surface *s, con
     ic_vec3 le = ic_scene_emission(c->tr->scene, &hs, v3_neg(wi));
     if (v3_is_black(le))
         return v3s(0.0f);
-    float pl = ic_scene_light_pdf_triangle_sel(c->tr->scene, &c->light_sel, s->p, hit.triangle, wi, hit.t);
+    float pl = ic_scene_light_pdf_triangle_sel(c->tr->scene, sel, s->p, hit.triangle, wi, hit.t);
     /* f_d·cos/p_cos = kd for the cosine-sampled Lambertian lobe. */
     return v3_scale(v3_mul(b->kd, le), ic_power_heuristic(cos_i * IC_INV_PI, pl));
 }
@@ -826,9 +826,11 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_surface *s, con
  * sun, a single delta light, is taken every time (choosing it among the lights would only add noise);
  * triangle and point lights are sampled once by power, and emitting triangles once more through the
  * diffuse lobe (MIS, power heuristic); the glossy lobe's BSDF sample is the final render's path. */
-ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
-                           uint64_t *rays)
+ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                           const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
+    if (!sel)
+        sel = &c->light_sel;
     float u0 = ic_rng_float(rng), u1, u2;
     ic_rng_2d(rng, &u1, &u2);
     ic_vec3 L = v3s(0.0f);
@@ -843,9 +845,9 @@ ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
         L = shade_light(c, s, b, wo, &sun, 0, rays);
     }
     ic_light_sample ls;
-    if (ic_scene_sample_light_sel(scene, &c->light_sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
+    if (ic_scene_sample_light_sel(scene, sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
         L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, rays));
-    return v3_add(L, diffuse_emission_sample(c, s, b, rng, rays));
+    return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
 }
 
 typedef struct final_ctx {
@@ -853,12 +855,12 @@ typedef struct final_ctx {
     int indirect_only;         /* AOV: indirect diffuse at the first shading point only */
     ic_cache_hint *hints;      /* one per render thread: consecutive samples of a tile share leaves */
     int hint_count;            /* entries in hints (0: none) */
+    ic_pixel_lights lights;    /* per-thread local light selection of the pixel being rendered */
 } final_ctx;
 
 static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic_rng *rng, int thread,
                             uint64_t *rays)
 {
-    (void)pixel;
     const final_ctx *fc = p;
     /* Hints change speed only, never a result (cache.h), so images stay thread-count independent. */
     ic_cache_hint *hint = thread >= 0 && thread < fc->hint_count ? &fc->hints[thread] : NULL;
@@ -869,6 +871,15 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
     int prev_glossy = 0; /* 0: camera or delta lobe, emission counts fully */
     float prev_pdf = 0.0f;
     ic_vec3 prev_p = ray.org;
+    /* The first shading point samples lights by the pixel's local distribution (built at the pixel's
+     * cache shading point, a function of the pixel alone); later vertices by power. */
+    ic_light_selection local;
+    const ic_light_selection *sel = NULL, *prev_sel = &c->light_sel;
+    if (!fc->indirect_only && pixel < (uint32_t)c->g.width * (uint32_t)c->g.height)
+        sel = ic_pixel_lights_get(&fc->lights, scene, thread, pixel, c->g.valid[pixel], c->g.p[pixel], c->g.n[pixel],
+                                  &local);
+    if (!sel)
+        sel = &c->light_sel;
     for (int depth = 0; depth <= c->tr->pt.max_depth; ++depth) {
         ic_hit hit;
         ++*rays;
@@ -885,7 +896,7 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
         ic_vec3 le = ic_scene_emission(scene, &s, wo);
         if (!v3_is_black(le) && !fc->indirect_only) {
             float w = prev_glossy ? ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle_sel(
-                                                                     scene, &c->light_sel, prev_p, hit.triangle, ray.dir, hit.t))
+                                                                     scene, prev_sel, prev_p, hit.triangle, ray.dir, hit.t))
                                   : 1.0f;
             L = v3_add(L, v3_scale(v3_mul(beta, le), w));
         }
@@ -909,7 +920,9 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
              * light's noise is what is left, and shadow rays are the cheapest rays there are. */
             ic_vec3 direct = v3s(0.0f);
             for (int k = 0; k < c->o.light_samples; ++k)
-                direct = v3_add(direct, ic_ic_direct_light(c, &s, &b, wo, rng, rays));
+                direct = v3_add(direct, ic_ic_direct_light(c, &s, &b, wo, sel, rng, rays));
+            prev_sel = sel;
+            sel = &c->light_sel;
             direct = v3_scale(direct, 1.0f / (float)c->o.light_samples);
             L = v3_add(L, v3_mul(beta, v3_add(indirect, direct)));
             float u1, u2;
@@ -1231,9 +1244,15 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     loop.progress_user = opt->progress_user;
     int hint_count = ic_resolve_threads(loop.threads);
     hints = calloc((size_t)hint_count, sizeof *hints);
-    final_ctx fc = {c, 0, hints, hints ? hint_count : 0}; /* no hints: slower, the same image */
+    final_ctx fc = {c, 0, hints, hints ? hint_count : 0, {0}}; /* no hints: slower, the same image */
     ic_image_loop_result lr;
+    r = ic_pixel_lights_init(&fc.lights, tr->scene, c->light_sel, hint_count);
+    if (r != IC_OK) {
+        ic_error_set(err, r, "out of memory for the per-thread light tables");
+        goto done;
+    }
     r = ic_render_image(&loop, final_sample, &fc, out, &lr, err);
+    ic_pixel_lights_free(&fc.lights); /* the indirect AOV below samples no lights */
     if (r != IC_OK)
         goto done;
     st->spp = lr.spp_done;

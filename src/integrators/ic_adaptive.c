@@ -151,7 +151,7 @@ static void point_setup(void *p, int64_t item, int thread)
     ic_rng rng = ic_rng_make(c->seed, sp->pixel, 0, 0x6164617074646cULL);
     ic_vec3 sum = v3s(0.0f);
     for (int k = 0; k < DIRECT_SAMPLES; ++k)
-        sum = v3_add(sum, ic_ic_direct_light(c, &s, &b, wo, &rng, rays));
+        sum = v3_add(sum, ic_ic_direct_light(c, &s, &b, wo, NULL, &rng, rays));
     sp->direct = v3_lum(sum) / (float)DIRECT_SAMPLES;
 }
 

@@ -56,9 +56,10 @@ ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t 
 ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc);
 /* Progress report, if the caller asked for it. */
 void ic_ic_report(const ic_render_options *opt, const char *phase, double fraction);
-/* Direct light of the final render at s (NEE; the environment is cached, not sampled here). */
-ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
-                           uint64_t *rays);
+/* Direct light of the final render at s (NEE; the environment is cached, not sampled here); sel: the
+ * pixel's local light selection, NULL for the whole-scene one. */
+ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                           const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
 
 /* Sets up a context for tr and opt: resolved options, an empty cache, the shading-point buffers (used by
  * ic_render_ic and by tests that run construction alone). gbuffer_seconds may be NULL. */

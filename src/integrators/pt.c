@@ -6,6 +6,9 @@
 
 #include "core/sampling.h"
 
+#include <stdlib.h>
+#include <string.h>
+
 ic_pt_params ic_pt_params_resolve(ic_pt_params p)
 {
     if (p.max_depth <= 0)
@@ -15,15 +18,15 @@ ic_pt_params ic_pt_params_resolve(ic_pt_params p)
     return p;
 }
 
-ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
-                        uint64_t *rays)
+ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                        const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
     float u0 = ic_rng_float(rng), u1, u2;
     ic_rng_2d(rng, &u1, &u2);
     if (!ic_bsdf_has_smooth(b))
         return v3s(0.0f);
     ic_light_sample ls;
-    if (!ic_scene_sample_light(tr->scene, s->p, u0, u1, u2, &ls) || ls.pdf <= 0.0f)
+    if (!ic_scene_sample_light_sel(tr->scene, sel, s->p, u0, u1, u2, &ls) || ls.pdf <= 0.0f)
         return v3s(0.0f);
     ic_vec3 f = ic_bsdf_eval(b, wo, ls.wi);
     if (v3_is_black(f) || v3_is_black(ls.radiance))
@@ -47,6 +50,9 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
 {
     const ic_scene *scene = tr->scene;
     ic_vec3 L = v3s(0.0f), beta = v3s(1.0f);
+    /* The vertex's light selection, and the previous vertex's (the MIS weight of emission found by
+     * the BSDF sample uses the pdf with which that vertex would have sampled the light). */
+    const ic_light_selection *sel = st->first_sel ? st->first_sel : &scene->light_select, *prev_sel = sel;
     float prev_pdf = st->pdf;
     int prev_specular = st->is_specular;
     int skip_emission = st->skip_first_emission;
@@ -78,14 +84,17 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
         if (!v3_is_black(le)) {
             float w = 1.0f;
             if (!prev_specular && prev_pdf > 0.0f)
-                w = ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle(scene, prev_p, hit.triangle, ray.dir, hit.t));
+                w = ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle_sel(scene, prev_sel, prev_p, hit.triangle,
+                                                                                  ray.dir, hit.t));
             L = v3_add(L, v3_scale(v3_mul(beta, le), w));
         }
         if (depth >= tr->pt.max_depth)
             break;
         ic_bsdf b;
         ic_bsdf_init(&b, scene, &s, wo);
-        L = v3_add(L, v3_mul(beta, ic_direct_light(tr, &s, &b, wo, rng, rays)));
+        L = v3_add(L, v3_mul(beta, ic_direct_light(tr, &s, &b, wo, sel, rng, rays)));
+        prev_sel = sel;
+        sel = &scene->light_select;
         ic_bsdf_sample bs;
         float u0 = ic_rng_float(rng), u1, u2;
         ic_rng_2d(rng, &u1, &u2);
@@ -102,8 +111,56 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
     return L;
 }
 
-ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, ic_rng *rng, uint64_t *rays)
+ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
-    ic_path_start st = {0, 0.0f, 1, 0};
+    ic_path_start st = {0, 0.0f, 1, 0, sel};
     return ic_pt_li_from(tr, ray, &st, rng, rays);
+}
+
+ic_result ic_pixel_lights_init(ic_pixel_lights *pl, const ic_scene *scene, ic_light_selection base, int threads)
+{
+    memset(pl, 0, sizeof *pl);
+    pl->base = base;
+    pl->threads = threads;
+    if (scene->tri_light_count == 0 || scene->tri_light_count > IC_LOCAL_LIGHTS_MAX || !(base.tri > 0.0f))
+        return IC_OK;
+    size_t per = 2 * (size_t)scene->tri_light_count + 1;
+    pl->buf = malloc(sizeof *pl->buf * per * (size_t)threads);
+    pl->key = calloc((size_t)threads, sizeof *pl->key);
+    pl->ok = calloc((size_t)threads, sizeof *pl->ok);
+    if (!pl->buf || !pl->key || !pl->ok) {
+        ic_pixel_lights_free(pl);
+        return IC_ERR_OOM;
+    }
+    pl->count = scene->tri_light_count;
+    return IC_OK;
+}
+
+void ic_pixel_lights_free(ic_pixel_lights *pl)
+{
+    free(pl->buf);
+    free(pl->key);
+    free(pl->ok);
+    pl->buf = NULL;
+    pl->key = NULL;
+    pl->ok = NULL;
+    pl->count = 0;
+}
+
+const ic_light_selection *ic_pixel_lights_get(const ic_pixel_lights *pl, const ic_scene *scene, int thread, uint32_t pixel,
+                                              int have_point, ic_vec3 p, ic_vec3 n, ic_light_selection *out)
+{
+    if (!pl->count || thread < 0 || thread >= pl->threads)
+        return NULL;
+    float *pmf = pl->buf + (2 * (size_t)pl->count + 1) * (size_t)thread, *cdf = pmf + pl->count;
+    if (pl->key[thread] != pixel + 1) {
+        pl->key[thread] = pixel + 1;
+        pl->ok[thread] = (int8_t)(have_point && ic_scene_local_lights(scene, p, n, pmf, cdf));
+    }
+    if (!pl->ok[thread])
+        return NULL;
+    *out = pl->base;
+    out->tri_pmf = pmf;
+    out->tri_cdf = cdf;
+    return out;
 }

@@ -22,8 +22,30 @@ typedef struct ic_tracer {
     ic_pt_params pt;
 } ic_tracer;
 
-/* Radiance arriving at the ray's origin along a camera ray (path traced). *rays counts traced rays. */
-ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, ic_rng *rng, uint64_t *rays);
+/* Radiance arriving at the ray's origin along a camera ray (path traced). *rays counts traced rays.
+ * sel: light selection at the first vertex (NULL: the scene's). */
+ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
+
+/* Per-thread local light selection for the pixel being rendered: a distribution over the emitting
+ * triangles built once per pixel at a deterministic point of it (ic_scene_local_lights), so that a
+ * scene's many small emitters are sampled by their contribution there, not by power alone. */
+typedef struct ic_pixel_lights {
+    float *buf;            /* threads × (2·count + 1) floats */
+    uint32_t *key;         /* per thread: pixel + 1 whose distribution is in buf, 0 none */
+    int8_t *ok;            /* per thread: 1 if a local distribution exists for that pixel */
+    uint32_t count;        /* emitting triangles (0: local selection off) */
+    int threads;
+    ic_light_selection base; /* class probabilities the local selections copy */
+} ic_pixel_lights;
+
+/* Sets up buffers for `threads` threads (count 0, and no allocation, where the scene has no emitting
+ * triangles or too many). Returns IC_ERR_OOM on allocation failure. */
+ic_result ic_pixel_lights_init(ic_pixel_lights *pl, const ic_scene *scene, ic_light_selection base, int threads);
+void ic_pixel_lights_free(ic_pixel_lights *pl);
+/* The selection for `pixel` in `thread`, built at (p, n) when the pixel changes; have_point 0 (no
+ * surface at the pixel) or no emitting triangles: NULL (use the base selection). *out is caller storage. */
+const ic_light_selection *ic_pixel_lights_get(const ic_pixel_lights *pl, const ic_scene *scene, int thread, uint32_t pixel,
+                                              int have_point, ic_vec3 p, ic_vec3 n, ic_light_selection *out);
 
 /* How a path continues from a vertex that was not the camera. */
 typedef struct ic_path_start {
@@ -33,6 +55,8 @@ typedef struct ic_path_start {
     int is_specular;       /* the previous vertex was a delta lobe (or the camera): emission counts fully */
     int skip_first_emission; /* the first hit's emission is not counted at all (it is direct light,
                                 computed elsewhere: hemisphere rays of the irradiance cache) */
+    const ic_light_selection *first_sel; /* light selection at the path's first vertex (a pixel's local
+                                            distribution); NULL: the scene's, as at every later vertex */
 } ic_path_start;
 
 /* Path-traced radiance arriving at the ray's origin along ray, continuing a path described by st. */
@@ -44,8 +68,8 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
 
 /* Direct light reflected at surface s towards wo from one light sample (NEE, MIS-weighted against
  * BSDF sampling). */
-ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
-                        uint64_t *rays);
+ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                        const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
 
 /* A ray leaving surface s in direction dir, its origin moved off the surface (no self-hits). */
 static inline ic_ray ic_spawn_ray(const ic_surface *s, ic_vec3 dir)

@@ -29,11 +29,40 @@ static void add_phase(ic_render_stats *st, const char *name, double seconds)
     }
 }
 
-static ic_vec3 pt_sample(void *ctx, const ic_ray *ray, uint32_t pixel, ic_rng *rng, int thread, uint64_t *rays)
+typedef struct pt_ctx {
+    const ic_tracer *tr;
+    ic_pixel_lights lights;
+} pt_ctx;
+
+static ic_vec3 pt_sample(void *p, const ic_ray *ray, uint32_t pixel, ic_rng *rng, int thread, uint64_t *rays)
 {
-    (void)pixel;
-    (void)thread;
-    return ic_pt_li(ctx, *ray, rng, rays);
+    pt_ctx *c = p;
+    const ic_scene *scene = c->tr->scene;
+    ic_light_selection local;
+    const ic_light_selection *sel = NULL;
+    if (c->lights.count) {
+        /* The pixel's local light distribution, built at its centre's first hit (one ray per pixel
+         * and thread; a function of the pixel alone, so images do not depend on the thread count). */
+        int have = 0;
+        ic_vec3 hp = v3s(0.0f), hn = v3s(0.0f);
+        if (c->lights.key[thread] != pixel + 1) {
+            const ic_camera *cam = &scene->camera;
+            ic_ray centre = ic_camera_ray(cam, (float)(pixel % (uint32_t)cam->width) + 0.5f,
+                                          (float)(pixel / (uint32_t)cam->width) + 0.5f);
+            ic_hit hit;
+            ++*rays;
+            ic_accel_intersect1(c->tr->accel, &centre, &hit);
+            if (hit.triangle != IC_NO_HIT) {
+                ic_surface s;
+                ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+                have = 1;
+                hp = s.p;
+                hn = v3_dot(s.ns, centre.dir) > 0.0f ? v3_neg(s.ns) : s.ns;
+            }
+        }
+        sel = ic_pixel_lights_get(&c->lights, scene, thread, pixel, have, hp, hn, &local);
+    }
+    return ic_pt_li(c->tr, *ray, sel, rng, rays);
 }
 
 ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_image *out, ic_render_stats *stats,
@@ -91,7 +120,15 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     switch (opt.integrator) {
     case IC_INTEGRATOR_PT:
         loop.phase = "path tracing";
-        r = ic_render_image(&loop, pt_sample, &tr, out, &lr, err);
+        {
+            pt_ctx pc = {&tr, {0}};
+            r = ic_pixel_lights_init(&pc.lights, scene, scene->light_select, ic_resolve_threads(opt.threads));
+            if (r != IC_OK)
+                ic_error_set(err, r, "out of memory for the per-thread light tables");
+            else
+                r = ic_render_image(&loop, pt_sample, &pc, out, &lr, err);
+            ic_pixel_lights_free(&pc.lights);
+        }
         break;
     case IC_INTEGRATOR_IC:
         r = ic_render_ic(&tr, &opt, out, st, err);

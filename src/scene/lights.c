@@ -225,6 +225,14 @@ ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
         l->triangle = t;
         l->area = tri_area(s, t);
         l->power = IC_PI * l->area * v3_lum(m->emission) * (m->two_sided_emission ? 2.0f : 1.0f);
+        ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
+                p2 = s->positions[s->triangles[3 * t + 2]];
+        l->centroid = v3_scale(v3_add(v3_add(p0, p1), p2), 1.0f / 3.0f);
+        ic_vec3 cr = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
+        l->normal = v3_len2(cr) > 0.0f ? v3_norm(cr) : v3(0.0f, 0.0f, 1.0f);
+        l->radius = sqrtf(fmaxf(v3_len2(v3_sub(p0, l->centroid)),
+                                fmaxf(v3_len2(v3_sub(p1, l->centroid)), v3_len2(v3_sub(p2, l->centroid)))));
+        l->two_sided = m->two_sided_emission;
         total += l->power;
         s->triangle_light[t] = (int32_t)s->tri_light_count++;
         s->tri_light_cdf[s->tri_light_count] = (float)total;
@@ -307,8 +315,50 @@ float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_sele
     cos_l = fabsf(cos_l);
     if (!(cos_l > 0.0f) || !(l->area > 0.0f))
         return 0.0f;
-    float select = sel->tri * (l->power / scene->tri_light_power);
+    float select = sel->tri * (sel->tri_pmf ? sel->tri_pmf[li] : l->power / scene->tri_light_power);
     return select * dist * dist / (l->area * cos_l);
+}
+
+int ic_scene_local_lights(const ic_scene *s, ic_vec3 p, ic_vec3 n, float *pmf, float *cdf)
+{
+    uint32_t count = s->tri_light_count;
+    if (count == 0 || count > IC_LOCAL_LIGHTS_MAX || !(s->tri_light_power > 0.0f))
+        return 0;
+    double local = 0.0;
+    for (uint32_t i = 0; i < count; ++i) {
+        const ic_tri_light *l = &s->tri_lights[i];
+        ic_vec3 d = v3_sub(l->centroid, p);
+        float d2 = v3_len2(d), dist = sqrtf(d2);
+        /* Bounds of cos at the receiver and at the emitter over the triangle: the centre's cosine
+         * widened by the triangle's angular radius (sin ≤ radius/dist), clamped to [0, 1]. */
+        float spread = dist > 0.0f ? fminf(1.0f, l->radius / dist) : 1.0f;
+        float cr = dist > 0.0f ? v3_dot(n, d) / dist : 1.0f;
+        float ce = dist > 0.0f ? -v3_dot(l->normal, d) / dist : 1.0f;
+        if (l->two_sided)
+            ce = fabsf(ce);
+        cr = ic_clampf(cr + spread, 0.0f, 1.0f);
+        ce = ic_clampf(ce + spread, 0.0f, 1.0f);
+        float w = l->power * cr * ce / fmaxf(d2, l->area);
+        pmf[i] = isfinite(w) ? w : 0.0f;
+        local += pmf[i];
+    }
+    /* Mixed 3:1 with the power distribution: a light the bounds wrongly rule out (the receiver of a
+     * sample is not exactly p) keeps a quarter of its global probability. */
+    double sum = 0.0;
+    cdf[0] = 0.0f;
+    for (uint32_t i = 0; i < count; ++i) {
+        double g = s->tri_lights[i].power / (double)s->tri_light_power;
+        double q = local > 0.0 ? 0.75 * pmf[i] / local + 0.25 * g : g;
+        pmf[i] = (float)q;
+        sum += q;
+        cdf[i + 1] = (float)sum;
+    }
+    for (uint32_t i = 1; i <= count; ++i)
+        cdf[i] = (float)(cdf[i] / sum);
+    cdf[count] = 1.0f;
+    for (uint32_t i = 0; i < count; ++i)
+        pmf[i] = (float)(pmf[i] / sum);
+    return 1;
 }
 
 static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_vec3 p, float u1, float u2,
@@ -317,8 +367,9 @@ static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_
     /* The triangle is chosen with u1 and u1 is stretched back over [0,1) inside its interval, so a
      * well-spread (u1, u2) set stays well spread over the union of the emitters (a stratified
      * sequence loses its structure when a third, independent number picks the triangle). */
-    uint32_t li = cdf_find(s->tri_light_cdf, s->tri_light_count, u1);
-    float lo = s->tri_light_cdf[li], width = s->tri_light_cdf[li + 1] - lo;
+    const float *cdf = sel->tri_cdf ? sel->tri_cdf : s->tri_light_cdf;
+    uint32_t li = cdf_find(cdf, s->tri_light_count, u1);
+    float lo = cdf[li], width = cdf[li + 1] - lo;
     u1 = width > 0.0f ? ic_clampf((u1 - lo) / width, 0.0f, 0.99999994f) : 0.0f;
     const ic_tri_light *l = &s->tri_lights[li];
     uint32_t t = l->triangle;
@@ -340,7 +391,7 @@ static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_
     float cos_l = -v3_dot(ng, ls->wi);
     if ((!m->two_sided_emission && cos_l <= 0.0f) || cos_l == 0.0f)
         return 0; /* the point sees the back of a one-sided emitter */
-    float select = sel->tri * (l->power / s->tri_light_power);
+    float select = sel->tri * (sel->tri_pmf ? sel->tri_pmf[li] : l->power / s->tri_light_power);
     ls->pdf = select * dist2 / (l->area * fabsf(cos_l));
     ls->radiance = m->emission;
     return ls->pdf > 0.0f && isfinite(ls->pdf);

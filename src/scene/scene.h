@@ -51,6 +51,9 @@ typedef struct ic_tri_light {
     uint32_t triangle;     /* index into scene.triangles */
     float area;
     float power;           /* pi * area * luminance(emission) (× 2 if two-sided): selection weight */
+    ic_vec3 centroid, normal; /* for local selection (ic_scene_local_lights) */
+    float radius;          /* largest centroid-to-vertex distance */
+    int two_sided;
 } ic_tri_light;
 
 typedef struct ic_point_light {
@@ -79,7 +82,10 @@ typedef struct ic_environment {
 /* Probability with which ic_scene_sample_light picks each class of light; they sum to 1 (all 0 when
  * the scene has no light). Proportional to each class's estimated power (lights.c, docs/scene-format.md). */
 typedef struct ic_light_selection {
-    float tri, point, sun, env;
+    float tri, point, sun, env;    /* probabilities of the light classes */
+    const float *tri_cdf;  /* NULL: emitting triangles by power; else a local distribution over them
+                              (tri_light_count + 1 entries, from ic_scene_local_lights) */
+    const float *tri_pmf;  /* its probabilities (tri_light_count entries) */
 } ic_light_selection;
 
 typedef struct ic_camera {
@@ -177,6 +183,14 @@ int ic_scene_sample_light_sel(const ic_scene *scene, const ic_light_selection *s
                               float u2, ic_light_sample *ls);
 float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_selection *sel, ic_vec3 p, uint32_t tri,
                                       ic_vec3 wi, float dist);
+/* Most emitting triangles for which a local distribution is built per pixel (above: by power only). */
+#define IC_LOCAL_LIGHTS_MAX 4096
+/* A distribution over the emitting triangles for receivers at p facing n: each triangle's power times
+ * bounds of the two cosines over distance², mixed 3:1 with the power distribution so that every
+ * emitter keeps a probability (estimates stay unbiased for any receiver that uses it). Fills pmf
+ * (tri_light_count entries) and cdf (tri_light_count + 1); returns 0 if the scene has no emitting
+ * triangles or more than IC_LOCAL_LIGHTS_MAX. */
+int ic_scene_local_lights(const ic_scene *scene, ic_vec3 p, ic_vec3 n, float *pmf, float *cdf);
 /* Solid-angle pdf of sampling the environment in direction wi (for MIS when a ray escapes). */
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
 

@@ -6,6 +6,8 @@
  *   brute-force cosine-hemisphere sampling; the back of a one-sided emitter gives nothing.
  * - For every sample, ic_scene_light_pdf_triangle / ic_scene_light_pdf_env return the sampler's pdf,
  *   and light classes are picked with the documented probabilities.
+ * - A local light distribution (ic_scene_local_lights) is a distribution, keeps every emitter's defensive
+ *   share, agrees with its pdf, gives the same irradiance as selection by power, and less variance.
  * - An environment image: its pdf integrates to 1 over the sphere, importance sampling integrates the
  *   radiance to the same value as uniform sampling, and rotation_deg turns the map about +y.
  */
@@ -287,8 +289,74 @@ static void test_environment_map(void)
     ic_scene_free(s);
 }
 
+static void test_local_lights(void)
+{
+    ic_scene *s = load(SCENES "many_lights.obj");
+    if (!s)
+        return;
+    uint32_t n = s->tri_light_count;
+    CHECK(n == 8, "8 emitting triangles (%u)", n);
+    float pmf[8], cdf[9];
+    ic_vec3 p = v3(0, 0, 0), nrm = v3(0, 1, 0);
+    CHECK(ic_scene_local_lights(s, p, nrm, pmf, cdf) == 1, "local distribution built");
+    double sum = 0.0;
+    int defensive = 1, monotone = 1;
+    for (uint32_t i = 0; i < n; ++i) {
+        sum += pmf[i];
+        defensive &= pmf[i] >= 0.25f * s->tri_lights[i].power / s->tri_light_power * 0.999f;
+        monotone &= cdf[i + 1] >= cdf[i] && fabsf(cdf[i + 1] - cdf[i] - pmf[i]) < 1e-5f;
+    }
+    CHECK_NEAR(sum, 1.0, 1e-5, "pmf sums to 1");
+    CHECK(cdf[0] == 0.0f && cdf[n] == 1.0f && monotone, "cdf matches the pmf");
+    CHECK(defensive, "every emitter keeps a quarter of its power share");
+    /* the small lamp right above the receiver outweighs its power share; the lamp below it (facing
+     * up, behind the receiver's plane) keeps only its defensive share */
+    double g0 = s->tri_lights[0].power / s->tri_light_power, g6 = s->tri_lights[6].power / s->tri_light_power;
+    CHECK(pmf[0] > 2.0 * g0, "near lamp favoured (%.3f vs power share %.3f)", pmf[0], g0);
+    CHECK(pmf[6] < 0.3 * g6, "lamp behind the receiver at its defensive share (%.3f vs %.3f)", pmf[6], g6);
+
+    ic_light_selection local = s->light_select;
+    local.tri_pmf = pmf;
+    local.tri_cdf = cdf;
+    const int N = 200000;
+    uint64_t seed = 12345;
+    double m[2] = {0, 0}, m2[2] = {0, 0};
+    int mismatch = 0;
+    for (int k = 0; k < 2; ++k) {
+        const ic_light_selection *sel = k ? &local : &s->light_select;
+        for (int i = 0; i < N; ++i) {
+            ic_light_sample ls;
+            double e = 0.0;
+            if (ic_scene_sample_light_sel(s, sel, p, rnd(&seed), rnd(&seed), rnd(&seed), &ls)) {
+                e = ls.radiance.x * fmax(0.0, v3_dot(nrm, ls.wi)) / ls.pdf;
+                /* a sample on the diagonal of a quad meets both its triangles: either pdf will do */
+                int agree = 0;
+                for (uint32_t j = 0; j < n; ++j) {
+                    uint32_t t = s->tri_lights[j].triangle;
+                    float d = ray_triangle(s, t, p, ls.wi);
+                    if (d > 0.0f && fabsf(d - ls.dist) <= 1e-3f * ls.dist)
+                        agree |= fabsf(ic_scene_light_pdf_triangle_sel(s, sel, p, t, ls.wi, ls.dist) - ls.pdf) <=
+                                 1e-4f * ls.pdf;
+                }
+                mismatch += !agree;
+            }
+            m[k] += e;
+            m2[k] += e * e;
+        }
+        m[k] /= N;
+        m2[k] = m2[k] / N - m[k] * m[k];
+    }
+    double sigma = sqrt((m2[0] + m2[1]) / N);
+    printf("local lights: E by power %.5f (variance %.4g), local %.5f (variance %.4g)\n", m[0], m2[0], m[1], m2[1]);
+    CHECK(mismatch == 0, "%d samples whose pdf differs from pdf_triangle_sel", mismatch);
+    CHECK(fabs(m[0] - m[1]) < 4.0 * sigma, "same irradiance by power and by the local distribution");
+    CHECK(m2[1] < 0.5 * m2[0], "local selection halves the variance at least");
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_local_lights();
     test_rectangle_irradiance();
     test_mixed_selection();
     test_environment_map();
