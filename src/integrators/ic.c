@@ -871,13 +871,15 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
     int prev_glossy = 0; /* 0: camera or delta lobe, emission counts fully */
     float prev_pdf = 0.0f;
     ic_vec3 prev_p = ray.org;
-    /* The first shading point samples lights by the pixel's local distribution (built at the pixel's
-     * cache shading point, a function of the pixel alone); later vertices by power. */
+    /* The first shading point samples lights by the local distribution of the pixel's block (built at
+     * the cache shading point of the block's centre pixel, a function of the block alone); later
+     * vertices by power. */
     ic_light_selection local;
     const ic_light_selection *sel = NULL, *prev_sel = &c->light_sel;
-    if (!fc->indirect_only && pixel < (uint32_t)c->g.width * (uint32_t)c->g.height)
-        sel = ic_pixel_lights_get(&fc->lights, scene, thread, pixel, c->g.valid[pixel], c->g.p[pixel], c->g.n[pixel],
-                                  &local);
+    if (!fc->indirect_only && fc->lights.count && pixel < (uint32_t)c->g.width * (uint32_t)c->g.height) {
+        uint32_t a = ic_pixel_lights_anchor(&fc->lights, pixel);
+        sel = ic_pixel_lights_get(&fc->lights, scene, thread, pixel, c->g.valid[a], c->g.p[a], c->g.n[a], &local);
+    }
     if (!sel)
         sel = &c->light_sel;
     for (int depth = 0; depth <= c->tr->pt.max_depth; ++depth) {
@@ -1246,7 +1248,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     hints = calloc((size_t)hint_count, sizeof *hints);
     final_ctx fc = {c, 0, hints, hints ? hint_count : 0, {0}}; /* no hints: slower, the same image */
     ic_image_loop_result lr;
-    r = ic_pixel_lights_init(&fc.lights, tr->scene, c->light_sel, hint_count);
+    r = ic_pixel_lights_init(&fc.lights, tr->scene, c->light_sel, hint_count, c->g.width, c->g.height);
     if (r != IC_OK) {
         ic_error_set(err, r, "out of memory for the per-thread light tables");
         goto done;

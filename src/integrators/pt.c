@@ -117,17 +117,21 @@ ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel,
     return ic_pt_li_from(tr, ray, &st, rng, rays);
 }
 
-ic_result ic_pixel_lights_init(ic_pixel_lights *pl, const ic_scene *scene, ic_light_selection base, int threads)
+ic_result ic_pixel_lights_init(ic_pixel_lights *pl, const ic_scene *scene, ic_light_selection base, int threads,
+                               int width, int height)
 {
     memset(pl, 0, sizeof *pl);
     pl->base = base;
     pl->threads = threads;
-    if (scene->tri_light_count == 0 || scene->tri_light_count > IC_LOCAL_LIGHTS_MAX || !(base.tri > 0.0f))
+    pl->width = width;
+    pl->height = height;
+    if (scene->tri_light_count == 0 || scene->tri_light_count > IC_LOCAL_LIGHTS_MAX || !(base.tri > 0.0f) ||
+        width <= 0 || height <= 0)
         return IC_OK;
-    size_t per = 2 * (size_t)scene->tri_light_count + 1;
-    pl->buf = malloc(sizeof *pl->buf * per * (size_t)threads);
-    pl->key = calloc((size_t)threads, sizeof *pl->key);
-    pl->ok = calloc((size_t)threads, sizeof *pl->ok);
+    size_t per = 2 * (size_t)scene->tri_light_count + 1, slots = (size_t)threads * IC_LIGHT_SLOTS;
+    pl->buf = malloc(sizeof *pl->buf * per * slots);
+    pl->key = calloc(slots, sizeof *pl->key);
+    pl->ok = calloc(slots, sizeof *pl->ok);
     if (!pl->buf || !pl->key || !pl->ok) {
         ic_pixel_lights_free(pl);
         return IC_ERR_OOM;
@@ -147,17 +151,50 @@ void ic_pixel_lights_free(ic_pixel_lights *pl)
     pl->count = 0;
 }
 
-const ic_light_selection *ic_pixel_lights_get(const ic_pixel_lights *pl, const ic_scene *scene, int thread, uint32_t pixel,
-                                              int have_point, ic_vec3 p, ic_vec3 n, ic_light_selection *out)
+/* Block index and the slot it uses (the block's column within a row of 8 blocks). */
+static uint32_t block_of(const ic_pixel_lights *pl, uint32_t pixel, uint32_t *slot)
+{
+    uint32_t x = pixel % (uint32_t)pl->width, y = pixel / (uint32_t)pl->width;
+    uint32_t bx = x / IC_LIGHT_BLOCK, by = y / IC_LIGHT_BLOCK;
+    uint32_t bw = ((uint32_t)pl->width + IC_LIGHT_BLOCK - 1) / IC_LIGHT_BLOCK;
+    *slot = bx % IC_LIGHT_SLOTS;
+    return by * bw + bx;
+}
+
+uint32_t ic_pixel_lights_anchor(const ic_pixel_lights *pl, uint32_t pixel)
+{
+    uint32_t x = pixel % (uint32_t)pl->width, y = pixel / (uint32_t)pl->width;
+    uint32_t ax = x / IC_LIGHT_BLOCK * IC_LIGHT_BLOCK + IC_LIGHT_BLOCK / 2;
+    uint32_t ay = y / IC_LIGHT_BLOCK * IC_LIGHT_BLOCK + IC_LIGHT_BLOCK / 2;
+    if (ax >= (uint32_t)pl->width)
+        ax = (uint32_t)pl->width - 1;
+    if (ay >= (uint32_t)pl->height)
+        ay = (uint32_t)pl->height - 1;
+    return ay * (uint32_t)pl->width + ax;
+}
+
+int ic_pixel_lights_need_point(const ic_pixel_lights *pl, int thread, uint32_t pixel)
+{
+    if (!pl->count || thread < 0 || thread >= pl->threads)
+        return 0;
+    uint32_t slot, block = block_of(pl, pixel, &slot);
+    return pl->key[(size_t)thread * IC_LIGHT_SLOTS + slot] != block + 1;
+}
+
+const ic_light_selection *ic_pixel_lights_get(const ic_pixel_lights *pl, const ic_scene *scene, int thread,
+                                              uint32_t pixel, int have_point, ic_vec3 p, ic_vec3 n,
+                                              ic_light_selection *out)
 {
     if (!pl->count || thread < 0 || thread >= pl->threads)
         return NULL;
-    float *pmf = pl->buf + (2 * (size_t)pl->count + 1) * (size_t)thread, *cdf = pmf + pl->count;
-    if (pl->key[thread] != pixel + 1) {
-        pl->key[thread] = pixel + 1;
-        pl->ok[thread] = (int8_t)(have_point && ic_scene_local_lights(scene, p, n, pmf, cdf));
+    uint32_t slot, block = block_of(pl, pixel, &slot);
+    size_t k = (size_t)thread * IC_LIGHT_SLOTS + slot;
+    float *pmf = pl->buf + (2 * (size_t)pl->count + 1) * k, *cdf = pmf + pl->count;
+    if (pl->key[k] != block + 1) {
+        pl->key[k] = block + 1;
+        pl->ok[k] = (int8_t)(have_point && ic_scene_local_lights(scene, p, n, pmf, cdf));
     }
-    if (!pl->ok[thread])
+    if (!pl->ok[k])
         return NULL;
     *out = pl->base;
     out->tri_pmf = pmf;

@@ -26,26 +26,37 @@ typedef struct ic_tracer {
  * sel: light selection at the first vertex (NULL: the scene's). */
 ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
 
-/* Per-thread local light selection for the pixel being rendered: a distribution over the emitting
- * triangles built once per pixel at a deterministic point of it (ic_scene_local_lights), so that a
- * scene's many small emitters are sampled by their contribution there, not by power alone. */
+/* Per-thread local light selection: a distribution over the emitting triangles built once per block
+ * of IC_LIGHT_BLOCK × IC_LIGHT_BLOCK pixels at a deterministic point of the block (its centre pixel's
+ * first surface), so that a scene's many small emitters are sampled by their contribution there, not
+ * by power alone (ic_scene_local_lights). Each thread keeps the blocks of one row of a render tile. */
+#define IC_LIGHT_BLOCK 4
+#define IC_LIGHT_SLOTS 8
 typedef struct ic_pixel_lights {
-    float *buf;            /* threads × (2·count + 1) floats */
-    uint32_t *key;         /* per thread: pixel + 1 whose distribution is in buf, 0 none */
-    int8_t *ok;            /* per thread: 1 if a local distribution exists for that pixel */
+    float *buf;            /* threads × IC_LIGHT_SLOTS × (2·count + 1) floats */
+    uint32_t *key;         /* per thread and slot: block + 1 whose distribution is in buf, 0 none */
+    int8_t *ok;            /* per thread and slot: 1 if a local distribution exists for that block */
     uint32_t count;        /* emitting triangles (0: local selection off) */
     int threads;
+    int width, height;     /* image size (blocks) */
     ic_light_selection base; /* class probabilities the local selections copy */
 } ic_pixel_lights;
 
-/* Sets up buffers for `threads` threads (count 0, and no allocation, where the scene has no emitting
- * triangles or too many). Returns IC_ERR_OOM on allocation failure. */
-ic_result ic_pixel_lights_init(ic_pixel_lights *pl, const ic_scene *scene, ic_light_selection base, int threads);
+/* Sets up buffers for `threads` threads and a width × height image (count 0, and no allocation, where
+ * the scene has no emitting triangles or too many). Returns IC_ERR_OOM on allocation failure. */
+ic_result ic_pixel_lights_init(ic_pixel_lights *pl, const ic_scene *scene, ic_light_selection base, int threads,
+                               int width, int height);
 void ic_pixel_lights_free(ic_pixel_lights *pl);
-/* The selection for `pixel` in `thread`, built at (p, n) when the pixel changes; have_point 0 (no
- * surface at the pixel) or no emitting triangles: NULL (use the base selection). *out is caller storage. */
-const ic_light_selection *ic_pixel_lights_get(const ic_pixel_lights *pl, const ic_scene *scene, int thread, uint32_t pixel,
-                                              int have_point, ic_vec3 p, ic_vec3 n, ic_light_selection *out);
+/* Where the distribution of pixel's block is built: the block's centre pixel. */
+uint32_t ic_pixel_lights_anchor(const ic_pixel_lights *pl, uint32_t pixel);
+/* 1 if the block of `pixel` needs its anchor point in this thread (call ic_pixel_lights_get next with it). */
+int ic_pixel_lights_need_point(const ic_pixel_lights *pl, int thread, uint32_t pixel);
+/* The selection for `pixel` in `thread`, built at (p, n) — the anchor's surface — when the block is not
+ * cached; have_point 0 (no surface there) or no emitting triangles: NULL (use the base selection).
+ * *out is caller storage. */
+const ic_light_selection *ic_pixel_lights_get(const ic_pixel_lights *pl, const ic_scene *scene, int thread,
+                                              uint32_t pixel, int have_point, ic_vec3 p, ic_vec3 n,
+                                              ic_light_selection *out);
 
 /* How a path continues from a vertex that was not the camera. */
 typedef struct ic_path_start {

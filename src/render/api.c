@@ -41,14 +41,16 @@ static ic_vec3 pt_sample(void *p, const ic_ray *ray, uint32_t pixel, ic_rng *rng
     ic_light_selection local;
     const ic_light_selection *sel = NULL;
     if (c->lights.count) {
-        /* The pixel's local light distribution, built at its centre's first hit (one ray per pixel
-         * and thread; a function of the pixel alone, so images do not depend on the thread count). */
+        /* The block's local light distribution, built at the first hit of its centre pixel's centre
+         * (one ray per block and thread; a function of the block alone, so images do not depend on
+         * the thread count). */
         int have = 0;
         ic_vec3 hp = v3s(0.0f), hn = v3s(0.0f);
-        if (c->lights.key[thread] != pixel + 1) {
+        if (ic_pixel_lights_need_point(&c->lights, thread, pixel)) {
             const ic_camera *cam = &scene->camera;
-            ic_ray centre = ic_camera_ray(cam, (float)(pixel % (uint32_t)cam->width) + 0.5f,
-                                          (float)(pixel / (uint32_t)cam->width) + 0.5f);
+            uint32_t a = ic_pixel_lights_anchor(&c->lights, pixel);
+            ic_ray centre = ic_camera_ray(cam, (float)(a % (uint32_t)cam->width) + 0.5f,
+                                          (float)(a / (uint32_t)cam->width) + 0.5f);
             ic_hit hit;
             ++*rays;
             ic_accel_intersect1(c->tr->accel, &centre, &hit);
@@ -122,7 +124,8 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         loop.phase = "path tracing";
         {
             pt_ctx pc = {&tr, {0}};
-            r = ic_pixel_lights_init(&pc.lights, scene, scene->light_select, ic_resolve_threads(opt.threads));
+            r = ic_pixel_lights_init(&pc.lights, scene, scene->light_select, ic_resolve_threads(opt.threads),
+                                     scene->camera.width, scene->camera.height);
             if (r != IC_OK)
                 ic_error_set(err, r, "out of memory for the per-thread light tables");
             else
