@@ -36,11 +36,7 @@ static double pass(const ic_ctx *c, int hinted, double *refs, double *contrib, s
     for (size_t i = 0; i < npix; ++i) {
         if (!c->g.valid[i])
             continue;
-        ic_cache_lookup q;
-        memset(&q, 0, sizeof q);
-        q.position = c->g.p[i];
-        q.normal = c->g.n[i];
-        q.acceptance = IC_ACCEPT_FINAL;
+        ic_cache_lookup q = ic_cache_lookup_at(c->g.p[i], c->g.n[i], IC_ACCEPT_FINAL);
         ic_cache_estimate e;
         ic_cache_query_hinted(c->cache, &q, hinted ? &hint : NULL, &e);
         ++*points;

@@ -71,6 +71,8 @@
 
 #include "irrcache/common.h"
 
+#include <string.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -200,6 +202,17 @@ ic_result ic_cache_insert(ic_cache *cache, const ic_record *record, uint32_t *ou
  * All-or-nothing: an invalid record leaves the cache unchanged. */
 ic_result ic_cache_insert_batch(ic_cache *cache, const ic_record *records, uint32_t count, uint32_t *out_first,
                                 ic_error *err);
+
+/* A look-up at p with normal n under acceptance acc (every other field zero: bounce 0, no buffer). */
+static inline ic_cache_lookup ic_cache_lookup_at(ic_vec3 p, ic_vec3 n, ic_cache_acceptance acc)
+{
+    ic_cache_lookup q;
+    memset(&q, 0, sizeof q);
+    q.position = p;
+    q.normal = n;
+    q.acceptance = acc;
+    return q;
+}
 
 /* Interpolates at q->position; returns 1 if at least one record contributes, else 0. */
 int ic_cache_query(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);

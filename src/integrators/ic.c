@@ -51,11 +51,7 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_bsdf_init(&b, scene, &s, wo);
     if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
         return 0;
-    ic_cache_lookup q;
-    memset(&q, 0, sizeof q);
-    q.position = s.p;
-    q.normal = b.frame.n;
-    q.acceptance = IC_ACCEPT_FINAL;
+    ic_cache_lookup q = ic_cache_lookup_at(s.p, b.frame.n, IC_ACCEPT_FINAL);
     ic_cache_estimate e;
     if (!ic_cache_query(c->cache, &q, &e))
         return 0;
@@ -316,11 +312,7 @@ static void lookup_row(void *p, int64_t y, int thread)
         j->lum[i] = 0.0f;
         if (!g->valid[i])
             continue;
-        ic_cache_lookup q;
-        memset(&q, 0, sizeof q);
-        q.position = g->p[i];
-        q.normal = g->n[i];
-        q.acceptance = j->acceptance;
+        ic_cache_lookup q = ic_cache_lookup_at(g->p[i], g->n[i], j->acceptance);
         ic_cache_estimate e;
         j->covered[i] = (uint8_t)ic_cache_query(j->c->cache, &q, &e);
         j->lum[i] = v3_lum(e.irradiance);
@@ -383,10 +375,7 @@ static void world_path(void *p, int64_t item, int thread)
         ic_bsdf_init(&b, c->tr->scene, &s, wo);
         ic_bsdf_sample bs;
         if (ic_bsdf_has_smooth(&b)) {
-            ic_cache_lookup q;
-            memset(&q, 0, sizeof q);
-            q.position = s.p;
-            q.normal = b.frame.n;
+            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.frame.n, IC_ACCEPT_CONSTRUCTION);
             ic_cache_estimate e;
             if (!ic_cache_query(c->cache, &q, &e)) {
                 out[n].p = s.p;
@@ -643,10 +632,7 @@ static void recursive_trace(void *user, const ic_vec3 *origins, const ic_vec3 *d
 static ic_vec3 level_irradiance(lazy_state *ls, int level, const ic_surface *s, ic_vec3 n, float footprint)
 {
     ic_ctx *c = ls->c;
-    ic_cache_lookup q;
-    memset(&q, 0, sizeof q);
-    q.position = s->p;
-    q.normal = n;
+    ic_cache_lookup q = ic_cache_lookup_at(s->p, n, IC_ACCEPT_CONSTRUCTION);
     q.bounce = (uint32_t)level;
     ic_cache_estimate e;
     if (ic_cache_query(c->cache, &q, &e))
@@ -699,10 +685,7 @@ static ic_result build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_s
                 ic_ic_report(opt, "lazy cache", (double)i / (double)npix);
             if (!c->g.valid[i])
                 continue;
-            ic_cache_lookup q;
-            memset(&q, 0, sizeof q);
-            q.position = c->g.p[i];
-            q.normal = c->g.n[i];
+            ic_cache_lookup q = ic_cache_lookup_at(c->g.p[i], c->g.n[i], IC_ACCEPT_CONSTRUCTION);
             ic_cache_estimate e;
             if (ic_cache_query(c->cache, &q, &e))
                 continue;
@@ -747,11 +730,7 @@ static ic_result build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_s
 static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, ic_cache_hint *hint, ic_rng *rng,
                                  uint64_t *rays, int *from_cache)
 {
-    ic_cache_lookup q;
-    memset(&q, 0, sizeof q);
-    q.position = s->p;
-    q.normal = n;
-    q.acceptance = IC_ACCEPT_FINAL;
+    ic_cache_lookup q = ic_cache_lookup_at(s->p, n, IC_ACCEPT_FINAL);
     ic_cache_estimate e;
     if (ic_cache_query_hinted(c->cache, &q, hint, &e)) {
         *from_cache = 1;
@@ -1052,11 +1031,7 @@ static ic_result density_image(ic_ctx *c, ic_image *out)
             size_t i = (size_t)y * c->g.width + x;
             if (!c->g.valid[i])
                 continue;
-            ic_cache_lookup q;
-            memset(&q, 0, sizeof q);
-            q.position = c->g.p[i];
-            q.normal = c->g.n[i];
-            q.acceptance = IC_ACCEPT_FINAL;
+            ic_cache_lookup q = ic_cache_lookup_at(c->g.p[i], c->g.n[i], IC_ACCEPT_FINAL);
             ic_cache_estimate e;
             ic_cache_query_hinted(c->cache, &q, &hint, &e);
             out->rgb[3 * i] = out->rgb[3 * i + 1] = out->rgb[3 * i + 2] = (float)e.contributor_count;

@@ -282,11 +282,7 @@ static uint32_t load_contributions(adaptive *A, shading_pt *sp)
         memcpy(A->work, sp->c, sizeof *sp->c * sp->count);
         return sp->count;
     }
-    ic_cache_lookup q;
-    memset(&q, 0, sizeof q);
-    q.position = sp->p;
-    q.normal = sp->n;
-    q.acceptance = IC_ACCEPT_CONSTRUCTION;
+    ic_cache_lookup q = ic_cache_lookup_at(sp->p, sp->n, IC_ACCEPT_CONSTRUCTION);
     q.contributions = A->lookup;
     q.contribution_capacity = LOOKUP_CAPACITY;
     ic_cache_estimate e;
@@ -700,11 +696,7 @@ ic_result ic_ic_amap_image(const ic_ctx *c, ic_image *out)
             size_t i = (size_t)y * c->g.width + x;
             if (!c->g.valid[i])
                 continue;
-            ic_cache_lookup q;
-            memset(&q, 0, sizeof q);
-            q.position = c->g.p[i];
-            q.normal = c->g.n[i];
-            q.acceptance = IC_ACCEPT_FINAL;
+            ic_cache_lookup q = ic_cache_lookup_at(c->g.p[i], c->g.n[i], IC_ACCEPT_FINAL);
             q.contributions = contrib_buf;
             q.contribution_capacity = LOOKUP_CAPACITY;
             ic_cache_estimate e;

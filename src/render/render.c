@@ -87,12 +87,13 @@ static void render_tile(void *p, int64_t item, int thread)
         for (int x = x0; x < x1; ++x) {
             uint32_t pixel = (uint32_t)(y * cam->width + x);
             double sum[3] = {0, 0, 0};
+            uint64_t lds_key = ic_hash4(c->loop->seed, pixel, 0x736f626f6cULL, 0);
             for (int s = c->s_begin; s < c->s_end; ++s) {
                 ic_rng rng = ic_rng_make(c->loop->seed, pixel, (uint64_t)s, 0);
                 /* The sample number indexes the pixel's sequence across passes too, so every
                  * power-of-two prefix of a pixel's samples stays a net (time-budgeted passes). */
                 if (!c->loop->random_sampler)
-                    ic_rng_enable_lds(&rng, ic_hash4(c->loop->seed, pixel, 0x736f626f6cULL, 0), (uint32_t)s);
+                    ic_rng_enable_lds(&rng, lds_key, (uint32_t)s);
                 float u, v;
                 ic_rng_2d(&rng, &u, &v);
                 float fx = (float)x + 0.5f + tent_sample(u);
