@@ -40,6 +40,7 @@ typedef struct render_args {
     double weber, adaptive_growth;
     int rays, bounces, max_passes, min_candidates, light_samples;
     int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference, recursive, path_traced_gather;
+    const char *adaptive_sampling;
 } render_args;
 
 typedef enum opt_kind { OPT_INT, OPT_SEED, OPT_DOUBLE, OPT_STRING, OPT_OUTPUT, OPT_FLAG } opt_kind;
@@ -73,6 +74,8 @@ static const opt_def options[] = {
     {"--seed", NULL, OPT_SEED, OFF(seed), 0, "N", "scene file, else 1", "random seed; same seed, same image"},
     {"--sampler", NULL, OPT_STRING, OFF(sampler), 0, "sobol|random", "sobol",
      "pixel, light and BSDF sample pairs: Owen-scrambled Sobol' per pixel (less noise) or independent random"},
+    {"--adaptive-sampling", NULL, OPT_STRING, OFF(adaptive_sampling), 0, "on|off", "off (pt), on (ic, with --spp >= 8)",
+     "on: --spp becomes a mean, a pilot pass of spp/4 per pixel and the rest where the relative noise is (needs --spp >= 8, no --time)"},
     {"--exposure", NULL, OPT_DOUBLE, OFF(exposure), -100, "STOPS", "scene file, else 0", "exposure applied to .png outputs"},
     {"--stats", NULL, OPT_STRING, OFF(stats_path), 0, "FILE.json", "none",
      "write run statistics: seconds, rays, rays per second, per-phase times"},
@@ -253,6 +256,7 @@ static int parse_args(int argc, char **argv, render_args *a)
         {"--strategy", a->strategy, "batch lazy adaptive"},
         {"--weight", a->weight, "ward tl"},
         {"--gather", a->gather, "stratified progressive"},
+        {"--adaptive-sampling", a->adaptive_sampling, "on off"},
     };
     for (size_t i = 0; i < sizeof choices / sizeof choices[0]; ++i) {
         if (!choices[i].value)
@@ -285,6 +289,15 @@ static int parse_args(int argc, char **argv, render_args *a)
                   a->weber > 0 || a->adaptive_growth > 0;
     if (ic_only && strcmp(a->integrator, "ic") != 0) {
         fprintf(stderr, "irrcache render: irradiance-cache options need --integrator ic\n");
+        return 2;
+    }
+    int adaptive_on = a->adaptive_sampling && !strcmp(a->adaptive_sampling, "on");
+    if (adaptive_on && a->time_budget > 0) {
+        fprintf(stderr, "irrcache render: --adaptive-sampling shares out a fixed --spp; drop --time\n");
+        return 2;
+    }
+    if (adaptive_on && a->spp > 0 && a->spp < 8) {
+        fprintf(stderr, "irrcache render: --adaptive-sampling needs --spp 8 or more (a pilot pass of spp/4 first)\n");
         return 2;
     }
     if (a->recursive && (!a->strategy || strcmp(a->strategy, "lazy") != 0)) {
@@ -521,6 +534,7 @@ int ic_cli_render(int argc, char **argv)
     opt.has_seed = a.has_seed;
     opt.time_budget = a.time_budget;
     opt.sampler = a.sampler && !strcmp(a.sampler, "random") ? IC_SAMPLER_RANDOM : IC_SAMPLER_SOBOL;
+    opt.adaptive_sampling = !a.adaptive_sampling ? 0 : !strcmp(a.adaptive_sampling, "on") ? 1 : -1;
     opt.progress = on_progress;
     opt.progress_user = &prog;
     ic_render_aovs aovs;

@@ -125,6 +125,9 @@ typedef struct ic_render_options {
     int has_seed;          /* 1: use `seed` even if it is 0 */
     double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent */
     ic_sampler sampler;    /* pixel, light and BSDF sample pairs [IC_SAMPLER_SOBOL] */
+    int adaptive_sampling; /* 1: spp is a mean per pixel; a pilot pass of spp/4, the rest shared out by each
+                              pixel's relative noise (seed 004 §3.2; needs spp ≥ 8, no time budget); −1: off;
+                              0: on for integrator IC when spp ≥ 8 and there is no time budget, else off */
     ic_progress_fn progress;
     void *progress_user;
     ic_ic_options ic;      /* irradiance caching (integrator IC) */

@@ -117,7 +117,7 @@ static inline void ic_sobol2d(uint32_t index, uint64_t key, float *u, float *v)
 }
 
 /* Pairs per sample taken from the sequence; later pairs (deep path vertices) are plain random. */
-#define IC_RNG_LDS_PAIRS 24
+#define IC_RNG_LDS_PAIRS 32
 
 /* Makes the stream's 2-D draws points of per-`key` scrambled sequences, this stream being point
  * `index` (e.g. key = hash of the pixel, index = sample number). */
@@ -137,6 +137,20 @@ static inline void ic_rng_2d(ic_rng *r, float *u, float *v)
     }
     *u = ic_rng_float(r);
     *v = ic_rng_float(r);
+}
+
+/* A uniform number in [0,1) for a discrete choice (a BSDF lobe, reflection or refraction at glass, a
+ * kind of light): one coordinate of the next low-discrepancy dimension when enabled, so that over a
+ * pixel's samples each branch is taken in proportion to its probability, give or take one sample,
+ * instead of binomially; else one draw. */
+static inline float ic_rng_1d(ic_rng *r)
+{
+    if (r->lds_key && r->lds_dim < IC_RNG_LDS_PAIRS) {
+        float u, v;
+        ic_sobol2d(r->lds_index, r->lds_key + 0x9e3779b97f4a7c15ULL * ++r->lds_dim, &u, &v);
+        return u;
+    }
+    return ic_rng_float(r);
 }
 
 #endif

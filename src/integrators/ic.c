@@ -810,7 +810,7 @@ ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
 {
     if (!sel)
         sel = &c->light_sel;
-    float u0 = ic_rng_float(rng), u1, u2;
+    float u0 = ic_rng_1d(rng), u1, u2;
     ic_rng_2d(rng, &u1, &u2);
     ic_vec3 L = v3s(0.0f);
     const ic_scene *scene = c->tr->scene;
@@ -885,7 +885,7 @@ static ic_vec3 final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, i
         ic_bsdf_init(&b, scene, &s, wo);
         ic_bsdf_sample bs;
         if (!ic_bsdf_has_smooth(&b)) {
-            float u0 = ic_rng_float(rng), u1, u2;
+            float u0 = ic_rng_1d(rng), u1, u2;
             ic_rng_2d(rng, &u1, &u2);
             if (!ic_bsdf_sample_dir(&b, wo, u0, u1, u2, &bs))
                 break;
@@ -1164,8 +1164,9 @@ static uint64_t records_hash(const ic_ctx *c)
     int32_t g[9] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
                     (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
                     (int32_t)c->o.strategy, c->hit_lookups};
-    h = ic_fnv1a64(h, g, sizeof g);
-    return ic_fnv1a64(h, &c->seed, sizeof c->seed);
+    /* The seed is left out on purpose: records built with one seed are as valid as any others, and a
+     * cache re-used with a new seed renders an independent final image over the same records. */
+    return ic_fnv1a64(h, g, sizeof g);
 }
 
 ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_image *out, ic_render_stats *st,
@@ -1173,7 +1174,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
 {
     ic_ctx *c = NULL;
     ic_cache_hint *hints = NULL;
-    double t_gbuffer = 0.0;
+    double t_gbuffer = 0.0, t_candidates = 0.0;
     phase_times pt = {0, 0};
     ic_result r = ic_ic_ctx_create(tr, opt, &c, &t_gbuffer, err);
     if (r != IC_OK)
@@ -1194,15 +1195,21 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
         c->cache = loaded;
         pt.insert += ic_seconds() - t0;
     } else {
+        double t0 = ic_seconds();
         r = ic_ic_build(c, opt, st, &pt, err);
         if (r != IC_OK)
             goto done;
+        /* What construction spent outside gathering and insertion: discontinuity maps, look-up sweeps,
+         * world-stage paths, clustering. */
+        t_candidates = fmax(ic_seconds() - t0 - pt.gather - pt.insert, 0.0);
+        /* The final render reads a freshly built index: look-ups are faster than through the
+         * incrementally grown one, and the summation order of every look-up is the same as after
+         * loading a cache file, so a saved and re-loaded cache renders the identical image. */
+        t0 = ic_seconds();
+        if ((r = ic_cache_rebuild_index(c->cache, err)) != IC_OK)
+            goto done;
+        pt.insert += ic_seconds() - t0;
     }
-    /* The final render reads a freshly built index: look-ups are faster than through the incrementally
-     * grown one, and the summation order of every look-up is the same as after loading a cache file,
-     * so a saved and re-loaded cache renders the identical image. */
-    if (!c->o.load_cache && (r = ic_cache_rebuild_index(c->cache, err)) != IC_OK)
-        goto done;
     if (c->o.save_cache && (r = ic_cache_save(c->cache, c->o.save_cache, records_hash(c), err)) != IC_OK)
         goto done;
     st->records = ic_cache_count(c->cache);
@@ -1216,6 +1223,9 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     loop.threads = opt->threads;
     loop.seed = opt->seed;
     loop.random_sampler = opt->sampler == IC_SAMPLER_RANDOM;
+    /* The final render samples adaptively by default, as seed 004's does (§3.2), where it can. */
+    loop.adaptive = opt->adaptive_sampling > 0 ||
+                    (opt->adaptive_sampling == 0 && opt->spp >= 8 && !(opt->time_budget > 0.0));
     loop.phase = "final render";
     loop.progress = opt->progress;
     loop.progress_user = opt->progress_user;
@@ -1234,9 +1244,11 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
         goto done;
     st->spp = lr.spp_done;
     st->rays = lr.rays + st->gather_rays;
-    if (st->phase_count + 4 <= IC_MAX_PHASES) {
+    if (st->phase_count + 5 <= IC_MAX_PHASES) {
         st->phases[st->phase_count].name = "shading points";
         st->phases[st->phase_count++].seconds = t_gbuffer;
+        st->phases[st->phase_count].name = "candidates";
+        st->phases[st->phase_count++].seconds = t_candidates;
         st->phases[st->phase_count].name = "gathering";
         st->phases[st->phase_count++].seconds = pt.gather;
         st->phases[st->phase_count].name = "insertion";
@@ -1250,6 +1262,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
             fc.indirect_only = 1;
             loop.phase = "indirect AOV";
             loop.time_budget = 0.0;
+            loop.adaptive = 0;
             loop.spp = lr.spp_done;
             ic_image_loop_result lr2;
             r = ic_render_image(&loop, final_sample, &fc, &a->indirect, &lr2, err);

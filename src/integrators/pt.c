@@ -21,7 +21,7 @@ ic_pt_params ic_pt_params_resolve(ic_pt_params p)
 ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                         const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
-    float u0 = ic_rng_float(rng), u1, u2;
+    float u0 = ic_rng_1d(rng), u1, u2;
     ic_rng_2d(rng, &u1, &u2);
     if (!ic_bsdf_has_smooth(b))
         return v3s(0.0f);
@@ -96,7 +96,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
         prev_sel = sel;
         sel = &scene->light_select;
         ic_bsdf_sample bs;
-        float u0 = ic_rng_float(rng), u1, u2;
+        float u0 = ic_rng_1d(rng), u1, u2;
         ic_rng_2d(rng, &u1, &u2);
         if (!ic_bsdf_sample_dir(&b, wo, u0, u1, u2, &bs))
             break;

@@ -115,6 +115,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     loop.threads = opt.threads;
     loop.seed = opt.seed;
     loop.random_sampler = opt.sampler == IC_SAMPLER_RANDOM;
+    loop.adaptive = opt.adaptive_sampling > 0; /* the reference path tracer samples evenly by default */
     loop.progress = opt.progress;
     loop.progress_user = opt.progress_user;
     ic_image_loop_result lr;

@@ -3,6 +3,7 @@
 
 #include "core/threads.h"
 
+#include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -58,11 +59,15 @@ static float tent_sample(float u)
     return u < 0.5f ? sqrtf(2.0f * u) - 1.0f : 1.0f - sqrtf(2.0f - 2.0f * u);
 }
 
+static double luminance(ic_vec3 L) { return 0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z; }
+
 typedef struct loop_ctx {
     const ic_image_loop *loop;
     ic_sample_fn fn;
     void *user;
     double *accum;         /* width*height*3 running sums */
+    double *sumsq;         /* adaptive pilot pass: per-pixel sums of squared luminance, else NULL */
+    const uint32_t *extra; /* adaptive second pass: samples of each pixel from s_begin, else NULL */
     int tiles_x, tiles_y;
     int s_begin, s_end;    /* samples of this pass */
     uint64_t *rays;        /* per thread, padded */
@@ -87,8 +92,10 @@ static void render_tile(void *p, int64_t item, int thread)
         for (int x = x0; x < x1; ++x) {
             uint32_t pixel = (uint32_t)(y * cam->width + x);
             double sum[3] = {0, 0, 0};
+            double sq = 0.0;
             uint64_t lds_key = ic_hash4(c->loop->seed, pixel, 0x736f626f6cULL, 0);
-            for (int s = c->s_begin; s < c->s_end; ++s) {
+            int s_end = c->extra ? c->s_begin + (int)c->extra[pixel] : c->s_end;
+            for (int s = c->s_begin; s < s_end; ++s) {
                 ic_rng rng = ic_rng_make(c->loop->seed, pixel, (uint64_t)s, 0);
                 /* The sample number indexes the pixel's sequence across passes too, so every
                  * power-of-two prefix of a pixel's samples stays a net (time-budgeted passes). */
@@ -105,12 +112,16 @@ static void render_tile(void *p, int64_t item, int thread)
                     sum[0] += L.x;
                     sum[1] += L.y;
                     sum[2] += L.z;
+                    double y = luminance(L);
+                    sq += y * y;
                 }
             }
             double *a = &c->accum[3 * (size_t)pixel];
             a[0] += sum[0];
             a[1] += sum[1];
             a[2] += sum[2];
+            if (c->sumsq)
+                c->sumsq[pixel] += sq;
         }
     }
     c->rays[thread * RAY_PAD] += rays;
@@ -120,6 +131,179 @@ static void render_tile(void *p, int64_t item, int thread)
                           c->total_tiles_all_passes > 0
                               ? (double)(c->tiles_before_pass + done) / (double)c->total_tiles_all_passes
                               : -1.0);
+}
+
+/* ---------------------------------------------------------------- adaptive sampling
+ *
+ * The final render of seed 004 (§3.2) is adaptive path tracing: samples go where the image is noisy.
+ * A pilot pass takes n0 = spp/4 samples in every pixel and measures each pixel's per-sample relative
+ * variance v = s²/(m² + 0.01) of luminance (the relMSE metric's normalisation, so dark pixels are not
+ * starved). The rest of the budget, (spp − n0) per pixel on average, is shared out in proportion to
+ * sqrt(v) — the allocation n_i ∝ σ_i minimises Σ σ_i²/n_i for a fixed total — after v is averaged over
+ * the pixel's 3×3 neighbourhood (a few pilot samples that happen to agree must not starve a pixel).
+ * A tenth of the rest is spread evenly as insurance against variance the pilot missed, and no pixel
+ * takes more than IC_ADAPTIVE_CAP × spp in all. The allocation is computed serially from the pilot's
+ * sums, so it, and the image, are independent of the thread count. Each pixel continues its own
+ * sample sequence (indices n0, n0+1, …), so its samples stay one low-discrepancy sequence. The
+ * pixel's value is the mean of all its samples; since the count depends on the pilot, that is
+ * consistent but not exactly unbiased (the smoothing keeps the dependence weak; test_render checks
+ * the mean against uniform sampling). */
+#define IC_ADAPTIVE_CAP 8
+
+static int allocate_samples(const double *accum, const double *sumsq, int n0, int spp, int width, int height,
+                            uint32_t *extra)
+{
+    size_t npix = (size_t)width * (size_t)height;
+    double *v = malloc(npix * sizeof *v);
+    float *sigma = malloc(npix * sizeof *sigma);
+    if (!v || !sigma) {
+        free(v);
+        free(sigma);
+        return 0;
+    }
+    for (size_t i = 0; i < npix; ++i) {
+        const double *a = &accum[3 * i];
+        double m = (0.2126 * a[0] + 0.7152 * a[1] + 0.0722 * a[2]) / n0;
+        double var = fmax(sumsq[i] / n0 - m * m, 0.0) * n0 / (n0 - 1);
+        v[i] = var / (m * m + 0.01);
+    }
+    double total = 0.0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            double sum = 0.0;
+            int n = 0;
+            for (int yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < height; ++yy)
+                for (int xx = x > 0 ? x - 1 : 0; xx <= x + 1 && xx < width; ++xx, ++n)
+                    sum += v[(size_t)yy * width + xx];
+            sigma[(size_t)y * width + x] = (float)sqrt(sum / n);
+            total += sigma[(size_t)y * width + x];
+        }
+    /* Shares: 10 % even, 90 % by sigma; then water-filling under the cap (a few rounds suffice). */
+    double rest = (double)(spp - n0) * (double)npix, room = (double)(IC_ADAPTIVE_CAP * spp - n0);
+    double *x = v; /* reuse: the real-valued extra samples */
+    for (size_t i = 0; i < npix; ++i)
+        x[i] = rest * (0.1 / (double)npix + (total > 0.0 ? 0.9 * sigma[i] / total : 0.9 / (double)npix));
+    for (int round = 0; round < 8; ++round) {
+        double over = 0.0, free_weight = 0.0;
+        for (size_t i = 0; i < npix; ++i) {
+            if (x[i] > room) {
+                over += x[i] - room;
+                x[i] = room;
+            } else if (x[i] < room) {
+                free_weight += x[i];
+            }
+        }
+        if (!(over > 0.0) || !(free_weight > 0.0))
+            break;
+        double scale = 1.0 + over / free_weight;
+        for (size_t i = 0; i < npix; ++i)
+            if (x[i] < room)
+                x[i] *= scale;
+    }
+    /* Integer counts whose running sum follows the real one (no sample lost to rounding). */
+    double run = 0.0;
+    uint64_t given = 0;
+    for (size_t i = 0; i < npix; ++i) {
+        run += x[i];
+        uint64_t upto = (uint64_t)llround(run);
+        uint64_t e = upto > given ? upto - given : 0;
+        if (e > (uint64_t)room)
+            e = (uint64_t)room;
+        extra[i] = (uint32_t)e;
+        given += e;
+    }
+    free(v);
+    free(sigma);
+    return 1;
+}
+
+/* Allocates the loop's buffers (accumulators and per-thread ray counters). */
+static ic_result loop_init(loop_ctx *c, const ic_image_loop *loop, ic_sample_fn fn, void *user, int threads,
+                           ic_error *err)
+{
+    const ic_camera *cam = loop->camera;
+    memset(c, 0, sizeof *c);
+    c->loop = loop;
+    c->fn = fn;
+    c->user = user;
+    c->tiles_x = (cam->width + TILE - 1) / TILE;
+    c->tiles_y = (cam->height + TILE - 1) / TILE;
+    size_t npix = (size_t)cam->width * (size_t)cam->height;
+    c->accum = calloc(npix * 3, sizeof(double));
+    c->rays = calloc((size_t)threads * RAY_PAD, sizeof(uint64_t));
+    if (!c->accum || !c->rays) {
+        free(c->accum);
+        free(c->rays);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d image", cam->width, cam->height);
+    }
+    return IC_OK;
+}
+
+/* Runs samples [s_begin, s_end) (or each pixel's `extra` from s_begin) over every tile. */
+static ic_result loop_pass(loop_ctx *c, int threads, int s_begin, int s_end, ic_error *err)
+{
+    c->s_begin = s_begin;
+    c->s_end = s_end;
+    atomic_store(&c->tiles_done, 0);
+    ic_result r = ic_parallel_for(threads, c->tiles_x * c->tiles_y, render_tile, c);
+    if (r != IC_OK)
+        return ic_error_set(err, r, "could not start render threads");
+    c->tiles_before_pass += c->tiles_x * c->tiles_y;
+    return IC_OK;
+}
+
+static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, void *user, ic_image *out,
+                                 ic_image_loop_result *res, ic_error *err)
+{
+    const ic_camera *cam = loop->camera;
+    int threads = ic_resolve_threads(loop->threads);
+    loop_ctx c;
+    ic_result r = loop_init(&c, loop, fn, user, threads, err);
+    if (r != IC_OK)
+        return r;
+    size_t npix = (size_t)cam->width * (size_t)cam->height;
+    int n0 = loop->spp / 4;
+    c.sumsq = calloc(npix, sizeof *c.sumsq);
+    uint32_t *extra = malloc(npix * sizeof *extra);
+    c.total_tiles_all_passes = 2 * c.tiles_x * c.tiles_y;
+    c.start = ic_seconds();
+    if (!c.sumsq || !extra)
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
+                         cam->height);
+    if (r == IC_OK)
+        r = loop_pass(&c, threads, 0, n0, err);
+    if (r == IC_OK && !allocate_samples(c.accum, c.sumsq, n0, loop->spp, cam->width, cam->height, extra))
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
+                         cam->height);
+    if (r == IC_OK) {
+        free(c.sumsq);
+        c.sumsq = NULL;
+        c.extra = extra;
+        r = loop_pass(&c, threads, n0, n0, err);
+    }
+    if (r == IC_OK && (r = ic_image_create(out, cam->width, cam->height)) != IC_OK)
+        ic_error_set(err, r, "out of memory for a %dx%d image", cam->width, cam->height);
+    if (r == IC_OK) {
+        uint64_t taken = 0;
+        uint32_t most = 0;
+        for (size_t i = 0; i < npix; ++i) {
+            uint32_t n = (uint32_t)n0 + extra[i];
+            taken += n;
+            most = n > most ? n : most;
+            for (int k = 0; k < 3; ++k)
+                out->rgb[3 * i + k] = (float)(c.accum[3 * i + k] / n);
+        }
+        for (int t = 0; t < threads; ++t)
+            res->rays += c.rays[t * RAY_PAD];
+        res->spp_done = (int)llround((double)taken / (double)npix);
+        res->spp_max = (int)most;
+    }
+    res->seconds = ic_seconds() - c.start;
+    free(c.sumsq);
+    free(extra);
+    free(c.accum);
+    free(c.rays);
+    return r;
 }
 
 ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user, ic_image *out,
@@ -132,22 +316,17 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
                             cam->width, cam->height);
     if (loop->spp <= 0 && loop->time_budget <= 0.0)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "give a sample count (--spp) or a time budget (--time)");
+    if (loop->adaptive && (loop->spp < 8 || loop->time_budget > 0.0))
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "adaptive sampling needs --spp of at least 8 and no --time (it shares out a fixed budget)");
+    if (loop->adaptive)
+        return render_adaptive(loop, fn, user, out, res, err);
     int threads = ic_resolve_threads(loop->threads);
     loop_ctx c;
-    memset(&c, 0, sizeof c);
-    c.loop = loop;
-    c.fn = fn;
-    c.user = user;
-    c.tiles_x = (cam->width + TILE - 1) / TILE;
-    c.tiles_y = (cam->height + TILE - 1) / TILE;
+    ic_result r = loop_init(&c, loop, fn, user, threads, err);
+    if (r != IC_OK)
+        return r;
     size_t npix = (size_t)cam->width * (size_t)cam->height;
-    c.accum = calloc(npix * 3, sizeof(double));
-    c.rays = calloc((size_t)threads * RAY_PAD, sizeof(uint64_t));
-    if (!c.accum || !c.rays) {
-        free(c.accum);
-        free(c.rays);
-        return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d image", cam->width, cam->height);
-    }
     int tiles = c.tiles_x * c.tiles_y;
     c.start = ic_seconds();
     /* Without a budget: one pass of all samples. With a budget: passes of growing size, stopping
@@ -156,7 +335,6 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     int done = 0, pass_spp = loop->time_budget > 0.0 ? 1 : spp_max;
     c.total_tiles_all_passes = loop->time_budget > 0.0 ? 0 : tiles;
     double per_sample = 0.0;
-    ic_result r = IC_OK;
     while (done < spp_max) {
         if (pass_spp > spp_max - done)
             pass_spp = spp_max - done;
@@ -168,18 +346,11 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
             if (pass_spp > fit)
                 pass_spp = fit;
         }
-        c.s_begin = done;
-        c.s_end = done + pass_spp;
-        atomic_store(&c.tiles_done, 0);
         double t0 = ic_seconds();
-        r = ic_parallel_for(threads, tiles, render_tile, &c);
-        if (r != IC_OK) {
-            ic_error_set(err, r, "could not start render threads");
+        if ((r = loop_pass(&c, threads, done, done + pass_spp, err)) != IC_OK)
             break;
-        }
         per_sample = (ic_seconds() - t0) / pass_spp;
         done += pass_spp;
-        c.tiles_before_pass += tiles;
         if (loop->time_budget > 0.0 && loop->progress)
             loop->progress(loop->progress_user, loop->phase ? loop->phase : "render",
                            fmin(1.0, (ic_seconds() - c.start) / loop->time_budget));
@@ -198,6 +369,7 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
         for (int t = 0; t < threads; ++t)
             res->rays += c.rays[t * RAY_PAD];
         res->spp_done = done;
+        res->spp_max = done;
     }
     res->seconds = ic_seconds() - c.start;
     free(c.accum);

@@ -24,13 +24,16 @@ typedef struct ic_image_loop {
     int threads;           /* 0 = all cores */
     uint64_t seed;
     int random_sampler;    /* 1: independent draws; 0: scrambled Sobol' pairs per pixel */
+    int adaptive;          /* 1: spp is a mean; a pilot pass of spp/4 per pixel, the rest where the noise is
+                              (needs spp ≥ 8 and no time budget) */
     const char *phase;     /* progress phase name */
     ic_progress_fn progress;
     void *progress_user;
 } ic_image_loop;
 
 typedef struct ic_image_loop_result {
-    int spp_done;          /* samples per pixel actually taken */
+    int spp_done;          /* samples per pixel actually taken (adaptive: the mean) */
+    int spp_max;           /* adaptive: the most samples a pixel took */
     uint64_t rays;         /* rays traced by the sample function */
     double seconds;
 } ic_image_loop_result;

@@ -2,12 +2,13 @@
  * test_ic.c — rendering with the irradiance cache (integrator IC) against the path-traced reference:
  *   1. the Cornell box: IC (batch, with and without gradients; lazy) within stated relMSE and LDR PSNR
  *      bounds of a path-traced reference, and every shading point covered after construction;
- *   2. batch and lazy: 1 and 2 threads give bit-identical images;
+ *   2. batch and lazy, and batch with adaptive sampling: 1 and 2 threads give bit-identical images;
  *   3. a scene built to leak (a wall with a small gap above the floor, a bright light on the far side):
  *      without neighbor clamping (seed 000 §5.2–5.3) records next to the gap extrapolate wrong light
  *      over the dark floor; with it the error near the gap falls;
  *   4. a thin step lit from the side: with neighbor clamping the step's indirect light is captured
  *      (the error next to the step falls).
+ * Test 1 also compares the samplers and adaptive against uniform sampling, for both integrators.
  * The reference images are rendered here with the path tracer at high sample counts.
  */
 #include "test_util.h"
@@ -134,17 +135,49 @@ static void test_cornell(void)
         ic_image_free(&a);
         ic_image_free(&b);
     }
+    /* Adaptive sampling (seed 004 §3.2; render.c): at the same mean spp it puts samples where the
+     * noise is, so the error falls, and the image mean stays that of the reference. On for the cache
+     * render by default, off for the path tracer. */
+    for (int integ = 0; integ < 2; ++integ) {
+        ic_render_options o = integ ? ic_options() : pt;
+        o.spp = 32;
+        ic_image a = {0}, b = {0};
+        ic_render_stats sa, sb;
+        o.adaptive_sampling = -1;
+        int ok = test_render(CORNELL, W, H, &o, &a, &sa);
+        o.adaptive_sampling = 1;
+        ok &= test_render(CORNELL, W, H, &o, &b, &sb);
+        CHECK(ok, "%s renders with and without adaptive sampling", integ ? "IC" : "PT");
+        if (ok) {
+            ic_image_metrics ma, mb;
+            compare(&a, &ref, &ma);
+            compare(&b, &ref, &mb);
+            double ma_sum = 0.0, mb_sum = 0.0, sr = 0.0;
+            for (size_t i = 0; i < (size_t)W * H * 3; ++i)
+                ma_sum += a.rgb[i], mb_sum += b.rgb[i], sr += ref.rgb[i];
+            printf("cornell %dx%d: %s 32 spp relMSE uniform %.5f, adaptive %.5f; mean %.4f / %.4f (reference %.4f); "
+                   "spp %d / %d\n",
+                   W, H, integ ? "IC" : "PT", ma.relmse, mb.relmse, ma_sum, mb_sum, sr, sa.spp, sb.spp);
+            CHECK(sb.spp == 32, "adaptive: the mean spp is the budget (%d)", sb.spp);
+            CHECK(mb.relmse < (integ ? 0.85 : 0.97) * ma.relmse, "%s: adaptive relMSE %.5f below uniform %.5f",
+                  integ ? "IC" : "PT", mb.relmse, ma.relmse);
+            CHECK(fabs(mb_sum / sr - 1.0) < 0.03, "%s: adaptive sampling keeps the mean (%.4f vs %.4f)",
+                  integ ? "IC" : "PT", mb_sum, sr);
+        }
+        ic_image_free(&a);
+        ic_image_free(&b);
+    }
     ic_image_free(&ref);
     ic_image_free(&ptlow);
 }
 
 static void test_threads(void)
 {
-    for (int variant = 0; variant < 3; ++variant) {
-        int strategy = variant == 0 ? IC_STRATEGY_BATCH : IC_STRATEGY_LAZY;
+    for (int variant = 0; variant < 4; ++variant) {
+        int strategy = variant == 0 || variant == 3 ? IC_STRATEGY_BATCH : IC_STRATEGY_LAZY;
         ic_image a = {0}, b = {0};
         ic_render_options o = ic_options();
-        o.spp = 2;
+        o.spp = variant == 3 ? 16 : 2; /* variant 3: adaptive sampling's allocation is serial too */
         o.ic.strategy = (ic_strategy)strategy;
         o.ic.recursive = variant == 2;
         o.ic.bounces = variant == 2 ? 3 : 0;

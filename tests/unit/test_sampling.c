@@ -230,6 +230,33 @@ static void check_lds(void)
     float u, v;
     ic_rng_2d(&a, &u, &v);
     CHECK(u == ic_rng_float(&b) && v == ic_rng_float(&b), "disabled stream: pairs are plain draws");
+    CHECK(ic_rng_1d(&a) == ic_rng_float(&b), "disabled stream: 1-D draws are plain draws");
+    /* A discrete choice by ic_rng_1d over a pixel's 64 samples takes a branch of probability P
+     * round(64 P) times, give or take one (each 1-D projection of the net is stratified), where
+     * independent draws scatter binomially (standard deviation 1.7 samples at P = 0.05). */
+    const float probs[] = {0.05f, 0.3f, 0.5f, 0.83f};
+    int worst = 0;
+    double spread_random = 0.0;
+    for (uint64_t pixel = 0; pixel < 500; ++pixel) {
+        for (size_t k = 0; k < sizeof probs / sizeof probs[0]; ++k) {
+            int hits = 0, hits_r = 0;
+            for (uint32_t i = 0; i < 64; ++i) {
+                ic_rng r = ic_rng_make(5, pixel, i, 0);
+                ic_rng_enable_lds(&r, ic_hash4(9, pixel, 0, 0), i);
+                for (size_t skip = 0; skip < k; ++skip) /* a later dimension for each probability */
+                    (void)ic_rng_1d(&r);
+                hits += ic_rng_1d(&r) < probs[k];
+                hits_r += ic_rng_float(&r) < probs[k];
+            }
+            int dev = abs(hits - (int)lroundf(64.0f * probs[k]));
+            worst = dev > worst ? dev : worst;
+            spread_random += (hits_r - 64.0 * probs[k]) * (hits_r - 64.0 * probs[k]) / 2000.0;
+        }
+    }
+    printf("discrete choice over 64 samples: largest deviation %d (Sobol'), rms %.2f (random)\n", worst,
+           sqrt(spread_random));
+    CHECK(worst <= 1, "1-D choices stratified: off by %d samples", worst);
+    CHECK(sqrt(spread_random) > 1.5, "independent draws scatter (rms %.2f)", sqrt(spread_random));
 }
 
 int main(void)
