@@ -22,6 +22,13 @@
 #include <emmintrin.h>
 #endif
 
+/* The frozen look-up's loop is written once and instantiated per code path (SSE2, portable). */
+#if defined(__GNUC__)
+#define IC_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define IC_ALWAYS_INLINE inline
+#endif
+
 ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *out, ic_error *err)
 {
     ic_cache_params p;
@@ -324,6 +331,22 @@ void ic_cache_thaw(ic_cache *c)
 
 int ic_cache_is_frozen(const ic_cache *c) { return c && c->frozen.is_valid; }
 
+/* Counts record i (accepted with weight w, extrapolated value e3) into the estimate, after its w·E_i(p)
+ * went into the caller's sums, and reports it in the caller's buffer while there is room. */
+static inline void count_contributor(uint32_t i, float w, const float e3[3], const ic_cache_lookup *q,
+                                     ic_cache_estimate *e)
+{
+    e->weight_sum += w;
+    if (e->contributor_count < q->contribution_capacity && q->contributions) {
+        ic_cache_contribution *o = &q->contributions[e->contributor_count];
+        o->record = i;
+        o->weight = w;
+        o->value = v3(e3[0], e3[1], e3[2]);
+        e->contributions_written = e->contributor_count + 1;
+    }
+    ++e->contributor_count;
+}
+
 /* Accumulates record i (already accepted with weight w, offset dp = p − p_i; ni: its normal; E, gr, gt:
  * its irradiance and rotation and translation gradients) into the estimate. */
 static inline void accumulate(uint32_t i, const ic_float4 *ni, const ic_vec3 *E, const ic_vec3 gr[3],
@@ -339,15 +362,7 @@ static inline void accumulate(uint32_t i, const ic_float4 *ni, const ic_vec3 *E,
         e3[ch] = v > 0.0f ? v : 0.0f;
         acc[ch] += w * e3[ch];
     }
-    e->weight_sum += w;
-    if (e->contributor_count < q->contribution_capacity && q->contributions) {
-        ic_cache_contribution *o = &q->contributions[e->contributor_count];
-        o->record = i;
-        o->weight = w;
-        o->value = v3(e3[0], e3[1], e3[2]);
-        e->contributions_written = e->contributor_count + 1;
-    }
-    ++e->contributor_count;
+    count_contributor(i, w, e3, q, e);
 }
 
 /* accumulate() from the cache's own arrays. */
@@ -376,9 +391,41 @@ static inline int eligible(const ic_cache *c, uint32_t i, const ic_cache_lookup 
 }
 
 /* Frozen layout: the leaf whose cell holds p — the hint's when p is still in its cell, else found by
- * descent, which updates the hint; NULL outside the root. */
-static inline const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic_vec3 p, ic_cache_hint *hint)
+ * descent, which updates the hint; NULL outside the root. With SSE2 (unless is_portable) the three axes
+ * go side by side: the same comparisons, and c ± h as c + (±h), which IEEE arithmetic rounds alike, so
+ * the same leaf; and no branch on an axis's side, which no predictor guesses. */
+static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic_vec3 p, ic_cache_hint *hint,
+                                                          int is_portable)
 {
+#if defined(__SSE2__)
+    if (!is_portable) {
+        __m128 pv = _mm_setr_ps(p.x, p.y, p.z, 0.0f);
+        if (hint && hint->leaf - 1u < f->leaf_count) {
+            const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
+            __m128 in = _mm_and_ps(_mm_cmpge_ps(pv, _mm_loadu_ps(l->lo)), _mm_cmplt_ps(pv, _mm_loadu_ps(l->hi)));
+            if ((_mm_movemask_ps(in) & 7) == 7)
+                return l;
+        }
+        __m128 cv = _mm_setr_ps(f->cx, f->cy, f->cz, 0.0f), hv = _mm_set1_ps(f->half);
+        __m128 root = _mm_and_ps(_mm_cmpge_ps(pv, _mm_sub_ps(cv, hv)), _mm_cmple_ps(pv, _mm_add_ps(cv, hv)));
+        if (!f->has_root || (_mm_movemask_ps(root) & 7) != 7)
+            return NULL;
+        const __m128 sign = _mm_set1_ps(-0.0f), half = _mm_set1_ps(0.5f);
+        const uint32_t *node = f->node;
+        uint32_t v = node[0];
+        while (!(v & IC_FROZEN_LEAF)) {
+            hv = _mm_mul_ps(hv, half);
+            __m128 upper = _mm_cmpge_ps(pv, cv);
+            cv = _mm_add_ps(cv, _mm_xor_ps(hv, _mm_andnot_ps(upper, sign)));
+            v = node[v + ((unsigned)_mm_movemask_ps(upper) & 7u)];
+        }
+        const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + (v & ~IC_FROZEN_LEAF));
+        if (hint)
+            hint->leaf = l->id + 1u;
+        return l;
+    }
+#endif
+    (void)is_portable;
     if (hint && hint->leaf - 1u < f->leaf_count) {
         const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
         if (p.x >= l->lo[0] && p.x < l->hi[0] && p.y >= l->lo[1] && p.y < l->hi[1] && p.z >= l->lo[2] &&
@@ -406,63 +453,205 @@ static inline const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic_vec3 p, i
     return l;
 }
 
-/* Bit k set: entry k of the block passes the first two tests of ic_weight_test — inside the
- * influence sphere, not facing away — computed with the same operations, so the same decisions. */
-static inline unsigned block_candidates(const ic_frozen_block *b, ic_vec3 p, ic_vec3 n, float s)
+/* What a block's contributing entries need for accumulate(): w_i(p) and p − p_i per lane. */
+typedef struct block_weights {
+    float w[4];
+    float dx[4], dy[4], dz[4];
+} block_weights;
+
+/* Lane k of the block contributes: it passes ic_weight_test and is eligible (bounce, flags). Entry by
+ * entry with ic_weight_test itself: the reference for the SSE2 code below, and the code where SSE2 is
+ * absent. */
+static inline unsigned block_weights_portable(const ic_cache_params *params, const ic_frozen_block *b, ic_vec3 p,
+                                              ic_vec3 n, float s, uint32_t bounce, block_weights *out)
 {
+    unsigned mask = 0;
+    for (unsigned k = 0; k < 4; ++k) {
+        ic_float4 sp = {b->x[k], b->y[k], b->z[k], b->R[k]}, np = {b->nx[k], b->ny[k], b->nz[k], b->a[k]};
+        ic_vec3 dp;
+        if (b->bounce[k] != bounce || (b->flags[k] & IC_RECORD_DISABLED) ||
+            !ic_weight_test(params, &sp, &np, p, n, s, &out->w[k], &dp))
+            continue;
+        out->dx[k] = dp.x;
+        out->dy[k] = dp.y;
+        out->dz[k] = dp.z;
+        mask |= 1u << k;
+    }
+    return mask;
+}
+
 #if defined(__SSE2__)
+/* block_weights_portable four lanes at a time: ic_weight_test's tests in its order, each with the
+ * same float operations on the same operands (packed IEEE add, mul, div and sqrt round like their
+ * scalar forms), so every decision and every weight is bit-identical. */
+static inline unsigned block_weights_sse2(const ic_cache_params *params, const ic_frozen_record *records,
+                                          const ic_frozen_block *b, ic_vec3 p, ic_vec3 n, float s, uint32_t bounce,
+                                          block_weights *out)
+{
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
     __m128 dx = _mm_sub_ps(_mm_set1_ps(p.x), _mm_loadu_ps(b->x));
     __m128 dy = _mm_sub_ps(_mm_set1_ps(p.y), _mm_loadu_ps(b->y));
     __m128 dz = _mm_sub_ps(_mm_set1_ps(p.z), _mm_loadu_ps(b->z));
     __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    __m128 r = _mm_mul_ps(_mm_mul_ps(_mm_loadu_ps(b->a), _mm_set1_ps(s)), _mm_loadu_ps(b->R));
-    __m128 ndot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(n.x), _mm_loadu_ps(b->nx)),
-                                        _mm_mul_ps(_mm_set1_ps(n.y), _mm_loadu_ps(b->ny))),
-                             _mm_mul_ps(_mm_set1_ps(n.z), _mm_loadu_ps(b->nz)));
-    /* !(ndot <= 0), not ndot > 0: a NaN goes on to the weight test, as in the scalar code. */
-    __m128 pass = _mm_and_ps(_mm_cmplt_ps(d2, _mm_mul_ps(r, r)), _mm_cmpnle_ps(ndot, _mm_setzero_ps()));
-    return (unsigned)_mm_movemask_ps(pass);
-#else
-    unsigned mask = 0;
+    __m128 a = _mm_mul_ps(_mm_loadu_ps(b->a), _mm_set1_ps(s)), R = _mm_loadu_ps(b->R), r = _mm_mul_ps(a, R);
+    /* Inside the influence sphere: most blocks of a list fail this in every lane and stop here (testing
+     * the facing too before stopping was slower: the extra work outweighs the blocks it stops). */
+    __m128 pass = _mm_cmplt_ps(d2, _mm_mul_ps(r, r));
+    if (!_mm_movemask_ps(pass))
+        return 0;
+    /* Not facing away (!(ndot <= 0): a NaN goes on, as in the scalar code). */
+    __m128 nx = _mm_loadu_ps(b->nx), ny = _mm_loadu_ps(b->ny), nz = _mm_loadu_ps(b->nz);
+    __m128 ndot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(n.x), nx), _mm_mul_ps(_mm_set1_ps(n.y), ny)),
+                             _mm_mul_ps(_mm_set1_ps(n.z), nz));
+    pass = _mm_and_ps(pass, _mm_cmpnle_ps(ndot, zero));
+    /* Candidates: fetch their interpolation data while the rest of the test runs. */
     for (unsigned k = 0; k < 4; ++k) {
-        float d2 = ic_dist2(p.x, p.y, p.z, b->x[k], b->y[k], b->z[k]), r = b->a[k] * s * b->R[k];
-        float ndot = n.x * b->nx[k] + n.y * b->ny[k] + n.z * b->nz[k];
-        mask |= (unsigned)(d2 < r * r && !(ndot <= 0.0f)) << k;
+        const char *rec = (const char *)&records[b->slot[k]];
+        _mm_prefetch(rec, _MM_HINT_T0);
+        _mm_prefetch(rec + sizeof *records - 1, _MM_HINT_T0);
     }
-    return mask;
+    /* Not behind the record. */
+    __m128 behind = _mm_mul_ps(_mm_set1_ps(0.5f),
+                               _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_add_ps(_mm_set1_ps(n.x), nx)),
+                                                     _mm_mul_ps(dy, _mm_add_ps(_mm_set1_ps(n.y), ny))),
+                                          _mm_mul_ps(dz, _mm_add_ps(_mm_set1_ps(n.z), nz))));
+    pass = _mm_and_ps(pass, _mm_cmpnlt_ps(behind, _mm_mul_ps(_mm_set1_ps(-params->behind_tolerance), r)));
+    /* max(x, 0) is x > 0 ? x : 0, NaN included (maxps returns its second operand unless x > 0). */
+    __m128 dist = _mm_div_ps(_mm_sqrt_ps(d2), R), ndev = _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(one, ndot), zero)), w;
+    if (params->weight == IC_WEIGHT_WARD) {
+        __m128 denom = _mm_add_ps(dist, ndev);
+        pass = _mm_and_ps(pass, _mm_cmplt_ps(denom, a));
+        w = _mm_div_ps(one, _mm_max_ps(denom, _mm_set1_ps(1e-6f)));
+    } else {
+        __m128 nt = _mm_mul_ps(ndev, _mm_set1_ps(IC_TL_NORMAL_SCALE));
+        w = _mm_sub_ps(one, _mm_div_ps(_mm_max_ps(dist, nt), a));
+        pass = _mm_and_ps(pass, _mm_cmpgt_ps(w, zero));
+    }
+    /* Eligible: this bounce level, not disabled (bytes widened to the float lanes' 32 bits). */
+    int32_t bounce_bytes, flag_bytes;
+    memcpy(&bounce_bytes, b->bounce, 4);
+    memcpy(&flag_bytes, b->flags, 4);
+    __m128i ok = _mm_andnot_si128(
+        _mm_cmpeq_epi8(_mm_and_si128(_mm_cvtsi32_si128(flag_bytes), _mm_set1_epi8(IC_RECORD_DISABLED)),
+                       _mm_set1_epi8(IC_RECORD_DISABLED)),
+        _mm_cmpeq_epi8(_mm_cvtsi32_si128(bounce_bytes), _mm_set1_epi8((char)bounce)));
+    ok = _mm_unpacklo_epi16(_mm_unpacklo_epi8(ok, ok), _mm_unpacklo_epi8(ok, ok));
+    pass = _mm_and_ps(pass, _mm_castsi128_ps(ok));
+    _mm_storeu_ps(out->w, w);
+    _mm_storeu_ps(out->dx, dx);
+    _mm_storeu_ps(out->dy, dy);
+    _mm_storeu_ps(out->dz, dz);
+    return (unsigned)_mm_movemask_ps(pass);
+}
 #endif
+
+/* accumulate() for a frozen record, from its rows. */
+static inline void accumulate_frozen_portable(const ic_frozen_record *r, const ic_float4 *ni, ic_vec3 n, float w,
+                                              ic_vec3 dp, const ic_cache_lookup *q, ic_cache_estimate *e,
+                                              float acc[3])
+{
+    ic_vec3 E = v3(r->row[IC_FROZEN_E][0], r->row[IC_FROZEN_E][1], r->row[IC_FROZEN_E][2]), gr[3], gt[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        gr[ch] = v3(r->row[IC_FROZEN_GRAD_ROT][ch], r->row[IC_FROZEN_GRAD_ROT + 1][ch],
+                    r->row[IC_FROZEN_GRAD_ROT + 2][ch]);
+        gt[ch] = v3(r->row[IC_FROZEN_GRAD_TRANS][ch], r->row[IC_FROZEN_GRAD_TRANS + 1][ch],
+                    r->row[IC_FROZEN_GRAD_TRANS + 2][ch]);
+    }
+    accumulate(r->index, ni, &E, gr, gt, n, w, dp, q, e, acc);
 }
 
-/* ic_cache_query on the frozen layout: one list, four entries at a time. */
-static int query_frozen(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
+#if defined(__SSE2__)
+/* accumulate() with the three channels in three lanes: per lane the same operations in the same order
+ * (E + ((rot.x·gr.x + rot.y·gr.y) + rot.z·gr.z)) + ((dp.x·gt.x + dp.y·gt.y) + dp.z·gt.z), clamped
+ * with maxps (v > 0 ? v : 0, NaN included), so each channel is bit-identical to accumulate(). */
+static inline void accumulate_frozen_sse2(const ic_frozen_record *r, const ic_float4 *ni, ic_vec3 n, float w,
+                                          ic_vec3 dp, const ic_cache_lookup *q, ic_cache_estimate *e,
+                                          __m128 *acc)
+{
+    ic_vec3 rot = v3_cross(v3(ni->x, ni->y, ni->z), n);
+    const float *row = &r->row[0][0]; /* the rows as one array: row k starts at row + 3k */
+    /* Row 6's fourth lane is the index: cleared, so that no stray denormal or NaN enters the sums. */
+    const __m128 last = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    __m128 dot_rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(rot.x), _mm_loadu_ps(row + 3)),
+                                           _mm_mul_ps(_mm_set1_ps(rot.y), _mm_loadu_ps(row + 6))),
+                                _mm_mul_ps(_mm_set1_ps(rot.z), _mm_loadu_ps(row + 9)));
+    __m128 dot_trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(dp.x), _mm_loadu_ps(row + 12)),
+                                             _mm_mul_ps(_mm_set1_ps(dp.y), _mm_loadu_ps(row + 15))),
+                                  _mm_mul_ps(_mm_set1_ps(dp.z), _mm_and_ps(_mm_loadu_ps(row + 18), last)));
+    __m128 v = _mm_max_ps(_mm_add_ps(_mm_add_ps(_mm_loadu_ps(row), dot_rot), dot_trans), _mm_setzero_ps());
+    *acc = _mm_add_ps(*acc, _mm_mul_ps(_mm_set1_ps(w), v));
+    float e3[4];
+    _mm_storeu_ps(e3, v);
+    count_contributor(r->index, w, e3, q, e);
+}
+#endif
+
+/* Lowest set bit of a 4-bit lane mask. */
+static const uint8_t lowest_lane[16] = {0, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
+
+/* ic_cache_query on the frozen layout: one list, four entries at a time, with SSE2 unless is_portable
+ * (a constant: each caller below gets its own copy of the loop). */
+static IC_ALWAYS_INLINE int query_frozen(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
+                                         ic_cache_estimate *out, int is_portable)
 {
     const ic_frozen *f = &c->frozen;
-    float acc[3] = {0.0f, 0.0f, 0.0f};
+    float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     memset(out, 0, sizeof *out);
     ic_vec3 p = q->position, n = q->normal;
-    const ic_frozen_leaf *leaf = frozen_leaf(f, p, hint);
+    const ic_frozen_leaf *leaf = frozen_leaf(f, p, hint, is_portable);
     if (!leaf)
         return 0;
     float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
     const ic_frozen_block *blk = (const ic_frozen_block *)(leaf + 1);
-    uint32_t blocks = (leaf->count + 3) / 4;
+    /* Bounce levels are stored in bytes: a higher level has no records. */
+    uint32_t blocks = q->bounce <= UINT8_MAX ? (leaf->count + 3) / 4 : 0;
     out->records_tested = leaf->count;
+#if defined(__SSE2__)
+    __m128 acc4 = _mm_setzero_ps();
+#endif
     for (uint32_t b = 0; b < blocks; ++b) {
         const ic_frozen_block *o = &blk[b];
-        unsigned mask = block_candidates(o, p, n, s);
-        for (unsigned k = 0; mask; ++k, mask >>= 1) {
-            if (!(mask & 1u) || o->bounce[k] != q->bounce || (o->flags[k] & IC_RECORD_DISABLED))
+        block_weights bw;
+#if defined(__SSE2__)
+        unsigned mask = is_portable ? block_weights_portable(&c->params, o, p, n, s, q->bounce, &bw)
+                                    : block_weights_sse2(&c->params, f->record, o, p, n, s, q->bounce, &bw);
+#else
+        unsigned mask = block_weights_portable(&c->params, o, p, n, s, q->bounce, &bw);
+#endif
+        while (mask) {
+            unsigned k = lowest_lane[mask];
+            mask &= mask - 1;
+            const ic_frozen_record *r = &f->record[o->slot[k]];
+            ic_float4 ni = {o->nx[k], o->ny[k], o->nz[k], o->a[k]};
+            ic_vec3 dp = v3(bw.dx[k], bw.dy[k], bw.dz[k]);
+#if defined(__SSE2__)
+            if (!is_portable) {
+                accumulate_frozen_sse2(r, &ni, n, bw.w[k], dp, q, out, &acc4);
                 continue;
-            ic_float4 sp = {o->x[k], o->y[k], o->z[k], o->R[k]}, np = {o->nx[k], o->ny[k], o->nz[k], o->a[k]};
-            float w;
-            ic_vec3 dp;
-            if (ic_weight_test(&c->params, &sp, &np, p, n, s, &w, &dp)) {
-                const ic_frozen_record *r = &f->record[o->slot[k]];
-                accumulate(r->index, &np, &r->irradiance, r->grad_rot, r->grad_trans, n, w, dp, q, out, acc);
             }
+#endif
+            accumulate_frozen_portable(r, &ni, n, bw.w[k], dp, q, out, acc);
         }
     }
+#if defined(__SSE2__)
+    if (!is_portable)
+        _mm_storeu_ps(acc, acc4);
+#endif
+    (void)is_portable;
     return finish(out, acc);
+}
+
+#if defined(__SSE2__)
+static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
+{
+    return query_frozen(c, q, hint, out, 0);
+}
+#endif
+
+static int query_frozen_portable(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
+                                 ic_cache_estimate *out)
+{
+    return query_frozen(c, q, hint, out, 1);
 }
 
 int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
@@ -473,7 +662,11 @@ int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimat
 int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
 {
     if (c->frozen.is_valid)
-        return query_frozen(c, q, hint, out);
+#if defined(__SSE2__)
+        return c->is_portable_lookup ? query_frozen_portable(c, q, hint, out) : query_frozen_sse2(c, q, hint, out);
+#else
+        return query_frozen_portable(c, q, hint, out);
+#endif
     float acc[3] = {0.0f, 0.0f, 0.0f};
     memset(out, 0, sizeof *out);
     float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;

@@ -130,9 +130,13 @@ static uint32_t slot_for(builder *b, uint32_t i)
         const ic_record_cold *cd = &b->c->cold[i];
         ic_frozen_record *r = &f->record[f->record_count];
         memset(r, 0, sizeof *r);
-        r->irradiance = cd->irradiance;
-        memcpy(r->grad_rot, cd->grad_rot, sizeof r->grad_rot);
-        memcpy(r->grad_trans, cd->grad_trans, sizeof r->grad_trans);
+        for (int ch = 0; ch < 3; ++ch) {
+            r->row[IC_FROZEN_E][ch] = v3_get(cd->irradiance, ch);
+            for (int axis = 0; axis < 3; ++axis) {
+                r->row[IC_FROZEN_GRAD_ROT + axis][ch] = v3_get(cd->grad_rot[ch], axis);
+                r->row[IC_FROZEN_GRAD_TRANS + axis][ch] = v3_get(cd->grad_trans[ch], axis);
+            }
+        }
         r->index = i;
         b->slot_of[i] = f->record_count++;
     }

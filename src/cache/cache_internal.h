@@ -35,10 +35,10 @@ typedef struct ic_record_cold {
  *          the leaf in `list` (8-byte units);
  *   list — per leaf a header (its cell and entry count) followed by its entries, four to a block,
  *          with every hot field a rejection test reads (position, R_i, a_i, normal, bounce, flags)
- *          side by side: the distance and the facing test run four entries at a time, and a
- *          rejected candidate costs no other memory access;
- *   record — the interpolation data of the records (irradiance, gradients), in the order the lists
- *          first use them, read for contributors only.
+ *          side by side: the weight test runs four entries at a time (SSE2), and a rejected
+ *          candidate costs no other memory access;
+ *   record — the interpolation data of the records (irradiance, gradients), channels side by side,
+ *          in the order the lists first use them, read for contributors only.
  * Records are copied into each list that uses them (the octree's multiple references), so any
  * change to a record thaws the layout.
  */
@@ -63,10 +63,13 @@ typedef struct ic_frozen_leaf {
     uint32_t id;                 /* leaf number (the hint's value − 1) */
 } ic_frozen_leaf;
 
+/* A record's interpolation data with the three channels side by side, so that the extrapolation of
+ * seed 000 §3 runs on R, G and B at once: row 0 is E_i, rows 1–3 the x, y and z components of ∇r E_i
+ * (one value per channel), rows 4–6 those of ∇t E_i. A row is read four floats wide; its fourth lane
+ * (the next row's first value, or `index` for row 6) is ignored. */
+enum { IC_FROZEN_E = 0, IC_FROZEN_GRAD_ROT = 1, IC_FROZEN_GRAD_TRANS = 4, IC_FROZEN_ROWS = 7 };
 typedef struct ic_frozen_record {
-    ic_vec3 irradiance;          /* E_i */
-    ic_vec3 grad_rot[3];         /* ∇r E_i per channel */
-    ic_vec3 grad_trans[3];       /* ∇t E_i per channel */
+    float row[IC_FROZEN_ROWS][3];
     uint32_t index;              /* record index */
 } ic_frozen_record;
 
@@ -102,6 +105,7 @@ struct ic_cache {
     ic_octree points;            /* positions: k-nearest and radius queries */
     float tree_scale;            /* max(1, final_accuracy_scale) */
     ic_frozen frozen;            /* read-only look-up layout, valid between a freeze and the next insertion */
+    int is_portable_lookup;      /* tests: frozen look-ups take the portable code even where SSE2 is there */
     /* Insertion scratch (insertion is single-threaded with respect to the cache). */
     uint32_t *scratch;
     uint32_t scratch_cap;
@@ -171,6 +175,9 @@ static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_
 {
     return ic_weight_test(&c->params, &c->sphere[i], &c->normal[i], p, n, s, w, dp);
 }
+
+/* Tests: 1 makes frozen look-ups take the portable code even where SSE2 is there (both answer alike). */
+static inline void ic_cache_set_portable_lookup(ic_cache *c, int is_portable) { c->is_portable_lookup = is_portable; }
 
 /* Neighbor enumeration for the clamps: records j ≠ i within reach of i (see cache.h). Returns the
  * count, the indices are in c->scratch (grown as needed); IC_ERR_OOM → UINT32_MAX. */

@@ -21,6 +21,7 @@
  */
 #include "irrcache/cache.h"
 
+#include "cache/cache_internal.h" /* ic_cache_set_portable_lookup */
 #include "core/rng.h"
 #include "core/threads.h"
 #include "core/vecmath.h"
@@ -340,14 +341,17 @@ static int same_answer(const answer *a, const answer *b)
 /* Queries as in the brute-force check, each followed by a neighbour 10⁻³ away (a renderer's next
  * pixel: the hint hits), plus points outside the root and with odd coordinates; asked in that order
  * with one hint, in a scrambled order (hints left over from far-away look-ups), with no hint and with
- * garbage hints. The cache is thawed on entry and frozen on exit. */
-static void check_frozen_identical(ic_cache *c, uint32_t pairs, const char *what)
+ * garbage hints, and through the portable code (the SIMD code's reference, used where SSE2 is absent)
+ * with no hint and with hints in order. Query k asks for bounce level k mod `bounces`, level 3 standing
+ * for 256 (beyond the bytes levels are stored in). The cache is thawed on entry and frozen on exit. */
+static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces, const char *what)
 {
     uint32_t total = 2 * pairs + 64;
     ic_cache_lookup *q = calloc(total, sizeof *q);
     answer *want = malloc(total * sizeof *want), *got = malloc(sizeof *got);
     for (uint32_t k = 0; k < pairs; ++k) {
         make_query(c, 91, k, ic_cache_get_params(c)->final_accuracy_scale, &q[2 * k].position, &q[2 * k].normal);
+        q[2 * k].bounce = k % bounces == 3 ? 256 : k % bounces;
         q[2 * k + 1] = q[2 * k];
         q[2 * k + 1].position = v3_add(q[2 * k].position, v3(1e-3f, -0.5e-3f, 0.7e-3f));
     }
@@ -356,7 +360,7 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, const char *what
         q[k].position = v3(far[k % 8], 10.0f, far[(k / 8) % 8]);
         q[k].normal = v3(0, 0, 1);
     }
-    uint32_t differ[2][4] = {{0}}, hint_hits = 0;
+    uint32_t differ[2][6] = {{0}}, hint_hits = 0;
     for (int acc = 0; acc < 2; ++acc) {
         ic_cache_thaw(c);
         for (uint32_t k = 0; k < total; ++k) {
@@ -380,12 +384,23 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, const char *what
             ask(c, &q[k], &garbage, got);
             differ[acc][3] += !same_answer(got, &want[k]);
         }
+        ic_cache_hint portable_order = {0};
+        ic_cache_set_portable_lookup(c, 1);
+        for (uint32_t k = 0; k < total; ++k) {
+            ask(c, &q[k], NULL, got);
+            differ[acc][4] += !same_answer(got, &want[k]);
+            ask(c, &q[k], &portable_order, got);
+            differ[acc][5] += !same_answer(got, &want[k]);
+        }
+        ic_cache_set_portable_lookup(c, 0);
     }
     for (int acc = 0; acc < 2; ++acc)
-        CHECK(differ[acc][0] + differ[acc][1] + differ[acc][2] + differ[acc][3] == 0,
+        CHECK(differ[acc][0] + differ[acc][1] + differ[acc][2] + differ[acc][3] + differ[acc][4] +
+                      differ[acc][5] == 0,
               "%s (%s): frozen differs from the octree path: %u without hint, %u with hints in order, %u with "
-              "hints scrambled, %u with garbage hints", what, acc ? "final" : "construction", differ[acc][0],
-              differ[acc][1], differ[acc][2], differ[acc][3]);
+              "hints scrambled, %u with garbage hints; portable code: %u without hint, %u with hints", what,
+              acc ? "final" : "construction", differ[acc][0], differ[acc][1], differ[acc][2], differ[acc][3],
+              differ[acc][4], differ[acc][5]);
     /* The hint must actually be used for the test to mean something (both acceptances: 2·pairs
      * neighbours). */
     CHECK(hint_hits > pairs, "%s: neighbours kept their leaf only %u times of %u", what, hint_hits, 2 * pairs);
@@ -427,7 +442,7 @@ static void test_lookup_vs_brute_force(void)
             snprintf(what, sizeof what, "%s, %s", wk ? "T-L" : "Ward", clamp_name[which]);
             /* 20k queries for the full configurations, fewer for the single clamps (time). */
             check_lookup_equals_brute_force(c, 20000, what);
-            check_frozen_identical(c, 5000, what);
+            check_frozen_identical(c, 5000, 1, what);
             check_lookup_equals_brute_force(c, 10000, what);
             /* Clamps never raise R above the input (bounds off except in config 5). */
             uint32_t raised = 0;
@@ -1034,6 +1049,29 @@ static void test_file(void)
     free(recs);
 }
 
+/* Records of three bounce levels, every fifth disabled: the frozen layout's bounce and flag filter (SSE2
+ * and portable) answers like the octree path for queries of each level and of level 256, with both
+ * weights. */
+static void test_frozen_bounce_levels(void)
+{
+    const uint32_t n = 30000;
+    ic_record *recs = make_records(n, 9);
+    for (uint32_t i = 0; i < n; ++i)
+        recs[i].bounce = (uint8_t)(i % 3);
+    for (int wk = 0; wk < 2; ++wk) {
+        ic_cache_params p = clamp_config(wk ? IC_WEIGHT_TABELLION : IC_WEIGHT_WARD, 5);
+        ic_cache *c = build_cache(&p, recs, n);
+        for (uint32_t i = 0; i < n; i += 5)
+            ic_cache_set_record_flags(c, i, IC_RECORD_DISABLED);
+        ic_error err;
+        CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild: %s", err.message);
+        check_frozen_identical(c, 4000, 4, wk ? "T-L, bounce levels, disabled records"
+                                              : "Ward, bounce levels, disabled records");
+        ic_cache_destroy(c);
+    }
+    free(recs);
+}
+
 /* A freeze stays exact across the cache's life: insertions and record changes thaw it (look-ups go
  * through the octree, still equal to brute force), a rebuild re-freezes it, and a loaded cache is
  * frozen and answers like the one saved. */
@@ -1071,7 +1109,7 @@ static void test_freeze_lifecycle(void)
     check_lookup_equals_brute_force(c, 5000, "changed records, thawed");
     CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild did not re-freeze");
     check_lookup_equals_brute_force(c, 5000, "changed records, frozen");
-    check_frozen_identical(c, 5000, "changed records");
+    check_frozen_identical(c, 5000, 1, "changed records");
     /* freeze = off: rebuilds leave the cache thawed; an explicit freeze still works. */
     ic_cache_params off = p;
     off.freeze = IC_CACHE_OFF;
@@ -1150,6 +1188,7 @@ int main(void)
     RUN(test_point_queries);
     RUN(test_file);
     RUN(test_freeze_lifecycle);
+    RUN(test_frozen_bounce_levels);
     RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }
