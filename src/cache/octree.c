@@ -38,7 +38,6 @@ static unsigned point_octant(cube c, float x, float y, float z)
 
 /* max without fmaxf's NaN rules, which keep gcc from inlining it. */
 static inline float maxf(float a, float b) { return a > b ? a : b; }
-static inline float minf(float a, float b) { return a < b ? a : b; }
 
 /* Squared distance from p to the closed cube (0 inside). */
 static float cube_dist2(cube c, float x, float y, float z)
