@@ -378,6 +378,8 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
     fprintf(o, "  \"spp\": %d,\n  \"threads\": %d,\n  \"seconds\": %.6f,\n  \"rays\": %llu,\n", st->spp, st->threads,
             st->seconds, (unsigned long long)st->rays);
     fprintf(o, "  \"rays_per_second\": %.1f,\n", st->rays_per_second);
+    if (st->spp_max != st->spp)
+        fprintf(o, "  \"spp_max\": %d,\n", st->spp_max);
     if (!strcmp(a->integrator, "ic")) {
         fprintf(o, "  \"strategy\": \"%s\",\n  \"records\": %u,\n  \"passes\": %d,\n  \"gather_rays\": %llu,\n",
                 a->strategy ? a->strategy : "batch", st->records, st->passes, (unsigned long long)st->gather_rays);
@@ -599,8 +601,10 @@ int ic_cli_render(int argc, char **argv)
     if (ok && a.stats_path)
         ok = write_stats(a.stats_path, &a, w, h, &st);
     if (ok && !a.quiet) {
-        fprintf(stderr, "irrcache: %dx%d, %d spp, %.2fs, %.2f Mrays/s", w, h, st.spp, st.seconds,
-                st.rays_per_second * 1e-6);
+        fprintf(stderr, "irrcache: %dx%d, %d spp", w, h, st.spp);
+        if (st.spp_max != st.spp)
+            fprintf(stderr, " (adaptive, up to %d in a pixel)", st.spp_max);
+        fprintf(stderr, ", %.2fs, %.2f Mrays/s", st.seconds, st.rays_per_second * 1e-6);
         if (opt.integrator == IC_INTEGRATOR_IC)
             fprintf(stderr, ", %u records in %d passes", st.records, st.passes);
         fputc('\n', stderr);

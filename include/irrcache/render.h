@@ -141,7 +141,8 @@ typedef struct ic_render_stats {
     double seconds;        /* wall time of ic_render */
     uint64_t rays;         /* rays traced (camera, shadow, bounce, gathering) */
     double rays_per_second;
-    int spp;               /* samples per pixel taken */
+    int spp;               /* samples per pixel taken (adaptive sampling: the mean) */
+    int spp_max;           /* the most samples one pixel took (adaptive sampling; else spp) */
     int threads;           /* threads used */
     uint32_t records;      /* cache records (integrator IC) */
     int passes;            /* construction passes (integrator IC) */

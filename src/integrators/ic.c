@@ -1243,6 +1243,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     if (r != IC_OK)
         goto done;
     st->spp = lr.spp_done;
+    st->spp_max = lr.spp_max;
     st->rays = lr.rays + st->gather_rays;
     if (st->phase_count + 5 <= IC_MAX_PHASES) {
         st->phases[st->phase_count].name = "shading points";

@@ -145,6 +145,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         add_phase(st, "render", lr.seconds);
         st->rays = lr.rays;
         st->spp = lr.spp_done;
+        st->spp_max = lr.spp_max;
     }
     ic_accel_destroy(accel);
     st->seconds = ic_seconds() - t0;

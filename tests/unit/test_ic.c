@@ -159,6 +159,8 @@ static void test_cornell(void)
                    "spp %d / %d\n",
                    W, H, integ ? "IC" : "PT", ma.relmse, mb.relmse, ma_sum, mb_sum, sr, sa.spp, sb.spp);
             CHECK(sb.spp == 32, "adaptive: the mean spp is the budget (%d)", sb.spp);
+            CHECK(sb.spp_max > 32 && sb.spp_max <= 8 * 32 && sa.spp_max == 32,
+                  "adaptive: some pixels take more, none beyond the cap (%d; uniform %d)", sb.spp_max, sa.spp_max);
             CHECK(mb.relmse < (integ ? 0.85 : 0.97) * ma.relmse, "%s: adaptive relMSE %.5f below uniform %.5f",
                   integ ? "IC" : "PT", mb.relmse, ma.relmse);
             CHECK(fabs(mb_sum / sr - 1.0) < 0.03, "%s: adaptive sampling keeps the mean (%.4f vs %.4f)",
