@@ -74,7 +74,7 @@ static const opt_def options[] = {
     {"--seed", NULL, OPT_SEED, OFF(seed), 0, "N", "scene file, else 1", "random seed; same seed, same image"},
     {"--sampler", NULL, OPT_STRING, OFF(sampler), 0, "sobol|random", "sobol",
      "pixel, light and BSDF sample pairs: Owen-scrambled Sobol' per pixel (less noise) or independent random"},
-    {"--adaptive-sampling", NULL, OPT_STRING, OFF(adaptive_sampling), 0, "on|off", "off (pt), on (ic, with --spp >= 8)",
+    {"--adaptive-sampling", NULL, OPT_STRING, OFF(adaptive_sampling), 0, "on|off", "off (pt), on (ic, with --spp >= 8 and no --time)",
      "on: --spp becomes a mean, a pilot pass of spp/4 per pixel and the rest where the relative noise is (needs --spp >= 8, no --time)"},
     {"--exposure", NULL, OPT_DOUBLE, OFF(exposure), -100, "STOPS", "scene file, else 0", "exposure applied to .png outputs"},
     {"--stats", NULL, OPT_STRING, OFF(stats_path), 0, "FILE.json", "none",

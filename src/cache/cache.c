@@ -504,7 +504,8 @@ static inline unsigned block_weights_sse2(const ic_cache_params *params, const i
     __m128 ndot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(n.x), nx), _mm_mul_ps(_mm_set1_ps(n.y), ny)),
                              _mm_mul_ps(_mm_set1_ps(n.z), nz));
     pass = _mm_and_ps(pass, _mm_cmpnle_ps(ndot, zero));
-    /* Candidates: fetch their interpolation data while the rest of the test runs. */
+    /* Fetch the block's records (all four lanes: a branch per lane to skip the rejected ones was not
+     * measured to pay) while the rest of the test runs. */
     for (unsigned k = 0; k < 4; ++k) {
         const char *rec = (const char *)&records[b->slot[k]];
         _mm_prefetch(rec, _MM_HINT_T0);

@@ -116,7 +116,8 @@ static inline void ic_sobol2d(uint32_t index, uint64_t key, float *u, float *v)
     *v = (float)(y >> 8) * (1.0f / 16777216.0f);
 }
 
-/* Pairs per sample taken from the sequence; later pairs (deep path vertices) are plain random. */
+/* Dimensions per sample taken from the sequence (each ic_rng_2d pair and each ic_rng_1d draw uses
+ * one); later ones (deep path vertices) are plain random. */
 #define IC_RNG_LDS_PAIRS 32
 
 /* Makes the stream's 2-D draws points of per-`key` scrambled sequences, this stream being point
@@ -140,9 +141,11 @@ static inline void ic_rng_2d(ic_rng *r, float *u, float *v)
 }
 
 /* A uniform number in [0,1) for a discrete choice (a BSDF lobe, reflection or refraction at glass, a
- * kind of light): one coordinate of the next low-discrepancy dimension when enabled, so that over a
- * pixel's samples each branch is taken in proportion to its probability, give or take one sample,
- * instead of binomially; else one draw. */
+ * kind of light): one coordinate of the next low-discrepancy dimension when enabled (it uses up one
+ * of the IC_RNG_LDS_PAIRS dimensions), else one draw. Over an aligned power-of-two block of a pixel's
+ * samples that all reach this dimension, each branch is then taken in proportion to its probability,
+ * give or take one sample, instead of binomially; other counts (adaptive sampling, paths of different
+ * lengths) keep most of that evenness. */
 static inline float ic_rng_1d(ic_rng *r)
 {
     if (r->lds_key && r->lds_dim < IC_RNG_LDS_PAIRS) {

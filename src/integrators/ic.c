@@ -1196,12 +1196,17 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
         pt.insert += ic_seconds() - t0;
     } else {
         double t0 = ic_seconds();
+        int phases_before = st->phase_count;
         r = ic_ic_build(c, opt, st, &pt, err);
         if (r != IC_OK)
             goto done;
-        /* What construction spent outside gathering and insertion: discontinuity maps, look-up sweeps,
-         * world-stage paths, clustering. */
-        t_candidates = fmax(ic_seconds() - t0 - pt.gather - pt.insert, 0.0);
+        /* What construction spent outside gathering and insertion and outside the phases the strategy
+         * reports itself (adaptive: its own): discontinuity maps, look-up sweeps, world-stage paths,
+         * clustering for batch; the raster sweep for lazy. */
+        double own = 0.0;
+        for (int k = phases_before; k < st->phase_count; ++k)
+            own += st->phases[k].seconds;
+        t_candidates = fmax(ic_seconds() - t0 - pt.gather - pt.insert - own, 0.0);
         /* The final render reads a freshly built index: look-ups are faster than through the
          * incrementally grown one, and the summation order of every look-up is the same as after
          * loading a cache file, so a saved and re-loaded cache renders the identical image. */

@@ -79,6 +79,9 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     memset(st, 0, sizeof *st);
     if (opt.spp < 0 || opt.max_depth < 0 || opt.threads < 0 || opt.time_budget < 0.0)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "negative --spp, --max-depth, --threads or --time; give values >= 0");
+    if (opt.adaptive_sampling < -1 || opt.adaptive_sampling > 1)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "adaptive_sampling %d: use 1 (on), -1 (off) or 0 (default)",
+                            opt.adaptive_sampling);
     if (opt.sampler != IC_SAMPLER_SOBOL && opt.sampler != IC_SAMPLER_RANDOM)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "unknown sampler %d; use sobol or random", (int)opt.sampler);
     /* A cache render's samples are cheap (a camera ray, a light sample, a look-up): it defaults to more. */

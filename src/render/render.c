@@ -3,6 +3,7 @@
 
 #include "core/threads.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -112,8 +113,8 @@ static void render_tile(void *p, int64_t item, int thread)
                     sum[0] += L.x;
                     sum[1] += L.y;
                     sum[2] += L.z;
-                    double y = luminance(L);
-                    sq += y * y;
+                    double lum = luminance(L);
+                    sq += lum * lum;
                 }
             }
             double *a = &c->accum[3 * (size_t)pixel];
@@ -146,8 +147,8 @@ static void render_tile(void *p, int64_t item, int thread)
  * sums, so it, and the image, are independent of the thread count. Each pixel continues its own
  * sample sequence (indices n0, n0+1, …), so its samples stay one low-discrepancy sequence. The
  * pixel's value is the mean of all its samples; since the count depends on the pilot, that is
- * consistent but not exactly unbiased (the smoothing keeps the dependence weak; test_render checks
- * the mean against uniform sampling). */
+ * consistent but not exactly unbiased (the smoothing keeps the dependence weak; test_ic checks the
+ * image mean against the path-traced reference). */
 #define IC_ADAPTIVE_CAP 8
 
 static int allocate_samples(const double *accum, const double *sumsq, int n0, int spp, int width, int height,
@@ -265,6 +266,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     int n0 = loop->spp / 4;
     c.sumsq = calloc(npix, sizeof *c.sumsq);
     uint32_t *extra = malloc(npix * sizeof *extra);
+    /* Progress counts tiles of both passes alike, so the pilot (a quarter of the samples) shows as half. */
     c.total_tiles_all_passes = 2 * c.tiles_x * c.tiles_y;
     c.start = ic_seconds();
     if (!c.sumsq || !extra)
@@ -319,6 +321,10 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     if (loop->adaptive && (loop->spp < 8 || loop->time_budget > 0.0))
         return ic_error_set(err, IC_ERR_INVALID_ARG,
                             "adaptive sampling needs --spp of at least 8 and no --time (it shares out a fixed budget)");
+    if (loop->adaptive && loop->spp > INT_MAX / IC_ADAPTIVE_CAP)
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "--spp %d is too large for adaptive sampling (at most %d); lower it or add "
+                            "--adaptive-sampling off", loop->spp, INT_MAX / IC_ADAPTIVE_CAP);
     if (loop->adaptive)
         return render_adaptive(loop, fn, user, out, res, err);
     int threads = ic_resolve_threads(loop->threads);

@@ -360,12 +360,14 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
         q[k].position = v3(far[k % 8], 10.0f, far[(k / 8) % 8]);
         q[k].normal = v3(0, 0, 1);
     }
-    uint32_t differ[2][6] = {{0}}, hint_hits = 0;
+    uint32_t differ[2][6] = {{0}}, hint_hits = 0, found_at_level[3] = {0, 0, 0};
     for (int acc = 0; acc < 2; ++acc) {
         ic_cache_thaw(c);
         for (uint32_t k = 0; k < total; ++k) {
             q[k].acceptance = acc ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION;
             ask(c, &q[k], NULL, &want[k]);
+            if (want[k].hit && q[k].bounce < 3)
+                ++found_at_level[q[k].bounce];
         }
         ic_error err;
         CHECK(ic_cache_freeze(c, &err) == IC_OK && ic_cache_is_frozen(c), "freeze: %s", err.message);
@@ -404,6 +406,9 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
     /* The hint must actually be used for the test to mean something (both acceptances: 2·pairs
      * neighbours). */
     CHECK(hint_hits > pairs, "%s: neighbours kept their leaf only %u times of %u", what, hint_hits, 2 * pairs);
+    /* Every bounce level asked for must be answered somewhere, or the comparison would be of empty answers. */
+    for (uint32_t level = 0; level < (bounces < 3 ? bounces : 3); ++level)
+        CHECK(found_at_level[level] > 0, "%s: no look-up of bounce level %u found a record", what, level);
     free(q);
     free(want);
     free(got);

@@ -168,6 +168,17 @@ int main(void)
     CHECK(run(cmd) == 1 && strstr(err_text, "ic_cut.icc") && !file_exists(OUT), "truncated cache refused: %s",
           err_text);
 
+    /* Adaptive sampling it cannot do is refused before anything is rendered. */
+    snprintf(cmd, sizeof cmd, "%s -o %s --adaptive-sampling on --time 1", ic, OUT);
+    CHECK(run(cmd) == 2 && strstr(err_text, "--time") && line_count(err_text) == 1 && !file_exists(OUT),
+          "--adaptive-sampling on with --time refused: %s", err_text);
+    snprintf(cmd, sizeof cmd, "%s -o %s --adaptive-sampling on --spp 4", ic, OUT);
+    CHECK(run(cmd) == 2 && strstr(err_text, "--spp") && line_count(err_text) == 1 && !file_exists(OUT),
+          "--adaptive-sampling on with 4 spp refused: %s", err_text);
+    snprintf(cmd, sizeof cmd, "%s -o %s --adaptive-sampling maybe", ic, OUT);
+    CHECK(run(cmd) == 2 && strstr(err_text, "on off") && !file_exists(OUT), "--adaptive-sampling maybe refused: %s",
+          err_text);
+
     /* Help lists every option with its default. */
     rc = run("render --help >" IC_TEST_TMP "/cli_help.txt");
     CHECK(rc == 0, "render --help exits 0");

@@ -180,6 +180,7 @@ static void test_threads(void)
         ic_image a = {0}, b = {0};
         ic_render_options o = ic_options();
         o.spp = variant == 3 ? 16 : 2; /* variant 3: adaptive sampling's allocation is serial too */
+        o.adaptive_sampling = variant == 3 ? 1 : -1;
         o.ic.strategy = (ic_strategy)strategy;
         o.ic.recursive = variant == 2;
         o.ic.bounces = variant == 2 ? 3 : 0;
@@ -187,6 +188,22 @@ static void test_threads(void)
         int ok = test_render(CORNELL, 48, 48, &o, &a, NULL);
         o.threads = 2;
         ok &= test_render(CORNELL, 48, 48, &o, &b, NULL);
+        if (variant == 3) {
+            /* The library refuses adaptive sampling it cannot do: spp below 8, or a time budget. */
+            ic_render_options bad = o;
+            bad.spp = 4;
+            ic_image none = {0};
+            CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "adaptive sampling with 4 spp refused");
+            ic_image_free(&none);
+            bad.spp = 16;
+            bad.time_budget = 1.0;
+            CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "adaptive sampling with a time budget refused");
+            ic_image_free(&none);
+            bad.time_budget = 0.0;
+            bad.adaptive_sampling = 7;
+            CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "adaptive_sampling 7 refused");
+            ic_image_free(&none);
+        }
         CHECK(ok && memcmp(a.rgb, b.rgb, sizeof(float) * 3 * 48 * 48) == 0,
               "variant %d: 1 and 2 threads give identical images", variant);
         ic_image_free(&a);
