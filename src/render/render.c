@@ -60,7 +60,7 @@ static float tent_sample(float u)
     return u < 0.5f ? sqrtf(2.0f * u) - 1.0f : 1.0f - sqrtf(2.0f - 2.0f * u);
 }
 
-static double luminance(ic_vec3 L) { return 0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z; }
+static double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
 
 typedef struct loop_ctx {
     const ic_image_loop *loop;
@@ -113,8 +113,10 @@ static void render_tile(void *p, int64_t item, int thread)
                     sum[0] += L.x;
                     sum[1] += L.y;
                     sum[2] += L.z;
-                    double lum = luminance(L);
-                    sq += lum * lum;
+                    if (c->sumsq) { /* adaptive pilot pass only: nothing added to other samples */
+                        double lum = luminance(L.x, L.y, L.z);
+                        sq += lum * lum;
+                    }
                 }
             }
             double *a = &c->accum[3 * (size_t)pixel];
@@ -164,7 +166,7 @@ static int allocate_samples(const double *accum, const double *sumsq, int n0, in
     }
     for (size_t i = 0; i < npix; ++i) {
         const double *a = &accum[3 * i];
-        double m = (0.2126 * a[0] + 0.7152 * a[1] + 0.0722 * a[2]) / n0;
+        double m = luminance(a[0], a[1], a[2]) / n0;
         double var = fmax(sumsq[i] / n0 - m * m, 0.0) * n0 / (n0 - 1);
         v[i] = var / (m * m + 0.01);
     }
