@@ -41,6 +41,7 @@ typedef struct render_args {
     int rays, bounces, max_passes, min_candidates, light_samples;
     int no_gradients, no_neighbor_clamp, no_validity_clamp, gradient_difference, recursive, path_traced_gather;
     const char *adaptive_sampling;
+    const char *large_emitters;
 } render_args;
 
 typedef enum opt_kind { OPT_INT, OPT_SEED, OPT_DOUBLE, OPT_STRING, OPT_OUTPUT, OPT_FLAG } opt_kind;
@@ -96,6 +97,10 @@ static const opt_def options[] = {
      "ic lazy: one cache level per bounce, as Radiance's -ab (--bounces levels), instead of path tracing"},
     {"--light-samples", NULL, OPT_INT, OFF(light_samples), 1, "N", "1",
      "ic: light samples per shading point in the final render (direct light)"},
+    {"--large-emitters", NULL, OPT_STRING, OFF(large_emitters), 0, "F|off", "0.01",
+     "ic: an emitter covering at least F of the hemisphere at the median shading point, and mostly hidden "
+     "(a window seen through openings), lights the scene through the records instead of light sampling; "
+     "off: sample every emitter"},
     {"--min-radius", NULL, OPT_DOUBLE, OFF(min_radius), 0, "R", "0", "ic: smallest record radius, world units"},
     {"--max-radius", NULL, OPT_DOUBLE, OFF(max_radius), 0, "R", "scene diagonal / 8",
      "ic: largest record radius, world units"},
@@ -286,10 +291,19 @@ static int parse_args(int argc, char **argv, render_args *a)
                   a->min_radius > 0 || a->max_radius > 0 || a->min_radius_px > 0 || a->max_radius_px > 0 ||
                   a->final_scale > 0 || a->max_passes || a->min_candidates || a->no_gradients || a->path_traced_gather ||
                   a->no_neighbor_clamp || a->no_validity_clamp || a->gradient_difference || a->recursive || a->records_json ||
-                  a->weber > 0 || a->adaptive_growth > 0;
+                  a->weber > 0 || a->adaptive_growth > 0 || a->large_emitters;
     if (ic_only && strcmp(a->integrator, "ic") != 0) {
         fprintf(stderr, "irrcache render: irradiance-cache options need --integrator ic\n");
         return 2;
+    }
+    if (a->large_emitters && strcmp(a->large_emitters, "off") != 0) {
+        char *end;
+        double f = strtod(a->large_emitters, &end);
+        if (end == a->large_emitters || *end || !(f > 0.0) || !(f <= 1.0)) {
+            fprintf(stderr, "irrcache render: --large-emitters '%s': give a hemisphere share in (0, 1] (e.g. 0.01) or off\n",
+                    a->large_emitters);
+            return 2;
+        }
     }
     int adaptive_on = a->adaptive_sampling && !strcmp(a->adaptive_sampling, "on");
     if (adaptive_on && a->time_budget > 0) {
@@ -389,6 +403,7 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         fprintf(o, "],\n");
         if (a->strategy && !strcmp(a->strategy, "adaptive"))
             fprintf(o, "  \"refinements\": %u,\n", st->refinements);
+        fprintf(o, "  \"cached_emitters\": %u,\n", st->cached_emitters);
     }
     fprintf(o, "  \"phases\": {");
     for (int i = 0; i < st->phase_count; ++i)
@@ -438,6 +453,8 @@ static void fill_ic_options(const render_args *a, ic_ic_options *o)
     o->load_cache = a->load_cache;
     o->save_cache = a->save_cache;
     o->light_samples = a->light_samples;
+    if (a->large_emitters)
+        o->large_emitters = !strcmp(a->large_emitters, "off") ? -1.0f : (float)strtod(a->large_emitters, NULL);
     o->max_passes = a->max_passes;
     o->min_candidates = a->min_candidates;
 }
@@ -607,6 +624,8 @@ int ic_cli_render(int argc, char **argv)
         fprintf(stderr, ", %.2fs, %.2f Mrays/s", st.seconds, st.rays_per_second * 1e-6);
         if (opt.integrator == IC_INTEGRATOR_IC)
             fprintf(stderr, ", %u records in %d passes", st.records, st.passes);
+        if (st.cached_emitters)
+            fprintf(stderr, ", %u emitting triangles lit through the records", st.cached_emitters);
         fputc('\n', stderr);
     }
     return ok ? 0 : 1;

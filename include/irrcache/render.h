@@ -70,6 +70,12 @@ typedef struct ic_ic_options {
                               records already cover a diffuse hit, they give its indirect light (ic.c:
                               hit_from_cache) and only its direct light is sampled */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
+    float large_emitters;  /* an emitting material that covers at least this share of the cosine-weighted
+                              hemisphere at the image's median shading point, and whose light samples are
+                              mostly hidden (over a quarter), lights the scene through the records, as the
+                              environment does, and is not sampled in the final render: a window seen
+                              through openings (soft shadows, wasteful light samples) [0.01]; negative:
+                              every emitter is sampled */
     int max_passes;        /* batch: most construction passes [12] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */
@@ -147,6 +153,7 @@ typedef struct ic_render_stats {
     uint32_t records;      /* cache records (integrator IC) */
     int passes;            /* construction passes (integrator IC) */
     uint32_t refinements;  /* adaptive: times a record's a_i was lowered */
+    uint32_t cached_emitters; /* emitting triangles whose light the records carry (ic_ic_options.large_emitters) */
     uint32_t records_per_pass[32];
     uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */
     int phase_count;

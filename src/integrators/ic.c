@@ -40,6 +40,26 @@
  * it cuts record cost, which seed 004 §4.6 measures as most of the construction time. Only purely
  * diffuse hits are taken (a glossy hit needs its lobe traced); returns 0 where no record reaches, and
  * the caller path-traces. Deterministic: within a pass the cache is read-only. */
+/* 1 if emitting triangle tri is a large emitter whose light the records carry (cache_large_emitters). */
+static int emitter_is_cached(const ic_ctx *c, uint32_t tri)
+{
+    if (!c->direct_pmf || tri >= c->tr->scene->triangle_count)
+        return 0;
+    int32_t li = c->tr->scene->triangle_light[tri];
+    return li >= 0 && !(c->direct_pmf[li] > 0.0f);
+}
+
+/* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
+ * emitter, which is direct light the records carry (zero for any other surface). */
+static ic_vec3 cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit)
+{
+    if (!emitter_is_cached(c, hit->triangle))
+        return v3s(0.0f);
+    ic_surface s;
+    ic_scene_surface(c->tr->scene, hit->triangle, hit->u, hit->v, &s);
+    return ic_scene_emission(c->tr->scene, &s, v3_neg(ray->dir));
+}
+
 static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
                           ic_vec3 *radiance)
 {
@@ -98,12 +118,14 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             bits.f[5] = rays[i].dir.z;
             ic_rng rng = ic_rng_make(c->seed ^ 0x6761746865720000ULL, ((uint64_t)bits.u[0] << 32) | bits.u[1],
                                      ((uint64_t)bits.u[2] << 32) | bits.u[3], ((uint64_t)bits.u[4] << 32) | bits.u[5]);
-            if (c->hit_lookups && hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, &radiance[j]))
-                continue;
-            /* The hit is the path's second vertex (the record is the first): depth 1. Its emission is
-             * direct light of the record's point, delivered by NEE in the final render. */
-            ic_path_start st = {1, 0.0f, 1, 1, NULL};
-            radiance[j] = ic_pt_li_hit(tr, rays[i], &hits[i], &st, &rng, &nrays);
+            if (!c->hit_lookups || !hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, &radiance[j])) {
+                /* The hit is the path's second vertex (the record is the first): depth 1. Its emission
+                 * is direct light of the record's point, delivered by NEE in the final render. */
+                ic_path_start st = {1, 0.0f, 1, 1, NULL};
+                radiance[j] = ic_pt_li_hit(tr, rays[i], &hits[i], &st, &rng, &nrays);
+            }
+            /* ... unless it comes from a large emitter, which the records carry. */
+            radiance[j] = v3_add(radiance[j], cached_emission(c, &rays[i], &hits[i]));
         }
     }
     atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
@@ -611,19 +633,21 @@ static void recursive_trace(void *user, const ic_vec3 *origins, const ic_vec3 *d
         ic_vec3 wo = v3_neg(ray.dir);
         ic_bsdf b;
         ic_bsdf_init(&b, c->tr->scene, &s, wo);
-        radiance[j] = v3s(0.0f);
+        radiance[j] = cached_emission(c, &ray, &hit);
         if (!ic_bsdf_has_smooth(&b))
             continue; /* mirrors and glass seen by hemisphere rays: not followed (as Radiance's ambient) */
         ic_rng rng = ic_rng_make(c->seed, (uint64_t)lv->level, hit.triangle,
                                  ((uint64_t)(uint32_t)(hit.u * 4294967040.0f) << 32) | (uint32_t)(hit.v * 4294967040.0f));
-        ic_vec3 L = ic_ic_direct_light(c, &s, &b, wo, NULL, &rng, &nrays);
-        if (lv->level + 1 < ls->level_count && ls->status == IC_OK) {
+        /* The last level has no cache behind its hits: their direct light comes from every emitter. */
+        int last = lv->level + 1 >= ls->level_count;
+        ic_vec3 L = ic_ic_direct_light(c, &s, &b, wo, last ? &c->light_sel_all : NULL, &rng, &nrays);
+        if (!last && ls->status == IC_OK) {
             /* Deeper levels get the footprint of a pixel 1/128 of the scene wide, so the pixel bounds
              * keep their records at least ~diagonal/85 apart (Radiance's -ar 128 plays this part). */
             ic_vec3 E = level_irradiance(ls, lv->level + 1, &s, b.frame.n, c->scene_diag / 128.0f);
             L = v3_add(L, v3_mul(v3_scale(b.kd, IC_INV_PI), E));
         }
-        radiance[j] = L;
+        radiance[j] = v3_add(radiance[j], L);
     }
     atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
 }
@@ -746,7 +770,8 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     if (hit.triangle == IC_NO_HIT)
         return v3_scale(ic_scene_env_radiance(c->tr->scene, d), IC_PI);
     ic_path_start st = {1, 0.0f, 1, 1, NULL};
-    return v3_scale(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), IC_PI);
+    ic_vec3 L = v3_add(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), cached_emission(c, &ray, &hit));
+    return v3_scale(L, IC_PI);
 }
 
 /* Shadow-tested contribution of one light sample (weight for the glossy lobe's MIS given by wg). */
@@ -797,6 +822,9 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_light_selection
     if (v3_is_black(le))
         return v3s(0.0f);
     float pl = ic_scene_light_pdf_triangle_sel(c->tr->scene, sel, s->p, hit.triangle, wi, hit.t);
+    /* An emitter light sampling never picks is a large one: the records carry its light. */
+    if (!(pl > 0.0f))
+        return v3s(0.0f);
     /* f_d·cos/p_cos = kd for the cosine-sampled Lambertian lobe. */
     return v3_scale(v3_mul(b->kd, le), ic_power_heuristic(cos_i * IC_INV_PI, pl));
 }
@@ -1051,6 +1079,8 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
     if (o.light_samples <= 0)
         o.light_samples = 1;
+    if (o.large_emitters == 0.0f)
+        o.large_emitters = IC_LARGE_EMITTERS;
     if (o.max_passes <= 0)
         o.max_passes = 12;
     if (o.min_candidates <= 0)
@@ -1083,6 +1113,168 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
     c->scene_diag = diag > 0.0f ? diag : 1.0f;
 }
 
+/* Projected solid angle of triangle (a, b, c) seen from p above the plane with normal n, over π: the
+ * share of p's cosine-weighted hemisphere it covers, unoccluded. The solid angle is Van Oosterom and
+ * Strackee's (1983) closed form; the cosine is taken at the triangle's centroid (a small triangle's
+ * exact value, a fair one for a large triangle seen from afar). */
+static double hemisphere_share(ic_vec3 p, ic_vec3 n, ic_vec3 a, ic_vec3 b, ic_vec3 c)
+{
+    ic_vec3 ra = v3_sub(a, p), rb = v3_sub(b, p), rc = v3_sub(c, p);
+    double la = v3_len(ra), lb = v3_len(rb), lc = v3_len(rc);
+    double num = fabs((double)v3_dot(ra, v3_cross(rb, rc)));
+    double den = la * lb * lc + v3_dot(ra, rb) * lc + v3_dot(ra, rc) * lb + v3_dot(rb, rc) * la;
+    double omega = 2.0 * atan2(num, den);
+    ic_vec3 d = v3_sub(v3_scale(v3_add(v3_add(a, b), c), 1.0f / 3.0f), p);
+    double dl = v3_len(d), cos_r = dl > 0.0 ? v3_dot(d, n) / dl : 0.0;
+    return cos_r > 0.0 && isfinite(omega) ? omega * cos_r / IC_PI : 0.0;
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+/* Of the light samples a shading point would take on material m's emitting triangles (by area, from
+ * every stride-th valid pixel's shading point, 8 each), the fraction no surface hides, among those
+ * that face the point and that it faces; 1 when there are none. */
+static double visible_fraction(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride)
+{
+    double area = 0.0;
+    for (uint32_t li = 0; li < s->tri_light_count; ++li)
+        if (s->triangle_material[s->tri_lights[li].triangle] == m)
+            area += s->tri_lights[li].area;
+    size_t npix = (size_t)c->g.width * c->g.height, seen = 0, open = 0;
+    for (size_t i = 0, k = 0; i < npix; ++i) {
+        if (!c->g.valid[i] || k++ % stride)
+            continue;
+        ic_rng rng = ic_rng_make(c->seed, 0x6c61726765ULL, i, 0);
+        for (int j = 0; j < 8; ++j) {
+            /* A triangle by area (a scan: only large emitters get here, and they have few triangles). */
+            double u = ic_rng_float(&rng) * area, acc = 0.0;
+            const ic_tri_light *l = NULL;
+            for (uint32_t li = 0; li < s->tri_light_count && (!l || acc <= u); ++li)
+                if (s->triangle_material[s->tri_lights[li].triangle] == m) {
+                    l = &s->tri_lights[li];
+                    acc += l->area;
+                }
+            float b1, b2;
+            ic_warp_triangle(ic_rng_float(&rng), ic_rng_float(&rng), &b1, &b2);
+            const uint32_t *v = &s->triangles[3 * l->triangle];
+            ic_vec3 x = v3_add(v3_add(v3_scale(s->positions[v[0]], 1.0f - b1 - b2), v3_scale(s->positions[v[1]], b1)),
+                               v3_scale(s->positions[v[2]], b2));
+            ic_vec3 d = v3_sub(x, c->g.p[i]);
+            float dist = v3_len(d);
+            if (!(dist > 0.0f))
+                continue;
+            d = v3_scale(d, 1.0f / dist);
+            if (v3_dot(d, c->g.n[i]) <= 0.0f || (!l->two_sided && v3_dot(d, l->normal) >= 0.0f))
+                continue;
+            ic_ray r = {ic_offset_ray_origin(c->g.p[i], c->g.n[i], d), d, 0.0f, dist * (1.0f - 1e-3f)};
+            ++seen;
+            open += !ic_accel_occluded1(c->tr->accel, &r);
+        }
+    }
+    return seen ? (double)open / (double)seen : 1.0;
+}
+
+/* Large emitters. Seed 004 §3 caches all indirect light, and renderers built on a cache leave the sky
+ * to the records; this extends that to an emitting material that is large and mostly hidden: one that
+ * covers, at the median shading point of the image, at least large_emitters of the cosine-weighted
+ * hemisphere (hemisphere_share, unoccluded) and of whose light samples at most
+ * IC_LARGE_EMITTER_VISIBLE reach it (visible_fraction). Such an emitter — staircase2's window quads —
+ * is where light sampling is at its worst (most samples land on hidden parts, and each visible one
+ * carries a large weight), while its irradiance varies slowly (a source that large casts soft
+ * shadows), which is what the cache interpolates well. It is then not light-sampled in the final
+ * render; the hemisphere rays count its emission instead, so the records carry its direct light, as
+ * they carry the environment's. A lamp like the Cornell box's (0.6 % of the hemisphere, 90 % of its
+ * samples visible) keeps being sampled: the cache would blur its sharper shadows. Fills
+ * direct_pmf/direct_cdf and narrows light_sel to the emitters left; returns 0 when out of memory. */
+static int cache_large_emitters(ic_ctx *c, const ic_scene *s)
+{
+    if (!(c->o.large_emitters >= 0.0f) || s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
+        return 1;
+    size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
+    for (size_t i = 0; i < npix; ++i)
+        valid += c->g.valid[i];
+    if (valid == 0)
+        return 1;
+    /* At most ~1024 shading points, evenly through the image. */
+    size_t stride = valid / 1024 + 1, points = 0;
+    uint32_t nm = s->material_count;
+    double *share = calloc((size_t)nm * (valid / stride + 1), sizeof *share);
+    uint8_t *cached_mat = calloc(nm ? nm : 1, 1);
+    double *row = malloc(sizeof *row * (valid / stride + 1));
+    if (!share || !cached_mat || !row) {
+        free(share);
+        free(cached_mat);
+        free(row);
+        return 0;
+    }
+    for (size_t i = 0, k = 0; i < npix; ++i) {
+        if (!c->g.valid[i] || k++ % stride)
+            continue;
+        ic_vec3 p = c->g.p[i], n = c->g.n[i];
+        for (uint32_t li = 0; li < s->tri_light_count; ++li) {
+            const ic_tri_light *l = &s->tri_lights[li];
+            uint32_t t = l->triangle;
+            /* Only the emitting side counts. */
+            if (!l->two_sided && v3_dot(l->normal, v3_sub(p, l->centroid)) <= 0.0f)
+                continue;
+            share[(size_t)s->triangle_material[t] * (valid / stride + 1) + points] +=
+                hemisphere_share(p, n, s->positions[s->triangles[3 * t]], s->positions[s->triangles[3 * t + 1]],
+                                 s->positions[s->triangles[3 * t + 2]]);
+        }
+        ++points;
+    }
+    uint32_t cached = 0;
+    double kept = 0.0;
+    for (uint32_t m = 0; m < nm; ++m) {
+        memcpy(row, &share[(size_t)m * (valid / stride + 1)], sizeof *row * points);
+        qsort(row, points, sizeof *row, cmp_double);
+        cached_mat[m] = row[points / 2] >= c->o.large_emitters && !v3_is_black(s->materials[m].emission);
+        if (cached_mat[m])
+            cached_mat[m] = visible_fraction(c, s, m, stride) <= IC_LARGE_EMITTER_VISIBLE;
+    }
+    free(share);
+    free(row);
+    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+        if (cached_mat[s->triangle_material[s->tri_lights[i].triangle]])
+            ++cached;
+        else
+            kept += s->tri_lights[i].power;
+    }
+    if (cached == 0) {
+        free(cached_mat);
+        return 1;
+    }
+    c->direct_pmf = malloc(sizeof *c->direct_pmf * s->tri_light_count);
+    c->direct_cdf = malloc(sizeof *c->direct_cdf * (s->tri_light_count + 1));
+    if (!c->direct_pmf || !c->direct_cdf) {
+        free(cached_mat);
+        return 0;
+    }
+    double sum = 0.0;
+    c->direct_cdf[0] = 0.0f;
+    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+        int big = cached_mat[s->triangle_material[s->tri_lights[i].triangle]];
+        c->direct_pmf[i] = big || !(kept > 0.0) ? 0.0f : (float)(s->tri_lights[i].power / kept);
+        sum += c->direct_pmf[i];
+        c->direct_cdf[i + 1] = (float)sum;
+    }
+    if (kept > 0.0)
+        c->direct_cdf[s->tri_light_count] = 1.0f;
+    free(cached_mat);
+    c->cached_emitters = cached;
+    /* The class probabilities follow the power left to sample. */
+    double tri = c->light_sel.tri * kept / s->tri_light_power, point = c->light_sel.point;
+    c->light_sel.tri = tri + point > 0.0 ? (float)(tri / (tri + point)) : 0.0f;
+    c->light_sel.point = tri + point > 0.0 ? (float)(point / (tri + point)) : 0.0f;
+    c->light_sel.tri_pmf = kept > 0.0 ? c->direct_pmf : NULL;
+    c->light_sel.tri_cdf = kept > 0.0 ? c->direct_cdf : NULL;
+    return 1;
+}
+
 ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, double *gbuffer_seconds,
                            ic_error *err)
 {
@@ -1101,6 +1293,7 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
         c->light_sel.tri = tr->scene->light_select.tri / sel_sum;
         c->light_sel.point = tr->scene->light_select.point / sel_sum;
     }
+    c->light_sel_all = c->light_sel;
     c->gather_tr = *tr;
     c->gather_tr.pt.max_depth = c->o.bounces + 1;
     /* With one bounce a hemisphere ray returns its hit's direct light alone; records hold more. */
@@ -1113,6 +1306,8 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
         r = build_gbuffer(c, err);
     if (gbuffer_seconds)
         *gbuffer_seconds = ic_seconds() - t0;
+    if (r == IC_OK && !cache_large_emitters(c, tr->scene))
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
     if (r != IC_OK) {
         ic_ic_ctx_destroy(c);
         return r;
@@ -1127,6 +1322,8 @@ void ic_ic_ctx_destroy(ic_ctx *c)
         return;
     ic_cache_destroy(c->cache);
     free_gbuffer(c);
+    free(c->direct_pmf);
+    free(c->direct_cdf);
     free(c);
 }
 
@@ -1161,6 +1358,9 @@ static uint64_t records_hash(const ic_ctx *c)
     h = ic_fnv1a64(h, env, sizeof env);
     if (s->env.image.rgb)
         h = ic_fnv1a64(h, s->env.image.rgb, sizeof(float) * 3 * (size_t)s->env.image.width * s->env.image.height);
+    h = ic_fnv1a64(h, &c->cached_emitters, sizeof c->cached_emitters);
+    if (c->direct_pmf)
+        h = ic_fnv1a64(h, c->direct_pmf, sizeof *c->direct_pmf * s->tri_light_count);
     int32_t g[9] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
                     (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
                     (int32_t)c->o.strategy, c->hit_lookups};
@@ -1218,6 +1418,7 @@ ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_ima
     if (c->o.save_cache && (r = ic_cache_save(c->cache, c->o.save_cache, records_hash(c), err)) != IC_OK)
         goto done;
     st->records = ic_cache_count(c->cache);
+    st->cached_emitters = c->cached_emitters;
     st->gather_rays = atomic_load(&c->rays);
 
     ic_image_loop loop;

@@ -192,7 +192,7 @@ const ic_light_selection *ic_pixel_lights_get(const ic_pixel_lights *pl, const i
     float *pmf = pl->buf + (2 * (size_t)pl->count + 1) * k, *cdf = pmf + pl->count;
     if (pl->key[k] != block + 1) {
         pl->key[k] = block + 1;
-        pl->ok[k] = (int8_t)(have_point && ic_scene_local_lights(scene, p, n, pmf, cdf));
+        pl->ok[k] = (int8_t)(have_point && ic_scene_local_lights(scene, p, n, pl->base.tri_pmf, pmf, cdf));
     }
     if (!pl->ok[k])
         return NULL;

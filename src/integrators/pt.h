@@ -39,7 +39,8 @@ typedef struct ic_pixel_lights {
     uint32_t count;        /* emitting triangles (0: local selection off) */
     int threads;
     int width, height;     /* image size (blocks) */
-    ic_light_selection base; /* class probabilities the local selections copy */
+    ic_light_selection base; /* class probabilities the local selections copy, and the triangle
+                                distribution (tri_pmf; NULL: by power) they are mixed with */
 } ic_pixel_lights;
 
 /* Sets up buffers for `threads` threads and a width × height image (count 0, and no allocation, where

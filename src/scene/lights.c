@@ -319,7 +319,7 @@ float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_sele
     return select * dist * dist / (l->area * cos_l);
 }
 
-int ic_scene_local_lights(const ic_scene *s, ic_vec3 p, ic_vec3 n, float *pmf, float *cdf)
+int ic_scene_local_lights(const ic_scene *s, ic_vec3 p, ic_vec3 n, const float *base_pmf, float *pmf, float *cdf)
 {
     uint32_t count = s->tri_light_count;
     if (count == 0 || count > IC_LOCAL_LIGHTS_MAX || !(s->tri_light_power > 0.0f))
@@ -327,6 +327,10 @@ int ic_scene_local_lights(const ic_scene *s, ic_vec3 p, ic_vec3 n, float *pmf, f
     double local = 0.0;
     for (uint32_t i = 0; i < count; ++i) {
         const ic_tri_light *l = &s->tri_lights[i];
+        if (base_pmf && !(base_pmf[i] > 0.0f)) {
+            pmf[i] = 0.0f; /* not sampled at all under the base distribution: not here either */
+            continue;
+        }
         ic_vec3 d = v3_sub(l->centroid, p);
         float d2 = v3_len2(d), dist = sqrtf(d2);
         /* Bounds of cos at the receiver and at the emitter over the triangle: the centre's cosine
@@ -347,12 +351,14 @@ int ic_scene_local_lights(const ic_scene *s, ic_vec3 p, ic_vec3 n, float *pmf, f
     double sum = 0.0;
     cdf[0] = 0.0f;
     for (uint32_t i = 0; i < count; ++i) {
-        double g = s->tri_lights[i].power / (double)s->tri_light_power;
+        double g = base_pmf ? (double)base_pmf[i] : s->tri_lights[i].power / (double)s->tri_light_power;
         double q = local > 0.0 ? 0.75 * pmf[i] / local + 0.25 * g : g;
         pmf[i] = (float)q;
         sum += q;
         cdf[i + 1] = (float)sum;
     }
+    if (!(sum > 0.0))
+        return 0;
     for (uint32_t i = 1; i <= count; ++i)
         cdf[i] = (float)(cdf[i] / sum);
     cdf[count] = 1.0f;

@@ -186,11 +186,12 @@ float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_sele
 /* Most emitting triangles for which a local distribution is built per pixel (above: by power only). */
 #define IC_LOCAL_LIGHTS_MAX 4096
 /* A distribution over the emitting triangles for receivers at p facing n: each triangle's power times
- * bounds of the two cosines over distance², mixed 3:1 with the power distribution so that every
- * emitter keeps a probability (estimates stay unbiased for any receiver that uses it). Fills pmf
- * (tri_light_count entries) and cdf (tri_light_count + 1); returns 0 if the scene has no emitting
- * triangles or more than IC_LOCAL_LIGHTS_MAX. */
-int ic_scene_local_lights(const ic_scene *scene, ic_vec3 p, ic_vec3 n, float *pmf, float *cdf);
+ * bounds of the two cosines over distance², mixed 3:1 with the base distribution base_pmf (NULL: by
+ * power) so that every emitter keeps a probability (estimates stay unbiased for any receiver that uses
+ * it); emitters the base gives probability 0 get 0. Fills pmf (tri_light_count entries) and cdf
+ * (tri_light_count + 1); returns 0 if the scene has no emitting triangles, more than
+ * IC_LOCAL_LIGHTS_MAX, or none the base samples. */
+int ic_scene_local_lights(const ic_scene *scene, ic_vec3 p, ic_vec3 n, const float *base_pmf, float *pmf, float *cdf);
 /* Solid-angle pdf of sampling the environment in direction wi (for MIS when a ray escapes). */
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
 

@@ -179,6 +179,14 @@ int main(void)
     CHECK(run(cmd) == 2 && strstr(err_text, "on off") && !file_exists(OUT), "--adaptive-sampling maybe refused: %s",
           err_text);
 
+    /* A large-emitter threshold that is not a share of the hemisphere is refused. */
+    const char *bad_shares[] = {"abc", "0", "-0.1", "2"};
+    for (int k = 0; k < 4; ++k) {
+        snprintf(cmd, sizeof cmd, "%s -o %s --large-emitters %s", ic, OUT, bad_shares[k]);
+        CHECK(run(cmd) == 2 && strstr(err_text, "--large-emitters") && line_count(err_text) == 1 && !file_exists(OUT),
+              "--large-emitters %s refused: %s", bad_shares[k], err_text);
+    }
+
     /* Help lists every option with its default. */
     rc = run("render --help >" IC_TEST_TMP "/cli_help.txt");
     CHECK(rc == 0, "render --help exits 0");

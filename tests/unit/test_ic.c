@@ -8,6 +8,9 @@
  *      over the dark floor; with it the error near the gap falls;
  *   4. a thin step lit from the side: with neighbor clamping the step's indirect light is captured
  *      (the error next to the step falls).
+ *   5. a room lit through a window by a large emitter outside: the records carry its light by default
+ *      (ic_ic_options.large_emitters), the image mean matches the path tracer's with and without, and
+ *      the error is lower with.
  * Test 1 also compares the samplers and adaptive against uniform sampling, for both integrators.
  * The reference images are rendered here with the path tracer at high sample counts.
  */
@@ -87,6 +90,10 @@ static void test_cornell(void)
         /* Recursive caching adds the records of the deeper levels (off screen too). */
         CHECK(st.records > 10 && st.records < (uint32_t)(cases[k].recursive ? 20 * W * H : W * H / 2), "%s: %u records",
               cases[k].name, st.records);
+        /* The ceiling lamp covers 0.6 % of a shading point's hemisphere and is seen by 90 % of its light
+         * samples: it stays light-sampled (test_window has the other case). */
+        CHECK(st.cached_emitters == 0, "%s: the Cornell lamp is light-sampled (%u cached)", cases[k].name,
+              st.cached_emitters);
         /* Coverage: every pixel whose centre sees a surface has a contributing record. A pixel surely
          * sees one when it and its 8 neighbours are lit in the reference (the pixel filter spreads light
          * one pixel beyond silhouettes). */
@@ -349,11 +356,70 @@ static void test_step(void)
     ic_image_free(&off);
 }
 
+/* A room lit through a window by a large emitter outside it (staircase2's situation, small): the
+ * emitter covers much of the hemisphere of the points inside and most of its light samples hit the
+ * wall, so by default the records carry its light (ic_ic_options.large_emitters). With and without
+ * that, the image's mean matches the path tracer's (the emitter's light counted once, nowhere lost),
+ * and with it the error is lower at equal samples. */
+static void test_window(void)
+{
+    test_write_file(IC_TEST_TMP "/window.mtl", "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl sky\nKd 0 0 0\nKe 3 3 3\n");
+    test_write_file(IC_TEST_TMP "/window.obj",
+                    "mtllib window.mtl\nusemtl wall\n"
+                    /* floor, ceiling, the walls x = 0, x = 4 and z = 0 */
+                    "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 3 0\nv 4 3 0\nv 4 3 4\nv 0 3 4\n"
+                    "f 1 4 3 2\nf 5 6 7 8\nf 1 5 8 4\nf 2 3 7 6\nf 1 2 6 5\n"
+                    /* the wall z = 4 around a window x in [1.5, 2.5], y in [1, 2] */
+                    "v 1.5 0 4\nv 1.5 3 4\nv 2.5 0 4\nv 2.5 3 4\nv 1.5 1 4\nv 2.5 1 4\nv 1.5 2 4\nv 2.5 2 4\n"
+                    "f 4 8 10 9\nf 11 12 7 3\nf 9 13 14 11\nf 15 10 12 16\n"
+                    "usemtl sky\n"
+                    /* outside, facing the room (−z) */
+                    "v -1 -1 5\nv -1 4 5\nv 5 4 5\nv 5 -1 5\nf 17 18 19 20\n");
+    test_write_file(IC_TEST_TMP "/window.json",
+                    "{\n  \"camera\": {\"eye\": [3.6, 2.6, 0.3], \"target\": [1.8, 0.6, 3.2], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 70, \"width\": 64, \"height\": 48},\n"
+                    "  \"meshes\": [{\"path\": \"window.obj\"}]\n}\n");
+    const char *scene = IC_TEST_TMP "/window.json";
+    const int W = 64, H = 48;
+    ic_render_options pt = {0};
+    pt.spp = 2048;
+    ic_image ref = {0}, on = {0}, off = {0};
+    ic_render_stats st_on, st_off;
+    int ok = test_render(scene, W, H, &pt, &ref, NULL);
+    ic_render_options o = ic_options();
+    o.spp = 32;
+    ok &= test_render(scene, W, H, &o, &on, &st_on);
+    o.ic.large_emitters = -1.0f;
+    ok &= test_render(scene, W, H, &o, &off, &st_off);
+    CHECK(ok, "window scene renders");
+    if (ok) {
+        int f0, f1, f2;
+        double r = test_image_mean(&ref, &f0), m_on = test_image_mean(&on, &f1), m_off = test_image_mean(&off, &f2);
+        ic_image_metrics e_on, e_off;
+        compare(&on, &ref, &e_on);
+        compare(&off, &ref, &e_off);
+        printf("window: reference mean %.5f; large emitter cached: %u triangles, mean %.5f, relMSE %.5f; sampled: "
+               "mean %.5f, relMSE %.5f\n", r, st_on.cached_emitters, m_on, e_on.relmse, m_off, e_off.relmse);
+        CHECK(f0 && f1 && f2, "finite images");
+        CHECK(st_on.cached_emitters == 2 && st_off.cached_emitters == 0,
+              "the window's emitter is cached by default (%u triangles) and not with large_emitters < 0 (%u)",
+              st_on.cached_emitters, st_off.cached_emitters);
+        CHECK(fabs(m_on / r - 1.0) < 0.03, "cached: the image mean matches the path tracer's (%.5f vs %.5f)", m_on, r);
+        CHECK(fabs(m_off / r - 1.0) < 0.03, "sampled: the image mean matches the path tracer's (%.5f vs %.5f)", m_off,
+              r);
+        CHECK(e_on.relmse < 0.8 * e_off.relmse, "cached: relMSE %.5f below sampled %.5f", e_on.relmse, e_off.relmse);
+    }
+    ic_image_free(&ref);
+    ic_image_free(&on);
+    ic_image_free(&off);
+}
+
 int main(void)
 {
     test_cornell();
     test_threads();
     test_leak();
     test_step();
+    test_window();
     TEST_MAIN_END();
 }

@@ -298,7 +298,7 @@ static void test_local_lights(void)
     CHECK(n == 8, "8 emitting triangles (%u)", n);
     float pmf[8], cdf[9];
     ic_vec3 p = v3(0, 0, 0), nrm = v3(0, 1, 0);
-    CHECK(ic_scene_local_lights(s, p, nrm, pmf, cdf) == 1, "local distribution built");
+    CHECK(ic_scene_local_lights(s, p, nrm, NULL, pmf, cdf) == 1, "local distribution built");
     double sum = 0.0;
     int defensive = 1, monotone = 1;
     for (uint32_t i = 0; i < n; ++i) {
@@ -314,6 +314,30 @@ static void test_local_lights(void)
     double g0 = s->tri_lights[0].power / s->tri_light_power, g6 = s->tri_lights[6].power / s->tri_light_power;
     CHECK(pmf[0] > 2.0 * g0, "near lamp favoured (%.3f vs power share %.3f)", pmf[0], g0);
     CHECK(pmf[6] < 0.3 * g6, "lamp behind the receiver at its defensive share (%.3f vs %.3f)", pmf[6], g6);
+
+    /* With a base distribution that leaves emitters out (the cache render's, where the records carry
+     * large emitters' light), those get nothing and the rest is still a distribution mixed with it. */
+    {
+        float base[8], bpmf[8], bcdf[9];
+        double kept = 0.0;
+        for (uint32_t i = 0; i < n; ++i)
+            kept += i % 2 ? s->tri_lights[i].power : 0.0;
+        for (uint32_t i = 0; i < n; ++i)
+            base[i] = i % 2 ? (float)(s->tri_lights[i].power / kept) : 0.0f;
+        CHECK(ic_scene_local_lights(s, p, nrm, base, bpmf, bcdf) == 1, "local distribution over a base built");
+        double bsum = 0.0;
+        int left_out = 1, mixed = 1;
+        for (uint32_t i = 0; i < n; ++i) {
+            bsum += bpmf[i];
+            left_out &= i % 2 || (bpmf[i] == 0.0f && bcdf[i + 1] == bcdf[i]);
+            mixed &= !(i % 2) || bpmf[i] >= 0.25f * base[i] * 0.999f;
+        }
+        CHECK_NEAR(bsum, 1.0, 1e-5, "pmf over a base sums to 1");
+        CHECK(left_out && mixed, "emitters the base leaves out get 0; the others keep a quarter of the base");
+        for (uint32_t i = 0; i < n; ++i)
+            base[i] = 0.0f;
+        CHECK(ic_scene_local_lights(s, p, nrm, base, bpmf, bcdf) == 0, "no distribution over an empty base");
+    }
 
     ic_light_selection local = s->light_select;
     local.tri_pmf = pmf;
