@@ -95,14 +95,19 @@ static inline uint32_t ic_owen_scramble(uint32_t x, uint32_t seed)
     return ic_reverse_bits32(x);
 }
 
-/* Second Sobol' dimension (primitive polynomial x + 1: v_k = v_{k-1} xor v_{k-1} >> 1), as a 32-bit fraction. */
+/* Second Sobol' dimension (primitive polynomial x + 1: v_k = v_{k-1} xor v_{k-1} >> 1), as a 32-bit
+ * fraction: the XOR of v_k over the set bits k of i. Bit 31 − j of v_k is C(k, j) mod 2, which by
+ * Lucas' theorem is 1 exactly when j's bits are a subset of k's; so bit 31 − j of the result is the
+ * XOR of i's bits at the supersets of j — a superset-sum transform over the five bits of a bit
+ * position, five shift-mask-XOR steps (bit-identical to the 32-step loop; test_sampling checks). */
 static inline uint32_t ic_sobol_dim1(uint32_t i)
 {
-    uint32_t r = 0;
-    for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
-        if (i & 1u)
-            r ^= v;
-    return r;
+    i ^= (i >> 1) & 0x55555555u;
+    i ^= (i >> 2) & 0x33333333u;
+    i ^= (i >> 4) & 0x0f0f0f0fu;
+    i ^= (i >> 8) & 0x00ff00ffu;
+    i ^= (i >> 16) & 0x0000ffffu;
+    return ic_reverse_bits32(i);
 }
 
 /* Point `index` of the Sobol' pair scrambled by `key`, in [0,1)^2 (24-bit floats, never 1.0). */

@@ -259,6 +259,27 @@ static void check_lds(void)
     CHECK(sqrt(spread_random) > 1.5, "independent draws scatter (rms %.2f)", sqrt(spread_random));
 }
 
+/* ic_sobol_dim1 against its definition: the XOR of the direction numbers v_k (v_0 = 2^31,
+ * v_k = v_{k-1} xor v_{k-1} >> 1) over the index's set bits. */
+static void check_sobol_dim1(void)
+{
+    uint64_t state = 0x1234567ULL;
+    int mismatches = 0;
+    for (uint32_t n = 0; n < 300000; ++n) {
+        /* small indices in full, then random 32-bit ones */
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        uint32_t i = n < 65536 ? n : (uint32_t)(state >> 32);
+        uint32_t r = 0, v = 1u << 31;
+        for (uint32_t j = i; j; j >>= 1, v ^= v >> 1)
+            if (j & 1u)
+                r ^= v;
+        mismatches += ic_sobol_dim1(i) != r;
+    }
+    CHECK(mismatches == 0, "Sobol' dimension 1 matches its direction numbers (%d mismatches)", mismatches);
+    CHECK(ic_sobol_dim1(1) == 0x80000000u && ic_sobol_dim1(2) == 0xc0000000u && ic_sobol_dim1(3) == 0x40000000u,
+          "first points 1/2, 3/4, 1/4");
+}
+
 int main(void)
 {
     const warp_case cases[] = {
@@ -275,5 +296,6 @@ int main(void)
     check_frames();
     check_rng();
     check_lds();
+    check_sobol_dim1();
     TEST_MAIN_END();
 }
