@@ -74,25 +74,35 @@ static inline uint32_t ic_rng_below(ic_rng *r, uint32_t n) { return (uint32_t)((
 
 static inline uint32_t ic_reverse_bits32(uint32_t i)
 {
+#if defined(__GNUC__) || defined(__clang__)
+    i = __builtin_bswap32(i); /* the byte order, in one instruction */
+#else
     i = (i << 16) | (i >> 16);
     i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
+#endif
     i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
     i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
     return ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
 }
 
-/* Owen scrambling of a 32-bit binary fraction: bit b flips by a hash of the bits above it. The
- * Laine–Karras permutation (constants from Burley 2020) lets each bit depend only on lower bits;
- * applied to the reversed value, it acts on the digits below each digit, as Owen's tree does. */
-static inline uint32_t ic_owen_scramble(uint32_t x, uint32_t seed)
+/* The Laine–Karras permutation (constants from Burley 2020): each bit of the result depends only on
+ * the bits below it. */
+static inline uint32_t ic_laine_karras(uint32_t x, uint32_t seed)
 {
-    x = ic_reverse_bits32(x);
     x += seed;
     x ^= x * 0x6c50b47cu;
     x ^= x * 0xb82f1e52u;
     x ^= x * 0xc7afe638u;
     x ^= x * 0x8d22f6e6u;
-    return ic_reverse_bits32(x);
+    return x;
+}
+
+/* Owen scrambling of a 32-bit binary fraction: bit b flips by a hash of the bits above it. The
+ * Laine–Karras permutation applied to the reversed value acts on the digits below each digit, as
+ * Owen's tree does. */
+static inline uint32_t ic_owen_scramble(uint32_t x, uint32_t seed)
+{
+    return ic_reverse_bits32(ic_laine_karras(ic_reverse_bits32(x), seed));
 }
 
 /* Second Sobol' dimension (primitive polynomial x + 1: v_k = v_{k-1} xor v_{k-1} >> 1), as a 32-bit
@@ -100,23 +110,27 @@ static inline uint32_t ic_owen_scramble(uint32_t x, uint32_t seed)
  * Lucas' theorem is 1 exactly when j's bits are a subset of k's; so bit 31 − j of the result is the
  * XOR of i's bits at the supersets of j — a superset-sum transform over the five bits of a bit
  * position, five shift-mask-XOR steps (bit-identical to the 32-step loop; test_sampling checks). */
-static inline uint32_t ic_sobol_dim1(uint32_t i)
+static inline uint32_t ic_superset_xor(uint32_t i)
 {
     i ^= (i >> 1) & 0x55555555u;
     i ^= (i >> 2) & 0x33333333u;
     i ^= (i >> 4) & 0x0f0f0f0fu;
     i ^= (i >> 8) & 0x00ff00ffu;
     i ^= (i >> 16) & 0x0000ffffu;
-    return ic_reverse_bits32(i);
+    return i;
 }
+static inline uint32_t ic_sobol_dim1(uint32_t i) { return ic_reverse_bits32(ic_superset_xor(i)); }
 
-/* Point `index` of the Sobol' pair scrambled by `key`, in [0,1)^2 (24-bit floats, never 1.0). */
+/* Point `index` of the Sobol' pair scrambled by `key`, in [0,1)^2 (24-bit floats, never 1.0):
+ * i = owen(index), x = owen(reverse(i)), y = owen(dim1(i)), with the reversals that cancel left out
+ * (owen(z) = reverse(LK(reverse(z))), reverse(dim1(i)) = superset_xor(i)). */
 static inline void ic_sobol2d(uint32_t index, uint64_t key, float *u, float *v)
 {
     uint64_t h = ic_mix64(key);
     uint32_t i = ic_owen_scramble(index, (uint32_t)h);
-    uint32_t x = ic_owen_scramble(ic_reverse_bits32(i), (uint32_t)(h >> 32));
-    uint32_t y = ic_owen_scramble(ic_sobol_dim1(i), (uint32_t)ic_mix64(h ^ 0x5851f42d4c957f2dULL));
+    uint32_t x = ic_reverse_bits32(ic_laine_karras(i, (uint32_t)(h >> 32)));
+    uint32_t y = ic_reverse_bits32(
+        ic_laine_karras(ic_superset_xor(i), (uint32_t)ic_mix64(h ^ 0x5851f42d4c957f2dULL)));
     *u = (float)(x >> 8) * (1.0f / 16777216.0f);
     *v = (float)(y >> 8) * (1.0f / 16777216.0f);
 }

@@ -260,7 +260,8 @@ static void check_lds(void)
 }
 
 /* ic_sobol_dim1 against its definition: the XOR of the direction numbers v_k (v_0 = 2^31,
- * v_k = v_{k-1} xor v_{k-1} >> 1) over the index's set bits. */
+ * v_k = v_{k-1} xor v_{k-1} >> 1) over the index's set bits; bit reversal and ic_sobol2d against
+ * theirs. */
 static void check_sobol_dim1(void)
 {
     uint64_t state = 0x1234567ULL;
@@ -274,8 +275,21 @@ static void check_sobol_dim1(void)
             if (j & 1u)
                 r ^= v;
         mismatches += ic_sobol_dim1(i) != r;
+        /* bit reversal against a loop */
+        uint32_t rev = 0;
+        for (int b = 0; b < 32; ++b)
+            rev |= ((i >> b) & 1u) << (31 - b);
+        mismatches += ic_reverse_bits32(i) != rev;
+        /* the scrambled pair against its definition (ic_sobol2d leaves out reversals that cancel) */
+        uint64_t key = state ^ 0x9e3779b97f4a7c15ULL, h = ic_mix64(key);
+        uint32_t si = ic_owen_scramble(i, (uint32_t)h);
+        uint32_t sx = ic_owen_scramble(ic_reverse_bits32(si), (uint32_t)(h >> 32));
+        uint32_t sy = ic_owen_scramble(ic_sobol_dim1(si), (uint32_t)ic_mix64(h ^ 0x5851f42d4c957f2dULL));
+        float pu, pv;
+        ic_sobol2d(i, key, &pu, &pv);
+        mismatches += pu != (float)(sx >> 8) * (1.0f / 16777216.0f) || pv != (float)(sy >> 8) * (1.0f / 16777216.0f);
     }
-    CHECK(mismatches == 0, "Sobol' dimension 1 matches its direction numbers (%d mismatches)", mismatches);
+    CHECK(mismatches == 0, "Sobol' dimension 1, bit reversal and scrambled pairs match their definitions (%d mismatches)", mismatches);
     CHECK(ic_sobol_dim1(1) == 0x80000000u && ic_sobol_dim1(2) == 0xc0000000u && ic_sobol_dim1(3) == 0x40000000u,
           "first points 1/2, 3/4, 1/4");
 }
