@@ -7,6 +7,7 @@
  * with the cache thawed, the frozen layout, the frozen layout with a caller hint; cache.h: FROZEN
  * LOOK-UPS); asserts nothing. Single thread (= per core), median of 5 passes over all shading points.
  */
+#include "cache/cache_internal.h" /* ic_cache_set_lookup_path */
 #include "geom/accel.h"
 #include "integrators/ic_internal.h"
 #include "render/render.h"
@@ -22,8 +23,10 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint. */
-enum { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATHS };
+/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint
+ * (these two with the best code this CPU runs: AVX2 or SSE2), and frozen with a hint forced onto the
+ * SSE2 and the portable code (cache_internal.h: ic_cache_set_lookup_path). */
+enum { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATH_HINTED_SSE2, PATH_HINTED_PORTABLE, PATHS };
 
 /* One pass over all shading points in raster order; returns seconds, counts into *refs and *contrib. */
 static double pass(const ic_ctx *c, int hinted, double *refs, double *contrib, size_t *points)
@@ -50,7 +53,9 @@ static double pass(const ic_ctx *c, int hinted, double *refs, double *contrib, s
  * machine hits them alike. */
 static void measure(const char *label, const ic_ctx *c, double build_seconds)
 {
-    static const char *name[PATHS] = {"octree", "frozen", "frozen+hint"};
+    static const char *name[PATHS] = {"octree", "frozen", "frozen+hint", "frozen+hint SSE2", "frozen+hint C"};
+    static const ic_lookup_path code[PATHS] = {IC_LOOKUP_BEST, IC_LOOKUP_BEST, IC_LOOKUP_BEST, IC_LOOKUP_SSE2,
+                                               IC_LOOKUP_PORTABLE};
     double runs[PATHS][5], refs[PATHS] = {0}, contrib = 0.0;
     size_t points = 0;
     ic_cache *cache = c->cache;
@@ -63,12 +68,18 @@ static void measure(const char *label, const ic_ctx *c, double build_seconds)
                 fprintf(stderr, "bench_lookup: %s\n", err.message);
                 exit(1);
             }
-            runs[k][r] = pass(c, k == PATH_HINTED, &refs[k], &contrib, &points);
+            if (!ic_cache_set_lookup_path(cache, code[k])) {
+                runs[k][r] = 0.0;
+                continue;
+            }
+            runs[k][r] = pass(c, k >= PATH_HINTED, &refs[k], &contrib, &points);
+            ic_cache_set_lookup_path(cache, IC_LOOKUP_BEST);
         }
     for (int k = 0; k < PATHS; ++k)
         qsort(runs[k], 5, sizeof runs[k][0], cmp_double);
     for (int k = 0; k < PATHS; ++k)
-        printf("%-19s %-12s %6u records  build %6.2f s  %6.2f M look-ups/s/core  x%.2f  %5.1f refs/look-up  "
+        if (runs[k][2] > 0.0)
+            printf("%-19s %-17s %6u records  build %6.2f s  %6.2f M look-ups/s/core  x%.2f  %5.1f refs/look-up  "
                "%4.2f contributors\n",
                label, name[k], ic_cache_count(cache), build_seconds, (double)points / runs[k][2] * 1e-6,
                runs[PATH_OCTREE][2] / runs[k][2], refs[k] / (double)points, contrib / (double)points);

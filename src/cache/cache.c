@@ -21,6 +21,12 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+/* Eight entries at a time where the CPU has AVX2 (chosen at run time; the build stays baseline). */
+#if defined(__SSE2__) && defined(__x86_64__) && defined(__GNUC__)
+#define IC_HAVE_AVX2_PATH 1
+#include <immintrin.h>
+#define IC_TARGET_AVX2 __attribute__((target("avx2")))
+#endif
 
 /* The frozen look-up's loop is written once and instantiated per code path (SSE2, portable). */
 #if defined(__GNUC__)
@@ -118,6 +124,7 @@ ic_result ic_cache_create(const ic_cache_params *params, ic_cache **out, ic_erro
     if (!c)
         return ic_error_set(err, IC_ERR_OOM, "cache: out of memory");
     c->params = p;
+    ic_cache_set_lookup_path(c, IC_LOOKUP_BEST);
     c->tree_scale = fmaxf(1.0f, p.final_accuracy_scale);
     ic_octree_init(&c->tree, p.leaf_capacity, p.max_depth);
     /* Points: small buckets keep k-nearest searches short; depth as deep as allowed. */
@@ -590,23 +597,35 @@ static inline void accumulate_frozen_sse2(const ic_frozen_record *r, const ic_fl
 /* Lowest set bit of a 4-bit lane mask. */
 static const uint8_t lowest_lane[16] = {0, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
 
+/* Start of a frozen look-up: clears the estimate and returns the first block of p's leaf (NULL outside
+ * the root), its number of blocks and the acceptance's accuracy scale. */
+static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, const ic_cache_lookup *q,
+                                                            ic_cache_hint *hint, ic_cache_estimate *out,
+                                                            int is_portable, uint32_t *blocks, float *s)
+{
+    memset(out, 0, sizeof *out);
+    const ic_frozen_leaf *leaf = frozen_leaf(&c->frozen, q->position, hint, is_portable);
+    if (!leaf)
+        return NULL;
+    *s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
+    /* Bounce levels are stored in bytes: a higher level has no records. */
+    *blocks = q->bounce <= UINT8_MAX ? (leaf->count + 3) / 4 : 0;
+    out->records_tested = leaf->count;
+    return (const ic_frozen_block *)(leaf + 1);
+}
+
 /* ic_cache_query on the frozen layout: one list, four entries at a time, with SSE2 unless is_portable
  * (a constant: each caller below gets its own copy of the loop). */
 static IC_ALWAYS_INLINE int query_frozen(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
                                          ic_cache_estimate *out, int is_portable)
 {
     const ic_frozen *f = &c->frozen;
-    float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    memset(out, 0, sizeof *out);
+    float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f}, s;
     ic_vec3 p = q->position, n = q->normal;
-    const ic_frozen_leaf *leaf = frozen_leaf(f, p, hint, is_portable);
-    if (!leaf)
+    uint32_t blocks;
+    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, is_portable, &blocks, &s);
+    if (!blk)
         return 0;
-    float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
-    const ic_frozen_block *blk = (const ic_frozen_block *)(leaf + 1);
-    /* Bounce levels are stored in bytes: a higher level has no records. */
-    uint32_t blocks = q->bounce <= UINT8_MAX ? (leaf->count + 3) / 4 : 0;
-    out->records_tested = leaf->count;
 #if defined(__SSE2__)
     __m128 acc4 = _mm_setzero_ps();
 #endif
@@ -642,6 +661,138 @@ static IC_ALWAYS_INLINE int query_frozen(const ic_cache *c, const ic_cache_looku
     return finish(out, acc);
 }
 
+#if defined(IC_HAVE_AVX2_PATH)
+/* Two blocks (eight list entries) in one: block_weights_sse2 with 256-bit registers, lane for lane the
+ * same operations on the same operands (no FMA: the target is AVX2 alone), so every decision and
+ * weight is bit-identical. Lanes 0–3 are b0's entries, 4–7 b1's. */
+typedef struct block_weights8 {
+    float w[8];
+    float dx[8], dy[8], dz[8];
+} block_weights8;
+
+static IC_TARGET_AVX2 inline __m256 load_pair(const float *lo, const float *hi)
+{
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(lo)), _mm_loadu_ps(hi), 1);
+}
+
+static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *params,
+                                                         const ic_frozen_record *records, const ic_frozen_block *b0,
+                                                         const ic_frozen_block *b1, ic_vec3 p, ic_vec3 n, float s,
+                                                         uint32_t bounce, block_weights8 *out)
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    __m256 dx = _mm256_sub_ps(_mm256_set1_ps(p.x), load_pair(b0->x, b1->x));
+    __m256 dy = _mm256_sub_ps(_mm256_set1_ps(p.y), load_pair(b0->y, b1->y));
+    __m256 dz = _mm256_sub_ps(_mm256_set1_ps(p.z), load_pair(b0->z, b1->z));
+    __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+    __m256 a = _mm256_mul_ps(load_pair(b0->a, b1->a), _mm256_set1_ps(s)), R = load_pair(b0->R, b1->R);
+    __m256 r = _mm256_mul_ps(a, R);
+    __m256 pass = _mm256_cmp_ps(d2, _mm256_mul_ps(r, r), _CMP_LT_OQ);
+    if (!_mm256_movemask_ps(pass))
+        return 0;
+    __m256 nx = load_pair(b0->nx, b1->nx), ny = load_pair(b0->ny, b1->ny), nz = load_pair(b0->nz, b1->nz);
+    __m256 ndot = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(n.x), nx), _mm256_mul_ps(_mm256_set1_ps(n.y), ny)),
+        _mm256_mul_ps(_mm256_set1_ps(n.z), nz));
+    pass = _mm256_and_ps(pass, _mm256_cmp_ps(ndot, zero, _CMP_NLE_UQ));
+    for (unsigned k = 0; k < 4; ++k) {
+        const char *r0 = (const char *)&records[b0->slot[k]], *r1 = (const char *)&records[b1->slot[k]];
+        _mm_prefetch(r0, _MM_HINT_T0);
+        _mm_prefetch(r0 + sizeof *records - 1, _MM_HINT_T0);
+        _mm_prefetch(r1, _MM_HINT_T0);
+        _mm_prefetch(r1 + sizeof *records - 1, _MM_HINT_T0);
+    }
+    __m256 behind = _mm256_mul_ps(
+        _mm256_set1_ps(0.5f),
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_add_ps(_mm256_set1_ps(n.x), nx)),
+                                    _mm256_mul_ps(dy, _mm256_add_ps(_mm256_set1_ps(n.y), ny))),
+                      _mm256_mul_ps(dz, _mm256_add_ps(_mm256_set1_ps(n.z), nz))));
+    pass = _mm256_and_ps(pass, _mm256_cmp_ps(behind, _mm256_mul_ps(_mm256_set1_ps(-params->behind_tolerance), r),
+                                             _CMP_NLT_UQ));
+    __m256 dist = _mm256_div_ps(_mm256_sqrt_ps(d2), R);
+    __m256 ndev = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, ndot), zero)), w;
+    if (params->weight == IC_WEIGHT_WARD) {
+        __m256 denom = _mm256_add_ps(dist, ndev);
+        pass = _mm256_and_ps(pass, _mm256_cmp_ps(denom, a, _CMP_LT_OQ));
+        w = _mm256_div_ps(one, _mm256_max_ps(denom, _mm256_set1_ps(1e-6f)));
+    } else {
+        __m256 nt = _mm256_mul_ps(ndev, _mm256_set1_ps(IC_TL_NORMAL_SCALE));
+        w = _mm256_sub_ps(one, _mm256_div_ps(_mm256_max_ps(dist, nt), a));
+        pass = _mm256_and_ps(pass, _mm256_cmp_ps(w, zero, _CMP_GT_OQ));
+    }
+    int32_t bounce_bytes[2], flag_bytes[2];
+    memcpy(&bounce_bytes[0], b0->bounce, 4);
+    memcpy(&bounce_bytes[1], b1->bounce, 4);
+    memcpy(&flag_bytes[0], b0->flags, 4);
+    memcpy(&flag_bytes[1], b1->flags, 4);
+    __m128i bb = _mm_setr_epi32(bounce_bytes[0], bounce_bytes[1], 0, 0);
+    __m128i fb = _mm_setr_epi32(flag_bytes[0], flag_bytes[1], 0, 0);
+    __m128i ok = _mm_andnot_si128(_mm_cmpeq_epi8(_mm_and_si128(fb, _mm_set1_epi8(IC_RECORD_DISABLED)),
+                                                 _mm_set1_epi8(IC_RECORD_DISABLED)),
+                                  _mm_cmpeq_epi8(bb, _mm_set1_epi8((char)bounce)));
+    pass = _mm256_and_ps(pass, _mm256_castsi256_ps(_mm256_cvtepi8_epi32(ok)));
+    _mm256_storeu_ps(out->w, w);
+    _mm256_storeu_ps(out->dx, dx);
+    _mm256_storeu_ps(out->dy, dy);
+    _mm256_storeu_ps(out->dz, dz);
+    return (unsigned)_mm256_movemask_ps(pass);
+}
+
+/* query_frozen's SSE2 loop two blocks at a time (a list's odd last block takes the SSE2 test);
+ * contributors are met in list order, so the sums are those of every other path. */
+static IC_TARGET_AVX2 int query_frozen_avx2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
+                                            ic_cache_estimate *out)
+{
+    const ic_frozen *f = &c->frozen;
+    float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f}, s;
+    ic_vec3 p = q->position, n = q->normal;
+    uint32_t blocks;
+    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s);
+    if (!blk)
+        return 0;
+    __m128 acc4 = _mm_setzero_ps();
+    uint32_t b = 0;
+    for (; b + 1 < blocks; b += 2) {
+        block_weights8 bw;
+        unsigned mask = block_weights_avx2(&c->params, f->record, &blk[b], &blk[b + 1], p, n, s, q->bounce, &bw);
+        while (mask) {
+            unsigned k = (unsigned)__builtin_ctz(mask);
+            mask &= mask - 1;
+            const ic_frozen_block *o = &blk[b + (k >> 2)];
+            unsigned l = k & 3u;
+            ic_float4 ni = {o->nx[l], o->ny[l], o->nz[l], o->a[l]};
+            accumulate_frozen_sse2(&f->record[o->slot[l]], &ni, n, bw.w[k], v3(bw.dx[k], bw.dy[k], bw.dz[k]), q, out,
+                                   &acc4);
+        }
+    }
+    if (b < blocks) {
+        const ic_frozen_block *o = &blk[b];
+        block_weights bw;
+        unsigned mask = block_weights_sse2(&c->params, f->record, o, p, n, s, q->bounce, &bw);
+        while (mask) {
+            unsigned k = lowest_lane[mask];
+            mask &= mask - 1;
+            ic_float4 ni = {o->nx[k], o->ny[k], o->nz[k], o->a[k]};
+            accumulate_frozen_sse2(&f->record[o->slot[k]], &ni, n, bw.w[k], v3(bw.dx[k], bw.dy[k], bw.dz[k]), q, out,
+                                   &acc4);
+        }
+    }
+    _mm_storeu_ps(acc, acc4);
+    return finish(out, acc);
+}
+
+/* 1 where the CPU runs AVX2 (asked once; a benign race: every thread computes the same answer). */
+static int cpu_has_avx2(void)
+{
+    static int known = -1;
+    if (known < 0) {
+        __builtin_cpu_init();
+        known = __builtin_cpu_supports("avx2") ? 1 : 0;
+    }
+    return known;
+}
+#endif
+
 #if defined(__SSE2__)
 static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
 {
@@ -655,6 +806,24 @@ static int query_frozen_portable(const ic_cache *c, const ic_cache_lookup *q, ic
     return query_frozen(c, q, hint, out, 1);
 }
 
+int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path)
+{
+    int avx2 = 0, sse2 = 0;
+#if defined(IC_HAVE_AVX2_PATH)
+    avx2 = cpu_has_avx2();
+#endif
+#if defined(__SSE2__)
+    sse2 = 1;
+#endif
+    if (path == IC_LOOKUP_BEST)
+        path = avx2 ? IC_LOOKUP_AVX2 : sse2 ? IC_LOOKUP_SSE2 : IC_LOOKUP_PORTABLE;
+    if ((path == IC_LOOKUP_AVX2 && !avx2) || (path == IC_LOOKUP_SSE2 && !sse2) || path < IC_LOOKUP_PORTABLE ||
+        path > IC_LOOKUP_AVX2)
+        return 0;
+    c->lookup_path = path;
+    return 1;
+}
+
 int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
 {
     return ic_cache_query_hinted(c, q, NULL, out);
@@ -663,8 +832,13 @@ int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimat
 int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
 {
     if (c->frozen.is_valid)
-#if defined(__SSE2__)
-        return c->is_portable_lookup ? query_frozen_portable(c, q, hint, out) : query_frozen_sse2(c, q, hint, out);
+#if defined(IC_HAVE_AVX2_PATH)
+        return c->lookup_path == IC_LOOKUP_PORTABLE ? query_frozen_portable(c, q, hint, out)
+               : c->lookup_path == IC_LOOKUP_AVX2   ? query_frozen_avx2(c, q, hint, out)
+                                                    : query_frozen_sse2(c, q, hint, out);
+#elif defined(__SSE2__)
+        return c->lookup_path == IC_LOOKUP_PORTABLE ? query_frozen_portable(c, q, hint, out)
+                                                    : query_frozen_sse2(c, q, hint, out);
 #else
         return query_frozen_portable(c, q, hint, out);
 #endif

@@ -105,7 +105,7 @@ struct ic_cache {
     ic_octree points;            /* positions: k-nearest and radius queries */
     float tree_scale;            /* max(1, final_accuracy_scale) */
     ic_frozen frozen;            /* read-only look-up layout, valid between a freeze and the next insertion */
-    int is_portable_lookup;      /* tests: frozen look-ups take the portable code even where SSE2 is there */
+    int lookup_path;             /* ic_lookup_path the frozen look-ups take (the best this CPU runs) */
     /* Insertion scratch (insertion is single-threaded with respect to the cache). */
     uint32_t *scratch;
     uint32_t scratch_cap;
@@ -176,8 +176,16 @@ static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_
     return ic_weight_test(&c->params, &c->sphere[i], &c->normal[i], p, n, s, w, dp);
 }
 
-/* Tests: 1 makes frozen look-ups take the portable code even where SSE2 is there (both answer alike). */
-static inline void ic_cache_set_portable_lookup(ic_cache *c, int is_portable) { c->is_portable_lookup = is_portable; }
+/* Code paths of the frozen look-up; all answer alike, bit for bit. */
+typedef enum ic_lookup_path {
+    IC_LOOKUP_BEST = 0,          /* AVX2 where the CPU has it, else SSE2, else portable */
+    IC_LOOKUP_PORTABLE = 1,      /* scalar C */
+    IC_LOOKUP_SSE2 = 2,          /* four list entries at a time */
+    IC_LOOKUP_AVX2 = 3           /* eight at a time (chosen at run time, x86-64 with GCC or Clang) */
+} ic_lookup_path;
+/* Tests and benchmarks: makes frozen look-ups take `path`; returns 0 (and changes nothing) where this
+ * build or CPU lacks it. */
+int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path);
 
 /* Neighbor enumeration for the clamps: records j ≠ i within reach of i (see cache.h). Returns the
  * count, the indices are in c->scratch (grown as needed); IC_ERR_OOM → UINT32_MAX. */

@@ -1137,27 +1137,43 @@ static int cmp_double(const void *x, const void *y)
 
 /* Of the light samples a shading point would take on material m's emitting triangles (by area, from
  * every stride-th valid pixel's shading point, 8 each), the fraction no surface hides, among those
- * that face the point and that it faces; 1 when there are none. */
+ * that face the point and that it faces; 1 when there are none, -1 when out of memory. */
 static double visible_fraction(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride)
 {
-    double area = 0.0;
+    uint32_t count = 0;
     for (uint32_t li = 0; li < s->tri_light_count; ++li)
-        if (s->triangle_material[s->tri_lights[li].triangle] == m)
-            area += s->tri_lights[li].area;
+        count += s->triangle_material[s->tri_lights[li].triangle] == m;
+    uint32_t *tri = malloc(sizeof *tri * (count ? count : 1));
+    double *cdf = malloc(sizeof *cdf * (count + 1));
+    if (!tri || !cdf) {
+        free(tri);
+        free(cdf);
+        return -1.0;
+    }
+    cdf[0] = 0.0;
+    for (uint32_t li = 0, k = 0; li < s->tri_light_count; ++li)
+        if (s->triangle_material[s->tri_lights[li].triangle] == m) {
+            tri[k] = li;
+            cdf[k + 1] = cdf[k] + s->tri_lights[li].area;
+            ++k;
+        }
     size_t npix = (size_t)c->g.width * c->g.height, seen = 0, open = 0;
-    for (size_t i = 0, k = 0; i < npix; ++i) {
+    for (size_t i = 0, k = 0; i < npix && count; ++i) {
         if (!c->g.valid[i] || k++ % stride)
             continue;
         ic_rng rng = ic_rng_make(c->seed, 0x6c61726765ULL, i, 0);
         for (int j = 0; j < 8; ++j) {
-            /* A triangle by area (a scan: only large emitters get here, and they have few triangles). */
-            double u = ic_rng_float(&rng) * area, acc = 0.0;
-            const ic_tri_light *l = NULL;
-            for (uint32_t li = 0; li < s->tri_light_count && (!l || acc <= u); ++li)
-                if (s->triangle_material[s->tri_lights[li].triangle] == m) {
-                    l = &s->tri_lights[li];
-                    acc += l->area;
-                }
+            /* A triangle by area: the last cdf entry below u. */
+            double u = ic_rng_double(&rng) * cdf[count];
+            uint32_t lo = 0, hi = count - 1;
+            while (lo < hi) {
+                uint32_t mid = (lo + hi + 1) / 2;
+                if (cdf[mid] <= u)
+                    lo = mid;
+                else
+                    hi = mid - 1;
+            }
+            const ic_tri_light *l = &s->tri_lights[tri[lo]];
             float b1, b2;
             ic_warp_triangle(ic_rng_float(&rng), ic_rng_float(&rng), &b1, &b2);
             const uint32_t *v = &s->triangles[3 * l->triangle];
@@ -1175,6 +1191,8 @@ static double visible_fraction(const ic_ctx *c, const ic_scene *s, uint32_t m, s
             open += !ic_accel_occluded1(c->tr->accel, &r);
         }
     }
+    free(tri);
+    free(cdf);
     return seen ? (double)open / (double)seen : 1.0;
 }
 
@@ -1199,13 +1217,23 @@ static int cache_large_emitters(ic_ctx *c, const ic_scene *s)
         valid += c->g.valid[i];
     if (valid == 0)
         return 1;
-    /* At most ~1024 shading points, evenly through the image. */
-    size_t stride = valid / 1024 + 1, points = 0;
-    uint32_t nm = s->material_count;
-    double *share = calloc((size_t)nm * (valid / stride + 1), sizeof *share);
+    /* At most ~1024 shading points, evenly through the image, and fewer where there are so many
+     * emitting triangles that points × triangles would pass 2^23 (at least ~64 points). */
+    size_t want = ((size_t)1 << 23) / s->tri_light_count;
+    want = want < 64 ? 64 : want > 1024 ? 1024 : want;
+    size_t stride = valid / want + 1, points = 0;
+    /* Shares per emitting material (slot[m]: its row, UINT32_MAX for the others) and sampled point. */
+    uint32_t nm = s->material_count, ne = 0;
+    uint32_t *slot = malloc(sizeof *slot * (nm ? nm : 1));
     uint8_t *cached_mat = calloc(nm ? nm : 1, 1);
-    double *row = malloc(sizeof *row * (valid / stride + 1));
-    if (!share || !cached_mat || !row) {
+    double *row = malloc(sizeof *row * (valid / stride + 1)), *share = NULL;
+    if (slot) {
+        for (uint32_t m = 0; m < nm; ++m)
+            slot[m] = v3_is_black(s->materials[m].emission) ? UINT32_MAX : ne++;
+        share = calloc((size_t)(ne ? ne : 1) * (valid / stride + 1), sizeof *share);
+    }
+    if (!slot || !share || !cached_mat || !row) {
+        free(slot);
         free(share);
         free(cached_mat);
         free(row);
@@ -1221,7 +1249,7 @@ static int cache_large_emitters(ic_ctx *c, const ic_scene *s)
             /* Only the emitting side counts. */
             if (!l->two_sided && v3_dot(l->normal, v3_sub(p, l->centroid)) <= 0.0f)
                 continue;
-            share[(size_t)s->triangle_material[t] * (valid / stride + 1) + points] +=
+            share[(size_t)slot[s->triangle_material[t]] * (valid / stride + 1) + points] +=
                 hemisphere_share(p, n, s->positions[s->triangles[3 * t]], s->positions[s->triangles[3 * t + 1]],
                                  s->positions[s->triangles[3 * t + 2]]);
         }
@@ -1230,12 +1258,21 @@ static int cache_large_emitters(ic_ctx *c, const ic_scene *s)
     uint32_t cached = 0;
     double kept = 0.0;
     for (uint32_t m = 0; m < nm; ++m) {
-        memcpy(row, &share[(size_t)m * (valid / stride + 1)], sizeof *row * points);
+        if (slot[m] == UINT32_MAX)
+            continue;
+        memcpy(row, &share[(size_t)slot[m] * (valid / stride + 1)], sizeof *row * points);
         qsort(row, points, sizeof *row, cmp_double);
-        cached_mat[m] = row[points / 2] >= c->o.large_emitters && !v3_is_black(s->materials[m].emission);
-        if (cached_mat[m])
-            cached_mat[m] = visible_fraction(c, s, m, stride) <= IC_LARGE_EMITTER_VISIBLE;
+        double v = row[points / 2] >= c->o.large_emitters ? visible_fraction(c, s, m, stride) : 1.0;
+        if (v < 0.0) {
+            free(slot);
+            free(share);
+            free(row);
+            free(cached_mat);
+            return 0;
+        }
+        cached_mat[m] = v <= IC_LARGE_EMITTER_VISIBLE;
     }
+    free(slot);
     free(share);
     free(row);
     for (uint32_t i = 0; i < s->tri_light_count; ++i) {

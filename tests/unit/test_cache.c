@@ -21,7 +21,7 @@
  */
 #include "irrcache/cache.h"
 
-#include "cache/cache_internal.h" /* ic_cache_set_portable_lookup */
+#include "cache/cache_internal.h" /* ic_cache_set_lookup_path */
 #include "core/rng.h"
 #include "core/threads.h"
 #include "core/vecmath.h"
@@ -360,7 +360,7 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
         q[k].position = v3(far[k % 8], 10.0f, far[(k / 8) % 8]);
         q[k].normal = v3(0, 0, 1);
     }
-    uint32_t differ[2][6] = {{0}}, hint_hits = 0, found_at_level[3] = {0, 0, 0};
+    uint32_t differ[2][6] = {{0}}, hint_hits = 0, found_at_level[3] = {0, 0, 0}, paths_run[4] = {0, 0, 0, 0};
     for (int acc = 0; acc < 2; ++acc) {
         ic_cache_thaw(c);
         for (uint32_t k = 0; k < total; ++k) {
@@ -386,21 +386,27 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
             ask(c, &q[k], &garbage, got);
             differ[acc][3] += !same_answer(got, &want[k]);
         }
-        ic_cache_hint portable_order = {0};
-        ic_cache_set_portable_lookup(c, 1);
-        for (uint32_t k = 0; k < total; ++k) {
-            ask(c, &q[k], NULL, got);
-            differ[acc][4] += !same_answer(got, &want[k]);
-            ask(c, &q[k], &portable_order, got);
-            differ[acc][5] += !same_answer(got, &want[k]);
+        /* Every other code path this build and CPU have (the default is the best of them). */
+        for (int path = IC_LOOKUP_PORTABLE; path <= IC_LOOKUP_AVX2; ++path) {
+            if (!ic_cache_set_lookup_path(c, (ic_lookup_path)path))
+                continue;
+            ++paths_run[path];
+            ic_cache_hint path_order = {0};
+            for (uint32_t k = 0; k < total; ++k) {
+                ask(c, &q[k], NULL, got);
+                differ[acc][4] += !same_answer(got, &want[k]);
+                ask(c, &q[k], &path_order, got);
+                differ[acc][5] += !same_answer(got, &want[k]);
+            }
         }
-        ic_cache_set_portable_lookup(c, 0);
+        ic_cache_set_lookup_path(c, IC_LOOKUP_BEST);
     }
+    CHECK(paths_run[IC_LOOKUP_PORTABLE] == 2, "%s: the portable path ran", what);
     for (int acc = 0; acc < 2; ++acc)
         CHECK(differ[acc][0] + differ[acc][1] + differ[acc][2] + differ[acc][3] + differ[acc][4] +
                       differ[acc][5] == 0,
               "%s (%s): frozen differs from the octree path: %u without hint, %u with hints in order, %u with "
-              "hints scrambled, %u with garbage hints; portable code: %u without hint, %u with hints", what,
+              "hints scrambled, %u with garbage hints; each other code path: %u without hint, %u with hints", what,
               acc ? "final" : "construction", differ[acc][0], differ[acc][1], differ[acc][2], differ[acc][3],
               differ[acc][4], differ[acc][5]);
     /* The hint must actually be used for the test to mean something (both acceptances: 2·pairs
