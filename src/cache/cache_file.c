@@ -351,8 +351,9 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
     else if (ic_fnv1a64(IC_FNV64_OFFSET, data, size - 8) != get_u64(data + size - 8))
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: checksum mismatch, the file is corrupt; " REBUILD_HINT, path);
     else if (get_u64(data + 16) != scene_hash)
-        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (hash %016llx, this scene %016llx); "
-                          REBUILD_HINT, path, (unsigned long long)get_u64(data + 16),
+        rc = ic_error_set(err, IC_ERR_MISMATCH,
+                          "%s: made for another scene or settings that change its records (hash %016llx, here "
+                          "%016llx); " REBUILD_HINT, path, (unsigned long long)get_u64(data + 16),
                           (unsigned long long)scene_hash);
     else if (count >= UINT32_MAX)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: too many records", path);
