@@ -388,7 +388,15 @@ static void test_window(void)
     int ok = test_render(scene, W, H, &pt, &ref, NULL);
     ic_render_options o = ic_options();
     o.spp = 32;
+    o.threads = 2;
     ok &= test_render(scene, W, H, &o, &on, &st_on);
+    /* The choice is made serially on the shading points: one thread gives the same image. */
+    ic_image one = {0};
+    o.threads = 1;
+    ok &= test_render(scene, W, H, &o, &one, NULL);
+    CHECK(ok && memcmp(on.rgb, one.rgb, sizeof(float) * 3 * W * H) == 0,
+          "window: 1 and 2 threads give the same image with the emitter cached");
+    ic_image_free(&one);
     o.ic.large_emitters = -1.0f;
     ok &= test_render(scene, W, H, &o, &off, &st_off);
     CHECK(ok, "window scene renders");
