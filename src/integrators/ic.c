@@ -31,15 +31,6 @@
 
 /* ---------------------------------------------------------------- record radiance (trace callback) */
 
-/* Radiance leaving a hemisphere ray's hit towards the record, with the cache standing in for the
- * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light by
- * the final render's estimator (records hold no emitter light; ic_ic_direct_light adds it). This is
- * Ward's multiple-bounce scheme (the ambient value of a point is its records' interpolation, Radiance's
- * -ab) inside the batch passes: a pass's records serve the next passes' rays, and the world-space
- * stage puts records where these rays land (seed 004 §3.1.3), which is what makes the look-ups hit;
- * it cuts record cost, which seed 004 §4.6 measures as most of the construction time. Only purely
- * diffuse hits are taken (a glossy hit needs its lobe traced); returns 0 where no record reaches, and
- * the caller path-traces. Deterministic: within a pass the cache is read-only. */
 /* 1 if emitting triangle tri is a large emitter whose light the records carry (cache_large_emitters). */
 static int emitter_is_cached(const ic_ctx *c, uint32_t tri)
 {
@@ -60,6 +51,15 @@ static ic_vec3 cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit 
     return ic_scene_emission(c->tr->scene, &s, v3_neg(ray->dir));
 }
 
+/* Radiance leaving a hemisphere ray's hit towards the record, with the cache standing in for the
+ * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light by
+ * the final render's estimator (records hold no light of the emitters it samples; ic_ic_direct_light
+ * adds it). This is Ward's multiple-bounce scheme (the ambient value of a point is its records' interpolation, Radiance's
+ * -ab) inside the batch passes: a pass's records serve the next passes' rays, and the world-space
+ * stage puts records where these rays land (seed 004 §3.1.3), which is what makes the look-ups hit;
+ * it cuts record cost, which seed 004 §4.6 measures as most of the construction time. Only purely
+ * diffuse hits are taken (a glossy hit needs its lobe traced); returns 0 where no record reaches, and
+ * the caller path-traces. Deterministic: within a pass the cache is read-only. */
 static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
                           ic_vec3 *radiance)
 {
