@@ -98,9 +98,9 @@ static const opt_def options[] = {
     {"--light-samples", NULL, OPT_INT, OFF(light_samples), 1, "N", "1",
      "ic: light samples per shading point in the final render (direct light)"},
     {"--large-emitters", NULL, OPT_STRING, OFF(large_emitters), 0, "F|off", "0.01",
-     "ic: an emitter covering at least F of the hemisphere at the median shading point, and mostly hidden "
-     "(a window seen through openings), lights the scene through the records instead of light sampling; "
-     "off: sample every emitter"},
+     "ic: an emitter covering at least F of the hemisphere at the median shading point, with over a quarter "
+     "of its light samples blocked (a window seen through openings), lights the scene through the records "
+     "instead of light sampling; off: sample every emitter"},
     {"--min-radius", NULL, OPT_DOUBLE, OFF(min_radius), 0, "R", "0", "ic: smallest record radius, world units"},
     {"--max-radius", NULL, OPT_DOUBLE, OFF(max_radius), 0, "R", "scene diagonal / 8",
      "ic: largest record radius, world units"},

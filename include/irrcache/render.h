@@ -71,8 +71,8 @@ typedef struct ic_ic_options {
                               hit_from_cache) and only its direct light is sampled */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     float large_emitters;  /* an emitting material that covers at least this share of the cosine-weighted
-                              hemisphere at the image's median shading point, and whose light samples are
-                              mostly hidden (over a quarter), lights the scene through the records, as the
+                              hemisphere at the image's median shading point, and over a quarter of whose
+                              light samples are blocked, lights the scene through the records, as the
                               environment does, and is not sampled in the final render: a window seen
                               through openings (soft shadows, wasteful light samples) [0.01]; negative:
                               every emitter is sampled */

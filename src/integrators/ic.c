@@ -1197,7 +1197,7 @@ static double visible_fraction(const ic_ctx *c, const ic_scene *s, uint32_t m, s
 }
 
 /* Large emitters. Seed 004 §3 caches all indirect light, and renderers built on a cache leave the sky
- * to the records; this extends that to an emitting material that is large and mostly hidden: one that
+ * to the records; this extends that to an emitting material that is large and partly hidden: one that
  * covers, at the median shading point of the image, at least large_emitters of the cosine-weighted
  * hemisphere (hemisphere_share, unoccluded) and of whose light samples at most
  * IC_LARGE_EMITTER_VISIBLE reach it (visible_fraction). Such an emitter — staircase2's window quads —
