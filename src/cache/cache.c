@@ -781,15 +781,12 @@ static IC_TARGET_AVX2 int query_frozen_avx2(const ic_cache *c, const ic_cache_lo
     return finish(out, acc);
 }
 
-/* 1 where the CPU runs AVX2 (asked once; a benign race: every thread computes the same answer). */
+/* 1 where the CPU runs AVX2. Asked at each cache creation: the answer is a read of what the runtime
+ * found at start-up, so nothing is cached here and no thread writes shared state. */
 static int cpu_has_avx2(void)
 {
-    static int known = -1;
-    if (known < 0) {
-        __builtin_cpu_init();
-        known = __builtin_cpu_supports("avx2") ? 1 : 0;
-    }
-    return known;
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") ? 1 : 0;
 }
 #endif
 

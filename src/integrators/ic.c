@@ -1221,16 +1221,16 @@ static int cache_large_emitters(ic_ctx *c, const ic_scene *s)
      * emitting triangles that points × triangles would pass 2^23 (at least ~64 points). */
     size_t want = ((size_t)1 << 23) / s->tri_light_count;
     want = want < 64 ? 64 : want > 1024 ? 1024 : want;
-    size_t stride = valid / want + 1, points = 0;
+    size_t stride = valid / want + 1, points = 0, cap = valid / stride + 1; /* cap: sampled points, at most */
     /* Shares per emitting material (slot[m]: its row, UINT32_MAX for the others) and sampled point. */
     uint32_t nm = s->material_count, ne = 0;
     uint32_t *slot = malloc(sizeof *slot * (nm ? nm : 1));
     uint8_t *cached_mat = calloc(nm ? nm : 1, 1);
-    double *row = malloc(sizeof *row * (valid / stride + 1)), *share = NULL;
+    double *row = malloc(sizeof *row * cap), *share = NULL;
     if (slot) {
         for (uint32_t m = 0; m < nm; ++m)
             slot[m] = v3_is_black(s->materials[m].emission) ? UINT32_MAX : ne++;
-        share = calloc((size_t)(ne ? ne : 1) * (valid / stride + 1), sizeof *share);
+        share = calloc((size_t)(ne ? ne : 1) * cap, sizeof *share);
     }
     if (!slot || !share || !cached_mat || !row) {
         free(slot);
@@ -1249,7 +1249,7 @@ static int cache_large_emitters(ic_ctx *c, const ic_scene *s)
             /* Only the emitting side counts. */
             if (!l->two_sided && v3_dot(l->normal, v3_sub(p, l->centroid)) <= 0.0f)
                 continue;
-            share[(size_t)slot[s->triangle_material[t]] * (valid / stride + 1) + points] +=
+            share[(size_t)slot[s->triangle_material[t]] * cap + points] +=
                 hemisphere_share(p, n, s->positions[s->triangles[3 * t]], s->positions[s->triangles[3 * t + 1]],
                                  s->positions[s->triangles[3 * t + 2]]);
         }
@@ -1260,7 +1260,7 @@ static int cache_large_emitters(ic_ctx *c, const ic_scene *s)
     for (uint32_t m = 0; m < nm; ++m) {
         if (slot[m] == UINT32_MAX)
             continue;
-        memcpy(row, &share[(size_t)slot[m] * (valid / stride + 1)], sizeof *row * points);
+        memcpy(row, &share[(size_t)slot[m] * cap], sizeof *row * points);
         qsort(row, points, sizeof *row, cmp_double);
         double v = row[points / 2] >= c->o.large_emitters ? visible_fraction(c, s, m, stride) : 1.0;
         if (v < 0.0) {
