@@ -3,9 +3,12 @@
  * scene, queried at the scene's own shading points (one per pixel centre, raster order, as the final
  * render queries them), with and without validity-radius clamping (seed 004 §4.2, Table 1).
  *
- * usage: bench_lookup SCENE [width height] — prints one row per setting and look-up path (the octree
- * with the cache thawed, the frozen layout, the frozen layout with a caller hint; cache.h: FROZEN
- * LOOK-UPS); asserts nothing. Single thread (= per core), median of 5 passes over all shading points.
+ * usage: bench_lookup [--save DIR] SCENE [width height] — prints one row per setting and look-up path
+ * (the octree with the cache thawed, the frozen layout, the frozen layout with a caller hint; cache.h:
+ * FROZEN LOOK-UPS) with a digest of the answers; asserts nothing. Single thread (= per core), median of
+ * 5 passes over all shading points. --save DIR also writes both caches and their shading points to DIR;
+ * bench_lookup --load DIR times those again without building the caches (the same build's files: to
+ * compare code changes on the same look-ups).
  */
 #include "cache/cache_internal.h" /* ic_cache_set_lookup_path */
 #include "geom/accel.h"
@@ -28,37 +31,43 @@ static int cmp_double(const void *a, const void *b)
  * SSE2 and the portable code (cache_internal.h: ic_cache_set_lookup_path). */
 enum { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATH_HINTED_SSE2, PATH_HINTED_PORTABLE, PATHS };
 
-/* One pass over all shading points in raster order; returns seconds, counts into *refs and *contrib. */
-static double pass(const ic_ctx *c, int hinted, double *refs, double *contrib, size_t *points)
+/* The shading points of a view: position and normal, raster order, pixels without a hit left out. */
+typedef struct points {
+    ic_vec3 *p, *n;
+    size_t count;
+} points;
+
+/* One pass over all shading points; returns seconds and counts into *refs and *contrib. With digest
+ * (an untimed pass), folds the estimates' bits into *digest: equal digests, equal answers. */
+static double pass(const ic_cache *cache, const points *pts, int hinted, double *refs, double *contrib,
+                   uint64_t *digest)
 {
-    size_t npix = (size_t)c->g.width * c->g.height;
     ic_cache_hint hint = {0};
     *refs = *contrib = 0.0;
-    *points = 0;
     double t0 = ic_seconds();
-    for (size_t i = 0; i < npix; ++i) {
-        if (!c->g.valid[i])
-            continue;
-        ic_cache_lookup q = ic_cache_lookup_at(c->g.p[i], c->g.n[i], IC_ACCEPT_FINAL);
+    for (size_t i = 0; i < pts->count; ++i) {
+        ic_cache_lookup q = ic_cache_lookup_at(pts->p[i], pts->n[i], IC_ACCEPT_FINAL);
         ic_cache_estimate e;
-        ic_cache_query_hinted(c->cache, &q, hinted ? &hint : NULL, &e);
-        ++*points;
+        ic_cache_query_hinted(cache, &q, hinted ? &hint : NULL, &e);
         *refs += e.records_tested;
         *contrib += e.contributor_count;
+        if (digest)
+            *digest = ic_fnv1a64(*digest, &e.irradiance, sizeof e.irradiance);
     }
     return ic_seconds() - t0;
 }
 
 /* Median of 5 passes per path; the paths alternate within each repetition so that load on a shared
  * machine hits them alike. */
-static void measure(const char *label, const ic_ctx *c, double build_seconds)
+static void measure(const char *label, ic_cache *cache, const points *pts, double build_seconds)
 {
     static const char *name[PATHS] = {"octree", "frozen", "frozen+hint", "frozen+hint SSE2", "frozen+hint C"};
     static const ic_lookup_path code[PATHS] = {IC_LOOKUP_BEST, IC_LOOKUP_BEST, IC_LOOKUP_BEST, IC_LOOKUP_SSE2,
                                                IC_LOOKUP_PORTABLE};
     double runs[PATHS][5], refs[PATHS] = {0}, contrib = 0.0;
-    size_t points = 0;
-    ic_cache *cache = c->cache;
+    uint64_t digest[PATHS];
+    for (int k = 0; k < PATHS; ++k)
+        digest[k] = IC_FNV64_OFFSET;
     for (int r = 0; r < 5; ++r)
         for (int k = 0; k < PATHS; ++k) {
             ic_error err;
@@ -72,17 +81,20 @@ static void measure(const char *label, const ic_ctx *c, double build_seconds)
                 runs[k][r] = 0.0;
                 continue;
             }
-            runs[k][r] = pass(c, k >= PATH_HINTED, &refs[k], &contrib, &points);
+            runs[k][r] = pass(cache, pts, k >= PATH_HINTED, &refs[k], &contrib, NULL);
+            if (r == 0)
+                pass(cache, pts, k >= PATH_HINTED, &refs[k], &contrib, &digest[k]);
             ic_cache_set_lookup_path(cache, IC_LOOKUP_BEST);
         }
     for (int k = 0; k < PATHS; ++k)
         qsort(runs[k], 5, sizeof runs[k][0], cmp_double);
+    double n = (double)pts->count;
     for (int k = 0; k < PATHS; ++k)
         if (runs[k][2] > 0.0)
             printf("%-19s %-17s %6u records  build %6.2f s  %6.2f M look-ups/s/core  x%.2f  %5.1f refs/look-up  "
-               "%4.2f contributors\n",
-               label, name[k], ic_cache_count(cache), build_seconds, (double)points / runs[k][2] * 1e-6,
-               runs[PATH_OCTREE][2] / runs[k][2], refs[k] / (double)points, contrib / (double)points);
+                   "%4.2f contributors  digest %016llx\n",
+                   label, name[k], ic_cache_count(cache), build_seconds, n / runs[k][2] * 1e-6,
+                   runs[PATH_OCTREE][2] / runs[k][2], refs[k] / n, contrib / n, (unsigned long long)digest[k]);
     size_t frozen = ic_cache_memory_bytes(cache);
     ic_cache_thaw(cache);
     size_t thawed = ic_cache_memory_bytes(cache);
@@ -90,29 +102,66 @@ static void measure(const char *label, const ic_ctx *c, double build_seconds)
            (double)thawed / ic_cache_count(cache), (double)(frozen - thawed) / ic_cache_count(cache));
 }
 
-int main(int argc, char **argv)
+static const char *const setting_label[2] = {"validity clamp off", "validity clamp on"};
+static const char *const setting_file[2] = {"validity-off", "validity-on"};
+
+static void fail(const char *what)
 {
-    if (argc < 2) {
-        fprintf(stderr, "usage: bench_lookup SCENE [width height]\n");
-        return 2;
-    }
+    fprintf(stderr, "bench_lookup: %s\n", what);
+    exit(1);
+}
+
+/* DIR/<setting>.points: the cache's parameters (the load must name them), then the points. Raw
+ * structs: read back by the same build only. */
+static void save_points(const char *dir, int validity, const ic_cache_params *params, const points *pts)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s.points", dir, setting_file[validity]);
+    FILE *f = fopen(path, "wb");
+    uint64_t count = pts->count;
+    if (!f || fwrite(params, sizeof *params, 1, f) != 1 || fwrite(&count, sizeof count, 1, f) != 1 ||
+        fwrite(pts->p, sizeof *pts->p, pts->count, f) != pts->count ||
+        fwrite(pts->n, sizeof *pts->n, pts->count, f) != pts->count || fclose(f) != 0)
+        fail("cannot write the points file");
+}
+
+static void load_points(const char *dir, int validity, ic_cache_params *params, points *pts)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s.points", dir, setting_file[validity]);
+    FILE *f = fopen(path, "rb");
+    uint64_t count = 0;
+    if (!f || fread(params, sizeof *params, 1, f) != 1 || fread(&count, sizeof count, 1, f) != 1 ||
+        count > ((uint64_t)1 << 32))
+        fail("cannot read the points file (written by bench_lookup --save of this build?)");
+    pts->count = (size_t)count;
+    pts->p = malloc(pts->count * sizeof *pts->p);
+    pts->n = malloc(pts->count * sizeof *pts->n);
+    if (!pts->p || !pts->n || fread(pts->p, sizeof *pts->p, pts->count, f) != pts->count ||
+        fread(pts->n, sizeof *pts->n, pts->count, f) != pts->count)
+        fail("cannot read the points file (truncated?)");
+    fclose(f);
+}
+
+/* Builds the batch strategy's cache for the scene at width × height and times it; with save_dir,
+ * also writes the cache and the points there for --load. */
+static int from_scene(const char *scene_path, int width, int height, const char *save_dir)
+{
     ic_scene_load_options lo = {0};
-    lo.width = argc > 3 ? atoi(argv[2]) : 320;
-    lo.height = argc > 3 ? atoi(argv[3]) : 180;
+    lo.width = width;
+    lo.height = height;
     ic_error err;
     ic_scene *scene;
     ic_accel *accel;
-    if (ic_scene_load(argv[1], &lo, &scene, &err) != IC_OK || ic_accel_create(scene, &accel, &err) != IC_OK) {
-        fprintf(stderr, "bench_lookup: %s\n", err.message);
-        return 1;
-    }
+    if (ic_scene_load(scene_path, &lo, &scene, &err) != IC_OK || ic_accel_create(scene, &accel, &err) != IC_OK)
+        fail(err.message);
     ic_tracer tr;
     tr.scene = scene;
     tr.accel = accel;
     tr.pt.max_depth = 8;
     tr.pt.rr_depth = 0;
     tr.pt = ic_pt_params_resolve(tr.pt);
-    printf("scene %s, %dx%d, batch strategy, default settings, final acceptance\n", argv[1], lo.width, lo.height);
+    printf("scene %s, %dx%d, batch strategy, default settings, final acceptance\n", scene_path, width, height);
     for (int validity = 1; validity >= 0; --validity) {
         ic_render_options opt = {0};
         opt.integrator = IC_INTEGRATOR_IC;
@@ -124,14 +173,70 @@ int main(int argc, char **argv)
         phase_times pt = {0, 0};
         double t0 = ic_seconds();
         if (ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) != IC_OK || ic_ic_build(c, &opt, &st, &pt, &err) != IC_OK ||
-            ic_cache_rebuild_index(c->cache, &err) != IC_OK) {
-            fprintf(stderr, "bench_lookup: %s\n", err.message);
-            return 1;
+            ic_cache_rebuild_index(c->cache, &err) != IC_OK)
+            fail(err.message);
+        double build = ic_seconds() - t0;
+        size_t npix = (size_t)c->g.width * c->g.height;
+        points pts = {malloc(npix * sizeof(ic_vec3)), malloc(npix * sizeof(ic_vec3)), 0};
+        if (!pts.p || !pts.n)
+            fail("out of memory");
+        for (size_t i = 0; i < npix; ++i)
+            if (c->g.valid[i]) {
+                pts.p[pts.count] = c->g.p[i];
+                pts.n[pts.count++] = c->g.n[i];
+            }
+        if (save_dir) {
+            char path[4096];
+            snprintf(path, sizeof path, "%s/%s.cache", save_dir, setting_file[validity]);
+            if (ic_cache_save(c->cache, path, 0, &err) != IC_OK)
+                fail(err.message);
+            save_points(save_dir, validity, ic_cache_get_params(c->cache), &pts);
         }
-        measure(validity ? "validity clamp on" : "validity clamp off", c, ic_seconds() - t0);
+        measure(setting_label[validity], c->cache, &pts, build);
+        free(pts.p);
+        free(pts.n);
         ic_ic_ctx_destroy(c);
     }
     ic_accel_destroy(accel);
     ic_scene_free(scene);
     return 0;
+}
+
+/* Times the caches and points a --save run wrote (the same look-ups, without building the cache). */
+static int from_saved(const char *dir)
+{
+    printf("caches and points from %s, final acceptance\n", dir);
+    for (int validity = 1; validity >= 0; --validity) {
+        ic_cache_params params;
+        points pts;
+        load_points(dir, validity, &params, &pts);
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s.cache", dir, setting_file[validity]);
+        ic_cache *cache;
+        ic_error err;
+        if (ic_cache_load(path, &params, 0, &cache, &err) != IC_OK)
+            fail(err.message);
+        measure(setting_label[validity], cache, &pts, 0.0);
+        ic_cache_destroy(cache);
+        free(pts.p);
+        free(pts.n);
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc == 3 && !strcmp(argv[1], "--load"))
+        return from_saved(argv[2]);
+    const char *save_dir = NULL;
+    if (argc >= 3 && !strcmp(argv[1], "--save")) {
+        save_dir = argv[2];
+        argc -= 2;
+        argv += 2;
+    }
+    if (argc < 2) {
+        fprintf(stderr, "usage: bench_lookup [--save DIR] SCENE [width height] | bench_lookup --load DIR\n");
+        return 2;
+    }
+    return from_scene(argv[1], argc > 3 ? atoi(argv[2]) : 320, argc > 3 ? atoi(argv[3]) : 180, save_dir);
 }
