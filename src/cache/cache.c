@@ -662,23 +662,51 @@ static IC_ALWAYS_INLINE int query_frozen(const ic_cache *c, const ic_cache_looku
 }
 
 #if defined(IC_HAVE_AVX2_PATH)
-/* Two blocks (eight list entries) in one: block_weights_sse2 with 256-bit registers, lane for lane the
- * same operations on the same operands (no FMA: the target is AVX2 alone), so every decision and
- * weight is bit-identical. Lanes 0–3 are b0's entries, 4–7 b1's. */
-typedef struct block_weights8 {
-    float w[8];
-    float dx[8], dy[8], dz[8];
-} block_weights8;
+/*
+ * The AVX2 look-up tests two blocks (eight list entries) at a time: block_weights_sse2 with 256-bit
+ * registers, lane for lane the same operations on the same operands (no FMA: the target is AVX2
+ * alone), so every decision and weight is bit-identical. The contributors of a pair of blocks are then
+ * packed, in list order, into a buffer with what their extrapolation needs (w_i, p − p_i, n_i × n and
+ * the record slot), and the whole list's contributors are summed in one loop at the end: one loop of
+ * unpredictable length per look-up instead of one per block pair, whose mispredicted exits cost more
+ * than the packing (BENCHMARKS.md "Contributors packed"). Contributors are met in list order, so the
+ * sums are those of every other path.
+ */
+enum { IC_PACKED_CAP = 64 }; /* contributors buffered before they are summed; 8 lanes of slack follow */
+
+typedef struct packed_contributors {
+    float w[IC_PACKED_CAP + 8];
+    float dx[IC_PACKED_CAP + 8], dy[IC_PACKED_CAP + 8], dz[IC_PACKED_CAP + 8]; /* p − p_i */
+    float rx[IC_PACKED_CAP + 8], ry[IC_PACKED_CAP + 8], rz[IC_PACKED_CAP + 8]; /* n_i × n */
+    uint32_t slot[IC_PACKED_CAP + 8];
+} packed_contributors;
+
+/* The lanes set in a 4-bit mask, in increasing order, one byte each (unused bytes 0). */
+static const uint32_t lanes_of_mask4[16] = {0x00000000, 0x00000000, 0x00000001, 0x00000100,
+                                            0x00000002, 0x00000200, 0x00000201, 0x00020100,
+                                            0x00000003, 0x00000300, 0x00000301, 0x00030100,
+                                            0x00000302, 0x00030200, 0x00030201, 0x03020100};
 
 static IC_TARGET_AVX2 inline __m256 load_pair(const float *lo, const float *hi)
 {
     return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(lo)), _mm_loadu_ps(hi), 1);
 }
 
+/* The permutation that moves the lanes set in an 8-bit mask to the front, in order. */
+static IC_TARGET_AVX2 inline __m256i packing_permutation(unsigned mask)
+{
+    unsigned lo = mask & 15u;
+    uint64_t lanes = lanes_of_mask4[lo] |
+                     (uint64_t)(lanes_of_mask4[mask >> 4] + 0x04040404u) << (8 * __builtin_popcount(lo));
+    return _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)lanes));
+}
+
+/* Blocks b0 and b1 (lanes 0–3 and 4–7): appends their contributors to out at position `at` and returns
+ * how many there are. Writes up to 8 lanes past them (the buffer's slack). */
 static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *params,
                                                          const ic_frozen_record *records, const ic_frozen_block *b0,
                                                          const ic_frozen_block *b1, ic_vec3 p, ic_vec3 n, float s,
-                                                         uint32_t bounce, block_weights8 *out)
+                                                         uint32_t bounce, packed_contributors *out, unsigned at)
 {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
     __m256 dx = _mm256_sub_ps(_mm256_set1_ps(p.x), load_pair(b0->x, b1->x));
@@ -691,22 +719,19 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
     if (!_mm256_movemask_ps(pass))
         return 0;
     __m256 nx = load_pair(b0->nx, b1->nx), ny = load_pair(b0->ny, b1->ny), nz = load_pair(b0->nz, b1->nz);
-    __m256 ndot = _mm256_add_ps(
-        _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(n.x), nx), _mm256_mul_ps(_mm256_set1_ps(n.y), ny)),
-        _mm256_mul_ps(_mm256_set1_ps(n.z), nz));
+    __m256 px = _mm256_set1_ps(n.x), py = _mm256_set1_ps(n.y), pz = _mm256_set1_ps(n.z);
+    __m256 ndot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, nx), _mm256_mul_ps(py, ny)), _mm256_mul_ps(pz, nz));
     pass = _mm256_and_ps(pass, _mm256_cmp_ps(ndot, zero, _CMP_NLE_UQ));
-    for (unsigned k = 0; k < 4; ++k) {
-        const char *r0 = (const char *)&records[b0->slot[k]], *r1 = (const char *)&records[b1->slot[k]];
-        _mm_prefetch(r0, _MM_HINT_T0);
-        _mm_prefetch(r0 + sizeof *records - 1, _MM_HINT_T0);
-        _mm_prefetch(r1, _MM_HINT_T0);
-        _mm_prefetch(r1 + sizeof *records - 1, _MM_HINT_T0);
+    /* Fetch all eight records (no branch per lane) while the rest of the test runs. */
+    for (unsigned k = 0; k < 8; ++k) {
+        const char *rec = (const char *)&records[k < 4 ? b0->slot[k] : b1->slot[k - 4]];
+        _mm_prefetch(rec, _MM_HINT_T0);
+        _mm_prefetch(rec + sizeof *records - 1, _MM_HINT_T0);
     }
-    __m256 behind = _mm256_mul_ps(
-        _mm256_set1_ps(0.5f),
-        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_add_ps(_mm256_set1_ps(n.x), nx)),
-                                    _mm256_mul_ps(dy, _mm256_add_ps(_mm256_set1_ps(n.y), ny))),
-                      _mm256_mul_ps(dz, _mm256_add_ps(_mm256_set1_ps(n.z), nz))));
+    __m256 behind = _mm256_mul_ps(_mm256_set1_ps(0.5f),
+                                  _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_add_ps(px, nx)),
+                                                              _mm256_mul_ps(dy, _mm256_add_ps(py, ny))),
+                                                _mm256_mul_ps(dz, _mm256_add_ps(pz, nz))));
     pass = _mm256_and_ps(pass, _mm256_cmp_ps(behind, _mm256_mul_ps(_mm256_set1_ps(-params->behind_tolerance), r),
                                              _CMP_NLT_UQ));
     __m256 dist = _mm256_div_ps(_mm256_sqrt_ps(d2), R);
@@ -731,18 +756,79 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
                                                  _mm_set1_epi8(IC_RECORD_DISABLED)),
                                   _mm_cmpeq_epi8(bb, _mm_set1_epi8((char)bounce)));
     pass = _mm256_and_ps(pass, _mm256_castsi256_ps(_mm256_cvtepi8_epi32(ok)));
-    _mm256_storeu_ps(out->w, w);
-    _mm256_storeu_ps(out->dx, dx);
-    _mm256_storeu_ps(out->dy, dy);
-    _mm256_storeu_ps(out->dz, dz);
-    return (unsigned)_mm256_movemask_ps(pass);
+    /* Packed without a branch on the mask (an empty mask writes only slack). n_i × n as v3_cross. */
+    unsigned mask = (unsigned)_mm256_movemask_ps(pass);
+    __m256i idx = packing_permutation(mask);
+    __m256 rx = _mm256_sub_ps(_mm256_mul_ps(ny, pz), _mm256_mul_ps(nz, py));
+    __m256 ry = _mm256_sub_ps(_mm256_mul_ps(nz, px), _mm256_mul_ps(nx, pz));
+    __m256 rz = _mm256_sub_ps(_mm256_mul_ps(nx, py), _mm256_mul_ps(ny, px));
+    __m256i slots = _mm256_loadu2_m128i((const __m128i *)b1->slot, (const __m128i *)b0->slot);
+    _mm256_storeu_ps(out->w + at, _mm256_permutevar8x32_ps(w, idx));
+    _mm256_storeu_ps(out->dx + at, _mm256_permutevar8x32_ps(dx, idx));
+    _mm256_storeu_ps(out->dy + at, _mm256_permutevar8x32_ps(dy, idx));
+    _mm256_storeu_ps(out->dz + at, _mm256_permutevar8x32_ps(dz, idx));
+    _mm256_storeu_ps(out->rx + at, _mm256_permutevar8x32_ps(rx, idx));
+    _mm256_storeu_ps(out->ry + at, _mm256_permutevar8x32_ps(ry, idx));
+    _mm256_storeu_ps(out->rz + at, _mm256_permutevar8x32_ps(rz, idx));
+    _mm256_storeu_si256((__m256i *)(out->slot + at), _mm256_permutevar8x32_epi32(slots, idx));
+    return (unsigned)__builtin_popcount(mask);
 }
 
-/* query_frozen's SSE2 loop two blocks at a time (a list's odd last block takes the SSE2 test);
- * contributors are met in list order, so the sums are those of every other path. */
+/* E_i(p) of packed contributor k, R, G and B in lanes 0–2: accumulate_frozen_sse2's extrapolation,
+ * operand for operand. */
+static IC_TARGET_AVX2 inline __m128 extrapolate_packed(const ic_frozen_record *r, const packed_contributors *pc,
+                                                       unsigned k)
+{
+    const float *row = &r->row[0][0];
+    const __m128 last = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    __m128 dot_rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(pc->rx[k]), _mm_loadu_ps(row + 3)),
+                                           _mm_mul_ps(_mm_set1_ps(pc->ry[k]), _mm_loadu_ps(row + 6))),
+                                _mm_mul_ps(_mm_set1_ps(pc->rz[k]), _mm_loadu_ps(row + 9)));
+    __m128 dot_trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(pc->dx[k]), _mm_loadu_ps(row + 12)),
+                                             _mm_mul_ps(_mm_set1_ps(pc->dy[k]), _mm_loadu_ps(row + 15))),
+                                  _mm_mul_ps(_mm_set1_ps(pc->dz[k]), _mm_and_ps(_mm_loadu_ps(row + 18), last)));
+    return _mm_max_ps(_mm_add_ps(_mm_add_ps(_mm_loadu_ps(row), dot_rot), dot_trans), _mm_setzero_ps());
+}
+
+/* The first `count` packed contributors into the sums, in order: R, G, B in *acc, Σ w_i in *weight_sum
+ * and |S| in *contributors (kept out of `out` in the common case without a contributions buffer). */
+static IC_TARGET_AVX2 inline void sum_packed(const ic_frozen_record *records, const packed_contributors *pc,
+                                             unsigned count, const ic_cache_lookup *q, ic_cache_estimate *out,
+                                             __m128 *acc, float *weight_sum, uint32_t *contributors)
+{
+    __m128 acc4 = *acc;
+    if (!q->contributions) {
+        float ws = *weight_sum;
+        for (unsigned k = 0; k < count; ++k) {
+            __m128 v = extrapolate_packed(&records[pc->slot[k]], pc, k);
+            acc4 = _mm_add_ps(acc4, _mm_mul_ps(_mm_set1_ps(pc->w[k]), v));
+            ws += pc->w[k];
+        }
+        *weight_sum = ws;
+        *contributors += count;
+    } else {
+        out->weight_sum = *weight_sum;
+        out->contributor_count = *contributors;
+        for (unsigned k = 0; k < count; ++k) {
+            const ic_frozen_record *r = &records[pc->slot[k]];
+            __m128 v = extrapolate_packed(r, pc, k);
+            acc4 = _mm_add_ps(acc4, _mm_mul_ps(_mm_set1_ps(pc->w[k]), v));
+            float e3[4];
+            _mm_storeu_ps(e3, v);
+            count_contributor(r->index, pc->w[k], e3, q, out);
+        }
+        *weight_sum = out->weight_sum;
+        *contributors = out->contributor_count;
+    }
+    *acc = acc4;
+}
+
+/* ic_cache_query on the frozen layout with AVX2: the list two blocks at a time (an odd last block pairs
+ * with a block of padding), contributors summed at the end (or whenever the buffer is nearly full). */
 static IC_TARGET_AVX2 int query_frozen_avx2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
                                             ic_cache_estimate *out)
 {
+    static const ic_frozen_block padding; /* R = a = 0: no distance passes */
     const ic_frozen *f = &c->frozen;
     float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f}, s;
     ic_vec3 p = q->position, n = q->normal;
@@ -751,32 +837,21 @@ static IC_TARGET_AVX2 int query_frozen_avx2(const ic_cache *c, const ic_cache_lo
     if (!blk)
         return 0;
     __m128 acc4 = _mm_setzero_ps();
-    uint32_t b = 0;
-    for (; b + 1 < blocks; b += 2) {
-        block_weights8 bw;
-        unsigned mask = block_weights_avx2(&c->params, f->record, &blk[b], &blk[b + 1], p, n, s, q->bounce, &bw);
-        while (mask) {
-            unsigned k = (unsigned)__builtin_ctz(mask);
-            mask &= mask - 1;
-            const ic_frozen_block *o = &blk[b + (k >> 2)];
-            unsigned l = k & 3u;
-            ic_float4 ni = {o->nx[l], o->ny[l], o->nz[l], o->a[l]};
-            accumulate_frozen_sse2(&f->record[o->slot[l]], &ni, n, bw.w[k], v3(bw.dx[k], bw.dy[k], bw.dz[k]), q, out,
-                                   &acc4);
+    float weight_sum = 0.0f;
+    uint32_t contributors = 0;
+    packed_contributors pc;
+    unsigned count = 0;
+    for (uint32_t b = 0; b < blocks; b += 2) {
+        const ic_frozen_block *b1 = b + 1 < blocks ? &blk[b + 1] : &padding;
+        count += block_weights_avx2(&c->params, f->record, &blk[b], b1, p, n, s, q->bounce, &pc, count);
+        /* One call site: two made the loop measurably slower. */
+        if (count > IC_PACKED_CAP - 8 || b + 2 >= blocks) {
+            sum_packed(f->record, &pc, count, q, out, &acc4, &weight_sum, &contributors);
+            count = 0;
         }
     }
-    if (b < blocks) {
-        const ic_frozen_block *o = &blk[b];
-        block_weights bw;
-        unsigned mask = block_weights_sse2(&c->params, f->record, o, p, n, s, q->bounce, &bw);
-        while (mask) {
-            unsigned k = lowest_lane[mask];
-            mask &= mask - 1;
-            ic_float4 ni = {o->nx[k], o->ny[k], o->nz[k], o->a[k]};
-            accumulate_frozen_sse2(&f->record[o->slot[k]], &ni, n, bw.w[k], v3(bw.dx[k], bw.dy[k], bw.dz[k]), q, out,
-                                   &acc4);
-        }
-    }
+    out->weight_sum = weight_sum;
+    out->contributor_count = contributors;
     _mm_storeu_ps(acc, acc4);
     return finish(out, acc);
 }

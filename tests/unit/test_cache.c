@@ -327,6 +327,24 @@ static void ask(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint
     a->hit = ic_cache_query_hinted(c, &l, hint, &a->e);
 }
 
+/* ask() without a contributions buffer (look-ups take a shorter route then). */
+static void ask_bare(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, answer *a)
+{
+    ic_cache_lookup l = *q;
+    l.contributions = NULL;
+    l.contribution_capacity = 0;
+    a->hit = ic_cache_query_hinted(c, &l, hint, &a->e);
+}
+
+/* Same hit, count and sums (bitwise) as a full answer, and nothing reported written. */
+static int same_sums(const answer *bare, const answer *full)
+{
+    return bare->hit == full->hit && bare->e.contributor_count == full->e.contributor_count &&
+           bare->e.contributions_written == 0 &&
+           memcmp(&bare->e.irradiance, &full->e.irradiance, sizeof bare->e.irradiance) == 0 &&
+           memcmp(&bare->e.weight_sum, &full->e.weight_sum, sizeof bare->e.weight_sum) == 0;
+}
+
 /* Same contributors in the same order with the same weights and values, same sums (bitwise). */
 static int same_answer(const answer *a, const answer *b)
 {
@@ -360,7 +378,7 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
         q[k].position = v3(far[k % 8], 10.0f, far[(k / 8) % 8]);
         q[k].normal = v3(0, 0, 1);
     }
-    uint32_t differ[2][6] = {{0}}, hint_hits = 0, found_at_level[3] = {0, 0, 0}, paths_run[4] = {0, 0, 0, 0};
+    uint32_t differ[2][7] = {{0}}, hint_hits = 0, found_at_level[3] = {0, 0, 0}, paths_run[4] = {0, 0, 0, 0};
     for (int acc = 0; acc < 2; ++acc) {
         ic_cache_thaw(c);
         for (uint32_t k = 0; k < total; ++k) {
@@ -391,12 +409,14 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
             if (!ic_cache_set_lookup_path(c, (ic_lookup_path)path))
                 continue;
             ++paths_run[path];
-            ic_cache_hint path_order = {0};
+            ic_cache_hint path_order = {0}, bare_order = {0};
             for (uint32_t k = 0; k < total; ++k) {
                 ask(c, &q[k], NULL, got);
                 differ[acc][4] += !same_answer(got, &want[k]);
                 ask(c, &q[k], &path_order, got);
                 differ[acc][5] += !same_answer(got, &want[k]);
+                ask_bare(c, &q[k], &bare_order, got);
+                differ[acc][6] += !same_sums(got, &want[k]);
             }
         }
         ic_cache_set_lookup_path(c, IC_LOOKUP_BEST);
@@ -404,11 +424,11 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
     CHECK(paths_run[IC_LOOKUP_PORTABLE] == 2, "%s: the portable path ran", what);
     for (int acc = 0; acc < 2; ++acc)
         CHECK(differ[acc][0] + differ[acc][1] + differ[acc][2] + differ[acc][3] + differ[acc][4] +
-                      differ[acc][5] == 0,
+                      differ[acc][5] + differ[acc][6] == 0,
               "%s (%s): frozen differs from the octree path: %u without hint, %u with hints in order, %u with "
-              "hints scrambled, %u with garbage hints; each other code path: %u without hint, %u with hints", what,
-              acc ? "final" : "construction", differ[acc][0], differ[acc][1], differ[acc][2], differ[acc][3],
-              differ[acc][4], differ[acc][5]);
+              "hints scrambled, %u with garbage hints; each code path: %u without hint, %u with hints, %u without "
+              "a contributions buffer", what, acc ? "final" : "construction", differ[acc][0], differ[acc][1],
+              differ[acc][2], differ[acc][3], differ[acc][4], differ[acc][5], differ[acc][6]);
     /* The hint must actually be used for the test to mean something (both acceptances: 2·pairs
      * neighbours). */
     CHECK(hint_hits > pairs, "%s: neighbours kept their leaf only %u times of %u", what, hint_hits, 2 * pairs);
@@ -1187,6 +1207,40 @@ static void test_api_edges(void)
 
 #define RUN(f) do { double t0 = now(); f(); printf("%-28s %.2f s\n", #f, now() - t0); fflush(stdout); } while (0)
 
+/* Hundreds of records overlapping one spot: look-ups with more contributors than the SIMD paths buffer
+ * at once (cache.c: IC_PACKED_CAP) still equal the octree path and brute force, with both weights. */
+static void test_crowded_lookups(void)
+{
+    const uint32_t n = 400;
+    ic_record *recs = make_records(n, 17);
+    for (uint32_t i = 0; i < n; ++i) {
+        ic_rng r = ic_rng_make(23, i, 0, 0);
+        recs[i].position = v3(10.0f + ic_rng_float(&r) - 0.5f, 10.0f + ic_rng_float(&r) - 0.5f, 1.0f);
+        recs[i].normal = v3(0, 0, 1);
+        recs[i].tangent = v3(1, 0, 0);
+        recs[i].harmonic_mean_dist = 4.0f + ic_rng_float(&r);
+        for (int ch = 0; ch < 3; ++ch) {
+            recs[i].grad_trans[ch] = random_in_plane(&r, recs[i].normal, 0.05f);
+            recs[i].grad_rot[ch] = random_in_plane(&r, recs[i].normal, 0.05f);
+        }
+    }
+    for (int wk = 0; wk < 2; ++wk) {
+        ic_cache_params p = clamp_config(wk ? IC_WEIGHT_TABELLION : IC_WEIGHT_WARD, 0);
+        ic_cache *c = build_cache(&p, recs, n);
+        ic_error err;
+        CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild: %s", err.message);
+        ic_cache_lookup q = ic_cache_lookup_at(v3(10.0f, 10.0f, 1.0f), v3(0, 0, 1), IC_ACCEPT_FINAL);
+        ic_cache_estimate e;
+        ic_cache_query(c, &q, &e);
+        CHECK(e.contributor_count > 300, "%s: only %u contributors at the crowded spot", wk ? "T-L" : "Ward",
+              e.contributor_count);
+        check_frozen_identical(c, 300, 1, wk ? "T-L, crowded" : "Ward, crowded");
+        check_lookup_equals_brute_force(c, 2000, wk ? "T-L, crowded" : "Ward, crowded");
+        ic_cache_destroy(c);
+    }
+    free(recs);
+}
+
 int main(void)
 {
     RUN(test_api_edges);
@@ -1200,6 +1254,7 @@ int main(void)
     RUN(test_file);
     RUN(test_freeze_lifecycle);
     RUN(test_frozen_bounce_levels);
+    RUN(test_crowded_lookups);
     RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }
