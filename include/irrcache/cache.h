@@ -58,10 +58,11 @@
  *   compact read-only layout: 4-byte nodes in depth-first order; per leaf, one contiguous list of the
  *   references on its root-to-leaf path whose sphere can reach the leaf, in path order, with the hot
  *   fields of their records (position, R_i, a_i, normal, bounce, flags) side by side four at a time,
- *   so the weight test runs four-wide (SSE2, with a portable fallback) and a rejected candidate
- *   touches no other memory; the interpolation data of the records in the order the lists first use
- *   them, the three channels side by side. A look-up descends (or, with a hint, stays in the
- *   previous leaf), tests one list and weighs the records that pass.
+ *   so the weight test runs four-wide (SSE2, with a portable fallback; eight-wide where the CPU has
+ *   AVX2, chosen at run time) and a rejected candidate touches no other memory; the interpolation
+ *   data of the records in the order the lists first use them, the three channels side by side. A
+ *   look-up descends (or, with a hint, stays in the previous leaf), tests one list and weighs the
+ *   records that pass. A look-up without a contributions buffer takes a shorter route.
  *   Results are bit-identical to the octree path: the same contributors in the same order with the
  *   same arithmetic. Any change to the records (insertion, ic_cache_set_record_accuracy,
  *   ic_cache_set_record_flags) thaws the cache: look-ups go through the octree again, with the same

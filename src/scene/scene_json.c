@@ -835,10 +835,11 @@ static ic_result read_text(const char *path, char **text, size_t *len, ic_error 
 {
     FILE *fp = fopen(path, "rb");
     if (!fp) {
+        int open_errno = errno; /* before resolving the path, which may set errno itself */
         char abs_path[IC_SCENE_PATH_MAX];
         ic_path_absolute(path, abs_path, sizeof abs_path);
         return ic_error_set(err, IC_ERR_IO, "%s: cannot open the scene file (%s; resolved to %s); check the path",
-                            path, strerror(errno), abs_path);
+                            path, strerror(open_errno), abs_path);
     }
     char *buf = NULL;
     size_t n = 0;

@@ -5,6 +5,7 @@
 #include "scene/scene.h"
 #include "test_util.h"
 
+#include <errno.h>
 #include <string.h>
 
 #define SCENES IC_SOURCE_DIR "/tests/scenes/"
@@ -32,6 +33,9 @@ static void expect_error(const char *path, const ic_scene_load_options *opt, ic_
 
 int main(void)
 {
+    /* A scene file that is not there: the open's own reason, not one left by resolving the path. */
+    expect_error(SCENES "no-such-scene.json", NULL, IC_ERR_IO, "no-such-scene.json", strerror(ENOENT),
+                 "resolved to");
     /* JSON syntax: the missing comma after line 4 is found where "fov_y" starts, line 5 */
     expect_error(SCENES "malformed.json", NULL, IC_ERR_PARSE, "malformed.json:5:", "malformed JSON", NULL);
     /* a mesh that does not exist: the line of its "path" and the absolute path it resolved to */
