@@ -719,8 +719,8 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
     if (!_mm256_movemask_ps(pass))
         return 0;
     __m256 nx = load_pair(b0->nx, b1->nx), ny = load_pair(b0->ny, b1->ny), nz = load_pair(b0->nz, b1->nz);
-    __m256 px = _mm256_set1_ps(n.x), py = _mm256_set1_ps(n.y), pz = _mm256_set1_ps(n.z);
-    __m256 ndot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, nx), _mm256_mul_ps(py, ny)), _mm256_mul_ps(pz, nz));
+    __m256 qx = _mm256_set1_ps(n.x), qy = _mm256_set1_ps(n.y), qz = _mm256_set1_ps(n.z); /* our normal */
+    __m256 ndot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, nx), _mm256_mul_ps(qy, ny)), _mm256_mul_ps(qz, nz));
     pass = _mm256_and_ps(pass, _mm256_cmp_ps(ndot, zero, _CMP_NLE_UQ));
     /* Fetch all eight records (no branch per lane) while the rest of the test runs. */
     for (unsigned k = 0; k < 8; ++k) {
@@ -729,9 +729,9 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
         _mm_prefetch(rec + sizeof *records - 1, _MM_HINT_T0);
     }
     __m256 behind = _mm256_mul_ps(_mm256_set1_ps(0.5f),
-                                  _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_add_ps(px, nx)),
-                                                              _mm256_mul_ps(dy, _mm256_add_ps(py, ny))),
-                                                _mm256_mul_ps(dz, _mm256_add_ps(pz, nz))));
+                                  _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_add_ps(qx, nx)),
+                                                              _mm256_mul_ps(dy, _mm256_add_ps(qy, ny))),
+                                                _mm256_mul_ps(dz, _mm256_add_ps(qz, nz))));
     pass = _mm256_and_ps(pass, _mm256_cmp_ps(behind, _mm256_mul_ps(_mm256_set1_ps(-params->behind_tolerance), r),
                                              _CMP_NLT_UQ));
     __m256 dist = _mm256_div_ps(_mm256_sqrt_ps(d2), R);
@@ -759,9 +759,9 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
     /* Packed without a branch on the mask (an empty mask writes only slack). n_i × n as v3_cross. */
     unsigned mask = (unsigned)_mm256_movemask_ps(pass);
     __m256i idx = packing_permutation(mask);
-    __m256 rx = _mm256_sub_ps(_mm256_mul_ps(ny, pz), _mm256_mul_ps(nz, py));
-    __m256 ry = _mm256_sub_ps(_mm256_mul_ps(nz, px), _mm256_mul_ps(nx, pz));
-    __m256 rz = _mm256_sub_ps(_mm256_mul_ps(nx, py), _mm256_mul_ps(ny, px));
+    __m256 rx = _mm256_sub_ps(_mm256_mul_ps(ny, qz), _mm256_mul_ps(nz, qy));
+    __m256 ry = _mm256_sub_ps(_mm256_mul_ps(nz, qx), _mm256_mul_ps(nx, qz));
+    __m256 rz = _mm256_sub_ps(_mm256_mul_ps(nx, qy), _mm256_mul_ps(ny, qx));
     __m256i slots = _mm256_loadu2_m128i((const __m128i *)b1->slot, (const __m128i *)b0->slot);
     _mm256_storeu_ps(out->w + at, _mm256_permutevar8x32_ps(w, idx));
     _mm256_storeu_ps(out->dx + at, _mm256_permutevar8x32_ps(dx, idx));
