@@ -11,11 +11,13 @@
  * compare code changes on the same look-ups).
  */
 #include "cache/cache_internal.h" /* ic_cache_set_lookup_path */
+#include "core/atomic_file.h"
 #include "geom/accel.h"
 #include "integrators/ic_internal.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -112,17 +114,25 @@ static void fail(const char *what)
 }
 
 /* DIR/<setting>.points: the cache's parameters (the load must name them), then the points. Raw
- * structs: read back by the same build only. */
+ * structs: read back by the same build only. Written under a temporary name and renamed. */
 static void save_points(const char *dir, int validity, const ic_cache_params *params, const points *pts)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s.points", dir, setting_file[validity]);
-    FILE *f = fopen(path, "wb");
+    ic_atomic_file f;
+    ic_error err;
     uint64_t count = pts->count;
-    if (!f || fwrite(params, sizeof *params, 1, f) != 1 || fwrite(&count, sizeof count, 1, f) != 1 ||
-        fwrite(pts->p, sizeof *pts->p, pts->count, f) != pts->count ||
-        fwrite(pts->n, sizeof *pts->n, pts->count, f) != pts->count || fclose(f) != 0)
-        fail("cannot write the points file");
+    if (ic_atomic_file_open(&f, path, &err) != IC_OK)
+        fail(err.message);
+    if (fwrite(params, sizeof *params, 1, f.fp) != 1 || fwrite(&count, sizeof count, 1, f.fp) != 1 ||
+        fwrite(pts->p, sizeof *pts->p, pts->count, f.fp) != pts->count ||
+        fwrite(pts->n, sizeof *pts->n, pts->count, f.fp) != pts->count) {
+        ic_atomic_file_abort(&f);
+        fprintf(stderr, "bench_lookup: %s: cannot write (%s); check the free space\n", path, strerror(errno));
+        exit(1);
+    }
+    if (ic_atomic_file_commit(&f, &err) != IC_OK)
+        fail(err.message);
 }
 
 static void load_points(const char *dir, int validity, ic_cache_params *params, points *pts)
@@ -130,17 +140,25 @@ static void load_points(const char *dir, int validity, ic_cache_params *params, 
     char path[4096];
     snprintf(path, sizeof path, "%s/%s.points", dir, setting_file[validity]);
     FILE *f = fopen(path, "rb");
+    if (!f) {
+        fprintf(stderr, "bench_lookup: %s: cannot read (%s); write it with bench_lookup --save %s SCENE\n", path,
+                strerror(errno), dir);
+        exit(1);
+    }
     uint64_t count = 0;
-    if (!f || fread(params, sizeof *params, 1, f) != 1 || fread(&count, sizeof count, 1, f) != 1 ||
-        count > ((uint64_t)1 << 32))
-        fail("cannot read the points file (written by bench_lookup --save of this build?)");
-    pts->count = (size_t)count;
-    pts->p = malloc(pts->count * sizeof *pts->p);
-    pts->n = malloc(pts->count * sizeof *pts->n);
-    if (!pts->p || !pts->n || fread(pts->p, sizeof *pts->p, pts->count, f) != pts->count ||
-        fread(pts->n, sizeof *pts->n, pts->count, f) != pts->count)
-        fail("cannot read the points file (truncated?)");
+    int ok = fread(params, sizeof *params, 1, f) == 1 && fread(&count, sizeof count, 1, f) == 1 &&
+             count <= ((uint64_t)1 << 32);
+    pts->count = ok ? (size_t)count : 0;
+    pts->p = malloc((pts->count ? pts->count : 1) * sizeof *pts->p);
+    pts->n = malloc((pts->count ? pts->count : 1) * sizeof *pts->n);
+    ok = ok && pts->p && pts->n && fread(pts->p, sizeof *pts->p, pts->count, f) == pts->count &&
+         fread(pts->n, sizeof *pts->n, pts->count, f) == pts->count;
     fclose(f);
+    if (!ok) {
+        fprintf(stderr, "bench_lookup: %s: truncated or not a points file; write it again with bench_lookup --save %s "
+                        "SCENE, with this build\n", path, dir);
+        exit(1);
+    }
 }
 
 /* Builds the batch strategy's cache for the scene at width × height and times it; with save_dir,
