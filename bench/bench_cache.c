@@ -20,6 +20,8 @@
 #include "core/threads.h"
 #include "core/vecmath.h"
 
+#include "bench_index.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -264,6 +266,7 @@ static void print_freeze(const char *cache, ic_cache *c)
     double t = now() - t0;
     printf("freeze, %s: %.3f s, frozen layout %.0f bytes per record (cache without it %.0f)\n", cache, t,
            (double)(ic_cache_memory_bytes(c) - thawed) / ic_cache_count(c), (double)thawed / ic_cache_count(c));
+    print_index_stats("  ", cache, c);
 }
 
 int main(int argc, char **argv)

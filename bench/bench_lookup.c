@@ -18,6 +18,8 @@
 #include "scene/scene.h"
 
 #include <errno.h>
+#include "bench_index.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,6 +99,8 @@ static void measure(const char *label, ic_cache *cache, const points *pts, doubl
                    "%4.2f contributors  digest %016llx\n",
                    label, name[k], ic_cache_count(cache), build_seconds, n / runs[k][2] * 1e-6,
                    runs[PATH_OCTREE][2] / runs[k][2], refs[k] / n, contrib / n, (unsigned long long)digest[k]);
+    printf("%-19s", label);
+    print_index_stats("", "", cache);
     size_t frozen = ic_cache_memory_bytes(cache);
     ic_cache_thaw(cache);
     size_t thawed = ic_cache_memory_bytes(cache);

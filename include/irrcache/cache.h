@@ -66,7 +66,8 @@
  *   Results are bit-identical to the octree path: the same contributors in the same order with the
  *   same arithmetic. Any change to the records (insertion, ic_cache_set_record_accuracy,
  *   ic_cache_set_record_flags) thaws the cache: look-ups go through the octree again, with the same
- *   results, until the next freeze. Memory: see ic_cache_memory_bytes.
+ *   results, until the next freeze. Memory: see ic_cache_memory_bytes; the index's shape:
+ *   ic_cache_get_index_stats.
  */
 #ifndef IRRCACHE_CACHE_H
 #define IRRCACHE_CACHE_H
@@ -197,6 +198,25 @@ uint32_t ic_cache_count(const ic_cache *cache);
 size_t ic_cache_bytes_per_record(void);
 /* Bytes the cache holds now: records, octree nodes and references, point index. */
 size_t ic_cache_memory_bytes(const ic_cache *cache);
+
+/* The shape of the look-up index (diagnostics and benchmarks; seed 004 §4.3 reports records per leaf). */
+typedef struct ic_cache_index_stats {
+    uint32_t nodes;                   /* octree nodes */
+    uint32_t leaves;                  /* octree leaves */
+    uint32_t depth;                   /* deepest leaf (root = 0) */
+    uint64_t references;              /* record references in all nodes (a record is in every node it is stored in) */
+    double references_per_record;     /* references / records */
+    double leaf_references;           /* mean over leaves of the references the leaf itself holds */
+    uint32_t max_leaf_references;     /* most references in one leaf */
+    double path_references;           /* mean over leaves of the references on the root-to-leaf path: the
+                                         records a look-up there tests through the octree */
+    uint32_t max_path_references;
+    uint32_t frozen_leaves;           /* leaves of the frozen layout (0 while thawed) */
+    double frozen_list_entries;       /* mean over them of their list's entries: what a frozen look-up tests */
+    uint32_t max_frozen_list_entries;
+} ic_cache_index_stats;
+/* Fills *out (all zero for an empty cache). */
+void ic_cache_get_index_stats(const ic_cache *cache, ic_cache_index_stats *out);
 
 /* Inserts one record (clamps as documented above); its index goes to *out_index (may be NULL). */
 ic_result ic_cache_insert(ic_cache *cache, const ic_record *record, uint32_t *out_index, ic_error *err);

@@ -158,6 +158,49 @@ size_t ic_cache_memory_bytes(const ic_cache *c)
            ic_octree_bytes(&c->points) + (size_t)c->scratch_cap * sizeof(uint32_t) + ic_frozen_bytes(&c->frozen);
 }
 
+/* Depth-first walk of the octree below `node` (at `depth`, `above` references on the path to it). */
+static void index_walk(const ic_octree *t, uint32_t node, uint32_t depth, uint64_t above, ic_cache_index_stats *s,
+                       uint64_t *path_sum)
+{
+    const ic_octree_node *nd = &t->nodes[node];
+    ++s->nodes;
+    s->references += nd->count;
+    uint64_t path = above + nd->count;
+    if (nd->child) {
+        for (unsigned o = 0; o < 8; ++o)
+            index_walk(t, nd->child + o, depth + 1, path, s, path_sum);
+        return;
+    }
+    ++s->leaves;
+    s->depth = depth > s->depth ? depth : s->depth;
+    s->leaf_references += nd->count;
+    s->max_leaf_references = nd->count > s->max_leaf_references ? nd->count : s->max_leaf_references;
+    *path_sum += path;
+    s->max_path_references = path > s->max_path_references ? (uint32_t)path : s->max_path_references;
+}
+
+void ic_cache_get_index_stats(const ic_cache *c, ic_cache_index_stats *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!c || !c->tree.has_root || c->count == 0)
+        return;
+    uint64_t path_sum = 0;
+    index_walk(&c->tree, 0, 0, 0, out, &path_sum);
+    out->references_per_record = (double)out->references / c->count;
+    out->leaf_references /= out->leaves;
+    out->path_references = (double)path_sum / out->leaves;
+    const ic_frozen *f = &c->frozen;
+    if (f->is_valid && f->leaf_count) {
+        out->frozen_leaves = f->leaf_count;
+        out->frozen_list_entries = (double)f->entry_count / f->leaf_count;
+        for (uint32_t k = 0; k < f->leaf_count; ++k) {
+            const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + f->leaf_at[k]);
+            out->max_frozen_list_entries =
+                l->count > out->max_frozen_list_entries ? l->count : out->max_frozen_list_entries;
+        }
+    }
+}
+
 ic_result ic_cache_reserve(ic_cache *c, uint32_t n)
 {
     if (n <= c->cap)

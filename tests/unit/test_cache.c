@@ -1241,6 +1241,65 @@ static void test_crowded_lookups(void)
     free(recs);
 }
 
+/* The index statistics agree with the tree's shape: an empty cache has none; 8 children per split;
+ * every record stored somewhere; a frozen list never longer than its leaf's path; thawed, no lists. */
+static void test_index_stats(void)
+{
+    ic_cache_index_stats s;
+    ic_cache *empty = NULL;
+    ic_error err;
+    CHECK(ic_cache_create(NULL, &empty, &err) == IC_OK, "create: %s", err.message);
+    ic_cache_get_index_stats(empty, &s);
+    CHECK(s.nodes == 0 && s.leaves == 0 && s.references == 0 && s.frozen_leaves == 0, "empty cache: no index");
+    ic_cache_destroy(empty);
+    const uint32_t n = 20000;
+    ic_record *recs = make_records(n, 31);
+    for (int validity = 0; validity < 2; ++validity) {
+        ic_cache_params p = clamp_config(IC_WEIGHT_WARD, validity ? 3 : 0);
+        ic_cache *c = build_cache(&p, recs, n);
+        CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild: %s", err.message);
+        ic_cache_get_index_stats(c, &s);
+        CHECK(s.nodes >= 1 && (s.nodes - 1) % 8 == 0 && s.leaves == 1 + 7 * ((s.nodes - 1) / 8),
+              "octree shape: %u nodes, %u leaves", s.nodes, s.leaves);
+        CHECK(s.references >= n && fabs(s.references_per_record - (double)s.references / n) < 1e-9,
+              "every record referenced: %llu references for %u records", (unsigned long long)s.references, n);
+        CHECK(s.leaf_references <= s.max_leaf_references && s.path_references <= s.max_path_references &&
+                  s.leaf_references <= s.path_references && s.depth <= ic_cache_get_params(c)->max_depth,
+              "means within maxima: leaf %.2f ≤ %u, path %.2f ≤ %u, depth %u", s.leaf_references,
+              s.max_leaf_references, s.path_references, s.max_path_references, s.depth);
+        CHECK(s.frozen_leaves == s.leaves && s.frozen_list_entries > 0.0 && s.frozen_list_entries <= s.path_references &&
+                  s.max_frozen_list_entries <= s.max_path_references,
+              "frozen lists: %u leaves of %.2f entries (max %u) against paths of %.2f (max %u)", s.frozen_leaves,
+              s.frozen_list_entries, s.max_frozen_list_entries, s.path_references, s.max_path_references);
+        /* A look-up through the octree tests exactly its leaf's path: the mean over points spread like the
+         * records lies within the per-leaf range. */
+        ic_cache_thaw(c);
+        double tested = 0.0;
+        uint32_t queries = 2000, max_tested = 0;
+        for (uint32_t k = 0; k < queries; ++k) {
+            ic_vec3 qp, qn;
+            make_query(c, 77, k, 1.0f, &qp, &qn);
+            ic_cache_lookup q = ic_cache_lookup_at(qp, qn, IC_ACCEPT_CONSTRUCTION);
+            ic_cache_estimate e;
+            ic_cache_query(c, &q, &e);
+            tested += e.records_tested;
+            max_tested = e.records_tested > max_tested ? e.records_tested : max_tested;
+        }
+        CHECK(max_tested <= s.max_path_references, "a look-up tested %u references, more than the longest path %u",
+              max_tested, s.max_path_references);
+        ic_cache_index_stats thawed;
+        ic_cache_get_index_stats(c, &thawed);
+        CHECK(thawed.frozen_leaves == 0 && thawed.frozen_list_entries == 0.0 && thawed.references == s.references,
+              "thawed: no lists, same octree");
+        printf("  index, %s: %u leaves (depth %u), %.2f references per record, %.2f per leaf, %.2f on a path "
+               "(look-ups: %.2f), frozen lists %.2f\n",
+               validity ? "validity clamp" : "no clamps", s.leaves, s.depth, s.references_per_record,
+               s.leaf_references, s.path_references, tested / queries, s.frozen_list_entries);
+        ic_cache_destroy(c);
+    }
+    free(recs);
+}
+
 int main(void)
 {
     RUN(test_api_edges);
@@ -1255,6 +1314,7 @@ int main(void)
     RUN(test_freeze_lifecycle);
     RUN(test_frozen_bounce_levels);
     RUN(test_crowded_lookups);
+    RUN(test_index_stats);
     RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }
