@@ -1386,8 +1386,22 @@ static uint64_t records_hash(const ic_ctx *c)
                        m->emission.z, m->ior, (float)m->type, (float)m->kd_texture, (float)m->two_sided_emission};
         h = ic_fnv1a64(h, f, sizeof f);
     }
-    for (uint32_t i = 0; i < s->texture_count; ++i)
-        h = ic_fnv1a64(h, s->textures[i].rgb, sizeof(float) * 3 * (size_t)s->textures[i].width * s->textures[i].height);
+    for (uint32_t i = 0; i < s->texture_count; ++i) {
+        /* The texel values as floats, however they are stored (the hash streams: same bytes, same hash). */
+        const ic_texture *t = &s->textures[i];
+        size_t n = 3 * (size_t)t->width * (size_t)t->height;
+        if (t->rgb) {
+            h = ic_fnv1a64(h, t->rgb, sizeof(float) * n);
+            continue;
+        }
+        float chunk[768];
+        for (size_t at = 0; at < n; at += 768) {
+            size_t m = n - at < 768 ? n - at : 768;
+            for (size_t k = 0; k < m; ++k)
+                chunk[k] = ic_texture_value(t, at + k);
+            h = ic_fnv1a64(h, chunk, sizeof(float) * m);
+        }
+    }
     h = ic_fnv1a64(h, s->point_lights, sizeof *s->point_lights * s->point_light_count);
     float env[12] = {(float)s->sun.enabled, s->sun.direction.x, s->sun.direction.y, s->sun.direction.z,
                      s->sun.irradiance.x, s->sun.irradiance.y, s->sun.irradiance.z, (float)s->env.enabled,

@@ -15,6 +15,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -142,6 +143,31 @@ void ic_mat4_mul(const float a[16], const float b[16], float out[16])
 /* ------------------------------------------------------------------------------------------------ */
 /* textures */
 
+/* The n texel values as sRGB bytes when every one is exactly ic_srgb8_to_linear of a byte (the table
+ * goes to linear); else NULL (HDR files, 16-bit files, or no memory), and the floats stay. */
+static uint8_t *srgb8_texels(const float *rgb, size_t n, float linear[256])
+{
+    for (int v = 0; v < 256; ++v)
+        linear[v] = ic_srgb8_to_linear((uint8_t)v);
+    uint8_t *bytes = malloc(n ? n : 1);
+    if (!bytes)
+        return NULL;
+    for (size_t i = 0; i < n; ++i) {
+        float x = rgb[i];
+        /* The table increases, so the byte is the encoder's guess or a neighbour. */
+        int guess = isfinite(x) && x >= 0.0f && x <= 1.0f ? ic_linear_to_srgb8(x) : -2, found = -1;
+        for (int k = guess - 1; k <= guess + 1 && found < 0; ++k)
+            if (k >= 0 && k < 256 && memcmp(&linear[k], &x, sizeof x) == 0)
+                found = k;
+        if (found < 0) {
+            free(bytes);
+            return NULL;
+        }
+        bytes[i] = (uint8_t)found;
+    }
+    return bytes;
+}
+
 ic_result ic_scene_texture_load(ic_scene *scene, const char *path, const char *owner, int32_t *index,
                                 ic_error *err)
 {
@@ -172,7 +198,11 @@ ic_result ic_scene_texture_load(ic_scene *scene, const char *path, const char *o
     snprintf(t->path, sizeof t->path, "%.1023s", path);
     t->width = img.width;
     t->height = img.height;
-    t->rgb = img.rgb; /* ownership moves to the scene; released with ic_image_free in ic_scene_free */
+    t->srgb8 = srgb8_texels(img.rgb, (size_t)img.width * (size_t)img.height * 3, t->linear);
+    if (t->srgb8)
+        ic_image_free(&img);
+    else
+        t->rgb = img.rgb; /* ownership moves to the scene; released with ic_image_free in ic_scene_free */
     *index = (int32_t)scene->texture_count++;
     return IC_OK;
 }
@@ -333,7 +363,9 @@ void ic_scene_free(ic_scene *s)
     free(s->materials);
     for (uint32_t i = 0; i < s->texture_count; ++i) {
         ic_image img = {s->textures[i].width, s->textures[i].height, s->textures[i].rgb};
-        ic_image_free(&img);
+        if (img.rgb)
+            ic_image_free(&img);
+        free(s->textures[i].srgb8);
     }
     free(s->textures);
     free(s->tri_lights);

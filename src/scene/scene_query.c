@@ -60,10 +60,10 @@ static ic_vec3 texture_lookup(const ic_texture *t, float s_coord, float t_coord)
     ic_vec3 r;
     float *out = &r.x;
     for (int c = 0; c < 3; ++c) {
-        float a = t->rgb[3 * ((size_t)ys[0] * (size_t)t->width + (size_t)xs[0]) + (size_t)c];
-        float b = t->rgb[3 * ((size_t)ys[0] * (size_t)t->width + (size_t)xs[1]) + (size_t)c];
-        float d = t->rgb[3 * ((size_t)ys[1] * (size_t)t->width + (size_t)xs[0]) + (size_t)c];
-        float e = t->rgb[3 * ((size_t)ys[1] * (size_t)t->width + (size_t)xs[1]) + (size_t)c];
+        float a = ic_texture_value(t, 3 * ((size_t)ys[0] * (size_t)t->width + (size_t)xs[0]) + (size_t)c);
+        float b = ic_texture_value(t, 3 * ((size_t)ys[0] * (size_t)t->width + (size_t)xs[1]) + (size_t)c);
+        float d = ic_texture_value(t, 3 * ((size_t)ys[1] * (size_t)t->width + (size_t)xs[0]) + (size_t)c);
+        float e = ic_texture_value(t, 3 * ((size_t)ys[1] * (size_t)t->width + (size_t)xs[1]) + (size_t)c);
         out[c] = (1.0f - fy) * ((1.0f - fx) * a + fx * b) + fy * ((1.0f - fx) * d + fx * e);
     }
     return r;

@@ -5,9 +5,16 @@
  * bilinear textures, one-sided emission).
  */
 #include "scene/scene.h"
+#include "scene/scene_internal.h" /* ic_scene_texture_load */
 #include "test_util.h"
 
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+
+#ifndef IC_TEST_TMP
+#define IC_TEST_TMP "/tmp"
+#endif
 
 #define SCENES IC_SOURCE_DIR "/tests/scenes/"
 
@@ -280,6 +287,40 @@ static void test_gltf_and_ply(void)
     ic_scene_free(s);
 }
 
+/* An 8-bit PNG texture keeps its sRGB bytes: every texel value equals, bit for bit, what the file reads
+ * as floats; a float texture whose values are not sRGB bytes keeps its floats. */
+static void test_texture_storage(void)
+{
+    ic_image img;
+    ic_error err;
+    CHECK(ic_image_create(&img, 37, 23) == IC_OK, "create");
+    for (int i = 0; i < 37 * 23 * 3; ++i)
+        img.rgb[i] = (float)((i * 7919) % 1000) / 999.0f; /* all over [0, 1], then 8-bit in the file */
+    char png[512], pfm[512];
+    snprintf(png, sizeof png, "%s/texture_8bit.png", IC_TEST_TMP);
+    snprintf(pfm, sizeof pfm, "%s/texture_float.pfm", IC_TEST_TMP);
+    CHECK(ic_image_write(png, &img, NULL, &err) == IC_OK, "write png: %s", err.message);
+    CHECK(ic_image_write(pfm, &img, NULL, &err) == IC_OK, "write pfm: %s", err.message);
+    ic_scene *s = calloc(1, sizeof *s);
+    int32_t a = -1, b = -1;
+    CHECK(ic_scene_texture_load(s, png, "test", &a, &err) == IC_OK && a == 0, "load png: %s", err.message);
+    CHECK(ic_scene_texture_load(s, pfm, "test", &b, &err) == IC_OK && b == 1, "load pfm: %s", err.message);
+    ic_image back;
+    CHECK(ic_image_read(png, &back, &err) == IC_OK, "read png: %s", err.message);
+    const ic_texture *t8 = &s->textures[0], *tf = &s->textures[1];
+    CHECK(t8->srgb8 != NULL && t8->rgb == NULL, "the 8-bit texture keeps bytes");
+    CHECK(tf->srgb8 == NULL && tf->rgb != NULL, "the float texture keeps floats");
+    int differ = 0;
+    for (size_t i = 0; i < (size_t)37 * 23 * 3; ++i) {
+        float x = ic_texture_value(t8, i), y = ic_texture_value(tf, i);
+        differ += memcmp(&x, &back.rgb[i], sizeof x) != 0 || memcmp(&y, &img.rgb[i], sizeof y) != 0;
+    }
+    CHECK(differ == 0, "%d texel values differ from the files' floats", differ);
+    ic_image_free(&back);
+    ic_image_free(&img);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
     test_cornell_box();
@@ -288,5 +329,6 @@ int main(void)
     test_degenerate_dropped();
     test_bare_mesh_and_queries();
     test_gltf_and_ply();
+    test_texture_storage();
     TEST_MAIN_END();
 }
