@@ -531,6 +531,15 @@ static inline unsigned block_weights_portable(const ic_cache_params *params, con
 }
 
 #if defined(__SSE2__)
+/* Byte k: all ones where entry k is of this bounce level and not disabled (bounce and flag bytes of up
+ * to 16 entries side by side). */
+static IC_ALWAYS_INLINE __m128i eligible_bytes(__m128i bounce_bytes, __m128i flag_bytes, uint32_t bounce)
+{
+    const __m128i disabled = _mm_set1_epi8(IC_RECORD_DISABLED);
+    return _mm_andnot_si128(_mm_cmpeq_epi8(_mm_and_si128(flag_bytes, disabled), disabled),
+                            _mm_cmpeq_epi8(bounce_bytes, _mm_set1_epi8((char)bounce)));
+}
+
 /* block_weights_portable four lanes at a time: ic_weight_test's tests in its order, each with the
  * same float operations on the same operands (packed IEEE add, mul, div and sqrt round like their
  * scalar forms), so every decision and every weight is bit-identical. */
@@ -582,10 +591,7 @@ static inline unsigned block_weights_sse2(const ic_cache_params *params, const i
     int32_t bounce_bytes, flag_bytes;
     memcpy(&bounce_bytes, b->bounce, 4);
     memcpy(&flag_bytes, b->flags, 4);
-    __m128i ok = _mm_andnot_si128(
-        _mm_cmpeq_epi8(_mm_and_si128(_mm_cvtsi32_si128(flag_bytes), _mm_set1_epi8(IC_RECORD_DISABLED)),
-                       _mm_set1_epi8(IC_RECORD_DISABLED)),
-        _mm_cmpeq_epi8(_mm_cvtsi32_si128(bounce_bytes), _mm_set1_epi8((char)bounce)));
+    __m128i ok = eligible_bytes(_mm_cvtsi32_si128(bounce_bytes), _mm_cvtsi32_si128(flag_bytes), bounce);
     ok = _mm_unpacklo_epi16(_mm_unpacklo_epi8(ok, ok), _mm_unpacklo_epi8(ok, ok));
     pass = _mm_and_ps(pass, _mm_castsi128_ps(ok));
     _mm_storeu_ps(out->w, w);
@@ -615,21 +621,28 @@ static inline void accumulate_frozen_portable(const ic_frozen_record *r, const i
 /* accumulate() with the three channels in three lanes: per lane the same operations in the same order
  * (E + ((rot.x·gr.x + rot.y·gr.y) + rot.z·gr.z)) + ((dp.x·gt.x + dp.y·gt.y) + dp.z·gt.z), clamped
  * with maxps (v > 0 ? v : 0, NaN included), so each channel is bit-identical to accumulate(). */
+/* E_i(p) of record r, R, G and B in lanes 0–2, given rot = n_i × n and dp = p − p_i. */
+static IC_ALWAYS_INLINE __m128 extrapolate_sse2(const ic_frozen_record *r, float rx, float ry, float rz, float dx,
+                                                float dy, float dz)
+{
+    const float *row = &r->row[0][0]; /* the rows as one array: row k starts at row + 3k */
+    /* Row 6's fourth lane is the index: cleared, so that no stray denormal or NaN enters the sums. */
+    const __m128 last = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    __m128 dot_rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(rx), _mm_loadu_ps(row + 3)),
+                                           _mm_mul_ps(_mm_set1_ps(ry), _mm_loadu_ps(row + 6))),
+                                _mm_mul_ps(_mm_set1_ps(rz), _mm_loadu_ps(row + 9)));
+    __m128 dot_trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(dx), _mm_loadu_ps(row + 12)),
+                                             _mm_mul_ps(_mm_set1_ps(dy), _mm_loadu_ps(row + 15))),
+                                  _mm_mul_ps(_mm_set1_ps(dz), _mm_and_ps(_mm_loadu_ps(row + 18), last)));
+    return _mm_max_ps(_mm_add_ps(_mm_add_ps(_mm_loadu_ps(row), dot_rot), dot_trans), _mm_setzero_ps());
+}
+
 static inline void accumulate_frozen_sse2(const ic_frozen_record *r, const ic_float4 *ni, ic_vec3 n, float w,
                                           ic_vec3 dp, const ic_cache_lookup *q, ic_cache_estimate *e,
                                           __m128 *acc)
 {
     ic_vec3 rot = v3_cross(v3(ni->x, ni->y, ni->z), n);
-    const float *row = &r->row[0][0]; /* the rows as one array: row k starts at row + 3k */
-    /* Row 6's fourth lane is the index: cleared, so that no stray denormal or NaN enters the sums. */
-    const __m128 last = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    __m128 dot_rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(rot.x), _mm_loadu_ps(row + 3)),
-                                           _mm_mul_ps(_mm_set1_ps(rot.y), _mm_loadu_ps(row + 6))),
-                                _mm_mul_ps(_mm_set1_ps(rot.z), _mm_loadu_ps(row + 9)));
-    __m128 dot_trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(dp.x), _mm_loadu_ps(row + 12)),
-                                             _mm_mul_ps(_mm_set1_ps(dp.y), _mm_loadu_ps(row + 15))),
-                                  _mm_mul_ps(_mm_set1_ps(dp.z), _mm_and_ps(_mm_loadu_ps(row + 18), last)));
-    __m128 v = _mm_max_ps(_mm_add_ps(_mm_add_ps(_mm_loadu_ps(row), dot_rot), dot_trans), _mm_setzero_ps());
+    __m128 v = extrapolate_sse2(r, rot.x, rot.y, rot.z, dp.x, dp.y, dp.z);
     *acc = _mm_add_ps(*acc, _mm_mul_ps(_mm_set1_ps(w), v));
     float e3[4];
     _mm_storeu_ps(e3, v);
@@ -793,11 +806,8 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
     memcpy(&bounce_bytes[1], b1->bounce, 4);
     memcpy(&flag_bytes[0], b0->flags, 4);
     memcpy(&flag_bytes[1], b1->flags, 4);
-    __m128i bb = _mm_setr_epi32(bounce_bytes[0], bounce_bytes[1], 0, 0);
-    __m128i fb = _mm_setr_epi32(flag_bytes[0], flag_bytes[1], 0, 0);
-    __m128i ok = _mm_andnot_si128(_mm_cmpeq_epi8(_mm_and_si128(fb, _mm_set1_epi8(IC_RECORD_DISABLED)),
-                                                 _mm_set1_epi8(IC_RECORD_DISABLED)),
-                                  _mm_cmpeq_epi8(bb, _mm_set1_epi8((char)bounce)));
+    __m128i ok = eligible_bytes(_mm_setr_epi32(bounce_bytes[0], bounce_bytes[1], 0, 0),
+                                _mm_setr_epi32(flag_bytes[0], flag_bytes[1], 0, 0), bounce);
     pass = _mm256_and_ps(pass, _mm256_castsi256_ps(_mm256_cvtepi8_epi32(ok)));
     /* Packed without a branch on the mask (an empty mask writes only slack). n_i × n as v3_cross. */
     unsigned mask = (unsigned)_mm256_movemask_ps(pass);
@@ -817,20 +827,11 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
     return (unsigned)__builtin_popcount(mask);
 }
 
-/* E_i(p) of packed contributor k, R, G and B in lanes 0–2: accumulate_frozen_sse2's extrapolation,
- * operand for operand. */
+/* E_i(p) of packed contributor k (extrapolate_sse2, operand for operand). */
 static IC_TARGET_AVX2 inline __m128 extrapolate_packed(const ic_frozen_record *r, const packed_contributors *pc,
                                                        unsigned k)
 {
-    const float *row = &r->row[0][0];
-    const __m128 last = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    __m128 dot_rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(pc->rx[k]), _mm_loadu_ps(row + 3)),
-                                           _mm_mul_ps(_mm_set1_ps(pc->ry[k]), _mm_loadu_ps(row + 6))),
-                                _mm_mul_ps(_mm_set1_ps(pc->rz[k]), _mm_loadu_ps(row + 9)));
-    __m128 dot_trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(pc->dx[k]), _mm_loadu_ps(row + 12)),
-                                             _mm_mul_ps(_mm_set1_ps(pc->dy[k]), _mm_loadu_ps(row + 15))),
-                                  _mm_mul_ps(_mm_set1_ps(pc->dz[k]), _mm_and_ps(_mm_loadu_ps(row + 18), last)));
-    return _mm_max_ps(_mm_add_ps(_mm_add_ps(_mm_loadu_ps(row), dot_rot), dot_trans), _mm_setzero_ps());
+    return extrapolate_sse2(r, pc->rx[k], pc->ry[k], pc->rz[k], pc->dx[k], pc->dy[k], pc->dz[k]);
 }
 
 /* The first `count` packed contributors into the sums, in order: R, G, B in *acc, Σ w_i in *weight_sum
