@@ -4,9 +4,9 @@
  * render queries them), with and without validity-radius clamping (seed 004 §4.2, Table 1).
  *
  * usage: bench_lookup [--save DIR] SCENE [width height] — prints one row per setting and look-up path
- * (the octree with the cache thawed, the frozen layout, the frozen layout with a caller hint; cache.h:
- * FROZEN LOOK-UPS) with a digest of the answers; asserts nothing. Single thread (= per core), median of
- * 5 passes over all shading points. --save DIR also writes both caches and their shading points to DIR;
+ * (the octree with the cache thawed, the frozen layout, the frozen layout with a caller hint, the same
+ * in batches of 256 look-ups per call; cache.h: FROZEN LOOK-UPS) with a digest of the answers; asserts
+ * nothing. Single thread (= per core), median and best of 5 passes over all shading points. --save DIR also writes both caches and their shading points to DIR;
  * bench_lookup --load DIR times those again without building the caches (the same build's files: to
  * compare code changes on the same look-ups).
  */
@@ -30,10 +30,12 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint
- * (these two with the best code this CPU runs: AVX2 or SSE2), and frozen with a hint forced onto the
- * SSE2 and the portable code (cache_internal.h: ic_cache_set_lookup_path). */
-enum { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATH_HINTED_SSE2, PATH_HINTED_PORTABLE, PATHS };
+/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint,
+ * frozen in batches of BATCH look-ups with a hint (ic_cache_query_batch) — these three with the best
+ * code this CPU runs: AVX2 or SSE2 —, and frozen with a hint forced onto the SSE2 and the portable code
+ * (cache_internal.h: ic_cache_set_lookup_path). */
+enum { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATH_BATCH, PATH_HINTED_SSE2, PATH_HINTED_PORTABLE, PATHS };
+enum { BATCH = 256 };
 
 /* The shading points of a view: position and normal, raster order, pixels without a hit left out. */
 typedef struct points {
@@ -41,33 +43,54 @@ typedef struct points {
     size_t count;
 } points;
 
+/* The estimates' counts into *refs and *contrib and (with digest) their bits into *digest. */
+static void tally(const ic_cache_estimate *e, double *refs, double *contrib, uint64_t *digest)
+{
+    *refs += e->records_tested;
+    *contrib += e->contributor_count;
+    if (digest)
+        *digest = ic_fnv1a64(*digest, &e->irradiance, sizeof e->irradiance);
+}
+
 /* One pass over all shading points; returns seconds and counts into *refs and *contrib. With digest
  * (an untimed pass), folds the estimates' bits into *digest: equal digests, equal answers. */
-static double pass(const ic_cache *cache, const points *pts, int hinted, double *refs, double *contrib,
+static double pass(const ic_cache *cache, const points *pts, int path, double *refs, double *contrib,
                    uint64_t *digest)
 {
     ic_cache_hint hint = {0};
+    int hinted = path >= PATH_HINTED;
     *refs = *contrib = 0.0;
     double t0 = ic_seconds();
+    if (path == PATH_BATCH) {
+        ic_cache_lookup q[BATCH];
+        ic_cache_estimate e[BATCH];
+        for (size_t first = 0; first < pts->count; first += BATCH) {
+            size_t m = pts->count - first < BATCH ? pts->count - first : BATCH;
+            for (size_t k = 0; k < m; ++k)
+                q[k] = ic_cache_lookup_at(pts->p[first + k], pts->n[first + k], IC_ACCEPT_FINAL);
+            ic_cache_query_batch(cache, q, m, &hint, e);
+            for (size_t k = 0; k < m; ++k)
+                tally(&e[k], refs, contrib, digest);
+        }
+        return ic_seconds() - t0;
+    }
     for (size_t i = 0; i < pts->count; ++i) {
         ic_cache_lookup q = ic_cache_lookup_at(pts->p[i], pts->n[i], IC_ACCEPT_FINAL);
         ic_cache_estimate e;
         ic_cache_query_hinted(cache, &q, hinted ? &hint : NULL, &e);
-        *refs += e.records_tested;
-        *contrib += e.contributor_count;
-        if (digest)
-            *digest = ic_fnv1a64(*digest, &e.irradiance, sizeof e.irradiance);
+        tally(&e, refs, contrib, digest);
     }
     return ic_seconds() - t0;
 }
 
-/* Median of 5 passes per path; the paths alternate within each repetition so that load on a shared
+/* Median (and best) of 5 passes per path; the paths alternate within each repetition so that load on a shared
  * machine hits them alike. */
 static void measure(const char *label, ic_cache *cache, const points *pts, double build_seconds)
 {
-    static const char *name[PATHS] = {"octree", "frozen", "frozen+hint", "frozen+hint SSE2", "frozen+hint C"};
-    static const ic_lookup_path code[PATHS] = {IC_LOOKUP_BEST, IC_LOOKUP_BEST, IC_LOOKUP_BEST, IC_LOOKUP_SSE2,
-                                               IC_LOOKUP_PORTABLE};
+    static const char *name[PATHS] = {"octree",           "frozen",       "frozen+hint", "frozen batch",
+                                      "frozen+hint SSE2", "frozen+hint C"};
+    static const ic_lookup_path code[PATHS] = {IC_LOOKUP_BEST, IC_LOOKUP_BEST, IC_LOOKUP_BEST,
+                                               IC_LOOKUP_BEST, IC_LOOKUP_SSE2, IC_LOOKUP_PORTABLE};
     double runs[PATHS][5], refs[PATHS] = {0}, contrib = 0.0;
     uint64_t digest[PATHS];
     for (int k = 0; k < PATHS; ++k)
@@ -85,9 +108,9 @@ static void measure(const char *label, ic_cache *cache, const points *pts, doubl
                 runs[k][r] = 0.0;
                 continue;
             }
-            runs[k][r] = pass(cache, pts, k >= PATH_HINTED, &refs[k], &contrib, NULL);
+            runs[k][r] = pass(cache, pts, k, &refs[k], &contrib, NULL);
             if (r == 0)
-                pass(cache, pts, k >= PATH_HINTED, &refs[k], &contrib, &digest[k]);
+                pass(cache, pts, k, &refs[k], &contrib, &digest[k]);
             ic_cache_set_lookup_path(cache, IC_LOOKUP_BEST);
         }
     for (int k = 0; k < PATHS; ++k)
@@ -95,10 +118,11 @@ static void measure(const char *label, ic_cache *cache, const points *pts, doubl
     double n = (double)pts->count;
     for (int k = 0; k < PATHS; ++k)
         if (runs[k][2] > 0.0)
-            printf("%-19s %-17s %6u records  build %6.2f s  %6.2f M look-ups/s/core  x%.2f  %5.1f refs/look-up  "
-                   "%4.2f contributors  digest %016llx\n",
+            printf("%-19s %-17s %6u records  build %6.2f s  %6.2f M look-ups/s/core (best %6.2f)  x%.2f  "
+                   "%5.1f refs/look-up  %4.2f contributors  digest %016llx\n",
                    label, name[k], ic_cache_count(cache), build_seconds, n / runs[k][2] * 1e-6,
-                   runs[PATH_OCTREE][2] / runs[k][2], refs[k] / n, contrib / n, (unsigned long long)digest[k]);
+                   n / runs[k][0] * 1e-6, runs[PATH_OCTREE][2] / runs[k][2], refs[k] / n, contrib / n,
+                   (unsigned long long)digest[k]);
     printf("%-19s", label);
     print_index_stats("", "", cache);
     size_t frozen = ic_cache_memory_bytes(cache);

@@ -56,17 +56,19 @@
  * FROZEN LOOK-UPS (for the read-only final render)
  *   ic_cache_freeze (called by ic_cache_rebuild_index and ic_cache_load) copies the octree into a
  *   compact read-only layout: 4-byte nodes in depth-first order; per leaf, one contiguous list of the
- *   references on its root-to-leaf path whose sphere can reach the leaf, in path order, with the hot
- *   fields of their records (position, R_i, a_i, normal, bounce, flags) side by side four at a time,
- *   so the weight test runs four-wide (SSE2, with a portable fallback; eight-wide where the CPU has
- *   AVX2, chosen at run time) and a rejected candidate touches no other memory; the interpolation
- *   data of the records in the order the lists first use them, the three channels side by side. A
- *   look-up descends (or, with a hint, stays in the previous leaf), tests one list and weighs the
- *   records that pass. A look-up without a contributions buffer takes a shorter route.
- *   Results are bit-identical to the octree path: the same contributors in the same order with the
- *   same arithmetic. Any change to the records (insertion, ic_cache_set_record_accuracy,
- *   ic_cache_set_record_flags) thaws the cache: look-ups go through the octree again, with the same
- *   results, until the next freeze. Memory: see ic_cache_memory_bytes; the index's shape:
+ *   references on its root-to-leaf path whose sphere can reach the leaf, in path order, eight to a
+ *   block with everything the look-up reads side by side — the weight test's fields (position, R_i,
+ *   a_i, normal, bounce, flags) and the interpolation data (E_i and both gradients per channel) — so
+ *   that the weight test and the extrapolation run eight entries at a time (AVX2, chosen at run time;
+ *   four at a time with SSE2; a portable fallback) and a look-up reads one contiguous run of memory.
+ *   A look-up descends (or, with a hint, stays in the previous leaf) and tests one list. A look-up
+ *   without a contributions buffer takes a shorter route.
+ *   Results: the octree path's contributors, in the same order, with the same weights and values,
+ *   bit for bit; the sums Σ w_i E_i(p) and Σ w_i are added in eight interleaved partial sums and may
+ *   differ from the octree path's in the last bits (every frozen code path gives the same bits, on
+ *   every CPU). Any change to the records (insertion, ic_cache_set_record_accuracy,
+ *   ic_cache_set_record_flags) thaws the cache: look-ups go through the octree again until the next
+ *   freeze. Memory: see ic_cache_memory_bytes; the index's shape:
  *   ic_cache_get_index_stats.
  */
 #ifndef IRRCACHE_CACHE_H
@@ -242,7 +244,13 @@ int ic_cache_query(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_est
  * the same result, faster for coherent look-ups on a frozen cache. */
 int ic_cache_query_hinted(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_hint *hint,
                           ic_cache_estimate *out);
-/* Same result as ic_cache_query by a linear scan over all records: the O(N) reference for tests. */
+/* Looks up q[0…count−1] in order, one hint (NULL = none) carried from each to the next: out[k] is
+ * what ic_cache_query_hinted(cache, &q[k], hint, &out[k]) gives, bit for bit, without the per-call
+ * costs (for a tile of shading points, a lightmap's texels). Returns how many found a contributor. */
+size_t ic_cache_query_batch(const ic_cache *cache, const ic_cache_lookup *q, size_t count, ic_cache_hint *hint,
+                            ic_cache_estimate *out);
+/* ic_cache_query's contributors by a linear scan over all records (sums in record order): the O(N)
+ * reference for tests. */
 int ic_cache_query_linear(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);
 
 /* The weight test alone for one record (no bounce or flag filter): 1 and *weight = w_i(p, n) if
@@ -261,7 +269,7 @@ ic_result ic_cache_set_record_flags(ic_cache *cache, uint32_t index, uint8_t fla
 ic_result ic_cache_rebuild_index(ic_cache *cache, ic_error *err);
 /* Builds the frozen look-up layout from the current octree (see FROZEN LOOK-UPS); replaces an old one. */
 ic_result ic_cache_freeze(ic_cache *cache, ic_error *err);
-/* Drops the frozen layout: look-ups go through the octree again (same results). */
+/* Drops the frozen layout: look-ups go through the octree again (FROZEN LOOK-UPS: same contributors). */
 void ic_cache_thaw(ic_cache *cache);
 /* 1 while the cache holds a current frozen layout, else 0. */
 int ic_cache_is_frozen(const ic_cache *cache);

@@ -503,31 +503,124 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
     return l;
 }
 
-/* What a block's contributing entries need for accumulate(): w_i(p) and p − p_i per lane. */
-typedef struct block_weights {
-    float w[4];
-    float dx[4], dy[4], dz[4];
-} block_weights;
+/*
+ * Frozen look-ups. A leaf's list is read one block of eight entries at a time; every test and the
+ * extrapolation of seed 000 §3 run on the eight lanes side by side. Contributor k of the list (k-th
+ * entry, not k-th contributor) adds w_i·E_i(p) and w_i to the running sums of lane k mod 8; the eight
+ * lane sums are added in one fixed order at the end (lane_total). Every code path — portable C, SSE2
+ * (two halves of four lanes), AVX2 (eight) — performs the same IEEE operations on the same operands
+ * per lane (packed add, mul, div and sqrt round like their scalar forms; no FMA: contraction is off),
+ * so all three give the same bits. Against the octree path: the same contributors in the same order
+ * with the same weights and extrapolated values; the sums differ in rounding only (the octree path
+ * adds in list order).
+ */
 
-/* Lane k of the block contributes: it passes ic_weight_test and is eligible (bounce, flags). Entry by
- * entry with ic_weight_test itself: the reference for the SSE2 code below, and the code where SSE2 is
- * absent. */
-static inline unsigned block_weights_portable(const ic_cache_params *params, const ic_frozen_block *b, ic_vec3 p,
-                                              ic_vec3 n, float s, uint32_t bounce, block_weights *out)
+/* Offsets of a channel's rows in a block's interpolation data, read as one array of floats. */
+enum {
+    ROW_E = IC_FROZEN_LANES * IC_FROZEN_E,
+    ROT_X = IC_FROZEN_LANES * IC_FROZEN_GRAD_ROT,
+    ROT_Y = ROT_X + IC_FROZEN_LANES,
+    ROT_Z = ROT_Y + IC_FROZEN_LANES,
+    TRANS_X = IC_FROZEN_LANES * IC_FROZEN_GRAD_TRANS,
+    TRANS_Y = TRANS_X + IC_FROZEN_LANES,
+    TRANS_Z = TRANS_Y + IC_FROZEN_LANES
+};
+
+/* Σ of eight lane sums: ((0 + 4) + (2 + 6)) + ((1 + 5) + (3 + 7)), the order of a SIMD reduction. */
+static inline float lane_total(const float l[IC_FROZEN_LANES])
 {
+    return ((l[0] + l[4]) + (l[2] + l[6])) + ((l[1] + l[5]) + (l[3] + l[7]));
+}
+
+/* The estimate from the lane sums: acc[c][k] = Σ w_i E_i(p) of channel c in lane k, wsum[k] = Σ w_i. */
+static int finish_lanes(ic_cache_estimate *out, float acc[3][IC_FROZEN_LANES], const float wsum[IC_FROZEN_LANES],
+                        uint32_t contributors)
+{
+    float total[3] = {lane_total(acc[0]), lane_total(acc[1]), lane_total(acc[2])};
+    out->weight_sum = lane_total(wsum);
+    out->contributor_count = contributors;
+    return finish(out, total);
+}
+
+/* Writes the contributors among lanes first + k (k: the bits of mask) of block b to the caller's
+ * buffer while there is room, in lane order; w and v[c] hold the lanes' weights and values from lane
+ * `first` on. */
+static void report_lanes(const ic_frozen_block *b, unsigned first, unsigned mask, const float *w, const float *v0,
+                         const float *v1, const float *v2, const ic_cache_lookup *q, ic_cache_estimate *out)
+{
+    for (unsigned k = 0; mask; ++k, mask >>= 1) {
+        if (!(mask & 1u) || out->contributions_written >= q->contribution_capacity)
+            continue;
+        ic_cache_contribution *o = &q->contributions[out->contributions_written++];
+        o->record = b->index[first + k];
+        o->weight = w[k];
+        o->value = v3(v0[k], v1[k], v2[k]);
+    }
+}
+
+/* One block, entry by entry with ic_weight_test itself: the reference for the SIMD code below, and
+ * the code where SSE2 is absent. Returns the block's number of contributors. */
+static unsigned block_portable(const ic_cache_params *params, const ic_frozen_block *b, ic_vec3 p, ic_vec3 n,
+                               float s, const ic_cache_lookup *q, ic_cache_estimate *out,
+                               float acc[3][IC_FROZEN_LANES], float wsum[IC_FROZEN_LANES])
+{
+    float w[IC_FROZEN_LANES] = {0}, v[3][IC_FROZEN_LANES] = {{0}};
     unsigned mask = 0;
-    for (unsigned k = 0; k < 4; ++k) {
+    for (unsigned k = 0; k < IC_FROZEN_LANES; ++k) {
         ic_float4 sp = {b->x[k], b->y[k], b->z[k], b->R[k]}, np = {b->nx[k], b->ny[k], b->nz[k], b->a[k]};
         ic_vec3 dp;
-        if (b->bounce[k] != bounce || (b->flags[k] & IC_RECORD_DISABLED) ||
-            !ic_weight_test(params, &sp, &np, p, n, s, &out->w[k], &dp))
+        if (b->bounce[k] != q->bounce || (b->flags[k] & IC_RECORD_DISABLED) ||
+            !ic_weight_test(params, &sp, &np, p, n, s, &w[k], &dp))
             continue;
-        out->dx[k] = dp.x;
-        out->dy[k] = dp.y;
-        out->dz[k] = dp.z;
+        /* (n_i × n): the rotation that takes the record's normal to ours (seed 000 §3). */
+        ic_vec3 rot = v3_cross(v3(np.x, np.y, np.z), n);
+        for (int ch = 0; ch < 3; ++ch) {
+            const float *row = b->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS * ch;
+            float e = (row[ROW_E + k] + ((rot.x * row[ROT_X + k] + rot.y * row[ROT_Y + k]) + rot.z * row[ROT_Z + k])) +
+                      ((dp.x * row[TRANS_X + k] + dp.y * row[TRANS_Y + k]) + dp.z * row[TRANS_Z + k]);
+            /* Extrapolation with large gradients can go negative; irradiance cannot. */
+            v[ch][k] = e > 0.0f ? e : 0.0f;
+            acc[ch][k] += w[k] * v[ch][k];
+        }
+        wsum[k] += w[k];
         mask |= 1u << k;
     }
-    return mask;
+    if (q->contributions)
+        report_lanes(b, 0, mask, w, v[0], v[1], v[2], q, out);
+    unsigned count = 0;
+    for (; mask; mask &= mask - 1)
+        ++count;
+    return count;
+}
+
+/* Start of a frozen look-up: clears the estimate and returns the first block of p's leaf (NULL outside
+ * the root), its number of blocks and the acceptance's accuracy scale. */
+static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, const ic_cache_lookup *q,
+                                                            ic_cache_hint *hint, ic_cache_estimate *out,
+                                                            int is_portable, uint32_t *blocks, float *s)
+{
+    memset(out, 0, sizeof *out);
+    const ic_frozen_leaf *leaf = frozen_leaf(&c->frozen, q->position, hint, is_portable);
+    if (!leaf)
+        return NULL;
+    *s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
+    /* Bounce levels are stored in bytes: a higher level has no records. */
+    *blocks = q->bounce <= UINT8_MAX ? (leaf->count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES : 0;
+    out->records_tested = leaf->count;
+    return (const ic_frozen_block *)(leaf + 1);
+}
+
+static int query_frozen_portable(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
+                                 ic_cache_estimate *out)
+{
+    float acc[3][IC_FROZEN_LANES] = {{0}}, wsum[IC_FROZEN_LANES] = {0}, s;
+    uint32_t blocks, contributors = 0;
+    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 1, &blocks, &s);
+    if (!blk)
+        return 0;
+    for (uint32_t b = 0; b < blocks; ++b)
+        contributors += block_portable(&c->params, &blk[b], q->position, q->normal, s, q, out, acc, wsum);
+    return finish_lanes(out, acc, wsum, contributors);
 }
 
 #if defined(__SSE2__)
@@ -540,41 +633,33 @@ static IC_ALWAYS_INLINE __m128i eligible_bytes(__m128i bounce_bytes, __m128i fla
                             _mm_cmpeq_epi8(bounce_bytes, _mm_set1_epi8((char)bounce)));
 }
 
-/* block_weights_portable four lanes at a time: ic_weight_test's tests in its order, each with the
- * same float operations on the same operands (packed IEEE add, mul, div and sqrt round like their
- * scalar forms), so every decision and every weight is bit-identical. */
-static inline unsigned block_weights_sse2(const ic_cache_params *params, const ic_frozen_record *records,
-                                          const ic_frozen_block *b, ic_vec3 p, ic_vec3 n, float s, uint32_t bounce,
-                                          block_weights *out)
+/* Lanes h…h+3 of block b (h = 0 or 4), block_portable four lanes at a time: ic_weight_test's tests,
+ * each with the same operations on the same operands, then the extrapolation and the lane sums acc[c]
+ * and wsum (lanes h…h+3). Returns the lanes' mask. */
+static IC_ALWAYS_INLINE unsigned half_sse2(const ic_cache_params *params, const ic_frozen_block *b, unsigned h,
+                                           ic_vec3 p, ic_vec3 n, float s, const ic_cache_lookup *q,
+                                           ic_cache_estimate *out, __m128 acc[3], __m128 *wsum)
 {
     const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
-    __m128 dx = _mm_sub_ps(_mm_set1_ps(p.x), _mm_loadu_ps(b->x));
-    __m128 dy = _mm_sub_ps(_mm_set1_ps(p.y), _mm_loadu_ps(b->y));
-    __m128 dz = _mm_sub_ps(_mm_set1_ps(p.z), _mm_loadu_ps(b->z));
+    __m128 dx = _mm_sub_ps(_mm_set1_ps(p.x), _mm_loadu_ps(b->x + h));
+    __m128 dy = _mm_sub_ps(_mm_set1_ps(p.y), _mm_loadu_ps(b->y + h));
+    __m128 dz = _mm_sub_ps(_mm_set1_ps(p.z), _mm_loadu_ps(b->z + h));
     __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    __m128 a = _mm_mul_ps(_mm_loadu_ps(b->a), _mm_set1_ps(s)), R = _mm_loadu_ps(b->R), r = _mm_mul_ps(a, R);
-    /* Inside the influence sphere: most blocks of a list fail this in every lane and stop here (testing
-     * the facing too before stopping was slower: the extra work outweighs the blocks it stops). */
+    __m128 a = _mm_mul_ps(_mm_loadu_ps(b->a + h), _mm_set1_ps(s)), R = _mm_loadu_ps(b->R + h), r = _mm_mul_ps(a, R);
+    /* Inside the influence sphere: most halves fail this in every lane and stop here. */
     __m128 pass = _mm_cmplt_ps(d2, _mm_mul_ps(r, r));
     if (!_mm_movemask_ps(pass))
         return 0;
     /* Not facing away (!(ndot <= 0): a NaN goes on, as in the scalar code). */
-    __m128 nx = _mm_loadu_ps(b->nx), ny = _mm_loadu_ps(b->ny), nz = _mm_loadu_ps(b->nz);
-    __m128 ndot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(n.x), nx), _mm_mul_ps(_mm_set1_ps(n.y), ny)),
-                             _mm_mul_ps(_mm_set1_ps(n.z), nz));
+    __m128 qx = _mm_set1_ps(n.x), qy = _mm_set1_ps(n.y), qz = _mm_set1_ps(n.z);
+    __m128 nx = _mm_loadu_ps(b->nx + h), ny = _mm_loadu_ps(b->ny + h), nz = _mm_loadu_ps(b->nz + h);
+    __m128 ndot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(qx, nx), _mm_mul_ps(qy, ny)), _mm_mul_ps(qz, nz));
     pass = _mm_and_ps(pass, _mm_cmpnle_ps(ndot, zero));
-    /* Fetch the block's records (all four lanes: a branch per lane to skip the rejected ones was not
-     * measured to pay) while the rest of the test runs. */
-    for (unsigned k = 0; k < 4; ++k) {
-        const char *rec = (const char *)&records[b->slot[k]];
-        _mm_prefetch(rec, _MM_HINT_T0);
-        _mm_prefetch(rec + sizeof *records - 1, _MM_HINT_T0);
-    }
     /* Not behind the record. */
     __m128 behind = _mm_mul_ps(_mm_set1_ps(0.5f),
-                               _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_add_ps(_mm_set1_ps(n.x), nx)),
-                                                     _mm_mul_ps(dy, _mm_add_ps(_mm_set1_ps(n.y), ny))),
-                                          _mm_mul_ps(dz, _mm_add_ps(_mm_set1_ps(n.z), nz))));
+                               _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_add_ps(qx, nx)),
+                                                     _mm_mul_ps(dy, _mm_add_ps(qy, ny))),
+                                          _mm_mul_ps(dz, _mm_add_ps(qz, nz))));
     pass = _mm_and_ps(pass, _mm_cmpnlt_ps(behind, _mm_mul_ps(_mm_set1_ps(-params->behind_tolerance), r)));
     /* max(x, 0) is x > 0 ? x : 0, NaN included (maxps returns its second operand unless x > 0). */
     __m128 dist = _mm_div_ps(_mm_sqrt_ps(d2), R), ndev = _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(one, ndot), zero)), w;
@@ -589,201 +674,113 @@ static inline unsigned block_weights_sse2(const ic_cache_params *params, const i
     }
     /* Eligible: this bounce level, not disabled (bytes widened to the float lanes' 32 bits). */
     int32_t bounce_bytes, flag_bytes;
-    memcpy(&bounce_bytes, b->bounce, 4);
-    memcpy(&flag_bytes, b->flags, 4);
-    __m128i ok = eligible_bytes(_mm_cvtsi32_si128(bounce_bytes), _mm_cvtsi32_si128(flag_bytes), bounce);
+    memcpy(&bounce_bytes, b->bounce + h, 4);
+    memcpy(&flag_bytes, b->flags + h, 4);
+    __m128i ok = eligible_bytes(_mm_cvtsi32_si128(bounce_bytes), _mm_cvtsi32_si128(flag_bytes), q->bounce);
     ok = _mm_unpacklo_epi16(_mm_unpacklo_epi8(ok, ok), _mm_unpacklo_epi8(ok, ok));
     pass = _mm_and_ps(pass, _mm_castsi128_ps(ok));
-    _mm_storeu_ps(out->w, w);
-    _mm_storeu_ps(out->dx, dx);
-    _mm_storeu_ps(out->dy, dy);
-    _mm_storeu_ps(out->dz, dz);
-    return (unsigned)_mm_movemask_ps(pass);
-}
-#endif
-
-/* accumulate() for a frozen record, from its rows. */
-static inline void accumulate_frozen_portable(const ic_frozen_record *r, const ic_float4 *ni, ic_vec3 n, float w,
-                                              ic_vec3 dp, const ic_cache_lookup *q, ic_cache_estimate *e,
-                                              float acc[3])
-{
-    ic_vec3 E = v3(r->row[IC_FROZEN_E][0], r->row[IC_FROZEN_E][1], r->row[IC_FROZEN_E][2]), gr[3], gt[3];
+    /* E_i(p) = E_i + (n_i × n)·∇r E_i + (p − p_i)·∇t E_i per channel, clamped ≥ 0; the lanes that do
+     * not contribute add +0 (masked after the product, so no NaN or infinity gets in). */
+    __m128 rx = _mm_sub_ps(_mm_mul_ps(ny, qz), _mm_mul_ps(nz, qy));
+    __m128 ry = _mm_sub_ps(_mm_mul_ps(nz, qx), _mm_mul_ps(nx, qz));
+    __m128 rz = _mm_sub_ps(_mm_mul_ps(nx, qy), _mm_mul_ps(ny, qx));
+    __m128 v[3];
     for (int ch = 0; ch < 3; ++ch) {
-        gr[ch] = v3(r->row[IC_FROZEN_GRAD_ROT][ch], r->row[IC_FROZEN_GRAD_ROT + 1][ch],
-                    r->row[IC_FROZEN_GRAD_ROT + 2][ch]);
-        gt[ch] = v3(r->row[IC_FROZEN_GRAD_TRANS][ch], r->row[IC_FROZEN_GRAD_TRANS + 1][ch],
-                    r->row[IC_FROZEN_GRAD_TRANS + 2][ch]);
+        const float *row = b->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS * ch;
+        __m128 rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, _mm_loadu_ps(row + ROT_X + h)),
+                                           _mm_mul_ps(ry, _mm_loadu_ps(row + ROT_Y + h))),
+                                _mm_mul_ps(rz, _mm_loadu_ps(row + ROT_Z + h)));
+        __m128 trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_loadu_ps(row + TRANS_X + h)),
+                                             _mm_mul_ps(dy, _mm_loadu_ps(row + TRANS_Y + h))),
+                                  _mm_mul_ps(dz, _mm_loadu_ps(row + TRANS_Z + h)));
+        v[ch] = _mm_max_ps(_mm_add_ps(_mm_add_ps(_mm_loadu_ps(row + ROW_E + h), rot), trans), zero);
+        acc[ch] = _mm_add_ps(acc[ch], _mm_and_ps(pass, _mm_mul_ps(w, v[ch])));
     }
-    accumulate(r->index, ni, &E, gr, gt, n, w, dp, q, e, acc);
+    *wsum = _mm_add_ps(*wsum, _mm_and_ps(pass, w));
+    unsigned mask = (unsigned)_mm_movemask_ps(pass);
+    if (q->contributions) {
+        float wl[4], v0[4], v1[4], v2[4];
+        _mm_storeu_ps(wl, w);
+        _mm_storeu_ps(v0, v[0]);
+        _mm_storeu_ps(v1, v[1]);
+        _mm_storeu_ps(v2, v[2]);
+        report_lanes(b, h, mask, wl, v0, v1, v2, q, out);
+    }
+    return mask;
 }
 
-#if defined(__SSE2__)
-/* accumulate() with the three channels in three lanes: per lane the same operations in the same order
- * (E + ((rot.x·gr.x + rot.y·gr.y) + rot.z·gr.z)) + ((dp.x·gt.x + dp.y·gt.y) + dp.z·gt.z), clamped
- * with maxps (v > 0 ? v : 0, NaN included), so each channel is bit-identical to accumulate(). */
-/* E_i(p) of record r, R, G and B in lanes 0–2, given rot = n_i × n and dp = p − p_i. */
-static IC_ALWAYS_INLINE __m128 extrapolate_sse2(const ic_frozen_record *r, float rx, float ry, float rz, float dx,
-                                                float dy, float dz)
+/* (s0 + s2) + (s1 + s3) of four lane sums s_k = l_k + l_{k+4}: lane_total's order. */
+static inline float lane_total_sse2(__m128 s)
 {
-    const float *row = &r->row[0][0]; /* the rows as one array: row k starts at row + 3k */
-    /* Row 6's fourth lane is the index: cleared, so that no stray denormal or NaN enters the sums. */
-    const __m128 last = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    __m128 dot_rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(rx), _mm_loadu_ps(row + 3)),
-                                           _mm_mul_ps(_mm_set1_ps(ry), _mm_loadu_ps(row + 6))),
-                                _mm_mul_ps(_mm_set1_ps(rz), _mm_loadu_ps(row + 9)));
-    __m128 dot_trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(dx), _mm_loadu_ps(row + 12)),
-                                             _mm_mul_ps(_mm_set1_ps(dy), _mm_loadu_ps(row + 15))),
-                                  _mm_mul_ps(_mm_set1_ps(dz), _mm_and_ps(_mm_loadu_ps(row + 18), last)));
-    return _mm_max_ps(_mm_add_ps(_mm_add_ps(_mm_loadu_ps(row), dot_rot), dot_trans), _mm_setzero_ps());
+    __m128 t = _mm_add_ps(s, _mm_movehl_ps(s, s)); /* s0 + s2, s1 + s3 */
+    return _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)));
 }
 
-static inline void accumulate_frozen_sse2(const ic_frozen_record *r, const ic_float4 *ni, ic_vec3 n, float w,
-                                          ic_vec3 dp, const ic_cache_lookup *q, ic_cache_estimate *e,
-                                          __m128 *acc)
-{
-    ic_vec3 rot = v3_cross(v3(ni->x, ni->y, ni->z), n);
-    __m128 v = extrapolate_sse2(r, rot.x, rot.y, rot.z, dp.x, dp.y, dp.z);
-    *acc = _mm_add_ps(*acc, _mm_mul_ps(_mm_set1_ps(w), v));
-    float e3[4];
-    _mm_storeu_ps(e3, v);
-    count_contributor(r->index, w, e3, q, e);
-}
-#endif
+/* Bits set in a 4-bit mask. */
+static const uint8_t bits_in[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
 
-/* Lowest set bit of a 4-bit lane mask. */
-static const uint8_t lowest_lane[16] = {0, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
-
-/* Start of a frozen look-up: clears the estimate and returns the first block of p's leaf (NULL outside
- * the root), its number of blocks and the acceptance's accuracy scale. */
-static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, const ic_cache_lookup *q,
-                                                            ic_cache_hint *hint, ic_cache_estimate *out,
-                                                            int is_portable, uint32_t *blocks, float *s)
+static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
 {
-    memset(out, 0, sizeof *out);
-    const ic_frozen_leaf *leaf = frozen_leaf(&c->frozen, q->position, hint, is_portable);
-    if (!leaf)
-        return NULL;
-    *s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
-    /* Bounce levels are stored in bytes: a higher level has no records. */
-    *blocks = q->bounce <= UINT8_MAX ? (leaf->count + 3) / 4 : 0;
-    out->records_tested = leaf->count;
-    return (const ic_frozen_block *)(leaf + 1);
-}
-
-/* ic_cache_query on the frozen layout: one list, four entries at a time, with SSE2 unless is_portable
- * (a constant: each caller below gets its own copy of the loop). */
-static IC_ALWAYS_INLINE int query_frozen(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
-                                         ic_cache_estimate *out, int is_portable)
-{
-    const ic_frozen *f = &c->frozen;
-    float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f}, s;
-    ic_vec3 p = q->position, n = q->normal;
-    uint32_t blocks;
-    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, is_portable, &blocks, &s);
+    float s;
+    uint32_t blocks, contributors = 0;
+    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s);
     if (!blk)
         return 0;
-#if defined(__SSE2__)
-    __m128 acc4 = _mm_setzero_ps();
-#endif
-    for (uint32_t b = 0; b < blocks; ++b) {
-        const ic_frozen_block *o = &blk[b];
-        block_weights bw;
-#if defined(__SSE2__)
-        unsigned mask = is_portable ? block_weights_portable(&c->params, o, p, n, s, q->bounce, &bw)
-                                    : block_weights_sse2(&c->params, f->record, o, p, n, s, q->bounce, &bw);
-#else
-        unsigned mask = block_weights_portable(&c->params, o, p, n, s, q->bounce, &bw);
-#endif
-        while (mask) {
-            unsigned k = lowest_lane[mask];
-            mask &= mask - 1;
-            const ic_frozen_record *r = &f->record[o->slot[k]];
-            ic_float4 ni = {o->nx[k], o->ny[k], o->nz[k], o->a[k]};
-            ic_vec3 dp = v3(bw.dx[k], bw.dy[k], bw.dz[k]);
-#if defined(__SSE2__)
-            if (!is_portable) {
-                accumulate_frozen_sse2(r, &ni, n, bw.w[k], dp, q, out, &acc4);
-                continue;
-            }
-#endif
-            accumulate_frozen_portable(r, &ni, n, bw.w[k], dp, q, out, acc);
-        }
+    /* Lane sums: [0] lanes 0–3, [1] lanes 4–7. */
+    __m128 acc[2][3], wsum[2];
+    for (int h = 0; h < 2; ++h) {
+        acc[h][0] = acc[h][1] = acc[h][2] = wsum[h] = _mm_setzero_ps();
     }
-#if defined(__SSE2__)
-    if (!is_portable)
-        _mm_storeu_ps(acc, acc4);
-#endif
-    (void)is_portable;
-    return finish(out, acc);
+    for (uint32_t b = 0; b < blocks; ++b) {
+        contributors += bits_in[half_sse2(&c->params, &blk[b], 0, q->position, q->normal, s, q, out, acc[0], &wsum[0])];
+        contributors += bits_in[half_sse2(&c->params, &blk[b], 4, q->position, q->normal, s, q, out, acc[1], &wsum[1])];
+    }
+    out->weight_sum = lane_total_sse2(_mm_add_ps(wsum[0], wsum[1]));
+    out->contributor_count = contributors;
+    float total[3];
+    for (int ch = 0; ch < 3; ++ch)
+        total[ch] = lane_total_sse2(_mm_add_ps(acc[0][ch], acc[1][ch]));
+    return finish(out, total);
 }
+#endif
 
 #if defined(IC_HAVE_AVX2_PATH)
-/*
- * The AVX2 look-up tests two blocks (eight list entries) at a time: block_weights_sse2 with 256-bit
- * registers, lane for lane the same operations on the same operands (no FMA: the target is AVX2
- * alone), so every decision and weight is bit-identical. The contributors of a pair of blocks are then
- * packed, in list order, into a buffer with what their extrapolation needs (w_i, p − p_i, n_i × n and
- * the record slot), and the whole list's contributors are summed in one loop at the end: one loop of
- * unpredictable length per look-up instead of one per block pair, whose mispredicted exits cost more
- * than the packing (BENCHMARKS.md "Contributors packed"). Contributors are met in list order, so the
- * sums are those of every other path.
- */
-enum { IC_PACKED_CAP = 64 }; /* contributors buffered before they are summed; 8 lanes of slack follow */
-
-typedef struct packed_contributors {
-    float w[IC_PACKED_CAP + 8];
-    float dx[IC_PACKED_CAP + 8], dy[IC_PACKED_CAP + 8], dz[IC_PACKED_CAP + 8]; /* p − p_i */
-    float rx[IC_PACKED_CAP + 8], ry[IC_PACKED_CAP + 8], rz[IC_PACKED_CAP + 8]; /* n_i × n */
-    uint32_t slot[IC_PACKED_CAP + 8];
-} packed_contributors;
-
-/* The lanes set in a 4-bit mask, in increasing order, one byte each (unused bytes 0). */
-static const uint32_t lanes_of_mask4[16] = {0x00000000, 0x00000000, 0x00000001, 0x00000100,
-                                            0x00000002, 0x00000200, 0x00000201, 0x00020100,
-                                            0x00000003, 0x00000300, 0x00000301, 0x00030100,
-                                            0x00000302, 0x00030200, 0x00030201, 0x03020100};
-
-static IC_TARGET_AVX2 inline __m256 load_pair(const float *lo, const float *hi)
+/* E_i(p) of a block's eight lanes for one channel (rows: the channel's interpolation data), clamped
+ * ≥ 0, with block_portable's operations: (E + ((rx·∇r.x + ry·∇r.y) + rz·∇r.z)) + ((dx·∇t.x + …)). */
+static IC_TARGET_AVX2 IC_ALWAYS_INLINE __m256 extrapolate_avx2(const float *row, __m256 rx, __m256 ry, __m256 rz,
+                                                               __m256 dx, __m256 dy, __m256 dz)
 {
-    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(lo)), _mm_loadu_ps(hi), 1);
+    __m256 rot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(rx, _mm256_loadu_ps(row + ROT_X)),
+                                             _mm256_mul_ps(ry, _mm256_loadu_ps(row + ROT_Y))),
+                               _mm256_mul_ps(rz, _mm256_loadu_ps(row + ROT_Z)));
+    __m256 trans = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_loadu_ps(row + TRANS_X)),
+                                               _mm256_mul_ps(dy, _mm256_loadu_ps(row + TRANS_Y))),
+                                 _mm256_mul_ps(dz, _mm256_loadu_ps(row + TRANS_Z)));
+    return _mm256_max_ps(_mm256_add_ps(_mm256_add_ps(_mm256_loadu_ps(row + ROW_E), rot), trans),
+                         _mm256_setzero_ps());
 }
 
-/* The permutation that moves the lanes set in an 8-bit mask to the front, in order. */
-static IC_TARGET_AVX2 inline __m256i packing_permutation(unsigned mask)
-{
-    unsigned lo = mask & 15u;
-    uint64_t lanes = lanes_of_mask4[lo] |
-                     (uint64_t)(lanes_of_mask4[mask >> 4] + 0x04040404u) << (8 * __builtin_popcount(lo));
-    return _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)lanes));
-}
-
-/* Blocks b0 and b1 (lanes 0–3 and 4–7): appends their contributors to out at position `at` and returns
- * how many there are. Writes up to 8 lanes past them (the buffer's slack). */
-static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *params,
-                                                         const ic_frozen_record *records, const ic_frozen_block *b0,
-                                                         const ic_frozen_block *b1, ic_vec3 p, ic_vec3 n, float s,
-                                                         uint32_t bounce, packed_contributors *out, unsigned at)
+/* block_portable eight lanes at a time: half_sse2 with 256-bit registers, lane for lane the same
+ * operations on the same operands (no FMA: the target is AVX2 alone). Returns the block's mask. */
+static IC_TARGET_AVX2 IC_ALWAYS_INLINE unsigned block_avx2(const ic_cache_params *params, const ic_frozen_block *b,
+                                                           ic_vec3 p, ic_vec3 n, float s, uint32_t bounce,
+                                                           const ic_cache_lookup *q, ic_cache_estimate *out,
+                                                           int report, __m256 acc[3], __m256 *wsum)
 {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
-    __m256 dx = _mm256_sub_ps(_mm256_set1_ps(p.x), load_pair(b0->x, b1->x));
-    __m256 dy = _mm256_sub_ps(_mm256_set1_ps(p.y), load_pair(b0->y, b1->y));
-    __m256 dz = _mm256_sub_ps(_mm256_set1_ps(p.z), load_pair(b0->z, b1->z));
+    __m256 dx = _mm256_sub_ps(_mm256_set1_ps(p.x), _mm256_loadu_ps(b->x));
+    __m256 dy = _mm256_sub_ps(_mm256_set1_ps(p.y), _mm256_loadu_ps(b->y));
+    __m256 dz = _mm256_sub_ps(_mm256_set1_ps(p.z), _mm256_loadu_ps(b->z));
     __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-    __m256 a = _mm256_mul_ps(load_pair(b0->a, b1->a), _mm256_set1_ps(s)), R = load_pair(b0->R, b1->R);
+    __m256 a = _mm256_mul_ps(_mm256_loadu_ps(b->a), _mm256_set1_ps(s)), R = _mm256_loadu_ps(b->R);
     __m256 r = _mm256_mul_ps(a, R);
     __m256 pass = _mm256_cmp_ps(d2, _mm256_mul_ps(r, r), _CMP_LT_OQ);
     if (!_mm256_movemask_ps(pass))
         return 0;
-    __m256 nx = load_pair(b0->nx, b1->nx), ny = load_pair(b0->ny, b1->ny), nz = load_pair(b0->nz, b1->nz);
-    __m256 qx = _mm256_set1_ps(n.x), qy = _mm256_set1_ps(n.y), qz = _mm256_set1_ps(n.z); /* our normal */
+    __m256 qx = _mm256_set1_ps(n.x), qy = _mm256_set1_ps(n.y), qz = _mm256_set1_ps(n.z);
+    __m256 nx = _mm256_loadu_ps(b->nx), ny = _mm256_loadu_ps(b->ny), nz = _mm256_loadu_ps(b->nz);
     __m256 ndot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, nx), _mm256_mul_ps(qy, ny)), _mm256_mul_ps(qz, nz));
     pass = _mm256_and_ps(pass, _mm256_cmp_ps(ndot, zero, _CMP_NLE_UQ));
-    /* Fetch all eight records (no branch per lane) while the rest of the test runs. */
-    for (unsigned k = 0; k < 8; ++k) {
-        const char *rec = (const char *)&records[k < 4 ? b0->slot[k] : b1->slot[k - 4]];
-        _mm_prefetch(rec, _MM_HINT_T0);
-        _mm_prefetch(rec + sizeof *records - 1, _MM_HINT_T0);
-    }
     __m256 behind = _mm256_mul_ps(_mm256_set1_ps(0.5f),
                                   _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_add_ps(qx, nx)),
                                                               _mm256_mul_ps(dy, _mm256_add_ps(qy, ny))),
@@ -801,103 +798,79 @@ static IC_TARGET_AVX2 inline unsigned block_weights_avx2(const ic_cache_params *
         w = _mm256_sub_ps(one, _mm256_div_ps(_mm256_max_ps(dist, nt), a));
         pass = _mm256_and_ps(pass, _mm256_cmp_ps(w, zero, _CMP_GT_OQ));
     }
-    int32_t bounce_bytes[2], flag_bytes[2];
-    memcpy(&bounce_bytes[0], b0->bounce, 4);
-    memcpy(&bounce_bytes[1], b1->bounce, 4);
-    memcpy(&flag_bytes[0], b0->flags, 4);
-    memcpy(&flag_bytes[1], b1->flags, 4);
-    __m128i ok = eligible_bytes(_mm_setr_epi32(bounce_bytes[0], bounce_bytes[1], 0, 0),
-                                _mm_setr_epi32(flag_bytes[0], flag_bytes[1], 0, 0), bounce);
+    __m128i ok = eligible_bytes(_mm_loadl_epi64((const __m128i *)b->bounce), _mm_loadl_epi64((const __m128i *)b->flags),
+                                bounce);
     pass = _mm256_and_ps(pass, _mm256_castsi256_ps(_mm256_cvtepi8_epi32(ok)));
-    /* Packed without a branch on the mask (an empty mask writes only slack). n_i × n as v3_cross. */
-    unsigned mask = (unsigned)_mm256_movemask_ps(pass);
-    __m256i idx = packing_permutation(mask);
     __m256 rx = _mm256_sub_ps(_mm256_mul_ps(ny, qz), _mm256_mul_ps(nz, qy));
     __m256 ry = _mm256_sub_ps(_mm256_mul_ps(nz, qx), _mm256_mul_ps(nx, qz));
     __m256 rz = _mm256_sub_ps(_mm256_mul_ps(nx, qy), _mm256_mul_ps(ny, qx));
-    __m256i slots = _mm256_loadu2_m128i((const __m128i *)b1->slot, (const __m128i *)b0->slot);
-    _mm256_storeu_ps(out->w + at, _mm256_permutevar8x32_ps(w, idx));
-    _mm256_storeu_ps(out->dx + at, _mm256_permutevar8x32_ps(dx, idx));
-    _mm256_storeu_ps(out->dy + at, _mm256_permutevar8x32_ps(dy, idx));
-    _mm256_storeu_ps(out->dz + at, _mm256_permutevar8x32_ps(dz, idx));
-    _mm256_storeu_ps(out->rx + at, _mm256_permutevar8x32_ps(rx, idx));
-    _mm256_storeu_ps(out->ry + at, _mm256_permutevar8x32_ps(ry, idx));
-    _mm256_storeu_ps(out->rz + at, _mm256_permutevar8x32_ps(rz, idx));
-    _mm256_storeu_si256((__m256i *)(out->slot + at), _mm256_permutevar8x32_epi32(slots, idx));
-    return (unsigned)__builtin_popcount(mask);
-}
-
-/* E_i(p) of packed contributor k (extrapolate_sse2, operand for operand). */
-static IC_TARGET_AVX2 inline __m128 extrapolate_packed(const ic_frozen_record *r, const packed_contributors *pc,
-                                                       unsigned k)
-{
-    return extrapolate_sse2(r, pc->rx[k], pc->ry[k], pc->rz[k], pc->dx[k], pc->dy[k], pc->dz[k]);
-}
-
-/* The first `count` packed contributors into the sums, in order: R, G, B in *acc, Σ w_i in *weight_sum
- * and |S| in *contributors (kept out of `out` in the common case without a contributions buffer). */
-static IC_TARGET_AVX2 inline void sum_packed(const ic_frozen_record *records, const packed_contributors *pc,
-                                             unsigned count, const ic_cache_lookup *q, ic_cache_estimate *out,
-                                             __m128 *acc, float *weight_sum, uint32_t *contributors)
-{
-    __m128 acc4 = *acc;
-    if (!q->contributions) {
-        float ws = *weight_sum;
-        for (unsigned k = 0; k < count; ++k) {
-            __m128 v = extrapolate_packed(&records[pc->slot[k]], pc, k);
-            acc4 = _mm_add_ps(acc4, _mm_mul_ps(_mm_set1_ps(pc->w[k]), v));
-            ws += pc->w[k];
-        }
-        *weight_sum = ws;
-        *contributors += count;
-    } else {
-        out->weight_sum = *weight_sum;
-        out->contributor_count = *contributors;
-        for (unsigned k = 0; k < count; ++k) {
-            const ic_frozen_record *r = &records[pc->slot[k]];
-            __m128 v = extrapolate_packed(r, pc, k);
-            acc4 = _mm_add_ps(acc4, _mm_mul_ps(_mm_set1_ps(pc->w[k]), v));
-            float e3[4];
-            _mm_storeu_ps(e3, v);
-            count_contributor(r->index, pc->w[k], e3, q, out);
-        }
-        *weight_sum = out->weight_sum;
-        *contributors = out->contributor_count;
+    /* Channel by channel, written out: a loop over an array of sums kept them in memory. */
+    __m256 v0 = extrapolate_avx2(b->interp, rx, ry, rz, dx, dy, dz);
+    __m256 v1 = extrapolate_avx2(b->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS, rx, ry, rz, dx, dy, dz);
+    __m256 v2 = extrapolate_avx2(b->interp + 2 * IC_FROZEN_LANES * IC_FROZEN_ROWS, rx, ry, rz, dx, dy, dz);
+    acc[0] = _mm256_add_ps(acc[0], _mm256_and_ps(pass, _mm256_mul_ps(w, v0)));
+    acc[1] = _mm256_add_ps(acc[1], _mm256_and_ps(pass, _mm256_mul_ps(w, v1)));
+    acc[2] = _mm256_add_ps(acc[2], _mm256_and_ps(pass, _mm256_mul_ps(w, v2)));
+    *wsum = _mm256_add_ps(*wsum, _mm256_and_ps(pass, w));
+    unsigned mask = (unsigned)_mm256_movemask_ps(pass);
+    if (report) {
+        float wl[8], e0[8], e1[8], e2[8];
+        _mm256_storeu_ps(wl, w);
+        _mm256_storeu_ps(e0, v0);
+        _mm256_storeu_ps(e1, v1);
+        _mm256_storeu_ps(e2, v2);
+        report_lanes(b, 0, mask, wl, e0, e1, e2, q, out);
     }
-    *acc = acc4;
+    return mask;
 }
 
-/* ic_cache_query on the frozen layout with AVX2: the list two blocks at a time (an odd last block pairs
- * with a block of padding), contributors summed at the end (or whenever the buffer is nearly full). */
-static IC_TARGET_AVX2 int query_frozen_avx2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
-                                            ic_cache_estimate *out)
+/* lane_total in registers: the halves added lane by lane (0 + 4, 1 + 5, 2 + 6, 3 + 7), then
+ * lane_total_sse2. */
+static IC_TARGET_AVX2 inline float lane_total_avx2(__m256 v)
 {
-    static const ic_frozen_block padding; /* R = a = 0: no distance passes */
-    const ic_frozen *f = &c->frozen;
-    float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f}, s;
-    ic_vec3 p = q->position, n = q->normal;
-    uint32_t blocks;
+    return lane_total_sse2(_mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1)));
+}
+
+static IC_TARGET_AVX2 IC_ALWAYS_INLINE int query_frozen_avx2_inline(const ic_cache *c, const ic_cache_lookup *q,
+                                                                   ic_cache_hint *hint, ic_cache_estimate *out)
+{
+    float s;
+    uint32_t blocks, contributors = 0;
     const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s);
     if (!blk)
         return 0;
-    __m128 acc4 = _mm_setzero_ps();
-    float weight_sum = 0.0f;
-    uint32_t contributors = 0;
-    packed_contributors pc;
-    unsigned count = 0;
-    for (uint32_t b = 0; b < blocks; b += 2) {
-        const ic_frozen_block *b1 = b + 1 < blocks ? &blk[b + 1] : &padding;
-        count += block_weights_avx2(&c->params, f->record, &blk[b], b1, p, n, s, q->bounce, &pc, count);
-        /* One call site: two made the loop measurably slower. */
-        if (count > IC_PACKED_CAP - 8 || b + 2 >= blocks) {
-            sum_packed(f->record, &pc, count, q, out, &acc4, &weight_sum, &contributors);
-            count = 0;
-        }
-    }
-    out->weight_sum = weight_sum;
+    __m256 acc[3] = {_mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps()}, wsum = _mm256_setzero_ps();
+    ic_vec3 p = q->position, n = q->normal;
+    uint32_t bounce = q->bounce;
+    /* Two copies of the loop: one reports contributors, the other (the final render's) does not. */
+    if (q->contributions)
+        for (uint32_t b = 0; b < blocks; ++b)
+            contributors += (uint32_t)__builtin_popcount(
+                block_avx2(&c->params, &blk[b], p, n, s, bounce, q, out, 1, acc, &wsum));
+    else
+        for (uint32_t b = 0; b < blocks; ++b)
+            contributors += (uint32_t)__builtin_popcount(
+                block_avx2(&c->params, &blk[b], p, n, s, bounce, q, out, 0, acc, &wsum));
+    out->weight_sum = lane_total_avx2(wsum);
     out->contributor_count = contributors;
-    _mm_storeu_ps(acc, acc4);
-    return finish(out, acc);
+    float total[3] = {lane_total_avx2(acc[0]), lane_total_avx2(acc[1]), lane_total_avx2(acc[2])};
+    return finish(out, total);
+}
+
+static IC_TARGET_AVX2 int query_frozen_avx2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
+                                            ic_cache_estimate *out)
+{
+    return query_frozen_avx2_inline(c, q, hint, out);
+}
+
+/* ic_cache_query_batch's loop with the look-up inlined: no call, no dispatch per look-up. */
+static IC_TARGET_AVX2 size_t query_batch_avx2(const ic_cache *c, const ic_cache_lookup *q, size_t count,
+                                              ic_cache_hint *hint, ic_cache_estimate *out)
+{
+    size_t found = 0;
+    for (size_t k = 0; k < count; ++k)
+        found += (size_t)query_frozen_avx2_inline(c, &q[k], hint, &out[k]);
+    return found;
 }
 
 /* 1 where the CPU runs AVX2. Asked at each cache creation: the answer is a read of what the runtime
@@ -908,19 +881,6 @@ static int cpu_has_avx2(void)
     return __builtin_cpu_supports("avx2") ? 1 : 0;
 }
 #endif
-
-#if defined(__SSE2__)
-static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
-{
-    return query_frozen(c, q, hint, out, 0);
-}
-#endif
-
-static int query_frozen_portable(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
-                                 ic_cache_estimate *out)
-{
-    return query_frozen(c, q, hint, out, 1);
-}
 
 int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path)
 {
@@ -938,6 +898,19 @@ int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path)
         return 0;
     c->lookup_path = path;
     return 1;
+}
+
+size_t ic_cache_query_batch(const ic_cache *c, const ic_cache_lookup *q, size_t count, ic_cache_hint *hint,
+                            ic_cache_estimate *out)
+{
+#if defined(IC_HAVE_AVX2_PATH)
+    if (c->frozen.is_valid && c->lookup_path == IC_LOOKUP_AVX2)
+        return query_batch_avx2(c, q, count, hint, out);
+#endif
+    size_t found = 0;
+    for (size_t k = 0; k < count; ++k)
+        found += (size_t)ic_cache_query_hinted(c, &q[k], hint, &out[k]);
+    return found;
 }
 
 int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)

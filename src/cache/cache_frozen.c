@@ -9,7 +9,8 @@
  * record's centre to the cell is at most the rounded |p − p_i|² the weight test computes (the same
  * operations in the same order on smaller or equal operands, and float rounding is monotonic), which
  * is below the accepted radius². So a frozen look-up meets the same contributors in the same order as
- * the octree path and sums them identically.
+ * the octree path, with the same weights and extrapolated values (its sums differ from the octree
+ * path's in rounding only: cache.c, "Frozen look-ups").
  *
  * A leaf's cell is the set of points the descent sends there: lo ≤ p < hi per axis, where lo and hi
  * are the thresholds the descent compares with (ancestors' centres, the root's faces). A hint check
@@ -45,7 +46,6 @@ typedef struct builder {
     size_t active_cap;
     size_t list_cap;             /* units allocated in f->list */
     size_t leaf_cap;             /* entries allocated in f->leaf_at */
-    uint32_t *slot_of;           /* record index → slot in f->record, UINT32_MAX before first use */
 } builder;
 
 /* Squared distance from (x, y, z) to the box [lo, hi], with the weight test's operation order. */
@@ -107,7 +107,7 @@ static ic_result reserve_active(builder *b, size_t n)
 static ic_result append_leaf(builder *b, uint32_t count, size_t *offset)
 {
     ic_frozen *f = b->f;
-    size_t units = (sizeof(ic_frozen_leaf) + (size_t)(count + 3) / 4 * sizeof(ic_frozen_block)) / 8;
+    size_t units = (sizeof(ic_frozen_leaf) + (size_t)(count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES * sizeof(ic_frozen_block)) / 8;
     void *list = f->list, *leaf_at = f->leaf_at;
     ic_result rc = grow(&list, &b->list_cap, f->list_len + units, sizeof *f->list);
     f->list = list;
@@ -122,33 +122,12 @@ static ic_result append_leaf(builder *b, uint32_t count, size_t *offset)
     return IC_OK;
 }
 
-/* Slot of record i in f->record, copying its interpolation data at first use. */
-static uint32_t slot_for(builder *b, uint32_t i)
-{
-    ic_frozen *f = b->f;
-    if (b->slot_of[i] == UINT32_MAX) {
-        const ic_record_cold *cd = &b->c->cold[i];
-        ic_frozen_record *r = &f->record[f->record_count];
-        memset(r, 0, sizeof *r);
-        for (int ch = 0; ch < 3; ++ch) {
-            r->row[IC_FROZEN_E][ch] = v3_get(cd->irradiance, ch);
-            for (int axis = 0; axis < 3; ++axis) {
-                r->row[IC_FROZEN_GRAD_ROT + axis][ch] = v3_get(cd->grad_rot[ch], axis);
-                r->row[IC_FROZEN_GRAD_TRANS + axis][ch] = v3_get(cd->grad_trans[ch], axis);
-            }
-        }
-        r->index = i;
-        b->slot_of[i] = f->record_count++;
-    }
-    return b->slot_of[i];
-}
-
 /* The list [begin, end) of b->active becomes the list of the leaf at f->node[fpos]. */
 static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t begin, size_t end)
 {
     ic_frozen *f = b->f;
     const ic_cache *c = b->c;
-    uint32_t count = (uint32_t)(end - begin), blocks = (count + 3) / 4;
+    uint32_t count = (uint32_t)(end - begin), blocks = (count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES;
     size_t at;
     if (append_leaf(b, count, &at) != IC_OK)
         return IC_ERR_OOM;
@@ -159,10 +138,10 @@ static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t beg
     leaf->count = count;
     leaf->id = f->leaf_count;
     f->leaf_at[f->leaf_count++] = (uint32_t)at;
-    memset(blk, 0, blocks * sizeof *blk); /* padding lanes: R = a = 0, no distance passes */
+    memset(blk, 0, blocks * sizeof *blk); /* padding lanes: all zero, no distance passes */
     for (uint32_t k = 0; k < count; ++k) {
-        uint32_t i = b->active[begin + k].record, lane = k % 4;
-        ic_frozen_block *o = &blk[k / 4];
+        uint32_t i = b->active[begin + k].record, lane = k % IC_FROZEN_LANES;
+        ic_frozen_block *o = &blk[k / IC_FROZEN_LANES];
         const ic_float4 *sp = &c->sphere[i], *np = &c->normal[i];
         o->x[lane] = sp->x;
         o->y[lane] = sp->y;
@@ -172,9 +151,18 @@ static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t beg
         o->nx[lane] = np->x;
         o->ny[lane] = np->y;
         o->nz[lane] = np->z;
-        o->slot[lane] = slot_for(b, i);
-        o->bounce[lane] = c->cold[i].bounce;
-        o->flags[lane] = c->cold[i].flags;
+        o->index[lane] = i;
+        const ic_record_cold *cd = &c->cold[i];
+        o->bounce[lane] = cd->bounce;
+        o->flags[lane] = cd->flags;
+        for (int ch = 0; ch < 3; ++ch) {
+            float *row = o->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS * ch + lane; /* row r at row[8r] */
+            row[IC_FROZEN_LANES * IC_FROZEN_E] = v3_get(cd->irradiance, ch);
+            for (int axis = 0; axis < 3; ++axis) {
+                row[IC_FROZEN_LANES * (IC_FROZEN_GRAD_ROT + axis)] = v3_get(cd->grad_rot[ch], axis);
+                row[IC_FROZEN_LANES * (IC_FROZEN_GRAD_TRANS + axis)] = v3_get(cd->grad_trans[ch], axis);
+            }
+        }
     }
     f->entry_count += count;
     f->node[fpos] = IC_FROZEN_LEAF | (uint32_t)at;
@@ -236,14 +224,13 @@ void ic_frozen_free(ic_frozen *f)
     free(f->node);
     free(f->list);
     free(f->leaf_at);
-    free(f->record);
     memset(f, 0, sizeof *f);
 }
 
 size_t ic_frozen_bytes(const ic_frozen *f)
 {
     return (size_t)f->node_count * sizeof *f->node + f->list_len * sizeof *f->list +
-           (size_t)f->leaf_count * sizeof *f->leaf_at + (size_t)f->record_count * sizeof *f->record;
+           (size_t)f->leaf_count * sizeof *f->leaf_at;
 }
 
 ic_result ic_frozen_build(ic_cache *c)
@@ -256,11 +243,9 @@ ic_result ic_frozen_build(ic_cache *c)
         return IC_OK;
     }
     f->node = malloc((size_t)t->node_count * sizeof *f->node);
-    f->record = malloc((size_t)c->count * sizeof *f->record);
-    builder b = {c, f, NULL, 0, 0, 0, malloc((size_t)c->count * sizeof(uint32_t))};
-    ic_result rc = f->node && f->record && b.slot_of ? IC_OK : IC_ERR_OOM;
+    builder b = {c, f, NULL, 0, 0, 0};
+    ic_result rc = f->node ? IC_OK : IC_ERR_OOM;
     if (rc == IC_OK) {
-        memset(b.slot_of, 0xff, (size_t)c->count * sizeof *b.slot_of);
         f->cx = t->cx;
         f->cy = t->cy;
         f->cz = t->cz;
@@ -274,7 +259,6 @@ ic_result ic_frozen_build(ic_cache *c)
         rc = build_node(&b, 0, 0, &root, 0, 0);
     }
     free(b.active);
-    free(b.slot_of);
     if (rc != IC_OK) {
         ic_frozen_free(f);
         return rc;
@@ -283,9 +267,6 @@ ic_result ic_frozen_build(ic_cache *c)
     uint64_t *l = realloc(f->list, (f->list_len ? f->list_len : 1) * sizeof *l);
     if (l)
         f->list = l;
-    ic_frozen_record *r = realloc(f->record, (size_t)(f->record_count ? f->record_count : 1) * sizeof *r);
-    if (r)
-        f->record = r;
     f->has_root = 1;
     f->is_valid = 1;
     return IC_OK;

@@ -29,49 +29,46 @@ typedef struct ic_record_cold {
 } ic_record_cold;
 
 /*
- * The frozen look-up layout (cache.h: FROZEN LOOK-UPS; built by cache_frozen.c). What a look-up
- * touches before it finds a contributor sits in two compact arrays, both in depth-first order:
+ * The frozen look-up layout (cache.h: FROZEN LOOK-UPS; built by cache_frozen.c). Everything a look-up
+ * reads sits in two compact arrays, both in depth-first order:
  *   node — 4 bytes a node: the first of its 8 contiguous children, or IC_FROZEN_LEAF | the offset of
  *          the leaf in `list` (8-byte units);
- *   list — per leaf a header (its cell and entry count) followed by its entries, four to a block,
- *          with every hot field a rejection test reads (position, R_i, a_i, normal, bounce, flags)
- *          side by side: the weight test runs four entries at a time (SSE2), and a rejected
- *          candidate costs no other memory access;
- *   record — the interpolation data of the records (irradiance, gradients), channels side by side,
- *          in the order the lists first use them, read for contributors only.
+ *   list — per leaf a header (its cell and entry count) followed by its entries, eight to a block,
+ *          every field side by side: what the weight test reads (position, R_i, a_i, normal, bounce,
+ *          flags) and what the extrapolation reads (irradiance and both gradients per channel), so
+ *          that the test and the extrapolation run eight entries at a time (AVX2; two halves of four
+ *          with SSE2) and a look-up reads one contiguous run of memory.
  * Records are copied into each list that uses them (the octree's multiple references), so any
  * change to a record thaws the layout.
  */
 #define IC_FROZEN_LEAF 0x80000000u
 
-/* Four list entries. Padding entries have R = a = 0: no distance passes. */
+/* Entries per block: lane k of a block is list entry 8j + k. */
+enum { IC_FROZEN_LANES = 8 };
+
+/* Rows of a block's interpolation data: channel c (R, G, B) has rows IC_FROZEN_ROWS·c + IC_FROZEN_E
+ * (E_i), + IC_FROZEN_GRAD_ROT + axis (∇r E_i, x y z) and + IC_FROZEN_GRAD_TRANS + axis (∇t E_i). */
+enum { IC_FROZEN_E = 0, IC_FROZEN_GRAD_ROT = 1, IC_FROZEN_GRAD_TRANS = 4, IC_FROZEN_ROWS = 7 };
+
+/* Eight list entries. Padding entries are all zero (R = a = 0: no distance passes). */
 typedef struct ic_frozen_block {
-    float x[4], y[4], z[4];      /* p_i */
-    float R[4];                  /* R_i */
-    float a[4];                  /* a_i */
-    float nx[4], ny[4], nz[4];   /* n_i */
-    uint32_t slot[4];            /* index into ic_frozen.record */
-    uint8_t bounce[4];           /* bounce level */
-    uint8_t flags[4];            /* IC_RECORD_* */
+    float x[8], y[8], z[8];      /* p_i */
+    float R[8];                  /* R_i */
+    float a[8];                  /* a_i */
+    float nx[8], ny[8], nz[8];   /* n_i */
+    uint32_t index[8];           /* record index */
+    uint8_t bounce[8];           /* bounce level */
+    uint8_t flags[8];            /* IC_RECORD_* */
+    float interp[3 * IC_FROZEN_ROWS * 8]; /* rows of 8 lanes: E_i, ∇r E_i, ∇t E_i per channel (above) */
 } ic_frozen_block;
 
-/* A leaf's header in `list`; its ⌈count/4⌉ blocks follow it. */
+/* A leaf's header in `list`; its ⌈count/8⌉ blocks follow it. */
 typedef struct ic_frozen_leaf {
     float lo[3];                 /* a point descends here iff lo ≤ p < hi on every axis */
     float hi[3];
     uint32_t count;              /* entries */
     uint32_t id;                 /* leaf number (the hint's value − 1) */
 } ic_frozen_leaf;
-
-/* A record's interpolation data with the three channels side by side, so that the extrapolation of
- * seed 000 §3 runs on R, G and B at once: row 0 is E_i, rows 1–3 the x, y and z components of ∇r E_i
- * (one value per channel), rows 4–6 those of ∇t E_i. A row is read four floats wide; its fourth lane
- * (the next row's first value, or `index` for row 6) is ignored. */
-enum { IC_FROZEN_E = 0, IC_FROZEN_GRAD_ROT = 1, IC_FROZEN_GRAD_TRANS = 4, IC_FROZEN_ROWS = 7 };
-typedef struct ic_frozen_record {
-    float row[IC_FROZEN_ROWS][3];
-    uint32_t index;              /* record index */
-} ic_frozen_record;
 
 typedef struct ic_frozen {
     int is_valid;                /* 0: thawed, look-ups use the octree */
@@ -84,8 +81,6 @@ typedef struct ic_frozen {
     uint32_t *leaf_at;           /* leaf number → offset of its header in list */
     uint32_t leaf_count;
     size_t entry_count;          /* list entries in all leaves */
-    ic_frozen_record *record;
-    uint32_t record_count;
 } ic_frozen;
 
 /* Builds c->frozen from c->tree (replacing it); IC_ERR_OOM leaves the cache thawed. */

@@ -323,21 +323,35 @@ typedef struct lookup_job {
     ic_cache_acceptance acceptance;
 } lookup_job;
 
+/* One row's look-ups, in batches of up to LOOKUP_BATCH pixels with a hint carried along the row
+ * (ic_cache_query_batch: the answers of one look-up each, without the per-call costs). */
+enum { LOOKUP_BATCH = 64 };
+
 static void lookup_row(void *p, int64_t y, int thread)
 {
     (void)thread;
     lookup_job *j = p;
     const ic_gbuffer *g = &j->c->g;
+    ic_cache_hint hint = {0};
+    ic_cache_lookup q[LOOKUP_BATCH];
+    ic_cache_estimate e[LOOKUP_BATCH];
+    size_t pixel[LOOKUP_BATCH], m = 0;
     for (int x = 0; x < g->width; ++x) {
         size_t i = (size_t)y * g->width + x;
         j->covered[i] = 0;
         j->lum[i] = 0.0f;
-        if (!g->valid[i])
-            continue;
-        ic_cache_lookup q = ic_cache_lookup_at(g->p[i], g->n[i], j->acceptance);
-        ic_cache_estimate e;
-        j->covered[i] = (uint8_t)ic_cache_query(j->c->cache, &q, &e);
-        j->lum[i] = v3_lum(e.irradiance);
+        if (g->valid[i]) {
+            q[m] = ic_cache_lookup_at(g->p[i], g->n[i], j->acceptance);
+            pixel[m++] = i;
+        }
+        if (m == LOOKUP_BATCH || (x + 1 == g->width && m > 0)) {
+            ic_cache_query_batch(j->c->cache, q, m, &hint, e);
+            for (size_t k = 0; k < m; ++k) {
+                j->covered[pixel[k]] = (uint8_t)(e[k].contributor_count > 0);
+                j->lum[pixel[k]] = v3_lum(e[k].irradiance);
+            }
+            m = 0;
+        }
     }
 }
 

@@ -308,7 +308,7 @@ static void check_lookup_equals_brute_force(const ic_cache *c, uint32_t queries,
     free(order);
 }
 
-/* ---- frozen layout equals the octree path, bit for bit ------------------------------------------ */
+/* ---- frozen layout: the octree path's contributors; every code path the same bits ---------------- */
 
 #define ID_CONTRIB 512
 
@@ -345,6 +345,26 @@ static int same_sums(const answer *bare, const answer *full)
            memcmp(&bare->e.weight_sum, &full->e.weight_sum, sizeof bare->e.weight_sum) == 0;
 }
 
+/* |x − y| within the rounding that adding n positive terms in another order, and dividing two such
+ * sums, can make: (4n + 2) units of 2⁻²⁴ relative. */
+static int sums_close(float x, float y, uint32_t n)
+{
+    return fabsf(x - y) <= (4.0f * (float)n + 2.0f) * 0x1p-24f * fmaxf(fabsf(x), fabsf(y));
+}
+
+/* The frozen layout's answer a against the octree path's b: the same contributors in the same order
+ * with the same weights and values (bitwise), sums equal up to the order of the additions (cache.c:
+ * "Frozen look-ups"). */
+static int octree_agrees(const answer *a, const answer *b)
+{
+    uint32_t n = a->e.contributor_count;
+    if (a->hit != b->hit || n != b->e.contributor_count || a->e.contributions_written != b->e.contributions_written ||
+        memcmp(a->con, b->con, a->e.contributions_written * sizeof a->con[0]) != 0)
+        return 0;
+    return sums_close(a->e.weight_sum, b->e.weight_sum, n) && sums_close(a->e.irradiance.x, b->e.irradiance.x, n) &&
+           sums_close(a->e.irradiance.y, b->e.irradiance.y, n) && sums_close(a->e.irradiance.z, b->e.irradiance.z, n);
+}
+
 /* Same contributors in the same order with the same weights and values, same sums (bitwise). */
 static int same_answer(const answer *a, const answer *b)
 {
@@ -356,17 +376,54 @@ static int same_answer(const answer *a, const answer *b)
     return memcmp(a->con, b->con, a->e.contributions_written * sizeof a->con[0]) == 0;
 }
 
+enum { BATCH_SIZE = 37 }; /* look-ups per ic_cache_query_batch call in the checks (not a divisor of theirs) */
+
+/* Asks q[0…total−1] through ic_cache_query_batch, BATCH_SIZE at a time with one hint carried over, with
+ * contributions buffers and then without; returns how many answers differ from ref (bitwise) or from
+ * the count the call returned. `room`: BATCH_SIZE answers of scratch. */
+static uint32_t batch_differs(const ic_cache *c, const ic_cache_lookup *q, uint32_t total, const answer *ref,
+                              answer *room)
+{
+    uint32_t bad = 0;
+    for (int bare = 0; bare < 2; ++bare) {
+        ic_cache_hint hint = {0};
+        for (uint32_t first = 0; first < total; first += BATCH_SIZE) {
+            uint32_t m = total - first < BATCH_SIZE ? total - first : BATCH_SIZE, hits = 0;
+            ic_cache_lookup l[BATCH_SIZE];
+            ic_cache_estimate e[BATCH_SIZE];
+            for (uint32_t k = 0; k < m; ++k) {
+                l[k] = q[first + k];
+                l[k].contributions = bare ? NULL : room[k].con;
+                l[k].contribution_capacity = bare ? 0 : ID_CONTRIB;
+                memset(room[k].con, 0, sizeof room[k].con);
+            }
+            size_t found = ic_cache_query_batch(c, l, m, &hint, e);
+            for (uint32_t k = 0; k < m; ++k) {
+                room[k].e = e[k];
+                room[k].hit = e[k].contributor_count > 0;
+                hits += (uint32_t)room[k].hit;
+                bad += bare ? !same_sums(&room[k], &ref[first + k]) : !same_answer(&room[k], &ref[first + k]);
+            }
+            bad += found != hits;
+        }
+    }
+    return bad;
+}
+
 /* Queries as in the brute-force check, each followed by a neighbour 10⁻³ away (a renderer's next
- * pixel: the hint hits), plus points outside the root and with odd coordinates; asked in that order
- * with one hint, in a scrambled order (hints left over from far-away look-ups), with no hint and with
- * garbage hints, and through the portable code (the SIMD code's reference, used where SSE2 is absent)
- * with no hint and with hints in order. Query k asks for bounce level k mod `bounces`, level 3 standing
+ * pixel: the hint hits), plus points outside the root and with odd coordinates. The frozen answer
+ * without a hint must agree with the octree path's (octree_agrees); then every frozen look-up must
+ * give that answer bit for bit: asked in order with one hint, in a scrambled order (hints left over
+ * from far-away look-ups), with garbage hints, and through every code path (portable — the SIMD
+ * code's reference, used where SSE2 is absent —, SSE2, AVX2) with no hint, with hints in order,
+ * without a contributions buffer and in batches (ic_cache_query_batch). Query k asks for bounce level k mod `bounces`, level 3 standing
  * for 256 (beyond the bytes levels are stored in). The cache is thawed on entry and frozen on exit. */
 static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces, const char *what)
 {
     uint32_t total = 2 * pairs + 64;
     ic_cache_lookup *q = calloc(total, sizeof *q);
-    answer *want = malloc(total * sizeof *want), *got = malloc(sizeof *got);
+    answer *want = malloc(total * sizeof *want), *ref = malloc(total * sizeof *ref), *got = malloc(sizeof *got);
+    answer *batch = malloc(BATCH_SIZE * sizeof *batch);
     for (uint32_t k = 0; k < pairs; ++k) {
         make_query(c, 91, k, ic_cache_get_params(c)->final_accuracy_scale, &q[2 * k].position, &q[2 * k].normal);
         q[2 * k].bounce = k % bounces == 3 ? 256 : k % bounces;
@@ -378,7 +435,7 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
         q[k].position = v3(far[k % 8], 10.0f, far[(k / 8) % 8]);
         q[k].normal = v3(0, 0, 1);
     }
-    uint32_t differ[2][7] = {{0}}, hint_hits = 0, found_at_level[3] = {0, 0, 0}, paths_run[4] = {0, 0, 0, 0};
+    uint32_t differ[2][8] = {{0}}, disagree[2] = {0, 0}, hint_hits = 0, found_at_level[3] = {0, 0, 0}, paths_run[4] = {0, 0, 0, 0};
     for (int acc = 0; acc < 2; ++acc) {
         ic_cache_thaw(c);
         for (uint32_t k = 0; k < total; ++k) {
@@ -389,20 +446,24 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
         }
         ic_error err;
         CHECK(ic_cache_freeze(c, &err) == IC_OK && ic_cache_is_frozen(c), "freeze: %s", err.message);
+        for (uint32_t k = 0; k < total; ++k) {
+            ask(c, &q[k], NULL, &ref[k]);
+            disagree[acc] += !octree_agrees(&ref[k], &want[k]);
+        }
         ic_cache_hint in_order = {0}, scrambled = {0};
         for (uint32_t k = 0; k < total; ++k) {
             ask(c, &q[k], NULL, got);
-            differ[acc][0] += !same_answer(got, &want[k]);
+            differ[acc][0] += !same_answer(got, &ref[k]);
             uint32_t before = in_order.leaf;
             ask(c, &q[k], &in_order, got);
-            differ[acc][1] += !same_answer(got, &want[k]);
+            differ[acc][1] += !same_answer(got, &ref[k]);
             hint_hits += before != 0 && in_order.leaf == before;
             uint32_t j = (uint32_t)(((uint64_t)k * 7919u) % total);
             ask(c, &q[j], &scrambled, got);
-            differ[acc][2] += !same_answer(got, &want[j]);
+            differ[acc][2] += !same_answer(got, &ref[j]);
             ic_cache_hint garbage = {k * 2654435761u};
             ask(c, &q[k], &garbage, got);
-            differ[acc][3] += !same_answer(got, &want[k]);
+            differ[acc][3] += !same_answer(got, &ref[k]);
         }
         /* Every other code path this build and CPU have (the default is the best of them). */
         for (int path = IC_LOOKUP_PORTABLE; path <= IC_LOOKUP_AVX2; ++path) {
@@ -412,23 +473,28 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
             ic_cache_hint path_order = {0}, bare_order = {0};
             for (uint32_t k = 0; k < total; ++k) {
                 ask(c, &q[k], NULL, got);
-                differ[acc][4] += !same_answer(got, &want[k]);
+                differ[acc][4] += !same_answer(got, &ref[k]);
                 ask(c, &q[k], &path_order, got);
-                differ[acc][5] += !same_answer(got, &want[k]);
+                differ[acc][5] += !same_answer(got, &ref[k]);
                 ask_bare(c, &q[k], &bare_order, got);
-                differ[acc][6] += !same_sums(got, &want[k]);
+                differ[acc][6] += !same_sums(got, &ref[k]);
             }
+            differ[acc][7] += batch_differs(c, q, total, ref, batch);
         }
         ic_cache_set_lookup_path(c, IC_LOOKUP_BEST);
     }
     CHECK(paths_run[IC_LOOKUP_PORTABLE] == 2, "%s: the portable path ran", what);
     for (int acc = 0; acc < 2; ++acc)
+        CHECK(disagree[acc] == 0, "%s (%s): %u of %u frozen answers disagree with the octree path", what,
+              acc ? "final" : "construction", disagree[acc], total);
+    for (int acc = 0; acc < 2; ++acc)
         CHECK(differ[acc][0] + differ[acc][1] + differ[acc][2] + differ[acc][3] + differ[acc][4] +
-                      differ[acc][5] + differ[acc][6] == 0,
-              "%s (%s): frozen differs from the octree path: %u without hint, %u with hints in order, %u with "
+                      differ[acc][5] + differ[acc][6] + differ[acc][7] == 0,
+              "%s (%s): frozen look-ups differ from each other: %u without hint, %u with hints in order, %u with "
               "hints scrambled, %u with garbage hints; each code path: %u without hint, %u with hints, %u without "
-              "a contributions buffer", what, acc ? "final" : "construction", differ[acc][0], differ[acc][1],
-              differ[acc][2], differ[acc][3], differ[acc][4], differ[acc][5], differ[acc][6]);
+              "a contributions buffer, %u in batches", what, acc ? "final" : "construction", differ[acc][0],
+              differ[acc][1], differ[acc][2], differ[acc][3], differ[acc][4], differ[acc][5], differ[acc][6],
+              differ[acc][7]);
     /* The hint must actually be used for the test to mean something (both acceptances: 2·pairs
      * neighbours). */
     CHECK(hint_hits > pairs, "%s: neighbours kept their leaf only %u times of %u", what, hint_hits, 2 * pairs);
@@ -437,7 +503,9 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
         CHECK(found_at_level[level] > 0, "%s: no look-up of bounce level %u found a record", what, level);
     free(q);
     free(want);
+    free(ref);
     free(got);
+    free(batch);
 }
 
 static ic_cache_params clamp_config(ic_weight_kind weight, int which)
