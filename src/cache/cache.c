@@ -636,8 +636,8 @@ static IC_ALWAYS_INLINE __m128i eligible_bytes(__m128i bounce_bytes, __m128i fla
 /* Lanes h…h+3 of block b (h = 0 or 4), block_portable four lanes at a time: ic_weight_test's tests,
  * each with the same operations on the same operands, then the extrapolation and the lane sums acc[c]
  * and wsum (lanes h…h+3). Returns the lanes' mask. */
-static IC_ALWAYS_INLINE unsigned half_sse2(const ic_cache_params *params, const ic_frozen_block *b, unsigned h,
-                                           ic_vec3 p, ic_vec3 n, float s, const ic_cache_lookup *q,
+static IC_ALWAYS_INLINE unsigned half_sse2(const ic_frozen_block *b, unsigned h, ic_vec3 p, ic_vec3 n, float s,
+                                           float neg_tolerance, int ward, const ic_cache_lookup *q,
                                            ic_cache_estimate *out, __m128 acc[3], __m128 *wsum)
 {
     const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
@@ -660,10 +660,10 @@ static IC_ALWAYS_INLINE unsigned half_sse2(const ic_cache_params *params, const 
                                _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_add_ps(qx, nx)),
                                                      _mm_mul_ps(dy, _mm_add_ps(qy, ny))),
                                           _mm_mul_ps(dz, _mm_add_ps(qz, nz))));
-    pass = _mm_and_ps(pass, _mm_cmpnlt_ps(behind, _mm_mul_ps(_mm_set1_ps(-params->behind_tolerance), r)));
+    pass = _mm_and_ps(pass, _mm_cmpnlt_ps(behind, _mm_mul_ps(_mm_set1_ps(neg_tolerance), r)));
     /* max(x, 0) is x > 0 ? x : 0, NaN included (maxps returns its second operand unless x > 0). */
     __m128 dist = _mm_div_ps(_mm_sqrt_ps(d2), R), ndev = _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(one, ndot), zero)), w;
-    if (params->weight == IC_WEIGHT_WARD) {
+    if (ward) {
         __m128 denom = _mm_add_ps(dist, ndev);
         pass = _mm_and_ps(pass, _mm_cmplt_ps(denom, a));
         w = _mm_div_ps(one, _mm_max_ps(denom, _mm_set1_ps(1e-6f)));
@@ -726,14 +726,17 @@ static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cac
     const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s);
     if (!blk)
         return 0;
+    ic_vec3 p = q->position, n = q->normal;
+    float neg_tolerance = -c->params.behind_tolerance; /* read once, as in query_frozen_avx2_inline */
+    int ward = c->params.weight == IC_WEIGHT_WARD;
     /* Lane sums: [0] lanes 0–3, [1] lanes 4–7. */
     __m128 acc[2][3], wsum[2];
     for (int h = 0; h < 2; ++h) {
         acc[h][0] = acc[h][1] = acc[h][2] = wsum[h] = _mm_setzero_ps();
     }
     for (uint32_t b = 0; b < blocks; ++b) {
-        contributors += bits_in[half_sse2(&c->params, &blk[b], 0, q->position, q->normal, s, q, out, acc[0], &wsum[0])];
-        contributors += bits_in[half_sse2(&c->params, &blk[b], 4, q->position, q->normal, s, q, out, acc[1], &wsum[1])];
+        contributors += bits_in[half_sse2(&blk[b], 0, p, n, s, neg_tolerance, ward, q, out, acc[0], &wsum[0])];
+        contributors += bits_in[half_sse2(&blk[b], 4, p, n, s, neg_tolerance, ward, q, out, acc[1], &wsum[1])];
     }
     out->weight_sum = lane_total_sse2(_mm_add_ps(wsum[0], wsum[1]));
     out->contributor_count = contributors;
@@ -762,8 +765,8 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE __m256 extrapolate_avx2(const float *row,
 
 /* block_portable eight lanes at a time: half_sse2 with 256-bit registers, lane for lane the same
  * operations on the same operands (no FMA: the target is AVX2 alone). Returns the block's mask. */
-static IC_TARGET_AVX2 IC_ALWAYS_INLINE unsigned block_avx2(const ic_cache_params *params, const ic_frozen_block *b,
-                                                           ic_vec3 p, ic_vec3 n, float s, uint32_t bounce,
+static IC_TARGET_AVX2 IC_ALWAYS_INLINE unsigned block_avx2(const ic_frozen_block *b, ic_vec3 p, ic_vec3 n, float s,
+                                                           uint32_t bounce, float neg_tolerance, int ward,
                                                            const ic_cache_lookup *q, ic_cache_estimate *out,
                                                            int report, __m256 acc[3], __m256 *wsum)
 {
@@ -785,11 +788,11 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE unsigned block_avx2(const ic_cache_params
                                   _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_add_ps(qx, nx)),
                                                               _mm256_mul_ps(dy, _mm256_add_ps(qy, ny))),
                                                 _mm256_mul_ps(dz, _mm256_add_ps(qz, nz))));
-    pass = _mm256_and_ps(pass, _mm256_cmp_ps(behind, _mm256_mul_ps(_mm256_set1_ps(-params->behind_tolerance), r),
+    pass = _mm256_and_ps(pass, _mm256_cmp_ps(behind, _mm256_mul_ps(_mm256_set1_ps(neg_tolerance), r),
                                              _CMP_NLT_UQ));
     __m256 dist = _mm256_div_ps(_mm256_sqrt_ps(d2), R);
     __m256 ndev = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, ndot), zero)), w;
-    if (params->weight == IC_WEIGHT_WARD) {
+    if (ward) {
         __m256 denom = _mm256_add_ps(dist, ndev);
         pass = _mm256_and_ps(pass, _mm256_cmp_ps(denom, a, _CMP_LT_OQ));
         w = _mm256_div_ps(one, _mm256_max_ps(denom, _mm256_set1_ps(1e-6f)));
@@ -842,15 +845,18 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE int query_frozen_avx2_inline(const ic_cac
     __m256 acc[3] = {_mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps()}, wsum = _mm256_setzero_ps();
     ic_vec3 p = q->position, n = q->normal;
     uint32_t bounce = q->bounce;
+    /* Read once: the compiler cannot keep them across the stores to *out. */
+    float neg_tolerance = -c->params.behind_tolerance;
+    int ward = c->params.weight == IC_WEIGHT_WARD;
     /* Two copies of the loop: one reports contributors, the other (the final render's) does not. */
     if (q->contributions)
         for (uint32_t b = 0; b < blocks; ++b)
             contributors += (uint32_t)__builtin_popcount(
-                block_avx2(&c->params, &blk[b], p, n, s, bounce, q, out, 1, acc, &wsum));
+                block_avx2(&blk[b], p, n, s, bounce, neg_tolerance, ward, q, out, 1, acc, &wsum));
     else
         for (uint32_t b = 0; b < blocks; ++b)
             contributors += (uint32_t)__builtin_popcount(
-                block_avx2(&c->params, &blk[b], p, n, s, bounce, q, out, 0, acc, &wsum));
+                block_avx2(&blk[b], p, n, s, bounce, neg_tolerance, ward, q, out, 0, acc, &wsum));
     out->weight_sum = lane_total_avx2(wsum);
     out->contributor_count = contributors;
     float total[3] = {lane_total_avx2(acc[0]), lane_total_avx2(acc[1]), lane_total_avx2(acc[2])};
