@@ -597,7 +597,8 @@ static unsigned block_portable(const ic_cache_params *params, const ic_frozen_bl
  * the root), its number of blocks and the acceptance's accuracy scale. */
 static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, const ic_cache_lookup *q,
                                                             ic_cache_hint *hint, ic_cache_estimate *out,
-                                                            int is_portable, uint32_t *blocks, float *s)
+                                                            int is_portable, uint32_t *blocks, float *s,
+                                                            int *all_eligible)
 {
     memset(out, 0, sizeof *out);
     const ic_frozen_leaf *leaf = frozen_leaf(&c->frozen, q->position, hint, is_portable);
@@ -607,6 +608,8 @@ static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, c
     /* Bounce levels are stored in bytes: a higher level has no records. */
     *blocks = q->bounce <= UINT8_MAX ? (leaf->count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES : 0;
     out->records_tested = leaf->count;
+    /* Every entry of this level and enabled: the SIMD code skips the per-entry check. */
+    *all_eligible = leaf->all_eligible == q->bounce + 1u;
     return (const ic_frozen_block *)(leaf + 1);
 }
 
@@ -615,7 +618,8 @@ static int query_frozen_portable(const ic_cache *c, const ic_cache_lookup *q, ic
 {
     float acc[3][IC_FROZEN_LANES] = {{0}}, wsum[IC_FROZEN_LANES] = {0}, s;
     uint32_t blocks, contributors = 0;
-    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 1, &blocks, &s);
+    int all_eligible; /* unused: the reference checks every entry */
+    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 1, &blocks, &s, &all_eligible);
     if (!blk)
         return 0;
     for (uint32_t b = 0; b < blocks; ++b)
@@ -637,7 +641,7 @@ static IC_ALWAYS_INLINE __m128i eligible_bytes(__m128i bounce_bytes, __m128i fla
  * each with the same operations on the same operands, then the extrapolation and the lane sums acc[c]
  * and wsum (lanes h…h+3). Returns the lanes' mask. */
 static IC_ALWAYS_INLINE unsigned half_sse2(const ic_frozen_block *b, unsigned h, ic_vec3 p, ic_vec3 n, float s,
-                                           float neg_tolerance, int ward, const ic_cache_lookup *q,
+                                           float neg_tolerance, int ward, int all_eligible, const ic_cache_lookup *q,
                                            ic_cache_estimate *out, __m128 acc[3], __m128 *wsum)
 {
     const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
@@ -673,12 +677,14 @@ static IC_ALWAYS_INLINE unsigned half_sse2(const ic_frozen_block *b, unsigned h,
         pass = _mm_and_ps(pass, _mm_cmpgt_ps(w, zero));
     }
     /* Eligible: this bounce level, not disabled (bytes widened to the float lanes' 32 bits). */
-    int32_t bounce_bytes, flag_bytes;
-    memcpy(&bounce_bytes, b->bounce + h, 4);
-    memcpy(&flag_bytes, b->flags + h, 4);
-    __m128i ok = eligible_bytes(_mm_cvtsi32_si128(bounce_bytes), _mm_cvtsi32_si128(flag_bytes), q->bounce);
-    ok = _mm_unpacklo_epi16(_mm_unpacklo_epi8(ok, ok), _mm_unpacklo_epi8(ok, ok));
-    pass = _mm_and_ps(pass, _mm_castsi128_ps(ok));
+    if (!all_eligible) {
+        int32_t bounce_bytes, flag_bytes;
+        memcpy(&bounce_bytes, b->bounce + h, 4);
+        memcpy(&flag_bytes, b->flags + h, 4);
+        __m128i ok = eligible_bytes(_mm_cvtsi32_si128(bounce_bytes), _mm_cvtsi32_si128(flag_bytes), q->bounce);
+        ok = _mm_unpacklo_epi16(_mm_unpacklo_epi8(ok, ok), _mm_unpacklo_epi8(ok, ok));
+        pass = _mm_and_ps(pass, _mm_castsi128_ps(ok));
+    }
     /* E_i(p) = E_i + (n_i × n)·∇r E_i + (p − p_i)·∇t E_i per channel, clamped ≥ 0; the lanes that do
      * not contribute add +0 (masked after the product, so no NaN or infinity gets in). */
     __m128 rx = _mm_sub_ps(_mm_mul_ps(ny, qz), _mm_mul_ps(nz, qy));
@@ -723,7 +729,8 @@ static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cac
 {
     float s;
     uint32_t blocks, contributors = 0;
-    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s);
+    int all_eligible;
+    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s, &all_eligible);
     if (!blk)
         return 0;
     ic_vec3 p = q->position, n = q->normal;
@@ -735,8 +742,8 @@ static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cac
         acc[h][0] = acc[h][1] = acc[h][2] = wsum[h] = _mm_setzero_ps();
     }
     for (uint32_t b = 0; b < blocks; ++b) {
-        contributors += bits_in[half_sse2(&blk[b], 0, p, n, s, neg_tolerance, ward, q, out, acc[0], &wsum[0])];
-        contributors += bits_in[half_sse2(&blk[b], 4, p, n, s, neg_tolerance, ward, q, out, acc[1], &wsum[1])];
+        contributors += bits_in[half_sse2(&blk[b], 0, p, n, s, neg_tolerance, ward, all_eligible, q, out, acc[0], &wsum[0])];
+        contributors += bits_in[half_sse2(&blk[b], 4, p, n, s, neg_tolerance, ward, all_eligible, q, out, acc[1], &wsum[1])];
     }
     out->weight_sum = lane_total_sse2(_mm_add_ps(wsum[0], wsum[1]));
     out->contributor_count = contributors;
@@ -767,7 +774,8 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE __m256 extrapolate_avx2(const float *row,
  * operations on the same operands (no FMA: the target is AVX2 alone). Returns the block's mask. */
 static IC_TARGET_AVX2 IC_ALWAYS_INLINE unsigned block_avx2(const ic_frozen_block *b, ic_vec3 p, ic_vec3 n, float s,
                                                            uint32_t bounce, float neg_tolerance, int ward,
-                                                           const ic_cache_lookup *q, ic_cache_estimate *out,
+                                                           int all_eligible, const ic_cache_lookup *q,
+                                                           ic_cache_estimate *out,
                                                            int report, __m256 acc[3], __m256 *wsum)
 {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
@@ -801,9 +809,11 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE unsigned block_avx2(const ic_frozen_block
         w = _mm256_sub_ps(one, _mm256_div_ps(_mm256_max_ps(dist, nt), a));
         pass = _mm256_and_ps(pass, _mm256_cmp_ps(w, zero, _CMP_GT_OQ));
     }
-    __m128i ok = eligible_bytes(_mm_loadl_epi64((const __m128i *)b->bounce), _mm_loadl_epi64((const __m128i *)b->flags),
-                                bounce);
-    pass = _mm256_and_ps(pass, _mm256_castsi256_ps(_mm256_cvtepi8_epi32(ok)));
+    if (!all_eligible) {
+        __m128i ok = eligible_bytes(_mm_loadl_epi64((const __m128i *)b->bounce),
+                                    _mm_loadl_epi64((const __m128i *)b->flags), bounce);
+        pass = _mm256_and_ps(pass, _mm256_castsi256_ps(_mm256_cvtepi8_epi32(ok)));
+    }
     __m256 rx = _mm256_sub_ps(_mm256_mul_ps(ny, qz), _mm256_mul_ps(nz, qy));
     __m256 ry = _mm256_sub_ps(_mm256_mul_ps(nz, qx), _mm256_mul_ps(nx, qz));
     __m256 rz = _mm256_sub_ps(_mm256_mul_ps(nx, qy), _mm256_mul_ps(ny, qx));
@@ -839,7 +849,8 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE int query_frozen_avx2_inline(const ic_cac
 {
     float s;
     uint32_t blocks, contributors = 0;
-    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s);
+    int all_eligible;
+    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s, &all_eligible);
     if (!blk)
         return 0;
     __m256 acc[3] = {_mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps()}, wsum = _mm256_setzero_ps();
@@ -852,11 +863,11 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE int query_frozen_avx2_inline(const ic_cac
     if (q->contributions)
         for (uint32_t b = 0; b < blocks; ++b)
             contributors += (uint32_t)__builtin_popcount(
-                block_avx2(&blk[b], p, n, s, bounce, neg_tolerance, ward, q, out, 1, acc, &wsum));
+                block_avx2(&blk[b], p, n, s, bounce, neg_tolerance, ward, all_eligible, q, out, 1, acc, &wsum));
     else
         for (uint32_t b = 0; b < blocks; ++b)
             contributors += (uint32_t)__builtin_popcount(
-                block_avx2(&blk[b], p, n, s, bounce, neg_tolerance, ward, q, out, 0, acc, &wsum));
+                block_avx2(&blk[b], p, n, s, bounce, neg_tolerance, ward, all_eligible, q, out, 0, acc, &wsum));
     out->weight_sum = lane_total_avx2(wsum);
     out->contributor_count = contributors;
     float total[3] = {lane_total_avx2(acc[0]), lane_total_avx2(acc[1]), lane_total_avx2(acc[2])};

@@ -137,6 +137,8 @@ static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t beg
     memcpy(leaf->hi, cl->hi, sizeof leaf->hi);
     leaf->count = count;
     leaf->id = f->leaf_count;
+    leaf->all_eligible = count ? 1u + c->cold[b->active[begin].record].bounce : 0u;
+    leaf->unused = 0;
     f->leaf_at[f->leaf_count++] = (uint32_t)at;
     memset(blk, 0, blocks * sizeof *blk); /* padding lanes: all zero, no distance passes */
     for (uint32_t k = 0; k < count; ++k) {
@@ -155,6 +157,8 @@ static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t beg
         const ic_record_cold *cd = &c->cold[i];
         o->bounce[lane] = cd->bounce;
         o->flags[lane] = cd->flags;
+        if (1u + cd->bounce != leaf->all_eligible || (cd->flags & IC_RECORD_DISABLED))
+            leaf->all_eligible = 0;
         for (int ch = 0; ch < 3; ++ch) {
             float *row = o->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS * ch + lane; /* row r at row[8r] */
             row[IC_FROZEN_LANES * IC_FROZEN_E] = v3_get(cd->irradiance, ch);

@@ -68,6 +68,8 @@ typedef struct ic_frozen_leaf {
     float hi[3];
     uint32_t count;              /* entries */
     uint32_t id;                 /* leaf number (the hint's value − 1) */
+    uint32_t all_eligible;       /* 1 + the bounce level of every entry if none is disabled, else 0 */
+    uint32_t unused;             /* (the list's 8-byte unit) */
 } ic_frozen_leaf;
 
 typedef struct ic_frozen {
