@@ -21,6 +21,8 @@
  *   4. Look up: ic_cache_lookup q = {.position = p, .normal = n}; ic_cache_estimate e;
  *      if (ic_cache_query(cache, &q, &e)) use e.irradiance, else gather a new record.
  *      For the final render set q.acceptance = IC_ACCEPT_FINAL (looser, final_accuracy_scale).
+ *      Many points at once (a row of pixels, a light map's texels): ic_cache_query_batch with an
+ *      ic_cache_hint, the same answers at a lower cost per look-up on a frozen cache.
  *   5. Optionally ic_cache_save(cache, path, scene_hash, &err); later ic_cache_load(path, &params,
  *      scene_hash, &cache, &err) refuses files made for another scene or other parameters.
  *   6. ic_cache_destroy(cache).

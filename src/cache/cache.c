@@ -28,7 +28,7 @@
 #define IC_TARGET_AVX2 __attribute__((target("avx2")))
 #endif
 
-/* The frozen look-up's loop is written once and instantiated per code path (SSE2, portable). */
+/* Helpers of the frozen look-ups are inlined into each code path and into the batch loop. */
 #if defined(__GNUC__)
 #define IC_ALWAYS_INLINE inline __attribute__((always_inline))
 #else
