@@ -65,10 +65,10 @@
  *   four at a time with SSE2; a portable fallback) and a look-up reads one contiguous run of memory.
  *   A look-up descends (or, with a hint, stays in the previous leaf) and tests one list. A look-up
  *   without a contributions buffer takes a shorter route.
- *   Results: the octree path's contributors, in the same order, with the same weights and values,
- *   bit for bit; the sums Σ w_i E_i(p) and Σ w_i are added in eight interleaved partial sums and may
- *   differ from the octree path's in the last bits (every frozen code path gives the same bits, on
- *   every CPU). Any change to the records (insertion, ic_cache_set_record_accuracy,
+ *   Results: the octree path's contributors, in the same order, with the same weights, bit for bit;
+ *   the extrapolated values E_i(p) (the rotation term evaluated as n·(∇r E_i × n_i)) and the sums
+ *   (added in eight interleaved partial sums) may differ from the octree path's in the last bits.
+ *   Every frozen code path (AVX2, SSE2, portable) gives the same bits. Any change to the records (insertion, ic_cache_set_record_accuracy,
  *   ic_cache_set_record_flags) thaws the cache: look-ups go through the octree again until the next
  *   freeze. Memory: see ic_cache_memory_bytes; the index's shape:
  *   ic_cache_get_index_stats.

@@ -511,8 +511,8 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
  * (two halves of four lanes), AVX2 (eight) — performs the same IEEE operations on the same operands
  * per lane (packed add, mul, div and sqrt round like their scalar forms; no FMA: contraction is off),
  * so all three give the same bits. Against the octree path: the same contributors in the same order
- * with the same weights and extrapolated values; the sums differ in rounding only (the octree path
- * adds in list order).
+ * with the same weights; the extrapolated values and the sums differ in rounding only (the rotation
+ * term is evaluated as n·(∇r E_i × n_i), cache_internal.h; the octree path adds in list order).
  */
 
 /* Offsets of a channel's rows in a block's interpolation data, read as one array of floats. */
@@ -572,11 +572,10 @@ static unsigned block_portable(const ic_cache_params *params, const ic_frozen_bl
         if (b->bounce[k] != q->bounce || (b->flags[k] & IC_RECORD_DISABLED) ||
             !ic_weight_test(params, &sp, &np, p, n, s, &w[k], &dp))
             continue;
-        /* (n_i × n): the rotation that takes the record's normal to ours (seed 000 §3). */
-        ic_vec3 rot = v3_cross(v3(np.x, np.y, np.z), n);
         for (int ch = 0; ch < 3; ++ch) {
+            /* The rotation term (n_i × n)·∇r E_i as n·(∇r E_i × n_i), the cross product made at freezing. */
             const float *row = b->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS * ch;
-            float e = (row[ROW_E + k] + ((rot.x * row[ROT_X + k] + rot.y * row[ROT_Y + k]) + rot.z * row[ROT_Z + k])) +
+            float e = (row[ROW_E + k] + ((n.x * row[ROT_X + k] + n.y * row[ROT_Y + k]) + n.z * row[ROT_Z + k])) +
                       ((dp.x * row[TRANS_X + k] + dp.y * row[TRANS_Y + k]) + dp.z * row[TRANS_Z + k]);
             /* Extrapolation with large gradients can go negative; irradiance cannot. */
             v[ch][k] = e > 0.0f ? e : 0.0f;
@@ -685,17 +684,14 @@ static IC_ALWAYS_INLINE unsigned half_sse2(const ic_frozen_block *b, unsigned h,
         ok = _mm_unpacklo_epi16(_mm_unpacklo_epi8(ok, ok), _mm_unpacklo_epi8(ok, ok));
         pass = _mm_and_ps(pass, _mm_castsi128_ps(ok));
     }
-    /* E_i(p) = E_i + (n_i × n)·∇r E_i + (p − p_i)·∇t E_i per channel, clamped ≥ 0; the lanes that do
+    /* E_i(p) = E_i + n·(∇r E_i × n_i) + (p − p_i)·∇t E_i per channel, clamped ≥ 0; the lanes that do
      * not contribute add +0 (masked after the product, so no NaN or infinity gets in). */
-    __m128 rx = _mm_sub_ps(_mm_mul_ps(ny, qz), _mm_mul_ps(nz, qy));
-    __m128 ry = _mm_sub_ps(_mm_mul_ps(nz, qx), _mm_mul_ps(nx, qz));
-    __m128 rz = _mm_sub_ps(_mm_mul_ps(nx, qy), _mm_mul_ps(ny, qx));
     __m128 v[3];
     for (int ch = 0; ch < 3; ++ch) {
         const float *row = b->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS * ch;
-        __m128 rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, _mm_loadu_ps(row + ROT_X + h)),
-                                           _mm_mul_ps(ry, _mm_loadu_ps(row + ROT_Y + h))),
-                                _mm_mul_ps(rz, _mm_loadu_ps(row + ROT_Z + h)));
+        __m128 rot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(qx, _mm_loadu_ps(row + ROT_X + h)),
+                                           _mm_mul_ps(qy, _mm_loadu_ps(row + ROT_Y + h))),
+                                _mm_mul_ps(qz, _mm_loadu_ps(row + ROT_Z + h)));
         __m128 trans = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_loadu_ps(row + TRANS_X + h)),
                                              _mm_mul_ps(dy, _mm_loadu_ps(row + TRANS_Y + h))),
                                   _mm_mul_ps(dz, _mm_loadu_ps(row + TRANS_Z + h)));
@@ -755,14 +751,15 @@ static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cac
 #endif
 
 #if defined(IC_HAVE_AVX2_PATH)
-/* E_i(p) of a block's eight lanes for one channel (rows: the channel's interpolation data), clamped
- * ≥ 0, with block_portable's operations: (E + ((rx·∇r.x + ry·∇r.y) + rz·∇r.z)) + ((dx·∇t.x + …)). */
-static IC_TARGET_AVX2 IC_ALWAYS_INLINE __m256 extrapolate_avx2(const float *row, __m256 rx, __m256 ry, __m256 rz,
+/* E_i(p) of a block's eight lanes for one channel (row: the channel's interpolation data), clamped
+ * ≥ 0, with block_portable's operations: (E + ((nx·H.x + ny·H.y) + nz·H.z)) + ((dx·∇t.x + …)) where
+ * H = ∇r E_i × n_i and n is our normal. */
+static IC_TARGET_AVX2 IC_ALWAYS_INLINE __m256 extrapolate_avx2(const float *row, __m256 nx, __m256 ny, __m256 nz,
                                                                __m256 dx, __m256 dy, __m256 dz)
 {
-    __m256 rot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(rx, _mm256_loadu_ps(row + ROT_X)),
-                                             _mm256_mul_ps(ry, _mm256_loadu_ps(row + ROT_Y))),
-                               _mm256_mul_ps(rz, _mm256_loadu_ps(row + ROT_Z)));
+    __m256 rot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_loadu_ps(row + ROT_X)),
+                                             _mm256_mul_ps(ny, _mm256_loadu_ps(row + ROT_Y))),
+                               _mm256_mul_ps(nz, _mm256_loadu_ps(row + ROT_Z)));
     __m256 trans = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_loadu_ps(row + TRANS_X)),
                                                _mm256_mul_ps(dy, _mm256_loadu_ps(row + TRANS_Y))),
                                  _mm256_mul_ps(dz, _mm256_loadu_ps(row + TRANS_Z)));
@@ -814,13 +811,10 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE unsigned block_avx2(const ic_frozen_block
                                     _mm_loadl_epi64((const __m128i *)b->flags), bounce);
         pass = _mm256_and_ps(pass, _mm256_castsi256_ps(_mm256_cvtepi8_epi32(ok)));
     }
-    __m256 rx = _mm256_sub_ps(_mm256_mul_ps(ny, qz), _mm256_mul_ps(nz, qy));
-    __m256 ry = _mm256_sub_ps(_mm256_mul_ps(nz, qx), _mm256_mul_ps(nx, qz));
-    __m256 rz = _mm256_sub_ps(_mm256_mul_ps(nx, qy), _mm256_mul_ps(ny, qx));
     /* Channel by channel, written out: a loop over an array of sums kept them in memory. */
-    __m256 v0 = extrapolate_avx2(b->interp, rx, ry, rz, dx, dy, dz);
-    __m256 v1 = extrapolate_avx2(b->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS, rx, ry, rz, dx, dy, dz);
-    __m256 v2 = extrapolate_avx2(b->interp + 2 * IC_FROZEN_LANES * IC_FROZEN_ROWS, rx, ry, rz, dx, dy, dz);
+    __m256 v0 = extrapolate_avx2(b->interp, qx, qy, qz, dx, dy, dz);
+    __m256 v1 = extrapolate_avx2(b->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS, qx, qy, qz, dx, dy, dz);
+    __m256 v2 = extrapolate_avx2(b->interp + 2 * IC_FROZEN_LANES * IC_FROZEN_ROWS, qx, qy, qz, dx, dy, dz);
     acc[0] = _mm256_add_ps(acc[0], _mm256_and_ps(pass, _mm256_mul_ps(w, v0)));
     acc[1] = _mm256_add_ps(acc[1], _mm256_and_ps(pass, _mm256_mul_ps(w, v1)));
     acc[2] = _mm256_add_ps(acc[2], _mm256_and_ps(pass, _mm256_mul_ps(w, v2)));

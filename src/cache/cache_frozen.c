@@ -163,7 +163,8 @@ static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t beg
             float *row = o->interp + IC_FROZEN_LANES * IC_FROZEN_ROWS * ch + lane; /* row r at row[8r] */
             row[IC_FROZEN_LANES * IC_FROZEN_E] = v3_get(cd->irradiance, ch);
             for (int axis = 0; axis < 3; ++axis) {
-                row[IC_FROZEN_LANES * (IC_FROZEN_GRAD_ROT + axis)] = v3_get(cd->grad_rot[ch], axis);
+                row[IC_FROZEN_LANES * (IC_FROZEN_GRAD_ROT + axis)] =
+                    v3_get(v3_cross(cd->grad_rot[ch], v3(np->x, np->y, np->z)), axis);
                 row[IC_FROZEN_LANES * (IC_FROZEN_GRAD_TRANS + axis)] = v3_get(cd->grad_trans[ch], axis);
             }
         }

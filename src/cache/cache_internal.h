@@ -47,7 +47,9 @@ typedef struct ic_record_cold {
 enum { IC_FROZEN_LANES = 8 };
 
 /* Rows of a block's interpolation data: channel c (R, G, B) has rows IC_FROZEN_ROWS·c + IC_FROZEN_E
- * (E_i), + IC_FROZEN_GRAD_ROT + axis (∇r E_i, x y z) and + IC_FROZEN_GRAD_TRANS + axis (∇t E_i). */
+ * (E_i), + IC_FROZEN_GRAD_ROT + axis (∇r E_i × n_i, x y z: the rotation term (n_i × n)·∇r E_i of seed
+ * 000 §3 is n·(∇r E_i × n_i), a triple product, so a look-up needs no cross product) and
+ * + IC_FROZEN_GRAD_TRANS + axis (∇t E_i). */
 enum { IC_FROZEN_E = 0, IC_FROZEN_GRAD_ROT = 1, IC_FROZEN_GRAD_TRANS = 4, IC_FROZEN_ROWS = 7 };
 
 /* Eight list entries. Padding entries are all zero (R = a = 0: no distance passes). */
@@ -59,7 +61,7 @@ typedef struct ic_frozen_block {
     uint32_t index[8];           /* record index */
     uint8_t bounce[8];           /* bounce level */
     uint8_t flags[8];            /* IC_RECORD_* */
-    float interp[3 * IC_FROZEN_ROWS * 8]; /* rows of 8 lanes: E_i, ∇r E_i, ∇t E_i per channel (above) */
+    float interp[3 * IC_FROZEN_ROWS * 8]; /* rows of 8 lanes: E_i, ∇r E_i × n_i, ∇t E_i per channel */
 } ic_frozen_block;
 
 /* A leaf's header in `list`; its ⌈count/8⌉ blocks follow it. */

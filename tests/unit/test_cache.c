@@ -352,17 +352,34 @@ static int sums_close(float x, float y, uint32_t n)
     return fabsf(x - y) <= (4.0f * (float)n + 2.0f) * 0x1p-24f * fmaxf(fabsf(x), fabsf(y));
 }
 
+/* x and y agree up to the rounding of an extrapolation done in another (exact) arithmetic form:
+ * 10⁻⁵ absolute on values of order one, relative beyond. */
+static int values_close(float x, float y)
+{
+    return fabsf(x - y) <= 1e-5f * (1.0f + fmaxf(fabsf(x), fabsf(y)));
+}
+
 /* The frozen layout's answer a against the octree path's b: the same contributors in the same order
- * with the same weights and values (bitwise), sums equal up to the order of the additions (cache.c:
- * "Frozen look-ups"). */
+ * with the same weights (bitwise); values and sums equal up to rounding (cache.c: "Frozen look-ups":
+ * another order of the additions, the rotation term as n·(∇r E_i × n_i)). */
 static int octree_agrees(const answer *a, const answer *b)
 {
     uint32_t n = a->e.contributor_count;
-    if (a->hit != b->hit || n != b->e.contributor_count || a->e.contributions_written != b->e.contributions_written ||
-        memcmp(a->con, b->con, a->e.contributions_written * sizeof a->con[0]) != 0)
+    if (a->hit != b->hit || n != b->e.contributor_count || a->e.contributions_written != b->e.contributions_written)
         return 0;
-    return sums_close(a->e.weight_sum, b->e.weight_sum, n) && sums_close(a->e.irradiance.x, b->e.irradiance.x, n) &&
-           sums_close(a->e.irradiance.y, b->e.irradiance.y, n) && sums_close(a->e.irradiance.z, b->e.irradiance.z, n);
+    for (uint32_t k = 0; k < a->e.contributions_written; ++k) {
+        const ic_cache_contribution *x = &a->con[k], *y = &b->con[k];
+        if (x->record != y->record || memcmp(&x->weight, &y->weight, sizeof x->weight) != 0 ||
+            !values_close(x->value.x, y->value.x) || !values_close(x->value.y, y->value.y) ||
+            !values_close(x->value.z, y->value.z))
+            return 0;
+    }
+    float x[3] = {a->e.irradiance.x, a->e.irradiance.y, a->e.irradiance.z};
+    float y[3] = {b->e.irradiance.x, b->e.irradiance.y, b->e.irradiance.z};
+    for (int ch = 0; ch < 3; ++ch)
+        if (!sums_close(x[ch], y[ch], n) && !values_close(x[ch], y[ch]))
+            return 0;
+    return sums_close(a->e.weight_sum, b->e.weight_sum, n);
 }
 
 /* Same contributors in the same order with the same weights and values, same sums (bitwise). */
