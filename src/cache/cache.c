@@ -505,9 +505,9 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
 
 /*
  * Frozen look-ups. A leaf's list is read one block of eight entries at a time; every test and the
- * extrapolation of seed 000 §3 run on the eight lanes side by side. Contributor k of the list (k-th
- * entry, not k-th contributor) adds w_i·E_i(p) and w_i to the running sums of lane k mod 8; the eight
- * lane sums are added in one fixed order at the end (lane_total). Every code path — portable C, SSE2
+ * extrapolation of seed 000 §3 run on the eight lanes side by side. The entry at list position k, if
+ * it contributes, adds w_i·E_i(p) and w_i to the running sums of lane k mod 8; the eight lane sums
+ * are added in one fixed order at the end (lane_total). Every code path — portable C, SSE2
  * (two halves of four lanes), AVX2 (eight) — performs the same IEEE operations on the same operands
  * per lane (packed add, mul, div and sqrt round like their scalar forms; no FMA: contraction is off),
  * so all three give the same bits. Against the octree path: the same contributors in the same order
