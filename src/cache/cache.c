@@ -908,6 +908,16 @@ int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path)
         path > IC_LOOKUP_AVX2)
         return 0;
     c->lookup_path = path;
+#if defined(IC_HAVE_AVX2_PATH)
+    if (path == IC_LOOKUP_AVX2)
+        c->query_frozen = query_frozen_avx2;
+#endif
+#if defined(__SSE2__)
+    if (path == IC_LOOKUP_SSE2)
+        c->query_frozen = query_frozen_sse2;
+#endif
+    if (path == IC_LOOKUP_PORTABLE)
+        c->query_frozen = query_frozen_portable;
     return 1;
 }
 
@@ -929,19 +939,9 @@ int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimat
     return ic_cache_query_hinted(c, q, NULL, out);
 }
 
-int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
+/* ic_cache_query on the octree (the cache thawed). */
+static int query_octree(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
 {
-    if (c->frozen.is_valid)
-#if defined(IC_HAVE_AVX2_PATH)
-        return c->lookup_path == IC_LOOKUP_PORTABLE ? query_frozen_portable(c, q, hint, out)
-               : c->lookup_path == IC_LOOKUP_AVX2   ? query_frozen_avx2(c, q, hint, out)
-                                                    : query_frozen_sse2(c, q, hint, out);
-#elif defined(__SSE2__)
-        return c->lookup_path == IC_LOOKUP_PORTABLE ? query_frozen_portable(c, q, hint, out)
-                                                    : query_frozen_sse2(c, q, hint, out);
-#else
-        return query_frozen_portable(c, q, hint, out);
-#endif
     float acc[3] = {0.0f, 0.0f, 0.0f};
     memset(out, 0, sizeof *out);
     float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
@@ -969,6 +969,11 @@ int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_
         }
     }
     return finish(out, acc);
+}
+
+int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
+{
+    return c->frozen.is_valid ? c->query_frozen(c, q, hint, out) : query_octree(c, q, out);
 }
 
 int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)

@@ -105,6 +105,8 @@ struct ic_cache {
     float tree_scale;            /* max(1, final_accuracy_scale) */
     ic_frozen frozen;            /* read-only look-up layout, valid between a freeze and the next insertion */
     int lookup_path;             /* ic_lookup_path the frozen look-ups take (the best this CPU runs) */
+    /* That path's look-up (cache.c), called through this pointer: one call, no dispatch chain. */
+    int (*query_frozen)(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out);
     /* Insertion scratch (insertion is single-threaded with respect to the cache). */
     uint32_t *scratch;
     uint32_t scratch_cap;
