@@ -6,8 +6,8 @@
  * usage: bench_lookup [--save DIR] SCENE [width height] — prints one row per setting and look-up path
  * (the octree with the cache thawed, the frozen layout, the frozen layout with a caller hint, the same
  * in batches of 256 look-ups per call; cache.h: FROZEN LOOK-UPS) with a digest of the answers; asserts
- * nothing. Single thread (= per core), median and best of 5 passes over all shading points. --save DIR also writes both caches and their shading points to DIR;
- * bench_lookup --load DIR times those again without building the caches (the same build's files: to
+ * nothing. Single thread (= per core), median and best of 5 passes over all shading points.
+ * --save DIR also writes both caches and their shading points to DIR; bench_lookup --load DIR times those again without building the caches (the same build's files: to
  * compare code changes on the same look-ups).
  */
 #include "cache/cache_internal.h" /* ic_cache_set_lookup_path */

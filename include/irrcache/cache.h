@@ -68,10 +68,10 @@
  *   Results: the octree path's contributors, in the same order, with the same weights, bit for bit;
  *   the extrapolated values E_i(p) (the rotation term evaluated as n·(∇r E_i × n_i)) and the sums
  *   (added in eight interleaved partial sums) may differ from the octree path's in the last bits.
- *   Every frozen code path (AVX2, SSE2, portable) gives the same bits. Any change to the records (insertion, ic_cache_set_record_accuracy,
- *   ic_cache_set_record_flags) thaws the cache: look-ups go through the octree again until the next
- *   freeze. Memory: see ic_cache_memory_bytes; the index's shape:
- *   ic_cache_get_index_stats.
+ *   Every frozen code path (AVX2, SSE2, portable) gives the same bits. Any change to the records
+ *   (insertion, ic_cache_set_record_accuracy, ic_cache_set_record_flags) thaws the cache: look-ups
+ *   go through the octree again until the next freeze. Memory: see ic_cache_memory_bytes; the
+ *   index's shape: ic_cache_get_index_stats.
  */
 #ifndef IRRCACHE_CACHE_H
 #define IRRCACHE_CACHE_H

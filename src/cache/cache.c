@@ -593,7 +593,8 @@ static unsigned block_portable(const ic_cache_params *params, const ic_frozen_bl
 }
 
 /* Start of a frozen look-up: clears the estimate and returns the first block of p's leaf (NULL outside
- * the root), its number of blocks and the acceptance's accuracy scale. */
+ * the root), its number of blocks, the acceptance's accuracy scale and whether every entry of the
+ * leaf is eligible (q's bounce level, none disabled: the SIMD code then skips that test). */
 static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, const ic_cache_lookup *q,
                                                             ic_cache_hint *hint, ic_cache_estimate *out,
                                                             int is_portable, uint32_t *blocks, float *s,
@@ -607,7 +608,6 @@ static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, c
     /* Bounce levels are stored in bytes: a higher level has no records. */
     *blocks = q->bounce <= UINT8_MAX ? (leaf->count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES : 0;
     out->records_tested = leaf->count;
-    /* Every entry of this level and enabled: the SIMD code skips the per-entry check. */
     *all_eligible = leaf->all_eligible == q->bounce + 1u;
     return (const ic_frozen_block *)(leaf + 1);
 }
@@ -737,10 +737,10 @@ static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cac
     for (int h = 0; h < 2; ++h) {
         acc[h][0] = acc[h][1] = acc[h][2] = wsum[h] = _mm_setzero_ps();
     }
-    for (uint32_t b = 0; b < blocks; ++b) {
-        contributors += bits_in[half_sse2(&blk[b], 0, p, n, s, neg_tolerance, ward, all_eligible, q, out, acc[0], &wsum[0])];
-        contributors += bits_in[half_sse2(&blk[b], 4, p, n, s, neg_tolerance, ward, all_eligible, q, out, acc[1], &wsum[1])];
-    }
+    for (uint32_t b = 0; b < blocks; ++b)
+        for (unsigned h = 0; h < 2; ++h)
+            contributors += bits_in[half_sse2(&blk[b], 4 * h, p, n, s, neg_tolerance, ward, all_eligible, q, out,
+                                              acc[h], &wsum[h])];
     out->weight_sum = lane_total_sse2(_mm_add_ps(wsum[0], wsum[1]));
     out->contributor_count = contributors;
     float total[3];

@@ -107,7 +107,8 @@ static ic_result reserve_active(builder *b, size_t n)
 static ic_result append_leaf(builder *b, uint32_t count, size_t *offset)
 {
     ic_frozen *f = b->f;
-    size_t units = (sizeof(ic_frozen_leaf) + (size_t)(count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES * sizeof(ic_frozen_block)) / 8;
+    size_t blocks = ((size_t)count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES;
+    size_t units = (sizeof(ic_frozen_leaf) + blocks * sizeof(ic_frozen_block)) / 8;
     void *list = f->list, *leaf_at = f->leaf_at;
     ic_result rc = grow(&list, &b->list_cap, f->list_len + units, sizeof *f->list);
     f->list = list;

@@ -129,8 +129,8 @@ static inline ic_octree_items ic_cache_point_items(const ic_cache *c)
 #define IC_TL_NORMAL_SCALE 8.1131404f
 
 /*
- * The weight of a record (sp: position and R_i, np: normal and a_i) at (p, n) with acceptance scale s; returns 0 if the record is rejected,
- * else writes w_i(p) to *w and p − p_i to *dp. Each rejection test is labelled (after Radiance's
+ * The weight of a record (sp: position and R_i, np: normal and a_i) at (p, n) with acceptance
+ * scale s; returns 0 if the record is rejected, else writes w_i(p) to *w and p − p_i to *dp. Each rejection test is labelled (after Radiance's
  * ambient.c habit). The first test is the influence sphere a_i·s·R_i of both weights; the octree
  * holds every sphere a point lies in, so the octree and a linear scan accept the same records.
  */

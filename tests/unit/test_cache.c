@@ -433,8 +433,8 @@ static uint32_t batch_differs(const ic_cache *c, const ic_cache_lookup *q, uint3
  * give that answer bit for bit: asked in order with one hint, in a scrambled order (hints left over
  * from far-away look-ups), with garbage hints, and through every code path (portable — the SIMD
  * code's reference, used where SSE2 is absent —, SSE2, AVX2) with no hint, with hints in order,
- * without a contributions buffer and in batches (ic_cache_query_batch). Query k asks for bounce level k mod `bounces`, level 3 standing
- * for 256 (beyond the bytes levels are stored in). The cache is thawed on entry and frozen on exit. */
+ * without a contributions buffer and in batches (ic_cache_query_batch). Query k asks for bounce
+ * level k mod `bounces`, level 3 standing for 256 (beyond the bytes levels are stored in). The cache is thawed on entry and frozen on exit. */
 static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces, const char *what)
 {
     uint32_t total = 2 * pairs + 64;
@@ -452,7 +452,8 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
         q[k].position = v3(far[k % 8], 10.0f, far[(k / 8) % 8]);
         q[k].normal = v3(0, 0, 1);
     }
-    uint32_t differ[2][8] = {{0}}, disagree[2] = {0, 0}, hint_hits = 0, found_at_level[3] = {0, 0, 0}, paths_run[4] = {0, 0, 0, 0};
+    uint32_t differ[2][8] = {{0}}, disagree[2] = {0, 0}, hint_hits = 0, found_at_level[3] = {0, 0, 0};
+    uint32_t paths_run[4] = {0, 0, 0, 0};
     for (int acc = 0; acc < 2; ++acc) {
         ic_cache_thaw(c);
         for (uint32_t k = 0; k < total; ++k) {
