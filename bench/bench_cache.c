@@ -8,8 +8,9 @@
  * clamping (seed 004 §4.2), and in batches of 10k (a batch-strategy pass), timing batch insertion.
  * Look-ups at 1M random surface points run on one thread (per-core rate; median of 5 runs) with the
  * construction and the final acceptance, and on all threads; after ic_cache_rebuild_index each cache
- * is timed through its octree (thawed), its frozen layout, and the frozen layout with a hint
- * (cache.h: FROZEN LOOK-UPS), back to back in one run.
+ * is timed through its octree (thawed), its frozen layout, the frozen layout with a hint, and in
+ * batches (ic_cache_query_batch; cache.h: FROZEN LOOK-UPS), back to back in one run. Only the
+ * look-up calls are timed.
  *
  * Usage: bench_cache [records] (default 300000). Prints a table; asserts nothing.
  */
@@ -117,28 +118,45 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint. */
-typedef enum path_kind { PATH_OCTREE, PATH_FROZEN, PATH_HINTED } path_kind;
+/* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint, and
+ * frozen in batches of CHUNK look-ups with a hint (ic_cache_query_batch). */
+typedef enum path_kind { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATH_BATCH, PATH_KINDS } path_kind;
+enum { CHUNK = 256 };
 
-static lookup_stats time_lookups(const ic_cache *c, const surface_point *q, ic_cache_acceptance acc, int hinted)
+/* Look-ups of q on one thread, CHUNK at a time: a chunk's requests are built, its calls timed, its
+ * answers counted. Only the calls are timed (two clock reads per CHUNK look-ups), so every path is
+ * measured alike. */
+static lookup_stats time_lookups(const ic_cache *c, const surface_point *q, ic_cache_acceptance acc, path_kind path)
 {
     lookup_stats st = {0, 0, 0, 0};
     double rates[REPS];
     uint64_t tested = 0, contributors = 0, hits = 0;
     float sink = 0.0f;
+    ic_cache_lookup l[CHUNK];
+    ic_cache_estimate e[CHUNK];
     for (int rep = 0; rep < REPS; ++rep) {
         tested = contributors = hits = 0;
-        ic_cache_hint hint = {0};
-        double t0 = now();
-        for (int k = 0; k < QUERIES; ++k) {
-            ic_cache_lookup l = {q[k].p, q[k].n, acc, 0, NULL, 0};
-            ic_cache_estimate e;
-            hits += (uint64_t)ic_cache_query_hinted(c, &l, hinted ? &hint : NULL, &e);
-            tested += e.records_tested;
-            contributors += e.contributor_count;
-            sink += e.irradiance.x;
+        ic_cache_hint hint = {0}, *h = path >= PATH_HINTED ? &hint : NULL;
+        double seconds = 0.0;
+        for (int first = 0; first < QUERIES; first += CHUNK) {
+            int m = QUERIES - first < CHUNK ? QUERIES - first : CHUNK;
+            for (int k = 0; k < m; ++k)
+                l[k] = ic_cache_lookup_at(q[first + k].p, q[first + k].n, acc);
+            double t0 = now();
+            if (path == PATH_BATCH)
+                ic_cache_query_batch(c, l, (size_t)m, h, e);
+            else
+                for (int k = 0; k < m; ++k)
+                    ic_cache_query_hinted(c, &l[k], h, &e[k]);
+            seconds += now() - t0;
+            for (int k = 0; k < m; ++k) {
+                hits += e[k].contributor_count > 0;
+                tested += e[k].records_tested;
+                contributors += e[k].contributor_count;
+                sink += e[k].irradiance.x;
+            }
         }
-        rates[rep] = QUERIES / (now() - t0);
+        rates[rep] = QUERIES / seconds;
     }
     qsort(rates, REPS, sizeof rates[0], cmp_double);
     st.per_second = rates[REPS / 2];
@@ -220,30 +238,30 @@ static int cmp_key(const void *a, const void *b)
 static void print_row(const char *cache, const char *order, const ic_cache *c, const surface_point *q,
                       ic_cache_acceptance acc)
 {
-    lookup_stats st = time_lookups(c, q, acc, 0);
+    lookup_stats st = time_lookups(c, q, acc, PATH_OCTREE);
     char label[128];
     snprintf(label, sizeof label, "%s, %s, %s", cache, order, acc == IC_ACCEPT_FINAL ? "final" : "constr.");
     printf("| %-52s | %8.2f | %6.2f | %6.2f | %5.1f%% |\n", label, st.per_second * 1e-6, st.tested, st.contributors,
            100.0 * st.hit);
 }
 
-/* One row per look-up path on a rebuilt cache (octree path thawed, then frozen, then frozen with a
- * hint), the same queries, timed back to back; speed-ups are ratios within this run. */
+/* One row per look-up path on a rebuilt cache (octree path thawed, then frozen, frozen with a hint,
+ * frozen in batches), the same queries, timed back to back; speed-ups are ratios within this run. */
 static void print_paths(const char *cache, const char *order, ic_cache *c, const surface_point *q,
                         ic_cache_acceptance acc)
 {
-    static const char *name[3] = {"octree", "frozen", "frozen+hint"};
-    lookup_stats st[3];
+    static const char *name[PATH_KINDS] = {"octree", "frozen", "frozen+hint", "frozen batch"};
+    lookup_stats st[PATH_KINDS];
     ic_error err;
     ic_cache_thaw(c);
-    st[PATH_OCTREE] = time_lookups(c, q, acc, 0);
+    st[PATH_OCTREE] = time_lookups(c, q, acc, PATH_OCTREE);
     if (ic_cache_freeze(c, &err) != IC_OK) {
         fprintf(stderr, "bench_cache: %s\n", err.message);
         exit(1);
     }
-    st[PATH_FROZEN] = time_lookups(c, q, acc, 0);
-    st[PATH_HINTED] = time_lookups(c, q, acc, 1);
-    for (int k = 0; k < 3; ++k) {
+    for (int k = PATH_FROZEN; k < PATH_KINDS; ++k)
+        st[k] = time_lookups(c, q, acc, (path_kind)k);
+    for (int k = 0; k < PATH_KINDS; ++k) {
         char label[128];
         snprintf(label, sizeof label, "%s, %s, %s, %s", cache, order, acc == IC_ACCEPT_FINAL ? "final" : "constr.",
                  name[k]);
@@ -355,8 +373,8 @@ int main(int argc, char **argv)
     /* The batch caches' octrees were rebuilt by their (large) batch; rebuild anyway for equal footing. */
     ic_cache_rebuild_index(without_v, &err);
     ic_cache_rebuild_index(with_v, &err);
-    printf("\nAfter ic_cache_rebuild_index: octree path (thawed) vs frozen layout vs frozen + hint, same queries;\n"
-           "speed-up = rate / octree rate of the same cache, order and acceptance:\n\n");
+    printf("\nAfter ic_cache_rebuild_index: octree path (thawed) vs frozen layout vs frozen + hint vs batches,\n"
+           "same queries; speed-up = rate / octree rate of the same cache, order and acceptance:\n\n");
     printf("| %-58s | %8s | %6s | %6s | %6s | %6s |\n", "cache, order, acceptance, path", "M look/s", "speed",
            "refs", "contrib", "hit");
     printf("|%s|%s|%s|%s|%s|%s|\n", "------------------------------------------------------------", "----------",

@@ -64,7 +64,9 @@
  *   that the weight test and the extrapolation run eight entries at a time (AVX2, chosen at run time;
  *   four at a time with SSE2; a portable fallback) and a look-up reads one contiguous run of memory.
  *   A look-up descends (or, with a hint, stays in the previous leaf) and tests one list. A look-up
- *   without a contributions buffer takes a shorter route.
+ *   without a contributions buffer takes a shorter route. A batch (ic_cache_query_batch) finds the
+ *   leaves of its next points ahead and fetches the start of their lists, which pays on caches larger
+ *   than the CPU's caches.
  *   Results: the octree path's contributors, in the same order, with the same weights, bit for bit;
  *   the extrapolated values E_i(p) (the rotation term evaluated as n·(∇r E_i × n_i)) and the sums
  *   (added in eight interleaved partial sums) may differ from the octree path's in the last bits.

@@ -440,10 +440,44 @@ static inline int eligible(const ic_cache *c, uint32_t i, const ic_cache_lookup 
     return cd->bounce == q->bounce && !(cd->flags & IC_RECORD_DISABLED);
 }
 
+#if defined(__SSE2__)
+/* p's leaf by descent from the root (pv: p, 4th lane unused), NULL outside the root. The three axes go
+ * side by side: the comparisons of the octree's descent (octree.h: ic_octree_path), and c ± h as
+ * c + (±h), which IEEE arithmetic rounds alike, so the same leaf; and no branch on an axis's side,
+ * which no predictor guesses. With lo and hi (else NULL) it also stores the leaf's cell there, found
+ * as the builder finds it (cache_frozen.c: child_cell, the same operations): a point inside it
+ * descends to the same leaf. */
+static IC_ALWAYS_INLINE const ic_frozen_leaf *descend_sse2(const ic_frozen *f, __m128 pv, __m128 *lo, __m128 *hi)
+{
+    if (!f->has_root)
+        return NULL;
+    __m128 l = _mm_loadu_ps(f->root_lo), h = _mm_loadu_ps(f->root_hi);
+    if ((_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(pv, l), _mm_cmplt_ps(pv, h))) & 7) != 7)
+        return NULL;
+    __m128 cv = _mm_setr_ps(f->cx, f->cy, f->cz, 0.0f), hv = _mm_set1_ps(f->half);
+    const __m128 sign = _mm_set1_ps(-0.0f), half = _mm_set1_ps(0.5f);
+    const uint32_t *node = f->node;
+    uint32_t v = node[0];
+    while (!(v & IC_FROZEN_LEAF)) {
+        hv = _mm_mul_ps(hv, half);
+        __m128 upper = _mm_cmpge_ps(pv, cv);
+        if (lo) { /* the child's cell: above the centre lo = max(lo, centre), below it hi = min(hi, centre) */
+            l = _mm_or_ps(_mm_and_ps(upper, _mm_max_ps(l, cv)), _mm_andnot_ps(upper, l));
+            h = _mm_or_ps(_mm_and_ps(upper, h), _mm_andnot_ps(upper, _mm_min_ps(h, cv)));
+        }
+        cv = _mm_add_ps(cv, _mm_xor_ps(hv, _mm_andnot_ps(upper, sign)));
+        v = node[v + ((unsigned)_mm_movemask_ps(upper) & 7u)];
+    }
+    if (lo) {
+        *lo = l;
+        *hi = h;
+    }
+    return (const ic_frozen_leaf *)(f->list + (v & ~IC_FROZEN_LEAF));
+}
+#endif
+
 /* Frozen layout: the leaf whose cell holds p — the hint's when p is still in its cell, else found by
- * descent, which updates the hint; NULL outside the root. With SSE2 (unless is_portable) the three axes
- * go side by side: the same comparisons, and c ± h as c + (±h), which IEEE arithmetic rounds alike, so
- * the same leaf; and no branch on an axis's side, which no predictor guesses. */
+ * descent, which updates the hint; NULL outside the root. With SSE2 (unless is_portable), descend_sse2. */
 static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic_vec3 p, ic_cache_hint *hint,
                                                           int is_portable)
 {
@@ -456,21 +490,8 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
             if ((_mm_movemask_ps(in) & 7) == 7)
                 return l;
         }
-        __m128 cv = _mm_setr_ps(f->cx, f->cy, f->cz, 0.0f), hv = _mm_set1_ps(f->half);
-        __m128 root = _mm_and_ps(_mm_cmpge_ps(pv, _mm_sub_ps(cv, hv)), _mm_cmple_ps(pv, _mm_add_ps(cv, hv)));
-        if (!f->has_root || (_mm_movemask_ps(root) & 7) != 7)
-            return NULL;
-        const __m128 sign = _mm_set1_ps(-0.0f), half = _mm_set1_ps(0.5f);
-        const uint32_t *node = f->node;
-        uint32_t v = node[0];
-        while (!(v & IC_FROZEN_LEAF)) {
-            hv = _mm_mul_ps(hv, half);
-            __m128 upper = _mm_cmpge_ps(pv, cv);
-            cv = _mm_add_ps(cv, _mm_xor_ps(hv, _mm_andnot_ps(upper, sign)));
-            v = node[v + ((unsigned)_mm_movemask_ps(upper) & 7u)];
-        }
-        const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + (v & ~IC_FROZEN_LEAF));
-        if (hint)
+        const ic_frozen_leaf *l = descend_sse2(f, pv, NULL, NULL);
+        if (l && hint)
             hint->leaf = l->id + 1u;
         return l;
     }
@@ -592,16 +613,15 @@ static unsigned block_portable(const ic_cache_params *params, const ic_frozen_bl
     return count;
 }
 
-/* Start of a frozen look-up: clears the estimate and returns the first block of p's leaf (NULL outside
- * the root), its number of blocks, the acceptance's accuracy scale and whether every entry of the
- * leaf is eligible (q's bounce level, none disabled: the SIMD code then skips that test). */
-static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, const ic_cache_lookup *q,
-                                                            ic_cache_hint *hint, ic_cache_estimate *out,
-                                                            int is_portable, uint32_t *blocks, float *s,
-                                                            int *all_eligible)
+/* Start of a frozen look-up in p's leaf (NULL: p is outside the root): clears the estimate and returns
+ * the leaf's first block (NULL without a leaf), its number of blocks, the acceptance's accuracy scale
+ * and whether every entry of the leaf is eligible (q's bounce level, none disabled: the SIMD code then
+ * skips that test). */
+static IC_ALWAYS_INLINE const ic_frozen_block *leaf_begin(const ic_cache *c, const ic_cache_lookup *q,
+                                                          const ic_frozen_leaf *leaf, ic_cache_estimate *out,
+                                                          uint32_t *blocks, float *s, int *all_eligible)
 {
     memset(out, 0, sizeof *out);
-    const ic_frozen_leaf *leaf = frozen_leaf(&c->frozen, q->position, hint, is_portable);
     if (!leaf)
         return NULL;
     *s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
@@ -610,6 +630,16 @@ static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, c
     out->records_tested = leaf->count;
     *all_eligible = leaf->all_eligible == q->bounce + 1u;
     return (const ic_frozen_block *)(leaf + 1);
+}
+
+/* leaf_begin in the leaf frozen_leaf finds with the hint. */
+static IC_ALWAYS_INLINE const ic_frozen_block *frozen_begin(const ic_cache *c, const ic_cache_lookup *q,
+                                                            ic_cache_hint *hint, ic_cache_estimate *out,
+                                                            int is_portable, uint32_t *blocks, float *s,
+                                                            int *all_eligible)
+{
+    const ic_frozen_leaf *leaf = frozen_leaf(&c->frozen, q->position, hint, is_portable);
+    return leaf_begin(c, q, leaf, out, blocks, s, all_eligible);
 }
 
 static int query_frozen_portable(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
@@ -730,7 +760,7 @@ static int query_frozen_sse2(const ic_cache *c, const ic_cache_lookup *q, ic_cac
     if (!blk)
         return 0;
     ic_vec3 p = q->position, n = q->normal;
-    float neg_tolerance = -c->params.behind_tolerance; /* read once, as in query_frozen_avx2_inline */
+    float neg_tolerance = -c->params.behind_tolerance; /* read once, as in query_leaf_avx2 */
     int ward = c->params.weight == IC_WEIGHT_WARD;
     /* Lane sums: [0] lanes 0–3, [1] lanes 4–7. */
     __m128 acc[2][3], wsum[2];
@@ -838,13 +868,14 @@ static IC_TARGET_AVX2 inline float lane_total_avx2(__m256 v)
     return lane_total_sse2(_mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1)));
 }
 
-static IC_TARGET_AVX2 IC_ALWAYS_INLINE int query_frozen_avx2_inline(const ic_cache *c, const ic_cache_lookup *q,
-                                                                   ic_cache_hint *hint, ic_cache_estimate *out)
+/* The AVX2 look-up of q in its leaf (NULL: outside the root). */
+static IC_TARGET_AVX2 IC_ALWAYS_INLINE int query_leaf_avx2(const ic_cache *c, const ic_cache_lookup *q,
+                                                           const ic_frozen_leaf *leaf, ic_cache_estimate *out)
 {
     float s;
     uint32_t blocks, contributors = 0;
     int all_eligible;
-    const ic_frozen_block *blk = frozen_begin(c, q, hint, out, 0, &blocks, &s, &all_eligible);
+    const ic_frozen_block *blk = leaf_begin(c, q, leaf, out, &blocks, &s, &all_eligible);
     if (!blk)
         return 0;
     __m256 acc[3] = {_mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps()}, wsum = _mm256_setzero_ps();
@@ -871,16 +902,65 @@ static IC_TARGET_AVX2 IC_ALWAYS_INLINE int query_frozen_avx2_inline(const ic_cac
 static IC_TARGET_AVX2 int query_frozen_avx2(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint,
                                             ic_cache_estimate *out)
 {
-    return query_frozen_avx2_inline(c, q, hint, out);
+    return query_leaf_avx2(c, q, frozen_leaf(&c->frozen, q->position, hint, 0), out);
 }
 
-/* ic_cache_query_batch's loop with the look-up inlined: no call, no dispatch per look-up. */
+/*
+ * Batches look AHEAD points ahead: while look-up k runs, the leaf of point k + AHEAD is found and the
+ * start of its list is prefetched, so a leaf that is not in the CPU's caches has arrived by the time
+ * its look-up begins. Finding it must not wait for that leaf either: the hint test of the next point
+ * needs the leaf's cell, which the descent computes (descend_sse2) instead of reading it from the
+ * leaf's header. So the look-ahead reads only the node array. The cell is exact: a point inside it
+ * descends to that leaf, so the answers are the single calls'. A ring of AHEAD leaves, 8 ahead and the
+ * first block (1 KiB) prefetched: measured in BENCHMARKS.md ("Timing only the look-up calls").
+ */
+enum { AHEAD = 8, PREFETCH_BYTES = 1024 };
+
+/* The batch's leaf finder: the leaf whose cell [*lo, *hi) holds p is `cur` (the previous point's);
+ * else the descent finds p's leaf, sets *lo and *hi to its cell and prefetches the start of its list.
+ * NULL (lo, hi unchanged) when p is outside the root, as frozen_leaf. */
+static IC_TARGET_AVX2 IC_ALWAYS_INLINE const ic_frozen_leaf *batch_leaf(const ic_frozen *f, ic_vec3 p, __m128 *lo,
+                                                                         __m128 *hi, const ic_frozen_leaf *cur)
+{
+    __m128 pv = _mm_setr_ps(p.x, p.y, p.z, 0.0f);
+    if ((_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(pv, *lo), _mm_cmplt_ps(pv, *hi))) & 7) == 7)
+        return cur;
+    const ic_frozen_leaf *leaf = descend_sse2(f, pv, lo, hi);
+    if (leaf)
+        for (unsigned o = 0; o < PREFETCH_BYTES; o += 64)
+            _mm_prefetch((const char *)leaf + o, _MM_HINT_T0);
+    return leaf;
+}
+
+/* ic_cache_query_batch on the AVX2 path: the look-up inlined (no call, no dispatch per look-up), leaves
+ * found AHEAD points ahead into a ring. The hint is read once and written once; in between the current
+ * leaf and its cell stay in registers. */
 static IC_TARGET_AVX2 size_t query_batch_avx2(const ic_cache *c, const ic_cache_lookup *q, size_t count,
                                               ic_cache_hint *hint, ic_cache_estimate *out)
 {
+    const ic_frozen *f = &c->frozen;
+    const ic_frozen_leaf *ring[AHEAD], *cur = NULL;
+    __m128 lo = _mm_set1_ps(INFINITY), hi = _mm_set1_ps(-INFINITY); /* an empty cell: no point is inside */
+    if (hint && hint->leaf - 1u < f->leaf_count) {
+        cur = (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
+        lo = _mm_loadu_ps(cur->lo);
+        hi = _mm_loadu_ps(cur->hi);
+    }
+    for (size_t k = 0; k < AHEAD && k < count; ++k) {
+        ring[k] = batch_leaf(f, q[k].position, &lo, &hi, cur);
+        cur = ring[k] ? ring[k] : cur;
+    }
     size_t found = 0;
-    for (size_t k = 0; k < count; ++k)
-        found += (size_t)query_frozen_avx2_inline(c, &q[k], hint, &out[k]);
+    for (size_t k = 0; k < count; ++k) {
+        const ic_frozen_leaf *leaf = ring[k % AHEAD];
+        if (k + AHEAD < count) {
+            ring[k % AHEAD] = batch_leaf(f, q[k + AHEAD].position, &lo, &hi, cur);
+            cur = ring[k % AHEAD] ? ring[k % AHEAD] : cur;
+        }
+        found += (size_t)query_leaf_avx2(c, &q[k], leaf, &out[k]);
+    }
+    if (hint && cur)
+        hint->leaf = cur->id + 1u;
     return found;
 }
 

@@ -259,8 +259,11 @@ ic_result ic_frozen_build(ic_cache *c)
         cell root = {t->cx, t->cy, t->cz, t->half, {t->cx - t->half, t->cy - t->half, t->cz - t->half},
                      {t->cx + t->half, t->cy + t->half, t->cz + t->half}};
         /* The root test is p ≤ centre + h (closed); p < the next float up says the same. */
-        for (int a = 0; a < 3; ++a)
+        for (int a = 0; a < 3; ++a) {
             root.hi[a] = nextafterf(root.hi[a], INFINITY);
+            f->root_lo[a] = root.lo[a];
+            f->root_hi[a] = root.hi[a];
+        }
         f->node_count = 1;
         rc = build_node(&b, 0, 0, &root, 0, 0);
     }

@@ -78,6 +78,7 @@ typedef struct ic_frozen {
     int is_valid;                /* 0: thawed, look-ups use the octree */
     int has_root;                /* 0: empty cache */
     float cx, cy, cz, half;      /* root cube, as in the octree */
+    float root_lo[4], root_hi[4]; /* the root's cell (lo ≤ p < hi per axis; the 4th lane unused) */
     uint32_t *node;
     uint32_t node_count;
     uint64_t *list;              /* leaf headers and blocks, addressed in 8-byte units */

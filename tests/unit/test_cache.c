@@ -395,17 +395,26 @@ static int same_answer(const answer *a, const answer *b)
 
 enum { BATCH_SIZE = 37 }; /* look-ups per ic_cache_query_batch call in the checks (not a divisor of theirs) */
 
-/* Asks q[0…total−1] through ic_cache_query_batch, BATCH_SIZE at a time with one hint carried over, with
- * contributions buffers and then without; returns how many answers differ from ref (bitwise) or from
- * the count the call returned. `room`: BATCH_SIZE answers of scratch. */
+/* Asks q[0…total−1] through ic_cache_query_batch with one hint carried over: BATCH_SIZE at a time with
+ * contributions buffers, then without; then in batches of 1 to 9 look-ups (shorter and longer than the
+ * AVX2 path's look-ahead) each starting from a garbage hint. Returns how many answers differ from ref
+ * (bitwise) or from the count the call returned, plus 1 for each run whose batches carried over the
+ * hint end with another hint than single calls in order (want_hint). `room`: BATCH_SIZE answers of
+ * scratch. */
 static uint32_t batch_differs(const ic_cache *c, const ic_cache_lookup *q, uint32_t total, const answer *ref,
-                              answer *room)
+                              uint32_t want_hint, answer *room)
 {
     uint32_t bad = 0;
-    for (int bare = 0; bare < 2; ++bare) {
+    for (int run = 0; run < 3; ++run) {
+        int bare = run > 0, garbage = run == 2;
         ic_cache_hint hint = {0};
-        for (uint32_t first = 0; first < total; first += BATCH_SIZE) {
-            uint32_t m = total - first < BATCH_SIZE ? total - first : BATCH_SIZE, hits = 0;
+        uint32_t size = BATCH_SIZE;
+        for (uint32_t first = 0; first < total; first += size) {
+            if (garbage) {
+                size = 1 + first % 9;
+                hint.leaf = first * 2654435761u;
+            }
+            uint32_t m = total - first < size ? total - first : size, hits = 0;
             ic_cache_lookup l[BATCH_SIZE];
             ic_cache_estimate e[BATCH_SIZE];
             for (uint32_t k = 0; k < m; ++k) {
@@ -423,6 +432,7 @@ static uint32_t batch_differs(const ic_cache *c, const ic_cache_lookup *q, uint3
             }
             bad += found != hits;
         }
+        bad += !garbage && hint.leaf != want_hint;
     }
     return bad;
 }
@@ -497,7 +507,7 @@ static void check_frozen_identical(ic_cache *c, uint32_t pairs, uint32_t bounces
                 ask_bare(c, &q[k], &bare_order, got);
                 differ[acc][6] += !same_sums(got, &ref[k]);
             }
-            differ[acc][7] += batch_differs(c, q, total, ref, batch);
+            differ[acc][7] += batch_differs(c, q, total, ref, in_order.leaf, batch);
         }
         ic_cache_set_lookup_path(c, IC_LOOKUP_BEST);
     }
