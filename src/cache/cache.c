@@ -440,6 +440,14 @@ static inline int eligible(const ic_cache *c, uint32_t i, const ic_cache_lookup 
     return cd->bounce == q->bounce && !(cd->flags & IC_RECORD_DISABLED);
 }
 
+/* The leaf a hint names; NULL for none or a value out of range (any value is safe). */
+static inline const ic_frozen_leaf *hint_leaf(const ic_frozen *f, const ic_cache_hint *hint)
+{
+    if (!hint || hint->leaf - 1u >= f->leaf_count)
+        return NULL;
+    return (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
+}
+
 #if defined(__SSE2__)
 /* p's leaf by descent from the root (pv: p, 4th lane unused), NULL outside the root. The three axes go
  * side by side: the comparisons of the octree's descent (octree.h: ic_octree_path), and c ± h as
@@ -484,25 +492,21 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
 #if defined(__SSE2__)
     if (!is_portable) {
         __m128 pv = _mm_setr_ps(p.x, p.y, p.z, 0.0f);
-        if (hint && hint->leaf - 1u < f->leaf_count) {
-            const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
-            __m128 in = _mm_and_ps(_mm_cmpge_ps(pv, _mm_loadu_ps(l->lo)), _mm_cmplt_ps(pv, _mm_loadu_ps(l->hi)));
-            if ((_mm_movemask_ps(in) & 7) == 7)
-                return l;
-        }
-        const ic_frozen_leaf *l = descend_sse2(f, pv, NULL, NULL);
+        const ic_frozen_leaf *l = hint_leaf(f, hint);
+        if (l && (_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(pv, _mm_loadu_ps(l->lo)),
+                                             _mm_cmplt_ps(pv, _mm_loadu_ps(l->hi)))) & 7) == 7)
+            return l;
+        l = descend_sse2(f, pv, NULL, NULL);
         if (l && hint)
             hint->leaf = l->id + 1u;
         return l;
     }
 #endif
     (void)is_portable;
-    if (hint && hint->leaf - 1u < f->leaf_count) {
-        const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
-        if (p.x >= l->lo[0] && p.x < l->hi[0] && p.y >= l->lo[1] && p.y < l->hi[1] && p.z >= l->lo[2] &&
-            p.z < l->hi[2])
-            return l;
-    }
+    const ic_frozen_leaf *l = hint_leaf(f, hint);
+    if (l && p.x >= l->lo[0] && p.x < l->hi[0] && p.y >= l->lo[1] && p.y < l->hi[1] && p.z >= l->lo[2] &&
+        p.z < l->hi[2])
+        return l;
     float cx = f->cx, cy = f->cy, cz = f->cz, h = f->half;
     if (!f->has_root ||
         !(p.x >= cx - h && p.x <= cx + h && p.y >= cy - h && p.y <= cy + h && p.z >= cz - h && p.z <= cz + h))
@@ -518,7 +522,7 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
         cz = oz ? cz + h : cz - h;
         v = node[v + (ox | oy << 1 | oz << 2)];
     }
-    const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + (v & ~IC_FROZEN_LEAF));
+    l = (const ic_frozen_leaf *)(f->list + (v & ~IC_FROZEN_LEAF));
     if (hint)
         hint->leaf = l->id + 1u;
     return l;
@@ -939,10 +943,9 @@ static IC_TARGET_AVX2 size_t query_batch_avx2(const ic_cache *c, const ic_cache_
                                               ic_cache_hint *hint, ic_cache_estimate *out)
 {
     const ic_frozen *f = &c->frozen;
-    const ic_frozen_leaf *ring[AHEAD], *cur = NULL;
+    const ic_frozen_leaf *ring[AHEAD], *cur = hint_leaf(f, hint);
     __m128 lo = _mm_set1_ps(INFINITY), hi = _mm_set1_ps(-INFINITY); /* an empty cell: no point is inside */
-    if (hint && hint->leaf - 1u < f->leaf_count) {
-        cur = (const ic_frozen_leaf *)(f->list + f->leaf_at[hint->leaf - 1u]);
+    if (cur) {
         lo = _mm_loadu_ps(cur->lo);
         hi = _mm_loadu_ps(cur->hi);
     }

@@ -1408,9 +1408,10 @@ static uint64_t records_hash(const ic_ctx *c)
             h = ic_fnv1a64(h, t->rgb, sizeof(float) * n);
             continue;
         }
-        float chunk[768];
-        for (size_t at = 0; at < n; at += 768) {
-            size_t m = n - at < 768 ? n - at : 768;
+        enum { CHUNK = 768 };
+        float chunk[CHUNK];
+        for (size_t at = 0; at < n; at += CHUNK) {
+            size_t m = n - at < CHUNK ? n - at : CHUNK;
             for (size_t k = 0; k < m; ++k)
                 chunk[k] = ic_texture_value(t, at + k);
             h = ic_fnv1a64(h, chunk, sizeof(float) * m);
