@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Golden outputs of a fixed set of small Cornell-box renders, for changes that must not change any
+# image: every output file's SHA-256 (stats JSON with times and rates removed).
+#
+#   bash tests/golden/golden.sh IRRCACHE_BINARY            print the hashes
+#   bash tests/golden/golden.sh IRRCACHE_BINARY --check    compare with tests/golden/hashes.txt
+#   bash tests/golden/golden.sh IRRCACHE_BINARY --record   rewrite tests/golden/hashes.txt
+#
+# The hashes are those of one machine and compiler (floating point is not the same everywhere), so
+# this is a tool for a refactor, run before and after, and not part of the test suite.
+set -euo pipefail
+bin=$(realpath "$1"); mode=${2:-print}
+root=$(cd "$(dirname "$0")/../.." && pwd)
+scene=$root/scenes/cornell-box/cornell-box.json
+work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
+cd "$work"
+r() { # name, args...
+  local name=$1; shift
+  "$bin" render "$scene" --width 48 --height 48 --threads 2 --quiet -o "$name.exr" --stats "$name.json" "$@"
+}
+r pt --spp 8
+r pt_random --spp 8 --sampler random --adaptive-sampling on
+r batch --integrator ic --spp 8 --aov indirect,records,density,amap --records-json batch.records.json
+r batch_tl --integrator ic --spp 4 --weight tl --no-gradients --gather progressive
+r lazy --integrator ic --spp 4 --strategy lazy --rays 128
+r recursive --integrator ic --spp 4 --strategy lazy --recursive --bounces 2 --rays 128
+r adaptive --integrator ic --spp 4 --strategy adaptive --rays 128 --aov amap
+r nograd --integrator ic --spp 4 --no-gradients --no-neighbor-clamp --no-validity-clamp --path-traced-gather
+r save --integrator ic --spp 4 --rays 256 --save-cache c.irc
+r load --integrator ic --spp 4 --rays 256 --load-cache c.irc --seed 7
+r emitters --integrator ic --spp 4 --rays 256 --large-emitters off --max-depth 3
+for f in *.json; do
+  python3 - "$f" <<'PY'
+import json, sys
+p = sys.argv[1]
+d = json.load(open(p))
+if isinstance(d, dict):
+    for k in ("seconds", "rays_per_second", "phases", "settings"):
+        d.pop(k, None)
+    json.dump(d, open(p, "w"), sort_keys=True)
+PY
+done
+sha256sum $(ls | sort) > "$work/hashes.txt.new"
+mv "$work/hashes.txt.new" "$work/HASHES"
+case $mode in
+  print) cat HASHES ;;
+  --record) cp HASHES "$root/tests/golden/hashes.txt"; echo "recorded $(wc -l < HASHES) hashes" ;;
+  --check)
+    if diff -u "$root/tests/golden/hashes.txt" HASHES; then echo "golden: all $(wc -l < HASHES) outputs identical"
+    else echo "golden: outputs differ"; exit 1; fi ;;
+  *) echo "unknown mode $mode"; exit 2 ;;
+esac
