@@ -12,9 +12,9 @@
  */
 #include "cache/cache_internal.h" /* ic_cache_set_lookup_path */
 #include "core/atomic_file.h"
+#include "film/film.h"
 #include "geom/accel.h"
 #include "integrators/ic_internal.h"
-#include "render/render.h"
 #include "scene/scene.h"
 
 #include <errno.h>

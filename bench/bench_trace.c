@@ -8,9 +8,9 @@
  */
 #include "core/rng.h"
 #include "core/sampling.h"
+#include "film/film.h"
 #include "geom/accel.h"
 #include "irrcache/render.h"
-#include "render/render.h"
 #include "scene/scene.h"
 
 #include <embree3/rtcore.h>

@@ -1,5 +1,5 @@
 /*
- * ic.h — rendering with the irradiance cache (DESIGN.md §7 and §9; seed 004_b98c0b87c8321936.txt §3).
+ * ic.h — rendering with the irradiance cache (Ward et al. 1988; Frolov et al. 2012 §3).
  *
  * Two phases. Construction builds the cache with one of the strategies (lazy: Ward 1988; batch:
  * Frolov et al. 2012 multi-pass); then the final render reads the cache without changing it:
@@ -16,11 +16,8 @@
 #ifndef IC_INTEGRATORS_IC_H
 #define IC_INTEGRATORS_IC_H
 
-#include "integrators/pt.h"
-#include "irrcache/render.h"
+#include "integrators/integrator.h"
 
-/* Builds the cache and renders the image (called by ic_render for IC_INTEGRATOR_IC). */
-ic_result ic_render_ic(const ic_tracer *tr, const ic_render_options *opt, ic_image *out, ic_render_stats *st,
-                       ic_error *err);
+/* The integrator itself is ic_ic_integrator_create (integrator.h); its files share ic_internal.h. */
 
 #endif

@@ -45,13 +45,12 @@
 
 #include "core/threads.h"
 #include "integrators/kdtree.h"
-#include "render/render.h"
+#include "film/film.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 #define CONTRIB_SLOTS 6        /* seed 000 §4.2: "a static array of length 6" */
-#define LOOKUP_CAPACITY 64     /* contributions read back from one cache look-up */
 #define DIRECT_SAMPLES 16      /* light samples of the stored direct light of a shading point */
 #define KEY_TAG 0x20u          /* gather-key tag of adaptive records (batch uses others) */
 
@@ -597,7 +596,7 @@ static void adaptive_free(adaptive *A)
 }
 
 /* Runs construction on c; fills the statistics and, for tests, optionally hands out the points. */
-static ic_result build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
                        ic_adaptive_probe *probe, ic_error *err)
 {
     adaptive *A = calloc(1, sizeof *A);
@@ -667,102 +666,5 @@ static ic_result build(ic_ctx *c, const ic_render_options *opt, ic_render_stats 
 ic_result ic_ic_build_adaptive(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
                                ic_error *err)
 {
-    return build(c, opt, st, pt, NULL, err);
-}
-
-/* ---------------------------------------------------------------- diagnostics: the a_i map */
-
-/* A blue → cyan → green → yellow → red ramp over t ∈ [0, 1]. */
-static ic_vec3 ramp(float t)
-{
-    static const float k[5][3] = {{0.05f, 0.1f, 0.9f}, {0.0f, 0.8f, 0.9f}, {0.1f, 0.85f, 0.1f},
-                                  {0.95f, 0.9f, 0.05f}, {0.9f, 0.05f, 0.05f}};
-    t = ic_clampf(t, 0.0f, 1.0f) * 4.0f;
-    int i = t >= 4.0f ? 3 : (int)t;
-    float f = t - (float)i;
-    return v3(k[i][0] + f * (k[i + 1][0] - k[i][0]), k[i][1] + f * (k[i + 1][1] - k[i][1]),
-              k[i][2] + f * (k[i + 1][2] - k[i][2]));
-}
-
-ic_result ic_ic_amap_image(const ic_ctx *c, ic_image *out)
-{
-    ic_result r = ic_image_create(out, c->g.width, c->g.height);
-    if (r != IC_OK)
-        return r;
-    ic_cache_contribution contrib_buf[LOOKUP_CAPACITY];
-    const float a_max = c->o.cache.accuracy, span = log2f(IC_AMAP_RANGE);
-    for (int y = 0; y < c->g.height; ++y) {
-        for (int x = 0; x < c->g.width; ++x) {
-            size_t i = (size_t)y * c->g.width + x;
-            if (!c->g.valid[i])
-                continue;
-            ic_cache_lookup q = ic_cache_lookup_at(c->g.p[i], c->g.n[i], IC_ACCEPT_FINAL);
-            q.contributions = contrib_buf;
-            q.contribution_capacity = LOOKUP_CAPACITY;
-            ic_cache_estimate e;
-            if (!ic_cache_query(c->cache, &q, &e) || e.contributions_written == 0)
-                continue;
-            uint32_t best = 0;
-            for (uint32_t k = 1; k < e.contributions_written; ++k)
-                if (contrib_buf[k].weight > contrib_buf[best].weight)
-                    best = k;
-            ic_record rec;
-            ic_cache_get_record(c->cache, contrib_buf[best].record, &rec);
-            ic_vec3 col = ramp(log2f(a_max / rec.accuracy) / span);
-            float *px = &out->rgb[3 * i];
-            px[0] = col.x;
-            px[1] = col.y;
-            px[2] = col.z;
-        }
-    }
-    return IC_OK;
-}
-
-/* ---------------------------------------------------------------- test entry point */
-
-ic_result ic_ic_adaptive_probe_run(const ic_scene *scene, const ic_render_options *opt, ic_adaptive_probe *out,
-                                   ic_error *err)
-{
-    memset(out, 0, sizeof *out);
-    ic_accel *accel = NULL;
-    ic_result r = ic_accel_create(scene, &accel, err);
-    if (r != IC_OK)
-        return r;
-    ic_tracer tr;
-    tr.scene = scene;
-    tr.accel = accel;
-    tr.pt.max_depth = opt->max_depth;
-    tr.pt.rr_depth = 0;
-    tr.pt = ic_pt_params_resolve(tr.pt);
-    ic_render_options o = *opt;
-    o.ic.strategy = IC_STRATEGY_ADAPTIVE;
-    ic_ctx *c = NULL;
-    r = ic_ic_ctx_create(&tr, &o, &c, NULL, err);
-    if (r == IC_OK) {
-        ic_render_stats st;
-        memset(&st, 0, sizeof st);
-        phase_times pt = {0, 0};
-        r = build(c, &o, &st, &pt, out, err);
-        if (r == IC_OK) {
-            out->cache = c->cache; /* handed over: the context must not free it */
-            c->cache = NULL;
-            out->weber = c->o.weber;
-            out->accuracy = c->o.cache.accuracy;
-        }
-    }
-    ic_ic_ctx_destroy(c);
-    ic_accel_destroy(accel);
-    if (r != IC_OK)
-        ic_ic_adaptive_probe_free(out);
-    return r;
-}
-
-void ic_ic_adaptive_probe_free(ic_adaptive_probe *p)
-{
-    ic_cache_destroy(p->cache);
-    free(p->position);
-    free(p->normal);
-    free(p->albedo);
-    free(p->direct);
-    memset(p, 0, sizeof *p);
+    return ic_ic_build_adaptive_probed(c, opt, st, pt, NULL, err);
 }

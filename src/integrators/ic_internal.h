@@ -1,6 +1,15 @@
 /*
- * ic_internal.h — what the construction strategies of the irradiance-cache integrator share
- * (ic.c: lazy, batch and the final render; further strategies in files of their own).
+ * ic_internal.h — what the files of the irradiance-cache integrator share. In pipeline order:
+ *   ic_context.c    options resolved, the empty cache, shading points, large emitters, cache-file hash
+ *   ic_gbuffer.c    shading points per pixel centre, look-ups over all of them
+ *   ic_emitters.c   which large emitters the records carry
+ *   ic_direct.c     direct light (NEE) as this integrator estimates it
+ *   ic_gathering.c  what hemisphere rays return, records from gather results, batch insertion
+ *   ic_batch.c, ic_lazy.c, ic_adaptive.c   the construction strategies, peers behind ic_build_fn
+ *   ic_final.c      the final render's pixel sample
+ *   ic_aov.c        diagnostic images and the record list
+ *   ic_integrator.c the integrator interface (integrator.h): prepare, sample, aovs, destroy
+ *   ic_probe.c      adaptive construction alone, for tests
  */
 #ifndef IC_INTEGRATORS_IC_INTERNAL_H
 #define IC_INTEGRATORS_IC_INTERNAL_H
@@ -13,6 +22,8 @@
 
 #define MAX_SPECULAR_CHAIN 8
 #define WORLD_SLOTS 4 /* look-up points kept per world-stage eye path */
+#define PAD 8         /* uint64 slots between per-thread counters: no false sharing */
+#define LOOKUP_CAPACITY 64 /* contributions read back from one cache look-up (adaptive, amap) */
 
 typedef struct ic_ctx {
     const ic_tracer *tr;       /* scene, accel, path-tracing parameters of the final render */
@@ -69,25 +80,63 @@ void ic_ic_report(const ic_render_options *opt, const char *phase, double fracti
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                            const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
 
+/* Shading points of every pixel centre into c->g (and c->has_record); gbuffer_free frees them. */
+ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err);
+void ic_ic_gbuffer_free(ic_ctx *c);
+/* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
+ * emitter the records carry (zero for any other surface). */
+ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit);
+/* Chooses the large emitters the records carry (ic_emitters.c); returns 0 when out of memory. */
+int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s);
+/* Hash of everything a record's value depends on besides the cache parameters (the cache file's
+ * identity check). */
+uint64_t ic_ic_records_hash(const ic_ctx *c);
+
+/* The final render's state shared by its threads. */
+typedef struct ic_final_ctx {
+    const ic_ctx *c;
+    int indirect_only;         /* AOV: indirect diffuse at the first shading point only */
+    ic_cache_hint *hints;      /* one per render thread: consecutive samples of a tile share leaves */
+    int hint_count;            /* entries in hints (0: none) */
+    ic_pixel_lights lights;    /* per-thread local light selection of the pixel being rendered */
+} ic_final_ctx;
+/* One final-render pixel sample (ic_sample_fn; p = ic_final_ctx). */
+ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic_rng *rng, int thread,
+                           uint64_t *rays);
+
+/* Diagnostics (ic_aov.c): record dots and circles over beauty, records per pixel centre, and the list of
+ * records as the camera sees them (malloc'd). */
+ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image *out);
+ic_result ic_ic_density_image(ic_ctx *c, ic_image *out);
+ic_result ic_ic_record_views(const ic_ctx *c, ic_record_view **out, uint32_t *count);
+
 /* Sets up a context for tr and opt: resolved options, an empty cache, the shading-point buffers (used by
  * ic_render_ic and by tests that run construction alone). gbuffer_seconds may be NULL. */
 ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, double *gbuffer_seconds,
                            ic_error *err);
 /* Frees a context, its cache (unless the caller took it and set c->cache = NULL) and buffers; NULL is a no-op. */
 void ic_ic_ctx_destroy(ic_ctx *c);
-/* Builds the cache of c with the strategy of its options (construction only, no final render). */
-ic_result ic_ic_build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt, ic_error *err);
-
-/* ---- adaptive caching (ic_adaptive.c; seed 000 §4) */
-
-/* Builds the cache with Algorithm 1 of seed 000 over the G-buffer shading points (strategy adaptive). */
+/* ---- construction strategies: peers behind one signature. Each fills c->cache from the shading
+ * points, reports progress through opt, adds its own phases to st (if any) and its gathering and
+ * insertion times to pt. */
+typedef ic_result (*ic_build_fn)(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                                 ic_error *err);
+/* Frolov et al. 2012 multi-pass construction (ic_batch.c). */
+ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                            ic_error *err);
+/* Ward et al. 1988 lazy construction, and recursive caching per bounce (ic_lazy.c). */
+ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                           ic_error *err);
+/* Křivánek et al. 2006 §4 adaptive caching, Algorithm 1 over the G-buffer shading points (ic_adaptive.c). */
 ic_result ic_ic_build_adaptive(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
                                ic_error *err);
+/* The strategy of c's options (construction only, no final render; ic_integrator.c). */
+ic_result ic_ic_build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt, ic_error *err);
 /* The amap AOV: a_i of the heaviest contributing record per pixel centre on a colour ramp (log scale
  * from --accuracy, blue, down to accuracy / IC_AMAP_RANGE, red). */
 ic_result ic_ic_amap_image(const ic_ctx *c, ic_image *out);
 #define IC_AMAP_RANGE 32.0f
-/* Large emitters the records carry (ic.c: cache_large_emitters): the default of
+/* Large emitters the records carry (ic_emitters.c): the default of
  * ic_ic_options.large_emitters, the median share of a shading point's cosine-weighted hemisphere an
  * emitting material covers, and the largest fraction of light samples on it that reach it. Measured
  * on the image's shading points: staircase2's three window quads cover 2.0–8.7 % and 6–60 % of their
@@ -109,6 +158,9 @@ typedef struct ic_adaptive_probe {
     uint64_t refinements;
     uint32_t unresolved;       /* refinements that found no positive a_i (coincident records) */
 } ic_adaptive_probe;
+/* Adaptive construction that also fills probe (may be NULL: ic_ic_build_adaptive). */
+ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                                      ic_adaptive_probe *probe, ic_error *err);
 /* Runs shading-point setup and adaptive construction only (no final render) on scene with opt. */
 ic_result ic_ic_adaptive_probe_run(const ic_scene *scene, const ic_render_options *opt, ic_adaptive_probe *out,
                                    ic_error *err);

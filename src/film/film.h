@@ -1,13 +1,13 @@
 /*
- * render.h — the image loop shared by every integrator: camera rays with a tent pixel filter
+ * film.h — the film: the image loop shared by every integrator: camera rays with a tent pixel filter
  * (filter importance sampling), tiles handed to all threads, progressive passes under an optional
  * wall-time budget, progress reports, and per-phase statistics.
  *
  * Determinism: sample s of pixel i draws from the counter-based stream (seed, i, s), so the image
  * never depends on the thread count or on which thread rendered a tile.
  */
-#ifndef IC_RENDER_RENDER_H
-#define IC_RENDER_RENDER_H
+#ifndef IC_FILM_FILM_H
+#define IC_FILM_FILM_H
 
 #include "core/rng.h"
 #include "geom/accel.h"

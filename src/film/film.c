@@ -1,5 +1,5 @@
-/* render.c — tiles, passes, pixel filter and progress for every integrator (render.h). */
-#include "render.h"
+/* film.c — camera rays, tiles, passes, pixel filter, adaptive sampling and progress for every integrator (film.h). */
+#include "film.h"
 
 #include "core/threads.h"
 

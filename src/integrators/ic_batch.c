@@ -1,0 +1,254 @@
+/*
+ * ic_batch.c — batch construction (`--strategy batch`, the default), Frolov et al. 2012 §3.1 step by step:
+ *   pass 0      primary position/normal buffers → geometry discontinuity on a mip pyramid → blend →
+ *               deterministic dithering → candidates (ic_screen.c);
+ *   passes 1…n  screen stage (first `screen_passes` passes): irradiance discontinuity of the current
+ *               cache look-ups, same pyramid and dithering, pixels that already made a record dropped;
+ *               world stage: eye paths, hit points on every bounce where no record is valid, Morton
+ *               sort, clusters bounded by a box size, several candidates with distinct normals per
+ *               cluster (ic_world.c);
+ *   each stage's candidates are gathered in parallel (ic_gather_batch: results do not depend on the
+ *   thread count) and inserted in one transaction (ic_cache_insert_batch: validity-radius clamping,
+ *   neighbour clamping, in a fixed order). Stop at max_passes or when a pass finds fewer than
+ *   min_candidates. A last coverage sweep adds records for any pixel centre still uncovered, so every
+ *   primary shading point has at least one contributing record.
+ */
+#include "ic_internal.h"
+
+#include "core/sampling.h"
+
+#include "core/threads.h"
+#include "film/film.h"
+#include "integrators/ic_screen.h"
+#include "integrators/ic_world.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct world_job {
+    ic_ctx *c;
+    int pass;
+    ic_candidate *slots;       /* WORLD_SLOTS per traced pixel */
+    uint8_t *slot_count;
+    int stride, cols, rows;
+    uint64_t *rays;
+} world_job;
+
+/* One eye path per stride×stride block (seed 004 §3.1.3): the path visits the points where the final
+ * render will look the cache up — the first surface with a smooth lobe after ideal specular chains,
+ * then the surfaces reached through glossy lobes — and every such point where no record is valid
+ * becomes a candidate. (The seed collects hits on every bounce because its final render fetches the
+ * cache along whole paths; ours path-traces record radiance, so deeper diffuse bounces never look up.) */
+static void world_path(void *p, int64_t item, int thread)
+{
+    world_job *j = p;
+    ic_ctx *c = j->c;
+    const ic_camera *cam = &c->tr->scene->camera;
+    int bx = (int)(item % j->cols), by = (int)(item / j->cols);
+    ic_rng rng = ic_rng_make(c->seed, (uint64_t)item, (uint64_t)j->pass, 0x776f726c64ULL);
+    int x = bx * j->stride + (int)ic_rng_below(&rng, (uint32_t)j->stride);
+    int y = by * j->stride + (int)ic_rng_below(&rng, (uint32_t)j->stride);
+    if (x >= cam->width)
+        x = cam->width - 1;
+    if (y >= cam->height)
+        y = cam->height - 1;
+    uint32_t pixel = (uint32_t)(y * cam->width + x);
+    ic_ray ray = ic_camera_ray(cam, (float)x + ic_rng_float(&rng), (float)y + ic_rng_float(&rng));
+    ic_candidate *out = &j->slots[item * WORLD_SLOTS];
+    int n = 0, smooth_hits = 0;
+    float t_primary = 0.0f;
+    uint64_t *rays = &j->rays[thread * PAD];
+    for (int bounce = 0; bounce <= MAX_SPECULAR_CHAIN && smooth_hits < WORLD_SLOTS; ++bounce) {
+        ic_hit hit;
+        ++*rays;
+        ic_accel_intersect1(c->tr->accel, &ray, &hit);
+        if (hit.triangle == IC_NO_HIT)
+            break;
+        if (bounce == 0)
+            t_primary = hit.t;
+        ic_surface s;
+        ic_scene_surface(c->tr->scene, hit.triangle, hit.u, hit.v, &s);
+        ic_vec3 wo = v3_neg(ray.dir);
+        ic_bsdf b;
+        ic_bsdf_init(&b, c->tr->scene, &s, wo);
+        ic_bsdf_sample bs;
+        if (ic_bsdf_has_smooth(&b)) {
+            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.frame.n, IC_ACCEPT_CONSTRUCTION);
+            ic_cache_estimate e;
+            if (!ic_cache_query(c->cache, &q, &e)) {
+                out[n].p = s.p;
+                out[n].n = b.frame.n;
+                /* Pixel-based radius bounds only hold for what the camera sees directly. */
+                out[n].footprint = smooth_hits == 0 ? t_primary * c->pixel_angle : 0.0f;
+                out[n].key = ((uint64_t)pixel << 8) | (uint64_t)(0x80 | (j->pass & 0x1f) << 2 | (smooth_hits & 3));
+                ++n;
+            }
+            ++smooth_hits;
+            if (!ic_bsdf_sample_glossy(&b, wo, ic_rng_float(&rng), ic_rng_float(&rng), &bs))
+                break;
+        } else if (!ic_bsdf_sample_dir(&b, wo, ic_rng_float(&rng), ic_rng_float(&rng), ic_rng_float(&rng), &bs)) {
+            break;
+        }
+        ray = ic_spawn_ray(&s, bs.wi);
+    }
+    j->slot_count[item] = (uint8_t)n;
+}
+
+/* Collects world-stage candidates in item order (deterministic), then clusters and selects. */
+static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *out_count, ic_error *err)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    world_job j;
+    memset(&j, 0, sizeof j);
+    j.c = c;
+    j.pass = pass;
+    j.stride = c->o.world_stride;
+    j.cols = (cam->width + j.stride - 1) / j.stride;
+    j.rows = (cam->height + j.stride - 1) / j.stride;
+    int64_t items = (int64_t)j.cols * j.rows;
+    j.slots = malloc(sizeof *j.slots * (size_t)items * WORLD_SLOTS);
+    j.slot_count = calloc((size_t)items, 1);
+    j.rays = calloc((size_t)c->threads * PAD, sizeof *j.rays);
+    if (!j.slots || !j.slot_count || !j.rays) {
+        free(j.slots);
+        free(j.slot_count);
+        free(j.rays);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for world-space candidates");
+    }
+    ic_result r = ic_parallel_for(c->threads, items, world_path, &j);
+    for (int t = 0; t < c->threads; ++t)
+        atomic_fetch_add(&c->rays, j.rays[t * PAD]);
+    uint32_t n = 0;
+    for (int64_t i = 0; i < items; ++i)
+        for (int k = 0; k < j.slot_count[i]; ++k)
+            j.slots[n++] = j.slots[i * WORLD_SLOTS + k];
+    const ic_scene *sc = c->tr->scene;
+    *out_count = ic_world_select(j.slots, n, sc->bounds_min, sc->bounds_max, c->o.cluster_size * c->scene_diag, 3,
+                                 30.0f);
+    *out = j.slots;
+    free(j.slot_count);
+    free(j.rays);
+    return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
+}
+
+/* Candidates from dithering a need map; pixels that already made a record are dropped. */
+static uint32_t dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix, ic_candidate *cand, uint64_t tag)
+{
+    uint32_t np = ic_screen_dither(&c->g, need, c->o.dither_threshold, pix);
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < np; ++i) {
+        if (c->has_record[pix[i]])
+            continue;
+        c->has_record[pix[i]] = 1;
+        cand[n++] = ic_ic_candidate_at_pixel(c, pix[i], tag);
+    }
+    return n;
+}
+
+/* Adds records at pixel centres that no record covers (construction acceptance), clustered so that
+ * one record serves a whole uncovered patch; repeats until every shading point is covered. */
+static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_candidate *cand, phase_times *pt,
+                                uint32_t *added, ic_error *err)
+{
+    *added = 0;
+    size_t npix = (size_t)c->g.width * c->g.height;
+    for (int round = 0; round < 16; ++round) {
+        ic_result r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+        if (r != IC_OK)
+            return ic_error_set(err, r, "could not start threads");
+        uint32_t n = 0;
+        for (size_t i = 0; i < npix; ++i)
+            if (c->g.valid[i] && !covered[i])
+                cand[n++] = ic_ic_candidate_at_pixel(c, (uint32_t)i, 0x40 | (uint64_t)round);
+        if (n == 0)
+            return IC_OK;
+        /* Small clusters: each selected record covers at least its own pixel, so this terminates. */
+        const ic_scene *sc = c->tr->scene;
+        n = ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->scene_diag, 3,
+                            30.0f);
+        r = ic_ic_gather_and_insert(c, cand, n, pt, err);
+        if (r != IC_OK)
+            return r;
+        *added += n;
+    }
+    return IC_OK;
+}
+
+ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
+                             ic_error *err)
+{
+    size_t npix = (size_t)c->g.width * c->g.height;
+    float *need = malloc(sizeof *need * npix);
+    float *lum = malloc(sizeof *lum * npix);
+    uint8_t *covered = malloc(npix);
+    uint32_t *pix = malloc(sizeof *pix * npix);
+    ic_candidate *cand = malloc(sizeof *cand * npix);
+    ic_result r = IC_OK;
+    if (!need || !lum || !covered || !pix || !cand) {
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the construction buffers");
+        goto done;
+    }
+    /* Pass 0: geometry discontinuity. */
+    ic_ic_report(opt, "cache pass 0", 0.0);
+    r = ic_screen_geometry_need(&c->g, c->o.normal_weight, need);
+    if (r != IC_OK) {
+        ic_error_set(err, r, "out of memory for the discontinuity map");
+        goto done;
+    }
+    uint32_t n = dithered_candidates(c, need, pix, cand, 0);
+    r = ic_ic_gather_and_insert(c, cand, n, pt, err);
+    if (r != IC_OK)
+        goto done;
+    st->records_per_pass[0] = n;
+    st->passes = 1;
+    for (int pass = 1; pass <= c->o.max_passes; ++pass) {
+        ic_ic_report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
+        uint32_t found = 0, before = ic_cache_count(c->cache);
+        if (pass <= c->o.screen_passes) {
+            r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+            if (r != IC_OK) {
+                ic_error_set(err, r, "could not start threads");
+                goto done;
+            }
+            r = ic_screen_value_need(&c->g, lum, need);
+            if (r != IC_OK) {
+                ic_error_set(err, r, "out of memory for the discontinuity map");
+                goto done;
+            }
+            /* Pixels no record covers ask for at least the 16-pixel spacing; later passes (and the
+             * world stage, which clusters uncovered hits) fill what remains. */
+            for (size_t i = 0; i < npix; ++i)
+                if (c->g.valid[i] && !covered[i])
+                    need[i] = fmaxf(need[i], c->o.dither_threshold);
+            n = dithered_candidates(c, need, pix, cand, (uint64_t)pass);
+            found += n;
+            r = ic_ic_gather_and_insert(c, cand, n, pt, err);
+            if (r != IC_OK)
+                goto done;
+        }
+        ic_candidate *wc = NULL;
+        uint32_t wn = 0;
+        r = world_stage(c, pass, &wc, &wn, err);
+        if (r == IC_OK)
+            r = ic_ic_gather_and_insert(c, wc, wn, pt, err);
+        free(wc);
+        if (r != IC_OK)
+            goto done;
+        found += wn;
+        if (pass < 32)
+            st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
+        st->passes = pass + 1;
+        if ((int)found < c->o.min_candidates)
+            break;
+    }
+    uint32_t added;
+    r = coverage_sweep(c, lum, covered, cand, pt, &added, err);
+done:
+    free(need);
+    free(lum);
+    free(covered);
+    free(pix);
+    free(cand);
+    return r;
+}

@@ -1,0 +1,165 @@
+/*
+ * ic_context.c — the cache integrator's shared context: options resolved against the scene, an empty
+ * cache, the shading points and the large-emitter choice; the hash that ties a cache file to the scene
+ * and the gathering settings; progress reports.
+ */
+#include "ic_internal.h"
+
+#include "core/sampling.h"
+
+#include "core/threads.h"
+#include "film/film.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+
+void ic_ic_report(const ic_render_options *opt, const char *phase, double f)
+{
+    if (opt->progress)
+        opt->progress(opt->progress_user, phase, f);
+}
+
+static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *scene)
+{
+    ic_ic_options o = *in;
+    /* Records gather as many bounces as the path tracer follows (max_depth scattering events in all,
+     * the record's own point being the first): truncating earlier darkens the image measurably. */
+    if (o.bounces <= 0)
+        o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
+    if (o.light_samples <= 0)
+        o.light_samples = 1;
+    if (o.large_emitters == 0.0f)
+        o.large_emitters = IC_LARGE_EMITTERS;
+    if (o.max_passes <= 0)
+        o.max_passes = 12;
+    if (o.min_candidates <= 0)
+        o.min_candidates = 16;
+    if (o.screen_passes <= 0)
+        o.screen_passes = 3;
+    if (o.dither_threshold <= 0.0f)
+        o.dither_threshold = 0.5f;
+    if (o.normal_weight <= 0.0f)
+        o.normal_weight = 4.0f;
+    if (o.world_stride <= 0)
+        o.world_stride = 2;
+    if (o.cluster_size <= 0.0f)
+        o.cluster_size = 0.05f;
+    if (o.cache.accuracy == 0.0f)
+        o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? 1.0f : 0.3f;
+    /* Radius bounds: 0 means the renderer's default, negative switches the bound off. The pixel bounds
+     * given to the renderer bound a record's influence radius a·R on screen (what a user sees: "a record
+     * covers between 3 and 48 pixels"); the cache clamps R itself, hence the division by a. The floor of
+     * 3 pixels, not 1.5: records closer than that mostly average their own Monte Carlo noise; on Sponza
+     * at 448×252 it cut records by a quarter and lowered the error (BENCHMARKS.md). */
+    float diag = v3_len(v3_sub(scene->bounds_max, scene->bounds_min));
+    float min_px = o.cache.min_radius_pixels == 0.0f ? 3.0f : fmaxf(o.cache.min_radius_pixels, 0.0f);
+    float max_px = o.cache.max_radius_pixels == 0.0f ? 48.0f : fmaxf(o.cache.max_radius_pixels, 0.0f);
+    o.cache.min_radius_pixels = min_px / o.cache.accuracy;
+    o.cache.max_radius_pixels = max_px / o.cache.accuracy;
+    o.cache.max_radius = o.cache.max_radius == 0.0f ? diag / 8.0f : (o.cache.max_radius < 0.0f ? INFINITY : o.cache.max_radius);
+    o.cache.min_radius = fmaxf(o.cache.min_radius, 0.0f);
+    c->o = o;
+    c->scene_diag = diag > 0.0f ? diag : 1.0f;
+}
+
+ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, double *gbuffer_seconds,
+                           ic_error *err)
+{
+    *out = NULL;
+    ic_ctx *c = calloc(1, sizeof *c);
+    if (!c)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory");
+    c->tr = tr;
+    c->seed = opt->seed;
+    c->threads = ic_resolve_threads(opt->threads);
+    c->pixel_angle = ic_camera_pixel_angle(&tr->scene->camera);
+    atomic_init(&c->rays, 0);
+    resolve_options(c, &opt->ic, tr->scene);
+    float sel_sum = tr->scene->light_select.tri + tr->scene->light_select.point;
+    if (sel_sum > 0.0f) {
+        c->light_sel.tri = tr->scene->light_select.tri / sel_sum;
+        c->light_sel.point = tr->scene->light_select.point / sel_sum;
+    }
+    c->light_sel_all = c->light_sel;
+    c->gather_tr = *tr;
+    c->gather_tr.pt.max_depth = c->o.bounces + 1;
+    /* With one bounce a hemisphere ray returns its hit's direct light alone; records hold more. */
+    c->hit_lookups = !c->o.path_traced_gather && !c->o.recursive && c->o.bounces > 1;
+    c->o.gather.seed ^= opt->seed;
+    c->o.cache.threads = opt->threads;
+    ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);
+    double t0 = ic_seconds();
+    if (r == IC_OK)
+        r = ic_ic_gbuffer_build(c, err);
+    if (gbuffer_seconds)
+        *gbuffer_seconds = ic_seconds() - t0;
+    if (r == IC_OK && !ic_ic_select_large_emitters(c, tr->scene))
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
+    if (r != IC_OK) {
+        ic_ic_ctx_destroy(c);
+        return r;
+    }
+    *out = c;
+    return IC_OK;
+}
+
+void ic_ic_ctx_destroy(ic_ctx *c)
+{
+    if (!c)
+        return;
+    ic_cache_destroy(c->cache);
+    ic_ic_gbuffer_free(c);
+    free(c->direct_pmf);
+    free(c->direct_cdf);
+    free(c);
+}
+
+/* Hash of everything a record's value depends on besides the cache parameters (which the cache file
+ * records itself): geometry, materials, textures' sizes, lights, environment, and how records gather. */
+uint64_t ic_ic_records_hash(const ic_ctx *c)
+{
+    const ic_scene *s = c->tr->scene;
+    uint64_t h = IC_FNV64_OFFSET;
+    h = ic_fnv1a64(h, s->positions, sizeof *s->positions * s->vertex_count);
+    h = ic_fnv1a64(h, s->triangles, sizeof *s->triangles * 3 * (size_t)s->triangle_count);
+    h = ic_fnv1a64(h, s->triangle_material, sizeof *s->triangle_material * s->triangle_count);
+    for (uint32_t i = 0; i < s->material_count; ++i) {
+        const ic_material *m = &s->materials[i];
+        float f[14] = {m->kd.x, m->kd.y, m->kd.z, m->ks.x, m->ks.y, m->ks.z, m->ns, m->emission.x, m->emission.y,
+                       m->emission.z, m->ior, (float)m->type, (float)m->kd_texture, (float)m->two_sided_emission};
+        h = ic_fnv1a64(h, f, sizeof f);
+    }
+    for (uint32_t i = 0; i < s->texture_count; ++i) {
+        /* The texel values as floats, however they are stored (the hash streams: same bytes, same hash). */
+        const ic_texture *t = &s->textures[i];
+        size_t n = 3 * (size_t)t->width * (size_t)t->height;
+        if (t->rgb) {
+            h = ic_fnv1a64(h, t->rgb, sizeof(float) * n);
+            continue;
+        }
+        enum { CHUNK = 768 };
+        float chunk[CHUNK];
+        for (size_t at = 0; at < n; at += CHUNK) {
+            size_t m = n - at < CHUNK ? n - at : CHUNK;
+            for (size_t k = 0; k < m; ++k)
+                chunk[k] = ic_texture_value(t, at + k);
+            h = ic_fnv1a64(h, chunk, sizeof(float) * m);
+        }
+    }
+    h = ic_fnv1a64(h, s->point_lights, sizeof *s->point_lights * s->point_light_count);
+    float env[12] = {(float)s->sun.enabled, s->sun.direction.x, s->sun.direction.y, s->sun.direction.z,
+                     s->sun.irradiance.x, s->sun.irradiance.y, s->sun.irradiance.z, (float)s->env.enabled,
+                     s->env.radiance.x, s->env.radiance.y, s->env.radiance.z, s->env.rotation_deg};
+    h = ic_fnv1a64(h, env, sizeof env);
+    if (s->env.image.rgb)
+        h = ic_fnv1a64(h, s->env.image.rgb, sizeof(float) * 3 * (size_t)s->env.image.width * s->env.image.height);
+    h = ic_fnv1a64(h, &c->cached_emitters, sizeof c->cached_emitters);
+    if (c->direct_pmf)
+        h = ic_fnv1a64(h, c->direct_pmf, sizeof *c->direct_pmf * s->tri_light_count);
+    int32_t g[9] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
+                    (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
+                    (int32_t)c->o.strategy, c->hit_lookups};
+    /* The seed is left out on purpose: records built with one seed are as valid as any others, and a
+     * cache re-used with a new seed renders an independent final image over the same records. */
+    return ic_fnv1a64(h, g, sizeof g);
+}

@@ -1,0 +1,91 @@
+/*
+ * ic_direct.c — direct light as the cache integrator estimates it (the final render, and the direct part
+ * of what a hemisphere ray returns): the sun every time, one light sample by the selection, and emitting
+ * triangles once more through the diffuse lobe (MIS); the environment is in the records.
+ */
+#include "ic_internal.h"
+
+#include "core/sampling.h"
+
+/* Shadow-tested contribution of one light sample (weight for the glossy lobe's MIS given by wg). */
+static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, const ic_light_sample *ls,
+                           int mis, uint64_t *rays)
+{
+    ic_vec3 fd, fg;
+    ic_bsdf_eval_lobes(b, wo, ls->wi, &fd, &fg);
+    /* Each lobe is MIS-weighted against its own sampling: the diffuse lobe's cosine sample in
+     * ic_ic_direct_light, the glossy lobe's in the final render's path. */
+    float cos_pdf = fmaxf(v3_dot(ls->wi, b->frame.n), 0.0f) * IC_INV_PI;
+    float wd = mis ? ic_power_heuristic(ls->pdf, cos_pdf) : 1.0f;
+    float wg = mis ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
+    ic_vec3 f = v3_add(v3_scale(fd, wd), v3_scale(fg, wg));
+    if (v3_is_black(f) || v3_is_black(ls->radiance))
+        return v3s(0.0f);
+    ic_ray shadow = ic_shadow_ray(s, ls);
+    ++*rays;
+    if (ic_accel_occluded1(c->tr->accel, &shadow))
+        return v3s(0.0f);
+    return v3_scale(v3_mul(f, ls->radiance), fabsf(v3_dot(ls->wi, b->frame.n)) / ls->pdf);
+}
+
+/* The diffuse lobe's half of the MIS pair for emitting triangles: a cosine-distributed ray that counts
+ * the emission it finds, weighted against light sampling. Light sampling alone is noisy next to small
+ * emitters (a close point sees a small light under a large solid angle, which the area pdf samples
+ * poorly); the records exclude this emission, so nothing is counted twice. */
+static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_light_selection *sel, const ic_surface *s,
+                                       const ic_bsdf *b, ic_rng *rng, uint64_t *rays)
+{
+    float u1, u2;
+    ic_rng_2d(rng, &u1, &u2);
+    if (!(sel->tri > 0.0f) || v3_is_black(b->kd))
+        return v3s(0.0f);
+    ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
+    float cos_i = v3_dot(wi, b->frame.n);
+    if (cos_i <= 0.0f || v3_dot(wi, b->ng) <= 0.0f)
+        return v3s(0.0f);
+    ic_ray ray = ic_spawn_ray(s, wi);
+    ic_hit hit;
+    ++*rays;
+    ic_accel_intersect1(c->tr->accel, &ray, &hit);
+    if (hit.triangle == IC_NO_HIT || c->tr->scene->triangle_light[hit.triangle] < 0)
+        return v3s(0.0f);
+    ic_surface hs;
+    ic_scene_surface(c->tr->scene, hit.triangle, hit.u, hit.v, &hs);
+    ic_vec3 le = ic_scene_emission(c->tr->scene, &hs, v3_neg(wi));
+    if (v3_is_black(le))
+        return v3s(0.0f);
+    float pl = ic_scene_light_pdf_triangle_sel(c->tr->scene, sel, s->p, hit.triangle, wi, hit.t);
+    /* An emitter light sampling never picks is a large one: the records carry its light. */
+    if (!(pl > 0.0f))
+        return v3s(0.0f);
+    /* f_d·cos/p_cos = kd for the cosine-sampled Lambertian lobe. */
+    return v3_scale(v3_mul(b->kd, le), ic_power_heuristic(cos_i * IC_INV_PI, pl));
+}
+
+/* Direct light for the final render. The environment is in the records and is not sampled here; the
+ * sun, a single delta light, is taken every time (choosing it among the lights would only add noise);
+ * triangle and point lights are sampled once by power, and emitting triangles once more through the
+ * diffuse lobe (MIS, power heuristic); the glossy lobe's BSDF sample is the final render's path. */
+ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                           const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
+{
+    if (!sel)
+        sel = &c->light_sel;
+    float u0 = ic_rng_1d(rng), u1, u2;
+    ic_rng_2d(rng, &u1, &u2);
+    ic_vec3 L = v3s(0.0f);
+    const ic_scene *scene = c->tr->scene;
+    if (scene->sun.enabled) {
+        ic_light_sample sun;
+        sun.wi = scene->sun.direction;
+        sun.dist = INFINITY;
+        sun.radiance = scene->sun.irradiance;
+        sun.pdf = 1.0f;
+        sun.is_delta = 1;
+        L = shade_light(c, s, b, wo, &sun, 0, rays);
+    }
+    ic_light_sample ls;
+    if (ic_scene_sample_light_sel(scene, sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
+        L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, rays));
+    return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
+}

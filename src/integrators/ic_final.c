@@ -1,0 +1,118 @@
+/*
+ * ic_final.c — the final render's pixel sample: direct light by next-event estimation, indirect diffuse
+ * from the cache (or one hemisphere ray where no record reaches), glossy and specular paths traced.
+ */
+#include "ic_internal.h"
+
+#include "core/sampling.h"
+
+/* Indirect diffuse irradiance at a shading point: the cache (final acceptance), or, where no record
+ * reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one cosine-
+ * distributed hemisphere ray that returns what a record's ray would: E ≈ π·L. */
+static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, ic_cache_hint *hint, ic_rng *rng,
+                                 uint64_t *rays, int *from_cache)
+{
+    ic_cache_lookup q = ic_cache_lookup_at(s->p, n, IC_ACCEPT_FINAL);
+    ic_cache_estimate e;
+    if (ic_cache_query_hinted(c->cache, &q, hint, &e)) {
+        *from_cache = 1;
+        return e.irradiance;
+    }
+    *from_cache = 0;
+    ic_frame f = ic_frame_from_normal(n);
+    ic_vec3 d = ic_frame_to_world(&f, ic_warp_cosine_hemisphere(ic_rng_float(rng), ic_rng_float(rng)));
+    ic_ray ray = ic_spawn_ray(s, d);
+    ic_hit hit;
+    ++*rays;
+    ic_accel_intersect1(c->tr->accel, &ray, &hit);
+    if (hit.triangle == IC_NO_HIT)
+        return v3_scale(ic_scene_env_radiance(c->tr->scene, d), IC_PI);
+    ic_path_start st = {1, 0.0f, 1, 1, NULL};
+    ic_vec3 L = v3_add(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), ic_ic_cached_emission(c, &ray, &hit));
+    return v3_scale(L, IC_PI);
+}
+
+ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic_rng *rng, int thread,
+                            uint64_t *rays)
+{
+    const ic_final_ctx *fc = p;
+    /* Hints change speed only, never a result (cache.h), so images stay thread-count independent. */
+    ic_cache_hint *hint = thread >= 0 && thread < fc->hint_count ? &fc->hints[thread] : NULL;
+    const ic_ctx *c = fc->c;
+    const ic_scene *scene = c->tr->scene;
+    ic_ray ray = *camera_ray;
+    ic_vec3 L = v3s(0.0f), beta = v3s(1.0f);
+    int prev_glossy = 0; /* 0: camera or delta lobe, emission counts fully */
+    float prev_pdf = 0.0f;
+    ic_vec3 prev_p = ray.org;
+    /* The first shading point samples lights by the local distribution of the pixel's block (built at
+     * the cache shading point of the block's centre pixel, a function of the block alone); later
+     * vertices by power. */
+    ic_light_selection local;
+    const ic_light_selection *sel = NULL, *prev_sel = &c->light_sel;
+    if (!fc->indirect_only && fc->lights.count && pixel < (uint32_t)c->g.width * (uint32_t)c->g.height) {
+        uint32_t a = ic_pixel_lights_anchor(&fc->lights, pixel);
+        sel = ic_pixel_lights_get(&fc->lights, scene, thread, pixel, c->g.valid[a], c->g.p[a], c->g.n[a], &local);
+    }
+    if (!sel)
+        sel = &c->light_sel;
+    for (int depth = 0; depth <= c->tr->pt.max_depth; ++depth) {
+        ic_hit hit;
+        ++*rays;
+        ic_accel_intersect1(c->tr->accel, &ray, &hit);
+        if (hit.triangle == IC_NO_HIT) {
+            /* The environment is never light-sampled in this integrator: full weight. */
+            if (!fc->indirect_only)
+                L = v3_add(L, v3_mul(beta, ic_scene_env_radiance(scene, ray.dir)));
+            break;
+        }
+        ic_surface s;
+        ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+        ic_vec3 wo = v3_neg(ray.dir);
+        ic_vec3 le = ic_scene_emission(scene, &s, wo);
+        if (!v3_is_black(le) && !fc->indirect_only) {
+            float w = prev_glossy ? ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle_sel(
+                                                                     scene, prev_sel, prev_p, hit.triangle, ray.dir, hit.t))
+                                  : 1.0f;
+            L = v3_add(L, v3_scale(v3_mul(beta, le), w));
+        }
+        ic_bsdf b;
+        ic_bsdf_init(&b, scene, &s, wo);
+        ic_bsdf_sample bs;
+        if (!ic_bsdf_has_smooth(&b)) {
+            float u0 = ic_rng_1d(rng), u1, u2;
+            ic_rng_2d(rng, &u1, &u2);
+            if (!ic_bsdf_sample_dir(&b, wo, u0, u1, u2, &bs))
+                break;
+            beta = v3_mul(beta, bs.weight);
+            prev_glossy = 0;
+        } else {
+            int from_cache;
+            ic_vec3 E = cached_irradiance(c, &s, b.frame.n, hint, rng, rays, &from_cache);
+            ic_vec3 indirect = v3_mul(v3_scale(b.kd, IC_INV_PI), E);
+            if (fc->indirect_only)
+                return v3_mul(beta, indirect);
+            /* Several light samples per shading point: with indirect light from the cache, the direct
+             * light's noise is what is left, and shadow rays are the cheapest rays there are. */
+            ic_vec3 direct = v3s(0.0f);
+            for (int k = 0; k < c->o.light_samples; ++k)
+                direct = v3_add(direct, ic_ic_direct_light(c, &s, &b, wo, sel, rng, rays));
+            prev_sel = sel;
+            sel = &c->light_sel;
+            direct = v3_scale(direct, 1.0f / (float)c->o.light_samples);
+            L = v3_add(L, v3_mul(beta, v3_add(indirect, direct)));
+            float u1, u2;
+            ic_rng_2d(rng, &u1, &u2);
+            if (!ic_bsdf_has_glossy(&b) || !ic_bsdf_sample_glossy(&b, wo, u1, u2, &bs))
+                break;
+            beta = v3_mul(beta, bs.weight);
+            prev_glossy = 1;
+            prev_pdf = bs.pdf;
+        }
+        prev_p = s.p;
+        if (!ic_russian_roulette(&beta, depth, c->tr->pt.rr_depth, rng))
+            break;
+        ray = ic_spawn_ray(&s, bs.wi);
+    }
+    return L;
+}

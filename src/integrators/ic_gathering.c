@@ -1,0 +1,202 @@
+/*
+ * ic_gathering.c — what a record's hemisphere rays return (the trace callback of ic_gather_batch, with
+ * Ward's multiple-bounce look-ups at diffuse hits and large emitters' light), and turning gather results
+ * into records: candidates, gather points, parallel gathering and one-batch insertion.
+ */
+#include "ic_internal.h"
+
+#include "core/sampling.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* 1 if emitting triangle tri is a large emitter whose light the records carry (ic_ic_select_large_emitters). */
+static int emitter_is_cached(const ic_ctx *c, uint32_t tri)
+{
+    if (!c->direct_pmf || tri >= c->tr->scene->triangle_count)
+        return 0;
+    int32_t li = c->tr->scene->triangle_light[tri];
+    return li >= 0 && !(c->direct_pmf[li] > 0.0f);
+}
+
+/* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
+ * emitter, which is direct light the records carry (zero for any other surface). */
+ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit)
+{
+    if (!emitter_is_cached(c, hit->triangle))
+        return v3s(0.0f);
+    ic_surface s;
+    ic_scene_surface(c->tr->scene, hit->triangle, hit->u, hit->v, &s);
+    return ic_scene_emission(c->tr->scene, &s, v3_neg(ray->dir));
+}
+
+/* Radiance leaving a hemisphere ray's hit towards the record, with the cache standing in for the
+ * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light by
+ * the final render's estimator (records hold no light of the emitters it samples; ic_ic_direct_light
+ * adds it). This is Ward's multiple-bounce scheme (the ambient value of a point is its records' interpolation, Radiance's
+ * -ab) inside the batch passes: a pass's records serve the next passes' rays, and the world-space
+ * stage puts records where these rays land (seed 004 §3.1.3), which is what makes the look-ups hit;
+ * it cuts record cost, which seed 004 §4.6 measures as most of the construction time. Only purely
+ * diffuse hits are taken (a glossy hit needs its lobe traced); returns 0 where no record reaches, and
+ * the caller path-traces. Deterministic: within a pass the cache is read-only. */
+static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
+                          ic_vec3 *radiance)
+{
+    const ic_scene *scene = c->tr->scene;
+    ic_surface s;
+    ic_scene_surface(scene, hit->triangle, hit->u, hit->v, &s);
+    ic_vec3 wo = v3_neg(ray->dir);
+    ic_bsdf b;
+    ic_bsdf_init(&b, scene, &s, wo);
+    if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
+        return 0;
+    ic_cache_lookup q = ic_cache_lookup_at(s.p, b.frame.n, IC_ACCEPT_FINAL);
+    ic_cache_estimate e;
+    if (!ic_cache_query(c->cache, &q, &e))
+        return 0;
+    *radiance = v3_add(v3_mul(v3_scale(b.kd, IC_INV_PI), e.irradiance), ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays));
+    return 1;
+}
+
+/* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
+ * is seeded from the ray itself (origin and direction bits), so it does not depend on which batch or
+ * thread traced it. */
+void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
+                         ic_vec3 *radiance)
+{
+    ic_ctx *c = user;
+    const ic_tracer *tr = &c->gather_tr;
+    enum { CHUNK = 256 };
+    ic_ray rays[CHUNK];
+    ic_hit hits[CHUNK];
+    uint64_t nrays = 0;
+    for (uint32_t base = 0; base < count; base += CHUNK) {
+        uint32_t n = count - base < CHUNK ? count - base : CHUNK;
+        for (uint32_t i = 0; i < n; ++i) {
+            rays[i].org = origins[base + i];
+            rays[i].dir = dirs[base + i];
+            rays[i].tnear = 0.0f;
+            rays[i].tfar = INFINITY;
+        }
+        ic_accel_intersect_n(tr->accel, rays, hits, n, 0);
+        nrays += n;
+        for (uint32_t i = 0; i < n; ++i) {
+            uint32_t j = base + i;
+            if (hits[i].triangle == IC_NO_HIT) {
+                hit_dist[j] = INFINITY;
+                radiance[j] = ic_scene_env_radiance(tr->scene, rays[i].dir);
+                continue;
+            }
+            hit_dist[j] = hits[i].t;
+            union { float f[6]; uint32_t u[6]; } bits;
+            bits.f[0] = rays[i].org.x;
+            bits.f[1] = rays[i].org.y;
+            bits.f[2] = rays[i].org.z;
+            bits.f[3] = rays[i].dir.x;
+            bits.f[4] = rays[i].dir.y;
+            bits.f[5] = rays[i].dir.z;
+            ic_rng rng = ic_rng_make(c->seed ^ 0x6761746865720000ULL, ((uint64_t)bits.u[0] << 32) | bits.u[1],
+                                     ((uint64_t)bits.u[2] << 32) | bits.u[3], ((uint64_t)bits.u[4] << 32) | bits.u[5]);
+            if (!c->hit_lookups || !hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, &radiance[j])) {
+                /* The hit is the path's second vertex (the record is the first): depth 1. Its emission
+                 * is direct light of the record's point, delivered by NEE in the final render. */
+                ic_path_start st = {1, 0.0f, 1, 1, NULL};
+                radiance[j] = ic_pt_li_hit(tr, rays[i], &hits[i], &st, &rng, &nrays);
+            }
+            /* ... unless it comes from a large emitter, which the records carry. */
+            radiance[j] = v3_add(radiance[j], ic_ic_cached_emission(c, &rays[i], &hits[i]));
+        }
+    }
+    atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
+}
+
+void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec)
+{
+    memset(rec, 0, sizeof *rec);
+    rec->position = cand->p;
+    rec->normal = cand->n;
+    rec->tangent = ic_frame_from_normal(cand->n).t;
+    rec->irradiance = gr->irradiance;
+    if (!c->o.no_gradients) {
+        /* Gradient-magnitude clamping (seed 000 §5.1, eq. 2) bounds the extrapolated change by shrinking
+         * R to Y/|∇t Y|; where the R floor (R_min, pixel bound) stops that, the linear model would be
+         * extrapolated beyond its validity (seen as bright blotches in concave corners, where 1/r of
+         * close hits makes |∇t E| huge). There the gradient itself is scaled so |∇t Y|·R_floor ≤ Y.
+         * Likewise the rotational term is kept below Y for the largest normal change the weights accept
+         * (|n_i × n| ≲ √2·a). */
+        float y = v3_lum(gr->irradiance);
+        ic_vec3 gt = v3_add(v3_add(v3_scale(gr->trans_grad[0], 0.2126f), v3_scale(gr->trans_grad[1], 0.7152f)),
+                            v3_scale(gr->trans_grad[2], 0.0722f));
+        ic_vec3 grt = v3_add(v3_add(v3_scale(gr->rot_grad[0], 0.2126f), v3_scale(gr->rot_grad[1], 0.7152f)),
+                             v3_scale(gr->rot_grad[2], 0.0722f));
+        float floor_r = fmaxf(c->o.cache.min_radius, c->o.cache.min_radius_pixels * cand->footprint);
+        float gt_len = v3_len(gt), grt_len = v3_len(grt);
+        float st = (gt_len * floor_r > y && gt_len > 0.0f) ? y / (gt_len * floor_r) : 1.0f;
+        float rot_limit = y / (1.4142f * c->o.cache.accuracy);
+        float sr = grt_len > rot_limit && grt_len > 0.0f ? rot_limit / grt_len : 1.0f;
+        for (int k = 0; k < 3; ++k) {
+            rec->grad_rot[k] = v3_scale(gr->rot_grad[k], sr);
+            rec->grad_trans[k] = v3_scale(gr->trans_grad[k], st);
+        }
+    }
+    rec->sigma = gr->sigma;
+    /* A record that sees nothing (open sky) has an infinite harmonic-mean distance: its radius is
+     * then set by the upper bounds. */
+    rec->harmonic_mean_dist = isfinite(gr->harmonic_mean_dist) && gr->harmonic_mean_dist > 0.0f
+                                  ? gr->harmonic_mean_dist
+                                  : c->scene_diag;
+    rec->pixel_footprint = cand->footprint;
+}
+
+ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand)
+{
+    ic_gather_point gp;
+    gp.position = ic_offset_ray_origin(cand->p, cand->n, cand->n);
+    gp.normal = cand->n;
+    gp.key = cand->key;
+    return gp;
+}
+
+/* Gathers all candidates in parallel and inserts them as one batch. */
+ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt,
+                                   ic_error *err)
+{
+    if (count == 0)
+        return IC_OK;
+    ic_gather_point *pts = malloc(sizeof *pts * count);
+    ic_gather_result *res = malloc(sizeof *res * count);
+    ic_record *recs = malloc(sizeof *recs * count);
+    ic_result r = IC_OK;
+    if (!pts || !res || !recs) {
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u cache candidates", count);
+        goto done;
+    }
+    for (uint32_t i = 0; i < count; ++i)
+        pts[i] = ic_ic_gather_point_of(&cand[i]);
+    double t0 = ic_seconds();
+    r = ic_gather_batch(&c->o.gather, ic_ic_gather_trace, c, c->threads, pts, count, res, err);
+    double t1 = ic_seconds();
+    pt->gather += t1 - t0;
+    if (r != IC_OK)
+        goto done;
+    for (uint32_t i = 0; i < count; ++i)
+        ic_ic_record_from_gather(c, &cand[i], &res[i], &recs[i]);
+    r = ic_cache_insert_batch(c->cache, recs, count, NULL, err);
+    pt->insert += ic_seconds() - t1;
+done:
+    free(pts);
+    free(res);
+    free(recs);
+    return r;
+}
+
+ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag)
+{
+    ic_candidate cd;
+    cd.p = c->g.p[pixel];
+    cd.n = c->g.n[pixel];
+    cd.footprint = c->g.footprint[pixel];
+    cd.key = ((uint64_t)pixel << 8) | tag;
+    return cd;
+}

@@ -1,0 +1,147 @@
+/*
+ * ic_gbuffer.c — the cache's shading points: one per pixel centre, after ideal specular chains (the
+ * G-buffer every strategy starts from), and cache look-ups over all of them.
+ */
+#include "ic_internal.h"
+
+#include "core/sampling.h"
+
+#include "core/threads.h"
+#include "film/film.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+
+/* Follows a camera ray through ideal specular surfaces to the first surface with a smooth lobe.
+ * Glass takes the more likely branch (refraction unless Fresnel reflection dominates): the shading
+ * points of the cache must be a deterministic function of the pixel. */
+int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf *b, ic_vec3 *wo, float *t_primary,
+                        uint64_t *rays)
+{
+    for (int k = 0; k <= MAX_SPECULAR_CHAIN; ++k) {
+        ic_hit hit;
+        ++*rays;
+        ic_accel_intersect1(tr->accel, &ray, &hit);
+        if (hit.triangle == IC_NO_HIT)
+            return 0;
+        if (k == 0 && t_primary)
+            *t_primary = hit.t;
+        ic_scene_surface(tr->scene, hit.triangle, hit.u, hit.v, s);
+        *wo = v3_neg(ray.dir);
+        ic_bsdf_init(b, tr->scene, s, *wo);
+        if (ic_bsdf_has_smooth(b))
+            return 1;
+        ic_bsdf_sample bs;
+        float F = b->type == IC_MAT_GLASS ? ic_fresnel_dielectric(v3_dot(*wo, b->frame.n), b->ior) : 1.0f;
+        if (!ic_bsdf_sample_dir(b, *wo, F > 0.5f ? 0.0f : 0.999f, 0.5f, 0.5f, &bs))
+            return 0;
+        ray = ic_spawn_ray(s, bs.wi);
+    }
+    return 0;
+}
+
+typedef struct gbuffer_job {
+    ic_ctx *c;
+    uint64_t *rays;            /* per thread, padded */
+} gbuffer_job;
+
+#define PAD 8
+
+static void gbuffer_row(void *p, int64_t y, int thread)
+{
+    gbuffer_job *j = p;
+    ic_ctx *c = j->c;
+    const ic_camera *cam = &c->tr->scene->camera;
+    for (int x = 0; x < cam->width; ++x) {
+        size_t i = (size_t)y * cam->width + x;
+        ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
+        ic_surface s;
+        ic_bsdf b;
+        ic_vec3 wo;
+        float t_primary = 0.0f;
+        c->g.valid[i] = (uint8_t)ic_ic_shading_point(c->tr, ray, &s, &b, &wo, &t_primary, &j->rays[thread * PAD]);
+        if (c->g.valid[i]) {
+            c->g.p[i] = s.p;
+            c->g.n[i] = b.frame.n;
+            c->g.footprint[i] = t_primary * c->pixel_angle;
+        }
+    }
+}
+
+ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    size_t n = (size_t)cam->width * cam->height;
+    c->g.width = cam->width;
+    c->g.height = cam->height;
+    c->g.p = calloc(n, sizeof *c->g.p);
+    c->g.n = calloc(n, sizeof *c->g.n);
+    c->g.footprint = calloc(n, sizeof *c->g.footprint);
+    c->g.valid = calloc(n, 1);
+    c->has_record = calloc(n, 1);
+    uint64_t *rays = calloc((size_t)c->threads * PAD, sizeof *rays);
+    if (!c->g.p || !c->g.n || !c->g.footprint || !c->g.valid || !c->has_record || !rays) {
+        free(rays);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the shading-point buffers");
+    }
+    gbuffer_job j = {c, rays};
+    ic_result r = ic_parallel_for(c->threads, cam->height, gbuffer_row, &j);
+    for (int t = 0; t < c->threads; ++t)
+        atomic_fetch_add(&c->rays, rays[t * PAD]);
+    free(rays);
+    return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
+}
+
+void ic_ic_gbuffer_free(ic_ctx *c)
+{
+    free(c->g.p);
+    free(c->g.n);
+    free(c->g.footprint);
+    free(c->g.valid);
+    free(c->has_record);
+}
+
+typedef struct lookup_job {
+    ic_ctx *c;
+    float *lum;                /* per pixel luminance of the look-up */
+    uint8_t *covered;          /* per pixel: some record contributes */
+    ic_cache_acceptance acceptance;
+} lookup_job;
+
+/* One row's look-ups, in batches of up to LOOKUP_BATCH pixels with a hint carried along the row
+ * (ic_cache_query_batch: the answers of one look-up each, without the per-call costs). */
+enum { LOOKUP_BATCH = 64 };
+
+static void lookup_row(void *p, int64_t y, int thread)
+{
+    (void)thread;
+    lookup_job *j = p;
+    const ic_gbuffer *g = &j->c->g;
+    ic_cache_hint hint = {0};
+    ic_cache_lookup q[LOOKUP_BATCH];
+    ic_cache_estimate e[LOOKUP_BATCH];
+    size_t pixel[LOOKUP_BATCH], m = 0;
+    for (int x = 0; x < g->width; ++x) {
+        size_t i = (size_t)y * g->width + x;
+        j->covered[i] = 0;
+        j->lum[i] = 0.0f;
+        if (g->valid[i]) {
+            q[m] = ic_cache_lookup_at(g->p[i], g->n[i], j->acceptance);
+            pixel[m++] = i;
+        }
+        if (m == LOOKUP_BATCH || (x + 1 == g->width && m > 0)) {
+            ic_cache_query_batch(j->c->cache, q, m, &hint, e);
+            for (size_t k = 0; k < m; ++k) {
+                j->covered[pixel[k]] = (uint8_t)(e[k].contributor_count > 0);
+                j->lum[pixel[k]] = v3_lum(e[k].irradiance);
+            }
+            m = 0;
+        }
+    }
+}
+
+ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc)
+{
+    lookup_job j = {c, lum, covered, acc};
+    return ic_parallel_for(c->threads, c->g.height, lookup_row, &j);
+}

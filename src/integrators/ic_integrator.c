@@ -1,0 +1,184 @@
+/*
+ * ic_integrator.c — irradiance caching behind the integrator interface (integrator.h).
+ *
+ * prepare: the shading points and an empty cache (ic_context.c), then the records: loaded from a cache
+ * file, or built by the strategy of the options (a table of peers, ic_build_fn) and re-indexed for the
+ * final render; saved if asked. sample: the final render (ic_final.c), reading the cache without
+ * changing it. aovs: the indirect image (the film again, same samples), and the diagnostics (ic_aov.c).
+ */
+#include "ic_internal.h"
+
+#include "core/threads.h"
+#include "film/film.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const ic_build_fn strategies[] = {
+    [IC_STRATEGY_BATCH] = ic_ic_build_batch,
+    [IC_STRATEGY_LAZY] = ic_ic_build_lazy,
+    [IC_STRATEGY_ADAPTIVE] = ic_ic_build_adaptive,
+};
+#define STRATEGY_COUNT (sizeof strategies / sizeof strategies[0])
+
+ic_result ic_ic_build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt, ic_error *err)
+{
+    if ((unsigned)c->o.strategy >= STRATEGY_COUNT)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "unknown cache strategy %d; use batch, lazy or adaptive",
+                            (int)c->o.strategy);
+    return strategies[c->o.strategy](c, opt, st, pt, err);
+}
+
+/* The integrator's state. The final render's context comes first: the film calls ic_ic_final_sample
+ * with this state's address, which is that of its first member. */
+typedef struct ic_state {
+    ic_final_ctx fc;
+    const ic_tracer *tr;
+    const ic_render_options *opt;
+    ic_ctx *c;
+} ic_state;
+
+static void add_phase(ic_render_stats *st, const char *name, double seconds)
+{
+    st->phases[st->phase_count].name = name;
+    st->phases[st->phase_count++].seconds = seconds;
+}
+
+/* The records: loaded (refused, with the cache library's message, when made for another scene, other
+ * gathering settings or other cache parameters), or built and re-indexed. Adds construction's own time,
+ * outside gathering, insertion and the phases a strategy reports itself, to *t_candidates. */
+static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt, double *t_candidates, ic_error *err)
+{
+    ic_ctx *c = s->c;
+    if (c->o.load_cache) {
+        ic_cache *loaded = NULL;
+        double t0 = ic_seconds();
+        ic_result r = ic_cache_load(c->o.load_cache, &c->o.cache, ic_ic_records_hash(c), &loaded, err);
+        if (r != IC_OK)
+            return r;
+        ic_cache_destroy(c->cache);
+        c->cache = loaded;
+        pt->insert += ic_seconds() - t0;
+        return IC_OK;
+    }
+    double t0 = ic_seconds();
+    int phases_before = st->phase_count;
+    ic_result r = ic_ic_build(c, s->opt, st, pt, err);
+    if (r != IC_OK)
+        return r;
+    /* Discontinuity maps, look-up sweeps, world-stage paths, clustering for batch; the raster sweep
+     * for lazy. */
+    double own = 0.0;
+    for (int k = phases_before; k < st->phase_count; ++k)
+        own += st->phases[k].seconds;
+    *t_candidates = fmax(ic_seconds() - t0 - pt->gather - pt->insert - own, 0.0);
+    /* The final render reads a freshly built index: look-ups are faster than through the incrementally
+     * grown one, and the summation order of every look-up is the same as after loading a cache file, so
+     * a saved and re-loaded cache renders the identical image. */
+    t0 = ic_seconds();
+    r = ic_cache_rebuild_index(c->cache, err);
+    pt->insert += ic_seconds() - t0;
+    return r;
+}
+
+static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
+{
+    ic_state *s = self;
+    double t_gbuffer = 0.0, t_candidates = 0.0;
+    phase_times pt = {0, 0};
+    ic_result r = ic_ic_ctx_create(s->tr, s->opt, &s->c, &t_gbuffer, err);
+    if (r != IC_OK)
+        return r;
+    ic_ctx *c = s->c;
+    if (c->o.recursive && c->o.strategy != IC_STRATEGY_LAZY)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "recursive caching builds its levels lazily; use the lazy strategy");
+    if ((r = make_records(s, st, &pt, &t_candidates, err)) != IC_OK)
+        return r;
+    if (c->o.save_cache && (r = ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), err)) != IC_OK)
+        return r;
+    st->records = ic_cache_count(c->cache);
+    st->cached_emitters = c->cached_emitters;
+    st->gather_rays = atomic_load(&c->rays);
+    st->rays = st->gather_rays; /* the driver adds the final render's */
+
+    int hint_count = ic_resolve_threads(s->opt->threads);
+    s->fc.c = c;
+    s->fc.hints = calloc((size_t)hint_count, sizeof *s->fc.hints);
+    s->fc.hint_count = s->fc.hints ? hint_count : 0; /* no hints: slower, the same image */
+    r = ic_pixel_lights_init(&s->fc.lights, s->tr->scene, c->light_sel, hint_count, c->g.width, c->g.height);
+    if (r != IC_OK)
+        return ic_error_set(err, r, "out of memory for the per-thread light tables");
+    /* The final render's own phase follows (the driver adds it). */
+    if (st->phase_count + 5 <= IC_MAX_PHASES) {
+        add_phase(st, "shading points", t_gbuffer);
+        add_phase(st, "candidates", t_candidates);
+        add_phase(st, "gathering", pt.gather);
+        add_phase(st, "insertion", pt.insert);
+    }
+    return IC_OK;
+}
+
+static ic_result ic_aovs(void *self, const ic_image *beauty, const ic_image_loop *loop_in,
+                         const ic_image_loop_result *lr, ic_render_aovs *a, ic_error *err)
+{
+    ic_state *s = self;
+    const ic_ctx *c = s->c;
+    ic_pixel_lights_free(&s->fc.lights); /* the indirect AOV samples no lights */
+    if (a->want_indirect) {
+        ic_image_loop loop = *loop_in;
+        s->fc.indirect_only = 1;
+        loop.phase = "indirect AOV";
+        loop.time_budget = 0.0;
+        loop.adaptive = 0;
+        loop.spp = lr->spp_done;
+        ic_image_loop_result lr2;
+        ic_result r = ic_render_image(&loop, ic_ic_final_sample, &s->fc, &a->indirect, &lr2, err);
+        s->fc.indirect_only = 0;
+        if (r != IC_OK)
+            return r;
+    }
+    ic_result r;
+    if (a->want_records && (r = ic_ic_records_image(c, beauty, &a->records)) != IC_OK)
+        return ic_error_set(err, r, "out of memory for the records AOV");
+    if (a->want_record_list && (r = ic_ic_record_views(c, &a->record_views, &a->record_view_count)) != IC_OK)
+        return ic_error_set(err, r, "out of memory for the record list");
+    if (a->want_density && (r = ic_ic_density_image(s->c, &a->density)) != IC_OK)
+        return ic_error_set(err, r, "out of memory for the density AOV");
+    if (a->want_amap && (r = ic_ic_amap_image(c, &a->amap)) != IC_OK)
+        return ic_error_set(err, r, "out of memory for the amap AOV");
+    return IC_OK;
+}
+
+static void ic_destroy(void *self)
+{
+    ic_state *s = self;
+    ic_pixel_lights_free(&s->fc.lights);
+    free(s->fc.hints);
+    ic_ic_ctx_destroy(s->c);
+    free(s);
+}
+
+static const ic_integrator_ops ic_ops = {
+    .loop_phase = "final render",
+    .stats_phase = "final render",
+    .adaptive_by_default = 1, /* as Frolov et al. 2012 §3.2's final render does, where it can */
+    .prepare = ic_prepare,
+    .sample = ic_ic_final_sample,
+    .aovs = ic_aovs,
+    .destroy = ic_destroy,
+};
+
+ic_result ic_ic_integrator_create(const ic_tracer *tr, const ic_render_options *opt, ic_integrator_obj *out,
+                                  ic_error *err)
+{
+    out->ops = &ic_ops;
+    ic_state *s = calloc(1, sizeof *s);
+    out->self = s;
+    if (!s)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory");
+    s->tr = tr;
+    s->opt = opt;
+    return IC_OK;
+}
