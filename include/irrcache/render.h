@@ -16,6 +16,7 @@
 
 #include "irrcache/cache.h"
 #include "irrcache/common.h"
+#include "irrcache/defaults.h"
 #include "irrcache/gather.h"
 #include "irrcache/image.h"
 
@@ -57,10 +58,12 @@ typedef enum ic_strategy {
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
 typedef struct ic_ic_options {
     ic_strategy strategy;
-    ic_cache_params cache; /* weights, accuracy [0.3], clamps. Unlike the cache library, here
-                              min_radius_pixels [3] and max_radius_pixels [48] bound the influence radius
-                              a·R on screen; max_radius [scene diagonal/8] bounds R in world units;
-                              a negative value switches a bound off */
+    ic_cache_params cache; /* weights, accuracy [0.3], clamps; max_radius [scene diagonal/8] bounds R in
+                              world units, a negative value switches it off. min_radius_pixels and
+                              max_radius_pixels are set by the renderer from the two fields below */
+    float min_radius_px;   /* smallest influence radius a·R of a record, in pixels at its primary hit [3];
+                              negative: no bound */
+    float max_radius_px;   /* largest influence radius a·R, in pixels at its primary hit [48]; negative: none */
     ic_gather_opts gather; /* hemisphere sampling [stratified, 16×50 = 800 rays] */
     int no_gradients;      /* 1: records carry no gradients (interpolation is a weighted average) */
     int bounces;           /* indirect bounces in the radiance a hemisphere ray returns [max_depth − 1] */
@@ -131,9 +134,10 @@ typedef struct ic_render_options {
     int has_seed;          /* 1: use `seed` even if it is 0 */
     double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent */
     ic_sampler sampler;    /* pixel, light and BSDF sample pairs [IC_SAMPLER_SOBOL] */
-    int adaptive_sampling; /* 1: spp is a mean per pixel; a pilot pass of spp/4, the rest shared out by each
-                              pixel's relative noise (seed 004 §3.2; needs spp ≥ 8, no time budget); −1: off;
-                              0: on for integrator IC when spp ≥ 8 and there is no time budget, else off */
+    ic_cache_switch adaptive_sampling; /* IC_CACHE_ON: spp is a mean per pixel; a pilot pass of spp/4, the
+                              rest shared out by each pixel's relative noise (Frolov et al. 2012 §3.2; needs
+                              spp ≥ 8, no time budget); IC_CACHE_OFF: even; IC_CACHE_DEFAULT: on for
+                              integrator IC when spp ≥ 8 and there is no time budget, else off */
     ic_progress_fn progress;
     void *progress_user;
     ic_ic_options ic;      /* irradiance caching (integrator IC) */

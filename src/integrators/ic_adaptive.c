@@ -603,12 +603,6 @@ ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, i
     if (!A)
         return ic_error_set(err, IC_ERR_OOM, "out of memory");
     /* Defaults of the adaptive options (zero means default, render.h). */
-    if (!(c->o.weber > 0.0f))
-        c->o.weber = 0.02f;
-    if (!(c->o.adaptive_growth > 0.0f))
-        c->o.adaptive_growth = 1.4f;
-    if (c->o.adaptive_max_passes <= 0)
-        c->o.adaptive_max_passes = 64;
     A->c = c;
     A->weber = c->o.weber;
     A->growth = c->o.adaptive_growth;

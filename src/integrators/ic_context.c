@@ -5,6 +5,8 @@
  */
 #include "ic_internal.h"
 
+#include "irrcache/defaults.h"
+
 #include "core/sampling.h"
 
 #include "core/threads.h"
@@ -27,36 +29,42 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
     if (o.bounces <= 0)
         o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
     if (o.light_samples <= 0)
-        o.light_samples = 1;
+        o.light_samples = IC_DEFAULT_LIGHT_SAMPLES;
     if (o.large_emitters == 0.0f)
-        o.large_emitters = IC_LARGE_EMITTERS;
+        o.large_emitters = IC_DEFAULT_LARGE_EMITTERS;
     if (o.max_passes <= 0)
-        o.max_passes = 12;
+        o.max_passes = IC_DEFAULT_MAX_PASSES;
     if (o.min_candidates <= 0)
-        o.min_candidates = 16;
+        o.min_candidates = IC_DEFAULT_MIN_CANDIDATES;
     if (o.screen_passes <= 0)
-        o.screen_passes = 3;
+        o.screen_passes = IC_DEFAULT_SCREEN_PASSES;
     if (o.dither_threshold <= 0.0f)
-        o.dither_threshold = 0.5f;
+        o.dither_threshold = IC_DEFAULT_DITHER_THRESHOLD;
     if (o.normal_weight <= 0.0f)
-        o.normal_weight = 4.0f;
+        o.normal_weight = IC_DEFAULT_NORMAL_WEIGHT;
     if (o.world_stride <= 0)
-        o.world_stride = 2;
+        o.world_stride = IC_DEFAULT_WORLD_STRIDE;
     if (o.cluster_size <= 0.0f)
-        o.cluster_size = 0.05f;
+        o.cluster_size = IC_DEFAULT_CLUSTER_SIZE;
+    if (!(o.weber > 0.0f))
+        o.weber = IC_DEFAULT_WEBER;
+    if (!(o.adaptive_growth > 0.0f))
+        o.adaptive_growth = IC_DEFAULT_ADAPTIVE_GROWTH;
+    if (o.adaptive_max_passes <= 0)
+        o.adaptive_max_passes = IC_DEFAULT_ADAPTIVE_MAX_PASSES;
     if (o.cache.accuracy == 0.0f)
-        o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? 1.0f : 0.3f;
+        o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? IC_DEFAULT_ACCURACY_TL : IC_DEFAULT_ACCURACY_WARD;
     /* Radius bounds: 0 means the renderer's default, negative switches the bound off. The pixel bounds
      * given to the renderer bound a record's influence radius a·R on screen (what a user sees: "a record
      * covers between 3 and 48 pixels"); the cache clamps R itself, hence the division by a. The floor of
      * 3 pixels, not 1.5: records closer than that mostly average their own Monte Carlo noise; on Sponza
      * at 448×252 it cut records by a quarter and lowered the error (BENCHMARKS.md). */
     float diag = v3_len(v3_sub(scene->bounds_max, scene->bounds_min));
-    float min_px = o.cache.min_radius_pixels == 0.0f ? 3.0f : fmaxf(o.cache.min_radius_pixels, 0.0f);
-    float max_px = o.cache.max_radius_pixels == 0.0f ? 48.0f : fmaxf(o.cache.max_radius_pixels, 0.0f);
+    float min_px = o.min_radius_px == 0.0f ? IC_DEFAULT_MIN_RADIUS_PX : fmaxf(o.min_radius_px, 0.0f);
+    float max_px = o.max_radius_px == 0.0f ? IC_DEFAULT_MAX_RADIUS_PX : fmaxf(o.max_radius_px, 0.0f);
     o.cache.min_radius_pixels = min_px / o.cache.accuracy;
     o.cache.max_radius_pixels = max_px / o.cache.accuracy;
-    o.cache.max_radius = o.cache.max_radius == 0.0f ? diag / 8.0f : (o.cache.max_radius < 0.0f ? INFINITY : o.cache.max_radius);
+    o.cache.max_radius = o.cache.max_radius == 0.0f ? diag / IC_DEFAULT_MAX_RADIUS_DIAG : (o.cache.max_radius < 0.0f ? INFINITY : o.cache.max_radius);
     o.cache.min_radius = fmaxf(o.cache.min_radius, 0.0f);
     c->o = o;
     c->scene_diag = diag > 0.0f ? diag : 1.0f;

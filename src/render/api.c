@@ -42,9 +42,10 @@ static ic_result resolve_options(const ic_scene *scene, ic_render_options *opt, 
 {
     if (opt->spp < 0 || opt->max_depth < 0 || opt->threads < 0 || opt->time_budget < 0.0)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "negative --spp, --max-depth, --threads or --time; give values >= 0");
-    if (opt->adaptive_sampling < -1 || opt->adaptive_sampling > 1)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "adaptive_sampling %d: use 1 (on), -1 (off) or 0 (default)",
-                            opt->adaptive_sampling);
+    if (opt->adaptive_sampling != IC_CACHE_DEFAULT && opt->adaptive_sampling != IC_CACHE_ON &&
+        opt->adaptive_sampling != IC_CACHE_OFF)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "adaptive_sampling %d: use IC_CACHE_ON, IC_CACHE_OFF or "
+                            "IC_CACHE_DEFAULT", (int)opt->adaptive_sampling);
     if (opt->sampler != IC_SAMPLER_SOBOL && opt->sampler != IC_SAMPLER_RANDOM)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "unknown sampler %d; use sobol or random", (int)opt->sampler);
     if ((unsigned)opt->integrator >= INTEGRATOR_COUNT || !integrators[opt->integrator])
@@ -54,12 +55,12 @@ static ic_result resolve_options(const ic_scene *scene, ic_render_options *opt, 
     if (opt->spp == 0)
         opt->spp = scene->settings.spp > 0              ? scene->settings.spp
                    : opt->time_budget > 0.0             ? 0
-                   : opt->integrator == IC_INTEGRATOR_IC ? 64
-                                                         : 16;
+                   : opt->integrator == IC_INTEGRATOR_IC ? IC_DEFAULT_SPP_IC
+                                                         : IC_DEFAULT_SPP_PT;
     if (opt->max_depth == 0)
-        opt->max_depth = scene->settings.max_depth > 0 ? scene->settings.max_depth : 8;
+        opt->max_depth = scene->settings.max_depth > 0 ? scene->settings.max_depth : IC_DEFAULT_MAX_DEPTH;
     if (!opt->has_seed && opt->seed == 0)
-        opt->seed = scene->settings.seed ? scene->settings.seed : 1;
+        opt->seed = scene->settings.seed ? scene->settings.seed : IC_DEFAULT_SEED;
     return IC_OK;
 }
 
@@ -106,9 +107,9 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         loop.threads = opt.threads;
         loop.seed = opt.seed;
         loop.random_sampler = opt.sampler == IC_SAMPLER_RANDOM;
-        loop.adaptive = opt.adaptive_sampling > 0 ||
-                        (it.ops->adaptive_by_default && opt.adaptive_sampling == 0 && opt.spp >= 8 &&
-                         !(opt.time_budget > 0.0));
+        loop.adaptive = opt.adaptive_sampling == IC_CACHE_ON ||
+                        (it.ops->adaptive_by_default && opt.adaptive_sampling == IC_CACHE_DEFAULT &&
+                         opt.spp >= IC_ADAPTIVE_SAMPLING_MIN_SPP && !(opt.time_budget > 0.0));
         loop.phase = it.ops->loop_phase;
         loop.progress = opt.progress;
         loop.progress_user = opt.progress_user;

@@ -150,9 +150,9 @@ static void test_cornell(void)
         o.spp = 32;
         ic_image a = {0}, b = {0};
         ic_render_stats sa, sb;
-        o.adaptive_sampling = -1;
+        o.adaptive_sampling = IC_CACHE_OFF;
         int ok = test_render(CORNELL, W, H, &o, &a, &sa);
-        o.adaptive_sampling = 1;
+        o.adaptive_sampling = IC_CACHE_ON;
         ok &= test_render(CORNELL, W, H, &o, &b, &sb);
         CHECK(ok, "%s renders with and without adaptive sampling", integ ? "IC" : "PT");
         if (ok) {
@@ -187,7 +187,7 @@ static void test_threads(void)
         ic_image a = {0}, b = {0};
         ic_render_options o = ic_options();
         o.spp = variant == 3 ? 16 : 2; /* variant 3: adaptive sampling's allocation is serial too */
-        o.adaptive_sampling = variant == 3 ? 1 : -1;
+        o.adaptive_sampling = variant == 3 ? IC_CACHE_ON : IC_CACHE_OFF;
         o.ic.strategy = (ic_strategy)strategy;
         o.ic.recursive = variant == 2;
         o.ic.bounces = variant == 2 ? 3 : 0;
@@ -207,7 +207,7 @@ static void test_threads(void)
             CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "adaptive sampling with a time budget refused");
             ic_image_free(&none);
             bad.time_budget = 0.0;
-            bad.adaptive_sampling = 7;
+            bad.adaptive_sampling = (ic_cache_switch)7;
             CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "adaptive_sampling 7 refused");
             ic_image_free(&none);
         }

@@ -1,0 +1,354 @@
+/*
+ * options.c — parsing, checking and describing the options of `irrcache render` from the one table in
+ * options.h.
+ */
+#include "options.h"
+
+#include <errno.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct opt_def {
+    const char *name, *alias;
+    ic_opt_kind kind;
+    size_t offset;
+    double min_value, max_value;
+    const char *value_name;
+    double def;                /* numeric default, NAN if none */
+    const char *default_text;  /* "%g" takes def */
+    const char *unit;
+    ic_opt_scope scope;
+    const char *help;
+} opt_def;
+
+#define IC_OPT_ROW(id, name, alias, kind, member, lo, hi, value, def, def_text, unit, scope, help) \
+    {name, alias, kind, offsetof(ic_cli_args, member), lo, hi, value, def, def_text, unit, scope, help},
+static const opt_def options[IC_ARG_COUNT] = {IC_RENDER_OPTIONS(IC_OPT_ROW)};
+#undef IC_OPT_ROW
+
+#define ERR(...) (fprintf(stderr, "irrcache render: " __VA_ARGS__), fputc('\n', stderr), 2)
+
+static const char *scope_prefix(ic_opt_scope s)
+{
+    switch (s) {
+    case IC_SCOPE_IC: return "ic: ";
+    case IC_SCOPE_BATCH: return "ic batch: ";
+    case IC_SCOPE_LAZY: return "ic lazy: ";
+    case IC_SCOPE_ADAPTIVE: return "ic adaptive: ";
+    default: return "";
+    }
+}
+
+/* Index of value among the names of list ("a|b|c" with sep '|'), or −1. */
+static int choice_index(const char *list, char sep, const char *value, size_t len)
+{
+    int index = 0;
+    for (const char *p = list;; ++index) {
+        const char *end = strchr(p, sep);
+        size_t n = end ? (size_t)(end - p) : strlen(p);
+        if (n == len && !strncmp(p, value, len))
+            return index;
+        if (!end)
+            return -1;
+        p = end + 1;
+    }
+}
+
+static void default_string(const opt_def *o, char *buf, size_t size)
+{
+    snprintf(buf, size, o->default_text, o->def); /* a text without %g ignores the number */
+    if (o->unit[0] && strcmp(o->default_text, "none") && !strchr(o->default_text, ' '))
+        snprintf(buf + strlen(buf), size - strlen(buf), " %s", o->unit);
+}
+
+const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id)
+{
+    static char names[IC_ARG_COUNT][48];
+    const opt_def *o = &options[id];
+    const char *v = a->given[id] ? a->given[id] : o->value_name;
+    size_t n = strcspn(v, "|");
+    snprintf(names[id], sizeof names[id], "%.*s", (int)n, v);
+    return names[id];
+}
+
+/* Stores one option's value. Returns 0 or 2 (usage error printed). */
+static int store(ic_cli_args *a, const opt_def *o, const char *val)
+{
+    char *field = (char *)a + o->offset, *end = NULL;
+    errno = 0;
+    switch (o->kind) {
+    case IC_OPT_INT:
+    case IC_OPT_SEED:
+    case IC_OPT_RAYS: {
+        long long v = strtoll(val, &end, 10);
+        if (o->kind == IC_OPT_SEED) {
+            unsigned long long u = strtoull(val, &end, 10);
+            if (errno || !*val || *end || val[0] == '-')
+                return ERR("%s %s: expected an integer from 0 to 2^64 - 1", o->name, val);
+            *(uint64_t *)field = (uint64_t)u;
+            a->render.has_seed = 1;
+            return 0;
+        }
+        if (errno || !*val || *end || v < (long long)o->min_value || v > (long long)o->max_value)
+            return ERR("%s %s: expected an integer from %.0f to %.0f", o->name, val, o->min_value, o->max_value);
+        if (o->kind == IC_OPT_INT) {
+            *(int *)field = (int)v;
+        } else {
+            /* M×N strata with N ≈ π·M (Ward et al. 1988's recommendation): M = sqrt(rays/π). */
+            ic_gather_opts *g = (ic_gather_opts *)field;
+            int m = (int)lround(sqrt((double)v / 3.14159265358979));
+            if (m < 2)
+                m = 2;
+            g->theta_strata = (uint32_t)m;
+            g->phi_strata = (uint32_t)((v + m / 2) / m);
+        }
+        return 0;
+    }
+    case IC_OPT_FLOAT:
+    case IC_OPT_DOUBLE: {
+        double v = strtod(val, &end);
+        if (errno || !*val || *end || !isfinite(v) || v < o->min_value || v > o->max_value)
+            return ERR("%s %s: expected a number from %g to %g", o->name, val, o->min_value, o->max_value);
+        if (o->kind == IC_OPT_FLOAT)
+            *(float *)field = (float)v;
+        else
+            *(double *)field = v;
+        return 0;
+    }
+    case IC_OPT_SHARE_OFF: {
+        if (!strcmp(val, "off")) {
+            *(float *)field = -1.0f;
+            return 0;
+        }
+        double v = strtod(val, &end);
+        if (errno || end == val || *end || !(v > 0.0) || !(v <= 1.0))
+            return ERR("%s %s: give a hemisphere share in (0, 1] (e.g. 0.01) or off", o->name, val);
+        *(float *)field = (float)v;
+        return 0;
+    }
+    case IC_OPT_CHOICE:
+    case IC_OPT_ON_OFF: {
+        int k = choice_index(o->value_name, '|', val, strlen(val));
+        if (k < 0)
+            return ERR("%s %s: unknown value; use one of: %s", o->name, val, o->value_name);
+        if (o->kind == IC_OPT_CHOICE)
+            *(int *)field = k;
+        else
+            *(ic_cache_switch *)field = k == 0 ? IC_CACHE_ON : IC_CACHE_OFF;
+        return 0;
+    }
+    case IC_OPT_LIST:
+        for (const char *p = val; *p;) {
+            size_t n = strcspn(p, ",");
+            if (choice_index(o->value_name, ',', p, n) < 0)
+                return ERR("%s %s: unknown name '%.*s'; use %s", o->name, val, (int)n, p, o->value_name);
+            p += n + (p[n] == ',');
+        }
+        *(const char **)field = val;
+        return 0;
+    case IC_OPT_STRING:
+        *(const char **)field = val;
+        return 0;
+    case IC_OPT_OUTPUT:
+        if (a->output_count == IC_CLI_MAX_OUTPUTS)
+            return ERR("at most %d outputs", IC_CLI_MAX_OUTPUTS);
+        a->outputs[a->output_count++] = val;
+        return 0;
+    case IC_OPT_FLAG:
+        *(int *)field = 1;
+        return 0;
+    case IC_OPT_FLAG_OFF:
+    case IC_OPT_FLAG_ON:
+        *(ic_cache_switch *)field = o->kind == IC_OPT_FLAG_ON ? IC_CACHE_ON : IC_CACHE_OFF;
+        return 0;
+    case IC_OPT_HELP:
+        return 0;
+    }
+    return 0;
+}
+
+static int takes_value(ic_opt_kind k)
+{
+    return k != IC_OPT_FLAG && k != IC_OPT_FLAG_OFF && k != IC_OPT_FLAG_ON && k != IC_OPT_HELP;
+}
+
+static int find_option(const char *arg, size_t len)
+{
+    for (int i = 0; i < IC_ARG_COUNT; ++i) {
+        const opt_def *o = &options[i];
+        if ((strlen(o->name) == len && !strncmp(arg, o->name, len)) ||
+            (o->alias && strlen(o->alias) == len && !strncmp(arg, o->alias, len)))
+            return i;
+    }
+    return -1;
+}
+
+/* What no single option can check: combinations, and the integrator an option needs. */
+static int check(const ic_cli_args *a)
+{
+    if (!a->scene)
+        return ERR("no scene given; usage: irrcache render SCENE -o OUT (see --help)");
+    if (a->output_count == 0)
+        return ERR("no output given; add -o out.exr (or .png, .pfm, .hdr)");
+    for (int i = 0; i < a->output_count; ++i)
+        if (!ic_image_is_writable_format(a->outputs[i]))
+            return ERR("%s: unknown image format; use .exr, .png, .pfm or .hdr", a->outputs[i]);
+    int ic = a->render.integrator == IC_INTEGRATOR_IC;
+    for (int i = 0; i < IC_ARG_COUNT; ++i)
+        if (a->given[i] && options[i].scope != IC_SCOPE_ALL && !ic)
+            return ERR("%s is an irradiance-cache option; add --integrator ic", options[i].name);
+    int adaptive_on = a->render.adaptive_sampling == IC_CACHE_ON;
+    if (adaptive_on && a->render.time_budget > 0)
+        return ERR("--adaptive-sampling shares out a fixed --spp; drop --time");
+    if (adaptive_on && a->render.spp > 0 && a->render.spp < IC_ADAPTIVE_SAMPLING_MIN_SPP)
+        return ERR("--adaptive-sampling needs --spp %d or more (a pilot pass of spp/4 first)",
+                   IC_ADAPTIVE_SAMPLING_MIN_SPP);
+    if (a->render.ic.recursive && a->render.ic.strategy != IC_STRATEGY_LAZY)
+        return ERR("--recursive builds its levels lazily; add --strategy lazy");
+    const ic_cache_params *p = &a->render.ic.cache;
+    if (p->min_radius > 0 && p->max_radius > 0 && p->min_radius > p->max_radius)
+        return ERR("--min-radius %g is larger than --max-radius %g", (double)p->min_radius, (double)p->max_radius);
+    const ic_ic_options *o = &a->render.ic;
+    if (o->min_radius_px > 0 && o->max_radius_px > 0 && o->min_radius_px > o->max_radius_px)
+        return ERR("--min-radius-px %g is larger than --max-radius-px %g", (double)o->min_radius_px,
+                   (double)o->max_radius_px);
+    return 0;
+}
+
+int ic_cli_parse(int argc, char **argv, ic_cli_args *a)
+{
+    memset(a, 0, sizeof *a);
+    int only_positional = 0;
+    for (int i = 1; i < argc; ++i) {
+        const char *arg = argv[i];
+        if (only_positional || arg[0] != '-' || !arg[1]) {
+            if (a->scene)
+                return ERR("unexpected argument '%s'; give one scene file", arg);
+            a->scene = arg;
+            continue;
+        }
+        if (!strcmp(arg, "--")) {
+            only_positional = 1;
+            continue;
+        }
+        const char *eq = arg[1] == '-' ? strchr(arg, '=') : NULL;
+        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+        int id = find_option(arg, len);
+        if (id < 0)
+            return ERR("unknown option '%.*s'; see irrcache render --help", (int)len, arg);
+        const opt_def *o = &options[id];
+        const char *val = "";
+        if (takes_value(o->kind)) {
+            if (eq)
+                val = eq + 1;
+            else if (i + 1 < argc)
+                val = argv[++i];
+            else
+                return ERR("%s needs a value (%s)", o->name, o->value_name);
+        } else if (eq) {
+            return ERR("%s takes no value; drop '=%s'", o->name, eq + 1);
+        }
+        if (o->kind == IC_OPT_HELP)
+            return -1 - id;
+        int rc = store(a, o, val);
+        if (rc)
+            return rc;
+        a->given[id] = val;
+    }
+    return check(a);
+}
+
+/* Writes text from column `indent` on, wrapped at IC_CLI_HELP_COLUMNS; `at` is the current column. */
+static void wrap(FILE *f, const char *text, int indent, int at)
+{
+    const char *p = text;
+    while (*p) {
+        size_t word = strcspn(p, " ");
+        if (at > indent && at + 1 + (int)word > IC_CLI_HELP_COLUMNS) {
+            fprintf(f, "\n%*s", indent, "");
+            at = indent;
+        } else if (at > indent) {
+            fputc(' ', f);
+            ++at;
+        }
+        fwrite(p, 1, word, f);
+        at += (int)word;
+        p += word;
+        while (*p == ' ')
+            ++p;
+    }
+    fputc('\n', f);
+}
+
+static void option_left(const opt_def *o, char *buf, size_t size, const char *quote)
+{
+    snprintf(buf, size, "%s%s%s%s%s%s%s%s", quote, o->alias ? o->alias : "", o->alias ? ", " : "", o->name,
+             takes_value(o->kind) ? " " : "", takes_value(o->kind) ? o->value_name : "", quote, "");
+}
+
+void ic_cli_print_help(FILE *f)
+{
+    fprintf(f, "usage: irrcache render SCENE -o OUT [options]\n\n"
+               "SCENE is a JSON scene file (docs/scene-format.md) or a mesh (.obj .gltf .glb .ply).\n"
+               "Options take their value as --name VALUE or --name=VALUE; -- ends the options.\n\n"
+               "options:\n");
+    enum { LEFT = 30 };
+    for (int i = 0; i < IC_ARG_COUNT; ++i) {
+        const opt_def *o = &options[i];
+        char left[96], text[1024], def[96];
+        option_left(o, left, sizeof left, "");
+        default_string(o, def, sizeof def);
+        snprintf(text, sizeof text, "%s%s%s%s%s", scope_prefix(o->scope), o->help, def[0] ? " [default: " : "",
+                 def, def[0] ? "]" : "");
+        int at = fprintf(f, "  %-*s", LEFT - 2, left);
+        if (at > LEFT) {
+            fputc('\n', f);
+            fprintf(f, "%*s", LEFT, "");
+            at = LEFT;
+        }
+        wrap(f, text, LEFT, at);
+    }
+    fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error\n");
+}
+
+/* A table cell cannot hold a bare '|'. */
+static void md_cell(FILE *f, const char *text)
+{
+    for (const char *p = text; *p; ++p) {
+        if (*p == '|')
+            fputc('\\', f);
+        fputc(*p, f);
+    }
+}
+
+static void markdown_table(FILE *f, int ic)
+{
+    fprintf(f, "| option | default | meaning |\n|---|---|---|\n");
+    for (int i = 0; i < IC_ARG_COUNT; ++i) {
+        const opt_def *o = &options[i];
+        if ((o->scope != IC_SCOPE_ALL) != ic || o->kind == IC_OPT_HELP)
+            continue;
+        char left[96], def[96];
+        option_left(o, left, sizeof left, "`");
+        default_string(o, def, sizeof def);
+        fputs("| ", f);
+        md_cell(f, left);
+        fputs(" | ", f);
+        md_cell(f, def);
+        fputs(" | ", f);
+        const char *prefix = scope_prefix(o->scope);
+        if (ic && strcmp(prefix, "ic: "))
+            fprintf(f, "%.*s: ", (int)strlen(prefix) - 5, prefix + 3);
+        md_cell(f, o->help);
+        fputs(" |\n", f);
+    }
+}
+
+void ic_cli_print_markdown(FILE *f)
+{
+    fprintf(f, "Common options:\n\n");
+    markdown_table(f, 0);
+    fprintf(f, "\nIrradiance caching (`--integrator ic`):\n\n");
+    markdown_table(f, 1);
+}

@@ -1,0 +1,188 @@
+/*
+ * options.h — every option of `irrcache render`, declared once.
+ *
+ * IC_RENDER_OPTIONS is an X-macro: one row per option, from which come the parser (--name VALUE,
+ * --name=VALUE, the alias, `--` ends the options), the range checks, --help (wrapped within 100
+ * columns), the README's tables (--help-markdown) and the settings echoed in the --stats JSON. A
+ * numeric default is the constant of irrcache/defaults.h that the library itself falls back to, so
+ * the help cannot disagree with what is rendered.
+ *
+ * Row: X(ID, "--name", "alias" or NULL, kind, member of ic_cli_args, min, max, "VALUE" (for a choice:
+ *        "a|b|c", in the order of the enum it sets), numeric default or NAN, "default text" ("%g" takes
+ *        the numeric default), "unit", scope, "help")
+ */
+#ifndef IC_CLI_OPTIONS_H
+#define IC_CLI_OPTIONS_H
+
+#include "irrcache/render.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#define IC_CLI_MAX_OUTPUTS 8
+#define IC_CLI_HELP_COLUMNS 100
+
+typedef enum ic_opt_kind {
+    IC_OPT_INT,        /* int */
+    IC_OPT_SEED,       /* uint64_t; also sets render.has_seed */
+    IC_OPT_FLOAT,      /* float */
+    IC_OPT_DOUBLE,     /* double */
+    IC_OPT_CHOICE,     /* an enum: the index of the value in "a|b|c" */
+    IC_OPT_ON_OFF,     /* ic_cache_switch from on|off */
+    IC_OPT_FLAG,       /* int set to 1 */
+    IC_OPT_FLAG_OFF,   /* ic_cache_switch set to IC_CACHE_OFF */
+    IC_OPT_FLAG_ON,    /* ic_cache_switch set to IC_CACHE_ON */
+    IC_OPT_STRING,     /* const char * */
+    IC_OPT_OUTPUT,     /* appended to outputs[] */
+    IC_OPT_RAYS,       /* a ray count, stored as M×N strata (ic_gather_opts) */
+    IC_OPT_SHARE_OFF,  /* float in (0, 1], or "off" stored as −1 */
+    IC_OPT_LIST,       /* comma-separated names of those in VALUE "a,b,c" */
+    IC_OPT_HELP        /* prints something and exits 0 */
+} ic_opt_kind;
+
+/* Who an option is for: an irradiance-cache option needs --integrator ic. */
+typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_LAZY, IC_SCOPE_ADAPTIVE } ic_opt_scope;
+
+/* clang-format off */
+#define IC_RENDER_OPTIONS(X) \
+    X(OUTPUT, "--output", "-o", IC_OPT_OUTPUT, outputs, 0, 0, "PATH", NAN, "(required)", "", IC_SCOPE_ALL, \
+      "output image; the format follows the extension: .exr (linear float), .png (tone-mapped sRGB), " \
+      ".pfm, .hdr; repeatable") \
+    X(WIDTH, "--width", NULL, IC_OPT_INT, load.width, 1, 65536, "N", IC_DEFAULT_WIDTH, "scene file, else %g", "px", \
+      IC_SCOPE_ALL, "image width") \
+    X(HEIGHT, "--height", NULL, IC_OPT_INT, load.height, 1, 65536, "N", IC_DEFAULT_HEIGHT, "scene file, else %g", \
+      "px", IC_SCOPE_ALL, "image height") \
+    X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, 1e9, "N", NAN, "scene file, else 16 (pt) or 64 (ic)", "", \
+      IC_SCOPE_ALL, "samples per pixel (with --time: the most to take)") \
+    X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
+      "wall-time budget: progressive passes until it is spent (equal-time comparisons)") \
+    X(INTEGRATOR, "--integrator", NULL, IC_OPT_CHOICE, render.integrator, 0, 0, "pt|ic", NAN, "pt", "", \
+      IC_SCOPE_ALL, "pt: path-traced reference; ic: irradiance caching (indirect diffuse from the cache)") \
+    X(MAX_DEPTH, "--max-depth", NULL, IC_OPT_INT, render.max_depth, 1, 1000, "N", IC_DEFAULT_MAX_DEPTH, \
+      "scene file, else %g", "", IC_SCOPE_ALL, "maximum number of scattering events (direct light is 1)") \
+    X(THREADS, "--threads", NULL, IC_OPT_INT, render.threads, 0, 4096, "N", NAN, "0 (all cores)", "", IC_SCOPE_ALL, \
+      "worker threads; the image does not depend on it: same seed, same image") \
+    X(SEED, "--seed", NULL, IC_OPT_SEED, render.seed, 0, 1.8e19, "N", IC_DEFAULT_SEED, "scene file, else %g", "", \
+      IC_SCOPE_ALL, "random seed") \
+    X(SAMPLER, "--sampler", NULL, IC_OPT_CHOICE, render.sampler, 0, 0, "sobol|random", NAN, "sobol", "", \
+      IC_SCOPE_ALL, "where each pixel's sample pairs (position, light, BSDF) come from: Owen-scrambled Sobol' " \
+      "points per pixel (less noise at equal samples) or independent random numbers") \
+    X(ADAPTIVE_SAMPLING, "--adaptive-sampling", NULL, IC_OPT_ON_OFF, render.adaptive_sampling, 0, 0, "on|off", NAN, \
+      "off (pt), on (ic with --spp >= 8 and no --time)", "", IC_SCOPE_ALL, \
+      "on: --spp becomes a mean; a pilot pass of spp/4 samples in every pixel, then the rest shared out by " \
+      "each pixel's relative noise (needs --spp >= 8 and no --time)") \
+    X(EXPOSURE, "--exposure", NULL, IC_OPT_DOUBLE, exposure, -100, 100, "STOPS", NAN, "scene file, else 0", "stops", \
+      IC_SCOPE_ALL, "exposure applied to .png outputs") \
+    X(STATS, "--stats", NULL, IC_OPT_STRING, stats_path, 0, 0, "FILE.json", NAN, "none", "", IC_SCOPE_ALL, \
+      "write run statistics: the settings, seconds, rays, rays per second, spp, per-phase times and, for " \
+      "ic, records and passes") \
+    X(SCENES_DIR, "--scenes-dir", NULL, IC_OPT_STRING, load.shared_scenes_dir, 0, 0, "DIR", NAN, \
+      "$IRRCACHE_SCENES, else ../shared/scenes", "", IC_SCOPE_ALL, "where 'shared:' mesh paths of scene files " \
+      "resolve") \
+    X(QUIET, "--quiet", "-q", IC_OPT_FLAG, quiet, 0, 0, "", NAN, "off", "", IC_SCOPE_ALL, \
+      "no progress line and no summary (the progress line is shown only when stderr is a terminal)") \
+    X(STRATEGY, "--strategy", NULL, IC_OPT_CHOICE, render.ic.strategy, 0, 0, "batch|lazy|adaptive", NAN, "batch", \
+      "", IC_SCOPE_IC, "cache construction: batch (Frolov et al. 2012, multi-pass, gathered in parallel), " \
+      "lazy (Ward et al. 1988, serial) or adaptive (Krivanek et al. 2006: each record's a refined until no " \
+      "discontinuity is visible; docs/adaptive.md)") \
+    X(ACCURACY, "--accuracy", "-a", IC_OPT_FLOAT, render.ic.cache.accuracy, 0.001, 100, "A", NAN, \
+      "0.3 (ward), 1 (tl)", "", IC_SCOPE_IC, "error bound a of the weights; smaller means more records") \
+    X(WEIGHT, "--weight", NULL, IC_OPT_CHOICE, render.ic.cache.weight, 0, 0, "ward|tl", NAN, "ward", "", IC_SCOPE_IC, \
+      "Ward or Tabellion-Lamorlette weights") \
+    X(RAYS, "--rays", NULL, IC_OPT_RAYS, render.ic.gather, 16, 1e7, "N", IC_DEFAULT_RAYS, "%g", "", IC_SCOPE_IC, \
+      "hemisphere rays per record (stratified M x N, N about pi M)") \
+    X(GATHER, "--gather", NULL, IC_OPT_CHOICE, render.ic.gather.method, 0, 0, "stratified|progressive", NAN, \
+      "stratified", "", IC_SCOPE_IC, "hemisphere sampler; progressive: Hammersley rounds of 4096 to 65536 " \
+      "rays until converged") \
+    X(BOUNCES, "--bounces", NULL, IC_OPT_INT, render.ic.bounces, 1, 1000, "N", NAN, "max-depth - 1", "", \
+      IC_SCOPE_IC, "bounces in the light a record gathers") \
+    X(RECURSIVE, "--recursive", NULL, IC_OPT_FLAG, render.ic.recursive, 0, 0, "", NAN, "off", "", IC_SCOPE_LAZY, \
+      "one cache level per bounce, as Radiance's -ab (then --bounces is the number of levels)") \
+    X(LIGHT_SAMPLES, "--light-samples", NULL, IC_OPT_INT, render.ic.light_samples, 1, 1e6, "N", \
+      IC_DEFAULT_LIGHT_SAMPLES, "%g", "", IC_SCOPE_IC, "light samples per shading point in the final render") \
+    X(LARGE_EMITTERS, "--large-emitters", NULL, IC_OPT_SHARE_OFF, render.ic.large_emitters, 0, 1, "F|off", \
+      IC_DEFAULT_LARGE_EMITTERS, "%g", "", IC_SCOPE_IC, "an emitting material that covers at least F of the " \
+      "cosine-weighted hemisphere at the image's median shading point, and over a quarter of whose light " \
+      "samples hit something else first (a window seen through openings), lights the scene through the " \
+      "records instead of being light-sampled; off: sample every emitter. The summary line and the stats " \
+      "(cached_emitters) say when it happens") \
+    X(MIN_RADIUS_PX, "--min-radius-px", NULL, IC_OPT_FLOAT, render.ic.min_radius_px, 0, 1e6, "P", \
+      IC_DEFAULT_MIN_RADIUS_PX, "%g", "px", IC_SCOPE_IC, "smallest influence radius a*R of a record, in pixels " \
+      "at its primary hit") \
+    X(MAX_RADIUS_PX, "--max-radius-px", NULL, IC_OPT_FLOAT, render.ic.max_radius_px, 0, 1e6, "P", \
+      IC_DEFAULT_MAX_RADIUS_PX, "%g", "px", IC_SCOPE_IC, "largest influence radius a*R of a record, in pixels " \
+      "at its primary hit") \
+    X(MIN_RADIUS, "--min-radius", NULL, IC_OPT_FLOAT, render.ic.cache.min_radius, 0, 1e30, "R", 0, "%g", \
+      "world units", IC_SCOPE_IC, "smallest record radius R") \
+    X(MAX_RADIUS, "--max-radius", NULL, IC_OPT_FLOAT, render.ic.cache.max_radius, 0, 1e30, "R", NAN, \
+      "scene diagonal / 8", "world units", IC_SCOPE_IC, "largest record radius R") \
+    X(FINAL_ACCURACY_SCALE, "--final-accuracy-scale", NULL, IC_OPT_FLOAT, render.ic.cache.final_accuracy_scale, 1, \
+      100, "S", IC_DEFAULT_FINAL_ACCURACY_SCALE, "%g", "", IC_SCOPE_IC, "the final render accepts records up " \
+      "to S times the construction error bound") \
+    X(NO_GRADIENTS, "--no-gradients", NULL, IC_OPT_FLAG, render.ic.no_gradients, 0, 0, "", NAN, "off", "", \
+      IC_SCOPE_IC, "interpolate without gradients (a weighted average)") \
+    X(PATH_TRACED_GATHER, "--path-traced-gather", NULL, IC_OPT_FLAG, render.ic.path_traced_gather, 0, 0, "", NAN, \
+      "off", "", IC_SCOPE_IC, "hemisphere rays path-trace every bounce after their hit; by default, where " \
+      "records of earlier passes cover a diffuse hit, they give its indirect light and only its direct light " \
+      "is sampled (Ward's multiple-bounce scheme)") \
+    X(NO_NEIGHBOR_CLAMP, "--no-neighbor-clamp", NULL, IC_OPT_FLAG_OFF, render.ic.cache.neighbor_clamp, 0, 0, "", \
+      NAN, "off", "", IC_SCOPE_IC, "switch off neighbour clamping (Krivanek et al. 2006 §5.2)") \
+    X(NO_VALIDITY_CLAMP, "--no-validity-clamp", NULL, IC_OPT_FLAG_OFF, render.ic.cache.validity_clamp, 0, 0, "", \
+      NAN, "off", "", IC_SCOPE_IC, "switch off validity-radius clamping (Frolov et al. 2012 §4.2)") \
+    X(GRADIENT_DIFFERENCE, "--gradient-difference", NULL, IC_OPT_FLAG_ON, render.ic.cache.gradient_difference, 0, 0, \
+      "", NAN, "off", "", IC_SCOPE_IC, "gradient-difference record scaling (Castano 2014)") \
+    X(MAX_PASSES, "--max-passes", NULL, IC_OPT_INT, render.ic.max_passes, 1, 1000, "N", IC_DEFAULT_MAX_PASSES, "%g", \
+      "", IC_SCOPE_BATCH, "most construction passes") \
+    X(MIN_CANDIDATES, "--min-candidates", NULL, IC_OPT_INT, render.ic.min_candidates, 1, 1e9, "N", \
+      IC_DEFAULT_MIN_CANDIDATES, "%g", "", IC_SCOPE_BATCH, "construction stops when a pass finds fewer new " \
+      "candidates") \
+    X(WEBER, "--weber", NULL, IC_OPT_FLOAT, render.ic.weber, 0.0001, 1, "F", IC_DEFAULT_WEBER, "%g", "", \
+      IC_SCOPE_ADAPTIVE, "Weber fraction of the discontinuity test; smaller means more records") \
+    X(ADAPTIVE_GROWTH, "--adaptive-growth", NULL, IC_OPT_FLOAT, render.ic.adaptive_growth, 1, 100, "F", \
+      IC_DEFAULT_ADAPTIVE_GROWTH, "%g", "", IC_SCOPE_ADAPTIVE, "a new record starts from the nearest " \
+      "record's a times F (at most --accuracy)") \
+    X(SAVE_CACHE, "--save-cache", NULL, IC_OPT_STRING, render.ic.save_cache, 0, 0, "FILE", NAN, "none", "", \
+      IC_SCOPE_IC, "keep the records in a versioned, checksummed cache file") \
+    X(LOAD_CACHE, "--load-cache", NULL, IC_OPT_STRING, render.ic.load_cache, 0, 0, "FILE", NAN, "none", "", \
+      IC_SCOPE_IC, "render from the records in FILE instead of building them; refused if made for another " \
+      "scene or other gathering settings (another --seed, --spp or view is fine)") \
+    X(RECORDS_JSON, "--records-json", NULL, IC_OPT_STRING, records_json, 0, 0, "FILE", NAN, "none", "", \
+      IC_SCOPE_IC, "write every record (position, radius, a, image position, visibility) as JSON") \
+    X(AOV, "--aov", NULL, IC_OPT_LIST, aov, 0, 0, "indirect,records,density,amap", NAN, "none", "", IC_SCOPE_IC, \
+      "extra images next to the first output: <stem>.indirect.exr, <stem>.records.png (dots and radii), " \
+      "<stem>.density.exr (records per pixel), <stem>.amap.png (a of the heaviest record, blue = --accuracy " \
+      "to red = accuracy/32)") \
+    X(HELP, "--help", "-h", IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, "show this help and exit") \
+    X(HELP_MARKDOWN, "--help-markdown", NULL, IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, \
+      "print the option tables of README.md (Markdown) and exit")
+/* clang-format on */
+
+#define IC_OPT_ID(id, ...) IC_ARG_##id,
+typedef enum ic_arg_id { IC_RENDER_OPTIONS(IC_OPT_ID) IC_ARG_COUNT } ic_arg_id;
+#undef IC_OPT_ID
+
+/* What the command line says: the library's options, the scene's load options, and the CLI's own. */
+typedef struct ic_cli_args {
+    const char *scene;
+    const char *outputs[IC_CLI_MAX_OUTPUTS];
+    int output_count;
+    const char *stats_path, *records_json, *aov;
+    double exposure;
+    int quiet;
+    int none;                          /* target of options that set nothing */
+    ic_scene_load_options load;
+    ic_render_options render;
+    const char *given[IC_ARG_COUNT];   /* the value as written ("" for a flag), NULL if not given */
+} ic_cli_args;
+
+/* Parses argv (argv[0] is the command's name) into a. Returns 0, 2 on a usage error (one line on
+ * stderr), or −1 − ID of a help option that was given (the caller prints it and exits 0). */
+int ic_cli_parse(int argc, char **argv, ic_cli_args *a);
+/* --help and --help-markdown. */
+void ic_cli_print_help(FILE *f);
+void ic_cli_print_markdown(FILE *f);
+/* The name a choice option was given (or its default, the first), for messages and the stats. */
+const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id);
+
+#endif

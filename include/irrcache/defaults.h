@@ -1,0 +1,40 @@
+/*
+ * irrcache/defaults.h — the one place every default of the renderer and the cache library is written.
+ * The cache library (cache.h, gather.h) fills its zero fields from here, the renderer (render.h) does
+ * the same, and the command line's option table prints them in --help and the README, so a default
+ * can only change here.
+ */
+#ifndef IRRCACHE_DEFAULTS_H
+#define IRRCACHE_DEFAULTS_H
+
+/* Image and sampling (render.h). */
+#define IC_DEFAULT_WIDTH 512             /* pixels, when neither the scene file nor an option gives it */
+#define IC_DEFAULT_HEIGHT 512
+#define IC_DEFAULT_SPP_PT 16             /* samples per pixel, path tracer */
+#define IC_DEFAULT_SPP_IC 64             /* samples per pixel, cache render (its samples are cheap) */
+#define IC_DEFAULT_MAX_DEPTH 8           /* scattering events */
+#define IC_DEFAULT_SEED 1
+#define IC_ADAPTIVE_SAMPLING_MIN_SPP 8   /* adaptive sampling needs a pilot pass of spp/4 ≥ 2 */
+
+/* Irradiance cache (cache.h, render.h's ic_ic_options). */
+#define IC_DEFAULT_ACCURACY_WARD 0.3f    /* a of Ward's weight */
+#define IC_DEFAULT_ACCURACY_TL 1.0f      /* a of the Tabellion–Lamorlette weight (κ = 1/a = 1) */
+#define IC_DEFAULT_MIN_RADIUS_PX 3.0f    /* smallest influence radius a·R, pixels at the primary hit */
+#define IC_DEFAULT_MAX_RADIUS_PX 48.0f   /* largest influence radius a·R, pixels at the primary hit */
+#define IC_DEFAULT_MAX_RADIUS_DIAG 8.0f  /* largest R: the scene diagonal over this */
+#define IC_DEFAULT_FINAL_ACCURACY_SCALE 1.0f
+#define IC_DEFAULT_RAYS 800              /* hemisphere rays per record (stratified M×N, N ≈ πM) */
+#define IC_DEFAULT_LIGHT_SAMPLES 1       /* final render: light samples per shading point */
+#define IC_DEFAULT_LARGE_EMITTERS 0.01f  /* hemisphere share of a large emitter (ic_ic_options) */
+#define IC_DEFAULT_MAX_PASSES 12         /* batch construction */
+#define IC_DEFAULT_MIN_CANDIDATES 16
+#define IC_DEFAULT_SCREEN_PASSES 3
+#define IC_DEFAULT_DITHER_THRESHOLD 0.5f
+#define IC_DEFAULT_NORMAL_WEIGHT 4.0f
+#define IC_DEFAULT_WORLD_STRIDE 2
+#define IC_DEFAULT_CLUSTER_SIZE 0.05f
+#define IC_DEFAULT_WEBER 0.02f           /* adaptive construction */
+#define IC_DEFAULT_ADAPTIVE_GROWTH 1.4f
+#define IC_DEFAULT_ADAPTIVE_MAX_PASSES 64
+
+#endif

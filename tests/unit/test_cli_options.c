@@ -1,0 +1,133 @@
+/*
+ * test_cli_options.c — the option table of `irrcache render` and what comes from it: README.md's
+ * option tables are exactly `--help-markdown`, --help fits in 100 columns and lists the exit codes,
+ * --name=value means the same as --name value, `--` ends the options, and each kind of bad value is a
+ * usage error (exit 2) with one line naming the option.
+ */
+#include "test_util.h"
+
+#include <string.h>
+#include <sys/wait.h>
+
+#define CLI IC_CLI_PATH
+#define CORNELL IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
+#define TMP IC_TEST_TMP "/cli_options"
+
+static char out_text[1 << 17], err_text[8192];
+
+static size_t slurp(const char *path, char *buf, size_t size)
+{
+    FILE *f = fopen(path, "rb");
+    size_t n = f ? fread(buf, 1, size - 1, f) : 0;
+    buf[n] = 0;
+    if (f)
+        fclose(f);
+    return n;
+}
+
+/* Runs `irrcache ARGS`, stdout into out_text and stderr into err_text; returns the exit status. */
+static int run(const char *args)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s %s >%s.out 2>%s.err", CLI, args, TMP, TMP);
+    int st = system(cmd);
+    slurp(TMP ".out", out_text, sizeof out_text);
+    slurp(TMP ".err", err_text, sizeof err_text);
+    return st == -1 || !WIFEXITED(st) ? -1 : WEXITSTATUS(st);
+}
+
+static int lines(const char *s)
+{
+    int n = 0;
+    for (; *s; ++s)
+        n += *s == '\n';
+    return n;
+}
+
+static void readme_matches_table(void)
+{
+    static char readme[1 << 18];
+    CHECK(slurp(IC_SOURCE_DIR "/README.md", readme, sizeof readme) > 0, "README.md readable");
+    const char *b = strstr(readme, "<!-- options:begin"), *e = strstr(readme, "<!-- options:end -->");
+    CHECK(b && e && b < e, "README.md has the options markers");
+    if (!b || !e || b > e)
+        return;
+    b = strchr(b, '\n') + 1;
+    CHECK(run("render --help-markdown") == 0, "--help-markdown exits 0");
+    size_t n = strlen(out_text);
+    int same = (size_t)(e - b) == n && !strncmp(b, out_text, n);
+    CHECK(same, "README.md's option tables are `irrcache render --help-markdown` "
+                "(run bash scripts/update-readme-options.sh)");
+    CHECK(strstr(out_text, "--accuracy A`") && strstr(out_text, "`--strategy batch\\|lazy\\|adaptive`"),
+          "the tables list the cache options, with '|' escaped");
+}
+
+static void help_layout(void)
+{
+    CHECK(run("render --help") == 0, "--help exits 0");
+    int longest = 0, at = 0;
+    for (const char *p = out_text; *p; ++p) {
+        at = *p == '\n' ? 0 : at + 1;
+        longest = at > longest ? at : longest;
+    }
+    CHECK(longest <= 100, "--help lines within 100 columns (longest %d)", longest);
+    CHECK(strstr(out_text, "exit status: 0") && strstr(out_text, "2 usage error"), "--help lists the exit codes");
+    CHECK(strstr(out_text, "--min-radius-px P") && strstr(out_text, "[default: 3 px]"),
+          "--help shows a default from irrcache/defaults.h with its unit");
+}
+
+static void value_forms(void)
+{
+    /* The same render with --name value, with --name=value, and with the scene after `--`: same stats. */
+    static char a[1 << 14], b[1 << 14], c[1 << 14];
+    const char *common = "--integrator ic --width 24 --height 24 --spp 2 --rays 64 -q";
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_a.exr %s --accuracy 0.5 --stats " TMP "_a.json", common);
+    CHECK(run(cmd) == 0, "render with --name value: %s", err_text);
+    snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_b.exr %s --accuracy=0.5 --stats=" TMP "_b.json", common);
+    CHECK(run(cmd) == 0, "render with --name=value: %s", err_text);
+    snprintf(cmd, sizeof cmd, "render -o " TMP "_c.exr %s --accuracy=0.5 --stats " TMP "_c.json -- " CORNELL, common);
+    CHECK(run(cmd) == 0, "render with the scene after --: %s", err_text);
+    slurp(TMP "_a.json", a, sizeof a);
+    slurp(TMP "_b.json", b, sizeof b);
+    slurp(TMP "_c.json", c, sizeof c);
+    const char *ra = strstr(a, "\"records\""), *rb = strstr(b, "\"records\""), *rc = strstr(c, "\"records\"");
+    CHECK(ra && rb && rc && atoi(ra + 10) > 0 && atoi(ra + 10) == atoi(rb + 10) && atoi(ra + 10) == atoi(rc + 10),
+          "the three forms build the same cache");
+    CHECK(run("render -o " TMP "_d.exr -- --not-an-option.json") == 1 && strstr(err_text, "--not-an-option.json"),
+          "after --, a name starting with '-' is the scene: %s", err_text);
+}
+
+static void bad_values(void)
+{
+    static const struct { const char *args, *names; } cases[] = {
+        {"--spp=0", "--spp"},
+        {"--spp=", "--spp"},
+        {"--quiet=yes", "--quiet"},
+        {"--width 70000", "--width"},
+        {"--accuracy=-1 --integrator ic", "--accuracy"},
+        {"--integrator=xyz", "pt|ic"},
+        {"--aov indirect,nope --integrator ic", "nope"},
+        {"--max-passes 4", "--integrator ic"},
+        {"--recursive --integrator ic", "--strategy lazy"},
+        {"--min-radius-px 9 --max-radius-px 4 --integrator ic", "--min-radius-px"},
+        {"--seed -3", "--seed"},
+        {"--frobnicate=3", "--frobnicate"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_bad.exr %s", cases[i].args);
+        int rc = run(cmd);
+        CHECK(rc == 2 && lines(err_text) == 1 && strstr(err_text, cases[i].names), "%s: exit %d, '%s'",
+              cases[i].args, rc, err_text);
+    }
+}
+
+int main(void)
+{
+    readme_matches_table();
+    help_layout();
+    value_forms();
+    bad_values();
+    TEST_MAIN_END();
+}
