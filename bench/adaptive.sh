@@ -1,5 +1,6 @@
 #!/bin/sh
-# bench/adaptive.sh — figures for BENCHMARKS.md "Adaptive caching" (seed 000 §4, docs/adaptive.md).
+# bench/adaptive.sh — figures for BENCHMARKS.md "Adaptive caching" (Křivánek et al. 2006 §4,
+# docs/adaptive.md).
 #
 #   bench/adaptive.sh [BUILD_DIR] [OUT_DIR]
 #

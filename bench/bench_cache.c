@@ -5,7 +5,7 @@
  * construction (Ward 1988: look up at a random surface point, insert a record where no record
  * contributes) places ~300k records the way a renderer would, timing incremental insertion. The
  * same input records are then inserted again as one batch with and without validity-radius
- * clamping (seed 004 §4.2), and in batches of 10k (a batch-strategy pass), timing batch insertion.
+ * clamping (Frolov et al. 2012 §4.2), and in batches of 10k (a batch-strategy pass), timing batch insertion.
  * Look-ups at 1M random surface points run on one thread (per-core rate; median of 5 runs) with the
  * construction and the final acceptance, and on all threads; after ic_cache_rebuild_index each cache
  * is timed through its octree (thawed), its frozen layout, the frozen layout with a hint, and in

@@ -1,7 +1,8 @@
 /*
  * bench_lookup.c — look-ups per second on a real cache: the records the batch strategy builds for a
  * scene, queried at the scene's own shading points (one per pixel centre, raster order, as the final
- * render queries them), with and without validity-radius clamping (seed 004 §4.2, Table 1).
+ * render queries them), with and without validity-radius clamping (Frolov et al. 2012 §4.2,
+ * Table 1).
  *
  * usage: bench_lookup [--save DIR] SCENE [width height] — prints one row per setting and look-up path
  * (the octree with the cache thawed, the frozen layout, the frozen layout with a caller hint, the same

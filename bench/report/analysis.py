@@ -1,5 +1,5 @@
 """The arithmetic of the benchmark: equal-quality speed-ups from the path tracer's error-versus-time curve
-(DESIGN.md section 11), medians, and the marked section of BENCHMARKS.md that bench/run owns.
+(bench/README.md), medians, and the marked section of BENCHMARKS.md that bench/run owns.
 
 Equal quality. The path tracer is rendered at 1, 2, 4, ... samples per pixel; each point gives (seconds,
 relMSE). To find the time the path tracer needs to reach a cache render's relMSE e:

@@ -1,5 +1,5 @@
 """Internal-consistency checks of a benchmark run (bench/run --check; the bench_quick test). They assert
-correctness, never a wall time (STYLE.md): the reference diffed with itself is exact; the path tracer's
+correctness, never a wall time: the reference diffed with itself is exact; the path tracer's
 error falls as its sample count grows; every cache render has records and finite metrics; speed-ups and
 equal-time ratios are positive and finite; every file the report links exists.
 """

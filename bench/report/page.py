@@ -139,7 +139,7 @@ METHOD_NOTE = (
     "tracer is extrapolated with MSE ∝ spp^-s, s fitted to its last three points and kept in [1, 2]; \"≥\" marks "
     "corrected errors below a quarter of the reference's noise, which are raised to that quarter (a lower bound). "
     "The path tracer samples every pixel evenly; the cache render's final pass samples adaptively (its default, as "
-    "in seed 004 §3.2), and each scene notes what adaptive sampling alone gives the path tracer.")
+    "in Frolov et al. 2012 §3.2), and each scene notes what adaptive sampling alone gives the path tracer.")
 
 
 def markdown_section(results):

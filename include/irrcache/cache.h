@@ -4,11 +4,14 @@
  *
  * The cache depends on nothing but the C library and irrcache's core (no Embree, no scene), so any
  * renderer, light-map baker or engine can embed it. Methods and where they come from:
- *   - weights and interpolation: seed 000 (Křivánek et al. 2006) §3, eq. 1; Tabellion–Lamorlette 2004;
- *   - gradient-magnitude clamping: seed 000 §5.1, eq. 2;  neighbor clamping: seed 000 §5.2;
+ *   - weights and interpolation: Ward et al. 1988, Křivánek et al. 2006 §3, eq. 1;
+ *     Tabellion–Lamorlette 2004;
+ *   - gradient-magnitude clamping: Křivánek et al. 2006 §5.1, eq. 2;
+ *     neighbor clamping: Křivánek et al. 2006 §5.2;
  *   - validity-radius clamping and the multiple-reference octree with stackless look-up:
- *     seed 004 (Frolov et al. 2012) §4.2–4.3;
- *   - gradient-difference scaling: seed 003 (Castaño 2014).
+ *     Frolov et al. 2012 §4.2–4.3;
+ *   - gradient-difference scaling: Castaño 2014.
+ * Full references: docs/references.md.
  *
  * USAGE
  *   1. ic_cache_params params = {0};            zero means default for every field
@@ -41,16 +44,16 @@
  *   |p−p_i|/R_i < 1/κ_i = a_i. With IC_ACCEPT_FINAL both use s·a_i (s = final_accuracy_scale).
  *
  * CLAMPS (applied in this order, every step deterministic and independent of the thread count)
- *   1. per record: R := harmonic_mean_dist; gradient-magnitude clamp (seed 000 eq. 2, on luminance:
- *      if |∇t Y|/Y > 1/R then R := Y/|∇t Y|); then R bounds: R := clamp(R, lo, hi) with
+ *   1. per record: R := harmonic_mean_dist; gradient-magnitude clamp (Křivánek et al. 2006 eq. 2,
+ *      on luminance: if |∇t Y|/Y > 1/R then R := Y/|∇t Y|); then R bounds: R := clamp(R, lo, hi) with
  *      lo = max(min_radius, min_radius_pixels·footprint), hi = min(max_radius,
  *      max_radius_pixels·footprint). The R_min floor is the only step that can raise R.
- *   2. validity-radius clamp (seed 004 §4.2): influence radius ≤ distance to the farthest of the k
+ *   2. validity-radius clamp (Frolov et al. 2012 §4.2): influence radius ≤ distance to the farthest of the k
  *      nearest records in distinct tangent-plane directions, scanning the 8·k nearest (new records
  *      only; a record with fewer than k distinct directions there is left alone).
- *   3. gradient-difference scaling (seed 003): shrink pairs whose luminance gradients differ.
- *   4. neighbor clamping (seed 000 §5.2), to a fixed point: |R_i − R_j| ≤ |p_i − p_j| for every pair
- *      within reach.
+ *   3. gradient-difference scaling (Castaño 2014): shrink pairs whose luminance gradients differ.
+ *   4. neighbor clamping (Křivánek et al. 2006 §5.2), to a fixed point: |R_i − R_j| ≤ |p_i − p_j|
+ *      for every pair within reach.
  *   Two records i, j are "within reach" when |p_i − p_j| < max(a_i·R_i, a_j·R_j): one's position
  *   lies inside the other's (construction) influence sphere. Steps 2–4 only ever shrink radii, of new
  *   and existing records alike.
@@ -91,7 +94,7 @@ typedef struct ic_cache ic_cache;
 
 /* Weighting function of the interpolation. */
 typedef enum ic_weight_kind {
-    IC_WEIGHT_WARD = 0,       /* w = 1 / (|p−p_i|/R_i + sqrt(1 − n·n_i)), accept w > 1/a_i (seed 000 §3) */
+    IC_WEIGHT_WARD = 0,       /* w = 1 / (|p−p_i|/R_i + sqrt(1 − n·n_i)), accept w > 1/a_i (Křivánek et al. 2006 §3) */
     IC_WEIGHT_TABELLION = 1   /* w = 1 − κ_i·max(|p−p_i|/R_i, sqrt(1−n·n_i)/sqrt(1−cos 10°)), κ_i = 1/a_i, accept w > 0 */
 } ic_weight_kind;
 
@@ -112,12 +115,12 @@ typedef struct ic_cache_params {
     float max_radius;                 /* R ceiling in world units; default +inf (none) */
     float min_radius_pixels;          /* R floor in primary-hit pixel footprints; default 0 (none) */
     float max_radius_pixels;          /* R ceiling in primary-hit pixel footprints; default 0 (none) */
-    ic_cache_switch gradient_clamp;   /* seed 000 §5.1 eq. 2; default on */
-    ic_cache_switch neighbor_clamp;   /* seed 000 §5.2; default on */
-    ic_cache_switch validity_clamp;   /* seed 004 §4.2; default on */
+    ic_cache_switch gradient_clamp;   /* Křivánek et al. 2006 §5.1 eq. 2; default on */
+    ic_cache_switch neighbor_clamp;   /* Křivánek et al. 2006 §5.2; default on */
+    ic_cache_switch validity_clamp;   /* Frolov et al. 2012 §4.2; default on */
     uint32_t validity_k;              /* neighbours in distinct directions, 1…16; default 6 */
     float validity_angle_deg;         /* minimum angle between taken directions; default 30 */
-    ic_cache_switch gradient_difference; /* seed 003; default off */
+    ic_cache_switch gradient_difference; /* Castaño 2014; default off */
     float gradient_difference_threshold; /* τ of the criterion (see cache_clamp.c); default 0.1 */
     uint32_t leaf_capacity;           /* octree: split leaves holding more refs than this; default 12 */
     uint32_t max_depth;               /* octree depth limit, ≤ 32; default 20 */
@@ -138,7 +141,7 @@ typedef struct ic_record {
     ic_vec3 irradiance;               /* E_i, RGB */
     ic_vec3 grad_rot[3];              /* ∇r E_i per channel (R, G, B): world-space vectors */
     ic_vec3 grad_trans[3];            /* ∇t E_i per channel (R, G, B): world-space vectors */
-    ic_vec3 sigma;                    /* Monte Carlo σ of E_i per channel (seed 000 §4.3), 0 if unknown */
+    ic_vec3 sigma;                    /* Monte Carlo σ of E_i per channel (Křivánek et al. 2006 §4.3), 0 if unknown */
     float harmonic_mean_dist;         /* R from hemisphere sampling (> 0): input of the clamps */
     float radius;                     /* R_i after clamping: output (ignored on insertion) */
     float accuracy;                   /* a_i; 0 on insertion means params.accuracy */
@@ -205,7 +208,7 @@ size_t ic_cache_bytes_per_record(void);
 /* Bytes the cache holds now: records, octree nodes and references, point index. */
 size_t ic_cache_memory_bytes(const ic_cache *cache);
 
-/* The shape of the look-up index (diagnostics and benchmarks; seed 004 §4.3 reports records per leaf). */
+/* The shape of the look-up index (diagnostics and benchmarks; Frolov et al. 2012 §4.3 reports records per leaf). */
 typedef struct ic_cache_index_stats {
     uint32_t nodes;                   /* octree nodes */
     uint32_t leaves;                  /* octree leaves */

@@ -1,5 +1,5 @@
 /*
- * irrcache/gather.h — hemisphere gathering for irradiance-cache records (DESIGN.md §6).
+ * irrcache/gather.h — hemisphere gathering for irradiance-cache records.
  *
  * Given a shading point (position, unit normal, a 64-bit record key), a gather samples the
  * cosine-weighted hemisphere, traces the rays through a caller-supplied callback, and returns the
@@ -7,10 +7,10 @@
  * distances, and a Monte Carlo error estimate σ. Two samplers:
  *
  *   - stratified  : M×N jittered strata, Ward & Heckbert 1992 gradients, translational gradient in the
- *                   original WH92 form or the improved Křivánek et al. 2005 form (default);
+ *                   original WH92 form or the improved Křivánek et al. 2005 (SCCG) form (default);
  *   - progressive : Hammersley point sets in rounds (4096 → 16384 → 65536 rays by default) until the
- *                   odd/even estimates agree (seed 004 §4.1, seed 000 §4.3); many points per call, only
- *                   the still-active ones are traced in each round.
+ *                   odd/even estimates agree (Frolov et al. 2012 §4.1, Křivánek et al. 2006 §4.3);
+ *                   many points per call, only the still-active ones are traced in each round.
  *
  * The library knows nothing about geometry: it calls ic_trace_fn with batches of rays and reads back
  * hit distances and incoming radiance. Everything random is a pure function of (opts.seed, point key,
@@ -35,7 +35,7 @@
  *
  * Units and conventions: irradiance is ∫ L cosθ dω over the hemisphere (a uniform sky of radiance L
  * gives E = πL). Gradients are world-space vectors, one per colour channel: grad[c] is the gradient of
- * channel c (0 = R, 1 = G, 2 = B). They are meant for the interpolation of DESIGN.md §4:
+ * channel c (0 = R, 1 = G, 2 = B). They are meant for the interpolation of Křivánek et al. 2006 §3 (cache.h):
  *     E_c(p, n) ≈ E_c + (n_i × n) · rot_grad[c] + (p − p_i) · trans_grad[c].
  */
 #ifndef IRRCACHE_GATHER_H
@@ -56,12 +56,12 @@ typedef void (*ic_trace_fn)(void *user, const ic_vec3 *origins, const ic_vec3 *d
 /* Which hemisphere sampler a gatherer uses by default (ic_gather_batch). */
 typedef enum ic_gather_method {
     IC_GATHER_STRATIFIED = 0,   /* M×N jittered cosine-weighted strata (default) */
-    IC_GATHER_PROGRESSIVE = 1   /* Hammersley rounds with odd/even convergence (seed 004 §4.1) */
+    IC_GATHER_PROGRESSIVE = 1   /* Hammersley rounds with odd/even convergence (Frolov et al. 2012 §4.1) */
 } ic_gather_method;
 
 /* Which formula estimates the translational gradient from the stratified cells. */
 typedef enum ic_gather_tgrad {
-    IC_GATHER_TGRAD_IMPROVED = 0,     /* Křivánek, Gautron, Bouatouch, Pattanaik 2005 (default) */
+    IC_GATHER_TGRAD_IMPROVED = 0,     /* Křivánek, Gautron, Bouatouch, Pattanaik 2005 (SCCG; default) */
     IC_GATHER_TGRAD_WARD_HECKBERT = 1 /* Ward & Heckbert 1992 (original form; for comparison) */
 } ic_gather_tgrad;
 
@@ -98,7 +98,7 @@ typedef struct ic_gather_result {
     float harmonic_mean_dist;      /* n / Σ_hits 1/d_i over all n rays: a miss counts as d = ∞ and adds 0
                                       to the sum; INFINITY if no ray hit */
     float min_dist;                /* smallest hit distance; INFINITY if no ray hit */
-    ic_vec3 sigma;                 /* σ = |E − E'| per channel, E' from half of the rays (seed 000 §4.3) */
+    ic_vec3 sigma;                 /* σ = |E − E'| per channel, E' from half of the rays (Křivánek et al. 2006 §4.3) */
     uint32_t ray_count;            /* rays traced for this point (all rounds) */
     uint32_t hit_count;            /* rays that hit something */
     int is_converged;              /* progressive: 1 if it stopped on the threshold, 0 if it hit max_rays;

@@ -56,7 +56,7 @@ typedef struct ic_image_metrics {
     double rmse;           /* root-mean-square error over all channels, linear HDR */
     double relmse;         /* mean of (a-r)^2 / (r^2 + 0.01) over all channels (pbrt/Rousselle convention) */
     double psnr_hdr;       /* 10 log10(peak^2 / MSE), peak = max reference channel value, linear HDR */
-    double psnr_ldr;       /* PSNR of the 8-bit sRGB images (peak 255), as the seeds report */
+    double psnr_ldr;       /* PSNR of the 8-bit sRGB images (peak 255), as Frolov et al. 2012 report */
     double ssim;           /* mean SSIM of the luma of the 8-bit sRGB images (8×8 windows, Wang et al. 2004 constants) */
     long nonfinite;        /* channel values (of img or ref) that were NaN or ±Inf; they count as 0 above */
 } ic_image_metrics;

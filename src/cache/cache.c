@@ -2,11 +2,11 @@
  * cache.c — the irradiance cache: parameters, record store, insertion and interpolation
  * (include/irrcache/cache.h).
  *
- * Interpolation is seed 000 §3 eq. 1 for irradiance:
+ * Interpolation is Křivánek et al. 2006 §3 eq. 1 for irradiance:
  *   E(p) = Σ_{i∈S} w_i(p) E_i(p) / Σ_{i∈S} w_i(p),
  *   E_i(p) = E_i + (n_i × n)·∇r E_i + (p − p_i)·∇t E_i   (per channel, clamped ≥ 0),
  * with Ward's or Tabellion–Lamorlette's weight (cache_internal.h: ic_record_weight). The set S comes
- * from a single root-to-leaf descent of the multiple-reference octree (seed 004 §4.3).
+ * from a single root-to-leaf descent of the multiple-reference octree (Frolov et al. 2012 §4.3).
  *
  * Insertion (one record or a batch) runs the clamp steps of cache.h in a fixed order; records keep
  * the caller's order as their indices, and every parallel step writes per-record slots only, so the
@@ -403,7 +403,7 @@ static inline void accumulate(uint32_t i, const ic_float4 *ni, const ic_vec3 *E,
                               const ic_vec3 gt[3], ic_vec3 n, float w, ic_vec3 dp, const ic_cache_lookup *q,
                               ic_cache_estimate *e, float acc[3])
 {
-    /* (n_i × n): the rotation that takes the record's normal to ours (seed 000 §3). */
+    /* (n_i × n): the rotation that takes the record's normal to ours (Křivánek et al. 2006 §3). */
     ic_vec3 rot = v3_cross(v3(ni->x, ni->y, ni->z), n);
     float e3[3] = {E->x, E->y, E->z};
     for (int ch = 0; ch < 3; ++ch) {
@@ -530,8 +530,8 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
 
 /*
  * Frozen look-ups. A leaf's list is read one block of eight entries at a time; every test and the
- * extrapolation of seed 000 §3 run on the eight lanes side by side. The entry at list position k, if
- * it contributes, adds w_i·E_i(p) and w_i to the running sums of lane k mod 8; the eight lane sums
+ * extrapolation of Křivánek et al. 2006 §3 run on the eight lanes side by side. The entry at list
+ * position k, if it contributes, adds w_i·E_i(p) and w_i to the running sums of lane k mod 8; the eight lane sums
  * are added in one fixed order at the end (lane_total). Every code path — portable C, SSE2
  * (two halves of four lanes), AVX2 (eight) — performs the same IEEE operations on the same operands
  * per lane (packed add, mul, div and sqrt round like their scalar forms; no FMA: contraction is off),

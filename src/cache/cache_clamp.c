@@ -1,10 +1,10 @@
 /*
  * cache_clamp.c — the radius clamps of the irradiance cache, in the order cache.h documents.
  *
- *   1. gradient-magnitude clamp, seed 000 (Křivánek et al. 2006) §5.1 eq. 2, then R bounds;
- *   2. validity-radius clamp, seed 004 (Frolov et al. 2012) §4.2;
- *   3. gradient-difference scaling, seed 003 (Castaño 2014);
- *   4. neighbor clamping, seed 000 §5.2.
+ *   1. gradient-magnitude clamp, Křivánek et al. 2006 §5.1 eq. 2, then R bounds;
+ *   2. validity-radius clamp, Frolov et al. 2012 §4.2;
+ *   3. gradient-difference scaling, Castaño 2014;
+ *   4. neighbor clamping, Křivánek et al. 2006 §5.2.
  *
  * Radii here are R_i (the value in the weights); the influence radius is r_i = a_i·R_i (cache.h).
  * "Within reach" (steps 3, 4): |p_i − p_j| < max(r_i, r_j). Steps 2–4 only ever lower R, and each is
@@ -31,9 +31,9 @@ float ic_cache_clamp_record(const ic_cache_params *p, const ic_record *r)
 {
     float R = r->harmonic_mean_dist;
     if (p->gradient_clamp == IC_CACHE_ON) {
-        /* Seed 000 §5.1 eq. 2 on luminance Y: if |∇t Y|/Y > 1/R then R := Y/|∇t Y|. The split-sphere
-         * model bounds the gradient by Y/R; a measured gradient above that bound means the field
-         * changes faster than the geometry suggests, so the record must be smaller. */
+        /* Křivánek et al. 2006 §5.1 eq. 2 on luminance Y: if |∇t Y|/Y > 1/R then R := Y/|∇t Y|.
+         * The split-sphere model bounds the gradient by Y/R; a measured gradient above that bound
+         * means the field changes faster than the geometry suggests, so the record must be smaller. */
         float Y = lum3(r->irradiance), g = v3_len(lum_gradient(r->grad_trans));
         if (Y > 0.0f && g * R > Y)
             R = Y / g;
@@ -116,7 +116,7 @@ static float distance(const ic_cache *c, uint32_t i, uint32_t j)
     return sqrtf(ic_dist2(a->x, a->y, a->z, b->x, b->y, b->z));
 }
 
-/* ---- Step 2: validity-radius clamping (seed 004 §4.2) ----------------------------------------- */
+/* ---- Step 2: validity-radius clamping (Frolov et al. 2012 §4.2) ------------------------------- */
 
 /* Candidates examined per record: the 8·k nearest. Enough for k distinct directions on any surface
  * patch; a record on the rim of the cached region may find fewer and is then left alone. */
@@ -186,7 +186,7 @@ ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first)
     return ic_parallel_for(c->params.threads, n, validity_one, &job);
 }
 
-/* ---- Step 3: gradient-difference scaling (seed 003) ------------------------------------------- */
+/* ---- Step 3: gradient-difference scaling (Castaño 2014) --------------------------------------- */
 
 /*
  * Criterion. For records i, j within reach, on the same smooth surface (n_i·n_j ≥ cos 30°), with
@@ -281,7 +281,7 @@ ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first)
     return rc;
 }
 
-/* ---- Step 4: neighbor clamping (seed 000 §5.2) ------------------------------------------------ */
+/* ---- Step 4: neighbor clamping (Křivánek et al. 2006 §5.2) ------------------------------------ */
 
 /*
  * The paper clamps a new record by its neighbours, R_i := min(R_i, R_j + |p_i − p_j|), then the

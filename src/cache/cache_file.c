@@ -1,5 +1,5 @@
 /*
- * cache_file.c — the cache file (DESIGN.md §10): versioned, checksummed, tied to one scene and one
+ * cache_file.c — the cache file: versioned, checksummed, tied to one scene and one
  * set of cache parameters, written atomically (core/atomic_file.h).
  *
  * Layout, all little-endian, floats as IEEE-754 bit patterns (so a round trip is bit-exact):

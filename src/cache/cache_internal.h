@@ -2,7 +2,7 @@
  * cache_internal.h — the cache's storage and the weight test shared by cache.c, cache_clamp.c and
  * cache_file.c. Not a public header.
  *
- * Storage is split hot/cold (DESIGN.md §4, STYLE.md "Data layout"): the look-up loop touches only
+ * Storage is split hot/cold: the look-up loop touches only
  * `sphere` (position, R_i) and `normal` (n_i, a_i), 32 bytes per record in two 16-byte-aligned
  * arrays; irradiance, gradients and the rest are read only for records that pass the weight test.
  */
@@ -47,8 +47,8 @@ typedef struct ic_record_cold {
 enum { IC_FROZEN_LANES = 8 };
 
 /* Rows of a block's interpolation data: channel c (R, G, B) has rows IC_FROZEN_ROWS·c + IC_FROZEN_E
- * (E_i), + IC_FROZEN_GRAD_ROT + axis (∇r E_i × n_i, x y z: the rotation term (n_i × n)·∇r E_i of seed
- * 000 §3 is n·(∇r E_i × n_i), a triple product, so a look-up needs no cross product) and
+ * (E_i), + IC_FROZEN_GRAD_ROT + axis (∇r E_i × n_i, x y z: the rotation term (n_i × n)·∇r E_i of
+ * Křivánek et al. 2006 §3 is n·(∇r E_i × n_i), a triple product, so a look-up needs no cross product) and
  * + IC_FROZEN_GRAD_TRANS + axis (∇t E_i). */
 enum { IC_FROZEN_E = 0, IC_FROZEN_GRAD_ROT = 1, IC_FROZEN_GRAD_TRANS = 4, IC_FROZEN_ROWS = 7 };
 
@@ -154,7 +154,7 @@ static inline int ic_weight_test(const ic_cache_params *params, const ic_float4 
         return 0;
     float dev = 1.0f - ndot, dist = sqrtf(d2) / R, ndev = sqrtf(dev > 0.0f ? dev : 0.0f);
     if (params->weight == IC_WEIGHT_WARD) {
-        /* Ward, seed 000 §3: accept w > 1/a ⇔ denominator < a. */
+        /* Ward (Křivánek et al. 2006 §3): accept w > 1/a ⇔ denominator < a. */
         float denom = dist + ndev;
         if (!(denom < a))
             return 0;

@@ -1,5 +1,5 @@
 /*
- * octree.c — flat multiple-reference octree and point octree (octree.h; seed 004 §4.2–4.3).
+ * octree.c — flat multiple-reference octree and point octree (octree.h; Frolov et al. 2012 §4.2–4.3).
  *
  * Insertion walks every leaf a sphere overlaps with an explicit fixed-size stack; a point (radius 0)
  * goes to exactly one leaf, chosen by the same octant rule as the look-up descent, so k-nearest and

@@ -1,16 +1,16 @@
 /*
  * octree.h — flat octree over records: the multiple-reference sphere octree of the irradiance cache
- * and the auxiliary point octree for k-nearest and radius queries (seed 004 §4.2–4.3).
+ * and the auxiliary point octree for k-nearest and radius queries (Frolov et al. 2012 §4.2–4.3).
  *
- * One structure serves both (STYLE.md: one routine, not two variants). Items are spheres
+ * One structure serves both (one routine, not two variants). Items are spheres
  * (center, radius = R·a·scale); a point tree is the special case scale = 0.
  *
- * Multiple references, stackless look-up (seed 004 §4.3): a sphere is referenced from every node it
+ * Multiple references, stackless look-up (Frolov et al. 2012 §4.3): a sphere is referenced from every node it
  * overlaps on the level that matches its size — the first nodes on the way down whose half side is
  * at most its radius — or from the leaves above that level. Finding every sphere that holds p is
  * then one root-to-leaf descent with no stack and no backtracking, scanning the reference list of
  * each node on the path (almost always only the leaf's and one or two above it). Pure leaf storage,
- * as in the seed, is the special case where all records are alike in size (which validity clamping
+ * as in Frolov et al. 2012, is the special case where all records are alike in size (which validity clamping
  * brings about); with mixed sizes it would copy a large sphere into every tiny leaf that small
  * neighbours caused, (r/h)² references each — storing by size bounds a record to at most 27 nodes.
  *

@@ -2,7 +2,7 @@
  * rng.h — counter-based random numbers.
  *
  * Every random number is a pure function of (seed, stream key, sample, dimension), so an image or a
- * cache never depends on the thread count or on scheduling (STYLE.md, "Threads and determinism").
+ * cache never depends on the thread count or on scheduling.
  * The mixer is a 64-bit finaliser in the style of SplitMix64 / Murmur3's fmix64; the stream key is
  * built by hashing its parts together, and each draw hashes (key, counter).
  */

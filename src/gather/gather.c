@@ -1,12 +1,12 @@
 /*
  * gather.c — gatherer lifecycle, option defaults and validation, and the threaded batch helper
- * (include/irrcache/gather.h; DESIGN.md §6).
+ * (include/irrcache/gather.h).
  *
  * A gatherer's buffers are sized once, at creation, for the larger of the stratified grid (M·N cells)
  * and the progressive last round (max_rays cells), so no gather allocates per ray. ic_gather_batch
  * makes one gatherer per thread and hands out fixed chunks of points through ic_parallel_for; every
  * point's result depends only on (seed, key), and is written to its own slot, so the output is the same
- * for any thread count (STYLE.md, "Threads and determinism").
+ * for any thread count.
  */
 #include "gather_internal.h"
 
@@ -75,7 +75,7 @@ static ic_result resolve_opts(const ic_gather_opts *in, ic_gather_opts *o, ic_er
                             o->round_growth);
     if (!isfinite(o->threshold))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: threshold must be finite");
-    /* Whole groups of 32 rays per trace call (seed 004 §4.1), but never fewer than 32. */
+    /* Whole groups of 32 rays per trace call (Frolov et al. 2012 §4.1), but never fewer than 32. */
     o->batch_rays = o->batch_rays < 32 ? 32 : o->batch_rays & ~31u;
     return IC_OK;
 }

@@ -6,9 +6,9 @@
  *
  * Irradiance: E = π/(MN) Σ L_jk (cosine-weighted Monte Carlo / stratified quadrature).
  *
- * σ (seed 000 §4.3, after Dmitriev & Seidel 2004): E' from half of the samples, σ = |E − E'|. The half
- * is the caller's: a checkerboard of the strata (stratified) or the Thue–Morse half of a Hammersley set
- * (progressive), so both halves are themselves well-stratified sets and |E − E'| = |E_odd − E_even|/2.
+ * σ (Křivánek et al. 2006 §4.3, after Dmitriev & Seidel 2004): E' from half of the samples,
+ * σ = |E − E'|. The half is the caller's: a checkerboard of the strata (stratified) or the Thue–Morse
+ * half of a Hammersley set (progressive), so both halves are themselves well-stratified sets and |E − E'| = |E_odd − E_even|/2.
  *
  * Rotational gradient (Ward & Heckbert 1992, "Irradiance Gradients", §3): tilting the normal by a
  * small rotation a·δ (axis a in the tangent plane) changes the cosine of each direction by
@@ -39,7 +39,7 @@
  *     φ-wall weight taken as the swept *solid angle* (cosθ_j − cosθ_j+1) / sinθ_j,c (θ_j,c the stratum
  *     centre, as Mitsuba 0.6 does to avoid dividing by a jittered sinθ ≈ 0), without the cosine
  *     foreshortening of the strip. It overestimates walls near the horizon (tests: ~20% too large).
- *   - Improved (Křivánek et al. 2005 derive each cell's marginal change of projected solid angle):
+ *   - Improved (Křivánek et al. 2005 (SCCG) derive each cell's marginal change of projected solid angle):
  *     the φ-wall weight is the swept *projected* solid angle. Křivánek & Gautron write it with the
  *     midpoint rule, cosθ_c (cosθ_j − cosθ_j+1) / sinθ_c; we integrate it exactly,
  *     ∫cosθ dθ = sinθ_j+1 − sinθ_j (equal to second order), and ∫u_φ dφ = 2 sin(π/N) u(φ_k+½) exactly.

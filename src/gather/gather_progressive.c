@@ -1,6 +1,6 @@
 /*
  * gather_progressive.c — progressive Hammersley hemisphere sampling with odd/even convergence
- * (seed 004, Frolov et al. 2012, §4.1; convergence estimate after seed 000, Křivánek et al. 2006, §4.3).
+ * (Frolov et al. 2012 §4.1; convergence estimate after Křivánek et al. 2006 §4.3).
  *
  * All points start in the active set. Round r traces n_r = first·growth^r rays (4096, 16384, 65536 by
  * default) for every still-active point; afterwards a point leaves the active set when
@@ -13,7 +13,8 @@
  * neighbouring records (and successive rounds) see decorrelated patterns — without it every record would
  * probe the same directions and alias against the same geometry. Consecutive indices share a φ wedge,
  * so each run of M consecutive rays (M ≥ 32 for n ≥ 4096) is one coherent group of 32·k rays, as the
- * seed's GPU implementation arranges its "sectors". Rays go to the tracer in index order.
+ * GPU implementation of Frolov et al. 2012 §4.1 arranges its "sectors". Rays go to the tracer in index
+ * order.
  *
  * Rounds are independent point sets (a Hammersley set of 4n points does not contain the one of n
  * points); each round's estimate enters the result weighted by its ray count, so no ray is wasted: the
@@ -138,7 +139,7 @@ ic_result ic_gather_progressive(ic_gatherer *g, const ic_gather_point *pts, uint
             point_state *s = &state[p];
             trace_round(g, &pts[p], &s->frame, round, n, &s->acc);
             ic_gather_acc_finish(&s->acc, &s->frame, &out[p]);
-            /* σ = |E − E_even| = |E_odd − E_even| / 2 (gather_grid.c), so the seed-004 test
+            /* σ = |E − E_even| = |E_odd − E_even| / 2 (gather_grid.c), so the Frolov et al. test
              * |E_odd − E_even| / E < threshold reads 2·Y(σ-vector) < threshold·Y(E). Written as a
              * product so E = 0 with no disagreement counts as converged. */
             const double dy = 0.2126 * (s->acc.e[0] - s->acc.e_half[0]) +

@@ -1,6 +1,6 @@
 /*
  * gather_stratified.c — M×N stratified cosine-weighted hemisphere gather (Ward & Heckbert 1992;
- * Křivánek et al. 2005 gradients; σ per seed 000 §4.3). DESIGN.md §6.
+ * Křivánek et al. 2005 (SCCG) gradients; σ per Křivánek et al. 2006 §4.3).
  *
  * Cell (j, k) holds one ray with sin²θ = (j + ξ1)/M and φ = φ0 + 2π(k + ξ2)/N: equal projected solid
  * angle per cell, so the estimator weights every ray by π/(MN). φ0 is a per-record rotation about the

@@ -2,8 +2,8 @@
  * accel.h — ray tracing against the scene. The only module that talks to Embree (accel.c includes
  * <embree3/rtcore.h>; nothing else may). Hits come back as the renderer's own ic_hit.
  *
- * Robustness: the BVH is built with RTC_SCENE_FLAG_ROBUST (no rays slipping through shared edges,
- * DESIGN.md §3), and secondary rays start from ic_offset_ray_origin(), which moves the origin off
+ * Robustness: the BVH is built with RTC_SCENE_FLAG_ROBUST (no rays slipping through shared edges),
+ * and secondary rays start from ic_offset_ray_origin(), which moves the origin off
  * the surface along the geometric normal by an amount that scales with the coordinates' magnitude
  * (Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems
  * ch. 6), so there is neither acne nor light leaking through corners.

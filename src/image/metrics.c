@@ -4,7 +4,7 @@
  *
  * HDR metrics (RMSE, relMSE as in pbrt / Rousselle et al. 2011, PSNR with the reference's peak) are
  * computed on linear values in double precision. LDR metrics use the 8-bit sRGB images that a PNG
- * would hold, because that is what the seeds report (Frolov et al. 2012: PSNR ≈ 40 dB): PSNR with
+ * would hold, because that is what Frolov et al. 2012 report (§1 and Table 2: PSNR ≈ 40 dB): PSNR with
  * peak 255, and SSIM (Wang, Bovik, Sheikh, Simoncelli 2004, "Image quality assessment: from error
  * visibility to structural similarity") on the luma 0.299 R' + 0.587 G' + 0.114 B' of those images,
  * with uniform 8×8 windows moved one pixel at a time (the paper's §III-B variant), population

@@ -3,7 +3,7 @@
  *
  * ic_scene_load picks the front end by extension: ".json" goes to scene_json.c, a bare mesh
  * (.obj .gltf .glb .ply) is imported as is and gets a fitted camera and, when it has no emitter, a
- * constant white sky (radiance 1), so any mesh renders without a scene file (DESIGN.md §10).
+ * constant white sky (radiance 1), so any mesh renders without a scene file (docs/scene-format.md).
  * Everything else here is shared by both front ends.
  */
 #ifndef _DEFAULT_SOURCE

@@ -1,8 +1,8 @@
 /*
- * test_adaptive.c — adaptive caching (seed 000 §4; src/integrators/ic_adaptive.c):
+ * test_adaptive.c — adaptive caching (Křivánek et al. 2006 §4; src/integrators/ic_adaptive.c):
  *   1. full convergence checked independently: after construction, every shading point is re-read from
  *      the cache with ic_cache_query (all contributors, not the algorithm's 6-slot lists or change
- *      counters) and the Weber-law test of seed 000 §4.3 is evaluated from scratch here: every point
+ *      counters) and the Weber-law test of Křivánek et al. 2006 §4.3 is evaluated from scratch here: every point
  *      has a contribution, and no point with two or more reports a discontinuity (Ward and
  *      Tabellion–Lamorlette weights); the Cornell box converges within a bounded number of passes;
  *   2. a lower Weber fraction never gives fewer records (0.05, 0.02, 0.01);
@@ -62,7 +62,7 @@ static ic_render_options adaptive_options(float weber)
     return opt;
 }
 
-/* The seed 000 §4.3 test written independently of ic_adaptive.c: L = Σ w_i ρ/π E_i(p) / Σ w_i + L_d,
+/* The Křivánek et al. 2006 §4.3 test written independently of ic_adaptive.c: L = Σ w_i ρ/π E_i(p) / Σ w_i + L_d,
  * σ(L) = Y(ρ/π Σ w_i σ_i / Σ w_i); record i is discernible when |Y(L1) − Y(L2)| exceeds
  * weber·Y(L1) + max(σ(L1), σ(L2)). The relative slack of 1e-4 only absorbs summation order. */
 static int has_discontinuity(const ic_cache *cache, const ic_cache_contribution *cb, uint32_t m, ic_vec3 albedo,

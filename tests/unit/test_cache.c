@@ -9,12 +9,14 @@
  *     contributors in the same order, same sums) with and without hints — hints in query order, left
  *     over from far-away look-ups, garbage — and at points outside the root, and equals the linear
  *     scan too; insertions and record changes thaw it and look-ups stay exact; a rebuild re-freezes;
- *   - the weights and the extrapolation follow the formulas of seed 000 §3 and Tabellion–Lamorlette
- *     (checked against hand-computed values), and a linear irradiance field is reproduced exactly;
- *   - clamps never raise a radius (new or existing records); after neighbor clamping (seed 000 §5.2)
- *     |R_i − R_j| ≤ |p_i − p_j| for every pair within reach; validity clamping (seed 004 §4.2) leaves
- *     no influence radius above the k-th distinct-direction neighbour distance, recomputed here by
- *     brute force; gradient-difference scaling (seed 003) separates records with different gradients;
+ *   - the weights and the extrapolation follow the formulas of Křivánek et al. 2006 §3 and
+ *     Tabellion–Lamorlette (checked against hand-computed values), and a linear irradiance field is
+ *     reproduced exactly;
+ *   - clamps never raise a radius (new or existing records); after neighbor clamping
+ *     (Křivánek et al. 2006 §5.2) |R_i − R_j| ≤ |p_i − p_j| for every pair within reach; validity
+ *     clamping (Frolov et al. 2012 §4.2) leaves no influence radius above the k-th distinct-direction
+ *     neighbour distance, recomputed here by brute force; gradient-difference scaling (Castaño 2014)
+ *     separates records with different gradients;
  *   - batch insertion gives the same cache on 1 and 2 threads;
  *   - k-nearest and radius queries equal brute force;
  *   - the cache file round-trips bit-exactly and refuses truncated, corrupted and mismatched files.
@@ -142,7 +144,7 @@ static int cmp_u32(const void *a, const void *b)
  * |x − p.x| ≤ max influence radius found by binary search (nothing outside it can reach p), then a
  * vectorisable distance pre-filter with a generous margin over the slab, then the library's
  * per-record weight test. The interpolated value is recomputed here from the record fields with
- * seed 000 eq. 1 — independent of the octree and of the library's accumulation code.
+ * Křivánek et al. 2006 eq. 1 — independent of the octree and of the library's accumulation code.
  */
 #define MAX_CONTRIB 4096
 
@@ -781,7 +783,7 @@ static void test_neighbor_clamp(void)
     free(recs);
 }
 
-/* Independent recomputation of seed 004 §4.2 for record i of set recs (positions, normals). */
+/* Independent recomputation of Frolov et al. 2012 §4.2 for record i of set recs (positions, normals). */
 static int kth_distinct_distance(const ic_record *fin, uint32_t n, uint32_t i, uint32_t k, float cos_min, float *out)
 {
     enum { M = 6 * 8 + 1 };
@@ -868,7 +870,7 @@ static void test_validity_clamp(void)
 static void test_gradient_clamps(void)
 {
     ic_error err;
-    /* Gradient magnitude (seed 000 eq. 2): |∇Y|/Y = 2 > 1/R = 0.5 → R = Y/|∇Y| = 0.5. */
+    /* Gradient magnitude (Křivánek et al. 2006 eq. 2): |∇Y|/Y = 2 > 1/R = 0.5 → R = Y/|∇Y| = 0.5. */
     ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.2f);
     p.gradient_clamp = IC_CACHE_ON;
     ic_cache *c;
@@ -906,8 +908,8 @@ static void test_gradient_clamps(void)
     CHECK_NEAR(out.radius, 0.02f, 1e-7, "pixel floor");
     ic_cache_destroy(c);
 
-    /* Gradient difference (seed 003): two overlapping records whose gradients differ strongly end up
-     * with disjoint spheres; two with equal gradients keep their radii. */
+    /* Gradient difference (Castaño 2014): two overlapping records whose gradients differ strongly
+     * end up with disjoint spheres; two with equal gradients keep their radii. */
     p = no_clamps(IC_WEIGHT_WARD, 0.5f);
     p.gradient_difference = IC_CACHE_ON;
     p.gradient_difference_threshold = 0.1f;

@@ -372,7 +372,7 @@ static void test_progressive(void)
            exact, worst, within1, within2, within3, trials, calib, more_rays, trials, (double)total_rays / trials);
     CHECK(more_rays >= trials * 8 / 10, "high variance needs more rounds than the uniform sky: %d/%d", more_rays, trials);
     CHECK((double)total_rays / trials > 3.0 * 4096, "mean rays %g", (double)total_rays / trials);
-    /* σ = |E − E'| is a one-degree-of-freedom estimate of the error's scale (seed 000 §4.3): for
+    /* σ = |E − E'| is a one-degree-of-freedom estimate of the error's scale (Křivánek et al. 2006 §4.3): for
      * independent halves E[σ²] = E[err²], and a single error then lies within σ only about half the
      * time. The Hammersley halves do a little better (the full net beats its halves), but records that
      * stop early are exactly those whose halves agreed by chance. Stated, from the measured 35/38/40 of

@@ -4,7 +4,7 @@
  *      bounds of a path-traced reference, and every shading point covered after construction;
  *   2. batch and lazy, and batch with adaptive sampling: 1 and 2 threads give bit-identical images;
  *   3. a scene built to leak (a wall with a small gap above the floor, a bright light on the far side):
- *      without neighbor clamping (seed 000 §5.2–5.3) records next to the gap extrapolate wrong light
+ *      without neighbor clamping (Křivánek et al. 2006 §5.2–5.3) records next to the gap extrapolate wrong light
  *      over the dark floor; with it the error near the gap falls;
  *   4. a thin step lit from the side: with neighbor clamping the step's indirect light is captured
  *      (the error next to the step falls).
@@ -142,7 +142,7 @@ static void test_cornell(void)
         ic_image_free(&a);
         ic_image_free(&b);
     }
-    /* Adaptive sampling (seed 004 §3.2; render.c): at the same mean spp it puts samples where the
+    /* Adaptive sampling (Frolov et al. 2012 §3.2; render.c): at the same mean spp it puts samples where the
      * noise is, so the error falls, and the image mean stays that of the reference. On for the cache
      * render by default, off for the path tracer. */
     for (int integ = 0; integ < 2; ++integ) {
@@ -267,7 +267,7 @@ static int clamp_pair(const char *scene, int W, int H, float accuracy, ic_image 
 
 static void test_leak(void)
 {
-    /* Seed 000 §5.3, fig. 5: a wall polygon that stops 0.02 above the floor polygon, a bright lamp on
+    /* Křivánek et al. 2006 §5.3, fig. 5: a wall polygon that stops 0.02 above the floor polygon, a bright lamp on
      * the far side lighting the floor there, the camera on the dark side looking at the wall's foot.
      * Records next to the gap whose rays pass under the wall get large R-values and extrapolate the
      * gap's light over the dark floor; neighbor clamping bounds them by their neighbours' R. */
@@ -306,7 +306,7 @@ static void test_leak(void)
 
 static void test_step(void)
 {
-    /* Seed 000 §5.2, fig. 4: a thin step (height 0.06) on a floor, lit from the side by a low sun; the
+    /* Křivánek et al. 2006 §5.2, fig. 4: a thin step (height 0.06) on a floor, lit from the side by a low sun; the
      * floor next to the step receives light bounced off the step's lit face, a feature the random
      * rays of distant records miss. */
     test_write_file(IC_TEST_TMP "/step.mtl", "newmtl grey\nKd 0.7 0.7 0.7\n");
@@ -327,7 +327,8 @@ static void test_step(void)
                     "  \"lights\": [{\"type\": \"sun\", \"direction\": [-1, 0.35, 0], \"irradiance\": [3, 3, 3]}]\n}\n");
     ic_image ref = {0}, on = {0}, off = {0};
     /* A coarse accuracy (a = 0.5) leaves few records on the floor, so whether the step is noticed
-     * depends on neighbor clamping (seed 000 §5.2: without it many more records are needed). */
+     * depends on neighbor clamping (Křivánek et al. 2006 §5.2: without it many more records are
+     * needed). */
     if (clamp_pair(IC_TEST_TMP "/step.json", 64, 64, 0.5f, &ref, &on, &off)) {
         /* Rows 36–48: the step's foot and the floor in front of it, lit by the step's face. */
         double e_on = rows_error(&on, &ref, 36, 48), e_off = rows_error(&off, &ref, 36, 48);
