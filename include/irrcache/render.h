@@ -46,12 +46,12 @@ typedef enum ic_integrator {
     IC_INTEGRATOR_IC       /* irradiance caching */
 } ic_integrator;
 
-/* How the irradiance cache is built (DESIGN.md §7). */
+/* How the irradiance cache is built (Ward et al. 1988; Frolov et al. 2012 §3.1; Křivánek et al. 2006 §4). */
 typedef enum ic_strategy {
-    IC_STRATEGY_BATCH = 0, /* Frolov et al. 2012 (seed 004 §3): passes of candidates, parallel gathering,
+    IC_STRATEGY_BATCH = 0, /* Frolov et al. 2012 §3: passes of candidates, parallel gathering,
                               batch insertion; the default */
     IC_STRATEGY_LAZY,      /* Ward 1988: shading points in raster order, gather on a miss (serial reference) */
-    IC_STRATEGY_ADAPTIVE   /* Křivánek et al. 2006 (seed 000 §4): per-record a_i refined until no shading point
+    IC_STRATEGY_ADAPTIVE   /* Křivánek et al. 2006 §4: per-record a_i refined until no shading point
                               sees a discernible discontinuity (docs/adaptive.md) */
 } ic_strategy;
 
@@ -70,7 +70,7 @@ typedef struct ic_ic_options {
     int recursive;         /* lazy: one cache level per bounce (Radiance's -ab) instead of path-traced bounces
                               behind each hemisphere ray; then `bounces` is the number of levels */
     int path_traced_gather;/* 1: hemisphere rays path-trace every bounce after their hit; default: where
-                              records already cover a diffuse hit, they give its indirect light (ic.c:
+                              records already cover a diffuse hit, they give its indirect light (ic_gathering.c:
                               hit_from_cache) and only its direct light is sampled */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     float large_emitters;  /* an emitting material that covers at least this share of the cosine-weighted
@@ -83,13 +83,13 @@ typedef struct ic_ic_options {
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */
     float dither_threshold;/* batch: need at which dithering goes from 32- to 16-pixel spacing [0.5] */
-    float normal_weight;   /* batch: k of k·normDiff + posDiff (seed 004 §3.1.1) [4] */
+    float normal_weight;   /* batch: k of k·normDiff + posDiff (Frolov et al. 2012 §3.1.1) [4] */
     int world_stride;      /* batch: world stage traces one eye path per stride×stride pixels [2] */
     float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene diagonal [0.05] */
     const char *load_cache;/* read the records from this cache file instead of building them (must match
                               the scene, the gathering settings and the cache parameters) */
     const char *save_cache;/* write the records to this cache file after construction (atomically) */
-    float weber;           /* adaptive: Weber fraction of the discernibility test (seed 000 §4.3) [0.02] */
+    float weber;           /* adaptive: Weber fraction of the discernibility test (Křivánek et al. 2006 §4.3) [0.02] */
     float adaptive_growth; /* adaptive: a new record's a = growth × a of the nearest record, ≤ accuracy [1.4] */
     int adaptive_max_passes; /* adaptive: safety bound on convergence passes [64] */
 } ic_ic_options;
@@ -121,7 +121,7 @@ typedef struct ic_render_aovs {
     ic_image records;      /* the image with record positions (dots) and influence radii (circles) */
     ic_image density;      /* number of records contributing at each pixel centre (grey level) */
     ic_image amap;         /* a_i of the heaviest record at each pixel centre on a colour ramp: blue = --accuracy,
-                              red = accuracy/32 or less (log scale; seed 000 figs. 7–9) */
+                              red = accuracy/32 or less (log scale; Křivánek et al. 2006 figs. 7–9) */
 } ic_render_aovs;
 
 /* Render options; zero means default (or the scene file's value where it gives one). */

@@ -138,7 +138,7 @@ static void render_tile(void *p, int64_t item, int thread)
 
 /* ---------------------------------------------------------------- adaptive sampling
  *
- * The final render of seed 004 (§3.2) is adaptive path tracing: samples go where the image is noisy.
+ * The final render of Frolov et al. 2012 (§3.2) is adaptive path tracing: samples go where the image is noisy.
  * A pilot pass takes n0 = spp/4 samples in every pixel and measures each pixel's per-sample relative
  * variance v = s²/(m² + 0.01) of luminance (the relMSE metric's normalisation, so dark pixels are not
  * starved). The rest of the budget, (spp − n0) per pixel on average, is shared out in proportion to

@@ -1,6 +1,6 @@
 /*
- * ic_adaptive.c — adaptive caching: `--strategy adaptive` (seed 000_43d86744696072f6.txt, Křivánek,
- * Bouatouch, Pattanaik, Žára 2006, §4; DESIGN.md §7).
+ * ic_adaptive.c — adaptive caching: `--strategy adaptive` (Křivánek,
+ * Bouatouch, Pattanaik, Žára 2006, §4; docs/adaptive.md).
  *
  *   §4.1  every record carries its own error bound a_i. Where a shading point sees a visible
  *         discontinuity between the records that overlap there, the lowest-weight of those records is
@@ -50,11 +50,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CONTRIB_SLOTS 6        /* seed 000 §4.2: "a static array of length 6" */
+#define CONTRIB_SLOTS 6        /* Křivánek et al. 2006 §4.2: "a static array of length 6" */
 #define DIRECT_SAMPLES 16      /* light samples of the stored direct light of a shading point */
 #define KEY_TAG 0x20u          /* gather-key tag of adaptive records (batch uses others) */
 
-/* One record's contribution at a shading point (seed 000 §4.2, "each contribution in the list"). */
+/* One record's contribution at a shading point (Křivánek et al. 2006 §4.2, "each contribution in the list"). */
 typedef struct contrib {
     uint32_t record;           /* record index */
     uint32_t change;           /* the record's change counter when this entry was evaluated */
@@ -64,7 +64,7 @@ typedef struct contrib {
 } contrib;
 
 enum {
-    PT_QUEUED = 1u << 0,       /* in the point queue (seed 000 §4.2: "a bit indicating its presence") */
+    PT_QUEUED = 1u << 0,       /* in the point queue (Křivánek et al. 2006 §4.2: "a bit indicating its presence") */
     PT_STALE = 1u << 1,        /* a new record may reach it: re-read contributions from the cache */
     PT_OVERFLOW = 1u << 2,     /* more than CONTRIB_SLOTS contributions: the list is not the whole set */
     PT_UNCOVERED = 1u << 3,    /* waiting for a new record in this pass */
@@ -325,9 +325,9 @@ static void store_contributions(adaptive *A, shading_pt *sp, uint32_t m)
         sp->flags |= PT_OVERFLOW;
 }
 
-/* The discernibility test of seed 000 §4.3 over contributions (m ≥ 2) at a point with direct light Y_d:
+/* The discernibility test of Křivánek et al. 2006 §4.3 over contributions (m ≥ 2) at a point with direct light Y_d:
  * if removing any record is discernible, returns the index of the lowest-weight contribution (the
- * record to shrink, seed 000 fig. 1b: "the record contributing with the minimum weight"), else −1.
+ * record to shrink, Křivánek et al. 2006 fig. 1b: "the record contributing with the minimum weight"), else −1.
  * Shrinking the lowest-weight record rather than the lowest-weight *discernible* one matters where a
  * point sits on its own record: only that record's removal is discernible, yet it cannot be excluded
  * (x_i(p) = 0), while excluding the far neighbour resolves the discontinuity.
@@ -362,7 +362,7 @@ static int discernible(const float *weight, const float *y, const float *sigma, 
     return lowest;
 }
 
-/* The a_i that just excludes the point from record i (seed 000 §4.1, a_i := |p − p_i|/R_i − ε), from
+/* The a_i that just excludes the point from record i (Křivánek et al. 2006 §4.1, a_i := |p − p_i|/R_i − ε), from
  * the weight the cache computed. Ward accepts while x = |p − p_i|/R_i + sqrt(1 − n·n_i) < a_i, and
  * w = 1/x, so a_i := x·(1 − ε) leaves the point out; ε = 1e-5 exceeds the rounding of 1/(1/x) (a few
  * float ulps). Tabellion–Lamorlette accepts while x = max(d/R_i, c·sqrt(1 − n·n_i)) < a_i with
@@ -380,7 +380,7 @@ static float exclusion_accuracy(const ic_ctx *c, float weight, float accuracy)
     return a > 0.0f ? a : 0.0f;
 }
 
-/* Adaptive refinement at one point (seed 000 §4.1) on A->work[0..m): returns the contributions left. */
+/* Adaptive refinement at one point (Křivánek et al. 2006 §4.1) on A->work[0..m): returns the contributions left. */
 static uint32_t refine_point(adaptive *A, const shading_pt *sp, uint32_t m)
 {
     float weight[LOOKUP_CAPACITY], y[LOOKUP_CAPACITY], sigma[LOOKUP_CAPACITY];
@@ -468,7 +468,7 @@ static ic_result add_records(adaptive *A, phase_times *pt, ic_error *err)
                                                        ? c->o.cache.max_radius_pixels * fp
                                                        : INFINITY);
         if (ic_cache_knn(c->cache, sp->p, 1, &near, &d2) == 1) {
-            /* seed 000 §4.2: "copied from the nearest existing record … and multiplied by 1.4". */
+            /* Křivánek et al. 2006 §4.2: "copied from the nearest existing record … and multiplied by 1.4". */
             a = fminf(A->a_max, A->growth * A->rec[near].accuracy);
             R = A->rec[near].radius;
         } else {
@@ -620,7 +620,7 @@ ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, i
         st->passes = res.passes;
         st->refinements = (uint32_t)A->refinements;
         memcpy(st->records_per_pass, res.records_per_pass, sizeof st->records_per_pass);
-        /* Convergence overhead: the loop's time without gathering and insertion (seed 000 Table 1). */
+        /* Convergence overhead: the loop's time without gathering and insertion (Křivánek et al. 2006 Table 1). */
         double loop = (t2 - t1) - (pt->gather - before.gather) - (pt->insert - before.insert);
         if (st->phase_count < IC_MAX_PHASES) {
             st->phases[st->phase_count].name = "adaptive points";

@@ -35,7 +35,7 @@ typedef struct world_job {
     uint64_t *rays;
 } world_job;
 
-/* One eye path per stride×stride block (seed 004 §3.1.3): the path visits the points where the final
+/* One eye path per stride×stride block (Frolov et al. 2012 §3.1.3): the path visits the points where the final
  * render will look the cache up — the first surface with a smooth lobe after ideal specular chains,
  * then the surfaces reached through glossy lobes — and every such point where no record is valid
  * becomes a candidate. (The seed collects hits on every bounce because its final render fetches the

@@ -36,8 +36,8 @@ ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *
  * the final render's estimator (records hold no light of the emitters it samples; ic_ic_direct_light
  * adds it). This is Ward's multiple-bounce scheme (the ambient value of a point is its records' interpolation, Radiance's
  * -ab) inside the batch passes: a pass's records serve the next passes' rays, and the world-space
- * stage puts records where these rays land (seed 004 §3.1.3), which is what makes the look-ups hit;
- * it cuts record cost, which seed 004 §4.6 measures as most of the construction time. Only purely
+ * stage puts records where these rays land (Frolov et al. 2012 §3.1.3), which is what makes the look-ups hit;
+ * it cuts record cost, which Frolov et al. 2012 §4.6 measures as most of the construction time. Only purely
  * diffuse hits are taken (a glossy hit needs its lobe traced); returns 0 where no record reaches, and
  * the caller path-traces. Deterministic: within a pass the cache is read-only. */
 static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
@@ -119,7 +119,7 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
     rec->tangent = ic_frame_from_normal(cand->n).t;
     rec->irradiance = gr->irradiance;
     if (!c->o.no_gradients) {
-        /* Gradient-magnitude clamping (seed 000 §5.1, eq. 2) bounds the extrapolated change by shrinking
+        /* Gradient-magnitude clamping (Křivánek et al. 2006 §5.1, eq. 2) bounds the extrapolated change by shrinking
          * R to Y/|∇t Y|; where the R floor (R_min, pixel bound) stops that, the linear model would be
          * extrapolated beyond its validity (seen as bright blotches in concave corners, where 1/r of
          * close hits makes |∇t E| huge). There the gradient itself is scaled so |∇t Y|·R_floor ≤ Y.

@@ -45,7 +45,7 @@ typedef struct ic_ctx {
                                          recursive caching, whose hits have no cache behind them) */
     float *direct_pmf;         /* tri_light_count: the final render's distribution over emitting
                                   triangles, 0 for a large emitter whose light the records carry
-                                  (ic.c: cache_large_emitters); NULL when none is */
+                                  (ic_emitters.c); NULL when none is */
     float *direct_cdf;         /* its cdf (tri_light_count + 1) */
     uint32_t cached_emitters;  /* emitting triangles whose light the records carry */
 } ic_ctx;
@@ -111,7 +111,7 @@ ic_result ic_ic_density_image(ic_ctx *c, ic_image *out);
 ic_result ic_ic_record_views(const ic_ctx *c, ic_record_view **out, uint32_t *count);
 
 /* Sets up a context for tr and opt: resolved options, an empty cache, the shading-point buffers (used by
- * ic_render_ic and by tests that run construction alone). gbuffer_seconds may be NULL. */
+ * the integrator's prepare (ic_integrator.c) and by tests that run construction alone). gbuffer_seconds may be NULL. */
 ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, double *gbuffer_seconds,
                            ic_error *err);
 /* Frees a context, its cache (unless the caller took it and set c->cache = NULL) and buffers; NULL is a no-op. */

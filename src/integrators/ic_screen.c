@@ -1,4 +1,4 @@
-/* ic_screen.c — discontinuity maps, mip pyramid, blend and dithering (ic_screen.h; seed 004 §3.1). */
+/* ic_screen.c — discontinuity maps, mip pyramid, blend and dithering (ic_screen.h; Frolov et al. 2012 §3.1). */
 #include "ic_screen.h"
 
 #include "core/vecmath.h"

@@ -1,10 +1,10 @@
 /*
- * ic_screen.h — the screen-space candidate selection of seed 004_b98c0b87c8321936.txt §3.1.1–3.1.2:
+ * ic_screen.h — the screen-space candidate selection of Frolov et al. 2012 §3.1.1–3.1.2:
  * a discontinuity map (geometry in the first pass, irradiance in later passes) evaluated on every
  * level of a mip pyramid, the up-scaled levels blended into one "need" map, and deterministic
  * dithering that picks every 32nd, 16th, 8th, 4th or 2nd pixel by local need.
  *
- * Geometry discontinuity (seed 004 §3.1.1, surfDisc = k·normDiff + worldPosDiff): at pyramid level l,
+ * Geometry discontinuity (Frolov et al. 2012 §3.1.1, surfDisc = k·normDiff + worldPosDiff): at pyramid level l,
  * for each pixel, the largest over its 4 neighbours of
  *     k · (1 − n·n')  +  |n · (p' − p)| / (2^l · footprint)
  * i.e. the normal change plus the distance of the neighbour from this pixel's tangent plane measured

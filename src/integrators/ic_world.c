@@ -1,4 +1,4 @@
-/* ic_world.c — Morton sort, bounding-box clustering, distinct-normal selection (seed 004 §3.1.3). */
+/* ic_world.c — Morton sort, bounding-box clustering, distinct-normal selection (Frolov et al. 2012 §3.1.3). */
 #include "ic_world.h"
 
 #include "core/morton.h"

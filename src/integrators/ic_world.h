@@ -1,5 +1,5 @@
 /*
- * ic_world.h — the world-space stage of seed 004_b98c0b87c8321936.txt §3.1.3: hit points where no
+ * ic_world.h — the world-space stage of Frolov et al. 2012 §3.1.3: hit points where no
  * record is valid (collected on every bounce of eye paths) are sorted along a 3-D Morton (Z) curve,
  * cut into clusters whose bounding box stays under a size limit, and from each cluster a few
  * candidates with distinct normals are kept, so a cluster spanning a corner yields one candidate

@@ -1,5 +1,5 @@
 /*
- * kdtree.c — implicit balanced k-d tree over shading points (kdtree.h; seed 000 §4.2, Jensen 2001 §6.3).
+ * kdtree.c — implicit balanced k-d tree over shading points (kdtree.h; Křivánek et al. 2006 §4.2, Jensen 2001 §6.3).
  */
 #include "kdtree.h"
 

@@ -1,5 +1,5 @@
 /*
- * kdtree.h — a static k-d tree over shading points for radius queries (seed 000 §4.2: "shading points
+ * kdtree.h — a static k-d tree over shading points for radius queries (Křivánek et al. 2006 §4.2: "shading points
  * are stored in a k-D tree [Jen01] to quickly locate the points in a record's influence area").
  *
  * The tree is balanced and implicit (Jensen 2001, "Realistic Image Synthesis Using Photon Mapping"

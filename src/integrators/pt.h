@@ -1,5 +1,5 @@
 /*
- * pt.h — the path-traced reference (DESIGN.md §9): next-event estimation with multiple importance
+ * pt.h — the path-traced reference (Veach 1997): next-event estimation with multiple importance
  * sampling (power heuristic), Russian roulette, a maximum depth. Also the pieces the cache
  * integrators reuse: direct light at a surface, and the radiance arriving along a ray.
  */

@@ -142,7 +142,7 @@ static void test_cornell(void)
         ic_image_free(&a);
         ic_image_free(&b);
     }
-    /* Adaptive sampling (Frolov et al. 2012 §3.2; render.c): at the same mean spp it puts samples where the
+    /* Adaptive sampling (Frolov et al. 2012 §3.2; film/film.c): at the same mean spp it puts samples where the
      * noise is, so the error falls, and the image mean stays that of the reference. On for the cache
      * render by default, off for the path tracer. */
     for (int integ = 0; integ < 2; ++integ) {
