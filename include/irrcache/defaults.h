@@ -23,7 +23,9 @@
 #define IC_DEFAULT_MAX_RADIUS_PX 48.0f   /* largest influence radius a·R, pixels at the primary hit */
 #define IC_DEFAULT_MAX_RADIUS_DIAG 8.0f  /* largest R: the scene diagonal over this */
 #define IC_DEFAULT_FINAL_ACCURACY_SCALE 1.0f
-#define IC_DEFAULT_RAYS 800              /* hemisphere rays per record (stratified M×N, N ≈ πM) */
+#define IC_DEFAULT_THETA_STRATA 16       /* hemisphere gathering (gather.h): M × N strata, N ≈ π·M */
+#define IC_DEFAULT_PHI_STRATA 50
+#define IC_DEFAULT_RAYS (IC_DEFAULT_THETA_STRATA * IC_DEFAULT_PHI_STRATA) /* rays per record */
 #define IC_DEFAULT_LIGHT_SAMPLES 1       /* final render: light samples per shading point */
 #define IC_DEFAULT_LARGE_EMITTERS 0.01f  /* hemisphere share of a large emitter (ic_ic_options) */
 #define IC_DEFAULT_MAX_PASSES 12         /* batch construction */

@@ -14,6 +14,8 @@
  */
 #include "cache_internal.h"
 
+#include "irrcache/defaults.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,9 +48,9 @@ ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *ou
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: unknown weight kind %d; use IC_WEIGHT_WARD or "
                             "IC_WEIGHT_TABELLION", (int)p.weight);
     if (p.accuracy == 0.0f)
-        p.accuracy = p.weight == IC_WEIGHT_WARD ? 0.2f : 1.0f;
+        p.accuracy = p.weight == IC_WEIGHT_WARD ? IC_DEFAULT_ACCURACY_WARD : IC_DEFAULT_ACCURACY_TL;
     if (p.final_accuracy_scale == 0.0f)
-        p.final_accuracy_scale = 1.0f;
+        p.final_accuracy_scale = IC_DEFAULT_FINAL_ACCURACY_SCALE;
     if (p.behind_tolerance == 0.0f)
         p.behind_tolerance = 0.05f;
     if (p.max_radius == 0.0f)

@@ -10,6 +10,8 @@
  */
 #include "gather_internal.h"
 
+#include "irrcache/defaults.h"
+
 #include "core/threads.h"
 
 #include <stdatomic.h>
@@ -26,8 +28,8 @@ void ic_gather_opts_default(ic_gather_opts *o)
 {
     *o = (ic_gather_opts){0};
     o->method = IC_GATHER_STRATIFIED;
-    o->theta_strata = 16;
-    o->phi_strata = (uint32_t)lroundf(IC_PI * 16.0f);
+    o->theta_strata = IC_DEFAULT_THETA_STRATA;
+    o->phi_strata = IC_DEFAULT_PHI_STRATA; /* ≈ π·M (Ward et al. 1988) */
     o->tgrad = IC_GATHER_TGRAD_IMPROVED;
     o->first_round_rays = 4096;
     o->max_rays = 65536;

@@ -301,7 +301,8 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
     r = ic_scene_finalize(b, err);
     if (r != IC_OK)
         return r;
-    ic_scene_fit_camera(s, opt->width > 0 ? opt->width : 512, opt->height > 0 ? opt->height : 512);
+    ic_scene_fit_camera(s, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
+                        opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
     return IC_OK;
 }
 

@@ -915,8 +915,8 @@ static ic_result load_document(json_ctx *c, const cJSON *root)
     static const int order[] = {SEC_RENDER, SEC_CAMERA, SEC_ENVIRONMENT, SEC_LIGHTS, SEC_MESHES, SEC_MATERIALS};
     camera_spec cam = {0};
     cam.up = v3(0.0f, 1.0f, 0.0f);
-    cam.width = 512;
-    cam.height = 512;
+    cam.width = IC_DEFAULT_WIDTH;
+    cam.height = IC_DEFAULT_HEIGHT;
     for (size_t i = 0; i < sizeof order / sizeof order[0]; ++i) {
         int k = order[i];
         if (!node[k])

@@ -1274,7 +1274,8 @@ static void test_api_edges(void)
     CHECK(ic_cache_create(&p, &c, &err) == IC_ERR_INVALID_ARG && c == NULL, "negative accuracy accepted");
     ic_cache_destroy(NULL);
     CHECK(ic_cache_create(NULL, &c, &err) == IC_OK, "default create");
-    CHECK(ic_cache_get_params(c)->accuracy == 0.2f && ic_cache_get_params(c)->validity_k == 6, "defaults");
+    CHECK(ic_cache_get_params(c)->accuracy == IC_DEFAULT_ACCURACY_WARD && ic_cache_get_params(c)->validity_k == 6,
+          "defaults: the renderer's (irrcache/defaults.h)");
     ic_cache_lookup q = {v3(0, 0, 0), v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
     ic_cache_estimate e;
     CHECK(!ic_cache_query(c, &q, &e) && e.contributor_count == 0, "empty cache answered");
