@@ -7,6 +7,7 @@
  * error. Every failure is one line on stderr: "irrcache diff: <file>: <problem>; <what to do>".
  */
 #include "cli.h"
+#include "json_out.h"
 
 #include "irrcache/image.h"
 
@@ -18,7 +19,7 @@
 #define EXIT_IO 1
 #define EXIT_USAGE 2
 /* JSON has no infinity: identical images report this PSNR (documented in --help). */
-#define PSNR_INFINITE_JSON "999.0"
+#define PSNR_INFINITE 999.0
 
 static void print_help(FILE *out)
 {
@@ -64,50 +65,31 @@ static const char *option_value(int argc, char **argv, int *i, const char *name,
     return argv[++*i];
 }
 
-static void json_string(FILE *out, const char *s)
+/* A metric as JSON: JSON has no infinity (identical images: PSNR_INFINITE). */
+static void add_metric(cJSON *o, const char *key, double v)
 {
-    fputc('"', out);
-    for (; *s; ++s) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\')
-            fprintf(out, "\\%c", c);
-        else if (c < 0x20)
-            fprintf(out, "\\u%04x", c);
-        else
-            fputc(c, out);
-    }
-    fputc('"', out);
-}
-
-static void json_number(FILE *out, const char *key, double v)
-{
-    fprintf(out, "\"%s\":", key);
     if (isinf(v) && v > 0)
-        fputs(PSNR_INFINITE_JSON, out);
+        cJSON_AddNumberToObject(o, key, PSNR_INFINITE);
     else if (isfinite(v))
-        fprintf(out, "%.10g", v);
+        cJSON_AddNumberToObject(o, key, v);
     else
-        fputs("null", out); /* never produced by ic_image_compare; kept valid JSON regardless */
+        cJSON_AddNullToObject(o, key); /* never produced by ic_image_compare; kept valid JSON regardless */
 }
 
-static void print_json(FILE *out, const ic_image *img, const ic_image_metrics *m, const char *heatmap)
+static int print_json(const ic_image *img, const ic_image_metrics *m, const char *heatmap)
 {
-    fprintf(out, "{\"width\":%d,\"height\":%d,", img->width, img->height);
-    json_number(out, "rmse", m->rmse);
-    fputc(',', out);
-    json_number(out, "relmse", m->relmse);
-    fputc(',', out);
-    json_number(out, "psnr_hdr", m->psnr_hdr);
-    fputc(',', out);
-    json_number(out, "psnr_ldr", m->psnr_ldr);
-    fputc(',', out);
-    json_number(out, "ssim", m->ssim);
-    fprintf(out, ",\"nonfinite\":%ld", m->nonfinite);
-    if (heatmap) {
-        fputs(",\"heatmap\":", out);
-        json_string(out, heatmap);
-    }
-    fputs("}\n", out);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "width", img->width);
+    cJSON_AddNumberToObject(o, "height", img->height);
+    add_metric(o, "rmse", m->rmse);
+    add_metric(o, "relmse", m->relmse);
+    add_metric(o, "psnr_hdr", m->psnr_hdr);
+    add_metric(o, "psnr_ldr", m->psnr_ldr);
+    add_metric(o, "ssim", m->ssim);
+    cJSON_AddNumberToObject(o, "nonfinite", (double)m->nonfinite);
+    if (heatmap)
+        cJSON_AddStringToObject(o, "heatmap", heatmap);
+    return ic_cli_write_json("diff", NULL, o, 0);
 }
 
 static void print_db(FILE *out, const char *label, double db)
@@ -202,11 +184,11 @@ int ic_cli_diff(int argc, char **argv)
                            ic_image_write(heatmap, &heat, NULL, &err) != IC_OK)) {
         fprintf(stderr, "irrcache diff: %s\n", err.message);
     } else {
-        if (json)
-            print_json(stdout, &img, &metrics, heatmap);
-        else
-            print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap);
         status = 0;
+        if (json && !print_json(&img, &metrics, heatmap))
+            status = EXIT_IO;
+        else if (!json)
+            print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap);
     }
     ic_image_free(&heat);
     ic_image_free(&ref);

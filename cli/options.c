@@ -4,6 +4,7 @@
  */
 #include "options.h"
 
+#include <cjson/cJSON.h>
 #include <errno.h>
 #include <stddef.h>
 #include <stdlib.h>
@@ -351,4 +352,76 @@ void ic_cli_print_markdown(FILE *f)
     markdown_table(f, 0);
     fprintf(f, "\nIrradiance caching (`--integrator ic`):\n\n");
     markdown_table(f, 1);
+}
+
+/* "--max-radius-px" → "max_radius_px". */
+static void json_key(const char *name, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s", name + 2);
+    for (char *p = buf; *p; ++p)
+        if (*p == '-')
+            *p = '_';
+}
+
+/* A float default as written (0.01, not 0.0099999998). */
+static cJSON *default_number(const opt_def *o)
+{
+    char buf[32];
+    snprintf(buf, sizeof buf, "%g", o->def);
+    return cJSON_CreateNumber(strtod(buf, NULL));
+}
+
+static cJSON *setting(const ic_cli_args *a, int id)
+{
+    const opt_def *o = &options[id];
+    const char *given = a->given[id];
+    switch (o->kind) {
+    case IC_OPT_FLAG:
+    case IC_OPT_FLAG_OFF:
+    case IC_OPT_FLAG_ON:
+        return cJSON_CreateBool(given != NULL);
+    case IC_OPT_CHOICE:
+    case IC_OPT_ON_OFF:
+        if (!given && o->kind == IC_OPT_ON_OFF)
+            return cJSON_CreateString(o->default_text);
+        return cJSON_CreateString(ic_cli_choice(a, (ic_arg_id)id));
+    case IC_OPT_SEED:
+        if (given)
+            return cJSON_CreateRaw(given); /* a validated decimal integer, exact */
+        break;
+    case IC_OPT_INT:
+    case IC_OPT_FLOAT:
+    case IC_OPT_DOUBLE:
+    case IC_OPT_RAYS:
+        if (given)
+            return cJSON_CreateNumber(strtod(given, NULL));
+        break;
+    case IC_OPT_SHARE_OFF:
+        if (given)
+            return strcmp(given, "off") ? cJSON_CreateNumber(strtod(given, NULL)) : cJSON_CreateString("off");
+        break;
+    case IC_OPT_STRING:
+    case IC_OPT_LIST:
+        return given ? cJSON_CreateString(given) : cJSON_CreateNull();
+    case IC_OPT_OUTPUT:
+    case IC_OPT_HELP:
+        return NULL;
+    }
+    if (!isnan(o->def))
+        return default_number(o);
+    return strcmp(o->default_text, "none") ? cJSON_CreateString(o->default_text) : cJSON_CreateNull();
+}
+
+cJSON *ic_cli_settings_json(const ic_cli_args *a)
+{
+    cJSON *obj = cJSON_CreateObject();
+    for (int i = 0; i < IC_ARG_COUNT; ++i) {
+        cJSON *v = setting(a, i);
+        if (!v)
+            continue;
+        char key[64];
+        json_key(options[i].name, key, sizeof key);
+        cJSON_AddItemToObject(obj, key, v);
+    }
+    return obj;
 }

@@ -182,6 +182,10 @@ int ic_cli_parse(int argc, char **argv, ic_cli_args *a);
 /* --help and --help-markdown. */
 void ic_cli_print_help(FILE *f);
 void ic_cli_print_markdown(FILE *f);
+/* The settings of a run for the --stats JSON: every option but the outputs and the help, with its
+ * value as given or else its default (a number, a name, true/false for a switch, null for none; a
+ * default that depends on the scene is given as its text). */
+struct cJSON *ic_cli_settings_json(const ic_cli_args *a);
 /* The name a choice option was given (or its default, the first), for messages and the stats. */
 const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id);
 

@@ -5,6 +5,7 @@
  * writable folder before rendering starts, so a long render is never lost to a typo.
  */
 #include "cli.h"
+#include "json_out.h"
 #include "options.h"
 
 #include "core/atomic_file.h"
@@ -69,45 +70,35 @@ static void on_progress(void *user, const char *phase, double fraction)
 
 static int write_stats(const char *path, const render_args *a, int w, int h, const ic_render_stats *st)
 {
-    ic_atomic_file f;
-    ic_error err;
-    if (ic_atomic_file_open(&f, path, &err) != IC_OK) {
-        fprintf(stderr, "irrcache render: %s\n", err.message);
-        return 0;
-    }
-    FILE *o = f.fp;
-    fprintf(o, "{\n  \"scene\": \"");
-    for (const char *c = a->scene; *c; ++c) {
-        if (*c == '"' || *c == '\\')
-            fputc('\\', o);
-        fputc(*c, o);
-    }
-    fprintf(o, "\",\n  \"integrator\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n", ic_cli_choice(a, IC_ARG_INTEGRATOR), w, h);
-    fprintf(o, "  \"spp\": %d,\n  \"threads\": %d,\n  \"seconds\": %.6f,\n  \"rays\": %llu,\n", st->spp, st->threads,
-            st->seconds, (unsigned long long)st->rays);
-    fprintf(o, "  \"rays_per_second\": %.1f,\n", st->rays_per_second);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "scene", a->scene);
+    cJSON_AddStringToObject(o, "integrator", ic_cli_choice(a, IC_ARG_INTEGRATOR));
+    cJSON_AddNumberToObject(o, "width", w);
+    cJSON_AddNumberToObject(o, "height", h);
+    cJSON_AddNumberToObject(o, "spp", st->spp);
+    cJSON_AddNumberToObject(o, "threads", st->threads);
+    cJSON_AddNumberToObject(o, "seconds", st->seconds);
+    cJSON_AddItemToObject(o, "rays", ic_cli_json_u64(st->rays));
+    cJSON_AddNumberToObject(o, "rays_per_second", st->rays_per_second);
     if (st->spp_max != st->spp)
-        fprintf(o, "  \"spp_max\": %d,\n", st->spp_max);
+        cJSON_AddNumberToObject(o, "spp_max", st->spp_max);
     if (a->render.integrator == IC_INTEGRATOR_IC) {
-        fprintf(o, "  \"strategy\": \"%s\",\n  \"records\": %u,\n  \"passes\": %d,\n  \"gather_rays\": %llu,\n",
-                ic_cli_choice(a, IC_ARG_STRATEGY), st->records, st->passes, (unsigned long long)st->gather_rays);
-        fprintf(o, "  \"records_per_pass\": [");
+        cJSON_AddStringToObject(o, "strategy", ic_cli_choice(a, IC_ARG_STRATEGY));
+        cJSON_AddNumberToObject(o, "records", st->records);
+        cJSON_AddNumberToObject(o, "passes", st->passes);
+        cJSON_AddItemToObject(o, "gather_rays", ic_cli_json_u64(st->gather_rays));
+        cJSON *per = cJSON_AddArrayToObject(o, "records_per_pass");
         for (int i = 0; i < st->passes && i < 32; ++i)
-            fprintf(o, "%s%u", i ? ", " : "", st->records_per_pass[i]);
-        fprintf(o, "],\n");
+            cJSON_AddItemToArray(per, cJSON_CreateNumber(st->records_per_pass[i]));
         if (a->render.ic.strategy == IC_STRATEGY_ADAPTIVE)
-            fprintf(o, "  \"refinements\": %u,\n", st->refinements);
-        fprintf(o, "  \"cached_emitters\": %u,\n", st->cached_emitters);
+            cJSON_AddNumberToObject(o, "refinements", st->refinements);
+        cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
     }
-    fprintf(o, "  \"phases\": {");
+    cJSON *phases = cJSON_AddObjectToObject(o, "phases");
     for (int i = 0; i < st->phase_count; ++i)
-        fprintf(o, "%s\"%s\": %.6f", i ? ", " : "", st->phases[i].name, st->phases[i].seconds);
-    fprintf(o, "}\n}\n");
-    if (ic_atomic_file_commit(&f, &err) != IC_OK) {
-        fprintf(stderr, "irrcache render: %s\n", err.message);
-        return 0;
-    }
-    return 1;
+        cJSON_AddNumberToObject(phases, st->phases[i].name, st->phases[i].seconds);
+    cJSON_AddItemToObject(o, "settings", ic_cli_settings_json(a));
+    return ic_cli_write_json("render", path, o, 1);
 }
 
 /* AOVs go next to the first output: <stem>.<aov>.<ext>, with .exr for linear data and .png for the
@@ -139,27 +130,22 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
 
 static int write_records_json(const char *path, const ic_render_aovs *aovs)
 {
-    ic_atomic_file f;
-    ic_error err;
-    if (ic_atomic_file_open(&f, path, &err) != IC_OK) {
-        fprintf(stderr, "irrcache render: %s\n", err.message);
-        return 0;
-    }
-    fprintf(f.fp, "[\n");
+    cJSON *list = cJSON_CreateArray();
     for (uint32_t i = 0; i < aovs->record_view_count; ++i) {
         const ic_record_view *v = &aovs->record_views[i];
-        fprintf(f.fp,
-                "  {\"x\": %.6g, \"y\": %.6g, \"z\": %.6g, \"radius\": %.6g, \"a\": %.6g, \"px\": %.2f, "
-                "\"py\": %.2f, \"radius_px\": %.2f, \"visible\": %s}%s\n",
-                v->position.x, v->position.y, v->position.z, v->radius, v->accuracy, v->px, v->py, v->radius_px,
-                v->visible ? "true" : "false", i + 1 < aovs->record_view_count ? "," : "");
+        cJSON *r = cJSON_CreateObject();
+        cJSON_AddNumberToObject(r, "x", v->position.x);
+        cJSON_AddNumberToObject(r, "y", v->position.y);
+        cJSON_AddNumberToObject(r, "z", v->position.z);
+        cJSON_AddNumberToObject(r, "radius", v->radius);
+        cJSON_AddNumberToObject(r, "a", v->accuracy);
+        cJSON_AddNumberToObject(r, "px", v->px);
+        cJSON_AddNumberToObject(r, "py", v->py);
+        cJSON_AddNumberToObject(r, "radius_px", v->radius_px);
+        cJSON_AddBoolToObject(r, "visible", v->visible);
+        cJSON_AddItemToArray(list, r);
     }
-    fprintf(f.fp, "]\n");
-    if (ic_atomic_file_commit(&f, &err) != IC_OK) {
-        fprintf(stderr, "irrcache render: %s\n", err.message);
-        return 0;
-    }
-    return 1;
+    return ic_cli_write_json("render", path, list, 1);
 }
 
 int ic_cli_render(int argc, char **argv)

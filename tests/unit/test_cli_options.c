@@ -8,6 +8,7 @@
 
 #include <string.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #define CLI IC_CLI_PATH
 #define CORNELL IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
@@ -123,8 +124,33 @@ static void bad_values(void)
     }
 }
 
+/* The stats JSON goes through cJSON's writer: a scene path with a quote, a backslash and non-ASCII
+ * letters comes out escaped, and the file parses; the settings echo what was given and the defaults. */
+static void stats_json(void)
+{
+    const char *dir = TMP "_we\"ird\\dir_é";
+    unlink(dir);
+    CHECK(symlink(IC_SOURCE_DIR "/scenes/cornell-box", dir) == 0, "symlink %s", dir);
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "render '%s/cornell-box.json' -o " TMP "_s.exr --width 16 --height 16 --spp 2 -q "
+             "--integrator=ic --rays 64 --stats " TMP "_s.json", dir);
+    CHECK(run(cmd) == 0, "render through the odd path: %s", err_text);
+    static char js[1 << 15];
+    slurp(TMP "_s.json", js, sizeof js);
+    CHECK(strstr(js, "_we\\\"ird\\\\dir_é/cornell-box.json\""), "the path is escaped: %.200s", js);
+    CHECK(strstr(js, "\"settings\"") && strstr(js, "\"rays\":\t64") && strstr(js, "\"max_passes\":\t12") &&
+              strstr(js, "\"integrator\":\t\"ic\""),
+          "the settings: given values and defaults");
+    CHECK(system("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
+                 "sys.exit(0 if d[\"settings\"][\"spp\"] == 2 and \"we\\\"ird\" in d[\"scene\"] else 1)' "
+                 TMP "_s.json") == 0,
+          "the stats file parses as JSON");
+    unlink(dir);
+}
+
 int main(void)
 {
+    stats_json();
     readme_matches_table();
     help_layout();
     value_forms();
