@@ -104,15 +104,12 @@ static double visible_fraction(const ic_ctx *c, const ic_scene *s, uint32_t m, s
  * they carry the environment's. A lamp like the Cornell box's (0.6 % of the hemisphere, 90 % of its
  * samples visible) keeps being sampled: the cache would blur its sharper shadows. Fills
  * direct_pmf/direct_cdf and narrows light_sel to the emitters left; returns 0 when out of memory. */
-int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
+/* Marks in cached_mat[m] (zeroed, material_count entries) each emitting material the records carry:
+ * the median over sampled shading points of its hemisphere share reaches large_emitters and at most
+ * IC_LARGE_EMITTER_VISIBLE of its light samples are unblocked. Returns 0 when out of memory. */
+static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, uint8_t *cached_mat)
 {
-    if (!(c->o.large_emitters >= 0.0f) || s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
-        return 1;
-    size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
-    for (size_t i = 0; i < npix; ++i)
-        valid += c->g.valid[i];
-    if (valid == 0)
-        return 1;
+    size_t npix = (size_t)c->g.width * c->g.height;
     /* At most ~1024 shading points, evenly through the image, and fewer where there are so many
      * emitting triangles that points × triangles would pass 2^23 (at least ~64 points). */
     size_t want = ((size_t)1 << 23) / s->tri_light_count;
@@ -121,21 +118,14 @@ int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
     /* Shares per emitting material (slot[m]: its row, UINT32_MAX for the others) and sampled point. */
     uint32_t nm = s->material_count, ne = 0;
     uint32_t *slot = malloc(sizeof *slot * (nm ? nm : 1));
-    uint8_t *cached_mat = calloc(nm ? nm : 1, 1);
     double *row = malloc(sizeof *row * cap), *share = NULL;
     if (slot) {
         for (uint32_t m = 0; m < nm; ++m)
             slot[m] = v3_is_black(s->materials[m].emission) ? UINT32_MAX : ne++;
         share = calloc((size_t)(ne ? ne : 1) * cap, sizeof *share);
     }
-    if (!slot || !share || !cached_mat || !row) {
-        free(slot);
-        free(share);
-        free(cached_mat);
-        free(row);
-        return 0;
-    }
-    for (size_t i = 0, k = 0; i < npix; ++i) {
+    int ok = slot && share && row;
+    for (size_t i = 0, k = 0; ok && i < npix; ++i) {
         if (!c->g.valid[i] || k++ % stride)
             continue;
         ic_vec3 p = c->g.p[i], n = c->g.n[i];
@@ -151,42 +141,29 @@ int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
         }
         ++points;
     }
-    uint32_t cached = 0;
-    double kept = 0.0;
-    for (uint32_t m = 0; m < nm; ++m) {
+    for (uint32_t m = 0; ok && m < nm; ++m) {
         if (slot[m] == UINT32_MAX)
             continue;
         memcpy(row, &share[(size_t)slot[m] * cap], sizeof *row * points);
         qsort(row, points, sizeof *row, cmp_double);
         double v = row[points / 2] >= c->o.large_emitters ? visible_fraction(c, s, m, stride) : 1.0;
-        if (v < 0.0) {
-            free(slot);
-            free(share);
-            free(row);
-            free(cached_mat);
-            return 0;
-        }
-        cached_mat[m] = v <= IC_LARGE_EMITTER_VISIBLE;
+        ok = v >= 0.0;
+        cached_mat[m] = ok && v <= IC_LARGE_EMITTER_VISIBLE;
     }
     free(slot);
     free(share);
     free(row);
-    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
-        if (cached_mat[s->triangle_material[s->tri_lights[i].triangle]])
-            ++cached;
-        else
-            kept += s->tri_lights[i].power;
-    }
-    if (cached == 0) {
-        free(cached_mat);
-        return 1;
-    }
+    return ok;
+}
+
+/* The final render's distribution over the emitting triangles left to sample (direct_pmf/direct_cdf),
+ * and light_sel narrowed to them. Returns 0 when out of memory. */
+static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *cached_mat, double kept)
+{
     c->direct_pmf = malloc(sizeof *c->direct_pmf * s->tri_light_count);
     c->direct_cdf = malloc(sizeof *c->direct_cdf * (s->tri_light_count + 1));
-    if (!c->direct_pmf || !c->direct_cdf) {
-        free(cached_mat);
+    if (!c->direct_pmf || !c->direct_cdf)
         return 0;
-    }
     double sum = 0.0;
     c->direct_cdf[0] = 0.0f;
     for (uint32_t i = 0; i < s->tri_light_count; ++i) {
@@ -197,8 +174,6 @@ int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
     }
     if (kept > 0.0)
         c->direct_cdf[s->tri_light_count] = 1.0f;
-    free(cached_mat);
-    c->cached_emitters = cached;
     /* The class probabilities follow the power left to sample. */
     double tri = c->light_sel.tri * kept / s->tri_light_power, point = c->light_sel.point;
     c->light_sel.tri = tri + point > 0.0 ? (float)(tri / (tri + point)) : 0.0f;
@@ -206,4 +181,33 @@ int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
     c->light_sel.tri_pmf = kept > 0.0 ? c->direct_pmf : NULL;
     c->light_sel.tri_cdf = kept > 0.0 ? c->direct_cdf : NULL;
     return 1;
+}
+
+int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
+{
+    if (!(c->o.large_emitters >= 0.0f) || s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
+        return 1;
+    size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
+    for (size_t i = 0; i < npix; ++i)
+        valid += c->g.valid[i];
+    if (valid == 0)
+        return 1;
+    uint8_t *cached_mat = calloc(s->material_count ? s->material_count : 1, 1);
+    if (!cached_mat || !choose_materials(c, s, valid, cached_mat)) {
+        free(cached_mat);
+        return 0;
+    }
+    uint32_t cached = 0;
+    double kept = 0.0;
+    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+        if (cached_mat[s->triangle_material[s->tri_lights[i].triangle]])
+            ++cached;
+        else
+            kept += s->tri_lights[i].power;
+    }
+    int ok = cached == 0 || narrow_light_selection(c, s, cached_mat, kept);
+    if (ok)
+        c->cached_emitters = cached;
+    free(cached_mat);
+    return ok;
 }

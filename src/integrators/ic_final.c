@@ -32,6 +32,10 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     return v3_scale(L, IC_PI);
 }
 
+/* One path from the camera: at each vertex with a smooth lobe, direct light plus kd/π·E from the cache,
+ * then the glossy lobe's sample continues the path; delta lobes are followed. Kept as one function (84
+ * lines): the MIS state carried from vertex to vertex (prev_glossy, prev_pdf, prev_p, prev_sel) reads
+ * more clearly in one loop than spread over helpers that would have to pass it all back and forth. */
 ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic_rng *rng, int thread,
                             uint64_t *rays)
 {
