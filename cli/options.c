@@ -118,14 +118,16 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
         return 0;
     }
     case IC_OPT_SHARE_OFF: {
+        ic_large_emitters *le = (ic_large_emitters *)field;
         if (!strcmp(val, "off")) {
-            *(float *)field = -1.0f;
+            le->mode = IC_CACHE_OFF;
             return 0;
         }
         double v = strtod(val, &end);
         if (errno || end == val || *end || !(v > 0.0) || !(v <= 1.0))
             return ERR("%s %s: give a hemisphere share in (0, 1] (e.g. 0.01) or off", o->name, val);
-        *(float *)field = (float)v;
+        le->mode = IC_CACHE_ON;
+        le->share = (float)v;
         return 0;
     }
     case IC_OPT_CHOICE:

@@ -36,7 +36,7 @@ typedef enum ic_opt_kind {
     IC_OPT_STRING,     /* const char * */
     IC_OPT_OUTPUT,     /* appended to outputs[] */
     IC_OPT_RAYS,       /* a ray count, stored as M×N strata (ic_gather_opts) */
-    IC_OPT_SHARE_OFF,  /* float in (0, 1], or "off" stored as −1 */
+    IC_OPT_SHARE_OFF,  /* ic_large_emitters: a share in (0, 1], or off */
     IC_OPT_LIST,       /* comma-separated names of those in VALUE "a,b,c" */
     IC_OPT_HELP        /* prints something and exits 0 */
 } ic_opt_kind;

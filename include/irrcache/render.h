@@ -55,6 +55,15 @@ typedef enum ic_strategy {
                               sees a discernible discontinuity (docs/adaptive.md) */
 } ic_strategy;
 
+/* Large emitters: an emitting material that covers at least `share` of the cosine-weighted hemisphere at
+ * the image's median shading point, and over a quarter of whose light samples are blocked, lights the
+ * scene through the records, as the environment does, and is not sampled in the final render: a window
+ * seen through openings (soft shadows, wasteful light samples). */
+typedef struct ic_large_emitters {
+    ic_cache_switch mode;  /* IC_CACHE_OFF: every emitter is light-sampled; otherwise chosen by share */
+    float share;           /* [0.01] */
+} ic_large_emitters;
+
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
 typedef struct ic_ic_options {
     ic_strategy strategy;
@@ -73,12 +82,7 @@ typedef struct ic_ic_options {
                               records already cover a diffuse hit, they give its indirect light (ic_gathering.c:
                               hit_from_cache) and only its direct light is sampled */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
-    float large_emitters;  /* an emitting material that covers at least this share of the cosine-weighted
-                              hemisphere at the image's median shading point, and over a quarter of whose
-                              light samples are blocked, lights the scene through the records, as the
-                              environment does, and is not sampled in the final render: a window seen
-                              through openings (soft shadows, wasteful light samples) [0.01]; negative:
-                              every emitter is sampled */
+    ic_large_emitters large_emitters; /* which emitters the records carry instead of light sampling */
     int max_passes;        /* batch: most construction passes [12] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */

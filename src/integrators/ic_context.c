@@ -30,8 +30,8 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
     if (o.light_samples <= 0)
         o.light_samples = IC_DEFAULT_LIGHT_SAMPLES;
-    if (o.large_emitters == 0.0f)
-        o.large_emitters = IC_DEFAULT_LARGE_EMITTERS;
+    if (o.large_emitters.share == 0.0f)
+        o.large_emitters.share = IC_DEFAULT_LARGE_EMITTERS;
     if (o.max_passes <= 0)
         o.max_passes = IC_DEFAULT_MAX_PASSES;
     if (o.min_candidates <= 0)

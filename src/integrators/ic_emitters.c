@@ -146,7 +146,7 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, ui
             continue;
         memcpy(row, &share[(size_t)slot[m] * cap], sizeof *row * points);
         qsort(row, points, sizeof *row, cmp_double);
-        double v = row[points / 2] >= c->o.large_emitters ? visible_fraction(c, s, m, stride) : 1.0;
+        double v = row[points / 2] >= c->o.large_emitters.share ? visible_fraction(c, s, m, stride) : 1.0;
         ok = v >= 0.0;
         cached_mat[m] = ok && v <= IC_LARGE_EMITTER_VISIBLE;
     }
@@ -185,7 +185,7 @@ static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *c
 
 int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
 {
-    if (!(c->o.large_emitters >= 0.0f) || s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
+    if (c->o.large_emitters.mode == IC_CACHE_OFF || s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
         return 1;
     size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
     for (size_t i = 0; i < npix; ++i)

@@ -398,7 +398,7 @@ static void test_window(void)
     CHECK(ok && memcmp(on.rgb, one.rgb, sizeof(float) * 3 * W * H) == 0,
           "window: 1 and 2 threads give the same image with the emitter cached");
     ic_image_free(&one);
-    o.ic.large_emitters = -1.0f;
+    o.ic.large_emitters.mode = IC_CACHE_OFF;
     ok &= test_render(scene, W, H, &o, &off, &st_off);
     CHECK(ok, "window scene renders");
     if (ok) {
@@ -411,7 +411,7 @@ static void test_window(void)
                "mean %.5f, relMSE %.5f\n", r, st_on.cached_emitters, m_on, e_on.relmse, m_off, e_off.relmse);
         CHECK(f0 && f1 && f2, "finite images");
         CHECK(st_on.cached_emitters == 2 && st_off.cached_emitters == 0,
-              "the window's emitter is cached by default (%u triangles) and not with large_emitters < 0 (%u)",
+              "the window's emitter is cached by default (%u triangles) and not with large_emitters off (%u)",
               st_on.cached_emitters, st_off.cached_emitters);
         CHECK(fabs(m_on / r - 1.0) < 0.03, "cached: the image mean matches the path tracer's (%.5f vs %.5f)", m_on, r);
         CHECK(fabs(m_off / r - 1.0) < 0.03, "sampled: the image mean matches the path tracer's (%.5f vs %.5f)", m_off,
