@@ -148,7 +148,7 @@ typedef struct ic_render_options {
     ic_render_aovs *aovs;  /* optional diagnostics (integrator IC); caller frees the images */
 } ic_render_options;
 
-#define IC_MAX_PHASES 8
+#define IC_MAX_PHASES 12 /* room for every phase of every integrator, and the CLI's "load" */
 
 /* What a render cost. */
 typedef struct ic_render_stats {

@@ -146,6 +146,18 @@ static void stats_json(void)
                  TMP "_s.json") == 0,
           "the stats file parses as JSON");
     unlink(dir);
+    /* Every strategy's stats have the same phases around its own: load first, the final render last. */
+    const char *strategies[] = {"batch", "lazy", "adaptive"};
+    for (int i = 0; i < 3; ++i) {
+        snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_p.exr --width 16 --height 16 --spp 2 -q "
+                 "--integrator ic --rays 64 --strategy %s --stats " TMP "_p.json", strategies[i]);
+        CHECK(run(cmd) == 0, "render with %s: %s", strategies[i], err_text);
+        slurp(TMP "_p.json", js, sizeof js);
+        const char *ph = strstr(js, "\"phases\"");
+        CHECK(ph && strstr(ph, "\"load\"") && strstr(ph, "\"accel\"") && strstr(ph, "\"gathering\"") &&
+                  strstr(ph, "\"final render\""),
+              "%s: load, accel, gathering and final render phases: %.400s", strategies[i], ph ? ph : js);
+    }
 }
 
 int main(void)
