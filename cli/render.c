@@ -93,6 +93,7 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         if (a->render.ic.strategy == IC_STRATEGY_ADAPTIVE)
             cJSON_AddNumberToObject(o, "refinements", st->refinements);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
+        cJSON_AddBoolToObject(o, "cut_short", st->cut_short);
     }
     cJSON *phases = cJSON_AddObjectToObject(o, "phases");
     for (int i = 0; i < st->phase_count; ++i)
@@ -237,6 +238,9 @@ int ic_cli_render(int argc, char **argv)
     ic_image_free(&aovs.density);
     ic_image_free(&aovs.amap);
     ic_scene_free(scene);
+    if (ok && st.cut_short)
+        fprintf(stderr, "irrcache render: warning: cache construction stopped at its pass limit (%d passes) before "
+                        "it converged; with --strategy batch raise --max-passes\n", st.passes);
     if (ok && a.stats_path)
         ok = write_stats(a.stats_path, &a, w, h, &st);
     if (ok && !a.quiet) {

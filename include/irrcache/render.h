@@ -161,6 +161,8 @@ typedef struct ic_render_stats {
     uint32_t records;      /* cache records (integrator IC) */
     int passes;            /* construction passes (integrator IC) */
     uint32_t refinements;  /* adaptive: times a record's a_i was lowered */
+    int cut_short;         /* 1: construction stopped at a limit (batch: max_passes; adaptive: its pass bound)
+                              before its own criterion said the cache was done */
     uint32_t cached_emitters; /* emitting triangles whose light the records carry (ic_ic_options.large_emitters) */
     uint32_t records_per_pass[32];
     uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */

@@ -619,6 +619,7 @@ ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, i
     if (r == IC_OK) {
         st->passes = res.passes;
         st->refinements = (uint32_t)A->refinements;
+        st->cut_short = A->npts > 0 && !res.converged;
         memcpy(st->records_per_pass, res.records_per_pass, sizeof st->records_per_pass);
         /* Convergence overhead: the loop's time without gathering and insertion (Křivánek et al. 2006 Table 1). */
         double loop = (t2 - t1) - (pt->gather - before.gather) - (pt->insert - before.insert);

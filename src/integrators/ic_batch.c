@@ -202,6 +202,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         goto done;
     st->records_per_pass[0] = n;
     st->passes = 1;
+    st->cut_short = 1; /* until a pass finds fewer than min_candidates */
     for (int pass = 1; pass <= c->o.max_passes; ++pass) {
         ic_ic_report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
         uint32_t found = 0, before = ic_cache_count(c->cache);
@@ -239,8 +240,10 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         if (pass < 32)
             st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
         st->passes = pass + 1;
-        if ((int)found < c->o.min_candidates)
+        if ((int)found < c->o.min_candidates) {
+            st->cut_short = 0;
             break;
+        }
     }
     uint32_t added;
     r = coverage_sweep(c, lum, covered, cand, pt, &added, err);

@@ -160,8 +160,28 @@ static void stats_json(void)
     }
 }
 
+/* Construction that a limit cuts short says so: a warning line and "cut_short" in the stats. */
+static void cut_short(void)
+{
+    static char js[1 << 15];
+    const char *base = "render " CORNELL " -o " TMP "_cs.exr --width 48 --height 48 --spp 2 -q --integrator ic "
+                       "--rays 64 --stats " TMP "_cs.json";
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s --max-passes 1", base);
+    CHECK(run(cmd) == 0, "render with --max-passes 1: %s", err_text);
+    slurp(TMP "_cs.json", js, sizeof js);
+    CHECK(strstr(js, "\"cut_short\":\ttrue") && strstr(err_text, "warning") && strstr(err_text, "--max-passes") &&
+              lines(err_text) == 1,
+          "one pass is cut short and says so: '%s'", err_text);
+    snprintf(cmd, sizeof cmd, "%s --max-passes 100 --min-candidates 1000000", base);
+    CHECK(run(cmd) == 0, "render that converges: %s", err_text);
+    slurp(TMP "_cs.json", js, sizeof js);
+    CHECK(strstr(js, "\"cut_short\":\tfalse") && !strstr(err_text, "warning"), "a converged build does not warn");
+}
+
 int main(void)
 {
+    cut_short();
     stats_json();
     readme_matches_table();
     help_layout();
