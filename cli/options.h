@@ -56,7 +56,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, 1e9, "N", NAN, "scene file, else 16 (pt) or 64 (ic)", "", \
       IC_SCOPE_ALL, "samples per pixel (with --time: the most to take)") \
     X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
-      "wall-time budget: progressive passes until it is spent (equal-time comparisons)") \
+      "wall-time budget of the whole render, cache construction included: progressive passes " \
+      "until it is spent (equal-time comparisons)") \
     X(INTEGRATOR, "--integrator", NULL, IC_OPT_CHOICE, render.integrator, 0, 0, "pt|ic", NAN, "pt", "", \
       IC_SCOPE_ALL, "pt: path-traced reference; ic: irradiance caching (indirect diffuse from the cache)") \
     X(MAX_DEPTH, "--max-depth", NULL, IC_OPT_INT, render.max_depth, 1, 1000, "N", IC_DEFAULT_MAX_DEPTH, \

@@ -136,7 +136,8 @@ typedef struct ic_render_options {
     int threads;           /* 0 = all cores */
     uint64_t seed;         /* random seed (default: scene file, else 1) */
     int has_seed;          /* 1: use `seed` even if it is 0 */
-    double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent */
+    double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent (the budget
+                              of the whole call: construction comes off the film's share) */
     ic_sampler sampler;    /* pixel, light and BSDF sample pairs [IC_SAMPLER_SOBOL] */
     ic_cache_switch adaptive_sampling; /* IC_CACHE_ON: spp is a mean per pixel; a pilot pass of spp/4, the
                               rest shared out by each pixel's relative noise (Frolov et al. 2012 §3.2; needs

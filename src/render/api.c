@@ -11,6 +11,7 @@
 #include "integrators/integrator.h"
 #include "scene/scene.h"
 
+#include <math.h>
 #include <string.h>
 
 void ic_scene_resolution(const ic_scene *scene, int *width, int *height)
@@ -103,7 +104,9 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     if (r == IC_OK) {
         loop.camera = &scene->camera;
         loop.spp = opt.spp;
-        loop.time_budget = opt.time_budget;
+        /* The budget is the whole render's: what the accelerator and preparation (cache construction)
+         * took comes off the film's share; its first pass runs however little is left. */
+        loop.time_budget = opt.time_budget > 0.0 ? fmax(opt.time_budget - (ic_seconds() - t0), 1e-3) : 0.0;
         loop.threads = opt.threads;
         loop.seed = opt.seed;
         loop.random_sampler = opt.sampler == IC_SAMPLER_RANDOM;
