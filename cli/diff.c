@@ -30,12 +30,14 @@ static void print_help(FILE *out)
           "\n"
           "Metrics: RMSE, relMSE (mean of (a-b)^2/(b^2+0.01)) and PSNR on linear values (peak = the\n"
           "reference's largest value); PSNR and SSIM (luma, 8x8 windows) on the 8-bit sRGB images.\n"
+          "relMSE lp (relmse_lowpass) is the relMSE after a Gaussian blur of sigma = 2 pixels of both\n"
+          "images: the low-frequency error (a cache's blotches) without the pixel noise.\n"
           "NaN/Inf values count as 0 and are reported. Identical images have PSNR infinity, printed\n"
-          "as \"inf\" in the table and as 999.0 in JSON.\n"
+          "as \"inf\" in the table and as 999 in JSON.\n"
           "\n"
           "options:\n"
-          "  --json             print one JSON object: width, height, rmse, relmse, psnr_hdr,\n"
-          "                     psnr_ldr, ssim, nonfinite (default: a table)\n"
+          "  --json             print one JSON object: width, height, rmse, relmse, relmse_lowpass,\n"
+          "                     psnr_hdr, psnr_ldr, ssim, nonfinite (default: a table)\n"
           "  --heatmap FILE     write a false-colour map of the per-pixel relative luma error\n"
           "                     |a-b|/(|b|+0.01): blue = 0 ... red = the maximum (.png, .exr, .pfm or\n"
           "                     .hdr; magenta = NaN/Inf) (default: none)\n"
@@ -83,6 +85,7 @@ static int print_json(const ic_image *img, const ic_image_metrics *m, const char
     cJSON_AddNumberToObject(o, "height", img->height);
     add_metric(o, "rmse", m->rmse);
     add_metric(o, "relmse", m->relmse);
+    add_metric(o, "relmse_lowpass", m->relmse_lowpass);
     add_metric(o, "psnr_hdr", m->psnr_hdr);
     add_metric(o, "psnr_ldr", m->psnr_ldr);
     add_metric(o, "ssim", m->ssim);
@@ -105,7 +108,8 @@ static void print_table(FILE *out, const char *a, const char *b, const ic_image 
 {
     fprintf(out, "%-10s %s\n%-10s %s\n%-10s %d x %d\n", "image", a, "reference", b, "size", img->width,
             img->height);
-    fprintf(out, "%-10s %.6g\n%-10s %.6g\n", "RMSE", m->rmse, "relMSE", m->relmse);
+    fprintf(out, "%-10s %.6g\n%-10s %.6g\n%-10s %.6g\n", "RMSE", m->rmse, "relMSE", m->relmse, "relMSE lp",
+            m->relmse_lowpass);
     print_db(out, "PSNR HDR", m->psnr_hdr);
     print_db(out, "PSNR LDR", m->psnr_ldr);
     fprintf(out, "%-10s %.5f\n", "SSIM", m->ssim);

@@ -52,9 +52,13 @@ float ic_linear_to_srgb(float v);
 float ic_srgb_to_linear(float v);
 
 /* Error metrics of an image against a reference of the same size. */
+#define IC_LOWPASS_SIGMA 2.0 /* pixels: white noise drops ~1/(4πσ²) = 1/50, a blotch of 10+ px stays */
+
 typedef struct ic_image_metrics {
     double rmse;           /* root-mean-square error over all channels, linear HDR */
     double relmse;         /* mean of (a-r)^2 / (r^2 + 0.01) over all channels (pbrt/Rousselle convention) */
+    double relmse_lowpass; /* the same after a Gaussian blur of σ = IC_LOWPASS_SIGMA pixels of both images: the
+                              low-frequency error (an interpolated cache's blotches) without pixel noise */
     double psnr_hdr;       /* 10 log10(peak^2 / MSE), peak = max reference channel value, linear HDR */
     double psnr_ldr;       /* PSNR of the 8-bit sRGB images (peak 255), as Frolov et al. 2012 report */
     double ssim;           /* mean SSIM of the luma of the 8-bit sRGB images (8×8 windows, Wang et al. 2004 constants) */

@@ -23,6 +23,7 @@
 #define RELMSE_EPSILON 0.01
 #define HEATMAP_EPSILON 0.01f
 #define SSIM_WINDOW 8
+#define LOWPASS_RADIUS 6 /* 3 σ of IC_LOWPASS_SIGMA, in pixels */
 
 static float finite_or_zero(float v, long *nonfinite)
 {
@@ -95,6 +96,60 @@ static ic_result mean_ssim(const float *x, const float *y, int w, int h, double 
     return IC_OK;
 }
 
+/* Separable Gaussian of σ = IC_LOWPASS_SIGMA (radius 3σ, edges clamped) of an RGB image into out;
+ * tmp holds one image. Non-finite values count as 0, as in the other metrics. */
+static void gaussian_blur(const float *in, int w, int h, float *tmp, float *out)
+{
+#define R LOWPASS_RADIUS
+    float k[2 * R + 1], sum = 0.0f;
+    for (int i = -R; i <= R; ++i)
+        sum += k[i + R] = (float)exp(-0.5 * (double)(i * i) / (IC_LOWPASS_SIGMA * IC_LOWPASS_SIGMA));
+    for (int i = 0; i <= 2 * R; ++i)
+        k[i] /= sum;
+    long ignored = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                float acc = 0.0f;
+                for (int i = -R; i <= R; ++i) {
+                    int xx = x + i < 0 ? 0 : x + i >= w ? w - 1 : x + i;
+                    acc += k[i + R] * finite_or_zero(in[3 * ((size_t)y * w + xx) + c], &ignored);
+                }
+                tmp[3 * ((size_t)y * w + x) + c] = acc;
+            }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                float acc = 0.0f;
+                for (int i = -R; i <= R; ++i) {
+                    int yy = y + i < 0 ? 0 : y + i >= h ? h - 1 : y + i;
+                    acc += k[i + R] * tmp[3 * ((size_t)yy * w + x) + c];
+                }
+                out[3 * ((size_t)y * w + x) + c] = acc;
+            }
+#undef R
+}
+
+/* relMSE of the blurred images (ic_image_metrics.relmse_lowpass); returns IC_ERR_OOM if out of memory. */
+static ic_result lowpass_relmse(const ic_image *img, const ic_image *ref, double *out)
+{
+    size_t count = 3 * (size_t)img->width * (size_t)img->height;
+    float *buf = malloc(sizeof *buf * count * 3);
+    if (!buf)
+        return IC_ERR_OOM;
+    float *a = buf, *b = buf + count, *tmp = buf + 2 * count;
+    gaussian_blur(img->rgb, img->width, img->height, tmp, a);
+    gaussian_blur(ref->rgb, ref->width, ref->height, tmp, b);
+    double sum = 0.0;
+    for (size_t i = 0; i < count; ++i) {
+        double d = (double)a[i] - (double)b[i];
+        sum += d * d / ((double)b[i] * (double)b[i] + RELMSE_EPSILON);
+    }
+    free(buf);
+    *out = sum / (double)count;
+    return IC_OK;
+}
+
 static ic_result check_pair(const ic_image *img, const ic_image *ref, ic_error *err)
 {
     if (!img || !ref || !img->rgb || !ref->rgb || img->width <= 0 || img->height <= 0)
@@ -148,6 +203,8 @@ ic_result ic_image_compare(const ic_image *img, const ic_image *ref, ic_image_me
         luma[pixels + p] = srgb8_luma(ldr_ref + 3 * p);
     }
     r = mean_ssim(luma, luma + pixels, img->width, img->height, &m->ssim);
+    if (r == IC_OK)
+        r = lowpass_relmse(img, ref, &m->relmse_lowpass);
     free(ldr);
     free(luma);
     if (r != IC_OK)

@@ -139,7 +139,7 @@ int main(void)
     const char *help[] = {"--help"};
     CHECK(run_diff(1, help) == 0, "help exit");
     CHECK(strstr(out_text, "--json") && strstr(out_text, "--heatmap") && strstr(out_text, "--max-error") &&
-              strstr(out_text, "default") && strstr(out_text, "999.0"),
+              strstr(out_text, "default") && strstr(out_text, "999 in JSON"),
           "help: %s", out_text);
 
     /* Usage errors: exit 2, one line on stderr naming the culprit, nothing on stdout. */

@@ -399,6 +399,40 @@ static void test_metrics(void)
     ic_image_free(&a);
 }
 
+/* The low-pass relMSE: a blur keeps a constant offset (a blotch larger than the kernel) and divides
+ * independent pixel noise by about 4πσ² (the sum of the squared Gaussian weights). */
+static void test_lowpass(void)
+{
+    ic_error err = {0};
+    ic_image_metrics m;
+    ic_image ref = constant(64, 48, 0.5f), img = constant(64, 48, 0.6f);
+    CHECK(ic_image_compare(&img, &ref, &m, &err) == IC_OK, "compare: %s", err.message);
+    CHECK_NEAR(m.relmse_lowpass, m.relmse, 1e-5 * m.relmse, "low-pass relMSE of a constant offset (float blur)");
+    CHECK(ic_image_compare(&ref, &ref, &m, &err) == IC_OK && m.relmse_lowpass == 0.0, "identical: low-pass 0");
+    /* Noise: ±0.1 at random in every channel. */
+    uint32_t st = 12345u;
+    for (size_t i = 0; i < 3 * (size_t)img.width * img.height; ++i) {
+        st = st * 1664525u + 1013904223u;
+        img.rgb[i] = 0.5f + ((st >> 31) ? 0.1f : -0.1f);
+    }
+    CHECK(ic_image_compare(&img, &ref, &m, &err) == IC_OK, "compare: %s", err.message);
+    double expect = 1.0 / (4.0 * 3.14159265358979 * IC_LOWPASS_SIGMA * IC_LOWPASS_SIGMA);
+    double ratio = m.relmse_lowpass / m.relmse;
+    CHECK(ratio > 0.5 * expect && ratio < 2.0 * expect, "noise: low-pass/relMSE %.4g, expected about %.4g", ratio,
+          expect);
+    /* A blotch: a 16×16 patch 20 % too bright keeps most of its error. */
+    ic_image_free(&img);
+    img = constant(64, 48, 0.5f);
+    for (int y = 16; y < 32; ++y)
+        for (int x = 24; x < 40; ++x)
+            for (int c = 0; c < 3; ++c)
+                img.rgb[3 * ((size_t)y * img.width + x) + c] = 0.6f;
+    CHECK(ic_image_compare(&img, &ref, &m, &err) == IC_OK && m.relmse_lowpass > 0.6 * m.relmse,
+          "blotch: low-pass %.4g of relMSE %.4g", m.relmse_lowpass, m.relmse);
+    ic_image_free(&img);
+    ic_image_free(&ref);
+}
+
 static void test_heatmap(void)
 {
     ic_error err = {0};
@@ -548,6 +582,7 @@ int main(void)
     test_pfm_variants();
     test_hdr_variants();
     test_metrics();
+    test_lowpass();
     test_heatmap();
     test_bad_input();
     TEST_MAIN_END();
