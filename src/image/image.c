@@ -1,10 +1,6 @@
 /*
- * image.c — the ic_image type and the format dispatch of ic_image_read / ic_image_write
- * (include/irrcache/image.h).
- *
- * Reading sniffs the file's first bytes (the extension may lie: a renamed .exr is still read);
- * writing picks the format from the extension. The per-format code lives in exr.c, pfm.c, rgbe.c
- * and ldr.c (PNG/JPEG through stb).
+ * image.c — the ic_image type: creation with bounded sizes, freeing, and creation for a reader that
+ * reports a bad size against its file (include/irrcache/image.h, image_internal.h).
  */
 #include "image_internal.h"
 
@@ -36,90 +32,6 @@ void ic_image_free(ic_image *img)
         return;
     free(img->rgb);
     memset(img, 0, sizeof *img);
-}
-
-/* Lower-case extension of path including the dot ("" if none), into ext[8]. */
-static void extension_of(const char *path, char ext[8])
-{
-    ext[0] = '\0';
-    const char *slash = strrchr(path, '/');
-    const char *dot = strrchr(path, '.');
-    if (!dot || (slash && dot < slash) || strlen(dot) >= 8)
-        return;
-    size_t i = 0;
-    for (; dot[i]; ++i)
-        ext[i] = (char)((dot[i] >= 'A' && dot[i] <= 'Z') ? dot[i] - 'A' + 'a' : dot[i]);
-    ext[i] = '\0';
-}
-
-int ic_image_is_writable_format(const char *path)
-{
-    if (!path)
-        return 0;
-    char ext[8];
-    extension_of(path, ext);
-    return !strcmp(ext, ".exr") || !strcmp(ext, ".pfm") || !strcmp(ext, ".hdr") || !strcmp(ext, ".png");
-}
-
-ic_result ic_image_read(const char *path, ic_image *out, ic_error *err)
-{
-    if (!out)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_image_read: no output image given");
-    memset(out, 0, sizeof *out);
-    if (!path || !*path)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "empty image path; give a file name");
-
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot read (%s); check the path and its permissions", path,
-                            strerror(errno));
-    unsigned char magic[4] = {0};
-    size_t n = fread(magic, 1, sizeof magic, fp);
-    int read_error = ferror(fp);
-    fclose(fp);
-    if (read_error)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot read (I/O error); check the file and the disk", path);
-    if (n == 0)
-        return ic_error_set(err, IC_ERR_PARSE, "%s: file is empty; re-create the image", path);
-
-    if (n == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01)
-        return ic_image_read_exr(path, out, err);
-    if (n >= 3 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f') &&
-        (magic[2] == '\n' || magic[2] == '\r' || magic[2] == ' ' || magic[2] == '\t'))
-        return ic_image_read_pfm(path, out, err);
-    if (n >= 2 && magic[0] == '#' && magic[1] == '?')
-        return ic_image_read_hdr(path, out, err);
-    if ((n == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') || /* PNG */
-        (n >= 3 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff))               /* JPEG */
-        return ic_image_read_stb(path, out, err);
-    return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                        "%s: not an image format irrcache reads; convert it to OpenEXR, PFM, Radiance HDR, "
-                        "PNG or JPEG",
-                        path);
-}
-
-ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err)
-{
-    static const ic_image_write_options defaults = {0};
-    if (!opt)
-        opt = &defaults;
-    if (!path || !*path)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "empty output path; give a file name");
-    if (!img || !img->rgb || img->width <= 0 || img->height <= 0)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: nothing to write (empty image)", path);
-
-    char ext[8];
-    extension_of(path, ext);
-    if (!strcmp(ext, ".exr"))
-        return ic_image_write_exr(path, img, opt->exr_half, err);
-    if (!strcmp(ext, ".pfm"))
-        return ic_image_write_pfm(path, img, err);
-    if (!strcmp(ext, ".hdr"))
-        return ic_image_write_hdr(path, img, err);
-    if (!strcmp(ext, ".png"))
-        return ic_image_write_png(path, img, opt->exposure, err);
-    return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                        "%s: unknown image extension; use .exr, .pfm, .hdr or .png", path);
 }
 
 ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, ic_error *err)
