@@ -197,8 +197,8 @@ static int from_scene(const char *scene_path, int width, int height, const char 
     lo.width = width;
     lo.height = height;
     ic_error err;
-    ic_scene *scene;
-    ic_accel *accel;
+    ic_scene *scene = NULL;
+    ic_accel *accel = NULL;
     if (ic_scene_load(scene_path, &lo, &scene, &err) != IC_OK || ic_accel_create(scene, &accel, &err) != IC_OK)
         fail(err.message);
     ic_tracer tr;

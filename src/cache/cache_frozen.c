@@ -10,7 +10,7 @@
  * operations in the same order on smaller or equal operands, and float rounding is monotonic), which
  * is below the accepted radius². So a frozen look-up meets the same contributors in the same order as
  * the octree path, with the same weights and extrapolated values (its sums differ from the octree
- * path's in rounding only: cache.c, "Frozen look-ups").
+ * path's in rounding only: cache_frozen_query.c, "Frozen look-ups").
  *
  * A leaf's cell is the set of points the descent sends there: lo ≤ p < hi per axis, where lo and hi
  * are the thresholds the descent compares with (ancestors' centres, the root's faces). A hint check

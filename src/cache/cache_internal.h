@@ -1,6 +1,7 @@
 /*
- * cache_internal.h — the cache's storage and the weight test shared by cache.c, cache_clamp.c and
- * cache_file.c. Not a public header.
+ * cache_internal.h — the cache's storage, the weight test and the estimate's last step, shared by the
+ * files of src/cache/ (cache.c, cache_query.c, cache_frozen_query.c, cache_frozen.c, cache_clamp.c,
+ * cache_file.c). Not a public header.
  *
  * Storage is split hot/cold: the look-up loop touches only
  * `sphere` (position, R_i) and `normal` (n_i, a_i), 32 bytes per record in two 16-byte-aligned
@@ -106,7 +107,7 @@ struct ic_cache {
     float tree_scale;            /* max(1, final_accuracy_scale) */
     ic_frozen frozen;            /* read-only look-up layout, valid between a freeze and the next insertion */
     int lookup_path;             /* ic_lookup_path the frozen look-ups take (the best this CPU runs) */
-    /* That path's look-up (cache.c), called through this pointer: one call, no dispatch chain. */
+    /* That path's look-up (cache_frozen_query.c), called through this pointer: one call, no dispatch chain. */
     int (*query_frozen)(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out);
     /* Insertion scratch (insertion is single-threaded with respect to the cache). */
     uint32_t *scratch;
@@ -176,6 +177,18 @@ static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_
                                    ic_vec3 *dp)
 {
     return ic_weight_test(&c->params, &c->sphere[i], &c->normal[i], p, n, s, w, dp);
+}
+
+/* The estimate's irradiance from the weighted sums acc[c] = Σ w_i E_i(p) of channel c and
+ * e->weight_sum; returns 1 if any record contributed. Shared by the octree look-ups (cache_query.c)
+ * and the frozen ones (cache_frozen_query.c). */
+static inline int ic_estimate_finish(ic_cache_estimate *e, const float acc[3])
+{
+    if (e->weight_sum > 0.0f) {
+        float inv = 1.0f / e->weight_sum;
+        e->irradiance = v3(acc[0] * inv, acc[1] * inv, acc[2] * inv);
+    }
+    return e->contributor_count > 0;
 }
 
 /* Code paths of the frozen look-up; all answer alike, bit for bit. */

@@ -85,16 +85,115 @@ static void add_wall(double grad[3][2], ic_vec3 a, ic_vec3 b, double s, double v
     }
 }
 
-void ic_gather_grid_accumulate(const ic_gatherer *g, uint32_t M, uint32_t N, float phi0, ic_gather_acc *acc)
+/* One φ column's directions (the file comment): v_k, the φ-wall direction at the column's first
+ * boundary; u, the θ-wall direction, with the factor uscale standing for ∫u_φ dφ; and v at the column's
+ * centre φ_k+½, where the rotational gradient is evaluated. */
+typedef struct grid_column {
+    double vx, vy;            /* v_k */
+    double ux, uy, uscale;    /* u and its factor */
+    double vcx, vcy;          /* v(φ_k+½) */
+} grid_column;
+
+static grid_column column_directions(float phi0, uint32_t k, uint32_t N, int wh)
+{
+    const double two_pi = 2.0 * (double)IC_PI;
+    grid_column col;
+    const double phi_k = phi0 + two_pi * k / N;
+    col.vx = -sin(phi_k);
+    col.vy = cos(phi_k);
+    if (wh) {
+        col.ux = cos(phi_k);
+        col.uy = sin(phi_k);
+        col.uscale = two_pi / N;
+    } else {
+        const double phi_c = phi0 + two_pi * (k + 0.5) / N;
+        col.ux = cos(phi_c);
+        col.uy = sin(phi_c);
+        col.uscale = 2.0 * sin((double)IC_PI / N);
+    }
+    const double phi_mid = phi0 + two_pi * (k + 0.5) / N;
+    col.vcx = -sin(phi_mid);
+    col.vcy = cos(phi_mid);
+    return col;
+}
+
+/* One grid's sums, in the cells' order, before ic_gather_grid_accumulate scales them into the acc. */
+typedef struct grid_sums {
+    double sum[3], half_sum[3], rot[3][2], trans[3][2];
+    uint32_t half_count;
+} grid_sums;
+
+/* Cell c (tan_c: tanθ at its stratum's centre): its radiance into the sums and the rotational
+ * gradient, its hit distance into acc. */
+static void add_cell(const ic_gatherer *g, uint32_t c, double tan_c, const grid_column *col, grid_sums *gs,
+                     ic_gather_acc *acc)
+{
+    const ic_vec3 Lc = g->cell_radiance[c];
+    const double Lv[3] = {Lc.x, Lc.y, Lc.z};
+    for (int ch = 0; ch < 3; ++ch)
+        gs->sum[ch] += Lv[ch];
+    if (g->cell_half[c] == 0) {
+        for (int ch = 0; ch < 3; ++ch)
+            gs->half_sum[ch] += Lv[ch];
+        ++gs->half_count;
+    }
+
+    /* Rotational gradient at the cell centre (WH92's θ_j, φ_k), see the file comment. */
+    for (int ch = 0; ch < 3; ++ch) {
+        gs->rot[ch][0] += Lv[ch] * tan_c * col->vcx;
+        gs->rot[ch][1] += Lv[ch] * tan_c * col->vcy;
+    }
+
+    const float d = g->cell_dist[c];
+    if (d < INFINITY) {
+        acc->inv_dist += 1.0 / d;
+        acc->min_dist = fminf(acc->min_dist, d);
+        ++acc->hits;
+    }
+}
+
+/* The walls on the low sides of cell (j, k) of the M×N grid, to (j−1, k) and to (j, k−1), into the
+ * translational gradient (wh: the Ward–Heckbert form, else the improved one). */
+static void add_cell_walls(const ic_gatherer *g, uint32_t M, uint32_t N, uint32_t j, uint32_t k,
+                           const grid_column *col, int wh, double trans[3][2])
 {
     const ic_vec3 *L = g->cell_radiance;
     const float *dist = g->cell_dist;
+    const uint32_t c = k * M + j;
+    const float d = dist[c];
+    const double s_lo2 = (double)j / M, s_hi2 = (double)(j + 1) / M;
+    /* θ-wall between (j−1, k) and (j, k). */
+    if (j > 0) {
+        const float dmin = fminf(d, dist[c - 1]);
+        if (dmin < INFINITY) {
+            const double s = sqrt(s_lo2) * (1.0 - s_lo2) / dmin * col->uscale;
+            add_wall(trans, L[c], L[c - 1], s, col->ux, col->uy);
+        }
+    }
+    /* φ-wall between (j, k−1) and (j, k). */
+    if (N > 1) {
+        const uint32_t kprev = k == 0 ? N - 1 : k - 1;
+        const uint32_t cp = kprev * M + j;
+        const float dmin = fminf(d, dist[cp]);
+        if (dmin < INFINITY) {
+            double weight;
+            if (wh) {
+                const double sin_c = sqrt((j + 0.5) / M);
+                weight = (sqrt(1.0 - s_lo2) - sqrt(1.0 - s_hi2)) / sin_c;
+            } else {
+                weight = sqrt(s_hi2) - sqrt(s_lo2);
+            }
+            add_wall(trans, L[c], L[cp], weight / dmin, col->vx, col->vy);
+        }
+    }
+}
+
+void ic_gather_grid_accumulate(const ic_gatherer *g, uint32_t M, uint32_t N, float phi0, ic_gather_acc *acc)
+{
     const double n = (double)M * N;
-    const double two_pi = 2.0 * (double)IC_PI;
     const int wh = g->opts.tgrad == IC_GATHER_TGRAD_WARD_HECKBERT;
 
-    double sum[3] = {0, 0, 0}, half_sum[3] = {0, 0, 0}, rot[3][2] = {{0}}, trans[3][2] = {{0}};
-    uint32_t half_count = 0;
+    grid_sums gs = {0};
     /* tanθ at each θ stratum's centre, sin²θ = (j + ½)/M: never at the horizon. */
     double *tan_c = g->tan_scratch;
     for (uint32_t j = 0; j < M; ++j) {
@@ -103,82 +202,20 @@ void ic_gather_grid_accumulate(const ic_gatherer *g, uint32_t M, uint32_t N, flo
     }
 
     for (uint32_t k = 0; k < N; ++k) {
-        const uint32_t kprev = k == 0 ? N - 1 : k - 1;
-        /* φ-wall direction v_k at the column's first boundary, and the θ-wall direction u. */
-        const double phi_k = phi0 + two_pi * k / N;
-        const double vx = -sin(phi_k), vy = cos(phi_k);
-        double ux, uy, uscale;
-        if (wh) {
-            ux = cos(phi_k);
-            uy = sin(phi_k);
-            uscale = two_pi / N;
-        } else {
-            const double phi_c = phi0 + two_pi * (k + 0.5) / N;
-            ux = cos(phi_c);
-            uy = sin(phi_c);
-            uscale = 2.0 * sin((double)IC_PI / N);
-        }
-        const double phi_mid = phi0 + two_pi * (k + 0.5) / N;
-        const double vcx = -sin(phi_mid), vcy = cos(phi_mid);
+        const grid_column col = column_directions(phi0, k, N, wh);
         for (uint32_t j = 0; j < M; ++j) {
-            const uint32_t c = k * M + j;
-            const ic_vec3 Lc = L[c];
-            const double Lv[3] = {Lc.x, Lc.y, Lc.z};
-            for (int ch = 0; ch < 3; ++ch)
-                sum[ch] += Lv[ch];
-            if (g->cell_half[c] == 0) {
-                for (int ch = 0; ch < 3; ++ch)
-                    half_sum[ch] += Lv[ch];
-                ++half_count;
-            }
-
-            /* Rotational gradient at the cell centre (WH92's θ_j, φ_k), see the file comment. */
-            for (int ch = 0; ch < 3; ++ch) {
-                rot[ch][0] += Lv[ch] * tan_c[j] * vcx;
-                rot[ch][1] += Lv[ch] * tan_c[j] * vcy;
-            }
-
-            const float d = dist[c];
-            if (d < INFINITY) {
-                acc->inv_dist += 1.0 / d;
-                acc->min_dist = fminf(acc->min_dist, d);
-                ++acc->hits;
-            }
-
-            const double s_lo2 = (double)j / M, s_hi2 = (double)(j + 1) / M;
-            /* θ-wall between (j−1, k) and (j, k). */
-            if (j > 0) {
-                const float dmin = fminf(d, dist[c - 1]);
-                if (dmin < INFINITY) {
-                    const double s = sqrt(s_lo2) * (1.0 - s_lo2) / dmin * uscale;
-                    add_wall(trans, Lc, L[c - 1], s, ux, uy);
-                }
-            }
-            /* φ-wall between (j, k−1) and (j, k). */
-            if (N > 1) {
-                const uint32_t cp = kprev * M + j;
-                const float dmin = fminf(d, dist[cp]);
-                if (dmin < INFINITY) {
-                    double weight;
-                    if (wh) {
-                        const double sin_c = sqrt((j + 0.5) / M);
-                        weight = (sqrt(1.0 - s_lo2) - sqrt(1.0 - s_hi2)) / sin_c;
-                    } else {
-                        weight = sqrt(s_hi2) - sqrt(s_lo2);
-                    }
-                    add_wall(trans, Lc, L[cp], weight / dmin, vx, vy);
-                }
-            }
+            add_cell(g, k * M + j, tan_c[j], &col, &gs, acc);
+            add_cell_walls(g, M, N, j, k, &col, wh, gs.trans);
         }
     }
 
     const double pi = (double)IC_PI;
     for (int ch = 0; ch < 3; ++ch) {
-        acc->e[ch] += pi * sum[ch];                                   /* n · E */
-        acc->e_half[ch] += half_count ? n * pi * half_sum[ch] / half_count : pi * sum[ch]; /* n · E' */
+        acc->e[ch] += pi * gs.sum[ch];                                      /* n · E */
+        acc->e_half[ch] += gs.half_count ? n * pi * gs.half_sum[ch] / gs.half_count : pi * gs.sum[ch]; /* n · E' */
         for (int a = 0; a < 2; ++a) {
-            acc->rot[ch][a] += pi * rot[ch][a];                       /* n · ∇r E */
-            acc->trans[ch][a] += n * trans[ch][a];                    /* n · ∇t E */
+            acc->rot[ch][a] += pi * gs.rot[ch][a];                          /* n · ∇r E */
+            acc->trans[ch][a] += n * gs.trans[ch][a];                       /* n · ∇t E */
         }
     }
     acc->rays += M * N;

@@ -201,9 +201,19 @@ static float env_mean_lum(const ic_environment *env)
     return wsum > 0.0 ? (float)(sum / wsum) : 0.0f;
 }
 
-ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
+/* Turns the running sums cdf[1..n] (cdf[0] = 0) into a CDF: divided by their total (uniform when it is
+ * 0), with cdf[n] exactly 1. */
+static void normalise_cdf(float *cdf, uint32_t n, double total)
 {
-    /* triangle lights */
+    for (uint32_t i = 1; i <= n; ++i)
+        cdf[i] = total > 0.0 ? (float)(cdf[i] / total) : (float)i / (float)n;
+    if (n)
+        cdf[n] = 1.0f;
+}
+
+/* Triangle lights: every triangle with an emissive material, its power and CDF; *power: their total. */
+static ic_result build_tri_lights(ic_scene *s, double *power, ic_error *err)
+{
     uint32_t count = 0;
     for (uint32_t t = 0; t < s->triangle_count; ++t)
         if (!v3_is_black(s->materials[s->triangle_material[t]].emission))
@@ -237,13 +247,15 @@ ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
         s->triangle_light[t] = (int32_t)s->tri_light_count++;
         s->tri_light_cdf[s->tri_light_count] = (float)total;
     }
-    for (uint32_t i = 1; i <= s->tri_light_count; ++i)
-        s->tri_light_cdf[i] = total > 0.0 ? (float)(s->tri_light_cdf[i] / total) : (float)i / (float)s->tri_light_count;
-    if (s->tri_light_count)
-        s->tri_light_cdf[s->tri_light_count] = 1.0f;
+    normalise_cdf(s->tri_light_cdf, s->tri_light_count, total);
     s->tri_light_power = (float)total;
+    *power = total;
+    return IC_OK;
+}
 
-    /* point lights */
+/* Point lights: their CDF by power; *power: their total. */
+static ic_result build_point_lights(ic_scene *s, double *power, ic_error *err)
+{
     s->point_light_cdf = malloc(sizeof *s->point_light_cdf * (s->point_light_count + 1));
     if (!s->point_light_cdf)
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for the light tables", s->path);
@@ -253,25 +265,18 @@ ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
         point_power += 4.0 * IC_PI * v3_lum(s->point_lights[i].intensity);
         s->point_light_cdf[i + 1] = (float)point_power;
     }
-    for (uint32_t i = 1; i <= s->point_light_count; ++i)
-        s->point_light_cdf[i] = point_power > 0.0 ? (float)(s->point_light_cdf[i] / point_power)
-                                                  : (float)i / (float)s->point_light_count;
-    if (s->point_light_count)
-        s->point_light_cdf[s->point_light_count] = 1.0f;
+    normalise_cdf(s->point_light_cdf, s->point_light_count, point_power);
+    *power = point_power;
+    return IC_OK;
+}
 
-    /* environment */
-    if (s->env.enabled && s->env.image.width > 0) {
-        ic_result r = build_env_tables(s, err);
-        if (r != IC_OK)
-            return r;
-    }
-
-    /* class selection */
+/* The light-class probabilities, proportional to each class's power (the file comment); all zero when
+ * the scene has no light. */
+static void select_light_classes(ic_scene *s, double w_tri, double w_point)
+{
     float radius = 0.5f * v3_len(v3_sub(s->bounds_max, s->bounds_min));
     if (!(radius > 0.0f) || !isfinite(radius))
         radius = 1.0f;
-    double w_tri = total;
-    double w_point = point_power;
     double w_sun = s->sun.enabled ? IC_PI * radius * radius * v3_lum(s->sun.irradiance) : 0.0;
     double w_env = 0.0;
     if (s->env.enabled && (s->env.image.width <= 0 || s->env.total_weight > 0.0f))
@@ -284,6 +289,23 @@ ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
         s->light_select.sun = (float)(w_sun / sum);
         s->light_select.env = (float)(w_env / sum);
     }
+}
+
+ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
+{
+    double tri_power = 0.0, point_power = 0.0;
+    ic_result r = build_tri_lights(s, &tri_power, err);
+    if (r != IC_OK)
+        return r;
+    r = build_point_lights(s, &point_power, err);
+    if (r != IC_OK)
+        return r;
+    if (s->env.enabled && s->env.image.width > 0) {
+        r = build_env_tables(s, err);
+        if (r != IC_OK)
+            return r;
+    }
+    select_light_classes(s, tri_power, point_power);
     return IC_OK;
 }
 

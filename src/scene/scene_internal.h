@@ -47,7 +47,7 @@ ic_result ic_scene_build_lights(ic_scene *scene, ic_error *err);
 /* Camera looking at the bounds' centre from +z, vertical fov 45°, framing the bounding sphere. */
 void ic_scene_fit_camera(ic_scene *scene, int width, int height);
 
-/* JSON front end (scene_json.c): fills b->scene from the scene file at path. */
+/* JSON front end (scene_json.c; its sections in scene_json_*.c): fills b->scene from the scene file at path. */
 ic_result ic_scene_load_json(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt,
                              ic_error *err);
 

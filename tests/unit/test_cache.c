@@ -362,7 +362,7 @@ static int values_close(float x, float y)
 }
 
 /* The frozen layout's answer a against the octree path's b: the same contributors in the same order
- * with the same weights (bitwise); values and sums equal up to rounding (cache.c: "Frozen look-ups":
+ * with the same weights (bitwise); values and sums equal up to rounding (cache_frozen_query.c: "Frozen look-ups":
  * another order of the additions, the rotation term as n·(∇r E_i × n_i)). */
 static int octree_agrees(const answer *a, const answer *b)
 {
@@ -1306,8 +1306,9 @@ static void test_api_edges(void)
 
 #define RUN(f) do { double t0 = now(); f(); printf("%-28s %.2f s\n", #f, now() - t0); fflush(stdout); } while (0)
 
-/* Hundreds of records overlapping one spot: look-ups with more contributors than the SIMD paths buffer
- * at once (cache.c: IC_PACKED_CAP) still equal the octree path and brute force, with both weights. */
+/* Hundreds of records overlapping one spot: look-ups with far more contributors than one block of eight
+ * or the caller's contribution buffer holds still equal the octree path and brute force, with both
+ * weights. */
 static void test_crowded_lookups(void)
 {
     const uint32_t n = 400;

@@ -1,0 +1,149 @@
+/*
+ * scene_json_light.c — the "lights" (point and sun lights) and "environment" (constant radiance or an
+ * equirectangular map) sections of the JSON scene file.
+ */
+#include "scene/scene_json_internal.h"
+
+#include "core/vecmath.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
+{
+    static const char *valid = "radiance, map, scale, rotation_deg";
+    ic_environment *env = &c->b->scene->env;
+    ic_result r = ic_json_expect_object(c, obj, line);
+    if (r != IC_OK)
+        return r;
+    const char *map = NULL;
+    int map_line = line, has_radiance = 0, has_scale = 0;
+    ic_vec3 radiance = v3s(0.0f), scale = v3s(1.0f);
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        int kl = ic_json_locate_key(c, it->string);
+        if (ic_json_is_comment(it->string))
+            continue;
+        if (!strcmp(it->string, "radiance")) {
+            r = ic_json_read_color(c, it, kl, &radiance);
+            has_radiance = 1;
+        } else if (!strcmp(it->string, "map")) {
+            r = ic_json_read_string(c, it, kl, &map);
+            map_line = kl;
+        } else if (!strcmp(it->string, "scale")) {
+            r = ic_json_read_color(c, it, kl, &scale);
+            has_scale = 1;
+        } else if (!strcmp(it->string, "rotation_deg")) {
+            r = ic_json_read_float(c, it, kl, &env->rotation_deg);
+        } else {
+            return ic_json_unknown_key(c, kl, it->string, "environment", valid);
+        }
+        if (r != IC_OK)
+            return r;
+    }
+    if (map && has_radiance)
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
+                            "environment gives both 'radiance' and 'map'; use 'map' with "
+                            "'scale', or 'radiance' alone");
+    if (!map && has_scale)
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
+                            "environment 'scale' applies to a 'map'; give 'radiance' for a "
+                            "constant sky");
+    if (!map && !has_radiance)
+        return ic_json_fail(c, line, IC_ERR_PARSE,
+                            "environment needs 'radiance' [r, g, b] or 'map' (an .exr/.hdr file)");
+    env->enabled = 1;
+    if (!map) {
+        env->radiance = radiance;
+        return IC_OK;
+    }
+    char full[IC_SCENE_PATH_MAX];
+    r = ic_json_resolve_path(c, map, map_line, "environment map", full, sizeof full);
+    if (r != IC_OK)
+        return r;
+    ic_error ierr;
+    r = ic_image_read(full, &env->image, &ierr);
+    if (r != IC_OK)
+        return ic_json_fail(c, map_line, r, "environment map: %s", ierr.message);
+    env->radiance = scale;
+    return IC_OK;
+}
+
+static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
+{
+    ic_scene *s = c->b->scene;
+    int line = ic_json_locate_object_start(c);
+    if (!cJSON_IsObject(obj))
+        return ic_json_fail(c, line, IC_ERR_PARSE, "lights[%d] must be an object with a 'type'", index);
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(obj, "type");
+    int type_line = ic_json_peek_key_line(c, "type");
+    if (!type || !cJSON_IsString(type))
+        return ic_json_fail(c, line, IC_ERR_PARSE, "lights[%d] needs \"type\": \"point\" or \"sun\"", index);
+    int is_point = !strcmp(type->valuestring, "point"), is_sun = !strcmp(type->valuestring, "sun");
+    if (!is_point && !is_sun)
+        return ic_json_fail(c, type_line, IC_ERR_INVALID_ARG, "unknown light type '%s'; use \"point\" or \"sun\"",
+                            type->valuestring);
+    const char *valid = is_point ? "type, position, intensity" : "type, direction, irradiance";
+    ic_vec3 a = v3s(0.0f), e = v3s(0.0f);
+    int has_a = 0, has_e = 0;
+    const cJSON *it;
+    ic_result r = IC_OK;
+    cJSON_ArrayForEach(it, obj)
+    {
+        int kl = ic_json_locate_key(c, it->string);
+        if (ic_json_is_comment(it->string) || !strcmp(it->string, "type"))
+            continue;
+        if (!strcmp(it->string, is_point ? "position" : "direction")) {
+            r = ic_json_read_vec3(c, it, kl, &a);
+            has_a = 1;
+        } else if (!strcmp(it->string, is_point ? "intensity" : "irradiance")) {
+            r = ic_json_read_color(c, it, kl, &e);
+            has_e = 1;
+        } else {
+            return ic_json_unknown_key(c, kl, it->string, is_point ? "a point light" : "a sun light", valid);
+        }
+        if (r != IC_OK)
+            return r;
+    }
+    if (!has_a || !has_e)
+        return ic_json_fail(c, line, IC_ERR_PARSE, "lights[%d] (%s) needs %s", index, type->valuestring,
+                            is_point ? "'position' and 'intensity'" : "'direction' and 'irradiance'");
+    if (is_sun) {
+        if (s->sun.enabled)
+            return ic_json_fail(c, line, IC_ERR_UNSUPPORTED, "only one sun light is supported; remove lights[%d]",
+                                index);
+        if (!(v3_len2(a) > 0.0f))
+            return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
+                                "lights[%d] sun 'direction' is zero; give the direction "
+                                "towards the sun",
+                                index);
+        s->sun.enabled = 1;
+        s->sun.direction = v3_norm(a);
+        s->sun.irradiance = e;
+        return IC_OK;
+    }
+    ic_point_light *grown = realloc(s->point_lights, sizeof *grown * (s->point_light_count + 1));
+    if (!grown)
+        return ic_json_fail(c, line, IC_ERR_OOM, "out of memory for lights");
+    s->point_lights = grown;
+    s->point_lights[s->point_light_count].position = a;
+    s->point_lights[s->point_light_count].intensity = e;
+    ++s->point_light_count;
+    return IC_OK;
+}
+
+ic_result ic_json_parse_lights(json_ctx *c, const cJSON *arr, int line)
+{
+    if (!cJSON_IsArray(arr))
+        return ic_json_fail(c, line, IC_ERR_PARSE, "'lights' must be an array of light objects");
+    int i = 0;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, arr)
+    {
+        ic_result r = parse_light(c, it, i++);
+        if (r != IC_OK)
+            return r;
+    }
+    return IC_OK;
+}

@@ -1,0 +1,197 @@
+/*
+ * scene_json_material.c — the "materials" section of the JSON scene file: overrides of the materials
+ * the meshes define, by name.
+ */
+#include "scene/scene_json_internal.h"
+
+#include "core/vecmath.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static ic_result parse_material_type(json_ctx *c, const cJSON *it, int line, ic_material_type *type)
+{
+    static const char *names[] = {"diffuse", "glossy", "mirror", "glass"};
+    if (cJSON_IsString(it))
+        for (int k = 0; k < 4; ++k)
+            if (!strcmp(it->valuestring, names[k])) {
+                *type = (ic_material_type)k;
+                return IC_OK;
+            }
+    return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
+                        "unknown material type '%s'; use \"diffuse\", \"glossy\", \"mirror\" "
+                        "or \"glass\"",
+                        cJSON_IsString(it) ? it->valuestring : "(not a string)");
+}
+
+/* An override as read: the fields it gives (has_*) and their values. */
+typedef struct material_override {
+    ic_material m;               /* the values given */
+    int has_type, has_kd, has_ks, has_ns, has_em, has_two, has_ior, has_tex;
+    int32_t tex;                 /* kd_texture: the texture's index, -1 for none */
+} material_override;
+
+/* 1 if a mesh defines a material called name. */
+static int material_defined(const ic_scene *s, const char *name)
+{
+    int found = 0;
+    for (uint32_t i = 0; i < s->material_count; ++i)
+        found |= !strcmp(s->materials[i].name, name);
+    return found;
+}
+
+/* The error for an override of a material no mesh defines: lists the names the meshes define, each
+ * once, as many as fit. */
+static ic_result unknown_material(json_ctx *c, const char *name, int line)
+{
+    const ic_scene *s = c->b->scene;
+    char known[512] = "";
+    size_t used = 0;
+    for (uint32_t i = 0; i < s->material_count && used + 4 < sizeof known; ++i) {
+        int dup = 0;
+        for (uint32_t j = 0; j < i; ++j)
+            dup |= !strcmp(s->materials[j].name, s->materials[i].name);
+        if (dup)
+            continue;
+        int n = snprintf(known + used, sizeof known - used, "%s'%s'", used ? ", " : "", s->materials[i].name);
+        if (n < 0 || (size_t)n >= sizeof known - used) {
+            snprintf(known + used, sizeof known - used, ", ...");
+            break;
+        }
+        used += (size_t)n;
+    }
+    return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
+                        "material '%s' in \"materials\" is not defined by any mesh; known materials: %s", name,
+                        known[0] ? known : "(none)");
+}
+
+/* "kd_texture": loads the texture at the path (resolved like every path) into the scene and sets *tex
+ * to its index; an empty path leaves *tex as it is (no texture). */
+static ic_result read_texture(json_ctx *c, const cJSON *it, int kl, int32_t *tex)
+{
+    const char *p = "";
+    ic_result r = ic_json_read_string(c, it, kl, &p);
+    if (r == IC_OK && p[0]) {
+        char full[IC_SCENE_PATH_MAX], owner[IC_SCENE_PATH_MAX + 32];
+        r = ic_json_resolve_path(c, p, kl, "texture", full, sizeof full);
+        snprintf(owner, sizeof owner, "%s:%d", c->path, kl);
+        if (r == IC_OK)
+            r = ic_scene_texture_load(c->b->scene, full, owner, tex, c->err);
+    }
+    return r;
+}
+
+/* Reads key `it` (at line kl) of an override into o. */
+static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, material_override *o)
+{
+    static const char *valid = "type, kd, ks, ns, emission, two_sided, ior, kd_texture";
+    ic_result r = IC_OK;
+    if (!strcmp(it->string, "type")) {
+        r = parse_material_type(c, it, kl, &o->m.type);
+        o->has_type = 1;
+    } else if (!strcmp(it->string, "kd")) {
+        r = ic_json_read_color(c, it, kl, &o->m.kd);
+        o->has_kd = 1;
+    } else if (!strcmp(it->string, "ks")) {
+        r = ic_json_read_color(c, it, kl, &o->m.ks);
+        o->has_ks = 1;
+    } else if (!strcmp(it->string, "ns")) {
+        r = ic_json_read_float(c, it, kl, &o->m.ns);
+        if (r == IC_OK && !(o->m.ns > 0.0f))
+            return ic_json_fail(c, kl, IC_ERR_INVALID_ARG, "'ns' must be > 0 (a Phong exponent)");
+        o->has_ns = 1;
+    } else if (!strcmp(it->string, "emission")) {
+        r = ic_json_read_color(c, it, kl, &o->m.emission);
+        o->has_em = 1;
+    } else if (!strcmp(it->string, "two_sided")) {
+        if (!cJSON_IsBool(it))
+            return ic_json_fail(c, kl, IC_ERR_PARSE, "'two_sided' must be true or false");
+        o->m.two_sided_emission = cJSON_IsTrue(it);
+        o->has_two = 1;
+    } else if (!strcmp(it->string, "ior")) {
+        r = ic_json_read_float(c, it, kl, &o->m.ior);
+        if (r == IC_OK && !(o->m.ior >= 1.0f))
+            return ic_json_fail(c, kl, IC_ERR_INVALID_ARG, "'ior' must be >= 1 (index of refraction)");
+        o->has_ior = 1;
+    } else if (!strcmp(it->string, "kd_texture")) {
+        r = read_texture(c, it, kl, &o->tex);
+        o->has_tex = 1;
+    } else {
+        return ic_json_unknown_key(c, kl, it->string, "a material override", valid);
+    }
+    return r;
+}
+
+/* Sets the fields o gives in every material called name, then keeps each one's type usable. */
+static void apply_override(ic_scene *s, const char *name, const material_override *o)
+{
+    for (uint32_t i = 0; i < s->material_count; ++i) {
+        ic_material *m = &s->materials[i];
+        if (strcmp(m->name, name))
+            continue;
+        if (o->has_type)
+            m->type = o->m.type;
+        if (o->has_kd)
+            m->kd = o->m.kd;
+        if (o->has_ks)
+            m->ks = o->m.ks;
+        if (o->has_ns)
+            m->ns = o->m.ns;
+        if (o->has_em)
+            m->emission = o->m.emission;
+        if (o->has_two)
+            m->two_sided_emission = o->m.two_sided_emission;
+        if (o->has_ior)
+            m->ior = o->m.ior;
+        if (o->has_tex)
+            m->kd_texture = o->tex;
+        /* keep the type usable: a glossy lobe needs an exponent, a mirror or glass a tint */
+        if (m->type == IC_MAT_GLOSSY && !(m->ns >= 1.0f))
+            m->ns = 1.0f;
+        if ((m->type == IC_MAT_MIRROR || m->type == IC_MAT_GLASS) && v3_is_black(m->ks) && !o->has_ks)
+            m->ks = v3s(1.0f);
+    }
+}
+
+/* Overrides of one named material; applies to every material of that name from every mesh. */
+static ic_result parse_material_override(json_ctx *c, const cJSON *obj, int line)
+{
+    ic_result r = ic_json_expect_object(c, obj, line);
+    if (r != IC_OK)
+        return r;
+    if (!material_defined(c->b->scene, obj->string))
+        return unknown_material(c, obj->string, line);
+    material_override o;
+    memset(&o, 0, sizeof o);
+    o.tex = -1;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        int kl = ic_json_locate_key(c, it->string);
+        if (ic_json_is_comment(it->string))
+            continue;
+        r = read_override_key(c, it, kl, &o);
+        if (r != IC_OK)
+            return r;
+    }
+    apply_override(c->b->scene, obj->string, &o);
+    return IC_OK;
+}
+
+ic_result ic_json_parse_materials(json_ctx *c, const cJSON *obj, int line)
+{
+    ic_result r = ic_json_expect_object(c, obj, line);
+    if (r != IC_OK)
+        return r;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        int kl = ic_json_locate_key(c, it->string);
+        if (ic_json_is_comment(it->string))
+            continue;
+        r = parse_material_override(c, it, kl);
+        if (r != IC_OK)
+            return r;
+    }
+    return IC_OK;
+}

@@ -1,0 +1,220 @@
+/*
+ * scene_json_value.c — what every section of the JSON scene file is read with: a key's line (the
+ * search that scene_json.c describes), messages that name the file and the line, typed values and
+ * paths resolved against the scene file's directory or the shared scenes folder.
+ */
+#include "scene/scene_json_internal.h"
+
+#include "core/vecmath.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ------------------------------------------------------------------------------------------------ */
+/* positions and messages */
+
+int ic_json_line_of(const json_ctx *c, size_t off)
+{
+    int line = 1;
+    for (size_t i = 0; i < off && i < c->len; ++i)
+        line += c->text[i] == '\n';
+    return line;
+}
+
+/* Offset just past the next `"key"` followed by ':' at or after `from`, or (size_t)-1. */
+static size_t find_key(const json_ctx *c, const char *key, size_t from)
+{
+    size_t klen = strlen(key);
+    for (size_t i = from; i + klen + 2 <= c->len; ++i) {
+        if (c->text[i] != '"' || strncmp(c->text + i + 1, key, klen) != 0 || c->text[i + 1 + klen] != '"')
+            continue;
+        size_t j = i + klen + 2;
+        while (j < c->len && (c->text[j] == ' ' || c->text[j] == '\t' || c->text[j] == '\n' || c->text[j] == '\r'))
+            ++j;
+        if (j < c->len && c->text[j] == ':')
+            return j + 1;
+    }
+    return (size_t)-1;
+}
+
+/* Moves the cursor past the next occurrence of key and returns its line (the last line if absent). */
+int ic_json_locate_key(json_ctx *c, const char *key)
+{
+    size_t at = find_key(c, key, c->cursor);
+    if (at != (size_t)-1) {
+        c->line = ic_json_line_of(c, at);
+        c->cursor = at;
+    }
+    return c->line;
+}
+
+/* Line of the next occurrence of key without moving the cursor. */
+int ic_json_peek_key_line(const json_ctx *c, const char *key)
+{
+    size_t at = find_key(c, key, c->cursor);
+    return at != (size_t)-1 ? ic_json_line_of(c, at) : c->line;
+}
+
+/* Moves the cursor to the next '{' (the start of an array's object element) and returns its line. */
+int ic_json_locate_object_start(json_ctx *c)
+{
+    const char *brace = memchr(c->text + c->cursor, '{', c->len - c->cursor);
+    if (brace) {
+        c->cursor = (size_t)(brace - c->text) + 1;
+        c->line = ic_json_line_of(c, c->cursor);
+    }
+    return c->line;
+}
+
+ic_result ic_json_fail(json_ctx *c, int line, ic_result code, const char *fmt, ...)
+{
+    char msg[900];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return ic_error_set(c->err, code, "%s:%d: %s", c->path, line, msg);
+}
+
+ic_result ic_json_unknown_key(json_ctx *c, int line, const char *key, const char *where, const char *valid)
+{
+    return ic_json_fail(c, line, IC_ERR_PARSE, "unknown key '%s' in %s; valid keys: %s", key, where, valid);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* values */
+
+static ic_result read_number(json_ctx *c, const cJSON *it, int line, double *out)
+{
+    if (!cJSON_IsNumber(it) || !isfinite(it->valuedouble))
+        return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be a number", it->string);
+    *out = it->valuedouble;
+    return IC_OK;
+}
+
+ic_result ic_json_read_float(json_ctx *c, const cJSON *it, int line, float *out)
+{
+    double d = 0.0;
+    ic_result r = read_number(c, it, line, &d);
+    if (r == IC_OK && fabs(d) > 3.0e38)
+        return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' = %g is out of range", it->string, d);
+    *out = (float)d;
+    return r;
+}
+
+/* An integer in [lo, hi]. */
+ic_result ic_json_read_int(json_ctx *c, const cJSON *it, int line, double lo, double hi, const char *hint, double *out)
+{
+    if (!cJSON_IsNumber(it) || !isfinite(it->valuedouble) || it->valuedouble != floor(it->valuedouble) ||
+        it->valuedouble < lo || it->valuedouble > hi) {
+        char shown[64];
+        if (cJSON_IsNumber(it))
+            snprintf(shown, sizeof shown, "%g", it->valuedouble);
+        else
+            snprintf(shown, sizeof shown, "a non-number");
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "'%s' is %s but must be an integer from %.0f to %.0f; %s",
+                            it->string, shown, lo, hi, hint);
+    }
+    *out = it->valuedouble;
+    return IC_OK;
+}
+
+ic_result ic_json_read_vec3(json_ctx *c, const cJSON *it, int line, ic_vec3 *out)
+{
+    float v[3];
+    if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 3)
+        return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be an array of 3 numbers, like [0, 1, 0]", it->string);
+    for (int k = 0; k < 3; ++k) {
+        const cJSON *e = cJSON_GetArrayItem(it, k);
+        if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble) || fabs(e->valuedouble) > 3.0e38)
+            return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be an array of 3 finite numbers, like [0, 1, 0]",
+                                it->string);
+        v[k] = (float)e->valuedouble;
+    }
+    *out = v3(v[0], v[1], v[2]);
+    return IC_OK;
+}
+
+/* A colour: one non-negative number (grey) or [r, g, b]. */
+ic_result ic_json_read_color(json_ctx *c, const cJSON *it, int line, ic_vec3 *out)
+{
+    ic_result r;
+    if (cJSON_IsNumber(it)) {
+        float g;
+        r = ic_json_read_float(c, it, line, &g);
+        *out = v3s(g);
+    } else {
+        r = ic_json_read_vec3(c, it, line, out);
+    }
+    if (r != IC_OK)
+        return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be a colour: a number or [r, g, b]", it->string);
+    if (out->x < 0.0f || out->y < 0.0f || out->z < 0.0f)
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "'%s' has a negative component; colours must be >= 0",
+                            it->string);
+    return IC_OK;
+}
+
+ic_result ic_json_read_string(json_ctx *c, const cJSON *it, int line, const char **out)
+{
+    if (!cJSON_IsString(it) || !it->valuestring)
+        return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be a string", it->string);
+    *out = it->valuestring;
+    return IC_OK;
+}
+
+ic_result ic_json_expect_object(json_ctx *c, const cJSON *it, int line)
+{
+    if (!cJSON_IsObject(it))
+        return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be an object { ... }", it->string);
+    return IC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* paths */
+
+/* Resolves a path from the scene file: relative to its directory, or "shared:rest" against the shared
+ * scenes folder (option, $IRRCACHE_SCENES, <dir>/../../../shared/scenes, <dir>/../../shared/scenes —
+ * the first that holds the file). Reports `what` not found at line. */
+ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const char *what, char *out, size_t size)
+{
+    char tried[IC_SCENE_PATH_MAX] = "";
+    if (!given[0])
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "empty path for %s; give a file name", what);
+    if (!strncmp(given, "shared:", 7)) {
+        const char *rest = given + 7;
+        char up3[IC_SCENE_PATH_MAX + 32], up2[IC_SCENE_PATH_MAX + 32];
+        snprintf(up3, sizeof up3, "%s/../../../shared/scenes", c->dir);
+        snprintf(up2, sizeof up2, "%s/../../shared/scenes", c->dir);
+        const char *env = getenv("IRRCACHE_SCENES");
+        const char *dirs[4] = {c->opt->shared_scenes_dir, (env && *env) ? env : NULL, up3, up2};
+        for (int k = 0; k < 4; ++k) {
+            if (!dirs[k] || !dirs[k][0])
+                continue;
+            if (!ic_path_join(dirs[k], rest, out, size))
+                return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "path of %s '%s' is too long; shorten it", what,
+                                    given);
+            if (ic_path_exists(out))
+                return IC_OK;
+            if (!tried[0])
+                snprintf(tried, sizeof tried, "%s", out);
+        }
+        char abs_path[IC_SCENE_PATH_MAX];
+        ic_path_absolute(tried, abs_path, sizeof abs_path);
+        return ic_json_fail(c, line, IC_ERR_IO,
+                            "%s '%s' not found (resolved to %s); check the path, or point $IRRCACHE_SCENES or the "
+                            "shared_scenes_dir option at the shared scenes folder",
+                            what, given, abs_path);
+    }
+    if (!ic_path_join(c->dir, given, out, size))
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "path of %s '%s' is too long; shorten it", what, given);
+    if (!ic_path_exists(out)) {
+        char abs_path[IC_SCENE_PATH_MAX];
+        ic_path_absolute(out, abs_path, sizeof abs_path);
+        return ic_json_fail(c, line, IC_ERR_IO, "%s '%s' not found (resolved to %s); check the path", what, given,
+                            abs_path);
+    }
+    return IC_OK;
+}
