@@ -11,7 +11,7 @@
  * --save DIR also writes both caches and their shading points to DIR; bench_lookup --load DIR times those again without building the caches (the same build's files: to
  * compare code changes on the same look-ups).
  */
-#include "cache/cache_internal.h" /* ic_cache_set_lookup_path */
+#include "cache/cache_store.h" /* ic_cache_set_lookup_path */
 #include "core/atomic_file.h"
 #include "film/film.h"
 #include "geom/accel.h"
@@ -34,7 +34,7 @@ static int cmp_double(const void *a, const void *b)
 /* Look-up paths compared on one cache: the octree (thawed), the frozen layout, frozen with a hint,
  * frozen in batches of BATCH look-ups with a hint (ic_cache_query_batch) — these three with the best
  * code this CPU runs: AVX2 or SSE2 —, and frozen with a hint forced onto the SSE2 and the portable code
- * (cache_internal.h: ic_cache_set_lookup_path). */
+ * (cache_store.h: ic_cache_set_lookup_path). */
 enum { PATH_OCTREE, PATH_FROZEN, PATH_HINTED, PATH_BATCH, PATH_HINTED_SSE2, PATH_HINTED_PORTABLE, PATHS };
 enum { BATCH = 256 };
 

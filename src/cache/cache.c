@@ -7,7 +7,7 @@
  * cache never depends on the thread count. Look-ups: cache_query.c (octree, linear scan) and
  * cache_frozen_query.c (the frozen layout).
  */
-#include "cache_internal.h"
+#include "cache_store.h"
 
 #include "irrcache/defaults.h"
 

@@ -12,7 +12,7 @@
  * step 3 computes every target from the radii before the step and then takes minima, step 4 is a
  * sequential label-correcting pass ordered by (R, index).
  */
-#include "cache_internal.h"
+#include "cache_store.h"
 
 #include "core/threads.h"
 

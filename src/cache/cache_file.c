@@ -17,7 +17,7 @@
  *   end u64      FNV-1a 64 of every byte before it
  * The octree is not stored: loading rebuilds it from the records.
  */
-#include "cache_internal.h"
+#include "cache_store.h"
 
 #include "core/atomic_file.h"
 

@@ -1,6 +1,6 @@
 /*
  * cache_frozen.c — builds the frozen look-up layout of the irradiance cache (cache.h: FROZEN
- * LOOK-UPS; cache_internal.h: ic_frozen) from the multiple-reference octree (Frolov et al. 2012 §4.3).
+ * LOOK-UPS; cache_store.h: ic_frozen) from the multiple-reference octree (Frolov et al. 2012 §4.3).
  *
  * Each leaf's list is the concatenation, root first, of the reference segments of the nodes on its
  * path — the references the octree look-up scans, in the same order — less those whose sphere
@@ -18,7 +18,7 @@
  *
  * Building allocates; look-ups on the layout allocate nothing.
  */
-#include "cache_internal.h"
+#include "cache_store.h"
 
 #include <math.h>
 #include <stdlib.h>

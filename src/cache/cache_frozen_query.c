@@ -1,9 +1,9 @@
 /*
- * cache_frozen_query.c — look-ups on the irradiance cache's frozen layout (cache_internal.h: ic_frozen;
+ * cache_frozen_query.c — look-ups on the irradiance cache's frozen layout (cache_store.h: ic_frozen;
  * built by cache_frozen.c): finding a point's leaf, the portable, SSE2 and AVX2 code paths, the choice
  * among them, and batches of look-ups (include/irrcache/cache.h: FROZEN LOOK-UPS).
  */
-#include "cache_internal.h"
+#include "cache_store.h"
 
 #include <math.h>
 #include <string.h>
@@ -122,7 +122,7 @@ static IC_ALWAYS_INLINE const ic_frozen_leaf *frozen_leaf(const ic_frozen *f, ic
  * per lane (packed add, mul, div and sqrt round like their scalar forms; no FMA: contraction is off),
  * so all three give the same bits. Against the octree path: the same contributors in the same order
  * with the same weights; the extrapolated values and the sums differ in rounding only (the rotation
- * term is evaluated as n·(∇r E_i × n_i), cache_internal.h; the octree path adds in list order).
+ * term is evaluated as n·(∇r E_i × n_i), cache_store.h; the octree path adds in list order).
  */
 
 /* Offsets of a channel's rows in a block's interpolation data, read as one array of floats. */

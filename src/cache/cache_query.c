@@ -5,11 +5,11 @@
  * Interpolation is Křivánek et al. 2006 §3 eq. 1 for irradiance:
  *   E(p) = Σ_{i∈S} w_i(p) E_i(p) / Σ_{i∈S} w_i(p),
  *   E_i(p) = E_i + (n_i × n)·∇r E_i + (p − p_i)·∇t E_i   (per channel, clamped ≥ 0),
- * with Ward's or Tabellion–Lamorlette's weight (cache_internal.h: ic_record_weight). The set S comes
+ * with Ward's or Tabellion–Lamorlette's weight (cache_store.h: ic_record_weight). The set S comes
  * from a single root-to-leaf descent of the multiple-reference octree (Frolov et al. 2012 §4.3). A
  * frozen cache answers through the frozen layout instead (cache_frozen_query.c).
  */
-#include "cache_internal.h"
+#include "cache_store.h"
 
 #include <string.h>
 

@@ -27,7 +27,7 @@
  * for bit alike only if no a·b + c is fused into an FMA in one and not in another (intrinsics never
  * are). GCC in ISO C mode (-std=c11) does not contract; clang does where the target has FMA
  * (-march=native) unless told not to: here, before the inline arithmetic of the cache's headers
- * (cache_internal.h includes this one before core/vecmath.h). */
+ * (cache_store.h includes this one before core/vecmath.h). */
 #if defined(__clang__)
 #pragma STDC FP_CONTRACT OFF
 #endif

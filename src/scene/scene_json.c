@@ -2,7 +2,7 @@
  * scene_json.c — the JSON scene file (format: docs/scene-format.md), parsed with cJSON: reading the
  * file, its top level, and the "camera" and "render" sections. The other sections are read in
  * scene_json_mesh.c, scene_json_material.c and scene_json_light.c, all with the helpers of
- * scene_json_value.c (declared in scene_json_internal.h).
+ * scene_json_value.c (declared in json_context.h).
  *
  * Every message names the scene file and a line. cJSON keeps no positions, so a syntax error's line is
  * counted up to where the parser stopped, and a key's line is found by searching the text for `"key":`
@@ -12,7 +12,7 @@
  * restarting the search at its own key. Unknown keys are errors that list the valid ones: a typo
  * should not silently drop a setting. Keys starting with '_' are comments and ignored.
  */
-#include "scene/scene_json_internal.h"
+#include "scene/json_context.h"
 
 #include "core/vecmath.h"
 

@@ -2,7 +2,7 @@
  * scene_json_light.c — the "lights" (point and sun lights) and "environment" (constant radiance or an
  * equirectangular map) sections of the JSON scene file.
  */
-#include "scene/scene_json_internal.h"
+#include "scene/json_context.h"
 
 #include "core/vecmath.h"
 

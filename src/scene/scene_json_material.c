@@ -2,7 +2,7 @@
  * scene_json_material.c — the "materials" section of the JSON scene file: overrides of the materials
  * the meshes define, by name.
  */
-#include "scene/scene_json_internal.h"
+#include "scene/json_context.h"
 
 #include "core/vecmath.h"
 

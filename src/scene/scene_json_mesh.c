@@ -2,7 +2,7 @@
  * scene_json_mesh.c — the "meshes" section of the JSON scene file: each mesh file, placed by a
  * transform (translate, rotate, scale) or a 4x4 matrix, imported into the builder.
  */
-#include "scene/scene_json_internal.h"
+#include "scene/json_context.h"
 
 #include "core/vecmath.h"
 

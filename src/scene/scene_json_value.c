@@ -3,7 +3,7 @@
  * search that scene_json.c describes), messages that name the file and the line, typed values and
  * paths resolved against the scene file's directory or the shared scenes folder.
  */
-#include "scene/scene_json_internal.h"
+#include "scene/json_context.h"
 
 #include "core/vecmath.h"
 

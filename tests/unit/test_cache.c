@@ -23,7 +23,7 @@
  */
 #include "irrcache/cache.h"
 
-#include "cache/cache_internal.h" /* ic_cache_set_lookup_path */
+#include "cache/cache_store.h" /* ic_cache_set_lookup_path */
 #include "core/rng.h"
 #include "core/threads.h"
 #include "core/vecmath.h"

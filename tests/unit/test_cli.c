@@ -3,8 +3,9 @@
  * malformed JSON, a missing mesh or texture, an unknown material or option, NaN vertices, a zero-area
  * light, impossible option values, an unwritable output. Each must give a non-zero exit, a single
  * line on stderr that names the file (and line where there is one), no crash, and no output file;
- * an existing output is left untouched. Also: degenerate triangles are dropped (not an error), and a
- * good render writes every requested output and the stats JSON.
+ * an existing output is left untouched. Also: degenerate triangles are dropped (not an error), a
+ * good render writes every requested output and the stats JSON, and the JSON files stay valid JSON
+ * whatever bytes the scene path holds.
  */
 #include "test_util.h"
 
@@ -67,6 +68,62 @@ static void check_bad(const bad_case *c)
     CHECK(line_count(err_text) == 1, "%s: one line on stderr, got: %s", c->what, err_text);
     CHECK(strstr(err_text, c->must_name) != NULL, "%s: message names '%s': %s", c->what, c->must_name, err_text);
     CHECK(!file_exists(OUT), "%s: no output written", c->what);
+}
+
+/* The JSON files (--stats, --records-json) go through cJSON's writer: a scene path with a double quote,
+ * a backslash, control characters, non-ASCII UTF-8 and a byte that is not UTF-8 (written as U+FFFD)
+ * still gives valid JSON, and counts are integers. Checked on the bytes, and with Python's strict
+ * parser where python3 is installed. */
+#define ODD_DIR IC_TEST_TMP "/cli_q\"b\\s\x01" "c\td\ne_\xc3\xa9_\xe9"
+#define ODD_ESCAPED "cli_q\\\"b\\\\s\\u0001c\\td\\ne_\xc3\xa9_\xef\xbf\xbd/cornell-box.json\""
+#define ODD_STATS IC_TEST_TMP "/cli_odd_stats.json"
+#define ODD_RECORDS IC_TEST_TMP "/cli_odd_records.json"
+#define ODD_CHECK IC_TEST_TMP "/cli_odd_check.py"
+
+static void odd_path_json(void)
+{
+    unlink(ODD_DIR);
+    remove(ODD_STATS);
+    remove(ODD_RECORDS);
+    CHECK(symlink(IC_SOURCE_DIR "/scenes/cornell-box", ODD_DIR) == 0, "symlink to the odd folder");
+    int rc = run("render '" ODD_DIR "/cornell-box.json' -o " OUT " --integrator ic --width 16 --height 16 --spp 2 "
+                 "--rays 64 -q --stats " ODD_STATS " --records-json " ODD_RECORDS);
+    CHECK(rc == 0, "render through the odd path (exit %d: %s)", rc, err_text);
+    static char js[1 << 15];
+    FILE *f = fopen(ODD_STATS, "rb");
+    size_t n = f ? fread(js, 1, sizeof js - 1, f) : 0;
+    js[n] = 0;
+    if (f)
+        fclose(f);
+    CHECK(strstr(js, ODD_ESCAPED) != NULL, "the scene path is escaped: %.300s", js);
+    const char *rays = strstr(js, "\"rays\":\t");
+    CHECK(rays && strspn(rays + 8, "0123456789") > 0 && rays[8 + strspn(rays + 8, "0123456789")] == ',',
+          "rays is a plain integer: %.40s", rays ? rays : "(none)");
+    CHECK(js[0] == '{' && strstr(js, "\n\t\"spp\":\t2,\n"), "pretty-printed, one key a line: %.120s", js);
+
+    if (system("python3 -c '' >/dev/null 2>&1") != 0) {
+        printf("python3 not found: the strict JSON parse of the odd-path outputs is skipped\n");
+    } else {
+        f = fopen(ODD_CHECK, "w");
+        if (f) {
+            fputs("import json, sys\n"
+                  "s = json.load(open(sys.argv[1], encoding='utf-8'))\n"
+                  "r = json.load(open(sys.argv[2], encoding='utf-8'))\n"
+                  "want = 'cli_q\"b\\\\s\\x01c\\td\\ne_\\u00e9_\\ufffd/cornell-box.json'\n"
+                  "keys = {'x', 'y', 'z', 'radius', 'a', 'px', 'py', 'radius_px', 'visible'}\n"
+                  "ints = ['width', 'height', 'spp', 'threads', 'rays', 'records', 'passes', 'gather_rays']\n"
+                  "ok = (s['scene'].endswith(want) and s['integrator'] == 'ic'\n"
+                  "      and all(type(s[k]) is int for k in ints)\n"
+                  "      and all(type(v) is int for v in s['records_per_pass'])\n"
+                  "      and isinstance(r, list) and len(r) == s['records'] and all(set(x) == keys for x in r))\n"
+                  "sys.exit(0 if ok else 1)\n",
+                  f);
+            fclose(f);
+        }
+        CHECK(system("python3 " ODD_CHECK " " ODD_STATS " " ODD_RECORDS) == 0,
+              "stats and records parse as strict JSON with the exact path and integer counts");
+    }
+    unlink(ODD_DIR);
 }
 
 int main(void)
@@ -186,6 +243,8 @@ int main(void)
         CHECK(run(cmd) == 2 && strstr(err_text, "--large-emitters") && line_count(err_text) == 1 && !file_exists(OUT),
               "--large-emitters %s refused: %s", bad_shares[k], err_text);
     }
+
+    odd_path_json();
 
     /* Help lists every option with its default. */
     rc = run("render --help >" IC_TEST_TMP "/cli_help.txt");

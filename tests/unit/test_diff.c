@@ -128,6 +128,43 @@ int main(void)
           err.message);
     ic_image_free(&map);
 
+    /* The JSON parses (strictly: one object, nothing after it) with every metric a number, and a
+     * heat-map path with a quote, a backslash, control characters, UTF-8 and a non-UTF-8 byte comes
+     * back exactly (the byte as U+FFFD). */
+    const char *odd_heat = SCRATCH "/heat q\"b\\s\x01" "c\td_\xc3\xa9_\xe9.png";
+    const char *odd_heat_json = SCRATCH "/heat q\"b\\s\x01" "c\td_\xc3\xa9_\xef\xbf\xbd.png";
+    const char *odd[] = {off, ref, "--json", "--heatmap", odd_heat};
+    CHECK(run_diff(5, odd) == 0, "odd heat-map path: %s", err_text);
+    CHECK(one_line(out_text), "one JSON line: %s", out_text);
+    const char *end = NULL;
+    cJSON *parsed = cJSON_ParseWithOpts(out_text, &end, 0);
+    CHECK(cJSON_IsObject(parsed) && end && !strcmp(end, "\n"), "diff --json parses: %s", out_text);
+    const char *metric_keys[] = {"width", "height", "rmse", "relmse", "relmse_lowpass", "psnr_hdr", "psnr_ldr",
+                                 "ssim", "nonfinite"};
+    for (size_t k = 0; k < sizeof metric_keys / sizeof metric_keys[0]; ++k)
+        CHECK(cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(parsed, metric_keys[k])), "%s is a number: %s",
+              metric_keys[k], out_text);
+    const char *hm = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(parsed, "heatmap"));
+    CHECK(hm && !strcmp(hm, odd_heat_json), "heatmap path round-trips: %s", out_text);
+    CHECK(strstr(out_text, "\"width\":16,") && strstr(out_text, "\"nonfinite\":0"), "integers print as integers: %s",
+          out_text);
+    cJSON_Delete(parsed);
+    if (system("python3 -c '' >/dev/null 2>&1") == 0)
+        CHECK(system("python3 -c 'import json, sys; d = json.load(open(sys.argv[1], encoding=\"utf-8\")); "
+                     "sys.exit(0 if d[\"heatmap\"].endswith(\"_\\u00e9_\\ufffd.png\") else 1)' " SCRATCH
+                     "/stdout.txt") == 0,
+              "diff --json is strict JSON (python3): %s", out_text);
+    else
+        printf("python3 not found: the strict parse of diff --json is skipped\n");
+    remove(odd_heat);
+
+    /* `--` ends the options: what follows is an image path even if it starts with "--". */
+    const char *dashdash[] = {"--json", "--", off, ref};
+    CHECK(run_diff(4, dashdash) == 0 && out_text[0] == '{', "--json -- A B: %s", err_text);
+    const char *dash_path[] = {off, "--", "--json"};
+    CHECK(run_diff(3, dash_path) == 1 && one_line(err_text) && strstr(err_text, "--json") && out_text[0] == '\0',
+          "after --, --json is a file name: %s", err_text);
+
     /* The table. */
     const char *table[] = {off, ref};
     CHECK(run_diff(2, table) == 0, "table: %s", err_text);
@@ -141,6 +178,8 @@ int main(void)
     CHECK(strstr(out_text, "--json") && strstr(out_text, "--heatmap") && strstr(out_text, "--max-error") &&
               strstr(out_text, "default") && strstr(out_text, "999 in JSON"),
           "help: %s", out_text);
+    CHECK(strstr(out_text, "exit status: 0 success, 1 ") && strstr(out_text, "2 usage error"),
+          "help lists the exit codes: %s", out_text);
 
     /* Usage errors: exit 2, one line on stderr naming the culprit, nothing on stdout. */
     const char *unknown[] = {off, ref, "--bogus"};

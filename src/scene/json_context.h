@@ -1,10 +1,10 @@
 /*
- * scene_json_internal.h — what the files of the JSON scene front end share: the parse context, the
+ * json_context.h — what the files of the JSON scene front end share: the parse context, the
  * helpers every section reads with (scene_json_value.c) and the section parsers scene_json.c calls.
  * Not for the rest of the scene module.
  */
-#ifndef IC_SCENE_JSON_INTERNAL_H
-#define IC_SCENE_JSON_INTERNAL_H
+#ifndef IC_SCENE_JSON_CONTEXT_H
+#define IC_SCENE_JSON_CONTEXT_H
 
 #include "scene/scene_internal.h"
 

@@ -1,5 +1,5 @@
 /*
- * cache_internal.h — the cache's storage, the weight test and the estimate's last step, shared by the
+ * cache_store.h — the cache's storage, the weight test and the estimate's last step, shared by the
  * files of src/cache/ (cache.c, cache_query.c, cache_frozen_query.c, cache_frozen.c, cache_clamp.c,
  * cache_file.c). Not a public header.
  *
@@ -7,8 +7,8 @@
  * `sphere` (position, R_i) and `normal` (n_i, a_i), 32 bytes per record in two 16-byte-aligned
  * arrays; irradiance, gradients and the rest are read only for records that pass the weight test.
  */
-#ifndef IC_CACHE_INTERNAL_H
-#define IC_CACHE_INTERNAL_H
+#ifndef IC_CACHE_STORE_H
+#define IC_CACHE_STORE_H
 
 #include "irrcache/cache.h"
 #include "octree.h"

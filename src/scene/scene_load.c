@@ -1,0 +1,87 @@
+/*
+ * scene_load.c — ic_scene_load, the loading entry point: it picks the front end by extension. ".json"
+ * goes to scene_json.c; a bare mesh (.obj .gltf .glb .ply) is imported as is and gets a fitted camera
+ * and, when it has no emitter, a constant white sky (radiance 1), so any mesh renders without a scene
+ * file (docs/scene-format.md).
+ */
+#include "scene/scene_internal.h"
+
+#include "core/vecmath.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt,
+                                ic_error *err)
+{
+    if (!ic_path_exists(path)) {
+        char abs_path[IC_SCENE_PATH_MAX];
+        ic_path_absolute(path, abs_path, sizeof abs_path);
+        return ic_error_set(err, IC_ERR_IO, "%s: mesh not found (resolved to %s); check the path", path, abs_path);
+    }
+    ic_result r = ic_mesh_import(b, path, NULL, err);
+    if (r != IC_OK)
+        return r;
+    ic_scene *s = b->scene;
+    int has_emitter = 0;
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        if (!v3_is_black(s->materials[m].emission) && b->material_tris[m] > 0)
+            has_emitter = 1;
+    if (!has_emitter) {
+        s->env.enabled = 1;
+        s->env.radiance = v3s(1.0f);
+    }
+    r = ic_scene_finalize(b, err);
+    if (r != IC_OK)
+        return r;
+    ic_scene_fit_camera(s, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
+                        opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
+    return IC_OK;
+}
+
+ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_scene **out, ic_error *err)
+{
+    static const ic_scene_load_options defaults = {0};
+    if (!out)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_scene_load: no output pointer given");
+    *out = NULL;
+    if (!path || !*path)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "empty scene path; give a .json scene or a mesh file");
+    if (!opt)
+        opt = &defaults;
+    if (opt->width < 0 || opt->height < 0)
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s: resolution override %dx%d is negative; give positive width and height", path,
+                            opt->width, opt->height);
+    if (strlen(path) >= sizeof((ic_scene *)0)->path)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: path too long; use a shorter path", path);
+
+    ic_scene *s = calloc(1, sizeof *s);
+    if (!s)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    snprintf(s->path, sizeof s->path, "%s", path);
+    ic_scene_builder b;
+    memset(&b, 0, sizeof b);
+    b.scene = s;
+
+    char ext[16];
+    ic_path_extension(path, ext, sizeof ext);
+    ic_result r;
+    if (!strcmp(ext, ".json")) {
+        r = ic_scene_load_json(&b, path, opt, err);
+    } else if (!strcmp(ext, ".obj") || !strcmp(ext, ".gltf") || !strcmp(ext, ".glb") || !strcmp(ext, ".ply")) {
+        r = load_bare_mesh(&b, path, opt, err);
+    } else {
+        r = ic_error_set(err, IC_ERR_UNSUPPORTED,
+                         "%s: unknown scene type '%s'; give a .json scene or a .obj, .gltf, .glb or .ply mesh",
+                         path, ext);
+    }
+    ic_scene_builder_release(&b);
+    if (r != IC_OK) {
+        ic_scene_free(s);
+        return r;
+    }
+    *out = s;
+    return IC_OK;
+}
