@@ -5,10 +5,104 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+
+/* Length of the well-formed UTF-8 sequence at s (RFC 3629: no overlong forms, no surrogates, at most
+ * U+10FFFF), or 0 if s does not start one. s is NUL-terminated, so a cut sequence fails on the NUL. */
+static size_t utf8_sequence(const unsigned char *s)
+{
+    unsigned char c = s[0];
+    if (c < 0x80)
+        return 1;
+    unsigned char lo = 0x80, hi = 0xBF;
+    size_t n;
+    if (c >= 0xC2 && c <= 0xDF) {
+        n = 2;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+        n = 3;
+        lo = c == 0xE0 ? 0xA0 : 0x80;
+        hi = c == 0xED ? 0x9F : 0xBF;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+        n = 4;
+        lo = c == 0xF0 ? 0x90 : 0x80;
+        hi = c == 0xF4 ? 0x8F : 0xBF;
+    } else {
+        return 0;
+    }
+    if (s[1] < lo || s[1] > hi)
+        return 0;
+    for (size_t i = 2; i < n; ++i)
+        if (s[i] < 0x80 || s[i] > 0xBF)
+            return 0;
+    return n;
+}
+
+/* s with every byte that is not part of well-formed UTF-8 replaced by U+FFFD (allocated with
+ * cJSON_malloc), or NULL when s is already well-formed (or out of memory: *oom set). */
+static char *utf8_repaired(const char *s, int *oom)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    size_t n;
+    while (*p && (n = utf8_sequence(p)) > 0)
+        p += n;
+    if (!*p)
+        return NULL;
+    char *out = cJSON_malloc(3 * strlen(s) + 1), *q = out;
+    if (!out) {
+        *oom = 1;
+        return NULL;
+    }
+    for (p = (const unsigned char *)s; *p;) {
+        n = utf8_sequence(p);
+        if (n) {
+            memcpy(q, p, n);
+            q += n;
+            p += n;
+        } else {
+            memcpy(q, "\xEF\xBF\xBD", 3);
+            q += 3;
+            ++p;
+        }
+    }
+    *q = '\0';
+    return out;
+}
+
+/* cJSON escapes quotes, backslashes and control characters but copies other bytes as they are, and
+ * JSON text must be UTF-8: a path in another encoding (a Latin-1 file name) would make the whole file
+ * unreadable to a strict parser. Repairs every string value and key of the tree in place (the repaired
+ * text replaces the old, owned or not, and is freed by cJSON_Delete); 0 if out of memory. */
+static int repair_strings(cJSON *item)
+{
+    for (; item; item = item->next) {
+        int oom = 0;
+        if (cJSON_IsString(item) && item->valuestring) {
+            char *fixed = utf8_repaired(item->valuestring, &oom);
+            if (fixed) {
+                if (!(item->type & cJSON_IsReference))
+                    cJSON_free(item->valuestring);
+                item->type &= ~cJSON_IsReference; /* the repaired copy is the item's own */
+                item->valuestring = fixed;
+            }
+        }
+        if (!oom && item->string) {
+            char *fixed = utf8_repaired(item->string, &oom);
+            if (fixed) {
+                if (!(item->type & cJSON_StringIsConst))
+                    cJSON_free(item->string);
+                item->type &= ~cJSON_StringIsConst;
+                item->string = fixed;
+            }
+        }
+        if (oom || !repair_strings(item->child))
+            return 0;
+    }
+    return 1;
+}
 
 int ic_cli_write_json(const char *cmd, const char *path, cJSON *root, int pretty)
 {
-    char *text = !root ? NULL : pretty ? cJSON_Print(root) : cJSON_PrintUnformatted(root);
+    char *text = !root || !repair_strings(root) ? NULL : pretty ? cJSON_Print(root) : cJSON_PrintUnformatted(root);
     cJSON_Delete(root);
     if (!text) {
         fprintf(stderr, "irrcache %s: out of memory writing %s\n", cmd, path ? path : "JSON");
@@ -16,7 +110,9 @@ int ic_cli_write_json(const char *cmd, const char *path, cJSON *root, int pretty
     }
     int ok = 1;
     if (!path) {
-        ok = puts(text) >= 0;
+        ok = puts(text) >= 0 && fflush(stdout) == 0;
+        if (!ok)
+            fprintf(stderr, "irrcache %s: cannot write JSON to standard output\n", cmd);
     } else {
         ic_atomic_file f;
         ic_error err;

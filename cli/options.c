@@ -4,6 +4,8 @@
  */
 #include "options.h"
 
+#include "json_out.h"
+
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <stddef.h>
@@ -389,7 +391,7 @@ static cJSON *setting(const ic_cli_args *a, int id)
         return cJSON_CreateString(ic_cli_choice(a, (ic_arg_id)id));
     case IC_OPT_SEED:
         if (given)
-            return cJSON_CreateRaw(given); /* a validated decimal integer, exact */
+            return ic_cli_json_u64(a->render.seed); /* the parsed value, exact ("007" is no JSON number) */
         break;
     case IC_OPT_INT:
     case IC_OPT_FLOAT:
