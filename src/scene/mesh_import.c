@@ -218,8 +218,39 @@ static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_ma
     }
 }
 
+/* The folder an OBJ's materials name their textures from: that of its first `mtllib` file (the MTL
+ * format's rule), else the OBJ's own folder. */
+static void obj_material_dir(const char *obj_path, const char *obj_dir, char *out, size_t size)
+{
+    snprintf(out, size, "%s", obj_dir);
+    FILE *fp = fopen(obj_path, "r");
+    if (!fp)
+        return;
+    char line[4096];
+    while (fgets(line, sizeof line, fp)) {
+        const char *c = line;
+        while (*c == ' ' || *c == '\t')
+            ++c;
+        if (strncmp(c, "mtllib", 6) || (c[6] != ' ' && c[6] != '\t'))
+            continue;
+        c += 6;
+        while (*c == ' ' || *c == '\t')
+            ++c;
+        char name[IC_SCENE_PATH_MAX], mtl[IC_SCENE_PATH_MAX];
+        snprintf(name, sizeof name, "%s", c);
+        name[strcspn(name, "\r\n")] = 0;
+        if (name[0] && ic_path_join(obj_dir, name, mtl, sizeof mtl))
+            ic_path_dirname(mtl, out, size);
+        break;
+    }
+    fclose(fp);
+}
+
+/* mesh_dir: the mesh's folder; tex_dir: where its materials' texture paths start (an OBJ's MTL folder),
+ * tried first, then mesh_dir (exporters that write paths from the OBJ's folder). */
 static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, const float *gltf_strength,
-                                  const char *mesh_path, const char *mesh_dir, ic_material *m, ic_error *err)
+                                  const char *mesh_path, const char *mesh_dir, const char *tex_dir, ic_material *m,
+                                  ic_error *err)
 {
     memset(m, 0, sizeof *m);
     struct aiString name;
@@ -243,8 +274,11 @@ static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, 
             return ic_error_set(err, IC_ERR_UNSUPPORTED,
                                 "%s: embedded texture '%s' is not supported; export the textures as separate files",
                                 owner, rel);
-        if (!ic_path_join(mesh_dir, rel, full, sizeof full))
+        char alt[IC_SCENE_PATH_MAX];
+        if (!ic_path_join(tex_dir, rel, full, sizeof full) || !ic_path_join(mesh_dir, rel, alt, sizeof alt))
             return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
+        if (!ic_path_exists(full) && ic_path_exists(alt))
+            snprintf(full, sizeof full, "%s", alt);
         return ic_scene_texture_load(scene, full, owner, &m->kd_texture, err);
     }
     return IC_OK;
@@ -393,6 +427,11 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     ic_path_extension(mesh_path, ext, sizeof ext);
     ic_path_dirname(mesh_path, dir, sizeof dir);
     int is_gltf = !strcmp(ext, ".gltf") || !strcmp(ext, ".glb");
+    char tex_dir[IC_SCENE_PATH_MAX];
+    if (!strcmp(ext, ".obj"))
+        obj_material_dir(mesh_path, dir, tex_dir, sizeof tex_dir);
+    else
+        snprintf(tex_dir, sizeof tex_dir, "%s", dir);
     if (!strcmp(ext, ".obj")) {
         ic_result r = check_obj_vertices(mesh_path, err);
         if (r != IC_OK)
@@ -446,7 +485,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         } else {
             float one = 1.0f;
             const float *strength = !is_gltf ? NULL : (strengths ? &strengths[i] : &one);
-            r = convert_material(s, ai->mMaterials[i], strength, mesh_path, dir, m, err);
+            r = convert_material(s, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
             if (r != IC_OK)
                 goto done;
         }

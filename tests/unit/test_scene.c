@@ -182,6 +182,20 @@ static void test_degenerate_dropped(void)
     ic_scene_free(s);
 }
 
+/* An MTL in another folder than its OBJ: map_Kd is read from the MTL's folder (the MTL format's rule). */
+static void test_mtl_folder(void)
+{
+    ic_scene *s = load(SCENES "mtl_folder/quad.obj", NULL);
+    if (!s)
+        return;
+    int textured = 0;
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        textured += s->materials[m].kd_texture == 0;
+    CHECK(s->texture_count == 1 && s->textures[0].width == 2 && textured == 1,
+          "texture beside the MTL in a subfolder loaded");
+    ic_scene_free(s);
+}
+
 static void test_bare_mesh_and_queries(void)
 {
     ic_scene *s = load(SCENES "plain_quad.obj", NULL);
@@ -328,6 +342,7 @@ int main(void)
     test_fov_x_and_shared();
     test_degenerate_dropped();
     test_bare_mesh_and_queries();
+    test_mtl_folder();
     test_gltf_and_ply();
     test_texture_storage();
     TEST_MAIN_END();
