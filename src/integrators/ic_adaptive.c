@@ -623,14 +623,8 @@ ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, i
         memcpy(st->records_per_pass, res.records_per_pass, sizeof st->records_per_pass);
         /* Convergence overhead: the loop's time without gathering and insertion (Křivánek et al. 2006 Table 1). */
         double loop = (t2 - t1) - (pt->gather - before.gather) - (pt->insert - before.insert);
-        if (st->phase_count < IC_MAX_PHASES) {
-            st->phases[st->phase_count].name = "adaptive points";
-            st->phases[st->phase_count++].seconds = t1 - t0;
-        }
-        if (st->phase_count < IC_MAX_PHASES) {
-            st->phases[st->phase_count].name = "convergence";
-            st->phases[st->phase_count++].seconds = loop;
-        }
+        ic_stats_add_phase(st, "adaptive points", t1 - t0);
+        ic_stats_add_phase(st, "convergence", loop);
     }
     if (r == IC_OK && probe) {
         probe->point_count = A->npts;

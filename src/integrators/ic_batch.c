@@ -15,8 +15,6 @@
  */
 #include "ic_internal.h"
 
-#include "core/sampling.h"
-
 #include "core/threads.h"
 #include "film/film.h"
 #include "integrators/ic_screen.h"

@@ -5,12 +5,9 @@
  */
 #include "ic_internal.h"
 
-#include "irrcache/defaults.h"
-
-#include "core/sampling.h"
-
 #include "core/threads.h"
 #include "film/film.h"
+#include "irrcache/defaults.h"
 
 #include <stdatomic.h>
 #include <stdlib.h>

@@ -5,8 +5,6 @@
  */
 #include "ic_internal.h"
 
-#include "core/sampling.h"
-
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>

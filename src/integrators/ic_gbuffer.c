@@ -4,8 +4,6 @@
  */
 #include "ic_internal.h"
 
-#include "core/sampling.h"
-
 #include "core/threads.h"
 #include "film/film.h"
 

@@ -40,12 +40,6 @@ typedef struct ic_state {
     ic_ctx *c;
 } ic_state;
 
-static void add_phase(ic_render_stats *st, const char *name, double seconds)
-{
-    st->phases[st->phase_count].name = name;
-    st->phases[st->phase_count++].seconds = seconds;
-}
-
 /* The records: loaded (refused, with the cache library's message, when made for another scene, other
  * gathering settings or other cache parameters), or built and re-indexed. Adds construction's own time,
  * outside gathering, insertion and the phases a strategy reports itself, to *t_candidates. */
@@ -92,8 +86,6 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     if (r != IC_OK)
         return r;
     ic_ctx *c = s->c;
-    if (c->o.recursive && c->o.strategy != IC_STRATEGY_LAZY)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "recursive caching builds its levels lazily; use the lazy strategy");
     if ((r = make_records(s, st, &pt, &t_candidates, err)) != IC_OK)
         return r;
     if (c->o.save_cache && (r = ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), err)) != IC_OK)
@@ -112,10 +104,10 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
         return ic_error_set(err, r, "out of memory for the per-thread light tables");
     /* The final render's own phase follows (the driver adds it). */
     if (st->phase_count + 5 <= IC_MAX_PHASES) {
-        add_phase(st, "shading points", t_gbuffer);
-        add_phase(st, "candidates", t_candidates);
-        add_phase(st, "gathering", pt.gather);
-        add_phase(st, "insertion", pt.insert);
+        ic_stats_add_phase(st, "shading points", t_gbuffer);
+        ic_stats_add_phase(st, "candidates", t_candidates);
+        ic_stats_add_phase(st, "gathering", pt.gather);
+        ic_stats_add_phase(st, "insertion", pt.insert);
     }
     return IC_OK;
 }
@@ -180,5 +172,8 @@ ic_result ic_ic_integrator_create(const ic_tracer *tr, const ic_render_options *
         return ic_error_set(err, IC_ERR_OOM, "out of memory");
     s->tr = tr;
     s->opt = opt;
+    /* Checked before any construction work (the shading points alone take a pass over the image). */
+    if (opt->ic.recursive && opt->ic.strategy != IC_STRATEGY_LAZY)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "recursive caching builds its levels lazily; use the lazy strategy");
     return IC_OK;
 }

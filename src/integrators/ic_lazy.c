@@ -5,8 +5,6 @@
  */
 #include "ic_internal.h"
 
-#include "core/sampling.h"
-
 #include "film/film.h"
 
 #include <stdatomic.h>

@@ -53,6 +53,16 @@ ic_result ic_pt_integrator_create(const ic_tracer *tr, const ic_render_options *
 ic_result ic_ic_integrator_create(const ic_tracer *tr, const ic_render_options *opt, ic_integrator_obj *out,
                                   ic_error *err);
 
+/* Appends a phase to the statistics where there is room (IC_MAX_PHASES). */
+static inline void ic_stats_add_phase(ic_render_stats *st, const char *name, double seconds)
+{
+    if (st->phase_count < IC_MAX_PHASES) {
+        st->phases[st->phase_count].name = name;
+        st->phases[st->phase_count].seconds = seconds;
+        ++st->phase_count;
+    }
+}
+
 static inline void ic_integrator_destroy(ic_integrator_obj *it)
 {
     if (it->ops && it->self)

@@ -29,15 +29,6 @@ static const ic_integrator_create_fn integrators[] = {
 };
 #define INTEGRATOR_COUNT (sizeof integrators / sizeof integrators[0])
 
-static void add_phase(ic_render_stats *st, const char *name, double seconds)
-{
-    if (st->phase_count < IC_MAX_PHASES) {
-        st->phases[st->phase_count].name = name;
-        st->phases[st->phase_count].seconds = seconds;
-        ++st->phase_count;
-    }
-}
-
 /* Checks opt and fills its zero fields from the scene file and the defaults. */
 static ic_result resolve_options(const ic_scene *scene, ic_render_options *opt, ic_error *err)
 {
@@ -84,7 +75,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     ic_accel *accel = NULL;
     if ((r = ic_accel_create(scene, &accel, err)) != IC_OK)
         return r;
-    add_phase(st, "accel", ic_seconds() - t0);
+    ic_stats_add_phase(st, "accel", ic_seconds() - t0);
 
     ic_tracer tr;
     tr.scene = scene;
@@ -119,7 +110,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         r = ic_render_image(&loop, it.ops->sample, it.self, out, &lr, err);
     }
     if (r == IC_OK) {
-        add_phase(st, it.ops->stats_phase, lr.seconds);
+        ic_stats_add_phase(st, it.ops->stats_phase, lr.seconds);
         st->rays += lr.rays;
         st->spp = lr.spp_done;
         st->spp_max = lr.spp_max;

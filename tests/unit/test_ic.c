@@ -210,6 +210,11 @@ static void test_threads(void)
             bad.adaptive_sampling = (ic_cache_switch)7;
             CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "adaptive_sampling 7 refused");
             ic_image_free(&none);
+            bad = o;
+            bad.ic.recursive = 1;
+            bad.ic.strategy = IC_STRATEGY_BATCH;
+            CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "recursive caching with the batch strategy refused");
+            ic_image_free(&none);
         }
         CHECK(ok && memcmp(a.rgb, b.rgb, sizeof(float) * 3 * 48 * 48) == 0,
               "variant %d: 1 and 2 threads give identical images", variant);
