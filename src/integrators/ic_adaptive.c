@@ -484,16 +484,17 @@ static ic_result add_records(adaptive *A, phase_times *pt, ic_error *err)
     ic_gather_point *gp = malloc(sizeof *gp * (n ? n : 1));
     ic_gather_result *gr = malloc(sizeof *gr * (n ? n : 1));
     ic_record *recs = malloc(sizeof *recs * (n ? n : 1));
+    ic_vec3 *levels = c->levels ? malloc(sizeof *levels * ((size_t)c->levels + 1) * (n ? n : 1)) : NULL;
     ic_result r = IC_OK;
     uint32_t first = ic_cache_count(c->cache);
-    if (!gp || !gr || !recs) {
+    if (!gp || !gr || !recs || (c->levels && !levels)) {
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u adaptive records", n);
         goto done;
     }
     for (uint32_t k = 0; k < n; ++k)
         gp[k] = ic_ic_gather_point_of(&A->cand[k]);
     double t0 = ic_seconds();
-    r = ic_gather_batch(&c->o.gather, ic_ic_gather_trace, c, c->threads, gp, n, gr, err);
+    r = ic_ic_gather_points(c, gp, n, gr, levels, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     if (r != IC_OK)
@@ -503,6 +504,8 @@ static ic_result add_records(adaptive *A, phase_times *pt, ic_error *err)
         recs[k].accuracy = A->cand_a[k];
     }
     r = ic_cache_insert_batch(c->cache, recs, n, &first, err);
+    if (r == IC_OK)
+        r = ic_ic_keep_levels(c, first, n, levels, err);
     if (r == IC_OK)
         r = refresh_records(A, err);
     pt->insert += ic_seconds() - t1;
@@ -524,6 +527,7 @@ done:
     free(gp);
     free(gr);
     free(recs);
+    free(levels);
     return r;
 }
 

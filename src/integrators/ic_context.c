@@ -89,7 +89,9 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     c->gather_tr = *tr;
     c->gather_tr.pt.max_depth = c->o.bounces + 1;
     /* With one bounce a hemisphere ray returns its hit's direct light alone; records hold more. */
-    c->hit_lookups = !c->o.path_traced_gather && !c->o.recursive && c->o.bounces > 1;
+    c->hit_lookups = !c->o.path_traced_gather && !c->o.recursive && c->o.bounces > 1 &&
+                     c->o.bounces <= IC_LEVELS_MAX;
+    c->levels = c->hit_lookups ? c->o.bounces : 0;
     c->o.gather.seed ^= opt->seed;
     c->o.cache.threads = opt->threads;
     ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);
@@ -116,6 +118,7 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     ic_ic_gbuffer_free(c);
     free(c->direct_pmf);
     free(c->direct_cdf);
+    free(c->level_irr);
     free(c);
 }
 
@@ -161,9 +164,11 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
     h = ic_fnv1a64(h, &c->cached_emitters, sizeof c->cached_emitters);
     if (c->direct_pmf)
         h = ic_fnv1a64(h, c->direct_pmf, sizeof *c->direct_pmf * s->tri_light_count);
-    int32_t g[9] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
-                    (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
-                    (int32_t)c->o.strategy, c->hit_lookups};
+    /* levels: hit look-ups that keep the bounce count exact (records of older builds took every bounce
+     * of the records they met). */
+    int32_t g[10] = {c->o.bounces, c->o.no_gradients, (int32_t)c->o.gather.method, (int32_t)c->o.gather.theta_strata,
+                     (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
+                     (int32_t)c->o.strategy, c->hit_lookups, c->levels};
     /* The seed is left out on purpose: records built with one seed are as valid as any others, and a
      * cache re-used with a new seed renders an independent final image over the same records. */
     return ic_fnv1a64(h, g, sizeof g);

@@ -5,6 +5,8 @@
  */
 #include "ic_internal.h"
 
+#include "core/threads.h"
+
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,14 +34,22 @@ ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *
 /* Radiance leaving a hemisphere ray's hit towards the record, with the cache standing in for the
  * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light by
  * the final render's estimator (records hold no light of the emitters it samples; ic_ic_direct_light
- * adds it). This is Ward's multiple-bounce scheme (the ambient value of a point is its records' interpolation, Radiance's
- * -ab) inside the batch passes: a pass's records serve the next passes' rays, and the world-space
- * stage puts records where these rays land (Frolov et al. 2012 §3.1.3), which is what makes the look-ups hit;
- * it cuts record cost, which Frolov et al. 2012 §4.6 measures as most of the construction time. Only purely
- * diffuse hits are taken (a glossy hit needs its lobe traced); returns 0 where no record reaches, and
- * the caller path-traces. Deterministic: within a pass the cache is read-only. */
+ * adds it). This is Ward's multiple-bounce scheme (the ambient value of a point is its records'
+ * interpolation, Radiance's -ab) inside the batch passes: a pass's records serve the next passes' rays,
+ * and the world-space stage puts records where these rays land (Frolov et al. 2012 §3.1.3), which is
+ * what makes the look-ups hit; it cuts record cost, which Frolov et al. 2012 §4.6 measures as most of
+ * the construction time. Only purely diffuse hits are taken (a glossy hit needs its lobe traced);
+ * returns 0 where no record reaches, and the caller path-traces. Deterministic: within a pass the cache
+ * is read-only.
+ *
+ * The bounce count stays exact: the records met here hold B bounces of their own, and a ray of a record
+ * that is to hold B bounces may take only B − 1 of them. Each record keeps its irradiance split by level
+ * (T_k, ic_ctx.level_irr), and the look-up reads the interpolation of T_{k−1} for every level k the
+ * ray reports: each contributor's gradient-extrapolated value scaled per channel by its T_{k−1}/E_i, the
+ * same weights as the full estimate. cum[k] (k = 1…B) gets the light of at most k bounces after the
+ * record; cum[B] is what the ray returns. */
 static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
-                          ic_vec3 *radiance)
+                          ic_vec3 *cum)
 {
     const ic_scene *scene = c->tr->scene;
     ic_surface s;
@@ -49,22 +59,51 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_bsdf_init(&b, scene, &s, wo);
     if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
         return 0;
+    ic_cache_contribution contrib[LOOKUP_CAPACITY];
     ic_cache_lookup q = ic_cache_lookup_at(s.p, b.frame.n, IC_ACCEPT_FINAL);
+    q.contributions = contrib;
+    q.contribution_capacity = LOOKUP_CAPACITY;
     ic_cache_estimate e;
     if (!ic_cache_query(c->cache, &q, &e))
         return 0;
-    *radiance = v3_add(v3_mul(v3_scale(b.kd, IC_INV_PI), e.irradiance), ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays));
+    ic_vec3 albedo = v3_scale(b.kd, IC_INV_PI);
+    ic_vec3 direct = ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays);
+    const int B = c->levels;
+    ic_vec3 E[IC_LEVELS_MAX];
+    for (int k = 0; k < B; ++k)
+        E[k] = v3s(0.0f);
+    float wsum = 0.0f;
+    for (uint32_t i = 0; i < e.contributions_written; ++i) {
+        const ic_cache_contribution *ct = &contrib[i];
+        const ic_vec3 *T = &c->level_irr[(size_t)ct->record * (size_t)(B + 1)];
+        const float tb[3] = {T[B].x, T[B].y, T[B].z}, v[3] = {ct->value.x, ct->value.y, ct->value.z};
+        for (int k = 0; k < B; ++k) {
+            const float tk[3] = {T[k].x, T[k].y, T[k].z};
+            float x[3];
+            for (int ch = 0; ch < 3; ++ch)
+                x[ch] = tb[ch] > 0.0f ? ct->weight * v[ch] * (tk[ch] / tb[ch]) : 0.0f;
+            E[k] = v3_add(E[k], v3(x[0], x[1], x[2]));
+        }
+        wsum += ct->weight;
+    }
+    float inv = wsum > 0.0f ? 1.0f / wsum : 0.0f;
+    for (int k = 1; k <= B; ++k)
+        cum[k] = v3_add(direct, v3_mul(albedo, v3_scale(E[k - 1], inv)));
     return 1;
 }
 
 /* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
  * is seeded from the ray itself (origin and direction bits), so it does not depend on which batch or
- * thread traced it. */
+ * thread traced it. With levels, each ray's light is also split by bounce level into the worker's sums:
+ * the environment and large emitters' light at level 0 and up, a look-up's by hit_from_cache, a
+ * path-traced ray's by the scattering events after the record (ic_path_start.levels). */
 void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
                          ic_vec3 *radiance)
 {
-    ic_ctx *c = user;
+    ic_gather_worker *w = user;
+    ic_ctx *c = w->c;
     const ic_tracer *tr = &c->gather_tr;
+    const int B = c->levels;
     enum { CHUNK = 256 };
     ic_ray rays[CHUNK];
     ic_hit hits[CHUNK];
@@ -81,9 +120,14 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
         nrays += n;
         for (uint32_t i = 0; i < n; ++i) {
             uint32_t j = base + i;
+            ic_vec3 cum[IC_LEVELS_MAX + 1];
             if (hits[i].triangle == IC_NO_HIT) {
                 hit_dist[j] = INFINITY;
                 radiance[j] = ic_scene_env_radiance(tr->scene, rays[i].dir);
+                for (int k = 0; k < B; ++k)
+                    w->sum[k] = v3_add(w->sum[k], radiance[j]);
+                if (B)
+                    w->sum[B] = v3_add(w->sum[B], radiance[j]);
                 continue;
             }
             hit_dist[j] = hits[i].t;
@@ -96,17 +140,150 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             bits.f[5] = rays[i].dir.z;
             ic_rng rng = ic_rng_make(c->seed ^ 0x6761746865720000ULL, ((uint64_t)bits.u[0] << 32) | bits.u[1],
                                      ((uint64_t)bits.u[2] << 32) | bits.u[3], ((uint64_t)bits.u[4] << 32) | bits.u[5]);
-            if (!c->hit_lookups || !hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, &radiance[j])) {
+            if (c->hit_lookups && hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, cum)) {
+                radiance[j] = cum[B];
+            } else {
                 /* The hit is the path's second vertex (the record is the first): depth 1. Its emission
                  * is direct light of the record's point, delivered by NEE in the final render. */
-                ic_path_start st = {1, 0.0f, 1, 1, NULL};
+                ic_vec3 by_events[IC_LEVELS_MAX + 1];
+                for (int k = 0; k <= B; ++k)
+                    by_events[k] = v3s(0.0f);
+                ic_path_start st = {1, 0.0f, 1, 1, NULL, B ? by_events : NULL};
                 radiance[j] = ic_pt_li_hit(tr, rays[i], &hits[i], &st, &rng, &nrays);
+                if (B) {
+                    cum[0] = by_events[0];
+                    for (int k = 1; k <= B; ++k)
+                        cum[k] = v3_add(cum[k - 1], by_events[k]);
+                }
             }
-            /* ... unless it comes from a large emitter, which the records carry. */
-            radiance[j] = v3_add(radiance[j], ic_ic_cached_emission(c, &rays[i], &hits[i]));
+            /* ... unless it comes from a large emitter, which the records carry (level 0). */
+            ic_vec3 emitted = ic_ic_cached_emission(c, &rays[i], &hits[i]);
+            radiance[j] = v3_add(radiance[j], emitted);
+            if (B) {
+                w->sum[0] = v3_add(w->sum[0], emitted);
+                for (int k = 1; k < B; ++k)
+                    w->sum[k] = v3_add(w->sum[k], v3_add(cum[k], emitted));
+                w->sum[B] = v3_add(w->sum[B], radiance[j]);
+            }
         }
     }
     atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
+}
+
+ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
+                           ic_vec3 *levels)
+{
+    const int B = w->c->levels;
+    for (int k = 0; k <= B; ++k)
+        w->sum[k] = v3s(0.0f);
+    ic_result r = w->c->o.gather.method == IC_GATHER_PROGRESSIVE ? ic_gather_progressive(g, pt, 1, out)
+                                                                 : ic_gather_stratified(g, pt, out);
+    if (r != IC_OK || !B || !levels)
+        return r;
+    /* The stratified estimate is π/(MN) times the sum of the rays' radiance, so scaling E by each
+     * level's share of that sum gives the level's own estimate exactly (progressive: its rounds' share). */
+    const float e[3] = {out->irradiance.x, out->irradiance.y, out->irradiance.z};
+    const float all[3] = {w->sum[B].x, w->sum[B].y, w->sum[B].z};
+    for (int k = 0; k < B; ++k) {
+        const float part[3] = {w->sum[k].x, w->sum[k].y, w->sum[k].z};
+        float t[3];
+        for (int ch = 0; ch < 3; ++ch)
+            t[ch] = all[ch] > 0.0f ? e[ch] * fminf(fmaxf(part[ch] / all[ch], 0.0f), 1.0f) : 0.0f;
+        levels[k] = v3(t[0], t[1], t[2]);
+    }
+    levels[B] = out->irradiance;
+    return IC_OK;
+}
+
+/* Points per work item of ic_ic_gather_points: enough to amortise scheduling, small enough to balance. */
+#define GATHER_CHUNK_POINTS 8u
+
+typedef struct gather_job {
+    ic_ctx *c;
+    ic_gather_worker *workers;   /* one per thread */
+    ic_gatherer **gatherers;     /* one per thread */
+    const ic_gather_point *pts;
+    ic_gather_result *out;
+    ic_vec3 *levels;
+    uint32_t count;
+    atomic_int status;           /* first failure, IC_OK if none */
+} gather_job;
+
+static void gather_item(void *p, int64_t item, int thread)
+{
+    gather_job *j = p;
+    uint32_t first = (uint32_t)item * GATHER_CHUNK_POINTS;
+    uint32_t end = j->count - first < GATHER_CHUNK_POINTS ? j->count : first + GATHER_CHUNK_POINTS;
+    size_t stride = (size_t)j->c->levels + 1;
+    for (uint32_t i = first; i < end; ++i) {
+        ic_result r = ic_ic_gather_one(&j->workers[thread], j->gatherers[thread], &j->pts[i], &j->out[i],
+                                       j->levels ? &j->levels[i * stride] : NULL);
+        if (r != IC_OK) {
+            int expected = IC_OK;
+            atomic_compare_exchange_strong(&j->status, &expected, (int)r);
+            return;
+        }
+    }
+}
+
+ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
+                              ic_vec3 *levels, ic_error *err)
+{
+    if (count == 0)
+        return IC_OK;
+    int64_t items = ((int64_t)count + GATHER_CHUNK_POINTS - 1) / GATHER_CHUNK_POINTS;
+    int threads = c->threads < items ? c->threads : (int)items;
+    gather_job j;
+    memset(&j, 0, sizeof j);
+    j.c = c;
+    j.pts = pts;
+    j.out = out;
+    j.levels = levels;
+    j.count = count;
+    atomic_init(&j.status, IC_OK);
+    j.workers = calloc((size_t)threads, sizeof *j.workers);
+    j.gatherers = calloc((size_t)threads, sizeof *j.gatherers);
+    ic_result r = j.workers && j.gatherers ? IC_OK : ic_error_set(err, IC_ERR_OOM, "out of memory for gatherers");
+    for (int t = 0; t < threads && r == IC_OK; ++t) {
+        j.workers[t].c = c;
+        r = ic_gatherer_create(&c->o.gather, ic_ic_gather_trace, &j.workers[t], &j.gatherers[t], err);
+    }
+    if (r == IC_OK) {
+        r = ic_parallel_for(threads, items, gather_item, &j);
+        if (r != IC_OK)
+            ic_error_set(err, r, "could not start %d gathering threads", threads);
+        else if ((r = (ic_result)atomic_load(&j.status)) != IC_OK)
+            ic_error_set(err, r, "gathering a record failed (%s): a shading point with a zero normal or a "
+                         "non-finite position", ic_result_name(r));
+    }
+    for (int t = 0; j.gatherers && t < threads; ++t)
+        ic_gatherer_destroy(j.gatherers[t]);
+    free(j.gatherers);
+    free(j.workers);
+    return r;
+}
+
+ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_vec3 *levels, ic_error *err)
+{
+    if (!c->levels || count == 0)
+        return IC_OK;
+    if (first != c->level_records)
+        return ic_error_set(err, IC_ERR_INTERNAL, "bounce levels out of step with the records (%u, %u)", first,
+                            c->level_records);
+    size_t stride = (size_t)c->levels + 1;
+    if (first + count > c->level_capacity) {
+        uint32_t cap = c->level_capacity ? c->level_capacity : 1024;
+        while (cap < first + count)
+            cap *= 2;
+        ic_vec3 *grown = realloc(c->level_irr, sizeof *grown * stride * cap);
+        if (!grown)
+            return ic_error_set(err, IC_ERR_OOM, "out of memory for the records' bounce levels");
+        c->level_irr = grown;
+        c->level_capacity = cap;
+    }
+    memcpy(&c->level_irr[(size_t)first * stride], levels, sizeof *levels * stride * count);
+    c->level_records = first + count;
+    return IC_OK;
 }
 
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec)
@@ -162,30 +339,36 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
 {
     if (count == 0)
         return IC_OK;
+    size_t stride = (size_t)c->levels + 1;
     ic_gather_point *pts = malloc(sizeof *pts * count);
     ic_gather_result *res = malloc(sizeof *res * count);
     ic_record *recs = malloc(sizeof *recs * count);
+    ic_vec3 *levels = c->levels ? malloc(sizeof *levels * stride * count) : NULL;
     ic_result r = IC_OK;
-    if (!pts || !res || !recs) {
+    if (!pts || !res || !recs || (c->levels && !levels)) {
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u cache candidates", count);
         goto done;
     }
     for (uint32_t i = 0; i < count; ++i)
         pts[i] = ic_ic_gather_point_of(&cand[i]);
     double t0 = ic_seconds();
-    r = ic_gather_batch(&c->o.gather, ic_ic_gather_trace, c, c->threads, pts, count, res, err);
+    r = ic_ic_gather_points(c, pts, count, res, levels, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     if (r != IC_OK)
         goto done;
     for (uint32_t i = 0; i < count; ++i)
         ic_ic_record_from_gather(c, &cand[i], &res[i], &recs[i]);
-    r = ic_cache_insert_batch(c->cache, recs, count, NULL, err);
+    uint32_t first = 0;
+    r = ic_cache_insert_batch(c->cache, recs, count, &first, err);
+    if (r == IC_OK)
+        r = ic_ic_keep_levels(c, first, count, levels, err);
     pt->insert += ic_seconds() - t1;
 done:
     free(pts);
     free(res);
     free(recs);
+    free(levels);
     return r;
 }
 

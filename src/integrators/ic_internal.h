@@ -24,6 +24,8 @@
 #define WORLD_SLOTS 4 /* look-up points kept per world-stage eye path */
 #define PAD 8         /* uint64 slots between per-thread counters: no false sharing */
 #define LOOKUP_CAPACITY 64 /* contributions read back from one cache look-up (adaptive, amap) */
+#define IC_LEVELS_MAX 16   /* most bounces whose levels records keep apart for hit look-ups (beyond:
+                              hemisphere rays are path-traced) */
 
 typedef struct ic_ctx {
     const ic_tracer *tr;       /* scene, accel, path-tracing parameters of the final render */
@@ -38,6 +40,13 @@ typedef struct ic_ctx {
     ic_gbuffer g;
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
+    int levels;                /* with hit_lookups: bounces B, whose levels the records keep apart;
+                                  else 0 */
+    ic_vec3 *level_irr;        /* (levels + 1) entries per record, in record order: T_k, the record's
+                                  irradiance carried by light of at most k bounces after it (k = 0 is
+                                  the large emitters' and the environment's own light), T_B = E_i */
+    uint32_t level_records;    /* records level_irr holds */
+    uint32_t level_capacity;   /* records it has room for */
     ic_light_selection light_sel; /* final render: triangle and point lights only (the sun is taken
                                      every time, the environment is in the records), and of the
                                      triangles only those not cached (direct_pmf) */
@@ -60,9 +69,28 @@ typedef struct phase_times {
  * primary hit's distance. Returns 0 if the ray escapes or is absorbed. */
 int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf *b, ic_vec3 *wo, float *t_primary,
                         uint64_t *rays);
-/* Trace callback of hemisphere gathering (ic_trace_fn; user = ic_ctx): see ic.h for what it returns. */
+/* What one gathering thread's trace callback needs: the context and, with c->levels, the sums over
+ * the current point's rays of their radiance split by bounce level (cumulative: sum[k] holds light of at
+ * most k bounces after the record, sum[levels] all of it). The caller zeroes sum before each point. */
+typedef struct ic_gather_worker {
+    ic_ctx *c;
+    ic_vec3 sum[IC_LEVELS_MAX + 1];
+} ic_gather_worker;
+/* Trace callback of hemisphere gathering (ic_trace_fn; user = ic_gather_worker): see ic.h for what it
+ * returns. */
 void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
                         ic_vec3 *radiance);
+/* Gathers one point with w's gatherer g (the method of c's options); with c->levels, also its level
+ * split: levels[k] = T_k for k = 0…c->levels (may be NULL without levels). */
+ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
+                           ic_vec3 *levels);
+/* Gathers count points in parallel (one gatherer per thread; each point's result depends only on the
+ * seed and its key, never on the thread count); levels: (c->levels + 1) entries per point, or NULL. */
+ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
+                              ic_vec3 *levels, ic_error *err);
+/* Keeps the level split of records first…first+count−1 (they must follow the last kept one); a no-op
+ * without levels. */
+ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_vec3 *levels, ic_error *err);
 /* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
 /* Gather point (offset origin, normal, key) of a candidate. */

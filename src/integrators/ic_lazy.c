@@ -28,6 +28,7 @@ typedef struct lazy_state {
     ic_ctx *c;
     ic_gatherer *g[MAX_LEVELS];
     lazy_level levels[MAX_LEVELS];
+    ic_gather_worker worker;   /* the non-recursive gatherer's (bounce levels of hit look-ups) */
     int level_count;
     phase_times *pt;
     ic_result status;          /* first failure inside the recursion (gathering or insertion) */
@@ -115,6 +116,7 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
     lazy_state ls;
     memset(&ls, 0, sizeof ls);
     ls.c = c;
+    ls.worker.c = c;
     ls.pt = pt;
     ls.level_count = c->o.recursive ? (c->o.bounces < MAX_LEVELS ? c->o.bounces : MAX_LEVELS) : 1;
     ic_result r = IC_OK;
@@ -123,7 +125,7 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
         ls.levels[k].level = k;
         ls.levels[k].state = &ls;
         r = c->o.recursive ? ic_gatherer_create(&c->o.gather, recursive_trace, &ls.levels[k], &ls.g[k], err)
-                           : ic_gatherer_create(&c->o.gather, ic_ic_gather_trace, c, &ls.g[k], err);
+                           : ic_gatherer_create(&c->o.gather, ic_ic_gather_trace, &ls.worker, &ls.g[k], err);
     }
     size_t npix = (size_t)c->g.width * c->g.height;
     double t_insert = 0.0, t0 = ic_seconds();
@@ -142,8 +144,11 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
             ic_candidate cd = ic_ic_candidate_at_pixel(c, (uint32_t)i, (uint64_t)round);
             ic_gather_point gp = ic_ic_gather_point_of(&cd);
             ic_gather_result gr;
-            r = c->o.gather.method == IC_GATHER_PROGRESSIVE ? ic_gather_progressive(ls.g[0], &gp, 1, &gr)
-                                                            : ic_gather_stratified(ls.g[0], &gp, &gr);
+            ic_vec3 levels[IC_LEVELS_MAX + 1];
+            r = c->o.recursive ? (c->o.gather.method == IC_GATHER_PROGRESSIVE
+                                      ? ic_gather_progressive(ls.g[0], &gp, 1, &gr)
+                                      : ic_gather_stratified(ls.g[0], &gp, &gr))
+                               : ic_ic_gather_one(&ls.worker, ls.g[0], &gp, &gr, levels);
             if (r != IC_OK) {
                 ic_error_set(err, r, "gathering failed at pixel %zu", i);
                 break;
@@ -155,7 +160,10 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
             ic_record rec;
             ic_ic_record_from_gather(c, &cd, &gr, &rec);
             double t1 = ic_seconds();
-            r = ic_cache_insert(c->cache, &rec, NULL, err);
+            uint32_t index = 0;
+            r = ic_cache_insert(c->cache, &rec, &index, err);
+            if (r == IC_OK)
+                r = ic_ic_keep_levels(c, index, 1, levels, err);
             t_insert += ic_seconds() - t1;
             ++added;
         }

@@ -57,6 +57,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
     int prev_specular = st->is_specular;
     int skip_emission = st->skip_first_emission;
     ic_vec3 prev_p = ray.org;
+    ic_vec3 *levels = st->levels;
     for (int depth = st->depth;; ++depth) {
         ic_hit hit;
         if (first_hit) {
@@ -72,7 +73,10 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
                 float w = 1.0f;
                 if (!prev_specular && prev_pdf > 0.0f)
                     w = ic_power_heuristic(prev_pdf, ic_scene_light_pdf_env(scene, ray.dir));
-                L = v3_add(L, v3_scale(v3_mul(beta, le), w));
+                ic_vec3 c = v3_scale(v3_mul(beta, le), w);
+                L = v3_add(L, c);
+                if (levels)
+                    levels[depth - st->depth] = v3_add(levels[depth - st->depth], c);
             }
             break;
         }
@@ -86,13 +90,19 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
             if (!prev_specular && prev_pdf > 0.0f)
                 w = ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle_sel(scene, prev_sel, prev_p, hit.triangle,
                                                                                   ray.dir, hit.t));
-            L = v3_add(L, v3_scale(v3_mul(beta, le), w));
+            ic_vec3 c = v3_scale(v3_mul(beta, le), w);
+            L = v3_add(L, c);
+            if (levels)
+                levels[depth - st->depth] = v3_add(levels[depth - st->depth], c);
         }
         if (depth >= tr->pt.max_depth)
             break;
         ic_bsdf b;
         ic_bsdf_init(&b, scene, &s, wo);
-        L = v3_add(L, v3_mul(beta, ic_direct_light(tr, &s, &b, wo, sel, rng, rays)));
+        ic_vec3 direct = v3_mul(beta, ic_direct_light(tr, &s, &b, wo, sel, rng, rays));
+        L = v3_add(L, direct);
+        if (levels)
+            levels[depth - st->depth + 1] = v3_add(levels[depth - st->depth + 1], direct);
         prev_sel = sel;
         sel = &scene->light_select;
         ic_bsdf_sample bs;
@@ -113,7 +123,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
 
 ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
-    ic_path_start st = {0, 0.0f, 1, 0, sel};
+    ic_path_start st = {0, 0.0f, 1, 0, sel, NULL};
     return ic_pt_li_from(tr, ray, &st, rng, rays);
 }
 

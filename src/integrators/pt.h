@@ -69,6 +69,9 @@ typedef struct ic_path_start {
                                 computed elsewhere: hemisphere rays of the irradiance cache) */
     const ic_light_selection *first_sel; /* light selection at the path's first vertex (a pixel's local
                                             distribution); NULL: the scene's, as at every later vertex */
+    ic_vec3 *levels;       /* optional (NULL: none), max_depth − depth + 1 entries: each contribution is
+                              also added to levels[k], k the scattering events it made after the ray's
+                              origin (emission found at the first hit: 0; that hit's light sample: 1) */
 } ic_path_start;
 
 /* Path-traced radiance arriving at the ray's origin along ray, continuing a path described by st. */
