@@ -1,0 +1,104 @@
+/*
+ * test_interiors.c — the project's interior scenes (scenes/interiors/README.md) load and render: each at a
+ * tiny size with the path tracer and with the irradiance cache gives a finite image that is not black, so
+ * light reaches the camera through the door gap (door-ajar) and the windows (sky-room). Also checks what
+ * each scene is meant to test: door-ajar's only emitter is in the far room, sky-room has no emitter but the
+ * sky, and the meshes stay small.
+ */
+#include "test_util.h"
+
+#include "test_render_util.h"
+
+#include "scene/scene.h"
+
+#include <string.h>
+
+#define INTERIORS IC_SOURCE_DIR "/scenes/interiors/"
+
+static ic_scene *load(const char *path)
+{
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    ic_result r = ic_scene_load(path, NULL, &s, &err);
+    CHECK(r == IC_OK && s, "%s: %s", path, err.message);
+    return r == IC_OK ? s : NULL;
+}
+
+/* Mean Rec. 709 luminance; *finite is 0 if any value is NaN or infinite. */
+static double mean_luminance(const ic_image *img, int *finite)
+{
+    double s = 0.0;
+    size_t n = (size_t)img->width * (size_t)img->height;
+    *finite = 1;
+    for (size_t i = 0; i < n; ++i) {
+        const float *p = img->rgb + 3 * i;
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
+            *finite = 0;
+        s += 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    }
+    return n ? s / (double)n : 0.0;
+}
+
+static void test_renders(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, INTERIORS "%s.json", name);
+    for (int k = 0; k < 2; ++k) {
+        ic_render_options opt = {0};
+        opt.integrator = k ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT;
+        opt.spp = 4;
+        ic_image img = {0};
+        ic_render_stats stats;
+        int ok = test_render(path, 40, 30, &opt, &img, &stats);
+        CHECK(ok, "%s renders with %s", name, k ? "ic" : "pt");
+        if (ok) {
+            int finite;
+            double mean = mean_luminance(&img, &finite);
+            printf("%s %s 40x30 4 spp: mean luminance %.5g, %.2f s\n", name, k ? "ic" : "pt", mean, stats.seconds);
+            CHECK(finite, "%s %s: every pixel is finite", name, k ? "ic" : "pt");
+            CHECK(mean > 0.0, "%s %s: the image is black (mean luminance %g)", name, k ? "ic" : "pt", mean);
+        }
+        ic_image_free(&img);
+    }
+}
+
+static void test_what_they_test(void)
+{
+    ic_scene *s = load(INTERIORS "door-ajar.json");
+    if (s) {
+        /* the near room is x < 4 and the camera is in it; every emitting triangle is beyond the wall */
+        CHECK(s->camera.eye.x < 4.0f, "the camera is in the near room (x %g)", s->camera.eye.x);
+        CHECK(s->tri_light_count > 0, "door-ajar has an emitter");
+        for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+            const uint32_t *t = &s->triangles[3 * s->tri_lights[i].triangle];
+            for (int v = 0; v < 3; ++v)
+                CHECK(s->positions[t[v]].x > 4.15f, "emitter vertex in the far room (x %g)", s->positions[t[v]].x);
+        }
+        CHECK(!s->env.enabled && !s->sun.enabled && s->point_light_count == 0, "door-ajar: no other light");
+        CHECK(s->triangle_count < 20000, "door-ajar: %u triangles", s->triangle_count);
+    }
+    ic_scene_free(s);
+    s = load(INTERIORS "sky-room.json");
+    if (s) {
+        CHECK(s->tri_light_count == 0 && s->point_light_count == 0 && !s->sun.enabled, "sky-room: no emitter");
+        CHECK(s->env.enabled, "sky-room: lit by the sky");
+        CHECK(s->triangle_count < 20000, "sky-room: %u triangles", s->triangle_count);
+    }
+    ic_scene_free(s);
+    s = load(INTERIORS "stair-hall.json");
+    if (s) {
+        CHECK(s->tri_light_count == 2, "stair-hall: one light panel (2 triangles), got %u", s->tri_light_count);
+        CHECK(!s->env.enabled, "stair-hall: no sky");
+        CHECK(s->triangle_count < 20000, "stair-hall: %u triangles", s->triangle_count);
+    }
+    ic_scene_free(s);
+}
+
+int main(void)
+{
+    test_what_they_test();
+    test_renders("door-ajar");
+    test_renders("sky-room");
+    test_renders("stair-hall");
+    TEST_MAIN_END();
+}
