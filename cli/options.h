@@ -134,10 +134,13 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(GRADIENT_DIFFERENCE, "--gradient-difference", NULL, IC_OPT_FLAG_ON, render.ic.cache.gradient_difference, 0, 0, \
       "", NAN, "off", "", IC_SCOPE_IC, "gradient-difference record scaling (Castano 2014)") \
     X(MAX_PASSES, "--max-passes", NULL, IC_OPT_INT, render.ic.max_passes, 1, 1000, "N", IC_DEFAULT_MAX_PASSES, "%g", \
-      "", IC_SCOPE_BATCH, "most construction passes") \
+      "", IC_SCOPE_BATCH, "most construction passes: a safety bound (a warning says when it stops construction)") \
     X(MIN_CANDIDATES, "--min-candidates", NULL, IC_OPT_INT, render.ic.min_candidates, 1, 1e9, "N", \
       IC_DEFAULT_MIN_CANDIDATES, "%g", "", IC_SCOPE_BATCH, "construction stops when a pass finds fewer new " \
       "candidates") \
+    X(UNCOVERED, "--uncovered", NULL, IC_OPT_FLOAT, render.ic.uncovered, 0.000001, 1, "F", IC_DEFAULT_UNCOVERED, \
+      "%g", "", IC_SCOPE_BATCH, "construction has converged when fewer than F of a pass's eye-path look-up " \
+      "points (where the final render reads the cache) find no record; the stats report the last pass's share") \
     X(WEBER, "--weber", NULL, IC_OPT_FLOAT, render.ic.weber, 0.0001, 1, "F", IC_DEFAULT_WEBER, "%g", "", \
       IC_SCOPE_ADAPTIVE, "Weber fraction of the discontinuity test; smaller means more records") \
     X(ADAPTIVE_GROWTH, "--adaptive-growth", NULL, IC_OPT_FLOAT, render.ic.adaptive_growth, 1, 100, "F", \

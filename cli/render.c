@@ -94,6 +94,8 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
             cJSON_AddNumberToObject(o, "refinements", st->refinements);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
         cJSON_AddBoolToObject(o, "cut_short", st->cut_short);
+        if (a->render.ic.strategy == IC_STRATEGY_BATCH && !a->render.ic.load_cache)
+            cJSON_AddNumberToObject(o, "uncovered_share", st->uncovered_share);
     }
     cJSON *phases = cJSON_AddObjectToObject(o, "phases");
     for (int i = 0; i < st->phase_count; ++i)

@@ -83,8 +83,10 @@ typedef struct ic_ic_options {
                               hit_from_cache) and only its direct light is sampled */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     ic_large_emitters large_emitters; /* which emitters the records carry instead of light sampling */
-    int max_passes;        /* batch: most construction passes [12] */
+    int max_passes;        /* batch: most construction passes, a safety bound [30] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
+    float uncovered;       /* batch: converged when fewer than this share of a pass's eye-path look-up
+                              points (where the final render will read the cache) find no record [0.001] */
     int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */
     float dither_threshold;/* batch: need at which dithering goes from 32- to 16-pixel spacing [0.5] */
     float normal_weight;   /* batch: k of k·normDiff + posDiff (Frolov et al. 2012 §3.1.1) [4] */
@@ -166,6 +168,7 @@ typedef struct ic_render_stats {
                               before its own criterion said the cache was done */
     uint32_t cached_emitters; /* emitting triangles whose light the records carry (ic_ic_options.large_emitters) */
     uint32_t records_per_pass[32];
+    double uncovered_share; /* batch: share of the last pass's eye-path look-up points no record covered */
     uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */
     int phase_count;
     struct {

@@ -7,11 +7,14 @@
  *               world stage: eye paths, hit points on every bounce where no record is valid, Morton
  *               sort, clusters bounded by a box size, several candidates with distinct normals per
  *               cluster (ic_world.c);
- *   each stage's candidates are gathered in parallel (ic_gather_batch: results do not depend on the
+ *   each stage's candidates are gathered in parallel (ic_ic_gather_points: results do not depend on the
  *   thread count) and inserted in one transaction (ic_cache_insert_batch: validity-radius clamping,
- *   neighbour clamping, in a fixed order). Stop at max_passes or when a pass finds fewer than
- *   min_candidates. A last coverage sweep adds records for any pixel centre still uncovered, so every
- *   primary shading point has at least one contributing record.
+ *   neighbour clamping, in a fixed order). Converged when the share of the world stage's look-up points
+ *   that find no record (the points where the final render will read the cache) falls below
+ *   `uncovered` once the screen passes are done, or when a pass finds fewer than min_candidates;
+ *   max_passes is a safety bound, and stopping there is reported (cut_short). A last coverage sweep
+ *   adds records for any pixel centre still uncovered, so every primary shading point has at least one
+ *   contributing record.
  */
 #include "ic_internal.h"
 
@@ -29,6 +32,7 @@ typedef struct world_job {
     int pass;
     ic_candidate *slots;       /* WORLD_SLOTS per traced pixel */
     uint8_t *slot_count;
+    uint8_t *visited;          /* per eye path: look-up points visited (uncovered ones are in slots) */
     int stride, cols, rows;
     uint64_t *rays;
 } world_job;
@@ -91,10 +95,13 @@ static void world_path(void *p, int64_t item, int thread)
         ray = ic_spawn_ray(&s, bs.wi);
     }
     j->slot_count[item] = (uint8_t)n;
+    j->visited[item] = (uint8_t)smooth_hits;
 }
 
-/* Collects world-stage candidates in item order (deterministic), then clusters and selects. */
-static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *out_count, ic_error *err)
+/* Collects world-stage candidates in item order (deterministic), then clusters and selects;
+ * uncovered_share gets the share of the eye paths' look-up points that found no record. */
+static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *out_count, double *uncovered_share,
+                             ic_error *err)
 {
     const ic_camera *cam = &c->tr->scene->camera;
     world_job j;
@@ -107,10 +114,12 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
     int64_t items = (int64_t)j.cols * j.rows;
     j.slots = malloc(sizeof *j.slots * (size_t)items * WORLD_SLOTS);
     j.slot_count = calloc((size_t)items, 1);
+    j.visited = calloc((size_t)items, 1);
     j.rays = calloc((size_t)c->threads * PAD, sizeof *j.rays);
-    if (!j.slots || !j.slot_count || !j.rays) {
+    if (!j.slots || !j.slot_count || !j.visited || !j.rays) {
         free(j.slots);
         free(j.slot_count);
+        free(j.visited);
         free(j.rays);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for world-space candidates");
     }
@@ -118,14 +127,19 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
     for (int t = 0; t < c->threads; ++t)
         atomic_fetch_add(&c->rays, j.rays[t * PAD]);
     uint32_t n = 0;
-    for (int64_t i = 0; i < items; ++i)
+    uint64_t visited = 0;
+    for (int64_t i = 0; i < items; ++i) {
+        visited += j.visited[i];
         for (int k = 0; k < j.slot_count[i]; ++k)
             j.slots[n++] = j.slots[i * WORLD_SLOTS + k];
+    }
+    *uncovered_share = visited ? (double)n / (double)visited : 0.0;
     const ic_scene *sc = c->tr->scene;
     *out_count = ic_world_select(j.slots, n, sc->bounds_min, sc->bounds_max, c->o.cluster_size * c->scene_diag, 3,
                                  30.0f);
     *out = j.slots;
     free(j.slot_count);
+    free(j.visited);
     free(j.rays);
     return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
 }
@@ -200,7 +214,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         goto done;
     st->records_per_pass[0] = n;
     st->passes = 1;
-    st->cut_short = 1; /* until a pass finds fewer than min_candidates */
+    st->cut_short = 1; /* until the cache has converged */
     for (int pass = 1; pass <= c->o.max_passes; ++pass) {
         ic_ic_report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
         uint32_t found = 0, before = ic_cache_count(c->cache);
@@ -228,7 +242,8 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         }
         ic_candidate *wc = NULL;
         uint32_t wn = 0;
-        r = world_stage(c, pass, &wc, &wn, err);
+        double uncovered = 1.0;
+        r = world_stage(c, pass, &wc, &wn, &uncovered, err);
         if (r == IC_OK)
             r = ic_ic_gather_and_insert(c, wc, wn, pt, err);
         free(wc);
@@ -238,7 +253,10 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         if (pass < 32)
             st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
         st->passes = pass + 1;
-        if ((int)found < c->o.min_candidates) {
+        st->uncovered_share = uncovered;
+        /* Converged: the final render's look-ups (the eye paths' points, measured before this pass's
+         * records) almost all find records, and the screen stage has had its passes. */
+        if ((int)found < c->o.min_candidates || (uncovered < c->o.uncovered && pass >= c->o.screen_passes)) {
             st->cut_short = 0;
             break;
         }

@@ -11,6 +11,8 @@
  *   5. a room lit through a window by a large emitter outside: the records carry its light by default
  *      (ic_ic_options.large_emitters), the image mean matches the path tracer's with and without, and
  *      the error is lower with.
+ *   6. batch construction stops on its own criterion (the share of eye-path look-up points without a
+ *      record below --uncovered), says so in the stats, and reports a pass limit that cuts it short.
  * Test 1 also compares the samplers and adaptive against uniform sampling, for both integrators.
  * The reference images are rendered here with the path tracer at high sample counts.
  */
@@ -428,6 +430,36 @@ static void test_window(void)
     ic_image_free(&off);
 }
 
+static void test_convergence(void)
+{
+    ic_render_options o = ic_options();
+    o.spp = 2;
+    ic_image img = {0};
+    ic_render_stats st;
+    CHECK(test_render(CORNELL, 96, 96, &o, &img, &st), "batch renders");
+    printf("convergence: %d passes, %u records, uncovered share %.5f\n", st.passes, st.records, st.uncovered_share);
+    /* At this size a pass's last few candidates (min_candidates) may end it before the share does. */
+    CHECK(!st.cut_short && st.uncovered_share < 0.01 && st.passes < 30,
+          "default batch converges on its criterion: cut short %d, share %.5f, %d passes", st.cut_short,
+          st.uncovered_share, st.passes);
+    ic_image_free(&img);
+    ic_render_stats loose;
+    o.ic.uncovered = 0.02f;
+    CHECK(test_render(CORNELL, 96, 96, &o, &img, &loose), "batch renders with --uncovered 0.02");
+    CHECK(!loose.cut_short && loose.uncovered_share < 0.02 && loose.passes < st.passes && loose.records < st.records,
+          "a looser criterion stops sooner: %d passes (%u records) against %d (%u)", loose.passes, loose.records,
+          st.passes, st.records);
+    ic_image_free(&img);
+    ic_render_stats cut;
+    o.ic.uncovered = 0.0f;
+    o.ic.max_passes = 2;
+    CHECK(test_render(CORNELL, 96, 96, &o, &img, &cut), "batch renders with 2 passes at most");
+    CHECK(cut.cut_short && cut.passes == 3 && cut.uncovered_share > 0.001,
+          "a pass limit before convergence is reported: cut short %d, %d passes, share %.4f", cut.cut_short,
+          cut.passes, cut.uncovered_share);
+    ic_image_free(&img);
+}
+
 int main(void)
 {
     test_cornell();
@@ -435,5 +467,6 @@ int main(void)
     test_leak();
     test_step();
     test_window();
+    test_convergence();
     TEST_MAIN_END();
 }
