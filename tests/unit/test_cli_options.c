@@ -138,7 +138,7 @@ static void stats_json(void)
     static char js[1 << 15];
     slurp(TMP "_s.json", js, sizeof js);
     CHECK(strstr(js, "_we\\\"ird\\\\dir_é/cornell-box.json\""), "the path is escaped: %.200s", js);
-    CHECK(strstr(js, "\"settings\"") && strstr(js, "\"rays\":\t64") && strstr(js, "\"max_passes\":\t12") &&
+    CHECK(strstr(js, "\"settings\"") && strstr(js, "\"rays\":\t64") && strstr(js, "\"max_passes\":\t30") &&
               strstr(js, "\"integrator\":\t\"ic\""),
           "the settings: given values and defaults");
     CHECK(system("python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
