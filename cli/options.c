@@ -295,7 +295,8 @@ static void option_left(const opt_def *o, char *buf, size_t size, const char *qu
 void ic_cli_print_help(FILE *f)
 {
     fprintf(f, "usage: irrcache render SCENE -o OUT [options]\n\n"
-               "SCENE is a JSON scene file (docs/scene-format.md) or a mesh (.obj .gltf .glb .ply).\n"
+               "SCENE is a JSON scene file (docs/scene-format.md) or a mesh (.obj .gltf .glb .ply,\n"
+               "each also gzip-compressed: .obj.gz).\n"
                "Options take their value as --name VALUE or --name=VALUE; -- ends the options.\n\n"
                "options:\n");
     enum { LEFT = 30 };

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages irrcache needs, only those missing (safe to re-run).
 set -euo pipefail
-pkgs=(build-essential cmake pkg-config libembree-dev libassimp-dev libcjson-dev libopenexr-dev libstb-dev python3)
+pkgs=(build-essential cmake pkg-config libembree-dev libassimp-dev libcjson-dev libopenexr-dev libstb-dev zlib1g-dev python3)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -16,17 +16,26 @@
  *   metal (m > 0.5) with n at the clamp is a mirror; KHR_materials_transmission > 0 is glass;
  *   emission = emissiveFactor × KHR_materials_emissive_strength; doubleSided emits both ways.
  *   (assimp 5.2 drops KHR_materials_emissive_strength, so we read it from the file's JSON ourselves.)
+ *
+ * A gzip-compressed mesh (NAME.EXT.gz, RFC 1952, concatenated members allowed) is inflated into memory
+ * with zlib and handed to assimp through its file-system callbacks under the name NAME.EXT, which picks
+ * the format, and in NAME.EXT's folder, so that the MTL files and buffers it names are found where the
+ * compressed file lies; messages name the .gz file.
  */
 #include "scene/scene_internal.h"
 
 #include "core/vecmath.h"
 
+#include <assimp/cfileio.h>
 #include <assimp/cimport.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <cjson/cJSON.h>
+#include <zlib.h>
 
+#include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,12 +43,240 @@
 
 /* Phong exponents at or above this are treated as ideal mirrors (illum 3/5, glTF metals). */
 #define MIRROR_EXPONENT 10000.0f
+/* Largest mesh a .gz file may inflate to (a guard against a corrupt or hostile length). */
+#define GZIP_MAX_BYTES ((size_t)1 << 31)
+
+/* The mesh file as the importer reads it: the file itself, or a gzip-compressed file inflated into memory. */
+typedef struct mesh_source {
+    const char *path;             /* the file the scene names: messages name it */
+    char name[IC_SCENE_PATH_MAX]; /* path, or path without ".gz": its extension is the format */
+    char *data;                   /* the inflated bytes; NULL: read path itself */
+    size_t size;
+} mesh_source;
+
+/* Inflates the gzip file at path into *out (malloc'd, *size bytes). */
+static ic_result gunzip_file(const char *path, char **out, size_t *size, ic_error *err)
+{
+    *out = NULL;
+    *size = 0;
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return ic_error_set(err, IC_ERR_IO, "%s: cannot open the compressed mesh (%s); check the path", path,
+                            strerror(errno));
+    enum { CHUNK = 1 << 16 };
+    z_stream z;
+    memset(&z, 0, sizeof z);
+    unsigned char *in = malloc(CHUNK);
+    if (!in || inflateInit2(&z, 15 + 16) != Z_OK) { /* 15-bit window, gzip wrapper only */
+        free(in);
+        fclose(fp);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory to inflate it", path);
+    }
+    size_t cap = 0, len = 0, read_total = 0;
+    char *buf = NULL;
+    int ended = 0; /* a member ended and no input followed it yet */
+    ic_result r = IC_OK;
+    for (;;) {
+        if (z.avail_in == 0) {
+            size_t n = fread(in, 1, CHUNK, fp);
+            if (n == 0) {
+                if (ferror(fp))
+                    r = ic_error_set(err, IC_ERR_IO, "%s: read error after %zu bytes; check the file", path, read_total);
+                break;
+            }
+            read_total += n;
+            z.next_in = in;
+            z.avail_in = (uInt)n;
+        }
+        if (ended) { /* another member follows (gzip a b > c concatenates) */
+            inflateReset(&z);
+            ended = 0;
+        }
+        if (len == cap) {
+            size_t grown = cap ? 2 * cap : (size_t)1 << 20;
+            char *q = grown <= GZIP_MAX_BYTES ? realloc(buf, grown) : NULL;
+            if (!q) {
+                r = grown <= GZIP_MAX_BYTES
+                        ? ic_error_set(err, IC_ERR_OOM, "%s: out of memory to inflate it", path)
+                        : ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: inflates to more than %zu MiB; decompress it and "
+                                       "load the file itself", path, GZIP_MAX_BYTES >> 20);
+                break;
+            }
+            buf = q;
+            cap = grown;
+        }
+        z.next_out = (Bytef *)buf + len;
+        z.avail_out = (uInt)(cap - len < UINT_MAX ? cap - len : UINT_MAX);
+        int zr = inflate(&z, Z_NO_FLUSH);
+        len = (size_t)((char *)z.next_out - buf);
+        if (zr == Z_STREAM_END) {
+            ended = 1;
+        } else if (zr != Z_OK && zr != Z_BUF_ERROR) { /* Z_BUF_ERROR: needs more input or room, given above */
+            r = ic_error_set(err, IC_ERR_PARSE, "%s: corrupt or not gzip data (%s at compressed byte %zu); "
+                             "compress the mesh again or load it uncompressed", path, z.msg ? z.msg : "invalid data",
+                             read_total - z.avail_in);
+            break;
+        }
+    }
+    if (r == IC_OK && !ended && read_total == 0)
+        r = ic_error_set(err, IC_ERR_PARSE, "%s: empty file, no gzip data; compress the mesh again", path);
+    else if (r == IC_OK && !ended)
+        r = ic_error_set(err, IC_ERR_PARSE, "%s: truncated gzip data (the stream stops after %zu bytes); compress "
+                         "the mesh again or copy the whole file", path, read_total);
+    inflateEnd(&z);
+    free(in);
+    fclose(fp);
+    if (r != IC_OK) {
+        free(buf);
+        return r;
+    }
+    *out = buf;
+    *size = len;
+    return IC_OK;
+}
+
+/* Fills src for the mesh at path: a ".gz" file is inflated. */
+static ic_result source_load(const char *path, mesh_source *src, ic_error *err)
+{
+    memset(src, 0, sizeof *src);
+    src->path = path;
+    snprintf(src->name, sizeof src->name, "%s", path);
+    char ext[16];
+    ic_path_extension(path, ext, sizeof ext);
+    if (strcmp(ext, ".gz") != 0)
+        return IC_OK;
+    src->name[strlen(src->name) - 3] = '\0';
+    return gunzip_file(path, &src->data, &src->size, err);
+}
+
+/* The mesh's bytes as a stream (NULL if it cannot be read). */
+static FILE *source_open(const mesh_source *src)
+{
+    if (!src->data)
+        return fopen(src->path, "rb");
+    return src->size ? fmemopen(src->data, src->size, "rb") : NULL;
+}
+
+/* assimp's file system for an inflated mesh: its name opens the bytes in memory, any other file (MTL,
+ * buffers, textures) is opened from disk. */
+typedef struct source_file {
+    struct aiFile file; /* first: assimp hands back a pointer to it */
+    FILE *fp;           /* a file on disk, or NULL: the inflated mesh */
+    const mesh_source *src;
+    size_t pos;
+} source_file;
+
+static size_t source_read(struct aiFile *f, char *buf, size_t size, size_t count)
+{
+    source_file *sf = (source_file *)f;
+    if (sf->fp)
+        return fread(buf, size, count, sf->fp);
+    if (size == 0)
+        return 0;
+    size_t n = (sf->src->size - sf->pos) / size;
+    if (n > count)
+        n = count;
+    memcpy(buf, sf->src->data + sf->pos, n * size);
+    sf->pos += n * size;
+    return n;
+}
+
+static size_t source_write(struct aiFile *f, const char *buf, size_t size, size_t count)
+{
+    (void)f;
+    (void)buf;
+    (void)size;
+    (void)count;
+    return 0; /* the importer only reads */
+}
+
+static size_t source_tell(struct aiFile *f)
+{
+    source_file *sf = (source_file *)f;
+    if (!sf->fp)
+        return sf->pos;
+    long at = ftell(sf->fp);
+    return at < 0 ? 0 : (size_t)at;
+}
+
+static size_t source_size(struct aiFile *f)
+{
+    source_file *sf = (source_file *)f;
+    if (!sf->fp)
+        return sf->src->size;
+    long at = ftell(sf->fp), end = -1;
+    if (at >= 0 && fseek(sf->fp, 0, SEEK_END) == 0) {
+        end = ftell(sf->fp);
+        fseek(sf->fp, at, SEEK_SET);
+    }
+    return end < 0 ? 0 : (size_t)end;
+}
+
+static enum aiReturn source_seek(struct aiFile *f, size_t offset, enum aiOrigin origin)
+{
+    source_file *sf = (source_file *)f;
+    if (sf->fp) {
+        int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+        return offset <= LONG_MAX && fseek(sf->fp, (long)offset, whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+    }
+    size_t base = origin == aiOrigin_SET ? 0 : origin == aiOrigin_CUR ? sf->pos : sf->src->size;
+    if (offset > sf->src->size - base)
+        return aiReturn_FAILURE;
+    sf->pos = base + offset;
+    return aiReturn_SUCCESS;
+}
+
+static void source_flush(struct aiFile *f)
+{
+    (void)f;
+}
+
+static struct aiFile *source_fs_open(struct aiFileIO *io, const char *name, const char *mode)
+{
+    const mesh_source *src = (const mesh_source *)(void *)io->UserData;
+    FILE *fp = NULL;
+    if (strcmp(name, src->name) != 0 && (fp = fopen(name, mode)) == NULL)
+        return NULL;
+    source_file *sf = calloc(1, sizeof *sf);
+    if (!sf) {
+        if (fp)
+            fclose(fp);
+        return NULL;
+    }
+    sf->fp = fp;
+    sf->src = src;
+    sf->file.ReadProc = source_read;
+    sf->file.WriteProc = source_write;
+    sf->file.TellProc = source_tell;
+    sf->file.FileSizeProc = source_size;
+    sf->file.SeekProc = source_seek;
+    sf->file.FlushProc = source_flush;
+    return &sf->file;
+}
+
+static void source_fs_close(struct aiFileIO *io, struct aiFile *f)
+{
+    (void)io;
+    source_file *sf = (source_file *)f;
+    if (sf && sf->fp)
+        fclose(sf->fp);
+    free(sf);
+}
+
+static const struct aiScene *source_import(mesh_source *src, unsigned flags)
+{
+    if (!src->data)
+        return aiImportFile(src->path, flags);
+    struct aiFileIO io = {source_fs_open, source_fs_close, (aiUserData)(void *)src};
+    return aiImportFileEx(src->name, flags, &io);
+}
 
 /* OBJ files: assimp keeps NaN/Inf but renumbers vertices, so find the first bad `v` line ourselves to
  * report its line number and its 1-based vertex number as the file counts them. */
-static ic_result check_obj_vertices(const char *path, ic_error *err)
+static ic_result check_obj_vertices(const mesh_source *src, ic_error *err)
 {
-    FILE *fp = fopen(path, "r");
+    const char *path = src->path;
+    FILE *fp = source_open(src);
     if (!fp)
         return IC_OK; /* assimp will report it */
     char line[4096];
@@ -151,9 +388,9 @@ static void convert_phong(const struct aiMaterial *am, ic_material *m)
 /* KHR_materials_emissive_strength of each glTF material (1 where absent), read from the file's JSON
  * (.gltf text, or the JSON chunk of a .glb): assimp 5.2 does not pass it on. Returns NULL if the
  * file cannot be read; strengths[i] belongs to glTF material i, which is assimp material i. */
-static float *gltf_emissive_strengths(const char *path, unsigned count)
+static float *gltf_emissive_strengths(const mesh_source *src, unsigned count)
 {
-    FILE *fp = fopen(path, "rb");
+    FILE *fp = source_open(src);
     if (!fp)
         return NULL;
     char *text = NULL;
@@ -220,10 +457,10 @@ static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_ma
 
 /* The folder an OBJ's materials name their textures from: that of its first `mtllib` file (the MTL
  * format's rule), else the OBJ's own folder. */
-static void obj_material_dir(const char *obj_path, const char *obj_dir, char *out, size_t size)
+static void obj_material_dir(const mesh_source *src, const char *obj_dir, char *out, size_t size)
 {
     snprintf(out, size, "%s", obj_dir);
-    FILE *fp = fopen(obj_path, "r");
+    FILE *fp = source_open(src);
     if (!fp)
         return;
     char line[4096];
@@ -423,27 +660,31 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
 ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, ic_error *err)
 {
     ic_scene *s = b->scene;
+    mesh_source src;
+    ic_result r = source_load(mesh_path, &src, err);
+    if (r != IC_OK)
+        return r;
     char ext[16], dir[IC_SCENE_PATH_MAX];
-    ic_path_extension(mesh_path, ext, sizeof ext);
+    ic_path_extension(src.name, ext, sizeof ext);
     ic_path_dirname(mesh_path, dir, sizeof dir);
     int is_gltf = !strcmp(ext, ".gltf") || !strcmp(ext, ".glb");
     char tex_dir[IC_SCENE_PATH_MAX];
     if (!strcmp(ext, ".obj"))
-        obj_material_dir(mesh_path, dir, tex_dir, sizeof tex_dir);
+        obj_material_dir(&src, dir, tex_dir, sizeof tex_dir);
     else
         snprintf(tex_dir, sizeof tex_dir, "%s", dir);
-    if (!strcmp(ext, ".obj")) {
-        ic_result r = check_obj_vertices(mesh_path, err);
-        if (r != IC_OK)
-            return r;
+    if (!strcmp(ext, ".obj") && (r = check_obj_vertices(&src, err)) != IC_OK) {
+        free(src.data);
+        return r;
     }
-    const struct aiScene *ai = aiImportFile(
-        mesh_path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
-    if (!ai)
+    const struct aiScene *ai =
+        source_import(&src, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+    if (!ai) {
+        free(src.data);
         return ic_error_set(err, IC_ERR_PARSE, "%s: cannot import the mesh (%s); check that it is a valid OBJ, glTF "
                                                "or PLY file",
                             mesh_path, aiGetErrorString());
-    ic_result r = IC_OK;
+    }
     float *strengths = NULL;
     if ((ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || ai->mNumMeshes == 0) {
         r = ic_error_set(err, IC_ERR_PARSE, "%s: the file holds no triangle mesh; export the geometry as triangles",
@@ -454,7 +695,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     uint32_t material_base = s->material_count;
     uint32_t nmat = ai->mNumMaterials ? ai->mNumMaterials : 1;
     if (is_gltf)
-        strengths = gltf_emissive_strengths(mesh_path, ai->mNumMaterials);
+        strengths = gltf_emissive_strengths(&src, ai->mNumMaterials);
     char *path_copy = malloc(strlen(mesh_path) + 1);
     if (path_copy)
         memcpy(path_copy, mesh_path, strlen(mesh_path) + 1);
@@ -498,5 +739,6 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
 done:
     free(strengths);
     aiReleaseImport(ai);
+    free(src.data);
     return r;
 }

@@ -1,6 +1,7 @@
 /*
  * scene_load.c — ic_scene_load, the loading entry point: it picks the front end by extension. ".json"
- * goes to scene_json.c; a bare mesh (.obj .gltf .glb .ply) is imported as is and gets a fitted camera
+ * goes to scene_json.c; a bare mesh (.obj .gltf .glb .ply, or any of these gzip-compressed as
+ * NAME.EXT.gz) is imported as is and gets a fitted camera
  * and, when it has no emitter, a constant white sky (radiance 1), so any mesh renders without a scene
  * file (docs/scene-format.md).
  */
@@ -65,17 +66,26 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
     memset(&b, 0, sizeof b);
     b.scene = s;
 
-    char ext[16];
+    char ext[16], mesh_ext[16] = "";
     ic_path_extension(path, ext, sizeof ext);
+    if (!strcmp(ext, ".gz")) { /* NAME.EXT.gz: a compressed mesh of type EXT */
+        char inner[IC_SCENE_PATH_MAX];
+        snprintf(inner, sizeof inner, "%.*s", (int)(strlen(path) - 3), path);
+        ic_path_extension(inner, mesh_ext, sizeof mesh_ext);
+    } else {
+        snprintf(mesh_ext, sizeof mesh_ext, "%s", ext);
+    }
     ic_result r;
     if (!strcmp(ext, ".json")) {
         r = ic_scene_load_json(&b, path, opt, err);
-    } else if (!strcmp(ext, ".obj") || !strcmp(ext, ".gltf") || !strcmp(ext, ".glb") || !strcmp(ext, ".ply")) {
+    } else if (!strcmp(mesh_ext, ".obj") || !strcmp(mesh_ext, ".gltf") || !strcmp(mesh_ext, ".glb") ||
+               !strcmp(mesh_ext, ".ply")) {
         r = load_bare_mesh(&b, path, opt, err);
     } else {
         r = ic_error_set(err, IC_ERR_UNSUPPORTED,
-                         "%s: unknown scene type '%s'; give a .json scene or a .obj, .gltf, .glb or .ply mesh",
-                         path, ext);
+                         "%s: unknown scene type '%s%s'; give a .json scene or a .obj, .gltf, .glb or .ply mesh "
+                         "(or one of these gzip-compressed, as .obj.gz)",
+                         path, strcmp(ext, ".gz") ? "" : mesh_ext, ext);
     }
     ic_scene_builder_release(&b);
     if (r != IC_OK) {

@@ -1,16 +1,20 @@
 /*
  * test_scene.c — loading good scenes: the bundled Cornell box, transforms, material overrides, lights,
  * environment and render settings from JSON, fov_x conversion, "shared:" paths, bare meshes with a
- * fitted camera, dropped degenerate triangles, and the surface queries (barycentrics, normals, uvs,
- * bilinear textures, one-sided emission).
+ * fitted camera, dropped degenerate triangles, the surface queries (barycentrics, normals, uvs,
+ * bilinear textures, one-sided emission), and gzip-compressed meshes (.obj.gz: same triangles, MTL and
+ * textures from the folder of the .gz file; a truncated or corrupt file is a one-line error naming it).
  */
 #include "scene/scene.h"
 #include "scene/scene_internal.h" /* ic_scene_texture_load */
 #include "test_util.h"
 
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <zlib.h>
 
 #ifndef IC_TEST_TMP
 #define IC_TEST_TMP "/tmp"
@@ -196,6 +200,151 @@ static void test_mtl_folder(void)
     ic_scene_free(s);
 }
 
+/* The bytes of the file at path (malloc'd; NULL if unreadable). */
+static unsigned char *read_all(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *data = NULL;
+    long n = -1;
+    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (data = malloc((size_t)n + 1)) != NULL && fread(data, 1, (size_t)n, f) != (size_t)n) {
+        free(data);
+        data = NULL;
+    }
+    if (f)
+        fclose(f);
+    *size = data ? (size_t)n : 0;
+    CHECK(data != NULL, "read %s", path);
+    return data;
+}
+
+static void write_all(const char *path, const unsigned char *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    CHECK(f && fwrite(data, 1, size, f) == size && fclose(f) == 0, "write %s", path);
+}
+
+/* A gzip copy of the file at from (zlib's gzip writer, best compression). */
+static void gzip_copy(const char *from, const char *to)
+{
+    size_t size;
+    unsigned char *data = read_all(from, &size);
+    gzFile gz = gzopen(to, "wb9");
+    CHECK(gz && data && gzwrite(gz, data, (unsigned)size) == (int)size, "gzip %s", to);
+    if (gz)
+        gzclose(gz);
+    free(data);
+}
+
+static void copy_file(const char *from, const char *to)
+{
+    size_t size;
+    unsigned char *data = read_all(from, &size);
+    if (data)
+        write_all(to, data, size);
+    free(data);
+}
+
+/* The load fails with a one-line message that names the file and says what went wrong. */
+static void check_gz_error(const char *path, const char *what)
+{
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    ic_result r = ic_scene_load(path, NULL, &s, &err);
+    CHECK(r == IC_ERR_PARSE && !s, "%s: %s (%s)", path, ic_result_name(r), err.message);
+    CHECK(strstr(err.message, path) && strstr(err.message, what) && !strchr(err.message, '\n'),
+          "one line naming %s and saying '%s': %s", path, what, err.message);
+    ic_scene_free(s);
+}
+
+/* Gzip-compressed meshes: the same triangles and materials as the file itself, MTL files and textures
+ * found from the .gz file's folder; truncated, corrupt and empty files are errors naming the file. */
+static void test_gzip_meshes(void)
+{
+#define GZ IC_TEST_TMP "/gz"
+    CHECK((mkdir(IC_TEST_TMP, 0755) == 0 || errno == EEXIST) && (mkdir(GZ, 0755) == 0 || errno == EEXIST) &&
+              (mkdir(GZ "/materials", 0755) == 0 || errno == EEXIST),
+          "scratch folders");
+    gzip_copy(IC_SOURCE_DIR "/scenes/cornell-box/CornellBox-Original.obj", GZ "/cornell.obj.gz");
+    copy_file(IC_SOURCE_DIR "/scenes/cornell-box/CornellBox-Original.mtl", GZ "/CornellBox-Original.mtl");
+    ic_scene *plain = load(IC_SOURCE_DIR "/scenes/cornell-box/CornellBox-Original.obj", NULL);
+    ic_scene *s = load(GZ "/cornell.obj.gz", NULL);
+    if (s && plain) {
+        CHECK(s->triangle_count == plain->triangle_count && s->triangle_count == 36, "gzip: %u triangles, plain %u",
+              s->triangle_count, plain->triangle_count);
+        CHECK(s->vertex_count == plain->vertex_count &&
+                  !memcmp(s->positions, plain->positions, sizeof *s->positions * s->vertex_count),
+              "gzip: the same vertices");
+        int32_t left = find_material(s, "leftWall");
+        CHECK(left >= 0 && fabsf(s->materials[left].kd.x - 0.63f) < 1e-6f, "gzip: the MTL beside the .gz is read");
+        CHECK(s->tri_light_count == 2 && !s->env.enabled, "gzip: the MTL's emitter, no default sky");
+    }
+    ic_scene_free(plain);
+    ic_scene_free(s);
+
+    /* in a scene file, with a transform */
+    static const char json[] = "{ \"meshes\": [ { \"path\": \"cornell.obj.gz\", "
+                               "\"transform\": { \"translate\": [0, -5, 0] } } ] }\n";
+    write_all(GZ "/scene.json", (const unsigned char *)json, sizeof json - 1);
+    s = load(GZ "/scene.json", NULL);
+    if (s)
+        CHECK(s->triangle_count == 36 && fabsf(s->bounds_max.y - (1.99f - 5.0f)) < 1e-5f,
+              "gzip mesh in a scene file: %u triangles, top %g", s->triangle_count, s->bounds_max.y);
+    ic_scene_free(s);
+
+    /* an MTL in a subfolder and its texture beside it resolve from the .gz file's folder */
+    gzip_copy(SCENES "mtl_folder/quad.obj", GZ "/quad.obj.gz");
+    copy_file(SCENES "mtl_folder/materials/quad.mtl", GZ "/materials/quad.mtl");
+    copy_file(SCENES "mtl_folder/materials/checker.pfm", GZ "/materials/checker.pfm");
+    s = load(GZ "/quad.obj.gz", NULL);
+    if (s) {
+        int32_t m = find_material(s, "checker");
+        CHECK(s->triangle_count == 2 && s->texture_count == 1 && m >= 0 && s->materials[m].kd_texture == 0,
+              "gzip: MTL in a subfolder and its texture: %u triangles, %u textures", s->triangle_count,
+              s->texture_count);
+    }
+    ic_scene_free(s);
+
+    /* glTF: the emissive strength assimp drops is read from the inflated JSON */
+    gzip_copy(SCENES "triangle.gltf", GZ "/triangle.gltf.gz");
+    s = load(GZ "/triangle.gltf.gz", NULL);
+    if (s) {
+        int32_t m = find_material(s, "lamp_pbr");
+        CHECK(s->triangle_count == 1 && m >= 0 && s->materials[m].emission.x == 4.0f, "gzip glTF with its strength");
+    }
+    ic_scene_free(s);
+
+    /* two gzip members one after the other (gzip a b > c) inflate to the two files' concatenation */
+    size_t size;
+    unsigned char *gz = read_all(GZ "/cornell.obj.gz", &size);
+    if (gz) {
+        unsigned char *twice = malloc(2 * size);
+        if (twice) {
+            memcpy(twice, gz, size);
+            memcpy(twice + size, gz, size);
+            write_all(GZ "/twice.obj.gz", twice, 2 * size);
+            s = load(GZ "/twice.obj.gz", NULL);
+            if (s)
+                CHECK(s->triangle_count == 72, "two members: %u triangles", s->triangle_count);
+            ic_scene_free(s);
+        }
+        free(twice);
+
+        write_all(GZ "/truncated.obj.gz", gz, size / 2);
+        check_gz_error(GZ "/truncated.obj.gz", "truncated");
+        gz[size - 6] ^= 0x55; /* the CRC-32 of the trailer */
+        write_all(GZ "/crc.obj.gz", gz, size);
+        check_gz_error(GZ "/crc.obj.gz", "corrupt");
+        gz[0] = 'x'; /* not the gzip magic */
+        write_all(GZ "/magic.obj.gz", gz, size);
+        check_gz_error(GZ "/magic.obj.gz", "not gzip");
+    }
+    free(gz);
+    write_all(GZ "/empty.obj.gz", (const unsigned char *)"", 0);
+    check_gz_error(GZ "/empty.obj.gz", "empty");
+#undef GZ
+}
+
 static void test_bare_mesh_and_queries(void)
 {
     ic_scene *s = load(SCENES "plain_quad.obj", NULL);
@@ -345,5 +494,6 @@ int main(void)
     test_mtl_folder();
     test_gltf_and_ply();
     test_texture_storage();
+    test_gzip_meshes();
     TEST_MAIN_END();
 }
