@@ -1,7 +1,9 @@
 /*
  * diff.c — `irrcache diff A B`: error metrics of image A against the reference B (RMSE, relMSE,
  * PSNR on linear HDR and on 8-bit sRGB, SSIM; see include/irrcache/image.h), as a short table or
- * one JSON object, and optionally a false-colour heat map of the per-pixel relative error.
+ * one JSON object, and optionally a false-colour heat map of the per-pixel relative error. The heat map's
+ * scale is fixed (IC_DEFAULT_HEATMAP_MAX_ERROR, or --max-error), not fitted to the image, so the maps of
+ * two images against one reference compare; the scale used is printed (table) or recorded (JSON).
  *
  * Exit status: 0 success, 1 an image could not be read or written or the sizes differ, 2 a usage
  * error. Every failure is one line on stderr: "irrcache diff: <file>: <problem>; <what to do>".
@@ -9,6 +11,7 @@
 #include "cli.h"
 #include "json_out.h"
 
+#include "irrcache/defaults.h"
 #include "irrcache/image.h"
 
 #include <math.h>
@@ -20,10 +23,18 @@
 #define EXIT_USAGE 2
 /* JSON has no infinity: identical images report this PSNR (documented in --help). */
 #define PSNR_INFINITE 999.0
+/* --max-error auto: the heat map's scale is this quantile of the image's own errors. */
+#define AUTO_QUANTILE 0.99
+
+/* The heat map's scale: relative error shown as full red, and where it came from. */
+typedef struct heat_scale {
+    float max_error;
+    int automatic; /* 1: the image's 99th percentile (--max-error auto); 0: fixed */
+} heat_scale;
 
 static void print_help(FILE *out)
 {
-    fputs("usage: irrcache diff A B [options]\n"
+    fprintf(out, "usage: irrcache diff A B [options]\n"
           "\n"
           "Compares image A against the reference image B (same size). Formats: OpenEXR, PFM,\n"
           "Radiance HDR, PNG, JPEG (8-bit images are sRGB-decoded to linear first).\n"
@@ -37,16 +48,20 @@ static void print_help(FILE *out)
           "\n"
           "options:\n"
           "  --json             print one JSON object: width, height, rmse, relmse, relmse_lowpass,\n"
-          "                     psnr_hdr, psnr_ldr, ssim, nonfinite (default: a table)\n"
+          "                     psnr_hdr, psnr_ldr, ssim, nonfinite; with --heatmap also heatmap,\n"
+          "                     heatmap_max_error (the scale used) and heatmap_scale (\"fixed\" or\n"
+          "                     \"p99\") (default: a table, which prints the scale on its heat-map line)\n"
           "  --heatmap FILE     write a false-colour map of the per-pixel relative luma error\n"
-          "                     |a-b|/(|b|+0.01): blue = 0 ... red = the maximum (.png, .exr, .pfm or\n"
-          "                     .hdr; magenta = NaN/Inf) (default: none)\n"
-          "  --max-error E      relative error shown as full red in the heat map (default: 0 = the\n"
-          "                     99th percentile of the image's errors)\n"
+          "                     |a-b|/(|b|+0.01): blue = 0 ... red = --max-error and above (.png, .exr,\n"
+          "                     .pfm or .hdr; magenta = NaN/Inf) (default: none)\n"
+          "  --max-error E      relative error shown as full red in the heat map: a fixed scale, so the\n"
+          "                     heat maps of two images against one reference compare (a pixel with\n"
+          "                     the same error has the same colour); 'auto' (or 0): the 99th percentile\n"
+          "                     of this image's errors, which does not compare (default: %g)\n"
           "  -h, --help         show this help\n"
           "\n"
           "exit status: 0 success, 1 unreadable/unwritable image or size mismatch, 2 usage error\n",
-          out);
+          (double)IC_DEFAULT_HEATMAP_MAX_ERROR);
 }
 
 /* Returns the value of option `name` given as "--name VALUE" or "--name=VALUE", advancing *i;
@@ -78,7 +93,7 @@ static void add_metric(cJSON *o, const char *key, double v)
         cJSON_AddNullToObject(o, key); /* never produced by ic_image_compare; kept valid JSON regardless */
 }
 
-static int print_json(const ic_image *img, const ic_image_metrics *m, const char *heatmap)
+static int print_json(const ic_image *img, const ic_image_metrics *m, const char *heatmap, const heat_scale *hs)
 {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "width", img->width);
@@ -90,8 +105,11 @@ static int print_json(const ic_image *img, const ic_image_metrics *m, const char
     add_metric(o, "psnr_ldr", m->psnr_ldr);
     add_metric(o, "ssim", m->ssim);
     cJSON_AddNumberToObject(o, "nonfinite", (double)m->nonfinite);
-    if (heatmap)
+    if (heatmap) {
         cJSON_AddStringToObject(o, "heatmap", heatmap);
+        cJSON_AddNumberToObject(o, "heatmap_max_error", hs->max_error);
+        cJSON_AddStringToObject(o, "heatmap_scale", hs->automatic ? "p99" : "fixed");
+    }
     return ic_cli_write_json("diff", NULL, o, 0);
 }
 
@@ -104,7 +122,7 @@ static void print_db(FILE *out, const char *label, double db)
 }
 
 static void print_table(FILE *out, const char *a, const char *b, const ic_image *img, const ic_image_metrics *m,
-                        const char *heatmap)
+                        const char *heatmap, const heat_scale *hs)
 {
     fprintf(out, "%-10s %s\n%-10s %s\n%-10s %d x %d\n", "image", a, "reference", b, "size", img->width,
             img->height);
@@ -116,7 +134,20 @@ static void print_table(FILE *out, const char *a, const char *b, const ic_image 
     if (m->nonfinite > 0)
         fprintf(out, "%-10s %ld NaN/Inf values (counted as 0)\n", "nonfinite", m->nonfinite);
     if (heatmap)
-        fprintf(out, "%-10s %s\n", "heat map", heatmap);
+        fprintf(out, "%-10s %s (relative error 0 = blue to %g = red: %s)\n", "heat map", heatmap,
+                (double)hs->max_error, hs->automatic ? "this image's 99th percentile" : "fixed scale");
+}
+
+/* --max-error auto: the image's 99th percentile (the default scale where the image has no error). */
+static int heat_scale_resolve(heat_scale *hs, const ic_image *img, const ic_image *ref, ic_error *err)
+{
+    if (!hs->automatic)
+        return 1;
+    if (ic_image_heatmap_quantile(img, ref, AUTO_QUANTILE, &hs->max_error, err) != IC_OK)
+        return 0;
+    if (!(hs->max_error > 0.0f))
+        hs->max_error = IC_DEFAULT_HEATMAP_MAX_ERROR;
+    return 1;
 }
 
 int ic_cli_diff(int argc, char **argv)
@@ -124,7 +155,7 @@ int ic_cli_diff(int argc, char **argv)
     const char *paths[2] = {NULL, NULL};
     int npaths = 0, json = 0, options_done = 0;
     const char *heatmap = NULL;
-    float max_error = 0.0f;
+    heat_scale scale = {IC_DEFAULT_HEATMAP_MAX_ERROR, 0};
 
     for (int i = 1; i < argc; ++i) {
         const char *arg = argv[i], *value;
@@ -152,13 +183,14 @@ int ic_cli_diff(int argc, char **argv)
             heatmap = value;
         } else if ((value = option_value(argc, argv, &i, "--max-error", &missing)) != NULL) {
             char *end = NULL;
-            double e = strtod(value, &end);
-            if (end == value || *end != '\0' || !(e >= 0.0) || !isfinite(e) || e > 3e38) {
-                fprintf(stderr, "irrcache diff: --max-error %s: not a number >= 0; give a relative error such as "
-                        "0.5 (0 = 99th percentile)\n", value);
+            double e = strcmp(value, "auto") == 0 ? 0.0 : strtod(value, &end);
+            if (end && (end == value || *end != '\0' || !(e >= 0.0) || !isfinite(e) || e > 3e38)) {
+                fprintf(stderr, "irrcache diff: --max-error %s: not a number >= 0 or 'auto'; give a relative error "
+                        "such as 0.5 (auto or 0 = this image's 99th percentile)\n", value);
                 return EXIT_USAGE;
             }
-            max_error = (float)e;
+            scale.max_error = (float)e;
+            scale.automatic = e == 0.0;
         } else if (missing) {
             fprintf(stderr, "irrcache diff: %s: missing value; see irrcache diff --help\n", arg);
             return EXIT_USAGE;
@@ -184,15 +216,16 @@ int ic_cli_diff(int argc, char **argv)
                 "same size\n", paths[0], img.width, img.height, paths[1], ref.width, ref.height);
     } else if (ic_image_compare(&img, &ref, &metrics, &err) != IC_OK) {
         fprintf(stderr, "irrcache diff: %s: %s\n", paths[0], err.message);
-    } else if (heatmap && (ic_image_heatmap(&img, &ref, max_error, &heat, &err) != IC_OK ||
+    } else if (heatmap && (!heat_scale_resolve(&scale, &img, &ref, &err) ||
+                           ic_image_heatmap(&img, &ref, scale.max_error, &heat, &err) != IC_OK ||
                            ic_image_write(heatmap, &heat, NULL, &err) != IC_OK)) {
         fprintf(stderr, "irrcache diff: %s\n", err.message);
     } else {
         status = 0;
-        if (json && !print_json(&img, &metrics, heatmap))
+        if (json && !print_json(&img, &metrics, heatmap, &scale))
             status = EXIT_IO;
         else if (!json)
-            print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap);
+            print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap, &scale);
     }
     ic_image_free(&heat);
     ic_image_free(&ref);

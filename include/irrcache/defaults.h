@@ -16,6 +16,10 @@
 #define IC_DEFAULT_SEED 1
 #define IC_ADAPTIVE_SAMPLING_MIN_SPP 8   /* adaptive sampling needs a pilot pass of spp/4 ≥ 2 */
 
+/* Error heat maps (image.h, irrcache diff). */
+#define IC_DEFAULT_HEATMAP_MAX_ERROR 0.5f /* relative error shown as full red: one fixed scale, so heat maps of
+                                             different images against one reference compare (bench/run's too) */
+
 /* Irradiance cache (cache.h, render.h's ic_ic_options). */
 #define IC_DEFAULT_ACCURACY_WARD 0.3f    /* a of Ward's weight */
 #define IC_DEFAULT_ACCURACY_TL 1.0f      /* a of the Tabellion–Lamorlette weight (κ = 1/a = 1) */

@@ -70,9 +70,16 @@ typedef struct ic_image_metrics {
 ic_result ic_image_compare(const ic_image *img, const ic_image *ref, ic_image_metrics *m, ic_error *err);
 
 /* False-colour map of per-pixel relative error |a-r| / (|r| + 0.01) (luma), 0 → blue … ≥ max_err → red
- * (max_err 0 = the 99th percentile); written into out (allocated). The colours are linear so that an
- * sRGB output (PNG) shows the ramp as designed; pixels where either image is NaN/Inf are magenta. */
+ * (max_err 0 = IC_DEFAULT_HEATMAP_MAX_ERROR, irrcache/defaults.h); written into out (allocated). The scale
+ * is the caller's, never taken from the images, so heat maps of two images against one reference compare:
+ * a pixel with the same error has the same colour in both. The colours are linear so that an sRGB output
+ * (PNG) shows the ramp as designed; pixels where either image is NaN/Inf are magenta. */
 ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err);
+
+/* The q-quantile (q in [0, 1]) of the per-pixel relative error ic_image_heatmap shows, over the finite
+ * pixels (0 if there are none): a scale fitted to one image (`irrcache diff --max-error auto` uses q = 0.99),
+ * which makes that image's heat map use the whole ramp but not compare with another's. */
+ic_result ic_image_heatmap_quantile(const ic_image *img, const ic_image *ref, double q, float *value, ic_error *err);
 
 #ifdef __cplusplus
 }

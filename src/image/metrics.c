@@ -15,6 +15,8 @@
  */
 #include "irrcache/image.h"
 
+#include "irrcache/defaults.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -244,6 +246,40 @@ static int compare_floats(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Per-pixel relative luma error, NaN where either pixel holds NaN/Inf. */
+static float relative_error(const ic_image *img, const ic_image *ref, size_t p)
+{
+    float a = linear_luma(img->rgb + 3 * p), b = linear_luma(ref->rgb + 3 * p);
+    return fabsf(a - b) / (fabsf(b) + HEATMAP_EPSILON);
+}
+
+ic_result ic_image_heatmap_quantile(const ic_image *img, const ic_image *ref, double q, float *value, ic_error *err)
+{
+    if (value)
+        *value = 0.0f;
+    ic_result r = check_pair(img, ref, err);
+    if (r != IC_OK)
+        return r;
+    if (!value || !(q >= 0.0 && q <= 1.0))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "heat map: the quantile must be in [0, 1]");
+    const size_t pixels = (size_t)img->width * (size_t)img->height;
+    float *sorted = malloc(pixels * sizeof *sorted);
+    if (!sorted)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d heat map", img->width, img->height);
+    size_t finite = 0;
+    for (size_t p = 0; p < pixels; ++p) {
+        float e = relative_error(img, ref, p);
+        if (isfinite(e))
+            sorted[finite++] = e;
+    }
+    if (finite > 0) {
+        qsort(sorted, finite, sizeof *sorted, compare_floats);
+        *value = sorted[(size_t)(q * (double)(finite - 1))];
+    }
+    free(sorted);
+    return IC_OK;
+}
+
 ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err)
 {
     if (out)
@@ -251,48 +287,27 @@ ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_e
     ic_result r = check_pair(img, ref, err);
     if (r != IC_OK)
         return r;
-    if (!out || !(max_err >= 0.0f)) /* also NaN */
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "heat map: maximum error must be >= 0 (0 = 99th percentile)");
-    const size_t pixels = (size_t)img->width * (size_t)img->height;
-    float *rel = malloc(pixels * 2 * sizeof *rel); /* per-pixel error, then a sortable copy */
-    if (!rel)
-        return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d heat map", img->width, img->height);
-    float *sorted = rel + pixels;
-
-    size_t finite = 0;
-    for (size_t p = 0; p < pixels; ++p) {
-        float a = linear_luma(img->rgb + 3 * p), b = linear_luma(ref->rgb + 3 * p);
-        rel[p] = fabsf(a - b) / (fabsf(b) + HEATMAP_EPSILON); /* NaN if either pixel holds NaN/Inf */
-        if (isfinite(rel[p]))
-            sorted[finite++] = rel[p];
-    }
-    if (max_err == 0.0f) {
-        if (finite > 0) {
-            qsort(sorted, finite, sizeof *sorted, compare_floats);
-            max_err = sorted[(size_t)(0.99 * (double)(finite - 1))];
-        }
-        if (!(max_err > 0.0f))
-            max_err = 1.0f; /* no error anywhere: everything maps to the low end */
-    }
-
+    if (!out || !(max_err >= 0.0f) || !isfinite(max_err)) /* also NaN */
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "heat map: maximum error must be finite and >= 0 (0 = the "
+                            "default %g)", (double)IC_DEFAULT_HEATMAP_MAX_ERROR);
+    if (max_err == 0.0f)
+        max_err = IC_DEFAULT_HEATMAP_MAX_ERROR;
     r = ic_image_create(out, img->width, img->height);
-    if (r != IC_OK) {
-        free(rel);
+    if (r != IC_OK)
         return ic_error_set(err, r, "out of memory for a %dx%d heat map", img->width, img->height);
-    }
+    const size_t pixels = (size_t)img->width * (size_t)img->height;
     for (size_t p = 0; p < pixels; ++p) {
-        float *dst = out->rgb + 3 * p;
-        if (!isfinite(rel[p])) {
+        float *dst = out->rgb + 3 * p, e = relative_error(img, ref, p);
+        if (!isfinite(e)) {
             dst[0] = 1.0f; /* magenta: NaN/Inf in an input */
             dst[1] = 0.0f;
             dst[2] = 1.0f;
             continue;
         }
-        float t = fminf(rel[p] / max_err, 1.0f), display[3];
+        float t = fminf(e / max_err, 1.0f), display[3];
         ramp_srgb(t, display);
         for (int c = 0; c < 3; ++c)
             dst[c] = ic_srgb_to_linear(display[c]);
     }
-    free(rel);
     return IC_OK;
 }

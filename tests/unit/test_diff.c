@@ -1,6 +1,6 @@
 /*
  * test_diff.c — the `irrcache diff` sub-command: JSON and table output, exit codes, error lines
- * and the heat map.
+ * and the heat map, whose default scale is fixed (two images' maps against one reference compare).
  *
  * cli/diff.c and json_out.c are compiled into this test (they depend on the image library and cJSON only), so the command is
  * tested without building the whole renderer; stdout and stderr are captured through files.
@@ -84,6 +84,66 @@ static void write_constant(const char *path, int w, int h, float v)
     ic_image_free(&img);
 }
 
+/* A 16x12 image at 1 + 1.01 e (relative error e against 1) with pixel 5 at relative error 0.2. */
+static void write_errors(const char *path, float e)
+{
+    ic_image img;
+    ic_error err;
+    ic_image_create(&img, 16, 12);
+    for (size_t i = 0; i < (size_t)16 * 12 * 3; ++i)
+        img.rgb[i] = 1.0f + 1.01f * (i / 3 == 5 ? 0.2f : e);
+    if (ic_image_write(path, &img, NULL, &err) != IC_OK)
+        fprintf(stderr, "%s\n", err.message);
+    ic_image_free(&img);
+}
+
+/* Pixel 5 of the heat map at path (-1s if unreadable). */
+static void heat_pixel(const char *path, float rgb[3])
+{
+    ic_image map = {0};
+    ic_error err;
+    rgb[0] = rgb[1] = rgb[2] = -1.0f;
+    if (ic_image_read(path, &map, &err) == IC_OK && map.width == 16 && map.height == 12)
+        memcpy(rgb, map.rgb + 3 * 5, 3 * sizeof(float));
+    ic_image_free(&map);
+}
+
+/* Two images whose pixel 5 has the same error, one with small errors elsewhere and one with large ones:
+ * with the default scale their heat maps give pixel 5 the same colour, and both record the scale; with
+ * --max-error auto (each image's 99th percentile) they do not. */
+static void heat_maps_compare(void)
+{
+    const char *ref = SCRATCH "/ones.exr", *calm = SCRATCH "/calm.exr", *wild = SCRATCH "/wild.exr",
+               *heat_calm = SCRATCH "/calm.heat.png", *heat_wild = SCRATCH "/wild.heat.png";
+    write_constant(ref, 16, 12, 1.0f);
+    write_errors(calm, 0.1f);
+    write_errors(wild, 0.8f);
+    float a[3], b[3];
+    const char *calm_args[] = {calm, ref, "--json", "--heatmap", heat_calm};
+    CHECK(run_diff(5, calm_args) == 0, "calm: %s", err_text);
+    CHECK(json_value(out_text, "heatmap_max_error") == (double)IC_DEFAULT_HEATMAP_MAX_ERROR &&
+              strstr(out_text, "\"heatmap_scale\":\"fixed\""),
+          "the default scale is recorded: %s", out_text);
+    const char *wild_args[] = {wild, ref, "--heatmap", heat_wild};
+    CHECK(run_diff(4, wild_args) == 0, "wild: %s", err_text);
+    CHECK(strstr(out_text, "wild.heat.png (relative error 0 = blue to 0.5 = red: fixed scale)"),
+          "the table prints the scale: %s", out_text);
+    heat_pixel(heat_calm, a);
+    heat_pixel(heat_wild, b);
+    CHECK(a[0] >= 0.0f && !memcmp(a, b, sizeof a), "the same error, the same colour: %g %g %g vs %g %g %g", a[0],
+          a[1], a[2], b[0], b[1], b[2]);
+
+    const char *calm_auto[] = {calm, ref, "--json", "--heatmap", heat_calm, "--max-error", "auto"};
+    CHECK(run_diff(7, calm_auto) == 0 && strstr(out_text, "\"heatmap_scale\":\"p99\""), "auto: %s %s", out_text,
+          err_text);
+    CHECK_NEAR(json_value(out_text, "heatmap_max_error"), 0.1, 1e-5, "auto records the image's 99th percentile");
+    const char *wild_auto[] = {wild, ref, "--heatmap", heat_wild, "--max-error=0"};
+    CHECK(run_diff(5, wild_auto) == 0 && strstr(out_text, "this image's 99th percentile"), "0 is auto: %s", out_text);
+    heat_pixel(heat_calm, a);
+    heat_pixel(heat_wild, b);
+    CHECK(memcmp(a, b, sizeof a) != 0, "per-image scales colour the same error differently");
+}
+
 static int one_line(const char *s)
 {
     const char *nl = strchr(s, '\n');
@@ -157,6 +217,8 @@ int main(void)
     else
         printf("python3 not found: the strict parse of diff --json is skipped\n");
     remove(odd_heat);
+
+    heat_maps_compare();
 
     /* `--` ends the options: what follows is an image path even if it starts with "--". */
     const char *dashdash[] = {"--json", "--", off, ref};

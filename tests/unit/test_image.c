@@ -2,6 +2,7 @@
  * test_image.c — image I/O round trips, metrics against hand-computed values, heat maps, and bad
  * input (missing, truncated, garbage and unwritable files) for src/image.
  */
+#include "irrcache/defaults.h"
 #include "irrcache/image.h"
 #include "test_util.h"
 
@@ -460,6 +461,42 @@ static void test_heatmap(void)
     ic_image_free(&ref);
 }
 
+/* The default scale is fixed: two images whose pixel 5 has the same error, one with small errors elsewhere
+ * and one with large ones, give pixel 5 the same colour (a scale fitted to each image, such as its 99th
+ * percentile, would show it red in the first and green in the second). */
+static void test_heatmap_fixed_scale(void)
+{
+    ic_error err = {0};
+    ic_image ref = constant(8, 4, 1.0f), calm = constant(8, 4, 1.0f + 0.1f * 1.01f),
+             wild = constant(8, 4, 1.0f + 0.8f * 1.01f), heat_calm = {0}, heat_wild = {0}, heat_default = {0};
+    for (int c = 0; c < 3; ++c)
+        calm.rgb[3 * 5 + c] = wild.rgb[3 * 5 + c] = 1.0f + 0.2f * 1.01f; /* relative error 0.2 */
+    CHECK(ic_image_heatmap(&calm, &ref, 0.0f, &heat_calm, &err) == IC_OK &&
+              ic_image_heatmap(&wild, &ref, 0.0f, &heat_wild, &err) == IC_OK &&
+              ic_image_heatmap(&calm, &ref, IC_DEFAULT_HEATMAP_MAX_ERROR, &heat_default, &err) == IC_OK,
+          "heat maps: %s", err.message);
+    if (heat_calm.rgb && heat_wild.rgb && heat_default.rgb) {
+        CHECK(!memcmp(heat_calm.rgb + 15, heat_wild.rgb + 15, 3 * sizeof(float)),
+              "the same error, the same colour: %g %g %g vs %g %g %g", heat_calm.rgb[15], heat_calm.rgb[16],
+              heat_calm.rgb[17], heat_wild.rgb[15], heat_wild.rgb[16], heat_wild.rgb[17]);
+        CHECK(!memcmp(heat_calm.rgb, heat_default.rgb, sizeof(float) * 3 * 32), "max_err 0 is the default scale");
+        CHECK(memcmp(heat_calm.rgb, heat_wild.rgb, 3 * sizeof(float)) != 0, "different errors, different colours");
+    }
+    float q_calm = 0.0f, q_wild = 0.0f;
+    CHECK(ic_image_heatmap_quantile(&calm, &ref, 0.99, &q_calm, &err) == IC_OK &&
+              ic_image_heatmap_quantile(&wild, &ref, 0.99, &q_wild, &err) == IC_OK,
+          "quantiles: %s", err.message);
+    CHECK_NEAR(q_calm, 0.1, 1e-5, "99th percentile of the calm image");
+    CHECK_NEAR(q_wild, 0.8, 1e-5, "99th percentile of the wild image");
+    CHECK(ic_image_heatmap_quantile(&calm, &ref, 1.5, &q_calm, &err) == IC_ERR_INVALID_ARG, "quantile above 1");
+    ic_image_free(&heat_calm);
+    ic_image_free(&heat_wild);
+    ic_image_free(&heat_default);
+    ic_image_free(&calm);
+    ic_image_free(&wild);
+    ic_image_free(&ref);
+}
+
 static void test_bad_input(void)
 {
     ic_error err = {0};
@@ -584,6 +621,7 @@ int main(void)
     test_metrics();
     test_lowpass();
     test_heatmap();
+    test_heatmap_fixed_scale();
     test_bad_input();
     TEST_MAIN_END();
 }
