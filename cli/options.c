@@ -119,17 +119,18 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
             *(double *)field = v;
         return 0;
     }
-    case IC_OPT_SHARE_OFF: {
-        ic_large_emitters *le = (ic_large_emitters *)field;
+    case IC_OPT_NUMBER_OFF: {
+        ic_switched_value *sv = (ic_switched_value *)field;
         if (!strcmp(val, "off")) {
-            le->mode = IC_CACHE_OFF;
+            sv->mode = IC_CACHE_OFF;
             return 0;
         }
         double v = strtod(val, &end);
-        if (errno || end == val || *end || !(v > 0.0) || !(v <= 1.0))
-            return ERR("%s %s: give a hemisphere share in (0, 1] (e.g. 0.01) or off", o->name, val);
-        le->mode = IC_CACHE_ON;
-        le->share = (float)v;
+        if (errno || end == val || *end || !(v > o->min_value) || !(v <= o->max_value))
+            return ERR("%s %s: give a number in (%g, %g] (default %g) or off", o->name, val, o->min_value,
+                       o->max_value, o->def);
+        sv->mode = IC_CACHE_ON;
+        sv->value = (float)v;
         return 0;
     }
     case IC_OPT_CHOICE:
@@ -401,7 +402,7 @@ static cJSON *setting(const ic_cli_args *a, int id)
         if (given)
             return cJSON_CreateNumber(strtod(given, NULL));
         break;
-    case IC_OPT_SHARE_OFF:
+    case IC_OPT_NUMBER_OFF:
         if (given)
             return strcmp(given, "off") ? cJSON_CreateNumber(strtod(given, NULL)) : cJSON_CreateString("off");
         break;

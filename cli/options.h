@@ -36,7 +36,7 @@ typedef enum ic_opt_kind {
     IC_OPT_STRING,     /* const char * */
     IC_OPT_OUTPUT,     /* appended to outputs[] */
     IC_OPT_RAYS,       /* a ray count, stored as M×N strata (ic_gather_opts) */
-    IC_OPT_SHARE_OFF,  /* ic_large_emitters: a share in (0, 1], or off */
+    IC_OPT_NUMBER_OFF, /* ic_switched_value: a number in (min, max], or off */
     IC_OPT_LIST,       /* comma-separated names of those in VALUE "a,b,c" */
     IC_OPT_HELP        /* prints something and exits 0 */
 } ic_opt_kind;
@@ -102,12 +102,21 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "one cache level per bounce, as Radiance's -ab (then --bounces is the number of levels)") \
     X(LIGHT_SAMPLES, "--light-samples", NULL, IC_OPT_INT, render.ic.light_samples, 1, 1e6, "N", \
       IC_DEFAULT_LIGHT_SAMPLES, "%g", "", IC_SCOPE_IC, "light samples per shading point in the final render") \
-    X(LARGE_EMITTERS, "--large-emitters", NULL, IC_OPT_SHARE_OFF, render.ic.large_emitters, 0, 1, "F|off", \
+    X(LARGE_EMITTERS, "--large-emitters", NULL, IC_OPT_NUMBER_OFF, render.ic.large_emitters, 0, 1, "F|off", \
       IC_DEFAULT_LARGE_EMITTERS, "%g", "", IC_SCOPE_IC, "an emitting material that covers at least F of the " \
       "cosine-weighted hemisphere at the image's median shading point, and over a quarter of whose light " \
       "samples hit something else first (a window seen through openings), lights the scene through the " \
       "records instead of being light-sampled; off: sample every emitter. The summary line and the stats " \
       "(cached_emitters) say when it happens") \
+    X(RECORD_FILTER, "--record-filter", NULL, IC_OPT_NUMBER_OFF, render.ic.record_filter, 0, 16, "S|off", \
+      IC_DEFAULT_RECORD_FILTER, "%g", "", IC_SCOPE_IC, "record noise control: after construction each record's " \
+      "value becomes a robust mean of its neighbours' within S times its influence radius (differences " \
+      "beyond their noise are kept: docs/architecture.md); off: the records as gathered") \
+    X(RECORD_SETS, "--record-sets", NULL, IC_OPT_INT, render.ic.record_sets, 1, 64, "N", IC_DEFAULT_RECORD_SETS, \
+      "%g", "", IC_SCOPE_IC, "record noise control: a record whose relative noise is above --record-noise " \
+      "gathers up to N independent hemisphere sets and keeps their mean") \
+    X(RECORD_NOISE, "--record-noise", NULL, IC_OPT_FLOAT, render.ic.record_noise, 0.001, 1, "F", \
+      IC_DEFAULT_RECORD_NOISE, "%g", "", IC_SCOPE_IC, "the relative noise (sigma / E) --record-sets aims at") \
     X(MIN_RADIUS_PX, "--min-radius-px", NULL, IC_OPT_FLOAT, render.ic.min_radius_px, 0, 1e6, "P", \
       IC_DEFAULT_MIN_RADIUS_PX, "%g", "px", IC_SCOPE_IC, "smallest influence radius a*R of a record, in pixels " \
       "at its primary hit") \

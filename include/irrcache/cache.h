@@ -270,6 +270,11 @@ int ic_cache_record_weight(const ic_cache *cache, uint32_t index, ic_vec3 p, ic_
 ic_result ic_cache_get_record(const ic_cache *cache, uint32_t index, ic_record *out);
 /* Lowers a_i of record index (adaptive caching); raising it is refused. Counts a change. */
 ic_result ic_cache_set_record_accuracy(ic_cache *cache, uint32_t index, float accuracy);
+/* Replaces the value of record index: E_i, both gradients and σ (a filter over the records, for
+ * example); position, normal, a_i and R_i stay. Thaws the frozen layout. IC_ERR_INVALID_ARG for a bad
+ * index, a negative irradiance or anything not finite. */
+ic_result ic_cache_set_record_value(ic_cache *cache, uint32_t index, ic_vec3 irradiance, const ic_vec3 grad_rot[3],
+                                    const ic_vec3 grad_trans[3], ic_vec3 sigma);
 /* Sets or clears IC_RECORD_* flags of record index. */
 ic_result ic_cache_set_record_flags(ic_cache *cache, uint32_t index, uint8_t flags);
 /* Rebuilds the octree from the current radii (they only shrink, so references go stale-large), then

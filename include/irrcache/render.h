@@ -55,14 +55,12 @@ typedef enum ic_strategy {
                               sees a discernible discontinuity (docs/adaptive.md) */
 } ic_strategy;
 
-/* Large emitters: an emitting material that covers at least `share` of the cosine-weighted hemisphere at
- * the image's median shading point, and over a quarter of whose light samples are blocked, lights the
- * scene through the records, as the environment does, and is not sampled in the final render: a window
- * seen through openings (soft shadows, wasteful light samples). */
-typedef struct ic_large_emitters {
-    ic_cache_switch mode;  /* IC_CACHE_OFF: every emitter is light-sampled; otherwise chosen by share */
-    float share;           /* [0.01] */
-} ic_large_emitters;
+/* A setting that is a number or off: mode IC_CACHE_OFF switches it off; otherwise value, 0 meaning the
+ * default value (zero-initialised: the default). */
+typedef struct ic_switched_value {
+    ic_cache_switch mode;
+    float value;
+} ic_switched_value;
 
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
 typedef struct ic_ic_options {
@@ -82,7 +80,18 @@ typedef struct ic_ic_options {
                               records already cover a diffuse hit, they give its indirect light (ic_gathering.c:
                               hit_from_cache) and only its direct light is sampled */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
-    ic_large_emitters large_emitters; /* which emitters the records carry instead of light sampling */
+    ic_switched_value large_emitters; /* which emitters the records carry instead of light sampling: an
+                              emitting material that covers at least `value` of the cosine-weighted
+                              hemisphere at the image's median shading point, and over a quarter of whose
+                              light samples are blocked, lights the scene through the records, as the
+                              environment does, and is not sampled in the final render (a window seen
+                              through openings); off: every emitter is light-sampled [0.01] */
+    ic_switched_value record_filter; /* record noise control after construction (ic_filter.c): each
+                              record's value a robust mean of its neighbours' within `value` times its
+                              influence radius a_i·R_i; off: none [2] */
+    int record_sets;       /* record noise control while gathering: most hemisphere sets a record
+                              gathers while its relative σ is above record_noise [1] */
+    float record_noise;    /* the relative σ of E those sets aim at [0.05] */
     int max_passes;        /* batch: most construction passes, a safety bound [30] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     float uncovered;       /* batch: converged when fewer than this share of a pass's eye-path look-up

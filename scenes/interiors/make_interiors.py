@@ -186,7 +186,7 @@ def door_ajar():
     wall_b = m.material("wall_blue", (0.45, 0.55, 0.72))
     floor_b = m.material("floor_grey", (0.4, 0.4, 0.42))
     trim = m.material("trim_cream", (0.82, 0.78, 0.65))
-    light = m.material("light", (0.8, 0.8, 0.8), (400, 360, 300))
+    light = m.material("light", (0.8, 0.8, 0.8), (6400, 5760, 4800))
     t, h = 0.15, 2.6
     # near room A: x in [0, 4]; the dividing wall x in [4, 4.15]; far room B: x in [4.15, 8.15]; z in [0, 4]
     room_shell(m, "roomA", (0, 0, 0), (4, h, 4), t,

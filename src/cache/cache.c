@@ -398,6 +398,24 @@ ic_result ic_cache_set_record_accuracy(ic_cache *c, uint32_t i, float accuracy)
     return IC_OK;
 }
 
+ic_result ic_cache_set_record_value(ic_cache *c, uint32_t i, ic_vec3 irradiance, const ic_vec3 grad_rot[3],
+                                    const ic_vec3 grad_trans[3], ic_vec3 sigma)
+{
+    if (!c || i >= c->count || !grad_rot || !grad_trans || !vec_finite(irradiance) || !vec_finite(sigma) ||
+        irradiance.x < 0.0f || irradiance.y < 0.0f || irradiance.z < 0.0f)
+        return IC_ERR_INVALID_ARG;
+    for (int k = 0; k < 3; ++k)
+        if (!vec_finite(grad_rot[k]) || !vec_finite(grad_trans[k]))
+            return IC_ERR_INVALID_ARG;
+    ic_record_cold *cd = &c->cold[i];
+    cd->irradiance = irradiance;
+    memcpy(cd->grad_rot, grad_rot, sizeof cd->grad_rot);
+    memcpy(cd->grad_trans, grad_trans, sizeof cd->grad_trans);
+    cd->sigma = sigma;
+    ic_frozen_free(&c->frozen); /* the lists hold copies of the values */
+    return IC_OK;
+}
+
 ic_result ic_cache_set_record_flags(ic_cache *c, uint32_t i, uint8_t flags)
 {
     if (!c || i >= c->count)

@@ -27,8 +27,14 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
     if (o.light_samples <= 0)
         o.light_samples = IC_DEFAULT_LIGHT_SAMPLES;
-    if (o.large_emitters.share == 0.0f)
-        o.large_emitters.share = IC_DEFAULT_LARGE_EMITTERS;
+    if (o.large_emitters.value == 0.0f)
+        o.large_emitters.value = IC_DEFAULT_LARGE_EMITTERS;
+    if (o.record_filter.value == 0.0f)
+        o.record_filter.value = IC_DEFAULT_RECORD_FILTER;
+    if (o.record_sets <= 0)
+        o.record_sets = IC_DEFAULT_RECORD_SETS;
+    if (!(o.record_noise > 0.0f))
+        o.record_noise = IC_DEFAULT_RECORD_NOISE;
     if (o.max_passes <= 0)
         o.max_passes = IC_DEFAULT_MAX_PASSES;
     if (o.min_candidates <= 0)
@@ -173,5 +179,9 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
                      (int32_t)c->o.strategy, c->hit_lookups, c->levels};
     /* The seed is left out on purpose: records built with one seed are as valid as any others, and a
      * cache re-used with a new seed renders an independent final image over the same records. */
-    return ic_fnv1a64(h, g, sizeof g);
+    h = ic_fnv1a64(h, g, sizeof g);
+    /* Record noise control changes the values (the filter) or their noise (the sets). */
+    float noise[4] = {c->o.record_filter.mode == IC_CACHE_OFF ? 0.0f : c->o.record_filter.value,
+                      (float)c->o.record_sets, c->o.record_sets > 1 ? c->o.record_noise : 0.0f, 0.0f};
+    return ic_fnv1a64(h, noise, sizeof noise);
 }

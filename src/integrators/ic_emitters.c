@@ -146,7 +146,7 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, ui
             continue;
         memcpy(row, &share[(size_t)slot[m] * cap], sizeof *row * points);
         qsort(row, points, sizeof *row, cmp_double);
-        double v = row[points / 2] >= c->o.large_emitters.share ? visible_fraction(c, s, m, stride) : 1.0;
+        double v = row[points / 2] >= c->o.large_emitters.value ? visible_fraction(c, s, m, stride) : 1.0;
         ok = v >= 0.0;
         cached_mat[m] = ok && v <= IC_LARGE_EMITTER_VISIBLE;
     }

@@ -170,8 +170,9 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
     atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
 }
 
-ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
-                           ic_vec3 *levels)
+/* One hemisphere set of a point (see ic_ic_gather_one). */
+static ic_result gather_set(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
+                            ic_vec3 *levels)
 {
     const int B = w->c->levels;
     for (int k = 0; k <= B; ++k)
@@ -192,6 +193,59 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
         levels[k] = v3(t[0], t[1], t[2]);
     }
     levels[B] = out->irradiance;
+    return IC_OK;
+}
+
+/* Adds set b (weight 1) to the running mean a of k sets. */
+static void add_set(ic_gather_result *a, const ic_gather_result *b, int k, ic_vec3 *lev, const ic_vec3 *blev, int B)
+{
+    float wa = (float)k / (float)(k + 1), wb = 1.0f / (float)(k + 1);
+#define MIX(x, y) v3_add(v3_scale((x), wa), v3_scale((y), wb))
+    a->irradiance = MIX(a->irradiance, b->irradiance);
+    for (int ch = 0; ch < 3; ++ch) {
+        a->rot_grad[ch] = MIX(a->rot_grad[ch], b->rot_grad[ch]);
+        a->trans_grad[ch] = MIX(a->trans_grad[ch], b->trans_grad[ch]);
+    }
+    a->sigma = MIX(a->sigma, b->sigma);
+    for (int l = 0; lev && l <= B; ++l)
+        lev[l] = MIX(lev[l], blev[l]);
+#undef MIX
+    /* Harmonic means combine harmonically. */
+    float ia = a->harmonic_mean_dist > 0.0f ? 1.0f / a->harmonic_mean_dist : 0.0f;
+    float ib = b->harmonic_mean_dist > 0.0f ? 1.0f / b->harmonic_mean_dist : 0.0f;
+    float inv = ia * wa + ib * wb;
+    a->harmonic_mean_dist = inv > 0.0f ? 1.0f / inv : INFINITY;
+    a->min_dist = fminf(a->min_dist, b->min_dist);
+    a->ray_count += b->ray_count;
+    a->hit_count += b->hit_count;
+}
+
+ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
+                           ic_vec3 *levels)
+{
+    ic_ctx *c = w->c;
+    ic_result r = gather_set(w, g, pt, out, levels);
+    if (r != IC_OK || c->o.record_sets <= 1)
+        return r;
+    /* σ of one set's E (Křivánek et al. 2006 §4.3); sets needed for the target relative σ. */
+    float y = v3_lum(out->irradiance), s = v3_lum(out->sigma);
+    if (!(y > 0.0f))
+        return IC_OK;
+    float ratio = s / (y * c->o.record_noise);
+    int sets = ratio * ratio > (float)c->o.record_sets ? c->o.record_sets : (int)ceilf(ratio * ratio);
+    const int B = c->levels;
+    ic_vec3 blev[IC_LEVELS_MAX + 1];
+    for (int k = 1; k < sets; ++k) {
+        ic_gather_point p2 = *pt;
+        p2.key = ic_hash4(pt->key, (uint64_t)k, 0x73657473ULL, 0);
+        ic_gather_result b;
+        r = gather_set(w, g, &p2, &b, levels ? blev : NULL);
+        if (r != IC_OK)
+            return r;
+        add_set(out, &b, k, levels, blev, B);
+    }
+    /* The mean of k independent sets has 1/√k of one set's σ. */
+    out->sigma = v3_scale(out->sigma, 1.0f / sqrtf((float)sets));
     return IC_OK;
 }
 

@@ -68,6 +68,13 @@ static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt,
     for (int k = phases_before; k < st->phase_count; ++k)
         own += st->phases[k].seconds;
     *t_candidates = fmax(ic_seconds() - t0 - pt->gather - pt->insert - own, 0.0);
+    if (c->o.record_filter.mode != IC_CACHE_OFF) {
+        double tf = ic_seconds();
+        r = ic_ic_filter_cache(c->cache, c->threads, c->o.record_filter.value, err);
+        if (r != IC_OK)
+            return r;
+        ic_stats_add_phase(st, "record filter", ic_seconds() - tf);
+    }
     /* The final render reads a freshly built index: look-ups are faster than through the incrementally
      * grown one, and the summation order of every look-up is the same as after loading a cache file, so
      * a saved and re-loaded cache renders the identical image. */

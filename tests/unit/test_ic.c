@@ -265,6 +265,9 @@ static int clamp_pair(const char *scene, int W, int H, float accuracy, ic_image 
      * take the step's light from their neighbours and the effect of clamping is no longer isolated
      * (test_step checks that default separately). */
     o.ic.path_traced_gather = 1;
+    /* Clamping alone: the record filter, which averages records over their neighbourhood, would take
+     * the step's light from neighbours too. */
+    o.ic.record_filter.mode = IC_CACHE_OFF;
     ok &= test_render(scene, W, H, &o, on, NULL);
     o.ic.cache.neighbor_clamp = IC_CACHE_OFF;
     ok &= test_render(scene, W, H, &o, off, NULL);

@@ -1,0 +1,194 @@
+/*
+ * ic_filter.c — record noise control after construction: each record's value (irradiance and both
+ * gradients) becomes a robust weighted mean of its neighbours' values extrapolated to it.
+ *
+ * Interpolation turns a record's Monte Carlo error into a soft stain the size of its influence area;
+ * where the light comes through small openings or from a few bright patches, the stains are the image's
+ * main error (the low-pass error of Křivánek et al. 2006's interpolation is that of the records). The
+ * error of neighbouring records is independent while the irradiance they estimate varies slowly over
+ * their influence areas (that is what the error bound a promises), so averaging records over a
+ * neighbourhood of `scale` times a record's influence radius a_i·R_i cuts the stains' amplitude by about
+ * the square root of the neighbours averaged. Neighbours count with an Epanechnikov kernel in distance,
+ * only on the same bounce level, with normals within 30° and off the record's tangent plane by at most a
+ * quarter of the neighbourhood (no averaging across a step or a corner), each extrapolated to the record
+ * with its own gradients (Křivánek et al. 2006 §3).
+ *
+ * The mean is robust: a neighbour whose value differs from the current estimate by more than the noise
+ * explains (Tukey's biweight at 3·√2·σ, σ pooled over the neighbourhood from the records' own estimates,
+ * Křivánek et al. 2006 §4.3) counts less or not at all, so a real change of irradiance (a contact
+ * shadow, the edge of a light patch) that exceeds the noise is kept, and a record far off its
+ * neighbours is pulled back to them. The estimate starts from the plain kernel mean and is re-weighted
+ * twice; where that rejects most of the neighbourhood (a strong edge through it), it starts again from
+ * the record's own value. Every record is filtered from the values before filtering, in parallel with a
+ * fixed order of sums: the result does not depend on the thread count.
+ */
+#include "ic_internal.h"
+
+#include "core/threads.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NEIGHBOURS_MAX 256
+#define NORMAL_COS 0.866f  /* 30° */
+#define TUKEY_K 3.0f
+
+typedef struct filter_job {
+    ic_cache *cache;
+    const ic_record *rec;      /* every record before filtering */
+    ic_record *out;            /* value fields filtered */
+    float scale;
+    uint32_t **scratch;        /* per thread: NEIGHBOURS_MAX indices */
+    float **kern;              /* per thread: kernel weights */
+    ic_vec3 **val;             /* per thread: extrapolated values */
+} filter_job;
+
+static float lum(ic_vec3 v) { return v3_lum(v); }
+
+/* Record j's value extrapolated to record i's position and normal, clamped at zero. */
+static ic_vec3 extrapolate(const ic_record *j, const ic_record *i)
+{
+    ic_vec3 d = v3_sub(i->position, j->position), nx = v3_cross(j->normal, i->normal);
+    float e[3] = {j->irradiance.x, j->irradiance.y, j->irradiance.z};
+    for (int ch = 0; ch < 3; ++ch)
+        e[ch] = fmaxf(0.0f, e[ch] + v3_dot(j->grad_trans[ch], d) + v3_dot(j->grad_rot[ch], nx));
+    return v3(e[0], e[1], e[2]);
+}
+
+/* Robust mean of the neighbourhood's luminance around start: weights u_k = kernel · biweight. Returns
+ * Σ u and fills the weights. */
+static float reweight(const float *kern, const ic_vec3 *val, uint32_t n, float start, float band, float *u)
+{
+    float m = start, usum = 0.0f;
+    for (int it = 0; it < 2; ++it) {
+        double s = 0.0, w = 0.0;
+        for (uint32_t k = 0; k < n; ++k) {
+            float t = band > 0.0f ? (lum(val[k]) - m) / band : (lum(val[k]) == m ? 0.0f : 1.0f);
+            float b = fabsf(t) < 1.0f ? (1.0f - t * t) * (1.0f - t * t) : 0.0f;
+            u[k] = kern[k] * b;
+            s += (double)u[k] * lum(val[k]);
+            w += u[k];
+        }
+        usum = (float)w;
+        if (w > 0.0)
+            m = (float)(s / w);
+    }
+    return usum;
+}
+
+static void filter_one(void *p, int64_t item, int thread)
+{
+    filter_job *j = p;
+    const ic_record *ri = &j->rec[item];
+    ic_record *o = &j->out[item];
+    *o = *ri;
+    float h = j->scale * ri->accuracy * ri->radius;
+    if (!(h > 0.0f))
+        return;
+    uint32_t *idx = j->scratch[thread];
+    float *kern = j->kern[thread];
+    ic_vec3 *val = j->val[thread];
+    uint32_t total = ic_cache_radius_query(j->cache, ri->position, h, idx, NEIGHBOURS_MAX);
+    uint32_t found = total < NEIGHBOURS_MAX ? total : NEIGHBOURS_MAX, n = 0;
+    double var = 0.0, ksum = 0.0, kmean = 0.0;
+    for (uint32_t q = 0; q < found; ++q) {
+        const ic_record *rj = &j->rec[idx[q]];
+        ic_vec3 d = v3_sub(rj->position, ri->position);
+        if (rj->bounce != ri->bounce || v3_dot(rj->normal, ri->normal) < NORMAL_COS ||
+            fabsf(v3_dot(d, ri->normal)) > 0.25f * h)
+            continue;
+        float x = v3_len2(d) / (h * h);
+        if (x >= 1.0f)
+            continue;
+        idx[n] = idx[q];
+        kern[n] = (1.0f - x) * (1.0f - x);
+        val[n] = extrapolate(rj, ri);
+        float sy = lum(rj->sigma);
+        var += (double)kern[n] * sy * sy;
+        kmean += (double)kern[n] * lum(val[n]);
+        ksum += kern[n];
+        ++n;
+    }
+    if (n < 2 || !(ksum > 0.0))
+        return;
+    float sigma = (float)sqrt(var / ksum), band = TUKEY_K * 1.4142f * sigma;
+    float *u = kern + NEIGHBOURS_MAX; /* second half of the thread's buffer */
+    float usum = reweight(kern, val, n, (float)(kmean / ksum), band, u);
+    if (usum < 0.2f * (float)ksum)
+        usum = reweight(kern, val, n, lum(ri->irradiance), band, u);
+    if (!(usum > 0.0f))
+        return;
+    ic_vec3 e = v3s(0.0f), gr[3] = {v3s(0.0f), v3s(0.0f), v3s(0.0f)}, gt[3] = {v3s(0.0f), v3s(0.0f), v3s(0.0f)};
+    double u2 = 0.0;
+    for (uint32_t k = 0; k < n; ++k) {
+        const ic_record *rj = &j->rec[idx[k]];
+        e = v3_add(e, v3_scale(val[k], u[k]));
+        for (int ch = 0; ch < 3; ++ch) {
+            gr[ch] = v3_add(gr[ch], v3_scale(rj->grad_rot[ch], u[k]));
+            gt[ch] = v3_add(gt[ch], v3_scale(rj->grad_trans[ch], u[k]));
+        }
+        u2 += (double)u[k] * u[k];
+    }
+    float inv = 1.0f / usum;
+    o->irradiance = v3_scale(e, inv);
+    for (int ch = 0; ch < 3; ++ch) {
+        /* Gradients stay in the record's tangent plane. */
+        ic_vec3 g = v3_scale(gr[ch], inv), t = v3_scale(gt[ch], inv);
+        o->grad_rot[ch] = v3_sub(g, v3_scale(ri->normal, v3_dot(g, ri->normal)));
+        o->grad_trans[ch] = v3_sub(t, v3_scale(ri->normal, v3_dot(t, ri->normal)));
+    }
+    /* σ of a weighted mean of independent estimates: σ·√Σu² / Σu. */
+    float shrink = (float)sqrt(u2) * inv;
+    o->sigma = v3_scale(ri->sigma, fminf(shrink, 1.0f));
+}
+
+ic_result ic_ic_filter_cache(ic_cache *cache, int threads, float scale, ic_error *err)
+{
+    uint32_t n = ic_cache_count(cache);
+    if (n == 0 || !(scale > 0.0f))
+        return IC_OK;
+    threads = ic_resolve_threads(threads);
+    filter_job j;
+    memset(&j, 0, sizeof j);
+    j.cache = cache;
+    j.scale = scale;
+    ic_record *rec = malloc(sizeof *rec * n), *out = malloc(sizeof *out * n);
+    j.scratch = calloc((size_t)threads, sizeof *j.scratch);
+    j.kern = calloc((size_t)threads, sizeof *j.kern);
+    j.val = calloc((size_t)threads, sizeof *j.val);
+    ic_result r = rec && out && j.scratch && j.kern && j.val ? IC_OK : IC_ERR_OOM;
+    for (int t = 0; t < threads && r == IC_OK; ++t) {
+        j.scratch[t] = malloc(sizeof **j.scratch * NEIGHBOURS_MAX);
+        j.kern[t] = malloc(sizeof **j.kern * 2 * NEIGHBOURS_MAX);
+        j.val[t] = malloc(sizeof **j.val * NEIGHBOURS_MAX);
+        if (!j.scratch[t] || !j.kern[t] || !j.val[t])
+            r = IC_ERR_OOM;
+    }
+    if (r != IC_OK) {
+        ic_error_set(err, r, "out of memory for filtering %u records", n);
+    } else {
+        for (uint32_t i = 0; i < n; ++i)
+            ic_cache_get_record(cache, i, &rec[i]);
+        j.rec = rec;
+        j.out = out;
+        r = ic_parallel_for(threads, n, filter_one, &j);
+        if (r != IC_OK)
+            ic_error_set(err, r, "could not start threads");
+        for (uint32_t i = 0; i < n && r == IC_OK; ++i)
+            if ((r = ic_cache_set_record_value(cache, i, out[i].irradiance, out[i].grad_rot, out[i].grad_trans,
+                                               out[i].sigma)) != IC_OK)
+                ic_error_set(err, r, "record %u's filtered value is not finite", i);
+    }
+    for (int t = 0; j.scratch && t < threads; ++t) {
+        free(j.scratch[t]);
+        free(j.kern ? j.kern[t] : NULL);
+        free(j.val ? j.val[t] : NULL);
+    }
+    free(j.scratch);
+    free(j.kern);
+    free(j.val);
+    free(rec);
+    free(out);
+    return r;
+}

@@ -1,0 +1,198 @@
+/*
+ * test_filter.c — the record filter (record noise control, ic_filter.c) on records with known values:
+ *   1. constant irradiance plus independent noise of known σ: the filter cuts the records' error by
+ *      more than 2× and keeps their mean;
+ *   2. a step (1 beside 3) plus noise: no record moves towards the other side by more than a few σ
+ *      (the step is far beyond the noise, so the robust mean keeps it), and away from the edge the
+ *      error falls as in 1;
+ *   3. a linear ramp with its true gradient: the filter, which extrapolates each neighbour with its own
+ *      gradient, adds no bias and cuts the noise;
+ *   4. records on two perpendicular walls meeting at a corner never mix;
+ *   5. 1 and 2 threads give identical records.
+ */
+#include "test_util.h"
+
+#include "core/rng.h"
+#include "integrators/ic_internal.h"
+
+#include <string.h>
+
+#define GRID 40       /* records per side, spacing 0.1 */
+#define SPACING 0.1f
+
+typedef float (*truth_fn)(float x);
+
+static float flat(float x) { (void)x; return 1.0f; }
+static float step(float x) { return x < 2.0f ? 1.0f : 3.0f; }
+static float ramp(float x) { return 1.0f + 0.5f * x; }
+
+static double gauss(ic_rng *r)
+{
+    double u1 = ic_rng_float(r) + 1e-7, u2 = ic_rng_float(r);
+    return sqrt(-2.0 * log(u1)) * cos(2.0 * IC_PI * u2);
+}
+
+/* A cache of GRID² records on the plane z = 0 (jittered grid), value truth(x) + N(0, σ) in every
+ * channel, σ stored as the record's own noise estimate, radius fixed at 0.5 (a·R = 0.15). */
+static ic_cache *make_cache(truth_fn truth, float sigma, ic_vec3 gradient, uint64_t seed)
+{
+    ic_cache_params p = {0};
+    p.accuracy = 0.3f;
+    p.min_radius = 0.5f;
+    p.max_radius = 0.5f;
+    p.neighbor_clamp = IC_CACHE_OFF;
+    p.validity_clamp = IC_CACHE_OFF;
+    ic_cache *c = NULL;
+    ic_error err;
+    if (ic_cache_create(&p, &c, &err) != IC_OK)
+        return NULL;
+    ic_rng rng = ic_rng_make(seed, 1, 2, 3);
+    for (int i = 0; i < GRID; ++i)
+        for (int k = 0; k < GRID; ++k) {
+            ic_record r;
+            memset(&r, 0, sizeof r);
+            float x = ((float)i + 0.2f + 0.6f * ic_rng_float(&rng)) * SPACING;
+            float y = ((float)k + 0.2f + 0.6f * ic_rng_float(&rng)) * SPACING;
+            float e = truth(x) + sigma * (float)gauss(&rng);
+            r.position = v3(x, y, 0.0f);
+            r.normal = v3(0.0f, 0.0f, 1.0f);
+            r.irradiance = v3s(fmaxf(e, 0.0f));
+            r.sigma = v3s(sigma);
+            for (int ch = 0; ch < 3; ++ch)
+                r.grad_trans[ch] = gradient;
+            r.harmonic_mean_dist = 0.5f;
+            if (ic_cache_insert(c, &r, NULL, &err) != IC_OK) {
+                ic_cache_destroy(c);
+                return NULL;
+            }
+        }
+    return c;
+}
+
+/* RMS error of the records' red channel against truth, over records with |x − 2| ≥ margin; *mean gets
+ * the mean signed error. */
+static double rms_error(const ic_cache *c, truth_fn truth, float margin, double *mean)
+{
+    double s2 = 0.0, s = 0.0;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < ic_cache_count(c); ++i) {
+        ic_record r;
+        ic_cache_get_record(c, i, &r);
+        if (fabsf(r.position.x - 2.0f) < margin)
+            continue;
+        double d = (double)r.irradiance.x - truth(r.position.x);
+        s2 += d * d;
+        s += d;
+        ++n;
+    }
+    *mean = n ? s / n : 0.0;
+    return n ? sqrt(s2 / n) : 0.0;
+}
+
+static void test_noise(const char *name, truth_fn truth, ic_vec3 gradient)
+{
+    const float sigma = 0.1f;
+    ic_cache *c = make_cache(truth, sigma, gradient, 11);
+    CHECK(c != NULL, "%s: cache built", name);
+    if (!c)
+        return;
+    double bias0, bias1;
+    double before = rms_error(c, truth, 0.0f, &bias0);
+    ic_error err;
+    CHECK(ic_ic_filter_cache(c, 2, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "%s: filter runs", name);
+    double after = rms_error(c, truth, 0.0f, &bias1);
+    printf("%s: record error %.4f before, %.4f after (mean %+.4f, %+.4f)\n", name, before, after, bias0, bias1);
+    CHECK(after < 0.5 * before, "%s: error %.4f not cut by 2x from %.4f", name, after, before);
+    CHECK(fabs(bias1) < 0.01, "%s: filtered records biased by %+.4f", name, bias1);
+    ic_cache_destroy(c);
+}
+
+static void test_step(void)
+{
+    const float sigma = 0.05f;
+    ic_cache *c = make_cache(step, sigma, v3s(0.0f), 12);
+    CHECK(c != NULL, "step: cache built");
+    if (!c)
+        return;
+    double bias, before = rms_error(c, step, 0.3f, &bias);
+    ic_error err;
+    CHECK(ic_ic_filter_cache(c, 2, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "step: filter runs");
+    double worst = 0.0;
+    for (uint32_t i = 0; i < ic_cache_count(c); ++i) {
+        ic_record r;
+        ic_cache_get_record(c, i, &r);
+        worst = fmax(worst, fabs((double)r.irradiance.x - step(r.position.x)));
+    }
+    double after = rms_error(c, step, 0.3f, &bias);
+    printf("step: worst record %.4f off its side (step 2, sigma %.2f); away from it %.4f -> %.4f\n", worst,
+           (double)sigma, before, after);
+    CHECK(worst < 6.0 * sigma, "step: a record moved %.4f towards the other side", worst);
+    CHECK(after < 0.5 * before, "step: error away from the edge %.4f not cut by 2x from %.4f", after, before);
+    ic_cache_destroy(c);
+}
+
+static void test_corner(void)
+{
+    ic_cache_params p = {0};
+    p.accuracy = 0.3f;
+    p.min_radius = 0.5f;
+    p.max_radius = 0.5f;
+    ic_cache *c = NULL;
+    ic_error err;
+    CHECK(ic_cache_create(&p, &c, &err) == IC_OK, "corner: cache");
+    /* Floor z = 0 (E = 1) and wall x = 0 (E = 5), records 0.05 from the corner line. */
+    for (int i = 0; i < 20; ++i) {
+        ic_record r;
+        memset(&r, 0, sizeof r);
+        float t = 0.05f * (float)(i % 10) + 0.05f, y = 0.1f * (float)(i / 10);
+        int wall = i & 1;
+        r.position = wall ? v3(0.0f, y, t) : v3(t, y, 0.0f);
+        r.normal = wall ? v3(1.0f, 0.0f, 0.0f) : v3(0.0f, 0.0f, 1.0f);
+        r.irradiance = v3s(wall ? 5.0f : 1.0f);
+        r.sigma = v3s(2.0f); /* noise so large the biweight alone would not tell them apart */
+        r.harmonic_mean_dist = 0.5f;
+        ic_cache_insert(c, &r, NULL, &err);
+    }
+    CHECK(ic_ic_filter_cache(c, 1, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "corner: filter runs");
+    int mixed = 0;
+    for (uint32_t i = 0; i < ic_cache_count(c); ++i) {
+        ic_record r;
+        ic_cache_get_record(c, i, &r);
+        float want = r.normal.x > 0.5f ? 5.0f : 1.0f;
+        mixed += fabsf(r.irradiance.x - want) > 1e-4f;
+    }
+    CHECK(mixed == 0, "corner: %d records took light from the other wall", mixed);
+    ic_cache_destroy(c);
+}
+
+static void test_threads(void)
+{
+    ic_cache *a = make_cache(step, 0.1f, v3s(0.0f), 13), *b = make_cache(step, 0.1f, v3s(0.0f), 13);
+    ic_error err;
+    CHECK(a && b, "threads: caches built");
+    if (!a || !b)
+        return;
+    ic_ic_filter_cache(a, 1, IC_DEFAULT_RECORD_FILTER, &err);
+    ic_ic_filter_cache(b, 2, IC_DEFAULT_RECORD_FILTER, &err);
+    int same = 1;
+    for (uint32_t i = 0; i < ic_cache_count(a); ++i) {
+        ic_record x, y;
+        ic_cache_get_record(a, i, &x);
+        ic_cache_get_record(b, i, &y);
+        same &= memcmp(&x.irradiance, &y.irradiance, sizeof x.irradiance) == 0 &&
+                memcmp(x.grad_trans, y.grad_trans, sizeof x.grad_trans) == 0;
+    }
+    CHECK(same, "threads: 1 and 2 threads filter identically");
+    ic_cache_destroy(a);
+    ic_cache_destroy(b);
+}
+
+int main(void)
+{
+    test_noise("flat", flat, v3s(0.0f));
+    test_noise("ramp", ramp, v3(0.5f, 0.0f, 0.0f));
+    test_step();
+    test_corner();
+    test_threads();
+    TEST_MAIN_END();
+}
