@@ -1,10 +1,13 @@
 /*
  * ic_emitters.c — which large emitters the records carry instead of the final render's light sampling
- * (ic_ic_options.large_emitters), measured on the image's shading points.
+ * (ic_ic_options.large_emitters): a pilot on the image's shading points measures, per emitting
+ * material, the variance of both estimators of its direct light, and the records take the material
+ * where theirs is the lower one.
  */
 #include "ic_internal.h"
 
 #include "core/sampling.h"
+#include "irrcache/defaults.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -31,36 +34,87 @@ static int cmp_double(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
-/* Of the light samples a shading point would take on material m's emitting triangles (by area, from
- * every stride-th valid pixel's shading point, 8 each), the fraction no surface hides, among those
- * that face the point and that it faces; 1 when there are none, -1 when out of memory. */
-static double visible_fraction(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride)
+/* Pilot (choose_materials): at most this many shading points, every stride-th valid pixel's, and this
+ * many light samples at each. */
+#define PILOT_POINTS 512
+#define PILOT_SAMPLES 16
+
+/* Sums over the pilot's points: N, Σ_p E_p, Σ_p var_p of a light sample, and Σ_p E_p² (unbiased:
+ * mean_p² − s_p²/K), where E_p is the irradiance from the material at p (estimated by mean_p, the mean
+ * of its K = PILOT_SAMPLES light samples, s_p² their unbiased sample variance). */
+typedef struct pilot_sums {
+    double points, mean, var, mean_sq;
+} pilot_sums;
+
+/* The pooled relative variance per sample of an estimator with variance var_p at each point:
+ * N · Σ_p var_p / (Σ_p E_p)², one sample's variance at the average point over the squared average
+ * irradiance (points that see none of the emitter dilute both estimators alike); +∞ when no sample
+ * reached the emitter (nothing measured). */
+static double pooled_cv2(const pilot_sums *ps, double var)
 {
+    return ps->mean > 0.0 ? ps->points * fmax(var, 0.0) / (ps->mean * ps->mean) : INFINITY;
+}
+
+/* Measures the two estimators of the irradiance E_p from emitting material m (Le: the luminance of its
+ * emission) at every stride-th valid shading point p (normal n), and returns their pooled relative
+ * variances per sample (pooled_cv2):
+ *   light sampling, as the final render does it: one of m's emitting triangles with the probability the
+ *     final render's light selection gives it at p (ic_scene_local_lights where the final render builds
+ *     local selections, else by power), renormalised over m, and a point x on it by area;
+ *     f = Le·cos θ_p·cos θ_l / |x − p|² / pdf_area(x), 0 where a shadow ray finds x hidden, x is behind p
+ *     or p sees the back of a one-sided emitter. PILOT_SAMPLES of them at p give mean_p and s_p². The
+ *     final render picks m at all with probability P_m (its share of that selection): its sample is
+ *     then f / P_m, else 0, whose variance is (s_p² + E_p²)/P_m − E_p².
+ *   gathering, as a record's hemisphere rays do it: a cosine-weighted direction about n, f = π·Le where
+ *     its first hit is m's emitting side, else 0. An estimator that takes only the values 0 and π·Le
+ *     with mean E_p has variance E_p·(π·Le − E_p) exactly, so it needs no rays of its own: E_p comes
+ *     from the light samples, which reach a small emitter far more often than hemisphere rays would (a
+ *     few thousand hemisphere rays hit a Cornell-box lamp a few dozen times, too few to measure a
+ *     variance by).
+ * Deterministic: each point's random stream comes from the seed, m and the pixel. Returns 0 when out
+ * of memory. */
+static int pilot(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride, double *cv2_light,
+                 double *cv2_gather)
+{
+    const uint32_t nl = s->tri_light_count;
     uint32_t count = 0;
-    for (uint32_t li = 0; li < s->tri_light_count; ++li)
+    for (uint32_t li = 0; li < nl; ++li)
         count += s->triangle_material[s->tri_lights[li].triangle] == m;
+    const int local = nl <= IC_LOCAL_LIGHTS_MAX && c->light_sel.tri > 0.0f;
     uint32_t *tri = malloc(sizeof *tri * (count ? count : 1));
     double *cdf = malloc(sizeof *cdf * (count + 1));
-    if (!tri || !cdf) {
+    float *pmf = local ? malloc(sizeof *pmf * nl) : NULL, *all_cdf = local ? malloc(sizeof *all_cdf * (nl + 1)) : NULL;
+    if (!tri || !cdf || (local && (!pmf || !all_cdf))) {
         free(tri);
         free(cdf);
-        return -1.0;
+        free(pmf);
+        free(all_cdf);
+        return 0;
     }
-    cdf[0] = 0.0;
-    for (uint32_t li = 0, k = 0; li < s->tri_light_count; ++li)
-        if (s->triangle_material[s->tri_lights[li].triangle] == m) {
-            tri[k] = li;
-            cdf[k + 1] = cdf[k] + s->tri_lights[li].area;
-            ++k;
-        }
-    size_t npix = (size_t)c->g.width * c->g.height, seen = 0, open = 0;
+    for (uint32_t li = 0, k = 0; li < nl; ++li)
+        if (s->triangle_material[s->tri_lights[li].triangle] == m)
+            tri[k++] = li;
+    const double le = v3_lum(s->materials[m].emission), K = PILOT_SAMPLES;
+    pilot_sums ps = {0};
+    size_t npix = (size_t)c->g.width * c->g.height;
     for (size_t i = 0, k = 0; i < npix && count; ++i) {
         if (!c->g.valid[i] || k++ % stride)
             continue;
-        ic_rng rng = ic_rng_make(c->seed, 0x6c61726765ULL, i, 0);
-        for (int j = 0; j < 8; ++j) {
-            /* A triangle by area: the last cdf entry below u. */
-            double u = ic_rng_double(&rng) * cdf[count];
+        const ic_vec3 p = c->g.p[i], n = c->g.n[i];
+        /* The final render's selection over m's triangles at p: cdf, unnormalised (its total is m's
+         * share of the triangle lights). */
+        int have_local = local && ic_scene_local_lights(s, p, n, NULL, pmf, all_cdf);
+        cdf[0] = 0.0;
+        for (uint32_t j = 0; j < count; ++j)
+            cdf[j + 1] = cdf[j] + (have_local ? (double)pmf[tri[j]]
+                                              : (double)s->tri_lights[tri[j]].power / s->tri_light_power);
+        const double share = cdf[count], keep = fmin(1.0, share * c->light_sel.tri);
+        ic_rng rng = ic_rng_make(c->seed, 0x70696c6f74ULL, i, m);
+        double sum = 0.0, sum2 = 0.0;
+        for (int j = 0; j < PILOT_SAMPLES && keep > 0.0; ++j) {
+            /* A triangle: the last cdf entry below u; then a point on it by area. */
+            double u = ic_rng_double(&rng) * share;
+            float u1 = ic_rng_float(&rng), u2 = ic_rng_float(&rng);
             uint32_t lo = 0, hi = count - 1;
             while (lo < hi) {
                 uint32_t mid = (lo + hi + 1) / 2;
@@ -70,43 +124,94 @@ static double visible_fraction(const ic_ctx *c, const ic_scene *s, uint32_t m, s
                     hi = mid - 1;
             }
             const ic_tri_light *l = &s->tri_lights[tri[lo]];
+            const double q = (cdf[lo + 1] - cdf[lo]) / share; /* the triangle's probability within m */
             float b1, b2;
-            ic_warp_triangle(ic_rng_float(&rng), ic_rng_float(&rng), &b1, &b2);
+            ic_warp_triangle(u1, u2, &b1, &b2);
             const uint32_t *v = &s->triangles[3 * l->triangle];
             ic_vec3 x = v3_add(v3_add(v3_scale(s->positions[v[0]], 1.0f - b1 - b2), v3_scale(s->positions[v[1]], b1)),
                                v3_scale(s->positions[v[2]], b2));
-            ic_vec3 d = v3_sub(x, c->g.p[i]);
+            ic_vec3 d = v3_sub(x, p);
             float dist = v3_len(d);
-            if (!(dist > 0.0f))
+            if (!(dist > 0.0f) || !(q > 0.0))
                 continue;
             d = v3_scale(d, 1.0f / dist);
-            if (v3_dot(d, c->g.n[i]) <= 0.0f || (!l->two_sided && v3_dot(d, l->normal) >= 0.0f))
+            float cos_p = v3_dot(d, n), cos_l = -v3_dot(d, l->normal);
+            if (l->two_sided)
+                cos_l = fabsf(cos_l);
+            if (cos_p <= 0.0f || cos_l <= 0.0f)
                 continue;
-            ic_ray r = {ic_offset_ray_origin(c->g.p[i], c->g.n[i], d), d, 0.0f, dist * (1.0f - 1e-3f)};
-            ++seen;
-            open += !ic_accel_occluded1(c->tr->accel, &r);
+            ic_ray r = {ic_offset_ray_origin(p, n, d), d, 0.0f, dist * (1.0f - 1e-3f)};
+            if (ic_accel_occluded1(c->tr->accel, &r))
+                continue;
+            double f = le * cos_p * cos_l / ((double)dist * dist) * l->area / q;
+            sum += f;
+            sum2 += f * f;
         }
+        const double mean = sum / K, var = fmax(0.0, (sum2 - K * mean * mean) / (K - 1.0));
+        ps.points += 1.0;
+        ps.mean += mean;
+        ps.var += keep > 0.0 ? (var + mean * mean) / keep - mean * mean : 0.0;
+        ps.mean_sq += mean * mean - var / K;
     }
     free(tri);
     free(cdf);
-    return seen ? (double)open / (double)seen : 1.0;
+    free(pmf);
+    free(all_cdf);
+    *cv2_light = pooled_cv2(&ps, ps.var);
+    *cv2_gather = pooled_cv2(&ps, IC_PI * le * ps.mean - ps.mean_sq);
+    return 1;
 }
 
-/* Large emitters. Seed 004 §3 caches all indirect light, and renderers built on a cache leave the sky
- * to the records; this extends that to an emitting material that is large and partly hidden: one that
- * covers, at the median shading point of the image, at least large_emitters of the cosine-weighted
- * hemisphere (hemisphere_share, unoccluded) and of whose light samples at most
- * IC_LARGE_EMITTER_VISIBLE reach it (visible_fraction). Such an emitter — staircase2's window quads —
- * is where light sampling is at its worst (most samples land on hidden parts, and each visible one
- * carries a large weight), while its irradiance varies slowly (a source that large casts soft
- * shadows), which is what the cache interpolates well. It is then not light-sampled in the final
- * render; the hemisphere rays count its emission instead, so the records carry its direct light, as
- * they carry the environment's. A lamp like the Cornell box's (0.6 % of the hemisphere, 90 % of its
- * samples visible) keeps being sampled: the cache would blur its sharper shadows. Fills
- * direct_pmf/direct_cdf and narrows light_sel to the emitters left; returns 0 when out of memory. */
-/* Marks in cached_mat[m] (zeroed, material_count entries) each emitting material the records carry:
- * the median over sampled shading points of its hemisphere share reaches large_emitters and at most
- * IC_LARGE_EMITTER_VISIBLE of its light samples are unblocked. Returns 0 when out of memory. */
+/* Hemisphere rays one record gathers (its first set): the stratified grid's M × N cells, or the
+ * progressive sampler's first round (ic_gather_opts, zero fields resolved as gather.c does). */
+static double record_rays(const ic_gather_opts *g)
+{
+    ic_gather_opts d;
+    ic_gather_opts_default(&d);
+    if (g->method == IC_GATHER_PROGRESSIVE)
+        return g->first_round_rays ? g->first_round_rays : d.first_round_rays;
+    uint32_t m = g->theta_strata ? g->theta_strata : d.theta_strata;
+    uint32_t n = g->phi_strata ? g->phi_strata : (uint32_t)lround((double)IC_PI * m);
+    return (double)m * (double)n;
+}
+
+/* Large emitters. The records carry indirect light (Ward et al. 1988; Frolov et al. 2012 §3.2: the
+ * final render path-traces direct light and reads the cache for the smooth rest), and here the
+ * environment's too; this extends that to an emitting material whose direct light the records
+ * estimate better than the final render's light samples would. Which estimator serves a light better
+ * is measured, not guessed: Veach 1997 ch. 9 compares light sampling and BSDF sampling by their
+ * variance on the integrand at hand (a large source is better reached by sampling directions, a small
+ * one by sampling its area), and so does the pilot (pilot()): at the image's shading points, the
+ * pooled relative variance per sample of the final render's light sampling on the material,
+ * cv²_light, and that of a record's cosine-weighted hemisphere rays, cv²_gather. Each is divided by
+ * the samples it is averaged over where the image reads it: a pixel's light samples S (the cache
+ * render's default IC_DEFAULT_SPP_IC samples per pixel × light_samples; the final render's own count
+ * is not known here, and may be adaptive or bounded by time) and a record's hemisphere rays M
+ * (record_rays, 800 by default). The material is cached iff cv²_light / S > cv²_gather / M. The
+ * records' side is a bound from above: their rays are stratified and a pixel interpolates several
+ * records, both of which lower their noise below cv²_gather / M.
+ *
+ * A window seen through an opening (a large source most of whose area is hidden: light samples on it
+ * mostly wasted, each visible one carrying a large weight) is such an emitter, and its irradiance
+ * varies slowly (a source that large casts soft shadows), which is what the cache interpolates well.
+ * It is then not light-sampled in the final render; the hemisphere rays count its emission instead,
+ * so the records carry its direct light, as they carry the environment's. A lamp, even a ceiling
+ * panel that covers a few per cent of the hemisphere and that furniture hides from many points, is
+ * light-sampled at a small fraction of the hemisphere rays' variance and keeps being sampled: cached,
+ * its light would carry the records' noise and blur its shadows (a panel over a table that blocks 44 %
+ * of its light samples: cv²_light 0.64, cv²_gather 79; cached, relMSE doubles). Measured (cv²_light,
+ * cv²_gather, at M / S = 12.5): the Cornell box's lamp 0.11, 185 and stair-hall's ceiling panel
+ * 0.018, 890 stay sampled; staircase2's three window quads (97, 229; 36, 9.6; 63, 175) and a room's
+ * window with a bright outside behind it (22, 95) are cached.
+ *
+ * Only a material that covers, at the median sampled shading point, at least large_emitters of the
+ * cosine-weighted hemisphere (hemisphere_share, unoccluded) is piloted; a smaller one is light-sampled
+ * without measuring (its hemisphere rays' cv² at a point is at least (1 − a)/a for a share a: 99 at
+ * a = 0.01). The pilot costs PILOT_SAMPLES shadow rays at each of at most PILOT_POINTS shading points
+ * per material piloted (8,192 rays; a few ms).
+ *
+ * Marks in cached_mat[m] (zeroed, material_count entries) each emitting material the records carry.
+ * Returns 0 when out of memory. */
 static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, uint8_t *cached_mat)
 {
     size_t npix = (size_t)c->g.width * c->g.height;
@@ -115,6 +220,12 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, ui
     size_t want = ((size_t)1 << 23) / s->tri_light_count;
     want = want < 64 ? 64 : want > 1024 ? 1024 : want;
     size_t stride = valid / want + 1, points = 0, cap = valid / stride + 1; /* cap: sampled points, at most */
+    /* The pilot's points: every pilot_stride-th valid pixel, at most ~PILOT_POINTS. */
+    size_t pilot_stride = valid / PILOT_POINTS + 1;
+    /* What each estimator's samples are averaged over: a pixel's light samples (at the cache render's
+     * default samples per pixel) and a record's hemisphere rays. */
+    const double light_per_pixel = (double)IC_DEFAULT_SPP_IC * c->o.light_samples,
+                 rays_per_record = record_rays(&c->o.gather);
     /* Shares per emitting material (slot[m]: its row, UINT32_MAX for the others) and sampled point. */
     uint32_t nm = s->material_count, ne = 0;
     uint32_t *slot = malloc(sizeof *slot * (nm ? nm : 1));
@@ -146,9 +257,11 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, ui
             continue;
         memcpy(row, &share[(size_t)slot[m] * cap], sizeof *row * points);
         qsort(row, points, sizeof *row, cmp_double);
-        double v = row[points / 2] >= c->o.large_emitters.value ? visible_fraction(c, s, m, stride) : 1.0;
-        ok = v >= 0.0;
-        cached_mat[m] = ok && v <= IC_LARGE_EMITTER_VISIBLE;
+        if (row[points / 2] < c->o.large_emitters.value)
+            continue;
+        double cv2_light = INFINITY, cv2_gather = INFINITY;
+        ok = pilot(c, s, m, pilot_stride, &cv2_light, &cv2_gather);
+        cached_mat[m] = ok && cv2_light / light_per_pixel > cv2_gather / rays_per_record;
     }
     free(slot);
     free(share);

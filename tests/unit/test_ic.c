@@ -463,6 +463,62 @@ static void test_convergence(void)
     ic_image_free(&img);
 }
 
+/* A lamp stays light-sampled (ic_emitters.c: the records take an emitter only where a pilot measures
+ * their hemisphere rays to be the better estimator): a plain ceiling panel over a closed room, 2.5 %
+ * of a shading point's hemisphere at the median (above the pre-filter's 1 %, so the pilot decides),
+ * and the same panel over a table and a partition that hide it from 44 % of its light samples from a
+ * low camera (the former rule, cache a large emitter when at most 75 % of its light samples reach it,
+ * cached that one and doubled relMSE). The window of test_window (whose scene files it reuses) is still
+ * cached. */
+static void test_panel(void)
+{
+    test_write_file(IC_TEST_TMP "/panel.mtl", "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl lamp\nKd 0 0 0\nKe 10 10 10\n");
+    /* The room x, z in [0, 4], y in [0, 3], and the panel x, z in [1.4, 2.6] just under the ceiling,
+     * facing down. */
+    const char *room = "mtllib panel.mtl\nusemtl wall\n"
+                       "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 3 0\nv 4 3 0\nv 4 3 4\nv 0 3 4\n"
+                       "f 1 4 3 2\nf 5 6 7 8\nf 1 5 8 4\nf 2 3 7 6\nf 1 2 6 5\nf 4 8 7 3\n"
+                       "usemtl lamp\nv 1.4 2.99 1.4\nv 2.6 2.99 1.4\nv 2.6 2.99 2.6\nv 1.4 2.99 2.6\nf 9 10 11 12\n";
+    test_write_file(IC_TEST_TMP "/panel.obj", room);
+    char furnished[2048];
+    snprintf(furnished, sizeof furnished, "%s%s", room,
+             "usemtl wall\n"
+             /* a table top at y = 0.8 and a partition z = 2, x in [0, 2.5], 2.2 high (both sides) */
+             "v 0.8 0.8 0.8\nv 3.2 0.8 0.8\nv 3.2 0.8 3.2\nv 0.8 0.8 3.2\nf 13 16 15 14\nf 13 14 15 16\n"
+             "v 0 0 2\nv 2.5 0 2\nv 2.5 2.2 2\nv 0 2.2 2\nf 17 18 19 20\nf 17 20 19 18\n");
+    test_write_file(IC_TEST_TMP "/panel-table.obj", furnished);
+    test_write_file(IC_TEST_TMP "/panel.json",
+                    "{\n  \"camera\": {\"eye\": [3.6, 2.0, 0.4], \"target\": [1.0, 0.8, 3.0], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 70, \"width\": 64, \"height\": 48},\n"
+                    "  \"meshes\": [{\"path\": \"panel.obj\"}]\n}\n");
+    test_write_file(IC_TEST_TMP "/panel-table.json",
+                    "{\n  \"camera\": {\"eye\": [3.8, 0.6, 0.2], \"target\": [1.5, 0.2, 2.5], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 70, \"width\": 64, \"height\": 48},\n"
+                    "  \"meshes\": [{\"path\": \"panel-table.obj\"}]\n}\n");
+    const struct {
+        const char *name, *path;
+        uint32_t cached;
+    } cases[] = {
+        {"plain ceiling panel", IC_TEST_TMP "/panel.json", 0},
+        {"ceiling panel over a table", IC_TEST_TMP "/panel-table.json", 0},
+        {"window (test_window)", IC_TEST_TMP "/window.json", 2},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        for (int threads = 1; threads <= 2; ++threads) {
+            ic_render_options o = ic_options();
+            o.spp = 2;
+            o.threads = threads;
+            ic_image img = {0};
+            ic_render_stats st;
+            int ok = test_render(cases[k].path, 64, 48, &o, &img, &st);
+            CHECK(ok && st.cached_emitters == cases[k].cached,
+                  "%s, %d thread(s): %u emitting triangles cached (want %u)", cases[k].name, threads,
+                  ok ? st.cached_emitters : 0u, cases[k].cached);
+            ic_image_free(&img);
+        }
+    }
+}
+
 int main(void)
 {
     test_cornell();
@@ -470,6 +526,7 @@ int main(void)
     test_leak();
     test_step();
     test_window();
+    test_panel();
     test_convergence();
     TEST_MAIN_END();
 }
