@@ -104,10 +104,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_DEFAULT_LIGHT_SAMPLES, "%g", "", IC_SCOPE_IC, "light samples per shading point in the final render") \
     X(LARGE_EMITTERS, "--large-emitters", NULL, IC_OPT_NUMBER_OFF, render.ic.large_emitters, 0, 1, "F|off", \
       IC_DEFAULT_LARGE_EMITTERS, "%g", "", IC_SCOPE_IC, "an emitting material that covers at least F of the " \
-      "cosine-weighted hemisphere at the image's median shading point, and over a quarter of whose light " \
-      "samples hit something else first (a window seen through openings), lights the scene through the " \
-      "records instead of being light-sampled; off: sample every emitter. The summary line and the stats " \
-      "(cached_emitters) say when it happens") \
+      "cosine-weighted hemisphere at the image's median shading point, and whose light samples a pilot " \
+      "measures to be noisier per pixel than the records' hemisphere rays (a window seen through openings), " \
+      "lights the scene through the records instead of being light-sampled; off: sample every emitter. The " \
+      "summary line and the stats (cached_emitters) say when it happens") \
     X(RECORD_FILTER, "--record-filter", NULL, IC_OPT_NUMBER_OFF, render.ic.record_filter, 0, 16, "S|off", \
       IC_DEFAULT_RECORD_FILTER, "%g", "", IC_SCOPE_IC, "record noise control: after construction each record's " \
       "value becomes a robust mean of its neighbours' within S times its influence radius (differences " \

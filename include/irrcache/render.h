@@ -82,10 +82,11 @@ typedef struct ic_ic_options {
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     ic_switched_value large_emitters; /* which emitters the records carry instead of light sampling: an
                               emitting material that covers at least `value` of the cosine-weighted
-                              hemisphere at the image's median shading point, and over a quarter of whose
-                              light samples are blocked, lights the scene through the records, as the
-                              environment does, and is not sampled in the final render (a window seen
-                              through openings); off: every emitter is light-sampled [0.01] */
+                              hemisphere at the image's median shading point is piloted (ic_emitters.c),
+                              and where light sampling it would be noisier per pixel than the records'
+                              hemisphere rays (a window seen through openings), it lights the scene
+                              through the records, as the environment does, and is not sampled in the
+                              final render; off: every emitter is light-sampled [0.01] */
     ic_switched_value record_filter; /* record noise control after construction (ic_filter.c): each
                               record's value a robust mean of its neighbours' within `value` times its
                               influence radius a_i·R_i; off: none [2] */

@@ -168,13 +168,6 @@ ic_result ic_ic_build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *
  * from --accuracy, blue, down to accuracy / IC_AMAP_RANGE, red). */
 ic_result ic_ic_amap_image(const ic_ctx *c, ic_image *out);
 #define IC_AMAP_RANGE 32.0f
-/* Large emitters the records carry (ic_emitters.c): IC_DEFAULT_LARGE_EMITTERS
- * (irrcache/defaults.h) is the median share of a shading point's cosine-weighted hemisphere an
- * emitting material covers, and the largest fraction of light samples on it that reach it. Measured
- * on the image's shading points: staircase2's three window quads cover 2.0–8.7 % and 6–60 % of their
- * samples reach them; its 248 spot triangles cover 0.03 %; the Cornell box's ceiling light covers
- * 0.6–0.7 % and 90 % of its samples reach it. */
-#define IC_LARGE_EMITTER_VISIBLE 0.75
 
 /* What a test needs to check convergence independently: the converged cache and the shading points
  * with the inputs of the discernibility test. */

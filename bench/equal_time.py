@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""bench/equal_time.py: one cache configuration against the path tracer given the same wall time, on one
+scene, measured against a path-traced reference whose own noise is reported beside the errors.
+
+    python3 bench/equal_time.py SCENE [--width 320 --height 240] [--ref-spp 4096] [--name NAME]
+                                [--refs DIR] [--irrcache BIN] [--no-pt] -- [irrcache render options]
+
+The reference is rendered once (cached in --refs, keyed by the scene file's bytes, the size and the
+sample count) as two halves with independent seeds; its relMSE against the truth is about a quarter of
+the halves' relMSE against each other, and that figure is printed as the reference's noise (relMSE and
+low-pass relMSE). Then the cache renders with the given options (`--integrator ic` is added), and the
+path tracer renders with `--time` set to the cache render's own `seconds` from its stats. Both are
+compared with `irrcache diff --json`. One line per run, and a JSON record with --json-out. Python 3
+standard library only. Used for the record-noise-control figures in BENCHMARKS.md.
+"""
+
+import argparse
+import hashlib
+import json
+import os
+import struct
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        f.readline()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        n = w * h * 3
+        data = f.read(4 * n)
+    return w, h, struct.unpack(("<" if scale < 0 else ">") + "%df" % n, data)
+
+
+def write_pfm(path, w, h, values):
+    tmp = path + ".tmp"
+    with open(tmp, "wb") as f:
+        f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+        f.write(struct.pack("<%df" % len(values), *values))
+    os.replace(tmp, path)
+
+
+def diff(binary, image, ref):
+    out = subprocess.run([binary, "diff", image, ref, "--json"], capture_output=True, text=True, check=True)
+    return json.loads(out.stdout)
+
+
+def reference(args):
+    """Path of the averaged reference and the reference's noise (relMSE, low-pass relMSE)."""
+    with open(args.scene, "rb") as f:
+        key = hashlib.sha256(f.read() + b"%d %d %d" % (args.width, args.height, args.ref_spp)).hexdigest()[:16]
+    base = os.path.join(args.refs, "%s-%s" % (os.path.splitext(os.path.basename(args.scene))[0], key))
+    halves = []
+    for seed in (101, 202):
+        path = "%s-%d.pfm" % (base, seed)
+        if not os.path.exists(path):
+            subprocess.run([args.irrcache, "render", args.scene, "--width", str(args.width), "--height",
+                            str(args.height), "--spp", str(args.ref_spp // 2), "--adaptive-sampling", "off",
+                            "--seed", str(seed), "-q", "-o", path], check=True)
+        halves.append(path)
+    ref = base + "-ref.pfm"
+    noise_path = base + "-noise.json"
+    if not os.path.exists(ref) or not os.path.exists(noise_path):
+        w, h, a = read_pfm(halves[0])
+        _, _, b = read_pfm(halves[1])
+        write_pfm(ref, w, h, [(x + y) / 2 for x, y in zip(a, b)])
+        d = diff(args.irrcache, halves[0], halves[1])
+        with open(noise_path, "w") as f:
+            json.dump({"relmse": d["relmse"] / 4, "relmse_lowpass": d["relmse_lowpass"] / 4}, f)
+    with open(noise_path) as f:
+        return ref, json.load(f)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog="-- then irrcache render options")
+    ap.add_argument("scene")
+    ap.add_argument("--width", type=int, default=320)
+    ap.add_argument("--height", type=int, default=240)
+    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--name", default="ic")
+    ap.add_argument("--refs", default=os.path.join(HERE, "cache", "equal-time"))
+    ap.add_argument("--out", default=os.path.join(HERE, "out", "equal-time"))
+    ap.add_argument("--irrcache", default=os.path.join(ROOT, "build", "irrcache"))
+    ap.add_argument("--no-pt", action="store_true", help="skip the equal-time path tracer")
+    ap.add_argument("--json-out", help="append the run's record to this JSON-lines file")
+    argv = sys.argv[1:]
+    cut = argv.index("--") if "--" in argv else len(argv)
+    args = ap.parse_args(argv[:cut])
+    opts = argv[cut + 1:]  # after "--": irrcache render options
+    os.makedirs(args.refs, exist_ok=True)
+    os.makedirs(args.out, exist_ok=True)
+    ref, noise = reference(args)
+    stem = os.path.join(args.out, "%s-%s" % (os.path.splitext(os.path.basename(args.scene))[0], args.name))
+    size = ["--width", str(args.width), "--height", str(args.height)]
+    subprocess.run([args.irrcache, "render", args.scene, "--integrator", "ic", "-q", "-o", stem + ".pfm", "-o",
+                    stem + ".png", "--stats", stem + ".json"] + size + opts, check=True)
+    with open(stem + ".json") as f:
+        stats = json.load(f)
+    rec = {"scene": args.scene, "name": args.name, "options": opts, "seconds": stats["seconds"],
+           "records": stats.get("records"), "reference_noise": noise, "ic": diff(args.irrcache, stem + ".pfm", ref)}
+    if not args.no_pt:
+        subprocess.run([args.irrcache, "render", args.scene, "-q", "-o", stem + "-pt.pfm", "-o", stem + "-pt.png",
+                        "--time", "%.3f" % stats["seconds"], "--spp", "16777216"] + size, check=True)
+        rec["pt"] = diff(args.irrcache, stem + "-pt.pfm", ref)
+    ic, pt = rec["ic"], rec.get("pt")
+    line = "%-12s %-16s %7.2f s %6s records | cache relMSE %.5f low-pass %.5f" % (
+        os.path.splitext(os.path.basename(args.scene))[0], args.name, rec["seconds"], rec["records"],
+        ic["relmse"], ic["relmse_lowpass"])
+    if pt:
+        line += " | path tracer relMSE %.5f low-pass %.5f | ratio %.2f, low-pass %.2f" % (
+            pt["relmse"], pt["relmse_lowpass"], pt["relmse"] / ic["relmse"], pt["relmse_lowpass"] / ic["relmse_lowpass"])
+    line += " | reference noise %.5f, low-pass %.5f" % (noise["relmse"], noise["relmse_lowpass"])
+    print(line, flush=True)
+    if args.json_out:
+        with open(args.json_out, "a") as f:
+            f.write(json.dumps(rec) + "\n")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
