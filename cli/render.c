@@ -1,12 +1,14 @@
 /*
  * render.c — `irrcache render SCENE -o OUT [options]`.
  *
- * The options are declared once, in options.h. Every output path is checked for a known format and a
- * writable folder before rendering starts, so a long render is never lost to a typo.
+ * The options are declared once, in options.h. Every output (images, AOVs, --stats, --records-json,
+ * --save-cache) is checked before rendering starts (outputs.h), so a long render is never lost to a
+ * typo; when one output still fails at the end, the others are written and the exit status is 1.
  */
 #include "cli.h"
 #include "json_out.h"
 #include "options.h"
+#include "outputs.h"
 
 #include "core/atomic_file.h"
 #include "irrcache/render.h"
@@ -20,19 +22,6 @@
 #include <unistd.h>
 
 typedef ic_cli_args render_args;
-
-/* Fails early (before a long render) if path's folder cannot take a new file. */
-static int check_writable(const char *path)
-{
-    ic_atomic_file f;
-    ic_error err;
-    if (ic_atomic_file_open(&f, path, &err) != IC_OK) {
-        fprintf(stderr, "irrcache render: %s\n", err.message);
-        return 0;
-    }
-    ic_atomic_file_abort(&f);
-    return 1;
-}
 
 typedef struct progress_state {
     int enabled;
@@ -106,7 +95,16 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
 
 /* AOVs go next to the first output: <stem>.<aov>.<ext>, with .exr for linear data and .png for the
  * overlay. */
-static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_image_write_options *wo)
+typedef struct aov_file {
+    const char *name, *suffix, *option;
+} aov_file;
+static const aov_file aov_files[] = {{"indirect", ".indirect.exr", "--aov indirect"},
+                                     {"records", ".records.png", "--aov records"},
+                                     {"density", ".density.exr", "--aov density"},
+                                     {"amap", ".amap.png", "--aov amap"}};
+#define AOV_COUNT (int)(sizeof aov_files / sizeof aov_files[0])
+
+static void aov_path(const char *first, int k, char *path, size_t size)
 {
     char stem[4096];
     snprintf(stem, sizeof stem, "%s", first);
@@ -114,21 +112,26 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
     char *slash = strrchr(stem, '/');
     if (dot && (!slash || dot > slash))
         *dot = 0;
-    const struct { const ic_image *img; const char *suffix; } list[] = {
-        {&aovs->indirect, ".indirect.exr"}, {&aovs->records, ".records.png"}, {&aovs->density, ".density.exr"},
-        {&aovs->amap, ".amap.png"}};
-    for (size_t i = 0; i < sizeof list / sizeof list[0]; ++i) {
-        if (!list[i].img->rgb)
+    snprintf(path, size, "%s%s", stem, aov_files[k].suffix);
+}
+
+/* Writes every AOV that was made; returns the number that failed (each reported). */
+static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_image_write_options *wo)
+{
+    const ic_image *imgs[AOV_COUNT] = {&aovs->indirect, &aovs->records, &aovs->density, &aovs->amap};
+    int failed = 0;
+    for (int k = 0; k < AOV_COUNT; ++k) {
+        if (!imgs[k]->rgb)
             continue;
         char path[4200];
-        snprintf(path, sizeof path, "%s%s", stem, list[i].suffix);
+        aov_path(first, k, path, sizeof path);
         ic_error err;
-        if (ic_image_write(path, list[i].img, wo, &err) != IC_OK) {
-            fprintf(stderr, "irrcache render: %s\n", err.message);
-            return 0;
+        if (ic_image_write(path, imgs[k], wo, &err) != IC_OK) {
+            fprintf(stderr, "irrcache render: %s %s\n", aov_files[k].option, err.message);
+            ++failed;
         }
     }
-    return 1;
+    return failed;
 }
 
 static int write_records_json(const char *path, const ic_render_aovs *aovs)
@@ -165,13 +168,25 @@ int ic_cli_render(int argc, char **argv)
     }
     if (rc)
         return rc;
+    /* Every file the run will write, checked before anything is rendered. */
+    ic_cli_output outs[IC_CLI_MAX_OUTPUTS + AOV_COUNT + 3];
+    char aov_paths[AOV_COUNT][4200];
+    int n_outs = 0;
     for (int i = 0; i < a.output_count; ++i)
-        if (!check_writable(a.outputs[i]))
-            return 1;
-    if ((a.stats_path && !check_writable(a.stats_path)) ||
-        (a.render.ic.save_cache && !check_writable(a.render.ic.save_cache)) ||
-        (a.records_json && !check_writable(a.records_json)))
-        return 1;
+        outs[n_outs++] = (ic_cli_output){"-o", a.outputs[i]};
+    for (int k = 0; k < AOV_COUNT && a.aov; ++k)
+        if (strstr(a.aov, aov_files[k].name)) {
+            aov_path(a.outputs[0], k, aov_paths[k], sizeof aov_paths[k]);
+            outs[n_outs++] = (ic_cli_output){aov_files[k].option, aov_paths[k]};
+        }
+    if (a.stats_path)
+        outs[n_outs++] = (ic_cli_output){"--stats", a.stats_path};
+    if (a.records_json)
+        outs[n_outs++] = (ic_cli_output){"--records-json", a.records_json};
+    if (a.render.ic.save_cache)
+        outs[n_outs++] = (ic_cli_output){"--save-cache", a.render.ic.save_cache};
+    if (!ic_cli_check_outputs(outs, n_outs, a.scene))
+        return 2;
 
     progress_state prog = {0};
     prog.enabled = !a.quiet && isatty(fileno(stderr));
@@ -222,17 +237,25 @@ int ic_cli_render(int argc, char **argv)
     int w = img.width, h = img.height;
     ic_image_write_options wo = {0};
     wo.exposure = a.given[IC_ARG_EXPOSURE] ? (float)a.exposure : ic_scene_exposure(scene);
-    int ok = 1;
-    for (int i = 0; i < a.output_count && ok; ++i) {
+    /* One failed output does not cost the others: each is written, and the failures are named. */
+    char failed[1024] = "";
+    int n_failed = 0;
+#define FAILED(what, path)                                                                              \
+    (++n_failed, snprintf(failed + strlen(failed), sizeof failed - strlen(failed), "%s%s %s",           \
+                          failed[0] ? ", " : "", what, path))
+    for (int i = 0; i < a.output_count; ++i) {
         if (ic_image_write(a.outputs[i], &img, &wo, &err) != IC_OK) {
-            fprintf(stderr, "irrcache render: %s\n", err.message);
-            ok = 0;
+            fprintf(stderr, "irrcache render: -o %s\n", err.message);
+            FAILED("-o", a.outputs[i]);
         }
     }
-    if (ok && opt.aovs)
-        ok = write_aovs(a.outputs[0], &aovs, &wo);
-    if (ok && a.records_json)
-        ok = write_records_json(a.records_json, &aovs);
+    if (opt.aovs && a.aov) {
+        int n = write_aovs(a.outputs[0], &aovs, &wo);
+        if (n)
+            FAILED("--aov", a.aov);
+    }
+    if (a.records_json && !write_records_json(a.records_json, &aovs))
+        FAILED("--records-json", a.records_json);
     free(aovs.record_views);
     ic_image_free(&img);
     ic_image_free(&aovs.indirect);
@@ -240,11 +263,17 @@ int ic_cli_render(int argc, char **argv)
     ic_image_free(&aovs.density);
     ic_image_free(&aovs.amap);
     ic_scene_free(scene);
-    if (ok && st.cut_short)
+    if (st.cut_short)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its pass limit (%d passes) before "
                         "it converged; with --strategy batch raise --max-passes\n", st.passes);
-    if (ok && a.stats_path)
-        ok = write_stats(a.stats_path, &a, w, h, &st);
+    if (a.stats_path && !write_stats(a.stats_path, &a, w, h, &st))
+        FAILED("--stats", a.stats_path);
+#undef FAILED
+    int ok = n_failed == 0;
+    if (!ok)
+        fprintf(stderr, "irrcache render: the render finished but %d output%s could not be written (%s); the other "
+                        "outputs were written: free disk space or fix the paths and run again\n",
+                n_failed, n_failed == 1 ? "" : "s", failed);
     if (ok && !a.quiet) {
         fprintf(stderr, "irrcache: %dx%d, %d spp", w, h, st.spp);
         if (st.spp_max != st.spp)

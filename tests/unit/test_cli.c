@@ -146,7 +146,7 @@ int main(void)
         {"unknown strategy", SCENES "plain_quad.obj -o " OUT " --integrator ic --strategy xyz", 2, "xyz"},
         {"cache option without ic", SCENES "plain_quad.obj -o " OUT " --accuracy 0.2", 2, "--integrator ic"},
         {"unknown output format", SCENES "plain_quad.obj -o " IC_TEST_TMP "/x.bmp", 2, "x.bmp"},
-        {"unwritable output", SCENES "plain_quad.obj -o " IC_TEST_TMP "/no/such/dir/x.exr", 1, "no/such/dir/x.exr"},
+        {"unwritable output", SCENES "plain_quad.obj -o " IC_TEST_TMP "/no/such/dir/x.exr", 2, "no/such/dir/x.exr"},
         {"no output", SCENES "plain_quad.obj", 2, "-o"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i)

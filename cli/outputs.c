@@ -1,0 +1,99 @@
+/* outputs.c — checking the outputs of a render before it starts (outputs.h). */
+#include "outputs.h"
+
+#include "core/atomic_file.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define FAIL(o, ...)                                                                                   \
+    (fprintf(stderr, "irrcache render: %s %s: ", (o)->option, (o)->path), fprintf(stderr, __VA_ARGS__), \
+     fputc('\n', stderr), 0)
+
+/* Splits path into its folder ("." when it has none) and its last component. */
+static void split_path(const char *path, char *dir, size_t dir_size, const char **base)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        snprintf(dir, dir_size, ".");
+        *base = path;
+    } else if (slash == path) {
+        snprintf(dir, dir_size, "/");
+        *base = slash + 1;
+    } else {
+        snprintf(dir, dir_size, "%.*s", (int)(slash - path), path);
+        *base = slash + 1;
+    }
+}
+
+/* One output on its own; on success canon holds the canonical folder of path and its name, so that two
+ * spellings of one file ("a.exr", "./a.exr", "x/../a.exr", a folder reached through a link) compare
+ * equal. */
+static int check_one(const ic_cli_output *o, char *canon, size_t canon_size)
+{
+    const char *base;
+    char dir[PATH_MAX];
+    if (!o->path[0])
+        return FAIL(o, "empty path; give a file name");
+    if (strlen(o->path) >= sizeof dir - 64)
+        return FAIL(o, "path too long; use a shorter path");
+    split_path(o->path, dir, sizeof dir, &base);
+    struct stat st;
+    if (stat(o->path, &st) == 0) {
+        if (S_ISDIR(st.st_mode))
+            return FAIL(o, "is a folder; give a file name (for example %s/%s)", o->path,
+                        !strcmp(o->option, "--save-cache") ? "records.icc"
+                        : !strcmp(o->option, "-o")         ? "image.exr"
+                                                           : "out.json");
+        if (!S_ISREG(st.st_mode))
+            return FAIL(o, "is not a regular file (a device, pipe or socket); give a file name");
+    }
+    if (!base[0] || !strcmp(base, ".") || !strcmp(base, ".."))
+        return FAIL(o, "names a folder, not a file; give a file name");
+    struct stat ds;
+    if (stat(dir, &ds) != 0)
+        return FAIL(o, "folder %s %s; create it first or choose another", dir,
+                    errno == ENOENT ? "does not exist" : strerror(errno));
+    if (!S_ISDIR(ds.st_mode))
+        return FAIL(o, "%s is not a folder; choose another path", dir);
+    /* Creating the temporary file is the only sure test (permissions, a read-only file system, ACLs). */
+    ic_atomic_file f;
+    ic_error err;
+    if (ic_atomic_file_open(&f, o->path, &err) != IC_OK)
+        return FAIL(o, "cannot create a file in folder %s (%s); choose a writable folder", dir, strerror(errno));
+    ic_atomic_file_abort(&f);
+    char real[PATH_MAX];
+    if (!realpath(dir, real))
+        snprintf(real, sizeof real, "%s", dir);
+    snprintf(canon, canon_size, "%s/%s", real, base);
+    return 1;
+}
+
+int ic_cli_check_outputs(const ic_cli_output *outs, int count, const char *input)
+{
+    char(*canon)[PATH_MAX + 256] = calloc((size_t)count + 1, sizeof *canon);
+    if (!canon) {
+        fprintf(stderr, "irrcache render: out of memory checking the outputs\n");
+        return 0;
+    }
+    int ok = 1;
+    for (int i = 0; i < count && ok; ++i) {
+        ok = check_one(&outs[i], canon[i], sizeof canon[i]);
+        for (int j = 0; j < i && ok; ++j)
+            if (!strcmp(canon[i], canon[j]))
+                ok = FAIL(&outs[i], "the same file as %s %s; give each output its own name", outs[j].option,
+                          outs[j].path);
+    }
+    char real[PATH_MAX];
+    if (ok && input && realpath(input, real))
+        for (int i = 0; i < count && ok; ++i)
+            if (!strcmp(canon[i], real))
+                ok = FAIL(&outs[i], "is the scene file %s; writing it would destroy the scene, give another name",
+                          input);
+    free(canon);
+    return ok;
+}

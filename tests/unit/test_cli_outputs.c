@@ -1,0 +1,165 @@
+/*
+ * test_cli_outputs.c — every output of `irrcache render` is checked before the render starts (issue
+ * "Hardening", item 1): an -o, --aov, --stats, --records-json or --save-cache path that is an existing
+ * folder, a device or pipe, has a missing folder, cannot be created, or is the same file as another
+ * output (or the scene) is refused with exit 2 and one line naming the option and the path, and nothing
+ * is written. When one output fails at the end all the same (here: a file-size limit), the others are
+ * written, the exit status is 1 and the message names the one that failed; no temporary file is left.
+ */
+#include "test_util.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#define CLI IC_CLI_PATH
+#define DIR_ IC_TEST_TMP "/cli_outputs"
+#define ERR DIR_ "/stderr.txt"
+#define QUAD IC_SOURCE_DIR "/tests/scenes/quad_light.obj"
+#define CORNELL IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
+#define SMALL " --width 16 --height 16 --spp 1 -q"
+
+static char err_text[8192];
+
+static void read_err(void)
+{
+    FILE *f = fopen(ERR, "r");
+    size_t n = f ? fread(err_text, 1, sizeof err_text - 1, f) : 0;
+    err_text[n] = 0;
+    if (f)
+        fclose(f);
+}
+
+/* Runs `irrcache ARGS` (stderr captured); the exit status, or -1 if it crashed. */
+static int run(const char *args)
+{
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "%s %s 2>%s >/dev/null", CLI, args, ERR);
+    int st = system(cmd);
+    read_err();
+    return st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static int exists(const char *p)
+{
+    struct stat s;
+    return stat(p, &s) == 0;
+}
+
+static int lines(const char *s)
+{
+    int n = 0;
+    for (; *s; ++s)
+        n += *s == '\n';
+    return n;
+}
+
+/* Files under dir whose name holds ".tmp." (left-over temporaries). */
+static int temporaries(const char *dir)
+{
+    int n = 0;
+    DIR *d = opendir(dir);
+    for (struct dirent *e; d && (e = readdir(d));)
+        n += strstr(e->d_name, ".tmp.") != NULL;
+    if (d)
+        closedir(d);
+    return n;
+}
+
+/* A refused command line: exit 2, one line naming option and path (and `what`), no image written. */
+static void refused(const char *label, const char *args, const char *option, const char *path, const char *what)
+{
+    remove(DIR_ "/good.pfm");
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "render %s -o %s/good.pfm %s", QUAD, DIR_, args);
+    int rc = run(cmd);
+    CHECK(rc == 2, "%s: exit %d, expected 2 (%s)", label, rc, err_text);
+    CHECK(lines(err_text) == 1, "%s: one line: %s", label, err_text);
+    char want[1024];
+    snprintf(want, sizeof want, "%s %s", option, path);
+    CHECK(strstr(err_text, want) != NULL, "%s: names '%s': %s", label, want, err_text);
+    CHECK(strstr(err_text, what) != NULL, "%s: says '%s': %s", label, what, err_text);
+    CHECK(!exists(DIR_ "/good.pfm"), "%s: nothing rendered or written", label);
+    CHECK(temporaries(DIR_) == 0, "%s: no temporary file left", label);
+}
+
+/* Runs the command with a file-size limit and SIGXFSZ ignored, so that a write beyond the limit fails
+ * with EFBIG (as on a full disk) instead of killing the process. */
+static int run_limited(const char *args, rlim_t limit)
+{
+    pid_t pid = fork();
+    if (pid == 0) {
+        struct rlimit rl = {limit, limit};
+        setrlimit(RLIMIT_FSIZE, &rl);
+        signal(SIGXFSZ, SIG_IGN);
+        int fd = open(ERR, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        dup2(fd, 2);
+        execl("/bin/sh", "sh", "-c", args, (char *)NULL);
+        _exit(127);
+    }
+    int st = 0;
+    waitpid(pid, &st, 0);
+    read_err();
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+int main(void)
+{
+    CHECK(system("rm -rf '" DIR_ "' && mkdir -p '" DIR_ "/folder.pfm' '" DIR_ "/folder.json' '" DIR_
+                 "/cachedir'") == 0,
+          "scratch folders");
+    mkfifo(DIR_ "/fifo.pfm", 0644);
+
+    /* An existing folder, for every kind of output. */
+    refused("-o folder", "-o " DIR_ "/folder.pfm" SMALL, "-o", DIR_ "/folder.pfm", "is a folder");
+    refused("--stats folder", "--stats " DIR_ "/folder.json" SMALL, "--stats", DIR_ "/folder.json", "is a folder");
+    refused("--records-json folder", "--integrator ic --records-json " DIR_ "/folder.json" SMALL, "--records-json",
+            DIR_ "/folder.json", "is a folder");
+    refused("--save-cache folder", "--integrator ic --save-cache " DIR_ "/cachedir" SMALL, "--save-cache",
+            DIR_ "/cachedir", "is a folder");
+    /* AOVs go next to the first output (good.pfm): good.records.png is a folder. */
+    mkdir(DIR_ "/good.records.png", 0755);
+    refused("--aov folder", "--integrator ic --aov records" SMALL, "--aov records", DIR_ "/good.records.png",
+            "is a folder");
+    rmdir(DIR_ "/good.records.png");
+    /* A pipe is not a file to write an image into. */
+    refused("-o fifo", "-o " DIR_ "/fifo.pfm" SMALL, "-o", DIR_ "/fifo.pfm", "not a regular file");
+    /* A missing folder and one that takes no new file (/proc refuses even root). */
+    refused("-o missing folder", "-o " DIR_ "/no/such/x.exr" SMALL, "-o", DIR_ "/no/such/x.exr", "does not exist");
+    refused("--stats missing folder", "--stats " DIR_ "/no/s.json" SMALL, "--stats", DIR_ "/no/s.json",
+            "does not exist");
+    refused("--save-cache missing folder", "--integrator ic --save-cache " DIR_ "/no/c.icc" SMALL, "--save-cache",
+            DIR_ "/no/c.icc", "does not exist");
+    refused("--records-json unwritable", "--integrator ic --records-json /proc/self/r.json" SMALL,
+            "--records-json", "/proc/self/r.json", "cannot create");
+    /* Two outputs that are one file, however spelled; an output that is the scene. */
+    refused("-o twice", "-o " DIR_ "/../cli_outputs/good.pfm" SMALL, "-o", DIR_ "/../cli_outputs/good.pfm",
+            "the same file as -o " DIR_ "/good.pfm");
+    refused("--stats = --records-json", "--integrator ic --stats " DIR_ "/s.json --records-json " DIR_ "/./s.json" SMALL,
+            "--records-json", DIR_ "/./s.json", "the same file as --stats");
+    refused("--save-cache = -o", "--integrator ic --save-cache " DIR_ "/good.pfm" SMALL, "--save-cache",
+            DIR_ "/good.pfm", "the same file as -o");
+    refused("--stats = scene", "--stats " QUAD SMALL, "--stats", QUAD, "scene file");
+
+    /* A failure at the end costs only that output: the PFM (48x48: 27 kB) exceeds the 16 kB limit, the
+     * PNG and the stats (a few kB) are still written; exit 1 names the failed one. */
+    const char *cmd = CLI " render " CORNELL " -o " DIR_ "/end/big.pfm -o " DIR_ "/end/small.png --stats " DIR_
+                      "/end/stats.json --width 48 --height 48 --spp 1 -q";
+    CHECK(system("mkdir -p '" DIR_ "/end'") == 0, "end folder");
+    int rc = run_limited(cmd, 16384);
+    CHECK(rc == 1, "a late failure exits 1 (got %d: %s)", rc, err_text);
+    CHECK(strstr(err_text, "-o " DIR_ "/end/big.pfm") && strstr(err_text, "could not be written"),
+          "the message names the failed output: %s", err_text);
+    CHECK(!strstr(err_text, "small.png") && !strstr(err_text, "stats.json"), "only the failed one is named: %s",
+          err_text);
+    CHECK(!exists(DIR_ "/end/big.pfm"), "the failed output is not there");
+    CHECK(exists(DIR_ "/end/small.png"), "the PNG given after it is written");
+    CHECK(exists(DIR_ "/end/stats.json"), "the stats are written");
+    CHECK(temporaries(DIR_ "/end") == 0, "no temporary file left");
+    TEST_MAIN_END();
+}
