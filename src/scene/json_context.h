@@ -19,6 +19,9 @@ typedef struct json_ctx {
     size_t len;
     size_t cursor;                 /* key search starts here */
     int line;                      /* line of the last key found */
+    size_t line_off;               /* the last offset whose line was counted … */
+    int line_no;                   /* … and its line (0: none yet): lines are counted from there */
+    size_t scanned;                /* bytes examined by line counting and key search (linear in len) */
     const ic_scene_load_options *opt;
     ic_scene_builder *b;
     ic_error *err;
@@ -26,12 +29,13 @@ typedef struct json_ctx {
 
 /* --- positions and messages (scene_json_value.c; the search is described in scene_json.c) --- */
 
-/* Line of the text at offset off (1 = the first). */
-int ic_json_line_of(const json_ctx *c, size_t off);
+/* Line of the text at offset off (1 = the first), counted from the offset asked before: as the
+ * document is visited in file order, all the look-ups of one file cost O(its length) together. */
+int ic_json_line_of(json_ctx *c, size_t off);
 /* Moves the cursor past the next occurrence of key and returns its line (the last line if absent). */
 int ic_json_locate_key(json_ctx *c, const char *key);
 /* Line of the next occurrence of key without moving the cursor. */
-int ic_json_peek_key_line(const json_ctx *c, const char *key);
+int ic_json_peek_key_line(json_ctx *c, const char *key);
 /* Moves the cursor to the next '{' (the start of an array's object element) and returns its line. */
 int ic_json_locate_object_start(json_ctx *c);
 

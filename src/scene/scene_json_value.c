@@ -16,27 +16,138 @@
 /* ------------------------------------------------------------------------------------------------ */
 /* positions and messages */
 
-int ic_json_line_of(const json_ctx *c, size_t off)
+int ic_json_line_of(json_ctx *c, size_t off)
 {
-    int line = 1;
-    for (size_t i = 0; i < off && i < c->len; ++i)
-        line += c->text[i] == '\n';
-    return line;
+    if (off > c->len)
+        off = c->len;
+    if (c->line_no < 1) {
+        c->line_off = 0;
+        c->line_no = 1;
+    }
+    size_t lo = off < c->line_off ? off : c->line_off, hi = off < c->line_off ? c->line_off : off;
+    int newlines = 0;
+    for (const char *p = c->text + lo, *e = c->text + hi; (p = memchr(p, '\n', (size_t)(e - p))) != NULL; ++p)
+        ++newlines;
+    c->scanned += hi - lo;
+    c->line_no += off < c->line_off ? -newlines : newlines;
+    c->line_off = off;
+    return c->line_no;
+}
+
+/* Appends code point u to out as UTF-8 (RFC 3629); the number of bytes. */
+static size_t utf8_encode(unsigned long u, char *out)
+{
+    if (u < 0x80) {
+        out[0] = (char)u;
+        return 1;
+    }
+    if (u < 0x800) {
+        out[0] = (char)(0xC0 | (u >> 6));
+        out[1] = (char)(0x80 | (u & 0x3F));
+        return 2;
+    }
+    if (u < 0x10000) {
+        out[0] = (char)(0xE0 | (u >> 12));
+        out[1] = (char)(0x80 | ((u >> 6) & 0x3F));
+        out[2] = (char)(0x80 | (u & 0x3F));
+        return 3;
+    }
+    out[0] = (char)(0xF0 | (u >> 18));
+    out[1] = (char)(0x80 | ((u >> 12) & 0x3F));
+    out[2] = (char)(0x80 | ((u >> 6) & 0x3F));
+    out[3] = (char)(0x80 | (u & 0x3F));
+    return 4;
+}
+
+/* The 4 hex digits at t (a \u escape), or -1. */
+static long hex4(const char *t, size_t n)
+{
+    if (n < 4)
+        return -1;
+    long v = 0;
+    for (int k = 0; k < 4; ++k) {
+        char h = t[k];
+        int d = h >= '0' && h <= '9' ? h - '0' : h >= 'a' && h <= 'f' ? h - 'a' + 10 : h >= 'A' && h <= 'F' ? h - 'A' + 10 : -1;
+        if (d < 0)
+            return -1;
+        v = 16 * v + d;
+    }
+    return v;
+}
+
+/* If the JSON string token opening at text[i] (a '"') decodes to exactly key (escapes included, RFC 8259
+ * §7: "\u0074ype" is the key "type", as cJSON reads it), the offset just past its closing quote, else
+ * 0. Reads no further than key's length allows. */
+static size_t match_string(const json_ctx *c, size_t i, const char *key, size_t klen)
+{
+    const char *t = c->text;
+    size_t j = i + 1, k = 0;
+    while (j < c->len) {
+        char ch = t[j];
+        if (ch == '"')
+            return k == klen ? j + 1 : 0;
+        char buf[8];
+        size_t n = 1;
+        if (ch != '\\') {
+            buf[0] = ch;
+            ++j;
+        } else if (j + 1 < c->len) {
+            char e = t[j + 1];
+            j += 2;
+            switch (e) {
+            case '"': case '\\': case '/': buf[0] = e; break;
+            case 'b': buf[0] = '\b'; break;
+            case 'f': buf[0] = '\f'; break;
+            case 'n': buf[0] = '\n'; break;
+            case 'r': buf[0] = '\r'; break;
+            case 't': buf[0] = '\t'; break;
+            case 'u': {
+                long u = hex4(t + j, c->len - j);
+                if (u < 0)
+                    return 0;
+                j += 4;
+                if (u >= 0xD800 && u <= 0xDBFF && j + 6 <= c->len && t[j] == '\\' && t[j + 1] == 'u') {
+                    long lo = hex4(t + j + 2, c->len - j - 2);
+                    if (lo >= 0xDC00 && lo <= 0xDFFF) {
+                        u = 0x10000 + ((u - 0xD800) << 10) + (lo - 0xDC00);
+                        j += 6;
+                    }
+                }
+                n = utf8_encode((unsigned long)u, buf);
+                break;
+            }
+            default: return 0;
+            }
+        } else {
+            return 0;
+        }
+        if (k + n > klen || memcmp(buf, key + k, n) != 0)
+            return 0;
+        k += n;
+    }
+    return 0;
 }
 
 /* Offset just past the next `"key"` followed by ':' at or after `from`, or (size_t)-1. */
-static size_t find_key(const json_ctx *c, const char *key, size_t from)
+static size_t find_key(json_ctx *c, const char *key, size_t from)
 {
     size_t klen = strlen(key);
-    for (size_t i = from; i + klen + 2 <= c->len; ++i) {
-        if (c->text[i] != '"' || strncmp(c->text + i + 1, key, klen) != 0 || c->text[i + 1 + klen] != '"')
+    for (size_t i = from; i < c->len; ++i) {
+        const char *q = memchr(c->text + i, '"', c->len - i);
+        if (!q)
+            break;
+        i = (size_t)(q - c->text);
+        size_t j = match_string(c, i, key, klen);
+        if (!j)
             continue;
-        size_t j = i + klen + 2;
         while (j < c->len && (c->text[j] == ' ' || c->text[j] == '\t' || c->text[j] == '\n' || c->text[j] == '\r'))
             ++j;
-        if (j < c->len && c->text[j] == ':')
+        if (j < c->len && c->text[j] == ':') {
+            c->scanned += j + 1 - from;
             return j + 1;
+        }
     }
+    c->scanned += c->len - from;
     return (size_t)-1;
 }
 
@@ -52,7 +163,7 @@ int ic_json_locate_key(json_ctx *c, const char *key)
 }
 
 /* Line of the next occurrence of key without moving the cursor. */
-int ic_json_peek_key_line(const json_ctx *c, const char *key)
+int ic_json_peek_key_line(json_ctx *c, const char *key)
 {
     size_t at = find_key(c, key, c->cursor);
     return at != (size_t)-1 ? ic_json_line_of(c, at) : c->line;
