@@ -33,6 +33,11 @@
 #define HEADER_BYTES (24u + PARAM_BYTES + 8u)
 #define RECORD_BYTES 156u
 #define REBUILD_HINT "delete it and build the cache again"
+/* Largest coordinate of a record's sphere (centre ± its octree radius) a file may hold: far beyond any
+ * scene, and far enough below FLT_MAX (3.4e38) that the octree's bounds, their sums and its cell
+ * coordinates stay finite (a NaN cell coordinate converted to an integer is undefined behaviour, C11
+ * 6.3.1.4). */
+#define MAX_COORD 1e30
 
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
 {
@@ -368,9 +373,22 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
     rc = ic_cache_create(&p, &c, err);
     if (rc == IC_OK && ic_cache_reserve(c, (uint32_t)count) != IC_OK)
         rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory for %llu records", path, (unsigned long long)count);
-    for (uint32_t i = 0; rc == IC_OK && i < count; ++i)
-        if (!decode_record(c, i, data + HEADER_BYTES + (size_t)i * RECORD_BYTES))
+    for (uint32_t i = 0; rc == IC_OK && i < count; ++i) {
+        if (!decode_record(c, i, data + HEADER_BYTES + (size_t)i * RECORD_BYTES)) {
             rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: record %u is invalid; " REBUILD_HINT, path, i);
+            break;
+        }
+        /* A checksum proves only that the file is as written: the values must also fit the octree. */
+        ic_octree_items sph = ic_cache_tree_items(c);
+        const ic_float4 *s = &c->sphere[i];
+        double r = (double)s->w + (double)ic_octree_item_radius(&sph, i);
+        if (!(fabs((double)s->x) + r < MAX_COORD && fabs((double)s->y) + r < MAX_COORD &&
+              fabs((double)s->z) + r < MAX_COORD))
+            rc = ic_error_set(err, IC_ERR_CORRUPT,
+                              "%s: record %u at (%g, %g, %g) with radius %g lies beyond %g, the largest coordinate "
+                              "a cache holds; the file is corrupt: " REBUILD_HINT, path, i, (double)s->x,
+                              (double)s->y, (double)s->z, (double)s->w, MAX_COORD);
+    }
     free(data);
     if (rc == IC_OK) {
         c->count = (uint32_t)count;

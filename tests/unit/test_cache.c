@@ -1040,6 +1040,23 @@ static void write_file(const char *path, const unsigned char *data, size_t size)
     fclose(f);
 }
 
+static void put_f32_le(unsigned char *b, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    for (int k = 0; k < 4; ++k)
+        b[k] = (unsigned char)(v >> (8 * k));
+}
+
+/* Re-signs a cache file's bytes: the FNV-1a 64 of everything before the last 8 bytes, little-endian, as
+ * the loader computes it. */
+static void resign(unsigned char *d, size_t size)
+{
+    uint64_t h = ic_fnv1a64(IC_FNV64_OFFSET, d, size - 8);
+    for (int k = 0; k < 8; ++k)
+        d[size - 8 + k] = (unsigned char)(h >> (8 * k));
+}
+
 static void expect_refusal(const char *path, const ic_cache_params *p, uint64_t hash, ic_result code, const char *what)
 {
     ic_cache *c = (ic_cache *)1;
@@ -1138,6 +1155,39 @@ static void test_file(void)
     expect_refusal(bad, &p, hash, IC_ERR_MISMATCH, "other version");
     d1[8] = 1;
     expect_refusal(path, &p, hash ^ 1, IC_ERR_MISMATCH, "other scene");
+    /* A valid checksum over values the octree cannot hold (issue "Hardening", item 3): a finite but huge
+     * position or radius is refused naming the record, not turned into infinite bounds and a NaN cell. */
+    {
+        const float huge[][2] = {{1e35f, 0.0f}, {-3e38f, 0.0f}, {0.0f, 3e38f}, {9e29f, 2e29f}};
+        for (int k = 0; k < 4; ++k) {
+            unsigned char *d = malloc(s1);
+            memcpy(d, d1, s1);
+            size_t rec = 88 + 3 * 156; /* record 3: x at +0, R at +12 */
+            if (huge[k][0] != 0.0f)
+                put_f32_le(d + rec, huge[k][0]);
+            if (huge[k][1] != 0.0f)
+                put_f32_le(d + rec + 12, huge[k][1]);
+            resign(d, s1);
+            write_file(bad, d, s1);
+            char what[64];
+            snprintf(what, sizeof what, "record 3 at x %g, R %g", (double)huge[k][0], (double)huge[k][1]);
+            expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, what);
+            ic_cache *x = NULL;
+            ic_cache_load(bad, &p, hash, &x, &err);
+            CHECK(strstr(err.message, "record 3 ") != NULL, "%s: names the record: %s", what, err.message);
+            free(d);
+        }
+        /* Far but representable: accepted. */
+        unsigned char *d = malloc(s1);
+        memcpy(d, d1, s1);
+        put_f32_le(d + 88 + 3 * 156, 1e20f);
+        resign(d, s1);
+        write_file(bad, d, s1);
+        ic_cache *x = NULL;
+        CHECK(ic_cache_load(bad, &p, hash, &x, &err) == IC_OK, "a record at x = 1e20 loads: %s", err.message);
+        ic_cache_destroy(x);
+        free(d);
+    }
     {
         ic_cache *x = NULL;
         ic_cache_load(path, &p, hash ^ 1, &x, &err);
