@@ -20,6 +20,7 @@
 #include "cache_store.h"
 
 #include "core/atomic_file.h"
+#include "core/read_file.h"
 
 #include <errno.h>
 #include <math.h>
@@ -38,6 +39,8 @@
  * coordinates stay finite (a NaN cell coordinate converted to an integer is undefined behaviour, C11
  * 6.3.1.4). */
 #define MAX_COORD 1e30
+/* Largest cache file read (4 GiB: 27 million records; a 512x512 Cornell box makes 5,500). */
+#define MAX_FILE_BYTES (UINT64_C(4) << 30)
 
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
 {
@@ -263,37 +266,12 @@ ic_result ic_cache_save(const ic_cache *c, const char *path, uint64_t scene_hash
 
 static ic_result read_all(const char *path, unsigned char **out, size_t *size, ic_error *err)
 {
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
-    unsigned char *data = NULL;
-    size_t len = 0, cap = 0;
-    for (;;) {
-        if (len == cap) {
-            size_t nc = cap ? cap * 2 : 1 << 16;
-            unsigned char *d = realloc(data, nc);
-            if (!d) {
-                free(data);
-                fclose(fp);
-                return ic_error_set(err, IC_ERR_OOM, "%s: out of memory reading the cache file", path);
-            }
-            data = d;
-            cap = nc;
-        }
-        size_t got = fread(data + len, 1, cap - len, fp);
-        len += got;
-        if (got == 0)
-            break;
-    }
-    int bad = ferror(fp);
-    fclose(fp);
-    if (bad) {
-        free(data);
-        return ic_error_set(err, IC_ERR_IO, "%s: read error", path);
-    }
-    *out = data;
-    *size = len;
-    return IC_OK;
+    char *data = NULL;
+    ic_result rc = ic_read_regular_file(path, "cache file", MAX_FILE_BYTES,
+                                        "a cache this large was not written by irrcache: " REBUILD_HINT, &data, size,
+                                        NULL, err);
+    *out = (unsigned char *)data;
+    return rc;
 }
 
 static ic_result check_params(const char *path, const unsigned char *block, const ic_cache_params *p,

@@ -14,6 +14,7 @@
  */
 #include "scene/json_context.h"
 
+#include "core/read_file.h"
 #include "core/vecmath.h"
 
 #include <errno.h>
@@ -144,40 +145,16 @@ static ic_result parse_render(json_ctx *c, const cJSON *obj, int line)
 
 static ic_result read_text(const char *path, char **text, size_t *len, ic_error *err)
 {
-    FILE *fp = fopen(path, "rb");
-    if (!fp) {
-        int open_errno = errno; /* before resolving the path, which may set errno itself */
+    int open_errno = 0;
+    ic_result r = ic_read_regular_file(path, "scene file", MAX_SCENE_FILE_BYTES, "keep geometry in mesh files",
+                                       text, len, &open_errno, err);
+    if (r != IC_OK && open_errno) {
         char abs_path[IC_SCENE_PATH_MAX];
         ic_path_absolute(path, abs_path, sizeof abs_path);
         return ic_error_set(err, IC_ERR_IO, "%s: cannot open the scene file (%s; resolved to %s); check the path",
                             path, strerror(open_errno), abs_path);
     }
-    char *buf = NULL;
-    size_t n = 0;
-    if (fseek(fp, 0, SEEK_END) == 0) {
-        long size = ftell(fp);
-        if (size >= 0 && (unsigned long)size <= MAX_SCENE_FILE_BYTES && fseek(fp, 0, SEEK_SET) == 0) {
-            buf = malloc((size_t)size + 1);
-            if (buf)
-                n = fread(buf, 1, (size_t)size, fp);
-            if (buf && n != (size_t)size) {
-                free(buf);
-                buf = NULL;
-            }
-        } else if (size > (long)MAX_SCENE_FILE_BYTES) {
-            fclose(fp);
-            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: scene file larger than %u MiB; keep geometry in mesh "
-                                                         "files",
-                                path, MAX_SCENE_FILE_BYTES >> 20);
-        }
-    }
-    fclose(fp);
-    if (!buf)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot read the scene file; check the file and the disk", path);
-    buf[n] = '\0';
-    *text = buf;
-    *len = n;
-    return IC_OK;
+    return r;
 }
 
 /* Short excerpt of the text at off, on one line, for syntax errors. */

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt,
                                 ic_error *err)
@@ -57,6 +58,16 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
                             opt->width, opt->height);
     if (strlen(path) >= sizeof((ic_scene *)0)->path)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: path too long; use a shorter path", path);
+    /* Looked at before anything reads it: a folder, a pipe (whose open would wait for a writer) or a
+     * device (/dev/zero: endless) is no scene. A path that does not exist gets its own message below. */
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s: is a folder, not a scene; give a .json scene or a mesh file in it", path);
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode))
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s: is not a regular file (a pipe, device or socket); give a .json scene or a mesh file",
+                            path);
 
     ic_scene *s = calloc(1, sizeof *s);
     if (!s)

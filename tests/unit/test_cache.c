@@ -1208,6 +1208,36 @@ static void test_file(void)
     CHECK(ic_cache_load(path, &other, hash, &x, &err) == IC_OK, "look-up settings refused: %s", err.message);
     ic_cache_destroy(x);
     expect_refusal(IC_TEST_TMP "/no_such_cache.icc", &p, hash, IC_ERR_IO, "missing file");
+    /* Not a file, or too big (issue "Hardening", item 4): refused before reading; a pipe must not hang
+     * the load (the alarm fails the test if it does), /dev/zero must not be read without end. */
+    {
+        const char *fifo = IC_TEST_TMP "/test_cache_fifo.icc", *zero = IC_TEST_TMP "/test_cache_zero.icc",
+                   *dir = IC_TEST_TMP "/test_cache_isdir.icc", *big = IC_TEST_TMP "/test_cache_big.icc";
+        unlink(fifo);
+        unlink(zero);
+        rmdir(dir);
+        CHECK(mkfifo(fifo, 0644) == 0 && symlink("/dev/zero", zero) == 0 && mkdir(dir, 0755) == 0, "scratch files");
+        FILE *fb = fopen(big, "wb"); /* sparse: 5 GiB on no disk */
+        CHECK(fb && ftruncate(fileno(fb), (off_t)5 << 30) == 0, "sparse file");
+        if (fb)
+            fclose(fb);
+        alarm(60);
+        const struct { const char *path, *says; } cases[] = {
+            {fifo, "is not a regular file"}, {zero, "is not a regular file"}, {"/dev/zero", "is not a regular file"},
+            {dir, "is a folder"}, {big, "MiB limit"}};
+        for (int k = 0; k < 5; ++k) {
+            expect_refusal(cases[k].path, &p, hash, IC_ERR_INVALID_ARG, cases[k].says);
+            ic_cache *x = NULL;
+            ic_cache_load(cases[k].path, &p, hash, &x, &err);
+            CHECK(strstr(err.message, cases[k].says) != NULL, "%s: says '%s': %s", cases[k].path, cases[k].says,
+                  err.message);
+        }
+        alarm(0);
+        unlink(fifo);
+        unlink(zero);
+        rmdir(dir);
+        remove(big);
+    }
 
     /* Failed writes leave nothing behind: a missing folder, and a path that is a folder. */
     CHECK(ic_cache_save(c, IC_TEST_TMP "/no_such_dir/x.icc", hash, &err) == IC_ERR_IO, "save into missing folder");

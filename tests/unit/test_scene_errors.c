@@ -7,6 +7,8 @@
 
 #include <errno.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #define SCENES IC_SOURCE_DIR "/tests/scenes/"
 
@@ -76,6 +78,37 @@ int main(void)
     ic_scene_load_options opt = {0};
     opt.width = -1;
     expect_error(SCENES "quad_light.obj", &opt, IC_ERR_INVALID_ARG, "quad_light.obj", "negative", NULL);
+
+    /* Not a file (issue "Hardening", item 4): looked at before reading, so a pipe does not hang the load
+     * (the alarm fails the test if it does) and a folder is called a folder. */
+    alarm(60);
+    const char *dir_json = IC_TEST_TMP "/scene_errors_dir.json", *fifo_json = IC_TEST_TMP "/scene_errors_fifo.json",
+               *zero_json = IC_TEST_TMP "/scene_errors_zero.json", *fifo_obj = IC_TEST_TMP "/scene_errors_fifo.obj";
+    rmdir(dir_json);
+    unlink(fifo_json);
+    unlink(zero_json);
+    unlink(fifo_obj);
+    CHECK(mkdir(dir_json, 0755) == 0 && mkfifo(fifo_json, 0644) == 0 && symlink("/dev/zero", zero_json) == 0 &&
+              mkfifo(fifo_obj, 0644) == 0,
+          "scratch folder, pipes and link");
+    expect_error(dir_json, NULL, IC_ERR_INVALID_ARG, "scene_errors_dir.json", "is a folder", NULL);
+    expect_error(IC_TEST_TMP, NULL, IC_ERR_INVALID_ARG, IC_TEST_TMP, "is a folder", NULL);
+    expect_error(fifo_json, NULL, IC_ERR_INVALID_ARG, "scene_errors_fifo.json", "is not a regular file", NULL);
+    expect_error(fifo_obj, NULL, IC_ERR_INVALID_ARG, "scene_errors_fifo.obj", "is not a regular file", NULL);
+    expect_error(zero_json, NULL, IC_ERR_INVALID_ARG, "scene_errors_zero.json", "is not a regular file", NULL);
+    expect_error("/dev/zero", NULL, IC_ERR_INVALID_ARG, "/dev/zero", "is not a regular file", NULL);
+    alarm(0);
+    const char *big_json = IC_TEST_TMP "/scene_errors_big.json"; /* sparse: 65 MiB on no disk */
+    FILE *fb = fopen(big_json, "wb");
+    CHECK(fb && ftruncate(fileno(fb), (off_t)65 << 20) == 0, "sparse scene file");
+    if (fb)
+        fclose(fb);
+    expect_error(big_json, NULL, IC_ERR_INVALID_ARG, "scene_errors_big.json", "64 MiB limit", "mesh files");
+    remove(big_json);
+    rmdir(dir_json);
+    unlink(fifo_json);
+    unlink(zero_json);
+    unlink(fifo_obj);
 
     ic_scene *s = NULL;
     ic_error err;
