@@ -5,8 +5,39 @@
  */
 #include "cli.h"
 
+#include "irrcache/common.h"
+
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
+
+/* A signal that ends the program while an output is being written must not leave its temporary file:
+ * remove the library's temporary files (async-signal-safe), then die of the signal as if unhandled
+ * (SA_RESETHAND restores the default action, SA_NODEFER lets raise deliver it at once), so the parent
+ * still sees the signal. */
+static void on_fatal_signal(int sig)
+{
+    ic_remove_temporary_files();
+    raise(sig);
+}
+
+static void install_signal_handlers(void)
+{
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGXFSZ};
+    for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; ++i) {
+        struct sigaction old;
+        /* A signal ignored when the program starts stays ignored (POSIX: a background job's SIGINT; a
+         * caller that wants EFBIG instead of SIGXFSZ). */
+        if (sigaction(sigs[i], NULL, &old) != 0 || old.sa_handler == SIG_IGN)
+            continue;
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_fatal_signal;
+        sigemptyset(&sa.sa_mask);
+        sa.sa_flags = SA_RESETHAND | SA_NODEFER;
+        sigaction(sigs[i], &sa, NULL);
+    }
+}
 
 static void usage(FILE *f)
 {
@@ -29,6 +60,7 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
+    install_signal_handlers();
     const char *cmd = argv[1];
     if (!strcmp(cmd, "render"))
         return ic_cli_render(argc - 1, argv + 1);

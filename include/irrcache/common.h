@@ -53,6 +53,12 @@ typedef struct ic_vec3 {
 /* Progress report: phase name, fraction done in [0,1]. Called from one thread at a time. */
 typedef void (*ic_progress_fn)(void *user, const char *phase, double fraction);
 
+/* Removes every temporary file the library is writing at this moment (outputs are written under a
+ * temporary name and renamed into place). Async-signal-safe: meant for a program's handler of SIGINT,
+ * SIGTERM or SIGXFSZ, which then re-raises the signal with its default action. The library itself never
+ * installs a signal handler. */
+void ic_remove_temporary_files(void);
+
 #ifdef __cplusplus
 }
 #endif

@@ -9,10 +9,51 @@
 
 static atomic_uint tmp_counter;
 
+/* Temporary names in use, for ic_remove_temporary_files, which a signal handler may call: fixed slots
+ * (no allocation), a slot's name complete before its state says so, lock-free atomics only (the
+ * operations C11 7.14.1.1 and POSIX allow in a handler). */
+#define TEMP_SLOTS 64
+enum { SLOT_FREE, SLOT_CLAIMED, SLOT_READY };
+static atomic_int slot_state[TEMP_SLOTS];
+static char slot_name[TEMP_SLOTS][4096];
+
+static void temp_register(const char *name)
+{
+    if (strlen(name) >= sizeof slot_name[0])
+        return;
+    for (int k = 0; k < TEMP_SLOTS; ++k) {
+        int expected = SLOT_FREE;
+        if (atomic_compare_exchange_strong(&slot_state[k], &expected, SLOT_CLAIMED)) {
+            memcpy(slot_name[k], name, strlen(name) + 1);
+            atomic_store(&slot_state[k], SLOT_READY);
+            return;
+        }
+    }
+    /* All slots busy (64 files being written at once): this one is simply not cleaned up by a signal. */
+}
+
+void ic_atomic_temp_release(const char *tmp)
+{
+    for (int k = 0; k < TEMP_SLOTS; ++k) {
+        if (atomic_load(&slot_state[k]) == SLOT_READY && !strcmp(slot_name[k], tmp)) {
+            atomic_store(&slot_state[k], SLOT_FREE);
+            return;
+        }
+    }
+}
+
+void ic_remove_temporary_files(void)
+{
+    for (int k = 0; k < TEMP_SLOTS; ++k)
+        if (atomic_load(&slot_state[k]) == SLOT_READY)
+            (void)unlink(slot_name[k]);
+}
+
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size)
 {
     unsigned n = atomic_fetch_add(&tmp_counter, 1u);
     snprintf(out, out_size, "%s.tmp.%ld.%u", path, (long)getpid(), n);
+    temp_register(out);
 }
 
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
@@ -20,9 +61,11 @@ ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
     if (rename(tmp, path) != 0) {
         int e = errno;
         remove(tmp);
+        ic_atomic_temp_release(tmp);
         return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
                             path, strerror(e));
     }
+    ic_atomic_temp_release(tmp);
     return IC_OK;
 }
 
@@ -36,9 +79,12 @@ ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err
     snprintf(f->path, sizeof f->path, "%s", path);
     ic_atomic_temp_name(path, f->tmp_path, sizeof f->tmp_path);
     f->fp = fopen(f->tmp_path, "wb");
-    if (!f->fp)
+    if (!f->fp) {
+        int e = errno;
+        ic_atomic_temp_release(f->tmp_path);
         return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
-                            path, strerror(errno));
+                            path, strerror(e));
+    }
     return IC_OK;
 }
 
@@ -52,6 +98,7 @@ ic_result ic_atomic_file_commit(ic_atomic_file *f, ic_error *err)
     f->fp = NULL;
     if (bad) {
         remove(f->tmp_path);
+        ic_atomic_temp_release(f->tmp_path);
         return ic_error_set(err, IC_ERR_IO, "%s: write failed (disk full?); nothing was written", f->path);
     }
     return ic_atomic_rename(f->tmp_path, f->path, err);
@@ -63,5 +110,6 @@ void ic_atomic_file_abort(ic_atomic_file *f)
         fclose(f->fp);
         f->fp = NULL;
         remove(f->tmp_path);
+        ic_atomic_temp_release(f->tmp_path);
     }
 }

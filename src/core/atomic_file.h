@@ -4,7 +4,8 @@
  * Nothing is ever left half-written: readers see either the old file or the complete new one.
  * Usage: ic_atomic_file f; ic_atomic_file_open(&f, path, err) → write to f.fp →
  * ic_atomic_file_commit(&f, err) (flushes, checks for write errors, renames) or
- * ic_atomic_file_abort(&f) (removes the temporary file).
+ * ic_atomic_file_abort(&f) (removes the temporary file). While a temporary file exists its name is
+ * registered, so that a program's signal handler can remove it (ic_remove_temporary_files).
  */
 #ifndef IC_CORE_ATOMIC_FILE_H
 #define IC_CORE_ATOMIC_FILE_H
@@ -25,9 +26,12 @@ ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err
 ic_result ic_atomic_file_commit(ic_atomic_file *f, ic_error *err);
 /* Closes and removes the temporary file. Safe to call twice. */
 void ic_atomic_file_abort(ic_atomic_file *f);
-/* Builds a temporary sibling name for path (for writers that need a path, not a FILE*). */
+/* Builds a temporary sibling name for path (for writers that need a path, not a FILE*) and registers it
+ * for ic_remove_temporary_files (irrcache/common.h) until ic_atomic_rename or ic_atomic_temp_release. */
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size);
-/* Renames tmp to path, removing tmp on failure. */
+/* Renames tmp to path, removing tmp on failure; either way tmp is released. */
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err);
+/* Forgets a temporary name the caller removed itself. */
+void ic_atomic_temp_release(const char *tmp);
 
 #endif

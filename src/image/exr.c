@@ -279,6 +279,7 @@ ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half,
     }
     if (rv != EXR_ERR_SUCCESS) {
         remove(tmp); /* the library deletes it on most errors; make sure */
+        ic_atomic_temp_release(tmp);
         if (rv == EXR_ERR_FILE_ACCESS)
             return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
                                 path, open_errno ? strerror(open_errno) : exr_get_default_error_message(rv));
