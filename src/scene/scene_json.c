@@ -192,6 +192,9 @@ static ic_result load_document(json_ctx *c, const cJSON *root)
         if (k == SEC_COUNT)
             return ic_json_unknown_key(c, kl, it->string, "the scene",
                                        "camera, meshes, materials, lights, environment, render");
+        if (node[k])
+            return ic_json_fail(c, kl, IC_ERR_PARSE, "\"%s\" given twice (first at line %d); merge the two sections",
+                                it->string, line[k]);
         node[k] = it;
         at[k] = c->cursor;
         line[k] = kl;
@@ -277,7 +280,19 @@ ic_result ic_scene_load_json(ic_scene_builder *b, const char *path, const ic_sce
                          off >= len ? "at the end of the file" : "near '", off >= len ? "" : near,
                          off >= len ? "" : "'");
     } else {
-        r = load_document(&c, root);
+        /* One JSON text per file (RFC 8259 §2: whitespace may follow the value, nothing else). */
+        size_t off = (end && end >= text && end <= text + len) ? (size_t)(end - text) : len;
+        while (off < len && (text[off] == ' ' || text[off] == '\t' || text[off] == '\n' || text[off] == '\r'))
+            ++off;
+        if (off < len) {
+            char near[32];
+            excerpt(text, len, off, near, sizeof near);
+            r = ic_json_fail(&c, ic_json_line_of(&c, off), IC_ERR_PARSE,
+                             "text after the scene's closing brace near '%s'; remove it (one JSON object per file)",
+                             near);
+        } else {
+            r = load_document(&c, root);
+        }
         cJSON_Delete(root);
     }
     free(text);

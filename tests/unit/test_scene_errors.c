@@ -40,6 +40,11 @@ int main(void)
                  "resolved to");
     /* JSON syntax: the missing comma after line 4 is found where "fov_y" starts, line 5 */
     expect_error(SCENES "malformed.json", NULL, IC_ERR_PARSE, "malformed.json:5:", "malformed JSON", NULL);
+    /* one JSON object per file, each section once (issue "Hardening", item 6) */
+    expect_error(SCENES "trailing_garbage.json", NULL, IC_ERR_PARSE, "trailing_garbage.json:4:", "closing brace",
+                 "remove it");
+    expect_error(SCENES "duplicate_section.json", NULL, IC_ERR_PARSE, "duplicate_section.json:5:",
+                 "\"render\" given twice (first at line 3)", "merge");
     /* a mesh that does not exist: the line of its "path" and the absolute path it resolved to */
     expect_error(SCENES "missing_mesh.json", NULL, IC_ERR_IO, "missing_mesh.json:5:",
                  "mesh 'does-not-exist.obj' not found", IC_SOURCE_DIR "/tests/scenes/does-not-exist.obj");
