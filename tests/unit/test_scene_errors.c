@@ -45,6 +45,26 @@ int main(void)
                  "remove it");
     expect_error(SCENES "duplicate_section.json", NULL, IC_ERR_PARSE, "duplicate_section.json:5:",
                  "\"render\" given twice (first at line 3)", "merge");
+    /* an environment map with a negative texel: refused, naming the map and the texel */
+    {
+        FILE *pf = fopen(IC_TEST_TMP "/scene_errors_negsky.pfm", "wb");
+        FILE *js = fopen(IC_TEST_TMP "/scene_errors_negsky.json", "w");
+        CHECK(pf && js, "write the sky and its scene");
+        if (pf && js) {
+            const float px[6] = {1.0f, 1.0f, 1.0f, 0.5f, -2.0f, 0.5f}; /* 2x1, little-endian (scale < 0) */
+            fputs("PF\n2 1\n-1.0\n", pf);
+            fwrite(px, sizeof px[0], 6, pf);
+            fprintf(js, "{\n  \"meshes\": [ { \"path\": \"%s\" } ],\n  \"environment\": { \"map\": "
+                        "\"scene_errors_negsky.pfm\" }\n}\n",
+                    SCENES "quad_light.obj");
+        }
+        if (pf)
+            fclose(pf);
+        if (js)
+            fclose(js);
+        expect_error(IC_TEST_TMP "/scene_errors_negsky.json", NULL, IC_ERR_INVALID_ARG, "scene_errors_negsky.json:3:",
+                     "'scene_errors_negsky.pfm': texel (1, 0) has a green value of -2", "fix the map");
+    }
     /* a mesh that does not exist: the line of its "path" and the absolute path it resolved to */
     expect_error(SCENES "missing_mesh.json", NULL, IC_ERR_IO, "missing_mesh.json:5:",
                  "mesh 'does-not-exist.obj' not found", IC_SOURCE_DIR "/tests/scenes/does-not-exist.obj");
