@@ -89,7 +89,7 @@ typedef struct ic_ic_options {
                               final render; off: every emitter is light-sampled [0.01] */
     ic_switched_value record_filter; /* record noise control after construction (ic_filter.c): each
                               record's value a robust mean of its neighbours' within `value` times its
-                              influence radius a_i·R_i; off: none [2] */
+                              influence radius a_i·R_i; off: none [3] */
     int record_sets;       /* record noise control while gathering: most hemisphere sets a record
                               gathers while its relative σ is above record_noise [1] */
     float record_noise;    /* the relative σ of E those sets aim at [0.05] */

@@ -8,19 +8,23 @@
  * error of neighbouring records is independent while the irradiance they estimate varies slowly over
  * their influence areas (that is what the error bound a promises), so averaging records over a
  * neighbourhood of `scale` times a record's influence radius a_i·R_i cuts the stains' amplitude by about
- * the square root of the neighbours averaged. Neighbours count with an Epanechnikov kernel in distance,
+ * the square root of the neighbours averaged. Neighbours count with an Epanechnikov kernel in distance
+ * over the smaller of the two records' neighbourhoods (a record is never extrapolated beyond its own),
  * only on the same bounce level, with normals within 30° and off the record's tangent plane by at most a
  * quarter of the neighbourhood (no averaging across a step or a corner), each extrapolated to the record
  * with its own gradients (Křivánek et al. 2006 §3).
  *
  * The mean is robust: a neighbour whose value differs from the current estimate by more than the noise
  * explains (Tukey's biweight at 3·√2·σ, σ pooled over the neighbourhood from the records' own estimates,
- * Křivánek et al. 2006 §4.3) counts less or not at all, so a real change of irradiance (a contact
- * shadow, the edge of a light patch) that exceeds the noise is kept, and a record far off its
- * neighbours is pulled back to them. The estimate starts from the plain kernel mean and is re-weighted
- * twice; where that rejects most of the neighbourhood (a strong edge through it), it starts again from
- * the record's own value. Every record is filtered from the values before filtering, in parallel with a
- * fixed order of sums: the result does not depend on the thread count.
+ * Křivánek et al. 2006 §4.3) counts less or not at all. The estimate starts from the plain kernel mean
+ * and is re-weighted twice; where that rejects most of the neighbourhood (a strong edge through it), it
+ * starts again from the record's own value. The record then moves towards that mean only as far as the
+ * noise warrants (empirical Bayes shrinkage): the neighbourhood's spread around the mean is noise σ² plus
+ * a real variation τ² that the gradients do not explain, and the record moves by σ² / (σ² + τ²) — all
+ * the way where the spread is noise alone (light through a door gap), hardly at all where the irradiance
+ * really varies (contact shadows under thin treads), so the filter adds almost no bias where records are
+ * already good. Every record is filtered from the values before filtering, in parallel with a fixed
+ * order of sums: the result does not depend on the thread count.
  */
 #include "ic_internal.h"
 
@@ -98,8 +102,11 @@ static void filter_one(void *p, int64_t item, int thread)
         if (rj->bounce != ri->bounce || v3_dot(rj->normal, ri->normal) < NORMAL_COS ||
             fabsf(v3_dot(d, ri->normal)) > 0.25f * h)
             continue;
-        float x = v3_len2(d) / (h * h);
-        if (x >= 1.0f)
+        /* Both ways: j's own neighbourhood must reach i too, so a record of small radius (a corner's,
+         * whose gradient holds only over a short distance) is never extrapolated far. */
+        float hj = fminf(h, j->scale * rj->accuracy * rj->radius);
+        float x = v3_len2(d) / (hj * hj);
+        if (!(x < 1.0f))
             continue;
         idx[n] = idx[q];
         kern[n] = (1.0f - x) * (1.0f - x);
@@ -131,16 +138,31 @@ static void filter_one(void *p, int64_t item, int thread)
         u2 += (double)u[k] * u[k];
     }
     float inv = 1.0f / usum;
-    o->irradiance = v3_scale(e, inv);
+    ic_vec3 mean = v3_scale(e, inv);
+    /* How far to move towards the mean (empirical Bayes shrinkage): the neighbourhood's spread around it
+     * is noise (σ²) plus real variation the gradients do not explain (τ²); the record moves by
+     * σ² / (σ² + τ²), all the way where the spread is all noise, hardly at all where the irradiance
+     * really varies. */
+    double spread = 0.0;
+    float ym = lum(mean);
+    for (uint32_t k = 0; k < n; ++k) {
+        double dy = (double)lum(val[k]) - ym;
+        spread += (double)u[k] * dy * dy;
+    }
+    spread *= inv;
+    double noise = (double)sigma * sigma, tau2 = spread > noise ? spread - noise : 0.0;
+    float lambda = noise + tau2 > 0.0 ? (float)(noise / (noise + tau2)) : 0.0f, keep = 1.0f - lambda;
+    o->irradiance = v3_add(v3_scale(ri->irradiance, keep), v3_scale(mean, lambda));
     for (int ch = 0; ch < 3; ++ch) {
         /* Gradients stay in the record's tangent plane. */
-        ic_vec3 g = v3_scale(gr[ch], inv), t = v3_scale(gt[ch], inv);
+        ic_vec3 g = v3_add(v3_scale(ri->grad_rot[ch], keep), v3_scale(gr[ch], lambda * inv));
+        ic_vec3 t = v3_add(v3_scale(ri->grad_trans[ch], keep), v3_scale(gt[ch], lambda * inv));
         o->grad_rot[ch] = v3_sub(g, v3_scale(ri->normal, v3_dot(g, ri->normal)));
         o->grad_trans[ch] = v3_sub(t, v3_scale(ri->normal, v3_dot(t, ri->normal)));
     }
-    /* σ of a weighted mean of independent estimates: σ·√Σu² / Σu. */
-    float shrink = (float)sqrt(u2) * inv;
-    o->sigma = v3_scale(ri->sigma, fminf(shrink, 1.0f));
+    /* σ of the blend of the record (σ) and a weighted mean of independent estimates (σ·√Σu² / Σu). */
+    float of_mean = fminf((float)sqrt(u2) * inv, 1.0f);
+    o->sigma = v3_scale(ri->sigma, sqrtf(keep * keep + lambda * lambda * of_mean * of_mean));
 }
 
 ic_result ic_ic_filter_cache(ic_cache *cache, int threads, float scale, ic_error *err)
