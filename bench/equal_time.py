@@ -107,13 +107,13 @@ def main():
                         "--time", "%.3f" % stats["seconds"], "--spp", "16777216"] + size, check=True)
         rec["pt"] = diff(args.irrcache, stem + "-pt.pfm", ref)
     ic, pt = rec["ic"], rec.get("pt")
-    line = "%-12s %-16s %7.2f s %6s records | cache relMSE %.5f low-pass %.5f" % (
+    line = "%-12s %-16s %7.2f s %6s records | cache relMSE %.3g low-pass %.3g" % (
         os.path.splitext(os.path.basename(args.scene))[0], args.name, rec["seconds"], rec["records"],
         ic["relmse"], ic["relmse_lowpass"])
     if pt:
-        line += " | path tracer relMSE %.5f low-pass %.5f | ratio %.2f, low-pass %.2f" % (
+        line += " | path tracer relMSE %.3g low-pass %.3g | ratio %.2f, low-pass %.2f" % (
             pt["relmse"], pt["relmse_lowpass"], pt["relmse"] / ic["relmse"], pt["relmse_lowpass"] / ic["relmse_lowpass"])
-    line += " | reference noise %.5f, low-pass %.5f" % (noise["relmse"], noise["relmse_lowpass"])
+    line += " | reference noise %.2g, low-pass %.2g" % (noise["relmse"], noise["relmse_lowpass"])
     print(line, flush=True)
     if args.json_out:
         with open(args.json_out, "a") as f:

@@ -88,7 +88,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "lazy (Ward et al. 1988, serial) or adaptive (Krivanek et al. 2006: each record's a refined until no " \
       "discontinuity is visible; docs/adaptive.md)") \
     X(ACCURACY, "--accuracy", "-a", IC_OPT_FLOAT, render.ic.cache.accuracy, 0.001, 100, "A", NAN, \
-      "0.3 (ward), 1 (tl)", "", IC_SCOPE_IC, "error bound a of the weights; smaller means more records") \
+      "0.15 (ward), 1 (tl)", "", IC_SCOPE_IC, "error bound a of the weights; smaller means more records") \
     X(WEIGHT, "--weight", NULL, IC_OPT_CHOICE, render.ic.cache.weight, 0, 0, "ward|tl", NAN, "ward", "", IC_SCOPE_IC, \
       "Ward or Tabellion-Lamorlette weights") \
     X(RAYS, "--rays", NULL, IC_OPT_RAYS, render.ic.gather, 16, 1e7, "N", IC_DEFAULT_RAYS, "%g", "", IC_SCOPE_IC, \

@@ -109,7 +109,7 @@ typedef enum ic_cache_switch {
 /* Cache options. Zero means default in every field. */
 typedef struct ic_cache_params {
     ic_weight_kind weight;            /* default Ward */
-    float accuracy;                   /* a: default 0.3 (Ward), 1 (T–L, κ = 1/a = 1): irrcache/defaults.h */
+    float accuracy;                   /* a: default 0.15 (Ward), 1 (T–L, κ = 1/a = 1): irrcache/defaults.h */
     float final_accuracy_scale;       /* s ≥ 1: final render accepts with s·a_i; default 1 */
     float behind_tolerance;           /* ε of the behind test as a fraction of a_i·R_i; default 0.05 */
     float min_radius;                 /* R floor in world units; default 0 (none) */

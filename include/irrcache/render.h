@@ -65,7 +65,7 @@ typedef struct ic_switched_value {
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
 typedef struct ic_ic_options {
     ic_strategy strategy;
-    ic_cache_params cache; /* weights, accuracy [0.3], clamps; max_radius [scene diagonal/8] bounds R in
+    ic_cache_params cache; /* weights, accuracy [0.15 Ward, 1 T–L], clamps; max_radius [scene diagonal/8] bounds R in
                               world units, a negative value switches it off. min_radius_pixels and
                               max_radius_pixels are set by the renderer from the two fields below */
     float min_radius_px;   /* smallest influence radius a·R of a record, in pixels at its primary hit [3];
