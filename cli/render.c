@@ -256,6 +256,10 @@ int ic_cli_render(int argc, char **argv)
     }
     if (a.records_json && !write_records_json(a.records_json, &aovs))
         FAILED("--records-json", a.records_json);
+    if (st.save_error[0]) {
+        fprintf(stderr, "irrcache render: --save-cache %s\n", st.save_error);
+        FAILED("--save-cache", a.render.ic.save_cache);
+    }
     free(aovs.record_views);
     ic_image_free(&img);
     ic_image_free(&aovs.indirect);

@@ -178,6 +178,8 @@ typedef struct ic_render_stats {
                               before its own criterion said the cache was done */
     uint32_t cached_emitters; /* emitting triangles whose light the records carry (ic_ic_options.large_emitters) */
     uint32_t records_per_pass[32];
+    char save_error[1024]; /* ic_ic_options.save_cache could not be written: why (the render went on and
+                              its image is good); empty when it was written or not asked for */
     double uncovered_share; /* batch: share of the last pass's eye-path look-up points no record covered */
     uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */
     int phase_count;

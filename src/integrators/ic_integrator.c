@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -95,8 +96,11 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     ic_ctx *c = s->c;
     if ((r = make_records(s, st, &pt, &t_candidates, err)) != IC_OK)
         return r;
-    if (c->o.save_cache && (r = ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), err)) != IC_OK)
-        return r;
+    /* A cache file that cannot be written costs the file, not the render: the caller reports it. */
+    st->save_error[0] = '\0';
+    ic_error save_err = {0};
+    if (c->o.save_cache && ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK)
+        snprintf(st->save_error, sizeof st->save_error, "%s", save_err.message);
     st->records = ic_cache_count(c->cache);
     st->cached_emitters = c->cached_emitters;
     st->gather_rays = atomic_load(&c->rays);

@@ -161,5 +161,17 @@ int main(void)
     CHECK(exists(DIR_ "/end/small.png"), "the PNG given after it is written");
     CHECK(exists(DIR_ "/end/stats.json"), "the stats are written");
     CHECK(temporaries(DIR_ "/end") == 0, "no temporary file left");
+
+    /* A cache file that cannot be written (over the limit at save time) costs only itself: the render
+     * goes on, its image is written, exit 1 names --save-cache. */
+    const char *save = CLI " render " CORNELL " --integrator ic -o " DIR_ "/save/img.png --save-cache " DIR_
+                       "/save/c.irc --width 48 --height 48 --spp 1 -q";
+    CHECK(system("mkdir -p '" DIR_ "/save'") == 0, "save folder");
+    rc = run_limited(save, 16384);
+    CHECK(rc == 1, "a failed --save-cache exits 1 (got %d: %s)", rc, err_text);
+    CHECK(strstr(err_text, "--save-cache " DIR_ "/save/c.irc") != NULL, "the message names the cache file: %s",
+          err_text);
+    CHECK(exists(DIR_ "/save/img.png") && !exists(DIR_ "/save/c.irc"), "the image is written, the cache is not");
+    CHECK(temporaries(DIR_ "/save") == 0, "no temporary file left");
     TEST_MAIN_END();
 }
