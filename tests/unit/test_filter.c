@@ -3,8 +3,10 @@
  *   1. constant irradiance plus independent noise of known σ: the filter cuts the records' error by
  *      more than 2× and keeps their mean;
  *   2. a step (1 beside 3) plus noise: no record moves towards the other side by more than a few σ
- *      (the step is far beyond the noise, so the robust mean keeps it), and away from the edge the
- *      error falls as in 1;
+ *      (the spread across the step is far beyond the noise, so the records hardly move), and away from
+ *      the edge the error falls as in 1;
+ *   2b. right-skewed noise (rare bright records, as light through a gap gives): the filter keeps the
+ *      records' mean (a robust mean would pull it down);
  *   3. a linear ramp with its true gradient: the filter, which extrapolates each neighbour with its own
  *      gradient, adds no bias and cuts the noise;
  *   4. records on two perpendicular walls meeting at a corner never mix;
@@ -38,6 +40,8 @@ static double gauss(ic_rng *r)
 
 /* A cache of GRID² records on the plane z = 0 (jittered grid), value truth(x) + N(0, σ) in every
  * channel, σ stored as the record's own noise estimate, radius fixed at 0.5 (a·R = 0.15). */
+static int skewed_noise; /* make_cache: noise +9σ/3 with probability 0.1, −σ/3 otherwise (mean 0, std σ) */
+
 static ic_cache *make_cache(truth_fn truth, float sigma, ic_vec3 gradient, uint64_t seed)
 {
     ic_cache_params p = {0};
@@ -57,7 +61,8 @@ static ic_cache *make_cache(truth_fn truth, float sigma, ic_vec3 gradient, uint6
             memset(&r, 0, sizeof r);
             float x = ((float)i + 0.2f + 0.6f * ic_rng_float(&rng)) * SPACING;
             float y = ((float)k + 0.2f + 0.6f * ic_rng_float(&rng)) * SPACING;
-            float e = truth(x) + sigma * (float)gauss(&rng);
+            float e = truth(x) + (skewed_noise ? (ic_rng_float(&rng) < 0.1f ? 3.0f * sigma : -sigma / 3.0f)
+                                               : sigma * (float)gauss(&rng));
             r.position = v3(x, y, 0.0f);
             r.normal = v3(0.0f, 0.0f, 1.0f);
             r.irradiance = v3s(fmaxf(e, 0.0f));
@@ -108,6 +113,24 @@ static void test_noise(const char *name, truth_fn truth, ic_vec3 gradient)
     printf("%s: record error %.4f before, %.4f after (mean %+.4f, %+.4f)\n", name, before, after, bias0, bias1);
     CHECK(after < 0.5 * before, "%s: error %.4f not cut by 2x from %.4f", name, after, before);
     CHECK(fabs(bias1) < 0.01, "%s: filtered records biased by %+.4f", name, bias1);
+    ic_cache_destroy(c);
+}
+
+static void test_skewed(void)
+{
+    skewed_noise = 1;
+    ic_cache *c = make_cache(flat, 0.3f, v3s(0.0f), 15);
+    skewed_noise = 0;
+    CHECK(c != NULL, "skewed: cache built");
+    if (!c)
+        return;
+    double before, after;
+    rms_error(c, flat, 0.0f, &before);
+    ic_error err;
+    CHECK(ic_ic_filter_cache(c, 2, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "skewed: filter runs");
+    double rms = rms_error(c, flat, 0.0f, &after);
+    printf("skewed: mean error %+.4f before, %+.4f after (rms after %.4f)\n", before, after, rms);
+    CHECK(fabs(after - before) < 0.01, "skewed: the filter moved the records' mean by %+.4f", after - before);
     ic_cache_destroy(c);
 }
 
@@ -211,6 +234,7 @@ int main(void)
 {
     test_noise("flat", flat, v3s(0.0f));
     test_noise("ramp", ramp, v3(0.5f, 0.0f, 0.0f));
+    test_skewed();
     test_step();
     test_corner();
     test_curved();
