@@ -314,6 +314,105 @@ static ic_result check_obj_vertices(const mesh_source *src, ic_error *err)
     return r;
 }
 
+/* A colour component that is negative or not a number has no physical meaning (an albedo or a radiance);
+ * clamping it would hide an export bug, so it is an error. */
+static int bad_component(float v)
+{
+    return !(v >= 0.0f) || !isfinite(v);
+}
+
+/* Checks the Kd, Ks and Ke lines of one MTL file; an error names the file, the line and the material. */
+static ic_result check_mtl_file(const char *mtl_path, ic_error *err)
+{
+    FILE *fp = fopen(mtl_path, "rb");
+    if (!fp)
+        return IC_OK; /* assimp warns and the materials take their defaults */
+    char line[4096], material[128] = "";
+    long line_no = 0;
+    ic_result r = IC_OK;
+    while (r == IC_OK && fgets(line, sizeof line, fp)) {
+        ++line_no;
+        const char *c = line;
+        while (*c == ' ' || *c == '\t')
+            ++c;
+        if (!strncmp(c, "newmtl", 6) && (c[6] == ' ' || c[6] == '\t')) {
+            c += 7;
+            while (*c == ' ' || *c == '\t')
+                ++c;
+            snprintf(material, sizeof material, "%.*s", (int)strcspn(c, "\r\n"), c);
+        } else if (c[0] == 'K' && (c[1] == 'd' || c[1] == 's' || c[1] == 'e') && (c[2] == ' ' || c[2] == '\t')) {
+            const char *what = c[1] == 'd' ? "Kd (diffuse)" : c[1] == 's' ? "Ks (specular)" : "Ke (emission)";
+            const char *v = c + 3;
+            for (int k = 0; k < 3; ++k) {
+                char *end;
+                float f = strtof(v, &end);
+                if (end == v)
+                    break; /* no more numbers ("spectral", "xyz" or the end of the line) */
+                if (bad_component(f)) {
+                    r = ic_error_set(err, IC_ERR_PARSE,
+                                     "%s:%ld: material '%s': %s has a negative or non-finite value (%.*s); give "
+                                     "values >= 0",
+                                     mtl_path, line_no, material, what, (int)strcspn(c + 3, "\r\n"), c + 3);
+                    break;
+                }
+                v = end;
+            }
+        }
+        while (!strchr(line, '\n') && fgets(line, sizeof line, fp)) { /* skip the rest of a long line */
+        }
+    }
+    fclose(fp);
+    return r;
+}
+
+/* OBJ files: assimp reads the MTL files and keeps no line numbers, so check the colours of every file the
+ * OBJ's `mtllib` lines name (relative to the OBJ's folder) ourselves. */
+static ic_result check_obj_materials(const mesh_source *src, const char *obj_dir, ic_error *err)
+{
+    FILE *fp = source_open(src);
+    if (!fp)
+        return IC_OK;
+    char line[4096];
+    ic_result r = IC_OK;
+    while (r == IC_OK && fgets(line, sizeof line, fp)) {
+        const char *c = line;
+        while (*c == ' ' || *c == '\t')
+            ++c;
+        if (strncmp(c, "mtllib", 6) || (c[6] != ' ' && c[6] != '\t'))
+            continue;
+        char names[4096];
+        snprintf(names, sizeof names, "%s", c + 7);
+        names[strcspn(names, "\r\n")] = '\0';
+        char *save = NULL;
+        for (char *name = strtok_r(names, " \t", &save); name && r == IC_OK; name = strtok_r(NULL, " \t", &save)) {
+            char mtl[IC_SCENE_PATH_MAX];
+            if (ic_path_join(obj_dir, name, mtl, sizeof mtl))
+                r = check_mtl_file(mtl, err);
+        }
+    }
+    fclose(fp);
+    return r;
+}
+
+/* Any format: the colours as assimp hands them over, for files whose lines we do not read ourselves. */
+static ic_result check_material_colors(const struct aiMaterial *am, const char *mesh_path, const char *name,
+                                       ic_error *err)
+{
+    static const char *const keys[4] = {"$clr.diffuse", "$clr.specular", "$clr.emissive", "$clr.base"};
+    static const char *const what[4] = {"diffuse colour", "specular colour", "emission", "base colour"};
+    for (int k = 0; k < 4; ++k) {
+        struct aiColor4D c;
+        if (aiGetMaterialColor(am, keys[k], 0, 0, &c) != aiReturn_SUCCESS)
+            continue;
+        if (bad_component(c.r) || bad_component(c.g) || bad_component(c.b))
+            return ic_error_set(err, IC_ERR_PARSE,
+                                "%s: material '%s': %s (%g %g %g) has a negative or non-finite value; give values "
+                                ">= 0",
+                                mesh_path, name, what[k], (double)c.r, (double)c.g, (double)c.b);
+    }
+    return IC_OK;
+}
+
 static ic_vec3 color_or(const struct aiMaterial *am, const char *key, ic_vec3 fallback)
 {
     struct aiColor4D c;
@@ -495,6 +594,9 @@ static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, 
         snprintf(m->name, sizeof m->name, "%.127s", name.data);
     m->kd_texture = -1;
     m->ior = 1.5f;
+    ic_result r = check_material_colors(am, mesh_path, m->name, err);
+    if (r != IC_OK)
+        return r;
     if (gltf_strength)
         convert_gltf(am, *gltf_strength, m);
     else
@@ -673,7 +775,8 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         obj_material_dir(&src, dir, tex_dir, sizeof tex_dir);
     else
         snprintf(tex_dir, sizeof tex_dir, "%s", dir);
-    if (!strcmp(ext, ".obj") && (r = check_obj_vertices(&src, err)) != IC_OK) {
+    if (!strcmp(ext, ".obj") &&
+        ((r = check_obj_vertices(&src, err)) != IC_OK || (r = check_obj_materials(&src, dir, err)) != IC_OK)) {
         free(src.data);
         return r;
     }

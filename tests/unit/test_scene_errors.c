@@ -77,6 +77,14 @@ int main(void)
     expect_error(SCENES "nan_vertex.json", NULL, IC_ERR_PARSE, "nan_vertex.obj:6:", "vertex 4 has a non-finite",
                  "fix or remove it");
     expect_error(SCENES "nan_vertex.obj", NULL, IC_ERR_PARSE, "nan_vertex.obj:6:", "vertex 4", NULL);
+    /* MTL colours that are negative or NaN: an error naming the MTL file, its line and the material, not a
+     * silent zero (issue "Hardening", item 6) */
+    expect_error(SCENES "bad_color.obj", NULL, IC_ERR_PARSE, "bad_color.mtl:6:", "material 'paint'",
+                 "Kd (diffuse) has a negative");
+    expect_error(SCENES "bad_emission.obj", NULL, IC_ERR_PARSE, "bad_emission.mtl:7:", "material 'lamp'",
+                 "Ke (emission) has a negative or non-finite value (2 nan 2)");
+    expect_error(SCENES "bad_color.gltf", NULL, IC_ERR_PARSE, "bad_color.gltf: material 'lamp_pbr'",
+                 "has a negative or non-finite value", NULL);
     /* an emitter whose only triangle is degenerate */
     expect_error(SCENES "zero_area_light.json", NULL, IC_ERR_PARSE, "zero_area_light.obj", "'lamp'",
                  "zero total area");
