@@ -16,6 +16,11 @@
 #define IC_DEFAULT_SEED 1
 #define IC_ADAPTIVE_SAMPLING_MIN_SPP 8   /* adaptive sampling needs a pilot pass of spp/4 ≥ 2 */
 
+/* Resource limits of scene loading (render.h's ic_scene_load_options): checked from the files' headers
+ * before anything is allocated for them. */
+#define IC_DEFAULT_MAX_TEXTURE_PIXELS (1 << 26) /* a texture or environment map: 8192 x 8192 */
+#define IC_DEFAULT_MAX_MESH_ELEMENTS (1 << 26)  /* the vertices, or the faces, one mesh file declares */
+
 /* Error heat maps (image.h, irrcache diff). */
 #define IC_DEFAULT_HEATMAP_MAX_ERROR 0.5f /* relative error shown as full red: one fixed scale, so heat maps of
                                              different images against one reference compare (bench/run's too) */

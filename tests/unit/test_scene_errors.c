@@ -77,6 +77,22 @@ int main(void)
     expect_error(SCENES "nan_vertex.json", NULL, IC_ERR_PARSE, "nan_vertex.obj:6:", "vertex 4 has a non-finite",
                  "fix or remove it");
     expect_error(SCENES "nan_vertex.obj", NULL, IC_ERR_PARSE, "nan_vertex.obj:6:", "vertex 4", NULL);
+    /* PLY: a NaN vertex no face uses (assimp drops it silently), binary and ascii (issue "Hardening", item 6) */
+    expect_error(SCENES "nan_vertex.ply", NULL, IC_ERR_PARSE, "nan_vertex.ply: vertex 4 (of 4, binary)",
+                 "non-finite coordinate (nan)", "fix or remove it");
+    {
+        FILE *fp = fopen(IC_TEST_TMP "/scene_errors_nan_ascii.ply", "w");
+        CHECK(fp != NULL, "write an ascii PLY");
+        if (fp) {
+            fputs("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n2 0 0\n0 2 0\n"
+                  "1 inf 0\n3 0 1 2\n",
+                  fp);
+            fclose(fp);
+        }
+        expect_error(IC_TEST_TMP "/scene_errors_nan_ascii.ply", NULL, IC_ERR_PARSE, "scene_errors_nan_ascii.ply:13:",
+                     "vertex 4 has a non-finite coordinate (inf)", NULL);
+    }
     /* MTL colours that are negative or NaN: an error naming the MTL file, its line and the material, not a
      * silent zero (issue "Hardening", item 6) */
     expect_error(SCENES "bad_color.obj", NULL, IC_ERR_PARSE, "bad_color.mtl:6:", "material 'paint'",
