@@ -200,6 +200,9 @@ int ic_cli_render(int argc, char **argv)
         return 1;
     }
     t_load = now_seconds() - t_load;
+    if (ic_scene_light_count(scene) == 0)
+        fprintf(stderr, "irrcache render: warning: %s has no light (no emitting triangle, light or environment), "
+                        "so the image will be black; add an emitter, a light or an environment\n", a.scene);
 
     ic_render_options opt = a.render;
     opt.progress = on_progress;

@@ -197,6 +197,9 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt, ic_imag
 void ic_scene_resolution(const ic_scene *scene, int *width, int *height);
 /* Exposure (stops) the scene file asks for LDR outputs, 0 if none. */
 float ic_scene_exposure(const ic_scene *scene);
+/* Light sources of a loaded scene that emit something: emitting triangles, point lights, the sun and the
+ * environment (one each). 0 means every image of the scene is black (a caller may warn). */
+unsigned ic_scene_light_count(const ic_scene *scene);
 
 #ifdef __cplusplus
 }

@@ -1067,7 +1067,13 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
 
     float identity[16];
     ic_mat4_identity(identity);
+    uint32_t tris_before = s->triangle_count, dropped_before = s->dropped_degenerate;
     r = append_meshes(b, ai, mesh_path, xform ? xform : identity, material_base, err);
+    if (r == IC_OK && s->triangle_count == tris_before)
+        r = ic_error_set(err, IC_ERR_PARSE,
+                         "%s: no usable triangle (%u of zero area dropped; points and lines are ignored); fix the "
+                         "geometry or remove the mesh",
+                         mesh_path, s->dropped_degenerate - dropped_before);
 done:
     free(strengths);
     aiReleaseImport(ai);

@@ -89,3 +89,15 @@ ic_vec3 ic_scene_emission(const ic_scene *scene, const ic_surface *s, ic_vec3 wo
         return v3s(0.0f);
     return m->emission;
 }
+
+unsigned ic_scene_light_count(const ic_scene *scene)
+{
+    if (!scene)
+        return 0;
+    unsigned n = scene->tri_light_count;
+    for (uint32_t i = 0; i < scene->point_light_count; ++i)
+        n += !v3_is_black(scene->point_lights[i].intensity);
+    n += scene->sun.enabled && !v3_is_black(scene->sun.irradiance);
+    n += scene->env.enabled && !v3_is_black(scene->env.radiance);
+    return n;
+}

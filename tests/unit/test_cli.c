@@ -180,6 +180,14 @@ int main(void)
               strstr(stats, "\"phases\""),
           "stats JSON has seconds, rays, rays_per_second, phases: %s", stats);
 
+    /* A scene nothing lights: rendered (exit 0) with a one-line warning that the image is black. */
+    rc = run("render " SCENES "no_light.json -o " OUT " --spp 1 -q");
+    CHECK(rc == 0 && strstr(err_text, "warning: ") && strstr(err_text, "no_light.json has no light") &&
+              strstr(err_text, "black") && line_count(err_text) == 1,
+          "no light: a warning (exit %d: %s)", rc, err_text);
+    rc = run("render " SCENES "quad_light.obj -o " OUT " --spp 1 --width 8 --height 8 -q");
+    CHECK(rc == 0 && err_text[0] == '\0', "a lit scene: no warning (exit %d: %s)", rc, err_text);
+
     /* Cache files: records saved by one run render the same image when loaded by the next; a file made
      * with other gathering settings, or a truncated one, is refused without writing an output. */
     const char *ic = "render " IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json --integrator ic --width 24 "

@@ -186,6 +186,23 @@ static void test_degenerate_dropped(void)
     ic_scene_free(s);
 }
 
+/* ic_scene_light_count: 0 for a scene nothing lights (the command warns that the image will be black). */
+static void test_light_count(void)
+{
+    ic_scene *s = load(SCENES "no_light.json", NULL);
+    CHECK(s && ic_scene_light_count(s) == 0, "no_light.json: no light (%u)", s ? ic_scene_light_count(s) : 99u);
+    ic_scene_free(s);
+    s = load(SCENES "quad_light.obj", NULL);
+    CHECK(s && ic_scene_light_count(s) == 2, "quad_light.obj: two emitting triangles (%u)",
+          s ? ic_scene_light_count(s) : 0u);
+    ic_scene_free(s);
+    s = load(SCENES "plain_quad.obj", NULL);
+    CHECK(s && ic_scene_light_count(s) == 1, "a bare mesh without emitters gets the white sky (%u)",
+          s ? ic_scene_light_count(s) : 0u);
+    ic_scene_free(s);
+    CHECK(ic_scene_light_count(NULL) == 0, "NULL scene");
+}
+
 /* An MTL in another folder than its OBJ: map_Kd is read from the MTL's folder (the MTL format's rule). */
 static void test_mtl_folder(void)
 {
@@ -493,6 +510,7 @@ int main(void)
     test_bare_mesh_and_queries();
     test_mtl_folder();
     test_gltf_and_ply();
+    test_light_count();
     test_texture_storage();
     test_gzip_meshes();
     TEST_MAIN_END();

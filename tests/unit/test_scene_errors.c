@@ -101,6 +101,9 @@ int main(void)
                  "Ke (emission) has a negative or non-finite value (2 nan 2)");
     expect_error(SCENES "bad_color.gltf", NULL, IC_ERR_PARSE, "bad_color.gltf: material 'lamp_pbr'",
                  "has a negative or non-finite value", NULL);
+    /* a mesh with no usable triangle (it would render nothing, silently): the file and the count dropped */
+    expect_error(SCENES "only_degenerate.obj", NULL, IC_ERR_PARSE, "only_degenerate.obj: no usable triangle",
+                 "(2 of zero area dropped", "fix the geometry");
     /* an emitter whose only triangle is degenerate */
     expect_error(SCENES "zero_area_light.json", NULL, IC_ERR_PARSE, "zero_area_light.obj", "'lamp'",
                  "zero total area");
