@@ -917,7 +917,7 @@ static ic_vec3 xform_normal(const float n[9], struct aiVector3D v)
 }
 
 static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
-                               const float m4[16], uint32_t material_base, ic_error *err)
+                               const float m4[16], const char *xform_where, uint32_t material_base, ic_error *err)
 {
     ic_scene *s = b->scene;
     size_t add_vertices = 0, add_faces = 0;
@@ -950,7 +950,22 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
                 return ic_error_set(err, IC_ERR_PARSE,
                                     "%s: vertex %u of mesh '%s' has a non-finite coordinate; fix or remove it",
                                     mesh_path, v + 1, mesh->mName.data);
-            s->positions[base + v] = xform_point(m4, p);
+            ic_vec3 q = xform_point(m4, p);
+            if (!(fabsf(q.x) <= IC_SCENE_MAX_COORD && fabsf(q.y) <= IC_SCENE_MAX_COORD &&
+                  fabsf(q.z) <= IC_SCENE_MAX_COORD)) {
+                if (xform_where)
+                    return ic_error_set(err, IC_ERR_INVALID_ARG,
+                                        "%s: the transform of '%s' takes its vertex %u (%g, %g, %g) to (%g, %g, %g), "
+                                        "beyond the largest coordinate %g; give a smaller scale or translation",
+                                        xform_where, mesh_path, v + 1, (double)p.x, (double)p.y, (double)p.z,
+                                        (double)q.x, (double)q.y, (double)q.z, (double)IC_SCENE_MAX_COORD);
+                return ic_error_set(err, IC_ERR_INVALID_ARG,
+                                    "%s: vertex %u (%g, %g, %g) is beyond the largest coordinate %g; scale the mesh "
+                                    "down",
+                                    mesh_path, v + 1, (double)q.x, (double)q.y, (double)q.z,
+                                    (double)IC_SCENE_MAX_COORD);
+            }
+            s->positions[base + v] = q;
             if (s->normals)
                 s->normals[base + v] = mesh->mNormals ? xform_normal(nm, mesh->mNormals[v]) : v3s(0.0f);
             if (s->uvs) {
@@ -987,7 +1002,8 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
     return IC_OK;
 }
 
-ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, ic_error *err)
+ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, const char *xform_where,
+                         ic_error *err)
 {
     ic_scene *s = b->scene;
     mesh_source src;
@@ -1068,7 +1084,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     float identity[16];
     ic_mat4_identity(identity);
     uint32_t tris_before = s->triangle_count, dropped_before = s->dropped_degenerate;
-    r = append_meshes(b, ai, mesh_path, xform ? xform : identity, material_base, err);
+    r = append_meshes(b, ai, mesh_path, xform ? xform : identity, xform_where, material_base, err);
     if (r == IC_OK && s->triangle_count == tris_before)
         r = ic_error_set(err, IC_ERR_PARSE,
                          "%s: no usable triangle (%u of zero area dropped; points and lines are ignored); fix the "

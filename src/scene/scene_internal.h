@@ -29,9 +29,14 @@ typedef struct ic_scene_builder {
 /* Releases the builder's own arrays (not the scene). */
 void ic_scene_builder_release(ic_scene_builder *b);
 
+/* Largest world coordinate accepted: twice its square, a triangle's cross product, stays finite in float. */
+#define IC_SCENE_MAX_COORD 1e18f
+
 /* Appends every triangle and material of a mesh file (assimp) to the scene, transformed by the
- * row-major 4x4 matrix xform (NULL: identity). Degenerate triangles are dropped and counted. */
-ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, ic_error *err);
+ * row-major 4x4 matrix xform (NULL: identity). Degenerate triangles are dropped and counted.
+ * xform_where ("scene.json:12", or NULL) names the transform in messages about what it did to a vertex. */
+ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, const char *xform_where,
+                         ic_error *err);
 
 /* Loads (or finds already loaded) the texture at path into scene->textures; *index receives its
  * index. `owner` names who asked for it in messages ("mesh.obj: material 'wood'"). */

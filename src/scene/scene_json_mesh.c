@@ -7,6 +7,7 @@
 #include "core/vecmath.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 static void rotation_matrix(ic_vec3 axis, float angle, float m[16])
@@ -146,7 +147,7 @@ static ic_result parse_mesh(json_ctx *c, const cJSON *obj, int index)
     if (!cJSON_IsObject(obj))
         return ic_json_fail(c, line, IC_ERR_PARSE, "meshes[%d] must be an object with a 'path'", index);
     const char *path = NULL;
-    int path_line = line, has_xform = 0;
+    int path_line = line, has_xform = 0, xform_line = 0;
     float m[16];
     ic_mat4_identity(m);
     const cJSON *it;
@@ -164,6 +165,7 @@ static ic_result parse_mesh(json_ctx *c, const cJSON *obj, int index)
                 return ic_json_fail(c, kl, IC_ERR_INVALID_ARG,
                                     "meshes[%d] gives both 'transform' and 'matrix'; keep one", index);
             has_xform = 1;
+            xform_line = kl;
             r = !strcmp(it->string, "matrix") ? parse_matrix(c, it, kl, m) : parse_transform(c, it, kl, m);
         } else {
             return ic_json_unknown_key(c, kl, it->string, "a mesh", valid);
@@ -177,7 +179,9 @@ static ic_result parse_mesh(json_ctx *c, const cJSON *obj, int index)
     r = ic_json_resolve_path(c, path, path_line, "mesh", full, sizeof full);
     if (r != IC_OK)
         return r;
-    return ic_mesh_import(c->b, full, m, c->err);
+    char where[IC_SCENE_PATH_MAX + 32];
+    snprintf(where, sizeof where, "%s:%d", c->path, xform_line);
+    return ic_mesh_import(c->b, full, m, has_xform ? where : NULL, c->err);
 }
 
 ic_result ic_json_parse_meshes(json_ctx *c, const cJSON *arr, int line)

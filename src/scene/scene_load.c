@@ -22,7 +22,7 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
         ic_path_absolute(path, abs_path, sizeof abs_path);
         return ic_error_set(err, IC_ERR_IO, "%s: mesh not found (resolved to %s); check the path", path, abs_path);
     }
-    ic_result r = ic_mesh_import(b, path, NULL, err);
+    ic_result r = ic_mesh_import(b, path, NULL, NULL, err);
     if (r != IC_OK)
         return r;
     ic_scene *s = b->scene;

@@ -104,6 +104,19 @@ int main(void)
     /* a mesh with no usable triangle (it would render nothing, silently): the file and the count dropped */
     expect_error(SCENES "only_degenerate.obj", NULL, IC_ERR_PARSE, "only_degenerate.obj: no usable triangle",
                  "(2 of zero area dropped", "fix the geometry");
+    /* vertices a transform takes out of range: the scene line of that transform, not a "degenerate emitter" */
+    expect_error(SCENES "overflow_transform.json", NULL, IC_ERR_INVALID_ARG, "overflow_transform.json:5:",
+                 "the transform of '", "quad_light.obj' takes its vertex 1");
+    {
+        FILE *fp = fopen(IC_TEST_TMP "/scene_errors_far.obj", "w");
+        CHECK(fp != NULL, "write a far OBJ");
+        if (fp) {
+            fputs("v 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n", fp);
+            fclose(fp);
+        }
+        expect_error(IC_TEST_TMP "/scene_errors_far.obj", NULL, IC_ERR_INVALID_ARG, "scene_errors_far.obj: vertex 2",
+                     "beyond the largest coordinate 1e+18", "scale the mesh down");
+    }
     /* an emitter whose only triangle is degenerate */
     expect_error(SCENES "zero_area_light.json", NULL, IC_ERR_PARSE, "zero_area_light.obj", "'lamp'",
                  "zero total area");
