@@ -53,14 +53,14 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_ALL, "image width") \
     X(HEIGHT, "--height", NULL, IC_OPT_INT, load.height, 1, 65536, "N", IC_DEFAULT_HEIGHT, "scene file, else %g", \
       "px", IC_SCOPE_ALL, "image height") \
-    X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, 1e9, "N", NAN, "scene file, else 16 (pt) or 64 (ic)", "", \
+    X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, IC_MAX_SPP, "N", NAN, "scene file, else 16 (pt) or 64 (ic)", "", \
       IC_SCOPE_ALL, "samples per pixel (with --time: the most to take)") \
     X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
       "wall-time budget of the whole render, cache construction included: progressive passes " \
       "until it is spent (equal-time comparisons)") \
     X(INTEGRATOR, "--integrator", NULL, IC_OPT_CHOICE, render.integrator, 0, 0, "pt|ic", NAN, "pt", "", \
       IC_SCOPE_ALL, "pt: path-traced reference; ic: irradiance caching (indirect diffuse from the cache)") \
-    X(MAX_DEPTH, "--max-depth", NULL, IC_OPT_INT, render.max_depth, 1, 1000, "N", IC_DEFAULT_MAX_DEPTH, \
+    X(MAX_DEPTH, "--max-depth", NULL, IC_OPT_INT, render.max_depth, 1, IC_MAX_MAX_DEPTH, "N", IC_DEFAULT_MAX_DEPTH, \
       "scene file, else %g", "", IC_SCOPE_ALL, "maximum number of scattering events (direct light is 1)") \
     X(THREADS, "--threads", NULL, IC_OPT_INT, render.threads, 0, 4096, "N", NAN, "0 (all cores)", "", IC_SCOPE_ALL, \
       "worker threads; the image does not depend on it: same seed, same image") \
@@ -100,7 +100,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_IC, "bounces in the light a record gathers") \
     X(RECURSIVE, "--recursive", NULL, IC_OPT_FLAG, render.ic.recursive, 0, 0, "", NAN, "off", "", IC_SCOPE_LAZY, \
       "one cache level per bounce, as Radiance's -ab (then --bounces is the number of levels)") \
-    X(LIGHT_SAMPLES, "--light-samples", NULL, IC_OPT_INT, render.ic.light_samples, 1, 1e6, "N", \
+    X(LIGHT_SAMPLES, "--light-samples", NULL, IC_OPT_INT, render.ic.light_samples, 1, IC_MAX_LIGHT_SAMPLES, "N", \
       IC_DEFAULT_LIGHT_SAMPLES, "%g", "", IC_SCOPE_IC, "light samples per shading point in the final render") \
     X(LARGE_EMITTERS, "--large-emitters", NULL, IC_OPT_NUMBER_OFF, render.ic.large_emitters, 0, 1, "F|off", \
       IC_DEFAULT_LARGE_EMITTERS, "%g", "", IC_SCOPE_IC, "an emitting material that covers at least F of the " \

@@ -16,6 +16,12 @@
 #define IC_DEFAULT_SEED 1
 #define IC_ADAPTIVE_SAMPLING_MIN_SPP 8   /* adaptive sampling needs a pilot pass of spp/4 ≥ 2 */
 
+/* Largest values accepted from a scene file's "render" section, the command line and ic_render_options
+ * alike (render.h): a cap keeps sample counts and their products far from integer overflow. */
+#define IC_MAX_SPP (1 << 24)             /* samples per pixel */
+#define IC_MAX_LIGHT_SAMPLES (1 << 16)   /* light samples per shading point (cache render) */
+#define IC_MAX_MAX_DEPTH 1024            /* scattering events */
+
 /* Resource limits of scene loading (render.h's ic_scene_load_options): checked from the files' headers
  * before anything is allocated for them. */
 #define IC_DEFAULT_MAX_TEXTURE_PIXELS (1 << 26) /* a texture or environment map: 8192 x 8192 */

@@ -120,10 +120,10 @@ static ic_result parse_render(json_ctx *c, const cJSON *obj, int line)
         if (ic_json_is_comment(it->string))
             continue;
         if (!strcmp(it->string, "spp")) {
-            r = ic_json_read_int(c, it, kl, 1, 1 << 24, "give samples per pixel", &d);
+            r = ic_json_read_int(c, it, kl, 1, IC_MAX_SPP, "give samples per pixel", &d);
             st->spp = (int)d;
         } else if (!strcmp(it->string, "max_depth")) {
-            r = ic_json_read_int(c, it, kl, 1, 1024, "give the maximum path length in bounces", &d);
+            r = ic_json_read_int(c, it, kl, 1, IC_MAX_MAX_DEPTH, "give the maximum path length in bounces", &d);
             st->max_depth = (int)d;
         } else if (!strcmp(it->string, "seed")) {
             r = ic_json_read_int(c, it, kl, 0, 9007199254740992.0, "give a non-negative integer seed", &d);

@@ -140,6 +140,12 @@ int main(void)
         {"missing scene file", SCENES "no_such_scene.json -o " OUT, 1, "no_such_scene.json"},
         {"unknown option", SCENES "plain_quad.obj -o " OUT " --frobnicate", 2, "--frobnicate"},
         {"zero spp", SCENES "plain_quad.obj -o " OUT " --spp 0", 2, "--spp"},
+        /* capped as the scene file caps them (IC_MAX_SPP, IC_MAX_LIGHT_SAMPLES): refused before the scene is read */
+        {"spp above the cap", SCENES "no_such_scene.json -o " OUT " --spp 16777217", 2,
+         "--spp 16777217: expected an integer from 1 to 16777216"},
+        {"light samples above the cap", SCENES "no_such_scene.json -o " OUT " --integrator ic --light-samples 65537", 2,
+         "--light-samples 65537: expected an integer from 1 to 65536"},
+        {"max depth above the cap", SCENES "no_such_scene.json -o " OUT " --max-depth 1025", 2, "--max-depth 1025"},
         {"non-numeric width", SCENES "plain_quad.obj -o " OUT " --width abc", 2, "--width"},
         {"negative time", SCENES "plain_quad.obj -o " OUT " --time -1", 2, "--time"},
         {"unknown integrator", SCENES "plain_quad.obj -o " OUT " --integrator xyz", 2, "xyz"},

@@ -203,6 +203,27 @@ static void test_light_count(void)
     CHECK(ic_scene_light_count(NULL) == 0, "NULL scene");
 }
 
+/* ic_render refuses sample counts above the caps the scene file and the command line share. */
+static void test_render_caps(void)
+{
+    ic_scene *s = load(SCENES "quad_light.obj", NULL);
+    if (!s)
+        return;
+    ic_render_options opt = {0};
+    ic_image img = {0};
+    ic_error err;
+    opt.spp = IC_MAX_SPP + 1;
+    CHECK(ic_render(s, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "--spp 16777217"),
+          "spp above IC_MAX_SPP: %s", err.message);
+    opt.spp = 1;
+    opt.integrator = IC_INTEGRATOR_IC;
+    opt.ic.light_samples = IC_MAX_LIGHT_SAMPLES + 1;
+    CHECK(ic_render(s, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "--light-samples 65537"),
+          "light samples above IC_MAX_LIGHT_SAMPLES: %s", err.message);
+    ic_image_free(&img);
+    ic_scene_free(s);
+}
+
 /* An MTL in another folder than its OBJ: map_Kd is read from the MTL's folder (the MTL format's rule). */
 static void test_mtl_folder(void)
 {
@@ -511,6 +532,7 @@ int main(void)
     test_mtl_folder();
     test_gltf_and_ply();
     test_light_count();
+    test_render_caps();
     test_texture_storage();
     test_gzip_meshes();
     TEST_MAIN_END();
