@@ -81,6 +81,12 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(SCENES_DIR, "--scenes-dir", NULL, IC_OPT_STRING, load.shared_scenes_dir, 0, 0, "DIR", NAN, \
       "$IRRCACHE_SCENES, else ../shared/scenes", "", IC_SCOPE_ALL, "where 'shared:' mesh paths of scene files " \
       "resolve") \
+    X(MAX_TEXTURE_PIXELS, "--max-texture-pixels", NULL, IC_OPT_INT, load.max_texture_pixels, 1, 1 << 28, "N", \
+      IC_DEFAULT_MAX_TEXTURE_PIXELS, "67108864 (8192 x 8192)", "px", IC_SCOPE_ALL, "largest texture or " \
+      "environment map accepted, checked from the file's header before it is read (at most 2^28)") \
+    X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
+      IC_DEFAULT_MAX_MESH_ELEMENTS, "67108864", "", IC_SCOPE_ALL, "largest vertex or face count of one mesh " \
+      "file, checked from a PLY header before it is read, and on the meshes imported") \
     X(QUIET, "--quiet", "-q", IC_OPT_FLAG, quiet, 0, 0, "", NAN, "off", "", IC_SCOPE_ALL, \
       "no progress line and no summary (the progress line is shown only when stderr is a terminal)") \
     X(STRATEGY, "--strategy", NULL, IC_OPT_CHOICE, render.ic.strategy, 0, 0, "batch|lazy|adaptive", NAN, "batch", \

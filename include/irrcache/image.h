@@ -37,6 +37,10 @@ ic_result ic_image_create(ic_image *img, int width, int height);
 void ic_image_free(ic_image *img);
 /* Reads an image (EXR, PFM, HDR, PNG, JPEG) as linear RGB. */
 ic_result ic_image_read(const char *path, ic_image *out, ic_error *err);
+/* The same, refusing (IC_ERR_UNSUPPORTED) an image whose header gives more than max_pixels pixels before
+ * anything is allocated for it (0: no limit but the library's own); the message ends with `raise`, what
+ * to do ("raise --max-texture-pixels"; NULL: "use a smaller image"). */
+ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err);
 /* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. */
 ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
 /* Nonzero if the extension of path is one ic_image_write knows. */

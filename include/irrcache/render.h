@@ -32,6 +32,10 @@ typedef struct ic_scene_load_options {
     const char *shared_scenes_dir; /* where "shared:" mesh paths resolve (default: $IRRCACHE_SCENES,
                                       else ../shared/scenes next to the project) */
     int width, height;     /* override camera resolution (0: keep) */
+    int max_texture_pixels;/* largest texture or environment map, in pixels, checked from its header before
+                              it is read [IC_DEFAULT_MAX_TEXTURE_PIXELS] */
+    int max_mesh_elements; /* largest vertex or face count a mesh file may declare, checked from its header
+                              (PLY) before it is read and on the imported meshes [IC_DEFAULT_MAX_MESH_ELEMENTS] */
 } ic_scene_load_options;
 
 /* Loads a JSON scene file or a bare mesh (.obj .gltf .glb .ply); on failure *out is NULL and err

@@ -156,7 +156,7 @@ static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const
     return IC_OK;
 }
 
-ic_result ic_image_read_exr(const char *path, ic_image *out, ic_error *err)
+ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
     exr_context_initializer_t init = context_initializer();
@@ -180,7 +180,7 @@ ic_result ic_image_read_exr(const char *path, ic_image *out, ic_error *err)
         if (width <= 0 || height <= 0 || width > IC_IMAGE_MAX_SIDE || height > IC_IMAGE_MAX_SIDE)
             r = ic_error_set(err, IC_ERR_PARSE, "%s: OpenEXR data window is empty or too large; check the file", path);
         else
-            r = ic_image_create_for_file(path, out, (int)width, (int)height, err);
+            r = ic_image_create_for_file(path, out, (int)width, (int)height, lim, err);
     }
     if (r == IC_OK) {
         r = decode_chunks(path, ctxt, &window, grey, out, err);

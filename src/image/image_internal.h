@@ -15,26 +15,34 @@
 #define IC_IMAGE_MAX_SIDE 65536
 #define IC_IMAGE_MAX_PIXELS ((size_t)1 << 28)
 
-/* ic_image_create for a reader: reports a bad size or a failed allocation against path. */
-ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, ic_error *err);
+/* The caller's limit on the pixels of an image read (ic_image_read_max): max_pixels 0 is none. */
+typedef struct ic_image_limit {
+    size_t max_pixels;
+    const char *raise;     /* what to do when it is exceeded, or NULL */
+} ic_image_limit;
+
+/* ic_image_create for a reader: reports a bad size, one over lim (may be NULL) or a failed allocation
+ * against path. */
+ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, const ic_image_limit *lim,
+                                   ic_error *err);
 
 /* OpenEXR (Core C API): first part, scanline, R/G/B (A ignored) or Y, half or float. */
-ic_result ic_image_read_exr(const char *path, ic_image *out, ic_error *err);
+ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);
 /* OpenEXR: RGB channels as 16-bit half (is_half) or 32-bit float, ZIP compressed (lossless). */
 ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half, ic_error *err);
 
 /* Portable float map ("PF" colour, "Pf" grey), either byte order; rows are stored bottom first. */
-ic_result ic_image_read_pfm(const char *path, ic_image *out, ic_error *err);
+ic_result ic_image_read_pfm(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);
 /* Portable float map, little-endian, colour. */
 ic_result ic_image_write_pfm(const char *path, const ic_image *img, ic_error *err);
 
 /* Radiance RGBE (.hdr): flat and run-length encoded scanlines, "-Y h +X w" orientation. */
-ic_result ic_image_read_hdr(const char *path, ic_image *out, ic_error *err);
+ic_result ic_image_read_hdr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);
 /* Radiance RGBE (.hdr), flat (not run-length encoded) scanlines. */
 ic_result ic_image_write_hdr(const char *path, const ic_image *img, ic_error *err);
 
 /* Through stb_image: 8/16-bit PNG and JPEG (sRGB, converted to linear). */
-ic_result ic_image_read_stb(const char *path, ic_image *out, ic_error *err);
+ic_result ic_image_read_stb(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);
 /* 8-bit sRGB PNG after scaling by 2^exposure. */
 ic_result ic_image_write_png(const char *path, const ic_image *img, float exposure, ic_error *err);
 

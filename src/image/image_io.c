@@ -36,6 +36,12 @@ int ic_image_is_writable_format(const char *path)
 
 ic_result ic_image_read(const char *path, ic_image *out, ic_error *err)
 {
+    return ic_image_read_max(path, 0, NULL, out, err);
+}
+
+ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err)
+{
+    const ic_image_limit limit = {max_pixels, raise}, *lim = &limit;
     if (!out)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_image_read: no output image given");
     memset(out, 0, sizeof *out);
@@ -56,15 +62,15 @@ ic_result ic_image_read(const char *path, ic_image *out, ic_error *err)
         return ic_error_set(err, IC_ERR_PARSE, "%s: file is empty; re-create the image", path);
 
     if (n == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01)
-        return ic_image_read_exr(path, out, err);
+        return ic_image_read_exr(path, lim, out, err);
     if (n >= 3 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f') &&
         (magic[2] == '\n' || magic[2] == '\r' || magic[2] == ' ' || magic[2] == '\t'))
-        return ic_image_read_pfm(path, out, err);
+        return ic_image_read_pfm(path, lim, out, err);
     if (n >= 2 && magic[0] == '#' && magic[1] == '?')
-        return ic_image_read_hdr(path, out, err);
+        return ic_image_read_hdr(path, lim, out, err);
     if ((n == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') || /* PNG */
         (n >= 3 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff))               /* JPEG */
-        return ic_image_read_stb(path, out, err);
+        return ic_image_read_stb(path, lim, out, err);
     return ic_error_set(err, IC_ERR_UNSUPPORTED,
                         "%s: not an image format irrcache reads; convert it to OpenEXR, PFM, Radiance HDR, "
                         "PNG or JPEG",

@@ -24,14 +24,14 @@ static ic_result decode_failed(const char *path, ic_error *err)
                         path, why ? why : "unknown reason");
 }
 
-ic_result ic_image_read_stb(const char *path, ic_image *out, ic_error *err)
+ic_result ic_image_read_stb(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
     int width = 0, height = 0, channels = 0;
     if (!stbi_info(path, &width, &height, &channels))
         return decode_failed(path, err);
     /* Validate the size before stb allocates for it. */
-    ic_result r = ic_image_create_for_file(path, out, width, height, err);
+    ic_result r = ic_image_create_for_file(path, out, width, height, lim, err);
     if (r != IC_OK)
         return r;
     const size_t count = (size_t)width * (size_t)height * 3;

@@ -33,7 +33,7 @@ static float swap_float(float v)
     return v;
 }
 
-ic_result ic_image_read_pfm(const char *path, ic_image *out, ic_error *err)
+ic_result ic_image_read_pfm(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
     FILE *fp = fopen(path, "rb");
@@ -69,7 +69,7 @@ ic_result ic_image_read_pfm(const char *path, ic_image *out, ic_error *err)
                              width, height, expected, file_end - data_start);
     }
     if (r == IC_OK)
-        r = ic_image_create_for_file(path, out, width, height, err);
+        r = ic_image_create_for_file(path, out, width, height, lim, err);
     if (r != IC_OK) {
         fclose(fp);
         return r;

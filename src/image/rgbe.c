@@ -189,7 +189,7 @@ static int read_scanline(FILE *fp, unsigned char *line, int width)
     return 1;
 }
 
-ic_result ic_image_read_hdr(const char *path, ic_image *out, ic_error *err)
+ic_result ic_image_read_hdr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
     FILE *fp = fopen(path, "rb");
@@ -200,7 +200,7 @@ ic_result ic_image_read_hdr(const char *path, ic_image *out, ic_error *err)
     double exposure = 1.0;
     ic_result r = read_header(path, fp, &width, &height, &exposure, err);
     if (r == IC_OK)
-        r = ic_image_create_for_file(path, out, width, height, err);
+        r = ic_image_create_for_file(path, out, width, height, lim, err);
     unsigned char *line = r == IC_OK ? malloc((size_t)width * 4) : NULL;
     if (r == IC_OK && !line)
         r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory reading the image", path);

@@ -812,7 +812,7 @@ static void obj_material_dir(const mesh_source *src, const char *obj_dir, char *
 
 /* mesh_dir: the mesh's folder; tex_dir: where its materials' texture paths start (an OBJ's MTL folder),
  * tried first, then mesh_dir (exporters that write paths from the OBJ's folder). */
-static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, const float *gltf_strength,
+static ic_result convert_material(ic_scene_builder *b, const struct aiMaterial *am, const float *gltf_strength,
                                   const char *mesh_path, const char *mesh_dir, const char *tex_dir, ic_material *m,
                                   ic_error *err)
 {
@@ -846,7 +846,7 @@ static ic_result convert_material(ic_scene *scene, const struct aiMaterial *am, 
             return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
         if (!ic_path_exists(full) && ic_path_exists(alt))
             snprintf(full, sizeof full, "%s", alt);
-        return ic_scene_texture_load(scene, full, owner, &m->kd_texture, err);
+        return ic_scene_texture_load(b, full, owner, &m->kd_texture, err);
     }
     return IC_OK;
 }
@@ -929,6 +929,13 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
         any_normals |= mesh->mNormals != NULL;
         any_uvs |= mesh->mTextureCoords[0] != NULL;
     }
+    size_t max_elements = ic_scene_max_mesh_elements(b->opt);
+    if (add_vertices > max_elements || add_faces > max_elements)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                            "%s: %zu vertices and %zu faces, more than the limit of %zu; raise it with "
+                            "--max-mesh-elements (max_mesh_elements of ic_scene_load_options) if the mesh is really "
+                            "this large",
+                            mesh_path, add_vertices, add_faces, max_elements);
     if (s->vertex_count + add_vertices > UINT32_MAX / 4 || s->triangle_count + add_faces > UINT32_MAX / 4)
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: too many vertices or triangles; split the scene",
                             mesh_path);
@@ -1021,7 +1028,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         snprintf(tex_dir, sizeof tex_dir, "%s", dir);
     if ((!strcmp(ext, ".obj") &&
          ((r = check_obj_vertices(&src, err)) != IC_OK || (r = check_obj_materials(&src, dir, err)) != IC_OK)) ||
-        (!strcmp(ext, ".ply") && (r = check_ply(&src, IC_DEFAULT_MAX_MESH_ELEMENTS, err)) != IC_OK)) {
+        (!strcmp(ext, ".ply") && (r = check_ply(&src, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK)) {
         free(src.data);
         return r;
     }
@@ -1074,7 +1081,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         } else {
             float one = 1.0f;
             const float *strength = !is_gltf ? NULL : (strengths ? &strengths[i] : &one);
-            r = convert_material(s, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
+            r = convert_material(b, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
             if (r != IC_OK)
                 goto done;
         }

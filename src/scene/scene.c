@@ -165,9 +165,10 @@ static uint8_t *srgb8_texels(const float *rgb, size_t n, float linear[256])
     return bytes;
 }
 
-ic_result ic_scene_texture_load(ic_scene *scene, const char *path, const char *owner, int32_t *index,
+ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const char *owner, int32_t *index,
                                 ic_error *err)
 {
+    ic_scene *scene = b->scene;
     for (uint32_t i = 0; i < scene->texture_count; ++i)
         if (!strcmp(scene->textures[i].path, path)) {
             *index = (int32_t)i;
@@ -181,7 +182,8 @@ ic_result ic_scene_texture_load(ic_scene *scene, const char *path, const char *o
     }
     ic_image img;
     ic_error ierr;
-    ic_result r = ic_image_read(path, &img, &ierr);
+    ic_result r = ic_image_read_max(path, ic_scene_max_texture_pixels(b->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &img,
+                                    &ierr);
     if (r != IC_OK)
         return ic_error_set(err, r, "%s: %s", owner, ierr.message);
     ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));

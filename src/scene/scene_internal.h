@@ -24,7 +24,20 @@ typedef struct ic_scene_builder {
     uint32_t *material_mesh;    /* per material: index into mesh_paths of the file that defined it */
     char **mesh_paths;          /* every imported mesh file, for messages (mesh_count) */
     uint32_t mesh_count;
+    const ic_scene_load_options *opt; /* the caller's load options (never NULL) */
 } ic_scene_builder;
+
+/* The limits of opt with their defaults filled in. */
+static inline size_t ic_scene_max_texture_pixels(const ic_scene_load_options *opt)
+{
+    return opt && opt->max_texture_pixels > 0 ? (size_t)opt->max_texture_pixels : IC_DEFAULT_MAX_TEXTURE_PIXELS;
+}
+static inline size_t ic_scene_max_mesh_elements(const ic_scene_load_options *opt)
+{
+    return opt && opt->max_mesh_elements > 0 ? (size_t)opt->max_mesh_elements : IC_DEFAULT_MAX_MESH_ELEMENTS;
+}
+/* What to do when a texture is over its limit (the end of the message). */
+#define IC_SCENE_RAISE_TEXTURE_LIMIT "raise the limit with --max-texture-pixels (max_texture_pixels of ic_scene_load_options)"
 
 /* Releases the builder's own arrays (not the scene). */
 void ic_scene_builder_release(ic_scene_builder *b);
@@ -40,7 +53,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
 
 /* Loads (or finds already loaded) the texture at path into scene->textures; *index receives its
  * index. `owner` names who asked for it in messages ("mesh.obj: material 'wood'"). */
-ic_result ic_scene_texture_load(ic_scene *scene, const char *path, const char *owner, int32_t *index,
+ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const char *owner, int32_t *index,
                                 ic_error *err);
 
 /* Validates, computes bounds and builds the light tables. `where` names the scene for messages. */

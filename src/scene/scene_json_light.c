@@ -64,7 +64,8 @@ ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
     if (r != IC_OK)
         return r;
     ic_error ierr;
-    r = ic_image_read(full, &env->image, &ierr);
+    r = ic_image_read_max(full, ic_scene_max_texture_pixels(c->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &env->image,
+                          &ierr);
     if (r != IC_OK)
         return ic_json_fail(c, map_line, r, "environment map: %s", ierr.message);
     /* Radiance is never negative: a negative or non-finite texel would give negative pixels and a

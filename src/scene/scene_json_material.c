@@ -76,7 +76,7 @@ static ic_result read_texture(json_ctx *c, const cJSON *it, int kl, int32_t *tex
         r = ic_json_resolve_path(c, p, kl, "texture", full, sizeof full);
         snprintf(owner, sizeof owner, "%s:%d", c->path, kl);
         if (r == IC_OK)
-            r = ic_scene_texture_load(c->b->scene, full, owner, tex, c->err);
+            r = ic_scene_texture_load(c->b, full, owner, tex, c->err);
     }
     return r;
 }

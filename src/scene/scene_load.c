@@ -76,6 +76,7 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
     ic_scene_builder b;
     memset(&b, 0, sizeof b);
     b.scene = s;
+    b.opt = opt;
 
     char ext[16], mesh_ext[16] = "";
     ic_path_extension(path, ext, sizeof ext);

@@ -145,6 +145,8 @@ int main(void)
          "--spp 16777217: expected an integer from 1 to 16777216"},
         {"light samples above the cap", SCENES "no_such_scene.json -o " OUT " --integrator ic --light-samples 65537", 2,
          "--light-samples 65537: expected an integer from 1 to 65536"},
+        {"texture over --max-texture-pixels", SCENES "plain_quad.obj -o " OUT " --max-texture-pixels 3", 1,
+         "raise the limit with --max-texture-pixels"},
         {"max depth above the cap", SCENES "no_such_scene.json -o " OUT " --max-depth 1025", 2, "--max-depth 1025"},
         {"non-numeric width", SCENES "plain_quad.obj -o " OUT " --width abc", 2, "--width"},
         {"negative time", SCENES "plain_quad.obj -o " OUT " --time -1", 2, "--time"},

@@ -503,9 +503,11 @@ static void test_texture_storage(void)
     CHECK(ic_image_write(png, &img, NULL, &err) == IC_OK, "write png: %s", err.message);
     CHECK(ic_image_write(pfm, &img, NULL, &err) == IC_OK, "write pfm: %s", err.message);
     ic_scene *s = calloc(1, sizeof *s);
+    ic_scene_builder builder = {0};
+    builder.scene = s;
     int32_t a = -1, b = -1;
-    CHECK(ic_scene_texture_load(s, png, "test", &a, &err) == IC_OK && a == 0, "load png: %s", err.message);
-    CHECK(ic_scene_texture_load(s, pfm, "test", &b, &err) == IC_OK && b == 1, "load pfm: %s", err.message);
+    CHECK(ic_scene_texture_load(&builder, png, "test", &a, &err) == IC_OK && a == 0, "load png: %s", err.message);
+    CHECK(ic_scene_texture_load(&builder, pfm, "test", &b, &err) == IC_OK && b == 1, "load pfm: %s", err.message);
     ic_image back;
     CHECK(ic_image_read(png, &back, &err) == IC_OK, "read png: %s", err.message);
     const ic_texture *t8 = &s->textures[0], *tf = &s->textures[1];

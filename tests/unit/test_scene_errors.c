@@ -117,6 +117,33 @@ int main(void)
         expect_error(IC_TEST_TMP "/scene_errors_far.obj", NULL, IC_ERR_INVALID_ARG, "scene_errors_far.obj: vertex 2",
                      "beyond the largest coordinate 1e+18", "scale the mesh down");
     }
+    /* sizes from headers against the limits before anything is allocated (issue "Hardening": a 16000^2 PNG
+     * texture, a PLY header claiming 10^9 vertices); the message names the limit and the option */
+    expect_error(SCENES "huge_texture.obj", NULL, IC_ERR_UNSUPPORTED,
+                 "huge_texture.png: 16000x16000 is 256000000 pixels, more than the limit of 67108864",
+                 "material 'painted'", "--max-texture-pixels");
+    expect_error(SCENES "huge_header.ply", NULL, IC_ERR_UNSUPPORTED,
+                 "huge_header.ply: the PLY header declares 1000000000 of element 'vertex', more than the limit of "
+                 "67108864",
+                 "--max-mesh-elements", NULL);
+    {
+        ic_scene_load_options small = {0};
+        small.max_texture_pixels = 3; /* checker2x2.pfm has 4 */
+        expect_error(SCENES "plain_quad.obj", &small, IC_ERR_UNSUPPORTED, "checker2x2.pfm: 2x2 is 4 pixels",
+                     "limit of 3", "--max-texture-pixels");
+        small.max_texture_pixels = 0;
+        small.max_mesh_elements = 2; /* triangle.ply: 3 vertices */
+        expect_error(SCENES "triangle.ply", &small, IC_ERR_UNSUPPORTED, "declares 3 of element 'vertex'",
+                     "limit of 2", "--max-mesh-elements");
+        expect_error(SCENES "plain_quad.obj", &small, IC_ERR_UNSUPPORTED, "plain_quad.obj: 4 vertices",
+                     "limit of 2", "--max-mesh-elements");
+        small.max_mesh_elements = 4;
+        ic_scene *ok = NULL;
+        ic_error e;
+        CHECK(ic_scene_load(SCENES "plain_quad.obj", &small, &ok, &e) == IC_OK, "at the limits: loads (%s)",
+              e.message);
+        ic_scene_free(ok);
+    }
     /* an emitter whose only triangle is degenerate */
     expect_error(SCENES "zero_area_light.json", NULL, IC_ERR_PARSE, "zero_area_light.obj", "'lamp'",
                  "zero total area");
