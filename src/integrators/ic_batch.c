@@ -59,7 +59,7 @@ static void world_path(void *p, int64_t item, int thread)
     ic_ray ray = ic_camera_ray(cam, (float)x + ic_rng_float(&rng), (float)y + ic_rng_float(&rng));
     ic_candidate *out = &j->slots[item * WORLD_SLOTS];
     int n = 0, smooth_hits = 0;
-    float t_primary = 0.0f;
+    float t_path = 0.0f; /* length of the path from the camera to this hit */
     uint64_t *rays = &j->rays[thread * PAD];
     for (int bounce = 0; bounce <= MAX_SPECULAR_CHAIN && smooth_hits < WORLD_SLOTS; ++bounce) {
         ic_hit hit;
@@ -67,8 +67,7 @@ static void world_path(void *p, int64_t item, int thread)
         ic_accel_intersect1(c->tr->accel, &ray, &hit);
         if (hit.triangle == IC_NO_HIT)
             break;
-        if (bounce == 0)
-            t_primary = hit.t;
+        t_path += hit.t;
         ic_surface s;
         ic_scene_surface(c->tr->scene, hit.triangle, hit.u, hit.v, &s);
         ic_vec3 wo = v3_neg(ray.dir);
@@ -81,8 +80,12 @@ static void world_path(void *p, int64_t item, int thread)
             if (!ic_cache_query(c->cache, &q, &e)) {
                 out[n].p = s.p;
                 out[n].n = b.frame.n;
-                /* Pixel-based radius bounds only hold for what the camera sees directly. */
-                out[n].footprint = smooth_hits == 0 ? t_primary * c->pixel_angle : 0.0f;
+                /* A pixel's footprint at the point: the camera's directly, and the path length times the
+                 * pixel angle behind reflections (a mirror's ray differential; a glossy lobe widens it,
+                 * so this bounds the records from below without making them smaller than they may
+                 * be). Without it, records seen in a glossy floor had no size floor and construction
+                 * never converged there. */
+                out[n].footprint = t_path * c->pixel_angle;
                 out[n].key = ((uint64_t)pixel << 8) | (uint64_t)(0x80 | (j->pass & 0x1f) << 2 | (smooth_hits & 3));
                 ++n;
             }
