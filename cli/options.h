@@ -57,7 +57,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_ALL, "samples per pixel (with --time: the most to take)") \
     X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
       "wall-time budget of the whole render, cache construction included: progressive passes " \
-      "until it is spent (equal-time comparisons)") \
+      "until it is spent (equal-time comparisons); batch and adaptive cache construction stop after half " \
+      "of it (a warning and cut_by_time in the stats say so)") \
     X(INTEGRATOR, "--integrator", NULL, IC_OPT_CHOICE, render.integrator, 0, 0, "pt|ic", NAN, "pt", "", \
       IC_SCOPE_ALL, "pt: path-traced reference; ic: irradiance caching (indirect diffuse from the cache)") \
     X(MAX_DEPTH, "--max-depth", NULL, IC_OPT_INT, render.max_depth, 1, IC_MAX_MAX_DEPTH, "N", IC_DEFAULT_MAX_DEPTH, \

@@ -83,6 +83,7 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
             cJSON_AddNumberToObject(o, "refinements", st->refinements);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
         cJSON_AddBoolToObject(o, "cut_short", st->cut_short);
+        cJSON_AddBoolToObject(o, "cut_by_time", st->cut_by_time);
         if (a->render.ic.strategy == IC_STRATEGY_BATCH && !a->render.ic.load_cache)
             cJSON_AddNumberToObject(o, "uncovered_share", st->uncovered_share);
     }
@@ -270,7 +271,10 @@ int ic_cli_render(int argc, char **argv)
     ic_image_free(&aovs.density);
     ic_image_free(&aovs.amap);
     ic_scene_free(scene);
-    if (st.cut_short)
+    if (st.cut_by_time)
+        fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
+                        "(%d passes) before it converged; give more time for a converged cache\n", st.passes);
+    else if (st.cut_short)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its pass limit (%d passes) before "
                         "it converged; with --strategy batch raise --max-passes\n", st.passes);
     if (a.stats_path && !write_stats(a.stats_path, &a, w, h, &st))

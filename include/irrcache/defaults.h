@@ -46,6 +46,7 @@
 #define IC_DEFAULT_RECORD_FILTER 3.0f    /* neighbourhood of the record filter, in influence radii */
 #define IC_DEFAULT_RECORD_SETS 1         /* hemisphere sets a record may gather */
 #define IC_DEFAULT_RECORD_NOISE 0.05f    /* relative σ the sets aim at */
+#define IC_CONSTRUCTION_TIME_SHARE 0.5 /* with a time budget: construction stops after this share of it */
 #define IC_DEFAULT_MAX_PASSES 30         /* batch construction: a safety bound (stats keep 32 passes) */
 #define IC_DEFAULT_UNCOVERED 0.001f      /* batch: converged below this share of uncovered look-up points */
 #define IC_DEFAULT_MIN_CANDIDATES 16

@@ -153,7 +153,8 @@ typedef struct ic_render_options {
     uint64_t seed;         /* random seed (default: scene file, else 1) */
     int has_seed;          /* 1: use `seed` even if it is 0 */
     double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent (the budget
-                              of the whole call: construction comes off the film's share) */
+                              of the whole call: construction comes off the film's share, and the batch and
+                              adaptive strategies stop after IC_CONSTRUCTION_TIME_SHARE of it) */
     ic_sampler sampler;    /* pixel, light and BSDF sample pairs [IC_SAMPLER_SOBOL] */
     ic_cache_switch adaptive_sampling; /* IC_CACHE_ON: spp is a mean per pixel; a pilot pass of spp/4, the
                               rest shared out by each pixel's relative noise (Frolov et al. 2012 §3.2; needs
@@ -180,6 +181,7 @@ typedef struct ic_render_stats {
     uint32_t refinements;  /* adaptive: times a record's a_i was lowered */
     int cut_short;         /* 1: construction stopped at a limit (batch: max_passes; adaptive: its pass bound)
                               before its own criterion said the cache was done */
+    int cut_by_time;       /* 1: construction stopped at its share of time_budget (cut_short is 1 too) */
     uint32_t cached_emitters; /* emitting triangles whose light the records carry (ic_ic_options.large_emitters) */
     uint32_t records_per_pass[32];
     char save_error[1024]; /* ic_ic_options.save_cache could not be written: why (the render went on and

@@ -535,7 +535,8 @@ done:
 
 typedef struct adaptive_result {
     int passes;
-    int converged;             /* 0 if max_passes stopped it */
+    int converged;             /* 0 if max_passes or the time budget stopped it */
+    int out_of_time;           /* 1 if the time budget stopped it */
     uint32_t records_per_pass[32];
 } adaptive_result;
 
@@ -549,8 +550,9 @@ static ic_result converge(adaptive *A, const ic_render_options *opt, phase_times
     res->converged = 1;
     ic_result r = IC_OK;
     while (A->q_len > 0) {
-        if (res->passes >= c->o.adaptive_max_passes) {
+        if (res->passes >= c->o.adaptive_max_passes || (res->passes > 0 && ic_ic_out_of_time(c))) {
             res->converged = 0;
+            res->out_of_time = res->passes < c->o.adaptive_max_passes;
             break;
         }
         ic_ic_report(opt, "adaptive passes", (double)res->passes / (double)c->o.adaptive_max_passes);
@@ -624,6 +626,7 @@ ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, i
         st->passes = res.passes;
         st->refinements = (uint32_t)A->refinements;
         st->cut_short = A->npts > 0 && !res.converged;
+        st->cut_by_time = res.out_of_time;
         memcpy(st->records_per_pass, res.records_per_pass, sizeof st->records_per_pass);
         /* Convergence overhead: the loop's time without gathering and insertion (Křivánek et al. 2006 Table 1). */
         double loop = (t2 - t1) - (pt->gather - before.gather) - (pt->insert - before.insert);

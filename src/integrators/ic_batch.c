@@ -168,7 +168,8 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_cand
 {
     *added = 0;
     size_t npix = (size_t)c->g.width * c->g.height;
-    for (int round = 0; round < 16; ++round) {
+    /* Out of time, uncovered points take the final render's fallback (one path-traced hemisphere ray). */
+    for (int round = 0; round < 16 && !ic_ic_out_of_time(c); ++round) {
         ic_result r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
         if (r != IC_OK)
             return ic_error_set(err, r, "could not start threads");
@@ -261,6 +262,10 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
          * records) almost all find records, and the screen stage has had its passes. */
         if ((int)found < c->o.min_candidates || (uncovered < c->o.uncovered && pass >= c->o.screen_passes)) {
             st->cut_short = 0;
+            break;
+        }
+        if (ic_ic_out_of_time(c)) {
+            st->cut_by_time = 1;
             break;
         }
     }

@@ -84,6 +84,7 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
         return ic_error_set(err, IC_ERR_OOM, "out of memory");
     c->tr = tr;
     c->seed = opt->seed;
+    c->deadline = opt->time_budget > 0.0 ? ic_seconds() + IC_CONSTRUCTION_TIME_SHARE * opt->time_budget : 0.0;
     c->threads = ic_resolve_threads(opt->threads);
     c->pixel_angle = ic_camera_pixel_angle(&tr->scene->camera);
     atomic_init(&c->rays, 0);

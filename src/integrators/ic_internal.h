@@ -40,6 +40,8 @@ typedef struct ic_ctx {
     ic_gbuffer g;
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
+    double deadline;           /* ic_seconds() past which batch and adaptive construction stop (a time
+                                  budget's construction share); 0: none */
     int levels;                /* with hit_lookups: bounces B, whose levels the records keep apart;
                                   else 0 */
     ic_vec3 *level_irr;        /* (levels + 1) entries per record, in record order: T_k, the record's
@@ -101,6 +103,8 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
 /* Looks up every valid pixel: luminance of the estimate and whether any record contributes. */
 ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc);
+/* 1 once construction has spent its share of the render's time budget (c->deadline). */
+static inline int ic_ic_out_of_time(const ic_ctx *c) { return c->deadline > 0.0 && ic_seconds() > c->deadline; }
 /* Progress report, if the caller asked for it. */
 void ic_ic_report(const ic_render_options *opt, const char *phase, double fraction);
 /* Direct light of the final render at s (NEE; the environment is cached, not sampled here); sel: the

@@ -13,7 +13,8 @@
  *      (ic_ic_options.large_emitters), the image mean matches the path tracer's with and without, and
  *      the error is lower with.
  *   6. batch construction stops on its own criterion (the share of eye-path look-up points without a
- *      record below --uncovered), says so in the stats, and reports a pass limit that cuts it short.
+ *      record below --uncovered), says so in the stats, and reports a pass limit that cuts it short; a
+ *      time budget stops batch and adaptive construction early and is reported (cut_by_time).
  * Test 1 also compares the samplers and adaptive against uniform sampling, for both integrators.
  * The reference images are rendered here with the path tracer at high sample counts.
  */
@@ -467,6 +468,22 @@ static void test_convergence(void)
           "a pass limit before convergence is reported: cut short %d, %d passes, share %.4f", cut.cut_short,
           cut.passes, cut.uncovered_share);
     ic_image_free(&img);
+    /* A time budget far too small: batch and adaptive construction stop after their first pass, say so, and
+     * the image is still made (uncovered points take the fallback ray). */
+    for (int strategy = 0; strategy < 2; ++strategy) {
+        ic_render_options t = ic_options();
+        t.spp = 0;
+        t.time_budget = 1e-4;
+        t.ic.strategy = strategy ? IC_STRATEGY_ADAPTIVE : IC_STRATEGY_BATCH;
+        ic_render_stats ts;
+        int ok = test_render(CORNELL, 96, 96, &t, &img, &ts);
+        int finite = 0;
+        double mean = ok ? test_image_mean(&img, &finite) : 0.0;
+        CHECK(ok && ts.cut_by_time && ts.cut_short && ts.passes <= 2 && finite && mean > 0.0,
+              "%s under a 0.1 ms budget: cut by time %d, cut short %d, %d passes, mean %.4f",
+              strategy ? "adaptive" : "batch", ts.cut_by_time, ts.cut_short, ts.passes, mean);
+        ic_image_free(&img);
+    }
 }
 
 /* A lamp stays light-sampled (ic_emitters.c: the records take an emitter only where a pilot measures
