@@ -7,6 +7,7 @@
  * written, the exit status is 1 and the message names the one that failed; no temporary file is left.
  */
 #include "test_util.h"
+#include "test_files.h"
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -59,17 +60,6 @@ static int lines(const char *s)
     return n;
 }
 
-/* Files under dir whose name holds ".tmp." (left-over temporaries). */
-static int temporaries(const char *dir)
-{
-    int n = 0;
-    DIR *d = opendir(dir);
-    for (struct dirent *e; d && (e = readdir(d));)
-        n += strstr(e->d_name, ".tmp.") != NULL;
-    if (d)
-        closedir(d);
-    return n;
-}
 
 /* A refused command line: exit 2, one line naming option and path (and `what`), no image written. */
 static void refused(const char *label, const char *args, const char *option, const char *path, const char *what)
@@ -85,7 +75,7 @@ static void refused(const char *label, const char *args, const char *option, con
     CHECK(strstr(err_text, want) != NULL, "%s: names '%s': %s", label, want, err_text);
     CHECK(strstr(err_text, what) != NULL, "%s: says '%s': %s", label, what, err_text);
     CHECK(!exists(DIR_ "/good.pfm"), "%s: nothing rendered or written", label);
-    CHECK(temporaries(DIR_) == 0, "%s: no temporary file left", label);
+    CHECK(test_count_temporaries(DIR_) == 0, "%s: no temporary file left", label);
 }
 
 /* Runs the command with a file-size limit and SIGXFSZ ignored, so that a write beyond the limit fails
@@ -160,7 +150,7 @@ int main(void)
     CHECK(!exists(DIR_ "/end/big.pfm"), "the failed output is not there");
     CHECK(exists(DIR_ "/end/small.png"), "the PNG given after it is written");
     CHECK(exists(DIR_ "/end/stats.json"), "the stats are written");
-    CHECK(temporaries(DIR_ "/end") == 0, "no temporary file left");
+    CHECK(test_count_temporaries(DIR_ "/end") == 0, "no temporary file left");
 
     /* A cache file that cannot be written (over the limit at save time) costs only itself: the render
      * goes on, its image is written, exit 1 names --save-cache. */
@@ -172,6 +162,6 @@ int main(void)
     CHECK(strstr(err_text, "--save-cache " DIR_ "/save/c.irc") != NULL, "the message names the cache file: %s",
           err_text);
     CHECK(exists(DIR_ "/save/img.png") && !exists(DIR_ "/save/c.irc"), "the image is written, the cache is not");
-    CHECK(temporaries(DIR_ "/save") == 0, "no temporary file left");
+    CHECK(test_count_temporaries(DIR_ "/save") == 0, "no temporary file left");
     TEST_MAIN_END();
 }

@@ -8,6 +8,7 @@
  */
 #include "core/atomic_file.h"
 #include "test_util.h"
+#include "test_files.h"
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -20,16 +21,6 @@
 
 #define DIR_ IC_TEST_TMP "/cli_signals"
 
-static int temporaries(const char *dir)
-{
-    int n = 0;
-    DIR *d = opendir(dir);
-    for (struct dirent *e; d && (e = readdir(d));)
-        n += strstr(e->d_name, ".tmp.") != NULL;
-    if (d)
-        closedir(d);
-    return n;
-}
 
 static int exists(const char *p)
 {
@@ -75,7 +66,8 @@ static void die_while_writing(int sig, int exr_style)
     int st = 0;
     waitpid(pid, &st, 0);
     CHECK(WIFSIGNALED(st) && WTERMSIG(st) == sig, "signal %d: the child died of it (status %#x)", sig, st);
-    CHECK(temporaries(DIR_) == 0, "signal %d%s: no temporary file left", sig, exr_style ? " (two writes)" : "");
+    CHECK(test_count_temporaries(DIR_) == 0, "signal %d%s: no temporary file left", sig,
+          exr_style ? " (two writes)" : "");
     CHECK(!exists(DIR_ "/out.bin") && !exists(DIR_ "/out.exr"), "signal %d: no output either", sig);
 }
 
@@ -92,7 +84,8 @@ int main(void)
     CHECK(ic_atomic_file_open(&f, DIR_ "/aborted.bin", &err) == IC_OK, "open: %s", err.message);
     ic_atomic_file_abort(&f);
     ic_remove_temporary_files();
-    CHECK(exists(DIR_ "/done.bin") && temporaries(DIR_) == 0, "a committed file survives; nothing temporary");
+    CHECK(exists(DIR_ "/done.bin") && test_count_temporaries(DIR_) == 0,
+          "a committed file survives; nothing temporary");
     remove(DIR_ "/done.bin");
 
     die_while_writing(SIGTERM, 0);
@@ -113,7 +106,7 @@ int main(void)
     int st = 0;
     waitpid(pid, &st, 0);
     CHECK(WIFSIGNALED(st) && WTERMSIG(st) == SIGXFSZ, "the command died of SIGXFSZ (status %#x)", st);
-    CHECK(temporaries(DIR_) == 0, "SIGXFSZ: the command left no temporary file");
+    CHECK(test_count_temporaries(DIR_) == 0, "SIGXFSZ: the command left no temporary file");
     CHECK(!exists(DIR_ "/big.pfm"), "SIGXFSZ: no output");
     TEST_MAIN_END();
 }
