@@ -88,6 +88,9 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
       IC_DEFAULT_MAX_MESH_ELEMENTS, "67108864", "", IC_SCOPE_ALL, "largest vertex or face count of one mesh " \
       "file, checked from a PLY header before it is read, and on the meshes imported") \
+    X(ALLOW_OUTSIDE_PATHS, "--allow-outside-paths", NULL, IC_OPT_FLAG, load.allow_outside_paths, 0, 0, "", NAN, \
+      "off", "", IC_SCOPE_ALL, "let a scene read files outside its own folder tree and the shared scenes folder " \
+      "(meshes, MTL files, glTF buffers, textures, environment maps; symbolic links resolved)") \
     X(QUIET, "--quiet", "-q", IC_OPT_FLAG, quiet, 0, 0, "", NAN, "off", "", IC_SCOPE_ALL, \
       "no progress line and no summary (the progress line is shown only when stderr is a terminal)") \
     X(STRATEGY, "--strategy", NULL, IC_OPT_CHOICE, render.ic.strategy, 0, 0, "batch|lazy|adaptive", NAN, "batch", \

@@ -64,8 +64,11 @@ ic_result ic_json_read_color(json_ctx *c, const cJSON *it, int line, ic_vec3 *ou
 ic_result ic_json_read_string(json_ctx *c, const cJSON *it, int line, const char **out);
 ic_result ic_json_expect_object(json_ctx *c, const cJSON *it, int line);
 
+/* Adds the shared scenes folders that exist to the folders the scene may read from (c->b->roots). */
+void ic_json_add_shared_roots(json_ctx *c);
 /* A path from the scene file resolved to an existing file in out (see scene_json_value.c); reports
- * `what` not found at line. */
+ * `what` not found at line, and a file outside the scene's folder tree and the shared scenes folders
+ * (ic_scene_check_path) unless allow_outside_paths is set. */
 ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const char *what, char *out,
                                size_t size);
 

@@ -21,6 +21,11 @@
  * with zlib and handed to assimp through its file-system callbacks under the name NAME.EXT, which picks
  * the format, and in NAME.EXT's folder, so that the MTL files and buffers it names are found where the
  * compressed file lies; messages name the .gz file.
+ *
+ * Every import, compressed or not, goes through those callbacks, so that each file assimp opens (the
+ * mesh, MTL files, glTF buffers, and the names it probes) is checked to lie in the folders the scene may
+ * read from (ic_scene_path_allowed; docs/scene-format.md, "Paths"); the MTL files we read ourselves and
+ * the textures are checked the same way.
  */
 #include "scene/scene_internal.h"
 
@@ -40,6 +45,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* Phong exponents at or above this are treated as ideal mirrors (illum 3/5, glTF metals). */
 #define MIRROR_EXPONENT 10000.0f
@@ -157,8 +163,16 @@ static FILE *source_open(const mesh_source *src)
     return src->size ? fmemopen(src->data, src->size, "rb") : NULL;
 }
 
-/* assimp's file system for an inflated mesh: its name opens the bytes in memory, any other file (MTL,
- * buffers, textures) is opened from disk. */
+/* assimp's file system for every mesh: an inflated mesh's name opens the bytes in memory; any other file
+ * (the mesh itself, MTL files, glTF buffers) is opened from disk if it lies in the folders the scene may
+ * read from (ic_scene_path_allowed), and otherwise refused and remembered, so that the import reports it
+ * instead of assimp's "cannot open" (or, for an MTL file, nothing at all). */
+typedef struct source_fs {
+    const mesh_source *src;
+    const ic_scene_builder *b;
+    char refused[IC_SCENE_PATH_MAX]; /* the first name refused ("": none) */
+} source_fs;
+
 typedef struct source_file {
     struct aiFile file; /* first: assimp hands back a pointer to it */
     FILE *fp;           /* a file on disk, or NULL: the inflated mesh */
@@ -233,10 +247,19 @@ static void source_flush(struct aiFile *f)
 
 static struct aiFile *source_fs_open(struct aiFileIO *io, const char *name, const char *mode)
 {
-    const mesh_source *src = (const mesh_source *)(void *)io->UserData;
+    source_fs *fs = (source_fs *)(void *)io->UserData;
+    const mesh_source *src = fs->src;
     FILE *fp = NULL;
-    if (strcmp(name, src->name) != 0 && (fp = fopen(name, mode)) == NULL)
-        return NULL;
+    if (!src->data || strcmp(name, src->name) != 0) {
+        char real[IC_SCENE_PATH_MAX];
+        if (!ic_scene_path_allowed(fs->b, name, real, sizeof real)) {
+            if (real[0] && !fs->refused[0]) /* a file that is there, outside; a missing one is just missing */
+                snprintf(fs->refused, sizeof fs->refused, "%s", name);
+            return NULL;
+        }
+        if ((fp = fopen(name, mode)) == NULL)
+            return NULL;
+    }
     source_file *sf = calloc(1, sizeof *sf);
     if (!sf) {
         if (fp)
@@ -263,12 +286,26 @@ static void source_fs_close(struct aiFileIO *io, struct aiFile *f)
     free(sf);
 }
 
-static const struct aiScene *source_import(mesh_source *src, unsigned flags)
+static const struct aiScene *source_import(mesh_source *src, source_fs *fs, unsigned flags)
 {
-    if (!src->data)
-        return aiImportFile(src->path, flags);
-    struct aiFileIO io = {source_fs_open, source_fs_close, (aiUserData)(void *)src};
+    struct aiFileIO io = {source_fs_open, source_fs_close, (aiUserData)(void *)fs};
     return aiImportFileEx(src->name, flags, &io);
+}
+
+/* Where a file a mesh names is reported: the scene file's line of the mesh's path, or the bare mesh. */
+static const char *import_where(const ic_scene_builder *b, const char *mesh_path)
+{
+    return b->import_where ? b->import_where : mesh_path;
+}
+
+/* The error for a file the mesh at mesh_path names (`kind`: "MTL file", ...) that lies outside the
+ * folders the scene may read from. */
+static ic_result check_named_file(const ic_scene_builder *b, const char *mesh_path, const char *kind,
+                                  const char *path, ic_error *err)
+{
+    char desc[2 * IC_SCENE_PATH_MAX + 64];
+    snprintf(desc, sizeof desc, "%s '%s' named by mesh '%s'", kind, path, mesh_path);
+    return ic_scene_check_path(b, path, import_where(b, mesh_path), desc, err);
 }
 
 /* OBJ files: assimp keeps NaN/Inf but renumbers vertices, so find the first bad `v` line ourselves to
@@ -594,8 +631,10 @@ static ic_result check_mtl_file(const char *mtl_path, ic_error *err)
 }
 
 /* OBJ files: assimp reads the MTL files and keeps no line numbers, so check the colours of every file the
- * OBJ's `mtllib` lines name (relative to the OBJ's folder) ourselves. */
-static ic_result check_obj_materials(const mesh_source *src, const char *obj_dir, ic_error *err)
+ * OBJ's `mtllib` lines name (relative to the OBJ's folder) ourselves, and first that each lies in the
+ * folders the scene may read from. */
+static ic_result check_obj_materials(const ic_scene_builder *b, const mesh_source *src, const char *obj_dir,
+                                     ic_error *err)
 {
     FILE *fp = source_open(src);
     if (!fp)
@@ -614,7 +653,11 @@ static ic_result check_obj_materials(const mesh_source *src, const char *obj_dir
         char *save = NULL;
         for (char *name = strtok_r(names, " \t", &save); name && r == IC_OK; name = strtok_r(NULL, " \t", &save)) {
             char mtl[IC_SCENE_PATH_MAX];
-            if (ic_path_join(obj_dir, name, mtl, sizeof mtl))
+            if (!ic_path_join(obj_dir, name, mtl, sizeof mtl))
+                continue;
+            if (access(mtl, F_OK) == 0) /* a missing one is assimp's warning; one outside is refused */
+                r = check_named_file(b, src->path, "MTL file", mtl, err);
+            if (r == IC_OK)
                 r = check_mtl_file(mtl, err);
         }
     }
@@ -846,6 +889,13 @@ static ic_result convert_material(ic_scene_builder *b, const struct aiMaterial *
             return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
         if (!ic_path_exists(full) && ic_path_exists(alt))
             snprintf(full, sizeof full, "%s", alt);
+        if (ic_path_exists(full)) {
+            char kind[200];
+            snprintf(kind, sizeof kind, "texture of material '%s',", m->name);
+            ic_result rc = check_named_file(b, mesh_path, kind, full, err);
+            if (rc != IC_OK)
+                return rc;
+        }
         return ic_scene_texture_load(b, full, owner, &m->kd_texture, err);
     }
     return IC_OK;
@@ -1027,13 +1077,21 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     else
         snprintf(tex_dir, sizeof tex_dir, "%s", dir);
     if ((!strcmp(ext, ".obj") &&
-         ((r = check_obj_vertices(&src, err)) != IC_OK || (r = check_obj_materials(&src, dir, err)) != IC_OK)) ||
+         ((r = check_obj_vertices(&src, err)) != IC_OK || (r = check_obj_materials(b, &src, dir, err)) != IC_OK)) ||
         (!strcmp(ext, ".ply") && (r = check_ply(&src, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK)) {
         free(src.data);
         return r;
     }
-    const struct aiScene *ai =
-        source_import(&src, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+    source_fs fs = {&src, b, ""};
+    const struct aiScene *ai = source_import(
+        &src, &fs, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+    if (fs.refused[0]) { /* assimp may have failed for it, or carried on without it (an MTL file) */
+        r = check_named_file(b, mesh_path, "file", fs.refused, err);
+        if (ai)
+            aiReleaseImport(ai);
+        free(src.data);
+        return r;
+    }
     if (!ai) {
         free(src.data);
         return ic_error_set(err, IC_ERR_PARSE, "%s: cannot import the mesh (%s); check that it is a valid OBJ, glTF "

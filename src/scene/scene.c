@@ -116,6 +116,67 @@ void ic_path_extension(const char *path, char *ext, size_t size)
 }
 
 /* ------------------------------------------------------------------------------------------------ */
+/* the folders a scene may read from (docs/scene-format.md, "Paths") */
+
+void ic_scene_add_root(ic_scene_builder *b, const char *dir)
+{
+    char real[PATH_MAX];
+    if (!dir || !*dir || b->root_count == IC_SCENE_MAX_ROOTS || !realpath(dir, real))
+        return;
+    for (int k = 0; k < b->root_count; ++k)
+        if (!strcmp(b->roots[k], real))
+            return;
+    snprintf(b->roots[b->root_count++], sizeof b->roots[0], "%s", real);
+}
+
+/* 1 if the real path `real` is root itself or lies below it (compared by whole components). */
+static int path_below(const char *real, const char *root)
+{
+    size_t n = strlen(root);
+    if (strncmp(real, root, n) != 0)
+        return 0;
+    return real[n] == '\0' || real[n] == '/' || (n > 0 && root[n - 1] == '/');
+}
+
+int ic_scene_path_allowed(const ic_scene_builder *b, const char *path, char *real, size_t size)
+{
+    char buf[PATH_MAX];
+    if (size)
+        real[0] = '\0';
+    if (!realpath(path, buf))
+        return b->opt->allow_outside_paths;
+    snprintf(real, size, "%s", buf);
+    if (b->opt->allow_outside_paths)
+        return 1;
+    for (int k = 0; k < b->root_count; ++k)
+        if (path_below(buf, b->roots[k]))
+            return 1;
+    return 0;
+}
+
+ic_result ic_scene_check_path(const ic_scene_builder *b, const char *path, const char *where, const char *desc,
+                              ic_error *err)
+{
+    char real[IC_SCENE_PATH_MAX];
+    if (ic_scene_path_allowed(b, path, real, sizeof real))
+        return IC_OK;
+    char shared[IC_SCENE_MAX_ROOTS * 256] = "";
+    size_t used = 0;
+    for (int k = 1; k < b->root_count && used < sizeof shared; ++k) {
+        int n = snprintf(shared + used, sizeof shared - used, "%s%s", k > 1 ? " or " : "", b->roots[k]);
+        if (n < 0)
+            break;
+        used += (size_t)n;
+    }
+    return ic_error_set(err, IC_ERR_INVALID_ARG,
+                        "%s: %s is %s, outside the scene's folder %s and the shared scenes folder (%s); move the file "
+                        "into one of them, or pass --allow-outside-paths (allow_outside_paths of "
+                        "ic_scene_load_options) to permit it",
+                        where, desc, real[0] ? real : path, b->root_count ? b->roots[0] : "(unknown)",
+                        shared[0] ? shared : "none found");
+}
+
+/* ------------------------------------------------------------------------------------------------ */
 /* matrices */
 
 void ic_mat4_identity(float m[16])

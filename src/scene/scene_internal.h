@@ -15,6 +15,8 @@
 
 /* Longest path the loader handles. */
 #define IC_SCENE_PATH_MAX 4096
+/* The scene file's folder and up to four shared scenes folders (option, $IRRCACHE_SCENES, two fallbacks). */
+#define IC_SCENE_MAX_ROOTS 5
 
 /* State kept while a scene is being assembled. */
 typedef struct ic_scene_builder {
@@ -25,7 +27,22 @@ typedef struct ic_scene_builder {
     char **mesh_paths;          /* every imported mesh file, for messages (mesh_count) */
     uint32_t mesh_count;
     const ic_scene_load_options *opt; /* the caller's load options (never NULL) */
+    /* The folders the scene's files may be read from, as real paths (docs/scene-format.md, "Paths"): [0] the
+     * scene file's folder (a bare mesh's own), then the shared scenes folders that exist. */
+    char roots[IC_SCENE_MAX_ROOTS][IC_SCENE_PATH_MAX];
+    int root_count;
+    const char *import_where; /* while a mesh is imported: "scene.json:12" (its path's line) or the bare mesh */
 } ic_scene_builder;
+
+/* Adds dir's real path to b->roots (nothing if it does not exist or is there already). */
+void ic_scene_add_root(ic_scene_builder *b, const char *dir);
+/* 1 if path may be read: allow_outside_paths is set, or its real path lies in one of b->roots. *real gets
+ * the real path ("" where realpath fails: then 0 unless allowed, as nothing is there to read). */
+int ic_scene_path_allowed(const ic_scene_builder *b, const char *path, char *real, size_t size);
+/* IC_OK if path may be read; else the one-line error "where: desc is REAL, outside the scene's folder ...;
+ * ... --allow-outside-paths ...". desc names the path as the scene gave it ("mesh '../a.obj'"). */
+ic_result ic_scene_check_path(const ic_scene_builder *b, const char *path, const char *where, const char *desc,
+                              ic_error *err);
 
 /* The limits of opt with their defaults filled in. */
 static inline size_t ic_scene_max_texture_pixels(const ic_scene_load_options *opt)

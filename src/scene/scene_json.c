@@ -268,6 +268,7 @@ ic_result ic_scene_load_json(ic_scene_builder *b, const char *path, const ic_sce
     c.opt = opt;
     c.b = b;
     c.err = err;
+    ic_json_add_shared_roots(&c);
 
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);

@@ -179,9 +179,13 @@ static ic_result parse_mesh(json_ctx *c, const cJSON *obj, int index)
     r = ic_json_resolve_path(c, path, path_line, "mesh", full, sizeof full);
     if (r != IC_OK)
         return r;
-    char where[IC_SCENE_PATH_MAX + 32];
+    char where[IC_SCENE_PATH_MAX + 32], path_where[IC_SCENE_PATH_MAX + 32];
     snprintf(where, sizeof where, "%s:%d", c->path, xform_line);
-    return ic_mesh_import(c->b, full, m, has_xform ? where : NULL, c->err);
+    snprintf(path_where, sizeof path_where, "%s:%d", c->path, path_line);
+    c->b->import_where = path_where; /* files the mesh names are reported at its path's line */
+    r = ic_mesh_import(c->b, full, m, has_xform ? where : NULL, c->err);
+    c->b->import_where = NULL;
+    return r;
 }
 
 ic_result ic_json_parse_meshes(json_ctx *c, const cJSON *arr, int line)

@@ -286,9 +286,43 @@ ic_result ic_json_expect_object(json_ctx *c, const cJSON *it, int line)
 /* ------------------------------------------------------------------------------------------------ */
 /* paths */
 
+/* The shared scenes folders in the order "shared:" paths try them: the option, $IRRCACHE_SCENES,
+ * <dir>/../../../shared/scenes, <dir>/../../shared/scenes (entries may be NULL). */
+static void shared_dirs(const json_ctx *c, char up3[IC_SCENE_PATH_MAX + 32], char up2[IC_SCENE_PATH_MAX + 32],
+                        const char *dirs[4])
+{
+    snprintf(up3, IC_SCENE_PATH_MAX + 32, "%s/../../../shared/scenes", c->dir);
+    snprintf(up2, IC_SCENE_PATH_MAX + 32, "%s/../../shared/scenes", c->dir);
+    const char *env = getenv("IRRCACHE_SCENES");
+    dirs[0] = c->opt->shared_scenes_dir;
+    dirs[1] = (env && *env) ? env : NULL;
+    dirs[2] = up3;
+    dirs[3] = up2;
+}
+
+void ic_json_add_shared_roots(json_ctx *c)
+{
+    char up3[IC_SCENE_PATH_MAX + 32], up2[IC_SCENE_PATH_MAX + 32];
+    const char *dirs[4];
+    shared_dirs(c, up3, up2, dirs);
+    for (int k = 0; k < 4; ++k)
+        ic_scene_add_root(c->b, dirs[k]);
+}
+
+/* The file at `full` (resolved from `given`) may be read: inside the scene's folder tree or a shared
+ * scenes folder, after symbolic links, unless allow_outside_paths (docs/scene-format.md, "Paths"). */
+static ic_result check_inside(json_ctx *c, const char *given, int line, const char *what, const char *full)
+{
+    char where[IC_SCENE_PATH_MAX + 32], desc[IC_SCENE_PATH_MAX + 64];
+    snprintf(where, sizeof where, "%s:%d", c->path, line);
+    snprintf(desc, sizeof desc, "%s '%s'", what, given);
+    return ic_scene_check_path(c->b, full, where, desc, c->err);
+}
+
 /* Resolves a path from the scene file: relative to its directory, or "shared:rest" against the shared
  * scenes folder (option, $IRRCACHE_SCENES, <dir>/../../../shared/scenes, <dir>/../../shared/scenes —
- * the first that holds the file). Reports `what` not found at line. */
+ * the first that holds the file). Reports `what` not found at line, or outside the folders the scene
+ * may read from. */
 ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const char *what, char *out, size_t size)
 {
     char tried[IC_SCENE_PATH_MAX] = "";
@@ -297,10 +331,8 @@ ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const c
     if (!strncmp(given, "shared:", 7)) {
         const char *rest = given + 7;
         char up3[IC_SCENE_PATH_MAX + 32], up2[IC_SCENE_PATH_MAX + 32];
-        snprintf(up3, sizeof up3, "%s/../../../shared/scenes", c->dir);
-        snprintf(up2, sizeof up2, "%s/../../shared/scenes", c->dir);
-        const char *env = getenv("IRRCACHE_SCENES");
-        const char *dirs[4] = {c->opt->shared_scenes_dir, (env && *env) ? env : NULL, up3, up2};
+        const char *dirs[4];
+        shared_dirs(c, up3, up2, dirs);
         for (int k = 0; k < 4; ++k) {
             if (!dirs[k] || !dirs[k][0])
                 continue;
@@ -308,7 +340,7 @@ ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const c
                 return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "path of %s '%s' is too long; shorten it", what,
                                     given);
             if (ic_path_exists(out))
-                return IC_OK;
+                return check_inside(c, given, line, what, out);
             if (!tried[0])
                 snprintf(tried, sizeof tried, "%s", out);
         }
@@ -327,5 +359,5 @@ ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const c
         return ic_json_fail(c, line, IC_ERR_IO, "%s '%s' not found (resolved to %s); check the path", what, given,
                             abs_path);
     }
-    return IC_OK;
+    return check_inside(c, given, line, what, out);
 }

@@ -22,6 +22,7 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
         ic_path_absolute(path, abs_path, sizeof abs_path);
         return ic_error_set(err, IC_ERR_IO, "%s: mesh not found (resolved to %s); check the path", path, abs_path);
     }
+    b->import_where = path;
     ic_result r = ic_mesh_import(b, path, NULL, NULL, err);
     if (r != IC_OK)
         return r;
@@ -77,6 +78,9 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
     memset(&b, 0, sizeof b);
     b.scene = s;
     b.opt = opt;
+    char scene_dir[IC_SCENE_PATH_MAX];
+    ic_path_dirname(path, scene_dir, sizeof scene_dir);
+    ic_scene_add_root(&b, scene_dir); /* the scene's folder tree (a bare mesh's own): roots[0] */
 
     char ext[16], mesh_ext[16] = "";
     ic_path_extension(path, ext, sizeof ext);
