@@ -1,10 +1,15 @@
 /* atomic_file.c — temporary file + rename (atomic_file.h). */
 #include "atomic_file.h"
 
+#include <dirent.h>
 #include <errno.h>
+#include <limits.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static atomic_uint tmp_counter;
@@ -49,8 +54,59 @@ void ic_remove_temporary_files(void)
             (void)unlink(slot_name[k]);
 }
 
+/* The pid in a temporary name's tail "<pid>.<n>" (digits only), or 0 if the tail is not of that form. */
+static long temp_pid(const char *tail)
+{
+    const char *dot = strchr(tail, '.');
+    if (!dot || dot == tail || dot - tail > 10 || !dot[1])
+        return 0;
+    for (const char *c = tail; *c; ++c)
+        if (c != dot && (*c < '0' || *c > '9'))
+            return 0;
+    long pid = strtol(tail, NULL, 10);
+    return pid > 0 && pid <= INT_MAX ? pid : 0;
+}
+
+/* Removes the temporaries of path that a dead process left beside it: a SIGKILL (or a crash, or a power
+ * cut) during a write runs no handler, so <path>.tmp.<pid>.<n> stays. One is stale when no process has
+ * its pid (kill(pid, 0) fails with ESRCH); a live pid keeps its file, even if the pid was reused, so a
+ * concurrent writer of the same output on this machine is never disturbed. Only regular files named
+ * exactly so are removed. */
+static void remove_stale_temporaries(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    char dir[4096];
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == path)
+        snprintf(dir, sizeof dir, "/");
+    else if ((size_t)(slash - path) < sizeof dir)
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    else
+        return;
+    size_t base_len = strlen(base);
+    DIR *d = base_len ? opendir(dir) : NULL;
+    if (!d)
+        return;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        if (strncmp(e->d_name, base, base_len) != 0 || strncmp(e->d_name + base_len, ".tmp.", 5) != 0)
+            continue;
+        long pid = temp_pid(e->d_name + base_len + 5);
+        if (pid == 0 || pid == (long)getpid() || kill((pid_t)pid, 0) == 0 || errno != ESRCH)
+            continue;
+        char full[8192];
+        struct stat st;
+        if (snprintf(full, sizeof full, "%s/%s", dir, e->d_name) < (int)sizeof full && lstat(full, &st) == 0 &&
+            S_ISREG(st.st_mode))
+            (void)unlink(full);
+    }
+    closedir(d);
+}
+
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size)
 {
+    remove_stale_temporaries(path);
     unsigned n = atomic_fetch_add(&tmp_counter, 1u);
     snprintf(out, out_size, "%s.tmp.%ld.%u", path, (long)getpid(), n);
     temp_register(out);

@@ -5,7 +5,9 @@
  * Usage: ic_atomic_file f; ic_atomic_file_open(&f, path, err) → write to f.fp →
  * ic_atomic_file_commit(&f, err) (flushes, checks for write errors, renames) or
  * ic_atomic_file_abort(&f) (removes the temporary file). While a temporary file exists its name is
- * registered, so that a program's signal handler can remove it (ic_remove_temporary_files).
+ * registered, so that a program's signal handler can remove it (ic_remove_temporary_files). A temporary
+ * that a SIGKILL left (no handler runs) is removed by the next write of the same path, once its process
+ * is gone.
  */
 #ifndef IC_CORE_ATOMIC_FILE_H
 #define IC_CORE_ATOMIC_FILE_H
@@ -27,7 +29,9 @@ ic_result ic_atomic_file_commit(ic_atomic_file *f, ic_error *err);
 /* Closes and removes the temporary file. Safe to call twice. */
 void ic_atomic_file_abort(ic_atomic_file *f);
 /* Builds a temporary sibling name for path (for writers that need a path, not a FILE*) and registers it
- * for ic_remove_temporary_files (irrcache/common.h) until ic_atomic_rename or ic_atomic_temp_release. */
+ * for ic_remove_temporary_files (irrcache/common.h) until ic_atomic_rename or ic_atomic_temp_release.
+ * First removes the temporaries of path that dead processes left (<path>.tmp.<pid>.<n> whose pid no
+ * process has: a SIGKILL during a write); ic_atomic_file_open does the same. */
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size);
 /* Renames tmp to path, removing tmp on failure; either way tmp is released. */
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err);

@@ -1,0 +1,106 @@
+/*
+ * test_atomic_file.c — a temporary left by a SIGKILL during a write (<out>.tmp.<pid>.<n>, no handler ran) is
+ * removed by the next write of the same output, once its process is gone (issue "Hardening", Signals):
+ * through the library's atomic file, through ic_atomic_temp_name (the EXR writer's path), and through the
+ * command. A temporary of a live process, of another output, or a name not of the form is left alone.
+ */
+#include "core/atomic_file.h"
+#include "test_util.h"
+
+#include <errno.h>
+#include <signal.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#define T IC_TEST_TMP "/atomic_file"
+#define CLI IC_CLI_PATH
+#define QUAD IC_SOURCE_DIR "/tests/scenes/quad_light.obj"
+
+static int exists(const char *p)
+{
+    struct stat st;
+    return lstat(p, &st) == 0;
+}
+
+static void touch(const char *p)
+{
+    FILE *f = fopen(p, "wb");
+    CHECK(f != NULL, "write %s: %s", p, strerror(errno));
+    if (f) {
+        fputs("half-written", f);
+        fclose(f);
+    }
+}
+
+/* The pid of a process that has exited and been reaped: no process has it (until it is reused). */
+static long dead_pid(void)
+{
+    pid_t p = fork();
+    if (p == 0)
+        _exit(0);
+    CHECK(p > 0, "fork: %s", strerror(errno));
+    if (p > 0)
+        waitpid(p, NULL, 0);
+    CHECK(p > 0 && kill(p, 0) != 0 && errno == ESRCH, "the child %ld is gone", (long)p);
+    return (long)p;
+}
+
+/* Leaves the temporaries of out: a dead process's (two), a live one's, another output's, odd names. */
+static void leave(const char *out, long dead, char stale[2][512], char keep[4][512])
+{
+    snprintf(stale[0], 512, "%s.tmp.%ld.0", out, dead);
+    snprintf(stale[1], 512, "%s.tmp.%ld.17", out, dead);
+    snprintf(keep[0], 512, "%s.tmp.%ld.0", out, (long)getppid()); /* alive: the test's parent */
+    snprintf(keep[1], 512, "%s.other.tmp.%ld.0", out, dead);       /* another output's */
+    snprintf(keep[2], 512, "%s.tmp.%ldx.0", out, dead);            /* not <pid>.<n> */
+    snprintf(keep[3], 512, "%s.tmp.%ld", out, dead);               /* no counter */
+    for (int i = 0; i < 2; ++i)
+        touch(stale[i]);
+    for (int i = 0; i < 4; ++i)
+        touch(keep[i]);
+}
+
+static void check_cleaned(const char *what, char stale[2][512], char keep[4][512])
+{
+    for (int i = 0; i < 2; ++i)
+        CHECK(!exists(stale[i]), "%s: the dead process's %s is removed", what, stale[i]);
+    for (int i = 0; i < 4; ++i) {
+        CHECK(exists(keep[i]), "%s: %s is kept", what, keep[i]);
+        remove(keep[i]);
+    }
+}
+
+int main(void)
+{
+    CHECK(system("rm -rf '" T "' && mkdir -p '" T "'") == 0, "make %s", T);
+    long dead = dead_pid();
+    char stale[2][512], keep[4][512];
+
+    /* the atomic file (PNG, PFM, HDR, the cache file, the JSON outputs) */
+    leave(T "/out.pfm", dead, stale, keep);
+    ic_atomic_file f;
+    ic_error err;
+    memset(&err, 0, sizeof err);
+    CHECK(ic_atomic_file_open(&f, T "/out.pfm", &err) == IC_OK, "open: %s", err.message);
+    fputs("data", f.fp);
+    CHECK(ic_atomic_file_commit(&f, &err) == IC_OK, "commit: %s", err.message);
+    CHECK(exists(T "/out.pfm"), "the output is written");
+    check_cleaned("atomic file", stale, keep);
+
+    /* a temporary name for a writer that needs a path (the EXR writer) */
+    leave(T "/out.exr", dead, stale, keep);
+    char tmp[4096];
+    ic_atomic_temp_name(T "/out.exr", tmp, sizeof tmp);
+    ic_atomic_temp_release(tmp);
+    check_cleaned("temporary name", stale, keep);
+
+    /* the command: a rerun after a SIGKILL during its write */
+    leave(T "/render.png", dead, stale, keep);
+    int st = system(CLI " render " QUAD " -o " T "/render.png --width 4 --height 4 --spp 1 -q");
+    CHECK(st != -1 && WIFEXITED(st) && WEXITSTATUS(st) == 0, "render");
+    CHECK(exists(T "/render.png"), "the image is written");
+    check_cleaned("irrcache render", stale, keep);
+    TEST_MAIN_END();
+}
