@@ -24,9 +24,79 @@ static ic_result decode_failed(const char *path, ic_error *err)
                         path, why ? why : "unknown reason");
 }
 
+/* 1 if every Huffman table of the JPEG in b declares at most 256 codes (ITU-T T.81 §B.2.4.2: the counts
+ * L1…L16 of a DHT table sum to at most 256) and every DHT segment holds whole tables; 1 for data that is
+ * not a JPEG. stb_image 2.27, the one Debian 12 ships, writes past its code-length array when a table
+ * declares more (found by the image_png fuzz target), so such a file never reaches it. Markers are walked
+ * from SOI; entropy-coded data between them is skipped byte by byte (0xFF00 is a stuffed byte, RSTn and
+ * TEM carry no length), which also reaches the DHT segments between a progressive JPEG's scans. */
+static int jpeg_huffman_ok(const unsigned char *b, size_t n)
+{
+    if (n < 2 || b[0] != 0xFF || b[1] != 0xD8)
+        return 1;
+    size_t i = 2;
+    while (i + 1 < n) {
+        unsigned m = b[i + 1];
+        if (b[i] != 0xFF || m == 0xFF) {
+            ++i;
+            continue;
+        }
+        if (m == 0x00 || m == 0x01 || (m >= 0xD0 && m <= 0xD7)) {
+            i += 2;
+            continue;
+        }
+        if (m == 0xD9 || i + 4 > n)
+            break;
+        size_t len = ((size_t)b[i + 2] << 8) | b[i + 3], end = i + 2 + len;
+        if (m == 0xC4) {
+            if (len < 2 || end > n)
+                return 0;
+            for (size_t p = i + 4; p < end;) {
+                if (p + 17 > end)
+                    return 0;
+                unsigned codes = 0;
+                for (int k = 1; k <= 16; ++k)
+                    codes += b[p + k];
+                if (codes > 256)
+                    return 0;
+                p += 17 + codes;
+                if (p > end)
+                    return 0;
+            }
+        }
+        i = len >= 2 ? end : i + 2;
+    }
+    return 1;
+}
+
+/* Reads path whole (for the JPEG check); NULL if it cannot. */
+static unsigned char *read_whole(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    unsigned char *buf = NULL;
+    long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0 && (buf = malloc((size_t)size + 1)) != NULL &&
+        fread(buf, 1, (size_t)size, f) != (size_t)size) {
+        free(buf);
+        buf = NULL;
+    }
+    fclose(f);
+    *n = buf ? (size_t)size : 0;
+    return buf;
+}
+
 ic_result ic_image_read_stb(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
+    size_t n = 0;
+    unsigned char *bytes = read_whole(path, &n);
+    int huffman_ok = !bytes || jpeg_huffman_ok(bytes, n);
+    free(bytes);
+    if (!huffman_ok)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: a JPEG Huffman table declares more than 256 codes or overruns "
+                            "its segment; re-save the image with another program", path);
     int width = 0, height = 0, channels = 0;
     if (!stbi_info(path, &width, &height, &channels))
         return decode_failed(path, err);

@@ -607,6 +607,19 @@ static void test_bad_input(void)
     ic_image_free(&small);
 }
 
+/* A JPEG whose Huffman table declares 257 codes (found by fuzzing: stb_image 2.27 writes past its
+ * arrays on it) is refused before stb decodes it; a valid JPEG of the fuzz seeds still reads. */
+static void test_jpeg_huffman(void)
+{
+    const char *bad = IC_SOURCE_DIR "/tests/fuzz/regress/image_png/stb_build_huffman_oob.jpg";
+    ic_image img = {0};
+    ic_error err = {0};
+    CHECK(ic_image_read(bad, &img, &err) == IC_ERR_PARSE && strstr(err.message, "Huffman") &&
+              strstr(err.message, "stb_build_huffman_oob.jpg"),
+          "an oversized JPEG Huffman table is refused naming the file: %s", err.message);
+    ic_image_free(&img);
+}
+
 int main(void)
 {
     if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
@@ -620,6 +633,7 @@ int main(void)
     test_hdr_variants();
     test_metrics();
     test_lowpass();
+    test_jpeg_huffman();
     test_heatmap();
     test_heatmap_fixed_scale();
     test_bad_input();
