@@ -499,6 +499,17 @@ static int ply_binary_instance(FILE *fp, const ply_element *e, int big_endian, i
 /* PLY files: the element counts of the header against the limit before assimp allocates for them, and
  * every vertex's x, y, z (assimp drops a vertex no face uses, NaN or not, so the file is read here as
  * the OBJ's lines are). */
+/* A binary glTF's lengths against its bytes, before the importer allocates what they declare. */
+static ic_result check_glb(const mesh_source *src, ic_error *err)
+{
+    FILE *fp = source_open(src);
+    if (!fp)
+        return IC_OK; /* the importer reports it */
+    ic_result r = ic_glb_check(fp, src->path, err);
+    fclose(fp);
+    return r;
+}
+
 static ic_result check_ply(const mesh_source *src, unsigned long long max_elements, ic_error *err)
 {
     FILE *fp = source_open(src);
@@ -1078,7 +1089,8 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         snprintf(tex_dir, sizeof tex_dir, "%s", dir);
     if ((!strcmp(ext, ".obj") &&
          ((r = check_obj_vertices(&src, err)) != IC_OK || (r = check_obj_materials(b, &src, dir, err)) != IC_OK)) ||
-        (!strcmp(ext, ".ply") && (r = check_ply(&src, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK)) {
+        (!strcmp(ext, ".ply") && (r = check_ply(&src, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK) ||
+        (!strcmp(ext, ".glb") && (r = check_glb(&src, err)) != IC_OK)) {
         free(src.data);
         return r;
     }

@@ -33,6 +33,33 @@ static void expect_error(const char *path, const ic_scene_load_options *opt, ic_
         ic_scene_free(scene);
 }
 
+/* Binary glTF files whose lengths claim more than they hold: refused before the importer allocates what
+ * they declare (the fuzz target's 516-byte file declared a 2.8 GB chunk). */
+static void test_glb_lengths(void)
+{
+    static const char json[] = "{\"asset\":{\"version\":\"2.0\"}}    "; /* 32 bytes, 4-aligned */
+    unsigned char b[12 + 8 + 32];
+    uint32_t total = sizeof b, jlen = 32;
+    memcpy(b, "glTF", 4);
+    uint32_t v[2] = {2, total};
+    memcpy(b + 4, v, 8); /* little-endian host, as the format */
+    memcpy(b + 12, &jlen, 4);
+    memcpy(b + 16, "JSON", 4);
+    memcpy(b + 20, json, 32);
+    const char *path = IC_TEST_TMP "/chunk_overrun.glb";
+    /* A chunk longer than the file. */
+    uint32_t huge = 0xab0003b0u;
+    memcpy(b + 12, &huge, 4);
+    FILE *f = fopen(path, "wb");
+    CHECK(f && fwrite(b, 1, sizeof b, f) == sizeof b, "write %s", path);
+    if (f)
+        fclose(f);
+    expect_error(path, NULL, IC_ERR_PARSE, "chunk_overrun.glb", "declares", "past the file");
+    /* A header that declares more than the file holds (the fuzz target's input). */
+    expect_error(IC_SOURCE_DIR "/tests/fuzz/regress/mesh_glb/assimp_2_8gb_alloc.glb", NULL, IC_ERR_PARSE,
+                 "assimp_2_8gb_alloc.glb", "declares 1016 bytes", "holds 516");
+}
+
 int main(void)
 {
     /* A scene file that is not there: the open's own reason, not one left by resolving the path. */
@@ -206,5 +233,6 @@ int main(void)
     ic_error err;
     CHECK(ic_scene_load(NULL, NULL, &s, &err) == IC_ERR_INVALID_ARG && s == NULL, "NULL path");
     CHECK(ic_scene_load(SCENES "quad_light.obj", NULL, NULL, NULL) == IC_ERR_INVALID_ARG, "NULL out, NULL err");
+    test_glb_lengths();
     TEST_MAIN_END();
 }
