@@ -69,13 +69,18 @@ static int jpeg_huffman_ok(const unsigned char *b, size_t n)
     return 1;
 }
 
-/* Reads path whole (for the JPEG check); NULL if it cannot. */
-static unsigned char *read_whole(const char *path, size_t *n)
+/* Reads a JPEG file whole (for the Huffman check); NULL for any other file, or if it cannot be read. */
+static unsigned char *read_jpeg(const char *path, size_t *n)
 {
+    *n = 0;
     FILE *f = fopen(path, "rb");
     if (!f)
         return NULL;
-    unsigned char *buf = NULL;
+    unsigned char soi[2], *buf = NULL;
+    if (fread(soi, 1, 2, f) != 2 || soi[0] != 0xFF || soi[1] != 0xD8) {
+        fclose(f);
+        return NULL;
+    }
     long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
     if (size >= 0 && fseek(f, 0, SEEK_SET) == 0 && (buf = malloc((size_t)size + 1)) != NULL &&
         fread(buf, 1, (size_t)size, f) != (size_t)size) {
@@ -91,7 +96,7 @@ ic_result ic_image_read_stb(const char *path, const ic_image_limit *lim, ic_imag
 {
     memset(out, 0, sizeof *out);
     size_t n = 0;
-    unsigned char *bytes = read_whole(path, &n);
+    unsigned char *bytes = read_jpeg(path, &n);
     int huffman_ok = !bytes || jpeg_huffman_ok(bytes, n);
     free(bytes);
     if (!huffman_ok)

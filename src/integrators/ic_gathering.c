@@ -72,6 +72,8 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_vec3 E[IC_LEVELS_MAX];
     for (int k = 0; k < B; ++k)
         E[k] = v3s(0.0f);
+    /* Over the contributions read back (all but in a pile-up of more than LOOKUP_CAPACITY records,
+     * where the first ones written stand for the rest, normalised by their own weights). */
     float wsum = 0.0f;
     for (uint32_t i = 0; i < e.contributions_written; ++i) {
         const ic_cache_contribution *ct = &contrib[i];
