@@ -26,8 +26,14 @@
  * mesh, MTL files, glTF buffers, and the names it probes) is checked to lie in the folders the scene may
  * read from (ic_scene_path_allowed; docs/scene-format.md, "Paths"); the MTL files we read ourselves and
  * the textures are checked the same way.
+ *
+ * Before assimp sees a file, its structure is checked (mesh_check.h: mesh_check_ply.c, mesh_check_obj.c,
+ * mesh_check_gltf.c): assimp 5.2 crashes, hangs or leaks on some malformed files, and those checks
+ * refuse them with a message naming the file and the line or element.
  */
 #include "scene/scene_internal.h"
+
+#include "scene/mesh_check.h"
 
 #include "core/vecmath.h"
 
@@ -308,204 +314,14 @@ static ic_result check_named_file(const ic_scene_builder *b, const char *mesh_pa
     return ic_scene_check_path(b, path, import_where(b, mesh_path), desc, err);
 }
 
-/* OBJ files: assimp keeps NaN/Inf but renumbers vertices, so find the first bad `v` line ourselves to
- * report its line number and its 1-based vertex number as the file counts them. */
-static ic_result check_obj_vertices(const mesh_source *src, ic_error *err)
-{
-    const char *path = src->path;
-    FILE *fp = source_open(src);
-    if (!fp)
-        return IC_OK; /* assimp will report it */
-    char line[4096];
-    long line_no = 0, vertex_no = 0;
-    ic_result r = IC_OK;
-    while (fgets(line, sizeof line, fp)) {
-        ++line_no;
-        const char *c = line;
-        while (*c == ' ' || *c == '\t')
-            ++c;
-        if (c[0] != 'v' || (c[1] != ' ' && c[1] != '\t'))
-            continue;
-        ++vertex_no;
-        c += 2;
-        for (int k = 0; k < 3; ++k) {
-            char *end;
-            float f = strtof(c, &end);
-            if (end == c)
-                break;
-            if (!isfinite(f)) {
-                r = ic_error_set(err, IC_ERR_PARSE,
-                                 "%s:%ld: vertex %ld has a non-finite coordinate; fix or remove it", path,
-                                 line_no, vertex_no);
-                break;
-            }
-            c = end;
-        }
-        if (r != IC_OK)
-            break;
-        /* a line longer than the buffer: skip its tail so it is not counted as lines */
-        while (!strchr(line, '\n') && fgets(line, sizeof line, fp)) {
-        }
-    }
-    fclose(fp);
-    return r;
-}
-
-/* PLY (Turk 1994; the format as Paul Bourke documents it): a text header of elements, each with a count
- * and typed properties, then the elements' data in ascii or binary (either byte order). */
-enum { PLY_MAX_ELEMENTS = 16, PLY_MAX_PROPS = 32, PLY_MAX_HEADER_LINES = 4096 };
-typedef struct ply_prop {
-    int size, count_size;  /* bytes of the value (of each list item), and of a list's count (0: not a list) */
-    int is_float, is_signed;
-    int coord;             /* 0, 1, 2: x, y, z of the vertex element; -1: another property */
-} ply_prop;
-typedef struct ply_element {
-    char name[64];
-    unsigned long long count;
-    ply_prop props[PLY_MAX_PROPS];
-    int prop_count;
-} ply_element;
-
-/* Bytes of a PLY scalar type (both spellings: "float" and "float32"), 0 if unknown. */
-static int ply_type(const char *t, int *is_float, int *is_signed)
-{
-    static const struct { const char *name; int size, is_float, is_signed; } types[] = {
-        {"char", 1, 0, 1},   {"int8", 1, 0, 1},    {"uchar", 1, 0, 0},  {"uint8", 1, 0, 0},    {"short", 2, 0, 1},
-        {"int16", 2, 0, 1},  {"ushort", 2, 0, 0},  {"uint16", 2, 0, 0}, {"int", 4, 0, 1},      {"int32", 4, 0, 1},
-        {"uint", 4, 0, 0},   {"uint32", 4, 0, 0},  {"float", 4, 1, 1},  {"float32", 4, 1, 1}, {"double", 8, 1, 1},
-        {"float64", 8, 1, 1}};
-    for (size_t i = 0; i < sizeof types / sizeof types[0]; ++i)
-        if (!strcmp(t, types[i].name)) {
-            *is_float = types[i].is_float;
-            *is_signed = types[i].is_signed;
-            return types[i].size;
-        }
-    return 0;
-}
-
-/* A binary value of `size` bytes at p, in the file's byte order, as a double. */
-static double ply_value(const unsigned char *p, int size, int is_float, int is_signed, int big_endian)
-{
-    unsigned char b[8];
-    for (int i = 0; i < size; ++i)
-        b[i] = p[big_endian ? size - 1 - i : i];
-    uint64_t u = 0;
-    for (int i = size - 1; i >= 0; --i)
-        u = u << 8 | b[i];
-    if (is_float && size == 4) {
-        uint32_t w = (uint32_t)u;
-        float f;
-        memcpy(&f, &w, sizeof f);
-        return f;
-    }
-    if (is_float) {
-        double d;
-        memcpy(&d, &u, sizeof d);
-        return d;
-    }
-    if (is_signed && size < 8 && (u >> (8 * size - 1)) & 1u)
-        return (double)(int64_t)(u | ~(uint64_t)0 << (8 * size));
-    return (double)u;
-}
-
-/* Reads the header; the file position is then at the first byte of data. Returns 0 with err set. */
-static int ply_read_header(FILE *fp, const char *path, int *format, long *lines, ply_element *el, int *el_count,
-                           ic_error *err)
-{
-    char line[1024];
-    *format = -1; /* 0 ascii, 1 little-endian, 2 big-endian */
-    *el_count = 0;
-    for (*lines = 2; fgets(line, sizeof line, fp) && *lines <= PLY_MAX_HEADER_LINES; ++*lines) { /* 1: "ply" */
-        char word[64] = "", a[64] = "", b2[64] = "", c3[64] = "", d4[64] = "";
-        int n = sscanf(line, "%63s %63s %63s %63s %63s", word, a, b2, c3, d4);
-        if (!strcmp(word, "end_header"))
-            return *format >= 0 ? 1 : (ic_error_set(err, IC_ERR_PARSE, "%s: PLY header has no 'format' line; "
-                                                    "export the mesh again", path), 0);
-        if (!strcmp(word, "format") && n >= 2) {
-            *format = !strcmp(a, "ascii") ? 0 : !strcmp(a, "binary_little_endian") ? 1
-                                              : !strcmp(a, "binary_big_endian") ? 2 : -1;
-        } else if (!strcmp(word, "element") && n >= 3) {
-            if (*el_count == PLY_MAX_ELEMENTS)
-                return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s:%ld: more than %d PLY elements; keep vertices and "
-                                    "faces", path, *lines, PLY_MAX_ELEMENTS), 0;
-            ply_element *e = &el[(*el_count)++];
-            memset(e, 0, sizeof *e);
-            snprintf(e->name, sizeof e->name, "%s", a);
-            char *end;
-            e->count = strtoull(b2, &end, 10);
-            if (*end || b2[0] == '-')
-                return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: PLY element '%s' has count '%s', not a number; fix "
-                                    "the header", path, *lines, a, b2), 0;
-        } else if (!strcmp(word, "property") && n >= 3 && *el_count > 0) {
-            ply_element *e = &el[*el_count - 1];
-            if (e->prop_count == PLY_MAX_PROPS)
-                return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s:%ld: more than %d properties in PLY element '%s'; "
-                                    "drop the ones not needed", path, *lines, PLY_MAX_PROPS, e->name), 0;
-            ply_prop *p = &e->props[e->prop_count++];
-            memset(p, 0, sizeof *p);
-            const char *name = b2;
-            int fl, sg;
-            if (!strcmp(a, "list") && n >= 5) {
-                p->count_size = ply_type(b2, &fl, &sg);
-                p->size = ply_type(c3, &p->is_float, &p->is_signed);
-                name = d4;
-                if (!p->count_size || fl)
-                    p->size = 0;
-            } else {
-                p->size = ply_type(a, &p->is_float, &p->is_signed);
-            }
-            if (!p->size)
-                return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: unknown PLY property type in '%.*s'; fix the header",
-                                    path, *lines, (int)strcspn(line, "\r\n"), line), 0;
-            p->coord = !strcmp(e->name, "vertex") && !p->count_size && name[0] && !name[1] && name[0] >= 'x' &&
-                               name[0] <= 'z' ? name[0] - 'x' : -1;
-        }
-    }
-    return ic_error_set(err, IC_ERR_PARSE, "%s: PLY header without 'end_header' in its first %d lines; export the "
-                        "mesh again", path, PLY_MAX_HEADER_LINES), 0;
-}
-
-/* Reads one binary element instance; checks x, y, z when check is set. Returns 0 at the end of the data,
- * -1 on a non-finite coordinate (*bad: its value), 1 otherwise. */
-static int ply_binary_instance(FILE *fp, const ply_element *e, int big_endian, int check, double *bad)
-{
-    unsigned char buf[8];
-    int result = 1;
-    for (int k = 0; k < e->prop_count; ++k) {
-        const ply_prop *p = &e->props[k];
-        unsigned long long items = 1;
-        if (p->count_size) {
-            if (fread(buf, 1, (size_t)p->count_size, fp) != (size_t)p->count_size)
-                return 0;
-            double n = ply_value(buf, p->count_size, 0, 0, big_endian);
-            items = n > 0.0 ? (unsigned long long)n : 0;
-            if (fseek(fp, (long)(items * (unsigned long long)p->size), SEEK_CUR) != 0)
-                return 0;
-            continue;
-        }
-        if (fread(buf, 1, (size_t)p->size, fp) != (size_t)p->size)
-            return 0;
-        if (check && p->coord >= 0 && result == 1) {
-            double v = ply_value(buf, p->size, p->is_float, p->is_signed, big_endian);
-            if (!isfinite(v) || !isfinite((float)v)) {
-                *bad = v;
-                result = -1;
-            }
-        }
-    }
-    return result;
-}
-
-/* PLY files: the element counts of the header against the limit before assimp allocates for them, and
- * every vertex's x, y, z (assimp drops a vertex no face uses, NaN or not, so the file is read here as
- * the OBJ's lines are). */
-/* A binary glTF's lengths against its bytes, before the importer allocates what they declare. */
-static ic_result check_glb(const mesh_source *src, ic_error *err)
+/* Runs a structure check of mesh_check.h on the mesh's bytes (IC_OK if they cannot be opened: the importer
+ * reports that). */
+static ic_result run_check(const mesh_source *src, ic_result (*check)(FILE *, const char *, ic_error *), ic_error *err)
 {
     FILE *fp = source_open(src);
     if (!fp)
-        return IC_OK; /* the importer reports it */
-    ic_result r = ic_glb_check(fp, src->path, err);
+        return IC_OK;
+    ic_result r = check(fp, src->path, err);
     fclose(fp);
     return r;
 }
@@ -514,129 +330,8 @@ static ic_result check_ply(const mesh_source *src, unsigned long long max_elemen
 {
     FILE *fp = source_open(src);
     if (!fp)
-        return IC_OK; /* assimp will report it */
-    char magic[4] = "";
-    if (fread(magic, 1, 4, fp) != 4 || memcmp(magic, "ply", 3) || (magic[3] != '\n' && magic[3] != '\r')) {
-        fclose(fp);
-        return IC_OK; /* not a PLY after all: assimp reports what it is */
-    }
-    if (magic[3] == '\r') { /* CRLF lines */
-        int ch = fgetc(fp);
-        if (ch != '\n' && ch != EOF)
-            ungetc(ch, fp);
-    }
-    int format, el_count;
-    long lines;
-    ply_element *el = malloc(sizeof *el * PLY_MAX_ELEMENTS);
-    if (!el) {
-        fclose(fp);
-        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", src->path);
-    }
-    ic_result r = IC_OK;
-    if (!ply_read_header(fp, src->path, &format, &lines, el, &el_count, err))
-        r = err ? err->code : IC_ERR_PARSE;
-    for (int i = 0; r == IC_OK && i < el_count; ++i)
-        if (el[i].count > max_elements)
-            r = ic_error_set(err, IC_ERR_UNSUPPORTED,
-                             "%s: the PLY header declares %llu of element '%s', more than the limit of %llu; raise "
-                             "it with --max-mesh-elements (max_mesh_elements of ic_scene_load_options) if the "
-                             "mesh is really this large",
-                             src->path, el[i].count, el[i].name, max_elements);
-    /* data: the elements in header order, up to and including the vertices */
-    for (int i = 0; r == IC_OK && i < el_count; ++i) {
-        const ply_element *e = &el[i];
-        int check = !strcmp(e->name, "vertex");
-        for (unsigned long long v = 0; v < e->count; ++v) {
-            double bad = 0.0;
-            int got;
-            if (format == 0) {
-                char text[4096];
-                if (!fgets(text, sizeof text, fp))
-                    break;
-                ++lines;
-                got = 1;
-                char *c = text;
-                for (int k = 0; check && k < e->prop_count && got == 1; ++k) {
-                    char *end;
-                    double d = strtod(c, &end);
-                    if (end == c)
-                        break;
-                    c = end;
-                    if (e->props[k].coord >= 0 && (!isfinite(d) || !isfinite((float)d))) {
-                        bad = d;
-                        got = -1;
-                    }
-                    if (e->props[k].count_size)
-                        break; /* a list in the vertex element: x, y, z come first in practice */
-                }
-            } else {
-                got = ply_binary_instance(fp, e, format == 2, check, &bad);
-            }
-            if (got == 0)
-                break; /* truncated: assimp reports it */
-            if (got < 0) {
-                r = format == 0 ? ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex %llu has a non-finite coordinate "
-                                               "(%g); fix or remove it", src->path, lines, v + 1, bad)
-                                : ic_error_set(err, IC_ERR_PARSE, "%s: vertex %llu (of %llu, binary) has a non-finite "
-                                               "coordinate (%g); fix or remove it", src->path, v + 1, e->count, bad);
-                break;
-            }
-        }
-        if (check)
-            break;
-    }
-    free(el);
-    fclose(fp);
-    return r;
-}
-
-/* A colour component that is negative or not a number has no physical meaning (an albedo or a radiance);
- * clamping it would hide an export bug, so it is an error. */
-static int bad_component(float v)
-{
-    return !(v >= 0.0f) || !isfinite(v);
-}
-
-/* Checks the Kd, Ks and Ke lines of one MTL file; an error names the file, the line and the material. */
-static ic_result check_mtl_file(const char *mtl_path, ic_error *err)
-{
-    FILE *fp = fopen(mtl_path, "rb");
-    if (!fp)
-        return IC_OK; /* assimp warns and the materials take their defaults */
-    char line[4096], material[128] = "";
-    long line_no = 0;
-    ic_result r = IC_OK;
-    while (r == IC_OK && fgets(line, sizeof line, fp)) {
-        ++line_no;
-        const char *c = line;
-        while (*c == ' ' || *c == '\t')
-            ++c;
-        if (!strncmp(c, "newmtl", 6) && (c[6] == ' ' || c[6] == '\t')) {
-            c += 7;
-            while (*c == ' ' || *c == '\t')
-                ++c;
-            snprintf(material, sizeof material, "%.*s", (int)strcspn(c, "\r\n"), c);
-        } else if (c[0] == 'K' && (c[1] == 'd' || c[1] == 's' || c[1] == 'e') && (c[2] == ' ' || c[2] == '\t')) {
-            const char *what = c[1] == 'd' ? "Kd (diffuse)" : c[1] == 's' ? "Ks (specular)" : "Ke (emission)";
-            const char *v = c + 3;
-            for (int k = 0; k < 3; ++k) {
-                char *end;
-                float f = strtof(v, &end);
-                if (end == v)
-                    break; /* no more numbers ("spectral", "xyz" or the end of the line) */
-                if (bad_component(f)) {
-                    r = ic_error_set(err, IC_ERR_PARSE,
-                                     "%s:%ld: material '%s': %s has a negative or non-finite value (%.*s); give "
-                                     "values >= 0",
-                                     mtl_path, line_no, material, what, (int)strcspn(c + 3, "\r\n"), c + 3);
-                    break;
-                }
-                v = end;
-            }
-        }
-        while (!strchr(line, '\n') && fgets(line, sizeof line, fp)) { /* skip the rest of a long line */
-        }
-    }
+        return IC_OK;
+    ic_result r = ic_ply_check(fp, src->path, max_elements, err);
     fclose(fp);
     return r;
 }
@@ -669,7 +364,7 @@ static ic_result check_obj_materials(const ic_scene_builder *b, const mesh_sourc
             if (access(mtl, F_OK) == 0) /* a missing one is assimp's warning; one outside is refused */
                 r = check_named_file(b, src->path, "MTL file", mtl, err);
             if (r == IC_OK)
-                r = check_mtl_file(mtl, err);
+                r = ic_mtl_check(mtl, err);
         }
     }
     fclose(fp);
@@ -686,7 +381,7 @@ static ic_result check_material_colors(const struct aiMaterial *am, const char *
         struct aiColor4D c;
         if (aiGetMaterialColor(am, keys[k], 0, 0, &c) != aiReturn_SUCCESS)
             continue;
-        if (bad_component(c.r) || bad_component(c.g) || bad_component(c.b))
+        if (ic_bad_color_component(c.r) || ic_bad_color_component(c.g) || ic_bad_color_component(c.b))
             return ic_error_set(err, IC_ERR_PARSE,
                                 "%s: material '%s': %s (%g %g %g) has a negative or non-finite value; give values "
                                 ">= 0",
@@ -774,20 +469,8 @@ static float *gltf_emissive_strengths(const mesh_source *src, unsigned count)
     FILE *fp = source_open(src);
     if (!fp)
         return NULL;
-    char *text = NULL;
     size_t len = 0;
-    unsigned char head[20];
-    if (fread(head, 1, sizeof head, fp) == sizeof head && !memcmp(head, "glTF", 4)) {
-        /* .glb: 12-byte header, then chunk 0 = (length, "JSON", bytes) */
-        uint32_t chunk = (uint32_t)head[12] | (uint32_t)head[13] << 8 | (uint32_t)head[14] << 16 |
-                         (uint32_t)head[15] << 24;
-        if (!memcmp(head + 16, "JSON", 4) && chunk < (64u << 20) && (text = malloc(chunk + 1u)) != NULL)
-            len = fread(text, 1, chunk, fp);
-    } else if (fseek(fp, 0, SEEK_END) == 0) {
-        long size = ftell(fp);
-        if (size > 0 && size < (64L << 20) && fseek(fp, 0, SEEK_SET) == 0 && (text = malloc((size_t)size + 1)) != NULL)
-            len = fread(text, 1, (size_t)size, fp);
-    }
+    char *text = ic_gltf_json(fp, &len);
     fclose(fp);
     float *out = NULL;
     cJSON *root = text ? cJSON_ParseWithLength(text, len) : NULL;
@@ -1088,9 +771,10 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     else
         snprintf(tex_dir, sizeof tex_dir, "%s", dir);
     if ((!strcmp(ext, ".obj") &&
-         ((r = check_obj_vertices(&src, err)) != IC_OK || (r = check_obj_materials(b, &src, dir, err)) != IC_OK)) ||
+         ((r = run_check(&src, ic_obj_check, err)) != IC_OK || (r = check_obj_materials(b, &src, dir, err)) != IC_OK)) ||
         (!strcmp(ext, ".ply") && (r = check_ply(&src, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK) ||
-        (!strcmp(ext, ".glb") && (r = check_glb(&src, err)) != IC_OK)) {
+        (!strcmp(ext, ".glb") && (r = run_check(&src, ic_glb_check, err)) != IC_OK) ||
+        (is_gltf && (r = run_check(&src, ic_gltf_check, err)) != IC_OK)) {
         free(src.data);
         return r;
     }

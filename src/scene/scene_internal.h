@@ -66,9 +66,6 @@ void ic_scene_builder_release(ic_scene_builder *b);
 /* Appends every triangle and material of a mesh file (assimp) to the scene, transformed by the
  * row-major 4x4 matrix xform (NULL: identity). Degenerate triangles are dropped and counted.
  * xform_where ("scene.json:12", or NULL) names the transform in messages about what it did to a vertex. */
-/* Checks a binary glTF's header and chunk lengths against the bytes fp holds (glb_check.c); IC_OK for
- * anything that is not binary glTF. */
-ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err);
 ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, const char *xform_where,
                          ic_error *err);
 

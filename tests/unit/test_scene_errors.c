@@ -60,6 +60,115 @@ static void test_glb_lengths(void)
                  "assimp_2_8gb_alloc.glb", "declares 1016 bytes", "holds 516");
 }
 
+/* Writes text (len bytes; -1: up to its NUL) into the test folder under name; returns the path. */
+static const char *write_tmp(const char *name, const char *text, long len)
+{
+    static char path[1024];
+    snprintf(path, sizeof path, "%s/%s", IC_TEST_TMP, name);
+    FILE *fp = fopen(path, "wb");
+    size_t n = len < 0 ? strlen(text) : (size_t)len;
+    CHECK(fp && fwrite(text, 1, n, fp) == n, "write %s", path);
+    if (fp)
+        fclose(fp);
+    return path;
+}
+
+#define REGRESS IC_SOURCE_DIR "/tests/fuzz/regress/"
+
+/* Mesh files that crashed, hung or leaked inside assimp 5.2.5 (found by the fuzz targets): refused by the
+ * loader's structure checks before assimp sees them, with the file, the line or element and what to do. */
+static void test_hostile_meshes(void)
+{
+    static const char ply_head[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                   "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                   "end_header\n";
+    char text[1024];
+    /* The fuzz inputs themselves: each names its cause. */
+    expect_error(REGRESS "mesh_ply/assimp_segv_1efa1f.ply", NULL, IC_ERR_PARSE, "assimp_segv_1efa1f.ply: face 1 names "
+                 "vertex 1886157066, but the file has 3 vertices", "fix the face", NULL);
+    expect_error(REGRESS "mesh_ply/assimp_segv_208342.ply", NULL, IC_ERR_PARSE, "assimp_segv_208342.ply: the data "
+                 "ends in element 'face' 2 of 2 (binary)", "truncated", NULL);
+    expect_error(REGRESS "mesh_ply/assimp_segv_3c89c0.ply", NULL, IC_ERR_PARSE, "assimp_segv_3c89c0.ply:1: the first "
+                 "line of a PLY file must be exactly 'ply'", NULL, NULL);
+    expect_error(REGRESS "mesh_ply/assimp_timeout.ply", NULL, IC_ERR_PARSE, "assimp_timeout.ply:1: the first line",
+                 NULL, NULL);
+    expect_error(REGRESS "mesh_ply/assimp_leak.ply", NULL, IC_ERR_PARSE, "assimp_leak.ply:7: the PLY header holds "
+                 "the byte 0x02", "export the mesh again", NULL);
+    expect_error(REGRESS "mesh_gltf/assimp_leak.gltf", NULL, IC_ERR_PARSE, "assimp_leak.gltf: buffers[0]: character "
+                 "24 of the base64 data", "not base64", NULL);
+    /* Each cause alone, in an otherwise valid file. PLY: a word where a number belongs (assimp threw and
+     * leaked), an index past the vertices, a truncated body, a header without end_header (assimp looped). */
+    snprintf(text, sizeof text, "%s0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n", ply_head);
+    expect_error(write_tmp("hostile_word.ply", text, -1), NULL, IC_ERR_PARSE, "hostile_word.ply:11: 'x' is not a "
+                 "number (property 'y' of vertex 2)", NULL, NULL);
+    snprintf(text, sizeof text, "%s0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", ply_head);
+    expect_error(write_tmp("hostile_index.ply", text, -1), NULL, IC_ERR_PARSE, "hostile_index.ply:13: face 1 names "
+                 "vertex 3, but the file has 3 vertices (0 to 2)", NULL, NULL);
+    snprintf(text, sizeof text, "%s0 0 0\n1 0 0\n0 1 0\n", ply_head);
+    expect_error(write_tmp("hostile_short.ply", text, -1), NULL, IC_ERR_PARSE, "hostile_short.ply: the data ends in "
+                 "element 'face' 1 of 1 (ascii)", NULL, NULL);
+    snprintf(text, sizeof text, "%s0 0 0\n1 0 0\n0 1 0\n3 0 1\n", ply_head);
+    expect_error(write_tmp("hostile_few.ply", text, -1), NULL, IC_ERR_PARSE, "hostile_few.ply:13: face 1 ends before "
+                 "its property 'vertex_indices'", NULL, NULL);
+    expect_error(write_tmp("hostile_noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n", -1),
+                 NULL, IC_ERR_PARSE, "hostile_noend.ply: PLY header without 'end_header'", NULL, NULL);
+    expect_error(write_tmp("hostile_amp.ply", "ply&\nformat ascii 1.0\nend_header\n", -1), NULL, IC_ERR_PARSE,
+                 "hostile_amp.ply:1: the first line of a PLY file must be exactly 'ply'", NULL, NULL);
+    expect_error(write_tmp("hostile_keyword.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\n"
+                           "propertyy float y\nend_header\n", -1), NULL, IC_ERR_PARSE, "hostile_keyword.ply:5: "
+                 "'propertyy float y' is not a PLY header line", NULL, NULL);
+    snprintf(text, sizeof text, "%s0 0 0\n1 0 0\n0 1 0\n200 0 1 2\n", ply_head);
+    expect_error(write_tmp("hostile_list.ply", text, -1), NULL, IC_ERR_PARSE, "hostile_list.ply:13: face 1 ends "
+                 "before its property 'vertex_indices'", NULL, NULL);
+    /* OBJ: a face of the second material naming vertex 4 of 3 (assimp threw "vertex index out of range"
+     * holding the first mesh, which leaked), and a negative index reaching before the first vertex. */
+    expect_error(write_tmp("hostile_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 3 4\n", -1),
+                 NULL, IC_ERR_PARSE, "hostile_index.obj:7: a face names vertex 4, but the file has 3 vertices",
+                 "fix the face", NULL);
+    expect_error(write_tmp("hostile_negative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", -1), NULL,
+                 IC_ERR_PARSE, "hostile_negative.obj:4: vertex index -4 reaches before the first vertex", NULL, NULL);
+    expect_error(REGRESS "mesh_obj/assimp_leak.obj", NULL, IC_ERR_PARSE, "assimp_leak.obj:3: vertex 1: '2~' is not "
+                 "a number", NULL, NULL);
+    /* glTF: a data URI that is not base64 (assimp's decoder leaked its output). */
+    {
+        static char gltf[8192];
+        FILE *fp = fopen(SCENES "triangle.gltf", "rb");
+        size_t n = fp ? fread(gltf, 1, sizeof gltf - 1, fp) : 0;
+        if (fp)
+            fclose(fp);
+        gltf[n] = '\0';
+        char *b64 = strstr(gltf, "base64,");
+        CHECK(b64 != NULL && n < sizeof gltf - 1, "triangle.gltf has an embedded buffer");
+        if (b64) {
+            b64[7 + 5] = '*';
+            expect_error(write_tmp("hostile_base64.gltf", gltf, (long)n), NULL, IC_ERR_PARSE, "hostile_base64.gltf: "
+                         "buffers[0]: character 6 of the base64 data of its URI is not base64 (0x2a)", NULL, NULL);
+        }
+    }
+    /* glTF: a buffer file shorter than its byteLength (assimp threw and leaked the stream it had opened). */
+    {
+        static const char bin[44] = {0};
+        write_tmp("hostile_short.bin", bin, (long)sizeof bin);
+        expect_error(write_tmp("hostile_short.gltf", "{\"asset\": {\"version\": \"2.0\"},\n\"buffers\": [{\"byteLength\": "
+                               "45, \"uri\": \"hostile_short.bin\"}]}\n", -1),
+                     NULL, IC_ERR_PARSE, "hostile_short.gltf: buffers[0]: byteLength is 45 but 'hostile_short.bin' "
+                     "holds 44 bytes", "export the model again", NULL);
+    }
+    /* Valid files are still read: ascii with CRLF lines and a comment, binary in both byte orders. */
+    ic_scene *ok = NULL;
+    ic_error e;
+    snprintf(text, sizeof text, "ply\r\nformat ascii 1.0\r\ncomment crlf\r\nelement vertex 3\r\nproperty float x\r\n"
+             "property float y\r\nproperty float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\n"
+             "end_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n");
+    CHECK(ic_scene_load(write_tmp("valid_crlf.ply", text, -1), NULL, &ok, &e) == IC_OK, "CRLF PLY loads (%s)",
+          e.message);
+    ic_scene_free(ok);
+    ok = NULL;
+    CHECK(ic_scene_load(IC_SOURCE_DIR "/tests/fuzz/corpus/mesh_ply/tri_binary_be.ply", NULL, &ok, &e) == IC_OK,
+          "big-endian PLY loads (%s)", e.message);
+    ic_scene_free(ok);
+}
+
 int main(void)
 {
     /* A scene file that is not there: the open's own reason, not one left by resolving the path. */
@@ -234,5 +343,6 @@ int main(void)
     CHECK(ic_scene_load(NULL, NULL, &s, &err) == IC_ERR_INVALID_ARG && s == NULL, "NULL path");
     CHECK(ic_scene_load(SCENES "quad_light.obj", NULL, NULL, NULL) == IC_ERR_INVALID_ARG, "NULL out, NULL err");
     test_glb_lengths();
+    test_hostile_meshes();
     TEST_MAIN_END();
 }

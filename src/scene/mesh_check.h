@@ -1,0 +1,43 @@
+/*
+ * mesh_check.h — structure checks of mesh files, made before assimp imports them (mesh_import.c).
+ *
+ * assimp 5.2 (Debian 12) trusts what a file declares: faces that name vertices past the end crash its
+ * post-processing, a PLY header without end_header makes it loop or read past its buffer, and an
+ * exception thrown half-way through an import (a word where a number belongs, an index out of range,
+ * bad base64) leaks what it had built. Each check here reads the file as the format defines it and
+ * refuses such input with a one-line error naming the file (and line or element) and what to do, so
+ * that assimp only ever sees files it handles. Each returns IC_OK for a file it has nothing against;
+ * fp is read from its start and left at an unspecified position.
+ */
+#ifndef IC_SCENE_MESH_CHECK_H
+#define IC_SCENE_MESH_CHECK_H
+
+#include "irrcache/common.h"
+
+#include <stddef.h>
+#include <stdio.h>
+
+/* PLY (mesh_check_ply.c): the header's grammar, every element count against max_elements, then the whole
+ * body, ascii or binary: the values each property needs, present and numbers, vertex coordinates finite,
+ * face index lists of sane length naming existing vertices. */
+ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err);
+
+/* OBJ (mesh_check_obj.c): vertex coordinates finite, and every index of a face, line or point naming an
+ * existing vertex, texture coordinate or normal. */
+ic_result ic_obj_check(FILE *fp, const char *path, ic_error *err);
+/* An MTL file's Kd, Ks and Ke colours: negative or non-finite values are an error naming the MTL file, its
+ * line and the material (mesh_check_obj.c). A file that cannot be opened is IC_OK (assimp warns). */
+ic_result ic_mtl_check(const char *mtl_path, ic_error *err);
+/* 1 if v is negative or not a number: no meaning as an albedo or a radiance. */
+int ic_bad_color_component(float v);
+
+/* Binary glTF (mesh_check_gltf.c): the header's and every chunk's length against the bytes fp holds; IC_OK
+ * for anything that is not binary glTF. */
+ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err);
+/* glTF, text or binary: each buffer's and image's data URI holds valid base64. */
+ic_result ic_gltf_check(FILE *fp, const char *path, ic_error *err);
+/* The JSON text of a glTF file (.gltf: the file; .glb: its JSON chunk), malloc'd and NUL-terminated, at most
+ * 64 MiB; NULL if there is none or it cannot be read. *len gets its length. */
+char *ic_gltf_json(FILE *fp, size_t *len);
+
+#endif

@@ -1,0 +1,182 @@
+/*
+ * mesh_check_gltf.c — a glTF file's framing and embedded data checked before it is imported (Khronos
+ * glTF 2.0 specification §4.4, "GLB File Format Specification", and §3.6.1.1, data URIs; RFC 4648 §4,
+ * base64).
+ *
+ * - Binary glTF: a 12-byte header (magic "glTF", version 2, the total length) and chunks of an 8-byte
+ *   header (length, type) and their data, the first one JSON. The importer allocates what the lengths
+ *   declare before it reads anything, so a 516-byte file declaring a 2.8 GB JSON chunk (found by the
+ *   mesh_glb fuzz target) allocated 2.8 GB; here every length is checked against the bytes the file holds.
+ * - Data URIs ("data:...;base64,..." in a buffer's or an image's uri): assimp 5.2's base64 decoder
+ *   allocates the output and then throws on a character outside the alphabet (or a length that is not a
+ *   multiple of 4), leaking the output (found by the mesh_gltf fuzz target: a replacement character in a
+ *   buffer's data); here the text is checked first, and a buffer's decoded length against its byteLength.
+ * - A buffer in a file of its own (uri "tri.bin"): assimp throws when the file is shorter than the
+ *   buffer's byteLength and leaks the stream it opened (found by the mesh_gltf fuzz target: byteLength 45
+ *   for a 44-byte file); here the file's size is compared first.
+ */
+#include "scene/mesh_check.h"
+
+#include <cjson/cJSON.h>
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* Largest JSON text read for the checks (a glTF file's JSON describes; buffers hold the data). */
+#define GLTF_MAX_JSON ((size_t)64 << 20)
+
+static uint32_t le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err)
+{
+    unsigned char h[12];
+    if (fseek(fp, 0, SEEK_END) != 0)
+        return IC_OK; /* not seekable: the importer reports what it finds */
+    long size = ftell(fp);
+    if (size < 0 || fseek(fp, 0, SEEK_SET) != 0 || fread(h, 1, sizeof h, fp) != sizeof h || memcmp(h, "glTF", 4))
+        return IC_OK; /* too short or not binary glTF: the importer reports what it is */
+    uint32_t total = le32(h + 8);
+    if (le32(h + 4) != 2)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: binary glTF version %u; only version 2 is read (export it as "
+                            "glTF 2.0)", path, le32(h + 4));
+    if (total > (uint64_t)size)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: the binary glTF header declares %u bytes but the file holds %ld; "
+                            "the file is truncated or corrupt: export it again", path, total, size);
+    for (uint64_t at = 12; at + 8 <= total;) {
+        unsigned char c[8];
+        if (fseek(fp, (long)at, SEEK_SET) != 0 || fread(c, 1, sizeof c, fp) != sizeof c)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: cannot read the chunk header at byte %llu; export the file "
+                                "again", path, (unsigned long long)at);
+        uint64_t len = le32(c);
+        if (at == 12 && memcmp(c + 4, "JSON", 4))
+            return ic_error_set(err, IC_ERR_PARSE, "%s: the first chunk of a binary glTF must be JSON; export the "
+                                "file again", path);
+        if (at + 8 + len > total)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: the chunk at byte %llu declares %llu bytes, past the file's "
+                                "%u; the file is truncated or corrupt: export it again", path,
+                                (unsigned long long)at, (unsigned long long)len, total);
+        at += 8 + len;
+    }
+    return IC_OK;
+}
+
+char *ic_gltf_json(FILE *fp, size_t *len)
+{
+    *len = 0;
+    unsigned char head[20];
+    char *text = NULL;
+    if (fseek(fp, 0, SEEK_SET) != 0)
+        return NULL;
+    if (fread(head, 1, sizeof head, fp) == sizeof head && !memcmp(head, "glTF", 4)) {
+        /* .glb: 12-byte header, then chunk 0 = (length, "JSON", bytes) */
+        uint32_t chunk = le32(head + 12);
+        if (!memcmp(head + 16, "JSON", 4) && chunk < GLTF_MAX_JSON && (text = malloc(chunk + 1u)) != NULL)
+            *len = fread(text, 1, chunk, fp);
+    } else if (fseek(fp, 0, SEEK_END) == 0) {
+        long size = ftell(fp);
+        if (size > 0 && (size_t)size < GLTF_MAX_JSON && fseek(fp, 0, SEEK_SET) == 0 &&
+            (text = malloc((size_t)size + 1)) != NULL)
+            *len = fread(text, 1, (size_t)size, fp);
+    }
+    if (text)
+        text[*len] = '\0';
+    return text;
+}
+
+/* The first position in data of a character that is not base64 (or where padding is wrong), or len if
+ * the text is valid: the alphabet, then at most two '=' at the end, a multiple of 4 in all. */
+static size_t base64_error(const char *data, size_t len)
+{
+    size_t i = 0;
+    for (; i < len; ++i) {
+        unsigned char c = (unsigned char)data[i];
+        if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '+' || c == '/'))
+            break;
+    }
+    size_t pad = 0;
+    while (i + pad < len && data[i + pad] == '=' && pad < 2)
+        ++pad;
+    if (i + pad != len)
+        return i + pad;
+    return len % 4 ? len : len + 1; /* len + 1: valid */
+}
+
+/* A buffer in a file of its own: no shorter than its byteLength (assimp throws when it is, and leaks the
+ * file it opened). A file that is not there is left to the importer's message. */
+static ic_result check_buffer_file(const char *path, int i, const char *uri, double byte_length, ic_error *err)
+{
+    char file[4096];
+    const char *slash = strrchr(path, '/');
+    int dir_len = slash ? (int)(slash - path) + 1 : 0;
+    if (uri[0] == '/' || snprintf(file, sizeof file, "%.*s%s", dir_len, path, uri) >= (int)sizeof file)
+        return IC_OK;
+    struct stat st;
+    if (stat(file, &st) != 0 || !S_ISREG(st.st_mode) || (double)st.st_size >= byte_length)
+        return IC_OK;
+    return ic_error_set(err, IC_ERR_PARSE, "%s: buffers[%d]: byteLength is %.0f but '%s' holds %lld bytes; the "
+                        "buffer file is truncated or the wrong one: export the model again", path, i, byte_length,
+                        uri, (long long)st.st_size);
+}
+
+/* Checks the URIs of array `name` ("buffers", "images"): data URIs hold valid base64 (of a buffer's
+ * byteLength), a buffer's file is as long as its byteLength. */
+static ic_result check_uris(const cJSON *root, const char *name, const char *path, ic_error *err)
+{
+    const cJSON *list = cJSON_GetObjectItemCaseSensitive(root, name);
+    int i = 0;
+    for (const cJSON *item = cJSON_IsArray(list) ? list->child : NULL; item; item = item->next, ++i) {
+        const cJSON *uri = cJSON_GetObjectItemCaseSensitive(item, "uri");
+        const cJSON *byte_length = cJSON_GetObjectItemCaseSensitive(item, "byteLength");
+        double want = cJSON_IsNumber(byte_length) ? byte_length->valuedouble : 0.0;
+        if (!cJSON_IsString(uri))
+            continue;
+        if (strncmp(uri->valuestring, "data:", 5)) {
+            ic_result r = want > 0.0 && !strcmp(name, "buffers")
+                              ? check_buffer_file(path, i, uri->valuestring, want, err) : IC_OK;
+            if (r != IC_OK)
+                return r;
+            continue;
+        }
+        const char *comma = strchr(uri->valuestring, ',');
+        if (!comma)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: a data URI without ',' before its data; export the "
+                                "file again", path, name, i);
+        size_t head = (size_t)(comma - uri->valuestring);
+        if (head < 7 || strncmp(comma - 7, ";base64", 7))
+            continue; /* not base64: percent-encoded text, which assimp does not decode */
+        const char *data = comma + 1;
+        size_t len = strlen(data), at = base64_error(data, len);
+        if (at == len)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: the base64 data of its URI is %zu characters, not a "
+                                "multiple of 4; the file is corrupt: export it again", path, name, i, len);
+        if (at < len)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: character %zu of the base64 data of its URI is "
+                                "not base64 (0x%02x); the file is corrupt: export it again", path, name, i, at + 1,
+                                (unsigned char)data[at]);
+        size_t bytes = len / 4 * 3 - (len && data[len - 1] == '=') - (len > 1 && data[len - 2] == '=');
+        if (want > 0.0 && (double)bytes != want && !strcmp(name, "buffers"))
+            return ic_error_set(err, IC_ERR_PARSE, "%s: buffers[%d]: byteLength is %.0f but its data URI holds %zu "
+                                "bytes; the file is corrupt: export it again", path, i, want, bytes);
+    }
+    return IC_OK;
+}
+
+ic_result ic_gltf_check(FILE *fp, const char *path, ic_error *err)
+{
+    size_t len;
+    char *text = ic_gltf_json(fp, &len);
+    cJSON *root = text ? cJSON_ParseWithLength(text, len) : NULL;
+    free(text);
+    if (!root)
+        return IC_OK; /* the importer reports what it finds */
+    ic_result r = check_uris(root, "buffers", path, err);
+    if (r == IC_OK)
+        r = check_uris(root, "images", path, err);
+    cJSON_Delete(root);
+    return r;
+}

@@ -1,0 +1,252 @@
+/*
+ * mesh_check_obj.c — an OBJ file's vertices and faces, and its MTL files' colours, checked before assimp
+ * imports them (the OBJ and MTL formats as Wavefront's Advanced Visualizer manual documents them).
+ *
+ * Lines are split as assimp 5.2 splits them (at \n, \r\n, \r, \f and NUL; a backslash at the end of a
+ * line joins the next one), and a keyword counts only in the first column, as there, so that the vertices
+ * counted here are the ones assimp reads. Then:
+ * - a vertex line holds 3 (x y z), 4 (x y z w) or 6 (x y z r g b) numbers, all finite: assimp skips a
+ *   line of another count without a word, and keeps NaN and infinity but renumbers vertices, so the
+ *   first bad one is reported here with its line and its number as the file counts them;
+ * - every vertex index of a face, line or point names a vertex (1 to N, or -1 to -n for the n read so
+ *   far): for an index past the end assimp throws "vertex index out of range" while it holds the meshes
+ *   it has built, which leak (found by the mesh_obj fuzz target: a `mtllib` line without its line end
+ *   swallowed the first vertex, and the second material's face named vertex 4 of 3).
+ */
+#include "scene/mesh_check.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+enum { OBJ_MAX_LINE = 1 << 16 };
+
+/* Reads the next line as assimp sees it into buf (continuations joined); *line_no advances by the line
+ * ends consumed. Returns 0 at the end of the file, -1 if the line is longer than the buffer. */
+static int obj_line(FILE *fp, char *buf, long *line_no)
+{
+    int n = 0, c, any = 0;
+    for (;;) {
+        c = getc_unlocked(fp);
+        if (c == EOF)
+            break;
+        any = 1;
+        if (c == '\n' || c == '\r' || c == '\f' || c == '\0') {
+            if (c == '\r') {
+                int d = getc_unlocked(fp);
+                if (d != '\n' && d != EOF)
+                    ungetc(d, fp);
+            }
+            ++*line_no;
+            if (n > 0 && buf[n - 1] == '\\') { /* continued on the next line */
+                --n;
+                continue;
+            }
+            break;
+        }
+        if (n == OBJ_MAX_LINE - 1)
+            return -1;
+        buf[n++] = (char)c;
+    }
+    buf[n] = '\0';
+    return any ? 1 : 0;
+}
+
+/* A vertex component: [+-] digits, an optional fraction and exponent, or nan / inf. (assimp counts a word
+ * starting with '.' as no component.) */
+static int obj_number(const char *w, double *v)
+{
+    const char *c = w;
+    if (*c == '+' || *c == '-')
+        ++c;
+    if (!strcasecmp(c, "nan") || !strcasecmp(c, "inf")) {
+        *v = strtod(w, NULL);
+        return 1;
+    }
+    if (!isdigit((unsigned char)*c))
+        return 0;
+    while (isdigit((unsigned char)*c))
+        ++c;
+    if (*c == '.')
+        for (++c; isdigit((unsigned char)*c);)
+            ++c;
+    if (*c == 'e' || *c == 'E') {
+        ++c;
+        if (*c == '+' || *c == '-')
+            ++c;
+        if (!isdigit((unsigned char)*c))
+            return 0;
+        while (isdigit((unsigned char)*c))
+            ++c;
+    }
+    if (*c)
+        return 0;
+    *v = strtod(w, NULL);
+    return 1;
+}
+
+/* An index of a face word: [-] digits (empty: *present = 0, allowed for the texture and normal parts). */
+static int obj_index(const char *w, size_t len, long long *v, int *present)
+{
+    *present = len > 0;
+    if (!len)
+        return 1;
+    size_t i = w[0] == '-';
+    if (i == len)
+        return 0;
+    long long x = 0;
+    for (; i < len; ++i) {
+        if (!isdigit((unsigned char)w[i]) || x > 1000000000000LL)
+            return 0;
+        x = 10 * x + (w[i] - '0');
+    }
+    *v = w[0] == '-' ? -x : x;
+    return 1;
+}
+
+/* The first face index past the end: checked once the vertices are counted. */
+typedef struct obj_far_index {
+    long long index;
+    long line;
+} obj_far_index;
+
+static ic_result check_vertex_line(char *c, const char *path, long line_no, long long vertex_no, ic_error *err)
+{
+    int count = 0, bad = 0;
+    char *save = NULL;
+    for (char *w = strtok_r(c, " \t", &save); w; w = strtok_r(NULL, " \t", &save)) {
+        if (w[0] == '#')
+            break; /* a comment ends the line */
+        double v;
+        if (!obj_number(w, &v))
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex %lld: '%.40s' is not a number; fix the line or "
+                                "export the mesh again", path, line_no, vertex_no, w);
+        if (count < 3 && !isfinite((float)v))
+            bad = 1;
+        ++count;
+    }
+    if (count != 3 && count != 4 && count != 6)
+        return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex %lld has %d numbers; a vertex line holds 3 (x y z), 4 "
+                            "(x y z w) or 6 (x y z r g b): fix the line or export the mesh again", path, line_no,
+                            vertex_no, count);
+    if (bad)
+        return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex %lld has a non-finite coordinate; fix or remove it",
+                            path, line_no, vertex_no);
+    return IC_OK;
+}
+
+static ic_result check_face_line(char *c, const char *path, long line_no, long long vertices_so_far,
+                                 obj_far_index *far, ic_error *err)
+{
+    char *save = NULL;
+    for (char *w = strtok_r(c, " \t", &save); w; w = strtok_r(NULL, " \t", &save)) {
+        /* v, v/vt, v//vn or v/vt/vn */
+        long long idx[3] = {0, 0, 0};
+        int present[3] = {0, 0, 0}, parts = 0, ok = 1;
+        for (const char *p = w; ok; ++parts) {
+            size_t len = strcspn(p, "/");
+            ok = parts < 3 && obj_index(p, len, &idx[parts], &present[parts]);
+            if (!p[len])
+                break;
+            p += len + 1;
+        }
+        if (!ok || !present[0] || (present[1] && idx[1] == 0) || (present[2] && idx[2] == 0) || idx[0] == 0)
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: '%.40s' is not a vertex reference (v, v/vt, v//vn or "
+                                "v/vt/vn, counted from 1, or from -1 backwards); fix the line or export the mesh again",
+                                path, line_no, w);
+        if (idx[0] < 0 && -idx[0] > vertices_so_far)
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex index %lld reaches before the first vertex (%lld "
+                                "read so far); fix the face or export the mesh again", path, line_no, idx[0],
+                                vertices_so_far);
+        if (idx[0] > far->index) {
+            far->index = idx[0];
+            far->line = line_no;
+        }
+    }
+    return IC_OK;
+}
+
+ic_result ic_obj_check(FILE *fp, const char *path, ic_error *err)
+{
+    char *line = malloc(OBJ_MAX_LINE);
+    if (!line)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    long line_no = 0;
+    long long vertices = 0;
+    obj_far_index far = {0, 0};
+    ic_result r = IC_OK;
+    flockfile(fp);
+    for (;;) {
+        long at = line_no + 1; /* the line this one starts on */
+        int got = obj_line(fp, line, &line_no);
+        if (got == 0)
+            break;
+        if (got < 0) {
+            r = ic_error_set(err, IC_ERR_PARSE, "%s:%ld: a line longer than %d bytes; the file is corrupt: export "
+                             "the mesh again", path, at, OBJ_MAX_LINE - 1);
+            break;
+        }
+        if (line[0] == 'v' && (line[1] == ' ' || line[1] == '\t'))
+            r = check_vertex_line(line + 2, path, at, ++vertices, err);
+        else if ((line[0] == 'f' || line[0] == 'l' || line[0] == 'p') && (line[1] == ' ' || line[1] == '\t'))
+            r = check_face_line(line + 2, path, at, vertices, &far, err);
+        if (r != IC_OK)
+            break;
+    }
+    funlockfile(fp);
+    if (r == IC_OK && far.index > vertices)
+        r = ic_error_set(err, IC_ERR_PARSE, "%s:%ld: a face names vertex %lld, but the file has %lld vertices; fix the "
+                         "face or export the mesh again", path, far.line, far.index, vertices);
+    free(line);
+    return r;
+}
+
+int ic_bad_color_component(float v)
+{
+    return !(v >= 0.0f) || !isfinite(v);
+}
+
+ic_result ic_mtl_check(const char *mtl_path, ic_error *err)
+{
+    FILE *fp = fopen(mtl_path, "rb");
+    if (!fp)
+        return IC_OK; /* assimp warns and the materials take their defaults */
+    char line[4096], material[128] = "";
+    long line_no = 0;
+    ic_result r = IC_OK;
+    while (r == IC_OK && fgets(line, sizeof line, fp)) {
+        ++line_no;
+        const char *c = line;
+        while (*c == ' ' || *c == '\t')
+            ++c;
+        if (!strncmp(c, "newmtl", 6) && (c[6] == ' ' || c[6] == '\t')) {
+            c += 7;
+            while (*c == ' ' || *c == '\t')
+                ++c;
+            snprintf(material, sizeof material, "%.*s", (int)strcspn(c, "\r\n"), c);
+        } else if (c[0] == 'K' && (c[1] == 'd' || c[1] == 's' || c[1] == 'e') && (c[2] == ' ' || c[2] == '\t')) {
+            const char *what = c[1] == 'd' ? "Kd (diffuse)" : c[1] == 's' ? "Ks (specular)" : "Ke (emission)";
+            const char *v = c + 3;
+            for (int k = 0; k < 3; ++k) {
+                char *end;
+                float f = strtof(v, &end);
+                if (end == v)
+                    break; /* no more numbers ("spectral", "xyz" or the end of the line) */
+                if (ic_bad_color_component(f)) {
+                    r = ic_error_set(err, IC_ERR_PARSE,
+                                     "%s:%ld: material '%s': %s has a negative or non-finite value (%.*s); give "
+                                     "values >= 0",
+                                     mtl_path, line_no, material, what, (int)strcspn(c + 3, "\r\n"), c + 3);
+                    break;
+                }
+                v = end;
+            }
+        }
+        while (!strchr(line, '\n') && fgets(line, sizeof line, fp)) { /* skip the rest of a long line */
+        }
+    }
+    fclose(fp);
+    return r;
+}

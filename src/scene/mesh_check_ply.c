@@ -1,0 +1,533 @@
+/*
+ * mesh_check_ply.c — a PLY file's structure checked before assimp imports it (Turk 1994; the format as
+ * Paul Bourke documents it): the line "ply", a text header of elements (each with a count and typed
+ * properties, a list property with its count type), "end_header", then every element's instances in
+ * header order, one per line in ascii, packed in binary of either byte order.
+ *
+ * Why each check (assimp 5.2.5, found by the mesh_ply fuzz target, tests/fuzz/regress/mesh_ply/):
+ * - the first line must be exactly "ply": assimp takes "ply&" or "ply\0" as PLY too, so such files got
+ *   past a check that looked only for "ply\n";
+ * - the header must end with end_header and hold only its six kinds of line: without end_header
+ *   assimp's header parser loops for ever at the end of the file, or reads past its buffer when an
+ *   element line holds a NUL byte (SEGV);
+ * - every value the header declares must be there: on a truncated binary body assimp reads its buffer's
+ *   padding as data, so a face gets ten indices of 0x0a0a0a0a (SEGV in triangulation);
+ * - face indices must name existing vertices: assimp's post-processing indexes the vertex array with
+ *   them unchecked (SEGV in JoinIdenticalVertices);
+ * - an ascii value must be a number of its property's type: assimp throws on a word where a number
+ *   belongs and leaks the element it was filling.
+ * And, as before, every element count against the caller's limit (before the body is read), and every
+ * vertex's x, y, z finite even where no face uses it (assimp drops such a vertex silently).
+ */
+#include "scene/mesh_check.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+enum {
+    PLY_MAX_ELEMENTS = 16,
+    PLY_MAX_PROPS = 32,
+    PLY_MAX_HEADER_LINES = 4096,
+    PLY_MAX_HEADER_LINE = 1024,
+    PLY_MAX_FACE_VERTICES = 1024, /* one polygon of a face list: triangulated by assimp, quadratic in it */
+    PLY_MAX_LIST = 1 << 16,       /* any other list property of one instance */
+    PLY_MAX_ASCII_LINE = 1 << 16  /* one ascii instance: PLY_MAX_FACE_VERTICES indices fit many times over */
+};
+
+typedef struct ply_prop {
+    char name[64];
+    int size, is_float, is_signed;   /* the value, or each item of a list */
+    int count_size, count_signed;    /* a list's count (count_size 0: a scalar property) */
+    int coord;                       /* 0, 1, 2: x, y, z of the vertex element; -1: another property */
+    int is_index;                    /* a vertex index list (vertex_indices of face or tristrips) */
+} ply_prop;
+
+typedef struct ply_element {
+    char name[64];
+    unsigned long long count;
+    ply_prop props[PLY_MAX_PROPS];
+    int prop_count;
+} ply_element;
+
+typedef struct ply_file {
+    FILE *fp;
+    const char *path;
+    ic_error *err;
+    int format;                      /* 0 ascii, 1 binary little-endian, 2 binary big-endian */
+    long line;                       /* the line just read (header, or an ascii instance) */
+    ply_element el[PLY_MAX_ELEMENTS];
+    int el_count;
+    unsigned long long vertices;     /* the vertex element's count: the range of face indices */
+    char *text;                      /* an ascii instance line (PLY_MAX_ASCII_LINE bytes) */
+} ply_file;
+
+/* Bytes of a PLY scalar type (both spellings: "float" and "float32"), 0 if unknown. */
+static int ply_type(const char *t, int *is_float, int *is_signed)
+{
+    static const struct { const char *name; int size, is_float, is_signed; } types[] = {
+        {"char", 1, 0, 1},   {"int8", 1, 0, 1},    {"uchar", 1, 0, 0},  {"uint8", 1, 0, 0},    {"short", 2, 0, 1},
+        {"int16", 2, 0, 1},  {"ushort", 2, 0, 0},  {"uint16", 2, 0, 0}, {"int", 4, 0, 1},      {"int32", 4, 0, 1},
+        {"uint", 4, 0, 0},   {"uint32", 4, 0, 0},  {"float", 4, 1, 1},  {"float32", 4, 1, 1}, {"double", 8, 1, 1},
+        {"float64", 8, 1, 1}};
+    for (size_t i = 0; i < sizeof types / sizeof types[0]; ++i)
+        if (!strcmp(t, types[i].name)) {
+            *is_float = types[i].is_float;
+            *is_signed = types[i].is_signed;
+            return types[i].size;
+        }
+    return 0;
+}
+
+/* A binary value of `size` bytes at p, in the file's byte order, as a double. */
+static double ply_value(const unsigned char *p, int size, int is_float, int is_signed, int big_endian)
+{
+    uint64_t u = 0;
+    for (int i = 0; i < size; ++i)
+        u |= (uint64_t)p[big_endian ? size - 1 - i : i] << (8 * i);
+    if (is_float && size == 4) {
+        uint32_t w = (uint32_t)u;
+        float f;
+        memcpy(&f, &w, sizeof f);
+        return f;
+    }
+    if (is_float) {
+        double d;
+        memcpy(&d, &u, sizeof d);
+        return d;
+    }
+    if (is_signed && size < 8 && (u >> (8 * size - 1)) & 1u)
+        return (double)(int64_t)(u | ~(uint64_t)0 << (8 * size));
+    return (double)u;
+}
+
+/* Reads one header line into line (without its line end). Returns 1, 0 at the end of the file, or -1 with
+ * the error set (too long, or a control byte: no exporter writes one, and assimp's parser trips on NUL). */
+static int header_line(ply_file *f, char *line)
+{
+    int n = 0, c;
+    while ((c = getc(f->fp)) != EOF && c != '\n') {
+        if (c == '\r')
+            continue;
+        if ((c < 0x20 && c != '\t') || c == 0x7f) {
+            ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: the PLY header holds the byte 0x%02x, which is not text; "
+                         "the file is corrupt: export the mesh again", f->path, f->line, c);
+            return -1;
+        }
+        if (n == PLY_MAX_HEADER_LINE - 1) {
+            ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: PLY header line longer than %d bytes; fix the header or "
+                         "export the mesh again", f->path, f->line, PLY_MAX_HEADER_LINE - 1);
+            return -1;
+        }
+        line[n++] = (char)c;
+    }
+    line[n] = '\0';
+    return c == EOF && n == 0 ? 0 : 1;
+}
+
+/* Splits line at spaces and tabs into at most max words; returns how many there are (all of them,
+ * even beyond max). */
+static int split_words(char *line, char **word, int max)
+{
+    int n = 0;
+    for (char *c = line;;) {
+        while (*c == ' ' || *c == '\t')
+            ++c;
+        if (!*c)
+            return n;
+        if (n < max)
+            word[n] = c;
+        ++n;
+        while (*c && *c != ' ' && *c != '\t')
+            ++c;
+        if (*c)
+            *c++ = '\0';
+    }
+}
+
+static int header_error(ply_file *f, ic_result code, const char *what)
+{
+    ic_error_set(f->err, code, "%s:%ld: %s", f->path, f->line, what);
+    return 0;
+}
+
+/* Reads the header after the "ply" line; the file is then at the first byte of the body. Returns 0 with
+ * the error set. */
+static int read_header(ply_file *f)
+{
+    char line[PLY_MAX_HEADER_LINE], *w[8];
+    char msg[512];
+    f->format = -1;
+    for (f->line = 2; f->line <= PLY_MAX_HEADER_LINES; ++f->line) {
+        int got = header_line(f, line);
+        if (got < 0)
+            return 0;
+        if (got == 0)
+            break;
+        char shown[64];
+        snprintf(shown, sizeof shown, "%.60s", line);
+        int n = split_words(line, w, 8);
+        if (n == 0)
+            return header_error(f, IC_ERR_PARSE, "empty line in the PLY header; remove it");
+        if (!strcmp(w[0], "comment") || !strcmp(w[0], "obj_info"))
+            continue;
+        if (!strcmp(w[0], "end_header")) {
+            if (n != 1)
+                return header_error(f, IC_ERR_PARSE, "text after 'end_header'; fix the header");
+            if (f->format < 0)
+                return header_error(f, IC_ERR_PARSE, "PLY header has no 'format' line; export the mesh again");
+            return 1;
+        }
+        if (!strcmp(w[0], "format")) {
+            if (f->format >= 0 || f->el_count > 0)
+                return header_error(f, IC_ERR_PARSE, "a 'format' line after the first, or after an element; fix "
+                                    "the header");
+            if (n != 3 || strcmp(w[2], "1.0"))
+                return header_error(f, IC_ERR_PARSE, "the format line must read 'format ascii 1.0' (or "
+                                    "binary_little_endian, binary_big_endian); fix the header");
+            f->format = !strcmp(w[1], "ascii") ? 0 : !strcmp(w[1], "binary_little_endian") ? 1
+                        : !strcmp(w[1], "binary_big_endian") ? 2 : -1;
+            if (f->format < 0) {
+                snprintf(msg, sizeof msg, "unknown PLY format '%.40s' (ascii, binary_little_endian or "
+                         "binary_big_endian); fix the header", w[1]);
+                return header_error(f, IC_ERR_PARSE, msg);
+            }
+        } else if (!strcmp(w[0], "element")) {
+            if (n != 3)
+                return header_error(f, IC_ERR_PARSE, "an element line is 'element NAME COUNT'; fix the header");
+            if (f->el_count == PLY_MAX_ELEMENTS) {
+                snprintf(msg, sizeof msg, "more than %d PLY elements; keep vertices and faces", PLY_MAX_ELEMENTS);
+                return header_error(f, IC_ERR_UNSUPPORTED, msg);
+            }
+            for (int i = 0; i < f->el_count; ++i)
+                if (!strcmp(f->el[i].name, w[1])) {
+                    snprintf(msg, sizeof msg, "element '%.60s' declared twice; fix the header", w[1]);
+                    return header_error(f, IC_ERR_PARSE, msg);
+                }
+            ply_element *e = &f->el[f->el_count++];
+            memset(e, 0, sizeof *e);
+            snprintf(e->name, sizeof e->name, "%s", w[1]);
+            char *end;
+            errno = 0;
+            e->count = strtoull(w[2], &end, 10);
+            if (*end || !isdigit((unsigned char)w[2][0]) || errno == ERANGE) {
+                snprintf(msg, sizeof msg, "PLY element '%.60s' has count '%.40s', not a number; fix the header", w[1],
+                         w[2]);
+                return header_error(f, IC_ERR_PARSE, msg);
+            }
+        } else if (!strcmp(w[0], "property")) {
+            if (f->el_count == 0)
+                return header_error(f, IC_ERR_PARSE, "a property before any element; fix the header");
+            ply_element *e = &f->el[f->el_count - 1];
+            if (e->prop_count == PLY_MAX_PROPS) {
+                snprintf(msg, sizeof msg, "more than %d properties in PLY element '%s'; drop the ones not needed",
+                         PLY_MAX_PROPS, e->name);
+                return header_error(f, IC_ERR_UNSUPPORTED, msg);
+            }
+            ply_prop *p = &e->props[e->prop_count++];
+            memset(p, 0, sizeof *p);
+            int is_list = n >= 2 && !strcmp(w[1], "list");
+            if (n != (is_list ? 5 : 3))
+                return header_error(f, IC_ERR_PARSE, "a property line is 'property TYPE NAME' or 'property list "
+                                    "COUNT_TYPE TYPE NAME'; fix the header");
+            snprintf(p->name, sizeof p->name, "%s", w[n - 1]);
+            int count_float = 0;
+            if (is_list && (p->count_size = ply_type(w[2], &count_float, &p->count_signed)) == 0)
+                p->size = 0;
+            else
+                p->size = ply_type(w[n - 2], &p->is_float, &p->is_signed);
+            if (!p->size) {
+                snprintf(msg, sizeof msg, "unknown PLY property type in '%s' (char, uchar, short, ushort, int, "
+                         "uint, float, double or their sized names); fix the header", shown);
+                return header_error(f, IC_ERR_PARSE, msg);
+            }
+            if (count_float) {
+                snprintf(msg, sizeof msg, "the count of list '%s' is of a floating-point type; give it an integer "
+                         "type (uchar or int)", p->name);
+                return header_error(f, IC_ERR_PARSE, msg);
+            }
+            p->is_index = is_list && (!strcmp(e->name, "face") || !strcmp(e->name, "tristrips")) &&
+                          (!strcmp(p->name, "vertex_indices") || !strcmp(p->name, "vertex_index"));
+            if (p->is_index && p->is_float) {
+                snprintf(msg, sizeof msg, "the vertex indices of '%s' are of a floating-point type; give them an "
+                         "integer type (int or uint)", e->name);
+                return header_error(f, IC_ERR_PARSE, msg);
+            }
+            p->coord = !strcmp(e->name, "vertex") && !is_list && p->name[0] >= 'x' && p->name[0] <= 'z' &&
+                               !p->name[1] ? p->name[0] - 'x' : -1;
+        } else {
+            snprintf(msg, sizeof msg, "'%s' is not a PLY header line (format, comment, obj_info, element, "
+                     "property or end_header); fix the header or export the mesh again", shown);
+            return header_error(f, IC_ERR_PARSE, msg);
+        }
+    }
+    ic_error_set(f->err, IC_ERR_PARSE, "%s: PLY header without 'end_header' in its first %d lines; export the "
+                 "mesh again", f->path, PLY_MAX_HEADER_LINES);
+    return 0;
+}
+
+/* Where an instance is, for messages: "file:line" (ascii) or "file" (binary). */
+static void where(const ply_file *f, char *out, size_t size)
+{
+    if (f->format == 0)
+        snprintf(out, size, "%s:%ld", f->path, f->line);
+    else
+        snprintf(out, size, "%s", f->path);
+}
+
+static ic_result truncated(ply_file *f, const ply_element *e, unsigned long long i)
+{
+    return ic_error_set(f->err, IC_ERR_PARSE, "%s: the data ends in element '%s' %llu of %llu (%s), before what "
+                        "the header declares; the file is truncated: export the mesh again", f->path, e->name, i + 1,
+                        e->count, f->format == 0 ? "ascii" : "binary");
+}
+
+/* Checks one value of property p of instance i of e: a coordinate finite, a list's count in range, a
+ * vertex index naming a vertex. `item` is -1 for a scalar or a list's count, else the item's position. */
+static ic_result check_value(ply_file *f, const ply_element *e, const ply_prop *p, unsigned long long i, long item,
+                             double v)
+{
+    char at[4200];
+    where(f, at, sizeof at);
+    if (p->coord >= 0 && (!isfinite(v) || !isfinite((float)v)))
+        return f->format == 0 ? ic_error_set(f->err, IC_ERR_PARSE, "%s: vertex %llu has a non-finite coordinate (%g); "
+                                             "fix or remove it", at, i + 1, v)
+                              : ic_error_set(f->err, IC_ERR_PARSE, "%s: vertex %llu (of %llu, binary) has a non-finite "
+                                             "coordinate (%g); fix or remove it", at, i + 1, e->count, v);
+    if (p->count_size && item < 0) {
+        long max = p->is_index ? PLY_MAX_FACE_VERTICES : PLY_MAX_LIST;
+        if (v < (p->is_index ? 1 : 0) || v > max)
+            return ic_error_set(f->err, IC_ERR_PARSE, "%s: %s %llu has a list '%s' of %.0f items, outside 0 to %ld "
+                                "(faces: 1 to %d); fix it or export the mesh again (triangulated)", at, e->name,
+                                i + 1, p->name, v, max, PLY_MAX_FACE_VERTICES);
+    } else if (p->is_index) {
+        int restart = !strcmp(e->name, "tristrips") && v == -1.0; /* a strip restart */
+        if (!restart && !(v >= 0 && v < (double)f->vertices))
+            return ic_error_set(f->err, IC_ERR_PARSE, "%s: %s %llu names vertex %.0f, but the file has %llu vertices "
+                                "(0 to %llu); fix the %s or export the mesh again", at, e->name, i + 1, v,
+                                f->vertices, f->vertices ? f->vertices - 1 : 0, e->name);
+    }
+    return IC_OK;
+}
+
+/* One binary value of `size` bytes; 0 at the end of the file. */
+static int binary_value(ply_file *f, int size, int is_float, int is_signed, double *v)
+{
+    unsigned char b[8];
+    if (fread(b, 1, (size_t)size, f->fp) != (size_t)size)
+        return 0;
+    *v = ply_value(b, size, is_float, is_signed, f->format == 2);
+    return 1;
+}
+
+static ic_result binary_instance(ply_file *f, const ply_element *e, unsigned long long i)
+{
+    for (int k = 0; k < e->prop_count; ++k) {
+        const ply_prop *p = &e->props[k];
+        double v;
+        ic_result r;
+        if (!p->count_size) {
+            if (!binary_value(f, p->size, p->is_float, p->is_signed, &v))
+                return truncated(f, e, i);
+            if ((r = check_value(f, e, p, i, -1, v)) != IC_OK)
+                return r;
+            continue;
+        }
+        if (!binary_value(f, p->count_size, 0, p->count_signed, &v))
+            return truncated(f, e, i);
+        if ((r = check_value(f, e, p, i, -1, v)) != IC_OK)
+            return r;
+        long items = (long)v;
+        for (long j = 0; j < items; ++j) {
+            if (!binary_value(f, p->size, p->is_float, p->is_signed, &v))
+                return truncated(f, e, i);
+            if ((r = check_value(f, e, p, i, j, v)) != IC_OK)
+                return r;
+        }
+    }
+    return IC_OK;
+}
+
+/* 1 if word is a decimal number as assimp reads one: digits, signed for a signed or float type, and for a
+ * float an optional fraction and exponent, or nan / inf. */
+static int is_number(const char *w, int is_float, int is_signed)
+{
+    const char *c = w;
+    if ((is_float || is_signed) && (*c == '+' || *c == '-')) /* assimp reads no sign before an unsigned value */
+        ++c;
+    if (is_float && (!strcasecmp(c, "nan") || !strcasecmp(c, "inf")))
+        return 1;
+    int digits = 0;
+    while (isdigit((unsigned char)*c))
+        ++c, ++digits;
+    if (is_float && *c == '.') {
+        ++c;
+        while (isdigit((unsigned char)*c))
+            ++c, ++digits;
+    }
+    if (!digits)
+        return 0;
+    if (is_float && (*c == 'e' || *c == 'E')) {
+        ++c;
+        if (*c == '+' || *c == '-')
+            ++c;
+        if (!isdigit((unsigned char)*c))
+            return 0;
+        while (isdigit((unsigned char)*c))
+            ++c;
+    }
+    return *c == '\0';
+}
+
+/* The range of an integer type of `size` bytes. */
+static int in_int_range(double v, int size, int is_signed)
+{
+    double span = ldexp(1.0, 8 * size);
+    return is_signed ? v >= -span / 2 && v < span / 2 : v >= 0 && v < span;
+}
+
+/* The next word of an ascii instance as a value of the given type; the error names the property. */
+static ic_result ascii_value(ply_file *f, const ply_element *e, const ply_prop *p, unsigned long long i,
+                             char **cursor, int size, int is_float, int is_signed, double *v)
+{
+    char *c = *cursor;
+    while (*c == ' ' || *c == '\t')
+        ++c;
+    char *w = c;
+    while (*c && *c != ' ' && *c != '\t')
+        ++c;
+    if (c == w)
+        return ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: %s %llu ends before its property '%s'; give every "
+                            "property its value, one instance per line", f->path, f->line, e->name, i + 1, p->name);
+    char saved = *c;
+    *c = '\0';
+    int ok = is_number(w, is_float, is_signed);
+    *v = ok ? strtod(w, NULL) : 0.0;
+    if (ok && !is_float && !in_int_range(*v, size, is_signed))
+        ok = 0;
+    if (!ok) {
+        ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: '%.40s' is not %s (property '%s' of %s %llu); fix the value or "
+                     "export the mesh again", f->path, f->line, w, is_float ? "a number" : "an integer of its type",
+                     p->name, e->name, i + 1);
+        *c = saved;
+        return IC_ERR_PARSE;
+    }
+    *c = saved;
+    *cursor = c;
+    return IC_OK;
+}
+
+/* Reads the next ascii line into f->text; 0 at the end of the file, -1 with the error set. */
+static int ascii_line(ply_file *f)
+{
+    int n = 0, c;
+    ++f->line;
+    while ((c = getc_unlocked(f->fp)) != EOF && c != '\n') {
+        if (c == '\r')
+            continue;
+        if (c == '\0' || c == '\f' || c == '\v') {
+            ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: the byte 0x%02x in ascii PLY data; the file is corrupt: "
+                         "export the mesh again", f->path, f->line, c);
+            return -1;
+        }
+        if (n == PLY_MAX_ASCII_LINE - 1) {
+            ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: a line longer than %d bytes in ascii PLY data; export the "
+                         "mesh as binary PLY", f->path, f->line, PLY_MAX_ASCII_LINE - 1);
+            return -1;
+        }
+        f->text[n++] = (char)c;
+    }
+    f->text[n] = '\0';
+    return c == EOF && n == 0 ? 0 : 1;
+}
+
+static ic_result ascii_instance(ply_file *f, const ply_element *e, unsigned long long i)
+{
+    int got = ascii_line(f);
+    if (got < 0)
+        return f->err ? f->err->code : IC_ERR_PARSE;
+    if (got == 0)
+        return truncated(f, e, i);
+    char *c = f->text;
+    ic_result r;
+    for (int k = 0; k < e->prop_count; ++k) {
+        const ply_prop *p = &e->props[k];
+        double v;
+        if (!p->count_size) {
+            if ((r = ascii_value(f, e, p, i, &c, p->size, p->is_float, p->is_signed, &v)) != IC_OK ||
+                (r = check_value(f, e, p, i, -1, v)) != IC_OK)
+                return r;
+            continue;
+        }
+        if ((r = ascii_value(f, e, p, i, &c, p->count_size, 0, p->count_signed, &v)) != IC_OK ||
+            (r = check_value(f, e, p, i, -1, v)) != IC_OK)
+            return r;
+        long items = (long)v;
+        for (long j = 0; j < items; ++j)
+            if ((r = ascii_value(f, e, p, i, &c, p->size, p->is_float, p->is_signed, &v)) != IC_OK ||
+                (r = check_value(f, e, p, i, j, v)) != IC_OK)
+                return r;
+    }
+    while (*c == ' ' || *c == '\t')
+        ++c;
+    if (*c)
+        return ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: %s %llu has more values than its properties (from "
+                            "'%.20s'); one instance per line: fix the line or export the mesh again", f->path, f->line,
+                            e->name, i + 1, c);
+    return IC_OK;
+}
+
+ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err)
+{
+    char magic[5] = "";
+    size_t got = fread(magic, 1, 4, fp);
+    if (got < 3 || memcmp(magic, "ply", 3))
+        return ic_error_set(err, IC_ERR_PARSE, "%s: not a PLY file (it must start with the line 'ply'); export the "
+                            "mesh again as PLY", path);
+    if (got == 4 && magic[3] == '\r') {
+        int ch = getc(fp);
+        magic[3] = (char)(ch == '\n' ? '\n' : '?');
+    }
+    if (got < 4 || magic[3] != '\n')
+        return ic_error_set(err, IC_ERR_PARSE, "%s:1: the first line of a PLY file must be exactly 'ply'; fix it or "
+                            "export the mesh again", path);
+    ply_file *f = calloc(1, sizeof *f);
+    if (!f)
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    f->fp = fp;
+    f->path = path;
+    f->err = err;
+    ic_result r = IC_OK;
+    if (!read_header(f))
+        r = err ? err->code : IC_ERR_PARSE;
+    for (int i = 0; r == IC_OK && i < f->el_count; ++i) {
+        const ply_element *e = &f->el[i];
+        if (e->count > max_elements)
+            r = ic_error_set(err, IC_ERR_UNSUPPORTED,
+                             "%s: the PLY header declares %llu of element '%s', more than the limit of %llu; raise "
+                             "it with --max-mesh-elements (max_mesh_elements of ic_scene_load_options) if the "
+                             "mesh is really this large",
+                             path, e->count, e->name, max_elements);
+        else if (e->count > 0 && e->prop_count == 0)
+            r = ic_error_set(err, IC_ERR_PARSE, "%s: PLY element '%s' has %llu instances but no property; fix the "
+                             "header", path, e->name, e->count);
+        if (!strcmp(e->name, "vertex"))
+            f->vertices = e->count;
+    }
+    if (r == IC_OK && f->format == 0 && (f->text = malloc(PLY_MAX_ASCII_LINE)) == NULL)
+        r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    if (r == IC_OK) {
+        flockfile(fp); /* the ascii body is read a byte at a time */
+        for (int k = 0; r == IC_OK && k < f->el_count; ++k)
+            for (unsigned long long i = 0; r == IC_OK && i < f->el[k].count; ++i)
+                r = f->format == 0 ? ascii_instance(f, &f->el[k], i) : binary_instance(f, &f->el[k], i);
+        funlockfile(fp);
+    }
+    free(f->text);
+    free(f);
+    return r;
+}
