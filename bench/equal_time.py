@@ -9,8 +9,10 @@ The reference is rendered once (cached in --refs, keyed by the scene file's byte
 sample count) as two halves with independent seeds; its relMSE against the truth is about a quarter of
 the halves' relMSE against each other, and that figure is printed as the reference's noise (relMSE and
 low-pass relMSE). Then the cache renders with the given options (`--integrator ic` is added), and the
-path tracer renders with `--time` set to the cache render's own `seconds` from its stats. Both are
-compared with `irrcache diff --json`. One line per run, and a JSON record with --json-out. Python 3
+path tracer renders with `--time` set to the cache render's own `seconds` from its stats (`--equal time`,
+the default) or with the sample count that spends as many rays as the cache render did (`--equal rays`:
+independent of the machine's load, so runs on a shared machine compare; the path tracer's rays per sample
+come from a 4-spp pilot render, cached in --refs). Both are compared with `irrcache diff --json`. One line per run, and a JSON record with --json-out. Python 3
 standard library only. Used for the record-noise-control figures in BENCHMARKS.md.
 """
 
@@ -75,6 +77,25 @@ def reference(args):
         return ref, json.load(f)
 
 
+def pt_rays_per_spp(args, size):
+    """The path tracer's rays per sample at this size (a 4-spp pilot, cached beside the reference)."""
+    with open(args.scene, "rb") as f:
+        key = hashlib.sha256(f.read() + b"%d %d" % (args.width, args.height)).hexdigest()[:16]
+    path = os.path.join(args.refs, "%s-%s-pt-rays.json" % (os.path.splitext(os.path.basename(args.scene))[0], key))
+    if not os.path.exists(path):
+        stats = path + ".stats.json"
+        subprocess.run([args.irrcache, "render", args.scene, "-q", "--spp", "4", "-o", path + ".pfm", "--stats",
+                        stats] + size, check=True)
+        with open(stats) as f:
+            rays = json.load(f)["rays"] / 4.0
+        os.remove(stats)
+        os.remove(path + ".pfm")
+        with open(path, "w") as f:
+            json.dump({"rays_per_spp": rays}, f)
+    with open(path) as f:
+        return json.load(f)["rays_per_spp"]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog="-- then irrcache render options")
     ap.add_argument("scene")
@@ -86,6 +107,8 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "out", "equal-time"))
     ap.add_argument("--irrcache", default=os.path.join(ROOT, "build", "irrcache"))
     ap.add_argument("--no-pt", action="store_true", help="skip the equal-time path tracer")
+    ap.add_argument("--equal", choices=("time", "rays"), default="time",
+                    help="give the path tracer the cache render's seconds (time) or its ray count (rays)")
     ap.add_argument("--json-out", help="append the run's record to this JSON-lines file")
     argv = sys.argv[1:]
     cut = argv.index("--") if "--" in argv else len(argv)
@@ -102,14 +125,25 @@ def main():
         stats = json.load(f)
     rec = {"scene": args.scene, "name": args.name, "options": opts, "seconds": stats["seconds"],
            "records": stats.get("records"), "reference_noise": noise, "ic": diff(args.irrcache, stem + ".pfm", ref)}
+    rec["rays"] = stats["rays"]
     if not args.no_pt:
+        budget = ["--time", "%.3f" % stats["seconds"], "--spp", "16777216"]
+        if args.equal == "rays":
+            spp = max(1, round(stats["rays"] / pt_rays_per_spp(args, size)))
+            budget = ["--spp", str(spp)]
+            rec["pt_spp"] = spp
         subprocess.run([args.irrcache, "render", args.scene, "-q", "-o", stem + "-pt.pfm", "-o", stem + "-pt.png",
-                        "--time", "%.3f" % stats["seconds"], "--spp", "16777216"] + size, check=True)
+                        "--stats", stem + "-pt.json"] + budget + size, check=True)
+        with open(stem + "-pt.json") as f:
+            pt_stats = json.load(f)
+        rec["pt_seconds"], rec["pt_rays"] = pt_stats["seconds"], pt_stats["rays"]
         rec["pt"] = diff(args.irrcache, stem + "-pt.pfm", ref)
     ic, pt = rec["ic"], rec.get("pt")
-    line = "%-12s %-16s %7.2f s %6s records | cache relMSE %.3g low-pass %.3g" % (
-        os.path.splitext(os.path.basename(args.scene))[0], args.name, rec["seconds"], rec["records"],
-        ic["relmse"], ic["relmse_lowpass"])
+    line = "%-12s %-16s %7.2f s %6.1f Mrays %6s records | cache relMSE %.3g low-pass %.3g" % (
+        os.path.splitext(os.path.basename(args.scene))[0], args.name, rec["seconds"], rec["rays"] / 1e6,
+        rec["records"], ic["relmse"], ic["relmse_lowpass"])
+    if pt and args.equal == "rays":
+        line += " | path tracer %d spp, %.2f s" % (rec["pt_spp"], rec["pt_seconds"])
     if pt:
         line += " | path tracer relMSE %.3g low-pass %.3g | ratio %.2f, low-pass %.2f" % (
             pt["relmse"], pt["relmse_lowpass"], pt["relmse"] / ic["relmse"], pt["relmse_lowpass"] / ic["relmse_lowpass"])

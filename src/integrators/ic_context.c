@@ -100,7 +100,9 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     /* With one bounce a hemisphere ray returns its hit's direct light alone; records hold more. */
     c->hit_lookups = !c->o.path_traced_gather && !c->o.recursive && c->o.bounces > 1 &&
                      c->o.bounces <= IC_LEVELS_MAX;
-    c->levels = c->hit_lookups ? c->o.bounces : 0;
+    /* The level split serves the hit look-ups and the final render's vertices behind glass or glossy
+     * reflections; recursive caching keeps its levels as records of their own. */
+    c->levels = !c->o.recursive && c->o.bounces <= IC_LEVELS_MAX ? c->o.bounces : 0;
     c->o.gather.seed ^= opt->seed;
     c->o.cache.threads = opt->threads;
     ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);

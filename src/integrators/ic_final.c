@@ -6,16 +6,31 @@
 
 #include "core/sampling.h"
 
-/* Indirect diffuse irradiance at a shading point: the cache (final acceptance), or, where no record
- * reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one cosine-
- * distributed hemisphere ray that returns what a record's ray would: E ≈ π·L. */
-static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, ic_cache_hint *hint, ic_rng *rng,
-                                 uint64_t *rays, int *from_cache)
+/* Indirect diffuse irradiance at a camera path's vertex `depth`: the cache (final acceptance), or,
+ * where no record reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one
+ * cosine-distributed hemisphere ray that returns what a record's ray would: E ≈ π·L.
+ *
+ * The bounce count stays the path tracer's at every vertex, not only the first: a record holds the light
+ * of B bounces after its point, right for a vertex seen directly; a vertex seen in a glossy reflection or
+ * through glass (depth d) may take only B − d of them, the interpolation of the records' level T_{B−d}
+ * (ic_ic_level_estimates). Taking the full value there added one bounce per glass or glossy vertex: +5 %
+ * behind a glass panel of a white hall, where each bounce returns most of the light. */
+static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, int depth, ic_cache_hint *hint,
+                                 ic_rng *rng, uint64_t *rays, int *from_cache)
 {
+    ic_cache_contribution contrib[LOOKUP_CAPACITY];
     ic_cache_lookup q = ic_cache_lookup_at(s->p, n, IC_ACCEPT_FINAL);
+    const int level = c->levels - depth;
+    if (depth > 0 && c->levels) {
+        q.contributions = contrib;
+        q.contribution_capacity = LOOKUP_CAPACITY;
+    }
     ic_cache_estimate e;
     if (ic_cache_query_hinted(c->cache, &q, hint, &e)) {
         *from_cache = 1;
+        ic_vec3 E;
+        if (q.contributions && ic_ic_level_estimates(c, contrib, e.contributions_written, level > 0 ? level : 0, 1, &E))
+            return E;
         return e.irradiance;
     }
     *from_cache = 0;
@@ -27,7 +42,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     ic_accel_intersect1(c->tr->accel, &ray, &hit);
     if (hit.triangle == IC_NO_HIT)
         return v3_scale(ic_scene_env_radiance(c->tr->scene, d), IC_PI);
-    ic_path_start st = {1, 0.0f, 1, 1, NULL, NULL};
+    ic_path_start st = {depth + 1, 0.0f, 1, 1, NULL, NULL};
     ic_vec3 L = v3_add(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), ic_ic_cached_emission(c, &ray, &hit));
     return v3_scale(L, IC_PI);
 }
@@ -80,6 +95,9 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
                                   : 1.0f;
             L = v3_add(L, v3_scale(v3_mul(beta, le), w));
         }
+        /* As the path tracer: the last vertex adds its emission only. */
+        if (depth >= c->tr->pt.max_depth)
+            break;
         ic_bsdf b;
         ic_bsdf_init(&b, scene, &s, wo);
         ic_bsdf_sample bs;
@@ -92,7 +110,7 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
             prev_glossy = 0;
         } else {
             int from_cache;
-            ic_vec3 E = cached_irradiance(c, &s, b.frame.n, hint, rng, rays, &from_cache);
+            ic_vec3 E = cached_irradiance(c, &s, b.frame.n, depth, hint, rng, rays, &from_cache);
             ic_vec3 indirect = v3_mul(v3_scale(b.kd, IC_INV_PI), E);
             if (fc->indirect_only)
                 return v3_mul(beta, indirect);

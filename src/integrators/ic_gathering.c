@@ -31,6 +31,37 @@ ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *
     return ic_scene_emission(c->tr->scene, &s, v3_neg(ray->dir));
 }
 
+int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib, uint32_t count, int first,
+                          int levels, ic_vec3 *E)
+{
+    const int B = c->levels;
+    for (int k = 0; k < levels; ++k)
+        E[k] = v3s(0.0f);
+    /* Over the contributions read back (all but in a pile-up of more than LOOKUP_CAPACITY records,
+     * where the first ones written stand for the rest, normalised by their own weights). */
+    float wsum = 0.0f;
+    for (uint32_t i = 0; i < count; ++i) {
+        const ic_cache_contribution *ct = &contrib[i];
+        if (ct->record >= c->level_records)
+            return 0;
+        const ic_vec3 *T = &c->level_irr[(size_t)ct->record * (size_t)(B + 1)];
+        const float tb[3] = {T[B].x, T[B].y, T[B].z}, v[3] = {ct->value.x, ct->value.y, ct->value.z};
+        for (int k = 0; k < levels; ++k) {
+            const ic_vec3 Tk = T[first + k];
+            const float tk[3] = {Tk.x, Tk.y, Tk.z};
+            float x[3];
+            for (int ch = 0; ch < 3; ++ch)
+                x[ch] = tb[ch] > 0.0f ? ct->weight * v[ch] * (tk[ch] / tb[ch]) : 0.0f;
+            E[k] = v3_add(E[k], v3(x[0], x[1], x[2]));
+        }
+        wsum += ct->weight;
+    }
+    float inv = wsum > 0.0f ? 1.0f / wsum : 0.0f;
+    for (int k = 0; k < levels; ++k)
+        E[k] = v3_scale(E[k], inv);
+    return 1;
+}
+
 /* Radiance leaving a hemisphere ray's hit towards the record, with the cache standing in for the
  * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light by
  * the final render's estimator (records hold no light of the emitters it samples; ic_ic_direct_light
@@ -70,27 +101,9 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_vec3 direct = ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays);
     const int B = c->levels;
     ic_vec3 E[IC_LEVELS_MAX];
-    for (int k = 0; k < B; ++k)
-        E[k] = v3s(0.0f);
-    /* Over the contributions read back (all but in a pile-up of more than LOOKUP_CAPACITY records,
-     * where the first ones written stand for the rest, normalised by their own weights). */
-    float wsum = 0.0f;
-    for (uint32_t i = 0; i < e.contributions_written; ++i) {
-        const ic_cache_contribution *ct = &contrib[i];
-        const ic_vec3 *T = &c->level_irr[(size_t)ct->record * (size_t)(B + 1)];
-        const float tb[3] = {T[B].x, T[B].y, T[B].z}, v[3] = {ct->value.x, ct->value.y, ct->value.z};
-        for (int k = 0; k < B; ++k) {
-            const float tk[3] = {T[k].x, T[k].y, T[k].z};
-            float x[3];
-            for (int ch = 0; ch < 3; ++ch)
-                x[ch] = tb[ch] > 0.0f ? ct->weight * v[ch] * (tk[ch] / tb[ch]) : 0.0f;
-            E[k] = v3_add(E[k], v3(x[0], x[1], x[2]));
-        }
-        wsum += ct->weight;
-    }
-    float inv = wsum > 0.0f ? 1.0f / wsum : 0.0f;
+    ic_ic_level_estimates(c, contrib, e.contributions_written, 0, B, E);
     for (int k = 1; k <= B; ++k)
-        cum[k] = v3_add(direct, v3_mul(albedo, v3_scale(E[k - 1], inv)));
+        cum[k] = v3_add(direct, v3_mul(albedo, E[k - 1]));
     return 1;
 }
 

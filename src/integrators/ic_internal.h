@@ -118,6 +118,11 @@ void ic_ic_gbuffer_free(ic_ctx *c);
 /* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
  * emitter the records carry (zero for any other surface). */
 ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit);
+/* The interpolation of levels T_first … T_{first+levels−1} (ic_ctx.level_irr) over the contributions of
+ * one look-up, into E[0 … levels−1]: each contributor's value scaled per channel by T_k / E_i, with the
+ * full estimate's weights. Returns 0 (E unset) when a contributor has no levels (a loaded cache). */
+int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib, uint32_t count, int first,
+                          int levels, ic_vec3 *E);
 /* Chooses the large emitters the records carry (ic_emitters.c); returns 0 when out of memory. */
 int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s);
 /* Hash of everything a record's value depends on besides the cache parameters (the cache file's
