@@ -7,6 +7,7 @@
 #include "json_out.h"
 
 #include <cjson/cJSON.h>
+#include <ctype.h>
 #include <errno.h>
 #include <stddef.h>
 #include <stdlib.h>
@@ -106,6 +107,21 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
             g->theta_strata = (uint32_t)m;
             g->phi_strata = (uint32_t)((v + m / 2) / m);
         }
+        return 0;
+    }
+    case IC_OPT_BYTES: {
+        unsigned long long u = strtoull(val, &end, 10);
+        int shift = 0;
+        if (end != val && *end && !end[1])
+            shift = *end == 'K' || *end == 'k' ? 10 : *end == 'M' ? 20 : *end == 'G' ? 30 : *end == 'T' ? 40 : -1;
+        if (shift > 0 && u <= (~0ull >> shift)) {
+            u <<= shift;
+            ++end;
+        }
+        if (errno || !isdigit((unsigned char)val[0]) || *end || (double)u < o->min_value || (double)u > o->max_value)
+            return ERR("%s %s: expected a size in bytes from %.0f to %.0f (K, M, G, T: times 2^10, 2^20, 2^30, "
+                       "2^40)", o->name, val, o->min_value, o->max_value);
+        *(uint64_t *)field = (uint64_t)u;
         return 0;
     }
     case IC_OPT_FLOAT:
@@ -394,6 +410,10 @@ static cJSON *setting(const ic_cli_args *a, int id)
     case IC_OPT_SEED:
         if (given)
             return ic_cli_json_u64(a->render.seed); /* the parsed value, exact ("007" is no JSON number) */
+        break;
+    case IC_OPT_BYTES:
+        if (given)
+            return cJSON_CreateNumber((double)*(const uint64_t *)((const char *)a + o->offset)); /* "64M" parsed */
         break;
     case IC_OPT_INT:
     case IC_OPT_FLOAT:

@@ -26,6 +26,7 @@
 typedef enum ic_opt_kind {
     IC_OPT_INT,        /* int */
     IC_OPT_SEED,       /* uint64_t; also sets render.has_seed */
+    IC_OPT_BYTES,      /* uint64_t, a size in bytes; K, M, G or T after the number multiply by 2^10 ... 2^40 */
     IC_OPT_FLOAT,      /* float */
     IC_OPT_DOUBLE,     /* double */
     IC_OPT_CHOICE,     /* an enum: the index of the value in "a|b|c" */
@@ -88,6 +89,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
       IC_DEFAULT_MAX_MESH_ELEMENTS, "67108864", "", IC_SCOPE_ALL, "largest vertex or face count of one mesh " \
       "file, checked from a PLY header before it is read, and on the meshes imported") \
+    X(MAX_SCENE_BYTES, "--max-scene-bytes", NULL, IC_OPT_BYTES, load.max_scene_bytes, 1, 1099511627776.0, "N", \
+      IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest JSON scene file read, " \
+      "checked before it is read (a suffix K, M, G multiplies by 2^10, 2^20, 2^30; mesh files have " \
+      "--max-mesh-elements)") \
     X(ALLOW_OUTSIDE_PATHS, "--allow-outside-paths", NULL, IC_OPT_FLAG, load.allow_outside_paths, 0, 0, "", NAN, \
       "off", "", IC_SCOPE_ALL, "let a scene read files outside its own folder tree and the shared scenes folder " \
       "(meshes, MTL files, glTF buffers, textures, environment maps; symbolic links resolved)") \
@@ -170,6 +175,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(LOAD_CACHE, "--load-cache", NULL, IC_OPT_STRING, render.ic.load_cache, 0, 0, "FILE", NAN, "none", "", \
       IC_SCOPE_IC, "render from the records in FILE instead of building them; refused if made for another " \
       "scene or other gathering settings (another --seed, --spp or view is fine)") \
+    X(MAX_CACHE_BYTES, "--max-cache-bytes", NULL, IC_OPT_BYTES, render.ic.cache.max_file_bytes, 1, \
+      1099511627776.0, "N", IC_DEFAULT_MAX_CACHE_FILE_BYTES, "4294967296 (4G)", "bytes", IC_SCOPE_IC, \
+      "largest --load-cache file read, checked before it is read (a suffix K, M, G multiplies by 2^10, 2^20, " \
+      "2^30)") \
     X(RECORDS_JSON, "--records-json", NULL, IC_OPT_STRING, records_json, 0, 0, "FILE", NAN, "none", "", \
       IC_SCOPE_IC, "write every record (position, radius, a, image position, visibility) as JSON") \
     X(AOV, "--aov", NULL, IC_OPT_LIST, aov, 0, 0, "indirect,records,density,amap", NAN, "none", "", IC_SCOPE_IC, \

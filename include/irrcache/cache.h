@@ -127,6 +127,8 @@ typedef struct ic_cache_params {
     uint32_t max_depth;               /* octree depth limit, ≤ 32; default 20 */
     ic_cache_switch freeze;           /* ic_cache_rebuild_index and ic_cache_load freeze the cache; default on */
     int threads;                      /* threads for batch insertion; default all cores */
+    uint64_t max_file_bytes;          /* largest file ic_cache_load reads, checked with fstat before reading;
+                                         default IC_DEFAULT_MAX_CACHE_FILE_BYTES (4 GiB) */
 } ic_cache_params;
 
 /* Record flags. */
@@ -299,7 +301,8 @@ uint32_t ic_cache_radius_query(const ic_cache *cache, ic_vec3 p, float radius, u
 ic_result ic_cache_save(const ic_cache *cache, const char *path, uint64_t scene_hash, ic_error *err);
 /* Reads a cache file. Refuses (with a one-line message naming the file): wrong magic (IC_ERR_PARSE),
  * other format version or other scene hash or other parameters (IC_ERR_MISMATCH), truncation or a
- * bad checksum (IC_ERR_CORRUPT). params may be NULL for defaults. */
+ * bad checksum (IC_ERR_CORRUPT), a path that is not a regular file or one larger than params->max_file_bytes
+ * (IC_ERR_INVALID_ARG, before it is read). params may be NULL for defaults. */
 ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_t scene_hash, ic_cache **out,
                         ic_error *err);
 

@@ -36,6 +36,8 @@ typedef struct ic_scene_load_options {
                               it is read [IC_DEFAULT_MAX_TEXTURE_PIXELS] */
     int max_mesh_elements; /* largest vertex or face count a mesh file may declare, checked from its header
                               (PLY) before it is read and on the imported meshes [IC_DEFAULT_MAX_MESH_ELEMENTS] */
+    uint64_t max_scene_bytes; /* largest JSON scene file, in bytes, checked with fstat before it is read
+                              [IC_DEFAULT_MAX_SCENE_FILE_BYTES] */
     int allow_outside_paths; /* 1: files the scene names (meshes, MTL files, glTF buffers, textures, maps) may
                               lie anywhere; 0: only inside the scene file's folder tree and the shared scenes
                               folder (after symbolic links are resolved) */

@@ -39,8 +39,6 @@
  * coordinates stay finite (a NaN cell coordinate converted to an integer is undefined behaviour, C11
  * 6.3.1.4). */
 #define MAX_COORD 1e30
-/* Largest cache file read (4 GiB: 27 million records; a 512x512 Cornell box makes 5,500). */
-#define MAX_FILE_BYTES (UINT64_C(4) << 30)
 
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
 {
@@ -264,12 +262,14 @@ ic_result ic_cache_save(const ic_cache *c, const char *path, uint64_t scene_hash
 
 /* ---- load ------------------------------------------------------------------------------------- */
 
-static ic_result read_all(const char *path, unsigned char **out, size_t *size, ic_error *err)
+/* Reads the file whole, once fstat says it is a regular file of at most max_bytes (0: the default). */
+static ic_result read_all(const char *path, uint64_t max_bytes, unsigned char **out, size_t *size, ic_error *err)
 {
     char *data = NULL;
-    ic_result rc = ic_read_regular_file(path, "cache file", MAX_FILE_BYTES,
-                                        "a cache this large was not written by irrcache: " REBUILD_HINT, &data, size,
-                                        NULL, err);
+    ic_result rc = ic_read_regular_file(path, "cache file", max_bytes ? max_bytes : IC_DEFAULT_MAX_CACHE_FILE_BYTES,
+                                        "raise the limit with --max-cache-bytes (max_file_bytes of ic_cache_params) "
+                                        "if the cache is really this large, else " REBUILD_HINT, &data, size, NULL,
+                                        err);
     *out = (unsigned char *)data;
     return rc;
 }
@@ -309,7 +309,7 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
         return rc;
     unsigned char *data = NULL;
     size_t size = 0;
-    rc = read_all(path, &data, &size, err);
+    rc = read_all(path, params ? params->max_file_bytes : 0, &data, &size, err);
     if (rc != IC_OK)
         return rc;
 

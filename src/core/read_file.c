@@ -9,6 +9,17 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+/* "N bytes", with the size in MiB or GiB beside a large N. */
+static void size_text(uint64_t n, char *out, size_t size)
+{
+    if (n >= (1ull << 30))
+        snprintf(out, size, "%llu bytes (%.1f GiB)", (unsigned long long)n, (double)n / 1073741824.0);
+    else if (n >= (1ull << 20))
+        snprintf(out, size, "%llu bytes (%.1f MiB)", (unsigned long long)n, (double)n / 1048576.0);
+    else
+        snprintf(out, size, "%llu bytes", (unsigned long long)n);
+}
+
 ic_result ic_read_regular_file(const char *path, const char *what, uint64_t max_bytes, const char *limit_hint,
                                char **data, size_t *size, int *open_errno, ic_error *err)
 {
@@ -43,8 +54,11 @@ ic_result ic_read_regular_file(const char *path, const char *what, uint64_t max_
     }
     if ((uint64_t)st.st_size > max_bytes || (uint64_t)st.st_size >= SIZE_MAX) {
         close(fd);
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the %s is %.1f MiB, larger than the %.0f MiB limit; %s",
-                            path, what, (double)st.st_size / 1048576.0, (double)max_bytes / 1048576.0, limit_hint);
+        char have[64], limit[64];
+        size_text((uint64_t)st.st_size, have, sizeof have);
+        size_text(max_bytes, limit, sizeof limit);
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the %s is %s, more than the limit of %s; %s", path, what,
+                            have, limit, limit_hint);
     }
     size_t n = (size_t)st.st_size;
     char *buf = malloc(n + 1);

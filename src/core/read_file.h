@@ -15,7 +15,8 @@
 
 /* Reads the whole of path (what: "scene file", "cache file", for messages) into a malloc'd buffer with a
  * NUL after its last byte. Refuses a path that is not a regular file ("is a folder", "is not a regular
- * file") and one larger than max_bytes (the message names the limit and adds limit_hint). If the open
+ * file") and one larger than max_bytes (the message gives both sizes in bytes, then limit_hint: what to
+ * do, e.g. the option that raises the limit). If the open
  * itself fails, *open_errno (may be NULL) receives its errno and IC_ERR_IO is returned. */
 ic_result ic_read_regular_file(const char *path, const char *what, uint64_t max_bytes, const char *limit_hint,
                                char **data, size_t *size, int *open_errno, ic_error *err);

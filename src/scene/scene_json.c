@@ -23,8 +23,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Largest scene file accepted (scene files are small; meshes live in their own files). */
-#define MAX_SCENE_FILE_BYTES (64u << 20)
 #define MAX_RESOLUTION 65536
 
 /* ------------------------------------------------------------------------------------------------ */
@@ -143,10 +141,15 @@ static ic_result parse_render(json_ctx *c, const cJSON *obj, int line)
 /* ------------------------------------------------------------------------------------------------ */
 /* the file */
 
-static ic_result read_text(const char *path, char **text, size_t *len, ic_error *err)
+/* Reads the scene file whole, once fstat says it is a regular file within the size limit (scene files are
+ * small: geometry lives in mesh files). */
+static ic_result read_text(const char *path, const ic_scene_load_options *opt, char **text, size_t *len,
+                           ic_error *err)
 {
     int open_errno = 0;
-    ic_result r = ic_read_regular_file(path, "scene file", MAX_SCENE_FILE_BYTES, "keep geometry in mesh files",
+    uint64_t max_bytes = opt && opt->max_scene_bytes ? opt->max_scene_bytes : IC_DEFAULT_MAX_SCENE_FILE_BYTES;
+    ic_result r = ic_read_regular_file(path, "scene file", max_bytes, "keep geometry in mesh files, or raise the "
+                                       "limit with --max-scene-bytes (max_scene_bytes of ic_scene_load_options)",
                                        text, len, &open_errno, err);
     if (r != IC_OK && open_errno) {
         char abs_path[IC_SCENE_PATH_MAX];
@@ -255,7 +258,7 @@ ic_result ic_scene_load_json(ic_scene_builder *b, const char *path, const ic_sce
 {
     char *text = NULL;
     size_t len = 0;
-    ic_result r = read_text(path, &text, &len, err);
+    ic_result r = read_text(path, opt, &text, &len, err);
     if (r != IC_OK)
         return r;
     json_ctx c;

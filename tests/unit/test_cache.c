@@ -1224,7 +1224,7 @@ static void test_file(void)
         alarm(60);
         const struct { const char *path, *says; } cases[] = {
             {fifo, "is not a regular file"}, {zero, "is not a regular file"}, {"/dev/zero", "is not a regular file"},
-            {dir, "is a folder"}, {big, "MiB limit"}};
+            {dir, "is a folder"}, {big, "is 5368709120 bytes (5.0 GiB), more than the limit of 4294967296 bytes"}};
         for (int k = 0; k < 5; ++k) {
             expect_refusal(cases[k].path, &p, hash, IC_ERR_INVALID_ARG, cases[k].says);
             ic_cache *x = NULL;
@@ -1237,6 +1237,21 @@ static void test_file(void)
         unlink(zero);
         rmdir(dir);
         remove(big);
+        /* The limit is the caller's (--max-cache-bytes): a file one byte over it is refused naming both sizes
+         * and the option; at the limit it loads. */
+        ic_cache_params limited = p;
+        limited.max_file_bytes = s1 - 1;
+        expect_refusal(path, &limited, hash, IC_ERR_INVALID_ARG, "one byte over --max-cache-bytes");
+        ic_cache *y = NULL;
+        ic_cache_load(path, &limited, hash, &y, &err);
+        char want[128];
+        snprintf(want, sizeof want, "is %zu bytes, more than the limit of %zu bytes; raise the limit with "
+                 "--max-cache-bytes", s1, s1 - 1);
+        CHECK(strstr(err.message, want) != NULL, "the message names both sizes and the option: %s", err.message);
+        limited.max_file_bytes = s1;
+        CHECK(ic_cache_load(path, &limited, hash, &y, &err) == IC_OK && ic_cache_count(y) == (uint32_t)n,
+              "a cache file at --max-cache-bytes loads: %s", err.message);
+        ic_cache_destroy(y);
     }
 
     /* Failed writes leave nothing behind: a missing folder, and a path that is a folder. */

@@ -147,6 +147,14 @@ int main(void)
          "--light-samples 65537: expected an integer from 1 to 65536"},
         {"texture over --max-texture-pixels", SCENES "plain_quad.obj -o " OUT " --max-texture-pixels 3", 1,
          "raise the limit with --max-texture-pixels"},
+        {"scene over --max-scene-bytes", IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json -o " OUT
+         " --max-scene-bytes 100", 1, "raise the limit with --max-scene-bytes"},
+        {"--max-scene-bytes of 0", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 0", 2,
+         "--max-scene-bytes 0: expected a size in bytes"},
+        {"--max-scene-bytes with an unknown suffix", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 64Q", 2,
+         "--max-scene-bytes 64Q"},
+        {"--max-cache-bytes without ic", SCENES "plain_quad.obj -o " OUT " --max-cache-bytes 1M", 2,
+         "--integrator ic"},
         {"max depth above the cap", SCENES "no_such_scene.json -o " OUT " --max-depth 1025", 2, "--max-depth 1025"},
         {"non-numeric width", SCENES "plain_quad.obj -o " OUT " --width abc", 2, "--width"},
         {"negative time", SCENES "plain_quad.obj -o " OUT " --time -1", 2, "--time"},
@@ -215,6 +223,13 @@ int main(void)
         fclose(fb);
     /* Another seed re-uses the records (the seed is not part of the cache's identity) and draws new
      * final-render samples: the image changes. */
+    /* --max-cache-bytes: below the file's size it is refused naming the option; "1M" is far above it. */
+    remove(OUT);
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --max-cache-bytes 100", ic, OUT, IC_TEST_TMP);
+    CHECK(run(cmd) == 1 && strstr(err_text, "--max-cache-bytes") && line_count(err_text) == 1 && !file_exists(OUT),
+          "a cache over --max-cache-bytes refused: %s", err_text);
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --max-cache-bytes 1M", ic, OUT, IC_TEST_TMP);
+    CHECK(run(cmd) == 0, "--max-cache-bytes 1M loads it: %s", err_text);
     snprintf(cmd, sizeof cmd, "%s -o %s/ic_c.pfm --load-cache %s/ic.icc --seed 5", ic, IC_TEST_TMP, IC_TEST_TMP);
     CHECK(run(cmd) == 0, "render from the saved cache with another seed: %s", err_text);
     FILE *fc = fopen(IC_TEST_TMP "/ic_c.pfm", "rb");

@@ -169,6 +169,27 @@ static void test_hostile_meshes(void)
     ic_scene_free(ok);
 }
 
+/* The scene file's size limit is the caller's (--max-scene-bytes): one byte over it is refused, naming both
+ * sizes and the option, before the file is read; at the limit it loads. */
+static void test_scene_size_limit(void)
+{
+    char text[512];
+    int n = snprintf(text, sizeof text, "{\n  \"meshes\": [ { \"path\": \"%s\" } ]\n}\n", SCENES "quad_light.obj");
+    const char *path = write_tmp("scene_size_limit.json", text, -1);
+    ic_scene_load_options opt = {0};
+    opt.allow_outside_paths = 1;
+    opt.max_scene_bytes = (uint64_t)n - 1;
+    char want[160];
+    snprintf(want, sizeof want, "scene_size_limit.json: the scene file is %d bytes, more than the limit of %d bytes",
+             n, n - 1);
+    expect_error(path, &opt, IC_ERR_INVALID_ARG, want, "raise the limit with --max-scene-bytes", NULL);
+    opt.max_scene_bytes = (uint64_t)n;
+    ic_scene *s = NULL;
+    ic_error e;
+    CHECK(ic_scene_load(path, &opt, &s, &e) == IC_OK, "a scene file at --max-scene-bytes loads: %s", e.message);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
     /* A scene file that is not there: the open's own reason, not one left by resolving the path. */
@@ -331,7 +352,8 @@ int main(void)
     CHECK(fb && ftruncate(fileno(fb), (off_t)65 << 20) == 0, "sparse scene file");
     if (fb)
         fclose(fb);
-    expect_error(big_json, NULL, IC_ERR_INVALID_ARG, "scene_errors_big.json", "64 MiB limit", "mesh files");
+    expect_error(big_json, NULL, IC_ERR_INVALID_ARG, "scene_errors_big.json: the scene file is 68157440 bytes (65.0 "
+                 "MiB), more than the limit of 67108864 bytes (64.0 MiB)", "mesh files", "--max-scene-bytes");
     remove(big_json);
     rmdir(dir_json);
     unlink(fifo_json);
@@ -344,5 +366,6 @@ int main(void)
     CHECK(ic_scene_load(SCENES "quad_light.obj", NULL, NULL, NULL) == IC_ERR_INVALID_ARG, "NULL out, NULL err");
     test_glb_lengths();
     test_hostile_meshes();
+    test_scene_size_limit();
     TEST_MAIN_END();
 }
