@@ -120,13 +120,14 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(LARGE_EMITTERS, "--large-emitters", NULL, IC_OPT_NUMBER_OFF, render.ic.large_emitters, 0, 1, "F|off", \
       IC_DEFAULT_LARGE_EMITTERS, "%g", "", IC_SCOPE_IC, "an emitting material that covers at least F of the " \
       "cosine-weighted hemisphere at the image's median shading point, and whose light samples a pilot " \
-      "measures to be noisier per pixel than the records' hemisphere rays (a window seen through openings), " \
+      "measures to leave more error than the records' hemisphere rays, once its noise is averaged over the " \
+      "~50 pixels the eye sees together (a large source mostly hidden behind an opening), " \
       "lights the scene through the records instead of being light-sampled; off: sample every emitter. The " \
       "summary line and the stats (cached_emitters) say when it happens") \
     X(RECORD_FILTER, "--record-filter", NULL, IC_OPT_NUMBER_OFF, render.ic.record_filter, 0, 16, "S|off", \
       IC_DEFAULT_RECORD_FILTER, "%g", "", IC_SCOPE_IC, "record noise control: after construction each record's " \
-      "value becomes a robust mean of its neighbours' within S times its influence radius (differences " \
-      "beyond their noise are kept: docs/architecture.md); off: the records as gathered") \
+      "value moves towards the kernel mean of its neighbours' within S times its influence radius, as far " \
+      "as their noise explains their spread (docs/architecture.md); off: the records as gathered") \
     X(RECORD_SETS, "--record-sets", NULL, IC_OPT_INT, render.ic.record_sets, 1, 64, "N", IC_DEFAULT_RECORD_SETS, \
       "%g", "", IC_SCOPE_IC, "record noise control: a record whose relative noise is above --record-noise " \
       "gathers up to N independent hemisphere sets and keeps their mean") \

@@ -8,6 +8,7 @@
 
 #include "core/sampling.h"
 #include "irrcache/defaults.h"
+#include "irrcache/image.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -38,6 +39,8 @@ static int cmp_double(const void *x, const void *y)
  * many light samples at each. */
 #define PILOT_POINTS 512
 #define PILOT_SAMPLES 16
+/* Pixels over which the eye averages a pixel's own noise: 4πσ² for the low-pass Gaussian of irrcache diff. */
+#define BLUR_PIXELS (4.0 * IC_PI * IC_LOWPASS_SIGMA * IC_LOWPASS_SIGMA)
 
 /* Sums over the pilot's points: N, Σ_p E_p, Σ_p var_p of a light sample, and Σ_p E_p² (unbiased:
  * mean_p² − s_p²/K), where E_p is the irradiance from the material at p (estimated by mean_p, the mean
@@ -184,12 +187,19 @@ static double record_rays(const ic_gather_opts *g)
  * one by sampling its area), and so does the pilot (pilot()): at the image's shading points, the
  * pooled relative variance per sample of the final render's light sampling on the material,
  * cv²_light, and that of a record's cosine-weighted hemisphere rays, cv²_gather. Each is divided by
- * the samples it is averaged over where the image reads it: a pixel's light samples S (the cache
- * render's default IC_DEFAULT_SPP_IC samples per pixel × light_samples; the final render's own count
- * is not known here, and may be adaptive or bounded by time) and a record's hemisphere rays M
- * (record_rays, 800 by default). The material is cached iff cv²_light / S > cv²_gather / M. The
- * records' side is a bound from above: their rays are stratified and a pixel interpolates several
- * records, both of which lower their noise below cv²_gather / M.
+ * the samples it is averaged over where the eye reads it. Light sampling's error is a pixel's own,
+ * independent from pixel to pixel: the eye (and the low-pass error of irrcache diff, a Gaussian of
+ * σ = IC_LOWPASS_SIGMA pixels) averages it over about 4πσ² ≈ 50 pixels, so its samples are a pixel's
+ * light samples S (the cache render's default IC_DEFAULT_SPP_IC samples per pixel × light_samples; the
+ * final render's own count is not known here, and may be adaptive or bounded by time) times those 50
+ * pixels. A record's error is shared by every pixel it covers, a blotch that no averaging removes: its
+ * samples are its hemisphere rays M (record_rays, 800 by default). The material is cached iff
+ * cv²_light / (50·S) > cv²_gather / M. Counting the pixel alone (cv²_light / S), as before, cached
+ * staircase2's three windows and left the blotches of their records: low-pass relMSE 0.00028 against
+ * 0.00017 with the windows light-sampled (320×180, equal rays; per-pixel relMSE 0.0012 against 0.0021,
+ * both far below the path tracer's 0.012). The records' side is a bound from above: their rays are
+ * stratified and the record filter averages neighbours, both of which lower their noise below
+ * cv²_gather / M.
  *
  * A window seen through an opening (a large source most of whose area is hidden: light samples on it
  * mostly wasted, each visible one carrying a large weight) is such an emitter, and its irradiance
@@ -200,9 +210,11 @@ static double record_rays(const ic_gather_opts *g)
  * light-sampled at a small fraction of the hemisphere rays' variance and keeps being sampled: cached,
  * its light would carry the records' noise and blur its shadows (a panel over a table that blocks 44 %
  * of its light samples: cv²_light 0.64, cv²_gather 79; cached, relMSE doubles). Measured (cv²_light,
- * cv²_gather, at M / S = 12.5): the Cornell box's lamp 0.11, 185 and stair-hall's ceiling panel
- * 0.018, 890 stay sampled; staircase2's three window quads (97, 229; 36, 9.6; 63, 175) and a room's
- * window with a bright outside behind it (22, 95) are cached.
+ * cv²_gather): the Cornell box's lamp 0.11, 185, stair-hall's ceiling panel 0.018, 890, staircase2's
+ * three window quads (97, 229; 36, 9.6; 63, 175) and a room's window with a bright outside behind it
+ * (22, 95) are all sampled; an emitter is cached when light sampling is at least 4 times as noisy per
+ * sample as the hemisphere rays (50·S / M = 4 at the defaults) — a large source mostly hidden behind a
+ * narrow opening, or an emitting surface that surrounds the scene like a sky.
  *
  * Only a material that covers, at the median sampled shading point, at least large_emitters of the
  * cosine-weighted hemisphere (hemisphere_share, unoccluded) is piloted; a smaller one is light-sampled
@@ -223,8 +235,8 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, ui
     /* The pilot's points: every pilot_stride-th valid pixel, at most ~PILOT_POINTS. */
     size_t pilot_stride = valid / PILOT_POINTS + 1;
     /* What each estimator's samples are averaged over: a pixel's light samples (at the cache render's
-     * default samples per pixel) and a record's hemisphere rays. */
-    const double light_per_pixel = (double)IC_DEFAULT_SPP_IC * c->o.light_samples,
+     * default samples per pixel) over the pixels the eye averages, and a record's hemisphere rays. */
+    const double light_per_pixel = (double)IC_DEFAULT_SPP_IC * c->o.light_samples * BLUR_PIXELS,
                  rays_per_record = record_rays(&c->o.gather);
     /* Shares per emitting material (slot[m]: its row, UINT32_MAX for the others) and sampled point. */
     uint32_t nm = s->material_count, ne = 0;
