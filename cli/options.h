@@ -54,7 +54,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_ALL, "image width") \
     X(HEIGHT, "--height", NULL, IC_OPT_INT, load.height, 1, 65536, "N", IC_DEFAULT_HEIGHT, "scene file, else %g", \
       "px", IC_SCOPE_ALL, "image height") \
-    X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, IC_MAX_SPP, "N", NAN, "scene file, else 16 (pt) or 64 (ic)", "", \
+    X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, IC_MAX_SPP, "N", NAN, "scene file, else 16 (pt) or 32 (ic)", "", \
       IC_SCOPE_ALL, "samples per pixel (with --time: the most to take)") \
     X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
       "wall-time budget of the whole render, cache construction included: progressive passes " \

@@ -11,7 +11,8 @@
 #define IC_DEFAULT_WIDTH 512             /* pixels, when neither the scene file nor an option gives it */
 #define IC_DEFAULT_HEIGHT 512
 #define IC_DEFAULT_SPP_PT 16             /* samples per pixel, path tracer */
-#define IC_DEFAULT_SPP_IC 64             /* samples per pixel, cache render (its samples are cheap) */
+#define IC_DEFAULT_SPP_IC 32             /* samples per pixel, cache render (its samples are cheap; beyond 32 the
+                                            records' error dominates: chosen at equal rays, BENCHMARKS.md) */
 #define IC_DEFAULT_MAX_DEPTH 8           /* scattering events */
 #define IC_DEFAULT_SEED 1
 #define IC_ADAPTIVE_SAMPLING_MIN_SPP 8   /* adaptive sampling needs a pilot pass of spp/4 ≥ 2 */

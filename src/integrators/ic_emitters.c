@@ -39,8 +39,10 @@ static int cmp_double(const void *x, const void *y)
  * many light samples at each. */
 #define PILOT_POINTS 512
 #define PILOT_SAMPLES 16
-/* Pixels over which the eye averages a pixel's own noise: 4πσ² for the low-pass Gaussian of irrcache diff. */
-#define BLUR_PIXELS (4.0 * IC_PI * IC_LOWPASS_SIGMA * IC_LOWPASS_SIGMA)
+/* Pixels over which the eye averages a pixel's own noise, against which a record's error (shared by its
+ * whole footprint) is weighed: at least 4πσ² ≈ 50 for the low-pass Gaussian of irrcache diff (white
+ * noise), and measured higher on staircase2 (see choose_materials): 100. */
+#define BLUR_PIXELS 100.0
 
 /* Sums over the pilot's points: N, Σ_p E_p, Σ_p var_p of a light sample, and Σ_p E_p² (unbiased:
  * mean_p² − s_p²/K), where E_p is the irradiance from the material at p (estimated by mean_p, the mean
@@ -189,17 +191,18 @@ static double record_rays(const ic_gather_opts *g)
  * cv²_light, and that of a record's cosine-weighted hemisphere rays, cv²_gather. Each is divided by
  * the samples it is averaged over where the eye reads it. Light sampling's error is a pixel's own,
  * independent from pixel to pixel: the eye (and the low-pass error of irrcache diff, a Gaussian of
- * σ = IC_LOWPASS_SIGMA pixels) averages it over about 4πσ² ≈ 50 pixels, so its samples are a pixel's
- * light samples S (the cache render's default IC_DEFAULT_SPP_IC samples per pixel × light_samples; the
- * final render's own count is not known here, and may be adaptive or bounded by time) times those 50
- * pixels. A record's error is shared by every pixel it covers, a blotch that no averaging removes: its
- * samples are its hemisphere rays M (record_rays, 800 by default). The material is cached iff
- * cv²_light / (50·S) > cv²_gather / M. Counting the pixel alone (cv²_light / S), as before, cached
+ * σ = IC_LOWPASS_SIGMA pixels) averages it over at least 4πσ² ≈ 50 pixels, so its samples are a
+ * pixel's light samples S (the cache render's default IC_DEFAULT_SPP_IC samples per pixel ×
+ * light_samples; the final render's own count is not known here, and may be adaptive or bounded by time)
+ * times K = BLUR_PIXELS pixels. A record's error is shared by every pixel it covers, a blotch that no
+ * averaging removes: its samples are its hemisphere rays M (record_rays, 800 by default). The material
+ * is cached iff cv²_light / (K·S) > cv²_gather / M. Counting the pixel alone (K = 1), as before, cached
  * staircase2's three windows and left the blotches of their records: low-pass relMSE 0.00028 against
- * 0.00017 with the windows light-sampled (320×180, equal rays; per-pixel relMSE 0.0012 against 0.0021,
- * both far below the path tracer's 0.012). The records' side is a bound from above: their rays are
- * stratified and the record filter averages neighbours, both of which lower their noise below
- * cv²_gather / M.
+ * 0.00017 with the windows light-sampled (320×180, 64 spp, equal rays; per-pixel relMSE 0.0012 against
+ * 0.0021, both far below the path tracer's 0.012). K = 50 still cached its window with cv²_light /
+ * cv²_gather = 3.75 at 32 spp, and that raised the low-pass error from 0.00020 to 0.00027: K = 100.
+ * Stratification and the record filter lower the records' noise below cv²_gather / M, but a record's
+ * error also spreads over a footprint wider than the eye's averaging.
  *
  * A window seen through an opening (a large source most of whose area is hidden: light samples on it
  * mostly wasted, each visible one carrying a large weight) is such an emitter, and its irradiance
@@ -213,7 +216,7 @@ static double record_rays(const ic_gather_opts *g)
  * cv²_gather): the Cornell box's lamp 0.11, 185, stair-hall's ceiling panel 0.018, 890, staircase2's
  * three window quads (97, 229; 36, 9.6; 63, 175) and a room's window with a bright outside behind it
  * (22, 95) are all sampled; an emitter is cached when light sampling is at least 4 times as noisy per
- * sample as the hemisphere rays (50·S / M = 4 at the defaults) — a large source mostly hidden behind a
+ * sample as the hemisphere rays (K·S / M = 4 at the defaults) — a large source mostly hidden behind a
  * narrow opening, or an emitting surface that surrounds the scene like a sky.
  *
  * Only a material that covers, at the median sampled shading point, at least large_emitters of the
