@@ -10,7 +10,12 @@
  *                   original WH92 form or the improved Křivánek et al. 2005 (SCCG) form (default);
  *   - progressive : Hammersley point sets in rounds (4096 → 16384 → 65536 rays by default) until the
  *                   odd/even estimates agree (Frolov et al. 2012 §4.1, Křivánek et al. 2006 §4.3);
- *                   many points per call, only the still-active ones are traced in each round.
+ *                   many points per call, only the still-active ones are traced in each round;
+ *   - hemicube    : one ray through each texel centre of a five-face hemicube (Castaño 2014), with exact
+ *                   per-texel weights precomputed once per gatherer; deterministic for a given point.
+ *
+ * Optionally (opts.with_hessian, stratified and hemicube), the 2×2 tangent-plane Hessian of irradiance
+ * of Schwarzhaupt et al. 2012, and ic_gather_hessian_extent turns it into a record radius or ellipse.
  *
  * The library knows nothing about geometry: it calls ic_trace_fn with batches of rays and reads back
  * hit distances and incoming radiance. Everything random is a pure function of (opts.seed, point key,
@@ -56,7 +61,8 @@ typedef void (*ic_trace_fn)(void *user, const ic_vec3 *origins, const ic_vec3 *d
 /* Which hemisphere sampler a gatherer uses by default (ic_gather_batch). */
 typedef enum ic_gather_method {
     IC_GATHER_STRATIFIED = 0,   /* M×N jittered cosine-weighted strata (default) */
-    IC_GATHER_PROGRESSIVE = 1   /* Hammersley rounds with odd/even convergence (Frolov et al. 2012 §4.1) */
+    IC_GATHER_PROGRESSIVE = 1,  /* Hammersley rounds with odd/even convergence (Frolov et al. 2012 §4.1) */
+    IC_GATHER_HEMICUBE = 2      /* rays through hemicube texel centres (Castaño 2014) */
 } ic_gather_method;
 
 /* Which formula estimates the translational gradient from the stratified cells. */
@@ -81,6 +87,10 @@ typedef struct ic_gather_opts {
                                       (default 0.02; negative: never stop early) */
     uint32_t batch_rays;           /* most rays handed to one trace call (default 4096; rounded down to a
                                       multiple of 32 so coherent groups stay whole) */
+    uint32_t hemicube_resolution;  /* hemicube: texels across the top face, even, 2..512 (default 16:
+                                      3·16² = 768 rays, the nearest to the stratified 16×50 = 800) */
+    int with_hessian;              /* non-zero: stratified and hemicube gathers also fill the Hessian
+                                      fields of ic_gather_result (default 0: not computed) */
 } ic_gather_opts;
 
 /* A point to gather at. */
@@ -102,8 +112,32 @@ typedef struct ic_gather_result {
     uint32_t ray_count;            /* rays traced for this point (all rounds) */
     uint32_t hit_count;            /* rays that hit something */
     int is_converged;              /* progressive: 1 if it stopped on the threshold, 0 if it hit max_rays;
-                                      stratified: always 1 */
+                                      stratified and hemicube: always 1 */
+    /* Second order (Schwarzhaupt et al. 2012), filled only when opts.with_hessian is set and the
+     * sampler is stratified or hemicube; all zero otherwise. The Hessian is the Jacobian of the
+     * occlusion-aware translational gradient (each wall between two cells moves with the nearer of
+     * their hit distances): E_c(p + d) ≈ E_c + d·trans_grad[c] + ½ dᵀ H_c d for d in the tangent plane,
+     * with d = d_t·hessian_t + d_b·hessian_b and H_c = [[h_tt, h_tb], [h_tb, h_bb]]. */
+    int has_hessian;               /* 1 if the fields below are filled */
+    ic_vec3 hessian_t, hessian_b;  /* the tangent frame of the coefficients (unit, ⟂ normal, t × b = n) */
+    float hessian[3][3];           /* per channel c: {h_tt, h_tb, h_bb}, irradiance per length² */
 } ic_gather_result;
+
+/* A record extent from a Hessian (ic_gather_hessian_extent). */
+typedef struct ic_gather_extent_opts {
+    float rel_error;               /* ε: allowed second-order error relative to E (default 0.1) */
+    float min_radius;              /* smallest radius and semi-axis (default 0) */
+    float max_radius;              /* largest radius and semi-axis (default INFINITY; 0 means default) */
+    float min_irradiance;          /* floor on E in ε·E, so a record under a black occluder does not
+                                      shrink to nothing (default 0) */
+} ic_gather_extent_opts;
+
+typedef struct ic_gather_extent {
+    float radius;                  /* isotropic: √(2εE / max|λ|), clamped */
+    ic_vec3 axis[2];               /* unit world-space eigenvectors of the tangent-plane Hessian */
+    float eigenvalue[2];           /* λ along axis[k], |λ_0| >= |λ_1| */
+    float semi_axis[2];            /* √(2εE / |λ_k|) along axis[k], clamped; semi_axis[0] <= semi_axis[1] */
+} ic_gather_extent;
 
 /* Opaque per-thread gatherer: resolved options, trace callback, scratch buffers. */
 typedef struct ic_gatherer ic_gatherer;
@@ -127,6 +161,18 @@ ic_result ic_gather_stratified(ic_gatherer *g, const ic_gather_point *pt, ic_gat
  * are traced again. out[i] belongs to pts[i]. Allocates one small per-call state array (IC_ERR_OOM). */
 ic_result ic_gather_progressive(ic_gatherer *g, const ic_gather_point *pts, uint32_t count,
                                 ic_gather_result *out);
+
+/* Hemicube gather at one point (Castaño 2014): opts.hemicube_resolution = N gives N² + 4·N·N/2 = 3N²
+ * rays. IC_ERR_INVALID_ARG on a zero-length normal or NULL arguments. */
+ic_result ic_gather_hemicube(ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out);
+
+/* The record extent a Hessian implies (Schwarzhaupt et al. 2012): with the luminance Hessian H (Rec. 709
+ * weights of r->hessian) and E the luminance of r->irradiance, the second-order error ½ dᵀHd equals
+ * ε·max(E, min_irradiance) on an ellipse with semi-axes √(2εE/|λ_k|) along the eigenvectors, and on
+ * a circle of radius √(2εE / max|λ|) inside it; both clamped to [min_radius, max_radius] (a zero
+ * eigenvalue gives max_radius). Pure. IC_ERR_INVALID_ARG if r has no Hessian or opts are invalid. */
+ic_result ic_gather_hessian_extent(const ic_gather_result *r, const ic_gather_extent_opts *opts,
+                                   ic_gather_extent *out);
 
 /* Gathers `count` points on `threads` threads (0 = all cores) with opts->method, one gatherer per
  * thread; out[i] belongs to pts[i] and is identical for any thread count. */

@@ -36,6 +36,7 @@ void ic_gather_opts_default(ic_gather_opts *o)
     o->round_growth = 4;
     o->threshold = 0.02f;
     o->batch_rays = 4096;
+    o->hemicube_resolution = 16; /* 768 rays: nearest to the 800 of the stratified default (BENCHMARKS.md) */
 }
 
 /* Fills zero fields with defaults and checks the result. */
@@ -58,10 +59,15 @@ static ic_result resolve_opts(const ic_gather_opts *in, ic_gather_opts *o, ic_er
         o->threshold = d.threshold;
     if (!o->batch_rays)
         o->batch_rays = d.batch_rays;
+    if (!o->hemicube_resolution)
+        o->hemicube_resolution = d.hemicube_resolution;
 
-    if ((unsigned)o->method > IC_GATHER_PROGRESSIVE)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: unknown method %d; use IC_GATHER_STRATIFIED or "
-                            "IC_GATHER_PROGRESSIVE", (int)o->method);
+    if ((unsigned)o->method > IC_GATHER_HEMICUBE)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: unknown method %d; use IC_GATHER_STRATIFIED, "
+                            "IC_GATHER_PROGRESSIVE or IC_GATHER_HEMICUBE", (int)o->method);
+    if (o->hemicube_resolution % 2 || o->hemicube_resolution > 512)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: hemicube_resolution %u must be even and at most 512",
+                            o->hemicube_resolution);
     if ((unsigned)o->tgrad > IC_GATHER_TGRAD_WARD_HECKBERT)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: unknown translational-gradient form %d", (int)o->tgrad);
     if ((uint64_t)o->theta_strata * o->phi_strata > MAX_GRID_RAYS)
@@ -101,7 +107,10 @@ ic_result ic_gatherer_create(const ic_gather_opts *opts, ic_trace_fn trace, void
     g->trace = trace;
     g->user = user;
     const uint32_t grid = g->opts.theta_strata * g->opts.phi_strata;
+    const uint32_t hemicube = 3 * g->opts.hemicube_resolution * g->opts.hemicube_resolution;
     g->cell_capacity = grid > g->opts.max_rays ? grid : g->opts.max_rays;
+    if (hemicube > g->cell_capacity)
+        g->cell_capacity = hemicube;
     g->batch = g->opts.batch_rays < g->cell_capacity ? g->opts.batch_rays : g->cell_capacity;
 
     const size_t cells = g->cell_capacity, rays = g->batch;
@@ -119,6 +128,11 @@ ic_result ic_gatherer_create(const ic_gather_opts *opts, ic_trace_fn trace, void
         !g->ray_radiance || !g->ray_dist || !g->ray_cell) {
         ic_gatherer_destroy(g);
         return ic_error_set(err, IC_ERR_OOM, "gather: out of memory for %zu-cell buffers", cells);
+    }
+    /* Hemicube tables (a few hundred µs at the default 16) and, on request, the grid's wall factors. */
+    if (ic_gather_hemicube_init(g) != IC_OK || (g->opts.with_hessian && ic_gather_hessian_init(g) != IC_OK)) {
+        ic_gatherer_destroy(g);
+        return ic_error_set(err, IC_ERR_OOM, "gather: out of memory for the hemicube and Hessian tables");
     }
     *out = g;
     return IC_OK;
@@ -138,6 +152,8 @@ void ic_gatherer_destroy(ic_gatherer *g)
     free(g->ray_dist);
     free(g->ray_cell);
     free(g->tan_scratch);
+    ic_gather_hemicube_free(g);
+    free(g->grid_walls);
     free(g);
 }
 
@@ -160,6 +176,9 @@ static void batch_item(void *p, int64_t item, int thread)
     ic_result res = IC_OK;
     if (g->opts.method == IC_GATHER_PROGRESSIVE) {
         res = ic_gather_progressive(g, ctx->pts + first, n, ctx->out + first);
+    } else if (g->opts.method == IC_GATHER_HEMICUBE) {
+        for (uint32_t i = 0; i < n && res == IC_OK; ++i)
+            res = ic_gather_hemicube(g, &ctx->pts[first + i], &ctx->out[first + i]);
     } else {
         for (uint32_t i = 0; i < n && res == IC_OK; ++i)
             res = ic_gather_stratified(g, &ctx->pts[first + i], &ctx->out[first + i]);

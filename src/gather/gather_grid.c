@@ -48,6 +48,7 @@
 #include "gather_internal.h"
 
 #include <float.h>
+#include <string.h>
 
 void ic_gather_acc_init(ic_gather_acc *acc)
 {
@@ -241,6 +242,10 @@ void ic_gather_acc_finish(const ic_gather_acc *acc, const ic_frame *frame, ic_ga
     out->min_dist = acc->min_dist;
     out->ray_count = acc->rays;
     out->hit_count = acc->hits;
+    /* No Hessian unless the sampler adds one (gather_hessian.c). */
+    out->has_hessian = 0;
+    out->hessian_t = out->hessian_b = v3s(0.0f);
+    memset(out->hessian, 0, sizeof out->hessian);
 }
 
 ic_result ic_gather_point_frame(const ic_gather_point *pt, ic_frame *frame)

@@ -17,7 +17,37 @@
 #include "core/vecmath.h"
 
 /* Purposes that separate the random streams of one point (ic_rng_make's last word). */
-enum { IC_GATHER_STREAM_STRATIFIED = 0x5354, IC_GATHER_STREAM_PROGRESSIVE = 0x5052 };
+enum { IC_GATHER_STREAM_STRATIFIED = 0x5354, IC_GATHER_STREAM_PROGRESSIVE = 0x5052, IC_GATHER_STREAM_HEMICUBE = 0x4843 };
+
+/* What one wall between two cells contributes to the translational gradient and Hessian per unit
+ * radiance difference, before dividing by its distance r (gradient: g/r, Hessian: h/r²); tangent-frame
+ * components. Orientation: the contribution is (L_left − L_right)·g/r, where "left" is the side the wall's
+ * normal ω × dω/ds points to (gather_hessian.c). */
+typedef struct ic_wall_factors {
+    double g[2];              /* ∂/∂x_t, ∂/∂x_b */
+    double h[3];              /* h_tt, h_tb (symmetrised), h_bb */
+} ic_wall_factors;
+
+/* A wall of the hemicube: texels `left` and `right` and its factors. */
+typedef struct ic_hemicube_wall {
+    uint32_t left, right;
+    ic_wall_factors f;
+} ic_hemicube_wall;
+
+/* Per-resolution hemicube tables (gather_hemicube.c), built once per gatherer. Texel order: the top
+ * face row by row, then the four side half-faces (+x, +y, −x, −y). */
+typedef struct ic_hemicube {
+    uint32_t resolution;      /* N: texels across the top face */
+    uint32_t texels;          /* 3N² */
+    uint32_t walls;
+    ic_vec3 *dir;             /* unit texel-centre directions, local frame */
+    double *solid_angle;      /* ∫_texel dω (sums to 2π) */
+    double *weight;           /* irradiance weight ∫_texel cosθ dω (sums to π) */
+    double (*rot)[2];         /* rotational-gradient weight ∫_texel (n × ω) dω, (t, b) components */
+    uint8_t *half;            /* checkerboard half of the σ estimate */
+    double half_scale;        /* π / Σ_{half = 0} weight */
+    ic_hemicube_wall *wall;
+} ic_hemicube;
 
 struct ic_gatherer {
     ic_gather_opts opts;      /* resolved: no zero defaults left */
@@ -35,6 +65,9 @@ struct ic_gatherer {
     float *ray_dist;
     uint32_t *ray_cell;       /* cell each ray's result goes to */
     double *tan_scratch;      /* per-θ-stratum tanθ, cell_capacity entries (≥ any M) */
+    ic_hemicube hemicube;     /* tables for opts.hemicube_resolution */
+    ic_wall_factors *grid_walls; /* opts.with_hessian: per θ stratum j, the canonical φ-wall (2j) and
+                                    θ-wall (2j+1) of the stratified grid (gather_hessian.c) */
 };
 
 /* Running sums of one point's estimate over one or more grids ("rounds"). Each grid of n rays adds n
@@ -63,6 +96,22 @@ void ic_gather_grid_accumulate(const ic_gatherer *g, uint32_t M, uint32_t N, flo
 
 /* Writes acc's estimate, gradients turned to world space with frame, into out. */
 void ic_gather_acc_finish(const ic_gather_acc *acc, const ic_frame *frame, ic_gather_result *out);
+
+/* Builds g->hemicube for g->opts.hemicube_resolution (IC_ERR_OOM); frees it. */
+ic_result ic_gather_hemicube_init(ic_gatherer *g);
+void ic_gather_hemicube_free(ic_gatherer *g);
+
+/* Wall factors (gather_hessian.c) of a great-circle arc from unit a to unit b (local frame), of a
+ * meridian φ from θ0 to θ1, and of a parallel θ from φ0 to φ1 (the directions of increasing s). */
+ic_wall_factors ic_gather_arc_factors(ic_vec3 a, ic_vec3 b);
+ic_wall_factors ic_gather_meridian_factors(double phi, double theta0, double theta1);
+ic_wall_factors ic_gather_parallel_factors(double theta, double phi0, double phi1);
+
+/* Builds g->grid_walls for the stratified M×N grid (IC_ERR_OOM). */
+ic_result ic_gather_hessian_init(ic_gatherer *g);
+/* Fills out's Hessian fields from the filled M×N grid (azimuth phi0) of a stratified gather. */
+void ic_gather_hessian_grid(const ic_gatherer *g, uint32_t M, uint32_t N, float phi0, const ic_frame *frame,
+                            ic_gather_result *out);
 
 /* Frame around a point's normal; IC_ERR_INVALID_ARG if the normal is zero or not finite. */
 ic_result ic_gather_point_frame(const ic_gather_point *pt, ic_frame *frame);

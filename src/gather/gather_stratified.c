@@ -57,5 +57,7 @@ ic_result ic_gather_stratified(ic_gatherer *g, const ic_gather_point *pt, ic_gat
     ic_gather_grid_accumulate(g, M, N, phi0, &acc);
     ic_gather_acc_finish(&acc, &frame, out);
     out->is_converged = 1;
+    if (g->opts.with_hessian)
+        ic_gather_hessian_grid(g, M, N, phi0, &frame, out);
     return IC_OK;
 }
