@@ -163,7 +163,9 @@ ic_result ic_gather_progressive(ic_gatherer *g, const ic_gather_point *pts, uint
                                 ic_gather_result *out);
 
 /* Hemicube gather at one point (Castaño 2014): opts.hemicube_resolution = N gives N² + 4·N·N/2 = 3N²
- * rays. IC_ERR_INVALID_ARG on a zero-length normal or NULL arguments. */
+ * rays. The gatherer builds its hemicube tables at creation only if opts.method is IC_GATHER_HEMICUBE
+ * or opts.hemicube_resolution is set. IC_ERR_INVALID_ARG on a zero-length normal, NULL arguments or a
+ * gatherer without tables. */
 ic_result ic_gather_hemicube(ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out);
 
 /* The record extent a Hessian implies (Schwarzhaupt et al. 2012): with the luminance Hessian H (Rec. 709

@@ -129,8 +129,11 @@ ic_result ic_gatherer_create(const ic_gather_opts *opts, ic_trace_fn trace, void
         ic_gatherer_destroy(g);
         return ic_error_set(err, IC_ERR_OOM, "gather: out of memory for %zu-cell buffers", cells);
     }
-    /* Hemicube tables (a few hundred µs at the default 16) and, on request, the grid's wall factors. */
-    if (ic_gather_hemicube_init(g) != IC_OK || (g->opts.with_hessian && ic_gather_hessian_init(g) != IC_OK)) {
+    /* Hemicube tables (~0.5 ms at N = 16, BENCHMARKS.md) only for a hemicube gatherer or an explicit
+     * resolution, so other gatherers cost what they did; on request, the grid's wall factors. */
+    const int wants_hemicube = g->opts.method == IC_GATHER_HEMICUBE || (opts && opts->hemicube_resolution);
+    if ((wants_hemicube && ic_gather_hemicube_init(g) != IC_OK) ||
+        (g->opts.with_hessian && ic_gather_hessian_init(g) != IC_OK)) {
         ic_gatherer_destroy(g);
         return ic_error_set(err, IC_ERR_OOM, "gather: out of memory for the hemicube and Hessian tables");
     }

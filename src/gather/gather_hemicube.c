@@ -1,6 +1,6 @@
 /*
- * gather_hemicube.c — hemicube gathering (Castaño 2014, "Irradiance Caching – Continued", and his
- * "Irradiance Caching, Part 1" (2011) on the hemicube's weights and gradients).
+ * gather_hemicube.c — hemicube gathering (Castaño 2014, "Irradiance Caching – Continued", and
+ * Castaño 2011, "Irradiance Caching – Part 1", on the hemicube's weights and gradients).
  *
  * The hemicube around the normal z: a top face z = 1, x, y ∈ [−1, 1], of N×N texels and four side
  * half-faces (x = ±1 or y = ±1, z ∈ [0, 1]) of N×N/2 texels; 3N² texels, one ray through each texel
@@ -10,7 +10,7 @@
  * Per-texel weights, computed once per gatherer and exact (not the usual "solid angle × cosine at the
  * centre, renormalised to sum to π"): a texel is a spherical quadrilateral bounded by four great-circle
  * arcs (a straight edge on a cube face projects to a great circle), so its vector irradiance
- *     Φ = ∫_texel ω dω = ½ Σ_edges γ_e n̂_e          (Lambert's formula; Arvo 1995)
+ *     Φ = ∫_texel ω dω = ½ Σ_edges γ_e n̂_e          (Lambert's formula in Arvo 1995 (tensors)'s vector form)
  * with γ_e the angle an edge subtends and n̂_e the unit normal of its great-circle plane. Then
  *     irradiance weight  w = ∫ cosθ dω = Φ_z       (Σ w = π exactly, up to rounding),
  *     rotational weight  ∫ (n × ω) dω = (−Φ_y, Φ_x) (Ward & Heckbert 1992 §3: tilting the normal by a
@@ -22,7 +22,7 @@
  * Heckbert's construction; with hit distances the gradient is a property of the walls between texels,
  * not of the texels. Radiance is constant within a texel; moving the point by dx along a tangent e moves
  * each wall between texels i and j, and the wall belongs to the nearer of the two surfaces it separates
- * (Křivánek et al. 2005 (SCCG); Schwarzhaupt et al. 2012 §4), so its direction moves by
+ * (Křivánek et al. 2005 (SCCG); Schwarzhaupt et al. 2012), so its direction moves by
  * −(e − ω(ω·e)) dx / r_w with r_w = min(r_i, r_j). The projected solid angle it sweeps from one texel
  * into the other is cosθ (V · m) per unit length (m the wall's unit normal in the sphere), so
  *     ∇t E = Σ_walls (L_left − L_right) g_w / r_w,   g_e = −∫_wall ω_z (ω · (e × ω')) ds,
@@ -212,7 +212,7 @@ void ic_gather_hemicube_free(ic_gatherer *g)
 
 ic_result ic_gather_hemicube(ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out)
 {
-    if (!g || !pt || !out)
+    if (!g || !pt || !out || !g->hemicube.texels)
         return IC_ERR_INVALID_ARG;
     ic_frame frame;
     ic_result res = ic_gather_point_frame(pt, &frame);

@@ -1,7 +1,8 @@
 /*
  * gather_hessian.c — the tangent-plane Hessian of irradiance from a gather's cells and hit distances,
  * occlusion-aware (Schwarzhaupt, Jensen, Jarosz 2012, "Practical Hessian-Based Error Control for
- * Irradiance Caching", §4–5), and the record extent it implies (ibid. §6).
+ * Irradiance Caching"), and the record extent it implies. (Section numbers are not cited: the
+ * derivation below is ours, from the paper's model, not transcribed from its text.)
  *
  * Model (as in the paper): the hemisphere is split into cells (the stratified grid's strata, the
  * hemicube's texels); each cell sees one patch of the environment of constant radiance L_k at its hit
@@ -40,7 +41,7 @@
  * (6-point Gauss–Legendre along each wall, exact to well below float precision for the walls of any
  * grid of 4 or more strata) and each gather only scales them by ΔL/r and ΔL/r².
  *
- * Extent (§6): along a unit tangent direction d the first-order extrapolation misses ½ dᵀH d·t² at
+ * Extent: along a unit tangent direction d the first-order extrapolation misses ½ dᵀH d·t² at
  * distance t, so the error stays below ε·E inside the ellipse with semi-axes √(2εE/|λ_k|) along H's
  * eigenvectors, and inside the circle of radius √(2εE/max|λ|). The paper makes the relative metric
  * robust to black occluders (E → 0) and needs no split-sphere clamps; here the caller's

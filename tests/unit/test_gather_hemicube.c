@@ -285,6 +285,15 @@ static void test_bad_input(void)
     ic_gather_result r;
     CHECK(ic_gather_hemicube(g, &bad, &r) == IC_ERR_INVALID_ARG, "zero normal rejected");
     CHECK(ic_gather_hemicube(NULL, &bad, &r) == IC_ERR_INVALID_ARG, "NULL gatherer rejected");
+    ic_gatherer *gs = NULL;
+    ic_gather_point ok = {v3(0, 0, 0), v3(0, 0, 1), 1};
+    CHECK(ic_gatherer_create(NULL, gs_trace, &s, &gs, &err) == IC_OK, "stratified gatherer");
+    CHECK(ic_gather_hemicube(gs, &ok, &r) == IC_ERR_INVALID_ARG, "no hemicube tables in a stratified gatherer");
+    ic_gatherer_destroy(gs);
+    o = (ic_gather_opts){.hemicube_resolution = 8};
+    CHECK(ic_gatherer_create(&o, gs_trace, &s, &gs, &err) == IC_OK, "stratified gatherer with a resolution");
+    CHECK(ic_gather_hemicube(gs, &ok, &r) == IC_OK && r.ray_count == 192, "an explicit resolution builds the tables");
+    ic_gatherer_destroy(gs);
     CHECK(ic_gather_batch(&o, gs_trace, &s, 2, &bad, 1, &r, &err) == IC_ERR_INVALID_ARG, "batch reports a bad point");
     ic_gatherer_destroy(g);
 }
