@@ -108,9 +108,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "Ward or Tabellion-Lamorlette weights") \
     X(RAYS, "--rays", NULL, IC_OPT_RAYS, render.ic.gather, 16, 1e7, "N", IC_DEFAULT_RAYS, "%g", "", IC_SCOPE_IC, \
       "hemisphere rays per record (stratified M x N, N about pi M)") \
-    X(GATHER, "--gather", NULL, IC_OPT_CHOICE, render.ic.gather.method, 0, 0, "stratified|progressive", NAN, \
-      "stratified", "", IC_SCOPE_IC, "hemisphere sampler; progressive: Hammersley rounds of 4096 to 65536 " \
-      "rays until converged") \
+    X(GATHER, "--gather", NULL, IC_OPT_CHOICE, render.ic.gather.method, 0, 0, "stratified|progressive|hemicube", \
+      NAN, "stratified", "", IC_SCOPE_IC, "hemisphere sampler; progressive: Hammersley rounds of 4096 to 65536 " \
+      "rays until converged; hemicube: one ray per texel of a five-face hemicube with --rays texels (3N^2, " \
+      "N even) and exact per-texel weights (Castano 2014)") \
     X(BOUNCES, "--bounces", NULL, IC_OPT_INT, render.ic.bounces, 1, 1000, "N", NAN, "max-depth - 1", "", \
       IC_SCOPE_IC, "bounces in the light a record gathers") \
     X(RECURSIVE, "--recursive", NULL, IC_OPT_FLAG, render.ic.recursive, 0, 0, "", NAN, "off", "", IC_SCOPE_LAZY, \

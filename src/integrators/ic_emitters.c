@@ -167,14 +167,17 @@ static int pilot(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride, 
     return 1;
 }
 
-/* Hemisphere rays one record gathers (its first set): the stratified grid's M × N cells, or the
- * progressive sampler's first round (ic_gather_opts, zero fields resolved as gather.c does). */
+/* Hemisphere rays one record gathers (its first set): the stratified grid's M × N cells, the hemicube's
+ * 3N² texels, or the progressive sampler's first round (ic_gather_opts, zero fields resolved as gather.c
+ * does). */
 static double record_rays(const ic_gather_opts *g)
 {
     ic_gather_opts d;
     ic_gather_opts_default(&d);
     if (g->method == IC_GATHER_PROGRESSIVE)
         return g->first_round_rays ? g->first_round_rays : d.first_round_rays;
+    if (g->method == IC_GATHER_HEMICUBE && g->hemicube_resolution)
+        return 3.0 * (double)g->hemicube_resolution * (double)g->hemicube_resolution;
     uint32_t m = g->theta_strata ? g->theta_strata : d.theta_strata;
     uint32_t n = g->phi_strata ? g->phi_strata : (uint32_t)lround((double)IC_PI * m);
     return (double)m * (double)n;

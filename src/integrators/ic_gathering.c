@@ -185,6 +185,18 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
     atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
 }
 
+ic_result ic_ic_gather_by_method(const ic_ctx *c, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out)
+{
+    switch (c->o.gather.method) {
+    case IC_GATHER_PROGRESSIVE:
+        return ic_gather_progressive(g, pt, 1, out);
+    case IC_GATHER_HEMICUBE:
+        return ic_gather_hemicube(g, pt, out);
+    default:
+        return ic_gather_stratified(g, pt, out);
+    }
+}
+
 /* One hemisphere set of a point (see ic_ic_gather_one). */
 static ic_result gather_set(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
                             ic_vec3 *levels)
@@ -192,12 +204,12 @@ static ic_result gather_set(ic_gather_worker *w, ic_gatherer *g, const ic_gather
     const int B = w->c->levels;
     for (int k = 0; k <= B; ++k)
         w->sum[k] = v3s(0.0f);
-    ic_result r = w->c->o.gather.method == IC_GATHER_PROGRESSIVE ? ic_gather_progressive(g, pt, 1, out)
-                                                                 : ic_gather_stratified(g, pt, out);
+    ic_result r = ic_ic_gather_by_method(w->c, g, pt, out);
     if (r != IC_OK || !B || !levels)
         return r;
     /* The stratified estimate is π/(MN) times the sum of the rays' radiance, so scaling E by each
-     * level's share of that sum gives the level's own estimate exactly (progressive: its rounds' share). */
+     * level's share of that sum gives the level's own estimate exactly (progressive: its rounds' share;
+     * hemicube: a weighted sum, for which the unweighted share is an approximation). */
     const float e[3] = {out->irradiance.x, out->irradiance.y, out->irradiance.z};
     const float all[3] = {w->sum[B].x, w->sum[B].y, w->sum[B].z};
     for (int k = 0; k < B; ++k) {

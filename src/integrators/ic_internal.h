@@ -117,6 +117,8 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err);
 void ic_ic_gbuffer_free(ic_ctx *c);
 /* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
  * emitter the records carry (zero for any other surface). */
+/* One gather at pt with g by the method of c's options (stratified, progressive or hemicube). */
+ic_result ic_ic_gather_by_method(const ic_ctx *c, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out);
 ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit);
 /* The interpolation of levels T_first … T_{first+levels−1} (ic_ctx.level_irr) over the contributions of
  * one look-up, into E[0 … levels−1]: each contributor's value scaled per channel by T_k / E_i, with the

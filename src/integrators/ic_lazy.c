@@ -95,8 +95,7 @@ static ic_vec3 level_irradiance(lazy_state *ls, int level, const ic_surface *s, 
     cd.key = ic_hash4(c->seed, (uint64_t)level, ic_cache_count(c->cache), 0x726563ULL);
     ic_gather_point gp = ic_ic_gather_point_of(&cd);
     ic_gather_result gr;
-    ic_result r = c->o.gather.method == IC_GATHER_PROGRESSIVE ? ic_gather_progressive(ls->g[level], &gp, 1, &gr)
-                                                              : ic_gather_stratified(ls->g[level], &gp, &gr);
+    ic_result r = ic_ic_gather_by_method(c, ls->g[level], &gp, &gr);
     if (r != IC_OK) {
         if (ls->status == IC_OK)
             ls->status = ic_error_set(&ls->err, r, "gathering a level-%d record failed", level);
@@ -145,9 +144,7 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
             ic_gather_point gp = ic_ic_gather_point_of(&cd);
             ic_gather_result gr;
             ic_vec3 levels[IC_LEVELS_MAX + 1];
-            r = c->o.recursive ? (c->o.gather.method == IC_GATHER_PROGRESSIVE
-                                      ? ic_gather_progressive(ls.g[0], &gp, 1, &gr)
-                                      : ic_gather_stratified(ls.g[0], &gp, &gr))
+            r = c->o.recursive ? ic_ic_gather_by_method(c, ls.g[0], &gp, &gr)
                                : ic_ic_gather_one(&ls.worker, ls.g[0], &gp, &gr, levels);
             if (r != IC_OK) {
                 ic_error_set(err, r, "gathering failed at pixel %zu", i);
