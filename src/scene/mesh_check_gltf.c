@@ -6,7 +6,9 @@
  * - Binary glTF: a 12-byte header (magic "glTF", version 2, the total length) and chunks of an 8-byte
  *   header (length, type) and their data, the first one JSON. The importer allocates what the lengths
  *   declare before it reads anything, so a 516-byte file declaring a 2.8 GB JSON chunk (found by the
- *   mesh_glb fuzz target) allocated 2.8 GB; here every length is checked against the bytes the file holds.
+ *   mesh_glb fuzz target) allocated 2.8 GB; here every length is checked against the bytes the file holds,
+ *   and the total against a header and a chunk (a total of 0 let a 4 GB chunk through to the importer,
+ *   found by the fuzz stage of the test suite).
  * - Data URIs ("data:...;base64,..." in a buffer's or an image's uri): assimp 5.2's base64 decoder
  *   allocates the output and then throws on a character outside the alphabet (or a length that is not a
  *   multiple of 4), leaking the output (found by the mesh_gltf fuzz target: a replacement character in a
@@ -47,6 +49,9 @@ ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err)
     if (total > (uint64_t)size)
         return ic_error_set(err, IC_ERR_PARSE, "%s: the binary glTF header declares %u bytes but the file holds %ld; "
                             "the file is truncated or corrupt: export it again", path, total, size);
+    if (total < 12 + 8) /* no room for the JSON chunk's header: the chunk walk below would check nothing */
+        return ic_error_set(err, IC_ERR_PARSE, "%s: the binary glTF header declares %u bytes, too few for a header "
+                            "and a JSON chunk; the file is corrupt: export it again", path, total);
     for (uint64_t at = 12; at + 8 <= total;) {
         unsigned char c[8];
         if (fseek(fp, (long)at, SEEK_SET) != 0 || fread(c, 1, sizeof c, fp) != sizeof c)
