@@ -112,6 +112,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       NAN, "stratified", "", IC_SCOPE_IC, "hemisphere sampler; progressive: Hammersley rounds of 4096 to 65536 " \
       "rays until converged; hemicube: one ray per texel of a five-face hemicube with --rays texels (3N^2, " \
       "N even) and exact per-texel weights (Castano 2014)") \
+    X(ERROR, "--error", NULL, IC_OPT_CHOICE, render.ic.error, 0, 0, "split-sphere|hessian", NAN, "split-sphere", \
+      "", IC_SCOPE_IC, "what sets a record's extent: Ward's split sphere (harmonic mean of the hit distances), or " \
+      "the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error reaches --accuracy x E at " \
+      "the record's edge (stratified or hemicube gather)") \
     X(BOUNCES, "--bounces", NULL, IC_OPT_INT, render.ic.bounces, 1, 1000, "N", NAN, "max-depth - 1", "", \
       IC_SCOPE_IC, "bounces in the light a record gathers") \
     X(RECURSIVE, "--recursive", NULL, IC_OPT_FLAG, render.ic.recursive, 0, 0, "", NAN, "off", "", IC_SCOPE_LAZY, \

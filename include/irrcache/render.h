@@ -72,6 +72,13 @@ typedef struct ic_switched_value {
 } ic_switched_value;
 
 /* Irradiance-cache options; zero means the renderer's default (given in brackets). */
+/* What sets a record's extent. */
+typedef enum ic_error_metric {
+    IC_ERROR_SPLIT_SPHERE = 0, /* Ward's split sphere: R from the harmonic mean of the hit distances */
+    IC_ERROR_HESSIAN = 1       /* the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error
+                                  ½dᵀHd reaches accuracy × E at the edge a·R */
+} ic_error_metric;
+
 typedef struct ic_ic_options {
     ic_strategy strategy;
     ic_cache_params cache; /* weights, accuracy [0.15 Ward, 1 T–L], clamps; max_radius [scene diagonal/8] bounds R in
@@ -92,13 +99,15 @@ typedef struct ic_ic_options {
     ic_switched_value large_emitters; /* which emitters the records carry instead of light sampling: an
                               emitting material that covers at least `value` of the cosine-weighted
                               hemisphere at the image's median shading point is piloted (ic_emitters.c),
-                              and where light sampling it would be noisier per pixel than the records'
-                              hemisphere rays (a window seen through openings), it lights the scene
+                              and where light sampling it would leave more error than the records'
+                              hemisphere rays once averaged over the pixels the eye sees together (a large
+                              source mostly hidden behind an opening), it lights the scene
                               through the records, as the environment does, and is not sampled in the
                               final render; off: every emitter is light-sampled [0.01] */
     ic_switched_value record_filter; /* record noise control after construction (ic_filter.c): each
-                              record's value a robust mean of its neighbours' within `value` times its
-                              influence radius a_i·R_i; off: none [3] */
+                              record's value moves towards the kernel mean of its neighbours' within `value`
+                              times its influence radius a_i·R_i, as far as their noise explains their
+                              spread; off: none [3] */
     int record_sets;       /* record noise control while gathering: most hemisphere sets a record
                               gathers while its relative σ is above record_noise [1] */
     float record_noise;    /* the relative σ of E those sets aim at [0.05] */
@@ -117,6 +126,8 @@ typedef struct ic_ic_options {
     float weber;           /* adaptive: Weber fraction of the discernibility test (Křivánek et al. 2006 §4.3) [0.02] */
     float adaptive_growth; /* adaptive: a new record's a = growth × a of the nearest record, ≤ accuracy [1.4] */
     int adaptive_max_passes; /* adaptive: safety bound on convergence passes [64] */
+    ic_error_metric error; /* what sets a record's extent [split sphere]; the Hessian needs the stratified
+                              or hemicube gather */
 } ic_ic_options;
 
 /* A cache record as the camera sees it (for overlays and reports). */

@@ -27,6 +27,9 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.bounces = c->tr->pt.max_depth > 1 ? c->tr->pt.max_depth - 1 : 1;
     if (o.light_samples <= 0)
         o.light_samples = IC_DEFAULT_LIGHT_SAMPLES;
+    /* The Hessian extent needs the gather's second-order terms. */
+    if (o.error == IC_ERROR_HESSIAN)
+        o.gather.with_hessian = 1;
     /* A hemicube of N × N texels on top and four N × N/2 sides casts 3N² rays: N even, with as many rays
      * as the stratified grid that --rays asks for (800 by default: N = 16, 768 rays). */
     if (o.gather.method == IC_GATHER_HEMICUBE && o.gather.hemicube_resolution == 0 && o.gather.theta_strata) {
@@ -187,7 +190,7 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
     /* The hemicube's resolution rides with the method (zero for the other samplers, whose hashes stay). */
     int32_t method = (int32_t)c->o.gather.method |
                      (c->o.gather.method == IC_GATHER_HEMICUBE ? (int32_t)c->o.gather.hemicube_resolution << 8 : 0);
-    int32_t g[10] = {c->o.bounces, c->o.no_gradients, method, (int32_t)c->o.gather.theta_strata,
+    int32_t g[10] = {c->o.bounces | (int32_t)c->o.error << 16, c->o.no_gradients, method, (int32_t)c->o.gather.theta_strata,
                      (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
                      (int32_t)c->o.strategy, c->hit_lookups, c->levels};
     /* The seed is left out on purpose: records built with one seed are as valid as any others, and a

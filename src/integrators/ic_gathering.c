@@ -402,6 +402,18 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
     rec->harmonic_mean_dist = isfinite(gr->harmonic_mean_dist) && gr->harmonic_mean_dist > 0.0f
                                   ? gr->harmonic_mean_dist
                                   : c->scene_diag;
+    if (c->o.error == IC_ERROR_HESSIAN && gr->has_hessian) {
+        /* Schwarzhaupt et al. 2012: first-order extrapolation errs by ½dᵀHd; the record reaches as far
+         * as that stays below accuracy × E, the isotropic extent (the smaller semi-axis). The weights
+         * accept |p − p_i| < a·R_i, so R_i is that extent over a; the cache's clamps then apply as to
+         * the split sphere's R. */
+        ic_gather_extent_opts eo = {0};
+        eo.rel_error = c->o.cache.accuracy;
+        eo.max_radius = c->scene_diag;
+        ic_gather_extent ext;
+        if (ic_gather_hessian_extent(gr, &eo, &ext) == IC_OK && ext.radius > 0.0f)
+            rec->harmonic_mean_dist = ext.radius / c->o.cache.accuracy;
+    }
     rec->pixel_footprint = cand->footprint;
 }
 

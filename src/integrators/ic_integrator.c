@@ -186,5 +186,10 @@ ic_result ic_ic_integrator_create(const ic_tracer *tr, const ic_render_options *
     /* Checked before any construction work (the shading points alone take a pass over the image). */
     if (opt->ic.recursive && opt->ic.strategy != IC_STRATEGY_LAZY)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "recursive caching builds its levels lazily; use the lazy strategy");
+    if ((unsigned)opt->ic.error > IC_ERROR_HESSIAN)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "error metric %d unknown", (int)opt->ic.error);
+    if (opt->ic.error == IC_ERROR_HESSIAN && opt->ic.gather.method == IC_GATHER_PROGRESSIVE)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "the Hessian error metric needs the stratified or hemicube "
+                            "gather (the progressive sampler has no Hessian)");
     return IC_OK;
 }

@@ -2,9 +2,9 @@
  * test_ic.c — rendering with the irradiance cache (integrator IC) against the path-traced reference:
  *   1. the Cornell box: IC (batch, with and without gradients; lazy) within stated relMSE and LDR PSNR
  *      bounds of a path-traced reference, and every shading point covered after construction;
- *   2. batch and lazy, batch with adaptive sampling and with hemisphere sets, and hemicube gathering with
- *      batch, lazy and adaptive (the record filter is on in all): 1 and 2 threads give bit-identical
- *      images;
+ *   2. batch and lazy, batch with adaptive sampling and with hemisphere sets, hemicube gathering with
+ *      batch, lazy and adaptive, the Hessian error metric with batch and lazy (the record filter is on in
+ *      all): 1 and 2 threads give bit-identical images;
  *   3. a scene built to leak (a wall with a small gap above the floor, a bright light on the far side):
  *      without neighbor clamping (Křivánek et al. 2006 §5.2–5.3) records next to the gap extrapolate wrong light
  *      over the dark floor; with it the error near the gap falls;
@@ -188,9 +188,10 @@ static void test_cornell(void)
 
 static void test_threads(void)
 {
-    for (int variant = 0; variant < 8; ++variant) {
-        /* variants 5–7: hemicube gathering with the batch, lazy and adaptive strategies */
-        int strategy = variant == 6 ? IC_STRATEGY_LAZY
+    for (int variant = 0; variant < 10; ++variant) {
+        /* variants 5–7: hemicube gathering with the batch, lazy and adaptive strategies; 8, 9: the
+         * Hessian error metric with batch and lazy */
+        int strategy = variant == 6 || variant == 9 ? IC_STRATEGY_LAZY
                        : variant == 7 ? IC_STRATEGY_ADAPTIVE
                        : variant == 0 || variant >= 3 ? IC_STRATEGY_BATCH : IC_STRATEGY_LAZY;
         ic_image a = {0}, b = {0};
@@ -203,7 +204,8 @@ static void test_threads(void)
         /* variant 4: record noise control, both kinds (the filter is on in every variant by default) */
         o.ic.record_sets = variant == 4 ? 4 : 0;
         o.ic.record_noise = variant == 4 ? 0.02f : 0.0f;
-        o.ic.gather.method = variant >= 5 ? IC_GATHER_HEMICUBE : IC_GATHER_STRATIFIED;
+        o.ic.gather.method = variant >= 5 && variant <= 7 ? IC_GATHER_HEMICUBE : IC_GATHER_STRATIFIED;
+        o.ic.error = variant >= 8 ? IC_ERROR_HESSIAN : IC_ERROR_SPLIT_SPHERE;
         o.threads = 1;
         int ok = test_render(CORNELL, 48, 48, &o, &a, NULL);
         o.threads = 2;
@@ -222,6 +224,11 @@ static void test_threads(void)
             bad.time_budget = 0.0;
             bad.adaptive_sampling = (ic_cache_switch)7;
             CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "adaptive_sampling 7 refused");
+            ic_image_free(&none);
+            bad = o;
+            bad.ic.error = IC_ERROR_HESSIAN;
+            bad.ic.gather.method = IC_GATHER_PROGRESSIVE;
+            CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "the Hessian metric with the progressive gather refused");
             ic_image_free(&none);
             bad = o;
             bad.ic.recursive = 1;
