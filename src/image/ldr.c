@@ -27,14 +27,19 @@ static ic_result decode_failed(const char *path, ic_error *err)
 /* 1 if every Huffman table of the JPEG in b declares at most 256 codes (ITU-T T.81 §B.2.4.2: the counts
  * L1…L16 of a DHT table sum to at most 256) and every DHT segment holds whole tables; 1 for data that is
  * not a JPEG. stb_image 2.27, the one Debian 12 ships, writes past its code-length array when a table
- * declares more (found by the image_png fuzz target), so such a file never reaches it. Markers are walked
- * from SOI; entropy-coded data between them is skipped byte by byte (0xFF00 is a stuffed byte, RSTn and
+ * declares more (found by the image_png fuzz target), so such a file never reaches it — nor one whose
+ * SOI follows fill bytes (0xFF 0xFF 0xD8, found the same way), which stb_image takes as a JPEG too. Markers
+ * are walked from SOI; entropy-coded data between them is skipped byte by byte (0xFF00 is a stuffed byte, RSTn and
  * TEM carry no length), which also reaches the DHT segments between a progressive JPEG's scans. */
 static int jpeg_huffman_ok(const unsigned char *b, size_t n)
 {
-    if (n < 2 || b[0] != 0xFF || b[1] != 0xD8)
+    /* SOI may follow fill bytes (0xFF …, T.81 §B.1.1.2), as stb_image accepts it. */
+    size_t i = 0;
+    while (i < n && b[i] == 0xFF)
+        ++i;
+    if (i == 0 || i >= n || b[i] != 0xD8)
         return 1;
-    size_t i = 2;
+    ++i;
     while (i + 1 < n) {
         unsigned m = b[i + 1];
         if (b[i] != 0xFF || m == 0xFF) {
@@ -76,8 +81,9 @@ static unsigned char *read_jpeg(const char *path, size_t *n)
     FILE *f = fopen(path, "rb");
     if (!f)
         return NULL;
-    unsigned char soi[2], *buf = NULL;
-    if (fread(soi, 1, 2, f) != 2 || soi[0] != 0xFF || soi[1] != 0xD8) {
+    unsigned char first, *buf = NULL;
+    /* Any file that starts with 0xFF: SOI may follow fill bytes (jpeg_huffman_ok tells JPEG from not). */
+    if (fread(&first, 1, 1, f) != 1 || first != 0xFF) {
         fclose(f);
         return NULL;
     }

@@ -4,6 +4,7 @@
  */
 #include "irrcache/defaults.h"
 #include "irrcache/image.h"
+#include "image/image_internal.h"
 #include "test_util.h"
 
 #include <dirent.h>
@@ -617,6 +618,17 @@ static void test_jpeg_huffman(void)
     CHECK(ic_image_read(bad, &img, &err) == IC_ERR_PARSE && strstr(err.message, "Huffman") &&
               strstr(err.message, "stb_build_huffman_oob.jpg"),
           "an oversized JPEG Huffman table is refused naming the file: %s", err.message);
+    ic_image_free(&img);
+    /* The same table in a JPEG whose SOI follows a fill byte (FF FF D8): ic_image_read does not take it
+     * for an image at all, and the PNG/JPEG reader itself (which stb_image would decode it with) refuses
+     * its table. */
+    const char *filled = IC_SOURCE_DIR "/tests/fuzz/regress/image_png/stb_build_huffman_fill_bytes.jpg";
+    memset(&err, 0, sizeof err);
+    CHECK(ic_image_read(filled, &img, &err) != IC_OK, "a JPEG with a fill byte before SOI is not read");
+    ic_image_free(&img);
+    memset(&err, 0, sizeof err);
+    CHECK(ic_image_read_stb(filled, NULL, &img, &err) == IC_ERR_PARSE && strstr(err.message, "Huffman"),
+          "an oversized Huffman table after a fill byte is refused: %s", err.message);
     ic_image_free(&img);
 }
 
