@@ -10,6 +10,7 @@
  *   ic_aov.c        diagnostic images and the record list
  *   ic_integrator.c the integrator interface (integrator.h): prepare, sample, aovs, destroy
  *   ic_probe.c      adaptive construction alone, for tests
+ *   ic_points.c     the cache at sensor points (irrcache/points.h)
  */
 #ifndef IC_INTEGRATORS_IC_INTERNAL_H
 #define IC_INTEGRATORS_IC_INTERNAL_H
@@ -201,5 +202,18 @@ ic_result ic_ic_adaptive_probe_run(const ic_scene *scene, const ic_render_option
                                    ic_error *err);
 /* Frees what a probe holds; a zeroed probe is a no-op. */
 void ic_ic_adaptive_probe_free(ic_adaptive_probe *p);
+
+/* ---- sensor points (ic_points.c; the driver is src/render/points.c) */
+/* A sensor as a surface: a white Lambertian receiver (ρ = 1) at p facing the unit normal n, whose
+ * reflected radiance is E/π. */
+void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b);
+/* A context for sensor points: opt resolved as for a render, lazy, every emitter light-sampled, no record
+ * filter, no cache files, and no shading points of the camera. */
+ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, ic_error *err);
+/* Lazy construction over the sensors (p[i], unit n[i]) in input order, serial; freezes the cache. */
+ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_error *err);
+/* The interpolated irradiance at (p, n) (environment and indirect light), the σ of each channel and of
+ * its luminance (Radiance's weights) from the contributing records' σ; 0 if no record contributes. */
+int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 *E, ic_vec3 *sigma, double *sigma_lum);
 
 #endif

@@ -1,0 +1,270 @@
+/*
+ * points.c — ic_points_compute (irrcache/points.h), the sensor-point driver: checks the points and
+ * options, builds the accelerator, and estimates each point's irradiance with the path tracer (Veach 1997:
+ * light sampling and a cosine-distributed path per sample, MIS between them) or with the irradiance cache
+ * (Ward et al. 1988: lazy records at the sensors, their interpolation for the environment and indirect
+ * light, light sampling for every emitter at every point). Each point's random numbers are a hash of
+ * (seed, point, sample): the results never depend on the thread count.
+ */
+#include "irrcache/points.h"
+
+#include "core/sampling.h"
+#include "core/threads.h"
+#include "integrators/ic_internal.h"
+#include "scene/scene.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define STREAM_PT 0x70617468ULL     /* rng purpose: a path-traced sample */
+#define STREAM_DIRECT 0x6c696768ULL /* rng purpose: a light sample of the cache estimator */
+
+double ic_illuminance(ic_vec3 E)
+{
+    return IC_LUMINOUS_EFFICACY * (IC_LUMINANCE_R * E.x + IC_LUMINANCE_G * E.y + IC_LUMINANCE_B * E.z);
+}
+
+/* Running sums of one point's samples of E (RGB and luminance), for the mean and its σ. */
+typedef struct sample_sums {
+    double sum[4], sum2[4];
+    uint64_t n;
+} sample_sums;
+
+static void sums_add(sample_sums *s, ic_vec3 E)
+{
+    double v[4] = {E.x, E.y, E.z, IC_LUMINANCE_R * E.x + IC_LUMINANCE_G * E.y + IC_LUMINANCE_B * E.z};
+    for (int k = 0; k < 4; ++k) {
+        s->sum[k] += v[k];
+        s->sum2[k] += v[k] * v[k];
+    }
+    ++s->n;
+}
+
+/* Mean of the samples and the σ of that mean (from the unbiased sample variance). */
+static void sums_finish(const sample_sums *s, double mean[4], double sigma[4])
+{
+    double n = (double)s->n;
+    for (int k = 0; k < 4; ++k) {
+        mean[k] = n > 0.0 ? s->sum[k] / n : 0.0;
+        double var = n > 1.0 ? (s->sum2[k] - n * mean[k] * mean[k]) / (n - 1.0) : 0.0;
+        sigma[k] = n > 0.0 ? sqrt(fmax(var, 0.0) / n) : 0.0;
+    }
+}
+
+typedef struct points_job {
+    const ic_tracer *tr;
+    const ic_ctx *ic;          /* integrator IC: the built cache; NULL for the path tracer */
+    const ic_vec3 *p, *n;      /* points, unit normals */
+    ic_point_result *out;
+    uint64_t *rays;            /* per point (summed in order afterwards) */
+    uint64_t seed;
+    int samples;               /* pt: paths; ic: light samples */
+    uint32_t uncovered;        /* first point no record covered + 1 (0: none) */
+} points_job;
+
+/* Path-traced samples of E at one sensor: π × (a light sample + a cosine-distributed path), the
+ * white receiver's reflected radiance (f = 1/π, f·cos/p = 1 for the cosine path) scaled back to E. */
+static void point_pt(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    points_job *job = ctx;
+    const ic_tracer *tr = job->tr;
+    uint32_t i = (uint32_t)item;
+    ic_surface s;
+    ic_bsdf b;
+    ic_ic_sensor(job->p[i], job->n[i], &s, &b);
+    ic_vec3 wo = job->n[i];
+    sample_sums sums;
+    memset(&sums, 0, sizeof sums);
+    uint64_t rays = 0;
+    for (int k = 0; k < job->samples; ++k) {
+        ic_rng rng = ic_rng_make(job->seed, i, (uint64_t)k, STREAM_PT);
+        ic_vec3 L = ic_direct_light(tr, &s, &b, wo, &tr->scene->light_select, &rng, &rays);
+        float u1 = ic_rng_float(&rng), u2 = ic_rng_float(&rng);
+        ic_vec3 wi = ic_frame_to_world(&b.frame, ic_warp_cosine_hemisphere(u1, u2));
+        float cos_i = v3_dot(wi, b.frame.n);
+        if (cos_i > 0.0f) {
+            ic_path_start st;
+            memset(&st, 0, sizeof st);
+            st.depth = 1;
+            st.pdf = cos_i * IC_INV_PI;
+            L = v3_add(L, ic_pt_li_from(tr, ic_spawn_ray(&s, wi), &st, &rng, &rays));
+        }
+        sums_add(&sums, v3_scale(L, IC_PI));
+    }
+    double mean[4], sigma[4];
+    sums_finish(&sums, mean, sigma);
+    ic_point_result *r = &job->out[i];
+    r->irradiance = v3((float)mean[0], (float)mean[1], (float)mean[2]);
+    r->irradiance_sigma = v3((float)sigma[0], (float)sigma[1], (float)sigma[2]);
+    r->illuminance = IC_LUMINOUS_EFFICACY * mean[3];
+    r->illuminance_sigma = IC_LUMINOUS_EFFICACY * sigma[3];
+    job->rays[i] = rays;
+}
+
+/* The cache's estimate at one sensor: the records' interpolation plus light samples of the emitters;
+ * the two errors are independent, so their variances add. */
+static void point_ic(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    points_job *job = ctx;
+    uint32_t i = (uint32_t)item;
+    ic_vec3 E_cache, sigma_cache;
+    double sigma_cache_lum = 0.0;
+    if (!ic_ic_points_indirect(job->ic, job->p[i], job->n[i], &E_cache, &sigma_cache, &sigma_cache_lum)) {
+        /* Construction leaves every sensor covered; a point it missed is reported, not guessed. */
+        job->uncovered = i + 1;
+        return;
+    }
+    ic_surface s;
+    ic_bsdf b;
+    ic_ic_sensor(job->p[i], job->n[i], &s, &b);
+    sample_sums sums;
+    memset(&sums, 0, sizeof sums);
+    uint64_t rays = 0;
+    for (int k = 0; k < job->samples; ++k) {
+        ic_rng rng = ic_rng_make(job->seed, i, (uint64_t)k, STREAM_DIRECT);
+        sums_add(&sums, v3_scale(ic_ic_direct_light(job->ic, &s, &b, job->n[i], NULL, &rng, &rays), IC_PI));
+    }
+    double mean[4], sigma[4];
+    sums_finish(&sums, mean, sigma);
+    double ec[4] = {E_cache.x, E_cache.y, E_cache.z,
+                    IC_LUMINANCE_R * E_cache.x + IC_LUMINANCE_G * E_cache.y + IC_LUMINANCE_B * E_cache.z};
+    double sc[4] = {sigma_cache.x, sigma_cache.y, sigma_cache.z, sigma_cache_lum};
+    double e[4], sg[4];
+    for (int k = 0; k < 4; ++k) {
+        e[k] = mean[k] + ec[k];
+        sg[k] = sqrt(sigma[k] * sigma[k] + sc[k] * sc[k]);
+    }
+    ic_point_result *r = &job->out[i];
+    r->irradiance = v3((float)e[0], (float)e[1], (float)e[2]);
+    r->irradiance_sigma = v3((float)sg[0], (float)sg[1], (float)sg[2]);
+    r->illuminance = IC_LUMINOUS_EFFICACY * e[3];
+    r->illuminance_sigma = IC_LUMINOUS_EFFICACY * sg[3];
+    job->rays[i] = rays;
+}
+
+static int finite3(ic_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+/* Checks opt and fills its zero fields from the scene file and the defaults. */
+static ic_result resolve_options(const ic_scene *scene, ic_points_options *o, ic_error *err)
+{
+    if (o->integrator != IC_INTEGRATOR_PT && o->integrator != IC_INTEGRATOR_IC)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "unknown integrator %d; use pt or ic", (int)o->integrator);
+    if (o->samples < 0 || o->light_samples < 0 || o->max_depth < 0 || o->threads < 0)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "negative samples, light samples, max depth or threads; give "
+                            "values >= 0");
+    if (o->samples > IC_MAX_POINT_SAMPLES || o->light_samples > IC_MAX_POINT_SAMPLES ||
+        o->max_depth > IC_MAX_MAX_DEPTH)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "samples %d, light samples %d or max depth %d is above its "
+                            "limit (%d, %d, %d); give smaller values", o->samples, o->light_samples, o->max_depth,
+                            IC_MAX_POINT_SAMPLES, IC_MAX_POINT_SAMPLES, IC_MAX_MAX_DEPTH);
+    if (o->samples == 0)
+        o->samples = IC_DEFAULT_POINT_SAMPLES;
+    if (o->light_samples == 0)
+        o->light_samples = IC_DEFAULT_POINT_LIGHT_SAMPLES;
+    if (o->max_depth == 0)
+        o->max_depth = scene->settings.max_depth > 0 ? scene->settings.max_depth : IC_DEFAULT_MAX_DEPTH;
+    if (!o->has_seed && o->seed == 0)
+        o->seed = scene->settings.seed ? scene->settings.seed : IC_DEFAULT_SEED;
+    return IC_OK;
+}
+
+ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points, uint32_t count,
+                            const ic_points_options *opt_in, ic_point_result *out, ic_points_stats *stats,
+                            ic_error *err)
+{
+    ic_points_stats local;
+    ic_points_stats *st = stats ? stats : &local;
+    memset(st, 0, sizeof *st);
+    double t0 = ic_seconds();
+    if (!scene || (count > 0 && (!points || !out)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_points_compute: NULL scene, points or results");
+    ic_points_options opt;
+    memset(&opt, 0, sizeof opt);
+    if (opt_in)
+        opt = *opt_in;
+    ic_result r = resolve_options(scene, &opt, err);
+    if (r != IC_OK)
+        return r;
+    st->threads = ic_resolve_threads(opt.threads);
+    if (count == 0)
+        return IC_OK;
+
+    ic_vec3 *p = malloc(sizeof *p * count), *n = malloc(sizeof *n * count);
+    uint64_t *rays = calloc(count, sizeof *rays);
+    ic_accel *accel = NULL;
+    ic_ctx *ic = NULL;
+    if (!p || !n || !rays) {
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensor points", count);
+        goto done;
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        ic_vec3 nn = points[i].normal;
+        float len = v3_len(nn);
+        if (!finite3(points[i].position) || !finite3(nn) || !(len > 0.0f) || !isfinite(len)) {
+            r = ic_error_set(err, IC_ERR_INVALID_ARG, "sensor point %u: %s; give a finite position and a non-zero "
+                             "normal", i, !(len > 0.0f) && finite3(nn) ? "zero normal" : "not a finite number");
+            goto done;
+        }
+        p[i] = points[i].position;
+        n[i] = v3_scale(nn, 1.0f / len);
+    }
+    if ((r = ic_accel_create(scene, &accel, err)) != IC_OK)
+        goto done;
+    ic_tracer tr;
+    tr.scene = scene;
+    tr.accel = accel;
+    tr.pt.max_depth = opt.max_depth;
+    tr.pt.rr_depth = 0;
+    tr.pt = ic_pt_params_resolve(tr.pt);
+
+    points_job job;
+    memset(&job, 0, sizeof job);
+    job.tr = &tr;
+    job.p = p;
+    job.n = n;
+    job.out = out;
+    job.rays = rays;
+    job.seed = opt.seed;
+    if (opt.integrator == IC_INTEGRATOR_PT) {
+        job.samples = opt.samples;
+        if ((r = ic_parallel_for(opt.threads, count, point_pt, &job)) != IC_OK)
+            ic_error_set(err, r, "sensor points: the worker threads could not start");
+    } else {
+        ic_render_options ro;
+        memset(&ro, 0, sizeof ro);
+        ro.integrator = IC_INTEGRATOR_IC;
+        ro.max_depth = opt.max_depth;
+        ro.threads = opt.threads;
+        ro.seed = opt.seed;
+        ro.has_seed = 1;
+        ro.ic = opt.ic;
+        r = ic_ic_points_ctx_create(&tr, &ro, &ic, err);
+        if (r == IC_OK)
+            r = ic_ic_points_build(ic, p, n, count, err);
+        if (r == IC_OK) {
+            st->records = ic_cache_count(ic->cache);
+            st->rays += (uint64_t)atomic_load(&ic->rays);
+            job.ic = ic;
+            job.samples = opt.light_samples;
+            if ((r = ic_parallel_for(opt.threads, count, point_ic, &job)) != IC_OK)
+                ic_error_set(err, r, "sensor points: the worker threads could not start");
+        }
+        if (r == IC_OK && job.uncovered)
+            r = ic_error_set(err, IC_ERR_INTERNAL, "sensor point %u: no cache record covers it after construction",
+                             job.uncovered - 1);
+    }
+    for (uint32_t i = 0; i < count; ++i)
+        st->rays += rays[i];
+done:
+    ic_ic_ctx_destroy(ic);
+    ic_accel_destroy(accel);
+    free(p);
+    free(n);
+    free(rays);
+    st->seconds = ic_seconds() - t0;
+    return r;
+}
