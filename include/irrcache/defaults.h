@@ -26,7 +26,8 @@
 /* Resource limits of scene loading (render.h's ic_scene_load_options): checked from the files' headers
  * before anything is allocated for them. */
 #define IC_DEFAULT_MAX_TEXTURE_PIXELS (1 << 26) /* a texture or environment map: 8192 x 8192 */
-#define IC_DEFAULT_MAX_MESH_ELEMENTS (1 << 26)  /* the vertices, or the faces, one mesh file declares */
+#define IC_DEFAULT_MAX_MESH_ELEMENTS (1 << 24)  /* the vertices, or the faces, one mesh file declares (about
+                                                   11 GiB to import at the limit: README) */
 /* Input files' sizes, checked with fstat before they are read (ic_scene_load_options, ic_cache_params). */
 #define IC_DEFAULT_MAX_SCENE_FILE_BYTES (64ull << 20) /* a JSON scene file: 64 MiB (geometry is in mesh files) */
 #define IC_DEFAULT_MAX_CACHE_FILE_BYTES (4ull << 30)  /* a cache file: 4 GiB, 27 million records (a 512x512

@@ -284,7 +284,7 @@ int main(void)
                  "material 'painted'", "--max-texture-pixels");
     expect_error(SCENES "huge_header.ply", NULL, IC_ERR_UNSUPPORTED,
                  "huge_header.ply: the PLY header declares 1000000000 of element 'vertex', more than the limit of "
-                 "67108864",
+                 "16777216",
                  "--max-mesh-elements", NULL);
     {
         ic_scene_load_options small = {0};
