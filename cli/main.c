@@ -1,5 +1,5 @@
 /*
- * main.c — the irrcache command: dispatches to sub-commands (render, diff). The CLI, not the
+ * main.c — the irrcache command: dispatches to sub-commands (render, diff, points). The CLI, not the
  * library, prints messages and chooses exit codes: 0 success, 1 a failure while working (I/O,
  * malformed input), 2 a usage error (unknown option, impossible value).
  */
@@ -48,9 +48,10 @@ static void usage(FILE *f)
             "  irrcache render SCENE -o OUT [options]   render a scene (JSON scene file or .obj/.gltf/.glb/.ply,\n"
             "                                           also .gz)\n"
             "  irrcache diff IMAGE REFERENCE [options]  error metrics of IMAGE against REFERENCE\n"
+            "  irrcache points SCENE --points FILE|-    irradiance and illuminance at sensor points\n"
             "  irrcache --help | --version\n"
             "\n"
-            "Run 'irrcache render --help' or 'irrcache diff --help' for the options of each command.\n",
+            "Run 'irrcache COMMAND --help' (render, diff, points) for the options of each command.\n",
             IC_VERSION);
 }
 
@@ -66,6 +67,8 @@ int main(int argc, char **argv)
         return ic_cli_render(argc - 1, argv + 1);
     if (!strcmp(cmd, "diff"))
         return ic_cli_diff(argc - 1, argv + 1);
+    if (!strcmp(cmd, "points"))
+        return ic_cli_points(argc - 1, argv + 1);
     if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
         usage(stdout);
         return 0;
@@ -74,6 +77,6 @@ int main(int argc, char **argv)
         printf("irrcache %s\n", IC_VERSION);
         return 0;
     }
-    fprintf(stderr, "irrcache: unknown command '%s'; use 'render' or 'diff' (see irrcache --help)\n", cmd);
+    fprintf(stderr, "irrcache: unknown command '%s'; use 'render', 'diff' or 'points' (see irrcache --help)\n", cmd);
     return 2;
 }

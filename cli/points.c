@@ -1,0 +1,383 @@
+/*
+ * points.c — `irrcache points SCENE --points FILE|-`: irradiance and illuminance at sensor points
+ * (include/irrcache/points.h). Input lines are `x y z nx ny nz` (the order of Radiance's `rtrace -I`),
+ * with `#` comments and blank lines; output is one line per point in input order: irradiance R G B
+ * (the scene's radiometric units, W/m²), illuminance (lux, Radiance's 179 lm/W convention) and its
+ * one-sigma error (lux), as text, CSV or JSON, to stdout or atomically to -o FILE.
+ *
+ * Exit status: 0 success, 1 a failure while working (unreadable or malformed points file, scene,
+ * output), 2 a usage error. A malformed line is reported as "FILE:LINE: problem; what to do", and then
+ * no output file is written.
+ */
+#include "cli.h"
+#include "json_out.h"
+
+#include "core/atomic_file.h"
+#include "irrcache/points.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define EXIT_WORK 1
+#define EXIT_USAGE 2
+
+typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON } out_format;
+
+static void print_help(FILE *out)
+{
+    fprintf(out,
+            "usage: irrcache points SCENE --points FILE|- [options]\n"
+            "\n"
+            "Irradiance and illuminance at sensor points. Each input line is 'x y z nx ny nz' (a point and\n"
+            "the direction its sensor faces, as for Radiance's rtrace -I); '#' starts a comment, blank lines\n"
+            "are skipped. Output: one line per point, in input order:\n"
+            "  E_r E_g E_b  irradiance (the scene's radiometric units: W/m2)\n"
+            "  lux          illuminance, 179 lm/W x (0.265074 E_r + 0.670115 E_g + 0.064811 E_b) (Radiance's\n"
+            "               convention, so that numbers compare)\n"
+            "  sigma        one-sigma Monte Carlo error of the illuminance (lux); for the cache it leaves out\n"
+            "               the interpolation's bias, which --accuracy bounds\n"
+            "\n"
+            "options:\n"
+            "  --points FILE      the points ('-': standard input) (required)\n"
+            "  -o, --output FILE  write the results there, atomically (default: standard output)\n"
+            "  --format F         text (space-separated), csv (with a header line) or json (default: text)\n"
+            "  --integrator I     ic: irradiance cache, records gathered at the sensors and shared by\n"
+            "                     neighbours, direct light sampled at every point; pt: path-traced\n"
+            "                     reference (default: ic)\n"
+            "  --samples N        pt: paths per point (default: %d)\n"
+            "  --light-samples N  ic: light samples per point for the direct light (default: %d)\n"
+            "  --accuracy A       ic: the cache's accuracy a (smaller: more records) (default: %g)\n"
+            "  --max-depth N      scattering events, the sensor the first: light bounces at most N-1 times\n"
+            "                     before it arrives (default: the scene file's, else %d)\n"
+            "  --seed N           random seed (default: the scene file's, else %d)\n"
+            "  --threads N        threads, 0 = all cores; results do not depend on it (default: 0)\n"
+            "  -h, --help         show this help\n"
+            "\n"
+            "exit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n",
+            IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, (double)IC_DEFAULT_ACCURACY_WARD,
+            IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED);
+}
+
+/* Returns the value of option `name` given as "--name VALUE" or "--name=VALUE", advancing *i; NULL if
+ * argv[*i] is not this option; sets *missing if the value is absent. */
+static const char *option_value(int argc, char **argv, int *i, const char *name, int *missing)
+{
+    size_t n = strlen(name);
+    if (strncmp(argv[*i], name, n) != 0)
+        return NULL;
+    if (argv[*i][n] == '=')
+        return argv[*i] + n + 1;
+    if (argv[*i][n] != '\0')
+        return NULL;
+    if (*i + 1 >= argc) {
+        *missing = 1;
+        return NULL;
+    }
+    return argv[++*i];
+}
+
+/* A whole-string integer in [lo, hi]; prints the usage error and returns 0 otherwise. */
+static int parse_int(const char *opt, const char *s, long long lo, long long hi, long long *out)
+{
+    char *end = NULL;
+    errno = 0;
+    long long v = strtoll(s, &end, 10);
+    if (end == s || *end != '\0' || errno || v < lo || v > hi) {
+        fprintf(stderr, "irrcache points: %s %s: not an integer in [%lld, %lld]; give one such as %lld\n", opt, s, lo,
+                hi, lo > 1 ? lo : 1);
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+/* The points of one line: 1 if it holds a point, 0 if blank or a comment, -1 if malformed (message in why). */
+static int parse_line(char *line, ic_sensor_point *pt, char *why, size_t why_size)
+{
+    char *hash = strchr(line, '#');
+    if (hash)
+        *hash = '\0';
+    double v[6];
+    int count = 0;
+    char *at = line;
+    for (;;) {
+        while (*at == ' ' || *at == '\t' || *at == '\r' || *at == '\n' || *at == ',')
+            ++at;
+        if (*at == '\0')
+            break;
+        char *end = NULL;
+        double x = strtod(at, &end);
+        if (end == at) {
+            size_t len = strcspn(at, " \t\r\n,");
+            snprintf(why, why_size, "'%.*s' is not a number; give 'x y z nx ny nz'", (int)(len > 40 ? 40 : len), at);
+            return -1;
+        }
+        if (count == 6) {
+            snprintf(why, why_size, "more than 6 numbers; give 'x y z nx ny nz' (one point per line)");
+            return -1;
+        }
+        if (!isfinite(x)) {
+            snprintf(why, why_size, "number %d is not finite; give finite coordinates", count + 1);
+            return -1;
+        }
+        v[count++] = x;
+        at = end;
+    }
+    if (count == 0)
+        return 0;
+    if (count != 6) {
+        snprintf(why, why_size, "%d number%s, expected 6: 'x y z nx ny nz'", count, count == 1 ? "" : "s");
+        return -1;
+    }
+    if (v[3] == 0.0 && v[4] == 0.0 && v[5] == 0.0) {
+        snprintf(why, why_size, "the normal (0 0 0) is zero; give the direction the sensor faces");
+        return -1;
+    }
+    for (int k = 0; k < 6; ++k)
+        if (fabs(v[k]) > 3e38) {
+            snprintf(why, why_size, "number %d is out of range; give values below 3e38", k + 1);
+            return -1;
+        }
+    pt->position = (ic_vec3){(float)v[0], (float)v[1], (float)v[2]};
+    pt->normal = (ic_vec3){(float)v[3], (float)v[4], (float)v[5]};
+    return 1;
+}
+
+/* Reads every point of path ('-': stdin) into *out (malloc'd); prints the one-line error and returns 0
+ * on failure. */
+static int read_points(const char *path, ic_sensor_point **out, uint32_t *count)
+{
+    int is_stdin = strcmp(path, "-") == 0;
+    const char *name = is_stdin ? "<stdin>" : path;
+    FILE *f = is_stdin ? stdin : fopen(path, "r");
+    if (!f) {
+        fprintf(stderr, "irrcache points: %s: cannot open: %s; check the path\n", path, strerror(errno));
+        return 0;
+    }
+    ic_sensor_point *pts = NULL;
+    size_t n = 0, cap = 0, line_cap = 0;
+    char *line = NULL;
+    long line_no = 0;
+    int ok = 1;
+    ssize_t len;
+    while ((len = getline(&line, &line_cap, f)) >= 0) {
+        ++line_no;
+        if (memchr(line, '\0', (size_t)len)) {
+            fprintf(stderr, "irrcache points: %s:%ld: a NUL byte; give a text file\n", name, line_no);
+            ok = 0;
+            break;
+        }
+        ic_sensor_point pt;
+        char why[160];
+        int r = parse_line(line, &pt, why, sizeof why);
+        if (r < 0) {
+            fprintf(stderr, "irrcache points: %s:%ld: %s\n", name, line_no, why);
+            ok = 0;
+            break;
+        }
+        if (r == 0)
+            continue;
+        if (n == UINT32_MAX) {
+            fprintf(stderr, "irrcache points: %s:%ld: more than %u points; split the file\n", name, line_no,
+                    UINT32_MAX);
+            ok = 0;
+            break;
+        }
+        if (n == cap) {
+            size_t nc = cap ? 2 * cap : 256;
+            ic_sensor_point *np = realloc(pts, nc * sizeof *np);
+            if (!np) {
+                fprintf(stderr, "irrcache points: %s:%ld: out of memory for the points\n", name, line_no);
+                ok = 0;
+                break;
+            }
+            pts = np;
+            cap = nc;
+        }
+        pts[n++] = pt;
+    }
+    if (ok && ferror(f)) {
+        fprintf(stderr, "irrcache points: %s: read error after line %ld: %s\n", name, line_no, strerror(errno));
+        ok = 0;
+    }
+    if (ok && n == 0) {
+        fprintf(stderr, "irrcache points: %s: no points (only comments or blank lines); give lines 'x y z nx ny nz'\n",
+                name);
+        ok = 0;
+    }
+    free(line);
+    if (!is_stdin)
+        fclose(f);
+    if (!ok) {
+        free(pts);
+        return 0;
+    }
+    *out = pts;
+    *count = (uint32_t)n;
+    return 1;
+}
+
+static void write_rows(FILE *f, out_format format, const ic_point_result *res, uint32_t count)
+{
+    if (format == FORMAT_CSV)
+        fprintf(f, "irradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux\n");
+    const char *sep = format == FORMAT_CSV ? "," : " ";
+    for (uint32_t i = 0; i < count; ++i)
+        fprintf(f, "%.7g%s%.7g%s%.7g%s%.7g%s%.4g\n", (double)res[i].irradiance.x, sep, (double)res[i].irradiance.y,
+                sep, (double)res[i].irradiance.z, sep, res[i].illuminance, sep, res[i].illuminance_sigma);
+}
+
+static int write_json(const char *path, const ic_points_options *opt, const ic_point_result *res, uint32_t count,
+                      const ic_points_stats *st)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "integrator", opt->integrator == IC_INTEGRATOR_IC ? "ic" : "pt");
+    cJSON_AddNumberToObject(root, "luminous_efficacy", IC_LUMINOUS_EFFICACY);
+    cJSON_AddItemToObject(root, "records", ic_cli_json_u64(st->records));
+    cJSON_AddNumberToObject(root, "seconds", st->seconds);
+    cJSON *arr = cJSON_AddArrayToObject(root, "points");
+    for (uint32_t i = 0; i < count; ++i) {
+        cJSON *o = cJSON_CreateObject();
+        double e[3] = {res[i].irradiance.x, res[i].irradiance.y, res[i].irradiance.z};
+        double s[3] = {res[i].irradiance_sigma.x, res[i].irradiance_sigma.y, res[i].irradiance_sigma.z};
+        cJSON_AddItemToObject(o, "irradiance", cJSON_CreateDoubleArray(e, 3));
+        cJSON_AddItemToObject(o, "irradiance_sigma", cJSON_CreateDoubleArray(s, 3));
+        cJSON_AddNumberToObject(o, "illuminance", res[i].illuminance);
+        cJSON_AddNumberToObject(o, "sigma", res[i].illuminance_sigma);
+        cJSON_AddItemToArray(arr, o);
+    }
+    return ic_cli_write_json("points", path, root, 0);
+}
+
+int ic_cli_points(int argc, char **argv)
+{
+    const char *scene_path = NULL, *points_path = NULL, *out_path = NULL;
+    out_format format = FORMAT_TEXT;
+    ic_points_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.integrator = IC_INTEGRATOR_IC;
+    for (int i = 1; i < argc; ++i) {
+        const char *arg = argv[i], *value;
+        int missing = 0;
+        long long v = 0;
+        if (arg[0] != '-' || arg[1] == '\0') {
+            if (scene_path) {
+                fprintf(stderr, "irrcache points: %s: unexpected extra argument; give one scene\n", arg);
+                return EXIT_USAGE;
+            }
+            scene_path = arg;
+        } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
+            print_help(stdout);
+            return 0;
+        } else if ((value = option_value(argc, argv, &i, "--points", &missing)) != NULL) {
+            points_path = value;
+        } else if ((value = option_value(argc, argv, &i, "-o", &missing)) != NULL ||
+                   (value = option_value(argc, argv, &i, "--output", &missing)) != NULL) {
+            out_path = value;
+        } else if ((value = option_value(argc, argv, &i, "--format", &missing)) != NULL) {
+            if (!strcmp(value, "text"))
+                format = FORMAT_TEXT;
+            else if (!strcmp(value, "csv"))
+                format = FORMAT_CSV;
+            else if (!strcmp(value, "json"))
+                format = FORMAT_JSON;
+            else {
+                fprintf(stderr, "irrcache points: --format %s: unknown; use text, csv or json\n", value);
+                return EXIT_USAGE;
+            }
+        } else if ((value = option_value(argc, argv, &i, "--integrator", &missing)) != NULL) {
+            if (!strcmp(value, "ic"))
+                opt.integrator = IC_INTEGRATOR_IC;
+            else if (!strcmp(value, "pt"))
+                opt.integrator = IC_INTEGRATOR_PT;
+            else {
+                fprintf(stderr, "irrcache points: --integrator %s: unknown; use ic or pt\n", value);
+                return EXIT_USAGE;
+            }
+        } else if ((value = option_value(argc, argv, &i, "--samples", &missing)) != NULL) {
+            if (!parse_int("--samples", value, 1, IC_MAX_POINT_SAMPLES, &v))
+                return EXIT_USAGE;
+            opt.samples = (int)v;
+        } else if ((value = option_value(argc, argv, &i, "--light-samples", &missing)) != NULL) {
+            if (!parse_int("--light-samples", value, 1, IC_MAX_POINT_SAMPLES, &v))
+                return EXIT_USAGE;
+            opt.light_samples = (int)v;
+        } else if ((value = option_value(argc, argv, &i, "--max-depth", &missing)) != NULL) {
+            if (!parse_int("--max-depth", value, 1, IC_MAX_MAX_DEPTH, &v))
+                return EXIT_USAGE;
+            opt.max_depth = (int)v;
+        } else if ((value = option_value(argc, argv, &i, "--threads", &missing)) != NULL) {
+            if (!parse_int("--threads", value, 0, 4096, &v))
+                return EXIT_USAGE;
+            opt.threads = (int)v;
+        } else if ((value = option_value(argc, argv, &i, "--seed", &missing)) != NULL) {
+            if (!parse_int("--seed", value, 0, LLONG_MAX, &v))
+                return EXIT_USAGE;
+            opt.seed = (uint64_t)v;
+            opt.has_seed = 1;
+        } else if ((value = option_value(argc, argv, &i, "--accuracy", &missing)) != NULL) {
+            char *end = NULL;
+            double a = strtod(value, &end);
+            if (end == value || *end != '\0' || !(a > 0.0) || a > 10.0) {
+                fprintf(stderr, "irrcache points: --accuracy %s: not a number in (0, 10]; give one such as 0.15\n",
+                        value);
+                return EXIT_USAGE;
+            }
+            opt.ic.cache.accuracy = (float)a;
+        } else if (missing) {
+            fprintf(stderr, "irrcache points: %s: missing value; see irrcache points --help\n", arg);
+            return EXIT_USAGE;
+        } else {
+            fprintf(stderr, "irrcache points: %s: unknown option; see irrcache points --help\n", arg);
+            return EXIT_USAGE;
+        }
+    }
+    if (!scene_path || !points_path) {
+        fprintf(stderr, "irrcache points: %s; usage: irrcache points SCENE --points FILE|- [options]\n",
+                !scene_path ? "no scene given" : "no --points FILE given ('-' reads standard input)");
+        return EXIT_USAGE;
+    }
+
+    ic_sensor_point *pts = NULL;
+    uint32_t count = 0;
+    if (!read_points(points_path, &pts, &count))
+        return EXIT_WORK;
+    ic_error err = {0};
+    ic_scene *scene = NULL;
+    ic_point_result *res = malloc(sizeof *res * count);
+    ic_points_stats st;
+    int status = EXIT_WORK;
+    if (!res) {
+        fprintf(stderr, "irrcache points: out of memory for %u results\n", count);
+    } else if (ic_scene_load(scene_path, NULL, &scene, &err) != IC_OK) {
+        fprintf(stderr, "irrcache points: %s\n", err.message);
+    } else if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
+        fprintf(stderr, "irrcache points: %s: %s\n", points_path, err.message);
+    } else if (format == FORMAT_JSON) {
+        status = write_json(out_path, &opt, res, count, &st) ? 0 : EXIT_WORK;
+    } else if (!out_path) {
+        write_rows(stdout, format, res, count);
+        status = fflush(stdout) == 0 && !ferror(stdout) ? 0 : EXIT_WORK;
+        if (status)
+            fprintf(stderr, "irrcache points: standard output: write error\n");
+    } else {
+        ic_atomic_file f;
+        if (ic_atomic_file_open(&f, out_path, &err) != IC_OK) {
+            fprintf(stderr, "irrcache points: %s\n", err.message);
+        } else {
+            write_rows(f.fp, format, res, count);
+            if (ic_atomic_file_commit(&f, &err) != IC_OK)
+                fprintf(stderr, "irrcache points: %s\n", err.message);
+            else
+                status = 0;
+        }
+    }
+    ic_scene_free(scene);
+    free(res);
+    free(pts);
+    return status;
+}

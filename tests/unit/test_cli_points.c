@@ -1,0 +1,138 @@
+/*
+ * test_cli_points.c — `irrcache points`: results in input order in the three formats, stdin and -o,
+ * identical output for 1 and 2 threads, and malformed points files: a one-line error naming the file and
+ * line, exit 1, and no output file (nor a temporary one) left behind.
+ */
+#include "test_util.h"
+
+#include "test_files.h"
+#include "test_render_util.h"
+
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#define CLI IC_CLI_PATH
+#define SCENE IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
+#define DIR IC_TEST_TMP "/cli_points"
+#define ERR DIR "/stderr.txt"
+
+static char err_text[8192];
+
+/* Runs `irrcache points ARGS` (stderr captured, stdout to out_path or discarded); returns the exit status,
+ * or -1 if it crashed. */
+static int run(const char *args, const char *out_path)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s points %s 2>%s >%s", CLI, args, ERR, out_path ? out_path : "/dev/null");
+    int st = system(cmd);
+    FILE *f = fopen(ERR, "r");
+    size_t n = f ? fread(err_text, 1, sizeof err_text - 1, f) : 0;
+    err_text[n] = 0;
+    if (f)
+        fclose(f);
+    if (st == -1 || !WIFEXITED(st))
+        return -1;
+    return WEXITSTATUS(st);
+}
+
+static char *slurp(const char *path)
+{
+    static char buf[65536];
+    FILE *f = fopen(path, "r");
+    size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
+    buf[n] = 0;
+    if (f)
+        fclose(f);
+    return buf;
+}
+
+static int file_exists(const char *p)
+{
+    struct stat s;
+    return stat(p, &s) == 0;
+}
+
+static int line_count(const char *s)
+{
+    int n = 0;
+    for (; *s; ++s)
+        n += *s == '\n';
+    return n;
+}
+
+static void test_outputs(void)
+{
+    test_write_file(DIR "/pts.txt", "# two sensors on a work plane, one on the left wall\n"
+                                    "-0.7 0.8 0.6 0 1 0\n"
+                                    "\n"
+                                    "0.7 0.8 0.7   0 1 0   # right\n"
+                                    "-0.98 1 0 1 0 0\n");
+    CHECK(run("--help", NULL) == 0, "--help exits 0");
+    CHECK(run(SCENE " --points " DIR "/pts.txt --threads 1", DIR "/a.txt") == 0, "text to stdout: %s", err_text);
+    char a[4096];
+    snprintf(a, sizeof a, "%s", slurp(DIR "/a.txt"));
+    CHECK(line_count(a) == 3, "one line per point: %d", line_count(a));
+    double v[5] = {0};
+    CHECK(sscanf(a, "%lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4]) == 5, "five numbers per line: %s", a);
+    double lux = 179.0 * (0.265074126 * v[0] + 0.670114631 * v[1] + 0.064811243 * v[2]);
+    CHECK_NEAR(v[3], lux, 1e-4 * lux, "illuminance column is 179 lm/W times the luminance");
+    CHECK(v[3] > 50.0 && v[4] > 0.0 && v[4] < 0.1 * v[3], "plausible lux %g and sigma %g", v[3], v[4]);
+    /* Same points through stdin, 2 threads, written with -o: the same bytes. */
+    CHECK(run(SCENE " --points - --threads 2 -o " DIR "/b.txt < " DIR "/pts.txt", NULL) == 0, "stdin and -o: %s",
+          err_text);
+    CHECK(strcmp(a, slurp(DIR "/b.txt")) == 0, "1 and 2 threads, file and stdin: identical output");
+    CHECK(run(SCENE " --points " DIR "/pts.txt --format csv --integrator pt --samples 256 -o " DIR "/c.csv", NULL) == 0,
+          "csv: %s", err_text);
+    const char *csv = slurp(DIR "/c.csv");
+    CHECK(strncmp(csv, "irradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux\n", 65) == 0 &&
+              line_count(csv) == 4,
+          "csv: a header and three rows: %s", csv);
+    CHECK(run(SCENE " --points " DIR "/pts.txt --format json -o " DIR "/d.json", NULL) == 0, "json: %s", err_text);
+    const char *json = slurp(DIR "/d.json");
+    CHECK(strstr(json, "\"points\":[") && strstr(json, "\"illuminance\":") && strstr(json, "\"sigma\":"),
+          "json has the points: %s", json);
+}
+
+typedef struct bad_case {
+    const char *what;
+    const char *text;      /* the points file */
+    const char *must_name; /* text the message must contain */
+} bad_case;
+
+static void test_bad_files(void)
+{
+    static const bad_case cases[] = {
+        {"a word", "0 1 0 0 1 0\n# ok\n0 1 zero 0 1 0\n", "bad.txt:3: 'zero' is not a number"},
+        {"five numbers", "\n0 1 0 0 1\n", "bad.txt:2: 5 numbers, expected 6"},
+        {"seven numbers", "0 1 0 0 1 0 7\n", "bad.txt:1: more than 6 numbers"},
+        {"zero normal", "0 1 0 0 1 0\n0 1 0 0 0 0\n", "bad.txt:2: the normal (0 0 0) is zero"},
+        {"not finite", "0 1 nan 0 1 0\n", "bad.txt:1: number 3 is not finite"},
+        {"no points", "# nothing\n\n", "bad.txt: no points"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        const bad_case *c = &cases[k];
+        test_write_file(DIR "/bad.txt", c->text);
+        unlink(DIR "/bad-out.txt");
+        int st = run(SCENE " --points " DIR "/bad.txt -o " DIR "/bad-out.txt", NULL);
+        CHECK(st == 1, "%s: exit %d, expected 1", c->what, st);
+        CHECK(strstr(err_text, c->must_name) != NULL, "%s: message names '%s': %s", c->what, c->must_name, err_text);
+        CHECK(line_count(err_text) == 1, "%s: one line: %s", c->what, err_text);
+        CHECK(!file_exists(DIR "/bad-out.txt"), "%s: no output file", c->what);
+    }
+    CHECK(test_count_temporaries(DIR) == 0, "no temporaries left");
+    CHECK(run(SCENE " --points " DIR "/missing.txt", NULL) == 1 && strstr(err_text, "missing.txt"),
+          "a missing file: exit 1 naming it: %s", err_text);
+    CHECK(run(SCENE, NULL) == 2, "no --points: usage error");
+    CHECK(run(SCENE " --points " DIR "/pts.txt --format xml", NULL) == 2, "unknown format: usage error");
+    CHECK(run(SCENE " --points " DIR "/pts.txt --samples 0", NULL) == 2, "--samples 0: usage error");
+}
+
+int main(void)
+{
+    mkdir(DIR, 0755);
+    test_outputs();
+    test_bad_files();
+    TEST_MAIN_END();
+}
