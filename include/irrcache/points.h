@@ -17,8 +17,8 @@
  *                     (next-event estimation) plus one cosine-distributed ray path-traced onwards, MIS
  *                     between the two; σ from the samples' variance.
  *   IC_INTEGRATOR_IC  irradiance caching (Ward et al. 1988): a record is gathered at a sensor where a
- *                     look-up finds none (the lazy strategy over the points in input order), so
- *                     neighbouring sensors share records; each point's indirect light (and the sky's, as
+ *                     look-up finds none (in passes over the points in input order, each pass's
+ *                     records gathered in parallel), so neighbouring sensors share records; each point's indirect light (and the sky's, as
  *                     Radiance's ambient calculation treats a glow sky) is interpolated from them, while
  *                     the sun, point lights and emitting surfaces are light-sampled at every point
  *                     (`light_samples` samples, never interpolated). σ combines the records' Monte Carlo
@@ -30,8 +30,8 @@
  * 0.670114631 G + 0.064811243 B) of the irradiance (IC_LUMINOUS_EFFICACY, IC_LUMINANCE_R/G/B).
  *
  * Results depend only on the scene, the points, the options and the seed, never on the thread count:
- * random numbers are a hash of (seed, point index, sample), and the cache is built serially in input
- * order. The library never prints; failures come back as ic_result with err filled.
+ * random numbers are a hash of (seed, point index, sample), and which points get records is decided
+ * serially, in input order. The library never prints; failures come back as ic_result with err filled.
  */
 #ifndef IRRCACHE_POINTS_H
 #define IRRCACHE_POINTS_H
@@ -71,7 +71,7 @@ typedef struct ic_points_options {
     uint64_t seed;         /* random seed [scene file, else 1] */
     int has_seed;          /* 1: use `seed` even if it is 0 */
     ic_ic_options ic;      /* the cache (integrator IC): accuracy, gathering, bounces, …; the strategy is
-                              always lazy over the points; large emitters are always light-sampled; the
+                              always the points' own (passes, see above); large emitters are always light-sampled; the
                               pixel radius bounds, the record filter and cache files do not apply */
 } ic_points_options;
 

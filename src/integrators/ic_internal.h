@@ -210,7 +210,9 @@ void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b);
 /* A context for sensor points: opt resolved as for a render, lazy, every emitter light-sampled, no record
  * filter, no cache files, and no shading points of the camera. */
 ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, ic_error *err);
-/* Lazy construction over the sensors (p[i], unit n[i]) in input order, serial; freezes the cache. */
+/* Construction over the sensors (p[i], unit n[i]): in passes, the points no record covers, in input order,
+ * each unless it lies within reach of one taken before it in the pass; the pass's records gathered in
+ * parallel and inserted as one batch (the records do not depend on the thread count); freezes the cache. */
 ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_error *err);
 /* The interpolated irradiance at (p, n) (environment and indirect light), the σ of each channel and of
  * its luminance (Radiance's weights) from the contributing records' σ; 0 if no record contributes. */

@@ -1,8 +1,8 @@
 /*
  * ic_points.c — the irradiance cache at sensor points (include/irrcache/points.h, driven by
- * src/render/points.c): a context without the image's shading points, lazy construction over the
- * sensors in input order (Ward et al. 1988 §3: a look-up at each point, a record gathered and inserted
- * where none is accepted), and per point the interpolated indirect irradiance with the Monte Carlo σ
+ * src/render/points.c): a context without the image's shading points, construction over the sensors
+ * (Ward et al. 1988 §3: a look-up at each point, a record gathered and inserted where none is accepted),
+ * in passes whose records are gathered in parallel, and per point the interpolated indirect irradiance with the Monte Carlo σ
  * the interpolation carries over from its records (Křivánek et al. 2006 §4.3 for a record's σ).
  */
 #include "ic_internal.h"
@@ -10,10 +10,11 @@
 #include "irrcache/points.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define POINT_KEY_TAG 0x73656e736f72ULL /* keys of sensor records, apart from the image's */
-#define MAX_ROUNDS 8                    /* passes over the points while later records clamp earlier ones */
+#define MAX_ROUNDS 8                    /* most records gathered at one point (neighbour clamping) */
 #define CONTRIBUTION_CAPACITY 256
 
 void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b)
@@ -57,44 +58,51 @@ ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *
 
 ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_error *err)
 {
-    ic_gather_worker worker;
-    memset(&worker, 0, sizeof worker);
-    worker.c = c;
-    ic_gatherer *g = NULL;
-    ic_result r = ic_gatherer_create(&c->o.gather, ic_ic_gather_trace, &worker, &g, err);
-    /* Input order, then again while a point lost its cover to a later record's neighbour clamping. */
-    for (int round = 0; round < MAX_ROUNDS && r == IC_OK; ++round) {
-        uint32_t added = 0;
-        for (uint32_t i = 0; i < count && r == IC_OK; ++i) {
+    /* A record accepts a look-up only within a_i·R_i of itself (both weights' distance term), and R_i is at
+     * most the larger of the radius bounds: sensors farther apart than that can never share a record, so
+     * their records are gathered together without loss. */
+    float reach = c->o.cache.accuracy * fmaxf(c->o.cache.max_radius, c->o.cache.min_radius) * 1.0001f;
+    float reach2 = isfinite(reach) ? reach * reach : INFINITY;
+    uint8_t *gathered = calloc(count, 1);          /* records gathered at each point so far */
+    uint32_t *batch = malloc(sizeof *batch * count);
+    ic_candidate *cand = malloc(sizeof *cand * count);
+    ic_result r = gathered && batch && cand ? IC_OK
+                                             : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
+    phase_times times = {0.0, 0.0};
+    /* Passes: the uncovered points in input order, each taken unless it lies within reach of one already
+     * taken this pass (it waits for the next pass, where their record may cover it); the pass's records
+     * are gathered in parallel and inserted as one batch. What is taken depends only on the points and the
+     * records, never on the thread count. A point is gathered at most MAX_ROUNDS times (a later record's
+     * neighbour clamping can take its cover away, as in lazy construction). */
+    while (r == IC_OK) {
+        uint32_t taken = 0;
+        for (uint32_t i = 0; i < count; ++i) {
+            if (gathered[i] >= MAX_ROUNDS)
+                continue;
             ic_cache_lookup q = ic_cache_lookup_at(p[i], n[i], IC_ACCEPT_CONSTRUCTION);
             ic_cache_estimate e;
             if (ic_cache_query(c->cache, &q, &e))
                 continue;
-            ic_candidate cd;
-            cd.p = p[i];
-            cd.n = n[i];
-            cd.footprint = 0.0f; /* no pixel: only the world-space radius bounds apply */
-            cd.key = ic_hash4(POINT_KEY_TAG, i, (uint64_t)round, 0);
-            ic_gather_point gp = ic_ic_gather_point_of(&cd);
-            ic_gather_result gr;
-            ic_vec3 levels[IC_LEVELS_MAX + 1];
-            r = ic_ic_gather_one(&worker, g, &gp, &gr, levels);
-            if (r != IC_OK) {
-                ic_error_set(err, r, "gathering failed at sensor point %u", i);
-                break;
-            }
-            ic_record rec;
-            ic_ic_record_from_gather(c, &cd, &gr, &rec);
-            uint32_t index = 0;
-            r = ic_cache_insert(c->cache, &rec, &index, err);
-            if (r == IC_OK)
-                r = ic_ic_keep_levels(c, index, 1, levels, err);
-            ++added;
+            int near = 0;
+            for (uint32_t k = 0; k < taken && !near && reach2 > 0.0f; ++k)
+                near = v3_len2(v3_sub(p[batch[k]], p[i])) < reach2;
+            if (near)
+                continue;
+            ic_candidate *cd = &cand[taken];
+            cd->p = p[i];
+            cd->n = n[i];
+            cd->footprint = 0.0f; /* no pixel: only the world-space radius bounds apply */
+            cd->key = ic_hash4(POINT_KEY_TAG, i, gathered[i], 0);
+            batch[taken++] = i;
+            ++gathered[i];
         }
-        if (added == 0)
+        if (taken == 0)
             break;
+        r = ic_ic_gather_and_insert(c, cand, taken, &times, err);
     }
-    ic_gatherer_destroy(g);
+    free(gathered);
+    free(batch);
+    free(cand);
     if (r == IC_OK)
         r = ic_cache_freeze(c->cache, err);
     return r;
