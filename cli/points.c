@@ -52,7 +52,7 @@ static void print_help(FILE *out)
             "  --light-samples N  ic: light samples per point for the direct light (default: %d)\n"
             "  --accuracy A       ic: the cache's accuracy a (smaller: more records) (default: %g)\n"
             "  --max-depth N      scattering events, the sensor the first: light bounces at most N-1 times\n"
-            "                     before it arrives (default: the scene file's, else %d)\n"
+            "                     before it arrives; ic needs 2 or more (default: the scene file's, else %d)\n"
             "  --seed N           random seed (default: the scene file's, else %d)\n"
             "  --threads N        threads, 0 = all cores; results do not depend on it (default: 0)\n"
             "  -h, --help         show this help\n"
@@ -357,6 +357,8 @@ int ic_cli_points(int argc, char **argv)
         fprintf(stderr, "irrcache points: %s\n", err.message);
     } else if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
         fprintf(stderr, "irrcache points: %s: %s\n", points_path, err.message);
+        if (err.code == IC_ERR_INVALID_ARG)
+            status = EXIT_USAGE; /* an option the scene's settings make impossible */
     } else if (format == FORMAT_JSON) {
         status = write_json(out_path, &opt, res, count, &st) ? 0 : EXIT_WORK;
     } else if (!out_path) {

@@ -66,7 +66,8 @@ typedef struct ic_points_options {
     int samples;           /* pt: paths per point [IC_DEFAULT_POINT_SAMPLES] */
     int light_samples;     /* ic: light samples per point for the direct part [IC_DEFAULT_POINT_LIGHT_SAMPLES] */
     int max_depth;         /* scattering events, the sensor being the first; the light a sensor receives has
-                              bounced at most max_depth − 1 times [scene file, else 8] */
+                              bounced at most max_depth − 1 times; IC needs 2 or more (its records carry at
+                              least one bounce) [scene file, else 8] */
     int threads;           /* 0 = all cores (results do not depend on it) */
     uint64_t seed;         /* random seed [scene file, else 1] */
     int has_seed;          /* 1: use `seed` even if it is 0 */

@@ -169,6 +169,11 @@ static ic_result resolve_options(const ic_scene *scene, ic_points_options *o, ic
         o->max_depth = scene->settings.max_depth > 0 ? scene->settings.max_depth : IC_DEFAULT_MAX_DEPTH;
     if (!o->has_seed && o->seed == 0)
         o->seed = scene->settings.seed ? scene->settings.seed : IC_DEFAULT_SEED;
+    /* A record's hemisphere rays return at least their hit's direct light: one bounce at the least. */
+    if (o->integrator == IC_INTEGRATOR_IC && o->max_depth < 2)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "max depth %d (direct light only) with the cache: its records "
+                            "carry at least one bounce; use the path tracer, or a max depth of 2 or more",
+                            o->max_depth);
     return IC_OK;
 }
 

@@ -127,6 +127,8 @@ static void test_bad_files(void)
     CHECK(run(SCENE, NULL) == 2, "no --points: usage error");
     CHECK(run(SCENE " --points " DIR "/pts.txt --format xml", NULL) == 2, "unknown format: usage error");
     CHECK(run(SCENE " --points " DIR "/pts.txt --samples 0", NULL) == 2, "--samples 0: usage error");
+    CHECK(run(SCENE " --points " DIR "/pts.txt --max-depth 1", NULL) == 2 && strstr(err_text, "max depth 1"),
+          "the cache at --max-depth 1: usage error: %s", err_text);
 }
 
 int main(void)

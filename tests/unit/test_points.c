@@ -287,6 +287,14 @@ static void test_bad_points(void)
     opt.samples = -1;
     CHECK(ic_points_compute(scene, pts, 1, &opt, res, NULL, &err) == IC_ERR_INVALID_ARG, "negative samples refused");
     CHECK(ic_points_compute(scene, pts, 0, NULL, NULL, NULL, &err) == IC_OK, "no points: nothing to do");
+    opt.samples = 0;
+    opt.integrator = IC_INTEGRATOR_IC;
+    opt.max_depth = 1;
+    CHECK(ic_points_compute(scene, pts, 1, &opt, res, NULL, &err) == IC_ERR_INVALID_ARG,
+          "the cache refuses max depth 1 (direct light only), which the path tracer serves");
+    opt.integrator = IC_INTEGRATOR_PT;
+    opt.samples = 16;
+    CHECK(ic_points_compute(scene, pts, 1, &opt, res, NULL, &err) == IC_OK, "pt: max depth 1: %s", err.message);
     ic_scene_free(scene);
 }
 
