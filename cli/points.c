@@ -38,8 +38,9 @@ static void print_help(FILE *out)
             "  E_r E_g E_b  irradiance (the scene's radiometric units: W/m2)\n"
             "  lux          illuminance, 179 lm/W x (0.265074 E_r + 0.670115 E_g + 0.064811 E_b) (Radiance's\n"
             "               convention, so that numbers compare)\n"
-            "  sigma        one-sigma Monte Carlo error of the illuminance (lux); for the cache it leaves out\n"
-            "               the interpolation's bias, which --accuracy bounds\n"
+            "  sigma        one-sigma Monte Carlo error of the illuminance (lux), from 16 independent\n"
+            "               replicates per point; for the cache it leaves out the interpolation's bias,\n"
+            "               which --accuracy bounds\n"
             "\n"
             "options:\n"
             "  --points FILE      the points ('-': standard input) (required)\n"
@@ -48,9 +49,12 @@ static void print_help(FILE *out)
             "  --integrator I     ic: irradiance cache, records gathered at the sensors and shared by\n"
             "                     neighbours, direct light sampled at every point; pt: path-traced\n"
             "                     reference (default: ic)\n"
-            "  --samples N        pt: paths per point (default: %d)\n"
-            "  --light-samples N  ic: light samples per point for the direct light (default: %d)\n"
+            "  --samples N        pt: paths per point, rounded up to a multiple of 16 (default: %d)\n"
+            "  --light-samples N  ic: light samples per point for the direct light, rounded up to a\n"
+            "                     multiple of 16 (default: %d)\n"
             "  --accuracy A       ic: the cache's accuracy a (smaller: more records) (default: %g)\n"
+            "  --rays N           ic: hemisphere rays per record, stratified M x N with N about pi M (more:\n"
+            "                     less noise in each record) (default: %d)\n"
             "  --max-depth N      scattering events, the sensor the first: light bounces at most N-1 times\n"
             "                     before it arrives; ic needs 2 or more (default: the scene file's, else %d)\n"
             "  --seed N           random seed (default: the scene file's, else %d)\n"
@@ -59,7 +63,7 @@ static void print_help(FILE *out)
             "\n"
             "exit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n",
             IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, (double)IC_DEFAULT_ACCURACY_WARD,
-            IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED);
+            IC_DEFAULT_RAYS, IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED);
 }
 
 /* Returns the value of option `name` given as "--name VALUE" or "--name=VALUE", advancing *i; NULL if
@@ -319,6 +323,14 @@ int ic_cli_points(int argc, char **argv)
                 return EXIT_USAGE;
             opt.seed = (uint64_t)v;
             opt.has_seed = 1;
+        } else if ((value = option_value(argc, argv, &i, "--rays", &missing)) != NULL) {
+            if (!parse_int("--rays", value, 16, 10000000, &v))
+                return EXIT_USAGE;
+            /* M × N strata with N ≈ πM (Ward et al. 1988), as `render --rays` sets them. */
+            long m = lround(sqrt((double)v / 3.14159265358979));
+            m = m < 2 ? 2 : m;
+            opt.ic.gather.theta_strata = (uint32_t)m;
+            opt.ic.gather.phi_strata = (uint32_t)((v + m / 2) / m);
         } else if ((value = option_value(argc, argv, &i, "--accuracy", &missing)) != NULL) {
             char *end = NULL;
             double a = strtod(value, &end);

@@ -15,16 +15,21 @@
  * Two estimators:
  *   IC_INTEGRATOR_PT  the reference: per point `samples` paths from the sensor, each one light sample
  *                     (next-event estimation) plus one cosine-distributed ray path-traced onwards, MIS
- *                     between the two; σ from the samples' variance.
+ *                     between the two.
  *   IC_INTEGRATOR_IC  irradiance caching (Ward et al. 1988): a record is gathered at a sensor where a
- *                     look-up finds none (in passes over the points in input order, each pass's
- *                     records gathered in parallel), so neighbouring sensors share records; each point's indirect light (and the sky's, as
- *                     Radiance's ambient calculation treats a glow sky) is interpolated from them, while
- *                     the sun, point lights and emitting surfaces are light-sampled at every point
- *                     (`light_samples` samples, never interpolated). σ combines the records' Monte Carlo
- *                     σ, weighted as the interpolation weights them, with the direct part's sample
- *                     variance; it does not include the interpolation's bias (a record's value moved to
- *                     a nearby point by its gradients), which the cache's accuracy parameter bounds.
+ *                     look-up finds none (in passes over the points in input order, each pass's records
+ *                     gathered in parallel), so neighbouring sensors share records; each point's
+ *                     indirect light (and the sky's, as Radiance's ambient calculation treats a glow
+ *                     sky) is interpolated from them, while the sun, point lights and emitting surfaces
+ *                     are light-sampled at every point (`light_samples` samples, never interpolated).
+ *                     σ adds the interpolation's variance (the records' relative variance, pooled over
+ *                     all records, weighed as the interpolation weighs them) to the direct part's; it
+ *                     does not include the interpolation's bias (a record's value moved to a nearby
+ *                     point by its gradients), which the cache's accuracy parameter bounds.
+ *
+ * Both split a point's samples into IC_POINT_REPLICATES independent randomised quasi-Monte Carlo
+ * replicates (each its own Owen scrambling of the Sobol' sequence): σ is the standard error of their
+ * mean. docs/points.md has the details and measurements.
  *
  * Illuminance follows Radiance's convention so that numbers compare: lux = 179 lm/W × (0.265074126 R +
  * 0.670114631 G + 0.064811243 B) of the irradiance (IC_LUMINOUS_EFFICACY, IC_LUMINANCE_R/G/B).
@@ -53,6 +58,8 @@ extern "C" {
 #define IC_DEFAULT_POINT_SAMPLES 1024       /* pt: paths per point */
 #define IC_DEFAULT_POINT_LIGHT_SAMPLES 256  /* ic: light samples per point for the direct part */
 #define IC_MAX_POINT_SAMPLES (1 << 24)      /* the most either may be */
+#define IC_POINT_REPLICATES 16              /* independent randomised quasi-Monte Carlo estimates per point,
+                                               whose spread gives σ; samples round up to a multiple */
 
 /* A sensor: where it is and which way it faces. */
 typedef struct ic_sensor_point {
@@ -63,8 +70,10 @@ typedef struct ic_sensor_point {
 /* Options; zero means default (given in brackets). */
 typedef struct ic_points_options {
     ic_integrator integrator; /* IC_INTEGRATOR_PT (the zero value) or IC_INTEGRATOR_IC */
-    int samples;           /* pt: paths per point [IC_DEFAULT_POINT_SAMPLES] */
-    int light_samples;     /* ic: light samples per point for the direct part [IC_DEFAULT_POINT_LIGHT_SAMPLES] */
+    int samples;           /* pt: paths per point, rounded up to a multiple of IC_POINT_REPLICATES
+                              [IC_DEFAULT_POINT_SAMPLES] */
+    int light_samples;     /* ic: light samples per point for the direct part, rounded up likewise
+                              [IC_DEFAULT_POINT_LIGHT_SAMPLES] */
     int max_depth;         /* scattering events, the sensor being the first; the light a sensor receives has
                               bounced at most max_depth − 1 times; IC needs 2 or more (its records carry at
                               least one bounce) [scene file, else 8] */

@@ -212,10 +212,14 @@ void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b);
 ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, ic_error *err);
 /* Construction over the sensors (p[i], unit n[i]): in passes, the points no record covers, in input order,
  * each unless it lies within reach of one taken before it in the pass; the pass's records gathered in
- * parallel and inserted as one batch (the records do not depend on the thread count); freezes the cache. */
-ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_error *err);
-/* The interpolated irradiance at (p, n) (environment and indirect light), the σ of each channel and of
- * its luminance (Radiance's weights) from the contributing records' σ; 0 if no record contributes. */
-int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 *E, ic_vec3 *sigma, double *sigma_lum);
+ * parallel and inserted as one batch (the records do not depend on the thread count); freezes the cache.
+ * rel_var gets the records' mean relative variance (σ_i/E_i)² of R, G, B and luminance. */
+ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
+                             ic_error *err);
+/* The interpolated irradiance at (p, n) (environment and indirect light) and the σ of R, G, B and luminance
+ * (Radiance's weights), each record's σ being rel_var's relative σ times its value; 0 if no record
+ * contributes. */
+int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const double rel_var[4], ic_vec3 *E,
+                          double sigma[4]);
 
 #endif

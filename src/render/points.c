@@ -26,15 +26,14 @@ double ic_illuminance(ic_vec3 E)
     return IC_LUMINOUS_EFFICACY * (IC_LUMINANCE_R * E.x + IC_LUMINANCE_G * E.y + IC_LUMINANCE_B * E.z);
 }
 
-/* Running sums of one point's samples of E (RGB and luminance), for the mean and its σ. */
+/* Running sums of independent estimates of E (RGB and luminance), for their mean and its σ. */
 typedef struct sample_sums {
     double sum[4], sum2[4];
     uint64_t n;
 } sample_sums;
 
-static void sums_add(sample_sums *s, ic_vec3 E)
+static void sums_add(sample_sums *s, const double v[4])
 {
-    double v[4] = {E.x, E.y, E.z, IC_LUMINANCE_R * E.x + IC_LUMINANCE_G * E.y + IC_LUMINANCE_B * E.z};
     for (int k = 0; k < 4; ++k) {
         s->sum[k] += v[k];
         s->sum2[k] += v[k] * v[k];
@@ -42,7 +41,7 @@ static void sums_add(sample_sums *s, ic_vec3 E)
     ++s->n;
 }
 
-/* Mean of the samples and the σ of that mean (from the unbiased sample variance). */
+/* Mean of the estimates and the σ of that mean (from their unbiased sample variance). */
 static void sums_finish(const sample_sums *s, double mean[4], double sigma[4])
 {
     double n = (double)s->n;
@@ -62,87 +61,119 @@ typedef struct points_job {
     uint64_t seed;
     int samples;               /* pt: paths; ic: light samples */
     uint32_t uncovered;        /* first point no record covered + 1 (0: none) */
+    double rel_var[4];         /* ic: the records' relative variance (R, G, B, luminance) */
 } points_job;
 
-/* Path-traced samples of E at one sensor: π × (a light sample + a cosine-distributed path), the
- * white receiver's reflected radiance (f = 1/π, f·cos/p = 1 for the cosine path) scaled back to E. */
+/* One sample of E at sensor i (surface s, BSDF b): π times the white receiver's reflected radiance. */
+typedef ic_vec3 (*point_sample_fn)(const points_job *job, uint32_t i, const ic_surface *s, const ic_bsdf *b,
+                                   ic_rng *rng, uint64_t *rays);
+
+/* Path-traced: a light sample plus a cosine-distributed path, MIS between them (f = 1/π, and f·cos/p = 1
+ * for the cosine path). */
+static ic_vec3 sample_pt(const points_job *job, uint32_t i, const ic_surface *s, const ic_bsdf *b, ic_rng *rng,
+                         uint64_t *rays)
+{
+    const ic_tracer *tr = job->tr;
+    ic_vec3 L = ic_direct_light(tr, s, b, job->n[i], &tr->scene->light_select, rng, rays);
+    float u1, u2;
+    ic_rng_2d(rng, &u1, &u2);
+    ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
+    float cos_i = v3_dot(wi, b->frame.n);
+    if (cos_i > 0.0f) {
+        ic_path_start st;
+        memset(&st, 0, sizeof st);
+        st.depth = 1;
+        st.pdf = cos_i * IC_INV_PI;
+        L = v3_add(L, ic_pt_li_from(tr, ic_spawn_ray(s, wi), &st, rng, rays));
+    }
+    return v3_scale(L, IC_PI);
+}
+
+/* The cache estimator's direct part: light samples of the sun, point lights and emitting surfaces. */
+static ic_vec3 sample_direct(const points_job *job, uint32_t i, const ic_surface *s, const ic_bsdf *b, ic_rng *rng,
+                             uint64_t *rays)
+{
+    return v3_scale(ic_ic_direct_light(job->ic, s, b, job->n[i], NULL, rng, rays), IC_PI);
+}
+
+/* job->samples samples of fn at sensor i as REPLICATES independent randomised quasi-Monte Carlo estimates
+ * (Owen 1995): each replicate draws its 2-D pairs from its own scrambling of the Sobol' sequence
+ * (src/core/rng.h), so its samples cover the light's and the hemisphere's squares evenly (lower variance
+ * than independent draws), while the replicates stay independent and unbiased: the spread of their means
+ * gives σ. Samples are rounded up to a multiple of the replicates. */
+static void estimate_point(const points_job *job, uint32_t i, uint64_t purpose, point_sample_fn fn, double mean[4],
+                           double sigma[4], uint64_t *rays)
+{
+    ic_surface s;
+    ic_bsdf b;
+    ic_ic_sensor(job->p[i], job->n[i], &s, &b);
+    int replicates = job->samples < IC_POINT_REPLICATES ? job->samples : IC_POINT_REPLICATES;
+    int per = (job->samples + replicates - 1) / replicates;
+    sample_sums reps;
+    memset(&reps, 0, sizeof reps);
+    for (int r = 0; r < replicates; ++r) {
+        double acc[4] = {0.0, 0.0, 0.0, 0.0};
+        uint64_t key = ic_hash4(job->seed, i, (uint64_t)r, purpose);
+        for (int k = 0; k < per; ++k) {
+            ic_rng rng = ic_rng_make(job->seed, i, (uint64_t)r * (uint64_t)per + (uint64_t)k, purpose);
+            ic_rng_enable_lds(&rng, key, (uint32_t)k);
+            ic_vec3 E = fn(job, i, &s, &b, &rng, rays);
+            acc[0] += E.x;
+            acc[1] += E.y;
+            acc[2] += E.z;
+        }
+        double m[4] = {acc[0] / per, acc[1] / per, acc[2] / per, 0.0};
+        m[3] = IC_LUMINANCE_R * m[0] + IC_LUMINANCE_G * m[1] + IC_LUMINANCE_B * m[2];
+        sums_add(&reps, m);
+    }
+    sums_finish(&reps, mean, sigma);
+}
+
+static void store(ic_point_result *r, const double e[4], const double sg[4])
+{
+    r->irradiance = v3((float)e[0], (float)e[1], (float)e[2]);
+    r->irradiance_sigma = v3((float)sg[0], (float)sg[1], (float)sg[2]);
+    r->illuminance = IC_LUMINOUS_EFFICACY * e[3];
+    r->illuminance_sigma = IC_LUMINOUS_EFFICACY * sg[3];
+}
+
 static void point_pt(void *ctx, int64_t item, int thread)
 {
     (void)thread;
     points_job *job = ctx;
-    const ic_tracer *tr = job->tr;
     uint32_t i = (uint32_t)item;
-    ic_surface s;
-    ic_bsdf b;
-    ic_ic_sensor(job->p[i], job->n[i], &s, &b);
-    ic_vec3 wo = job->n[i];
-    sample_sums sums;
-    memset(&sums, 0, sizeof sums);
-    uint64_t rays = 0;
-    for (int k = 0; k < job->samples; ++k) {
-        ic_rng rng = ic_rng_make(job->seed, i, (uint64_t)k, STREAM_PT);
-        ic_vec3 L = ic_direct_light(tr, &s, &b, wo, &tr->scene->light_select, &rng, &rays);
-        float u1 = ic_rng_float(&rng), u2 = ic_rng_float(&rng);
-        ic_vec3 wi = ic_frame_to_world(&b.frame, ic_warp_cosine_hemisphere(u1, u2));
-        float cos_i = v3_dot(wi, b.frame.n);
-        if (cos_i > 0.0f) {
-            ic_path_start st;
-            memset(&st, 0, sizeof st);
-            st.depth = 1;
-            st.pdf = cos_i * IC_INV_PI;
-            L = v3_add(L, ic_pt_li_from(tr, ic_spawn_ray(&s, wi), &st, &rng, &rays));
-        }
-        sums_add(&sums, v3_scale(L, IC_PI));
-    }
     double mean[4], sigma[4];
-    sums_finish(&sums, mean, sigma);
-    ic_point_result *r = &job->out[i];
-    r->irradiance = v3((float)mean[0], (float)mean[1], (float)mean[2]);
-    r->irradiance_sigma = v3((float)sigma[0], (float)sigma[1], (float)sigma[2]);
-    r->illuminance = IC_LUMINOUS_EFFICACY * mean[3];
-    r->illuminance_sigma = IC_LUMINOUS_EFFICACY * sigma[3];
+    uint64_t rays = 0;
+    estimate_point(job, i, STREAM_PT, sample_pt, mean, sigma, &rays);
+    store(&job->out[i], mean, sigma);
     job->rays[i] = rays;
 }
 
-/* The cache's estimate at one sensor: the records' interpolation plus light samples of the emitters;
- * the two errors are independent, so their variances add. */
+/* The cache's estimate at one sensor: the records' interpolation plus the light samples; the two errors
+ * are independent, so their variances add. */
 static void point_ic(void *ctx, int64_t item, int thread)
 {
     (void)thread;
     points_job *job = ctx;
     uint32_t i = (uint32_t)item;
-    ic_vec3 E_cache, sigma_cache;
-    double sigma_cache_lum = 0.0;
-    if (!ic_ic_points_indirect(job->ic, job->p[i], job->n[i], &E_cache, &sigma_cache, &sigma_cache_lum)) {
+    ic_vec3 E_cache;
+    double sc[4];
+    if (!ic_ic_points_indirect(job->ic, job->p[i], job->n[i], job->rel_var, &E_cache, sc)) {
         /* Construction leaves every sensor covered; a point it missed is reported, not guessed. */
         job->uncovered = i + 1;
         return;
     }
-    ic_surface s;
-    ic_bsdf b;
-    ic_ic_sensor(job->p[i], job->n[i], &s, &b);
-    sample_sums sums;
-    memset(&sums, 0, sizeof sums);
-    uint64_t rays = 0;
-    for (int k = 0; k < job->samples; ++k) {
-        ic_rng rng = ic_rng_make(job->seed, i, (uint64_t)k, STREAM_DIRECT);
-        sums_add(&sums, v3_scale(ic_ic_direct_light(job->ic, &s, &b, job->n[i], NULL, &rng, &rays), IC_PI));
-    }
     double mean[4], sigma[4];
-    sums_finish(&sums, mean, sigma);
+    uint64_t rays = 0;
+    estimate_point(job, i, STREAM_DIRECT, sample_direct, mean, sigma, &rays);
     double ec[4] = {E_cache.x, E_cache.y, E_cache.z,
                     IC_LUMINANCE_R * E_cache.x + IC_LUMINANCE_G * E_cache.y + IC_LUMINANCE_B * E_cache.z};
-    double sc[4] = {sigma_cache.x, sigma_cache.y, sigma_cache.z, sigma_cache_lum};
     double e[4], sg[4];
     for (int k = 0; k < 4; ++k) {
         e[k] = mean[k] + ec[k];
         sg[k] = sqrt(sigma[k] * sigma[k] + sc[k] * sc[k]);
     }
-    ic_point_result *r = &job->out[i];
-    r->irradiance = v3((float)e[0], (float)e[1], (float)e[2]);
-    r->irradiance_sigma = v3((float)sg[0], (float)sg[1], (float)sg[2]);
-    r->illuminance = IC_LUMINOUS_EFFICACY * e[3];
-    r->illuminance_sigma = IC_LUMINOUS_EFFICACY * sg[3];
+    store(&job->out[i], e, sg);
     job->rays[i] = rays;
 }
 
@@ -249,7 +280,7 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
         ro.ic = opt.ic;
         r = ic_ic_points_ctx_create(&tr, &ro, &ic, err);
         if (r == IC_OK)
-            r = ic_ic_points_build(ic, p, n, count, err);
+            r = ic_ic_points_build(ic, p, n, count, job.rel_var, err);
         if (r == IC_OK) {
             st->records = ic_cache_count(ic->cache);
             st->rays += (uint64_t)atomic_load(&ic->rays);

@@ -2,7 +2,8 @@
  * test_points.c — irradiance and illuminance at sensor points (irrcache/points.h) against closed forms:
  *   1. open plane under a uniform sky of radiance L: a sensor facing up receives E = πL; one facing
  *      sideways sees half the sky and half the ground (radiance ρL), E = πL(1 + ρ)/2, and over 40 seeds
- *      its error stays within 2σ about 95 % of the time (checked: at least 85 %);
+ *      its error stays within 2σ about 94 % of the time (σ from 16 replicates: 15 degrees of freedom;
+ *      checked: at least 85 %);
  *   2. a sensor facing a single emitting rectangle: E by Lambert's polygon formula, both estimators;
  *   3. the Cornell box: the cache and the path tracer agree within their error bars (plus the cache's
  *      interpolation bias, which σ leaves out) at a few points; on an 8 × 8 work-plane grid the cache is
@@ -114,7 +115,7 @@ static void test_open_plane(void)
         inside1 += fabs(res.illuminance - side_lux) < res.illuminance_sigma;
     }
     printf("pt: sideways sensor within 2 sigma for %d of %d seeds, within 1 sigma for %d\n", inside, seeds, inside1);
-    CHECK(inside >= (int)(0.85 * seeds), "2-sigma coverage %d of %d (expected about 95 %%)", inside, seeds);
+    CHECK(inside >= (int)(0.85 * seeds), "2-sigma coverage %d of %d (expected about 94 %%)", inside, seeds);
     ic_scene_free(scene);
 }
 
