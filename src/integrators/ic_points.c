@@ -46,13 +46,28 @@ ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *
      * light only. */
     o.ic.large_emitters.mode = IC_CACHE_OFF;
     o.ic.record_filter.mode = IC_CACHE_OFF;
-    ic_result r = ic_ic_ctx_create(tr, &o, out, NULL, err);
+    /* Sensors are the only shading points: the context, which traces one shading point per pixel of the
+     * camera, is made over a copy of the scene whose camera has a single pixel (the copy shares the
+     * scene's arrays and is read only during the call), then pointed at the scene itself. */
+    ic_scene *one_pixel = malloc(sizeof *one_pixel);
+    if (!one_pixel)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory");
+    *one_pixel = *tr->scene;
+    one_pixel->camera.width = 1;
+    one_pixel->camera.height = 1;
+    ic_tracer one_pixel_tr = *tr;
+    one_pixel_tr.scene = one_pixel;
+    ic_result r = ic_ic_ctx_create(&one_pixel_tr, &o, out, NULL, err);
+    free(one_pixel);
     if (r != IC_OK)
         return r;
-    /* The camera's shading points are not used: sensors are the only shading points. */
-    ic_ic_gbuffer_free(*out);
-    memset(&(*out)->g, 0, sizeof (*out)->g);
-    (*out)->has_record = NULL;
+    ic_ctx *c = *out;
+    c->tr = tr;
+    c->gather_tr.scene = tr->scene;
+    c->gather_tr.accel = tr->accel;
+    ic_ic_gbuffer_free(c);
+    memset(&c->g, 0, sizeof c->g);
+    c->has_record = NULL;
     return IC_OK;
 }
 
