@@ -71,6 +71,69 @@ ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *
     return IC_OK;
 }
 
+/* The points taken in one construction pass, hashed by the cube of side `reach` each lies in: whether a
+ * taken point lies within reach of p is then a look at the 27 cubes around p, not at every taken point. */
+typedef struct taken_grid {
+    float cell;            /* cube side: the reach */
+    uint32_t mask;         /* slots − 1; slots a power of two ≥ 2 × points, so the table never fills */
+    uint64_t *key;         /* per slot: hash of its cube (never 0), 0 when empty */
+    uint32_t *head;        /* per slot: first taken point in the cube, + 1 */
+    uint32_t *next;        /* per point: the next taken point in its cube, + 1 (0: none) */
+} taken_grid;
+
+static int64_t cube_coord(float x, float cell)
+{
+    double v = floor((double)x / (double)cell);
+    return (int64_t)fmax(fmin(v, 4.0e18), -4.0e18);
+}
+
+static uint64_t cube_key(int64_t x, int64_t y, int64_t z)
+{
+    uint64_t k = ic_hash4((uint64_t)x, (uint64_t)y, (uint64_t)z, 0x63756265ULL);
+    return k ? k : 1;
+}
+
+/* The head of cube `key`'s list: created empty when insert is 1, else NULL if the cube holds nothing. */
+static uint32_t *grid_head(taken_grid *g, uint64_t key, int insert)
+{
+    for (uint32_t s = (uint32_t)key & g->mask;; s = (s + 1) & g->mask) {
+        if (g->key[s] == key)
+            return &g->head[s];
+        if (g->key[s] == 0) {
+            if (!insert)
+                return NULL;
+            g->key[s] = key;
+            g->head[s] = 0;
+            return &g->head[s];
+        }
+    }
+}
+
+/* 1 if a point taken this pass lies closer to p than the reach. */
+static int grid_near(taken_grid *g, const ic_vec3 *pts, ic_vec3 p)
+{
+    float reach2 = g->cell * g->cell;
+    int64_t cx = cube_coord(p.x, g->cell), cy = cube_coord(p.y, g->cell), cz = cube_coord(p.z, g->cell);
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                uint32_t *head = grid_head(g, cube_key(cx + dx, cy + dy, cz + dz), 0);
+                for (uint32_t k = head ? *head : 0; k; k = g->next[k - 1])
+                    if (v3_len2(v3_sub(pts[k - 1], p)) < reach2)
+                        return 1;
+            }
+    return 0;
+}
+
+static void grid_add(taken_grid *g, const ic_vec3 *pts, uint32_t i)
+{
+    ic_vec3 p = pts[i];
+    uint32_t *head = grid_head(g, cube_key(cube_coord(p.x, g->cell), cube_coord(p.y, g->cell),
+                                           cube_coord(p.z, g->cell)), 1);
+    g->next[i] = *head;
+    *head = i + 1;
+}
+
 ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
                              ic_error *err)
 {
@@ -78,12 +141,25 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
      * most the larger of the radius bounds: sensors farther apart than that can never share a record, so
      * their records are gathered together without loss. */
     float reach = c->o.cache.accuracy * fmaxf(c->o.cache.max_radius, c->o.cache.min_radius) * 1.0001f;
-    float reach2 = isfinite(reach) ? reach * reach : INFINITY;
+    /* Without a finite reach (no radius bound) any two points might share: one record per pass. */
+    int bounded = isfinite(reach) && reach > 0.0f && reach < 1e30f;
+    taken_grid grid;
+    memset(&grid, 0, sizeof grid);
+    grid.cell = reach;
+    uint32_t slots = 16;
+    while (slots < 2u * count && slots < (1u << 31))
+        slots *= 2;
+    grid.mask = slots - 1;
     uint8_t *gathered = calloc(count, 1);          /* records gathered at each point so far */
-    uint32_t *batch = malloc(sizeof *batch * count);
     ic_candidate *cand = malloc(sizeof *cand * count);
-    ic_result r = gathered && batch && cand ? IC_OK
-                                             : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
+    if (bounded) {
+        grid.key = malloc(sizeof *grid.key * slots);
+        grid.head = malloc(sizeof *grid.head * slots);
+        grid.next = malloc(sizeof *grid.next * count);
+    }
+    ic_result r = gathered && cand && (!bounded || (grid.key && grid.head && grid.next))
+                      ? IC_OK
+                      : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
     phase_times times = {0.0, 0.0};
     /* Passes: the uncovered points in input order, each taken unless it lies within reach of one already
      * taken this pass (it waits for the next pass, where their record may cover it); the pass's records
@@ -92,6 +168,8 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
      * neighbour clamping can take its cover away, as in lazy construction). */
     while (r == IC_OK) {
         uint32_t taken = 0;
+        if (bounded)
+            memset(grid.key, 0, sizeof *grid.key * slots);
         for (uint32_t i = 0; i < count; ++i) {
             if (gathered[i] >= MAX_ROUNDS)
                 continue;
@@ -99,17 +177,16 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
             ic_cache_estimate e;
             if (ic_cache_query(c->cache, &q, &e))
                 continue;
-            int near = 0;
-            for (uint32_t k = 0; k < taken && !near && reach2 > 0.0f; ++k)
-                near = v3_len2(v3_sub(p[batch[k]], p[i])) < reach2;
-            if (near)
+            if (bounded ? grid_near(&grid, p, p[i]) : taken > 0)
                 continue;
+            if (bounded)
+                grid_add(&grid, p, i);
             ic_candidate *cd = &cand[taken];
             cd->p = p[i];
             cd->n = n[i];
             cd->footprint = 0.0f; /* no pixel: only the world-space radius bounds apply */
             cd->key = ic_hash4(POINT_KEY_TAG, i, gathered[i], 0);
-            batch[taken++] = i;
+            ++taken;
             ++gathered[i];
         }
         if (taken == 0)
@@ -117,8 +194,10 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
         r = ic_ic_gather_and_insert(c, cand, taken, &times, err);
     }
     free(gathered);
-    free(batch);
     free(cand);
+    free(grid.key);
+    free(grid.head);
+    free(grid.next);
     if (r == IC_OK)
         r = ic_cache_freeze(c->cache, err);
     /* A record's own σ is one half-set difference |E − E_half| (one degree of freedom): on its own it is
