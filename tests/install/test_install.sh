@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# test_install.sh BUILD_DIR — irrcache as an installed package, the way another project uses it:
+#   1. cmake --install BUILD_DIR into a temporary prefix; the installed headers include nothing from src/
+#      and the exported targets name no source or build folder;
+#   2. examples/ configured with find_package(irrcache) (CMAKE_PREFIX_PATH = the prefix) and built; both
+#      examples run, render_scene writes a non-empty image of the Cornell box (cache_only alone in an
+#      IRRCACHE_CACHE_ONLY build);
+#   3. examples/cache_only.c compiled again with nothing but `pkg-config --cflags --libs irrcache-cache`
+#      (and render_scene.c with irrcache.pc), and run.
+# Skips (77) in a sanitizer build: its static libraries need the sanitizer runtimes on every link line,
+# which an installed package's users do not add.
+set -euo pipefail
+build=$(cd "${1:?usage: test_install.sh BUILD_DIR}" && pwd)
+src=$(cd "$(dirname "$0")/../.." && pwd)
+cache_var() { sed -n "s/^$1:[A-Z]*=//p" "$build/CMakeCache.txt"; }
+if [ "$(cache_var IC_SANITIZE)" = ON ] || [ "$(cache_var IC_FUZZ)" = ON ]; then
+  echo "skipped: a sanitizer build's static libraries cannot be linked without -fsanitize (test the Release build)"
+  exit 77
+fi
+cache_only=$(cache_var IRRCACHE_CACHE_ONLY)
+for tool in cmake pkg-config cc; do
+  command -v "$tool" >/dev/null || { echo "test_install: $tool not found (scripts/deps.sh installs it)"; exit 1; }
+done
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/irrcache-install.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+prefix=$tmp/prefix
+
+echo "== install into $prefix"
+cmake --install "$build" --prefix "$prefix" >/dev/null
+for f in include/irrcache/cache.h include/irrcache/version.h lib/cmake/irrcache/irrcacheConfig.cmake \
+         lib/cmake/irrcache/irrcacheConfigVersion.cmake lib/pkgconfig/irrcache-cache.pc; do
+  [ -s "$prefix/$f" ] || { echo "test_install: $f not installed"; exit 1; }
+done
+if [ "$cache_only" != ON ]; then
+  [ -x "$prefix/bin/irrcache" ] || { echo "test_install: bin/irrcache not installed"; exit 1; }
+  "$prefix/bin/irrcache" --version
+fi
+# Public headers include only each other and the C library; installed targets point inside the prefix.
+if grep -nE '#[[:space:]]*include[[:space:]]*"' "$prefix"/include/irrcache/*.h | grep -v '"irrcache/[a-z_]*\.h"'; then
+  echo "test_install: an installed header includes something outside include/irrcache"; exit 1
+fi
+if grep -lE "$src|$build" "$prefix"/lib/cmake/irrcache/*.cmake "$prefix"/lib/pkgconfig/*.pc; then
+  echo "test_install: an installed package file names the source or build folder"; exit 1
+fi
+
+echo "== examples/ with find_package(irrcache)"
+cmake -S "$src/examples" -B "$tmp/examples" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" \
+      -DCMAKE_C_FLAGS="-Wall -Wextra -Wpedantic -Werror" >"$tmp/configure.log" 2>&1 \
+  || { cat "$tmp/configure.log"; exit 1; }
+cmake --build "$tmp/examples" -j2 >"$tmp/build.log" 2>&1 || { cat "$tmp/build.log"; exit 1; }
+"$tmp/examples/cache_only"
+if [ "$cache_only" != ON ]; then
+  [ -x "$tmp/examples/render_scene" ] || { echo "test_install: render_scene was not built"; exit 1; }
+  "$tmp/examples/render_scene" "$src/scenes/cornell-box/cornell-box.json" "$tmp/cmake.png" 32
+  [ -s "$tmp/cmake.png" ] || { echo "test_install: render_scene wrote no image"; exit 1; }
+fi
+
+echo "== examples with pkg-config only"
+export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
+# shellcheck disable=SC2046  # the flags are meant to split
+cc -std=c11 -Wall -Wextra -Wpedantic -Werror -o "$tmp/cache_only_pc" "$src/examples/cache_only.c" \
+   $(pkg-config --cflags --libs irrcache-cache)
+"$tmp/cache_only_pc"
+if [ "$cache_only" != ON ]; then
+  # shellcheck disable=SC2046
+  cc -std=c11 -Wall -Wextra -Wpedantic -Werror -o "$tmp/render_scene_pc" "$src/examples/render_scene.c" \
+     $(pkg-config --cflags --libs irrcache)
+  "$tmp/render_scene_pc" "$src/scenes/cornell-box/cornell-box.json" "$tmp/pkgconfig.png" 32
+  [ -s "$tmp/pkgconfig.png" ] || { echo "test_install: render_scene (pkg-config) wrote no image"; exit 1; }
+fi
+echo "test_install: passed"
