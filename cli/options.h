@@ -79,7 +79,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_ALL, "exposure applied to .png outputs") \
     X(STATS, "--stats", NULL, IC_OPT_STRING, stats_path, 0, 0, "FILE.json", NAN, "none", "", IC_SCOPE_ALL, \
       "write run statistics: the settings, seconds, rays, rays per second, spp, per-phase times and, for " \
-      "ic, records and passes") \
+      "ic, records, passes and the records' extents a*R (record_extent: min, mean, max)") \
     X(SCENES_DIR, "--scenes-dir", NULL, IC_OPT_STRING, load.shared_scenes_dir, 0, 0, "DIR", NAN, \
       "$IRRCACHE_SCENES, else ../shared/scenes", "", IC_SCOPE_ALL, "where 'shared:' mesh paths of scene files " \
       "resolve") \

@@ -81,6 +81,10 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
             cJSON_AddItemToArray(per, cJSON_CreateNumber(st->records_per_pass[i]));
         if (a->render.ic.strategy == IC_STRATEGY_ADAPTIVE)
             cJSON_AddNumberToObject(o, "refinements", st->refinements);
+        cJSON *ext = cJSON_AddObjectToObject(o, "record_extent");
+        cJSON_AddNumberToObject(ext, "min", st->extent_min);
+        cJSON_AddNumberToObject(ext, "mean", st->extent_mean);
+        cJSON_AddNumberToObject(ext, "max", st->extent_max);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
         cJSON_AddBoolToObject(o, "cut_short", st->cut_short);
         cJSON_AddBoolToObject(o, "cut_by_time", st->cut_by_time);

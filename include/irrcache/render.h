@@ -204,6 +204,9 @@ typedef struct ic_render_stats {
                               its image is good); empty when it was written or not asked for */
     double uncovered_share; /* batch: share of the last pass's eye-path look-up points no record covered */
     uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */
+    float extent_min, extent_mean, extent_max; /* records' influence radii a_i·R_i in scene units (what the
+                              split sphere or the Hessian set, after the clamps; integrator IC, 0 without
+                              records) */
     int phase_count;
     struct {
         const char *name;  /* "accel", "render", … */

@@ -17,6 +17,25 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Smallest, mean and largest influence radius a_i·R_i of the records (the stats' record extents). */
+static void record_extents(const ic_cache *cache, ic_render_stats *st)
+{
+    uint32_t n = ic_cache_count(cache);
+    double sum = 0.0;
+    float lo = INFINITY, hi = 0.0f;
+    for (uint32_t i = 0; i < n; ++i) {
+        ic_record r;
+        ic_cache_get_record(cache, i, &r);
+        float e = r.accuracy * r.radius;
+        sum += e;
+        lo = fminf(lo, e);
+        hi = fmaxf(hi, e);
+    }
+    st->extent_min = n ? lo : 0.0f;
+    st->extent_mean = n ? (float)(sum / n) : 0.0f;
+    st->extent_max = hi;
+}
+
 static const ic_build_fn strategies[] = {
     [IC_STRATEGY_BATCH] = ic_ic_build_batch,
     [IC_STRATEGY_LAZY] = ic_ic_build_lazy,
@@ -102,6 +121,7 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     if (c->o.save_cache && ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK)
         snprintf(st->save_error, sizeof st->save_error, "%s", save_err.message);
     st->records = ic_cache_count(c->cache);
+    record_extents(c->cache, st);
     st->cached_emitters = c->cached_emitters;
     st->gather_rays = atomic_load(&c->rays);
     st->rays = st->gather_rays; /* the driver adds the final render's */

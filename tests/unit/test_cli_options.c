@@ -177,6 +177,14 @@ static void cut_short(void)
     CHECK(run(cmd) == 0, "render that converges: %s", err_text);
     slurp(TMP "_cs.json", js, sizeof js);
     CHECK(strstr(js, "\"cut_short\":\tfalse") && !strstr(err_text, "warning"), "a converged build does not warn");
+    /* The records' extents: positive, ordered, and within the pixel bounds' reach of the box (scene
+     * diagonal about 3.5 units). */
+    const char *ext = strstr(js, "\"record_extent\"");
+    double lo = -1.0, mean = -1.0, hi = -1.0;
+    CHECK(ext && sscanf(ext, "\"record_extent\":\t{\n\t\t\"min\":\t%lf,\n\t\t\"mean\":\t%lf,\n\t\t\"max\":\t%lf", &lo,
+                        &mean, &hi) == 3,
+          "record_extent in the stats: %.200s", ext ? ext : js);
+    CHECK(lo > 0.0 && lo <= mean && mean <= hi && hi < 3.5, "record extents ordered: %g %g %g", lo, mean, hi);
 }
 
 int main(void)
