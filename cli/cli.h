@@ -9,4 +9,9 @@ int ic_cli_diff(int argc, char **argv);
 /* irrcache points SCENE --points FILE|- [-o FILE] [--format text|csv|json] */
 int ic_cli_points(int argc, char **argv);
 
+/* The value of option `name` given as "--name VALUE" or "--name=VALUE" at argv[*i], advancing *i past
+ * it; NULL if argv[*i] is not this option, and then *missing is set if the value is absent (the
+ * hand-parsed sub-commands diff and points; render's options come from the table in options.h). */
+const char *ic_cli_option_value(int argc, char **argv, int *i, const char *name, int *missing);
+
 #endif

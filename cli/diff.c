@@ -64,23 +64,6 @@ static void print_help(FILE *out)
           (double)IC_DEFAULT_HEATMAP_MAX_ERROR);
 }
 
-/* Returns the value of option `name` given as "--name VALUE" or "--name=VALUE", advancing *i;
- * NULL if argv[*i] is not this option; sets *missing if the value is absent. */
-static const char *option_value(int argc, char **argv, int *i, const char *name, int *missing)
-{
-    size_t n = strlen(name);
-    if (strncmp(argv[*i], name, n) != 0)
-        return NULL;
-    if (argv[*i][n] == '=')
-        return argv[*i] + n + 1;
-    if (argv[*i][n] != '\0')
-        return NULL;
-    if (*i + 1 >= argc) {
-        *missing = 1;
-        return NULL;
-    }
-    return argv[++*i];
-}
 
 /* A metric as JSON: JSON has no infinity (identical images: PSNR_INFINITE). */
 static void add_metric(cJSON *o, const char *key, double v)
@@ -174,14 +157,14 @@ int ic_cli_diff(int argc, char **argv)
             return 0;
         } else if (strcmp(arg, "--json") == 0) {
             json = 1;
-        } else if ((value = option_value(argc, argv, &i, "--heatmap", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--heatmap", &missing)) != NULL) {
             if (!ic_image_is_writable_format(value)) {
                 fprintf(stderr, "irrcache diff: %s: unknown heat-map format; name it .png (or .exr, .pfm, .hdr)\n",
                         value);
                 return EXIT_USAGE;
             }
             heatmap = value;
-        } else if ((value = option_value(argc, argv, &i, "--max-error", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-error", &missing)) != NULL) {
             char *end = NULL;
             double e = strcmp(value, "auto") == 0 ? 0.0 : strtod(value, &end);
             if (end && (end == value || *end != '\0' || !(e >= 0.0) || !isfinite(e) || e > 3e38)) {

@@ -66,23 +66,6 @@ static void print_help(FILE *out)
             IC_DEFAULT_RAYS, IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED);
 }
 
-/* Returns the value of option `name` given as "--name VALUE" or "--name=VALUE", advancing *i; NULL if
- * argv[*i] is not this option; sets *missing if the value is absent. */
-static const char *option_value(int argc, char **argv, int *i, const char *name, int *missing)
-{
-    size_t n = strlen(name);
-    if (strncmp(argv[*i], name, n) != 0)
-        return NULL;
-    if (argv[*i][n] == '=')
-        return argv[*i] + n + 1;
-    if (argv[*i][n] != '\0')
-        return NULL;
-    if (*i + 1 >= argc) {
-        *missing = 1;
-        return NULL;
-    }
-    return argv[++*i];
-}
 
 /* A whole-string integer in [lo, hi]; prints the usage error and returns 0 otherwise. */
 static int parse_int(const char *opt, const char *s, long long lo, long long hi, long long *out)
@@ -277,12 +260,12 @@ int ic_cli_points(int argc, char **argv)
         } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
             print_help(stdout);
             return 0;
-        } else if ((value = option_value(argc, argv, &i, "--points", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--points", &missing)) != NULL) {
             points_path = value;
-        } else if ((value = option_value(argc, argv, &i, "-o", &missing)) != NULL ||
-                   (value = option_value(argc, argv, &i, "--output", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "-o", &missing)) != NULL ||
+                   (value = ic_cli_option_value(argc, argv, &i, "--output", &missing)) != NULL) {
             out_path = value;
-        } else if ((value = option_value(argc, argv, &i, "--format", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--format", &missing)) != NULL) {
             if (!strcmp(value, "text"))
                 format = FORMAT_TEXT;
             else if (!strcmp(value, "csv"))
@@ -293,7 +276,7 @@ int ic_cli_points(int argc, char **argv)
                 fprintf(stderr, "irrcache points: --format %s: unknown; use text, csv or json\n", value);
                 return EXIT_USAGE;
             }
-        } else if ((value = option_value(argc, argv, &i, "--integrator", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--integrator", &missing)) != NULL) {
             if (!strcmp(value, "ic"))
                 opt.integrator = IC_INTEGRATOR_IC;
             else if (!strcmp(value, "pt"))
@@ -302,28 +285,28 @@ int ic_cli_points(int argc, char **argv)
                 fprintf(stderr, "irrcache points: --integrator %s: unknown; use ic or pt\n", value);
                 return EXIT_USAGE;
             }
-        } else if ((value = option_value(argc, argv, &i, "--samples", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--samples", &missing)) != NULL) {
             if (!parse_int("--samples", value, 1, IC_MAX_POINT_SAMPLES, &v))
                 return EXIT_USAGE;
             opt.samples = (int)v;
-        } else if ((value = option_value(argc, argv, &i, "--light-samples", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--light-samples", &missing)) != NULL) {
             if (!parse_int("--light-samples", value, 1, IC_MAX_POINT_SAMPLES, &v))
                 return EXIT_USAGE;
             opt.light_samples = (int)v;
-        } else if ((value = option_value(argc, argv, &i, "--max-depth", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-depth", &missing)) != NULL) {
             if (!parse_int("--max-depth", value, 1, IC_MAX_MAX_DEPTH, &v))
                 return EXIT_USAGE;
             opt.max_depth = (int)v;
-        } else if ((value = option_value(argc, argv, &i, "--threads", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--threads", &missing)) != NULL) {
             if (!parse_int("--threads", value, 0, 4096, &v))
                 return EXIT_USAGE;
             opt.threads = (int)v;
-        } else if ((value = option_value(argc, argv, &i, "--seed", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--seed", &missing)) != NULL) {
             if (!parse_int("--seed", value, 0, LLONG_MAX, &v))
                 return EXIT_USAGE;
             opt.seed = (uint64_t)v;
             opt.has_seed = 1;
-        } else if ((value = option_value(argc, argv, &i, "--rays", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--rays", &missing)) != NULL) {
             if (!parse_int("--rays", value, 16, 10000000, &v))
                 return EXIT_USAGE;
             /* M × N strata with N ≈ πM (Ward et al. 1988), as `render --rays` sets them. */
@@ -331,7 +314,7 @@ int ic_cli_points(int argc, char **argv)
             m = m < 2 ? 2 : m;
             opt.ic.gather.theta_strata = (uint32_t)m;
             opt.ic.gather.phi_strata = (uint32_t)((v + m / 2) / m);
-        } else if ((value = option_value(argc, argv, &i, "--accuracy", &missing)) != NULL) {
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--accuracy", &missing)) != NULL) {
             char *end = NULL;
             double a = strtod(value, &end);
             if (end == value || *end != '\0' || !(a > 0.0) || a > 10.0) {

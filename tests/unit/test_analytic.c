@@ -14,37 +14,10 @@
 #include <stdio.h>
 #include <string.h>
 
-/* UV sphere of radius r, triangles wound so their front (emitting) side faces the centre. */
-static void write_inward_sphere(const char *path, const char *mtl_name, float r, int nu, int nv)
-{
-    FILE *f = fopen(path, "w");
-    if (!f)
-        exit(1);
-    fprintf(f, "mtllib furnace.mtl\nusemtl %s\n", mtl_name);
-    for (int j = 0; j <= nv; ++j) {
-        double th = M_PI * j / nv;
-        for (int i = 0; i < nu; ++i) {
-            double ph = 2.0 * M_PI * i / nu;
-            fprintf(f, "v %.7f %.7f %.7f\n", r * sin(th) * cos(ph), r * cos(th), r * sin(th) * sin(ph));
-        }
-    }
-    for (int j = 0; j < nv; ++j) {
-        for (int i = 0; i < nu; ++i) {
-            int a = j * nu + i + 1, b = j * nu + (i + 1) % nu + 1, c = (j + 1) * nu + i + 1,
-                d = (j + 1) * nu + (i + 1) % nu + 1;
-            if (j > 0)
-                fprintf(f, "f %d %d %d\n", a, c, b);
-            if (j < nv - 1)
-                fprintf(f, "f %d %d %d\n", b, c, d);
-        }
-    }
-    fclose(f);
-}
-
 static void test_furnace(void)
 {
     test_write_file(IC_TEST_TMP "/furnace.mtl", "newmtl glow\nKd 0.5 0.5 0.5\nKe 0.5 0.5 0.5\n");
-    write_inward_sphere(IC_TEST_TMP "/furnace.obj", "glow", 1.0f, 48, 24);
+    test_write_inward_sphere(IC_TEST_TMP "/furnace.obj", "furnace.mtl", "glow", 1.0f, 48, 24);
     test_write_file(IC_TEST_TMP "/furnace.json",
                "{\n"
                "  \"camera\": {\"eye\": [0.1, 0.05, 0.02], \"target\": [1, 0.2, 0.3], \"up\": [0, 1, 0],\n"

@@ -175,38 +175,12 @@ static void test_emitting_polygon(void)
     ic_scene_free(scene);
 }
 
-/* UV sphere of radius r, triangles wound so their front (emitting) side faces the centre. */
-static void write_inward_sphere(const char *path, const char *mtllib, float r, int nu, int nv)
-{
-    FILE *f = fopen(path, "w");
-    if (!f)
-        exit(1);
-    fprintf(f, "mtllib %s\nusemtl glow\n", mtllib);
-    for (int j = 0; j <= nv; ++j) {
-        double th = PI_D * j / nv;
-        for (int i = 0; i < nu; ++i) {
-            double ph = 2.0 * PI_D * i / nu;
-            fprintf(f, "v %.7f %.7f %.7f\n", r * sin(th) * cos(ph), r * cos(th), r * sin(th) * sin(ph));
-        }
-    }
-    for (int j = 0; j < nv; ++j)
-        for (int i = 0; i < nu; ++i) {
-            int a = j * nu + i + 1, b = j * nu + (i + 1) % nu + 1, c = (j + 1) * nu + i + 1,
-                d = (j + 1) * nu + (i + 1) % nu + 1;
-            if (j > 0)
-                fprintf(f, "f %d %d %d\n", a, c, b);
-            if (j < nv - 1)
-                fprintf(f, "f %d %d %d\n", b, c, d);
-        }
-    fclose(f);
-}
-
 /* A closed furnace: inside a sphere with albedo 0.5 and emission 0.5 everywhere, radiance is
  * L = Le / (1 − ρ) = 1 in every direction, so any sensor receives E = π, all bounces summed. */
 static void test_furnace(void)
 {
     test_write_file(IC_TEST_TMP "/points_furnace.mtl", "newmtl glow\nKd 0.5 0.5 0.5\nKe 0.5 0.5 0.5\n");
-    write_inward_sphere(IC_TEST_TMP "/points_furnace.obj", "points_furnace.mtl", 1.0f, 48, 24);
+    test_write_inward_sphere(IC_TEST_TMP "/points_furnace.obj", "points_furnace.mtl", "glow", 1.0f, 48, 24);
     test_write_file(IC_TEST_TMP "/points_furnace.json",
                     "{\n"
                     "  \"camera\": {\"eye\": [0.1, 0.05, 0.02], \"target\": [1, 0.2, 0.3], \"up\": [0, 1, 0],\n"

@@ -59,4 +59,33 @@ static inline double test_image_mean(const ic_image *img, int *finite)
     return s / (double)n;
 }
 
+/* A sphere of radius r about the origin as an OBJ with its faces turned inwards (nu × nv quads, split
+ * into triangles at the poles), using material `usemtl` of `mtllib`: a closed furnace room. */
+static inline void test_write_inward_sphere(const char *path, const char *mtllib, const char *usemtl, float r, int nu,
+                                            int nv)
+{
+    FILE *f = fopen(path, "w");
+    if (!f)
+        exit(1);
+    fprintf(f, "mtllib %s\nusemtl %s\n", mtllib, usemtl);
+    const double pi = 3.14159265358979323846;
+    for (int j = 0; j <= nv; ++j) {
+        double th = pi * j / nv;
+        for (int i = 0; i < nu; ++i) {
+            double ph = 2.0 * pi * i / nu;
+            fprintf(f, "v %.7f %.7f %.7f\n", r * sin(th) * cos(ph), r * cos(th), r * sin(th) * sin(ph));
+        }
+    }
+    for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i) {
+            int a = j * nu + i + 1, b = j * nu + (i + 1) % nu + 1, c = (j + 1) * nu + i + 1,
+                d = (j + 1) * nu + (i + 1) % nu + 1;
+            if (j > 0)
+                fprintf(f, "f %d %d %d\n", a, c, b);
+            if (j < nv - 1)
+                fprintf(f, "f %d %d %d\n", b, c, d);
+        }
+    fclose(f);
+}
+
 #endif
