@@ -2,6 +2,9 @@
 #ifndef IC_CLI_H
 #define IC_CLI_H
 
+#include <stddef.h>
+#include <string.h>
+
 /* irrcache render SCENE -o OUT [options] */
 int ic_cli_render(int argc, char **argv);
 /* irrcache diff A B [--json] [--heatmap FILE.png] */
@@ -10,8 +13,23 @@ int ic_cli_diff(int argc, char **argv);
 int ic_cli_points(int argc, char **argv);
 
 /* The value of option `name` given as "--name VALUE" or "--name=VALUE" at argv[*i], advancing *i past
- * it; NULL if argv[*i] is not this option, and then *missing is set if the value is absent (the
- * hand-parsed sub-commands diff and points; render's options come from the table in options.h). */
-const char *ic_cli_option_value(int argc, char **argv, int *i, const char *name, int *missing);
+ * it; NULL if argv[*i] is not this option, and then *missing is set if the value is absent. For the
+ * hand-parsed sub-commands diff and points (render's options come from the table in options.h); inline
+ * because test_diff compiles diff.c on its own. */
+static inline const char *ic_cli_option_value(int argc, char **argv, int *i, const char *name, int *missing)
+{
+    size_t n = strlen(name);
+    if (strncmp(argv[*i], name, n) != 0)
+        return NULL;
+    if (argv[*i][n] == '=')
+        return argv[*i] + n + 1;
+    if (argv[*i][n] != '\0')
+        return NULL;
+    if (*i + 1 >= argc) {
+        *missing = 1;
+        return NULL;
+    }
+    return argv[++*i];
+}
 
 #endif
