@@ -17,9 +17,17 @@
  *    and without opts.with_hessian interleaved run by run; and the time to create a gatherer (the
  *    hemicube tables, the Hessian's wall factors).
  *
+ * 3. A radiance record (ic_gather_radiance, Křivánek et al. 2005 (TVCG)) against a stratified irradiance
+ *    record at the same ray count: microseconds per record, HSH orders 6 and 10, the two interleaved run
+ *    by run, median of the per-run ratios; the difference is the cost of the coefficients and their
+ *    gradient (the trace is the same cheap analytic one). Twice: on the exact scene, where only the walls
+ *    at the emitters' edges carry a radiance difference, and with every direction's radiance varied
+ *    inside a closed dome (as on textured geometry in a room), where every wall does.
+ *
  * Usage: bench_gather [--quick]. Prints tables; asserts nothing.
  */
 #include "irrcache/gather.h"
+#include "irrcache/hsh.h"
 
 #include "core/vecmath.h"
 
@@ -57,9 +65,11 @@ static const rect SCENE[RECTS] = {
     {-1.5, 0.6, -0.5, 1.5, 1.0, {1, 8, 2}},
 };
 
+/* user non-NULL: a closed room where every direction sees a different radiance (emitters modulated by
+ * 1 + ½·dir.x, the rest a dome at distance 5 of radiance 0.2·(1 + dir.y)), so every wall between two
+ * cells moves and carries a radiance difference, as on textured geometry; NULL: the exact scene above. */
 static void trace(void *user, const ic_vec3 *org, const ic_vec3 *dir, uint32_t count, float *hit_dist, ic_vec3 *radiance)
 {
-    (void)user;
     for (uint32_t r = 0; r < count; ++r) {
         hit_dist[r] = INFINITY;
         radiance[r] = v3s(0.0f);
@@ -74,6 +84,12 @@ static void trace(void *user, const ic_vec3 *org, const ic_vec3 *dir, uint32_t c
                 radiance[r] = q->emit;
                 break;
             }
+        }
+        if (user && hit_dist[r] < INFINITY) {
+            radiance[r] = v3_scale(radiance[r], 1.0f + 0.5f * dir[r].x);
+        } else if (user) {
+            hit_dist[r] = 5.0f;
+            radiance[r] = v3s(0.2f * (1.0f + dir[r].y));
         }
     }
 }
@@ -131,16 +147,19 @@ static void make_reference(reference *ref)
     ref->rms_hess = sqrt(sh / POINTS);
 }
 
-static ic_gatherer *make(const ic_gather_opts *o)
+static ic_gatherer *make_lit(const ic_gather_opts *o, int is_varied)
 {
+    static int varied;
     ic_gatherer *g = NULL;
     ic_error err;
-    if (ic_gatherer_create(o, trace, NULL, &g, &err) != IC_OK) {
+    if (ic_gatherer_create(o, trace, is_varied ? &varied : NULL, &g, &err) != IC_OK) {
         fprintf(stderr, "bench_gather: %s\n", err.message);
         exit(1);
     }
     return g;
 }
+
+static ic_gatherer *make(const ic_gather_opts *o) { return make_lit(o, 0); }
 
 static ic_result gather(ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *r)
 {
@@ -207,6 +226,46 @@ static void cost(const ic_gather_opts *o, const reference *ref, int runs, double
     *ratio = q[runs / 2];
 }
 
+/* Microseconds per record of ic_gather_radiance at `order` and of ic_gather_stratified with the same
+ * options (the same ray count), interleaved run by run; medians and the median per-run ratio. */
+static void cost_radiance(const ic_gather_opts *o, uint32_t order, int is_varied, const reference *ref, int runs,
+                          double *t_strat, double *t_rad, double *ratio, uint32_t *rays)
+{
+    ic_hsh_opts ho = {.order = order};
+    ic_hsh_basis *basis = NULL;
+    ic_error err;
+    if (ic_hsh_basis_create(&ho, &basis, &err) != IC_OK) {
+        fprintf(stderr, "bench_gather: %s\n", err.message);
+        exit(1);
+    }
+    static float coeffs[3 * IC_HSH_MAX_COUNT], grad_t[3 * IC_HSH_MAX_COUNT], grad_b[3 * IC_HSH_MAX_COUNT];
+    const ic_hsh_frame frame = {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)};
+    ic_gatherer *g = make_lit(o, is_varied);
+    double t[2][32], q[32];
+    for (int k = 0; k < runs; ++k) {
+        double t0 = now();
+        ic_gather_result r;
+        for (int i = 0; i < POINTS; ++i)
+            gather(g, &ref->pt[i], &r);
+        t[0][k] = (now() - t0) / POINTS * 1e6;
+        t0 = now();
+        ic_gather_radiance_result rr = {.coeffs = coeffs, .grad_t = grad_t, .grad_b = grad_b};
+        for (int i = 0; i < POINTS; ++i)
+            ic_gather_radiance(g, basis, &ref->pt[i], &frame, &rr);
+        t[1][k] = (now() - t0) / POINTS * 1e6;
+        q[k] = t[1][k] / t[0][k];
+        *rays = rr.ray_count;
+    }
+    ic_gatherer_destroy(g);
+    ic_hsh_basis_destroy(basis);
+    qsort(t[0], (size_t)runs, sizeof t[0][0], cmp_double);
+    qsort(t[1], (size_t)runs, sizeof t[1][0], cmp_double);
+    qsort(q, (size_t)runs, sizeof q[0], cmp_double);
+    *t_strat = t[0][runs / 2];
+    *t_rad = t[1][runs / 2];
+    *ratio = q[runs / 2];
+}
+
 int main(int argc, char **argv)
 {
     const int quick = argc > 1 && strcmp(argv[1], "--quick") == 0;
@@ -250,6 +309,21 @@ int main(int argc, char **argv)
         printf("| %s | %u | %.1f | %.1f | %+.0f %% |\n", o.method == IC_GATHER_HEMICUBE ? "hemicube" : "stratified",
                r.ray_count, t0, t1, 100.0 * (ratio - 1.0));
     }
+
+    printf("\n## Gathering a radiance record (µs per record, median of %d runs over %d points, one thread)\n\n"
+           "| radiance | rays (stratified / radiance) | HSH order | stratified | radiance | radiance / stratified |\n"
+           "|---|---|---|---|---|---|\n", runs, POINTS);
+    const uint32_t strata[2] = {16, 32}, orders[2] = {6, 10};
+    for (int v = 0; v < 2; ++v)
+        for (int k = 0; k < 2; ++k)
+            for (int j = 0; j < 2; ++j) {
+                const ic_gather_opts o = {.theta_strata = strata[k]};
+                double ts, tr, ratio;
+                uint32_t rays;
+                cost_radiance(&o, orders[j], v, &ref, runs, &ts, &tr, &ratio, &rays);
+                printf("| %s | %u / %u | %u | %.1f | %.1f | %.2f |\n", v ? "varied" : "piecewise constant",
+                       strata[k] * (uint32_t)lround(PI_D * strata[k]), rays, orders[j], ts, tr, ratio);
+            }
 
     printf("\n## Creating a gatherer (µs, median of %d)\n\n| options | µs |\n|---|---|\n", runs);
     const ic_gather_opts create[4] = {

@@ -47,6 +47,7 @@
 #define IRRCACHE_GATHER_H
 
 #include "irrcache/common.h"
+#include "irrcache/hsh.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -180,6 +181,31 @@ ic_result ic_gather_hessian_extent(const ic_gather_result *r, const ic_gather_ex
  * thread; out[i] belongs to pts[i] and is identical for any thread count. */
 ic_result ic_gather_batch(const ic_gather_opts *opts, ic_trace_fn trace, void *user, int threads,
                           const ic_gather_point *pts, uint32_t count, ic_gather_result *out, ic_error *err);
+
+/* What one radiance-record gather returns (ic_gather_radiance). The three coefficient vectors are the
+ * caller's, 3·n² floats each for a basis of order n, planar RGB as in hsh.h. */
+typedef struct ic_gather_radiance_result {
+    float *coeffs;                 /* caller-provided: Λ_k = ∫ L(ω) H_k(ω) dω in the frame given */
+    float *grad_t;                 /* caller-provided: ∂Λ/∂t, along frame->tangent, per unit length */
+    float *grad_b;                 /* caller-provided: ∂Λ/∂b, along frame->bitangent, per unit length */
+    ic_vec3 irradiance;            /* E = ∫ L cosθ dω from the same samples */
+    ic_vec3 trans_grad[3];         /* ∇E per channel, world space, ⟂ normal, from the same walls */
+    float harmonic_mean_dist;      /* as ic_gather_result */
+    float min_dist;                /* as ic_gather_result */
+    ic_vec3 sigma;                 /* |E − E'|, E' from a checkerboard half of the cells */
+    uint32_t ray_count;            /* rays traced */
+    uint32_t hit_count;            /* rays that hit something */
+} ic_gather_radiance_result;
+
+/* Radiance-record gather at one point (Křivánek et al. 2005 (TVCG)): uniform solid-angle strata, M rings
+ * in cosθ × N ≈ 2M sectors with M·N ≤ opts.theta_strata·opts.phi_strata rays, one jittered ray each;
+ * the HSH coefficients of the incoming radiance in `frame` and their translational gradient from the
+ * occlusion-aware motion of the walls between cells (docs/gathering.md). `frame` must be orthonormal,
+ * right-handed, with its normal along pt->normal (within 10⁻⁴); the record keeps it for rotations.
+ * Random numbers depend only on (opts.seed, pt->key). No allocation. IC_ERR_INVALID_ARG on NULL
+ * arguments or coefficient pointers, a zero-length normal or a frame that does not fit. */
+ic_result ic_gather_radiance(ic_gatherer *g, const ic_hsh_basis *basis, const ic_gather_point *pt,
+                             const ic_hsh_frame *frame, ic_gather_radiance_result *out);
 
 #ifdef __cplusplus
 }

@@ -17,7 +17,8 @@
 #include "core/vecmath.h"
 
 /* Purposes that separate the random streams of one point (ic_rng_make's last word). */
-enum { IC_GATHER_STREAM_STRATIFIED = 0x5354, IC_GATHER_STREAM_PROGRESSIVE = 0x5052, IC_GATHER_STREAM_HEMICUBE = 0x4843 };
+enum { IC_GATHER_STREAM_STRATIFIED = 0x5354, IC_GATHER_STREAM_PROGRESSIVE = 0x5052, IC_GATHER_STREAM_HEMICUBE = 0x4843,
+       IC_GATHER_STREAM_RADIANCE = 0x5241 };
 
 /* What one wall between two cells contributes to the translational gradient and Hessian per unit
  * radiance difference, before dividing by its distance r (gradient: g/r, Hessian: h/r²); tangent-frame
