@@ -16,8 +16,9 @@
  * B as fast as the nearer of their two surfaces, a point seen at direction ω and distance d moving by
  * −(δ − (δ·ω)ω)/d. With n_A the wall's normal pointing from A into B, the strip the wall sweeps changes
  * any integral ∫ L f dω by (L_A − L_B) ∫_wall f(ω) (−δ·n_A / d) dl. For f = H_k the wall integral is
- * done by two-point Gauss–Legendre along the wall; for f = cosθ it is exact. Walls between two misses,
- * and walls whose two cells see the same radiance, change nothing.
+ * done by two-point Gauss–Legendre along the wall, ring by ring so that the polar part of the basis is
+ * evaluated once per ring; for f = cosθ it is exact. Walls between two misses, and walls whose two cells
+ * see the same radiance, change nothing.
  *
  * Random numbers: ic_rng_make(seed, key, 0, RADIANCE) only, so a record depends on nothing else.
  */
@@ -48,27 +49,6 @@ static double ring_sin(uint32_t j, uint32_t M)
     return sqrt(u * (2.0 - u));
 }
 
-/* Adds (L_A − L_B)·∫_wall H_k (−n_A/d) dl to the coefficient gradient, the wall integral by two
- * Gauss–Legendre nodes: node i at local direction dir[i], geometric weight (gx[i], gy[i]) that already
- * holds −n_A/d, the node weight and the length element. */
-static void add_wall_coefficients(const ic_hsh_basis *basis, const double diff[3], double dir[2][3],
-                                  const double gx[2], const double gy[2], radiance_sums *s)
-{
-    const uint32_t n = ic_hsh_count(basis);
-    double h[IC_HSH_MAX_COUNT];
-    for (int i = 0; i < 2; ++i) {
-        ic_hsh_eval_d(basis, dir[i], h);
-        for (int ch = 0; ch < 3; ++ch) {
-            const double ax = diff[ch] * gx[i], ay = diff[ch] * gy[i];
-            double *gt = s->grad[0] + ch * n, *gb = s->grad[1] + ch * n;
-            for (uint32_t k = 0; k < n; ++k) {
-                gt[k] += ax * h[k];
-                gb[k] += ay * h[k];
-            }
-        }
-    }
-}
-
 /* L_A − L_B per channel; 0 if the two cells see the same radiance (the wall changes nothing). */
 static int radiance_diff(ic_vec3 a, ic_vec3 b, double diff[3])
 {
@@ -78,56 +58,142 @@ static int radiance_diff(ic_vec3 a, ic_vec3 b, double diff[3])
     return diff[0] != 0.0 || diff[1] != 0.0 || diff[2] != 0.0;
 }
 
-/* The θ-wall between ring j (A) and ring j+1 (B) of sector k, at θ_w (z_w, sin_w), φ ∈ [φ_k, φ_k + Δφ].
- * n_A = e_θ = (cosθcosφ, cosθsinφ, −sinθ), dl = sinθ dφ, so per unit δ the wall's weight is
- * −sinθ_w cosθ_w (cosφ, sinφ)/d dφ. */
-static void theta_wall(const ic_hsh_basis *basis, const double diff[3], double d, double z_w, double sin_w,
-                       double phi_k, double dphi, radiance_sums *s)
+/* The basis separates: H_l^{±m}(θ, φ) = A_l^m(θ)·{cos mφ, sin mφ} (hsh.h's cos/sin pairs), so a sum over
+ * the walls of one ring boundary, where θ is fixed, needs the azimuthal factors only: per channel and
+ * tangent axis, one sum per slot (slot m < n: cos mφ; slot n − 1 + m, 1 ≤ m < n: sin mφ), multiplied by
+ * A(θ) once per ring. That makes a wall O(n) instead of O(n²). */
+typedef struct azimuth_sums {
+    double s[3][2][2 * IC_HSH_MAX_ORDER];
+    int is_used;
+} azimuth_sums;
+
+/* Adds diff·(gx, gy)·{cos mφ, sin mφ} to the slots. */
+static void add_azimuth(uint32_t order, double phi, const double diff[3], double gx, double gy, azimuth_sums *a)
 {
-    /* Irradiance (f = cosθ, constant along the wall): ∫(cosφ, sinφ)dφ = 2 sin(Δφ/2)(cosφ_m, sinφ_m). */
-    const double phi_m = phi_k + 0.5 * dphi, chord = 2.0 * sin(0.5 * dphi);
-    const double e = -sin_w * z_w * z_w * chord / d;
+    double trig[2 * IC_HSH_MAX_ORDER];
+    const double c1 = cos(phi), s1 = sin(phi);
+    double cm = 1.0, sm = 0.0;
+    trig[0] = 1.0;
+    for (uint32_t m = 1; m < order; ++m) {
+        const double c = cm * c1 - sm * s1;
+        sm = sm * c1 + cm * s1;
+        cm = c;
+        trig[m] = cm;
+        trig[order - 1 + m] = sm;
+    }
+    const uint32_t slots = 2 * order - 1;
     for (int ch = 0; ch < 3; ++ch) {
-        s->egrad[ch][0] += diff[ch] * e * cos(phi_m);
-        s->egrad[ch][1] += diff[ch] * e * sin(phi_m);
+        const double ax = diff[ch] * gx, ay = diff[ch] * gy;
+        for (uint32_t i = 0; i < slots; ++i) {
+            a->s[ch][0][i] += ax * trig[i];
+            a->s[ch][1][i] += ay * trig[i];
+        }
     }
-    double dir[2][3], gx[2], gy[2];
-    for (int i = 0; i < 2; ++i) {
-        const double phi = phi_k + GAUSS_NODE[i] * dphi, c = cos(phi), sn = sin(phi);
-        const double w = -sin_w * z_w * 0.5 * dphi / d;
-        dir[i][0] = sin_w * c;
-        dir[i][1] = sin_w * sn;
-        dir[i][2] = z_w;
-        gx[i] = w * c;
-        gy[i] = w * sn;
-    }
-    add_wall_coefficients(basis, diff, dir, gx, gy, s);
+    a->is_used = 1;
 }
 
-/* The φ-wall between sector k (A) and sector k+1 (B) at φ_w, ring j (θ from θ_0 to θ_1). n_A = e_φ =
- * (−sinφ, cosφ, 0), dl = dθ, so per unit δ the wall's weight is −(−sinφ_w, cosφ_w)/d dθ. */
-static void phi_wall(const ic_hsh_basis *basis, const double diff[3], double d, double phi_w, double z0,
-                     double sin0, double z1, double sin1, radiance_sums *s)
+/* The polar factors A_l^m(θ) (0 ≤ m ≤ l, at index l(l+1) + m) of `count` polar angles summed: the basis
+ * at φ = 0, where cos mφ = 1. */
+static void polar_terms(const ic_hsh_basis *basis, const double *z, const double *sin_t, int count, double *A)
 {
-    const double vx = -sin(phi_w), vy = cos(phi_w);
-    /* Irradiance: ∫ cosθ dθ = sinθ_1 − sinθ_0. */
-    const double e = -(sin1 - sin0) / d;
-    for (int ch = 0; ch < 3; ++ch) {
-        s->egrad[ch][0] += diff[ch] * e * vx;
-        s->egrad[ch][1] += diff[ch] * e * vy;
+    const uint32_t n = ic_hsh_count(basis);
+    double h[IC_HSH_MAX_COUNT];
+    memset(A, 0, n * sizeof *A);
+    for (int i = 0; i < count; ++i) {
+        const double dir[3] = {sin_t[i], 0.0, z[i]};
+        ic_hsh_eval_d(basis, dir, h);
+        for (uint32_t k = 0; k < n; ++k)
+            A[k] += h[k];
     }
+}
+
+/* grad[axis][c·n² + k] += A(θ)·slot sums, for every coefficient k = l(l+1) + m. */
+static void flush_azimuth(const ic_hsh_basis *basis, const double *A, const azimuth_sums *a, radiance_sums *s)
+{
+    const uint32_t order = ic_hsh_order(basis), n = ic_hsh_count(basis);
+    for (int ch = 0; ch < 3; ++ch)
+        for (int axis = 0; axis < 2; ++axis) {
+            const double *slot = a->s[ch][axis];
+            double *grad = s->grad[axis] + ch * n;
+            for (int l = 0; l < (int)order; ++l)
+                for (int m = -l; m <= l; ++m) {
+                    const double polar = A[ic_hsh_index(l, m < 0 ? -m : m)];
+                    grad[ic_hsh_index(l, m)] += polar * slot[m >= 0 ? m : (int)order - 1 - m];
+                }
+        }
+}
+
+/* The walls of ring j: the θ-walls to ring j+1 (at θ_w = θ_{j+1}) and the φ-walls between its sectors,
+ * into the gradients of E and of Λ.
+ *   θ-wall between (j, k) = A and (j+1, k) = B, φ ∈ [φ_k, φ_k + Δφ]: n_A = e_θ = (cosθcosφ, cosθsinφ,
+ *   −sinθ), dl = sinθ dφ, so per unit δ the weight is −sinθ_w cosθ_w (cosφ, sinφ)/d dφ. For E (f = cosθ,
+ *   constant along the wall) ∫(cosφ, sinφ)dφ = 2 sin(Δφ/2)(cosφ_m, sinφ_m) exactly; for Λ two Gauss nodes.
+ *   φ-wall between (j, k) = A and (j, k+1) = B at φ_w = φ_{k+1}: n_A = e_φ = (−sinφ, cosφ, 0), dl = dθ,
+ *   weight −(−sinφ_w, cosφ_w)/d dθ. For E ∫cosθ dθ = sinθ_{j+1} − sinθ_j exactly; for Λ two Gauss nodes in
+ *   θ, the same for every sector of the ring. */
+static void ring_walls(const ic_gatherer *g, const ic_hsh_basis *basis, uint32_t M, uint32_t N, uint32_t j,
+                       double phi0, radiance_sums *s)
+{
+    const uint32_t order = ic_hsh_order(basis);
+    const ic_vec3 *L = g->cell_radiance;
+    const float *dist = g->cell_dist;
+    const double dphi = 2.0 * (double)IC_PI / N, chord = 2.0 * sin(0.5 * dphi);
+    const double z0 = ring_z(j, M), sin0 = ring_sin(j, M), z1 = ring_z(j + 1, M), sin1 = ring_sin(j + 1, M);
     const double t0 = atan2(sin0, z0), t1 = atan2(sin1, z1);
-    double dir[2][3], gx[2], gy[2];
-    for (int i = 0; i < 2; ++i) {
-        const double t = t0 + GAUSS_NODE[i] * (t1 - t0), st = sin(t);
-        const double w = -0.5 * (t1 - t0) / d;
-        dir[i][0] = st * cos(phi_w);
-        dir[i][1] = st * sin(phi_w);
-        dir[i][2] = cos(t);
-        gx[i] = w * vx;
-        gy[i] = w * vy;
+    azimuth_sums theta_walls, phi_walls;
+    memset(&theta_walls, 0, sizeof theta_walls);
+    memset(&phi_walls, 0, sizeof phi_walls);
+    double diff[3];
+    for (uint32_t k = 0; k < N; ++k) {
+        const uint32_t c = k * M + j;
+        const double phi_k = phi0 + dphi * k;
+        /* θ-wall to ring j+1 (none at the horizon, where cosθ = 0). */
+        if (j + 1 < M) {
+            const uint32_t cb = c + 1;
+            const float d = fminf(dist[c], dist[cb]);
+            if (d < INFINITY && radiance_diff(L[c], L[cb], diff)) {
+                const double phi_m = phi_k + 0.5 * dphi, e = -sin1 * z1 * z1 * chord / d;
+                const double w = -sin1 * z1 * 0.5 * dphi / d;
+                for (int ch = 0; ch < 3; ++ch) {
+                    s->egrad[ch][0] += diff[ch] * e * cos(phi_m);
+                    s->egrad[ch][1] += diff[ch] * e * sin(phi_m);
+                }
+                for (int i = 0; i < 2; ++i) {
+                    const double phi = phi_k + GAUSS_NODE[i] * dphi;
+                    add_azimuth(order, phi, diff, w * cos(phi), w * sin(phi), &theta_walls);
+                }
+            }
+        }
+        /* φ-wall to sector k+1, wrapping around. */
+        if (N > 1) {
+            const uint32_t cb = (k + 1 == N ? 0 : k + 1) * M + j;
+            const float d = fminf(dist[c], dist[cb]);
+            if (d < INFINITY && radiance_diff(L[c], L[cb], diff)) {
+                const double phi_w = phi_k + dphi, vx = -sin(phi_w), vy = cos(phi_w);
+                const double e = -(sin1 - sin0) / d, w = -0.5 * (t1 - t0) / d;
+                for (int ch = 0; ch < 3; ++ch) {
+                    s->egrad[ch][0] += diff[ch] * e * vx;
+                    s->egrad[ch][1] += diff[ch] * e * vy;
+                }
+                add_azimuth(order, phi_w, diff, w * vx, w * vy, &phi_walls);
+            }
+        }
     }
-    add_wall_coefficients(basis, diff, dir, gx, gy, s);
+    double A[IC_HSH_MAX_COUNT];
+    if (theta_walls.is_used) {
+        polar_terms(basis, &z1, &sin1, 1, A);
+        flush_azimuth(basis, A, &theta_walls, s);
+    }
+    if (phi_walls.is_used) {
+        double zn[2], sn[2];
+        for (int i = 0; i < 2; ++i) {
+            const double t = t0 + GAUSS_NODE[i] * (t1 - t0);
+            zn[i] = cos(t);
+            sn[i] = sin(t);
+        }
+        polar_terms(basis, zn, sn, 2, A);
+        flush_azimuth(basis, A, &phi_walls, s);
+    }
 }
 
 /* The frame must be orthonormal, right-handed, with its normal along pt's. */
@@ -197,43 +263,24 @@ ic_result ic_gather_radiance(ic_gatherer *g, const ic_hsh_basis *basis, const ic
     const double omega = two_pi / n_rays; /* each cell's solid angle */
     const ic_vec3 *L = g->cell_radiance;
     const float *dist = g->cell_dist;
-    for (uint32_t k = 0; k < N; ++k) {
-        const double phi_k = phi0 + dphi * k;
-        for (uint32_t j = 0; j < M; ++j) {
-            const uint32_t c = k * M + j;
-            const ic_vec3 dir = g->cell_dir[c];
-            ic_hsh_accumulate(basis, dir, L[c], omega, s->coeff);
-            const double lv[3] = {L[c].x, L[c].y, L[c].z};
-            for (int ch = 0; ch < 3; ++ch) {
-                s->e[ch] += lv[ch] * dir.z * omega;
-                if (g->cell_half[c] == 0)
-                    s->e_half[ch] += lv[ch] * dir.z;
-            }
-            s->half_count += g->cell_half[c] == 0;
-            if (dist[c] < INFINITY) {
-                s->inv_dist += 1.0 / dist[c];
-                s->min_dist = fminf(s->min_dist, dist[c]);
-                ++s->hits;
-            }
-
-            double diff[3];
-            /* θ-wall to ring j+1 (none at the horizon: cosθ = 0 there). */
-            if (j + 1 < M) {
-                const uint32_t cb = c + 1;
-                const float d = fminf(dist[c], dist[cb]);
-                if (d < INFINITY && radiance_diff(L[c], L[cb], diff))
-                    theta_wall(basis, diff, d, ring_z(j + 1, M), ring_sin(j + 1, M), phi_k, dphi, s);
-            }
-            /* φ-wall to sector k+1, wrapping around. */
-            if (N > 1) {
-                const uint32_t cb = (k + 1 == N ? 0 : k + 1) * M + j;
-                const float d = fminf(dist[c], dist[cb]);
-                if (d < INFINITY && radiance_diff(L[c], L[cb], diff))
-                    phi_wall(basis, diff, d, phi_k + dphi, ring_z(j, M), ring_sin(j, M), ring_z(j + 1, M),
-                             ring_sin(j + 1, M), s);
-            }
+    for (uint32_t c = 0; c < n_rays; ++c) {
+        const ic_vec3 dir = g->cell_dir[c];
+        ic_hsh_accumulate(basis, dir, L[c], omega, s->coeff);
+        const double lv[3] = {L[c].x, L[c].y, L[c].z};
+        for (int ch = 0; ch < 3; ++ch) {
+            s->e[ch] += lv[ch] * dir.z * omega;
+            if (g->cell_half[c] == 0)
+                s->e_half[ch] += lv[ch] * dir.z;
+        }
+        s->half_count += g->cell_half[c] == 0;
+        if (dist[c] < INFINITY) {
+            s->inv_dist += 1.0 / dist[c];
+            s->min_dist = fminf(s->min_dist, dist[c]);
+            ++s->hits;
         }
     }
+    for (uint32_t j = 0; j < M; ++j)
+        ring_walls(g, basis, M, N, j, phi0, s);
 
     const uint32_t n = ic_hsh_count(basis);
     for (uint32_t i = 0; i < 3 * n; ++i) {
