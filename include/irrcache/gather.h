@@ -200,7 +200,7 @@ typedef struct ic_gather_radiance_result {
 /* Radiance-record gather at one point (Křivánek et al. 2005 (TVCG)): uniform solid-angle strata, M rings
  * in cosθ × N ≈ 2M sectors with M·N ≤ opts.theta_strata·opts.phi_strata rays, one jittered ray each;
  * the HSH coefficients of the incoming radiance in `frame` and their translational gradient from the
- * occlusion-aware motion of the walls between cells (docs/gathering.md). `frame` must be orthonormal,
+ * occlusion-aware motion of the walls between cells (docs/radiance-caching.md §5). `frame` must be orthonormal,
  * right-handed, with its normal along pt->normal (within 10⁻⁴); the record keeps it for rotations.
  * Random numbers depend only on (opts.seed, pt->key). No allocation. IC_ERR_INVALID_ARG on NULL
  * arguments or coefficient pointers, a zero-length normal or a frame that does not fit. */

@@ -1,7 +1,7 @@
 /*
  * gather_radiance.c — one radiance-cache record: the hemispherical-harmonics coefficients of the
- * incoming radiance and their translational gradient (Křivánek et al. 2005 (TVCG) §4–5; Křivánek et al.
- * 2006 §4.3 for σ), with the irradiance and its gradient from the same rays.
+ * incoming radiance and their translational gradient (Křivánek et al. 2005 (TVCG); Křivánek et al. 2006
+ * §4.3 for σ), with the irradiance and its gradient from the same rays.
  *
  * Sampling: uniform solid angle, not cosine-weighted. The m = 0 basis functions do not vanish at the
  * horizon, so projecting them from cosine-distributed samples has infinite variance
@@ -10,13 +10,13 @@
  * one jittered ray, so Λ_k = 2π/(MN) Σ_c L_c H_k(ω_c) is an unbiased stratified estimate. M·N matches
  * the stratified sampler's ray count (opts.theta_strata · opts.phi_strata) with N ≈ 2M.
  *
- * Translational gradient (Ward & Heckbert 1992 §4 for irradiance, Křivánek et al. 2005 (TVCG) §5 for the
- * coefficients; docs/gathering.md derives the form used here). Radiance is taken constant within a
- * cell; moving the point by δ in the tangent plane moves each wall between two neighbouring cells A and
- * B as fast as the nearer of their two surfaces, a point seen at direction ω and distance d moving by
- * −(δ − (δ·ω)ω)/d. With n_A the wall's normal pointing from A into B, the strip the wall sweeps changes
- * any integral ∫ L f dω by (L_A − L_B) ∫_wall f(ω) (−δ·n_A / d) dl. For f = H_k the wall integral is
- * done by two-point Gauss–Legendre along the wall, ring by ring so that the polar part of the basis is
+ * Translational gradient (Ward & Heckbert 1992 §4 for irradiance, Křivánek et al. 2005 (TVCG) for the
+ * coefficients; docs/radiance-caching.md §5 derives the form used here). Radiance is taken constant
+ * within a cell; moving the point by δ in the tangent plane moves each wall between two neighbouring
+ * cells A and B as fast as the nearer of their two surfaces, a point seen at direction ω and distance d
+ * moving by −(δ − (δ·ω)ω)/d. With n_A the wall's normal pointing from A into B, the strip the wall sweeps
+ * changes any integral ∫ L f dω by (L_A − L_B) ∫_wall f(ω) (−δ·n_A / d) dl. For f = H_k the wall integral
+ * is done by two-point Gauss–Legendre along the wall, ring by ring so that the polar part of the basis is
  * evaluated once per ring; for f = cosθ it is exact. Walls between two misses, and walls whose two cells
  * see the same radiance, change nothing.
  *
@@ -210,7 +210,7 @@ static int frame_fits(const ic_hsh_frame *f, const ic_frame *pf)
 
 /* M rings and N ≈ 2M sectors with M·N at most the stratified grid's ray count. Rings of equal height in
  * cosθ make the polar cells long and thin (ring 0 spans θ ∈ [0, √(2/M)]), so more rings and fewer
- * sectors than N ≈ 4M pay: at ~800 rays the projection error is 15% lower (docs/gathering.md). */
+ * sectors than N ≈ 4M pay: at ~800 rays the projection error is 15% lower (docs/radiance-caching.md §5). */
 static void radiance_grid(const ic_gatherer *g, uint32_t *M, uint32_t *N)
 {
     const uint32_t rays = g->opts.theta_strata * g->opts.phi_strata;
