@@ -132,6 +132,13 @@ static void test_uniform(void)
         for (int k = 0; k < 3 * COUNT; ++k)
             g_max = fmax(g_max, fmax(fabs(rec.grad_t[k]), fabs(rec.grad_b[k])));
         CHECK(rec.r.hit_count == rec.r.ray_count, "furnace: every ray hits");
+        /* The nearest wall is x = 1, 0.7 away; the farthest corner above the plane √(1.3² + 1.2² + 1²). */
+        const double far = sqrt(1.3 * 1.3 + 1.2 * 1.2 + 1.0);
+        CHECK(rec.r.min_dist >= 0.7f - 1e-4f && rec.r.min_dist < 0.75f && rec.r.harmonic_mean_dist > rec.r.min_dist &&
+              rec.r.harmonic_mean_dist < far, "furnace: distances %g %g", (double)rec.r.min_dist,
+              (double)rec.r.harmonic_mean_dist);
+        CHECK(rec.r.sigma.y < 0.01f * rec.r.irradiance.y, "furnace: σ %g small for E %g", (double)rec.r.sigma.y,
+              (double)rec.r.irradiance.y);
         CHECK(g_max == 0.0 && gs_len(rec.r.trans_grad[1]) == 0.0, "furnace: gradients exactly zero (%g)", g_max);
         ic_gatherer_destroy(gb);
     }
