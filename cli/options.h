@@ -116,6 +116,16 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "", IC_SCOPE_IC, "what sets a record's extent: Ward's split sphere (harmonic mean of the hit distances), or " \
       "the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error reaches --accuracy x E at " \
       "the record's edge (stratified or hemicube gather)") \
+    X(RADIANCE_CACHE, "--radiance-cache", NULL, IC_OPT_ON_OFF, render.ic.radiance_cache, 0, 0, "on|off", NAN, \
+      "off", "", IC_SCOPE_IC, "radiance caching (Krivanek et al. 2005): records of incoming radiance in " \
+      "hemispherical harmonics serve the glossy lobe of first shading points whose Phong exponent is at most " \
+      "--radiance-max-exponent; sharper lobes and vertices behind specular ones are path traced " \
+      "(docs/radiance-caching.md)") \
+    X(HSH_ORDER, "--hsh-order", NULL, IC_OPT_INT, render.ic.hsh_order, 1, 16, "N", IC_DEFAULT_HSH_ORDER, "%g", "", \
+      IC_SCOPE_IC, "order of a radiance record's hemispherical harmonics (N^2 coefficients per colour)") \
+    X(RADIANCE_MAX_EXPONENT, "--radiance-max-exponent", NULL, IC_OPT_FLOAT, render.ic.radiance_max_exponent, 0.001, \
+      1e6, "E", IC_DEFAULT_RADIANCE_MAX_EXPONENT, "%g", "", IC_SCOPE_IC, "sharpest Phong lobe radiance records " \
+      "serve (the order's limit: docs/radiance-caching.md)") \
     X(BOUNCES, "--bounces", NULL, IC_OPT_INT, render.ic.bounces, 1, 1000, "N", NAN, "max-depth - 1", "", \
       IC_SCOPE_IC, "bounces in the light a record gathers") \
     X(RECURSIVE, "--recursive", NULL, IC_OPT_FLAG, render.ic.recursive, 0, 0, "", NAN, "off", "", IC_SCOPE_LAZY, \
@@ -187,8 +197,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "2^30)") \
     X(RECORDS_JSON, "--records-json", NULL, IC_OPT_STRING, records_json, 0, 0, "FILE", NAN, "none", "", \
       IC_SCOPE_IC, "write every record (position, radius, a, image position, visibility) as JSON") \
-    X(AOV, "--aov", NULL, IC_OPT_LIST, aov, 0, 0, "indirect,records,density,amap", NAN, "none", "", IC_SCOPE_IC, \
-      "extra images next to the first output: <stem>.indirect.exr, <stem>.records.png (dots and radii), " \
+    X(AOV, "--aov", NULL, IC_OPT_LIST, aov, 0, 0, "indirect,glossy,records,density,amap", NAN, "none", "", \
+      IC_SCOPE_IC, "extra images next to the first output: <stem>.indirect.exr, <stem>.glossy.exr (the glossy " \
+      "lobe's indirect light from radiance records), <stem>.records.png (dots and radii; radiance records " \
+      "yellow in blue rings), " \
       "<stem>.density.exr (records per pixel), <stem>.amap.png (a of the heaviest record, blue = --accuracy " \
       "to red = accuracy/32)") \
     X(HELP, "--help", "-h", IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, "show this help and exit") \

@@ -86,6 +86,11 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         cJSON_AddNumberToObject(ext, "mean", st->extent_mean);
         cJSON_AddNumberToObject(ext, "max", st->extent_max);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
+        if (a->render.ic.radiance_cache == IC_CACHE_ON) {
+            cJSON_AddNumberToObject(o, "irradiance_records", st->records - st->radiance_records);
+            cJSON_AddNumberToObject(o, "radiance_records", st->radiance_records);
+            cJSON_AddNumberToObject(o, "radiance_record_bytes", st->radiance_record_bytes);
+        }
         cJSON_AddBoolToObject(o, "cut_short", st->cut_short);
         cJSON_AddBoolToObject(o, "cut_by_time", st->cut_by_time);
         if (a->render.ic.strategy == IC_STRATEGY_BATCH && !a->render.ic.load_cache)
@@ -104,6 +109,7 @@ typedef struct aov_file {
     const char *name, *suffix, *option;
 } aov_file;
 static const aov_file aov_files[] = {{"indirect", ".indirect.exr", "--aov indirect"},
+                                     {"glossy", ".glossy.exr", "--aov glossy"},
                                      {"records", ".records.png", "--aov records"},
                                      {"density", ".density.exr", "--aov density"},
                                      {"amap", ".amap.png", "--aov amap"}};
@@ -123,7 +129,7 @@ static void aov_path(const char *first, int k, char *path, size_t size)
 /* Writes every AOV that was made; returns the number that failed (each reported). */
 static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_image_write_options *wo)
 {
-    const ic_image *imgs[AOV_COUNT] = {&aovs->indirect, &aovs->records, &aovs->density, &aovs->amap};
+    const ic_image *imgs[AOV_COUNT] = {&aovs->indirect, &aovs->glossy, &aovs->records, &aovs->density, &aovs->amap};
     int failed = 0;
     for (int k = 0; k < AOV_COUNT; ++k) {
         if (!imgs[k]->rgb)
@@ -154,6 +160,8 @@ static int write_records_json(const char *path, const ic_render_aovs *aovs)
         cJSON_AddNumberToObject(r, "py", v->py);
         cJSON_AddNumberToObject(r, "radius_px", v->radius_px);
         cJSON_AddBoolToObject(r, "visible", v->visible);
+        if (v->is_radiance)
+            cJSON_AddBoolToObject(r, "radiance", 1);
         cJSON_AddItemToArray(list, r);
     }
     return ic_cli_write_json("render", path, list, 1);
@@ -223,6 +231,7 @@ int ic_cli_render(int argc, char **argv)
         aovs.want_records = strstr(a.aov, "records") != NULL;
         aovs.want_density = strstr(a.aov, "density") != NULL;
         aovs.want_amap = strstr(a.aov, "amap") != NULL;
+        aovs.want_glossy = strstr(a.aov, "glossy") != NULL;
         opt.aovs = &aovs;
     }
     ic_image img = {0};
@@ -274,6 +283,7 @@ int ic_cli_render(int argc, char **argv)
     ic_image_free(&aovs.records);
     ic_image_free(&aovs.density);
     ic_image_free(&aovs.amap);
+    ic_image_free(&aovs.glossy);
     ic_scene_free(scene);
     if (st.cut_by_time)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
@@ -296,6 +306,8 @@ int ic_cli_render(int argc, char **argv)
         fprintf(stderr, ", %.2fs, %.2f Mrays/s", st.seconds, st.rays_per_second * 1e-6);
         if (opt.integrator == IC_INTEGRATOR_IC)
             fprintf(stderr, ", %u records in %d passes", st.records, st.passes);
+        if (st.radiance_records)
+            fprintf(stderr, " (%u of them radiance records)", st.radiance_records);
         if (st.cached_emitters)
             fprintf(stderr, ", %u emitting triangles lit through the records", st.cached_emitters);
         fputc('\n', stderr);

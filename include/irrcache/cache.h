@@ -131,6 +131,12 @@ typedef struct ic_cache_params {
                                          default IC_DEFAULT_MAX_CACHE_FILE_BYTES (4 GiB) */
 } ic_cache_params;
 
+/* Record kinds share one cache and one octree through the bounce field: irradiance records serve
+ * levels 0 … IC_BOUNCE_RADIANCE − 1; a radiance record (radiance caching on glossy surfaces, Křivánek et
+ * al. 2005) has bounce IC_BOUNCE_RADIANCE + level and carries its incoming radiance as a payload
+ * (ic_cache_set_payload). A look-up sees the kind its bounce asks for; weights and clamps are the same. */
+#define IC_BOUNCE_RADIANCE 128u
+
 /* Record flags. */
 enum {
     IC_RECORD_DISABLED = 1u << 0      /* never contributes to look-ups (kept for indices and files) */
@@ -279,6 +285,15 @@ ic_result ic_cache_set_record_value(ic_cache *cache, uint32_t index, ic_vec3 irr
                                     const ic_vec3 grad_trans[3], ic_vec3 sigma);
 /* Sets or clears IC_RECORD_* flags of record index. */
 ic_result ic_cache_set_record_flags(ic_cache *cache, uint32_t index, uint8_t flags);
+/* Attaches count floats to record index (replacing what it had; count 0 removes it): what a kind of
+ * record carries beyond irradiance, such as a radiance record's coefficients. Stored and saved with the
+ * record. IC_ERR_INVALID_ARG for a bad index or a non-finite value, IC_ERR_OOM. */
+ic_result ic_cache_set_payload(ic_cache *cache, uint32_t index, const float *data, uint32_t count, ic_error *err);
+/* The payload of record index and its length in *count (NULL and 0 when it has none). Valid until the
+ * next ic_cache_set_payload or insertion. */
+const float *ic_cache_payload(const ic_cache *cache, uint32_t index, uint32_t *count);
+/* Bytes the payloads hold (included in ic_cache_memory_bytes). */
+size_t ic_cache_payload_bytes(const ic_cache *cache);
 /* Rebuilds the octree from the current radii (they only shrink, so references go stale-large), then
  * freezes the cache (ic_cache_freeze) unless params.freeze is IC_CACHE_OFF. */
 ic_result ic_cache_rebuild_index(ic_cache *cache, ic_error *err);

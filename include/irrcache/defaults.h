@@ -64,5 +64,9 @@
 #define IC_DEFAULT_WEBER 0.02f           /* adaptive construction */
 #define IC_DEFAULT_ADAPTIVE_GROWTH 1.4f
 #define IC_DEFAULT_ADAPTIVE_MAX_PASSES 64
+/* Radiance caching: order 10 (100 coefficients per channel) represents the normalised Phong lobe up to
+ * exponent 30 within a few per cent at most views (docs/radiance-caching.md, truncation table). */
+#define IC_DEFAULT_HSH_ORDER 10u
+#define IC_DEFAULT_RADIANCE_MAX_EXPONENT 30.0f
 
 #endif

@@ -128,6 +128,13 @@ typedef struct ic_ic_options {
     int adaptive_max_passes; /* adaptive: safety bound on convergence passes [64] */
     ic_error_metric error; /* what sets a record's extent [split sphere]; the Hessian needs the stratified
                               or hemicube gather */
+    ic_cache_switch radiance_cache; /* on: radiance records serve the glossy lobes of first shading points
+                              whose Phong exponent is at most radiance_max_exponent (Křivánek et al. 2005);
+                              off: glossy lobes are path traced [off] */
+    int hsh_order;         /* radiance records: hemispherical-harmonics order n, n² coefficients per channel
+                              (1…16) [IC_DEFAULT_HSH_ORDER] */
+    float radiance_max_exponent; /* sharpest Phong lobe radiance records serve; sharper ones are path traced
+                              [IC_DEFAULT_RADIANCE_MAX_EXPONENT] */
 } ic_ic_options;
 
 /* A cache record as the camera sees it (for overlays and reports). */
@@ -138,6 +145,7 @@ typedef struct ic_record_view {
     float px, py;          /* image position in pixels (top-left origin) */
     float radius_px;       /* influence radius in pixels at the record's depth */
     int visible;           /* 1 if the record lies on a surface the camera sees directly */
+    int is_radiance;       /* 1 for a radiance record (ic_ic_options.radiance_cache), 0 for irradiance */
 } ic_record_view;
 
 /* Where the 2-D sample pairs of a pixel's samples come from. */
@@ -150,11 +158,15 @@ typedef enum ic_sampler {
 typedef struct ic_render_aovs {
     int want_indirect, want_records, want_density;
     int want_amap;         /* a_i map (see amap) */
+    int want_glossy;       /* glossy AOV (see glossy) */
     int want_record_list;  /* fill record_views (malloc'd; the caller frees it) */
     ic_record_view *record_views;
     uint32_t record_view_count;
     ic_image indirect;     /* indirect diffuse radiance from the cache at the first shading point */
-    ic_image records;      /* the image with record positions (dots) and influence radii (circles) */
+    ic_image glossy;       /* the glossy lobe's indirect light from the radiance records at the first shading
+                              point (black where none serves it: path-traced lobes, no radiance caching) */
+    ic_image records;      /* the image with record positions (dots) and influence radii (circles): irradiance
+                              records red in green rings, radiance records yellow in blue rings */
     ic_image density;      /* number of records contributing at each pixel centre (grey level) */
     ic_image amap;         /* a_i of the heaviest record at each pixel centre on a colour ramp: blue = --accuracy,
                               red = accuracy/32 or less (log scale; Křivánek et al. 2006 figs. 7–9) */
@@ -199,6 +211,8 @@ typedef struct ic_render_stats {
                               before its own criterion said the cache was done */
     int cut_by_time;       /* 1: construction stopped at its share of time_budget (cut_short is 1 too) */
     uint32_t cached_emitters; /* emitting triangles whose light the records carry (ic_ic_options.large_emitters) */
+    uint32_t radiance_records; /* records of the radiance kind among `records` (ic_ic_options.radiance_cache) */
+    uint32_t radiance_record_bytes; /* bytes one radiance record holds: the record and its coefficients */
     uint32_t records_per_pass[32];
     char save_error[1024]; /* ic_ic_options.save_cache could not be written: why (the render went on and
                               its image is good); empty when it was written or not asked for */

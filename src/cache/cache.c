@@ -125,6 +125,7 @@ void ic_cache_destroy(ic_cache *c)
     free(c->cold);
     free(c->scratch);
     free(c->changed);
+    ic_cache_payload_free(c);
     free(c);
 }
 
@@ -135,7 +136,8 @@ size_t ic_cache_bytes_per_record(void) { return 2 * sizeof(ic_float4) + sizeof(i
 size_t ic_cache_memory_bytes(const ic_cache *c)
 {
     return sizeof *c + (size_t)c->cap * ic_cache_bytes_per_record() + ic_octree_bytes(&c->tree) +
-           ic_octree_bytes(&c->points) + (size_t)c->scratch_cap * sizeof(uint32_t) + ic_frozen_bytes(&c->frozen);
+           ic_octree_bytes(&c->points) + (size_t)c->scratch_cap * sizeof(uint32_t) + ic_frozen_bytes(&c->frozen) +
+           ic_cache_payload_bytes(c);
 }
 
 /* Depth-first walk of the octree below `node` (at `depth`, `above` references on the path to it). */
@@ -255,6 +257,7 @@ static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radi
 static void roll_back(ic_cache *c, uint32_t first)
 {
     c->count = first;
+    ic_cache_payload_truncate(c, first);
     ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
     ic_octree_build(&c->points, &pts, first);
     ic_octree_build(&c->tree, &sph, first);

@@ -14,7 +14,11 @@
  *   88  N × 156  records: p (3f), R, n (3f), a, E (3f), ∇r E (9f), ∇t E (9f), tangent (3f), σ (3f),
  *                harmonic-mean distance, pixel footprint, change count (u32), bounce (u8), flags (u8),
  *                2 zero bytes
+ *   …   u64      (version 2) payload floats P in all records
+ *   …   N × u32  (version 2) each record's payload length (0: none; cache.h ic_cache_set_payload)
+ *   …   P × f32  (version 2) the payloads in record order
  *   end u64      FNV-1a 64 of every byte before it
+ * Version 1 files (no payload section) still load.
  * The octree is not stored: loading rebuilds it from the records.
  */
 #include "cache_store.h"
@@ -28,7 +32,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define IC_CACHE_FILE_VERSION 1u
+#define IC_CACHE_FILE_VERSION 2u
+#define IC_CACHE_FILE_OLDEST 1u /* the oldest version still read */
 #define MAGIC "IRRCACHE"
 #define PARAM_BYTES 56u
 #define HEADER_BYTES (24u + PARAM_BYTES + 8u)
@@ -221,6 +226,34 @@ static void w_bytes(writer *w, const unsigned char *b, size_t n)
     w->len += n;
 }
 
+/* The payload section: the total, every record's length, then the floats in record order. */
+static void write_payloads(writer *w, const ic_cache *c)
+{
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < c->count; ++i) {
+        uint32_t n;
+        ic_cache_payload(c, i, &n);
+        total += n;
+    }
+    unsigned char b[8];
+    put_u64(b, total);
+    w_bytes(w, b, 8);
+    for (uint32_t i = 0; i < c->count; ++i) {
+        uint32_t n;
+        ic_cache_payload(c, i, &n);
+        put_u32(b, n);
+        w_bytes(w, b, 4);
+    }
+    for (uint32_t i = 0; i < c->count; ++i) {
+        uint32_t n;
+        const float *f = ic_cache_payload(c, i, &n);
+        for (uint32_t k = 0; k < n; ++k) {
+            put_f32(b, f[k]);
+            w_bytes(w, b, 4);
+        }
+    }
+}
+
 ic_result ic_cache_save(const ic_cache *c, const char *path, uint64_t scene_hash, ic_error *err)
 {
     if (!c || !path)
@@ -251,6 +284,7 @@ ic_result ic_cache_save(const ic_cache *c, const char *path, uint64_t scene_hash
         encode_record(c, i, rec);
         w_bytes(w, rec, sizeof rec);
     }
+    write_payloads(w, c);
     unsigned char tail[8];
     put_u64(tail, w->hash);
     w_bytes(w, tail, sizeof tail);
@@ -297,6 +331,42 @@ static ic_result check_params(const char *path, const unsigned char *block, cons
     return IC_OK;
 }
 
+/* The payload section at b (past its total): lengths that add up to the total, finite floats. */
+static ic_result read_payloads(ic_cache *c, const char *path, const unsigned char *b, uint64_t total, ic_error *err)
+{
+    const unsigned char *f = b + 4 * (size_t)c->count;
+    uint64_t at = 0;
+    float *buf = NULL;
+    size_t buf_len = 0;
+    ic_result rc = IC_OK;
+    for (uint32_t i = 0; i < c->count && rc == IC_OK; ++i) {
+        uint32_t n = get_u32(b + 4 * (size_t)i);
+        if (n > total - at) {
+            rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: record %u's payload runs past the file; " REBUILD_HINT, path,
+                              i);
+            break;
+        }
+        if (n > buf_len) {
+            float *nb = realloc(buf, (size_t)n * sizeof *nb);
+            if (!nb) {
+                rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory for record %u's payload", path, i);
+                break;
+            }
+            buf = nb;
+            buf_len = n;
+        }
+        for (uint32_t k = 0; k < n; ++k)
+            buf[k] = get_f32(f + 4 * (size_t)(at + k));
+        at += n;
+        if (n && ic_cache_set_payload(c, i, buf, n, NULL) != IC_OK)
+            rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: record %u's payload is invalid; " REBUILD_HINT, path, i);
+    }
+    if (rc == IC_OK && at != total)
+        rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: payload lengths do not add up; " REBUILD_HINT, path);
+    free(buf);
+    return rc;
+}
+
 ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_t scene_hash, ic_cache **out,
                         ic_error *err)
 {
@@ -317,9 +387,9 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
         rc = ic_error_set(err, IC_ERR_PARSE, "%s: not an irrcache cache file; " REBUILD_HINT, path);
     else if (size < HEADER_BYTES + 8)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: truncated (%zu bytes); " REBUILD_HINT, path, size);
-    else if (get_u32(data + 8) != IC_CACHE_FILE_VERSION)
-        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: cache format version %u, this build reads %u; " REBUILD_HINT,
-                          path, get_u32(data + 8), IC_CACHE_FILE_VERSION);
+    else if (get_u32(data + 8) < IC_CACHE_FILE_OLDEST || get_u32(data + 8) > IC_CACHE_FILE_VERSION)
+        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: cache format version %u, this build reads %u to %u; "
+                          REBUILD_HINT, path, get_u32(data + 8), IC_CACHE_FILE_OLDEST, IC_CACHE_FILE_VERSION);
     else if (get_u32(data + 12) != PARAM_BYTES)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: corrupt header; " REBUILD_HINT, path);
     if (rc != IC_OK) {
@@ -327,10 +397,15 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
         return rc;
     }
     uint64_t count = get_u64(data + 24 + PARAM_BYTES);
-    uint64_t max_count = (size - HEADER_BYTES - 8) / RECORD_BYTES;
-    if (count > max_count || size != HEADER_BYTES + 8 + count * RECORD_BYTES)
+    const int has_payloads = get_u32(data + 8) >= 2;
+    const uint64_t per_record = RECORD_BYTES + (has_payloads ? 4u : 0u), fixed = HEADER_BYTES + 8 + (has_payloads ? 8u : 0u);
+    uint64_t max_count = size >= fixed ? (size - fixed) / per_record : 0, payload_floats = 0;
+    if (has_payloads && count <= max_count)
+        payload_floats = get_u64(data + HEADER_BYTES + count * RECORD_BYTES);
+    if (count > max_count || size < fixed ||
+        payload_floats != (size - fixed - count * per_record) / 4 || size != fixed + count * per_record + 4 * payload_floats)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: %s (%zu bytes for %llu records); " REBUILD_HINT, path,
-                          count > max_count ? "truncated" : "wrong length", size, (unsigned long long)count);
+                          count > max_count || size < fixed ? "truncated" : "wrong length", size, (unsigned long long)count);
     else if (ic_fnv1a64(IC_FNV64_OFFSET, data, size - 8) != get_u64(data + size - 8))
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: checksum mismatch, the file is corrupt; " REBUILD_HINT, path);
     else if (get_u64(data + 16) != scene_hash)
@@ -367,9 +442,13 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
                               "a cache holds; the file is corrupt: " REBUILD_HINT, path, i, (double)s->x,
                               (double)s->y, (double)s->z, (double)s->w, MAX_COORD);
     }
-    free(data);
     if (rc == IC_OK) {
         c->count = (uint32_t)count;
+        if (has_payloads)
+            rc = read_payloads(c, path, data + HEADER_BYTES + count * RECORD_BYTES + 8, payload_floats, err);
+    }
+    free(data);
+    if (rc == IC_OK) {
         ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
         if (ic_octree_build(&c->points, &pts, c->count) != IC_OK || ic_octree_build(&c->tree, &sph, c->count) != IC_OK)
             rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory building the octree", path);

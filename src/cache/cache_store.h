@@ -114,6 +114,13 @@ struct ic_cache {
     uint32_t scratch_cap;
     uint32_t *changed;           /* existing records lowered by step 3: they seed step 4 too */
     uint32_t changed_len, changed_cap;
+    /* Record payloads (cache_payload.c): per record the offset of its floats in `payload` and their
+     * count (0: none); payload_records entries exist, records beyond them have none. */
+    uint64_t *payload_at;
+    uint32_t *payload_len;
+    uint32_t payload_records;
+    float *payload;
+    size_t payload_used, payload_cap; /* floats in use (including replaced ones) and allocated */
 };
 
 static inline ic_octree_items ic_cache_tree_items(const ic_cache *c)
@@ -217,5 +224,9 @@ ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first);
 
 /* Grows the record arrays to hold at least n records. */
 ic_result ic_cache_reserve(ic_cache *c, uint32_t n);
+/* Frees the payload store (ic_cache_destroy). */
+void ic_cache_payload_free(ic_cache *c);
+/* Drops the payloads of records first… (a rolled-back insertion). */
+void ic_cache_payload_truncate(ic_cache *c, uint32_t first);
 
 #endif

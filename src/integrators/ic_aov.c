@@ -44,6 +44,7 @@ static ic_record_view view_of(const ic_ctx *c, const ic_record *rec)
     v.position = rec->position;
     v.radius = rec->radius;
     v.accuracy = rec->accuracy;
+    v.is_radiance = rec->bounce >= IC_BOUNCE_RADIANCE;
     float z;
     if (!project(cam, rec->position, &v.px, &v.py, &z))
         return v;
@@ -73,7 +74,7 @@ ic_result ic_ic_record_views(const ic_ctx *c, ic_record_view **out, uint32_t *co
 }
 
 /* Records the camera sees are drawn as a dot with a circle of their influence radius a_i·R_i, over a
- * darkened copy of the image. */
+ * darkened copy of the image: irradiance records red in green rings, radiance records yellow in blue. */
 ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image *out)
 {
     ic_result r = ic_image_create(out, beauty->width, beauty->height);
@@ -90,7 +91,8 @@ ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image 
         ic_record_view v = view_of(c, &rec);
         if (!v.visible)
             continue;
-        ic_vec3 ring = v3(0.1f, 1.0f, 0.2f), dot = v3(1.0f, 0.15f, 0.1f);
+        ic_vec3 ring = v.is_radiance ? v3(0.2f, 0.5f, 1.0f) : v3(0.1f, 1.0f, 0.2f);
+        ic_vec3 dot = v.is_radiance ? v3(1.0f, 0.9f, 0.1f) : v3(1.0f, 0.15f, 0.1f);
         int steps = (int)(6.3f * v.radius_px) + 8;
         for (int k = 0; k < steps && v.radius_px >= 1.0f; ++k) {
             float a = 2.0f * IC_PI * (float)k / (float)steps;

@@ -67,6 +67,10 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.adaptive_growth = IC_DEFAULT_ADAPTIVE_GROWTH;
     if (o.adaptive_max_passes <= 0)
         o.adaptive_max_passes = IC_DEFAULT_ADAPTIVE_MAX_PASSES;
+    if (o.hsh_order <= 0)
+        o.hsh_order = (int)IC_DEFAULT_HSH_ORDER;
+    if (!(o.radiance_max_exponent > 0.0f))
+        o.radiance_max_exponent = IC_DEFAULT_RADIANCE_MAX_EXPONENT;
     if (o.cache.accuracy == 0.0f)
         o.cache.accuracy = o.cache.weight == IC_WEIGHT_TABELLION ? IC_DEFAULT_ACCURACY_TL : IC_DEFAULT_ACCURACY_WARD;
     /* Radius bounds: 0 means the renderer's default, negative switches the bound off. The pixel bounds
@@ -123,6 +127,8 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
         *gbuffer_seconds = ic_seconds() - t0;
     if (r == IC_OK && !ic_ic_select_large_emitters(c, tr->scene))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
+    if (r == IC_OK)
+        r = ic_ic_radiance_create(c, err);
     if (r != IC_OK) {
         ic_ic_ctx_destroy(c);
         return r;
@@ -140,6 +146,7 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     free(c->direct_pmf);
     free(c->direct_cdf);
     free(c->level_irr);
+    ic_ic_radiance_destroy(c->rad);
     free(c);
 }
 
@@ -199,5 +206,12 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
     /* Record noise control changes the values (the filter) or their noise (the sets). */
     float noise[4] = {c->o.record_filter.mode == IC_CACHE_OFF ? 0.0f : c->o.record_filter.value,
                       (float)c->o.record_sets, c->o.record_sets > 1 ? c->o.record_noise : 0.0f, 0.0f};
-    return ic_fnv1a64(h, noise, sizeof noise);
+    h = ic_fnv1a64(h, noise, sizeof noise);
+    /* Radiance records: their order and which lobes they serve (nothing added when off, so the hashes
+     * of irradiance-only caches stay). */
+    if (c->rad) {
+        float rad[2] = {(float)c->o.hsh_order, c->o.radiance_max_exponent};
+        h = ic_fnv1a64(h, rad, sizeof rad);
+    }
+    return h;
 }

@@ -9,7 +9,7 @@
 
 /* Shadow-tested contribution of one light sample (weight for the glossy lobe's MIS given by wg). */
 static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, const ic_light_sample *ls,
-                           int mis, uint64_t *rays)
+                           int mis, int glossy_traced, uint64_t *rays)
 {
     ic_vec3 fd, fg;
     ic_bsdf_eval_lobes(b, wo, ls->wi, &fd, &fg);
@@ -17,7 +17,7 @@ static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
      * ic_ic_direct_light, the glossy lobe's in the final render's path. */
     float cos_pdf = fmaxf(v3_dot(ls->wi, b->frame.n), 0.0f) * IC_INV_PI;
     float wd = mis ? ic_power_heuristic(ls->pdf, cos_pdf) : 1.0f;
-    float wg = mis ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
+    float wg = mis && glossy_traced ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
     ic_vec3 f = v3_add(v3_scale(fd, wd), v3_scale(fg, wg));
     if (v3_is_black(f) || v3_is_black(ls->radiance))
         return v3s(0.0f);
@@ -69,6 +69,12 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_light_selection
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                            const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
+    return ic_ic_direct_light_lobes(c, s, b, wo, sel, 1, rng, rays);
+}
+
+ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                                 const ic_light_selection *sel, int glossy_traced, ic_rng *rng, uint64_t *rays)
+{
     if (!sel)
         sel = &c->light_sel;
     float u0 = ic_rng_1d(rng), u1, u2;
@@ -82,10 +88,10 @@ ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
         sun.radiance = scene->sun.irradiance;
         sun.pdf = 1.0f;
         sun.is_delta = 1;
-        L = shade_light(c, s, b, wo, &sun, 0, rays);
+        L = shade_light(c, s, b, wo, &sun, 0, glossy_traced, rays);
     }
     ic_light_sample ls;
     if (ic_scene_sample_light_sel(scene, sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
-        L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, rays));
+        L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, glossy_traced, rays));
     return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
 }

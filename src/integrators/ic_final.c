@@ -1,6 +1,7 @@
 /*
  * ic_final.c — the final render's pixel sample: direct light by next-event estimation, indirect diffuse
- * from the cache (or one hemisphere ray where no record reaches), glossy and specular paths traced.
+ * from the cache (or one hemisphere ray where no record reaches), the first glossy lobe from radiance
+ * records where they reach, other glossy and specular paths traced.
  */
 #include "ic_internal.h"
 
@@ -69,7 +70,8 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
      * vertices by power. */
     ic_light_selection local;
     const ic_light_selection *sel = NULL, *prev_sel = &c->light_sel;
-    if (!fc->indirect_only && fc->lights.count && pixel < (uint32_t)c->g.width * (uint32_t)c->g.height) {
+    const int one_term = fc->indirect_only || fc->glossy_only; /* an AOV: one term of the first vertex */
+    if (!one_term && fc->lights.count && pixel < (uint32_t)c->g.width * (uint32_t)c->g.height) {
         uint32_t a = ic_pixel_lights_anchor(&fc->lights, pixel);
         sel = ic_pixel_lights_get(&fc->lights, scene, thread, pixel, c->g.valid[a], c->g.p[a], c->g.n[a], &local);
     }
@@ -81,7 +83,7 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
         ic_accel_intersect1(c->tr->accel, &ray, &hit);
         if (hit.triangle == IC_NO_HIT) {
             /* The environment is never light-sampled in this integrator: full weight. */
-            if (!fc->indirect_only)
+            if (!one_term)
                 L = v3_add(L, v3_mul(beta, ic_scene_env_radiance(scene, ray.dir)));
             break;
         }
@@ -89,7 +91,7 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
         ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
         ic_vec3 wo = v3_neg(ray.dir);
         ic_vec3 le = ic_scene_emission(scene, &s, wo);
-        if (!v3_is_black(le) && !fc->indirect_only) {
+        if (!v3_is_black(le) && !one_term) {
             float w = prev_glossy ? ic_power_heuristic(prev_pdf, ic_scene_light_pdf_triangle_sel(
                                                                      scene, prev_sel, prev_p, hit.triangle, ray.dir, hit.t))
                                   : 1.0f;
@@ -114,15 +116,24 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
             ic_vec3 indirect = v3_mul(v3_scale(b.kd, IC_INV_PI), E);
             if (fc->indirect_only)
                 return v3_mul(beta, indirect);
+            /* Radiance records serve the glossy lobe of the first vertex only: they hold every bounce
+             * after their point, one too many behind a specular or glossy vertex. */
+            ic_vec3 glossy = v3s(0.0f);
+            int glossy_cached = depth == 0 && ic_bsdf_has_glossy(&b) &&
+                                ic_ic_radiance_lookup(c, s.p, b.frame.n, b.ks, s.material, wo, hint, &glossy);
+            if (fc->glossy_only)
+                return v3_mul(beta, glossy);
             /* Several light samples per shading point: with indirect light from the cache, the direct
              * light's noise is what is left, and shadow rays are the cheapest rays there are. */
             ic_vec3 direct = v3s(0.0f);
             for (int k = 0; k < c->o.light_samples; ++k)
-                direct = v3_add(direct, ic_ic_direct_light(c, &s, &b, wo, sel, rng, rays));
+                direct = v3_add(direct, ic_ic_direct_light_lobes(c, &s, &b, wo, sel, !glossy_cached, rng, rays));
             prev_sel = sel;
             sel = &c->light_sel;
             direct = v3_scale(direct, 1.0f / (float)c->o.light_samples);
-            L = v3_add(L, v3_mul(beta, v3_add(indirect, direct)));
+            L = v3_add(L, v3_mul(beta, v3_add(v3_add(indirect, direct), glossy)));
+            if (glossy_cached)
+                break;
             float u1, u2;
             ic_rng_2d(rng, &u1, &u2);
             if (!ic_bsdf_has_glossy(&b) || !ic_bsdf_sample_glossy(&b, wo, u1, u2, &bs))

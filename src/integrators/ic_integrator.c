@@ -95,6 +95,10 @@ static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt,
             return r;
         ic_stats_add_phase(st, "record filter", ic_seconds() - tf);
     }
+    /* Radiance records after the irradiance ones: their hemisphere rays read those at diffuse hits. */
+    uint32_t made = 0;
+    if ((r = ic_ic_radiance_build(c, s->opt, pt, &made, err)) != IC_OK)
+        return r;
     /* The final render reads a freshly built index: look-ups are faster than through the incrementally
      * grown one, and the summation order of every look-up is the same as after loading a cache file, so
      * a saved and re-loaded cache renders the identical image. */
@@ -121,6 +125,15 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     if (c->o.save_cache && ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK)
         snprintf(st->save_error, sizeof st->save_error, "%s", save_err.message);
     st->records = ic_cache_count(c->cache);
+    st->radiance_records = 0;
+    for (uint32_t i = 0; c->rad && i < st->records; ++i) {
+        ic_record rec;
+        ic_cache_get_record(c->cache, i, &rec);
+        st->radiance_records += rec.bounce >= IC_BOUNCE_RADIANCE;
+    }
+    st->radiance_record_bytes = c->rad ? (uint32_t)(ic_cache_bytes_per_record() +
+                                                    sizeof(float) * ic_ic_radiance_payload_floats(c->rad))
+                                       : 0;
     record_extents(c->cache, st);
     st->cached_emitters = c->cached_emitters;
     st->gather_rays = atomic_load(&c->rays);
@@ -149,16 +162,23 @@ static ic_result ic_aovs(void *self, const ic_image *beauty, const ic_image_loop
     ic_state *s = self;
     const ic_ctx *c = s->c;
     ic_pixel_lights_free(&s->fc.lights); /* the indirect AOV samples no lights */
-    if (a->want_indirect) {
+    /* The film again with the same samples, returning one term of the first shading point. */
+    int *modes[2] = {&s->fc.indirect_only, &s->fc.glossy_only};
+    const int wanted[2] = {a->want_indirect, a->want_glossy};
+    ic_image *images[2] = {&a->indirect, &a->glossy};
+    const char *phases[2] = {"indirect AOV", "glossy AOV"};
+    for (int k = 0; k < 2; ++k) {
+        if (!wanted[k])
+            continue;
         ic_image_loop loop = *loop_in;
-        s->fc.indirect_only = 1;
-        loop.phase = "indirect AOV";
+        *modes[k] = 1;
+        loop.phase = phases[k];
         loop.time_budget = 0.0;
         loop.adaptive = 0;
         loop.spp = lr->spp_done;
         ic_image_loop_result lr2;
-        ic_result r = ic_render_image(&loop, ic_ic_final_sample, &s->fc, &a->indirect, &lr2, err);
-        s->fc.indirect_only = 0;
+        ic_result r = ic_render_image(&loop, ic_ic_final_sample, &s->fc, images[k], &lr2, err);
+        *modes[k] = 0;
         if (r != IC_OK)
             return r;
     }

@@ -11,11 +11,13 @@
  *   ic_integrator.c the integrator interface (integrator.h): prepare, sample, aovs, destroy
  *   ic_probe.c      adaptive construction alone, for tests
  *   ic_points.c     the cache at sensor points (irrcache/points.h)
+ *   ic_radiance.c   radiance records on glossy surfaces (ic_radiance.h)
  */
 #ifndef IC_INTEGRATORS_IC_INTERNAL_H
 #define IC_INTEGRATORS_IC_INTERNAL_H
 
 #include "integrators/ic.h"
+#include "integrators/ic_radiance.h"
 #include "integrators/ic_screen.h"
 #include "integrators/ic_world.h"
 
@@ -60,6 +62,7 @@ typedef struct ic_ctx {
                                   (ic_emitters.c); NULL when none is */
     float *direct_cdf;         /* its cdf (tri_light_count + 1) */
     uint32_t cached_emitters;  /* emitting triangles whose light the records carry */
+    ic_radiance *rad;          /* radiance caching on glossy lobes (ic_radiance.c); NULL when off */
 } ic_ctx;
 
 typedef struct phase_times {
@@ -112,6 +115,11 @@ void ic_ic_report(const ic_render_options *opt, const char *phase, double fracti
  * pixel's local light selection, NULL for the whole-scene one. */
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                            const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
+/* The same, saying whether the glossy lobe's own sample will continue the path (1, as above: its light
+ * samples are MIS-weighted against it) or not (0: the radiance records give the glossy lobe's indirect
+ * light, so light sampling alone carries its direct light, at full weight). */
+ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                                 const ic_light_selection *sel, int glossy_traced, ic_rng *rng, uint64_t *rays);
 
 /* Shading points of every pixel centre into c->g (and c->has_record); gbuffer_free frees them. */
 ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err);
@@ -136,6 +144,8 @@ uint64_t ic_ic_records_hash(const ic_ctx *c);
 typedef struct ic_final_ctx {
     const ic_ctx *c;
     int indirect_only;         /* AOV: indirect diffuse at the first shading point only */
+    int glossy_only;           /* AOV: the glossy lobe's indirect light from radiance records at the first
+                                  shading point only */
     ic_cache_hint *hints;      /* one per render thread: consecutive samples of a tile share leaves */
     int hint_count;            /* entries in hints (0: none) */
     ic_pixel_lights lights;    /* per-thread local light selection of the pixel being rendered */

@@ -1129,7 +1129,8 @@ static void test_file(void)
     size_t s1 = 0, s2 = 0;
     CHECK(read_file(path, &d1, &s1) && read_file(path2, &d2, &s2), "read back");
     CHECK(s1 == s2 && memcmp(d1, d2, s1) == 0, "second save is not bit-identical (%zu vs %zu bytes)", s1, s2);
-    CHECK(s1 == 88 + (size_t)n * 156 + 8, "file size %zu", s1);
+    /* Version 2: header, records, the payload section (total, per-record lengths, no floats here), checksum. */
+    CHECK(s1 == 88 + (size_t)n * 156 + 8 + 4 * (size_t)n + 8, "file size %zu", s1);
 
     /* Truncated, corrupted, foreign files. */
     write_file(bad, d1, s1 - 10);
@@ -1150,10 +1151,11 @@ static void test_file(void)
     write_file(bad, d1, s1);
     expect_refusal(bad, &p, hash, IC_ERR_PARSE, "wrong magic");
     d1[0] = 'I';
+    const unsigned char version = d1[8];
     d1[8] = 99;
     write_file(bad, d1, s1);
     expect_refusal(bad, &p, hash, IC_ERR_MISMATCH, "other version");
-    d1[8] = 1;
+    d1[8] = version;
     expect_refusal(path, &p, hash ^ 1, IC_ERR_MISMATCH, "other scene");
     /* A valid checksum over values the octree cannot hold (issue "Hardening", item 3): a finite but huge
      * position or radius is refused naming the record, not turned into infinite bounds and a NaN cell. */
@@ -1293,6 +1295,97 @@ static void test_frozen_bounce_levels(void)
                                               : "Ward, bounce levels, disabled records");
         ic_cache_destroy(c);
     }
+    free(recs);
+}
+
+/* Payloads (radiance records' coefficients): set and read back, replaced, kept through a save and a
+ * load bit for bit, refused when corrupt; a version-1 file (no payload section) still loads; records of
+ * the radiance kind (bounce IC_BOUNCE_RADIANCE) never answer an irradiance look-up and vice versa. */
+static void test_payloads(void)
+{
+    const char *path = IC_TEST_TMP "/test_cache_payload.icc", *bad = IC_TEST_TMP "/test_cache_payload_bad.icc";
+    const uint64_t hash = 77;
+    const uint32_t n = 400;
+    ic_record *recs = make_records(n, 5);
+    for (uint32_t i = 0; i < n; i += 2)
+        recs[i].bounce = (uint8_t)IC_BOUNCE_RADIANCE;
+    ic_cache_params p = {0};
+    ic_cache *c = build_cache(&p, recs, n);
+    ic_error err;
+    float buf[300];
+    for (uint32_t i = 0; i < n; i += 2) {
+        uint32_t len = 1 + i % 300;
+        for (uint32_t k = 0; k < len; ++k)
+            buf[k] = (float)i + 0.001f * (float)k;
+        CHECK(ic_cache_set_payload(c, i, buf, len, &err) == IC_OK, "set payload %u: %s", i, err.message);
+    }
+    buf[0] = 42.0f;
+    CHECK(ic_cache_set_payload(c, 0, buf, 1, &err) == IC_OK, "replace a payload by a shorter one");
+    buf[0] = NAN;
+    CHECK(ic_cache_set_payload(c, 2, buf, 1, &err) == IC_ERR_INVALID_ARG, "a NaN payload is refused");
+    CHECK(ic_cache_set_payload(c, n, buf, 1, &err) == IC_ERR_INVALID_ARG, "a payload past the records is refused");
+    uint32_t len = 7;
+    CHECK(ic_cache_payload(c, 1, &len) == NULL && len == 0, "a record without payload");
+    const float *got = ic_cache_payload(c, 0, &len);
+    CHECK(got && len == 1 && got[0] == 42.0f, "replaced payload reads back");
+    got = ic_cache_payload(c, 10, &len);
+    CHECK(got && len == 11 && got[10] == 10.0f + 0.010f, "payload 10 reads back");
+    /* Kinds: a look-up of each kind sees only records of that kind. */
+    uint32_t wrong = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        ic_cache_contribution ct[64];
+        ic_cache_lookup q = ic_cache_lookup_at(recs[i].position, recs[i].normal, IC_ACCEPT_FINAL);
+        q.bounce = (i & 1) ? 0 : IC_BOUNCE_RADIANCE;
+        q.contributions = ct;
+        q.contribution_capacity = 64;
+        ic_cache_estimate e;
+        ic_cache_query(c, &q, &e);
+        for (uint32_t k = 0; k < e.contributions_written; ++k)
+            wrong += (ct[k].record & 1) != (i & 1);
+    }
+    CHECK(wrong == 0, "%u contributions of the other kind", wrong);
+    CHECK(ic_cache_save(c, path, hash, &err) == IC_OK, "save: %s", err.message);
+    ic_cache *l = NULL;
+    CHECK(ic_cache_load(path, &p, hash, &l, &err) == IC_OK, "load: %s", err.message);
+    uint32_t diff = 0;
+    for (uint32_t i = 0; l && i < n; ++i) {
+        uint32_t la, lb;
+        const float *a = ic_cache_payload(c, i, &la), *b = ic_cache_payload(l, i, &lb);
+        diff += la != lb || (la && memcmp(a, b, la * sizeof *a) != 0);
+    }
+    CHECK(l && diff == 0, "%u payloads differ after a round trip", diff);
+    ic_cache_destroy(l);
+    unsigned char *d = NULL;
+    size_t size = 0;
+    CHECK(read_file(path, &d, &size), "read back");
+    /* Record 0's payload length raised by one: the lengths no longer add up. */
+    size_t lengths = 88 + (size_t)n * 156 + 8;
+    d[lengths] += 1;
+    resign(d, size);
+    write_file(bad, d, size);
+    expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "payload lengths that do not add up");
+    d[lengths] -= 1;
+    /* A NaN inside a payload, checksum valid. */
+    size_t floats = lengths + 4 * (size_t)n;
+    put_f32_le(d + floats, NAN);
+    resign(d, size);
+    write_file(bad, d, size);
+    expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "a NaN in a payload");
+    /* The same records as a version-1 file: no payload section. */
+    size_t v1 = 88 + (size_t)n * 156 + 8;
+    unsigned char *o = malloc(v1);
+    memcpy(o, d, v1 - 8);
+    o[8] = 1;
+    resign(o, v1);
+    write_file(bad, o, v1);
+    l = NULL;
+    CHECK(ic_cache_load(bad, &p, hash, &l, &err) == IC_OK && ic_cache_count(l) == n, "a version-1 file loads: %s",
+          err.message);
+    CHECK(l && ic_cache_payload(l, 0, NULL) == NULL, "a version-1 file has no payloads");
+    ic_cache_destroy(l);
+    free(o);
+    free(d);
+    ic_cache_destroy(c);
     free(recs);
 }
 
@@ -1506,6 +1599,7 @@ int main(void)
     RUN(test_thread_independence);
     RUN(test_point_queries);
     RUN(test_file);
+    RUN(test_payloads);
     RUN(test_freeze_lifecycle);
     RUN(test_frozen_bounce_levels);
     RUN(test_crowded_lookups);

@@ -1,0 +1,401 @@
+/*
+ * ic_radiance.c — radiance caching on glossy surfaces (ic_radiance.h): the lobe tables, construction
+ * of radiance records over the image's glossy first hits, and their interpolation in the final render.
+ */
+#include "ic_internal.h"
+
+#include "core/threads.h"
+#include "irrcache/defaults.h"
+#include "irrcache/hsh.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RADIANCE_KEY_TAG 0x726164696e6365ULL /* keys of radiance records, apart from the irradiance ones */
+/* Most SH order of the exact rotation a look-up runs with its scratch on the stack (the basis of order
+ * 16 uses 2·16 + 8 = 40). */
+#define MAX_SH_ORDER 40
+/* Below this angle between a record's normal and the shading normal, the two frames are taken as
+ * equal up to a turn about the normal (exact): the lobe is read straight in the record's frame. */
+#define SAME_NORMAL_COS 0.9999995f
+
+struct ic_radiance {
+    ic_hsh_basis *basis;
+    uint32_t k;                  /* n²: coefficients per channel */
+    int32_t *table_of;           /* per material: its lobe table, −1 if the material is not served */
+    ic_hsh_lobe_table **tables;
+    float *exponent;             /* per table: the Phong exponent it is for */
+    uint32_t table_count;
+};
+
+uint32_t ic_ic_radiance_payload_floats(const ic_radiance *r) { return r ? 9u * r->k : 0u; }
+
+/* The normalised modified Phong lobe with k_s = 1 in the local frame (Lafortune & Willems 1994):
+ * (e + 2)/(2π) cos^e α, α between ω_i and the mirror direction of ω_o. Any other glossy model is one
+ * more callback of this form. */
+static double phong_lobe(void *user, const double wi[3], const double wo[3])
+{
+    double e = *(const float *)user;
+    double c = -wi[0] * wo[0] - wi[1] * wo[1] + wi[2] * wo[2];
+    return c > 0.0 ? (e + 2.0) / (2.0 * IC_PI) * pow(c, e) : 0.0;
+}
+
+void ic_ic_radiance_destroy(ic_radiance *r)
+{
+    if (!r)
+        return;
+    for (uint32_t t = 0; t < r->table_count; ++t)
+        ic_hsh_lobe_table_destroy(r->tables[t]);
+    free(r->tables);
+    free(r->exponent);
+    free(r->table_of);
+    ic_hsh_basis_destroy(r->basis);
+    free(r);
+}
+
+ic_result ic_ic_radiance_create(ic_ctx *c, ic_error *err)
+{
+    c->rad = NULL;
+    if (c->o.radiance_cache != IC_CACHE_ON)
+        return IC_OK;
+    const ic_scene *s = c->tr->scene;
+    ic_radiance *r = calloc(1, sizeof *r);
+    if (!r)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the radiance cache");
+    r->table_of = malloc(sizeof *r->table_of * (s->material_count ? s->material_count : 1));
+    r->tables = calloc(s->material_count ? s->material_count : 1, sizeof *r->tables);
+    r->exponent = calloc(s->material_count ? s->material_count : 1, sizeof *r->exponent);
+    if (!r->table_of || !r->tables || !r->exponent) {
+        ic_ic_radiance_destroy(r);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the radiance cache");
+    }
+    ic_hsh_opts ho;
+    ic_hsh_opts_default(&ho, (uint32_t)c->o.hsh_order);
+    ic_result rc = ic_hsh_basis_create(&ho, &r->basis, err);
+    for (uint32_t m = 0; rc == IC_OK && m < s->material_count; ++m) {
+        const ic_material *mat = &s->materials[m];
+        r->table_of[m] = -1;
+        if (mat->type != IC_MAT_GLOSSY || !(v3_maxc(mat->ks) > 0.0f))
+            continue;
+        float e = mat->ns > 0.0f ? mat->ns : 1.0f;
+        if (e > c->o.radiance_max_exponent)
+            continue; /* too sharp for the order: path traced */
+        uint32_t t = 0;
+        while (t < r->table_count && r->exponent[t] != e)
+            ++t;
+        if (t == r->table_count) {
+            r->exponent[t] = e;
+            rc = ic_hsh_lobe_table_create(r->basis, phong_lobe, &r->exponent[t], NULL, &r->tables[t], err);
+            if (rc != IC_OK)
+                break;
+            ++r->table_count;
+        }
+        r->table_of[m] = (int32_t)t;
+    }
+    if (rc != IC_OK || r->table_count == 0) {
+        ic_ic_radiance_destroy(r);
+        return rc;
+    }
+    r->k = ic_hsh_count(r->basis);
+    if (ic_hsh_sh_order(r->basis) > MAX_SH_ORDER) {
+        ic_ic_radiance_destroy(r);
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "HSH order %d is too high for radiance records; use at most %d",
+                            c->o.hsh_order, (MAX_SH_ORDER - 8) / 2);
+    }
+    c->rad = r;
+    return IC_OK;
+}
+
+int ic_ic_radiance_serves(const ic_ctx *c, uint32_t material)
+{
+    return c->rad && material < c->tr->scene->material_count && c->rad->table_of[material] >= 0;
+}
+
+/* ---- construction ------------------------------------------------------------------------------ */
+
+/* The image's first hits on served materials, one per pixel centre. */
+typedef struct glossy_points {
+    ic_vec3 *p, *n;
+    float *footprint;
+    uint8_t *valid;
+} glossy_points;
+
+typedef struct points_job {
+    const ic_ctx *c;
+    glossy_points *g;
+} points_job;
+
+static void points_row(void *p, int64_t y, int thread)
+{
+    (void)thread;
+    points_job *j = p;
+    const ic_ctx *c = j->c;
+    const ic_camera *cam = &c->tr->scene->camera;
+    for (int x = 0; x < cam->width; ++x) {
+        size_t i = (size_t)y * cam->width + x;
+        ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
+        ic_hit hit;
+        ic_accel_intersect1(c->tr->accel, &ray, &hit);
+        j->g->valid[i] = 0;
+        if (hit.triangle == IC_NO_HIT)
+            continue;
+        ic_surface s;
+        ic_scene_surface(c->tr->scene, hit.triangle, hit.u, hit.v, &s);
+        if (!ic_ic_radiance_serves(c, s.material))
+            continue;
+        ic_bsdf b;
+        ic_bsdf_init(&b, c->tr->scene, &s, v3_neg(ray.dir));
+        j->g->p[i] = s.p;
+        j->g->n[i] = b.frame.n;
+        j->g->footprint[i] = hit.t * c->pixel_angle;
+        j->g->valid[i] = 1;
+    }
+}
+
+/* One candidate's gather: the result's buffers point into the pass's payload array. */
+typedef struct rad_job {
+    ic_ctx *c;
+    ic_gather_worker *workers;
+    ic_gatherer **gatherers;
+    const ic_candidate *cand;
+    ic_gather_radiance_result *res;
+    atomic_int status;
+} rad_job;
+
+static void rad_item(void *p, int64_t item, int thread)
+{
+    rad_job *j = p;
+    const ic_candidate *cd = &j->cand[item];
+    ic_gather_point gp = ic_ic_gather_point_of(cd);
+    ic_frame f = ic_frame_from_normal(cd->n);
+    ic_hsh_frame hf = {f.t, f.b, f.n};
+    memset(j->workers[thread].sum, 0, sizeof j->workers[thread].sum);
+    ic_result r = ic_gather_radiance(j->gatherers[thread], j->c->rad->basis, &gp, &hf, &j->res[item]);
+    if (r != IC_OK) {
+        int expected = IC_OK;
+        atomic_compare_exchange_strong(&j->status, &expected, (int)r);
+    }
+}
+
+/* The record of a gathered candidate: the irradiance and its gradient from the same rays (they set
+ * the weights and the cache's clamps), R_i also bounded by the coefficients' own relative gradient,
+ * R_i ≤ ‖Λ‖/‖∇Λ‖ (Křivánek et al. 2006 §5.1, the gradient clamp applied to the radiance record). */
+static void record_of(const ic_ctx *c, const ic_candidate *cd, const ic_gather_radiance_result *g, uint32_t k,
+                      ic_record *rec)
+{
+    memset(rec, 0, sizeof *rec);
+    rec->position = cd->p;
+    rec->normal = cd->n;
+    rec->tangent = ic_frame_from_normal(cd->n).t;
+    rec->irradiance = g->irradiance;
+    rec->sigma = g->sigma;
+    double l2 = 0.0, g2 = 0.0;
+    for (uint32_t i = 0; i < 3 * k; ++i) {
+        l2 += (double)g->coeffs[i] * g->coeffs[i];
+        g2 += (double)g->grad_t[i] * g->grad_t[i] + (double)g->grad_b[i] * g->grad_b[i];
+    }
+    float R = isfinite(g->harmonic_mean_dist) && g->harmonic_mean_dist > 0.0f ? g->harmonic_mean_dist : c->scene_diag;
+    if (!c->o.no_gradients) {
+        for (int ch = 0; ch < 3; ++ch)
+            rec->grad_trans[ch] = g->trans_grad[ch];
+        if (g2 > 0.0 && l2 > 0.0)
+            R = fminf(R, (float)sqrt(l2 / g2));
+    }
+    rec->harmonic_mean_dist = R > 0.0f ? R : c->scene_diag;
+    rec->pixel_footprint = cd->footprint;
+    rec->bounce = (uint8_t)IC_BOUNCE_RADIANCE;
+}
+
+/* Gathers count candidates in parallel and inserts them, with their coefficients, as one batch. */
+static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err)
+{
+    const uint32_t k = c->rad->k, floats = 9u * k;
+    int threads = c->threads < (int)count ? c->threads : (int)count;
+    rad_job j;
+    memset(&j, 0, sizeof j);
+    j.c = c;
+    j.cand = cand;
+    atomic_init(&j.status, IC_OK);
+    float *payload = malloc(sizeof *payload * floats * count);
+    ic_record *recs = malloc(sizeof *recs * count);
+    j.res = calloc(count, sizeof *j.res);
+    j.workers = calloc((size_t)threads, sizeof *j.workers);
+    j.gatherers = calloc((size_t)threads, sizeof *j.gatherers);
+    ic_result r = payload && recs && j.res && j.workers && j.gatherers
+                      ? IC_OK
+                      : ic_error_set(err, IC_ERR_OOM, "out of memory for %u radiance records", count);
+    for (uint32_t i = 0; r == IC_OK && i < count; ++i) {
+        j.res[i].coeffs = payload + (size_t)i * floats;
+        j.res[i].grad_t = j.res[i].coeffs + 3 * k;
+        j.res[i].grad_b = j.res[i].coeffs + 6 * k;
+    }
+    for (int t = 0; t < threads && r == IC_OK; ++t) {
+        j.workers[t].c = c;
+        r = ic_gatherer_create(&c->o.gather, ic_ic_gather_trace, &j.workers[t], &j.gatherers[t], err);
+    }
+    double t0 = ic_seconds();
+    if (r == IC_OK) {
+        r = ic_parallel_for(threads, count, rad_item, &j);
+        if (r != IC_OK)
+            ic_error_set(err, r, "could not start %d gathering threads", threads);
+        else if ((r = (ic_result)atomic_load(&j.status)) != IC_OK)
+            ic_error_set(err, r, "gathering a radiance record failed (%s)", ic_result_name(r));
+    }
+    double t1 = ic_seconds();
+    pt->gather += t1 - t0;
+    uint32_t first = 0;
+    if (r == IC_OK) {
+        for (uint32_t i = 0; i < count; ++i)
+            record_of(c, &cand[i], &j.res[i], k, &recs[i]);
+        r = ic_cache_insert_batch(c->cache, recs, count, &first, err);
+    }
+    for (uint32_t i = 0; c->o.no_gradients && i < count; ++i)
+        memset(payload + (size_t)i * floats + 3 * k, 0, sizeof *payload * 6 * k); /* interpolation without gradients */
+    for (uint32_t i = 0; r == IC_OK && i < count; ++i)
+        r = ic_cache_set_payload(c->cache, first + i, payload + (size_t)i * floats, floats, err);
+    pt->insert += ic_seconds() - t1;
+    for (int t = 0; j.gatherers && t < threads; ++t)
+        ic_gatherer_destroy(j.gatherers[t]);
+    free(j.gatherers);
+    free(j.workers);
+    free(j.res);
+    free(recs);
+    free(payload);
+    return r;
+}
+
+ic_result ic_ic_radiance_build(ic_ctx *c, const ic_render_options *opt, phase_times *pt, uint32_t *made,
+                               ic_error *err)
+{
+    *made = 0;
+    if (!c->rad)
+        return IC_OK;
+    const ic_camera *cam = &c->tr->scene->camera;
+    size_t n = (size_t)cam->width * cam->height;
+    glossy_points g = {malloc(sizeof *g.p * n), malloc(sizeof *g.n * n), malloc(sizeof *g.footprint * n), malloc(n)};
+    ic_candidate *cand = malloc(sizeof *cand * n);
+    ic_result r = g.p && g.n && g.footprint && g.valid && cand
+                      ? IC_OK
+                      : ic_error_set(err, IC_ERR_OOM, "out of memory for the glossy shading points");
+    if (r == IC_OK) {
+        points_job pj = {c, &g};
+        r = ic_parallel_for(c->threads, cam->height, points_row, &pj);
+        if (r != IC_OK)
+            ic_error_set(err, r, "could not start threads");
+    }
+    /* Coarse to fine: a pass gathers the grid points no radiance record accepts yet; the next, finer grid
+     * sees those records. Spacing 2 is the last: a pixel between four records' points that none of them
+     * accepts is rendered by the path tracer's glossy bounce. */
+    static const int spacing[] = {32, 16, 8, 4, 2};
+    for (int s = 0; r == IC_OK && s < (int)(sizeof spacing / sizeof spacing[0]); ++s) {
+        int sp = spacing[s];
+        uint32_t count = 0;
+        for (int y = sp / 2; y < cam->height; y += sp)
+            for (int x = sp / 2; x < cam->width; x += sp) {
+                size_t i = (size_t)y * cam->width + x;
+                if (!g.valid[i])
+                    continue;
+                ic_cache_lookup q = ic_cache_lookup_at(g.p[i], g.n[i], IC_ACCEPT_CONSTRUCTION);
+                q.bounce = IC_BOUNCE_RADIANCE;
+                ic_cache_estimate e;
+                if (ic_cache_query(c->cache, &q, &e))
+                    continue;
+                g.valid[i] = 0; /* gathered once at most */
+                cand[count].p = g.p[i];
+                cand[count].n = g.n[i];
+                cand[count].footprint = g.footprint[i];
+                cand[count].key = ic_hash4(RADIANCE_KEY_TAG, i, 0, 0);
+                ++count;
+            }
+        if (count)
+            r = gather_insert(c, cand, count, pt, err);
+        *made += count;
+        ic_ic_report(opt, "radiance records", (double)(s + 1) / (double)(sizeof spacing / sizeof spacing[0]));
+    }
+    free(g.p);
+    free(g.n);
+    free(g.footprint);
+    free(g.valid);
+    free(cand);
+    return r;
+}
+
+/* ---- look-up ----------------------------------------------------------------------------------- */
+
+/* Coefficient vector a·b over k coefficients of channel ch of a planar RGB vector. */
+static float dot_channel(const float *rgb, uint32_t ch, const float *lobe, uint32_t k)
+{
+    return ic_hsh_dot(rgb + ch * k, lobe, k);
+}
+
+int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uint32_t material, ic_vec3 wo,
+                          ic_cache_hint *hint, ic_vec3 *L)
+{
+    const ic_radiance *r = c->rad;
+    if (!ic_ic_radiance_serves(c, material))
+        return 0;
+    ic_cache_contribution contrib[LOOKUP_CAPACITY];
+    ic_cache_lookup q = ic_cache_lookup_at(p, n, IC_ACCEPT_FINAL);
+    q.bounce = IC_BOUNCE_RADIANCE;
+    q.contributions = contrib;
+    q.contribution_capacity = LOOKUP_CAPACITY;
+    ic_cache_estimate e;
+    if (!ic_cache_query_hinted(c->cache, &q, hint, &e) || e.contributions_written == 0)
+        return 0;
+    const ic_hsh_lobe_table *table = r->tables[r->table_of[material]];
+    const uint32_t k = r->k;
+    float lobe_here[IC_HSH_MAX_COUNT], lobe[IC_HSH_MAX_COUNT];
+    double scratch[2 * MAX_SH_ORDER * MAX_SH_ORDER];
+    int have_here = 0;
+    ic_hsh_frame here;
+    double sum[3] = {0.0, 0.0, 0.0}, wsum = 0.0;
+    for (uint32_t i = 0; i < e.contributions_written; ++i) {
+        ic_record rec;
+        uint32_t len;
+        const float *pay = ic_cache_payload(c->cache, contrib[i].record, &len);
+        if (!pay || len != 9u * k || ic_cache_get_record(c->cache, contrib[i].record, &rec) != IC_OK)
+            continue;
+        ic_vec3 t = rec.tangent, b = v3_cross(rec.normal, rec.tangent);
+        if (v3_dot(rec.normal, n) >= SAME_NORMAL_COS) {
+            /* The shading frame is the record's: the lobe for wo read in it. */
+            ic_vec3 wl = v3(v3_dot(wo, t), v3_dot(wo, b), v3_dot(wo, rec.normal));
+            ic_hsh_lobe_table_eval(table, v3_norm(wl), lobe);
+        } else {
+            /* The lobe in a shading frame (n, and the record's tangent projected onto n's plane), then
+             * turned into the record's frame by the inverse of the record-to-shading rotation: with the
+             * reference rotation, (M Λ)·C = Λ·(Mᵀ C) and Mᵀ is the inverse rotation's matrix (SH
+             * rotations are orthogonal), so one channel is rotated instead of three. */
+            if (!have_here) {
+                ic_vec3 ht = v3_sub(t, v3_scale(n, v3_dot(t, n)));
+                ht = v3_len2(ht) > 1e-12f ? v3_norm(ht) : ic_frame_from_normal(n).t;
+                here.normal = n;
+                here.tangent = ht;
+                here.bitangent = v3_cross(n, ht);
+                ic_vec3 wl = v3(v3_dot(wo, here.tangent), v3_dot(wo, here.bitangent), v3_dot(wo, n));
+                ic_hsh_lobe_table_eval(table, v3_norm(wl), lobe_here);
+                have_here = 1;
+            }
+            ic_hsh_frame from = {t, b, rec.normal};
+            ic_hsh_rotation rot, inv;
+            ic_hsh_rotation_from_frames(&from, &here, &rot);
+            ic_hsh_rotation_invert(&rot, &inv);
+            if (ic_hsh_rotate_exact(r->basis, &inv, lobe_here, 1, lobe, scratch) != IC_OK)
+                continue;
+        }
+        ic_vec3 d = v3_sub(p, rec.position);
+        float dt = v3_dot(d, t), db = v3_dot(d, b);
+        float w = contrib[i].weight;
+        for (uint32_t ch = 0; ch < 3; ++ch) {
+            float v = dot_channel(pay, ch, lobe, k) + dt * dot_channel(pay + 3 * k, ch, lobe, k) +
+                      db * dot_channel(pay + 6 * k, ch, lobe, k);
+            sum[ch] += (double)w * fmax(v, 0.0f);
+        }
+        wsum += w;
+    }
+    if (!(wsum > 0.0))
+        return 0;
+    *L = v3_mul(ks, v3((float)(sum[0] / wsum), (float)(sum[1] / wsum), (float)(sum[2] / wsum)));
+    return 1;
+}
