@@ -332,8 +332,8 @@ static void store_contributions(adaptive *A, shading_pt *sp, uint32_t m)
  * point sits on its own record: only that record's removal is discernible, yet it cannot be excluded
  * (x_i(p) = 0), while excluding the far neighbour resolves the discontinuity.
  * Sums in double: L2 is L1 minus one term, and the difference is what is tested. */
-static int discernible(const float *weight, const float *y, const float *sigma, const uint32_t *rec_of, uint32_t m,
-                       float direct, float weber)
+int ic_ic_discernible(const float *weight, const float *y, const float *sigma, const uint32_t *rec_of, uint32_t m,
+                      float direct, float weber)
 {
     double W = 0.0, Ys = 0.0, Ss = 0.0;
     for (uint32_t k = 0; k < m; ++k) {
@@ -368,7 +368,7 @@ static int discernible(const float *weight, const float *y, const float *sigma, 
  * float ulps). Tabellion–Lamorlette accepts while x = max(d/R_i, c·sqrt(1 − n·n_i)) < a_i with
  * w = 1 − x/a_i, so a_i := a_i·(1 − w − ε). Returns 0 when no positive a_i excludes the point (the
  * point sits on the record). */
-static float exclusion_accuracy(const ic_ctx *c, float weight, float accuracy)
+float ic_ic_exclusion_accuracy(const ic_ctx *c, float weight, float accuracy)
 {
     const float eps = 1e-5f;
     if (c->o.cache.weight == IC_WEIGHT_WARD) {
@@ -392,12 +392,12 @@ static uint32_t refine_point(adaptive *A, const shading_pt *sp, uint32_t m)
             sigma[k] = A->work[k].sigma;
             rec_of[k] = A->work[k].record;
         }
-        int best = discernible(weight, y, sigma, rec_of, m, sp->direct, A->weber);
+        int best = ic_ic_discernible(weight, y, sigma, rec_of, m, sp->direct, A->weber);
         if (best < 0)
             break;
         uint32_t ri = A->work[best].record;
         record_state *rs = &A->rec[ri];
-        float a = exclusion_accuracy(A->c, A->work[best].weight, rs->accuracy);
+        float a = ic_ic_exclusion_accuracy(A->c, A->work[best].weight, rs->accuracy);
         if (!(a > 0.0f) || a >= rs->accuracy ||
             ic_cache_set_record_accuracy(A->c->cache, ri, a) != IC_OK) {
             ++A->unresolved;

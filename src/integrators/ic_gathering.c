@@ -474,3 +474,54 @@ ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t 
     cd.key = ((uint64_t)pixel << 8) | tag;
     return cd;
 }
+
+ic_result ic_ic_levels_to_payloads(ic_ctx *c, ic_error *err)
+{
+    if (!c->levels)
+        return IC_OK;
+    const uint32_t floats = 3u * (uint32_t)(c->levels + 1);
+    float buf[3 * (IC_LEVELS_MAX + 1)];
+    for (uint32_t i = 0; i < c->level_records; ++i) {
+        const ic_vec3 *T = &c->level_irr[(size_t)i * (size_t)(c->levels + 1)];
+        for (int k = 0; k <= c->levels; ++k) {
+            buf[3 * k] = T[k].x;
+            buf[3 * k + 1] = T[k].y;
+            buf[3 * k + 2] = T[k].z;
+        }
+        ic_result r = ic_cache_set_payload(c->cache, i, buf, floats, err);
+        if (r != IC_OK)
+            return r;
+    }
+    return IC_OK;
+}
+
+ic_result ic_ic_levels_from_payloads(ic_ctx *c, ic_error *err)
+{
+    if (!c->levels)
+        return IC_OK;
+    const uint32_t floats = 3u * (uint32_t)(c->levels + 1), n = ic_cache_count(c->cache);
+    uint32_t first = 0;
+    /* The leading irradiance records that carry their split (the radiance records follow them). */
+    while (first < n) {
+        ic_record rec;
+        uint32_t len;
+        if (ic_cache_get_record(c->cache, first, &rec) != IC_OK || rec.bounce >= IC_BOUNCE_RADIANCE ||
+            !ic_cache_payload(c->cache, first, &len) || len != floats)
+            break;
+        ++first;
+    }
+    if (first == 0)
+        return IC_OK;
+    ic_vec3 *levels = malloc(sizeof *levels * (size_t)(c->levels + 1) * first);
+    if (!levels)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the records' bounce levels");
+    for (uint32_t i = 0; i < first; ++i) {
+        const float *p = ic_cache_payload(c->cache, i, NULL);
+        for (int k = 0; k <= c->levels; ++k)
+            levels[(size_t)i * (size_t)(c->levels + 1) + (size_t)k] = v3(p[3 * k], p[3 * k + 1], p[3 * k + 2]);
+    }
+    c->level_records = 0;
+    ic_result r = ic_ic_keep_levels(c, 0, first, levels, err);
+    free(levels);
+    return r;
+}

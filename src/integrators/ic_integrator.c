@@ -75,7 +75,7 @@ static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt,
         ic_cache_destroy(c->cache);
         c->cache = loaded;
         pt->insert += ic_seconds() - t0;
-        return IC_OK;
+        return ic_ic_levels_from_payloads(c, err);
     }
     double t0 = ic_seconds();
     int phases_before = st->phase_count;
@@ -96,9 +96,10 @@ static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt,
         ic_stats_add_phase(st, "record filter", ic_seconds() - tf);
     }
     /* Radiance records after the irradiance ones: their hemisphere rays read those at diffuse hits. */
-    uint32_t made = 0;
-    if ((r = ic_ic_radiance_build(c, s->opt, pt, &made, err)) != IC_OK)
+    uint32_t made = 0, refined = 0;
+    if ((r = ic_ic_radiance_build(c, s->opt, pt, &made, &refined, err)) != IC_OK)
         return r;
+    st->refinements += refined;
     /* The final render reads a freshly built index: look-ups are faster than through the incrementally
      * grown one, and the summation order of every look-up is the same as after loading a cache file, so
      * a saved and re-loaded cache renders the identical image. */
@@ -122,7 +123,8 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     /* A cache file that cannot be written costs the file, not the render: the caller reports it. */
     st->save_error[0] = '\0';
     ic_error save_err = {0};
-    if (c->o.save_cache && ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK)
+    if (c->o.save_cache && (ic_ic_levels_to_payloads(c, &save_err) != IC_OK ||
+                            ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK))
         snprintf(st->save_error, sizeof st->save_error, "%s", save_err.message);
     st->records = ic_cache_count(c->cache);
     st->radiance_records = 0;

@@ -97,6 +97,12 @@ ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t co
 /* Keeps the level split of records first…first+count−1 (they must follow the last kept one); a no-op
  * without levels. */
 ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_vec3 *levels, ic_error *err);
+/* The level split of the irradiance records as their cache payloads (3·(levels + 1) floats each), so a
+ * saved cache keeps it; and back into c->level_irr after a load (the leading irradiance records whose
+ * payload has that length; a file without them leaves the split empty and look-ups use E_i). No-ops
+ * without levels. */
+ic_result ic_ic_levels_to_payloads(ic_ctx *c, ic_error *err);
+ic_result ic_ic_levels_from_payloads(ic_ctx *c, ic_error *err);
 /* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
 /* Gather point (offset origin, normal, key) of a candidate. */
@@ -131,7 +137,8 @@ ic_result ic_ic_gather_by_method(const ic_ctx *c, ic_gatherer *g, const ic_gathe
 ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit);
 /* The interpolation of levels T_first … T_{first+levels−1} (ic_ctx.level_irr) over the contributions of
  * one look-up, into E[0 … levels−1]: each contributor's value scaled per channel by T_k / E_i, with the
- * full estimate's weights. Returns 0 (E unset) when a contributor has no levels (a loaded cache). */
+ * full estimate's weights. Returns 0 (E unset) when a contributor has no levels (a cache file
+ * from before the levels were saved with it). */
 int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib, uint32_t count, int first,
                           int levels, ic_vec3 *E);
 /* Chooses the large emitters the records carry (ic_emitters.c); returns 0 when out of memory. */
@@ -207,6 +214,13 @@ typedef struct ic_adaptive_probe {
 /* Adaptive construction that also fills probe (may be NULL: ic_ic_build_adaptive). */
 ic_result ic_ic_build_adaptive_probed(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
                                       ic_adaptive_probe *probe, ic_error *err);
+/* The discernibility test of Křivánek et al. 2006 §4.3 over m ≥ 2 contributions (weights, luminances y
+ * of their outgoing radiance, their σ) at a point whose other light has luminance `direct`: the index of
+ * the lowest-weight contribution if removing any one is discernible, else −1 (ic_adaptive.c). */
+int ic_ic_discernible(const float *weight, const float *y, const float *sigma, const uint32_t *rec_of, uint32_t m,
+                      float direct, float weber);
+/* The a_i that just excludes a point where the record weighs `weight` (§4.1); 0 when none does. */
+float ic_ic_exclusion_accuracy(const ic_ctx *c, float weight, float accuracy);
 /* Runs shading-point setup and adaptive construction only (no final render) on scene with opt. */
 ic_result ic_ic_adaptive_probe_run(const ic_scene *scene, const ic_render_options *opt, ic_adaptive_probe *out,
                                    ic_error *err);

@@ -113,13 +113,24 @@ int ic_ic_radiance_serves(const ic_ctx *c, uint32_t material)
     return c->rad && material < c->tr->scene->material_count && c->rad->table_of[material] >= 0;
 }
 
+/* The lobe of one shading point in a shading frame, computed once and turned into each record's frame. */
+typedef struct shading_lobe {
+    const ic_hsh_lobe_table *table;
+    ic_vec3 p, n, wo;
+    int have_here;
+    ic_hsh_frame here;
+    float lobe_here[IC_HSH_MAX_COUNT];
+} shading_lobe;
+
 /* ---- construction ------------------------------------------------------------------------------ */
 
 /* The image's first hits on served materials, one per pixel centre. */
 typedef struct glossy_points {
-    ic_vec3 *p, *n;
+    ic_vec3 *p, *n, *wo;
     float *footprint;
-    uint8_t *valid;
+    uint32_t *material;
+    uint8_t *valid;            /* 1: a served glossy first hit */
+    uint8_t *gathered;         /* 1: a record was gathered here */
 } glossy_points;
 
 typedef struct points_job {
@@ -138,7 +149,7 @@ static void points_row(void *p, int64_t y, int thread)
         ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
         ic_hit hit;
         ic_accel_intersect1(c->tr->accel, &ray, &hit);
-        j->g->valid[i] = 0;
+        j->g->valid[i] = j->g->gathered[i] = 0;
         if (hit.triangle == IC_NO_HIT)
             continue;
         ic_surface s;
@@ -149,6 +160,8 @@ static void points_row(void *p, int64_t y, int thread)
         ic_bsdf_init(&b, c->tr->scene, &s, v3_neg(ray.dir));
         j->g->p[i] = s.p;
         j->g->n[i] = b.frame.n;
+        j->g->wo[i] = v3_neg(ray.dir);
+        j->g->material[i] = s.material;
         j->g->footprint[i] = hit.t * c->pixel_angle;
         j->g->valid[i] = 1;
     }
@@ -266,17 +279,130 @@ static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t cou
     return r;
 }
 
-ic_result ic_ic_radiance_build(ic_ctx *c, const ic_render_options *opt, phase_times *pt, uint32_t *made,
-                               ic_error *err)
+static void glossy_points_free(glossy_points *g)
 {
-    *made = 0;
+    free(g->p);
+    free(g->n);
+    free(g->wo);
+    free(g->footprint);
+    free(g->material);
+    free(g->valid);
+    free(g->gathered);
+}
+
+static shading_lobe shading_lobe_at(const ic_ctx *c, ic_vec3 p, ic_vec3 n, uint32_t material, ic_vec3 wo);
+static int record_outgoing(const ic_ctx *c, shading_lobe *sl, uint32_t index, ic_vec3 *out);
+
+/* Coarse to fine: a pass gathers the grid points no radiance record accepts yet; the next, finer grid
+ * sees those records. Spacing 2 is the last: a pixel between records' points that none of them accepts
+ * is rendered by the path tracer's glossy bounce. Returns the records made in *made. */
+static ic_result cover(ic_ctx *c, const ic_render_options *opt, glossy_points *g, ic_candidate *cand, phase_times *pt,
+                       uint32_t *made, ic_error *err)
+{
+    static const int spacing[] = {32, 16, 8, 4, 2};
+    const int steps = (int)(sizeof spacing / sizeof spacing[0]);
+    const ic_camera *cam = &c->tr->scene->camera;
+    ic_result r = IC_OK;
+    for (int s = 0; r == IC_OK && s < steps; ++s) {
+        int sp = spacing[s];
+        uint32_t count = 0;
+        for (int y = sp / 2; y < cam->height; y += sp)
+            for (int x = sp / 2; x < cam->width; x += sp) {
+                size_t i = (size_t)y * cam->width + x;
+                if (!g->valid[i] || g->gathered[i])
+                    continue;
+                ic_cache_lookup q = ic_cache_lookup_at(g->p[i], g->n[i], IC_ACCEPT_CONSTRUCTION);
+                q.bounce = IC_BOUNCE_RADIANCE;
+                ic_cache_estimate e;
+                if (ic_cache_query(c->cache, &q, &e))
+                    continue;
+                g->gathered[i] = 1; /* gathered once at most */
+                cand[count].p = g->p[i];
+                cand[count].n = g->n[i];
+                cand[count].footprint = g->footprint[i];
+                cand[count].key = ic_hash4(RADIANCE_KEY_TAG, i, 0, 0);
+                ++count;
+            }
+        if (count)
+            r = gather_insert(c, cand, count, pt, err);
+        *made += count;
+        ic_ic_report(opt, "radiance records", (double)(s + 1) / (double)steps);
+    }
+    return r;
+}
+
+/* Křivánek et al. 2006 §4.1 and §4.3 on the glossy lobe's outgoing radiance: at every point of the
+ * spacing-2 grid, while removing one of the radiance records that accept it would be discernible
+ * (Weber's law on the luminance of k_s ⊙ Σ w_i L_i / Σ w_i plus the diffuse indirect light there, the
+ * records' σ scaled from their irradiance's), the lowest-weight one is shrunk to leave the point. A
+ * sharper lobe sees a record's neighbours' light differently, so its records shrink more and more are
+ * made (fig. 10 of the paper). Points are visited in raster order by one thread: the result depends on
+ * the records alone. Returns the refinements made. */
+static uint32_t refine(ic_ctx *c, const glossy_points *g)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    const ic_scene *scene = c->tr->scene;
+    uint32_t refinements = 0;
+    for (int y = 1; y < cam->height; y += 2)
+        for (int x = 1; x < cam->width; x += 2) {
+            size_t i = (size_t)y * cam->width + x;
+            if (!g->valid[i])
+                continue;
+            const ic_material *mat = &scene->materials[g->material[i]];
+            ic_cache_lookup qd = ic_cache_lookup_at(g->p[i], g->n[i], IC_ACCEPT_CONSTRUCTION);
+            ic_cache_estimate ed;
+            float rest = ic_cache_query(c->cache, &qd, &ed) ? v3_lum(v3_mul(v3_scale(mat->kd, IC_INV_PI), ed.irradiance))
+                                                             : 0.0f;
+            for (int round = 0; round < LOOKUP_CAPACITY; ++round) {
+                ic_cache_contribution contrib[LOOKUP_CAPACITY];
+                ic_cache_lookup q = ic_cache_lookup_at(g->p[i], g->n[i], IC_ACCEPT_CONSTRUCTION);
+                q.bounce = IC_BOUNCE_RADIANCE;
+                q.contributions = contrib;
+                q.contribution_capacity = LOOKUP_CAPACITY;
+                ic_cache_estimate e;
+                if (!ic_cache_query(c->cache, &q, &e) || e.contributions_written < 2)
+                    break;
+                float weight[LOOKUP_CAPACITY], yk[LOOKUP_CAPACITY], sigma[LOOKUP_CAPACITY], acc[LOOKUP_CAPACITY];
+                uint32_t rec_of[LOOKUP_CAPACITY], m = 0;
+                shading_lobe sl = shading_lobe_at(c, g->p[i], g->n[i], g->material[i], g->wo[i]);
+                for (uint32_t k = 0; k < e.contributions_written; ++k) {
+                    ic_vec3 v;
+                    ic_record rec;
+                    if (!record_outgoing(c, &sl, contrib[k].record, &v) ||
+                        ic_cache_get_record(c->cache, contrib[k].record, &rec) != IC_OK)
+                        continue;
+                    float y_rec = v3_lum(v3_mul(mat->ks, v)), e_lum = v3_lum(rec.irradiance);
+                    weight[m] = contrib[k].weight;
+                    yk[m] = y_rec;
+                    sigma[m] = e_lum > 0.0f ? y_rec * v3_lum(rec.sigma) / e_lum : 0.0f;
+                    rec_of[m] = contrib[k].record;
+                    acc[m] = rec.accuracy;
+                    ++m;
+                }
+                int best = m >= 2 ? ic_ic_discernible(weight, yk, sigma, rec_of, m, rest, c->o.weber) : -1;
+                if (best < 0)
+                    break;
+                float a = ic_ic_exclusion_accuracy(c, weight[best], acc[best]);
+                if (!(a > 0.0f) || a >= acc[best] || ic_cache_set_record_accuracy(c->cache, rec_of[best], a) != IC_OK)
+                    break;
+                ++refinements;
+            }
+        }
+    return refinements;
+}
+
+ic_result ic_ic_radiance_build(ic_ctx *c, const ic_render_options *opt, phase_times *pt, uint32_t *made,
+                               uint32_t *refinements, ic_error *err)
+{
+    *made = *refinements = 0;
     if (!c->rad)
         return IC_OK;
     const ic_camera *cam = &c->tr->scene->camera;
     size_t n = (size_t)cam->width * cam->height;
-    glossy_points g = {malloc(sizeof *g.p * n), malloc(sizeof *g.n * n), malloc(sizeof *g.footprint * n), malloc(n)};
+    glossy_points g = {malloc(sizeof *g.p * n), malloc(sizeof *g.n * n), malloc(sizeof *g.wo * n),
+                       malloc(sizeof *g.footprint * n), malloc(sizeof *g.material * n), malloc(n), malloc(n)};
     ic_candidate *cand = malloc(sizeof *cand * n);
-    ic_result r = g.p && g.n && g.footprint && g.valid && cand
+    ic_result r = g.p && g.n && g.wo && g.footprint && g.material && g.valid && g.gathered && cand
                       ? IC_OK
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for the glossy shading points");
     if (r == IC_OK) {
@@ -285,39 +411,21 @@ ic_result ic_ic_radiance_build(ic_ctx *c, const ic_render_options *opt, phase_ti
         if (r != IC_OK)
             ic_error_set(err, r, "could not start threads");
     }
-    /* Coarse to fine: a pass gathers the grid points no radiance record accepts yet; the next, finer grid
-     * sees those records. Spacing 2 is the last: a pixel between four records' points that none of them
-     * accepts is rendered by the path tracer's glossy bounce. */
-    static const int spacing[] = {32, 16, 8, 4, 2};
-    for (int s = 0; r == IC_OK && s < (int)(sizeof spacing / sizeof spacing[0]); ++s) {
-        int sp = spacing[s];
-        uint32_t count = 0;
-        for (int y = sp / 2; y < cam->height; y += sp)
-            for (int x = sp / 2; x < cam->width; x += sp) {
-                size_t i = (size_t)y * cam->width + x;
-                if (!g.valid[i])
-                    continue;
-                ic_cache_lookup q = ic_cache_lookup_at(g.p[i], g.n[i], IC_ACCEPT_CONSTRUCTION);
-                q.bounce = IC_BOUNCE_RADIANCE;
-                ic_cache_estimate e;
-                if (ic_cache_query(c->cache, &q, &e))
-                    continue;
-                g.valid[i] = 0; /* gathered once at most */
-                cand[count].p = g.p[i];
-                cand[count].n = g.n[i];
-                cand[count].footprint = g.footprint[i];
-                cand[count].key = ic_hash4(RADIANCE_KEY_TAG, i, 0, 0);
-                ++count;
-            }
-        if (count)
-            r = gather_insert(c, cand, count, pt, err);
-        *made += count;
-        ic_ic_report(opt, "radiance records", (double)(s + 1) / (double)(sizeof spacing / sizeof spacing[0]));
+    if (r == IC_OK)
+        r = cover(c, opt, &g, cand, pt, made, err);
+    /* The adaptive strategy refines the radiance records too, until a pass neither shrinks nor adds one. */
+    for (int pass = 0; r == IC_OK && c->o.strategy == IC_STRATEGY_ADAPTIVE && pass < c->o.adaptive_max_passes;
+         ++pass) {
+        double t0 = ic_seconds();
+        uint32_t refined = refine(c, &g), added = 0;
+        pt->insert += ic_seconds() - t0;
+        *refinements += refined;
+        if (refined == 0)
+            break;
+        r = cover(c, opt, &g, cand, pt, &added, err);
+        *made += added;
     }
-    free(g.p);
-    free(g.n);
-    free(g.footprint);
-    free(g.valid);
+    glossy_points_free(&g);
     free(cand);
     return r;
 }
@@ -330,10 +438,72 @@ static float dot_channel(const float *rgb, uint32_t ch, const float *lobe, uint3
     return ic_hsh_dot(rgb + ch * k, lobe, k);
 }
 
+/* Record `index`'s outgoing radiance through the lobe (k_s = 1) at the shading point, per channel and
+ * clamped at zero: (Λ_i + d_t ∂Λ_i/∂t + d_b ∂Λ_i/∂b)·C_i(ω_o). Returns 0 when the record has no
+ * coefficients of this basis. */
+static int record_outgoing(const ic_ctx *c, shading_lobe *sl, uint32_t index, ic_vec3 *out)
+{
+    const ic_radiance *r = c->rad;
+    const uint32_t k = r->k;
+    ic_record rec;
+    uint32_t len;
+    const float *pay = ic_cache_payload(c->cache, index, &len);
+    if (!pay || len != 9u * k || ic_cache_get_record(c->cache, index, &rec) != IC_OK)
+        return 0;
+    float lobe[IC_HSH_MAX_COUNT];
+    ic_vec3 t = rec.tangent, b = v3_cross(rec.normal, rec.tangent);
+    if (v3_dot(rec.normal, sl->n) >= SAME_NORMAL_COS) {
+        /* The shading frame is the record's: the lobe for wo read in it. */
+        ic_vec3 wl = v3(v3_dot(sl->wo, t), v3_dot(sl->wo, b), v3_dot(sl->wo, rec.normal));
+        ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), lobe);
+    } else {
+        /* The lobe in a shading frame (n, and the record's tangent projected onto n's plane), turned
+         * into the record's frame by the inverse of the record-to-shading rotation: with the reference
+         * rotation, (M Λ)·C = Λ·(Mᵀ C) and Mᵀ is the inverse rotation's matrix (SH rotations are
+         * orthogonal), so one channel is rotated instead of three. */
+        if (!sl->have_here) {
+            ic_vec3 ht = v3_sub(t, v3_scale(sl->n, v3_dot(t, sl->n)));
+            ht = v3_len2(ht) > 1e-12f ? v3_norm(ht) : ic_frame_from_normal(sl->n).t;
+            sl->here.normal = sl->n;
+            sl->here.tangent = ht;
+            sl->here.bitangent = v3_cross(sl->n, ht);
+            ic_vec3 wl = v3(v3_dot(sl->wo, ht), v3_dot(sl->wo, sl->here.bitangent), v3_dot(sl->wo, sl->n));
+            ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), sl->lobe_here);
+            sl->have_here = 1;
+        }
+        double scratch[2 * MAX_SH_ORDER * MAX_SH_ORDER];
+        ic_hsh_frame from = {t, b, rec.normal};
+        ic_hsh_rotation rot, inv;
+        ic_hsh_rotation_from_frames(&from, &sl->here, &rot);
+        ic_hsh_rotation_invert(&rot, &inv);
+        if (ic_hsh_rotate_exact(r->basis, &inv, sl->lobe_here, 1, lobe, scratch) != IC_OK)
+            return 0;
+    }
+    ic_vec3 d = v3_sub(sl->p, rec.position);
+    float dt = v3_dot(d, t), db = v3_dot(d, b);
+    float v[3];
+    for (uint32_t ch = 0; ch < 3; ++ch)
+        v[ch] = fmaxf(dot_channel(pay, ch, lobe, k) + dt * dot_channel(pay + 3 * k, ch, lobe, k) +
+                          db * dot_channel(pay + 6 * k, ch, lobe, k),
+                      0.0f);
+    *out = v3(v[0], v[1], v[2]);
+    return 1;
+}
+
+static shading_lobe shading_lobe_at(const ic_ctx *c, ic_vec3 p, ic_vec3 n, uint32_t material, ic_vec3 wo)
+{
+    shading_lobe sl;
+    sl.table = c->rad->tables[c->rad->table_of[material]];
+    sl.p = p;
+    sl.n = n;
+    sl.wo = wo;
+    sl.have_here = 0;
+    return sl;
+}
+
 int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uint32_t material, ic_vec3 wo,
                           ic_cache_hint *hint, ic_vec3 *L)
 {
-    const ic_radiance *r = c->rad;
     if (!ic_ic_radiance_serves(c, material))
         return 0;
     ic_cache_contribution contrib[LOOKUP_CAPACITY];
@@ -344,54 +514,16 @@ int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uin
     ic_cache_estimate e;
     if (!ic_cache_query_hinted(c->cache, &q, hint, &e) || e.contributions_written == 0)
         return 0;
-    const ic_hsh_lobe_table *table = r->tables[r->table_of[material]];
-    const uint32_t k = r->k;
-    float lobe_here[IC_HSH_MAX_COUNT], lobe[IC_HSH_MAX_COUNT];
-    double scratch[2 * MAX_SH_ORDER * MAX_SH_ORDER];
-    int have_here = 0;
-    ic_hsh_frame here;
+    shading_lobe sl = shading_lobe_at(c, p, n, material, wo);
     double sum[3] = {0.0, 0.0, 0.0}, wsum = 0.0;
     for (uint32_t i = 0; i < e.contributions_written; ++i) {
-        ic_record rec;
-        uint32_t len;
-        const float *pay = ic_cache_payload(c->cache, contrib[i].record, &len);
-        if (!pay || len != 9u * k || ic_cache_get_record(c->cache, contrib[i].record, &rec) != IC_OK)
+        ic_vec3 v;
+        if (!record_outgoing(c, &sl, contrib[i].record, &v))
             continue;
-        ic_vec3 t = rec.tangent, b = v3_cross(rec.normal, rec.tangent);
-        if (v3_dot(rec.normal, n) >= SAME_NORMAL_COS) {
-            /* The shading frame is the record's: the lobe for wo read in it. */
-            ic_vec3 wl = v3(v3_dot(wo, t), v3_dot(wo, b), v3_dot(wo, rec.normal));
-            ic_hsh_lobe_table_eval(table, v3_norm(wl), lobe);
-        } else {
-            /* The lobe in a shading frame (n, and the record's tangent projected onto n's plane), then
-             * turned into the record's frame by the inverse of the record-to-shading rotation: with the
-             * reference rotation, (M Λ)·C = Λ·(Mᵀ C) and Mᵀ is the inverse rotation's matrix (SH
-             * rotations are orthogonal), so one channel is rotated instead of three. */
-            if (!have_here) {
-                ic_vec3 ht = v3_sub(t, v3_scale(n, v3_dot(t, n)));
-                ht = v3_len2(ht) > 1e-12f ? v3_norm(ht) : ic_frame_from_normal(n).t;
-                here.normal = n;
-                here.tangent = ht;
-                here.bitangent = v3_cross(n, ht);
-                ic_vec3 wl = v3(v3_dot(wo, here.tangent), v3_dot(wo, here.bitangent), v3_dot(wo, n));
-                ic_hsh_lobe_table_eval(table, v3_norm(wl), lobe_here);
-                have_here = 1;
-            }
-            ic_hsh_frame from = {t, b, rec.normal};
-            ic_hsh_rotation rot, inv;
-            ic_hsh_rotation_from_frames(&from, &here, &rot);
-            ic_hsh_rotation_invert(&rot, &inv);
-            if (ic_hsh_rotate_exact(r->basis, &inv, lobe_here, 1, lobe, scratch) != IC_OK)
-                continue;
-        }
-        ic_vec3 d = v3_sub(p, rec.position);
-        float dt = v3_dot(d, t), db = v3_dot(d, b);
-        float w = contrib[i].weight;
-        for (uint32_t ch = 0; ch < 3; ++ch) {
-            float v = dot_channel(pay, ch, lobe, k) + dt * dot_channel(pay + 3 * k, ch, lobe, k) +
-                      db * dot_channel(pay + 6 * k, ch, lobe, k);
-            sum[ch] += (double)w * fmax(v, 0.0f);
-        }
+        double w = contrib[i].weight;
+        sum[0] += w * v.x;
+        sum[1] += w * v.y;
+        sum[2] += w * v.z;
         wsum += w;
     }
     if (!(wsum > 0.0))

@@ -35,9 +35,11 @@ int ic_ic_radiance_serves(const struct ic_ctx *c, uint32_t material);
 /* Construction over the image's first-hit points on served materials, after the irradiance records:
  * coarse-to-fine passes over pixel grids of spacing 32 … 2, each gathering the points no radiance
  * record yet accepts, in parallel, and inserting them as one batch (deterministic, thread-count
- * independent). Adds its time to pt and the records made to *made. */
+ * independent); with the adaptive strategy, then passes of §4 refinement on the glossy lobe's outgoing
+ * radiance and new records where refinement uncovered points, until one changes nothing. Adds its time
+ * to pt, the records made to *made and the a_i lowered to *refinements. */
 ic_result ic_ic_radiance_build(struct ic_ctx *c, const ic_render_options *opt, struct phase_times *pt,
-                               uint32_t *made, ic_error *err);
+                               uint32_t *made, uint32_t *refinements, ic_error *err);
 /* The glossy lobe's indirect outgoing radiance at the surface point p (shading normal n, the bsdf's
  * frame) towards wo, interpolated from the radiance records: returns 0 (L unset) when none accepts p. */
 int ic_ic_radiance_lookup(const struct ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uint32_t material,

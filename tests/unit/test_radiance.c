@@ -7,9 +7,11 @@
  * 2. The glossy Cornell box with a floor of exponent 20: the cache with radiance records against a
  *    path-traced reference (its noise measured from two halves) — image mean within 1 %, relMSE below a
  *    bound, and radiance records actually made on the floor and the sphere.
- * 3. Determinism: 1 and 2 threads give identical images, and a saved then loaded cache (radiance records
- *    and their coefficients in the file) renders the identical image; a render without radiance
- *    caching refuses that file.
+ * 3. Determinism: 1 and 2 threads give identical images for every strategy, and a saved then loaded
+ *    cache (radiance records and their coefficients in the file) renders the identical image; a render
+ *    without radiance caching refuses that file.
+ * 4. Adaptive caching (Křivánek et al. 2006 §4 on the glossy lobe's outgoing radiance) makes more
+ *    radiance records for sharper lobes: exponents 3, 10, 30 on a plane under a two-level sky.
  */
 #include "test_util.h"
 
@@ -127,13 +129,19 @@ static void test_determinism(void)
 {
     const int W = 40, H = 40;
     ic_image img[4] = {{0}, {0}, {0}, {0}};
-    for (int threads = 1; threads <= 2; ++threads) {
-        ic_render_options o = radiance_options();
-        o.spp = 4;
-        o.threads = threads;
-        CHECK(test_render(GLOSSY20, W, H, &o, &img[threads - 1], NULL), "%d threads render", threads);
+    const ic_strategy strategies[] = {IC_STRATEGY_LAZY, IC_STRATEGY_ADAPTIVE, IC_STRATEGY_BATCH};
+    for (int k = 0; k < 3; ++k) {
+        for (int threads = 1; threads <= 2; ++threads) {
+            ic_render_options o = radiance_options();
+            o.spp = 4;
+            o.threads = threads;
+            o.ic.strategy = strategies[k];
+            if (k > 0)
+                ic_image_free(&img[threads - 1]);
+            CHECK(test_render(GLOSSY20, W, H, &o, &img[threads - 1], NULL), "%d threads render", threads);
+        }
+        CHECK(images_equal(&img[0], &img[1]), "strategy %d: 1 and 2 threads give identical images", (int)strategies[k]);
     }
-    CHECK(images_equal(&img[0], &img[1]), "1 and 2 threads give identical images");
     /* Off: the same scene without radiance records renders differently (the records are used). */
     ic_render_options o = radiance_options();
     o.spp = 4;
@@ -142,27 +150,81 @@ static void test_determinism(void)
     CHECK(!images_equal(&img[0], &img[2]), "radiance records change the image");
     for (int k = 0; k < 3; ++k)
         ic_image_free(&img[k]);
-    /* Save and load, on the furnace plane of test_furnace (exponent 20), whose camera paths meet no
-     * diffuse vertex behind a glossy one: a loaded cache has no bounce levels (ic_final.c), so only there
-     * is the identity exact for any cache. */
+    /* Save and load: the radiance records' coefficients and the irradiance records' bounce levels travel
+     * in the file, so the loaded cache renders the identical image, glossy reflections included. */
     o = radiance_options();
     o.spp = 4;
     o.threads = 2;
     o.ic.save_cache = IC_TEST_TMP "/rc_cache.icc";
-    CHECK(test_render(IC_TEST_TMP "/rc_furnace.json", 0, 0, &o, &img[0], NULL), "saving render");
+    CHECK(test_render(GLOSSY20, W, H, &o, &img[0], NULL), "saving render");
     o.ic.save_cache = NULL;
     o.ic.load_cache = IC_TEST_TMP "/rc_cache.icc";
     ic_render_stats st;
-    CHECK(test_render(IC_TEST_TMP "/rc_furnace.json", 0, 0, &o, &img[1], &st), "loaded cache renders");
+    CHECK(test_render(GLOSSY20, W, H, &o, &img[1], &st), "loaded cache renders");
     CHECK(st.radiance_records > 0, "the loaded cache has %u radiance records", st.radiance_records);
     CHECK(images_equal(&img[0], &img[1]), "a saved and loaded cache renders the identical image");
     /* Without radiance records the file is refused (its records were made with other settings). */
     o.ic.radiance_cache = IC_CACHE_OFF;
-    CHECK(!test_render(IC_TEST_TMP "/rc_furnace.json", 0, 0, &o, &img[2], NULL),
+    CHECK(!test_render(GLOSSY20, W, H, &o, &img[2], NULL),
           "a cache with radiance records is refused by a render without them");
     ic_image_free(&img[0]);
     ic_image_free(&img[1]);
     ic_image_free(&img[2]);
+}
+
+/* A lat-long map, bright (2) in the half of the sky with d.x < 0 and dim (0.2) in the other (PFM). */
+static void write_half_sky(const char *path)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        exit(1);
+    const int w = 64, h = 32;
+    fprintf(f, "PF\n%d %d\n-1.0\n", w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float v = x < w / 2 ? 2.0f : 0.2f, px[3] = {v, 0.9f * v, 0.8f * v};
+            fwrite(px, sizeof px, 1, f);
+        }
+    fclose(f);
+}
+
+/* Křivánek et al. 2006 §6, fig. 10: adaptive caching puts more radiance records on sharper lobes. A glossy
+ * plane reflects a sky whose two halves differ tenfold; the discernibility test on outgoing radiance
+ * splits records where the reflected edge crosses them, and a sharper lobe sees the edge sharper. Records
+ * may be large (no world radius bound), so the count is what the refinement makes. */
+static void test_adaptive_sharpness(void)
+{
+    write_half_sky(IC_TEST_TMP "/rc_half.pfm");
+    test_write_file(IC_TEST_TMP "/rc_plane.obj", "mtllib rc_plane.mtl\nusemtl floor\n"
+                                                 "v -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nf 1 3 2\nf 1 4 3\n");
+    test_write_file(IC_TEST_TMP "/rc_plane.mtl", "newmtl floor\nKd 0.1 0.1 0.1\n");
+    const float exponents[] = {3.0f, 10.0f, 30.0f};
+    uint32_t count[3];
+    for (int e = 0; e < 3; ++e) {
+        char json[1024];
+        snprintf(json, sizeof json,
+                 "{\"camera\": {\"eye\": [0, 1, 2.5], \"target\": [0, 0, -1], \"up\": [0, 1, 0], \"fov_y\": 60, "
+                 "\"width\": 96, \"height\": 72}, \"meshes\": [{\"path\": \"rc_plane.obj\"}], \"materials\": "
+                 "{\"floor\": {\"type\": \"glossy\", \"kd\": [0.1, 0.1, 0.1], \"ks\": 0.7, \"ns\": %g}}, "
+                 "\"environment\": {\"map\": \"rc_half.pfm\"}}",
+                 (double)exponents[e]);
+        test_write_file(IC_TEST_TMP "/rc_plane.json", json);
+        ic_render_options o = radiance_options();
+        o.spp = 1;
+        o.ic.strategy = IC_STRATEGY_ADAPTIVE;
+        o.ic.cache.max_radius = 100.0f;
+        ic_image img = {0};
+        ic_render_stats st;
+        CHECK(test_render(IC_TEST_TMP "/rc_plane.json", 0, 0, &o, &img, &st), "exponent %g renders",
+              (double)exponents[e]);
+        count[e] = st.radiance_records;
+        printf("adaptive, glossy plane of exponent %g: %u radiance records\n", (double)exponents[e], count[e]);
+        ic_image_free(&img);
+    }
+    CHECK(count[0] < count[1] && count[1] < count[2], "radiance records %u, %u, %u for exponents 3, 10, 30: not "
+          "increasing", count[0], count[1], count[2]);
+    CHECK(count[2] > 3 * count[0], "exponent 30 has %u radiance records, exponent 3 %u: expected several times more",
+          count[2], count[0]);
 }
 
 int main(void)
@@ -170,5 +232,6 @@ int main(void)
     test_furnace();
     test_glossy_cornell();
     test_determinism();
+    test_adaptive_sharpness();
     TEST_MAIN_END();
 }
