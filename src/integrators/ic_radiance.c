@@ -438,55 +438,79 @@ static float dot_channel(const float *rgb, uint32_t ch, const float *lobe, uint3
     return ic_hsh_dot(rgb + ch * k, lobe, k);
 }
 
-/* Record `index`'s outgoing radiance through the lobe (k_s = 1) at the shading point, per channel and
- * clamped at zero: (Λ_i + d_t ∂Λ_i/∂t + d_b ∂Λ_i/∂b)·C_i(ω_o). Returns 0 when the record has no
- * coefficients of this basis. */
-static int record_outgoing(const ic_ctx *c, shading_lobe *sl, uint32_t index, ic_vec3 *out)
+/* The lobe's coefficients for the shading point's ω_o in a record's frame (t, b = n_i × t, n_i). */
+static int lobe_in_frame(const ic_ctx *c, shading_lobe *sl, ic_vec3 t, ic_vec3 b, ic_vec3 n_rec, float *lobe)
 {
-    const ic_radiance *r = c->rad;
-    const uint32_t k = r->k;
+    if (v3_dot(n_rec, sl->n) >= SAME_NORMAL_COS) {
+        /* The shading frame is the record's: the lobe for wo read in it. */
+        ic_vec3 wl = v3(v3_dot(sl->wo, t), v3_dot(sl->wo, b), v3_dot(sl->wo, n_rec));
+        ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), lobe);
+        return 1;
+    }
+    /* The lobe in a shading frame (n, and the record's tangent projected onto n's plane), turned into the
+     * record's frame by the inverse of the record-to-shading rotation: with the reference rotation,
+     * (M Λ)·C = Λ·(Mᵀ C) and Mᵀ is the inverse rotation's matrix (SH rotations are orthogonal), so one
+     * channel is rotated instead of three. */
+    if (!sl->have_here) {
+        ic_vec3 ht = v3_sub(t, v3_scale(sl->n, v3_dot(t, sl->n)));
+        ht = v3_len2(ht) > 1e-12f ? v3_norm(ht) : ic_frame_from_normal(sl->n).t;
+        sl->here.normal = sl->n;
+        sl->here.tangent = ht;
+        sl->here.bitangent = v3_cross(sl->n, ht);
+        ic_vec3 wl = v3(v3_dot(sl->wo, ht), v3_dot(sl->wo, sl->here.bitangent), v3_dot(sl->wo, sl->n));
+        ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), sl->lobe_here);
+        sl->have_here = 1;
+    }
+    double scratch[2 * MAX_SH_ORDER * MAX_SH_ORDER];
+    ic_hsh_frame from = {t, b, n_rec};
+    ic_hsh_rotation rot, inv;
+    ic_hsh_rotation_from_frames(&from, &sl->here, &rot);
+    ic_hsh_rotation_invert(&rot, &inv);
+    return ic_hsh_rotate_exact(c->rad->basis, &inv, sl->lobe_here, 1, lobe, scratch) == IC_OK;
+}
+
+/* Record `index`'s coefficients extrapolated to the shading point, Λ_i + d_t ∂Λ_i/∂t + d_b ∂Λ_i/∂b
+ * (3·n² planar RGB), scaled by w and added to acc; its frame to *t, *b, *n. Returns 0 when the record has
+ * no coefficients of this basis. */
+static int add_extrapolated(const ic_ctx *c, const shading_lobe *sl, uint32_t index, float w, float *acc, ic_vec3 *t,
+                            ic_vec3 *b, ic_vec3 *n)
+{
+    const uint32_t k = c->rad->k;
     ic_record rec;
     uint32_t len;
     const float *pay = ic_cache_payload(c->cache, index, &len);
     if (!pay || len != 9u * k || ic_cache_get_record(c->cache, index, &rec) != IC_OK)
         return 0;
-    float lobe[IC_HSH_MAX_COUNT];
-    ic_vec3 t = rec.tangent, b = v3_cross(rec.normal, rec.tangent);
-    if (v3_dot(rec.normal, sl->n) >= SAME_NORMAL_COS) {
-        /* The shading frame is the record's: the lobe for wo read in it. */
-        ic_vec3 wl = v3(v3_dot(sl->wo, t), v3_dot(sl->wo, b), v3_dot(sl->wo, rec.normal));
-        ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), lobe);
-    } else {
-        /* The lobe in a shading frame (n, and the record's tangent projected onto n's plane), turned
-         * into the record's frame by the inverse of the record-to-shading rotation: with the reference
-         * rotation, (M Λ)·C = Λ·(Mᵀ C) and Mᵀ is the inverse rotation's matrix (SH rotations are
-         * orthogonal), so one channel is rotated instead of three. */
-        if (!sl->have_here) {
-            ic_vec3 ht = v3_sub(t, v3_scale(sl->n, v3_dot(t, sl->n)));
-            ht = v3_len2(ht) > 1e-12f ? v3_norm(ht) : ic_frame_from_normal(sl->n).t;
-            sl->here.normal = sl->n;
-            sl->here.tangent = ht;
-            sl->here.bitangent = v3_cross(sl->n, ht);
-            ic_vec3 wl = v3(v3_dot(sl->wo, ht), v3_dot(sl->wo, sl->here.bitangent), v3_dot(sl->wo, sl->n));
-            ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), sl->lobe_here);
-            sl->have_here = 1;
-        }
-        double scratch[2 * MAX_SH_ORDER * MAX_SH_ORDER];
-        ic_hsh_frame from = {t, b, rec.normal};
-        ic_hsh_rotation rot, inv;
-        ic_hsh_rotation_from_frames(&from, &sl->here, &rot);
-        ic_hsh_rotation_invert(&rot, &inv);
-        if (ic_hsh_rotate_exact(r->basis, &inv, sl->lobe_here, 1, lobe, scratch) != IC_OK)
-            return 0;
-    }
+    *t = rec.tangent;
+    *b = v3_cross(rec.normal, rec.tangent);
+    *n = rec.normal;
     ic_vec3 d = v3_sub(sl->p, rec.position);
-    float dt = v3_dot(d, t), db = v3_dot(d, b);
-    float v[3];
-    for (uint32_t ch = 0; ch < 3; ++ch)
-        v[ch] = fmaxf(dot_channel(pay, ch, lobe, k) + dt * dot_channel(pay + 3 * k, ch, lobe, k) +
-                          db * dot_channel(pay + 6 * k, ch, lobe, k),
-                      0.0f);
-    *out = v3(v[0], v[1], v[2]);
+    float dt = v3_dot(d, *t), db = v3_dot(d, *b);
+    const float *gt = pay + 3 * k, *gb = pay + 6 * k;
+    for (uint32_t i = 0; i < 3 * k; ++i)
+        acc[i] += w * (pay[i] + dt * gt[i] + db * gb[i]);
+    return 1;
+}
+
+/* Per channel max(acc·C, 0) for a planar RGB vector and one lobe vector. */
+static ic_vec3 shade_clamped(const ic_ctx *c, const float *acc, const float *lobe)
+{
+    const uint32_t k = c->rad->k;
+    return v3(fmaxf(dot_channel(acc, 0, lobe, k), 0.0f), fmaxf(dot_channel(acc, 1, lobe, k), 0.0f),
+              fmaxf(dot_channel(acc, 2, lobe, k), 0.0f));
+}
+
+/* Record `index`'s outgoing radiance through the lobe (k_s = 1) at the shading point, per channel and
+ * clamped at zero: (Λ_i + d_t ∂Λ_i/∂t + d_b ∂Λ_i/∂b)·C_i(ω_o). Returns 0 when the record has no
+ * coefficients of this basis. */
+static int record_outgoing(const ic_ctx *c, shading_lobe *sl, uint32_t index, ic_vec3 *out)
+{
+    float acc[3 * IC_HSH_MAX_COUNT], lobe[IC_HSH_MAX_COUNT];
+    memset(acc, 0, sizeof(float) * 3 * c->rad->k);
+    ic_vec3 t, b, n;
+    if (!add_extrapolated(c, sl, index, 1.0f, acc, &t, &b, &n) || !lobe_in_frame(c, sl, t, b, n, lobe))
+        return 0;
+    *out = shade_clamped(c, acc, lobe);
     return 1;
 }
 
@@ -500,6 +524,11 @@ static shading_lobe shading_lobe_at(const ic_ctx *c, ic_vec3 p, ic_vec3 n, uint3
     sl.have_here = 0;
     return sl;
 }
+
+/* Records whose frames agree (a plane's records share one) are summed before the lobe is applied:
+ * Σ_i w_i Λ_i(p)·C = (Σ_i w_i Λ_i(p))·C, one lobe evaluation and one dot product per frame; the zero
+ * clamp then applies to each frame's sum rather than to each record. */
+#define FRAME_GROUPS 4
 
 int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uint32_t material, ic_vec3 wo,
                           ic_cache_hint *hint, ic_vec3 *L)
@@ -515,16 +544,48 @@ int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uin
     if (!ic_cache_query_hinted(c->cache, &q, hint, &e) || e.contributions_written == 0)
         return 0;
     shading_lobe sl = shading_lobe_at(c, p, n, material, wo);
+    const uint32_t k = c->rad->k;
+    float acc[FRAME_GROUPS][3 * IC_HSH_MAX_COUNT], lobe[IC_HSH_MAX_COUNT], one[3 * IC_HSH_MAX_COUNT];
+    ic_vec3 gt[FRAME_GROUPS], gb[FRAME_GROUPS], gn[FRAME_GROUPS];
+    int groups = 0;
     double sum[3] = {0.0, 0.0, 0.0}, wsum = 0.0;
     for (uint32_t i = 0; i < e.contributions_written; ++i) {
-        ic_vec3 v;
-        if (!record_outgoing(c, &sl, contrib[i].record, &v))
+        /* The record's frame decides its group: the same normal and tangent within 10⁻⁷ in cosine (records
+         * on one plane), else a new group, else (all groups taken) the record alone. */
+        ic_record rec;
+        if (ic_cache_get_record(c->cache, contrib[i].record, &rec) != IC_OK)
             continue;
-        double w = contrib[i].weight;
-        sum[0] += w * v.x;
-        sum[1] += w * v.y;
-        sum[2] += w * v.z;
-        wsum += w;
+        int gi = 0;
+        while (gi < groups && !(v3_dot(gn[gi], rec.normal) >= 1.0f - 1e-7f && v3_dot(gt[gi], rec.tangent) >= 1.0f - 1e-7f))
+            ++gi;
+        float *dst = gi < FRAME_GROUPS ? acc[gi] : one;
+        if (gi == groups && gi < FRAME_GROUPS)
+            memset(acc[gi], 0, sizeof(float) * 3 * k);
+        if (gi >= FRAME_GROUPS)
+            memset(one, 0, sizeof(float) * 3 * k);
+        ic_vec3 t, b, nn;
+        if (!add_extrapolated(c, &sl, contrib[i].record, contrib[i].weight, dst, &t, &b, &nn))
+            continue;
+        wsum += contrib[i].weight;
+        if (gi == groups && gi < FRAME_GROUPS) {
+            gt[gi] = t;
+            gb[gi] = b;
+            gn[gi] = nn;
+            ++groups;
+        } else if (gi >= FRAME_GROUPS && lobe_in_frame(c, &sl, t, b, nn, lobe)) {
+            ic_vec3 v = shade_clamped(c, one, lobe);
+            sum[0] += v.x;
+            sum[1] += v.y;
+            sum[2] += v.z;
+        }
+    }
+    for (int g = 0; g < groups; ++g) {
+        if (!lobe_in_frame(c, &sl, gt[g], gb[g], gn[g], lobe))
+            continue;
+        ic_vec3 v = shade_clamped(c, acc[g], lobe);
+        sum[0] += v.x;
+        sum[1] += v.y;
+        sum[2] += v.z;
     }
     if (!(wsum > 0.0))
         return 0;
