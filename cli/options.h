@@ -126,6 +126,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(RADIANCE_MAX_EXPONENT, "--radiance-max-exponent", NULL, IC_OPT_FLOAT, render.ic.radiance_max_exponent, 0.001, \
       1e6, "E", IC_DEFAULT_RADIANCE_MAX_EXPONENT, "%g", "", IC_SCOPE_IC, "sharpest Phong lobe radiance records " \
       "serve (the order's limit: docs/radiance-caching.md)") \
+    X(RADIANCE_RAYS, "--radiance-rays", NULL, IC_OPT_INT, render.ic.radiance_rays, 16, 1e7, "N", NAN, \
+      "4 x --rays", "", IC_SCOPE_IC, "hemisphere rays per radiance record") \
     X(BOUNCES, "--bounces", NULL, IC_OPT_INT, render.ic.bounces, 1, 1000, "N", NAN, "max-depth - 1", "", \
       IC_SCOPE_IC, "bounces in the light a record gathers") \
     X(RECURSIVE, "--recursive", NULL, IC_OPT_FLAG, render.ic.recursive, 0, 0, "", NAN, "off", "", IC_SCOPE_LAZY, \

@@ -68,5 +68,9 @@
  * exponent 30 within a few per cent at most views (docs/radiance-caching.md, truncation table). */
 #define IC_DEFAULT_HSH_ORDER 10u
 #define IC_DEFAULT_RADIANCE_MAX_EXPONENT 30.0f
+/* A radiance record's rays, in multiples of an irradiance record's: its n² coefficients need more than
+ * the irradiance's one, and radiance records are few (on the glossy-floor Cornell box at 160×160, 4× lowered
+ * the image's low-pass relMSE from 5.4·10⁻⁵ to 4.0·10⁻⁵ for 8 % more rays in all). */
+#define IC_DEFAULT_RADIANCE_RAYS_FACTOR 4
 
 #endif

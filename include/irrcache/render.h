@@ -135,6 +135,8 @@ typedef struct ic_ic_options {
                               (1…16) [IC_DEFAULT_HSH_ORDER] */
     float radiance_max_exponent; /* sharpest Phong lobe radiance records serve; sharper ones are path traced
                               [IC_DEFAULT_RADIANCE_MAX_EXPONENT] */
+    int radiance_rays;     /* hemisphere rays of a radiance record [IC_DEFAULT_RADIANCE_RAYS_FACTOR × those of an
+                              irradiance record] */
 } ic_ic_options;
 
 /* A cache record as the camera sees it (for overlays and reports). */

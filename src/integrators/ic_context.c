@@ -210,7 +210,7 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
     /* Radiance records: their order and which lobes they serve (nothing added when off, so the hashes
      * of irradiance-only caches stay). */
     if (c->rad) {
-        float rad[2] = {(float)c->o.hsh_order, c->o.radiance_max_exponent};
+        float rad[3] = {(float)c->o.hsh_order, c->o.radiance_max_exponent, (float)c->o.radiance_rays};
         h = ic_fnv1a64(h, rad, sizeof rad);
     }
     return h;

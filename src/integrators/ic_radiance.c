@@ -244,9 +244,15 @@ static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t cou
         j.res[i].grad_t = j.res[i].coeffs + 3 * k;
         j.res[i].grad_b = j.res[i].coeffs + 6 * k;
     }
+    /* The radiance records' own ray count, as M × N strata with N ≈ πM (the gather uses their product). */
+    ic_gather_opts go = c->o.gather;
+    double irradiance_rays = go.theta_strata && go.phi_strata ? (double)go.theta_strata * go.phi_strata : IC_DEFAULT_RAYS;
+    double rays = c->o.radiance_rays > 0 ? c->o.radiance_rays : IC_DEFAULT_RADIANCE_RAYS_FACTOR * irradiance_rays;
+    go.theta_strata = (uint32_t)fmax(1.0, round(sqrt(rays / IC_PI)));
+    go.phi_strata = (uint32_t)fmax(1.0, round(rays / go.theta_strata));
     for (int t = 0; t < threads && r == IC_OK; ++t) {
         j.workers[t].c = c;
-        r = ic_gatherer_create(&c->o.gather, ic_ic_gather_trace, &j.workers[t], &j.gatherers[t], err);
+        r = ic_gatherer_create(&go, ic_ic_gather_trace, &j.workers[t], &j.gatherers[t], err);
     }
     double t0 = ic_seconds();
     if (r == IC_OK) {
