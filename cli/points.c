@@ -3,7 +3,8 @@
  * (include/irrcache/points.h). Input lines are `x y z nx ny nz` (the order of Radiance's `rtrace -I`),
  * with `#` comments and blank lines; output is one line per point in input order: irradiance R G B
  * (the scene's radiometric units, W/m²), illuminance (lux, Radiance's 179 lm/W convention) and its
- * one-sigma error (lux), as text, CSV or JSON, to stdout or atomically to -o FILE.
+ * one-sigma error (lux), with --daylight-factor the daylight factor (%) and its σ, as text, CSV or JSON,
+ * to stdout or atomically to -o FILE.
  *
  * Exit status: 0 success, 1 a failure while working (unreadable or malformed points file, scene,
  * output), 2 a usage error. A malformed line is reported as "FILE:LINE: problem; what to do", and then
@@ -46,6 +47,9 @@ static void print_help(FILE *out)
             "  --points FILE      the points ('-': standard input) (required)\n"
             "  -o, --output FILE  write the results there, atomically (default: standard output)\n"
             "  --format F         text (space-separated), csv (with a header line) or json (default: text)\n"
+            "  --daylight-factor  two more columns: the daylight factor (%%), 100 x lux / (the unobstructed\n"
+            "                     horizontal illuminance of the scene's sky, 179 x 7 pi/9 x L_z), and its sigma;\n"
+            "                     the scene must be lit by a cie-overcast sky alone\n"
             "  --integrator I     ic: irradiance cache, records gathered at the sensors and shared by\n"
             "                     neighbours, direct light sampled at every point; pt: path-traced\n"
             "                     reference (default: ic)\n"
@@ -208,24 +212,33 @@ static int read_points(const char *path, ic_sensor_point **out, uint32_t *count)
     return 1;
 }
 
-static void write_rows(FILE *f, out_format format, const ic_point_result *res, uint32_t count)
+/* df_lux: the daylight factor's reference illuminance (0: no daylight-factor columns). */
+static void write_rows(FILE *f, out_format format, const ic_point_result *res, uint32_t count, double df_lux)
 {
     if (format == FORMAT_CSV)
-        fprintf(f, "irradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux\n");
+        fprintf(f, "irradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux%s\n",
+                df_lux > 0.0 ? ",daylight_factor_percent,daylight_factor_sigma_percent" : "");
     const char *sep = format == FORMAT_CSV ? "," : " ";
-    for (uint32_t i = 0; i < count; ++i)
-        fprintf(f, "%.7g%s%.7g%s%.7g%s%.7g%s%.4g\n", (double)res[i].irradiance.x, sep, (double)res[i].irradiance.y,
+    for (uint32_t i = 0; i < count; ++i) {
+        fprintf(f, "%.7g%s%.7g%s%.7g%s%.7g%s%.4g", (double)res[i].irradiance.x, sep, (double)res[i].irradiance.y,
                 sep, (double)res[i].irradiance.z, sep, res[i].illuminance, sep, res[i].illuminance_sigma);
+        if (df_lux > 0.0)
+            fprintf(f, "%s%.6g%s%.4g", sep, 100.0 * res[i].illuminance / df_lux, sep,
+                    100.0 * res[i].illuminance_sigma / df_lux);
+        fputc('\n', f);
+    }
 }
 
 static int write_json(const char *path, const ic_points_options *opt, const ic_point_result *res, uint32_t count,
-                      const ic_points_stats *st)
+                      const ic_points_stats *st, double df_lux)
 {
     cJSON *root = cJSON_CreateObject();
     cJSON_AddStringToObject(root, "integrator", opt->integrator == IC_INTEGRATOR_IC ? "ic" : "pt");
     cJSON_AddNumberToObject(root, "luminous_efficacy", IC_LUMINOUS_EFFICACY);
     cJSON_AddItemToObject(root, "records", ic_cli_json_u64(st->records));
     cJSON_AddNumberToObject(root, "seconds", st->seconds);
+    if (df_lux > 0.0)
+        cJSON_AddNumberToObject(root, "daylight_reference_lux", df_lux);
     cJSON *arr = cJSON_AddArrayToObject(root, "points");
     for (uint32_t i = 0; i < count; ++i) {
         cJSON *o = cJSON_CreateObject();
@@ -235,6 +248,10 @@ static int write_json(const char *path, const ic_points_options *opt, const ic_p
         cJSON_AddItemToObject(o, "irradiance_sigma", cJSON_CreateDoubleArray(s, 3));
         cJSON_AddNumberToObject(o, "illuminance", res[i].illuminance);
         cJSON_AddNumberToObject(o, "sigma", res[i].illuminance_sigma);
+        if (df_lux > 0.0) {
+            cJSON_AddNumberToObject(o, "daylight_factor", 100.0 * res[i].illuminance / df_lux);
+            cJSON_AddNumberToObject(o, "daylight_factor_sigma", 100.0 * res[i].illuminance_sigma / df_lux);
+        }
         cJSON_AddItemToArray(arr, o);
     }
     return ic_cli_write_json("points", path, root, 0);
@@ -244,6 +261,7 @@ int ic_cli_points(int argc, char **argv)
 {
     const char *scene_path = NULL, *points_path = NULL, *out_path = NULL;
     out_format format = FORMAT_TEXT;
+    int daylight_factor = 0;
     ic_points_options opt;
     memset(&opt, 0, sizeof opt);
     opt.integrator = IC_INTEGRATOR_IC;
@@ -260,6 +278,8 @@ int ic_cli_points(int argc, char **argv)
         } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
             print_help(stdout);
             return 0;
+        } else if (!strcmp(arg, "--daylight-factor")) {
+            daylight_factor = 1;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--points", &missing)) != NULL) {
             points_path = value;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "-o", &missing)) != NULL ||
@@ -345,19 +365,22 @@ int ic_cli_points(int argc, char **argv)
     ic_scene *scene = NULL;
     ic_point_result *res = malloc(sizeof *res * count);
     ic_points_stats st;
+    double df_lux = 0.0;
     int status = EXIT_WORK;
     if (!res) {
         fprintf(stderr, "irrcache points: out of memory for %u results\n", count);
     } else if (ic_scene_load(scene_path, NULL, &scene, &err) != IC_OK) {
         fprintf(stderr, "irrcache points: %s\n", err.message);
+    } else if (daylight_factor && ic_points_daylight_reference(scene, &df_lux, &err) != IC_OK) {
+        fprintf(stderr, "irrcache points: --daylight-factor: %s\n", err.message);
     } else if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
         fprintf(stderr, "irrcache points: %s: %s\n", points_path, err.message);
         if (err.code == IC_ERR_INVALID_ARG)
             status = EXIT_USAGE; /* an option the scene's settings make impossible */
     } else if (format == FORMAT_JSON) {
-        status = write_json(out_path, &opt, res, count, &st) ? 0 : EXIT_WORK;
+        status = write_json(out_path, &opt, res, count, &st, df_lux) ? 0 : EXIT_WORK;
     } else if (!out_path) {
-        write_rows(stdout, format, res, count);
+        write_rows(stdout, format, res, count, df_lux);
         status = fflush(stdout) == 0 && !ferror(stdout) ? 0 : EXIT_WORK;
         if (status)
             fprintf(stderr, "irrcache points: standard output: write error\n");
@@ -366,7 +389,7 @@ int ic_cli_points(int argc, char **argv)
         if (ic_atomic_file_open(&f, out_path, &err) != IC_OK) {
             fprintf(stderr, "irrcache points: %s\n", err.message);
         } else {
-            write_rows(f.fp, format, res, count);
+            write_rows(f.fp, format, res, count, df_lux);
             if (ic_atomic_file_commit(&f, &err) != IC_OK)
                 fprintf(stderr, "irrcache points: %s\n", err.message);
             else

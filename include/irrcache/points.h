@@ -104,6 +104,13 @@ typedef struct ic_points_stats {
 /* Illuminance (lux) of irradiance E by Radiance's convention. */
 double ic_illuminance(ic_vec3 irradiance);
 
+/* Daylight factor (BS 8206-2; CIBSE LG10): a point's illuminance under the CIE standard overcast sky as a
+ * percentage of the illuminance the same sky gives an unobstructed horizontal plane outdoors,
+ * DF = 100 % × E_v / E_v,h. *lux gets E_v,h = 179 lm/W × 7π/9 × L_z (the sky's zenith radiance) for a scene
+ * whose environment is a "cie-overcast" sky (docs/scene-format.md, "Skies") and that has no other light;
+ * fails with IC_ERR_INVALID_ARG for any other scene (the daylight factor is defined for that sky alone). */
+ic_result ic_points_daylight_reference(const ic_scene *scene, double *lux, ic_error *err);
+
 /* Computes out[0 … count−1] for points[0 … count−1] in scene (borrowed for the call). opt and stats may be
  * NULL. Fails with IC_ERR_INVALID_ARG for a point that is not finite or has a zero normal (the message
  * names its index), or options out of range. */

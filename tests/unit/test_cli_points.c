@@ -95,6 +95,31 @@ static void test_outputs(void)
           "json has the points: %s", json);
 }
 
+/* --daylight-factor: two more columns, 100 × lux / (179 × 7π/9 × L_z); refused (exit 1, no output) without
+ * a CIE overcast sky. */
+static void test_daylight_factor(void)
+{
+    const char *room = IC_SOURCE_DIR "/scenes/interiors/sky-room-overcast.json";
+    test_write_file(DIR "/room.txt", "2.5 0.8 1.0 0 1 0\n1.5 0.8 2.5 0 1 0\n");
+    char args[1024];
+    snprintf(args, sizeof args, "%s --points %s/room.txt --daylight-factor --format csv", room, DIR);
+    CHECK(run(args, DIR "/df.csv") == 0, "daylight factor: %s", err_text);
+    const char *csv = slurp(DIR "/df.csv");
+    CHECK(strstr(csv, ",daylight_factor_percent,daylight_factor_sigma_percent\n") && line_count(csv) == 3,
+          "csv header names the daylight factor: %s", csv);
+    const char *row = strchr(csv, '\n');
+    double v[7] = {0};
+    CHECK(row && sscanf(row + 1, "%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6]) == 7,
+          "seven columns: %s", csv);
+    double ref = 179.0 * 7.0 * 3.14159265358979323846 / 9.0 * (10000.0 / 179.0);
+    CHECK_NEAR(v[5], 100.0 * v[3] / ref, 1e-4 * v[5] + 1e-6, "DF = 100 lux / (7 pi/9 L_z)");
+    CHECK_NEAR(v[6], 100.0 * v[4] / ref, 1e-3 * v[6] + 1e-6, "its sigma likewise");
+    unlink(DIR "/df-out.txt");
+    CHECK(run(SCENE " --points " DIR "/pts.txt --daylight-factor -o " DIR "/df-out.txt", NULL) == 1 &&
+              strstr(err_text, "cie-overcast") && !file_exists(DIR "/df-out.txt"),
+          "no overcast sky: exit 1, no output: %s", err_text);
+}
+
 typedef struct bad_case {
     const char *what;
     const char *text;      /* the points file */
@@ -136,5 +161,6 @@ int main(void)
     mkdir(DIR, 0755);
     test_outputs();
     test_bad_files();
+    test_daylight_factor();
     TEST_MAIN_END();
 }
