@@ -47,7 +47,7 @@ static void print_help(FILE *out)
             "               which --accuracy bounds\n"
             "\n"
             "options:\n"
-            "  --points FILE      the points ('-': standard input) (required)\n"
+            "  --points FILE      the points ('-': standard input) (required unless --grid)\n"
             "  -o, --output FILE  write the results there, atomically (default: standard output)\n"
             "  --format F         text (space-separated), csv (with a header line) or json (default: text)\n"
             "  --grid X0 Y0 Z0 X1 Y1 Z1\n"
