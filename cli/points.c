@@ -3,7 +3,8 @@
  * (include/irrcache/points.h). Input lines are `x y z nx ny nz` (the order of Radiance's `rtrace -I`),
  * with `#` comments and blank lines; output is one line per point in input order: irradiance R G B
  * (the scene's radiometric units, W/m²), illuminance (lux, Radiance's 179 lm/W convention) and its
- * one-sigma error (lux), as text, CSV or JSON, to stdout or atomically to -o FILE.
+ * one-sigma error (lux), with --daylight-factor the daylight factor (%) and its σ, as text, CSV or JSON,
+ * to stdout or atomically to -o FILE.
  *
  * Exit status: 0 success, 1 a failure while working (unreadable or malformed points file, scene,
  * output), 2 a usage error. A malformed line is reported as "FILE:LINE: problem; what to do", and then
@@ -11,6 +12,7 @@
  */
 #include "cli.h"
 #include "json_out.h"
+#include "points_grid.h"
 
 #include "core/atomic_file.h"
 #include "irrcache/points.h"
@@ -21,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #define EXIT_WORK 1
 #define EXIT_USAGE 2
@@ -31,6 +34,7 @@ static void print_help(FILE *out)
 {
     fprintf(out,
             "usage: irrcache points SCENE --points FILE|- [options]\n"
+            "       irrcache points SCENE --grid X0 Y0 Z0 X1 Y1 Z1 --spacing S [--map FILE.png] [options]\n"
             "\n"
             "Irradiance and illuminance at sensor points. Each input line is 'x y z nx ny nz' (a point and\n"
             "the direction its sensor faces, as for Radiance's rtrace -I); '#' starts a comment, blank lines\n"
@@ -43,9 +47,21 @@ static void print_help(FILE *out)
             "               which --accuracy bounds\n"
             "\n"
             "options:\n"
-            "  --points FILE      the points ('-': standard input) (required)\n"
+            "  --points FILE      the points ('-': standard input) (required unless --grid)\n"
             "  -o, --output FILE  write the results there, atomically (default: standard output)\n"
             "  --format F         text (space-separated), csv (with a header line) or json (default: text)\n"
+            "  --grid X0 Y0 Z0 X1 Y1 Z1\n"
+            "                     instead of --points: a work-plane grid over the floor x0..x1, z0..z1 of that\n"
+            "                     box (+y up), one upward sensor at the centre of each whole cell, centred;\n"
+            "                     each output row then starts with its point 'x y z nx ny nz'\n"
+            "  --spacing S        the grid's cell size (required with --grid)\n"
+            "  --height H         the grid's height above y0 (default: %g)\n"
+            "  --map FILE.png     with --grid: a false-colour map of the grid (lux, or the daylight factor),\n"
+            "                     seen from above with +x to the right and -z up, and a legend\n"
+            "  --map-max V        the top of the map's scale (default: the largest value)\n"
+            "  --daylight-factor  two more columns: the daylight factor (%%), 100 x lux / (the unobstructed\n"
+            "                     horizontal illuminance of the scene's sky, 179 x 7 pi/9 x L_z), and its sigma;\n"
+            "                     the scene must be lit by a cie-overcast sky alone\n"
             "  --integrator I     ic: irradiance cache, records gathered at the sensors and shared by\n"
             "                     neighbours, direct light sampled at every point; pt: path-traced\n"
             "                     reference (default: ic)\n"
@@ -62,7 +78,7 @@ static void print_help(FILE *out)
             "  -h, --help         show this help\n"
             "\n"
             "exit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n",
-            IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, (double)IC_DEFAULT_ACCURACY_WARD,
+            IC_DEFAULT_GRID_HEIGHT, IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, (double)IC_DEFAULT_ACCURACY_WARD,
             IC_DEFAULT_RAYS, IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED);
 }
 
@@ -76,6 +92,21 @@ static int parse_int(const char *opt, const char *s, long long lo, long long hi,
     if (end == s || *end != '\0' || errno || v < lo || v > hi) {
         fprintf(stderr, "irrcache points: %s %s: not an integer in [%lld, %lld]; give one such as %lld\n", opt, s, lo,
                 hi, lo > 1 ? lo : 1);
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+/* A whole-string finite number above lo (lo < 0: at least 0); prints the usage error and returns 0 otherwise. */
+static int parse_real(const char *opt, const char *s, double lo, double *out)
+{
+    char *end = NULL;
+    double v = strtod(s, &end);
+    int ok = end != s && *end == '\0' && isfinite(v) && fabs(v) <= 1e18 && (lo < 0.0 ? v >= 0.0 : v > lo);
+    if (!ok) {
+        fprintf(stderr, "irrcache points: %s %s: not a number %s; give one such as 0.5\n", opt, s,
+                lo < 0.0 ? ">= 0" : "> 0");
         return 0;
     }
     *out = v;
@@ -208,33 +239,56 @@ static int read_points(const char *path, ic_sensor_point **out, uint32_t *count)
     return 1;
 }
 
-static void write_rows(FILE *f, out_format format, const ic_point_result *res, uint32_t count)
+/* df_lux: the daylight factor's reference illuminance (0: no daylight-factor columns); pts: the points, to
+ * start each row with (a generated grid), or NULL. */
+static void write_rows(FILE *f, out_format format, const ic_point_result *res, uint32_t count, double df_lux,
+                       const ic_sensor_point *pts)
 {
     if (format == FORMAT_CSV)
-        fprintf(f, "irradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux\n");
+        fprintf(f, "%sirradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux%s\n",
+                pts ? "x,y,z,nx,ny,nz," : "", df_lux > 0.0 ? ",daylight_factor_percent,daylight_factor_sigma_percent" : "");
     const char *sep = format == FORMAT_CSV ? "," : " ";
-    for (uint32_t i = 0; i < count; ++i)
-        fprintf(f, "%.7g%s%.7g%s%.7g%s%.7g%s%.4g\n", (double)res[i].irradiance.x, sep, (double)res[i].irradiance.y,
+    for (uint32_t i = 0; i < count; ++i) {
+        if (pts)
+            fprintf(f, "%.7g%s%.7g%s%.7g%s%g%s%g%s%g%s", (double)pts[i].position.x, sep, (double)pts[i].position.y, sep,
+                    (double)pts[i].position.z, sep, (double)pts[i].normal.x, sep, (double)pts[i].normal.y, sep,
+                    (double)pts[i].normal.z, sep);
+        fprintf(f, "%.7g%s%.7g%s%.7g%s%.7g%s%.4g", (double)res[i].irradiance.x, sep, (double)res[i].irradiance.y,
                 sep, (double)res[i].irradiance.z, sep, res[i].illuminance, sep, res[i].illuminance_sigma);
+        if (df_lux > 0.0)
+            fprintf(f, "%s%.6g%s%.4g", sep, 100.0 * res[i].illuminance / df_lux, sep,
+                    100.0 * res[i].illuminance_sigma / df_lux);
+        fputc('\n', f);
+    }
 }
 
 static int write_json(const char *path, const ic_points_options *opt, const ic_point_result *res, uint32_t count,
-                      const ic_points_stats *st)
+                      const ic_points_stats *st, double df_lux, const ic_sensor_point *pts)
 {
     cJSON *root = cJSON_CreateObject();
     cJSON_AddStringToObject(root, "integrator", opt->integrator == IC_INTEGRATOR_IC ? "ic" : "pt");
     cJSON_AddNumberToObject(root, "luminous_efficacy", IC_LUMINOUS_EFFICACY);
     cJSON_AddItemToObject(root, "records", ic_cli_json_u64(st->records));
     cJSON_AddNumberToObject(root, "seconds", st->seconds);
+    if (df_lux > 0.0)
+        cJSON_AddNumberToObject(root, "daylight_reference_lux", df_lux);
     cJSON *arr = cJSON_AddArrayToObject(root, "points");
     for (uint32_t i = 0; i < count; ++i) {
         cJSON *o = cJSON_CreateObject();
+        if (pts) {
+            double pos[3] = {pts[i].position.x, pts[i].position.y, pts[i].position.z};
+            cJSON_AddItemToObject(o, "position", cJSON_CreateDoubleArray(pos, 3));
+        }
         double e[3] = {res[i].irradiance.x, res[i].irradiance.y, res[i].irradiance.z};
         double s[3] = {res[i].irradiance_sigma.x, res[i].irradiance_sigma.y, res[i].irradiance_sigma.z};
         cJSON_AddItemToObject(o, "irradiance", cJSON_CreateDoubleArray(e, 3));
         cJSON_AddItemToObject(o, "irradiance_sigma", cJSON_CreateDoubleArray(s, 3));
         cJSON_AddNumberToObject(o, "illuminance", res[i].illuminance);
         cJSON_AddNumberToObject(o, "sigma", res[i].illuminance_sigma);
+        if (df_lux > 0.0) {
+            cJSON_AddNumberToObject(o, "daylight_factor", 100.0 * res[i].illuminance / df_lux);
+            cJSON_AddNumberToObject(o, "daylight_factor_sigma", 100.0 * res[i].illuminance_sigma / df_lux);
+        }
         cJSON_AddItemToArray(arr, o);
     }
     return ic_cli_write_json("points", path, root, 0);
@@ -244,6 +298,11 @@ int ic_cli_points(int argc, char **argv)
 {
     const char *scene_path = NULL, *points_path = NULL, *out_path = NULL;
     out_format format = FORMAT_TEXT;
+    int daylight_factor = 0, has_grid = 0, has_spacing = 0, has_height = 0, has_map_max = 0;
+    ic_points_grid_spec grid = {0};
+    grid.height = IC_DEFAULT_GRID_HEIGHT;
+    const char *map_path = NULL;
+    double map_max = 0.0;
     ic_points_options opt;
     memset(&opt, 0, sizeof opt);
     opt.integrator = IC_INTEGRATOR_IC;
@@ -260,6 +319,31 @@ int ic_cli_points(int argc, char **argv)
         } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
             print_help(stdout);
             return 0;
+        } else if (!strcmp(arg, "--daylight-factor")) {
+            daylight_factor = 1;
+        } else if (!strcmp(arg, "--grid")) {
+            if (!ic_cli_grid_box(argc, argv, &i, &grid))
+                return EXIT_USAGE;
+            has_grid = 1;
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--spacing", &missing)) != NULL) {
+            if (!parse_real("--spacing", value, 0.0, &grid.spacing))
+                return EXIT_USAGE;
+            has_spacing = 1;
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--height", &missing)) != NULL) {
+            if (!parse_real("--height", value, -1.0, &grid.height))
+                return EXIT_USAGE;
+            has_height = 1;
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--map-max", &missing)) != NULL) {
+            if (!parse_real("--map-max", value, 0.0, &map_max))
+                return EXIT_USAGE;
+            has_map_max = 1;
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--map", &missing)) != NULL) {
+            size_t len = strlen(value);
+            if (len < 4 || strcasecmp(value + len - 4, ".png") != 0) {
+                fprintf(stderr, "irrcache points: --map %s: the map is a PNG; give a path ending in .png\n", value);
+                return EXIT_USAGE;
+            }
+            map_path = value;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--points", &missing)) != NULL) {
             points_path = value;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "-o", &missing)) != NULL ||
@@ -331,33 +415,56 @@ int ic_cli_points(int argc, char **argv)
             return EXIT_USAGE;
         }
     }
-    if (!scene_path || !points_path) {
-        fprintf(stderr, "irrcache points: %s; usage: irrcache points SCENE --points FILE|- [options]\n",
-                !scene_path ? "no scene given" : "no --points FILE given ('-' reads standard input)");
+    const char *misuse = !scene_path                          ? "no scene given"
+                         : has_grid && points_path            ? "--grid and --points both given; give one"
+                         : !has_grid && !points_path          ? "no --points FILE given ('-' reads standard input) and no --grid"
+                         : has_grid && !has_spacing           ? "--grid needs --spacing S (the distance between sensors)"
+                         : !has_grid && (has_spacing || has_height || map_path)
+                             ? "--spacing, --height and --map apply to a --grid"
+                         : has_map_max && !map_path           ? "--map-max applies to a --map"
+                                                              : NULL;
+    if (misuse) {
+        fprintf(stderr, "irrcache points: %s; usage: irrcache points SCENE --points FILE|- [options] or irrcache "
+                        "points SCENE --grid x0 y0 z0 x1 y1 z1 --spacing S [options]\n",
+                misuse);
         return EXIT_USAGE;
     }
 
     ic_sensor_point *pts = NULL;
-    uint32_t count = 0;
-    if (!read_points(points_path, &pts, &count))
+    uint32_t count = 0, cols = 0, rows = 0;
+    if (has_grid) {
+        ic_error gerr = {0};
+        if (ic_points_grid(&grid, &pts, &cols, &rows, &gerr) != IC_OK) {
+            fprintf(stderr, "irrcache points: --grid: %s\n", gerr.message);
+            return EXIT_USAGE;
+        }
+        count = cols * rows;
+    } else if (!read_points(points_path, &pts, &count)) {
         return EXIT_WORK;
+    }
+    const ic_sensor_point *prefix = has_grid ? pts : NULL;
     ic_error err = {0};
     ic_scene *scene = NULL;
     ic_point_result *res = malloc(sizeof *res * count);
     ic_points_stats st;
+    double df_lux = 0.0;
     int status = EXIT_WORK;
     if (!res) {
         fprintf(stderr, "irrcache points: out of memory for %u results\n", count);
     } else if (ic_scene_load(scene_path, NULL, &scene, &err) != IC_OK) {
         fprintf(stderr, "irrcache points: %s\n", err.message);
+    } else if (daylight_factor && ic_points_daylight_reference(scene, &df_lux, &err) != IC_OK) {
+        fprintf(stderr, "irrcache points: --daylight-factor: %s\n", err.message);
     } else if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
-        fprintf(stderr, "irrcache points: %s: %s\n", points_path, err.message);
+        fprintf(stderr, "irrcache points: %s: %s\n", has_grid ? "--grid" : points_path, err.message);
         if (err.code == IC_ERR_INVALID_ARG)
             status = EXIT_USAGE; /* an option the scene's settings make impossible */
+    } else if (map_path && !ic_cli_grid_map(map_path, res, cols, rows, df_lux, map_max)) {
+        /* the map first: when it cannot be written, no results file is left either */
     } else if (format == FORMAT_JSON) {
-        status = write_json(out_path, &opt, res, count, &st) ? 0 : EXIT_WORK;
+        status = write_json(out_path, &opt, res, count, &st, df_lux, prefix) ? 0 : EXIT_WORK;
     } else if (!out_path) {
-        write_rows(stdout, format, res, count);
+        write_rows(stdout, format, res, count, df_lux, prefix);
         status = fflush(stdout) == 0 && !ferror(stdout) ? 0 : EXIT_WORK;
         if (status)
             fprintf(stderr, "irrcache points: standard output: write error\n");
@@ -366,7 +473,7 @@ int ic_cli_points(int argc, char **argv)
         if (ic_atomic_file_open(&f, out_path, &err) != IC_OK) {
             fprintf(stderr, "irrcache points: %s\n", err.message);
         } else {
-            write_rows(f.fp, format, res, count);
+            write_rows(f.fp, format, res, count, df_lux, prefix);
             if (ic_atomic_file_commit(&f, &err) != IC_OK)
                 fprintf(stderr, "irrcache points: %s\n", err.message);
             else

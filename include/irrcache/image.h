@@ -43,6 +43,40 @@ ic_result ic_image_read(const char *path, ic_image *out, ic_error *err);
 ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err);
 /* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. */
 ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
+/* Writes width×height 8-bit RGB bytes (row-major, top row first) as a PNG, as given (no curve); atomic. */
+ic_result ic_image_write_png8(const char *path, const uint8_t *rgb, int width, int height, ic_error *err);
+
+/* --- false-colour maps (falsecolor.c): a grid of values as coloured cells with a legend --- */
+
+/* The colour scale: t in [0, 1] (clamped; NaN as 0) → 8-bit sRGB, piecewise linear between six anchors,
+ * dark blue (0) – blue – cyan – green – yellow – dark red (1) (docs/points.md gives them). */
+void ic_falsecolor_scale(double t, uint8_t rgb[3]);
+
+/* Layout options; zero means default. */
+typedef struct ic_falsecolor_options {
+    double max;            /* the value at the top of the scale [the largest value; 1 if none is > 0] */
+    int cell_px;           /* pixels per cell side [480 / the larger grid side, clamped to 4–48] */
+    const char *unit;      /* the legend's title, drawn in the built-in font: digits, '.', '-', a–z, space
+                              ["lux"] */
+} ic_falsecolor_options;
+
+/* Where ic_falsecolor_render put things (pixels). */
+typedef struct ic_falsecolor_layout {
+    int width, height;     /* the image */
+    int map_x, map_y;      /* top-left corner of cell (0, 0) */
+    int cell_px;           /* cell side */
+    int bar_x, bar_y, bar_w, bar_h; /* the legend's colour bar: its top row is the scale's top */
+    double max;            /* the scale's top value */
+} ic_falsecolor_layout;
+
+/* Renders values[row * cols + col] (row 0 at the top) as cols × rows cells coloured by
+ * ic_falsecolor_scale(value / max), beside a legend: a colour bar with five labelled ticks (0, ¼, ½, ¾ and
+ * the maximum, in a 3 × 5 bitmap font at twice its size) under the unit. *rgb_out (malloc'd, free() it)
+ * holds layout->width × layout->height × 3 bytes on white. Fails with IC_ERR_INVALID_ARG for an empty grid
+ * or a negative or non-finite max, IC_ERR_OOM. */
+ic_result ic_falsecolor_render(const double *values, int cols, int rows, const ic_falsecolor_options *opt,
+                               uint8_t **rgb_out, ic_falsecolor_layout *layout, ic_error *err);
+
 /* Nonzero if the extension of path is one ic_image_write knows. */
 int ic_image_is_writable_format(const char *path);
 

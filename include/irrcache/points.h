@@ -58,6 +58,7 @@ extern "C" {
 #define IC_DEFAULT_POINT_SAMPLES 1024       /* pt: paths per point */
 #define IC_DEFAULT_POINT_LIGHT_SAMPLES 256  /* ic: light samples per point for the direct part */
 #define IC_MAX_POINT_SAMPLES (1 << 24)      /* the most either may be */
+#define IC_DEFAULT_GRID_HEIGHT 0.8          /* m: a work plane's height above the floor (ic_points_grid) */
 #define IC_POINT_REPLICATES 16              /* independent randomised quasi-Monte Carlo estimates per point,
                                                whose spread gives σ; samples round up to a multiple */
 
@@ -103,6 +104,32 @@ typedef struct ic_points_stats {
 
 /* Illuminance (lux) of irradiance E by Radiance's convention. */
 double ic_illuminance(ic_vec3 irradiance);
+
+/* Daylight factor (BS 8206-2; CIBSE LG10): a point's illuminance under the CIE standard overcast sky as a
+ * percentage of the illuminance the same sky gives an unobstructed horizontal plane outdoors,
+ * DF = 100 % × E_v / E_v,h. *lux gets E_v,h = 179 lm/W × 7π/9 × L_z (the sky's zenith radiance) for a scene
+ * whose environment is a "cie-overcast" sky (docs/scene-format.md, "Skies") and that has no other light;
+ * fails with IC_ERR_INVALID_ARG for any other scene (the daylight factor is defined for that sky alone). */
+ic_result ic_points_daylight_reference(const ic_scene *scene, double *lux, ic_error *err);
+
+/* A horizontal work-plane grid (+y up): cells of side `spacing` over the floor area x0…x1, z0…z1 of a box
+ * (y0 its floor, y1 its ceiling), as many whole cells as fit along each side, centred in it; a sensor at each
+ * cell's centre at height y0 + height, facing up. */
+typedef struct ic_points_grid_spec {
+    ic_vec3 lo, hi;        /* the box's corners (x0 y0 z0) and (x1 y1 z1), lo < hi in x and z, lo.y <= hi.y */
+    double spacing;        /* > 0 */
+    double height;         /* ≥ 0, above lo.y; the plane must lie in the box (y0 + height ≤ y1) */
+} ic_points_grid_spec;
+
+/* Most sensors a grid may have. */
+#define IC_MAX_GRID_POINTS (1u << 24)
+
+/* The sensors of a grid, row by row: row r (0 … *rows−1) at z = z_0 + r·spacing, column c at x = x_0 +
+ * c·spacing, point index r·cols + c; *out is malloc'd (free() it). Fails with IC_ERR_INVALID_ARG (the
+ * message says which value) for a box, spacing or height that gives no cell, more than IC_MAX_GRID_POINTS,
+ * or a plane outside the box. */
+ic_result ic_points_grid(const ic_points_grid_spec *spec, ic_sensor_point **out, uint32_t *cols, uint32_t *rows,
+                         ic_error *err);
 
 /* Computes out[0 … count−1] for points[0 … count−1] in scene (borrowed for the call). opt and stats may be
  * NULL. Fails with IC_ERR_INVALID_ARG for a point that is not finite or has a zero normal (the message

@@ -1,6 +1,6 @@
 /*
  * ldr.c — 8-bit images through stb: reading PNG and JPEG (8- or 16-bit sRGB, converted to linear)
- * and writing 8-bit sRGB PNG.
+ * and writing 8-bit sRGB PNG (from linear images, or bytes as given).
  *
  * Alpha is dropped on read and grey images are replicated to RGB. PNG output applies the exposure
  * (2^stops), then the sRGB curve, clamped to [0, 255]; NaN becomes 0.
@@ -149,6 +149,18 @@ static void write_to_file(void *context, void *data, int size)
         fwrite(data, 1, (size_t)size, (FILE *)context);
 }
 
+ic_result ic_image_write_png8(const char *path, const uint8_t *rgb, int width, int height, ic_error *err)
+{
+    ic_atomic_file f;
+    ic_result r = ic_atomic_file_open(&f, path, err);
+    if (r != IC_OK)
+        return r;
+    if (stbi_write_png_to_func(write_to_file, f.fp, width, height, 3, rgb, width * 3))
+        return ic_atomic_file_commit(&f, err);
+    ic_atomic_file_abort(&f);
+    return ic_error_set(err, IC_ERR_OOM, "%s: PNG encoding failed (out of memory); free memory and retry", path);
+}
+
 ic_result ic_image_write_png(const char *path, const ic_image *img, float exposure, ic_error *err)
 {
     const size_t count = (size_t)img->width * (size_t)img->height * 3;
@@ -158,17 +170,7 @@ ic_result ic_image_write_png(const char *path, const ic_image *img, float exposu
     const float scale = isfinite(exposure) ? exp2f(exposure) : 1.0f;
     for (size_t i = 0; i < count; ++i)
         pixels[i] = ic_linear_to_srgb8(img->rgb[i] * scale);
-
-    ic_atomic_file f;
-    ic_result r = ic_atomic_file_open(&f, path, err);
-    if (r == IC_OK) {
-        if (stbi_write_png_to_func(write_to_file, f.fp, img->width, img->height, 3, pixels, img->width * 3)) {
-            r = ic_atomic_file_commit(&f, err);
-        } else {
-            ic_atomic_file_abort(&f);
-            r = ic_error_set(err, IC_ERR_OOM, "%s: PNG encoding failed (out of memory); free memory and retry", path);
-        }
-    }
+    ic_result r = ic_image_write_png8(path, pixels, img->width, img->height, err);
     free(pixels);
     return r;
 }

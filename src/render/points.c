@@ -26,6 +26,26 @@ double ic_illuminance(ic_vec3 E)
     return IC_LUMINOUS_EFFICACY * (IC_LUMINANCE_R * E.x + IC_LUMINANCE_G * E.y + IC_LUMINANCE_B * E.z);
 }
 
+ic_result ic_points_daylight_reference(const ic_scene *scene, double *lux, ic_error *err)
+{
+    if (!scene || !lux)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_points_daylight_reference: NULL scene or result");
+    const ic_sky *sky = &scene->env.sky;
+    if (!scene->env.enabled || sky->model != IC_SKY_CIE_OVERCAST)
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s: the daylight factor needs a CIE overcast sky; give the scene \"environment\": "
+                            "{\"sky\": \"cie-overcast\", \"zenith_luminance\": 10000}",
+                            scene->path);
+    if (scene->sun.enabled || scene->point_light_count > 0 || scene->tri_light_count > 0)
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s: the daylight factor is defined under the overcast sky alone; remove the scene's "
+                            "other lights (sun, point lights, emitting surfaces)",
+                            scene->path);
+    /* a white sky: its luminance-weighted irradiance is its irradiance */
+    *lux = IC_LUMINOUS_EFFICACY * sky->horizontal;
+    return IC_OK;
+}
+
 /* Running sums of independent estimates of E (RGB and luminance), for their mean and its σ. */
 typedef struct sample_sums {
     double sum[4], sum2[4];

@@ -7,12 +7,14 @@
  * id indexes these arrays directly. Read-only once loaded; shared by all threads.
  *
  * Lights: emissive triangles (material with non-zero `emission`), point lights, a directional sun
- * and an environment (constant radiance or an equirectangular image). Light sampling: lights.c.
+ * and an environment (constant radiance, an equirectangular image or an analytic daylight sky, sky.h).
+ * Light sampling: lights.c.
  */
 #ifndef IC_SCENE_SCENE_H
 #define IC_SCENE_SCENE_H
 
 #include "core/vecmath.h"
+#include "scene/sky.h"
 #include "irrcache/common.h"
 #include "irrcache/image.h"
 #include "irrcache/render.h"
@@ -87,6 +89,8 @@ typedef struct ic_environment {
     float *marginal_cdf;   /* height+1 */
     float *conditional_cdf;/* height*(width+1) */
     float total_weight;    /* sum over texels of lum * sin(theta) */
+    ic_sky sky;            /* an analytic daylight sky (model != IC_SKY_NONE): it gives the radiance, and
+                              `image` holds it tabulated only for importance sampling (lights.c) */
 } ic_environment;
 
 /* Probability with which ic_scene_sample_light picks each class of light; they sum to 1 (all 0 when

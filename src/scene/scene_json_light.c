@@ -1,6 +1,6 @@
 /*
  * scene_json_light.c — the "lights" (point and sun lights) and "environment" (constant radiance or an
- * equirectangular map) sections of the JSON scene file.
+ * equirectangular map; a daylight sky is read by scene_json_sky.c) sections of the JSON scene file.
  */
 #include "scene/json_context.h"
 
@@ -12,11 +12,13 @@
 
 ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
 {
-    static const char *valid = "radiance, map, scale, rotation_deg";
+    static const char *valid = "radiance, map, scale, rotation_deg (or sky: see the scene format's Skies)";
     ic_environment *env = &c->b->scene->env;
     ic_result r = ic_json_expect_object(c, obj, line);
     if (r != IC_OK)
         return r;
+    if (cJSON_GetObjectItemCaseSensitive(obj, "sky"))
+        return ic_json_parse_sky(c, obj, line);
     const char *map = NULL;
     int map_line = line, has_radiance = 0, has_scale = 0;
     ic_vec3 radiance = v3s(0.0f), scale = v3s(1.0f);

@@ -1,9 +1,12 @@
 /*
  * test_cli_points.c — `irrcache points`: results in input order in the three formats, stdin and -o,
  * identical output for 1 and 2 threads, and malformed points files: a one-line error naming the file and
- * line, exit 1, and no output file (nor a temporary one) left behind.
+ * line, exit 1, and no output file (nor a temporary one) left behind; --daylight-factor's columns; --grid's
+ * rows and its --map (size, and each cell's colour against the scale for its lux); misused grid options.
  */
 #include "test_util.h"
+
+#include "irrcache/image.h"
 
 #include "test_files.h"
 #include "test_render_util.h"
@@ -95,6 +98,92 @@ static void test_outputs(void)
           "json has the points: %s", json);
 }
 
+/* --daylight-factor: two more columns, 100 × lux / (179 × 7π/9 × L_z); refused (exit 1, no output) without
+ * a CIE overcast sky. */
+static void test_daylight_factor(void)
+{
+    const char *room = IC_SOURCE_DIR "/scenes/interiors/sky-room-overcast.json";
+    test_write_file(DIR "/room.txt", "2.5 0.8 1.0 0 1 0\n1.5 0.8 2.5 0 1 0\n");
+    char args[1024];
+    snprintf(args, sizeof args, "%s --points %s/room.txt --daylight-factor --format csv", room, DIR);
+    CHECK(run(args, DIR "/df.csv") == 0, "daylight factor: %s", err_text);
+    const char *csv = slurp(DIR "/df.csv");
+    CHECK(strstr(csv, ",daylight_factor_percent,daylight_factor_sigma_percent\n") && line_count(csv) == 3,
+          "csv header names the daylight factor: %s", csv);
+    const char *row = strchr(csv, '\n');
+    double v[7] = {0};
+    CHECK(row && sscanf(row + 1, "%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6]) == 7,
+          "seven columns: %s", csv);
+    double ref = 179.0 * 7.0 * 3.14159265358979323846 / 9.0 * (10000.0 / 179.0);
+    CHECK_NEAR(v[5], 100.0 * v[3] / ref, 1e-4 * v[5] + 1e-6, "DF = 100 lux / (7 pi/9 L_z)");
+    CHECK_NEAR(v[6], 100.0 * v[4] / ref, 1e-3 * v[6] + 1e-6, "its sigma likewise");
+    unlink(DIR "/df-out.txt");
+    CHECK(run(SCENE " --points " DIR "/pts.txt --daylight-factor -o " DIR "/df-out.txt", NULL) == 1 &&
+              strstr(err_text, "cie-overcast") && !file_exists(DIR "/df-out.txt"),
+          "no overcast sky: exit 1, no output: %s", err_text);
+}
+
+/* --grid with --map: one row per grid point, starting with the point; the map's size follows the grid and a
+ * cell has the colour of its illuminance on the scale. */
+static void test_grid_map(void)
+{
+    char args[1024];
+    snprintf(args, sizeof args, "%s --grid -1 0 -1 1 1.9 1 --spacing 0.5 --height 0.8 --map %s/map.png --map-max 100",
+             SCENE, DIR);
+    unlink(DIR "/map.png");
+    CHECK(run(args, DIR "/grid.txt") == 0, "grid and map: %s", err_text);
+    char grid[65536];
+    snprintf(grid, sizeof grid, "%s", slurp(DIR "/grid.txt"));
+    CHECK(line_count(grid) == 16, "a 2 x 2 m floor at 0.5 m: 16 rows (%d)", line_count(grid));
+    double v[11] = {0};
+    CHECK(sscanf(grid, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6],
+                 &v[7], &v[8], &v[9], &v[10]) == 11 &&
+              fabs(v[0] + 0.75) < 1e-6 && fabs(v[1] - 0.8) < 1e-6 && fabs(v[2] + 0.75) < 1e-6 && v[4] == 1.0,
+          "each row starts with its point: %.60s", grid);
+    ic_image img = {0};
+    ic_error err = {0};
+    CHECK(ic_image_read(DIR "/map.png", &img, &err) == IC_OK, "the map decodes: %s", err.message);
+    ic_falsecolor_layout lay;
+    uint8_t *rgb = NULL;
+    double lux[16];
+    const char *row = grid;
+    for (int k = 0; k < 16 && row; ++k) {
+        double c[11];
+        lux[k] = sscanf(row, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &c[0], &c[1], &c[2], &c[3], &c[4], &c[5],
+                        &c[6], &c[7], &c[8], &c[9], &c[10]) == 11 ? c[9] : -1.0;
+        row = strchr(row, '\n');
+        row = row ? row + 1 : NULL;
+    }
+    ic_falsecolor_options fo = {0};
+    fo.max = 100.0;
+    CHECK(ic_falsecolor_render(lux, 4, 4, &fo, &rgb, &lay, &err) == IC_OK, "layout: %s", err.message);
+    free(rgb);
+    CHECK(img.width == lay.width && img.height == lay.height, "map size %d x %d, expected %d x %d", img.width,
+          img.height, lay.width, lay.height);
+    if (img.rgb && img.width == lay.width && img.height == lay.height) {
+        int wrong = 0;
+        for (int k = 0; k < 16; ++k) {
+            uint8_t want[3];
+            ic_falsecolor_scale(lux[k] / 100.0, want);
+            int x = lay.map_x + (k % 4) * lay.cell_px + lay.cell_px / 2, y = lay.map_y + (k / 4) * lay.cell_px + lay.cell_px / 2;
+            const float *p = img.rgb + 3 * ((size_t)y * (size_t)img.width + (size_t)x);
+            for (int c = 0; c < 3; ++c)
+                wrong += fabsf(p[c] - ic_srgb8_to_linear(want[c])) > 1e-6f;
+        }
+        CHECK(wrong == 0, "each cell has its lux's colour on the scale (%d channels differ)", wrong);
+    }
+    ic_image_free(&img);
+    CHECK(run(SCENE " --grid 0 0 0 1 1 1", NULL) == 2 && strstr(err_text, "--spacing"), "--grid needs --spacing: %s",
+          err_text);
+    CHECK(run(SCENE " --grid 0 0 0 1 1", NULL) == 2 && strstr(err_text, "six numbers"), "five numbers: %s", err_text);
+    CHECK(run(SCENE " --points " DIR "/pts.txt --map " DIR "/x.png", NULL) == 2 && strstr(err_text, "--grid"),
+          "--map without a grid: %s", err_text);
+    CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 0.5 --map " DIR "/x.jpg", NULL) == 2 && strstr(err_text, ".png"),
+          "--map needs .png: %s", err_text);
+    CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 2", NULL) == 2 && strstr(err_text, "no whole"),
+          "a grid with no cell: %s", err_text);
+}
+
 typedef struct bad_case {
     const char *what;
     const char *text;      /* the points file */
@@ -136,5 +225,7 @@ int main(void)
     mkdir(DIR, 0755);
     test_outputs();
     test_bad_files();
+    test_daylight_factor();
+    test_grid_map();
     TEST_MAIN_END();
 }

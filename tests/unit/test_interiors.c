@@ -3,7 +3,8 @@
  * tiny size with the path tracer and with the irradiance cache gives a finite image that is not black, so
  * light reaches the camera through the door gap (door-ajar) and the windows (sky-room). Also checks what
  * each scene is meant to test: door-ajar's only emitter is in the far room, sky-room has no emitter but the
- * sky, and the meshes stay small.
+ * sky, and the meshes stay small; the sky-room under the CIE overcast sky and under a clear sky whose sun
+ * faces its windows renders too.
  */
 #include "test_util.h"
 
@@ -85,6 +86,15 @@ static void test_what_they_test(void)
         CHECK(s->triangle_count < 20000, "sky-room: %u triangles", s->triangle_count);
     }
     ic_scene_free(s);
+    s = load(INTERIORS "sky-room-clear.json");
+    if (s) {
+        /* the windows (in the z = 0 wall, facing -z) face south: the sun shines in from -z, above the horizon */
+        CHECK(s->env.sky.model == IC_SKY_CIE_CLEAR && s->sun.enabled && s->sun.direction.z < 0.0f &&
+                  s->sun.direction.y > 0.0f,
+              "sky-room-clear: a clear sky, the sun in front of the windows (%g %g %g)", s->sun.direction.x,
+              s->sun.direction.y, s->sun.direction.z);
+    }
+    ic_scene_free(s);
     s = load(INTERIORS "stair-hall.json");
     if (s) {
         CHECK(s->tri_light_count == 2, "stair-hall: one light panel (2 triangles), got %u", s->tri_light_count);
@@ -100,5 +110,7 @@ int main(void)
     test_renders("door-ajar");
     test_renders("sky-room");
     test_renders("stair-hall");
+    test_renders("sky-room-overcast");
+    test_renders("sky-room-clear");
     TEST_MAIN_END();
 }

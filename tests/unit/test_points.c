@@ -11,7 +11,8 @@
  *      within 2σ of an 8192-sample reference at 80 % of the points or more; on a 30 × 30 grid records are
  *      shared (fewer than half as many as points), and 1 and 2 threads agree there too;
  *   4. 1 and 2 threads give identical results for both estimators; a zero normal is refused by index;
- *      illuminance uses Radiance's 179 lm/W and RGB weights.
+ *      illuminance uses Radiance's 179 lm/W and RGB weights;
+ *   5. work-plane grids (ic_points_grid): count, centred positions, height and normal; bad boxes refused.
  */
 #include "test_util.h"
 
@@ -20,6 +21,7 @@
 #include "irrcache/points.h"
 #include "core/vecmath.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #define PI_D 3.14159265358979323846
@@ -341,8 +343,50 @@ static void test_bad_points(void)
     ic_scene_free(scene);
 }
 
+/* ic_points_grid: whole cells centred in the floor area, at y0 + height, facing up; bad boxes refused. */
+static void test_grid(void)
+{
+    ic_error err = {0};
+    ic_points_grid_spec g = {{0.0f, 1.0f, -2.0f}, {4.0f, 4.0f, 1.0f}, 1.0, 0.8};
+    ic_sensor_point *p = NULL;
+    uint32_t cols = 0, rows = 0;
+    CHECK(ic_points_grid(&g, &p, &cols, &rows, &err) == IC_OK && cols == 4 && rows == 3, "4 x 3 m at 1 m: 4 x 3 (%u x %u)",
+          cols, rows);
+    int bad = 0;
+    for (uint32_t r = 0; p && r < rows; ++r)
+        for (uint32_t c = 0; c < cols; ++c) {
+            const ic_sensor_point *s = &p[r * cols + c];
+            bad += fabsf(s->position.x - (0.5f + (float)c)) > 1e-6f || fabsf(s->position.y - 1.8f) > 1e-6f ||
+                   fabsf(s->position.z - (-1.5f + (float)r)) > 1e-6f || s->normal.y != 1.0f || s->normal.x != 0.0f ||
+                   s->normal.z != 0.0f;
+        }
+    CHECK(bad == 0, "cell centres at y0 + height, facing up, row by row in z (%d wrong)", bad);
+    free(p);
+    /* 4.2 × 1.1 at 1 m: 4 × 1 whole cells, centred (margins 0.6 and 0.55) */
+    ic_points_grid_spec g2 = {{0.0f, 0.0f, 0.0f}, {4.2f, 3.0f, 1.1f}, 1.0, 0.8};
+    CHECK(ic_points_grid(&g2, &p, &cols, &rows, &err) == IC_OK && cols == 4 && rows == 1, "4.2 x 1.1: 4 x 1");
+    CHECK(p && fabsf(p[0].position.x - 0.6f) < 1e-5f && fabsf(p[3].position.x - 3.6f) < 1e-5f &&
+              fabsf(p[0].position.z - 0.55f) < 1e-5f,
+          "centred: first x 0.6, last 3.6, z 0.55");
+    free(p);
+    ic_points_grid_spec bad_specs[] = {
+        {{0, 0, 0}, {4, 3, 4}, 0.0, 0.8},   /* zero spacing */
+        {{0, 0, 0}, {4, 3, 4}, 5.0, 0.8},   /* no whole cell */
+        {{0, 0, 0}, {4, 0.5f, 4}, 1.0, 0.8}, /* plane above the box */
+        {{4, 0, 0}, {0, 3, 4}, 1.0, 0.8},   /* x0 > x1 */
+        {{0, 0, 0}, {1e6f, 3, 1e6f}, 1e-2, 0.8}, /* 10^16 points */
+        {{0, 0, 0}, {4, 3, 4}, 1.0, -1.0},  /* negative height */
+    };
+    for (size_t k = 0; k < sizeof bad_specs / sizeof bad_specs[0]; ++k) {
+        p = NULL;
+        CHECK(ic_points_grid(&bad_specs[k], &p, &cols, &rows, &err) == IC_ERR_INVALID_ARG && !p && strstr(err.message, "grid"),
+              "bad grid %zu refused: %s", k, err.message);
+    }
+}
+
 int main(void)
 {
+    test_grid();
     test_illuminance_convention();
     test_open_plane();
     test_emitting_polygon();

@@ -1,0 +1,90 @@
+/*
+ * sky.h — analytic daylight skies as a scene environment: the CIE standard overcast sky (Moon & Spencer
+ * 1942), the CIE clear sky (CIE 1973; ISO 15469 type 12) and the Perez all-weather sky (Perez, Seals &
+ * Michalsky 1993), parameterised as Radiance's gensky and gendaylit take them (zenith radiance or
+ * luminance, or horizontal diffuse irradiance; the sun by date, time and place or by its direction;
+ * ground reflectance below the horizon). docs/scene-format.md, "Skies", gives the formulas and units.
+ *
+ * The sky frame: +y is up (the environment's convention), `north` a horizontal direction (default −z),
+ * east = north × up (+x by default). Radiances are the scene's radiometric units, W/(m²·sr); a luminance
+ * L_v (cd/m²) is L_v / 179 W/(m²·sr) of white light (the 179 lm/W convention of docs/points.md).
+ */
+#ifndef IC_SCENE_SKY_H
+#define IC_SCENE_SKY_H
+
+#include "core/vecmath.h"
+
+#include <stddef.h>
+
+/* Radiance's luminous efficacy of white light (lm/W), the one conversion between the two unit systems. */
+#define IC_SKY_EFFICACY 179.0
+
+typedef enum ic_sky_model {
+    IC_SKY_NONE = 0,
+    IC_SKY_CIE_OVERCAST,   /* L(θ) = L_z (1 + 2 cos θ)/3 */
+    IC_SKY_CIE_CLEAR,      /* L(θ, γ) = L_z f(γ) φ(θ) / (f(Z_s) φ(0)) */
+    IC_SKY_PEREZ           /* L(θ, γ) ∝ (1 + a e^{b/cos θ})(1 + c e^{dγ} + e cos² γ) */
+} ic_sky_model;
+
+/* What a scene file gives (zero means "not given" except where noted). */
+typedef struct ic_sky_params {
+    ic_sky_model model;
+    double zenith_radiance;    /* W/(m²·sr) (gensky -b) */
+    double diffuse_horizontal; /* W/m²: the sky's irradiance on an unobstructed horizontal plane (gensky -B,
+                                  gendaylit -W's second value) */
+    double direct_normal;      /* W/m²: the sun's irradiance at normal incidence (0: no sun) */
+    int has_sun_direction;
+    ic_vec3 sun_direction;     /* towards the sun, world space */
+    int has_date;              /* month, day, hour, latitude, longitude given */
+    int month, day;            /* 1–12, 1–31 */
+    double hour;               /* local standard time, decimal hours */
+    double latitude;           /* degrees north */
+    double longitude;          /* degrees east */
+    int has_meridian;
+    double meridian;           /* the time zone's standard meridian, degrees east [15° × round(longitude/15°)] */
+    int has_ground;
+    double ground_reflectance; /* [0.2] */
+    int has_north;
+    ic_vec3 north;             /* horizontal direction of north [0, 0, −1] */
+} ic_sky_params;
+
+/* A sky ready to evaluate. */
+typedef struct ic_sky {
+    ic_sky_model model;
+    ic_vec3 up, north, east;   /* the sky frame */
+    ic_vec3 sun;               /* unit direction towards the sun (clear and Perez) */
+    double sun_zenith;         /* radians */
+    double perez[5];           /* Perez a, b, c, d, e */
+    double zenith_radiance;    /* L at the zenith, W/(m²·sr) */
+    double horizontal;         /* the sky's irradiance on an unobstructed horizontal plane, W/m² */
+    double ground_radiance;    /* radiance below the horizon: ρ_g (E_sky + E_sun,h) / π */
+    double direct_normal;      /* the sun's normal irradiance (0: no sun) */
+    double clearness, brightness; /* Perez ε and Δ (Perez et al. 1990), for the record */
+} ic_sky;
+
+/* Solar position by the approximations Radiance's gensky uses (declination, equation of time): altitude and
+ * azimuth in radians, azimuth measured from north towards east. month 1–12, day 1–31, hour local standard
+ * time; latitude, longitude and meridian in degrees (east positive). */
+void ic_sky_sun_position(int month, int day, double hour, double latitude, double longitude, double meridian,
+                         double *altitude, double *azimuth);
+/* Day of the year (1–365, no leap day) of month/day. */
+int ic_sky_day_of_year(int month, int day);
+
+/* Relative luminance of a sky model for a direction at zenith angle θ (cos θ = cos_theta > 0) and angle γ
+ * to the sun (cos γ = cos_gamma), divided by its value at the zenith. coef: the Perez coefficients (Perez
+ * only); sun_zenith: Z_s. */
+double ic_sky_relative(ic_sky_model model, const double coef[5], double sun_zenith, double cos_theta,
+                       double cos_gamma);
+
+/* Perez et al. 1993 coefficients a–e (Table 1; eqs. 6–8 for the overcast bin) for sky clearness ε,
+ * brightness Δ and solar zenith angle sun_zenith (radians). */
+void ic_sky_perez_coefficients(double clearness, double brightness, double sun_zenith, double coef[5]);
+
+/* Fills sky from p. Returns 1, or 0 with a message in why (what is wrong and what to do; the caller
+ * prefixes where). */
+int ic_sky_init(ic_sky *sky, const ic_sky_params *p, char *why, size_t why_size);
+
+/* Radiance arriving from unit direction d (pointing away from the scene), W/(m²·sr), white. */
+double ic_sky_radiance(const ic_sky *sky, ic_vec3 d);
+
+#endif
