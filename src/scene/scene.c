@@ -311,6 +311,12 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
                                 "degenerate); fix the light's geometry or remove its emission",
                                 b->mesh_paths[b->material_mesh[m]], s->materials[m].name, b->material_dropped[m]);
     }
+    /* a rough plastic's diffuse base is scaled by what its coat does not reflect: tabulated once here */
+    for (uint32_t m = 0; m < s->material_count; ++m) {
+        ic_material *mat = &s->materials[m];
+        if (mat->type == IC_MAT_PLASTIC)
+            ic_coat_albedo_table(mat->ior > 1.0f ? mat->ior : 1.5f, mat->alpha, mat->coat_albedo, &mat->coat_albedo_avg);
+    }
     if (s->triangle_count > 0) {
         ic_vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
         for (uint32_t i = 0; i < 3 * s->triangle_count; ++i) {

@@ -12,6 +12,7 @@
 #ifndef IC_SCENE_SCENE_H
 #define IC_SCENE_SCENE_H
 
+#include "core/microfacet.h"
 #include "core/vecmath.h"
 #include "irrcache/common.h"
 #include "irrcache/image.h"
@@ -40,7 +41,11 @@ typedef enum ic_material_type {
     IC_MAT_DIFFUSE = 0,    /* Lambertian: kd (× texture) */
     IC_MAT_GLOSSY,         /* Lambertian kd + normalized modified Phong lobe ks, exponent ns */
     IC_MAT_MIRROR,         /* ideal specular reflection, tint ks */
-    IC_MAT_GLASS           /* dielectric: Fresnel-weighted ideal reflection/refraction, index ior */
+    IC_MAT_GLASS,          /* dielectric: Fresnel-weighted ideal reflection/refraction, index ior */
+    IC_MAT_CONDUCTOR,      /* rough metal: GGX lobe of roughness alpha; Fresnel of the complex index
+                              eta + i·k when k is non-zero, else Schlick's from the colour ks = F0 (× texture) */
+    IC_MAT_PLASTIC         /* rough plastic: GGX dielectric coat (index ior, roughness alpha, tint ks) over
+                              a Lambertian base kd (× texture), coupled as Kelemen & Szirmay-Kalos 2001 */
 } ic_material_type;
 
 typedef struct ic_material {
@@ -53,7 +58,11 @@ typedef struct ic_material {
     ic_vec3 emission;      /* emitted radiance (one-sided, along the geometric normal's side the
                               triangle's winding gives; see `two_sided_emission`) */
     int two_sided_emission;/* 1: emits from both sides */
-    float ior;             /* index of refraction (glass), default 1.5 */
+    float ior;             /* index of refraction (glass, plastic's coat), default 1.5 */
+    float alpha;           /* GGX roughness α of conductor and plastic (glTF's roughness squared) */
+    ic_vec3 eta, k;        /* conductor: complex index of refraction (k all 0: use ks as F0) */
+    float coat_albedo[IC_COAT_TABLE]; /* plastic: the coat's directional albedo E(μ), filled at load */
+    float coat_albedo_avg; /* plastic: its cosine-weighted mean */
 } ic_material;
 
 /* Emissive triangle as a light. */
@@ -166,6 +175,8 @@ typedef struct ic_surface {
 void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_surface *s);
 /* Diffuse albedo at a surface (kd × texture). */
 ic_vec3 ic_scene_albedo(const ic_scene *scene, const ic_surface *s);
+/* The material's texture value at a surface (1 without a texture): kd's factor, and a conductor's F0's. */
+ic_vec3 ic_scene_texture_tint(const ic_scene *scene, const ic_surface *s);
 /* Emitted radiance leaving surface s towards direction wo (unit, pointing away from the surface). */
 ic_vec3 ic_scene_emission(const ic_scene *scene, const ic_surface *s, ic_vec3 wo);
 /* Environment radiance arriving from direction d (unit, pointing away from the scene); 0 if none. */
