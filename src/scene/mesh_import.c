@@ -490,32 +490,32 @@ static float *gltf_emissive_strengths(const mesh_source *src, unsigned count)
     return out;
 }
 
+/* glTF's metallic-roughness material on the microfacet models: a metal (metallic ≥ 0.5) is a rough
+ * conductor with F0 = base colour, anything else a rough plastic with base kd = base colour under a coat
+ * of index ior (F0 = 0.04 at the default 1.5); GGX α = roughness² (the glTF specification's appendix B). */
 static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_material *m)
 {
     ic_vec3 base = color_or(am, "$clr.base", color_or(am, "$clr.diffuse", v3s(1.0f)));
     float metal = ic_clampf(float_or(am, "$mat.metallicFactor", 1.0f), 0.0f, 1.0f);
     float rough = ic_clampf(float_or(am, "$mat.roughnessFactor", 1.0f), 0.0f, 1.0f);
-    float alpha = rough * rough;
-    float n = alpha > 0.0f ? 2.0f / (alpha * alpha) - 2.0f : MIRROR_EXPONENT;
-    m->ns = ic_clampf(n, 1.0f, MIRROR_EXPONENT);
-    m->ks = v3_lerp(v3s(0.04f), base, metal);
-    m->kd = v3_scale(base, 1.0f - metal);
-    m->kd = v3(fminf(m->kd.x, 1.0f - m->ks.x), fminf(m->kd.y, 1.0f - m->ks.y), fminf(m->kd.z, 1.0f - m->ks.z));
-    m->kd = clamp_color(m->kd);
+    m->alpha = rough * rough;
+    m->kd = clamp_color(base);
     /* a newer assimp passes the strength on; otherwise use what we read from the file */
     float strength = float_or(am, "$mat.emissiveIntensity", file_strength);
     m->emission = v3_scale(color_or(am, "$clr.emissive", v3s(0.0f)), strength);
     m->two_sided_emission = int_or(am, "$mat.twosided", 0) != 0;
     float transmission = float_or(am, "$mat.transmission.factor", 0.0f);
     float ior = float_or(am, "$mat.refracti", 1.5f);
+    m->ior = ior > 1.0f ? ior : 1.5f;
     if (transmission > 0.0f) {
         m->type = IC_MAT_GLASS;
-        m->ior = ior > 1.0f ? ior : 1.5f;
         m->ks = v3s(1.0f);
-    } else if (metal > 0.5f && m->ns >= MIRROR_EXPONENT) {
-        m->type = IC_MAT_MIRROR;
+    } else if (metal >= 0.5f) {
+        m->type = IC_MAT_CONDUCTOR;
+        m->ks = m->kd;
     } else {
-        m->type = IC_MAT_GLOSSY;
+        m->type = IC_MAT_PLASTIC;
+        m->ks = v3s(1.0f);
     }
 }
 
