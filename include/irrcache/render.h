@@ -41,6 +41,8 @@ typedef struct ic_scene_load_options {
     int allow_outside_paths; /* 1: files the scene names (meshes, MTL files, glTF buffers, textures, maps) may
                               lie anywhere; 0: only inside the scene file's folder tree and the shared scenes
                               folder (after symbolic links are resolved) */
+    const char *camera;    /* a glTF scene: the name (a node's or a camera's) of the camera to render from
+                              (NULL: the first perspective camera); any other scene refuses a name */
 } ic_scene_load_options;
 
 /* Loads a JSON scene file or a bare mesh (.obj .gltf .glb .ply); on failure *out is NULL and err

@@ -268,6 +268,32 @@ ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const cha
 }
 
 /* ------------------------------------------------------------------------------------------------ */
+/* point and spot lights */
+
+ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone)
+{
+    uint32_t n = s->point_light_count;
+    ic_point_light *grown = realloc(s->point_lights, sizeof *grown * (n + 1));
+    if (!grown)
+        return IC_ERR_OOM;
+    s->point_lights = grown;
+    if (cone || s->point_spots) {
+        ic_spot_cone *spots = realloc(s->point_spots, sizeof *spots * (n + 1));
+        if (!spots)
+            return IC_ERR_OOM;
+        if (!s->point_spots) /* the lights so far are points: no falloff */
+            for (uint32_t i = 0; i < n; ++i)
+                spots[i] = (ic_spot_cone){v3(0.0f, 0.0f, 1.0f), -1.0f, -2.0f};
+        s->point_spots = spots;
+        s->point_spots[n] = cone ? *cone : (ic_spot_cone){v3(0.0f, 0.0f, 1.0f), -1.0f, -2.0f};
+    }
+    s->point_lights[n].position = position;
+    s->point_lights[n].intensity = intensity;
+    s->point_light_count = n + 1;
+    return IC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
 /* camera */
 
 void ic_scene_fit_camera(ic_scene *scene, int width, int height)
@@ -366,6 +392,7 @@ void ic_scene_free(ic_scene *s)
     free(s->triangle_light);
     free(s->point_lights);
     free(s->point_light_cdf);
+    free(s->point_spots);
     ic_image_free(&s->env.image);
     free(s->env.marginal_cdf);
     free(s->env.conditional_cdf);

@@ -80,6 +80,22 @@ typedef struct ic_point_light {
     ic_vec3 intensity;     /* W/sr per channel (radiant intensity) */
 } ic_point_light;
 
+/* A spot light's cone (KHR_lights_punctual): the intensity is scaled by t² with
+ * t = clamp((cos θ − cos_outer)/(cos_inner − cos_outer), 0, 1), θ the angle from the axis. */
+typedef struct ic_spot_cone {
+    ic_vec3 axis;          /* unit direction the spot points to */
+    float cos_inner, cos_outer; /* full intensity inside the inner cone, none outside the outer */
+} ic_spot_cone;
+
+/* The cone's factor on the intensity towards unit direction d (from the light). */
+static inline float ic_spot_falloff(const ic_spot_cone *c, ic_vec3 d)
+{
+    float w = c->cos_inner - c->cos_outer;
+    float t = w > 0.0f ? (v3_dot(c->axis, d) - c->cos_outer) / w : (v3_dot(c->axis, d) >= c->cos_outer ? 1.0f : 0.0f);
+    t = ic_clampf(t, 0.0f, 1.0f);
+    return t * t;
+}
+
 typedef struct ic_sun_light {
     int enabled;
     ic_vec3 direction;     /* unit vector from the scene towards the sun */
@@ -148,6 +164,8 @@ struct ic_scene {
     ic_point_light *point_lights;
     float *point_light_cdf;/* point_light_count+1, by power 4 pi lum(intensity) */
     uint32_t point_light_count;
+    ic_spot_cone *point_spots; /* point_light_count cones, or NULL when no point light is a spot (the others
+                              then have cos_outer = -2: no falloff) */
     ic_sun_light sun;
     ic_environment env;
     ic_light_selection light_select; /* fixed light-class probabilities (lights.c) */

@@ -57,6 +57,15 @@ static inline size_t ic_scene_max_mesh_elements(const ic_scene_load_options *opt
 /* What to do when a texture is over its limit (the end of the message). */
 #define IC_SCENE_RAISE_TEXTURE_LIMIT "raise the limit with --max-texture-pixels (max_texture_pixels of ic_scene_load_options)"
 
+/* Appends a point light, a spot light when cone is given; IC_ERR_OOM leaves the scene as it was. */
+ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone);
+/* Reads the cameras and KHR_lights_punctual lights of the glTF file at path (gltf_scene.c) into the scene:
+ * the camera named camera_name (NULL: the first perspective camera met walking the default scene's nodes),
+ * point and spot lights, and directional lights (the first as the sun). *has_camera is 1 if a camera was
+ * set; *light_count gets the number of lights added. */
+ic_result ic_gltf_read_scene(ic_scene_builder *b, const char *path, const char *camera_name, int *has_camera,
+                             int *light_count, ic_error *err);
+
 /* Releases the builder's own arrays (not the scene). */
 void ic_scene_builder_release(ic_scene_builder *b);
 
