@@ -547,9 +547,70 @@ static void obj_material_dir(const mesh_source *src, const char *obj_dir, char *
     fclose(fp);
 }
 
+/* The embedded texture a material's texture path names: "*N" (the N-th), or one whose file name is the
+ * path's (aiScene::GetEmbeddedTexture's rule; the C interface has no such call); NULL if none. */
+static const struct aiTexture *find_embedded(const struct aiScene *ai, const char *rel)
+{
+    if (!ai || !ai->mTextures)
+        return NULL;
+    if (rel[0] == '*') {
+        char *end;
+        long i = strtol(rel + 1, &end, 10);
+        return *end == '\0' && end != rel + 1 && i >= 0 && i < (long)ai->mNumTextures ? ai->mTextures[i] : NULL;
+    }
+    const char *base = strrchr(rel, '/') ? strrchr(rel, '/') + 1 : rel;
+    for (unsigned i = 0; i < ai->mNumTextures; ++i) {
+        const char *f = ai->mTextures[i]->mFilename.data, *fb = strrchr(f, '/') ? strrchr(f, '/') + 1 : f;
+        if (f[0] && !strcmp(fb, base))
+            return ai->mTextures[i];
+    }
+    return NULL;
+}
+
+/* A texture held in the mesh file (a .glb's images, a "*N" reference): decoded from memory (PNG or JPEG), or
+ * taken as uncompressed texels; labelled "mesh#name" so that materials sharing it share one texture. */
+static ic_result embedded_texture(ic_scene_builder *b, const struct aiScene *ai, const char *rel, const char *mesh_path,
+                                  const char *owner, int32_t *index, ic_error *err)
+{
+    const struct aiTexture *et = find_embedded(ai, rel);
+    if (!et || !et->pcData)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: embedded texture '%s' is not in the file; fix the file", owner, rel);
+    char label[sizeof b->scene->textures[0].path];
+    snprintf(label, sizeof label, "%.900s#%.100s", mesh_path, rel);
+    ic_scene *s = b->scene;
+    for (uint32_t i = 0; i < s->texture_count; ++i)
+        if (!strcmp(s->textures[i].path, label)) {
+            *index = (int32_t)i;
+            return IC_OK;
+        }
+    ic_image img;
+    ic_error ierr;
+    size_t max_pixels = ic_scene_max_texture_pixels(b->opt);
+    ic_result r;
+    if (et->mHeight == 0) {
+        r = ic_image_decode_memory(et->pcData, et->mWidth, label, max_pixels, IC_SCENE_RAISE_TEXTURE_LIMIT, &img, &ierr);
+    } else if ((size_t)et->mWidth * et->mHeight > max_pixels) {
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: embedded texture '%s' has %ux%u pixels; %s", owner, rel,
+                            et->mWidth, et->mHeight, IC_SCENE_RAISE_TEXTURE_LIMIT);
+    } else if ((r = ic_image_create(&img, (int)et->mWidth, (int)et->mHeight)) == IC_OK) {
+        /* uncompressed texels (B, G, R, A bytes), sRGB like every 8-bit texture */
+        for (size_t i = 0; i < (size_t)et->mWidth * et->mHeight; ++i) {
+            img.rgb[3 * i] = ic_srgb8_to_linear(et->pcData[i].r);
+            img.rgb[3 * i + 1] = ic_srgb8_to_linear(et->pcData[i].g);
+            img.rgb[3 * i + 2] = ic_srgb8_to_linear(et->pcData[i].b);
+        }
+    } else {
+        snprintf(ierr.message, sizeof ierr.message, "out of memory for embedded texture '%.100s'", rel);
+    }
+    if (r != IC_OK)
+        return ic_error_set(err, r, "%s: %s", owner, ierr.message);
+    return ic_scene_texture_add(b, label, &img, owner, index, err);
+}
+
 /* mesh_dir: the mesh's folder; tex_dir: where its materials' texture paths start (an OBJ's MTL folder),
  * tried first, then mesh_dir (exporters that write paths from the OBJ's folder). */
-static ic_result convert_material(ic_scene_builder *b, const struct aiMaterial *am, const float *gltf_strength,
+static ic_result convert_material(ic_scene_builder *b, const struct aiScene *ai, const struct aiMaterial *am,
+                                  const float *gltf_strength,
                                   const char *mesh_path, const char *mesh_dir, const char *tex_dir, ic_material *m,
                                   ic_error *err)
 {
@@ -574,10 +635,8 @@ static ic_result convert_material(ic_scene_builder *b, const struct aiMaterial *
     if (texture_path(am, aiTextureType_BASE_COLOR, rel, sizeof rel) ||
         texture_path(am, aiTextureType_DIFFUSE, rel, sizeof rel)) {
         snprintf(owner, sizeof owner, "%s: material '%s'", mesh_path, m->name);
-        if (rel[0] == '*')
-            return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                                "%s: embedded texture '%s' is not supported; export the textures as separate files",
-                                owner, rel);
+        if (rel[0] == '*' || find_embedded(ai, rel))
+            return embedded_texture(b, ai, rel, mesh_path, owner, &m->kd_texture, err);
         char alt[IC_SCENE_PATH_MAX];
         if (!ic_path_join(tex_dir, rel, full, sizeof full) || !ic_path_join(mesh_dir, rel, alt, sizeof alt))
             return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
@@ -835,7 +894,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         } else {
             float one = 1.0f;
             const float *strength = !is_gltf ? NULL : (strengths ? &strengths[i] : &one);
-            r = convert_material(b, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
+            r = convert_material(b, ai, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
             if (r != IC_OK)
                 goto done;
         }

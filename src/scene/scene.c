@@ -247,6 +247,15 @@ ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const cha
                                     &ierr);
     if (r != IC_OK)
         return ic_error_set(err, r, "%s: %s", owner, ierr.message);
+    return ic_scene_texture_add(b, path, &img, owner, index, err);
+}
+
+ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img_in, const char *owner,
+                               int32_t *index, ic_error *err)
+{
+    ic_scene *scene = b->scene;
+    ic_image img = *img_in;
+    memset(img_in, 0, sizeof *img_in);
     ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));
     if (!grown) {
         ic_image_free(&img);

@@ -57,6 +57,10 @@ static inline size_t ic_scene_max_mesh_elements(const ic_scene_load_options *opt
 /* What to do when a texture is over its limit (the end of the message). */
 #define IC_SCENE_RAISE_TEXTURE_LIMIT "raise the limit with --max-texture-pixels (max_texture_pixels of ic_scene_load_options)"
 
+/* Adds a decoded image as a texture labelled path (a file's path, or "model.glb#*0" for an embedded one),
+ * taking its pixels (img is zeroed); *index gets its index. */
+ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img, const char *owner, int32_t *index,
+                               ic_error *err);
 /* Appends a point light, a spot light when cone is given; IC_ERR_OOM leaves the scene as it was. */
 ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone);
 /* Reads the cameras and KHR_lights_punctual lights of the glTF file at path (gltf_scene.c) into the scene:

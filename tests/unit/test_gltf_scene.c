@@ -12,6 +12,7 @@
  */
 #include "test_util.h"
 
+#include "irrcache/image.h"
 #include "irrcache/render.h"
 #include "scene/scene.h"
 
@@ -235,8 +236,92 @@ static void test_metal(void)
     ic_scene_free(s);
 }
 
+/* Appends n bytes, then zeros (bin) or spaces (json) to a multiple of 4. */
+static size_t put_padded(unsigned char *dst, size_t at, const void *src, size_t n, unsigned char pad)
+{
+    memcpy(dst + at, src, n);
+    at += n;
+    while (at % 4)
+        dst[at++] = pad;
+    return at;
+}
+
+/* A .glb whose floor material's base colour texture is a PNG inside the file (2×2, every texel
+ * (255, 128, 0)): the texture is decoded from memory and shades the floor. */
+static void test_embedded_texture(void)
+{
+    ic_image tex = {0};
+    ic_error err = {0};
+    CHECK(ic_image_create(&tex, 2, 2) == IC_OK, "texture image");
+    for (int i = 0; i < 4; ++i) {
+        tex.rgb[3 * i] = 1.0f;
+        tex.rgb[3 * i + 1] = ic_srgb8_to_linear(128);
+        tex.rgb[3 * i + 2] = 0.0f;
+    }
+    CHECK(ic_image_write(IC_TEST_TMP "/embedded.png", &tex, NULL, &err) == IC_OK, "PNG written: %s", err.message);
+    ic_image_free(&tex);
+    static unsigned char png[4096], bin[8192], glb[16384];
+    FILE *f = fopen(IC_TEST_TMP "/embedded.png", "rb");
+    size_t png_n = f ? fread(png, 1, sizeof png, f) : 0;
+    if (f)
+        fclose(f);
+    CHECK(png_n > 0 && png_n < sizeof png, "PNG read back");
+    float pos[12] = {-100, 0, -100, 100, 0, -100, 100, 0, 100, -100, 0, 100};
+    float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    uint16_t idx[6] = {0, 2, 1, 0, 3, 2};
+    size_t n = put_padded(bin, 0, pos, sizeof pos, 0);
+    n = put_padded(bin, n, uv, sizeof uv, 0);
+    n = put_padded(bin, n, idx, sizeof idx, 0);
+    size_t png_at = n;
+    n = put_padded(bin, n, png, png_n, 0);
+    char json[4096];
+    int jn = snprintf(json, sizeof json,
+                      "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": %zu}],\n"
+                      " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
+                      "  {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 32}, {\"buffer\": 0, \"byteOffset\": 80, "
+                      "\"byteLength\": 12},\n  {\"buffer\": 0, \"byteOffset\": %zu, \"byteLength\": %zu}],\n"
+                      " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\", "
+                      "\"min\": [-100, 0, -100], \"max\": [100, 0, 100]},\n"
+                      "  {\"bufferView\": 1, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC2\"},\n"
+                      "  {\"bufferView\": 2, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}],\n"
+                      " \"images\": [{\"bufferView\": 3, \"mimeType\": \"image/png\"}], \"textures\": [{\"source\": 0}],\n"
+                      " \"materials\": [{\"name\": \"tex\", \"pbrMetallicRoughness\": {\"metallicFactor\": 0, "
+                      "\"baseColorTexture\": {\"index\": 0}}}],\n"
+                      " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"TEXCOORD_0\": 1}, "
+                      "\"indices\": 2, \"material\": 0}]}],\n"
+                      " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}",
+                      n, png_at, png_n);
+    size_t jlen = ((size_t)jn + 3) / 4 * 4, total = 12 + 8 + jlen + 8 + n;
+    uint32_t head[5] = {0x46546C67u, 2u, (uint32_t)total, (uint32_t)jlen, 0x4E4F534Au};
+    size_t at = put_padded(glb, 0, head, sizeof head, 0);
+    at = put_padded(glb, at, json, (size_t)jn, ' ');
+    uint32_t bin_head[2] = {(uint32_t)n, 0x004E4942u};
+    at = put_padded(glb, at, bin_head, sizeof bin_head, 0);
+    at = put_padded(glb, at, bin, n, 0);
+    f = fopen(IC_TEST_TMP "/embedded.glb", "wb");
+    if (f) {
+        fwrite(glb, 1, at, f);
+        fclose(f);
+    }
+    ic_scene *s = load(IC_TEST_TMP "/embedded.glb", NULL, 0);
+    CHECK(s != NULL, "a .glb with an embedded PNG texture loads");
+    if (!s)
+        return;
+    CHECK(s->texture_count == 1 && s->textures[0].width == 2 && strstr(s->textures[0].path, "embedded.glb#*0"),
+          "one embedded texture, labelled by the file and its index");
+    if (s->texture_count == 1 && s->material_count >= 1 && s->triangle_count >= 1) {
+        ic_surface srf;
+        ic_scene_surface(s, 0, 0.3f, 0.3f, &srf);
+        ic_vec3 a = ic_scene_albedo(s, &srf);
+        CHECK(fabsf(a.x - 1.0f) < 1e-5f && fabsf(a.y - ic_srgb8_to_linear(128)) < 1e-5f && a.z == 0.0f,
+              "the floor's albedo is the texture's colour: %g %g %g", a.x, a.y, a.z);
+    }
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_embedded_texture();
     test_camera();
     test_point_light();
     test_spot_and_directional();
