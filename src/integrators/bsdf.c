@@ -17,14 +17,14 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
     b->ng = s->ng;
     ic_vec3 n = s->ns;
     /* Opaque materials shade on the side the viewer is on. */
-    if (b->type != IC_MAT_GLASS && v3_dot(wo, s->ng) < 0.0f) {
+    if (b->type != IC_MAT_GLASS && b->type != IC_MAT_ROUGH_GLASS && v3_dot(wo, s->ng) < 0.0f) {
         n = v3_neg(n);
         b->ng = v3_neg(s->ng);
     }
     b->frame = ic_frame_from_normal(n);
     float ld = v3_lum(b->kd), ls = v3_lum(b->ks);
     b->p_diffuse = (b->type == IC_MAT_GLOSSY) ? (ld + ls > 0.0f ? ld / (ld + ls) : 1.0f) : 1.0f;
-    if (b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC)
+    if (b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC || b->type == IC_MAT_ROUGH_GLASS)
         ic_mf_init(b, m, fmaxf(v3_dot(wo, n), 0.0f), ic_scene_texture_tint(scene, s));
 }
 
@@ -105,8 +105,21 @@ int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_b
     return out->pdf > 0.0f;
 }
 
+/* The rough glass's wi in the local frame, or 0 if wi crosses the geometric surface on the other side of
+ * the shading normal's (which would leak light). */
+static int rough_glass_local(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *wo_l, ic_vec3 *wi_l)
+{
+    *wo_l = ic_frame_to_local(&b->frame, wo);
+    *wi_l = ic_frame_to_local(&b->frame, wi);
+    return v3_dot(wi, b->ng) * wi_l->z > 0.0f;
+}
+
 ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
+    if (b->type == IC_MAT_ROUGH_GLASS) {
+        ic_vec3 wo_l, wi_l;
+        return rough_glass_local(b, wo, wi, &wo_l, &wi_l) ? v3s(ic_mf_dielectric_f(b, wo_l, wi_l)) : v3s(0.0f);
+    }
     float cos_o = v3_dot(wo, b->frame.n), cos_i = v3_dot(wi, b->frame.n);
     /* Both directions in the upper hemisphere of the shading normal and on the same side of the
      * geometric normal (prevents light leaking through shading-normal interpolation). */
@@ -133,6 +146,10 @@ ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 
 float ic_bsdf_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
+    if (b->type == IC_MAT_ROUGH_GLASS) {
+        ic_vec3 wo_l, wi_l;
+        return rough_glass_local(b, wo, wi, &wo_l, &wi_l) ? ic_mf_dielectric_pdf(b, wo_l, wi_l) : 0.0f;
+    }
     float cos_i = v3_dot(wi, b->frame.n);
     if (cos_i <= 0.0f || v3_dot(wo, b->frame.n) <= 0.0f)
         return 0.0f;
@@ -194,6 +211,20 @@ int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u
     }
     case IC_MAT_CONDUCTOR:
         return ic_bsdf_sample_glossy(b, wo, u1, u2, out);
+    case IC_MAT_ROUGH_GLASS: {
+        /* followed like the smooth glass (is_specular: no light sampling at the vertex, so what its
+         * sampled direction finds counts fully); the weight is the lobe's f·|cos|/pdf */
+        ic_vec3 wo_l = ic_frame_to_local(&b->frame, wo), wi_l;
+        out->is_specular = 1;
+        if (!ic_mf_dielectric_sample(b, wo_l, u0, u1, u2, &wi_l))
+            return 0;
+        out->wi = ic_frame_to_world(&b->frame, wi_l);
+        out->pdf = ic_bsdf_pdf(b, wo, out->wi);
+        if (!(out->pdf > 0.0f))
+            return 0;
+        out->weight = v3s(ic_mf_dielectric_f(b, wo_l, wi_l) * fabsf(wi_l.z) / out->pdf);
+        return 1;
+    }
     case IC_MAT_DIFFUSE:
     case IC_MAT_GLOSSY:
     case IC_MAT_PLASTIC: {

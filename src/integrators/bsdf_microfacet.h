@@ -17,4 +17,11 @@ float ic_mf_pdf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
 /* A direction reflected about a visible normal of wo (may point below the surface: a failed sample). */
 ic_vec3 ic_mf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2);
 
+/* Rough dielectric: f(wo, wi) of reflection and refraction, wo and wi on either side (+z is outside). */
+float ic_mf_dielectric_f(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
+/* Solid-angle pdf of ic_mf_dielectric_sample choosing wi. */
+float ic_mf_dielectric_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
+/* Samples a visible normal, then reflection (probability F) or refraction; 0 if the sample fails. */
+int ic_mf_dielectric_sample(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u2, ic_vec3 *wi);
+
 #endif

@@ -508,7 +508,7 @@ static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_ma
     float ior = float_or(am, "$mat.refracti", 1.5f);
     m->ior = ior > 1.0f ? ior : 1.5f;
     if (transmission > 0.0f) {
-        m->type = IC_MAT_GLASS;
+        m->type = m->alpha > 0.0f ? IC_MAT_ROUGH_GLASS : IC_MAT_GLASS;
         m->ks = v3s(1.0f);
     } else if (metal >= 0.5f) {
         m->type = IC_MAT_CONDUCTOR;

@@ -44,8 +44,10 @@ typedef enum ic_material_type {
     IC_MAT_GLASS,          /* dielectric: Fresnel-weighted ideal reflection/refraction, index ior */
     IC_MAT_CONDUCTOR,      /* rough metal: GGX lobe of roughness alpha; Fresnel of the complex index
                               eta + i·k when k is non-zero, else Schlick's from the colour ks = F0 (× texture) */
-    IC_MAT_PLASTIC         /* rough plastic: GGX dielectric coat (index ior, roughness alpha, tint ks) over
+    IC_MAT_PLASTIC,        /* rough plastic: GGX dielectric coat (index ior, roughness alpha, tint ks) over
                               a Lambertian base kd (× texture), coupled as Kelemen & Szirmay-Kalos 2001 */
+    IC_MAT_ROUGH_GLASS     /* rough dielectric: GGX reflection and refraction (Walter et al. 2007), index
+                              ior, roughness alpha; traced like glass (no light sampling through it) */
 } ic_material_type;
 
 typedef struct ic_material {
@@ -59,7 +61,7 @@ typedef struct ic_material {
                               triangle's winding gives; see `two_sided_emission`) */
     int two_sided_emission;/* 1: emits from both sides */
     float ior;             /* index of refraction (glass, plastic's coat), default 1.5 */
-    float alpha;           /* GGX roughness α of conductor and plastic (glTF's roughness squared) */
+    float alpha;           /* GGX roughness α of conductor, plastic and rough glass (glTF's roughness squared) */
     ic_vec3 eta, k;        /* conductor: complex index of refraction (k all 0: use ks as F0) */
     float coat_albedo[IC_COAT_TABLE]; /* plastic: the coat's directional albedo E(μ), filled at load */
     float coat_albedo_avg; /* plastic: its cosine-weighted mean */

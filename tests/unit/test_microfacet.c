@@ -74,21 +74,28 @@ static double sampled_albedo(const ic_bsdf *b, ic_vec3 wo, double *ok)
     return sum / (N * N);
 }
 
-/* ∫ g(wi) dwi over the upper hemisphere by the midpoint rule in (cos θ, φ): g = f·cos (what = 0) or the pdf. */
-static double hemisphere_integral(const ic_bsdf *b, ic_vec3 wo, int what)
+/* ∫ g(wi) dwi over cos θ in [mu_lo, 1] by the midpoint rule in (θ, φ) (dω = sin θ dθ dφ, which resolves
+ * lobes at the poles): g = f·|cos| (what = 0) or the pdf. */
+static double sphere_integral(const ic_bsdf *b, ic_vec3 wo, int what, float mu_lo)
 {
-    enum { NU = 600, NP = 1200 };
+    enum { NT = 600, NP = 1200 };
+    const double theta_max = acos(mu_lo);
     double sum = 0.0;
-    for (int i = 0; i < NU; ++i) {
-        float mu = (i + 0.5f) / NU, st = sqrtf(1.0f - mu * mu);
+    for (int i = 0; i < NT; ++i) {
+        double theta = theta_max * (i + 0.5) / NT;
+        float mu = (float)cos(theta), st = (float)sin(theta);
+        double row = 0.0;
         for (int j = 0; j < NP; ++j) {
             float phi = 2.0f * IC_PI * (j + 0.5f) / NP;
             ic_vec3 wi = v3(st * cosf(phi), st * sinf(phi), mu);
-            sum += what == 0 ? v3_lum(ic_bsdf_eval(b, wo, wi)) * mu : ic_bsdf_pdf(b, wo, wi);
+            row += what == 0 ? v3_lum(ic_bsdf_eval(b, wo, wi)) * fabsf(mu) : ic_bsdf_pdf(b, wo, wi);
         }
+        sum += row * st;
     }
-    return sum * (2.0 * IC_PI) / ((double)NU * NP);
+    return sum * (2.0 * IC_PI) * theta_max / ((double)NT * NP);
 }
+
+static double hemisphere_integral(const ic_bsdf *b, ic_vec3 wo, int what) { return sphere_integral(b, wo, what, 0.0f); }
 
 static void test_fresnel(void)
 {
@@ -154,7 +161,7 @@ static void test_pdf_integral(void)
 /* χ² of a histogram of sampled directions (cos θ × φ bins) against the pdf integrated over each bin;
  * bins expecting fewer than 5 samples are pooled. Fails beyond z = 5 of the Wilson–Hilferty normal
  * approximation (p ≈ 3e-7). */
-static void chi2_test(const char *what, ic_vec3 wo)
+static void chi2_test(const char *what, ic_vec3 wo, float mu_lo)
 {
     enum { NU = 16, NP = 32, SUB = 24, SAMPLES = 200000 };
     static double observed[NU * NP], expected[NU * NP];
@@ -170,7 +177,7 @@ static void chi2_test(const char *what, ic_vec3 wo)
         float phi = atan2f(bs.wi.y, bs.wi.x);
         if (phi < 0.0f)
             phi += 2.0f * IC_PI;
-        int iu = (int)(bs.wi.z * NU), ip = (int)(phi / (2.0f * IC_PI) * NP);
+        int iu = (int)((bs.wi.z - mu_lo) / (1.0f - mu_lo) * NU), ip = (int)(phi / (2.0f * IC_PI) * NP);
         iu = iu < 0 ? 0 : (iu >= NU ? NU - 1 : iu);
         ip = ip < 0 ? 0 : (ip >= NP ? NP - 1 : ip);
         observed[iu * NP + ip] += 1.0;
@@ -180,11 +187,12 @@ static void chi2_test(const char *what, ic_vec3 wo)
             double sum = 0.0;
             for (int a = 0; a < SUB; ++a)
                 for (int c = 0; c < SUB; ++c) {
-                    float mu = (iu + (a + 0.5f) / SUB) / NU, st = sqrtf(1.0f - mu * mu);
+                    float mu = mu_lo + (1.0f - mu_lo) * (iu + (a + 0.5f) / SUB) / NU;
+                    float st = sqrtf(fmaxf(0.0f, 1.0f - mu * mu));
                     float phi = 2.0f * IC_PI * (ip + (c + 0.5f) / SUB) / NP;
                     sum += ic_bsdf_pdf(&b, wo, v3(st * cosf(phi), st * sinf(phi), mu));
                 }
-            expected[iu * NP + ip] = sum / (SUB * SUB) * (2.0 * IC_PI / (NU * NP)) * SAMPLES;
+            expected[iu * NP + ip] = sum / (SUB * SUB) * (2.0 * IC_PI * (1.0 - mu_lo) / (NU * NP)) * SAMPLES;
         }
     double chi2 = 0.0, pool_o = 0.0, pool_e = 0.0;
     int df = -1;
@@ -209,13 +217,46 @@ static void chi2_test(const char *what, ic_vec3 wo)
 static void test_chi2(void)
 {
     set_material(IC_MAT_CONDUCTOR, 0.3f, v3s(0.0f), v3(0.9f, 0.6f, 0.3f));
-    chi2_test("conductor α=0.3 θ=40", dir_at(40.0f));
+    chi2_test("conductor α=0.3 θ=40", dir_at(40.0f), 0.0f);
     set_material(IC_MAT_CONDUCTOR, 0.7f, v3s(0.0f), v3s(1.0f));
-    chi2_test("conductor α=0.7 θ=70", dir_at(70.0f));
+    chi2_test("conductor α=0.7 θ=70", dir_at(70.0f), 0.0f);
     set_material(IC_MAT_PLASTIC, 0.3f, v3s(0.5f), v3s(1.0f));
-    chi2_test("plastic α=0.3 θ=40", dir_at(40.0f));
+    chi2_test("plastic α=0.3 θ=40", dir_at(40.0f), 0.0f);
     set_material(IC_MAT_PLASTIC, 0.15f, v3s(0.2f), v3s(1.0f));
-    chi2_test("plastic α=0.15 θ=60", dir_at(60.0f));
+    chi2_test("plastic α=0.15 θ=60", dir_at(60.0f), 0.0f);
+    set_material(IC_MAT_ROUGH_GLASS, 0.3f, v3s(0.0f), v3s(1.0f));
+    chi2_test("rough glass α=0.3 θ=40 from outside", dir_at(40.0f), -1.0f);
+    chi2_test("rough glass α=0.3 θ=150 from inside", dir_at(150.0f), -1.0f);
+    set_material(IC_MAT_ROUGH_GLASS, 0.6f, v3s(0.0f), v3s(1.0f));
+    chi2_test("rough glass α=0.6 θ=70", dir_at(70.0f), -1.0f);
+}
+
+/* Rough glass: what the sampled directions carry (reflection plus refraction, radiance not scaled by
+ * 1/η²) is at most 1, nearly 1 when smooth, from either side; the pdf integrates over the sphere to the
+ * share of samples that succeed; the weight equals the quadrature of f·|cos|. */
+static void test_rough_glass(void)
+{
+    static const float alphas[] = {0.02f, 0.1f, 0.3f, 0.7f};
+    static const float thetas[] = {0.0f, 45.0f, 75.0f, 120.0f, 170.0f};
+    for (int a = 0; a < 4; ++a)
+        for (int t = 0; t < 5; ++t) {
+            set_material(IC_MAT_ROUGH_GLASS, alphas[a], v3s(0.0f), v3s(1.0f));
+            ic_vec3 wo = dir_at(thetas[t]);
+            ic_bsdf b;
+            make_bsdf(&b, wo);
+            double ok, e = sampled_albedo(&b, wo, &ok);
+            CHECK(e <= 1.0 + 1e-3, "rough glass α=%g θ=%g: weight %g > 1", alphas[a], thetas[t], e);
+            if (alphas[a] <= 0.02f && (thetas[t] <= 45.0f || thetas[t] >= 170.0f))
+                CHECK(e >= 0.98, "smooth-ish rough glass α=%g θ=%g keeps its energy: %g", alphas[a], thetas[t], e);
+            if (alphas[a] >= 0.3f) {
+                double q = sphere_integral(&b, wo, 0, -1.0f);
+                CHECK(fabs(e - q) < 0.01, "rough glass α=%g θ=%g: sampled weight %g, ∫f·|cos| %g", alphas[a], thetas[t], e,
+                      q);
+                double integral = sphere_integral(&b, wo, 1, -1.0f);
+                CHECK(integral <= 1.0 + 5e-3, "rough glass pdf integrates to %g > 1", integral);
+                CHECK_NEAR(integral, ok, 5e-3, "rough glass pdf integral = share of samples that succeed");
+            }
+        }
 }
 
 static void test_reciprocity(void)
@@ -275,6 +316,7 @@ int main(void)
     test_furnace();
     test_pdf_integral();
     test_chi2();
+    test_rough_glass();
     test_reciprocity();
     test_glossy_local();
     TEST_MAIN_END();

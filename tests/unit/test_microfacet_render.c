@@ -2,7 +2,8 @@
  * test_microfacet_render.c — the rough materials rendered, path tracer and irradiance cache, on an open
  * plane under a uniform sky of radiance L (every direction above the plane sees L):
  *   1. a rough plastic with a white base is a white furnace: every pixel is L, for both integrators;
- *   2. a smooth conductor with F0 = 1 returns nearly L (the single-scattering loss of α = 0.05 is < 2 %);
+ *   2. a smooth conductor with F0 = 1 returns nearly L (the single-scattering loss of α = 0.05 is < 2 %),
+ *      and so does a sheet of rough glass (reflected plus transmitted);
  *   3. a coloured rough plastic and a coloured rough conductor: the cache's final render (diffuse lobe
  *      from the records, glossy lobe sampled) agrees with the path tracer within the noise.
  */
@@ -63,12 +64,16 @@ int main(void)
     static const char *iname[2] = {"path tracer", "cache"};
     const char *white = "{\"type\": \"plastic\", \"kd\": 1, \"alpha\": 0.3}";
     const char *mirror = "{\"type\": \"conductor\", \"ks\": 1, \"alpha\": 0.05}";
+    const char *glass = "{\"type\": \"rough_glass\", \"alpha\": 0.05, \"ior\": 1.5}";
     for (int i = 0; i < 2; ++i) {
         double m = render_plane("white", white, integ[i], 1);
         CHECK(fabs(m - 2.0) < 0.03, "%s: white rough plastic under L = 2 gives %g (expected 2)", iname[i], m);
         m = render_plane("mirror", mirror, integ[i], 1);
         CHECK(m > 0.98 * 2.0 && m < 2.0 + 0.01, "%s: smooth F0 = 1 conductor gives %g (expected just under 2)",
               iname[i], m);
+        m = render_plane("glass", glass, integ[i], 1);
+        CHECK(m > 0.98 * 2.0 && m < 2.0 + 0.01, "%s: a sheet of rough glass (alpha 0.05) in the uniform sky gives %g "
+              "(expected just under 2: what it reflects and what it lets through)", iname[i], m);
     }
     const char *coloured[2] = {"{\"type\": \"plastic\", \"kd\": [0.7, 0.3, 0.1], \"alpha\": 0.2, \"ior\": 1.6}",
                                "{\"type\": \"conductor\", \"eta\": [0.2, 0.9, 1.1], \"k\": [3.9, 2.4, 2.2], "
