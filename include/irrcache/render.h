@@ -241,6 +241,9 @@ float ic_scene_exposure(const ic_scene *scene);
 /* Light sources of a loaded scene that emit something: emitting triangles, point lights, the sun and the
  * environment (one each). 0 means every image of the scene is black (a caller may warn). */
 unsigned ic_scene_light_count(const ic_scene *scene);
+/* What loading approximated or left out, one line per kind ("scene.xml:12: ... is not supported; ..."),
+ * "" if nothing (a Mitsuba scene's unsupported elements). Owned by the scene. */
+const char *ic_scene_warnings(const ic_scene *scene);
 
 #ifdef __cplusplus
 }

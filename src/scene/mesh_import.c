@@ -812,6 +812,81 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
     return IC_OK;
 }
 
+ic_result ic_scene_add_material(ic_scene_builder *b, const ic_material *m, const char *source, uint32_t *index,
+                                ic_error *err)
+{
+    ic_scene *s = b->scene;
+    uint32_t n = s->material_count;
+    char *path_copy = malloc(strlen(source) + 1);
+    if (path_copy)
+        memcpy(path_copy, source, strlen(source) + 1);
+    if (!path_copy || !grow((void **)&b->mesh_paths, sizeof *b->mesh_paths, b->mesh_count + 1) ||
+        !grow((void **)&s->materials, sizeof *s->materials, n + 1) ||
+        !grow((void **)&b->material_dropped, sizeof *b->material_dropped, n + 1) ||
+        !grow((void **)&b->material_tris, sizeof *b->material_tris, n + 1) ||
+        !grow((void **)&b->material_mesh, sizeof *b->material_mesh, n + 1)) {
+        free(path_copy);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its materials", source);
+    }
+    b->mesh_paths[b->mesh_count++] = path_copy;
+    s->materials[n] = *m;
+    b->material_dropped[n] = b->material_tris[n] = 0;
+    b->material_mesh[n] = b->mesh_count - 1;
+    s->material_count = n + 1;
+    *index = n;
+    return IC_OK;
+}
+
+ic_result ic_scene_append_triangles(ic_scene_builder *b, const ic_vec3 *p, const ic_vec3 *n, uint32_t vertex_count,
+                                    const uint32_t *tri, uint32_t tri_count, uint32_t material, const float xform[16],
+                                    const char *where, ic_error *err)
+{
+    ic_scene *s = b->scene;
+    if (s->vertex_count + (size_t)vertex_count > UINT32_MAX / 4 || s->triangle_count + (size_t)tri_count > UINT32_MAX / 4)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: too many vertices or triangles; split the scene", where);
+    if (!grow_vertices(s, vertex_count, n != NULL, 0) ||
+        !grow((void **)&s->triangles, sizeof *s->triangles * 3, s->triangle_count + tri_count) ||
+        !grow((void **)&s->triangle_material, sizeof *s->triangle_material, s->triangle_count + tri_count))
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its geometry", where);
+    float nm[9];
+    int flip = normal_matrix(xform, nm) < 0.0f;
+    uint32_t base = s->vertex_count;
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        struct aiVector3D q = {p[v].x, p[v].y, p[v].z};
+        s->positions[base + v] = xform_point(xform, q);
+        if (!(fabsf(s->positions[base + v].x) <= IC_SCENE_MAX_COORD &&
+              fabsf(s->positions[base + v].y) <= IC_SCENE_MAX_COORD &&
+              fabsf(s->positions[base + v].z) <= IC_SCENE_MAX_COORD))
+            return ic_error_set(err, IC_ERR_INVALID_ARG,
+                                "%s: the transform takes a vertex beyond the largest coordinate %g; give a smaller "
+                                "scale or translation",
+                                where, (double)IC_SCENE_MAX_COORD);
+        if (s->normals) {
+            struct aiVector3D nn = n ? (struct aiVector3D){n[v].x, n[v].y, n[v].z} : (struct aiVector3D){0, 0, 0};
+            s->normals[base + v] = n ? xform_normal(nm, nn) : v3s(0.0f);
+        }
+        if (s->uvs)
+            s->uvs[2 * (base + v)] = s->uvs[2 * (base + v) + 1] = 0.0f;
+    }
+    s->vertex_count += vertex_count;
+    for (uint32_t f = 0; f < tri_count; ++f) {
+        uint32_t i0 = base + tri[3 * f], i1 = base + tri[3 * f + (flip ? 2 : 1)], i2 = base + tri[3 * f + (flip ? 1 : 2)];
+        ic_vec3 c = v3_cross(v3_sub(s->positions[i1], s->positions[i0]), v3_sub(s->positions[i2], s->positions[i0]));
+        if (!(v3_len2(c) > 0.0f) || !isfinite(v3_len2(c))) {
+            ++s->dropped_degenerate;
+            ++b->material_dropped[material];
+            continue;
+        }
+        uint32_t t = s->triangle_count++;
+        s->triangles[3 * t] = i0;
+        s->triangles[3 * t + 1] = i1;
+        s->triangles[3 * t + 2] = i2;
+        s->triangle_material[t] = material;
+        ++b->material_tris[material];
+    }
+    return IC_OK;
+}
+
 ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, const char *xform_where,
                          ic_error *err)
 {

@@ -13,6 +13,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -277,6 +278,28 @@ ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *
 }
 
 /* ------------------------------------------------------------------------------------------------ */
+/* warnings */
+
+void ic_scene_warn(ic_scene *s, const char *fmt, ...)
+{
+    char line[600];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    size_t old = s->warnings ? strlen(s->warnings) : 0, add = strlen(line);
+    char *grown = realloc(s->warnings, old + add + 2);
+    if (!grown)
+        return; /* a warning lost to a full memory is no reason to fail the load */
+    memcpy(grown + old, line, add);
+    grown[old + add] = '\n';
+    grown[old + add + 1] = '\0';
+    s->warnings = grown;
+}
+
+const char *ic_scene_warnings(const ic_scene *scene) { return scene && scene->warnings ? scene->warnings : ""; }
+
+/* ------------------------------------------------------------------------------------------------ */
 /* point and spot lights */
 
 ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone)
@@ -402,6 +425,7 @@ void ic_scene_free(ic_scene *s)
     free(s->point_lights);
     free(s->point_light_cdf);
     free(s->point_spots);
+    free(s->warnings);
     ic_image_free(&s->env.image);
     free(s->env.marginal_cdf);
     free(s->env.conditional_cdf);

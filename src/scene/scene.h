@@ -174,6 +174,7 @@ struct ic_scene {
     /* view and settings */
     ic_camera camera;
     ic_scene_settings settings;
+    char *warnings;        /* what loading approximated or left out, lines; NULL if nothing */
 };
 
 /* Loading (ic_scene_load, ic_scene_load_options, ic_scene_free) is declared in irrcache/render.h. */

@@ -61,6 +61,18 @@ static inline size_t ic_scene_max_mesh_elements(const ic_scene_load_options *opt
  * taking its pixels (img is zeroed); *index gets its index. */
 ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img, const char *owner, int32_t *index,
                                ic_error *err);
+/* Appends one line to the scene's warnings (ic_scene_warnings). */
+void ic_scene_warn(ic_scene *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Appends a material of its own (source names the file it comes from, for messages); *index gets its index. */
+ic_result ic_scene_add_material(ic_scene_builder *b, const ic_material *m, const char *source, uint32_t *index,
+                                ic_error *err);
+/* Appends triangles (tri: tri_count × 3 indices into p; n: unit normals or NULL) of one material, transformed by
+ * the row-major 4x4 xform; degenerate ones are dropped and counted. where names the shape in messages. */
+ic_result ic_scene_append_triangles(ic_scene_builder *b, const ic_vec3 *p, const ic_vec3 *n, uint32_t vertex_count,
+                                    const uint32_t *tri, uint32_t tri_count, uint32_t material, const float xform[16],
+                                    const char *where, ic_error *err);
+/* Reads a Mitsuba 0.6/3 XML scene (mitsuba_scene.c). */
+ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt, ic_error *err);
 /* Appends a point light, a spot light when cone is given; IC_ERR_OOM leaves the scene as it was. */
 ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone);
 /* Reads the cameras and KHR_lights_punctual lights of the glTF file at path (gltf_scene.c) into the scene:
