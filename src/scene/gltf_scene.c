@@ -60,25 +60,31 @@ static int numbers(const cJSON *obj, const char *key, float *out, int n)
     return 1;
 }
 
-/* out = a·b, column-major 4×4. */
+/* out = a·b, row-major 4×4. */
 static void mat_mul(const float a[16], const float b[16], float out[16])
 {
     float r[16];
-    for (int c = 0; c < 4; ++c)
-        for (int row = 0; row < 4; ++row) {
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
             float s = 0.0f;
             for (int k = 0; k < 4; ++k)
-                s += a[k * 4 + row] * b[c * 4 + k];
-            r[c * 4 + row] = s;
+                s += a[i * 4 + k] * b[k * 4 + j];
+            r[i * 4 + j] = s;
         }
     memcpy(out, r, sizeof r);
 }
 
-/* A node's local transform: its matrix, or T·R·S (rotation a unit quaternion x, y, z, w). */
+/* A node's local transform, row-major: its matrix (glTF stores it by columns), or T·R·S (rotation a unit
+ * quaternion x, y, z, w). */
 static void node_local(const cJSON *node, float m[16])
 {
-    if (numbers(node, "matrix", m, 16))
+    float cm[16];
+    if (numbers(node, "matrix", cm, 16)) {
+        for (int i = 0; i < 4; ++i)
+            for (int j = 0; j < 4; ++j)
+                m[i * 4 + j] = cm[j * 4 + i];
         return;
+    }
     float t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
     numbers(node, "translation", t, 3);
     numbers(node, "rotation", q, 4);
@@ -88,29 +94,17 @@ static void node_local(const cJSON *node, float m[16])
         for (int i = 0; i < 4; ++i)
             q[i] /= len;
     float x = q[0], y = q[1], z = q[2], w = q[3];
-    float r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
-                  2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
-                  2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)}; /* columns */
+    float r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - z * w),     2 * (x * z + y * w),
+                  2 * (x * y + z * w),     1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+                  2 * (x * z - y * w),     2 * (y * z + x * w),     1 - 2 * (x * x + y * y)}; /* rows */
     memset(m, 0, sizeof(float) * 16);
-    for (int c = 0; c < 3; ++c)
-        for (int row = 0; row < 3; ++row)
-            m[c * 4 + row] = r[c * 3 + row] * s[c];
-    m[12] = t[0];
-    m[13] = t[1];
-    m[14] = t[2];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            m[i * 4 + j] = r[i * 3 + j] * s[j];
+    m[3] = t[0];
+    m[7] = t[1];
+    m[11] = t[2];
     m[15] = 1.0f;
-}
-
-static ic_vec3 xform_point(const float m[16], ic_vec3 p)
-{
-    return v3(m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12], m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13],
-              m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14]);
-}
-
-static ic_vec3 xform_dir(const float m[16], ic_vec3 d)
-{
-    return v3_norm(v3(m[0] * d.x + m[4] * d.y + m[8] * d.z, m[1] * d.x + m[5] * d.y + m[9] * d.z,
-                      m[2] * d.x + m[6] * d.y + m[10] * d.z));
 }
 
 static const char *name_of(const cJSON *obj)
@@ -145,9 +139,9 @@ static ic_result take_camera(gltf_walk *w, const cJSON *node, int index, const f
         return ic_error_set(w->err, IC_ERR_PARSE, "%s: camera %d: yfov %g is not in (0, pi) radians; fix the file",
                             w->path, ci->valueint, (double)yfov);
     ic_camera *c = &w->b->scene->camera;
-    c->eye = xform_point(m, v3s(0.0f));
-    c->target = v3_add(c->eye, xform_dir(m, v3(0.0f, 0.0f, -1.0f)));
-    c->up = xform_dir(m, v3(0.0f, 1.0f, 0.0f));
+    c->eye = ic_xform_point(m, v3s(0.0f));
+    c->target = v3_add(c->eye, ic_xform_dir(m, v3(0.0f, 0.0f, -1.0f)));
+    c->up = ic_xform_dir(m, v3(0.0f, 1.0f, 0.0f));
     c->fov_y_deg = yfov * 180.0f / IC_PI;
     w->aspect = number_or(persp, "aspectRatio", 0.0f);
     w->has_camera = 1;
@@ -176,7 +170,7 @@ static ic_result take_light(gltf_walk *w, const cJSON *node, int index, const fl
         return ic_error_set(w->err, IC_ERR_PARSE, "%s: light %d: a negative colour or intensity; give values >= 0",
                             w->path, li->valueint);
     ic_vec3 power = v3_scale(v3(rgb[0], rgb[1], rgb[2]), intensity);
-    ic_vec3 pos = xform_point(m, v3s(0.0f)), axis = xform_dir(m, v3(0.0f, 0.0f, -1.0f));
+    ic_vec3 pos = ic_xform_point(m, v3s(0.0f)), axis = ic_xform_dir(m, v3(0.0f, 0.0f, -1.0f));
     ic_scene *s = w->b->scene;
     ic_result r = IC_OK;
     if (!strcmp(type->valuestring, "point")) {

@@ -387,18 +387,6 @@ static ic_result to_world(mts_ctx *c, const xmlNode *n, float m[16])
     return parse_transform(c, t, m);
 }
 
-static ic_vec3 apply_point(const float m[16], ic_vec3 p)
-{
-    return v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
-              m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
-}
-
-static ic_vec3 apply_dir(const float m[16], ic_vec3 d)
-{
-    return v3_norm(v3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
-                      m[8] * d.x + m[9] * d.y + m[10] * d.z));
-}
-
 /* ---- sensor ---- */
 
 static ic_result parse_sensor(mts_ctx *c, const xmlNode *n)
@@ -459,9 +447,9 @@ static ic_result parse_sensor(mts_ctx *c, const xmlNode *n)
     else if (strcmp(axis, "y") && strcmp(axis, "smaller") && strcmp(axis, "larger"))
         return fail(c, n, IC_ERR_INVALID_ARG, "unknown fovAxis; use x, y, diagonal, smaller or larger", NULL);
     cam->fov_y_deg = 2.0f * atanf(t) * 180.0f / IC_PI;
-    cam->eye = apply_point(m, v3s(0.0f));
-    cam->target = v3_add(cam->eye, apply_dir(m, v3(0.0f, 0.0f, 1.0f)));
-    cam->up = apply_dir(m, v3(0.0f, 1.0f, 0.0f));
+    cam->eye = ic_xform_point(m, v3s(0.0f));
+    cam->target = v3_add(cam->eye, ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f)));
+    cam->up = ic_xform_dir(m, v3(0.0f, 1.0f, 0.0f));
     if (spp >= 1.0f && spp <= (float)IC_MAX_SPP)
         c->b->scene->settings.spp = (int)spp;
     return IC_OK;
@@ -793,7 +781,7 @@ static ic_result parse_emitter(mts_ctx *c, const xmlNode *n)
     if (r != IC_OK || !type)
         return r != IC_OK ? r : fail(c, n, IC_ERR_PARSE, "<emitter> needs a type", NULL);
     if (!strcmp(type, "point") || !strcmp(type, "spot")) {
-        ic_vec3 pos = apply_point(m, v3s(0.0f)), intensity;
+        ic_vec3 pos = ic_xform_point(m, v3s(0.0f)), intensity;
         xmlNode *pk = child_named(c, n, "point", "position");
         if (pk && (r = vec_attrs(c, pk, 0.0f, &pos)) != IC_OK)
             return r;
@@ -810,7 +798,7 @@ static ic_result parse_emitter(mts_ctx *c, const xmlNode *n)
         if (!(cutoff > 0.0f && cutoff <= 90.0f && beam >= 0.0f && beam <= cutoff))
             return fail(c, n, IC_ERR_INVALID_ARG, "spot: need 0 < beamWidth <= cutoffAngle <= 90 degrees", NULL);
         warn_once(c, n, "<emitter type=\"spot\">", "falls off between beamWidth and cutoffAngle as t² (glTF's curve)");
-        ic_spot_cone cone = {apply_dir(m, v3(0.0f, 0.0f, 1.0f)), cosf(beam * IC_PI / 180.0f),
+        ic_spot_cone cone = {ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f)), cosf(beam * IC_PI / 180.0f),
                              cosf(cutoff * IC_PI / 180.0f)};
         if (cone.cos_inner <= cone.cos_outer)
             cone.cos_inner = cone.cos_outer + 1e-6f;
@@ -823,7 +811,7 @@ static ic_result parse_emitter(mts_ctx *c, const xmlNode *n)
         return color_param(c, n, "radiance", v3s(1.0f), &s->env.radiance, NULL);
     }
     if (!strcmp(type, "directional")) {
-        ic_vec3 d = apply_dir(m, v3(0.0f, 0.0f, 1.0f));
+        ic_vec3 d = ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f));
         xmlNode *dk = child_named(c, n, "vector", "direction");
         if (dk && (r = vec_attrs(c, dk, 0.0f, &d)) != IC_OK)
             return r;

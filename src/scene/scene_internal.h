@@ -61,6 +61,18 @@ static inline size_t ic_scene_max_mesh_elements(const ic_scene_load_options *opt
  * taking its pixels (img is zeroed); *index gets its index. */
 ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img, const char *owner, int32_t *index,
                                ic_error *err);
+/* A point and a direction (normalised) through a row-major 4x4 transform (scene files' transforms). */
+static inline ic_vec3 ic_xform_point(const float m[16], ic_vec3 p)
+{
+    return v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+              m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+static inline ic_vec3 ic_xform_dir(const float m[16], ic_vec3 d)
+{
+    return v3_norm(v3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                      m[8] * d.x + m[9] * d.y + m[10] * d.z));
+}
+
 /* Appends one line to the scene's warnings (ic_scene_warnings). */
 void ic_scene_warn(ic_scene *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Appends a material of its own (source names the file it comes from, for messages); *index gets its index. */
