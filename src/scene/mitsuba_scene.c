@@ -193,12 +193,11 @@ static ic_result color_param(mts_ctx *c, const xmlNode *n, const char *name, ic_
 {
     *out = fallback;
     xmlNode *k = child_named(c, n, NULL, name);
-    if (!k && texture) { /* a reference to a texture declared at the top */
-        for (xmlNode *r = n->children; r; r = r->next) {
-            const char *nm = is_element(r, "ref") ? attr(c, r, "name") : NULL;
-            if (nm && !strcmp(nm, name) && !k)
-                k = (xmlNode *)find_by_id(c, "texture", attr(c, r, "id"));
-        }
+    if (is_element(k, "ref")) { /* a texture declared at the top, by id */
+        xmlNode *t = (xmlNode *)find_by_id(c, "texture", attr(c, k, "id"));
+        if (!t)
+            return fail(c, k, IC_ERR_PARSE, "<ref> to an unknown texture id for ", name);
+        k = t;
     }
     if (!k)
         return IC_OK;
