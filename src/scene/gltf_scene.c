@@ -32,6 +32,7 @@ typedef struct gltf_walk {
     int has_camera;
     float aspect;              /* the chosen camera's aspectRatio, 0 if none */
     int light_count, sun_count;
+    uint8_t *visited;          /* per node: walked already (a node has one parent in glTF) */
     ic_vec3 centre;            /* of the meshes' bounds, for distant lights */
     float radius;
     ic_error *err;
@@ -210,8 +211,12 @@ static ic_result walk_node(gltf_walk *w, int index, const float parent[16], int 
     if (!node)
         return ic_error_set(w->err, IC_ERR_PARSE, "%s: node %d does not exist; fix the file", w->path, index);
     if (depth >= MAX_NODE_DEPTH)
-        return ic_error_set(w->err, IC_ERR_PARSE, "%s: the node hierarchy is deeper than %d or has a cycle; fix the file",
-                            w->path, MAX_NODE_DEPTH);
+        return ic_error_set(w->err, IC_ERR_PARSE, "%s: the node hierarchy is deeper than %d; fix the file", w->path,
+                            MAX_NODE_DEPTH);
+    if (w->visited[index]++)
+        return ic_error_set(w->err, IC_ERR_PARSE,
+                            "%s: node %d is reached twice (two parents, or a cycle); glTF nodes form trees, fix the file",
+                            w->path, index);
     float local[16], m[16];
     node_local(node, local);
     mat_mul(parent, local, m);
@@ -248,19 +253,22 @@ static ic_result walk_roots(gltf_walk *w, const cJSON *root)
         return r;
     }
     int count = cJSON_GetArraySize(w->nodes);
-    for (int i = 0; i < count && r == IC_OK; ++i) {
-        int is_child = 0;
-        const cJSON *node, *c;
-        cJSON_ArrayForEach(node, w->nodes)
+    uint8_t *is_child = calloc((size_t)count + 1, 1);
+    if (!is_child)
+        return ic_error_set(w->err, IC_ERR_OOM, "%s: out of memory", w->path);
+    const cJSON *node, *c;
+    cJSON_ArrayForEach(node, w->nodes)
+    {
+        cJSON_ArrayForEach(c, cJSON_GetObjectItemCaseSensitive(node, "children"))
         {
-            cJSON_ArrayForEach(c, cJSON_GetObjectItemCaseSensitive(node, "children"))
-            {
-                is_child |= cJSON_IsNumber(c) && c->valueint == i;
-            }
+            if (cJSON_IsNumber(c) && c->valueint >= 0 && c->valueint < count)
+                is_child[c->valueint] = 1;
         }
-        if (!is_child)
-            r = walk_node(w, i, identity, 0);
     }
+    for (int i = 0; i < count && r == IC_OK; ++i)
+        if (!is_child[i])
+            r = walk_node(w, i, identity, 0);
+    free(is_child);
     return r;
 }
 
@@ -299,7 +307,9 @@ ic_result ic_gltf_read_scene(ic_scene_builder *b, const char *path, const char *
     }
     w.centre = s->vertex_count ? v3_scale(v3_add(lo, hi), 0.5f) : v3s(0.0f);
     w.radius = s->vertex_count ? fmaxf(0.5f * v3_len(v3_sub(hi, lo)), 1e-3f) : 1.0f;
-    ic_result r = walk_roots(&w, root);
+    w.visited = calloc((size_t)cJSON_GetArraySize(w.nodes) + 1, 1);
+    ic_result r = w.visited ? walk_roots(&w, root) : ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    free(w.visited);
     cJSON_Delete(root);
     if (r != IC_OK)
         return r;

@@ -629,10 +629,14 @@ static ic_result shape_material(mts_ctx *c, const xmlNode *n, ic_material *m, in
 static ic_result primitive(mts_ctx *c, const xmlNode *n, const char *type, uint32_t material, const float m[16],
                            int flip, const char *where)
 {
-    enum { SEG = 64, RINGS = 32 };
-    static ic_vec3 p[(RINGS + 1) * (SEG + 1)], nn[(RINGS + 1) * (SEG + 1)];
-    static uint32_t tri[RINGS * SEG * 6];
-    uint32_t nv = 0, nt = 0;
+    enum { SEG = 64, RINGS = 32, MAXV = (RINGS + 1) * (SEG + 1) };
+    ic_vec3 *p = malloc(sizeof *p * MAXV * 2), *nn = p ? p + MAXV : NULL;
+    uint32_t *tri = malloc(sizeof *tri * RINGS * SEG * 6), nv = 0, nt = 0;
+    if (!p || !tri) {
+        free(p);
+        free(tri);
+        return fail(c, n, IC_ERR_OOM, "out of memory for a shape", NULL);
+    }
     const ic_vec3 *normals = NULL;
     if (!strcmp(type, "rectangle")) {
         static const float q[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
@@ -676,8 +680,11 @@ static ic_result primitive(mts_ctx *c, const xmlNode *n, const char *type, uint3
         ic_result r = ck ? vec_attrs(c, ck, 0.0f, &centre) : IC_OK;
         if (r == IC_OK)
             r = float_param(c, n, "radius", 1.0f, &radius);
-        if (r != IC_OK)
+        if (r != IC_OK) {
+            free(p);
+            free(tri);
             return r;
+        }
         for (int j = 0; j <= RINGS; ++j)
             for (int i = 0; i <= SEG; ++i) {
                 float th = IC_PI * j / RINGS, ph = 2.0f * IC_PI * i / SEG;
@@ -703,7 +710,10 @@ static ic_result primitive(mts_ctx *c, const xmlNode *n, const char *type, uint3
     if (flip && normals)
         for (uint32_t i = 0; i < nv; ++i)
             nn[i] = v3_neg(nn[i]);
-    return ic_scene_append_triangles(c->b, p, normals, nv, tri, nt, material, m, where, c->err);
+    ic_result r = ic_scene_append_triangles(c->b, p, normals, nv, tri, nt, material, m, where, c->err);
+    free(p);
+    free(tri);
+    return r;
 }
 
 static ic_result parse_shape(mts_ctx *c, const xmlNode *n)
