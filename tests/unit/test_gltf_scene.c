@@ -86,12 +86,13 @@ static void test_camera(void)
     snprintf(nodes, sizeof nodes,
              "{\"name\": \"rig\", \"translation\": [1, 0, 0], \"children\": [2]},\n"
              "{\"name\": \"cam\", \"camera\": 0, \"translation\": [-1, %g, 0], " DOWN_ROTATION "},\n"
-             "{\"name\": \"side\", \"camera\": 1, \"translation\": [0, 1, 5]}",
+             "{\"name\": \"side\", \"camera\": 1, \"translation\": [0, 1, 5]},\n"
+             "{\"name\": \"mat\", \"camera\": 1, \"matrix\": [0, 0, -1, 0, 0, 1, 0, 0, 1, 0, 0, 0, 2, 3, 7, 1]}",
              (double)H);
     const char *cams = "{\"type\": \"perspective\", \"name\": \"down\", \"perspective\": {\"yfov\": 0.17453293, "
                        "\"aspectRatio\": 2.0, \"znear\": 0.01}},\n"
                        "{\"type\": \"perspective\", \"name\": \"sidecam\", \"perspective\": {\"yfov\": 0.5, \"znear\": 0.01}}";
-    const char *path = write_gltf("cameras", nodes, "1, 3", cams, "", grey);
+    const char *path = write_gltf("cameras", nodes, "1, 3, 4", cams, "", grey);
     ic_scene *s = load(path, NULL, 0);
     CHECK(s != NULL, "glTF with cameras loads");
     if (s) {
@@ -116,6 +117,16 @@ static void test_camera(void)
     ic_scene_free(s);
     s = load(path, "side", 0);
     CHECK(s && fabsf(s->camera.eye.z - 5.0f) < 1e-5f, "--camera by the node's name");
+    ic_scene_free(s);
+    /* a column-major matrix: a turn of 90° about +y (−Z goes to −X) and a move to (2, 3, 7) */
+    s = load(path, "mat", 0);
+    if (s) {
+        ic_vec3 d = v3_norm(v3_sub(s->camera.target, s->camera.eye));
+        CHECK(fabsf(s->camera.eye.x - 2.0f) < 1e-5f && fabsf(s->camera.eye.y - 3.0f) < 1e-5f &&
+                  fabsf(s->camera.eye.z - 7.0f) < 1e-5f && d.x < -0.9999f,
+              "a node's matrix read by columns: eye %g %g %g, view %g %g %g", s->camera.eye.x, s->camera.eye.y,
+              s->camera.eye.z, d.x, d.y, d.z);
+    }
     ic_scene_free(s);
     ic_scene_load_options lo = {0};
     lo.camera = "nosuch";
@@ -217,6 +228,19 @@ static void test_spot_and_directional(void)
         CHECK_NEAR(s->point_lights[1].intensity.y / (dist * dist), 2.0, 2e-3, "its irradiance at the centre");
         CHECK(ic_spot_falloff(&s->point_spots[1], v3(0, 0, -1)) == 1.0f, "a point light has no falloff");
     }
+    ic_scene_free(s);
+}
+
+/* A node with two parents is refused (glTF nodes form trees; walking it twice could repeat without end). */
+static void test_two_parents(void)
+{
+    const char *path = write_gltf("two_parents", "{\"children\": [3]}, {\"children\": [3]}, {\"name\": \"leaf\"}",
+                                  "1, 2", "", "", grey);
+    ic_scene_load_options lo = {0};
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    CHECK(ic_scene_load(path, &lo, &s, &err) == IC_ERR_PARSE && strstr(err.message, "node 3"),
+          "a node reached twice is an error naming it: %s", err.message);
     ic_scene_free(s);
 }
 
@@ -326,5 +350,6 @@ int main(void)
     test_point_light();
     test_spot_and_directional();
     test_metal();
+    test_two_parents();
     TEST_MAIN_END();
 }
