@@ -310,7 +310,7 @@ int main(void)
     /* overrides: unknown material name, unknown type */
     expect_error(SCENES "unknown_material.json", NULL, IC_ERR_INVALID_ARG, "unknown_material.json:5:", "'marble'",
                  "'grey'");
-    expect_error(SCENES "bad_material_type.json", NULL, IC_ERR_INVALID_ARG, "bad_material_type.json:6:", "'plastic'",
+    expect_error(SCENES "bad_material_type.json", NULL, IC_ERR_INVALID_ARG, "bad_material_type.json:6:", "'velvet'",
                  "diffuse");
     /* camera: negative and zero resolution, fov out of (0, 180) */
     expect_error(SCENES "bad_resolution.json", NULL, IC_ERR_INVALID_ARG, "bad_resolution.json:6:", "'height' is -480",
