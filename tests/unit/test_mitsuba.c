@@ -148,9 +148,10 @@ static void test_materials_and_warnings(void)
     const char *xml =
         "<scene version=\"0.6.0\">\n"
         "  <default name=\"a\" value=\"0.3\"/>\n"
+        "  <default name=\"alpha\" value=\"0.7\"/>\n"
         "  <bsdf type=\"roughconductor\" id=\"gold\"><string name=\"material\" value=\"Au\"/>"
         "<float name=\"alpha\" value=\"$a\"/></bsdf>\n"
-        "  <bsdf type=\"twosided\" id=\"paint\"><bsdf type=\"roughplastic\"><float name=\"intIOR\" value=\"1.6\"/>"
+        "  <bsdf type=\"twosided\" id=\"paint\"><bsdf type=\"roughplastic\"><float name=\"intIOR\" value=\"1.6\"/><float name=\"alpha\" value=\"$alpha\"/>"
         "<rgb name=\"diffuseReflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf></bsdf>\n"
         "  <shape type=\"sphere\"><point name=\"center\" x=\"1\" y=\"2\" z=\"3\"/><float name=\"radius\" value=\"0.5\"/>"
         "<ref id=\"gold\"/></shape>\n"
@@ -174,12 +175,13 @@ static void test_materials_and_warnings(void)
         ic_vec3 p = s->positions[s->triangles[3 * t]];
         if (m->type == IC_MAT_CONDUCTOR && !seen[0]++) {
             CHECK(fabsf(m->alpha - 0.3f) < 1e-6f && fabsf(m->k.x - 3.98316f / 1.000277f) < 1e-4f,
-                  "gold by name (relative to air), alpha from $a: %g %g", m->alpha, m->k.x);
+                  "gold by name (relative to air), alpha from $a (not the start of $alpha): %g %g", m->alpha, m->k.x);
         } else if (m->type == IC_MAT_CONDUCTOR) {
             float d = v3_len(v3_sub(p, v3(1, 2, 3)));
             seen[1] |= fabsf(d - 0.5f) > 1e-4f; /* every sphere vertex on the sphere */
         } else if (m->type == IC_MAT_PLASTIC && !seen[2]++) {
-            CHECK(fabsf(m->ior - 1.6f / 1.000277f) < 1e-4f && m->kd.z == 0.6f, "twosided roughplastic by reference");
+            CHECK(fabsf(m->ior - 1.6f / 1.000277f) < 1e-4f && m->kd.z == 0.6f && fabsf(m->alpha - 0.7f) < 1e-6f,
+                  "twosided roughplastic by reference, alpha from $alpha (not $a followed by 'lpha'): %g", m->alpha);
             CHECK(p.x >= 8.0f - 1e-4f && p.x <= 12.0f + 1e-4f, "cube scaled by 2, then moved by 10: x = %g", p.x);
         } else if (m->type == IC_MAT_GLASS && !seen[3]++) {
             CHECK(fabsf(m->ior - 1.33f / 1.000277f) < 1e-4f && m->emission.x == 3.0f, "dielectric with an area emitter");
@@ -189,7 +191,7 @@ static void test_materials_and_warnings(void)
     const char *w = ic_scene_warnings(s);
     const char *bump = strstr(w, "bumpmap");
     CHECK(bump && !strstr(bump + 1, "bumpmap"), "one warning for the two bump maps: %s", w);
-    CHECK(strstr(w, "mts_materials.xml:10:") && strstr(w, "hair"),
+    CHECK(strstr(w, "mts_materials.xml:11:") && strstr(w, "hair"),
           "the unsupported shape named with file:line: %s", w);
     ic_scene_free(s);
 
