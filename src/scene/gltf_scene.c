@@ -61,20 +61,6 @@ static int numbers(const cJSON *obj, const char *key, float *out, int n)
     return 1;
 }
 
-/* out = a·b, row-major 4×4. */
-static void mat_mul(const float a[16], const float b[16], float out[16])
-{
-    float r[16];
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) {
-            float s = 0.0f;
-            for (int k = 0; k < 4; ++k)
-                s += a[i * 4 + k] * b[k * 4 + j];
-            r[i * 4 + j] = s;
-        }
-    memcpy(out, r, sizeof r);
-}
-
 /* A node's local transform, row-major: its matrix (glTF stores it by columns), or T·R·S (rotation a unit
  * quaternion x, y, z, w). */
 static void node_local(const cJSON *node, float m[16])
@@ -219,7 +205,7 @@ static ic_result walk_node(gltf_walk *w, int index, const float parent[16], int 
                             w->path, index);
     float local[16], m[16];
     node_local(node, local);
-    mat_mul(parent, local, m);
+    ic_mat4_mul(parent, local, m);
     ic_result r = take_camera(w, node, index, m);
     if (r == IC_OK)
         r = take_light(w, node, index, m);

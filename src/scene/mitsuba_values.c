@@ -218,26 +218,6 @@ ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec
 
 /* ---- transforms (row-major 4×4; each operation applies after the ones before it) ---- */
 
-static void mat_identity(float m[16])
-{
-    memset(m, 0, sizeof(float) * 16);
-    m[0] = m[5] = m[10] = m[15] = 1.0f;
-}
-
-/* m = a·m */
-static void mat_premul(const float a[16], float m[16])
-{
-    float r[16];
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) {
-            float s = 0.0f;
-            for (int k = 0; k < 4; ++k)
-                s += a[i * 4 + k] * m[k * 4 + j];
-            r[i * 4 + j] = s;
-        }
-    memcpy(m, r, sizeof r);
-}
-
 ic_result ic_mts_vec(ic_mts_ctx *c, const xmlNode *k, float fallback, ic_vec3 *out)
 {
     const char *value = ic_mts_attr(c, k, "value");
@@ -270,12 +250,12 @@ static ic_result point3(ic_mts_ctx *c, const xmlNode *k, const char *key, ic_vec
 
 static ic_result parse_transform(ic_mts_ctx *c, const xmlNode *t, float m[16])
 {
-    mat_identity(m);
+    ic_mat4_identity(m);
     for (xmlNode *k = t->children; k; k = k->next) {
         if (!ic_mts_is_element(k, NULL))
             continue;
         float a[16];
-        mat_identity(a);
+        ic_mat4_identity(a);
         ic_result r = IC_OK;
         ic_vec3 v;
         if (ic_mts_is_element(k, "translate")) {
@@ -331,7 +311,7 @@ static ic_result parse_transform(ic_mts_ctx *c, const xmlNode *t, float m[16])
         }
         if (r != IC_OK)
             return r;
-        mat_premul(a, m);
+        ic_mat4_mul(a, m, m);
     }
     return IC_OK;
 }
@@ -342,7 +322,7 @@ ic_result ic_mts_to_world(ic_mts_ctx *c, const xmlNode *n, float m[16])
     if (!t)
         t = ic_mts_child(c, n, "transform", "to_world");
     if (!t) {
-        mat_identity(m);
+        ic_mat4_identity(m);
         return IC_OK;
     }
     return parse_transform(c, t, m);
