@@ -321,7 +321,7 @@ int main(void)
     /* unknown keys list the valid ones; unknown light type */
     expect_error(SCENES "unknown_key.json", NULL, IC_ERR_PARSE, "unknown_key.json:6:", "'samples'",
                  "valid keys: spp, max_depth, seed, exposure");
-    expect_error(SCENES "bad_light.json", NULL, IC_ERR_INVALID_ARG, "bad_light.json:5:", "'spot'", NULL);
+    expect_error(SCENES "bad_light.json", NULL, IC_ERR_INVALID_ARG, "bad_light.json:5:", "'laser'", NULL);
     expect_error(SCENES "env_missing.json", NULL, IC_ERR_IO, "env_missing.json:3:", "no-such-sky.exr", NULL);
     /* files and options */
     expect_error(SCENES "no-such-scene.json", NULL, IC_ERR_IO, "no-such-scene.json", "check the path", NULL);
