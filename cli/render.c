@@ -213,6 +213,12 @@ int ic_cli_render(int argc, char **argv)
         return 1;
     }
     t_load = now_seconds() - t_load;
+    /* what the loader approximated or left out (a Mitsuba scene's unsupported elements), one line each */
+    for (const char *w = ic_scene_warnings(scene); *w;) {
+        size_t len = strcspn(w, "\n");
+        fprintf(stderr, "irrcache render: warning: %.*s\n", (int)len, w);
+        w += len + (w[len] == '\n');
+    }
     if (ic_scene_light_count(scene) == 0)
         fprintf(stderr, "irrcache render: warning: %s has no light (no emitting triangle, light or environment), "
                         "so the image will be black; add an emitter, a light or an environment\n", a.scene);

@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages irrcache needs, only those missing (safe to re-run).
 set -euo pipefail
 # clang and libclang-rt-dev (libFuzzer and the sanitizer runtimes): the fuzz stage of scripts/test.sh.
-pkgs=(build-essential cmake pkg-config libembree-dev libassimp-dev libcjson-dev libopenexr-dev libstb-dev zlib1g-dev python3
+pkgs=(build-essential cmake pkg-config libembree-dev libassimp-dev libcjson-dev libopenexr-dev libstb-dev zlib1g-dev libxml2-dev python3
       clang libclang-rt-dev)
 missing=()
 for p in "${pkgs[@]}"; do

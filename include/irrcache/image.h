@@ -41,6 +41,10 @@ ic_result ic_image_read(const char *path, ic_image *out, ic_error *err);
  * anything is allocated for it (0: no limit but the library's own); the message ends with `raise`, what
  * to do ("raise --max-texture-pixels"; NULL: "use a smaller image"). */
 ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err);
+/* Decodes a PNG or JPEG image held in memory (an image embedded in another file; name labels it in
+ * messages), with the pixel limit of ic_image_read_max. */
+ic_result ic_image_decode_memory(const void *data, size_t size, const char *name, size_t max_pixels, const char *raise,
+                                 ic_image *out, ic_error *err);
 /* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. */
 ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
 /* Writes width×height 8-bit RGB bytes (row-major, top row first) as a PNG, as given (no curve); atomic. */

@@ -41,6 +41,8 @@ typedef struct ic_scene_load_options {
     int allow_outside_paths; /* 1: files the scene names (meshes, MTL files, glTF buffers, textures, maps) may
                               lie anywhere; 0: only inside the scene file's folder tree and the shared scenes
                               folder (after symbolic links are resolved) */
+    const char *camera;    /* a glTF scene: the name (a node's or a camera's) of the camera to render from
+                              (NULL: the first perspective camera); any other scene refuses a name */
 } ic_scene_load_options;
 
 /* Loads a JSON scene file or a bare mesh (.obj .gltf .glb .ply); on failure *out is NULL and err
@@ -241,6 +243,9 @@ float ic_scene_exposure(const ic_scene *scene);
 /* Light sources of a loaded scene that emit something: emitting triangles, point lights, the sun and the
  * environment (one each). 0 means every image of the scene is black (a caller may warn). */
 unsigned ic_scene_light_count(const ic_scene *scene);
+/* What loading approximated or left out, one line per kind ("scene.xml:12: ... is not supported; ..."),
+ * "" if nothing (a Mitsuba scene's unsupported elements). Owned by the scene. */
+const char *ic_scene_warnings(const ic_scene *scene);
 
 #ifdef __cplusplus
 }

@@ -77,6 +77,24 @@ ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *rai
                         path);
 }
 
+ic_result ic_image_decode_memory(const void *data, size_t size, const char *name, size_t max_pixels, const char *raise,
+                                 ic_image *out, ic_error *err)
+{
+    const ic_image_limit limit = {max_pixels, raise};
+    if (!out)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_image_decode_memory: no output image given");
+    memset(out, 0, sizeof *out);
+    const unsigned char *m = data;
+    if (!name)
+        name = "(image in memory)";
+    if (!m || size == 0)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: the image is empty", name);
+    if ((size >= 4 && m[0] == 0x89 && m[1] == 'P' && m[2] == 'N' && m[3] == 'G') ||
+        (size >= 3 && m[0] == 0xff && m[1] == 0xd8 && m[2] == 0xff))
+        return ic_image_decode_stb(m, size, name, &limit, out, err);
+    return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: an embedded image must be PNG or JPEG; convert it", name);
+}
+
 ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err)
 {
     static const ic_image_write_options defaults = {0};

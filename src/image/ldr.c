@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -74,21 +75,16 @@ static int jpeg_huffman_ok(const unsigned char *b, size_t n)
     return 1;
 }
 
-/* Reads a JPEG file whole (for the Huffman check); NULL for any other file, or if it cannot be read. */
-static unsigned char *read_jpeg(const char *path, size_t *n)
+/* Reads a file whole; NULL if it cannot be read or does not fit stb_image's int length. */
+static unsigned char *read_whole(const char *path, size_t *n)
 {
     *n = 0;
     FILE *f = fopen(path, "rb");
     if (!f)
         return NULL;
-    unsigned char first, *buf = NULL;
-    /* Any file that starts with 0xFF: SOI may follow fill bytes (jpeg_huffman_ok tells JPEG from not). */
-    if (fread(&first, 1, 1, f) != 1 || first != 0xFF) {
-        fclose(f);
-        return NULL;
-    }
+    unsigned char *buf = NULL;
     long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
-    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0 && (buf = malloc((size_t)size + 1)) != NULL &&
+    if (size >= 0 && size < INT_MAX && fseek(f, 0, SEEK_SET) == 0 && (buf = malloc((size_t)size + 1)) != NULL &&
         fread(buf, 1, (size_t)size, f) != (size_t)size) {
         free(buf);
         buf = NULL;
@@ -102,35 +98,46 @@ ic_result ic_image_read_stb(const char *path, const ic_image_limit *lim, ic_imag
 {
     memset(out, 0, sizeof *out);
     size_t n = 0;
-    unsigned char *bytes = read_jpeg(path, &n);
-    int huffman_ok = !bytes || jpeg_huffman_ok(bytes, n);
+    unsigned char *bytes = read_whole(path, &n);
+    if (!bytes)
+        return ic_error_set(err, IC_ERR_IO, "%s: cannot read the image; check the file and its permissions", path);
+    ic_result r = ic_image_decode_stb(bytes, n, path, lim, out, err);
     free(bytes);
-    if (!huffman_ok)
+    return r;
+}
+
+ic_result ic_image_decode_stb(const unsigned char *bytes, size_t n, const char *name, const ic_image_limit *lim,
+                              ic_image *out, ic_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (n >= INT_MAX)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: image of %zu bytes is too large to decode", name, n);
+    if (!jpeg_huffman_ok(bytes, n))
         return ic_error_set(err, IC_ERR_PARSE, "%s: a JPEG Huffman table declares more than 256 codes or overruns "
-                            "its segment; re-save the image with another program", path);
-    int width = 0, height = 0, channels = 0;
-    if (!stbi_info(path, &width, &height, &channels))
-        return decode_failed(path, err);
+                            "its segment; re-save the image with another program", name);
+    int width = 0, height = 0, channels = 0, len = (int)n;
+    if (!stbi_info_from_memory(bytes, len, &width, &height, &channels))
+        return decode_failed(name, err);
     /* Validate the size before stb allocates for it. */
-    ic_result r = ic_image_create_for_file(path, out, width, height, lim, err);
+    ic_result r = ic_image_create_for_file(name, out, width, height, lim, err);
     if (r != IC_OK)
         return r;
     const size_t count = (size_t)width * (size_t)height * 3;
 
-    if (stbi_is_16_bit(path)) {
-        unsigned short *pixels = stbi_load_16(path, &width, &height, &channels, 3);
+    if (stbi_is_16_bit_from_memory(bytes, len)) {
+        unsigned short *pixels = stbi_load_16_from_memory(bytes, len, &width, &height, &channels, 3);
         if (!pixels) {
             ic_image_free(out);
-            return decode_failed(path, err);
+            return decode_failed(name, err);
         }
         for (size_t i = 0; i < count; ++i)
             out->rgb[i] = ic_srgb_to_linear((float)pixels[i] / 65535.0f);
         stbi_image_free(pixels);
     } else {
-        unsigned char *pixels = stbi_load(path, &width, &height, &channels, 3);
+        unsigned char *pixels = stbi_load_from_memory(bytes, len, &width, &height, &channels, 3);
         if (!pixels) {
             ic_image_free(out);
-            return decode_failed(path, err);
+            return decode_failed(name, err);
         }
         float to_linear[256];
         for (int v = 0; v < 256; ++v)

@@ -1,5 +1,8 @@
-/* bsdf.c — Lambert, normalized modified Phong, mirror, smooth dielectric (bsdf.h). */
+/* bsdf.c — Lambert, normalized modified Phong, mirror, smooth dielectric, and the dispatch to the rough
+ * microfacet materials (bsdf.h). */
 #include "bsdf.h"
+
+#include "bsdf_microfacet.h"
 
 #include "core/sampling.h"
 
@@ -14,13 +17,28 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
     b->ng = s->ng;
     ic_vec3 n = s->ns;
     /* Opaque materials shade on the side the viewer is on. */
-    if (b->type != IC_MAT_GLASS && v3_dot(wo, s->ng) < 0.0f) {
+    if (b->type != IC_MAT_GLASS && b->type != IC_MAT_ROUGH_GLASS && v3_dot(wo, s->ng) < 0.0f) {
         n = v3_neg(n);
         b->ng = v3_neg(s->ng);
     }
     b->frame = ic_frame_from_normal(n);
     float ld = v3_lum(b->kd), ls = v3_lum(b->ks);
     b->p_diffuse = (b->type == IC_MAT_GLOSSY) ? (ld + ls > 0.0f ? ld / (ld + ls) : 1.0f) : 1.0f;
+    if (b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC || b->type == IC_MAT_ROUGH_GLASS)
+        ic_mf_init(b, m, fmaxf(v3_dot(wo, n), 0.0f), ic_scene_texture_tint(scene, s));
+}
+
+static int is_microfacet(const ic_bsdf *b) { return b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC; }
+
+ic_vec3 ic_bsdf_glossy_local(const ic_bsdf *b, ic_vec3 wi_local, ic_vec3 wo_local)
+{
+    if (!ic_bsdf_has_glossy(b) || wi_local.z <= 0.0f || wo_local.z <= 0.0f)
+        return v3s(0.0f);
+    if (is_microfacet(b))
+        return ic_mf_glossy(b, wo_local, wi_local);
+    ic_vec3 r = v3(-wo_local.x, -wo_local.y, wo_local.z);
+    float c = fmaxf(0.0f, v3_dot(r, wi_local));
+    return v3_scale(b->ks, (b->ns + 2.0f) / (2.0f * IC_PI) * powf(c, b->ns));
 }
 
 static float phong_cos(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
@@ -35,6 +53,11 @@ void ic_bsdf_eval_lobes(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *diffu
     if (!ic_bsdf_has_smooth(b) || v3_dot(wo, b->frame.n) <= 0.0f || v3_dot(wi, b->frame.n) <= 0.0f ||
         v3_dot(wi, b->ng) <= 0.0f)
         return;
+    if (is_microfacet(b)) {
+        *diffuse = v3_scale(b->kd, IC_INV_PI * ic_bsdf_diffuse_factor(b, v3_dot(wi, b->frame.n)));
+        *glossy = ic_mf_glossy(b, ic_frame_to_local(&b->frame, wo), ic_frame_to_local(&b->frame, wi));
+        return;
+    }
     *diffuse = v3_scale(b->kd, IC_INV_PI);
     if (b->type == IC_MAT_GLOSSY)
         *glossy = v3_scale(b->ks, (b->ns + 2.0f) / (2.0f * IC_PI) * powf(phong_cos(b, wo, wi), b->ns));
@@ -44,7 +67,24 @@ float ic_bsdf_pdf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
     if (!ic_bsdf_has_glossy(b) || v3_dot(wi, b->frame.n) <= 0.0f || v3_dot(wo, b->frame.n) <= 0.0f)
         return 0.0f;
+    if (is_microfacet(b))
+        return ic_mf_pdf_glossy(b, ic_frame_to_local(&b->frame, wo), ic_frame_to_local(&b->frame, wi));
     return (b->ns + 1.0f) / (2.0f * IC_PI) * powf(phong_cos(b, wo, wi), b->ns);
+}
+
+/* The GGX lobe alone, by its visible normals (weight = f_glossy·cos/pdf_glossy). */
+static int sample_microfacet_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_bsdf_sample *out)
+{
+    ic_vec3 wo_l = ic_frame_to_local(&b->frame, wo);
+    ic_vec3 wi_l = ic_mf_sample_glossy(b, wo_l, u1, u2);
+    out->wi = ic_frame_to_world(&b->frame, wi_l);
+    if (wi_l.z <= 0.0f || v3_dot(out->wi, b->ng) <= 0.0f)
+        return 0;
+    out->pdf = ic_mf_pdf_glossy(b, wo_l, wi_l);
+    if (!(out->pdf > 0.0f))
+        return 0;
+    out->weight = v3_scale(ic_mf_glossy(b, wo_l, wi_l), wi_l.z / out->pdf);
+    return !v3_is_black(out->weight);
 }
 
 int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_bsdf_sample *out)
@@ -52,6 +92,8 @@ int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_b
     out->is_specular = 0;
     if (!ic_bsdf_has_glossy(b) || v3_dot(wo, b->frame.n) <= 0.0f)
         return 0;
+    if (is_microfacet(b))
+        return sample_microfacet_glossy(b, wo, u1, u2, out);
     ic_frame rf = ic_frame_from_normal(v3_reflect(wo, b->frame.n));
     out->wi = ic_frame_to_world(&rf, ic_warp_phong_lobe(u1, u2, b->ns));
     float cos_i = v3_dot(out->wi, b->frame.n);
@@ -63,8 +105,21 @@ int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_b
     return out->pdf > 0.0f;
 }
 
+/* The rough glass's wi in the local frame, or 0 if wi crosses the geometric surface on the other side of
+ * the shading normal's (which would leak light). */
+static int rough_glass_local(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *wo_l, ic_vec3 *wi_l)
+{
+    *wo_l = ic_frame_to_local(&b->frame, wo);
+    *wi_l = ic_frame_to_local(&b->frame, wi);
+    return v3_dot(wi, b->ng) * wi_l->z > 0.0f;
+}
+
 ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
+    if (b->type == IC_MAT_ROUGH_GLASS) {
+        ic_vec3 wo_l, wi_l;
+        return rough_glass_local(b, wo, wi, &wo_l, &wi_l) ? v3s(ic_mf_dielectric_f(b, wo_l, wi_l)) : v3s(0.0f);
+    }
     float cos_o = v3_dot(wo, b->frame.n), cos_i = v3_dot(wi, b->frame.n);
     /* Both directions in the upper hemisphere of the shading normal and on the same side of the
      * geometric normal (prevents light leaking through shading-normal interpolation). */
@@ -78,6 +133,12 @@ ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
         float lobe = (b->ns + 2.0f) / (2.0f * IC_PI) * powf(c, b->ns);
         return v3_add(v3_scale(b->kd, IC_INV_PI), v3_scale(b->ks, lobe));
     }
+    case IC_MAT_CONDUCTOR:
+    case IC_MAT_PLASTIC: {
+        ic_vec3 fd, fg;
+        ic_bsdf_eval_lobes(b, wo, wi, &fd, &fg);
+        return v3_add(fd, fg);
+    }
     default:
         return v3s(0.0f);
     }
@@ -85,6 +146,10 @@ ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 
 float ic_bsdf_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
+    if (b->type == IC_MAT_ROUGH_GLASS) {
+        ic_vec3 wo_l, wi_l;
+        return rough_glass_local(b, wo, wi, &wo_l, &wi_l) ? ic_mf_dielectric_pdf(b, wo_l, wi_l) : 0.0f;
+    }
     float cos_i = v3_dot(wi, b->frame.n);
     if (cos_i <= 0.0f || v3_dot(wo, b->frame.n) <= 0.0f)
         return 0.0f;
@@ -97,25 +162,14 @@ float ic_bsdf_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
         float ps = (b->ns + 1.0f) / (2.0f * IC_PI) * powf(c, b->ns);
         return b->p_diffuse * pd + (1.0f - b->p_diffuse) * ps;
     }
+    case IC_MAT_CONDUCTOR:
+    case IC_MAT_PLASTIC: {
+        float ps = ic_mf_pdf_glossy(b, ic_frame_to_local(&b->frame, wo), ic_frame_to_local(&b->frame, wi));
+        return b->p_diffuse * cos_i * IC_INV_PI + (1.0f - b->p_diffuse) * ps;
+    }
     default:
         return 0.0f;
     }
-}
-
-float ic_fresnel_dielectric(float cos_i, float eta)
-{
-    cos_i = ic_clampf(cos_i, -1.0f, 1.0f);
-    if (cos_i < 0.0f) {
-        eta = 1.0f / eta;
-        cos_i = -cos_i;
-    }
-    float sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
-    if (sin2_t >= 1.0f)
-        return 1.0f; /* total internal reflection */
-    float cos_t = sqrtf(1.0f - sin2_t);
-    float rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    float rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    return 0.5f * (rs * rs + rp * rp);
 }
 
 int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u2, ic_bsdf_sample *out)
@@ -155,12 +209,31 @@ int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u
         out->weight = v3s(1.0f);
         return 1;
     }
+    case IC_MAT_CONDUCTOR:
+        return ic_bsdf_sample_glossy(b, wo, u1, u2, out);
+    case IC_MAT_ROUGH_GLASS: {
+        /* followed like the smooth glass (is_specular: no light sampling at the vertex, so what its
+         * sampled direction finds counts fully); the weight is the lobe's f·|cos|/pdf */
+        ic_vec3 wo_l = ic_frame_to_local(&b->frame, wo), wi_l;
+        out->is_specular = 1;
+        if (!ic_mf_dielectric_sample(b, wo_l, u0, u1, u2, &wi_l))
+            return 0;
+        out->wi = ic_frame_to_world(&b->frame, wi_l);
+        out->pdf = ic_bsdf_pdf(b, wo, out->wi);
+        if (!(out->pdf > 0.0f))
+            return 0;
+        out->weight = v3s(ic_mf_dielectric_f(b, wo_l, wi_l) * fabsf(wi_l.z) / out->pdf);
+        return 1;
+    }
     case IC_MAT_DIFFUSE:
-    case IC_MAT_GLOSSY: {
+    case IC_MAT_GLOSSY:
+    case IC_MAT_PLASTIC: {
         if (v3_dot(wo, b->frame.n) <= 0.0f)
             return 0;
         if (u0 < b->p_diffuse) {
             out->wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
+        } else if (b->type == IC_MAT_PLASTIC) {
+            out->wi = ic_frame_to_world(&b->frame, ic_mf_sample_glossy(b, ic_frame_to_local(&b->frame, wo), u1, u2));
         } else {
             ic_vec3 r = v3_reflect(wo, b->frame.n);
             ic_frame rf = ic_frame_from_normal(r);

@@ -3,8 +3,14 @@
  *
  * Lambertian (kd/π), the normalized modified Phong lobe (Lafortune & Willems 1994: ks·(n+2)/(2π)·cos^n α,
  * α between the mirror direction of wo and wi), the ideal mirror and the smooth dielectric (Fresnel
- * reflection/refraction, Schlick-free exact dielectric Fresnel). All directions are world space and
- * point away from the surface; `ns` is the shading normal on the side of wo for opaque materials.
+ * reflection/refraction, Schlick-free exact dielectric Fresnel), and the GGX microfacet rough conductor and
+ * rough plastic (bsdf_microfacet.c). All directions are world space and point away from the surface; `ns`
+ * is the shading normal on the side of wo for opaque materials.
+ *
+ * Every non-delta material splits into the same two lobes, which is how the cache's final render treats
+ * them all alike: a diffuse lobe that is kd/π times a factor of wi whose cosine-weighted mean is 1 (so
+ * kd/π·E is its exact reflection of uniform light; the factor is 1 except for rough plastic), cached, and
+ * a glossy lobe (Phong or GGX) that is sampled.
  */
 #ifndef IC_INTEGRATORS_BSDF_H
 #define IC_INTEGRATORS_BSDF_H
@@ -17,8 +23,12 @@ typedef struct ic_bsdf {
     ic_vec3 kd;            /* diffuse albedo (texture applied) */
     ic_vec3 ks;            /* specular albedo */
     float ns;              /* Phong exponent */
-    float ior;             /* glass */
-    float p_diffuse;       /* probability of sampling the diffuse lobe (glossy) */
+    float ior;             /* glass, plastic's coat */
+    float alpha;           /* GGX roughness (conductor, plastic) */
+    ic_vec3 eta, k;        /* conductor: complex index (k all 0: Schlick from F0 = ks) */
+    const float *coat_albedo; /* plastic: the coat's E(μ) table (borrowed from the material) */
+    float coat_albedo_avg; /* plastic: its cosine-weighted mean */
+    float p_diffuse;       /* probability of sampling the diffuse lobe (glossy, plastic) */
     ic_frame frame;        /* around the shading normal */
     ic_vec3 ng;            /* geometric normal */
 } ic_bsdf;
@@ -33,22 +43,38 @@ typedef struct ic_bsdf_sample {
 /* Sets up the BSDF at surface s seen from direction wo. */
 void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec3 wo);
 /* 1 if the material has a non-delta lobe (light sampling makes sense). */
-static inline int ic_bsdf_has_smooth(const ic_bsdf *b) { return b->type == IC_MAT_DIFFUSE || b->type == IC_MAT_GLOSSY; }
+static inline int ic_bsdf_has_smooth(const ic_bsdf *b)
+{
+    return b->type == IC_MAT_DIFFUSE || b->type == IC_MAT_GLOSSY || b->type == IC_MAT_CONDUCTOR ||
+           b->type == IC_MAT_PLASTIC;
+}
 /* f(wo, wi) of the non-delta lobes (0 for delta materials). */
 ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
 /* Solid-angle pdf of ic_bsdf_sample choosing wi. */
 float ic_bsdf_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
 /* Samples wi; returns 0 if the sample failed (absorbed). */
 int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u2, ic_bsdf_sample *out);
-/* The two non-delta lobes of f(wo, wi) separately: diffuse kd/π and the glossy Phong lobe. */
+/* The two non-delta lobes of f(wo, wi) separately: diffuse (kd/π, times the plastic's coat factor) and
+ * glossy (Phong or GGX). */
 void ic_bsdf_eval_lobes(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *diffuse, ic_vec3 *glossy);
 /* 1 if the material has a glossy lobe. */
-static inline int ic_bsdf_has_glossy(const ic_bsdf *b) { return b->type == IC_MAT_GLOSSY && v3_maxc(b->ks) > 0.0f; }
+static inline int ic_bsdf_has_glossy(const ic_bsdf *b)
+{
+    return (b->type == IC_MAT_GLOSSY || b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC) &&
+           v3_maxc(b->ks) > 0.0f;
+}
 /* Solid-angle pdf of sampling wi from the glossy lobe alone. */
 float ic_bsdf_pdf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
 /* Samples the glossy lobe alone (weight = f_glossy·cos/pdf_glossy); 0 if it fails. */
 int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_bsdf_sample *out);
-/* Exact Fresnel reflectance of a dielectric for cos of the incident angle and eta = n_t / n_i. */
-float ic_fresnel_dielectric(float cos_i, float eta);
+/* The glossy lobe as f(wi, wo) with both directions in the local frame of b->frame (+z the shading
+ * normal): isotropic about the normal, for projections onto a basis of the hemisphere (0 below it). */
+ic_vec3 ic_bsdf_glossy_local(const ic_bsdf *b, ic_vec3 wi_local, ic_vec3 wo_local);
+/* The diffuse lobe's factor of wi (cos θi = cos_i): 1, except for rough plastic's coupling to its coat. */
+static inline float ic_bsdf_diffuse_factor(const ic_bsdf *b, float cos_i)
+{
+    return b->type == IC_MAT_PLASTIC ? (1.0f - ic_coat_albedo(b->coat_albedo, cos_i)) / (1.0f - b->coat_albedo_avg)
+                                     : 1.0f;
+}
 
 #endif

@@ -183,6 +183,8 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
         }
     }
     h = ic_fnv1a64(h, s->point_lights, sizeof *s->point_lights * s->point_light_count);
+    if (s->point_spots)
+        h = ic_fnv1a64(h, s->point_spots, sizeof *s->point_spots * s->point_light_count);
     float env[12] = {(float)s->sun.enabled, s->sun.direction.x, s->sun.direction.y, s->sun.direction.z,
                      s->sun.irradiance.x, s->sun.irradiance.y, s->sun.irradiance.z, (float)s->env.enabled,
                      s->env.radiance.x, s->env.radiance.y, s->env.radiance.z, s->env.rotation_deg};

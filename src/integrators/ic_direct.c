@@ -58,8 +58,8 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_light_selection
     /* An emitter light sampling never picks is a large one: the records carry its light. */
     if (!(pl > 0.0f))
         return v3s(0.0f);
-    /* f_d·cos/p_cos = kd for the cosine-sampled Lambertian lobe. */
-    return v3_scale(v3_mul(b->kd, le), ic_power_heuristic(cos_i * IC_INV_PI, pl));
+    /* f_d·cos/p_cos = kd (times the diffuse factor) for the cosine-sampled diffuse lobe. */
+    return v3_scale(v3_mul(b->kd, le), ic_power_heuristic(cos_i * IC_INV_PI, pl) * ic_bsdf_diffuse_factor(b, cos_i));
 }
 
 /* Direct light for the final render. The environment is in the records and is not sampled here; the

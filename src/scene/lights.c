@@ -284,7 +284,10 @@ static ic_result build_point_lights(ic_scene *s, double *power, ic_error *err)
     double point_power = 0.0;
     s->point_light_cdf[0] = 0.0f;
     for (uint32_t i = 0; i < s->point_light_count; ++i) {
-        point_power += 4.0 * IC_PI * v3_lum(s->point_lights[i].intensity);
+        /* a spot's power: that of a point times the share of the sphere its cone lights (about) */
+        double share = s->point_spots ? fmin(1.0, 0.5 * (1.0 - 0.5 * (s->point_spots[i].cos_inner +
+                                                                     s->point_spots[i].cos_outer))) : 1.0;
+        point_power += 4.0 * IC_PI * v3_lum(s->point_lights[i].intensity) * share;
         s->point_light_cdf[i + 1] = (float)point_power;
     }
     normalise_cdf(s->point_light_cdf, s->point_light_count, point_power);
@@ -464,6 +467,8 @@ static int sample_point(const ic_scene *s, const ic_light_selection *sel, ic_vec
     ls->wi = v3_scale(d, 1.0f / dist);
     ls->dist = dist;
     ls->radiance = v3_scale(l->intensity, 1.0f / dist2);
+    if (s->point_spots)
+        ls->radiance = v3_scale(ls->radiance, ic_spot_falloff(&s->point_spots[i], v3_neg(ls->wi)));
     ls->pdf = sel->point * (s->point_light_cdf[i + 1] - s->point_light_cdf[i]);
     ls->is_delta = 1;
     return ls->pdf > 0.0f;

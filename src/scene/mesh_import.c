@@ -490,32 +490,32 @@ static float *gltf_emissive_strengths(const mesh_source *src, unsigned count)
     return out;
 }
 
+/* glTF's metallic-roughness material on the microfacet models: a metal (metallic ≥ 0.5) is a rough
+ * conductor with F0 = base colour, anything else a rough plastic with base kd = base colour under a coat
+ * of index ior (F0 = 0.04 at the default 1.5); GGX α = roughness² (the glTF specification's appendix B). */
 static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_material *m)
 {
     ic_vec3 base = color_or(am, "$clr.base", color_or(am, "$clr.diffuse", v3s(1.0f)));
     float metal = ic_clampf(float_or(am, "$mat.metallicFactor", 1.0f), 0.0f, 1.0f);
     float rough = ic_clampf(float_or(am, "$mat.roughnessFactor", 1.0f), 0.0f, 1.0f);
-    float alpha = rough * rough;
-    float n = alpha > 0.0f ? 2.0f / (alpha * alpha) - 2.0f : MIRROR_EXPONENT;
-    m->ns = ic_clampf(n, 1.0f, MIRROR_EXPONENT);
-    m->ks = v3_lerp(v3s(0.04f), base, metal);
-    m->kd = v3_scale(base, 1.0f - metal);
-    m->kd = v3(fminf(m->kd.x, 1.0f - m->ks.x), fminf(m->kd.y, 1.0f - m->ks.y), fminf(m->kd.z, 1.0f - m->ks.z));
-    m->kd = clamp_color(m->kd);
+    m->alpha = rough * rough;
+    m->kd = clamp_color(base);
     /* a newer assimp passes the strength on; otherwise use what we read from the file */
     float strength = float_or(am, "$mat.emissiveIntensity", file_strength);
     m->emission = v3_scale(color_or(am, "$clr.emissive", v3s(0.0f)), strength);
     m->two_sided_emission = int_or(am, "$mat.twosided", 0) != 0;
     float transmission = float_or(am, "$mat.transmission.factor", 0.0f);
     float ior = float_or(am, "$mat.refracti", 1.5f);
+    m->ior = ior > 1.0f ? ior : 1.5f;
     if (transmission > 0.0f) {
-        m->type = IC_MAT_GLASS;
-        m->ior = ior > 1.0f ? ior : 1.5f;
+        m->type = m->alpha > 0.0f ? IC_MAT_ROUGH_GLASS : IC_MAT_GLASS;
         m->ks = v3s(1.0f);
-    } else if (metal > 0.5f && m->ns >= MIRROR_EXPONENT) {
-        m->type = IC_MAT_MIRROR;
+    } else if (metal >= 0.5f) {
+        m->type = IC_MAT_CONDUCTOR;
+        m->ks = m->kd;
     } else {
-        m->type = IC_MAT_GLOSSY;
+        m->type = IC_MAT_PLASTIC;
+        m->ks = v3s(1.0f);
     }
 }
 
@@ -547,9 +547,70 @@ static void obj_material_dir(const mesh_source *src, const char *obj_dir, char *
     fclose(fp);
 }
 
+/* The embedded texture a material's texture path names: "*N" (the N-th), or one whose file name is the
+ * path's (aiScene::GetEmbeddedTexture's rule; the C interface has no such call); NULL if none. */
+static const struct aiTexture *find_embedded(const struct aiScene *ai, const char *rel)
+{
+    if (!ai || !ai->mTextures)
+        return NULL;
+    if (rel[0] == '*') {
+        char *end;
+        long i = strtol(rel + 1, &end, 10);
+        return *end == '\0' && end != rel + 1 && i >= 0 && i < (long)ai->mNumTextures ? ai->mTextures[i] : NULL;
+    }
+    const char *base = strrchr(rel, '/') ? strrchr(rel, '/') + 1 : rel;
+    for (unsigned i = 0; i < ai->mNumTextures; ++i) {
+        const char *f = ai->mTextures[i]->mFilename.data, *fb = strrchr(f, '/') ? strrchr(f, '/') + 1 : f;
+        if (f[0] && !strcmp(fb, base))
+            return ai->mTextures[i];
+    }
+    return NULL;
+}
+
+/* A texture held in the mesh file (a .glb's images, a "*N" reference): decoded from memory (PNG or JPEG), or
+ * taken as uncompressed texels; labelled "mesh#name" so that materials sharing it share one texture. */
+static ic_result embedded_texture(ic_scene_builder *b, const struct aiScene *ai, const char *rel, const char *mesh_path,
+                                  const char *owner, int32_t *index, ic_error *err)
+{
+    const struct aiTexture *et = find_embedded(ai, rel);
+    if (!et || !et->pcData)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: embedded texture '%s' is not in the file; fix the file", owner, rel);
+    char label[sizeof b->scene->textures[0].path];
+    snprintf(label, sizeof label, "%.900s#%.100s", mesh_path, rel);
+    ic_scene *s = b->scene;
+    for (uint32_t i = 0; i < s->texture_count; ++i)
+        if (!strcmp(s->textures[i].path, label)) {
+            *index = (int32_t)i;
+            return IC_OK;
+        }
+    ic_image img;
+    ic_error ierr;
+    size_t max_pixels = ic_scene_max_texture_pixels(b->opt);
+    ic_result r;
+    if (et->mHeight == 0) {
+        r = ic_image_decode_memory(et->pcData, et->mWidth, label, max_pixels, IC_SCENE_RAISE_TEXTURE_LIMIT, &img, &ierr);
+    } else if ((size_t)et->mWidth * et->mHeight > max_pixels) {
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: embedded texture '%s' has %ux%u pixels; %s", owner, rel,
+                            et->mWidth, et->mHeight, IC_SCENE_RAISE_TEXTURE_LIMIT);
+    } else if ((r = ic_image_create(&img, (int)et->mWidth, (int)et->mHeight)) == IC_OK) {
+        /* uncompressed texels (B, G, R, A bytes), sRGB like every 8-bit texture */
+        for (size_t i = 0; i < (size_t)et->mWidth * et->mHeight; ++i) {
+            img.rgb[3 * i] = ic_srgb8_to_linear(et->pcData[i].r);
+            img.rgb[3 * i + 1] = ic_srgb8_to_linear(et->pcData[i].g);
+            img.rgb[3 * i + 2] = ic_srgb8_to_linear(et->pcData[i].b);
+        }
+    } else {
+        snprintf(ierr.message, sizeof ierr.message, "out of memory for embedded texture '%.100s'", rel);
+    }
+    if (r != IC_OK)
+        return ic_error_set(err, r, "%s: %s", owner, ierr.message);
+    return ic_scene_texture_add(b, label, &img, owner, index, err);
+}
+
 /* mesh_dir: the mesh's folder; tex_dir: where its materials' texture paths start (an OBJ's MTL folder),
  * tried first, then mesh_dir (exporters that write paths from the OBJ's folder). */
-static ic_result convert_material(ic_scene_builder *b, const struct aiMaterial *am, const float *gltf_strength,
+static ic_result convert_material(ic_scene_builder *b, const struct aiScene *ai, const struct aiMaterial *am,
+                                  const float *gltf_strength,
                                   const char *mesh_path, const char *mesh_dir, const char *tex_dir, ic_material *m,
                                   ic_error *err)
 {
@@ -574,10 +635,8 @@ static ic_result convert_material(ic_scene_builder *b, const struct aiMaterial *
     if (texture_path(am, aiTextureType_BASE_COLOR, rel, sizeof rel) ||
         texture_path(am, aiTextureType_DIFFUSE, rel, sizeof rel)) {
         snprintf(owner, sizeof owner, "%s: material '%s'", mesh_path, m->name);
-        if (rel[0] == '*')
-            return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                                "%s: embedded texture '%s' is not supported; export the textures as separate files",
-                                owner, rel);
+        if (rel[0] == '*' || find_embedded(ai, rel))
+            return embedded_texture(b, ai, rel, mesh_path, owner, &m->kd_texture, err);
         char alt[IC_SCENE_PATH_MAX];
         if (!ic_path_join(tex_dir, rel, full, sizeof full) || !ic_path_join(mesh_dir, rel, alt, sizeof alt))
             return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
@@ -753,6 +812,81 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
     return IC_OK;
 }
 
+ic_result ic_scene_add_material(ic_scene_builder *b, const ic_material *m, const char *source, uint32_t *index,
+                                ic_error *err)
+{
+    ic_scene *s = b->scene;
+    uint32_t n = s->material_count;
+    char *path_copy = malloc(strlen(source) + 1);
+    if (path_copy)
+        memcpy(path_copy, source, strlen(source) + 1);
+    if (!path_copy || !grow((void **)&b->mesh_paths, sizeof *b->mesh_paths, b->mesh_count + 1) ||
+        !grow((void **)&s->materials, sizeof *s->materials, n + 1) ||
+        !grow((void **)&b->material_dropped, sizeof *b->material_dropped, n + 1) ||
+        !grow((void **)&b->material_tris, sizeof *b->material_tris, n + 1) ||
+        !grow((void **)&b->material_mesh, sizeof *b->material_mesh, n + 1)) {
+        free(path_copy);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its materials", source);
+    }
+    b->mesh_paths[b->mesh_count++] = path_copy;
+    s->materials[n] = *m;
+    b->material_dropped[n] = b->material_tris[n] = 0;
+    b->material_mesh[n] = b->mesh_count - 1;
+    s->material_count = n + 1;
+    *index = n;
+    return IC_OK;
+}
+
+ic_result ic_scene_append_triangles(ic_scene_builder *b, const ic_vec3 *p, const ic_vec3 *n, uint32_t vertex_count,
+                                    const uint32_t *tri, uint32_t tri_count, uint32_t material, const float xform[16],
+                                    const char *where, ic_error *err)
+{
+    ic_scene *s = b->scene;
+    if (s->vertex_count + (size_t)vertex_count > UINT32_MAX / 4 || s->triangle_count + (size_t)tri_count > UINT32_MAX / 4)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: too many vertices or triangles; split the scene", where);
+    if (!grow_vertices(s, vertex_count, n != NULL, 0) ||
+        !grow((void **)&s->triangles, sizeof *s->triangles * 3, s->triangle_count + tri_count) ||
+        !grow((void **)&s->triangle_material, sizeof *s->triangle_material, s->triangle_count + tri_count))
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its geometry", where);
+    float nm[9];
+    int flip = normal_matrix(xform, nm) < 0.0f;
+    uint32_t base = s->vertex_count;
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        struct aiVector3D q = {p[v].x, p[v].y, p[v].z};
+        s->positions[base + v] = xform_point(xform, q);
+        if (!(fabsf(s->positions[base + v].x) <= IC_SCENE_MAX_COORD &&
+              fabsf(s->positions[base + v].y) <= IC_SCENE_MAX_COORD &&
+              fabsf(s->positions[base + v].z) <= IC_SCENE_MAX_COORD))
+            return ic_error_set(err, IC_ERR_INVALID_ARG,
+                                "%s: the transform takes a vertex beyond the largest coordinate %g; give a smaller "
+                                "scale or translation",
+                                where, (double)IC_SCENE_MAX_COORD);
+        if (s->normals) {
+            struct aiVector3D nn = n ? (struct aiVector3D){n[v].x, n[v].y, n[v].z} : (struct aiVector3D){0, 0, 0};
+            s->normals[base + v] = n ? xform_normal(nm, nn) : v3s(0.0f);
+        }
+        if (s->uvs)
+            s->uvs[2 * (base + v)] = s->uvs[2 * (base + v) + 1] = 0.0f;
+    }
+    s->vertex_count += vertex_count;
+    for (uint32_t f = 0; f < tri_count; ++f) {
+        uint32_t i0 = base + tri[3 * f], i1 = base + tri[3 * f + (flip ? 2 : 1)], i2 = base + tri[3 * f + (flip ? 1 : 2)];
+        ic_vec3 c = v3_cross(v3_sub(s->positions[i1], s->positions[i0]), v3_sub(s->positions[i2], s->positions[i0]));
+        if (!(v3_len2(c) > 0.0f) || !isfinite(v3_len2(c))) {
+            ++s->dropped_degenerate;
+            ++b->material_dropped[material];
+            continue;
+        }
+        uint32_t t = s->triangle_count++;
+        s->triangles[3 * t] = i0;
+        s->triangles[3 * t + 1] = i1;
+        s->triangles[3 * t + 2] = i2;
+        s->triangle_material[t] = material;
+        ++b->material_tris[material];
+    }
+    return IC_OK;
+}
+
 ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, const char *xform_where,
                          ic_error *err)
 {
@@ -835,7 +969,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         } else {
             float one = 1.0f;
             const float *strength = !is_gltf ? NULL : (strengths ? &strengths[i] : &one);
-            r = convert_material(b, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
+            r = convert_material(b, ai, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
             if (r != IC_OK)
                 goto done;
         }

@@ -13,6 +13,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -247,6 +248,15 @@ ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const cha
                                     &ierr);
     if (r != IC_OK)
         return ic_error_set(err, r, "%s: %s", owner, ierr.message);
+    return ic_scene_texture_add(b, path, &img, owner, index, err);
+}
+
+ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img_in, const char *owner,
+                               int32_t *index, ic_error *err)
+{
+    ic_scene *scene = b->scene;
+    ic_image img = *img_in;
+    memset(img_in, 0, sizeof *img_in);
     ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));
     if (!grown) {
         ic_image_free(&img);
@@ -264,6 +274,54 @@ ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const cha
     else
         t->rgb = img.rgb; /* ownership moves to the scene; released with ic_image_free in ic_scene_free */
     *index = (int32_t)scene->texture_count++;
+    return IC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* warnings */
+
+void ic_scene_warn(ic_scene *s, const char *fmt, ...)
+{
+    char line[600];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    size_t old = s->warnings ? strlen(s->warnings) : 0, add = strlen(line);
+    char *grown = realloc(s->warnings, old + add + 2);
+    if (!grown)
+        return; /* a warning lost to a full memory is no reason to fail the load */
+    memcpy(grown + old, line, add);
+    grown[old + add] = '\n';
+    grown[old + add + 1] = '\0';
+    s->warnings = grown;
+}
+
+const char *ic_scene_warnings(const ic_scene *scene) { return scene && scene->warnings ? scene->warnings : ""; }
+
+/* ------------------------------------------------------------------------------------------------ */
+/* point and spot lights */
+
+ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone)
+{
+    uint32_t n = s->point_light_count;
+    ic_point_light *grown = realloc(s->point_lights, sizeof *grown * (n + 1));
+    if (!grown)
+        return IC_ERR_OOM;
+    s->point_lights = grown;
+    if (cone || s->point_spots) {
+        ic_spot_cone *spots = realloc(s->point_spots, sizeof *spots * (n + 1));
+        if (!spots)
+            return IC_ERR_OOM;
+        if (!s->point_spots) /* the lights so far are points: no falloff */
+            for (uint32_t i = 0; i < n; ++i)
+                spots[i] = (ic_spot_cone){v3(0.0f, 0.0f, 1.0f), -1.0f, -2.0f};
+        s->point_spots = spots;
+        s->point_spots[n] = cone ? *cone : (ic_spot_cone){v3(0.0f, 0.0f, 1.0f), -1.0f, -2.0f};
+    }
+    s->point_lights[n].position = position;
+    s->point_lights[n].intensity = intensity;
+    s->point_light_count = n + 1;
     return IC_OK;
 }
 
@@ -310,6 +368,12 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
                                 "%s: emissive material '%s' has zero total area (all %u of its triangles are "
                                 "degenerate); fix the light's geometry or remove its emission",
                                 b->mesh_paths[b->material_mesh[m]], s->materials[m].name, b->material_dropped[m]);
+    }
+    /* a rough plastic's diffuse base is scaled by what its coat does not reflect: tabulated once here */
+    for (uint32_t m = 0; m < s->material_count; ++m) {
+        ic_material *mat = &s->materials[m];
+        if (mat->type == IC_MAT_PLASTIC)
+            ic_coat_albedo_table(mat->ior > 1.0f ? mat->ior : 1.5f, mat->alpha, mat->coat_albedo, &mat->coat_albedo_avg);
     }
     if (s->triangle_count > 0) {
         ic_vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
@@ -360,6 +424,8 @@ void ic_scene_free(ic_scene *s)
     free(s->triangle_light);
     free(s->point_lights);
     free(s->point_light_cdf);
+    free(s->point_spots);
+    free(s->warnings);
     ic_image_free(&s->env.image);
     free(s->env.marginal_cdf);
     free(s->env.conditional_cdf);

@@ -13,6 +13,7 @@
 #ifndef IC_SCENE_SCENE_H
 #define IC_SCENE_SCENE_H
 
+#include "core/microfacet.h"
 #include "core/vecmath.h"
 #include "scene/sky.h"
 #include "irrcache/common.h"
@@ -42,7 +43,13 @@ typedef enum ic_material_type {
     IC_MAT_DIFFUSE = 0,    /* Lambertian: kd (× texture) */
     IC_MAT_GLOSSY,         /* Lambertian kd + normalized modified Phong lobe ks, exponent ns */
     IC_MAT_MIRROR,         /* ideal specular reflection, tint ks */
-    IC_MAT_GLASS           /* dielectric: Fresnel-weighted ideal reflection/refraction, index ior */
+    IC_MAT_GLASS,          /* dielectric: Fresnel-weighted ideal reflection/refraction, index ior */
+    IC_MAT_CONDUCTOR,      /* rough metal: GGX lobe of roughness alpha; Fresnel of the complex index
+                              eta + i·k when k is non-zero, else Schlick's from the colour ks = F0 (× texture) */
+    IC_MAT_PLASTIC,        /* rough plastic: GGX dielectric coat (index ior, roughness alpha, tint ks) over
+                              a Lambertian base kd (× texture), coupled as Kelemen & Szirmay-Kalos 2001 */
+    IC_MAT_ROUGH_GLASS     /* rough dielectric: GGX reflection and refraction (Walter et al. 2007), index
+                              ior, roughness alpha; traced like glass (no light sampling through it) */
 } ic_material_type;
 
 typedef struct ic_material {
@@ -55,7 +62,11 @@ typedef struct ic_material {
     ic_vec3 emission;      /* emitted radiance (one-sided, along the geometric normal's side the
                               triangle's winding gives; see `two_sided_emission`) */
     int two_sided_emission;/* 1: emits from both sides */
-    float ior;             /* index of refraction (glass), default 1.5 */
+    float ior;             /* index of refraction (glass, plastic's coat), default 1.5 */
+    float alpha;           /* GGX roughness α of conductor, plastic and rough glass (glTF's roughness squared) */
+    ic_vec3 eta, k;        /* conductor: complex index of refraction (k all 0: use ks as F0) */
+    float coat_albedo[IC_COAT_TABLE]; /* plastic: the coat's directional albedo E(μ), filled at load */
+    float coat_albedo_avg; /* plastic: its cosine-weighted mean */
 } ic_material;
 
 /* Emissive triangle as a light. */
@@ -72,6 +83,22 @@ typedef struct ic_point_light {
     ic_vec3 position;
     ic_vec3 intensity;     /* W/sr per channel (radiant intensity) */
 } ic_point_light;
+
+/* A spot light's cone (KHR_lights_punctual): the intensity is scaled by t² with
+ * t = clamp((cos θ − cos_outer)/(cos_inner − cos_outer), 0, 1), θ the angle from the axis. */
+typedef struct ic_spot_cone {
+    ic_vec3 axis;          /* unit direction the spot points to */
+    float cos_inner, cos_outer; /* full intensity inside the inner cone, none outside the outer */
+} ic_spot_cone;
+
+/* The cone's factor on the intensity towards unit direction d (from the light). */
+static inline float ic_spot_falloff(const ic_spot_cone *c, ic_vec3 d)
+{
+    float w = c->cos_inner - c->cos_outer;
+    float t = w > 0.0f ? (v3_dot(c->axis, d) - c->cos_outer) / w : (v3_dot(c->axis, d) >= c->cos_outer ? 1.0f : 0.0f);
+    t = ic_clampf(t, 0.0f, 1.0f);
+    return t * t;
+}
 
 typedef struct ic_sun_light {
     int enabled;
@@ -143,12 +170,15 @@ struct ic_scene {
     ic_point_light *point_lights;
     float *point_light_cdf;/* point_light_count+1, by power 4 pi lum(intensity) */
     uint32_t point_light_count;
+    ic_spot_cone *point_spots; /* point_light_count cones, or NULL when no point light is a spot (the others
+                              then have cos_outer = -2: no falloff) */
     ic_sun_light sun;
     ic_environment env;
     ic_light_selection light_select; /* fixed light-class probabilities (lights.c) */
     /* view and settings */
     ic_camera camera;
     ic_scene_settings settings;
+    char *warnings;        /* what loading approximated or left out, lines; NULL if nothing */
 };
 
 /* Loading (ic_scene_load, ic_scene_load_options, ic_scene_free) is declared in irrcache/render.h. */
@@ -170,6 +200,8 @@ typedef struct ic_surface {
 void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_surface *s);
 /* Diffuse albedo at a surface (kd × texture). */
 ic_vec3 ic_scene_albedo(const ic_scene *scene, const ic_surface *s);
+/* The material's texture value at a surface (1 without a texture): kd's factor, and a conductor's F0's. */
+ic_vec3 ic_scene_texture_tint(const ic_scene *scene, const ic_surface *s);
 /* Emitted radiance leaving surface s towards direction wo (unit, pointing away from the surface). */
 ic_vec3 ic_scene_emission(const ic_scene *scene, const ic_surface *s, ic_vec3 wo);
 /* Environment radiance arriving from direction d (unit, pointing away from the scene); 0 if none. */

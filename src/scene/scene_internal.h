@@ -57,6 +57,43 @@ static inline size_t ic_scene_max_mesh_elements(const ic_scene_load_options *opt
 /* What to do when a texture is over its limit (the end of the message). */
 #define IC_SCENE_RAISE_TEXTURE_LIMIT "raise the limit with --max-texture-pixels (max_texture_pixels of ic_scene_load_options)"
 
+/* Adds a decoded image as a texture labelled path (a file's path, or "model.glb#*0" for an embedded one),
+ * taking its pixels (img is zeroed); *index gets its index. */
+ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img, const char *owner, int32_t *index,
+                               ic_error *err);
+/* A point and a direction (normalised) through a row-major 4x4 transform (scene files' transforms). */
+static inline ic_vec3 ic_xform_point(const float m[16], ic_vec3 p)
+{
+    return v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+              m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+static inline ic_vec3 ic_xform_dir(const float m[16], ic_vec3 d)
+{
+    return v3_norm(v3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                      m[8] * d.x + m[9] * d.y + m[10] * d.z));
+}
+
+/* Appends one line to the scene's warnings (ic_scene_warnings). */
+void ic_scene_warn(ic_scene *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Appends a material of its own (source names the file it comes from, for messages); *index gets its index. */
+ic_result ic_scene_add_material(ic_scene_builder *b, const ic_material *m, const char *source, uint32_t *index,
+                                ic_error *err);
+/* Appends triangles (tri: tri_count × 3 indices into p; n: unit normals or NULL) of one material, transformed by
+ * the row-major 4x4 xform; degenerate ones are dropped and counted. where names the shape in messages. */
+ic_result ic_scene_append_triangles(ic_scene_builder *b, const ic_vec3 *p, const ic_vec3 *n, uint32_t vertex_count,
+                                    const uint32_t *tri, uint32_t tri_count, uint32_t material, const float xform[16],
+                                    const char *where, ic_error *err);
+/* Reads a Mitsuba 0.6/3 XML scene (mitsuba_scene.c). */
+ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt, ic_error *err);
+/* Appends a point light, a spot light when cone is given; IC_ERR_OOM leaves the scene as it was. */
+ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone);
+/* Reads the cameras and KHR_lights_punctual lights of the glTF file at path (gltf_scene.c) into the scene:
+ * the camera named camera_name (NULL: the first perspective camera met walking the default scene's nodes),
+ * point and spot lights, and directional lights (the first as the sun). *has_camera is 1 if a camera was
+ * set; *light_count gets the number of lights added. */
+ic_result ic_gltf_read_scene(ic_scene_builder *b, const char *path, const char *camera_name, int *has_camera,
+                             int *light_count, ic_error *err);
+
 /* Releases the builder's own arrays (not the scene). */
 void ic_scene_builder_release(ic_scene_builder *b);
 

@@ -87,6 +87,53 @@ ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
     return IC_OK;
 }
 
+/* {"type": "spot", "position", "intensity", "direction", "cone_inner", "cone_outer"}: a point light lighting
+ * the cone about direction, full inside cone_inner degrees, none outside cone_outer, t² between (as glTF's
+ * KHR_lights_punctual). */
+static ic_result parse_spot(json_ctx *c, const cJSON *obj, int index, int line)
+{
+    static const char *valid = "type, position, intensity, direction, cone_inner, cone_outer";
+    ic_vec3 pos = v3s(0.0f), intensity = v3s(0.0f), dir = v3s(0.0f);
+    float inner = 0.0f, outer = 45.0f;
+    int has = 0;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        int kl = ic_json_locate_key(c, it->string);
+        ic_result r = IC_OK;
+        if (ic_json_is_comment(it->string) || !strcmp(it->string, "type"))
+            continue;
+        if (!strcmp(it->string, "position"))
+            r = ic_json_read_vec3(c, it, kl, &pos), has |= 1;
+        else if (!strcmp(it->string, "intensity"))
+            r = ic_json_read_color(c, it, kl, &intensity), has |= 2;
+        else if (!strcmp(it->string, "direction"))
+            r = ic_json_read_vec3(c, it, kl, &dir), has |= 4;
+        else if (!strcmp(it->string, "cone_inner"))
+            r = ic_json_read_float(c, it, kl, &inner);
+        else if (!strcmp(it->string, "cone_outer"))
+            r = ic_json_read_float(c, it, kl, &outer);
+        else
+            return ic_json_unknown_key(c, kl, it->string, "a spot light", valid);
+        if (r != IC_OK)
+            return r;
+    }
+    if (has != 7)
+        return ic_json_fail(c, line, IC_ERR_PARSE, "lights[%d] (spot) needs 'position', 'intensity' and 'direction'",
+                            index);
+    if (!(v3_len2(dir) > 0.0f))
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "lights[%d] spot 'direction' is zero; give where it points",
+                            index);
+    if (!(inner >= 0.0f && inner < outer && outer <= 180.0f))
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
+                            "lights[%d] spot cones %g and %g: need 0 <= cone_inner < cone_outer <= 180 (degrees)", index,
+                            (double)inner, (double)outer);
+    ic_spot_cone cone = {v3_norm(dir), cosf(inner * IC_PI / 180.0f), cosf(outer * IC_PI / 180.0f)};
+    if (ic_scene_add_point_light(c->b->scene, pos, intensity, &cone) != IC_OK)
+        return ic_json_fail(c, line, IC_ERR_OOM, "out of memory for lights");
+    return IC_OK;
+}
+
 static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
 {
     ic_scene *s = c->b->scene;
@@ -96,11 +143,14 @@ static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
     const cJSON *type = cJSON_GetObjectItemCaseSensitive(obj, "type");
     int type_line = ic_json_peek_key_line(c, "type");
     if (!type || !cJSON_IsString(type))
-        return ic_json_fail(c, line, IC_ERR_PARSE, "lights[%d] needs \"type\": \"point\" or \"sun\"", index);
+        return ic_json_fail(c, line, IC_ERR_PARSE, "lights[%d] needs \"type\": \"point\", \"spot\" or \"sun\"",
+                            index);
+    if (!strcmp(type->valuestring, "spot"))
+        return parse_spot(c, obj, index, line);
     int is_point = !strcmp(type->valuestring, "point"), is_sun = !strcmp(type->valuestring, "sun");
     if (!is_point && !is_sun)
-        return ic_json_fail(c, type_line, IC_ERR_INVALID_ARG, "unknown light type '%s'; use \"point\" or \"sun\"",
-                            type->valuestring);
+        return ic_json_fail(c, type_line, IC_ERR_INVALID_ARG,
+                            "unknown light type '%s'; use \"point\", \"spot\" or \"sun\"", type->valuestring);
     const char *valid = is_point ? "type, position, intensity" : "type, direction, irradiance";
     ic_vec3 a = v3s(0.0f), e = v3s(0.0f);
     int has_a = 0, has_e = 0;
@@ -140,13 +190,8 @@ static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
         s->sun.irradiance = e;
         return IC_OK;
     }
-    ic_point_light *grown = realloc(s->point_lights, sizeof *grown * (s->point_light_count + 1));
-    if (!grown)
+    if (ic_scene_add_point_light(s, a, e, NULL) != IC_OK)
         return ic_json_fail(c, line, IC_ERR_OOM, "out of memory for lights");
-    s->point_lights = grown;
-    s->point_lights[s->point_light_count].position = a;
-    s->point_lights[s->point_light_count].intensity = e;
-    ++s->point_light_count;
     return IC_OK;
 }
 

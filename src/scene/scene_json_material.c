@@ -11,23 +11,23 @@
 
 static ic_result parse_material_type(json_ctx *c, const cJSON *it, int line, ic_material_type *type)
 {
-    static const char *names[] = {"diffuse", "glossy", "mirror", "glass"};
+    static const char *names[] = {"diffuse", "glossy", "mirror", "glass", "conductor", "plastic", "rough_glass"};
     if (cJSON_IsString(it))
-        for (int k = 0; k < 4; ++k)
+        for (int k = 0; k < 7; ++k)
             if (!strcmp(it->valuestring, names[k])) {
                 *type = (ic_material_type)k;
                 return IC_OK;
             }
     return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
-                        "unknown material type '%s'; use \"diffuse\", \"glossy\", \"mirror\" "
-                        "or \"glass\"",
+                        "unknown material type '%s'; use \"diffuse\", \"glossy\", \"mirror\", "
+                        "\"glass\", \"conductor\", \"plastic\" or \"rough_glass\"",
                         cJSON_IsString(it) ? it->valuestring : "(not a string)");
 }
 
 /* An override as read: the fields it gives (has_*) and their values. */
 typedef struct material_override {
     ic_material m;               /* the values given */
-    int has_type, has_kd, has_ks, has_ns, has_em, has_two, has_ior, has_tex;
+    int has_type, has_kd, has_ks, has_ns, has_em, has_two, has_ior, has_tex, has_alpha, has_eta, has_k;
     int32_t tex;                 /* kd_texture: the texture's index, -1 for none */
 } material_override;
 
@@ -84,7 +84,7 @@ static ic_result read_texture(json_ctx *c, const cJSON *it, int kl, int32_t *tex
 /* Reads key `it` (at line kl) of an override into o. */
 static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, material_override *o)
 {
-    static const char *valid = "type, kd, ks, ns, emission, two_sided, ior, kd_texture";
+    static const char *valid = "type, kd, ks, ns, emission, two_sided, ior, kd_texture, alpha, eta, k";
     ic_result r = IC_OK;
     if (!strcmp(it->string, "type")) {
         r = parse_material_type(c, it, kl, &o->m.type);
@@ -113,6 +113,17 @@ static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, materia
         if (r == IC_OK && !(o->m.ior >= 1.0f))
             return ic_json_fail(c, kl, IC_ERR_INVALID_ARG, "'ior' must be >= 1 (index of refraction)");
         o->has_ior = 1;
+    } else if (!strcmp(it->string, "alpha")) {
+        r = ic_json_read_float(c, it, kl, &o->m.alpha);
+        if (r == IC_OK && !(o->m.alpha >= 0.0f && o->m.alpha <= 1.0f))
+            return ic_json_fail(c, kl, IC_ERR_INVALID_ARG, "'alpha' must be in [0, 1] (GGX roughness)");
+        o->has_alpha = 1;
+    } else if (!strcmp(it->string, "eta")) {
+        r = ic_json_read_color(c, it, kl, &o->m.eta);
+        o->has_eta = 1;
+    } else if (!strcmp(it->string, "k")) {
+        r = ic_json_read_color(c, it, kl, &o->m.k);
+        o->has_k = 1;
     } else if (!strcmp(it->string, "kd_texture")) {
         r = read_texture(c, it, kl, &o->tex);
         o->has_tex = 1;
@@ -145,11 +156,22 @@ static void apply_override(ic_scene *s, const char *name, const material_overrid
             m->ior = o->m.ior;
         if (o->has_tex)
             m->kd_texture = o->tex;
+        if (o->has_alpha)
+            m->alpha = o->m.alpha;
+        if (o->has_eta)
+            m->eta = o->m.eta;
+        if (o->has_k)
+            m->k = o->m.k;
         /* keep the type usable: a glossy lobe needs an exponent, a mirror or glass a tint */
         if (m->type == IC_MAT_GLOSSY && !(m->ns >= 1.0f))
             m->ns = 1.0f;
-        if ((m->type == IC_MAT_MIRROR || m->type == IC_MAT_GLASS) && v3_is_black(m->ks) && !o->has_ks)
+        if ((m->type == IC_MAT_MIRROR || m->type == IC_MAT_GLASS || m->type == IC_MAT_CONDUCTOR ||
+             m->type == IC_MAT_PLASTIC || m->type == IC_MAT_ROUGH_GLASS) &&
+            v3_is_black(m->ks) && !o->has_ks)
             m->ks = v3s(1.0f);
+        /* a complex index needs its real part: a missing one is that of a pure absorber (1) */
+        if (m->type == IC_MAT_CONDUCTOR && !v3_is_black(m->k) && v3_is_black(m->eta))
+            m->eta = v3s(1.0f);
     }
 }
 

@@ -1,9 +1,9 @@
 /*
  * scene_load.c — ic_scene_load, the loading entry point: it picks the front end by extension. ".json"
- * goes to scene_json.c; a bare mesh (.obj .gltf .glb .ply, or any of these gzip-compressed as
+ * goes to scene_json.c, ".xml" (a Mitsuba scene) to mitsuba_scene.c; a bare mesh (.obj .gltf .glb .ply, or any of these gzip-compressed as
  * NAME.EXT.gz) is imported as is and gets a fitted camera
  * and, when it has no emitter, a constant white sky (radiance 1), so any mesh renders without a scene
- * file (docs/scene-format.md).
+ * file (docs/scene-format.md). A glTF file brings its own camera and lights (gltf_scene.c) where it has them.
  */
 #include "scene/scene_internal.h"
 
@@ -27,7 +27,21 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
     if (r != IC_OK)
         return r;
     ic_scene *s = b->scene;
-    int has_emitter = 0;
+    /* a glTF file is a whole scene: its camera and lights (not read from a gzip-compressed one) */
+    char ext[16];
+    ic_path_extension(path, ext, sizeof ext);
+    int has_camera = 0, light_count = 0;
+    if (!strcmp(ext, ".gltf") || !strcmp(ext, ".glb")) {
+        r = ic_gltf_read_scene(b, path, opt->camera, &has_camera, &light_count, err);
+        if (r != IC_OK)
+            return r;
+    } else if (opt->camera && opt->camera[0]) {
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s: a camera name (--camera %s) is for glTF files (.gltf, .glb); other meshes get a "
+                            "fitted camera",
+                            path, opt->camera);
+    }
+    int has_emitter = light_count > 0;
     for (uint32_t m = 0; m < s->material_count; ++m)
         if (!v3_is_black(s->materials[m].emission) && b->material_tris[m] > 0)
             has_emitter = 1;
@@ -38,8 +52,9 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
     r = ic_scene_finalize(b, err);
     if (r != IC_OK)
         return r;
-    ic_scene_fit_camera(s, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
-                        opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
+    if (!has_camera)
+        ic_scene_fit_camera(s, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
+                            opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
     return IC_OK;
 }
 
@@ -92,15 +107,21 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
         snprintf(mesh_ext, sizeof mesh_ext, "%s", ext);
     }
     ic_result r;
-    if (!strcmp(ext, ".json")) {
+    if ((!strcmp(ext, ".json") || !strcmp(ext, ".xml")) && opt->camera && opt->camera[0]) {
+        r = ic_error_set(err, IC_ERR_INVALID_ARG,
+                         "%s: a camera name (--camera %s) is for glTF files; this scene has its own camera", path,
+                         opt->camera);
+    } else if (!strcmp(ext, ".json")) {
         r = ic_scene_load_json(&b, path, opt, err);
+    } else if (!strcmp(ext, ".xml")) {
+        r = ic_scene_load_mitsuba(&b, path, opt, err);
     } else if (!strcmp(mesh_ext, ".obj") || !strcmp(mesh_ext, ".gltf") || !strcmp(mesh_ext, ".glb") ||
                !strcmp(mesh_ext, ".ply")) {
         r = load_bare_mesh(&b, path, opt, err);
     } else {
         r = ic_error_set(err, IC_ERR_UNSUPPORTED,
-                         "%s: unknown scene type '%s%s'; give a .json scene or a .obj, .gltf, .glb or .ply mesh "
-                         "(or one of these gzip-compressed, as .obj.gz)",
+                         "%s: unknown scene type '%s%s'; give a .json or Mitsuba .xml scene or a .obj, .gltf, .glb "
+                         "or .ply mesh (or one of these gzip-compressed, as .obj.gz)",
                          path, strcmp(ext, ".gz") ? "" : mesh_ext, ext);
     }
     ic_scene_builder_release(&b);

@@ -80,6 +80,17 @@ ic_vec3 ic_scene_albedo(const ic_scene *scene, const ic_surface *s)
     return v3_mul(m->kd, texture_lookup(t, s->uv[0], s->uv[1]));
 }
 
+ic_vec3 ic_scene_texture_tint(const ic_scene *scene, const ic_surface *s)
+{
+    const ic_material *m = &scene->materials[s->material];
+    if (m->kd_texture < 0 || (uint32_t)m->kd_texture >= scene->texture_count)
+        return v3s(1.0f);
+    const ic_texture *t = &scene->textures[m->kd_texture];
+    if (t->width <= 0 || t->height <= 0 || !isfinite(s->uv[0]) || !isfinite(s->uv[1]))
+        return v3s(1.0f);
+    return texture_lookup(t, s->uv[0], s->uv[1]);
+}
+
 ic_vec3 ic_scene_emission(const ic_scene *scene, const ic_surface *s, ic_vec3 wo)
 {
     const ic_material *m = &scene->materials[s->material];

@@ -196,6 +196,14 @@ int main(void)
               strstr(stats, "\"phases\""),
           "stats JSON has seconds, rays, rays_per_second, phases: %s", stats);
 
+    /* A Mitsuba scene with an element irrcache does not render: rendered, with one warning line naming it. */
+    rc = run("render " SCENES "mitsuba_warn.xml -o " OUT " --spp 1 --width 8 --height 8 -q");
+    CHECK(rc == 0 && strstr(err_text, "warning: ") && strstr(err_text, "mitsuba_warn.xml:3: <shape type=\"hair\">") &&
+              line_count(err_text) == 1,
+          "one warning line for the unsupported shape (exit %d): %s", rc, err_text);
+    rc = run("render " SCENES "mitsuba_warn.xml -o " OUT " --camera front -q");
+    CHECK(rc == 1 && strstr(err_text, "--camera front"), "--camera is refused for a Mitsuba scene: %s", err_text);
+
     /* A scene nothing lights: rendered (exit 0) with a one-line warning that the image is black. */
     rc = run("render " SCENES "no_light.json -o " OUT " --spp 1 -q");
     CHECK(rc == 0 && strstr(err_text, "warning: ") && strstr(err_text, "no_light.json has no light") &&

@@ -466,11 +466,11 @@ static void test_gltf_and_ply(void)
         CHECK(s->triangle_count == 1 && m >= 0, "glTF triangle and material");
         if (m >= 0) {
             const ic_material *mat = &s->materials[m];
-            /* base (0.8, 0.6, 0.4), metallic 0.2, roughness 0.5: alpha 0.25, n = 2/0.0625 - 2 = 30 */
-            CHECK(mat->type == IC_MAT_GLOSSY, "dielectric-ish glTF material is glossy");
-            CHECK_NEAR(mat->ns, 30.0, 1e-3, "Phong exponent from roughness");
-            CHECK_NEAR(mat->kd.x, 0.8 * 0.8, 1e-6, "kd = base (1 - m)");
-            CHECK_NEAR(mat->ks.x, 0.04 * 0.8 + 0.8 * 0.2, 1e-6, "ks = mix(0.04, base, m)");
+            /* base (0.8, 0.6, 0.4), metallic 0.2, roughness 0.5: a plastic of alpha 0.25 over kd = base */
+            CHECK(mat->type == IC_MAT_PLASTIC, "dielectric-ish glTF material is a rough plastic");
+            CHECK_NEAR(mat->alpha, 0.25, 1e-6, "GGX alpha = roughness squared");
+            CHECK_NEAR(mat->kd.x, 0.8, 1e-6, "kd = base colour");
+            CHECK_NEAR(mat->ior, 1.5, 1e-6, "coat index 1.5 (F0 = 0.04)");
             /* emissiveFactor (1, 0.5, 0.25) × KHR_materials_emissive_strength 4 */
             CHECK(mat->emission.x == 4.0f && mat->emission.y == 2.0f && mat->emission.z == 1.0f,
                   "emission with strength: %g %g %g", mat->emission.x, mat->emission.y, mat->emission.z);

@@ -89,11 +89,11 @@ int main(void)
     memset(&err, 0, sizeof err);
     ic_scene_load_options opt = {0};
     opt.allow_outside_paths = 1; /* the file in IC_TEST_TMP names a mesh in tests/scenes */
-    write_scene("spot");
+    write_scene("laser");
     ic_result r = ic_scene_load(BIG, &opt, &scene, &err);
     char want[64];
     snprintf(want, sizeof want, "scene_big.json:%d:", 4 + LINES_PER * (N_OBJECTS - 1) + 1);
-    CHECK(r == IC_ERR_INVALID_ARG && strstr(err.message, want) && strstr(err.message, "'spot'"),
+    CHECK(r == IC_ERR_INVALID_ARG && strstr(err.message, want) && strstr(err.message, "'laser'"),
           "the last light's error names its line %s: %s", want, err.message);
     CHECK(scene == NULL, "no scene on failure");
     write_scene("point");

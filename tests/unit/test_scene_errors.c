@@ -310,7 +310,7 @@ int main(void)
     /* overrides: unknown material name, unknown type */
     expect_error(SCENES "unknown_material.json", NULL, IC_ERR_INVALID_ARG, "unknown_material.json:5:", "'marble'",
                  "'grey'");
-    expect_error(SCENES "bad_material_type.json", NULL, IC_ERR_INVALID_ARG, "bad_material_type.json:6:", "'plastic'",
+    expect_error(SCENES "bad_material_type.json", NULL, IC_ERR_INVALID_ARG, "bad_material_type.json:6:", "'velvet'",
                  "diffuse");
     /* camera: negative and zero resolution, fov out of (0, 180) */
     expect_error(SCENES "bad_resolution.json", NULL, IC_ERR_INVALID_ARG, "bad_resolution.json:6:", "'height' is -480",
@@ -321,7 +321,7 @@ int main(void)
     /* unknown keys list the valid ones; unknown light type */
     expect_error(SCENES "unknown_key.json", NULL, IC_ERR_PARSE, "unknown_key.json:6:", "'samples'",
                  "valid keys: spp, max_depth, seed, exposure");
-    expect_error(SCENES "bad_light.json", NULL, IC_ERR_INVALID_ARG, "bad_light.json:5:", "'spot'", NULL);
+    expect_error(SCENES "bad_light.json", NULL, IC_ERR_INVALID_ARG, "bad_light.json:5:", "'laser'", NULL);
     expect_error(SCENES "env_missing.json", NULL, IC_ERR_IO, "env_missing.json:3:", "no-such-sky.exr", NULL);
     /* files and options */
     expect_error(SCENES "no-such-scene.json", NULL, IC_ERR_IO, "no-such-scene.json", "check the path", NULL);

@@ -1,0 +1,130 @@
+/*
+ * mitsuba_bsdf.c — a Mitsuba <bsdf> as an irrcache material: diffuse, plastic / roughplastic, conductor /
+ * roughconductor (named metals or eta, k), dielectric / roughdielectric, and the wrappers (twosided; the
+ * others warned and passed through). Every roughness distribution is rendered as GGX of the same α.
+ */
+#include "scene/mitsuba_internal.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* Conductors by name: RGB fits of measured complex indices (the values renderers commonly tabulate for
+ * Mitsuba's names). */
+static int conductor_preset(const char *name, ic_vec3 *eta, ic_vec3 *k)
+{
+    static const struct { const char *name; float eta[3], k[3]; } table[] = {
+        {"Au", {0.143119f, 0.374957f, 1.44248f}, {3.98316f, 2.38572f, 1.60322f}},
+        {"Ag", {0.155265f, 0.116723f, 0.138342f}, {4.82835f, 3.12225f, 2.14696f}},
+        {"Al", {1.65746f, 0.880369f, 0.521229f}, {9.22387f, 6.26952f, 4.837f}},
+        {"Cu", {0.200438f, 0.924033f, 1.10221f}, {3.91295f, 2.45285f, 2.14219f}},
+        {"Cr", {4.36968f, 2.9167f, 1.6547f}, {5.20643f, 4.23136f, 3.75495f}},
+    };
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; ++i)
+        if (!strcmp(name, table[i].name)) {
+            *eta = v3(table[i].eta[0], table[i].eta[1], table[i].eta[2]);
+            *k = v3(table[i].k[0], table[i].k[1], table[i].k[2]);
+            return 1;
+        }
+    return 0;
+}
+
+ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth)
+{
+    char type_buf[64];
+    const char *type = ic_mts_attr_copy(c, n, "type", type_buf, sizeof type_buf);
+    if (!type)
+        return ic_mts_fail(c, n, IC_ERR_PARSE, "<bsdf> needs a type", NULL);
+    if (depth > 8)
+        return ic_mts_fail(c, n, IC_ERR_PARSE, "BSDFs nested too deeply", NULL);
+    /* wrappers: their first inner BSDF */
+    int is_wrapper = !strcmp(type, "twosided") || !strcmp(type, "bumpmap") || !strcmp(type, "normalmap") ||
+                     !strcmp(type, "mask") || !strcmp(type, "blendbsdf") || !strcmp(type, "coating");
+    if (is_wrapper) {
+        if (strcmp(type, "twosided")) {
+            char kind[80];
+            snprintf(kind, sizeof kind, "<bsdf type=\"%s\">", type);
+            ic_mts_warn_once(c, n, kind, "is not supported: its (first) inner BSDF is used alone");
+        }
+        for (xmlNode *k = n->children; k; k = k->next) {
+            if (ic_mts_is_element(k, "bsdf"))
+                return ic_mts_bsdf(c, k, m, depth + 1);
+            if (ic_mts_is_element(k, "ref")) {
+                const xmlNode *t = ic_mts_find_by_id(c, "bsdf", ic_mts_attr(c, k, "id") ? ic_mts_attr(c, k, "id") : "");
+                if (t)
+                    return ic_mts_bsdf(c, t, m, depth + 1);
+            }
+        }
+        return ic_mts_fail(c, n, IC_ERR_PARSE, "this BSDF wraps no BSDF", NULL);
+    }
+    ic_result r = IC_OK;
+    float ext = 1.000277f, in = 1.5046f;
+    int rough = !strncmp(type, "rough", 5);
+    const char *base = rough ? type + 5 : type;
+    if (rough) {
+        xmlNode *a = ic_mts_child(c, n, NULL, "alpha");
+        if (a && !ic_mts_is_element(a, "float"))
+            ic_mts_warn_once(c, a, "a textured roughness", "is not supported: alpha 0.1 is used");
+        else
+            r = ic_mts_float(c, n, "alpha", 0.1f, &m->alpha);
+        const char *dist = ic_mts_string(c, n, "distribution");
+        if (r == IC_OK && dist && strcmp(dist, "ggx"))
+            ic_mts_warn_once(c, n, "a microfacet distribution other than GGX", "is rendered as GGX of the same alpha");
+        if (r == IC_OK && !(m->alpha >= 0.0f && m->alpha <= 4.0f))
+            return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "alpha must be in [0, 4]", NULL);
+        m->alpha = fminf(m->alpha, 1.0f);
+    }
+    if (!strcmp(type, "diffuse")) {
+        m->type = IC_MAT_DIFFUSE;
+        r = ic_mts_color(c, n, "reflectance", v3s(0.5f), &m->kd, &m->kd_texture);
+    } else if (!strcmp(base, "plastic")) {
+        m->type = IC_MAT_PLASTIC;
+        r = ic_mts_color(c, n, "diffuseReflectance", v3s(0.5f), &m->kd, &m->kd_texture);
+        if (r == IC_OK)
+            r = ic_mts_color(c, n, "specularReflectance", v3s(1.0f), &m->ks, NULL);
+        if (r == IC_OK)
+            r = ic_mts_ior(c, n, "intIOR", 1.49f, &in);
+        if (r == IC_OK)
+            r = ic_mts_ior(c, n, "extIOR", 1.000277f, &ext);
+        m->ior = in / ext;
+    } else if (!strcmp(base, "conductor")) {
+        m->type = IC_MAT_CONDUCTOR;
+        char name_buf[64];
+        const char *name = ic_mts_string(c, n, "material");
+        snprintf(name_buf, sizeof name_buf, "%s", name ? name : "Cu");
+        name = name_buf;
+        if (!strcmp(name, "none")) {
+            m->ks = v3s(1.0f); /* a perfect reflector: F = 1 through Schlick with F0 = 1 */
+        } else if (!conductor_preset(name, &m->eta, &m->k)) {
+            char kind[96];
+            snprintf(kind, sizeof kind, "conductor material '%.40s'", name);
+            ic_mts_warn_once(c, n, kind, "is not in irrcache's table (Au, Ag, Al, Cu, Cr, none): Cu is used");
+            conductor_preset("Cu", &m->eta, &m->k);
+        }
+        if (r == IC_OK)
+            r = ic_mts_color(c, n, "eta", m->eta, &m->eta, NULL);
+        if (r == IC_OK)
+            r = ic_mts_color(c, n, "k", m->k, &m->k, NULL);
+        if (r == IC_OK && strcmp(name, "none"))
+            r = ic_mts_color(c, n, "specularReflectance", v3s(1.0f), &m->ks, NULL);
+        if (r == IC_OK)
+            r = ic_mts_ior(c, n, "extEta", 1.000277f, &ext);
+        m->eta = v3_scale(m->eta, 1.0f / ext);
+        m->k = v3_scale(m->k, 1.0f / ext);
+    } else if (!strcmp(base, "dielectric") || !strcmp(type, "thindielectric")) {
+        if (!strcmp(type, "thindielectric"))
+            ic_mts_warn_once(c, n, "<bsdf type=\"thindielectric\">", "is rendered as a solid dielectric");
+        m->type = rough ? IC_MAT_ROUGH_GLASS : IC_MAT_GLASS;
+        m->ks = v3s(1.0f);
+        r = ic_mts_ior(c, n, "intIOR", 1.5046f, &in);
+        if (r == IC_OK)
+            r = ic_mts_ior(c, n, "extIOR", 1.000277f, &ext);
+        m->ior = fmaxf(in / ext, 1.0f);
+    } else {
+        char kind[80];
+        snprintf(kind, sizeof kind, "<bsdf type=\"%.40s\">", type);
+        ic_mts_warn_once(c, n, kind, "is not supported: a diffuse grey 0.5 is used");
+        m->type = IC_MAT_DIFFUSE;
+        m->kd = v3s(0.5f);
+    }
+    return r;
+}

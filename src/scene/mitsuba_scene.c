@@ -1,0 +1,460 @@
+/*
+ * mitsuba_scene.c — Mitsuba 0.6 and 3 XML scene files, the subset the public research scenes use, parsed
+ * with libxml2 (no network access, no entity expansion) and mapped onto irrcache's scene:
+ *
+ *   sensor perspective (fov, fovAxis, toWorld: lookat / matrix / translate / rotate / scale), its film's
+ *   width and height, its sampler's sampleCount; shapes obj, ply (through assimp), rectangle, disk, cube,
+ *   sphere, with toWorld and flipNormals; BSDFs diffuse, plastic / roughplastic, conductor / roughconductor
+ *   (named materials or eta/k), dielectric / roughdielectric, twosided, by reference or inline; area, point,
+ *   spot, constant, envmap and directional emitters; <default> parameters and $name substitution.
+ *
+ * Every other element is named in one warning per kind (element, type and file:line) and skipped or
+ * approximated as the warning says; nothing is dropped silently. Roughness distributions other than GGX
+ * are rendered as GGX of the same α. Directions: Mitsuba's sensor looks down its +Z with +Y up.
+ */
+#include "scene/mitsuba_internal.h"
+
+#include "core/read_file.h"
+#include "core/vecmath.h"
+#include "irrcache/defaults.h"
+
+#include <libxml/parser.h>
+
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- sensor ---- */
+
+static ic_result parse_sensor(ic_mts_ctx *c, const xmlNode *n)
+{
+    char type_buf[64];
+    const char *type = ic_mts_attr_copy(c, n, "type", type_buf, sizeof type_buf);
+    if (!type || (strcmp(type, "perspective") && strcmp(type, "thinlens"))) {
+        ic_mts_warn_once(c, n, "<sensor> of this type", "is not supported: the camera is fitted to the scene");
+        return IC_OK;
+    }
+    if (!strcmp(type, "thinlens"))
+        ic_mts_warn_once(c, n, "<sensor type=\"thinlens\">", "is rendered as a pinhole (no depth of field)");
+    float m[16], fov = 0.0f, w = 768.0f, h = 576.0f, spp = 0.0f;
+    ic_result r = ic_mts_to_world(c, n, m);
+    if (r == IC_OK)
+        r = ic_mts_float(c, n, "fov", 0.0f, &fov);
+    if (r == IC_OK && fov == 0.0f) {
+        float focal = 0.0f;
+        const char *fl = ic_mts_string(c, n, "focalLength");
+        if (!fl)
+            fl = ic_mts_string(c, n, "focal_length");
+        if (fl && sscanf(fl, "%fmm", &focal) == 1 && focal > 0.0f) /* 35 mm film: 36 mm wide */
+            fov = 2.0f * atanf(18.0f / focal) * 180.0f / IC_PI;
+        else
+            fov = 39.3077f; /* Mitsuba's default, a 50 mm lens */
+    }
+    if (r != IC_OK)
+        return r;
+    if (!(fov > 0.0f && fov < 180.0f))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "fov must be in (0, 180) degrees", NULL);
+    for (xmlNode *k = n->children; k && r == IC_OK; k = k->next) {
+        if (ic_mts_is_element(k, "film")) {
+            r = ic_mts_float(c, k, "width", w, &w);
+            if (r == IC_OK)
+                r = ic_mts_float(c, k, "height", h, &h);
+        } else if (ic_mts_is_element(k, "sampler")) {
+            r = ic_mts_float(c, k, "sampleCount", 0.0f, &spp);
+            if (r == IC_OK && spp == 0.0f)
+                r = ic_mts_float(c, k, "sample_count", 0.0f, &spp);
+        }
+    }
+    if (r != IC_OK)
+        return r;
+    if (!(w >= 1.0f && h >= 1.0f && w <= 65536.0f && h <= 65536.0f))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "the film's width and height must be in [1, 65536]", NULL);
+    ic_camera *cam = &c->b->scene->camera;
+    cam->width = c->opt->width > 0 ? c->opt->width : (int)w;
+    cam->height = c->opt->height > 0 ? c->opt->height : (int)h;
+    /* fovAxis: x (default), y, diagonal, smaller, larger */
+    const char *axis = ic_mts_string(c, n, "fovAxis");
+    if (!axis)
+        axis = ic_mts_string(c, n, "fov_axis");
+    float aw = (float)cam->width, ah = (float)cam->height, t = tanf(0.5f * fov * IC_PI / 180.0f);
+    if (!axis || !strcmp(axis, "x") || (!strcmp(axis, "smaller") && aw <= ah) || (!strcmp(axis, "larger") && aw >= ah))
+        t *= ah / aw;
+    else if (!strcmp(axis, "diagonal"))
+        t *= ah / sqrtf(aw * aw + ah * ah);
+    else if (strcmp(axis, "y") && strcmp(axis, "smaller") && strcmp(axis, "larger"))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "unknown fovAxis; use x, y, diagonal, smaller or larger", NULL);
+    cam->fov_y_deg = 2.0f * atanf(t) * 180.0f / IC_PI;
+    cam->eye = ic_xform_point(m, v3s(0.0f));
+    cam->target = v3_add(cam->eye, ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f)));
+    cam->up = ic_xform_dir(m, v3(0.0f, 1.0f, 0.0f));
+    if (spp >= 1.0f && spp <= (float)IC_MAX_SPP)
+        c->b->scene->settings.spp = (int)spp;
+    return IC_OK;
+}
+
+/* ---- shapes ---- */
+
+/* The shape's material: its inline or referenced BSDF (a diffuse 0.5 without one), with its area emitter. */
+static ic_result shape_material(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int *has_bsdf)
+{
+    memset(m, 0, sizeof *m);
+    m->type = IC_MAT_DIFFUSE;
+    m->kd = v3s(0.5f);
+    m->kd_texture = -1;
+    m->ior = 1.5f;
+    *has_bsdf = 0;
+    ic_result r = IC_OK;
+    for (xmlNode *k = n->children; k && r == IC_OK; k = k->next) {
+        if (ic_mts_is_element(k, "bsdf")) {
+            r = ic_mts_bsdf(c, k, m, 0);
+            *has_bsdf = 1;
+        } else if (ic_mts_is_element(k, "ref")) {
+            char id[256];
+            const char *given = ic_mts_attr_copy(c, k, "id", id, sizeof id);
+            const xmlNode *t = given ? ic_mts_find_by_id(c, "bsdf", id) : NULL;
+            if (!t)
+                return ic_mts_fail(c, k, IC_ERR_PARSE, "<ref> to an unknown BSDF id: ", given ? id : "(none)");
+            r = ic_mts_bsdf(c, t, m, 0);
+            *has_bsdf = 1;
+        } else if (ic_mts_is_element(k, "emitter")) {
+            char type_buf[64];
+            const char *type = ic_mts_attr_copy(c, k, "type", type_buf, sizeof type_buf);
+            if (!type || strcmp(type, "area"))
+                return ic_mts_fail(c, k, IC_ERR_UNSUPPORTED, "a shape's emitter must be of type \"area\"", NULL);
+            r = ic_mts_color(c, k, "radiance", v3s(1.0f), &m->emission, NULL);
+        }
+    }
+    snprintf(m->name, sizeof m->name, "%.100s:%d", ic_mts_attr(c, n, "id") ? ic_mts_attr(c, n, "id") : "shape", ic_mts_line(n));
+    return r;
+}
+
+/* Triangles of a primitive shape in its local frame: rectangle, disk, cube, sphere. */
+static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, uint32_t material, const float m[16],
+                           int flip, const char *where)
+{
+    enum { SEG = 64, RINGS = 32, MAXV = (RINGS + 1) * (SEG + 1) };
+    ic_vec3 *p = malloc(sizeof *p * MAXV * 2), *nn = p ? p + MAXV : NULL;
+    uint32_t *tri = malloc(sizeof *tri * RINGS * SEG * 6), nv = 0, nt = 0;
+    if (!p || !tri) {
+        free(p);
+        free(tri);
+        return ic_mts_fail(c, n, IC_ERR_OOM, "out of memory for a shape", NULL);
+    }
+    const ic_vec3 *normals = NULL;
+    if (!strcmp(type, "rectangle")) {
+        static const float q[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+        for (int i = 0; i < 4; ++i)
+            p[nv++] = v3(q[i][0], q[i][1], 0.0f);
+        static const uint32_t t[6] = {0, 1, 2, 0, 2, 3};
+        memcpy(tri, t, sizeof t);
+        nt = 2;
+    } else if (!strcmp(type, "disk")) {
+        p[nv++] = v3s(0.0f);
+        for (int i = 0; i < SEG; ++i) {
+            float a = 2.0f * IC_PI * i / SEG;
+            p[nv++] = v3(cosf(a), sinf(a), 0.0f);
+            tri[3 * nt] = 0;
+            tri[3 * nt + 1] = 1 + i;
+            tri[3 * nt + 2] = 1 + (i + 1) % SEG;
+            ++nt;
+        }
+    } else if (!strcmp(type, "cube")) {
+        for (int face = 0; face < 6; ++face) { /* axis face/2, side ± */
+            int ax = face / 2;
+            float sgn = face % 2 ? 1.0f : -1.0f;
+            ic_vec3 nrm = v3s(0.0f), u = v3s(0.0f), v = v3s(0.0f);
+            ((float *)&nrm)[ax] = sgn;
+            ((float *)&u)[(ax + 1) % 3] = 1.0f;
+            v = v3_cross(nrm, u);
+            for (int i = 0; i < 4; ++i) {
+                float su = (i == 1 || i == 2) ? 1.0f : -1.0f, sv = i >= 2 ? 1.0f : -1.0f;
+                p[nv + i] = v3_add(nrm, v3_add(v3_scale(u, su), v3_scale(v, sv)));
+            }
+            static const uint32_t t[6] = {0, 1, 2, 0, 2, 3};
+            for (int i = 0; i < 6; ++i)
+                tri[3 * nt + i] = nv + t[i];
+            nv += 4;
+            nt += 2;
+        }
+    } else { /* sphere: a latitude-longitude mesh with smooth normals */
+        ic_vec3 centre = v3s(0.0f);
+        float radius = 1.0f;
+        xmlNode *ck = ic_mts_child(c, n, "point", "center");
+        ic_result r = ck ? ic_mts_vec(c, ck, 0.0f, &centre) : IC_OK;
+        if (r == IC_OK)
+            r = ic_mts_float(c, n, "radius", 1.0f, &radius);
+        if (r != IC_OK) {
+            free(p);
+            free(tri);
+            return r;
+        }
+        for (int j = 0; j <= RINGS; ++j)
+            for (int i = 0; i <= SEG; ++i) {
+                float th = IC_PI * j / RINGS, ph = 2.0f * IC_PI * i / SEG;
+                ic_vec3 d = v3(sinf(th) * cosf(ph), sinf(th) * sinf(ph), cosf(th));
+                nn[nv] = d;
+                p[nv++] = v3_add(centre, v3_scale(d, radius));
+            }
+        for (int j = 0; j < RINGS; ++j)
+            for (int i = 0; i < SEG; ++i) {
+                uint32_t a = j * (SEG + 1) + i, b = a + SEG + 1;
+                uint32_t t[6] = {a, b, a + 1, a + 1, b, b + 1}; /* outward winding */
+                memcpy(&tri[3 * nt], t, sizeof t);
+                nt += 2;
+            }
+        normals = nn;
+    }
+    if (flip)
+        for (uint32_t t = 0; t < nt; ++t) {
+            uint32_t s = tri[3 * t + 1];
+            tri[3 * t + 1] = tri[3 * t + 2];
+            tri[3 * t + 2] = s;
+        }
+    if (flip && normals)
+        for (uint32_t i = 0; i < nv; ++i)
+            nn[i] = v3_neg(nn[i]);
+    ic_result r = ic_scene_append_triangles(c->b, p, normals, nv, tri, nt, material, m, where, c->err);
+    free(p);
+    free(tri);
+    return r;
+}
+
+static ic_result parse_shape(ic_mts_ctx *c, const xmlNode *n)
+{
+    char type_buf[64];
+    const char *type = ic_mts_attr_copy(c, n, "type", type_buf, sizeof type_buf);
+    if (!type)
+        return ic_mts_fail(c, n, IC_ERR_PARSE, "<shape> needs a type", NULL);
+    int is_file = !strcmp(type, "obj") || !strcmp(type, "ply");
+    int is_prim = !strcmp(type, "rectangle") || !strcmp(type, "disk") || !strcmp(type, "cube") || !strcmp(type, "sphere");
+    if (!is_file && !is_prim) {
+        char kind[80];
+        snprintf(kind, sizeof kind, "<shape type=\"%.40s\">", type);
+        ic_mts_warn_once(c, n, kind, "is not supported and is left out");
+        return IC_OK;
+    }
+    float m[16];
+    ic_material mat;
+    int has_bsdf = 0, flip = 0;
+    ic_result r = ic_mts_to_world(c, n, m);
+    if (r == IC_OK)
+        r = shape_material(c, n, &mat, &has_bsdf);
+    xmlNode *fk = ic_mts_child(c, n, "boolean", "flipNormals");
+    if (!fk)
+        fk = ic_mts_child(c, n, "boolean", "flip_normals");
+    flip = fk && ic_mts_attr(c, fk, "value") && !strcmp(ic_mts_attr(c, fk, "value"), "true");
+    if (r != IC_OK)
+        return r;
+    char where[IC_SCENE_PATH_MAX + 32];
+    snprintf(where, sizeof where, "%s:%d", c->path, ic_mts_line(n));
+    uint32_t index;
+    if (is_prim) {
+        r = ic_scene_add_material(c->b, &mat, c->path, &index, c->err);
+        return r == IC_OK ? primitive(c, n, type, index, m, flip, where) : r;
+    }
+    const char *file = ic_mts_string(c, n, "filename");
+    if (!file)
+        return ic_mts_fail(c, n, IC_ERR_PARSE, "this shape needs <string name=\"filename\">", NULL);
+    char full[IC_SCENE_PATH_MAX];
+    if (!ic_path_join(c->dir, file, full, sizeof full))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "mesh path too long", NULL);
+    if ((r = ic_scene_check_path(c->b, full, where, "mesh", c->err)) != IC_OK)
+        return r;
+    if (!ic_path_exists(full))
+        return ic_error_set(c->err, IC_ERR_IO, "%s: mesh '%s' not found; check the path", where, file);
+    if (flip)
+        ic_mts_warn_once(c, n, "flipNormals on a mesh file", "is not supported: the file's winding is kept");
+    ic_scene *s = c->b->scene;
+    uint32_t first_tri = s->triangle_count, first_mat = s->material_count;
+    c->b->import_where = where;
+    r = ic_mesh_import(c->b, full, m, where, c->err);
+    if (r != IC_OK || !has_bsdf) /* without a BSDF the file's own materials stay (an extension of Mitsuba's) */
+        return r;
+    if ((r = ic_scene_add_material(c->b, &mat, c->path, &index, c->err)) != IC_OK)
+        return r;
+    for (uint32_t m2 = first_mat; m2 < index; ++m2) {
+        c->b->material_tris[index] += c->b->material_tris[m2];
+        c->b->material_tris[m2] = 0;
+    }
+    for (uint32_t t = first_tri; t < s->triangle_count; ++t)
+        s->triangle_material[t] = index;
+    return IC_OK;
+}
+
+/* ---- emitters ---- */
+
+static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
+{
+    char type_buf[64];
+    const char *type = ic_mts_attr_copy(c, n, "type", type_buf, sizeof type_buf);
+    ic_scene *s = c->b->scene;
+    float m[16];
+    ic_result r = ic_mts_to_world(c, n, m);
+    if (r != IC_OK || !type)
+        return r != IC_OK ? r : ic_mts_fail(c, n, IC_ERR_PARSE, "<emitter> needs a type", NULL);
+    if (!strcmp(type, "point") || !strcmp(type, "spot")) {
+        ic_vec3 pos = ic_xform_point(m, v3s(0.0f)), intensity;
+        xmlNode *pk = ic_mts_child(c, n, "point", "position");
+        if (pk && (r = ic_mts_vec(c, pk, 0.0f, &pos)) != IC_OK)
+            return r;
+        if ((r = ic_mts_color(c, n, "intensity", v3s(1.0f), &intensity, NULL)) != IC_OK)
+            return r;
+        if (!strcmp(type, "point"))
+            return ic_scene_add_point_light(s, pos, intensity, NULL) == IC_OK
+                       ? IC_OK
+                       : ic_mts_fail(c, n, IC_ERR_OOM, "out of memory for the lights", NULL);
+        float cutoff = 20.0f, beam;
+        if ((r = ic_mts_float(c, n, "cutoffAngle", 20.0f, &cutoff)) != IC_OK ||
+            (r = ic_mts_float(c, n, "beamWidth", cutoff * 0.75f, &beam)) != IC_OK)
+            return r;
+        if (!(cutoff > 0.0f && cutoff <= 90.0f && beam >= 0.0f && beam <= cutoff))
+            return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "spot: need 0 < beamWidth <= cutoffAngle <= 90 degrees", NULL);
+        ic_mts_warn_once(c, n, "<emitter type=\"spot\">", "falls off between beamWidth and cutoffAngle as t² (glTF's curve)");
+        ic_spot_cone cone = {ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f)), cosf(beam * IC_PI / 180.0f),
+                             cosf(cutoff * IC_PI / 180.0f)};
+        if (cone.cos_inner <= cone.cos_outer)
+            cone.cos_inner = cone.cos_outer + 1e-6f;
+        return ic_scene_add_point_light(s, pos, intensity, &cone) == IC_OK
+                   ? IC_OK
+                   : ic_mts_fail(c, n, IC_ERR_OOM, "out of memory for the lights", NULL);
+    }
+    if (!strcmp(type, "constant")) {
+        s->env.enabled = 1;
+        return ic_mts_color(c, n, "radiance", v3s(1.0f), &s->env.radiance, NULL);
+    }
+    if (!strcmp(type, "directional")) {
+        ic_vec3 d = ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f));
+        xmlNode *dk = ic_mts_child(c, n, "vector", "direction");
+        if (dk && (r = ic_mts_vec(c, dk, 0.0f, &d)) != IC_OK)
+            return r;
+        if (!(v3_len2(d) > 0.0f))
+            return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "directional: the direction is zero", NULL);
+        if (s->sun.enabled)
+            return ic_mts_fail(c, n, IC_ERR_UNSUPPORTED, "a second directional emitter; irrcache renders one sun", NULL);
+        s->sun.enabled = 1;
+        s->sun.direction = v3_neg(v3_norm(d));
+        return ic_mts_color(c, n, "irradiance", v3s(1.0f), &s->sun.irradiance, NULL);
+    }
+    if (!strcmp(type, "envmap")) {
+        char file_buf[IC_SCENE_PATH_MAX];
+        const char *file = ic_mts_string(c, n, "filename");
+        if (file)
+            file = strncpy(file_buf, file, sizeof file_buf - 1);
+        file_buf[sizeof file_buf - 1] = '\0';
+        float scale = 1.0f;
+        if (!file)
+            return ic_mts_fail(c, n, IC_ERR_PARSE, "envmap needs <string name=\"filename\">", NULL);
+        if ((r = ic_mts_float(c, n, "scale", 1.0f, &scale)) != IC_OK)
+            return r;
+        char full[IC_SCENE_PATH_MAX], where[IC_SCENE_PATH_MAX + 32];
+        snprintf(where, sizeof where, "%s:%d", c->path, ic_mts_line(n));
+        if (!ic_path_join(c->dir, file, full, sizeof full))
+            return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "envmap path too long", NULL);
+        if ((r = ic_scene_check_path(c->b, full, where, "environment map", c->err)) != IC_OK)
+            return r;
+        ic_error ierr;
+        ic_image_free(&s->env.image);
+        r = ic_image_read_max(full, ic_scene_max_texture_pixels(c->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &s->env.image,
+                              &ierr);
+        if (r != IC_OK)
+            return ic_error_set(c->err, r, "%s: %s", where, ierr.message);
+        s->env.enabled = 1;
+        s->env.radiance = v3s(scale);
+        ic_mts_warn_once(c, n, "<emitter type=\"envmap\">",
+                  "is mapped with irrcache's lat-long convention (+y up); its toWorld rotation is not applied");
+        return IC_OK;
+    }
+    char kind[80];
+    snprintf(kind, sizeof kind, "<emitter type=\"%.40s\">", type);
+    ic_mts_warn_once(c, n, kind, "is not supported and is left out");
+    return IC_OK;
+}
+
+static ic_result parse_scene(ic_mts_ctx *c)
+{
+    ic_result r = IC_OK;
+    for (xmlNode *n = c->root->children; n; n = n->next)
+        if (ic_mts_is_element(n, "default") && c->def_count < MAX_DEFAULTS) {
+            const char *name = ic_mts_attr(c, n, "name"), *value = ic_mts_attr(c, n, "value");
+            if (!name || !value)
+                return ic_mts_fail(c, n, IC_ERR_PARSE, "<default> needs name and value", NULL);
+            snprintf(c->def_name[c->def_count], sizeof c->def_name[0], "%s", name);
+            snprintf(c->def_value[c->def_count], sizeof c->def_value[0], "%s", ic_mts_attr(c, n, "value"));
+            ++c->def_count;
+        }
+    int has_sensor = 0;
+    for (xmlNode *n = c->root->children; n && r == IC_OK; n = n->next) {
+        if (!ic_mts_is_element(n, NULL) || ic_mts_is_element(n, "default") || ic_mts_is_element(n, "bsdf") || ic_mts_is_element(n, "texture") ||
+            ic_mts_is_element(n, "integrator"))
+            continue; /* BSDFs and textures are read where they are referenced; the integrator is irrcache's */
+        if (ic_mts_is_element(n, "sensor")) {
+            r = has_sensor++ ? IC_OK : parse_sensor(c, n);
+        } else if (ic_mts_is_element(n, "shape")) {
+            r = parse_shape(c, n);
+        } else if (ic_mts_is_element(n, "emitter")) {
+            r = parse_emitter(c, n);
+        } else {
+            char kind[80];
+            snprintf(kind, sizeof kind, "<%.40s>", (const char *)n->name);
+            ic_mts_warn_once(c, n, kind, "is not supported and is left out");
+        }
+    }
+    c->b->scene->camera.width = has_sensor ? c->b->scene->camera.width : 0;
+    return r;
+}
+
+ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt, ic_error *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    uint64_t max_bytes = opt->max_scene_bytes ? opt->max_scene_bytes : IC_DEFAULT_MAX_SCENE_FILE_BYTES;
+    ic_result rr = ic_read_regular_file(path, "scene file", max_bytes,
+                                        "keep geometry in mesh files, or raise the limit with --max-scene-bytes",
+                                        &text, &len, NULL, err);
+    if (rr != IC_OK)
+        return rr;
+    if (len > (size_t)INT_MAX) {
+        free(text);
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: too large for the XML parser", path);
+    }
+    /* no network, no external entities or DTDs loaded (the defaults), no messages printed */
+    xmlInitParser();
+    xmlDoc *doc = xmlReadMemory(text, (int)len, path, NULL, XML_PARSE_NONET | XML_PARSE_NOWARNING | XML_PARSE_NOERROR);
+    free(text);
+    if (!doc) {
+        const xmlError *e = xmlGetLastError();
+        char msg[256] = "not well-formed XML";
+        if (e && e->message) {
+            snprintf(msg, sizeof msg, "%s", e->message);
+            msg[strcspn(msg, "\n")] = '\0';
+        }
+        return ic_error_set(err, IC_ERR_PARSE, "%s:%d: %s; fix the XML", path, e ? e->line : 0, msg);
+    }
+    ic_mts_ctx *c = calloc(1, sizeof *c);
+    if (!c) {
+        xmlFreeDoc(doc);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    }
+    c->b = b;
+    c->opt = opt;
+    c->path = path;
+    c->err = err;
+    ic_path_dirname(path, c->dir, sizeof c->dir);
+    c->root = xmlDocGetRootElement(doc);
+    ic_result r;
+    if (!ic_mts_is_element(c->root, "scene"))
+        r = ic_mts_fail(c, c->root, IC_ERR_PARSE, "the root element must be <scene> (a Mitsuba scene file)", NULL);
+    else
+        r = parse_scene(c);
+    int has_camera = c->b->scene->camera.width > 0;
+    free(c);
+    xmlFreeDoc(doc);
+    if (r != IC_OK)
+        return r;
+    r = ic_scene_finalize(b, err);
+    if (r == IC_OK && !has_camera)
+        ic_scene_fit_camera(b->scene, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
+                            opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
+    return r;
+}

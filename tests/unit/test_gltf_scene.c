@@ -1,0 +1,355 @@
+/*
+ * test_gltf_scene.c — a glTF file as a whole scene: small files written here (a 200 m floor, nodes with
+ * cameras and KHR_lights_punctual lights) checked against what the specification says they mean:
+ *   1. the camera: eye, view direction, up and field of view through a node hierarchy; aspectRatio sets
+ *      the image's height; --camera picks another by name; an unknown name is an error naming it;
+ *   2. a point light through a parent node: its position and intensity; the scene has no fallback sky;
+ *      rendered, a Lambertian floor under it measures L = ρ·I/(π·h²) below the light (irradiance I/d²);
+ *   3. a spot light: full intensity inside the inner cone, the specification's falloff between the
+ *      cones, none outside; 4. directional lights: the first is the sun, a second a far point light with
+ *      the same irradiance at the scene's centre;
+ *   5. metallic-roughness: a metal is a rough conductor with F0 = base colour, alpha = roughness².
+ */
+#include "test_util.h"
+
+#include "irrcache/image.h"
+#include "irrcache/render.h"
+#include "scene/scene.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const float H = 2.0f; /* light and camera height above the floor */
+
+/* Writes floor.bin (4 positions, 6 indices) and NAME.gltf with the given nodes, scene roots, cameras,
+ * lights and material; returns the path. */
+static const char *write_gltf(const char *name, const char *nodes, const char *roots, const char *cameras,
+                              const char *lights, const char *material)
+{
+    static char path[512];
+    FILE *f = fopen(IC_TEST_TMP "/floor.bin", "wb");
+    if (!f)
+        exit(1);
+    float p[12] = {-100, 0, -100, 100, 0, -100, 100, 0, 100, -100, 0, 100};
+    uint16_t idx[6] = {0, 2, 1, 0, 3, 2};
+    fwrite(p, sizeof p, 1, f);
+    fwrite(idx, sizeof idx, 1, f);
+    fclose(f);
+    snprintf(path, sizeof path, IC_TEST_TMP "/%s.gltf", name);
+    f = fopen(path, "w");
+    if (!f)
+        exit(1);
+    fprintf(f,
+            "{\"asset\": {\"version\": \"2.0\"},\n"
+            " \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
+            " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [%s]}},\n"
+            " \"buffers\": [{\"uri\": \"floor.bin\", \"byteLength\": 60}],\n"
+            " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
+            "                  {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
+            " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"
+            "                 \"min\": [-100, 0, -100], \"max\": [100, 0, 100]},\n"
+            "                {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}],\n"
+            " \"materials\": [%s],\n"
+            " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1, \"material\": 0}]}],\n"
+            " \"cameras\": [%s],\n"
+            " \"nodes\": [{\"mesh\": 0, \"name\": \"floor\"}, %s],\n"
+            " \"scenes\": [{\"nodes\": [0, %s]}], \"scene\": 0}\n",
+            lights, material, cameras, nodes, roots);
+    fclose(f);
+    return path;
+}
+
+static const char *grey =
+    "{\"name\": \"grey\", \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.5, 0.5, 0.5, 1], \"metallicFactor\": 0}}";
+/* a camera at (0, H, 0) looking straight down (−90° about x), 10° vertical field, 2:1 */
+static const char *down_camera = "{\"type\": \"perspective\", \"name\": \"down\", "
+                                 "\"perspective\": {\"yfov\": 0.17453293, \"aspectRatio\": 2.0, \"znear\": 0.01}}";
+#define DOWN_ROTATION "\"rotation\": [-0.70710678, 0, 0, 0.70710678]"
+
+static ic_scene *load(const char *path, const char *camera, int width)
+{
+    ic_scene_load_options lo = {0};
+    lo.camera = camera;
+    lo.width = width;
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    if (ic_scene_load(path, &lo, &s, &err) != IC_OK) {
+        fprintf(stderr, "load %s: %s\n", path, err.message);
+        return NULL;
+    }
+    return s;
+}
+
+static void test_camera(void)
+{
+    char nodes[1024];
+    snprintf(nodes, sizeof nodes,
+             "{\"name\": \"rig\", \"translation\": [1, 0, 0], \"children\": [2]},\n"
+             "{\"name\": \"cam\", \"camera\": 0, \"translation\": [-1, %g, 0], " DOWN_ROTATION "},\n"
+             "{\"name\": \"side\", \"camera\": 1, \"translation\": [0, 1, 5]},\n"
+             "{\"name\": \"mat\", \"camera\": 1, \"matrix\": [0, 0, -1, 0, 0, 1, 0, 0, 1, 0, 0, 0, 2, 3, 7, 1]}",
+             (double)H);
+    const char *cams = "{\"type\": \"perspective\", \"name\": \"down\", \"perspective\": {\"yfov\": 0.17453293, "
+                       "\"aspectRatio\": 2.0, \"znear\": 0.01}},\n"
+                       "{\"type\": \"perspective\", \"name\": \"sidecam\", \"perspective\": {\"yfov\": 0.5, \"znear\": 0.01}}";
+    const char *path = write_gltf("cameras", nodes, "1, 3, 4", cams, "", grey);
+    ic_scene *s = load(path, NULL, 0);
+    CHECK(s != NULL, "glTF with cameras loads");
+    if (s) {
+        const ic_camera *c = &s->camera;
+        ic_vec3 d = v3_norm(v3_sub(c->target, c->eye));
+        CHECK(fabsf(c->eye.x) < 1e-5f && fabsf(c->eye.y - H) < 1e-5f && fabsf(c->eye.z) < 1e-5f,
+              "first camera's eye through the parent: %g %g %g", c->eye.x, c->eye.y, c->eye.z);
+        CHECK(d.y < -0.9999f, "looks down its node's -Z: %g %g %g", d.x, d.y, d.z);
+        CHECK(c->up.z < -0.9999f, "its +Y is up: %g %g %g", c->up.x, c->up.y, c->up.z);
+        CHECK_NEAR(c->fov_y_deg, 10.0, 1e-3, "yfov in degrees");
+        CHECK(c->width == 512 && c->height == 256, "aspectRatio 2: %dx%d", c->width, c->height);
+    }
+    ic_scene_free(s);
+    s = load(path, "sidecam", 64);
+    CHECK(s != NULL, "--camera by the camera's name");
+    if (s) {
+        CHECK(fabsf(s->camera.eye.z - 5.0f) < 1e-5f && s->camera.width == 64 && s->camera.height == 512,
+              "the named camera, width from the option: eye z %g, %dx%d", s->camera.eye.z, s->camera.width,
+              s->camera.height);
+        CHECK_NEAR(s->camera.fov_y_deg, 0.5 * 180.0 / 3.14159265358979, 1e-3, "its field of view");
+    }
+    ic_scene_free(s);
+    s = load(path, "side", 0);
+    CHECK(s && fabsf(s->camera.eye.z - 5.0f) < 1e-5f, "--camera by the node's name");
+    ic_scene_free(s);
+    /* a column-major matrix: a turn of 90° about +y (−Z goes to −X) and a move to (2, 3, 7) */
+    s = load(path, "mat", 0);
+    if (s) {
+        ic_vec3 d = v3_norm(v3_sub(s->camera.target, s->camera.eye));
+        CHECK(fabsf(s->camera.eye.x - 2.0f) < 1e-5f && fabsf(s->camera.eye.y - 3.0f) < 1e-5f &&
+                  fabsf(s->camera.eye.z - 7.0f) < 1e-5f && d.x < -0.9999f,
+              "a node's matrix read by columns: eye %g %g %g, view %g %g %g", s->camera.eye.x, s->camera.eye.y,
+              s->camera.eye.z, d.x, d.y, d.z);
+    }
+    ic_scene_free(s);
+    ic_scene_load_options lo = {0};
+    lo.camera = "nosuch";
+    ic_error err = {0};
+    s = NULL;
+    CHECK(ic_scene_load(path, &lo, &s, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "nosuch") &&
+              strstr(err.message, "cameras.gltf"),
+          "an unknown camera name is an error naming it and the file: %s", err.message);
+    ic_scene_free(s);
+}
+
+/* Mean of the green channel over the centre 4×4 pixels. */
+static double centre_mean(const ic_image *img)
+{
+    double sum = 0.0;
+    for (int y = img->height / 2 - 2; y < img->height / 2 + 2; ++y)
+        for (int x = img->width / 2 - 2; x < img->width / 2 + 2; ++x)
+            sum += img->rgb[3 * ((size_t)y * img->width + x) + 1];
+    return sum / 16.0;
+}
+
+static void test_point_light(void)
+{
+    char nodes[1024];
+    snprintf(nodes, sizeof nodes,
+             "{\"name\": \"cam\", \"camera\": 0, \"translation\": [0, %g, 0], " DOWN_ROTATION "},\n"
+             "{\"name\": \"lamp_parent\", \"translation\": [1, 0, 0], \"children\": [3]},\n"
+             "{\"name\": \"lamp\", \"translation\": [-1, %g, 0], \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}}",
+             (double)H, (double)H);
+    const char *path = write_gltf("point", nodes, "1, 2", down_camera,
+                                  "{\"type\": \"point\", \"color\": [1, 0.5, 0.25], \"intensity\": 8}", grey);
+    ic_scene *s = load(path, NULL, 48);
+    CHECK(s != NULL, "glTF with a point light loads");
+    if (!s)
+        return;
+    CHECK(s->point_light_count == 1 && !s->env.enabled, "one point light and no fallback sky");
+    if (s->point_light_count == 1) {
+        ic_vec3 p = s->point_lights[0].position, I = s->point_lights[0].intensity;
+        CHECK(fabsf(p.x) < 1e-5f && fabsf(p.y - H) < 1e-5f && fabsf(p.z) < 1e-5f, "position through the parent");
+        CHECK(I.x == 8.0f && I.y == 4.0f && I.z == 2.0f, "intensity = colour x intensity");
+    }
+    /* the floor Lambertian (albedo 0.5) for an analytic answer */
+    s->materials[0].type = IC_MAT_DIFFUSE;
+    ic_render_options opt = {0};
+    opt.spp = 4;
+    opt.threads = 2;
+    ic_image img = {0};
+    ic_render_stats st;
+    ic_error err = {0};
+    CHECK(ic_render(s, &opt, &img, &st, &err) == IC_OK, "renders: %s", err.message);
+    if (img.rgb) {
+        /* 10° field of view: the centre 4×4 pixels are within 0.2° of the axis (cos³ > 0.99998) */
+        double want = 0.5 * 4.0 / (3.14159265358979 * H * H);
+        CHECK(fabs(centre_mean(&img) - want) < 2e-3 * want, "floor below the light: %g, expected rho I/(pi h^2) = %g",
+              centre_mean(&img), want);
+    }
+    ic_image_free(&img);
+    ic_scene_free(s);
+}
+
+static void test_spot_and_directional(void)
+{
+    char nodes[1024];
+    snprintf(nodes, sizeof nodes,
+             "{\"name\": \"spot\", \"translation\": [0, %g, 0], " DOWN_ROTATION
+             ", \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}},\n"
+             "{\"name\": \"sun\", " DOWN_ROTATION ", \"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}},\n"
+             "{\"name\": \"sun2\", \"extensions\": {\"KHR_lights_punctual\": {\"light\": 2}}}",
+             (double)H);
+    const char *lights = "{\"type\": \"spot\", \"intensity\": 10, \"spot\": {\"innerConeAngle\": 0.17453293, "
+                         "\"outerConeAngle\": 0.34906585}},\n"
+                         "{\"type\": \"directional\", \"intensity\": 3},\n"
+                         "{\"type\": \"directional\", \"color\": [0, 1, 0], \"intensity\": 2}";
+    const char *path = write_gltf("spot", nodes, "1, 2, 3", "", lights, grey);
+    ic_scene *s = load(path, NULL, 0);
+    CHECK(s != NULL, "glTF with spot and directional lights loads");
+    if (!s)
+        return;
+    CHECK(s->sun.enabled && s->sun.direction.y > 0.9999f && s->sun.irradiance.x == 3.0f,
+          "the first directional light is the sun, pointing up towards it");
+    CHECK(s->point_light_count == 2 && s->point_spots, "the spot and the second directional light as points");
+    if (s->point_light_count == 2 && s->point_spots) {
+        const ic_spot_cone *cone = &s->point_spots[0];
+        CHECK(cone->axis.y < -0.9999f, "spot axis down");
+        static const float angles[] = {0.0f, 5.0f, 15.0f, 25.0f};
+        for (int k = 0; k < 4; ++k) {
+            float a = angles[k] * IC_PI / 180.0f;
+            ic_vec3 d = v3(sinf(a), -cosf(a), 0.0f);
+            float t = (cosf(a) - cosf(0.34906585f)) / (cosf(0.17453293f) - cosf(0.34906585f));
+            t = t < 0 ? 0 : (t > 1 ? 1 : t);
+            CHECK_NEAR(ic_spot_falloff(cone, d), t * t, 1e-5, "spot falloff");
+        }
+        CHECK(ic_spot_falloff(cone, v3(0, -1, 0)) == 1.0f && ic_spot_falloff(cone, v3_norm(v3(1, -1, 0))) == 0.0f,
+              "full inside the inner cone, none outside the outer");
+        /* the far light gives the second sun's irradiance at the centre, from straight along its -Z's opposite */
+        ic_vec3 d = v3_sub(s->point_lights[1].position, v3s(0.0f));
+        float dist = v3_len(d);
+        CHECK(v3_norm(d).z > 0.9999f, "the second sun lies towards +Z (it shines down -Z)");
+        CHECK_NEAR(s->point_lights[1].intensity.y / (dist * dist), 2.0, 2e-3, "its irradiance at the centre");
+        CHECK(ic_spot_falloff(&s->point_spots[1], v3(0, 0, -1)) == 1.0f, "a point light has no falloff");
+    }
+    ic_scene_free(s);
+}
+
+/* A node with two parents is refused (glTF nodes form trees; walking it twice could repeat without end). */
+static void test_two_parents(void)
+{
+    const char *path = write_gltf("two_parents", "{\"children\": [3]}, {\"children\": [3]}, {\"name\": \"leaf\"}",
+                                  "1, 2", "", "", grey);
+    ic_scene_load_options lo = {0};
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    CHECK(ic_scene_load(path, &lo, &s, &err) == IC_ERR_PARSE && strstr(err.message, "node 3"),
+          "a node reached twice is an error naming it: %s", err.message);
+    ic_scene_free(s);
+}
+
+static void test_metal(void)
+{
+    const char *metal = "{\"name\": \"gold\", \"pbrMetallicRoughness\": {\"baseColorFactor\": [1, 0.8, 0.3, 1], "
+                        "\"metallicFactor\": 1, \"roughnessFactor\": 0.4}}";
+    const char *path = write_gltf("metal", "{\"name\": \"empty\"}", "1", "", "", metal);
+    ic_scene *s = load(path, NULL, 0);
+    CHECK(s && s->material_count >= 1, "metal glTF loads");
+    if (s) {
+        const ic_material *m = &s->materials[0];
+        CHECK(m->type == IC_MAT_CONDUCTOR && m->ks.y == 0.8f && fabsf(m->alpha - 0.16f) < 1e-6f,
+              "metal: conductor with F0 = base, alpha = roughness^2 (%d, %g, %g)", (int)m->type, m->ks.y, m->alpha);
+        CHECK(s->env.enabled, "no light of any kind: the fallback sky");
+    }
+    ic_scene_free(s);
+}
+
+/* Appends n bytes, then zeros (bin) or spaces (json) to a multiple of 4. */
+static size_t put_padded(unsigned char *dst, size_t at, const void *src, size_t n, unsigned char pad)
+{
+    memcpy(dst + at, src, n);
+    at += n;
+    while (at % 4)
+        dst[at++] = pad;
+    return at;
+}
+
+/* A .glb whose floor material's base colour texture is a PNG inside the file (2×2, every texel
+ * (255, 128, 0)): the texture is decoded from memory and shades the floor. */
+static void test_embedded_texture(void)
+{
+    ic_image tex = {0};
+    ic_error err = {0};
+    CHECK(ic_image_create(&tex, 2, 2) == IC_OK, "texture image");
+    for (int i = 0; i < 4; ++i) {
+        tex.rgb[3 * i] = 1.0f;
+        tex.rgb[3 * i + 1] = ic_srgb8_to_linear(128);
+        tex.rgb[3 * i + 2] = 0.0f;
+    }
+    CHECK(ic_image_write(IC_TEST_TMP "/embedded.png", &tex, NULL, &err) == IC_OK, "PNG written: %s", err.message);
+    ic_image_free(&tex);
+    static unsigned char png[4096], bin[8192], glb[16384];
+    FILE *f = fopen(IC_TEST_TMP "/embedded.png", "rb");
+    size_t png_n = f ? fread(png, 1, sizeof png, f) : 0;
+    if (f)
+        fclose(f);
+    CHECK(png_n > 0 && png_n < sizeof png, "PNG read back");
+    float pos[12] = {-100, 0, -100, 100, 0, -100, 100, 0, 100, -100, 0, 100};
+    float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    uint16_t idx[6] = {0, 2, 1, 0, 3, 2};
+    size_t n = put_padded(bin, 0, pos, sizeof pos, 0);
+    n = put_padded(bin, n, uv, sizeof uv, 0);
+    n = put_padded(bin, n, idx, sizeof idx, 0);
+    size_t png_at = n;
+    n = put_padded(bin, n, png, png_n, 0);
+    char json[4096];
+    int jn = snprintf(json, sizeof json,
+                      "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": %zu}],\n"
+                      " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
+                      "  {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 32}, {\"buffer\": 0, \"byteOffset\": 80, "
+                      "\"byteLength\": 12},\n  {\"buffer\": 0, \"byteOffset\": %zu, \"byteLength\": %zu}],\n"
+                      " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\", "
+                      "\"min\": [-100, 0, -100], \"max\": [100, 0, 100]},\n"
+                      "  {\"bufferView\": 1, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC2\"},\n"
+                      "  {\"bufferView\": 2, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}],\n"
+                      " \"images\": [{\"bufferView\": 3, \"mimeType\": \"image/png\"}], \"textures\": [{\"source\": 0}],\n"
+                      " \"materials\": [{\"name\": \"tex\", \"pbrMetallicRoughness\": {\"metallicFactor\": 0, "
+                      "\"baseColorTexture\": {\"index\": 0}}}],\n"
+                      " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"TEXCOORD_0\": 1}, "
+                      "\"indices\": 2, \"material\": 0}]}],\n"
+                      " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}",
+                      n, png_at, png_n);
+    size_t jlen = ((size_t)jn + 3) / 4 * 4, total = 12 + 8 + jlen + 8 + n;
+    uint32_t head[5] = {0x46546C67u, 2u, (uint32_t)total, (uint32_t)jlen, 0x4E4F534Au};
+    size_t at = put_padded(glb, 0, head, sizeof head, 0);
+    at = put_padded(glb, at, json, (size_t)jn, ' ');
+    uint32_t bin_head[2] = {(uint32_t)n, 0x004E4942u};
+    at = put_padded(glb, at, bin_head, sizeof bin_head, 0);
+    at = put_padded(glb, at, bin, n, 0);
+    f = fopen(IC_TEST_TMP "/embedded.glb", "wb");
+    if (f) {
+        fwrite(glb, 1, at, f);
+        fclose(f);
+    }
+    ic_scene *s = load(IC_TEST_TMP "/embedded.glb", NULL, 0);
+    CHECK(s != NULL, "a .glb with an embedded PNG texture loads");
+    if (!s)
+        return;
+    CHECK(s->texture_count == 1 && s->textures[0].width == 2 && strstr(s->textures[0].path, "embedded.glb#*0"),
+          "one embedded texture, labelled by the file and its index");
+    if (s->texture_count == 1 && s->material_count >= 1 && s->triangle_count >= 1) {
+        ic_surface srf;
+        ic_scene_surface(s, 0, 0.3f, 0.3f, &srf);
+        ic_vec3 a = ic_scene_albedo(s, &srf);
+        CHECK(fabsf(a.x - 1.0f) < 1e-5f && fabsf(a.y - ic_srgb8_to_linear(128)) < 1e-5f && a.z == 0.0f,
+              "the floor's albedo is the texture's colour: %g %g %g", a.x, a.y, a.z);
+    }
+    ic_scene_free(s);
+}
+
+int main(void)
+{
+    test_embedded_texture();
+    test_camera();
+    test_point_light();
+    test_spot_and_directional();
+    test_metal();
+    test_two_parents();
+    TEST_MAIN_END();
+}
