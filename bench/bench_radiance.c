@@ -32,7 +32,7 @@ static int cmp_double(const void *a, const void *b)
 }
 
 typedef struct glossy_pts {
-    ic_vec3 *p, *n, *wo, *ks;
+    ic_vec3 *p, *n, *wo;
     uint32_t *material;
     uint32_t count;
 } glossy_pts;
@@ -42,8 +42,8 @@ static glossy_pts first_hits(const ic_ctx *c)
     const ic_camera *cam = &c->tr->scene->camera;
     size_t npix = (size_t)cam->width * cam->height;
     glossy_pts g = {malloc(npix * sizeof(ic_vec3)), malloc(npix * sizeof(ic_vec3)), malloc(npix * sizeof(ic_vec3)),
-                    malloc(npix * sizeof(ic_vec3)), malloc(npix * sizeof(uint32_t)), 0};
-    if (!g.p || !g.n || !g.wo || !g.ks || !g.material)
+                    malloc(npix * sizeof(uint32_t)), 0};
+    if (!g.p || !g.n || !g.wo || !g.material)
         fail("out of memory");
     for (int y = 0; y < cam->height; ++y)
         for (int x = 0; x < cam->width; ++x) {
@@ -61,7 +61,6 @@ static glossy_pts first_hits(const ic_ctx *c)
             g.p[g.count] = s.p;
             g.n[g.count] = b.frame.n;
             g.wo[g.count] = v3_neg(ray.dir);
-            g.ks[g.count] = b.ks;
             g.material[g.count++] = s.material;
         }
     return g;
@@ -88,7 +87,7 @@ static void measure(const char *label, const ic_ctx *c, const glossy_pts *g, con
         found_rad = 0;
         for (uint32_t i = 0; i < g->count; ++i) {
             ic_vec3 L;
-            if (ic_ic_radiance_lookup(c, g->p[i], g->n[i], g->ks[i], g->material[i], g->wo[i], &hint2, &L)) {
+            if (ic_ic_radiance_lookup(c, g->p[i], g->n[i], g->material[i], g->wo[i], &hint2, &L)) {
                 ++found_rad;
                 sum += L.x;
             }
@@ -157,7 +156,6 @@ int main(int argc, char **argv)
         free(g.p);
         free(g.n);
         free(g.wo);
-        free(g.ks);
         free(g.material);
         ic_ic_ctx_destroy(c);
     }

@@ -120,7 +120,7 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
              * after their point, one too many behind a specular or glossy vertex. */
             ic_vec3 glossy = v3s(0.0f);
             int glossy_cached = depth == 0 && ic_bsdf_has_glossy(&b) &&
-                                ic_ic_radiance_lookup(c, s.p, b.frame.n, b.ks, s.material, wo, hint, &glossy);
+                                ic_ic_radiance_lookup(c, s.p, b.frame.n, s.material, wo, hint, &glossy);
             if (fc->glossy_only)
                 return v3_mul(beta, glossy);
             /* Several light samples per shading point: with indirect light from the cache, the direct

@@ -24,22 +24,37 @@
 struct ic_radiance {
     ic_hsh_basis *basis;
     uint32_t k;                  /* n²: coefficients per channel */
-    int32_t *table_of;           /* per material: its lobe table, −1 if the material is not served */
+    int32_t (*table_of)[3];      /* per material and colour channel: its lobe table, −1 if not served */
+    ic_vec3 *scale;              /* per material: the factor of the tabulated lobes (k_s for Phong, 1 else) */
     ic_hsh_lobe_table **tables;
-    float *exponent;             /* per table: the Phong exponent it is for */
+    float *exponent;             /* per table: the Phong exponent it is for, 0 for a lobe of its own */
     uint32_t table_count;
 };
 
 uint32_t ic_ic_radiance_payload_floats(const ic_radiance *r) { return r ? 9u * r->k : 0u; }
 
 /* The normalised modified Phong lobe with k_s = 1 in the local frame (Lafortune & Willems 1994):
- * (e + 2)/(2π) cos^e α, α between ω_i and the mirror direction of ω_o. Any other glossy model is one
- * more callback of this form. */
+ * (e + 2)/(2π) cos^e α, α between ω_i and the mirror direction of ω_o. */
 static double phong_lobe(void *user, const double wi[3], const double wo[3])
 {
     double e = *(const float *)user;
     double c = -wi[0] * wo[0] - wi[1] * wo[1] + wi[2] * wo[2];
     return c > 0.0 ? (e + 2.0) / (2.0 * IC_PI) * pow(c, e) : 0.0;
+}
+
+/* Any other glossy model: one colour channel of the BSDF's own glossy lobe in the local frame
+ * (ic_bsdf_glossy_local), so a new model needs nothing here. */
+typedef struct bsdf_lobe {
+    ic_bsdf b;
+    int channel;
+} bsdf_lobe;
+
+static double bsdf_lobe_channel(void *user, const double wi[3], const double wo[3])
+{
+    const bsdf_lobe *l = user;
+    ic_vec3 f = ic_bsdf_glossy_local(&l->b, v3((float)wi[0], (float)wi[1], (float)wi[2]),
+                                     v3((float)wo[0], (float)wo[1], (float)wo[2]));
+    return l->channel == 0 ? f.x : l->channel == 1 ? f.y : f.z;
 }
 
 void ic_ic_radiance_destroy(ic_radiance *r)
@@ -51,8 +66,48 @@ void ic_ic_radiance_destroy(ic_radiance *r)
     free(r->tables);
     free(r->exponent);
     free(r->table_of);
+    free(r->scale);
     ic_hsh_basis_destroy(r->basis);
     free(r);
+}
+
+/* The lobe tables of a microfacet material (conductor, plastic's coat): one per colour channel, or one
+ * for all when the channels agree at a few direction pairs. The BSDF is set up for the material at an
+ * untextured point facing +z. */
+static ic_result microfacet_tables(ic_radiance *r, const ic_scene *s, uint32_t m, ic_error *err)
+{
+    ic_surface surf;
+    memset(&surf, 0, sizeof surf);
+    surf.material = m;
+    surf.ng = surf.ns = v3(0.0f, 0.0f, 1.0f);
+    surf.triangle = IC_NO_HIT;
+    bsdf_lobe lobe[3];
+    ic_bsdf_init(&lobe[0].b, s, &surf, v3(0.0f, 0.0f, 1.0f));
+    lobe[0].b.frame = ic_frame_from_normal(v3(0.0f, 0.0f, 1.0f));
+    lobe[1] = lobe[2] = lobe[0];
+    for (int ch = 0; ch < 3; ++ch)
+        lobe[ch].channel = ch;
+    int grey = 1;
+    for (int k = 0; k < 16 && grey; ++k) {
+        double th_o = 0.1 * k, th_i = 0.05 * k + 0.02, ph = 0.7 * k;
+        double wo[3] = {sin(th_o), 0.0, cos(th_o)}, wi[3] = {sin(th_i) * cos(ph), sin(th_i) * sin(ph), cos(th_i)};
+        double f0 = bsdf_lobe_channel(&lobe[0], wi, wo);
+        grey = fabs(bsdf_lobe_channel(&lobe[1], wi, wo) - f0) <= 1e-6 * fabs(f0) &&
+               fabs(bsdf_lobe_channel(&lobe[2], wi, wo) - f0) <= 1e-6 * fabs(f0);
+    }
+    for (int ch = 0; ch < (grey ? 1 : 3); ++ch) {
+        uint32_t t = r->table_count;
+        r->exponent[t] = 0.0f;
+        ic_result rc = ic_hsh_lobe_table_create(r->basis, bsdf_lobe_channel, &lobe[ch], NULL, &r->tables[t], err);
+        if (rc != IC_OK)
+            return rc;
+        ++r->table_count;
+        r->table_of[m][ch] = (int32_t)t;
+    }
+    if (grey)
+        r->table_of[m][1] = r->table_of[m][2] = r->table_of[m][0];
+    r->scale[m] = v3s(1.0f);
+    return IC_OK;
 }
 
 ic_result ic_ic_radiance_create(ic_ctx *c, ic_error *err)
@@ -64,19 +119,31 @@ ic_result ic_ic_radiance_create(ic_ctx *c, ic_error *err)
     ic_radiance *r = calloc(1, sizeof *r);
     if (!r)
         return ic_error_set(err, IC_ERR_OOM, "out of memory for the radiance cache");
-    r->table_of = malloc(sizeof *r->table_of * (s->material_count ? s->material_count : 1));
-    r->tables = calloc(s->material_count ? s->material_count : 1, sizeof *r->tables);
-    r->exponent = calloc(s->material_count ? s->material_count : 1, sizeof *r->exponent);
-    if (!r->table_of || !r->tables || !r->exponent) {
+    size_t mats = s->material_count ? s->material_count : 1;
+    r->table_of = malloc(sizeof *r->table_of * mats);
+    r->scale = malloc(sizeof *r->scale * mats);
+    r->tables = calloc(3 * mats, sizeof *r->tables);
+    r->exponent = calloc(3 * mats, sizeof *r->exponent);
+    if (!r->table_of || !r->scale || !r->tables || !r->exponent) {
         ic_ic_radiance_destroy(r);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for the radiance cache");
     }
     ic_hsh_opts ho;
     ic_hsh_opts_default(&ho, (uint32_t)c->o.hsh_order);
     ic_result rc = ic_hsh_basis_create(&ho, &r->basis, err);
+    /* A GGX lobe of roughness α is about as wide as a Phong lobe of exponent 2/α² − 2 (Walter et al. 2007
+     * §5.2), so the exponent bound is a roughness bound for the microfacet models. */
+    float alpha_min = sqrtf(2.0f / (c->o.radiance_max_exponent + 2.0f));
+    int served = 0;
     for (uint32_t m = 0; rc == IC_OK && m < s->material_count; ++m) {
         const ic_material *mat = &s->materials[m];
-        r->table_of[m] = -1;
+        r->table_of[m][0] = r->table_of[m][1] = r->table_of[m][2] = -1;
+        if ((mat->type == IC_MAT_CONDUCTOR || mat->type == IC_MAT_PLASTIC) && mat->kd_texture < 0 &&
+            mat->alpha >= alpha_min) {
+            rc = microfacet_tables(r, s, m, err);
+            served = 1;
+            continue;
+        }
         if (mat->type != IC_MAT_GLOSSY || !(v3_maxc(mat->ks) > 0.0f))
             continue;
         float e = mat->ns > 0.0f ? mat->ns : 1.0f;
@@ -92,9 +159,11 @@ ic_result ic_ic_radiance_create(ic_ctx *c, ic_error *err)
                 break;
             ++r->table_count;
         }
-        r->table_of[m] = (int32_t)t;
+        r->table_of[m][0] = r->table_of[m][1] = r->table_of[m][2] = (int32_t)t;
+        r->scale[m] = mat->ks;
+        served = 1;
     }
-    if (rc != IC_OK || r->table_count == 0) {
+    if (rc != IC_OK || !served) {
         ic_ic_radiance_destroy(r);
         return rc;
     }
@@ -110,16 +179,18 @@ ic_result ic_ic_radiance_create(ic_ctx *c, ic_error *err)
 
 int ic_ic_radiance_serves(const ic_ctx *c, uint32_t material)
 {
-    return c->rad && material < c->tr->scene->material_count && c->rad->table_of[material] >= 0;
+    return c->rad && material < c->tr->scene->material_count && c->rad->table_of[material][0] >= 0;
 }
 
 /* The lobe of one shading point in a shading frame, computed once and turned into each record's frame. */
 typedef struct shading_lobe {
-    const ic_hsh_lobe_table *table;
+    const ic_hsh_lobe_table *table[3]; /* per colour channel (the same table thrice for a grey lobe) */
+    int lobes;                 /* distinct tables: 1 (grey) or 3 */
+    ic_vec3 scale;             /* the material's factor on the tabulated lobes */
     ic_vec3 p, n, wo;
     int have_here;
     ic_hsh_frame here;
-    float lobe_here[IC_HSH_MAX_COUNT];
+    float lobe_here[3][IC_HSH_MAX_COUNT];
 } shading_lobe;
 
 /* ---- construction ------------------------------------------------------------------------------ */
@@ -377,7 +448,7 @@ static uint32_t refine(ic_ctx *c, const glossy_points *g)
                     if (!record_outgoing(c, &sl, contrib[k].record, &v) ||
                         ic_cache_get_record(c->cache, contrib[k].record, &rec) != IC_OK)
                         continue;
-                    float y_rec = v3_lum(v3_mul(mat->ks, v)), e_lum = v3_lum(rec.irradiance);
+                    float y_rec = v3_lum(v), e_lum = v3_lum(rec.irradiance);
                     weight[m] = contrib[k].weight;
                     yk[m] = y_rec;
                     sigma[m] = e_lum > 0.0f ? y_rec * v3_lum(rec.sigma) / e_lum : 0.0f;
@@ -444,27 +515,31 @@ static float dot_channel(const float *rgb, uint32_t ch, const float *lobe, uint3
     return ic_hsh_dot(rgb + ch * k, lobe, k);
 }
 
-/* The lobe's coefficients for the shading point's ω_o in a record's frame (t, b = n_i × t, n_i). */
-static int lobe_in_frame(const ic_ctx *c, shading_lobe *sl, ic_vec3 t, ic_vec3 b, ic_vec3 n_rec, float *lobe)
+/* The lobe's coefficients for the shading point's ω_o in a record's frame (t, b = n_i × t, n_i): one
+ * vector per distinct table, lobe[0 … sl->lobes − 1]. */
+static int lobe_in_frame(const ic_ctx *c, shading_lobe *sl, ic_vec3 t, ic_vec3 b, ic_vec3 n_rec,
+                         float lobe[3][IC_HSH_MAX_COUNT])
 {
     if (v3_dot(n_rec, sl->n) >= SAME_NORMAL_COS) {
         /* The shading frame is the record's: the lobe for wo read in it. */
-        ic_vec3 wl = v3(v3_dot(sl->wo, t), v3_dot(sl->wo, b), v3_dot(sl->wo, n_rec));
-        ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), lobe);
+        ic_vec3 wl = v3_norm(v3(v3_dot(sl->wo, t), v3_dot(sl->wo, b), v3_dot(sl->wo, n_rec)));
+        for (int l = 0; l < sl->lobes; ++l)
+            ic_hsh_lobe_table_eval(sl->table[l], wl, lobe[l]);
         return 1;
     }
     /* The lobe in a shading frame (n, and the record's tangent projected onto n's plane), turned into the
      * record's frame by the inverse of the record-to-shading rotation: with the reference rotation,
-     * (M Λ)·C = Λ·(Mᵀ C) and Mᵀ is the inverse rotation's matrix (SH rotations are orthogonal), so one
-     * channel is rotated instead of three. */
+     * (M Λ)·C = Λ·(Mᵀ C) and Mᵀ is the inverse rotation's matrix (SH rotations are orthogonal), so the
+     * lobe is rotated instead of the three channels of Λ. */
     if (!sl->have_here) {
         ic_vec3 ht = v3_sub(t, v3_scale(sl->n, v3_dot(t, sl->n)));
         ht = v3_len2(ht) > 1e-12f ? v3_norm(ht) : ic_frame_from_normal(sl->n).t;
         sl->here.normal = sl->n;
         sl->here.tangent = ht;
         sl->here.bitangent = v3_cross(sl->n, ht);
-        ic_vec3 wl = v3(v3_dot(sl->wo, ht), v3_dot(sl->wo, sl->here.bitangent), v3_dot(sl->wo, sl->n));
-        ic_hsh_lobe_table_eval(sl->table, v3_norm(wl), sl->lobe_here);
+        ic_vec3 wl = v3_norm(v3(v3_dot(sl->wo, ht), v3_dot(sl->wo, sl->here.bitangent), v3_dot(sl->wo, sl->n)));
+        for (int l = 0; l < sl->lobes; ++l)
+            ic_hsh_lobe_table_eval(sl->table[l], wl, sl->lobe_here[l]);
         sl->have_here = 1;
     }
     double scratch[2 * MAX_SH_ORDER * MAX_SH_ORDER];
@@ -472,7 +547,10 @@ static int lobe_in_frame(const ic_ctx *c, shading_lobe *sl, ic_vec3 t, ic_vec3 b
     ic_hsh_rotation rot, inv;
     ic_hsh_rotation_from_frames(&from, &sl->here, &rot);
     ic_hsh_rotation_invert(&rot, &inv);
-    return ic_hsh_rotate_exact(c->rad->basis, &inv, sl->lobe_here, 1, lobe, scratch) == IC_OK;
+    for (int l = 0; l < sl->lobes; ++l)
+        if (ic_hsh_rotate_exact(c->rad->basis, &inv, sl->lobe_here[l], 1, lobe[l], scratch) != IC_OK)
+            return 0;
+    return 1;
 }
 
 /* Record `index`'s coefficients extrapolated to the shading point, Λ_i + d_t ∂Λ_i/∂t + d_b ∂Λ_i/∂b
@@ -498,32 +576,39 @@ static int add_extrapolated(const ic_ctx *c, const shading_lobe *sl, uint32_t in
     return 1;
 }
 
-/* Per channel max(acc·C, 0) for a planar RGB vector and one lobe vector. */
-static ic_vec3 shade_clamped(const ic_ctx *c, const float *acc, const float *lobe)
+/* Per channel max(acc·C, 0) for a planar RGB vector and the lobe vectors of lobe_in_frame, times the
+ * material's scale. */
+static ic_vec3 shade_clamped(const ic_ctx *c, const shading_lobe *sl, const float *acc,
+                             float lobe[3][IC_HSH_MAX_COUNT])
 {
     const uint32_t k = c->rad->k;
-    return v3(fmaxf(dot_channel(acc, 0, lobe, k), 0.0f), fmaxf(dot_channel(acc, 1, lobe, k), 0.0f),
-              fmaxf(dot_channel(acc, 2, lobe, k), 0.0f));
+    const int l1 = sl->lobes > 1 ? 1 : 0, l2 = sl->lobes > 1 ? 2 : 0;
+    return v3_mul(sl->scale, v3(fmaxf(dot_channel(acc, 0, lobe[0], k), 0.0f), fmaxf(dot_channel(acc, 1, lobe[l1], k), 0.0f),
+                                fmaxf(dot_channel(acc, 2, lobe[l2], k), 0.0f)));
 }
 
-/* Record `index`'s outgoing radiance through the lobe (k_s = 1) at the shading point, per channel and
+/* Record `index`'s outgoing radiance through the material's lobe at the shading point, per channel and
  * clamped at zero: (Λ_i + d_t ∂Λ_i/∂t + d_b ∂Λ_i/∂b)·C_i(ω_o). Returns 0 when the record has no
  * coefficients of this basis. */
 static int record_outgoing(const ic_ctx *c, shading_lobe *sl, uint32_t index, ic_vec3 *out)
 {
-    float acc[3 * IC_HSH_MAX_COUNT], lobe[IC_HSH_MAX_COUNT];
+    float acc[3 * IC_HSH_MAX_COUNT], lobe[3][IC_HSH_MAX_COUNT];
     memset(acc, 0, sizeof(float) * 3 * c->rad->k);
     ic_vec3 t, b, n;
     if (!add_extrapolated(c, sl, index, 1.0f, acc, &t, &b, &n) || !lobe_in_frame(c, sl, t, b, n, lobe))
         return 0;
-    *out = shade_clamped(c, acc, lobe);
+    *out = shade_clamped(c, sl, acc, lobe);
     return 1;
 }
 
 static shading_lobe shading_lobe_at(const ic_ctx *c, ic_vec3 p, ic_vec3 n, uint32_t material, ic_vec3 wo)
 {
     shading_lobe sl;
-    sl.table = c->rad->tables[c->rad->table_of[material]];
+    const int32_t *t = c->rad->table_of[material];
+    for (int ch = 0; ch < 3; ++ch)
+        sl.table[ch] = c->rad->tables[t[ch]];
+    sl.lobes = t[1] == t[0] && t[2] == t[0] ? 1 : 3;
+    sl.scale = c->rad->scale[material];
     sl.p = p;
     sl.n = n;
     sl.wo = wo;
@@ -536,7 +621,7 @@ static shading_lobe shading_lobe_at(const ic_ctx *c, ic_vec3 p, ic_vec3 n, uint3
  * clamp then applies to each frame's sum rather than to each record. */
 #define FRAME_GROUPS 4
 
-int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uint32_t material, ic_vec3 wo,
+int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, uint32_t material, ic_vec3 wo,
                           ic_cache_hint *hint, ic_vec3 *L)
 {
     if (!ic_ic_radiance_serves(c, material))
@@ -551,7 +636,7 @@ int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uin
         return 0;
     shading_lobe sl = shading_lobe_at(c, p, n, material, wo);
     const uint32_t k = c->rad->k;
-    float acc[FRAME_GROUPS][3 * IC_HSH_MAX_COUNT], lobe[IC_HSH_MAX_COUNT], one[3 * IC_HSH_MAX_COUNT];
+    float acc[FRAME_GROUPS][3 * IC_HSH_MAX_COUNT], lobe[3][IC_HSH_MAX_COUNT], one[3 * IC_HSH_MAX_COUNT];
     ic_vec3 gt[FRAME_GROUPS], gb[FRAME_GROUPS], gn[FRAME_GROUPS];
     int groups = 0;
     double sum[3] = {0.0, 0.0, 0.0}, wsum = 0.0;
@@ -579,7 +664,7 @@ int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uin
             gn[gi] = nn;
             ++groups;
         } else if (gi >= FRAME_GROUPS && lobe_in_frame(c, &sl, t, b, nn, lobe)) {
-            ic_vec3 v = shade_clamped(c, one, lobe);
+            ic_vec3 v = shade_clamped(c, &sl, one, lobe);
             sum[0] += v.x;
             sum[1] += v.y;
             sum[2] += v.z;
@@ -588,13 +673,13 @@ int ic_ic_radiance_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uin
     for (int g = 0; g < groups; ++g) {
         if (!lobe_in_frame(c, &sl, gt[g], gb[g], gn[g], lobe))
             continue;
-        ic_vec3 v = shade_clamped(c, acc[g], lobe);
+        ic_vec3 v = shade_clamped(c, &sl, acc[g], lobe);
         sum[0] += v.x;
         sum[1] += v.y;
         sum[2] += v.z;
     }
     if (!(wsum > 0.0))
         return 0;
-    *L = v3_mul(ks, v3((float)(sum[0] / wsum), (float)(sum[1] / wsum), (float)(sum[2] / wsum)));
+    *L = v3((float)(sum[0] / wsum), (float)(sum[1] / wsum), (float)(sum[2] / wsum));
     return 1;
 }

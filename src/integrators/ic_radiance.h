@@ -9,7 +9,8 @@
  *
  * C_i the lobe's coefficients for ω_o expressed in record i's frame (a table over the outgoing elevation
  * per lobe, rotated into the record's frame when the normals differ), (d_t, d_b) = p − p_i in that frame.
- * Irradiance records keep serving the diffuse lobes; both kinds live in one cache with the same weights,
+ * A Phong lobe is one table times k_s; a microfacet lobe (conductor, plastic's coat) is tabulated from the
+ * BSDF itself (ic_bsdf_glossy_local), one table per colour channel unless they agree. Irradiance records keep serving the diffuse lobes; both kinds live in one cache with the same weights,
  * clamps and octree.
  */
 #ifndef IC_INTEGRATORS_IC_RADIANCE_H
@@ -41,9 +42,10 @@ int ic_ic_radiance_serves(const struct ic_ctx *c, uint32_t material);
 ic_result ic_ic_radiance_build(struct ic_ctx *c, const ic_render_options *opt, struct phase_times *pt,
                                uint32_t *made, uint32_t *refinements, ic_error *err);
 /* The glossy lobe's indirect outgoing radiance at the surface point p (shading normal n, the bsdf's
- * frame) towards wo, interpolated from the radiance records: returns 0 (L unset) when none accepts p. */
-int ic_ic_radiance_lookup(const struct ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_vec3 ks, uint32_t material,
-                          ic_vec3 wo, ic_cache_hint *hint, ic_vec3 *L);
+ * frame) of `material` towards wo, interpolated from the radiance records: returns 0 (L unset) when none
+ * accepts p. */
+int ic_ic_radiance_lookup(const struct ic_ctx *c, ic_vec3 p, ic_vec3 n, uint32_t material, ic_vec3 wo,
+                          ic_cache_hint *hint, ic_vec3 *L);
 /* Floats a radiance record's payload holds: Λ, ∂Λ/∂t, ∂Λ/∂b, each 3·n². */
 uint32_t ic_ic_radiance_payload_floats(const ic_radiance *r);
 

@@ -3,7 +3,8 @@
  *
  * 1. White furnace: a glossy plane (no diffuse part) under a constant sky reflects k_s × the Phong
  *    lobe's directional albedo × L at every view; the records' Λ·C must give the path tracer's image,
- *    for two exponents.
+ *    for two exponents; and for a coloured rough conductor and a rough plastic's coat, whose lobes are
+ *    tabulated from the BSDF itself.
  * 2. The glossy Cornell box with a floor of exponent 20: the cache with radiance records against a
  *    path-traced reference (its noise measured from two halves) — image mean within 1 %, relMSE below a
  *    bound, and radiance records actually made on the floor and the sphere.
@@ -82,6 +83,40 @@ static void test_furnace(void)
         CHECK(fabs(mc / mr - 1.0) < 0.01, "exponent %g: furnace mean %+.3f %% off", (double)exponents[e],
               100.0 * (mc / mr - 1.0));
         CHECK(err < 2e-3, "exponent %g: furnace relMSE %.2e", (double)exponents[e], err);
+        ic_image_free(&ref);
+        ic_image_free(&img);
+    }
+}
+
+/* The same furnace with the microfacet models, whose lobes are tabulated from the BSDF itself: a
+ * coloured rough conductor (one table per channel) and a rough plastic with a black base (its coat
+ * alone). */
+static void test_furnace_microfacet(void)
+{
+    const char *materials[] = {"{\"type\": \"conductor\", \"ks\": [0.95, 0.65, 0.3], \"alpha\": 0.4}",
+                               "{\"type\": \"plastic\", \"kd\": [0, 0, 0], \"alpha\": 0.3}"};
+    for (int m = 0; m < 2; ++m) {
+        char json[1024];
+        snprintf(json, sizeof json,
+                 "{\"camera\": {\"eye\": [0, 1, 2], \"target\": [0, 0, -1], \"up\": [0, 1, 0], \"fov_y\": 60, "
+                 "\"width\": 40, \"height\": 40}, \"meshes\": [{\"path\": \"rc_furnace.obj\"}], \"materials\": "
+                 "{\"mirrorish\": %s}, \"environment\": {\"radiance\": [1, 1, 1]}}",
+                 materials[m]);
+        test_write_file(IC_TEST_TMP "/rc_furnace_mf.json", json);
+        ic_render_options pt = {0};
+        pt.spp = 256;
+        ic_image ref = {0}, img = {0};
+        ic_render_stats st;
+        CHECK(test_render(IC_TEST_TMP "/rc_furnace_mf.json", 0, 0, &pt, &ref, NULL), "reference renders");
+        ic_render_options o = radiance_options();
+        CHECK(test_render(IC_TEST_TMP "/rc_furnace_mf.json", 0, 0, &o, &img, &st), "cache renders");
+        int f1, f2;
+        double mr = test_image_mean(&ref, &f1), mc = test_image_mean(&img, &f2), err = rel_mse(&img, &ref);
+        printf("furnace %s: %u radiance records, mean %+.3f %% off the path tracer, relMSE %.2e\n", materials[m],
+               st.radiance_records, 100.0 * (mc / mr - 1.0), err);
+        CHECK(st.radiance_records > 0, "%s: radiance records serve it", materials[m]);
+        CHECK(fabs(mc / mr - 1.0) < 0.01, "%s: furnace mean %+.3f %% off", materials[m], 100.0 * (mc / mr - 1.0));
+        CHECK(err < 2e-3, "%s: furnace relMSE %.2e", materials[m], err);
         ic_image_free(&ref);
         ic_image_free(&img);
     }
@@ -287,6 +322,7 @@ static void test_gradients(void)
 int main(void)
 {
     test_furnace();
+    test_furnace_microfacet();
     test_glossy_cornell();
     test_determinism();
     test_gradients();
