@@ -6,6 +6,7 @@
  * typo; when one output still fails at the end, the others are written and the exit status is 1.
  */
 #include "cli.h"
+#include "exr_meta.h"
 #include "json_out.h"
 #include "options.h"
 #include "outputs.h"
@@ -260,6 +261,10 @@ int ic_cli_render(int argc, char **argv)
     int w = img.width, h = img.height;
     ic_image_write_options wo = {0};
     wo.exposure = a.given[IC_ARG_EXPOSURE] ? (float)a.exposure : ic_scene_exposure(scene);
+    ic_cli_exr_meta meta;
+    ic_cli_exr_meta_make(&a, &st, &meta);
+    wo.meta = meta.items;
+    wo.meta_count = meta.count;
     /* One failed output does not cost the others: each is written, and the failures are named. */
     char failed[1024] = "";
     int n_failed = 0;
@@ -290,6 +295,7 @@ int ic_cli_render(int argc, char **argv)
     ic_image_free(&aovs.density);
     ic_image_free(&aovs.amap);
     ic_image_free(&aovs.glossy);
+    ic_cli_exr_meta_free(&meta);
     ic_scene_free(scene);
     if (st.cut_by_time)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "

@@ -26,9 +26,19 @@ typedef struct ic_image {
 } ic_image;
 
 /* Write options; zero means default. */
+/* One text attribute of an OpenEXR header (ic_image_write_options.meta). */
+typedef struct ic_image_meta {
+    const char *name;      /* attribute name, e.g. "irrcache:seed" (non-empty, < 256 bytes) */
+    const char *value;     /* UTF-8 text */
+} ic_image_meta;
+
 typedef struct ic_image_write_options {
     float exposure;        /* stops applied before tone mapping LDR outputs (default 0) */
     int exr_half;          /* 1: EXR as 16-bit half, 0 (default): 32-bit float */
+    const ic_image_meta *meta; /* EXR: text attributes written to the header (other formats ignore them);
+                              every EXR also gets the chromaticities of its linear Rec. 709 / sRGB primaries
+                              and D65 white */
+    uint32_t meta_count;
 } ic_image_write_options;
 
 /* Allocates a zero-filled w×h image. */
@@ -47,6 +57,10 @@ ic_result ic_image_decode_memory(const void *data, size_t size, const char *name
                                  ic_image *out, ic_error *err);
 /* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. */
 ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
+/* Reads the text attribute `name` of an OpenEXR file's first part into value (capacity cap, truncated,
+ * always terminated): IC_OK, IC_ERR_INVALID_ARG when the file has no such text attribute, or the reader's
+ * error for a file that is not a readable OpenEXR. */
+ic_result ic_image_exr_attribute(const char *path, const char *name, char *value, size_t cap, ic_error *err);
 /* Writes width×height 8-bit RGB bytes (row-major, top row first) as a PNG, as given (no curve); atomic. */
 ic_result ic_image_write_png8(const char *path, const uint8_t *rgb, int width, int height, ic_error *err);
 

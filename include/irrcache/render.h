@@ -208,6 +208,7 @@ typedef struct ic_render_stats {
     int spp;               /* samples per pixel taken (adaptive sampling: the mean) */
     int spp_max;           /* the most samples one pixel took (adaptive sampling; else spp) */
     int threads;           /* threads used */
+    uint64_t seed;         /* the seed the render used (the option's, else the scene file's, else the default) */
     uint32_t records;      /* cache records (integrator IC) */
     int passes;            /* construction passes (integrator IC) */
     uint32_t refinements;  /* adaptive: times a record's a_i was lowered */

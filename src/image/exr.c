@@ -196,8 +196,19 @@ ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_imag
 
 /* Writes img to the (temporary) file `file`; returns the first library error (and, when the file could
  * not be created, the system's errno in *open_errno). */
-static exr_result_t write_part(const char *file, const ic_image *img, int is_half, exr_compression_t compression,
-                               int *ambiguous, int *open_errno)
+/* The header's attributes beyond the required ones: the primaries of the linear sRGB data (ITU-R BT.709,
+ * D65 white) and the caller's text attributes. */
+static exr_result_t write_attributes(exr_context_t ctxt, int part, const ic_image_meta *meta, uint32_t meta_count)
+{
+    const exr_attr_chromaticities_t rec709 = {0.64f, 0.33f, 0.30f, 0.60f, 0.15f, 0.06f, 0.3127f, 0.3290f};
+    exr_result_t rv = exr_attr_set_chromaticities(ctxt, part, "chromaticities", &rec709);
+    for (uint32_t i = 0; i < meta_count && rv == EXR_ERR_SUCCESS; ++i)
+        rv = exr_attr_set_string(ctxt, part, meta[i].name, meta[i].value ? meta[i].value : "");
+    return rv;
+}
+
+static exr_result_t write_part(const char *file, const ic_image *img, int is_half, const ic_image_meta *meta,
+                               uint32_t meta_count, exr_compression_t compression, int *ambiguous, int *open_errno)
 {
     const float *rgb = img->rgb;
     exr_context_initializer_t init = context_initializer();
@@ -218,6 +229,8 @@ static exr_result_t write_part(const char *file, const ic_image *img, int is_hal
     static const char *const names[3] = {"R", "G", "B"};
     for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; ++c)
         rv = exr_add_channel(ctxt, part, names[c], type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = write_attributes(ctxt, part, meta, meta_count);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_write_header(ctxt);
 
@@ -264,18 +277,23 @@ static exr_result_t write_part(const char *file, const ic_image *img, int is_hal
     return rv != EXR_ERR_SUCCESS ? rv : finish;
 }
 
-ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half, ic_error *err)
+ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half, const ic_image_meta *meta,
+                             uint32_t meta_count, ic_error *err)
 {
+    for (uint32_t i = 0; i < meta_count; ++i)
+        if (!meta[i].name || !*meta[i].name || strlen(meta[i].name) >= 256)
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: EXR attribute %u has an empty or too long name", path,
+                                i);
     char tmp[4096];
     if (strlen(path) + 32 >= sizeof tmp)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: output path too long; use a shorter path", path);
     ic_atomic_temp_name(path, tmp, sizeof tmp);
 
     int open_errno = 0, ambiguous = 0;
-    exr_result_t rv = write_part(tmp, img, is_half, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);
+    exr_result_t rv = write_part(tmp, img, is_half, meta, meta_count, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);
     if (rv == EXR_ERR_SUCCESS && ambiguous) {
         remove(tmp);
-        rv = write_part(tmp, img, is_half, EXR_COMPRESSION_NONE, &ambiguous, &open_errno);
+        rv = write_part(tmp, img, is_half, meta, meta_count, EXR_COMPRESSION_NONE, &ambiguous, &open_errno);
     }
     if (rv != EXR_ERR_SUCCESS) {
         remove(tmp); /* the library deletes it on most errors; make sure */
@@ -289,4 +307,27 @@ ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half,
                             exr_get_default_error_message(rv));
     }
     return ic_atomic_rename(tmp, path, err);
+}
+
+ic_result ic_image_exr_attribute(const char *path, const char *name, char *value, size_t cap, ic_error *err)
+{
+    if (!path || !name || !value || cap == 0)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "EXR attribute: no path, name or buffer");
+    value[0] = '\0';
+    exr_context_initializer_t init = context_initializer();
+    exr_context_t ctxt = NULL;
+    exr_result_t rv = exr_start_read(&ctxt, path, &init);
+    if (rv != EXR_ERR_SUCCESS) {
+        exr_finish(&ctxt);
+        return exr_read_failed(path, rv, err);
+    }
+    const exr_attribute_t *attr = NULL;
+    rv = exr_get_attribute_by_name(ctxt, 0, name, &attr);
+    ic_result r = IC_OK;
+    if (rv != EXR_ERR_SUCCESS || !attr || attr->type != EXR_ATTR_STRING || !attr->string)
+        r = ic_error_set(err, IC_ERR_INVALID_ARG, "%s: no text attribute %s", path, name);
+    else
+        snprintf(value, cap, "%.*s", (int)attr->string->length, attr->string->str ? attr->string->str : "");
+    exr_finish(&ctxt);
+    return r;
 }

@@ -108,7 +108,7 @@ ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_w
     char ext[8];
     extension_of(path, ext);
     if (!strcmp(ext, ".exr"))
-        return ic_image_write_exr(path, img, opt->exr_half, err);
+        return ic_image_write_exr(path, img, opt->exr_half, opt->meta, opt->meta_count, err);
     if (!strcmp(ext, ".pfm"))
         return ic_image_write_pfm(path, img, err);
     if (!strcmp(ext, ".hdr"))

@@ -74,6 +74,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     if (r != IC_OK)
         return r;
     st->threads = ic_resolve_threads(opt.threads);
+    st->seed = opt.seed;
 
     double t0 = ic_seconds();
     ic_accel *accel = NULL;

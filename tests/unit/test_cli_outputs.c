@@ -9,6 +9,9 @@
 #include "test_util.h"
 #include "test_files.h"
 
+#include "irrcache/image.h"
+#include "irrcache/version.h"
+
 #include <dirent.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -163,5 +166,32 @@ int main(void)
           err_text);
     CHECK(exists(DIR_ "/save/img.png") && !exists(DIR_ "/save/c.irc"), "the image is written, the cache is not");
     CHECK(test_count_temporaries(DIR_ "/save") == 0, "no temporary file left");
+    /* EXR outputs, the AOVs' included, say how they were made (issue "An installable library", EXR metadata). */
+    CHECK(system("mkdir -p '" DIR_ "/meta'") == 0, "meta folder");
+    rc = run("render " CORNELL " --integrator ic --seed 42 --width 16 --height 16 --spp 2 --adaptive-sampling off -q -o "
+             DIR_ "/meta/m.exr --aov indirect");
+    CHECK(rc == 0, "render with EXR metadata (got %d: %s)", rc, err_text);
+    const char *files[2] = {DIR_ "/meta/m.exr", DIR_ "/meta/m.indirect.exr"};
+    for (int f = 0; f < 2; ++f) {
+        char v[4096];
+        ic_error e;
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:version", v, sizeof v, &e) == IC_OK && !strcmp(v, ic_version()),
+              "%s: version %s", files[f], v);
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:seed", v, sizeof v, &e) == IC_OK && !strcmp(v, "42"),
+              "%s: seed %s", files[f], v);
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:spp", v, sizeof v, &e) == IC_OK && !strcmp(v, "2"),
+              "%s: spp %s", files[f], v);
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:integrator", v, sizeof v, &e) == IC_OK && !strcmp(v, "ic"),
+              "%s: integrator %s", files[f], v);
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:scene_fnv1a64", v, sizeof v, &e) == IC_OK && strlen(v) == 16,
+              "%s: scene hash %s", files[f], v);
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:seconds", v, sizeof v, &e) == IC_OK && atof(v) > 0.0,
+              "%s: seconds %s", files[f], v);
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:settings", v, sizeof v, &e) == IC_OK &&
+                  strstr(v, "\"seed\"") && strstr(v, "42"),
+              "%s: settings %s", files[f], v);
+        CHECK(ic_image_exr_attribute(files[f], "irrcache:nothing", v, sizeof v, &e) == IC_ERR_INVALID_ARG,
+              "%s: a missing attribute is reported", files[f]);
+    }
     TEST_MAIN_END();
 }

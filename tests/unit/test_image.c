@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <sys/stat.h>
 
 #ifndef IC_TEST_TMP
@@ -632,6 +633,55 @@ static void test_jpeg_huffman(void)
     ic_image_free(&img);
 }
 
+/* Text attributes written to an EXR header come back as written (float and half), an attribute not
+ * written is reported, a bad name is refused before anything is written, other formats ignore them. */
+static void test_exr_metadata(void)
+{
+    ic_image img;
+    CHECK(ic_image_create(&img, 5, 3) == IC_OK, "create");
+    for (int i = 0; i < 15 * 3; ++i)
+        img.rgb[i] = 0.25f * (float)i;
+    const ic_image_meta meta[2] = {{"irrcache:note", "Λ·C = \"quoted\" text"}, {"owner", "tests"}};
+    for (int half = 0; half <= 1; ++half) {
+        ic_image_write_options wo = {0};
+        wo.exr_half = half;
+        wo.meta = meta;
+        wo.meta_count = 2;
+        ic_error err;
+        CHECK(ic_image_write(SCRATCH "/meta.exr", &img, &wo, &err) == IC_OK, "write with metadata: %s", err.message);
+        char v[256];
+        CHECK(ic_image_exr_attribute(SCRATCH "/meta.exr", "irrcache:note", v, sizeof v, &err) == IC_OK &&
+                  !strcmp(v, meta[0].value),
+              "half %d: note reads back as %s", half, v);
+        CHECK(ic_image_exr_attribute(SCRATCH "/meta.exr", "owner", v, sizeof v, &err) == IC_OK && !strcmp(v, "tests"),
+              "half %d: owner reads back as %s", half, v);
+        CHECK(ic_image_exr_attribute(SCRATCH "/meta.exr", "absent", v, sizeof v, &err) == IC_ERR_INVALID_ARG &&
+                  v[0] == '\0',
+              "half %d: an absent attribute", half);
+        char small[6];
+        CHECK(ic_image_exr_attribute(SCRATCH "/meta.exr", "owner", small, 3, &err) == IC_OK && !strcmp(small, "te"),
+              "a small buffer truncates");
+        ic_image back;
+        CHECK(ic_image_read(SCRATCH "/meta.exr", &back, &err) == IC_OK && back.width == 5 &&
+                  back.rgb[3 * 7 + 1] == img.rgb[3 * 7 + 1],
+              "the pixels are untouched by the header");
+        ic_image_free(&back);
+    }
+    const ic_image_meta bad[1] = {{"", "x"}};
+    ic_image_write_options wo = {0};
+    wo.meta = bad;
+    wo.meta_count = 1;
+    ic_error err;
+    CHECK(ic_image_write(SCRATCH "/bad_meta.exr", &img, &wo, &err) == IC_ERR_INVALID_ARG, "an empty name is refused");
+    CHECK(access(SCRATCH "/bad_meta.exr", F_OK) != 0, "and nothing is written");
+    wo.meta = meta;
+    wo.meta_count = 2;
+    CHECK(ic_image_write(SCRATCH "/meta.pfm", &img, &wo, &err) == IC_OK, "PFM ignores metadata");
+    CHECK(ic_image_exr_attribute(SCRATCH "/meta.pfm", "owner", (char[4]){0}, 4, &err) != IC_OK,
+          "a PFM is not an EXR");
+    ic_image_free(&img);
+}
+
 int main(void)
 {
     if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
@@ -649,5 +699,6 @@ int main(void)
     test_heatmap();
     test_heatmap_fixed_scale();
     test_bad_input();
+    test_exr_metadata();
     TEST_MAIN_END();
 }

@@ -1,0 +1,54 @@
+/* exr_meta.c — the EXR header attributes of a render's outputs (exr_meta.h). */
+#include "exr_meta.h"
+
+#include "core/read_file.h"
+#include "irrcache/cache.h"
+#include "irrcache/version.h"
+
+#include <cjson/cJSON.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void add(ic_cli_exr_meta *m, const char *name, const char *value)
+{
+    if (m->count < IC_CLI_EXR_META_MAX && value) {
+        m->items[m->count].name = name;
+        m->items[m->count].value = value;
+        ++m->count;
+    }
+}
+
+void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cli_exr_meta *m)
+{
+    memset(m, 0, sizeof *m);
+    add(m, "irrcache:version", ic_version());
+    add(m, "irrcache:scene", a->scene);
+    /* The scene file's own bytes identify it (its meshes and textures are not hashed here). */
+    char *data = NULL;
+    size_t size = 0;
+    if (a->scene && ic_read_regular_file(a->scene, "scene file", UINT64_MAX, "", &data, &size, NULL, NULL) == IC_OK) {
+        snprintf(m->text[0], sizeof m->text[0], "%016" PRIx64, ic_fnv1a64(IC_FNV64_OFFSET, data, size));
+        add(m, "irrcache:scene_fnv1a64", m->text[0]);
+    }
+    free(data);
+    add(m, "irrcache:integrator", a->render.integrator == IC_INTEGRATOR_IC ? "ic" : "pt");
+    snprintf(m->text[1], sizeof m->text[1], "%" PRIu64, st->seed);
+    add(m, "irrcache:seed", m->text[1]);
+    snprintf(m->text[2], sizeof m->text[2], "%d", st->spp);
+    add(m, "irrcache:spp", m->text[2]);
+    /* Fixed width, so that the header's size does not depend on the time. */
+    snprintf(m->text[3], sizeof m->text[3], "%014.3f", st->seconds);
+    add(m, "irrcache:seconds", m->text[3]);
+    cJSON *settings = ic_cli_settings_json(a);
+    m->settings = settings ? cJSON_PrintUnformatted(settings) : NULL;
+    cJSON_Delete(settings);
+    add(m, "irrcache:settings", m->settings);
+}
+
+void ic_cli_exr_meta_free(ic_cli_exr_meta *m)
+{
+    free(m->settings);
+    m->settings = NULL;
+}
