@@ -71,9 +71,9 @@ static ic_result check_layout(const char *path, exr_const_context_t ctxt, int *g
     exr_result_t rv = exr_get_storage(ctxt, 0, &storage);
     if (rv != EXR_ERR_SUCCESS)
         return exr_read_failed(path, rv, err);
-    if (storage != EXR_STORAGE_SCANLINE)
+    if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
         return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                            "%s: tiled or deep OpenEXR is not supported; save it as a scanline OpenEXR", path);
+                            "%s: deep OpenEXR is not supported; save it as a scanline or tiled OpenEXR", path);
 
     const exr_attr_chlist_t *channels = NULL;
     rv = exr_get_channels(ctxt, 0, &channels);
@@ -100,50 +100,70 @@ static ic_result check_layout(const char *path, exr_const_context_t ctxt, int *g
     return IC_OK;
 }
 
-/* Decodes every chunk of part 0 into img (rows relative to the data window's top). */
+/* Decodes one chunk whose pixels start at (col, row) of img (relative to the data window). */
+static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_t *chunk, int col, int row, int grey,
+                                 exr_decode_pipeline_t *decoder, int *initialized, ic_image *img)
+{
+    exr_result_t rv = *initialized ? exr_decoding_update(ctxt, 0, chunk, decoder)
+                                   : exr_decoding_initialize(ctxt, 0, chunk, decoder);
+    if (rv != EXR_ERR_SUCCESS)
+        return rv;
+    *initialized = 1;
+    if (col < 0 || row < 0 || col + chunk->width > img->width || row + chunk->height > img->height)
+        return EXR_ERR_BAD_CHUNK_LEADER;
+    const size_t line_floats = (size_t)img->width * 3;
+    for (int c = 0; c < decoder->channel_count; ++c) {
+        exr_coding_channel_info_t *ch = &decoder->channels[c];
+        int slot = rgb_slot(ch->channel_name, grey);
+        if (slot < 0) {
+            ch->decode_to_ptr = NULL; /* skipped */
+            continue;
+        }
+        ch->decode_to_ptr = (uint8_t *)(img->rgb + (size_t)row * line_floats + (size_t)col * 3 + (size_t)slot);
+        ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
+        ch->user_line_stride = (int32_t)(line_floats * sizeof(float));
+        ch->user_data_type = EXR_PIXEL_FLOAT;
+        ch->user_bytes_per_element = (int16_t)sizeof(float);
+    }
+    rv = exr_decoding_choose_default_routines(ctxt, 0, decoder);
+    return rv == EXR_ERR_SUCCESS ? exr_decoding_run(ctxt, 0, decoder) : rv;
+}
+
+/* Every chunk of part 0 into img: line groups of a scanline file, or the full-resolution level's tiles
+ * of a tiled one (mipmap and ripmap levels below it are not read). */
 static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const exr_attr_box2i_t *window, int grey,
                                ic_image *img, ic_error *err)
 {
-    int lines_per_chunk = 0;
-    exr_result_t rv = exr_get_scanlines_per_chunk(ctxt, 0, &lines_per_chunk);
-    if (rv != EXR_ERR_SUCCESS || lines_per_chunk <= 0)
-        return exr_read_failed(path, rv != EXR_ERR_SUCCESS ? rv : EXR_ERR_BAD_CHUNK_LEADER, err);
-
+    exr_storage_t storage;
+    exr_result_t rv = exr_get_storage(ctxt, 0, &storage);
     exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
     int initialized = 0;
-    const size_t line_floats = (size_t)img->width * 3;
-    for (int y = window->min.y; y <= window->max.y && rv == EXR_ERR_SUCCESS; y += lines_per_chunk) {
-        exr_chunk_info_t chunk;
-        rv = exr_read_scanline_chunk_info(ctxt, 0, y, &chunk);
-        if (rv != EXR_ERR_SUCCESS)
-            break;
-        rv = initialized ? exr_decoding_update(ctxt, 0, &chunk, &decoder)
-                         : exr_decoding_initialize(ctxt, 0, &chunk, &decoder);
-        if (rv != EXR_ERR_SUCCESS)
-            break;
-        initialized = 1;
-        /* A chunk may start above the window (line groups are aligned to the file's origin). */
-        const int row = chunk.start_y - window->min.y;
-        if (row < 0 || row + chunk.height > img->height) {
+    if (rv == EXR_ERR_SUCCESS && storage == EXR_STORAGE_TILED) {
+        int32_t tw = 0, th = 0;
+        rv = exr_get_tile_sizes(ctxt, 0, 0, 0, &tw, &th);
+        if (rv == EXR_ERR_SUCCESS && (tw <= 0 || th <= 0))
             rv = EXR_ERR_BAD_CHUNK_LEADER;
-            break;
-        }
-        for (int c = 0; c < decoder.channel_count; ++c) {
-            exr_coding_channel_info_t *ch = &decoder.channels[c];
-            int slot = rgb_slot(ch->channel_name, grey);
-            if (slot < 0) {
-                ch->decode_to_ptr = NULL; /* skipped */
-                continue;
+        const int tiles_x = rv == EXR_ERR_SUCCESS ? (img->width + tw - 1) / tw : 0;
+        const int tiles_y = rv == EXR_ERR_SUCCESS ? (img->height + th - 1) / th : 0;
+        for (int ty = 0; ty < tiles_y && rv == EXR_ERR_SUCCESS; ++ty)
+            for (int tx = 0; tx < tiles_x && rv == EXR_ERR_SUCCESS; ++tx) {
+                exr_chunk_info_t chunk;
+                rv = exr_read_tile_chunk_info(ctxt, 0, tx, ty, 0, 0, &chunk);
+                if (rv == EXR_ERR_SUCCESS)
+                    rv = decode_chunk(ctxt, &chunk, tx * tw, ty * th, grey, &decoder, &initialized, img);
             }
-            ch->decode_to_ptr = (uint8_t *)(img->rgb + (size_t)row * line_floats + (size_t)slot);
-            ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
-            ch->user_line_stride = (int32_t)(line_floats * sizeof(float));
-            ch->user_data_type = EXR_PIXEL_FLOAT;
-            ch->user_bytes_per_element = (int16_t)sizeof(float);
+    } else if (rv == EXR_ERR_SUCCESS) {
+        int lines_per_chunk = 0;
+        rv = exr_get_scanlines_per_chunk(ctxt, 0, &lines_per_chunk);
+        if (rv == EXR_ERR_SUCCESS && lines_per_chunk <= 0)
+            rv = EXR_ERR_BAD_CHUNK_LEADER;
+        for (int y = window->min.y; y <= window->max.y && rv == EXR_ERR_SUCCESS; y += lines_per_chunk) {
+            exr_chunk_info_t chunk;
+            rv = exr_read_scanline_chunk_info(ctxt, 0, y, &chunk);
+            /* A chunk may start above the window (line groups are aligned to the file's origin). */
+            if (rv == EXR_ERR_SUCCESS)
+                rv = decode_chunk(ctxt, &chunk, 0, chunk.start_y - window->min.y, grey, &decoder, &initialized, img);
         }
-        rv = exr_decoding_choose_default_routines(ctxt, 0, &decoder);
-        if (rv == EXR_ERR_SUCCESS)
-            rv = exr_decoding_run(ctxt, 0, &decoder);
     }
     if (initialized)
         exr_decoding_destroy(ctxt, &decoder);
