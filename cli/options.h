@@ -77,6 +77,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "each pixel's relative noise (needs --spp >= 8 and no --time)") \
     X(EXPOSURE, "--exposure", NULL, IC_OPT_DOUBLE, exposure, -100, 100, "STOPS", NAN, "scene file, else 0", "stops", \
       IC_SCOPE_ALL, "exposure applied to .png outputs") \
+    X(HALF, "--half", NULL, IC_OPT_FLAG, exr_half, 0, 0, "", NAN, "off", "", IC_SCOPE_ALL, \
+      "write .exr outputs (and EXR AOVs) as 16-bit half floats: half the size, about 3 significant digits") \
     X(STATS, "--stats", NULL, IC_OPT_STRING, stats_path, 0, 0, "FILE.json", NAN, "none", "", IC_SCOPE_ALL, \
       "write run statistics: the settings, seconds, rays, rays per second, spp, per-phase times and, for " \
       "ic, records, passes and the records' extents a*R (record_extent: min, mean, max)") \
@@ -223,6 +225,7 @@ typedef struct ic_cli_args {
     int output_count;
     const char *stats_path, *records_json, *aov;
     double exposure;
+    int exr_half;
     int quiet;
     int none;                          /* target of options that set nothing */
     ic_scene_load_options load;

@@ -261,6 +261,7 @@ int ic_cli_render(int argc, char **argv)
     int w = img.width, h = img.height;
     ic_image_write_options wo = {0};
     wo.exposure = a.given[IC_ARG_EXPOSURE] ? (float)a.exposure : ic_scene_exposure(scene);
+    wo.exr_half = a.exr_half;
     ic_cli_exr_meta meta;
     ic_cli_exr_meta_make(&a, &st, &meta);
     wo.meta = meta.items;

@@ -193,5 +193,25 @@ int main(void)
         CHECK(ic_image_exr_attribute(files[f], "irrcache:nothing", v, sizeof v, &e) == IC_ERR_INVALID_ARG,
               "%s: a missing attribute is reported", files[f]);
     }
+    /* --half: the same image in half the bytes, within half's precision. */
+    rc = run("render " CORNELL " --width 16 --height 16 --spp 2 --seed 3 -q -o " DIR_ "/meta/f.exr");
+    CHECK(rc == 0, "float EXR (got %d: %s)", rc, err_text);
+    rc = run("render " CORNELL " --width 16 --height 16 --spp 2 --seed 3 -q --half -o " DIR_ "/meta/h.exr");
+    CHECK(rc == 0, "half EXR (got %d: %s)", rc, err_text);
+    {
+        ic_image fimg, himg;
+        ic_error e;
+        CHECK(ic_image_read(DIR_ "/meta/f.exr", &fimg, &e) == IC_OK && ic_image_read(DIR_ "/meta/h.exr", &himg, &e) == IC_OK,
+              "both read back");
+        double worst = 0.0;
+        for (int i = 0; i < 16 * 16 * 3; ++i)
+            worst = fmax(worst, fabs(himg.rgb[i] - fimg.rgb[i]) / (fabs(fimg.rgb[i]) + 1e-6));
+        CHECK(worst < 1e-3, "half differs from float by %.2e at worst (half's epsilon is 9.8e-4)", worst);
+        struct stat sf, sh;
+        CHECK(stat(DIR_ "/meta/f.exr", &sf) == 0 && stat(DIR_ "/meta/h.exr", &sh) == 0 && sh.st_size < sf.st_size,
+              "the half file is smaller");
+        ic_image_free(&fimg);
+        ic_image_free(&himg);
+    }
     TEST_MAIN_END();
 }
