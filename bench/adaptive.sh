@@ -26,7 +26,7 @@ diffjson() { "$IRR" diff "$1" "$2" --json | python3 -c "import json,sys; d=json.
 run() { # name strategy accuracy [extra options...]
     name=$1; strategy=$2; acc=$3; shift 3
     "$IRR" render "$CORNELL" --integrator ic --strategy "$strategy" --accuracy "$acc" --width 128 --height 128 \
-        --spp $SPP --aov indirect -o "$OUT/$name.exr" --stats "$OUT/$name.json" -q "$@"
+        --spp $SPP --aov indirect -o "$OUT/$name.pfm" --stats "$OUT/$name.json" -q "$@"
     s="$OUT/$name.json"
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%.3f\t%.3f\t%.3f\t%s\n' "$strategy" "$acc" "$*" "$(field "$s" records)" \
         "$(field "$s" passes)" "$(field "$s" refinements)" "$(field "$s" phase gathering)" \
@@ -36,7 +36,7 @@ run() { # name strategy accuracy [extra options...]
 
 if [ ! -f "$OUT/ref.indirect.exr" ]; then
     "$IRR" render "$CORNELL" --integrator ic --strategy lazy --accuracy 0.01 --min-radius-px 0.5 --rays 2048 \
-        --width 128 --height 128 --spp $SPP --aov indirect -o "$OUT/ref.exr" --stats "$OUT/ref.json" -q
+        --width 128 --height 128 --spp $SPP --aov indirect -o "$OUT/ref.pfm" --stats "$OUT/ref.json" -q
 fi
 echo "# reference: $(field "$OUT/ref.json" records) records (one per pixel centre)"
 printf 'strategy\ta\textra\trecords\tpasses\trefinements\tgather_s\tinsert_s\tconvergence_s\trmse\trelmse\n'

@@ -205,10 +205,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_IC, "write every record (position, radius, a, image position, visibility) as JSON") \
     X(AOV, "--aov", NULL, IC_OPT_LIST, aov, 0, 0, "indirect,glossy,records,density,amap", NAN, "none", "", \
       IC_SCOPE_IC, "extra images next to the first output: <stem>.indirect.exr, <stem>.glossy.exr (the glossy " \
-      "lobe's indirect light from radiance records), <stem>.records.png (dots and radii; radiance records " \
-      "yellow in blue rings), " \
-      "<stem>.density.exr (records per pixel), <stem>.amap.png (a of the heaviest record, blue = --accuracy " \
-      "to red = accuracy/32)") \
+      "lobe's indirect light from radiance records), <stem>.density.exr (records per pixel) - when the first " \
+      "output is an .exr, these three are its layers instead (channels indirect.R ...) -, <stem>.records.png " \
+      "(dots and radii; radiance records yellow in blue rings), <stem>.amap.png (a of the heaviest record, " \
+      "blue = --accuracy to red = accuracy/32)") \
     X(HELP, "--help", "-h", IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, "show this help and exit") \
     X(HELP_MARKDOWN, "--help-markdown", NULL, IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, \
       "print the option tables of README.md (Markdown) and exit")

@@ -105,7 +105,7 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
 }
 
 /* AOVs go next to the first output: <stem>.<aov>.<ext>, with .exr for linear data and .png for the
- * overlay. */
+ * overlay; when the first output is itself an EXR, the linear ones are its layers instead. */
 typedef struct aov_file {
     const char *name, *suffix, *option;
 } aov_file;
@@ -115,6 +115,19 @@ static const aov_file aov_files[] = {{"indirect", ".indirect.exr", "--aov indire
                                      {"density", ".density.exr", "--aov density"},
                                      {"amap", ".amap.png", "--aov amap"}};
 #define AOV_COUNT (int)(sizeof aov_files / sizeof aov_files[0])
+
+/* 1 if path names an OpenEXR file. */
+static int is_exr(const char *path)
+{
+    size_t n = strlen(path);
+    return n >= 4 && !strcmp(path + n - 4, ".exr");
+}
+
+/* 1 if AOV k is a layer of the first output rather than a file of its own. */
+static int aov_is_layer(const char *first, int k)
+{
+    return is_exr(first) && is_exr(aov_files[k].suffix);
+}
 
 static void aov_path(const char *first, int k, char *path, size_t size)
 {
@@ -133,7 +146,7 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
     const ic_image *imgs[AOV_COUNT] = {&aovs->indirect, &aovs->glossy, &aovs->records, &aovs->density, &aovs->amap};
     int failed = 0;
     for (int k = 0; k < AOV_COUNT; ++k) {
-        if (!imgs[k]->rgb)
+        if (!imgs[k]->rgb || aov_is_layer(first, k))
             continue;
         char path[4200];
         aov_path(first, k, path, sizeof path);
@@ -189,7 +202,7 @@ int ic_cli_render(int argc, char **argv)
     for (int i = 0; i < a.output_count; ++i)
         outs[n_outs++] = (ic_cli_output){"-o", a.outputs[i]};
     for (int k = 0; k < AOV_COUNT && a.aov; ++k)
-        if (strstr(a.aov, aov_files[k].name)) {
+        if (strstr(a.aov, aov_files[k].name) && !aov_is_layer(a.outputs[0], k)) {
             aov_path(a.outputs[0], k, aov_paths[k], sizeof aov_paths[k]);
             outs[n_outs++] = (ic_cli_output){aov_files[k].option, aov_paths[k]};
         }
@@ -272,8 +285,20 @@ int ic_cli_render(int argc, char **argv)
 #define FAILED(what, path)                                                                              \
     (++n_failed, snprintf(failed + strlen(failed), sizeof failed - strlen(failed), "%s%s %s",           \
                           failed[0] ? ", " : "", what, path))
+    /* The linear AOVs ride in the first output when it is an EXR, as its layers. */
+    const ic_image *aov_imgs[AOV_COUNT] = {&aovs.indirect, &aovs.glossy, &aovs.records, &aovs.density, &aovs.amap};
+    ic_image_layer layers[AOV_COUNT];
+    uint32_t layer_count = 0;
+    for (int k = 0; k < AOV_COUNT && opt.aovs && a.aov; ++k)
+        if (aov_imgs[k]->rgb && aov_is_layer(a.outputs[0], k))
+            layers[layer_count++] = (ic_image_layer){aov_files[k].name, aov_imgs[k]};
     for (int i = 0; i < a.output_count; ++i) {
-        if (ic_image_write(a.outputs[i], &img, &wo, &err) != IC_OK) {
+        ic_image_write_options wo_i = wo;
+        if (i == 0) {
+            wo_i.layers = layers;
+            wo_i.layer_count = layer_count;
+        }
+        if (ic_image_write(a.outputs[i], &img, &wo_i, &err) != IC_OK) {
             fprintf(stderr, "irrcache render: -o %s\n", err.message);
             FAILED("-o", a.outputs[i]);
         }

@@ -26,6 +26,12 @@ typedef struct ic_image {
 } ic_image;
 
 /* Write options; zero means default. */
+/* One layer of a multi-layer OpenEXR (ic_image_write_options.layers): channels "<name>.R", ".G", ".B". */
+typedef struct ic_image_layer {
+    const char *name;      /* e.g. "indirect": non-empty, no '.', < 200 bytes */
+    const ic_image *image; /* the same size as the image written */
+} ic_image_layer;
+
 /* One text attribute of an OpenEXR header (ic_image_write_options.meta). */
 typedef struct ic_image_meta {
     const char *name;      /* attribute name, e.g. "irrcache:seed" (non-empty, < 256 bytes) */
@@ -39,6 +45,9 @@ typedef struct ic_image_write_options {
                               every EXR also gets the chromaticities of its linear Rec. 709 / sRGB primaries
                               and D65 white */
     uint32_t meta_count;
+    const ic_image_layer *layers; /* EXR: further images written as layers of the same file, beside its R, G,
+                              B (readers that know no layers see the image alone); other formats ignore them */
+    uint32_t layer_count;
 } ic_image_write_options;
 
 /* Allocates a zero-filled w×h image. */
@@ -57,6 +66,8 @@ ic_result ic_image_decode_memory(const void *data, size_t size, const char *name
                                  ic_image *out, ic_error *err);
 /* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. */
 ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
+/* Reads layer `layer` (channels "<layer>.R", ".G", ".B") of a multi-layer OpenEXR file as linear RGB. */
+ic_result ic_image_read_layer(const char *path, const char *layer, ic_image *out, ic_error *err);
 /* Reads the text attribute `name` of an OpenEXR file's first part into value (capacity cap, truncated,
  * always terminated): IC_OK, IC_ERR_INVALID_ARG when the file has no such text attribute, or the reader's
  * error for a file that is not a readable OpenEXR. */

@@ -38,9 +38,16 @@ static exr_context_initializer_t context_initializer(void)
 /* ---------------------------------------------------------------------------------------------- */
 /* Reading                                                                                        */
 
-/* Which channel of our RGB triple an EXR channel feeds: 0..2, or -1 to skip it. */
-static int rgb_slot(const char *name, int grey)
+/* Which channel of our RGB triple an EXR channel feeds: 0..2, or -1 to skip it. With a layer, only its
+ * channels "<layer>.R" … count; without, only the unprefixed ones. */
+static int rgb_slot(const char *name, const char *layer, int grey)
 {
+    if (layer) {
+        size_t n = strlen(layer);
+        if (strncmp(name, layer, n) != 0 || name[n] != '.')
+            return -1;
+        name += n + 1;
+    }
     if (grey)
         return strcmp(name, "Y") == 0 ? 0 : -1;
     if (strcmp(name, "R") == 0)
@@ -65,7 +72,7 @@ static ic_result exr_read_failed(const char *path, exr_result_t rv, ic_error *er
 }
 
 /* Checks the part's layout and finds whether it is RGB or grey. */
-static ic_result check_layout(const char *path, exr_const_context_t ctxt, int *grey, ic_error *err)
+static ic_result check_layout(const char *path, exr_const_context_t ctxt, const char *layer, int *grey, ic_error *err)
 {
     exr_storage_t storage;
     exr_result_t rv = exr_get_storage(ctxt, 0, &storage);
@@ -82,7 +89,7 @@ static ic_result check_layout(const char *path, exr_const_context_t ctxt, int *g
     int has_rgb = 0, has_y = 0;
     for (int i = 0; i < channels->num_channels; ++i) {
         const exr_attr_chlist_entry_t *ch = &channels->entries[i];
-        int is_rgb = rgb_slot(ch->name.str, 0) >= 0, is_y = rgb_slot(ch->name.str, 1) >= 0;
+        int is_rgb = rgb_slot(ch->name.str, layer, 0) >= 0, is_y = rgb_slot(ch->name.str, layer, 1) >= 0;
         if (!is_rgb && !is_y)
             continue;
         if (ch->pixel_type == EXR_PIXEL_UINT || ch->x_sampling != 1 || ch->y_sampling != 1)
@@ -93,6 +100,9 @@ static ic_result check_layout(const char *path, exr_const_context_t ctxt, int *g
         has_rgb |= is_rgb;
         has_y |= is_y;
     }
+    if (!has_rgb && !has_y && layer)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: no layer %s (channels %s.R, .G, .B) in the first part",
+                            path, layer, layer);
     if (!has_rgb && !has_y)
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: no R, G, B or Y channel in the first part; save the colour "
                             "as R, G, B channels", path);
@@ -101,8 +111,9 @@ static ic_result check_layout(const char *path, exr_const_context_t ctxt, int *g
 }
 
 /* Decodes one chunk whose pixels start at (col, row) of img (relative to the data window). */
-static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_t *chunk, int col, int row, int grey,
-                                 exr_decode_pipeline_t *decoder, int *initialized, ic_image *img)
+static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_t *chunk, int col, int row,
+                                 const char *layer, int grey, exr_decode_pipeline_t *decoder, int *initialized,
+                                 ic_image *img)
 {
     exr_result_t rv = *initialized ? exr_decoding_update(ctxt, 0, chunk, decoder)
                                    : exr_decoding_initialize(ctxt, 0, chunk, decoder);
@@ -114,7 +125,7 @@ static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_
     const size_t line_floats = (size_t)img->width * 3;
     for (int c = 0; c < decoder->channel_count; ++c) {
         exr_coding_channel_info_t *ch = &decoder->channels[c];
-        int slot = rgb_slot(ch->channel_name, grey);
+        int slot = rgb_slot(ch->channel_name, layer, grey);
         if (slot < 0) {
             ch->decode_to_ptr = NULL; /* skipped */
             continue;
@@ -131,8 +142,8 @@ static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_
 
 /* Every chunk of part 0 into img: line groups of a scanline file, or the full-resolution level's tiles
  * of a tiled one (mipmap and ripmap levels below it are not read). */
-static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const exr_attr_box2i_t *window, int grey,
-                               ic_image *img, ic_error *err)
+static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const exr_attr_box2i_t *window,
+                               const char *layer, int grey, ic_image *img, ic_error *err)
 {
     exr_storage_t storage;
     exr_result_t rv = exr_get_storage(ctxt, 0, &storage);
@@ -150,7 +161,7 @@ static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const
                 exr_chunk_info_t chunk;
                 rv = exr_read_tile_chunk_info(ctxt, 0, tx, ty, 0, 0, &chunk);
                 if (rv == EXR_ERR_SUCCESS)
-                    rv = decode_chunk(ctxt, &chunk, tx * tw, ty * th, grey, &decoder, &initialized, img);
+                    rv = decode_chunk(ctxt, &chunk, tx * tw, ty * th, layer, grey, &decoder, &initialized, img);
             }
     } else if (rv == EXR_ERR_SUCCESS) {
         int lines_per_chunk = 0;
@@ -162,7 +173,8 @@ static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const
             rv = exr_read_scanline_chunk_info(ctxt, 0, y, &chunk);
             /* A chunk may start above the window (line groups are aligned to the file's origin). */
             if (rv == EXR_ERR_SUCCESS)
-                rv = decode_chunk(ctxt, &chunk, 0, chunk.start_y - window->min.y, grey, &decoder, &initialized, img);
+                rv = decode_chunk(ctxt, &chunk, 0, chunk.start_y - window->min.y, layer, grey, &decoder,
+                                  &initialized, img);
         }
     }
     if (initialized)
@@ -178,6 +190,12 @@ static ic_result decode_chunks(const char *path, exr_const_context_t ctxt, const
 
 ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
+    return ic_image_read_exr_layer(path, NULL, lim, out, err);
+}
+
+ic_result ic_image_read_exr_layer(const char *path, const char *layer, const ic_image_limit *lim, ic_image *out,
+                                  ic_error *err)
+{
     memset(out, 0, sizeof *out);
     exr_context_initializer_t init = context_initializer();
     exr_context_t ctxt = NULL;
@@ -189,7 +207,7 @@ ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_imag
 
     int grey = 0;
     exr_attr_box2i_t window;
-    ic_result r = check_layout(path, ctxt, &grey, err);
+    ic_result r = check_layout(path, ctxt, layer, &grey, err);
     if (r == IC_OK) {
         rv = exr_get_data_window(ctxt, 0, &window);
         r = rv == EXR_ERR_SUCCESS ? IC_OK : exr_read_failed(path, rv, err);
@@ -203,7 +221,7 @@ ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_imag
             r = ic_image_create_for_file(path, out, (int)width, (int)height, lim, err);
     }
     if (r == IC_OK) {
-        r = decode_chunks(path, ctxt, &window, grey, out, err);
+        r = decode_chunks(path, ctxt, &window, layer, grey, out, err);
         if (r != IC_OK)
             ic_image_free(out);
     }
@@ -227,9 +245,23 @@ static exr_result_t write_attributes(exr_context_t ctxt, int part, const ic_imag
     return rv;
 }
 
-static exr_result_t write_part(const char *file, const ic_image *img, int is_half, const ic_image_meta *meta,
-                               uint32_t meta_count, exr_compression_t compression, int *ambiguous, int *open_errno)
+/* The image an output channel is encoded from, and its slot: the beauty for R, G, B, a layer for
+ * "<layer>.R" …; NULL for a name that is neither. */
+static const ic_image *channel_source(const char *name, const ic_image *img, const ic_image_write_options *opt,
+                                      int *slot)
 {
+    if ((*slot = rgb_slot(name, NULL, 0)) >= 0)
+        return img;
+    for (uint32_t i = 0; i < opt->layer_count; ++i)
+        if ((*slot = rgb_slot(name, opt->layers[i].name, 0)) >= 0)
+            return opt->layers[i].image;
+    return NULL;
+}
+
+static exr_result_t write_part(const char *file, const ic_image *img, const ic_image_write_options *opt,
+                               exr_compression_t compression, int *ambiguous, int *open_errno)
+{
+    const int is_half = opt->exr_half;
     const float *rgb = img->rgb;
     exr_context_initializer_t init = context_initializer();
     init.flags = 0; /* the read-only flags are not valid for writing */
@@ -249,8 +281,14 @@ static exr_result_t write_part(const char *file, const ic_image *img, int is_hal
     static const char *const names[3] = {"R", "G", "B"};
     for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; ++c)
         rv = exr_add_channel(ctxt, part, names[c], type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    for (uint32_t l = 0; l < opt->layer_count && rv == EXR_ERR_SUCCESS; ++l)
+        for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; ++c) {
+            char name[300];
+            snprintf(name, sizeof name, "%s.%s", opt->layers[l].name, names[c]);
+            rv = exr_add_channel(ctxt, part, name, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+        }
     if (rv == EXR_ERR_SUCCESS)
-        rv = write_attributes(ctxt, part, meta, meta_count);
+        rv = write_attributes(ctxt, part, opt->meta, opt->meta_count);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_write_header(ctxt);
 
@@ -272,8 +310,10 @@ static exr_result_t write_part(const char *file, const ic_image *img, int is_hal
         initialized = 1;
         for (int c = 0; c < encoder.channel_count; ++c) {
             exr_coding_channel_info_t *ch = &encoder.channels[c];
-            int slot = rgb_slot(ch->channel_name, 0);
-            ch->encode_from_ptr = (const uint8_t *)(rgb + (size_t)y * line_floats + (size_t)(slot < 0 ? 0 : slot));
+            int slot;
+            const ic_image *src = channel_source(ch->channel_name, img, opt, &slot);
+            ch->encode_from_ptr =
+                (const uint8_t *)((src ? src->rgb : rgb) + (size_t)y * line_floats + (size_t)(slot < 0 ? 0 : slot));
             ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
             ch->user_line_stride = (int32_t)(line_floats * sizeof(float));
             ch->user_data_type = EXR_PIXEL_FLOAT;
@@ -297,23 +337,31 @@ static exr_result_t write_part(const char *file, const ic_image *img, int is_hal
     return rv != EXR_ERR_SUCCESS ? rv : finish;
 }
 
-ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half, const ic_image_meta *meta,
-                             uint32_t meta_count, ic_error *err)
+ic_result ic_image_write_exr(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err)
 {
-    for (uint32_t i = 0; i < meta_count; ++i)
-        if (!meta[i].name || !*meta[i].name || strlen(meta[i].name) >= 256)
+    for (uint32_t i = 0; i < opt->meta_count; ++i)
+        if (!opt->meta[i].name || !*opt->meta[i].name || strlen(opt->meta[i].name) >= 256)
             return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: EXR attribute %u has an empty or too long name", path,
                                 i);
+    for (uint32_t i = 0; i < opt->layer_count; ++i) {
+        const ic_image *l = opt->layers[i].image;
+        const char *n = opt->layers[i].name;
+        if (!n || !*n || strlen(n) >= 200 || strchr(n, '.'))
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: EXR layer %u has an empty, too long or dotted name", path,
+                                i);
+        if (!l || !l->rgb || l->width != img->width || l->height != img->height)
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: EXR layer %s is empty or not the image's size", path, n);
+    }
     char tmp[4096];
     if (strlen(path) + 32 >= sizeof tmp)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: output path too long; use a shorter path", path);
     ic_atomic_temp_name(path, tmp, sizeof tmp);
 
     int open_errno = 0, ambiguous = 0;
-    exr_result_t rv = write_part(tmp, img, is_half, meta, meta_count, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);
+    exr_result_t rv = write_part(tmp, img, opt, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);
     if (rv == EXR_ERR_SUCCESS && ambiguous) {
         remove(tmp);
-        rv = write_part(tmp, img, is_half, meta, meta_count, EXR_COMPRESSION_NONE, &ambiguous, &open_errno);
+        rv = write_part(tmp, img, opt, EXR_COMPRESSION_NONE, &ambiguous, &open_errno);
     }
     if (rv != EXR_ERR_SUCCESS) {
         remove(tmp); /* the library deletes it on most errors; make sure */

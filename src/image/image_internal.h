@@ -28,9 +28,11 @@ ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, i
 
 /* OpenEXR (Core C API): first part, scanline, R/G/B (A ignored) or Y, half or float. */
 ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);
+/* The channels "<layer>.R" … of one layer of an EXR (layer NULL: its R, G, B, as ic_image_read_exr). */
+ic_result ic_image_read_exr_layer(const char *path, const char *layer, const ic_image_limit *lim, ic_image *out,
+                                  ic_error *err);
 /* OpenEXR: RGB channels as 16-bit half (is_half) or 32-bit float, ZIP compressed (lossless). */
-ic_result ic_image_write_exr(const char *path, const ic_image *img, int is_half, const ic_image_meta *meta,
-                             uint32_t meta_count, ic_error *err);
+ic_result ic_image_write_exr(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
 
 /* Portable float map ("PF" colour, "Pf" grey), either byte order; rows are stored bottom first. */
 ic_result ic_image_read_pfm(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);

@@ -39,6 +39,19 @@ ic_result ic_image_read(const char *path, ic_image *out, ic_error *err)
     return ic_image_read_max(path, 0, NULL, out, err);
 }
 
+ic_result ic_image_read_layer(const char *path, const char *layer, ic_image *out, ic_error *err)
+{
+    if (!out || !path || !*path || !layer || !*layer)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_image_read_layer: no path, layer or output image");
+    memset(out, 0, sizeof *out);
+    char ext[8];
+    extension_of(path, ext);
+    if (strcmp(ext, ".exr") != 0)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: only OpenEXR files have layers", path);
+    const ic_image_limit limit = {0, NULL};
+    return ic_image_read_exr_layer(path, layer, &limit, out, err);
+}
+
 ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err)
 {
     const ic_image_limit limit = {max_pixels, raise}, *lim = &limit;
@@ -108,7 +121,7 @@ ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_w
     char ext[8];
     extension_of(path, ext);
     if (!strcmp(ext, ".exr"))
-        return ic_image_write_exr(path, img, opt->exr_half, opt->meta, opt->meta_count, err);
+        return ic_image_write_exr(path, img, opt, err);
     if (!strcmp(ext, ".pfm"))
         return ic_image_write_pfm(path, img, err);
     if (!strcmp(ext, ".hdr"))

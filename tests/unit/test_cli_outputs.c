@@ -171,8 +171,29 @@ int main(void)
     rc = run("render " CORNELL " --integrator ic --seed 42 --width 16 --height 16 --spp 2 --adaptive-sampling off -q -o "
              DIR_ "/meta/m.exr --aov indirect");
     CHECK(rc == 0, "render with EXR metadata (got %d: %s)", rc, err_text);
-    const char *files[2] = {DIR_ "/meta/m.exr", DIR_ "/meta/m.indirect.exr"};
-    for (int f = 0; f < 2; ++f) {
+    /* The first output is an EXR: the indirect AOV is its layer "indirect", not a file of its own. */
+    CHECK(!exists(DIR_ "/meta/m.indirect.exr"), "no separate indirect file beside an EXR output");
+    {
+        ic_image beauty, layer;
+        ic_error e;
+        CHECK(ic_image_read(DIR_ "/meta/m.exr", &beauty, &e) == IC_OK &&
+                  ic_image_read_layer(DIR_ "/meta/m.exr", "indirect", &layer, &e) == IC_OK,
+              "the EXR's image and its indirect layer read: %s", e.message);
+        int le = beauty.rgb && layer.rgb && layer.width == beauty.width, any = 0;
+        for (int i = 0; le && i < 16 * 16 * 3; ++i) {
+            le &= layer.rgb[i] <= beauty.rgb[i] + 1e-4f; /* one term of the image: never more than all of it */
+            any |= layer.rgb[i] > 0.0f;
+        }
+        CHECK(le && any, "the indirect layer is part of the image, and not black");
+        ic_image_free(&beauty);
+        ic_image_free(&layer);
+    }
+    /* A PFM first output keeps separate AOV files. */
+    rc = run("render " CORNELL " --integrator ic --width 16 --height 16 --spp 1 -q -o " DIR_ "/meta/p.pfm --aov indirect");
+    CHECK(rc == 0 && exists(DIR_ "/meta/p.indirect.exr"), "a PFM output's indirect AOV is its own file (%d: %s)", rc,
+          err_text);
+    const char *files[1] = {DIR_ "/meta/m.exr"};
+    for (int f = 0; f < 1; ++f) {
         char v[4096];
         ic_error e;
         CHECK(ic_image_exr_attribute(files[f], "irrcache:version", v, sizeof v, &e) == IC_OK && !strcmp(v, ic_version()),

@@ -669,6 +669,50 @@ static void test_exr_metadata(void)
               "the pixels are untouched by the header");
         ic_image_free(&back);
     }
+    /* Layers: two more images in the same file, read back by name; readers that know no layers see the image. */
+    {
+        ic_image l1, l2;
+        CHECK(ic_image_create(&l1, 5, 3) == IC_OK && ic_image_create(&l2, 5, 3) == IC_OK, "layers");
+        for (int i = 0; i < 15 * 3; ++i) {
+            l1.rgb[i] = 1.0f + (float)i;
+            l2.rgb[i] = -0.5f * (float)i;
+        }
+        const ic_image_layer layers[2] = {{"indirect", &l1}, {"density", &l2}};
+        ic_image_write_options wo = {0};
+        wo.layers = layers;
+        wo.layer_count = 2;
+        ic_error err;
+        CHECK(ic_image_write(SCRATCH "/layers.exr", &img, &wo, &err) == IC_OK, "write layers: %s", err.message);
+        ic_image a, b, c;
+        CHECK(ic_image_read(SCRATCH "/layers.exr", &a, &err) == IC_OK &&
+                  ic_image_read_layer(SCRATCH "/layers.exr", "indirect", &b, &err) == IC_OK &&
+                  ic_image_read_layer(SCRATCH "/layers.exr", "density", &c, &err) == IC_OK,
+              "read the image and its layers: %s", err.message);
+        int same = 1;
+        for (int i = 0; i < 15 * 3; ++i)
+            same &= a.rgb[i] == img.rgb[i] && b.rgb[i] == l1.rgb[i] && c.rgb[i] == l2.rgb[i];
+        CHECK(same, "image and layers read back bit for bit");
+        ic_image_free(&a);
+        ic_image_free(&b);
+        ic_image_free(&c);
+        CHECK(ic_image_read_layer(SCRATCH "/layers.exr", "glossy", &a, &err) == IC_ERR_UNSUPPORTED &&
+                  strstr(err.message, "glossy"),
+              "an absent layer is named: %s", err.message);
+        CHECK(ic_image_read_layer(SCRATCH "/meta.pfm", "indirect", &a, &err) == IC_ERR_UNSUPPORTED, "a PFM has no layers");
+        ic_image small;
+        CHECK(ic_image_create(&small, 2, 2) == IC_OK, "small");
+        const ic_image_layer wrong[1] = {{"indirect", &small}};
+        wo.layers = wrong;
+        wo.layer_count = 1;
+        CHECK(ic_image_write(SCRATCH "/layers_bad.exr", &img, &wo, &err) == IC_ERR_INVALID_ARG,
+              "a layer of another size is refused");
+        const ic_image_layer dotted[1] = {{"in.direct", &l1}};
+        wo.layers = dotted;
+        CHECK(ic_image_write(SCRATCH "/layers_bad.exr", &img, &wo, &err) == IC_ERR_INVALID_ARG, "a dotted layer name is refused");
+        ic_image_free(&small);
+        ic_image_free(&l1);
+        ic_image_free(&l2);
+    }
     const ic_image_meta bad[1] = {{"", "x"}};
     ic_image_write_options wo = {0};
     wo.meta = bad;
