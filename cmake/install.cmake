@@ -3,7 +3,7 @@
 #   cmake --install BUILD --prefix PREFIX    installs
 #     bin/irrcache                                   the command
 #     include/irrcache/*.h                           the public headers (nothing from src/)
-#     lib/libic_core.a, libirrcache_cache.a, …       the static libraries
+#     lib/libic_core.a, libirrcache_cache.a, …       the libraries (static; shared with -DBUILD_SHARED_LIBS=ON)
 #     lib/cmake/irrcache/irrcacheConfig*.cmake       find_package(irrcache 0.1 REQUIRED [COMPONENTS cache render])
 #     lib/pkgconfig/irrcache.pc, irrcache-cache.pc   pkg-config --cflags --libs irrcache-cache
 #

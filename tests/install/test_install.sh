@@ -57,6 +57,8 @@ fi
 
 echo "== examples with pkg-config only"
 export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
+# A shared install (-DBUILD_SHARED_LIBS=ON, tests/install/test_shared.sh) is found at run time here.
+export LD_LIBRARY_PATH="$prefix/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 # shellcheck disable=SC2046  # the flags are meant to split
 cc -std=c11 -Wall -Wextra -Wpedantic -Werror -o "$tmp/cache_only_pc" "$src/examples/cache_only.c" \
    $(pkg-config --cflags --libs irrcache-cache)
