@@ -6,6 +6,7 @@
 #include "cli.h"
 
 #include "irrcache/common.h"
+#include "irrcache/version.h"
 
 #include <signal.h>
 #include <stdio.h>
@@ -74,7 +75,11 @@ int main(int argc, char **argv)
         return 0;
     }
     if (!strcmp(cmd, "--version")) {
-        printf("irrcache %s\n", IC_VERSION);
+        /* The library's version, which a shared library may give differently from the headers'. */
+        if (strcmp(ic_version(), IRRCACHE_VERSION_STRING) != 0)
+            printf("irrcache %s (built with headers %s)\n", ic_version(), IRRCACHE_VERSION_STRING);
+        else
+            printf("irrcache %s\n", ic_version());
         return 0;
     }
     fprintf(stderr, "irrcache: unknown command '%s'; use 'render', 'diff' or 'points' (see irrcache --help)\n", cmd);
