@@ -75,6 +75,50 @@ static int jpeg_huffman_ok(const unsigned char *b, size_t n)
     return 1;
 }
 
+static uint32_t be32(const unsigned char *b)
+{
+    return (uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | b[3];
+}
+
+/* A PNG whose IDAT chunks include an empty one, as a malloc'd copy without them (*m bytes); NULL when the
+ * data is not a PNG, has none, or memory runs out. An empty IDAT is valid PNG (ISO/IEC 15948 §11.2.4: the
+ * image data is the concatenation of all IDAT chunks), but stb_image 2.27 offsets its NULL buffer by the
+ * first IDAT's zero length ("applying zero offset to null pointer", found by the image_png fuzz target),
+ * so the chunk, which carries no data, is dropped before stb_image sees the file. Chunks are walked by
+ * their lengths; a length that runs past the end stops the walk (stb_image reports the truncation). */
+static unsigned char *png_without_empty_idat(const unsigned char *b, size_t n, size_t *m)
+{
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+    if (n < 8 || memcmp(b, signature, 8) != 0)
+        return NULL;
+    int empty = 0;
+    for (size_t i = 8; i + 12 <= n;) {
+        uint32_t len = be32(b + i);
+        if (len > n - i - 12)
+            break;
+        empty |= len == 0 && memcmp(b + i + 4, "IDAT", 4) == 0;
+        i += 12 + (size_t)len;
+    }
+    unsigned char *out = empty ? malloc(n) : NULL;
+    if (!out)
+        return NULL;
+    memcpy(out, b, 8);
+    size_t o = 8, i = 8;
+    while (i + 12 <= n) {
+        uint32_t len = be32(b + i);
+        if (len > n - i - 12)
+            break;
+        if (!(len == 0 && memcmp(b + i + 4, "IDAT", 4) == 0)) {
+            memcpy(out + o, b + i, 12 + (size_t)len);
+            o += 12 + (size_t)len;
+        }
+        i += 12 + (size_t)len;
+    }
+    memcpy(out + o, b + i, n - i); /* a truncated tail, as it was */
+    *m = o + (n - i);
+    return out;
+}
+
 /* Reads a file whole; NULL if it cannot be read or does not fit stb_image's int length. */
 static unsigned char *read_whole(const char *path, size_t *n)
 {
@@ -115,6 +159,13 @@ ic_result ic_image_decode_stb(const unsigned char *bytes, size_t n, const char *
     if (!jpeg_huffman_ok(bytes, n))
         return ic_error_set(err, IC_ERR_PARSE, "%s: a JPEG Huffman table declares more than 256 codes or overruns "
                             "its segment; re-save the image with another program", name);
+    size_t m = 0;
+    unsigned char *cleaned = png_without_empty_idat(bytes, n, &m);
+    if (cleaned) {
+        ic_result r = ic_image_decode_stb(cleaned, m, name, lim, out, err);
+        free(cleaned);
+        return r;
+    }
     int width = 0, height = 0, channels = 0, len = (int)n;
     if (!stbi_info_from_memory(bytes, len, &width, &height, &channels))
         return decode_failed(name, err);

@@ -728,6 +728,61 @@ static void test_exr_metadata(void)
     ic_image_free(&img);
 }
 
+static uint32_t crc32_png(const unsigned char *b, size_t n)
+{
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; ++i) {
+        c ^= b[i];
+        for (int k = 0; k < 8; ++k)
+            c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+    }
+    return c ^ 0xFFFFFFFFu;
+}
+
+/* An empty IDAT chunk is valid PNG (the image data is all IDATs concatenated) but made stb_image 2.27
+ * offset a NULL pointer (fuzz target image_png): the reader drops it first and decodes the same pixels. */
+static void test_png_empty_idat(void)
+{
+    ic_image img;
+    CHECK(ic_image_create(&img, 6, 4) == IC_OK, "create");
+    for (int i = 0; i < 6 * 4 * 3; ++i)
+        img.rgb[i] = (float)(i % 7) / 7.0f;
+    ic_error err;
+    CHECK(ic_image_write(SCRATCH "/idat.png", &img, NULL, &err) == IC_OK, "write PNG: %s", err.message);
+    FILE *f = fopen(SCRATCH "/idat.png", "rb");
+    unsigned char png[4096], with[4096 + 12];
+    size_t n = f ? fread(png, 1, sizeof png, f) : 0;
+    if (f)
+        fclose(f);
+    size_t at = 8;
+    while (at + 8 <= n && memcmp(png + at + 4, "IDAT", 4) != 0)
+        at += 12 + ((size_t)png[at] << 24 | (size_t)png[at + 1] << 16 | (size_t)png[at + 2] << 8 | png[at + 3]);
+    CHECK(at + 8 <= n, "the PNG has an IDAT chunk");
+    if (at + 8 > n)
+        return;
+    /* An empty IDAT (length 0, type, CRC of the type) before the first one. */
+    memcpy(with, png, at);
+    unsigned char empty[12] = {0, 0, 0, 0, 'I', 'D', 'A', 'T', 0, 0, 0, 0};
+    uint32_t crc = crc32_png(empty + 4, 4);
+    empty[8] = (unsigned char)(crc >> 24);
+    empty[9] = (unsigned char)(crc >> 16);
+    empty[10] = (unsigned char)(crc >> 8);
+    empty[11] = (unsigned char)crc;
+    memcpy(with + at, empty, 12);
+    memcpy(with + at + 12, png + at, n - at);
+    ic_image a, b;
+    CHECK(ic_image_decode_memory(png, n, "plain.png", 0, NULL, &a, &err) == IC_OK, "plain PNG decodes: %s", err.message);
+    CHECK(ic_image_decode_memory(with, n + 12, "empty-idat.png", 0, NULL, &b, &err) == IC_OK,
+          "a PNG with an empty IDAT decodes: %s", err.message);
+    int same = a.rgb && b.rgb && a.width == b.width && a.height == b.height;
+    for (int i = 0; same && i < 6 * 4 * 3; ++i)
+        same = a.rgb[i] == b.rgb[i];
+    CHECK(same, "the same pixels with and without the empty IDAT");
+    ic_image_free(&a);
+    ic_image_free(&b);
+    ic_image_free(&img);
+}
+
 /* Writes img as a tiled OpenEXR (one level, tw × th tiles, the last row and column partial) with
  * OpenEXR's own API, in float or half: what renderers and texture tools produce. */
 static int write_tiled_exr(const char *path, const ic_image *img, int tw, int th, int half)
@@ -822,5 +877,6 @@ int main(void)
     test_bad_input();
     test_exr_metadata();
     test_tiled_exr();
+    test_png_empty_idat();
     TEST_MAIN_END();
 }
