@@ -4,8 +4,14 @@
  * The options are declared once, in options.h. Every output (images, AOVs, --stats, --records-json,
  * --save-cache) is checked before rendering starts (outputs.h), so a long render is never lost to a
  * typo; when one output still fails at the end, the others are written and the exit status is 1.
+ *
+ * Under mpirun (cluster.h) every rank renders its share; rank 0 alone checks and writes the outputs and
+ * shows progress. A failure before the render (options, outputs, the scene on any rank) is agreed on:
+ * the lowest failing rank prints it and every rank exits non-zero; a failure during the render ends
+ * the job (MPI_Abort) once the failing rank has printed it, before any output is written.
  */
 #include "cli.h"
+#include "cluster.h"
 #include "exr_meta.h"
 #include "json_out.h"
 #include "options.h"
@@ -15,6 +21,7 @@
 #include "irrcache/render.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -58,7 +65,19 @@ static void on_progress(void *user, const char *phase, double fraction)
     fflush(stderr);
 }
 
-static int write_stats(const char *path, const render_args *a, int w, int h, const ic_render_stats *st)
+/* What each rank reports of its share (ic_render_stats' rank_ fields and its wall time), gathered to rank 0. */
+#define RANK_FIGURES 5
+static void rank_figures(const ic_render_stats *st, double f[RANK_FIGURES])
+{
+    f[0] = (double)st->rank_records_gathered;
+    f[1] = (double)st->rank_pixel_samples;
+    f[2] = st->rank_comm_seconds;
+    f[3] = (double)st->rank_comm_bytes;
+    f[4] = st->seconds;
+}
+
+static int write_stats(const char *path, const render_args *a, int w, int h, const ic_render_stats *st,
+                       const double *per_rank_figures)
 {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "scene", a->scene);
@@ -100,6 +119,21 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
     cJSON *phases = cJSON_AddObjectToObject(o, "phases");
     for (int i = 0; i < st->phase_count; ++i)
         cJSON_AddNumberToObject(phases, st->phases[i].name, st->phases[i].seconds);
+    /* How the ranks shared the work (MPI): only when there were several, so a single process's figures
+     * read as they always did. */
+    if (st->ranks > 1)
+        cJSON_AddNumberToObject(o, "ranks", st->ranks);
+    cJSON *per_rank = st->ranks > 1 ? cJSON_AddArrayToObject(o, "per_rank") : NULL;
+    for (int k = 0; per_rank && k < st->ranks; ++k) {
+        const double *f = &per_rank_figures[k * RANK_FIGURES];
+        cJSON *rk = cJSON_CreateObject();
+        cJSON_AddItemToObject(rk, "records_gathered", ic_cli_json_u64((uint64_t)f[0]));
+        cJSON_AddItemToObject(rk, "pixel_samples", ic_cli_json_u64((uint64_t)f[1]));
+        cJSON_AddNumberToObject(rk, "comm_seconds", f[2]);
+        cJSON_AddItemToObject(rk, "comm_bytes", ic_cli_json_u64((uint64_t)f[3]));
+        cJSON_AddNumberToObject(rk, "seconds", f[4]);
+        cJSON_AddItemToArray(per_rank, rk);
+    }
     cJSON_AddItemToObject(o, "settings", ic_cli_settings_json(a));
     return ic_cli_write_json("render", path, o, 1);
 }
@@ -181,21 +215,83 @@ static int write_records_json(const char *path, const ic_render_aovs *aovs)
     return ic_cli_write_json("render", path, list, 1);
 }
 
+/* Parses the options; ranks other than 0 parse silently (the same command line gives every rank the
+ * same verdict, and rank 0 says it once). */
+static int parse_quietly_unless(int speak, int argc, char **argv, render_args *a)
+{
+    if (speak)
+        return ic_cli_parse(argc, argv, a);
+    fflush(stderr);
+    int saved = dup(2), null_fd = open("/dev/null", O_WRONLY);
+    if (saved >= 0 && null_fd >= 0)
+        dup2(null_fd, 2);
+    int rc = ic_cli_parse(argc, argv, a);
+    fflush(stderr);
+    if (saved >= 0 && null_fd >= 0)
+        dup2(saved, 2);
+    if (saved >= 0)
+        close(saved);
+    if (null_fd >= 0)
+        close(null_fd);
+    return rc;
+}
+
+static int render_command(int argc, char **argv, ic_comm *comm);
+
+static void free_results(ic_image *img, ic_render_aovs *aovs, ic_scene *scene)
+{
+    free(aovs->record_views);
+    ic_image_free(img);
+    ic_image_free(&aovs->indirect);
+    ic_image_free(&aovs->records);
+    ic_image_free(&aovs->density);
+    ic_image_free(&aovs->amap);
+    ic_image_free(&aovs->glossy);
+    ic_scene_free(scene);
+}
+
 int ic_cli_render(int argc, char **argv)
 {
+    int failed = 0;
+    ic_comm *comm = ic_cli_cluster_start(&argc, &argv, &failed);
+    if (failed)
+        return 1;
+    int rc = render_command(argc, argv, comm);
+    ic_cli_cluster_end(comm);
+    return rc;
+}
+
+/* Before the render: what failed on this rank (status, and the message not yet printed), agreed on by
+ * every rank. Returns the status this rank exits with, 0 when every rank may render. */
+static int agree(ic_comm *comm, int status, const char *message)
+{
+    int first = ic_cli_cluster_first_failure(comm, status != 0);
+    if (first < 0)
+        return 0;
+    if (first == ic_cli_cluster_rank(comm) && message[0])
+        fprintf(stderr, "%s\n", message);
+    else if (first == ic_cli_cluster_rank(comm) && first != 0)
+        fprintf(stderr, "irrcache render: rank %d of %d: its command line is invalid; run it alone to see why\n",
+                first, ic_cli_cluster_size(comm));
+    return status ? status : 1;
+}
+
+static int render_command(int argc, char **argv, ic_comm *comm)
+{
+    int rank = ic_cli_cluster_rank(comm), ranks = ic_cli_cluster_size(comm);
     render_args a;
-    int rc = ic_cli_parse(argc, argv, &a);
-    if (rc == -1 - IC_ARG_HELP) {
-        ic_cli_print_help(stdout);
+    int rc = parse_quietly_unless(rank == 0, argc, argv, &a);
+    if (rc == -1 - IC_ARG_HELP || rc == -1 - IC_ARG_HELP_MARKDOWN) {
+        if (rank == 0 && rc == -1 - IC_ARG_HELP)
+            ic_cli_print_help(stdout);
+        else if (rank == 0)
+            ic_cli_print_markdown(stdout);
         return 0;
     }
-    if (rc == -1 - IC_ARG_HELP_MARKDOWN) {
-        ic_cli_print_markdown(stdout);
-        return 0;
-    }
+    char message[1400] = "";
     if (rc)
-        return rc;
-    /* Every file the run will write, checked before anything is rendered. */
+        return agree(comm, rc, message);
+    /* Every file the run will write, checked (by the rank that writes them) before anything is rendered. */
     ic_cli_output outs[IC_CLI_MAX_OUTPUTS + AOV_COUNT + 3];
     char aov_paths[AOV_COUNT][4200];
     int n_outs = 0;
@@ -212,32 +308,47 @@ int ic_cli_render(int argc, char **argv)
         outs[n_outs++] = (ic_cli_output){"--records-json", a.records_json};
     if (a.render.ic.save_cache)
         outs[n_outs++] = (ic_cli_output){"--save-cache", a.render.ic.save_cache};
-    if (!ic_cli_check_outputs(outs, n_outs, a.scene))
-        return 2;
+    if (rank == 0 && !ic_cli_check_outputs(outs, n_outs, a.scene))
+        return agree(comm, 2, message);
+    /* The library refuses it too, but on every rank at once: said here, it is said once. */
+    if (ranks > 1 && a.render.integrator == IC_INTEGRATOR_IC && a.render.ic.strategy == IC_STRATEGY_LAZY) {
+        snprintf(message, sizeof message, "irrcache render: --strategy lazy builds the cache one shading point at a "
+                 "time, each gather needing every record made before it, so %d ranks cannot share it; use "
+                 "--strategy batch or adaptive, or run one process", ranks);
+        return agree(comm, 2, rank == 0 ? message : "");
+    }
 
     progress_state prog = {0};
-    prog.enabled = !a.quiet && isatty(fileno(stderr));
+    prog.enabled = rank == 0 && !a.quiet && isatty(fileno(stderr));
     prog.start = now_seconds();
 
     ic_error err = {0};
     ic_scene *scene = NULL;
     double t_load = now_seconds();
     if (ic_scene_load(a.scene, &a.load, &scene, &err) != IC_OK) {
-        fprintf(stderr, "irrcache render: %s\n", err.message);
-        return 1;
+        if (ranks > 1)
+            snprintf(message, sizeof message, "irrcache render: rank %d of %d: %s", rank, ranks, err.message);
+        else
+            snprintf(message, sizeof message, "irrcache render: %s", err.message);
+        return agree(comm, 1, message);
+    }
+    if ((rc = agree(comm, 0, message)) != 0) {
+        ic_scene_free(scene);
+        return rc;
     }
     t_load = now_seconds() - t_load;
     /* what the loader approximated or left out (a Mitsuba scene's unsupported elements), one line each */
-    for (const char *w = ic_scene_warnings(scene); *w;) {
+    for (const char *w = rank == 0 ? ic_scene_warnings(scene) : ""; *w;) {
         size_t len = strcspn(w, "\n");
         fprintf(stderr, "irrcache render: warning: %.*s\n", (int)len, w);
         w += len + (w[len] == '\n');
     }
-    if (ic_scene_light_count(scene) == 0)
+    if (rank == 0 && ic_scene_light_count(scene) == 0)
         fprintf(stderr, "irrcache render: warning: %s has no light (no emitting triangle, light or environment), "
                         "so the image will be black; add an emitter, a light or an environment\n", a.scene);
 
     ic_render_options opt = a.render;
+    opt.comm = comm;
     opt.progress = on_progress;
     opt.progress_user = &prog;
     ic_render_aovs aovs;
@@ -260,9 +371,30 @@ int ic_cli_render(int argc, char **argv)
     if (prog.enabled)
         fputc('\n', stderr);
     if (r != IC_OK) {
+        if (ranks > 1) {
+            /* The other ranks wait in an exchange this rank will never join: end the job. */
+            fprintf(stderr, "irrcache render: rank %d of %d: %s: %s; stopping all ranks\n", rank, ranks, a.scene,
+                    err.message);
+            ic_cli_cluster_abort(comm, 1);
+        }
         fprintf(stderr, "irrcache render: %s: %s\n", a.scene, err.message);
         ic_scene_free(scene);
         return 1;
+    }
+    double figures[RANK_FIGURES], *per_rank = malloc(sizeof *per_rank * RANK_FIGURES * (size_t)ranks);
+    rank_figures(&st, figures);
+    if (!per_rank) {
+        fprintf(stderr, "irrcache render: out of memory for %d ranks' statistics\n", ranks);
+        ic_cli_cluster_abort(comm, 1);
+        ic_scene_free(scene);
+        return 1;
+    }
+    ic_cli_cluster_gather(comm, figures, RANK_FIGURES, per_rank);
+    if (rank != 0) {
+        /* Rank 0 writes every output; this rank's share is done. */
+        free(per_rank);
+        free_results(&img, &aovs, scene);
+        return 0;
     }
     /* Loading counts as a phase of the run too. */
     if (st.phase_count < IC_MAX_PHASES) {
@@ -314,23 +446,17 @@ int ic_cli_render(int argc, char **argv)
         fprintf(stderr, "irrcache render: --save-cache %s\n", st.save_error);
         FAILED("--save-cache", a.render.ic.save_cache);
     }
-    free(aovs.record_views);
-    ic_image_free(&img);
-    ic_image_free(&aovs.indirect);
-    ic_image_free(&aovs.records);
-    ic_image_free(&aovs.density);
-    ic_image_free(&aovs.amap);
-    ic_image_free(&aovs.glossy);
     ic_cli_exr_meta_free(&meta);
-    ic_scene_free(scene);
+    free_results(&img, &aovs, scene);
     if (st.cut_by_time)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
                         "(%d passes) before it converged; give more time for a converged cache\n", st.passes);
     else if (st.cut_short)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its pass limit (%d passes) before "
                         "it converged; with --strategy batch raise --max-passes\n", st.passes);
-    if (a.stats_path && !write_stats(a.stats_path, &a, w, h, &st))
+    if (a.stats_path && !write_stats(a.stats_path, &a, w, h, &st, per_rank))
         FAILED("--stats", a.stats_path);
+    free(per_rank);
 #undef FAILED
     int ok = n_failed == 0;
     if (!ok)
@@ -339,6 +465,8 @@ int ic_cli_render(int argc, char **argv)
                 n_failed, n_failed == 1 ? "" : "s", failed);
     if (ok && !a.quiet) {
         fprintf(stderr, "irrcache: %dx%d, %d spp", w, h, st.spp);
+        if (ranks > 1)
+            fprintf(stderr, ", %d ranks x %d threads", ranks, st.threads);
         if (st.spp_max != st.spp)
             fprintf(stderr, " (adaptive, up to %d in a pixel)", st.spp_max);
         fprintf(stderr, ", %.2fs, %.2f Mrays/s", st.seconds, st.rays_per_second * 1e-6);

@@ -15,6 +15,7 @@
 #define IRRCACHE_RENDER_H
 
 #include "irrcache/cache.h"
+#include "irrcache/comm.h"
 #include "irrcache/common.h"
 #include "irrcache/defaults.h"
 #include "irrcache/gather.h"
@@ -196,6 +197,9 @@ typedef struct ic_render_options {
     void *progress_user;
     ic_ic_options ic;      /* irradiance caching (integrator IC) */
     ic_render_aovs *aovs;  /* optional diagnostics (integrator IC); caller frees the images */
+    ic_comm *comm;         /* the processes sharing this render (irrcache/comm.h): every one calls ic_render
+                              with the same options and gets the same image; NULL: one process. Must outlive
+                              the call; its traffic counters are updated */
 } ic_render_options;
 
 #define IC_MAX_PHASES 12 /* room for every phase of every integrator, and the CLI's "load" */
@@ -226,6 +230,13 @@ typedef struct ic_render_stats {
     float extent_min, extent_mean, extent_max; /* records' influence radii a_i·R_i in scene units (what the
                               split sphere or the Hessian set, after the clamps; integrator IC, 0 without
                               records) */
+    /* How the render's processes shared it (opt.comm); the figures after `ranks` are this process's own
+     * (rays, gather_rays and the image are the whole job's). */
+    int ranks;             /* processes that rendered (1 without opt.comm) */
+    uint64_t rank_records_gathered; /* records whose hemispheres this process gathered */
+    uint64_t rank_pixel_samples;    /* pixel samples this process rendered (the film, AOVs excluded) */
+    double rank_comm_seconds;       /* seconds this process spent in opt.comm's operations */
+    uint64_t rank_comm_bytes;       /* bytes it received through them */
     int phase_count;
     struct {
         const char *name;  /* "accel", "render", … */

@@ -70,8 +70,11 @@ typedef struct loop_ctx {
     double *sumsq;         /* adaptive pilot pass: per-pixel sums of squared luminance, else NULL */
     const uint32_t *extra; /* adaptive second pass: samples of each pixel from s_begin, else NULL */
     int tiles_x, tiles_y;
+    int rank, ranks;       /* this process renders tiles rank, rank + ranks, … */
+    int own_tiles;         /* how many that is */
     int s_begin, s_end;    /* samples of this pass */
     uint64_t *rays;        /* per thread, padded */
+    uint64_t *samples;     /* per thread, padded: pixel samples taken */
     atomic_int tiles_done;
     int total_tiles_all_passes;
     int tiles_before_pass;
@@ -84,11 +87,12 @@ static void render_tile(void *p, int64_t item, int thread)
 {
     loop_ctx *c = p;
     const ic_camera *cam = c->loop->camera;
-    int tx = (int)(item % c->tiles_x), ty = (int)(item / c->tiles_x);
+    int64_t tile = (int64_t)c->rank + item * c->ranks;
+    int tx = (int)(tile % c->tiles_x), ty = (int)(tile / c->tiles_x);
     int x0 = tx * TILE, y0 = ty * TILE;
     int x1 = x0 + TILE < cam->width ? x0 + TILE : cam->width;
     int y1 = y0 + TILE < cam->height ? y0 + TILE : cam->height;
-    uint64_t rays = 0;
+    uint64_t rays = 0, samples = 0;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
             uint32_t pixel = (uint32_t)(y * cam->width + x);
@@ -96,6 +100,7 @@ static void render_tile(void *p, int64_t item, int thread)
             double sq = 0.0;
             uint64_t lds_key = ic_hash4(c->loop->seed, pixel, 0x736f626f6cULL, 0);
             int s_end = c->extra ? c->s_begin + (int)c->extra[pixel] : c->s_end;
+            samples += (uint64_t)(s_end - c->s_begin);
             for (int s = c->s_begin; s < s_end; ++s) {
                 ic_rng rng = ic_rng_make(c->loop->seed, pixel, (uint64_t)s, 0);
                 /* The sample number indexes the pixel's sequence across passes too, so every
@@ -128,6 +133,7 @@ static void render_tile(void *p, int64_t item, int thread)
         }
     }
     c->rays[thread * RAY_PAD] += rays;
+    c->samples[thread * RAY_PAD] += samples;
     int done = atomic_fetch_add(&c->tiles_done, 1) + 1;
     if (thread == 0 && c->loop->progress)
         c->loop->progress(c->loop->progress_user, c->loop->phase ? c->loop->phase : "render",
@@ -231,12 +237,18 @@ static ic_result loop_init(loop_ctx *c, const ic_image_loop *loop, ic_sample_fn 
     c->user = user;
     c->tiles_x = (cam->width + TILE - 1) / TILE;
     c->tiles_y = (cam->height + TILE - 1) / TILE;
+    c->rank = ic_comm_rank(loop->comm);
+    c->ranks = ic_comm_size(loop->comm);
+    int tiles = c->tiles_x * c->tiles_y;
+    c->own_tiles = tiles > c->rank ? (tiles - c->rank + c->ranks - 1) / c->ranks : 0;
     size_t npix = (size_t)cam->width * (size_t)cam->height;
     c->accum = calloc(npix * 3, sizeof(double));
     c->rays = calloc((size_t)threads * RAY_PAD, sizeof(uint64_t));
-    if (!c->accum || !c->rays) {
+    c->samples = calloc((size_t)threads * RAY_PAD, sizeof(uint64_t));
+    if (!c->accum || !c->rays || !c->samples) {
         free(c->accum);
         free(c->rays);
+        free(c->samples);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d image", cam->width, cam->height);
     }
     return IC_OK;
@@ -248,11 +260,47 @@ static ic_result loop_pass(loop_ctx *c, int threads, int s_begin, int s_end, ic_
     c->s_begin = s_begin;
     c->s_end = s_end;
     atomic_store(&c->tiles_done, 0);
-    ic_result r = ic_parallel_for(threads, c->tiles_x * c->tiles_y, render_tile, c);
+    ic_result r = ic_parallel_for(threads, c->own_tiles, render_tile, c);
     if (r != IC_OK)
         return ic_error_set(err, r, "could not start render threads");
-    c->tiles_before_pass += c->tiles_x * c->tiles_y;
+    c->tiles_before_pass += c->own_tiles;
     return IC_OK;
+}
+
+/* Zeroes the sums of the pixels other ranks render, so that adding every rank's sums gives each pixel
+ * exactly its own rank's value (x + 0 = x: the same bits as one process). */
+static void clear_other_ranks(loop_ctx *c, double *values, int per_pixel)
+{
+    const ic_camera *cam = c->loop->camera;
+    for (int t = 0; t < c->tiles_x * c->tiles_y; ++t) {
+        if (t % c->ranks == c->rank)
+            continue;
+        int x0 = (t % c->tiles_x) * TILE, y0 = (t / c->tiles_x) * TILE;
+        int x1 = x0 + TILE < cam->width ? x0 + TILE : cam->width;
+        int y1 = y0 + TILE < cam->height ? y0 + TILE : cam->height;
+        for (int y = y0; y < y1; ++y)
+            memset(&values[((size_t)y * cam->width + x0) * per_pixel], 0,
+                   sizeof *values * (size_t)(x1 - x0) * per_pixel);
+    }
+}
+
+/* Adds the ranks' sums (a no-op for one process). */
+static ic_result combine_ranks(loop_ctx *c, double *values, int per_pixel, ic_error *err)
+{
+    if (c->ranks == 1)
+        return IC_OK;
+    const ic_camera *cam = c->loop->camera;
+    clear_other_ranks(c, values, per_pixel);
+    return ic_comm_sum(c->loop->comm, values, (uint64_t)cam->width * cam->height * per_pixel, err);
+}
+
+/* This process's ray and sample counts into res. */
+static void count_work(const loop_ctx *c, int threads, ic_image_loop_result *res)
+{
+    for (int t = 0; t < threads; ++t) {
+        res->rays += c->rays[t * RAY_PAD];
+        res->samples += c->samples[t * RAY_PAD];
+    }
 }
 
 static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, void *user, ic_image *out,
@@ -269,13 +317,18 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     c.sumsq = calloc(npix, sizeof *c.sumsq);
     uint32_t *extra = malloc(npix * sizeof *extra);
     /* Progress counts tiles of both passes alike, so the pilot (a quarter of the samples) shows as half. */
-    c.total_tiles_all_passes = 2 * c.tiles_x * c.tiles_y;
+    c.total_tiles_all_passes = 2 * c.own_tiles;
     c.start = ic_seconds();
     if (!c.sumsq || !extra)
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
                          cam->height);
     if (r == IC_OK)
         r = loop_pass(&c, threads, 0, n0, err);
+    /* Every rank shares out the rest from the whole pilot image, so all make the same allocation. */
+    if (r == IC_OK)
+        r = combine_ranks(&c, c.accum, 3, err);
+    if (r == IC_OK)
+        r = combine_ranks(&c, c.sumsq, 1, err);
     if (r == IC_OK && !allocate_samples(c.accum, c.sumsq, n0, loop->spp, cam->width, cam->height, extra))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
                          cam->height);
@@ -285,6 +338,8 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         c.extra = extra;
         r = loop_pass(&c, threads, n0, n0, err);
     }
+    if (r == IC_OK)
+        r = combine_ranks(&c, c.accum, 3, err);
     if (r == IC_OK && (r = ic_image_create(out, cam->width, cam->height)) != IC_OK)
         ic_error_set(err, r, "out of memory for a %dx%d image", cam->width, cam->height);
     if (r == IC_OK) {
@@ -297,8 +352,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
             for (int k = 0; k < 3; ++k)
                 out->rgb[3 * i + k] = (float)(c.accum[3 * i + k] / n);
         }
-        for (int t = 0; t < threads; ++t)
-            res->rays += c.rays[t * RAY_PAD];
+        count_work(&c, threads, res);
         res->spp_done = (int)llround((double)taken / (double)npix);
         res->spp_max = (int)most;
     }
@@ -307,6 +361,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     free(extra);
     free(c.accum);
     free(c.rays);
+    free(c.samples);
     return r;
 }
 
@@ -335,13 +390,12 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     if (r != IC_OK)
         return r;
     size_t npix = (size_t)cam->width * (size_t)cam->height;
-    int tiles = c.tiles_x * c.tiles_y;
     c.start = ic_seconds();
     /* Without a budget: one pass of all samples. With a budget: passes of growing size, stopping
      * before a pass that would overrun the budget (estimated from the previous pass). */
     int spp_max = loop->spp > 0 ? loop->spp : (1 << 30);
     int done = 0, pass_spp = loop->time_budget > 0.0 ? 1 : spp_max;
-    c.total_tiles_all_passes = loop->time_budget > 0.0 ? 0 : tiles;
+    c.total_tiles_all_passes = loop->time_budget > 0.0 ? 0 : c.own_tiles;
     double per_sample = 0.0;
     while (done < spp_max) {
         if (pass_spp > spp_max - done)
@@ -349,10 +403,15 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
         if (loop->time_budget > 0.0 && done > 0) {
             double left = loop->time_budget - (ic_seconds() - c.start);
             int fit = per_sample > 0.0 ? (int)(left / per_sample) : pass_spp;
-            if (fit < 1)
-                break;
             if (pass_spp > fit)
-                pass_spp = fit;
+                pass_spp = fit > 0 ? fit : 0;
+            /* Rank 0's clock decides for all, so every pixel gets the same samples. */
+            int32_t decided = pass_spp;
+            if ((r = ic_comm_broadcast(loop->comm, &decided, sizeof decided, 0, err)) != IC_OK)
+                break;
+            pass_spp = decided;
+            if (pass_spp < 1)
+                break;
         }
         double t0 = ic_seconds();
         if ((r = loop_pass(&c, threads, done, done + pass_spp, err)) != IC_OK)
@@ -364,6 +423,8 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
                            fmin(1.0, (ic_seconds() - c.start) / loop->time_budget));
         pass_spp *= 2;
     }
+    if (r == IC_OK)
+        r = combine_ranks(&c, c.accum, 3, err);
     if (r == IC_OK && done == 0)
         r = ic_error_set(err, IC_ERR_INVALID_ARG, "time budget too small for one sample per pixel; raise --time");
     if (r == IC_OK) {
@@ -374,13 +435,13 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     if (r == IC_OK) {
         for (size_t i = 0; i < npix * 3; ++i)
             out->rgb[i] = (float)(c.accum[i] / done);
-        for (int t = 0; t < threads; ++t)
-            res->rays += c.rays[t * RAY_PAD];
+        count_work(&c, threads, res);
         res->spp_done = done;
         res->spp_max = done;
     }
     res->seconds = ic_seconds() - c.start;
     free(c.accum);
     free(c.rays);
+    free(c.samples);
     return r;
 }

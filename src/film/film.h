@@ -5,10 +5,16 @@
  *
  * Determinism: sample s of pixel i draws from the counter-based stream (seed, i, s), so the image
  * never depends on the thread count or on which thread rendered a tile.
+ *
+ * Several processes (loop.comm): tile t is rendered by rank t mod size (a static interleave: neighbouring
+ * tiles cost alike, so every rank gets a fair mix of cheap and expensive regions), and the per-pixel
+ * sums are added over the ranks, each pixel's from the one rank that rendered it, so the image is
+ * bit-identical to one process's. Every rank returns the whole image.
  */
 #ifndef IC_FILM_FILM_H
 #define IC_FILM_FILM_H
 
+#include "core/comm.h"
 #include "core/rng.h"
 #include "geom/accel.h"
 #include "irrcache/image.h"
@@ -29,12 +35,14 @@ typedef struct ic_image_loop {
     const char *phase;     /* progress phase name */
     ic_progress_fn progress;
     void *progress_user;
+    ic_comm *comm;         /* the processes sharing the image; NULL: one */
 } ic_image_loop;
 
 typedef struct ic_image_loop_result {
     int spp_done;          /* samples per pixel actually taken (adaptive: the mean) */
     int spp_max;           /* adaptive: the most samples a pixel took */
-    uint64_t rays;         /* rays traced by the sample function */
+    uint64_t rays;         /* rays traced by the sample function (this process's) */
+    uint64_t samples;      /* pixel samples this process took */
     double seconds;
 } ic_image_loop_result;
 

@@ -307,8 +307,9 @@ static void gather_item(void *p, int64_t item, int thread)
     }
 }
 
-ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
-                              ic_vec3 *levels, ic_error *err)
+/* Gathers count points on this process's threads. */
+static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
+                             ic_vec3 *levels, ic_error *err)
 {
     if (count == 0)
         return IC_OK;
@@ -341,6 +342,25 @@ ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t co
         ic_gatherer_destroy(j.gatherers[t]);
     free(j.gatherers);
     free(j.workers);
+    return r;
+}
+
+/* Several processes (c->comm): each gathers one contiguous block of the points (ic_comm_block), and the
+ * blocks' results are exchanged, so every process holds every result, bit for bit what one process
+ * would have gathered: a point's result depends only on the seed, its key and the records already in
+ * the cache, which every process holds alike. */
+ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
+                              ic_vec3 *levels, ic_error *err)
+{
+    uint64_t first, n;
+    ic_comm_block(count, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &n);
+    size_t stride = (size_t)c->levels + 1;
+    ic_result r = gather_here(c, pts + first, (uint32_t)n, out + first, levels ? levels + first * stride : NULL, err);
+    c->gathered += n;
+    if (r == IC_OK)
+        r = ic_comm_allgather_blocks(c->comm, out, count, sizeof *out, err);
+    if (r == IC_OK && levels)
+        r = ic_comm_allgather_blocks(c->comm, levels, count, sizeof *levels * stride, err);
     return r;
 }
 

@@ -123,8 +123,10 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     /* A cache file that cannot be written costs the file, not the render: the caller reports it. */
     st->save_error[0] = '\0';
     ic_error save_err = {0};
+    /* Every process holds the same cache (the level payloads too); rank 0 alone writes it. */
     if (c->o.save_cache && (ic_ic_levels_to_payloads(c, &save_err) != IC_OK ||
-                            ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK))
+                            (ic_comm_rank(c->comm) == 0 &&
+                             ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK)))
         snprintf(st->save_error, sizeof st->save_error, "%s", save_err.message);
     st->records = ic_cache_count(c->cache);
     st->radiance_records = 0;
@@ -139,6 +141,7 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     record_extents(c->cache, st);
     st->cached_emitters = c->cached_emitters;
     st->gather_rays = atomic_load(&c->rays);
+    st->rank_records_gathered = c->gathered;
     st->rays = st->gather_rays; /* the driver adds the final render's */
 
     int hint_count = ic_resolve_threads(s->opt->threads);
@@ -226,6 +229,11 @@ ic_result ic_ic_integrator_create(const ic_tracer *tr, const ic_render_options *
     s->tr = tr;
     s->opt = opt;
     /* Checked before any construction work (the shading points alone take a pass over the image). */
+    if (opt->ic.strategy == IC_STRATEGY_LAZY && opt->comm && opt->comm->size > 1)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "the lazy strategy builds the cache one shading point at a "
+                            "time, each gather needing every record before it, so it cannot be shared among "
+                            "%d processes; use --strategy batch or adaptive, or run one process",
+                            opt->comm->size);
     if (opt->ic.recursive && opt->ic.strategy != IC_STRATEGY_LAZY)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "recursive caching builds its levels lazily; use the lazy strategy");
     if ((unsigned)opt->ic.error > IC_ERROR_HESSIAN)

@@ -16,6 +16,7 @@
 #ifndef IC_INTEGRATORS_IC_INTERNAL_H
 #define IC_INTEGRATORS_IC_INTERNAL_H
 
+#include "core/comm.h"
 #include "integrators/ic.h"
 #include "integrators/ic_radiance.h"
 #include "integrators/ic_screen.h"
@@ -63,6 +64,8 @@ typedef struct ic_ctx {
     float *direct_cdf;         /* its cdf (tri_light_count + 1) */
     uint32_t cached_emitters;  /* emitting triangles whose light the records carry */
     ic_radiance *rad;          /* radiance caching on glossy lobes (ic_radiance.c); NULL when off */
+    ic_comm *comm;             /* the processes sharing construction (ic_ic_gather_points); NULL: one */
+    uint64_t gathered;         /* records whose hemispheres this process gathered */
 } ic_ctx;
 
 typedef struct phase_times {

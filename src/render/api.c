@@ -2,10 +2,12 @@
  * api.c — ic_render (irrcache/render.h), the driver: resolves the options against the scene file's
  * settings and the defaults, builds the accelerator, makes the chosen integrator (integrator.h),
  * prepares it, runs the film's image loop over its sample function, asks it for its AOVs, and fills
- * the statistics.
+ * the statistics. Several processes (opt.comm, irrcache/comm.h) share construction and the image; the
+ * ray counts are summed over them at the end.
  */
 #include "irrcache/render.h"
 
+#include "core/comm.h"
 #include "core/threads.h"
 #include "film/film.h"
 #include "integrators/integrator.h"
@@ -75,6 +77,9 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         return r;
     st->threads = ic_resolve_threads(opt.threads);
     st->seed = opt.seed;
+    st->ranks = ic_comm_size(opt.comm);
+    double comm_seconds0 = opt.comm ? opt.comm->seconds : 0.0;
+    uint64_t comm_bytes0 = opt.comm ? opt.comm->bytes : 0;
 
     double t0 = ic_seconds();
     ic_accel *accel = NULL;
@@ -112,6 +117,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         loop.phase = it.ops->loop_phase;
         loop.progress = opt.progress;
         loop.progress_user = opt.progress_user;
+        loop.comm = opt.comm;
         r = ic_render_image(&loop, it.ops->sample, it.self, out, &lr, err);
     }
     if (r == IC_OK) {
@@ -119,11 +125,22 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         st->rays += lr.rays;
         st->spp = lr.spp_done;
         st->spp_max = lr.spp_max;
+        st->rank_pixel_samples = lr.samples;
         if (opt.aovs && it.ops->aovs)
             r = it.ops->aovs(it.self, out, &loop, &lr, opt.aovs, err);
     }
     ic_integrator_destroy(&it);
     ic_accel_destroy(accel);
+    /* The job's rays: every process's (exact in doubles below 2^53). */
+    double rays[2] = {(double)st->rays, (double)st->gather_rays};
+    if (r == IC_OK && (r = ic_comm_sum(opt.comm, rays, 2, err)) == IC_OK) {
+        st->rays = (uint64_t)rays[0];
+        st->gather_rays = (uint64_t)rays[1];
+    }
+    if (opt.comm) {
+        st->rank_comm_seconds = opt.comm->seconds - comm_seconds0;
+        st->rank_comm_bytes = opt.comm->bytes - comm_bytes0;
+    }
     st->seconds = ic_seconds() - t0;
     st->rays_per_second = st->seconds > 0.0 ? (double)st->rays / st->seconds : 0.0;
     return r;

@@ -1,0 +1,175 @@
+/*
+ * cluster.c — the command's processes (cluster.h): the one file that calls MPI. Built with MPI when the
+ * build found it (IRRCACHE_MPI); without it every function is the one-process case.
+ *
+ * Only the main thread calls MPI (MPI_THREAD_FUNNELED): the library calls its comm from the thread
+ * that called ic_render, never from its worker threads.
+ */
+#include "cluster.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef IRRCACHE_MPI
+#include <mpi.h>
+
+typedef struct mpi_comm {
+    ic_comm comm;
+    int *counts, *displs; /* per rank, for MPI_Allgatherv */
+} mpi_comm;
+
+/* MPI counts and displacements are int: an exchange above 2 GiB in all is refused (IC_ERR_UNSUPPORTED). */
+static ic_result mpi_allgather(void *user, const void *send, void *recv, const uint64_t *counts)
+{
+    mpi_comm *m = user;
+    uint64_t total = 0;
+    for (int r = 0; r < m->comm.size; ++r) {
+        if (counts[r] > (uint64_t)INT32_MAX || total > (uint64_t)INT32_MAX)
+            return IC_ERR_UNSUPPORTED;
+        m->counts[r] = (int)counts[r];
+        m->displs[r] = (int)total;
+        total += counts[r];
+    }
+    const void *s = send == (const char *)recv + m->displs[m->comm.rank] ? MPI_IN_PLACE : send;
+    int rc = MPI_Allgatherv(s, m->counts[m->comm.rank], MPI_BYTE, recv, m->counts, m->displs, MPI_BYTE,
+                            MPI_COMM_WORLD);
+    return rc == MPI_SUCCESS ? IC_OK : IC_ERR_IO;
+}
+
+static ic_result mpi_sum(void *user, double *values, uint64_t count)
+{
+    (void)user;
+    /* In chunks that fit an int count. */
+    for (uint64_t done = 0; done < count;) {
+        int n = count - done > (uint64_t)(1 << 28) ? 1 << 28 : (int)(count - done);
+        if (MPI_Allreduce(MPI_IN_PLACE, values + done, n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD) != MPI_SUCCESS)
+            return IC_ERR_IO;
+        done += (uint64_t)n;
+    }
+    return IC_OK;
+}
+
+static ic_result mpi_broadcast(void *user, void *buf, uint64_t bytes, int root)
+{
+    (void)user;
+    for (uint64_t done = 0; done < bytes;) {
+        int n = bytes - done > (uint64_t)(1 << 30) ? 1 << 30 : (int)(bytes - done);
+        if (MPI_Bcast((char *)buf + done, n, MPI_BYTE, root, MPI_COMM_WORLD) != MPI_SUCCESS)
+            return IC_ERR_IO;
+        done += (uint64_t)n;
+    }
+    return IC_OK;
+}
+
+/* Started by an MPI launcher: Open MPI's mpirun and PMIx- or PMI-based launchers (srun) say so in the
+ * environment. Without one the program stays a plain process: MPI_Init alone would start a singleton
+ * job, slower to start and needing the launcher's daemon. */
+static int under_launcher(void)
+{
+    static const char *vars[] = {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"};
+    for (size_t i = 0; i < sizeof vars / sizeof vars[0]; ++i)
+        if (getenv(vars[i]))
+            return 1;
+    return 0;
+}
+
+ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
+{
+    *failed = 0;
+    if (!under_launcher())
+        return NULL;
+    int provided = 0;
+    if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+        fprintf(stderr, "irrcache: MPI could not start; check the launcher (mpirun) and its hostfile\n");
+        *failed = 1;
+        return NULL;
+    }
+    mpi_comm *m = calloc(1, sizeof *m);
+    int size = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    if (m) {
+        m->counts = calloc((size_t)size, sizeof *m->counts);
+        m->displs = calloc((size_t)size, sizeof *m->displs);
+    }
+    if (!m || !m->counts || !m->displs) {
+        fprintf(stderr, "irrcache: out of memory starting %d MPI ranks\n", size);
+        MPI_Abort(MPI_COMM_WORLD, 1);
+        return NULL;
+    }
+    m->comm.size = size;
+    MPI_Comm_rank(MPI_COMM_WORLD, &m->comm.rank);
+    m->comm.user = m;
+    m->comm.allgather = mpi_allgather;
+    m->comm.sum = mpi_sum;
+    m->comm.broadcast = mpi_broadcast;
+    return &m->comm;
+}
+
+void ic_cli_cluster_end(ic_comm *comm)
+{
+    if (!comm)
+        return;
+    mpi_comm *m = comm->user;
+    MPI_Finalize();
+    free(m->counts);
+    free(m->displs);
+    free(m);
+}
+
+int ic_cli_cluster_first_failure(ic_comm *comm, int failed)
+{
+    if (!comm)
+        return failed ? 0 : -1;
+    int mine = failed ? comm->rank : comm->size, first = comm->size;
+    if (MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS)
+        MPI_Abort(MPI_COMM_WORLD, 1);
+    return first < comm->size ? first : -1;
+}
+
+void ic_cli_cluster_abort(ic_comm *comm, int code)
+{
+    if (comm && comm->size > 1) {
+        fflush(stderr);
+        MPI_Abort(MPI_COMM_WORLD, code);
+    }
+}
+
+void ic_cli_cluster_gather(ic_comm *comm, const double *mine, int count, double *all)
+{
+    if (!comm) {
+        memcpy(all, mine, sizeof *mine * (size_t)count);
+        return;
+    }
+    MPI_Gather(mine, count, MPI_DOUBLE, all, count, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+}
+
+#else /* one process */
+
+ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
+{
+    (void)argc;
+    (void)argv;
+    *failed = 0;
+    return NULL;
+}
+void ic_cli_cluster_end(ic_comm *comm) { (void)comm; }
+int ic_cli_cluster_first_failure(ic_comm *comm, int failed)
+{
+    (void)comm;
+    return failed ? 0 : -1;
+}
+void ic_cli_cluster_abort(ic_comm *comm, int code)
+{
+    (void)comm;
+    (void)code;
+}
+void ic_cli_cluster_gather(ic_comm *comm, const double *mine, int count, double *all)
+{
+    (void)comm;
+    memcpy(all, mine, sizeof *mine * (size_t)count);
+}
+#endif
+
+int ic_cli_cluster_rank(const ic_comm *comm) { return comm ? comm->rank : 0; }
+int ic_cli_cluster_size(const ic_comm *comm) { return comm ? comm->size : 1; }

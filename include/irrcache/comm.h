@@ -1,0 +1,48 @@
+/*
+ * irrcache/comm.h — the processes of one render: how a renderer running as several processes (MPI
+ * ranks, one per node) exchanges data, without the library linking any message-passing library.
+ *
+ * The caller fills an ic_comm with its rank, the number of processes and three collective operations
+ * over its own transport (the irrcache command does so over MPI), and passes it in
+ * ic_render_options.comm. Every process then calls ic_render with the same scene and options: the
+ * cache's construction gathers each pass's records on one share of the processes each and exchanges
+ * them, so every process holds the same cache; the final render divides the image's tiles among them;
+ * every process returns the same image, the same records and the same cache as a single process would
+ * (same seed, same bits). A NULL comm, or size 1, is one process.
+ *
+ * The operations are collective: every rank calls each one, in the same order, with matching sizes.
+ * They are called from the thread that called ic_render, never from the library's worker threads.
+ * A non-IC_OK return ends the render with that result; a transport that cannot recover should end the
+ * job itself (MPI_Abort), since the other ranks wait in the operation.
+ */
+#ifndef IRRCACHE_COMM_H
+#define IRRCACHE_COMM_H
+
+#include "irrcache/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct ic_comm {
+    int rank;              /* this process, 0 … size − 1; rank 0 is the one that writes files */
+    int size;              /* processes in the render */
+    void *user;            /* handed to the operations */
+    /* All-gather: rank r contributes counts[r] bytes from send; recv (room for the sum of counts) gets
+     * every rank's block, in rank order. counts is the same array on every rank. send may be this
+     * rank's own block inside recv (in place: MPI_IN_PLACE). */
+    ic_result (*allgather)(void *user, const void *send, void *recv, const uint64_t *counts);
+    /* Element-wise sum of count doubles over all ranks, in place, the same result on every rank. */
+    ic_result (*sum)(void *user, double *values, uint64_t count);
+    /* root's `bytes` bytes at buf copied into buf on every other rank. */
+    ic_result (*broadcast)(void *user, void *buf, uint64_t bytes, int root);
+    /* Kept by the library: seconds spent in the operations above and bytes they received, over the
+     * comm's lifetime (zero them to start counting). */
+    double seconds;
+    uint64_t bytes;
+} ic_comm;
+
+#ifdef __cplusplus
+}
+#endif
+#endif

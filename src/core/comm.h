@@ -1,0 +1,29 @@
+/*
+ * comm.h — the library's side of irrcache/comm.h: the collective operations of a render's processes,
+ * timed and counted into the comm, and a one-process no-op when the comm is NULL or has one rank. The
+ * layers above call only these, so a single process never pays for the indirection.
+ */
+#ifndef IC_CORE_COMM_H
+#define IC_CORE_COMM_H
+
+#include "irrcache/comm.h"
+
+/* 1 when comm joins more than one process. */
+static inline int ic_comm_is_shared(const ic_comm *comm) { return comm && comm->size > 1; }
+static inline int ic_comm_rank(const ic_comm *comm) { return ic_comm_is_shared(comm) ? comm->rank : 0; }
+static inline int ic_comm_size(const ic_comm *comm) { return ic_comm_is_shared(comm) ? comm->size : 1; }
+
+/* The share of `count` items that rank r takes under the fixed block rule (contiguous, in rank order,
+ * sizes differing by at most one): items [*first, *first + *n). */
+void ic_comm_block(uint64_t count, int size, int r, uint64_t *first, uint64_t *n);
+
+/* Every rank's block of `item_bytes`-byte items under ic_comm_block's rule for `count` items, gathered
+ * into all (room for count items) on every rank; this rank's block is already in place at its offset.
+ * A no-op for one process. */
+ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, size_t item_bytes, ic_error *err);
+/* Sums count doubles over the ranks, in place (a no-op for one process). */
+ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err);
+/* Copies root's bytes to every rank (a no-op for one process). */
+ic_result ic_comm_broadcast(ic_comm *comm, void *buf, uint64_t bytes, int root, ic_error *err);
+
+#endif

@@ -1,0 +1,96 @@
+#!/usr/bin/env bash
+# test_mpi.sh IRRCACHE HAS_MPI — `mpirun -np N irrcache render` gives the bytes a single process gives:
+#   1. the Cornell box with the cache (batch; its image, cache file, record counts per pass) and with the
+#      path tracer, at 1, 2, 3 and 5 ranks of 1 or 2 threads each, against the same build run without
+#      mpirun (one process); the adaptive strategy and a loaded cache at 3 ranks;
+#   2. lazy construction under 2 ranks is refused with a message naming the strategy;
+#   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
+#      missing file) stops the job: non-zero exit within seconds, the message names the rank and the
+#      file, and no output is written.
+# Skips (77) when the build has no MPI. Runs as root in CI through Open MPI's own switches (set here,
+# never in the program).
+set -euo pipefail
+bin=${1:?usage: test_mpi.sh IRRCACHE HAS_MPI}
+if [ "${2:-}" != 1 ] && [ "${2:-}" != ON ] && [ "${2:-}" != TRUE ]; then
+  echo "skipped: this build has no MPI (configure with MPI installed: scripts/deps.sh)"
+  exit 77
+fi
+command -v mpirun >/dev/null || { echo "skipped: mpirun not found (scripts/deps.sh installs openmpi-bin)"; exit 77; }
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+src=$(cd "$(dirname "$0")/../.." && pwd)
+scene=$src/scenes/cornell-box/cornell-box.json
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/irrcache-mpi.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+cd "$tmp"
+common=(--width 40 --height 40 --quiet)
+ic=(--integrator ic --spp 8 --rays 256)
+pt=(--integrator pt --spp 4)
+fail=0
+
+# The counts that must not depend on the ranks: records, passes, records per pass.
+counts() { python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); print(d.get("records"), d.get("passes"), d.get("records_per_pass"), d["spp"], d.get("spp_max"))' "$1"; }
+same() { # same WHAT FILE REFERENCE
+  if cmp -s "$2" "$3"; then return 0; fi
+  echo "FAIL: $1: $2 differs from $3"; fail=1
+}
+
+"$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 2 -o ic.exr --stats ic.json --save-cache ic.cache
+"$bin" render "$scene" "${common[@]}" "${pt[@]}" --threads 2 -o pt.exr
+"$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy adaptive --threads 2 -o ad.exr
+"$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 2 --load-cache ic.cache -o load.exr
+for np in 1 2 3 5; do
+  for t in 1 2; do
+    tag=ic-$np-$t
+    mpirun --oversubscribe -np $np "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads $t -o $tag.exr \
+      --stats $tag.json --save-cache $tag.cache
+    same "batch image, $np ranks x $t threads" $tag.exr ic.exr
+    same "cache file, $np ranks x $t threads" $tag.cache ic.cache
+    if [ "$(counts $tag.json)" != "$(counts ic.json)" ]; then
+      echo "FAIL: record counts at $np ranks x $t threads: $(counts $tag.json), one process: $(counts ic.json)"
+      fail=1
+    fi
+    if [ $np -gt 1 ]; then
+      python3 - "$tag.json" "$np" <<'PY' || fail=1
+import json, sys
+d = json.load(open(sys.argv[1])); n = int(sys.argv[2])
+assert d["ranks"] == n and len(d["per_rank"]) == n, "stats: ranks"
+assert sum(r["records_gathered"] for r in d["per_rank"]) == d["records"], "stats: records gathered add up"
+assert sum(r["pixel_samples"] for r in d["per_rank"]) == d["spp"] * d["width"] * d["height"], "stats: samples add up"
+assert all(r["comm_seconds"] >= 0 and r["comm_bytes"] > 0 for r in d["per_rank"]), "stats: communication"
+PY
+    fi
+  done
+  mpirun --oversubscribe -np $np "$bin" render "$scene" "${common[@]}" "${pt[@]}" --threads $((np % 2 + 1)) -o pt-$np.exr
+  same "path-traced image, $np ranks" pt-$np.exr pt.exr
+done
+mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy adaptive --threads 1 -o ad-3.exr
+same "adaptive image, 3 ranks" ad-3.exr ad.exr
+mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 1 --load-cache ic.cache -o load-3.exr
+same "image from a loaded cache, 3 ranks" load-3.exr load.exr
+
+# Lazy construction is serial: refused under several ranks, with the reason.
+if mpirun --oversubscribe -np 2 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy lazy -o lazy.exr \
+     2>lazy.err; then
+  echo "FAIL: lazy under 2 ranks was not refused"; fail=1
+elif ! grep -q "lazy" lazy.err || [ -e lazy.exr ]; then
+  echo "FAIL: lazy under 2 ranks: no message naming the strategy, or an image was written:"; cat lazy.err; fail=1
+fi
+
+# A rank that cannot load its scene stops the whole job, at once, with one message and no output.
+start=$(date +%s)
+if timeout 60 mpirun --oversubscribe -np 2 "$bin" render "$scene" "${common[@]}" "${ic[@]}" -o bad.exr : \
+     -np 1 "$bin" render "$tmp/missing.json" "${common[@]}" "${ic[@]}" -o bad.exr 2>bad.err; then
+  echo "FAIL: a rank without its scene: the job exited 0"; fail=1
+fi
+took=$(( $(date +%s) - start ))
+if [ $took -gt 20 ]; then echo "FAIL: a rank without its scene: the job took ${took}s to stop"; fail=1; fi
+if ! grep -q "rank 2 of 3.*missing.json" bad.err; then
+  echo "FAIL: a rank without its scene: no message naming rank 2 and the file:"; cat bad.err; fail=1
+fi
+if [ "$(grep -c "irrcache render" bad.err)" != 1 ]; then
+  echo "FAIL: a rank without its scene: not exactly one message:"; cat bad.err; fail=1
+fi
+if ls bad.exr* >/dev/null 2>&1; then echo "FAIL: a rank without its scene: an output was written"; fail=1; fi
+
+[ $fail = 0 ] && echo "mpi: every rank count gave the single process's bytes"
+exit $fail
