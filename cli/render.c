@@ -372,7 +372,11 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         fputc('\n', stderr);
     if (r != IC_OK) {
         if (ranks > 1) {
-            /* The other ranks wait in an exchange this rank will never join: end the job. */
+            /* The other ranks may wait in an exchange this rank will never join: end the job. A failure
+             * every rank meets (a cache file that does not match) is said by rank 0, whose abort ends the
+             * others within the pause they take before speaking; a failure of one rank alone is said by it. */
+            if (rank != 0)
+                nanosleep(&(struct timespec){1, 0}, NULL);
             fprintf(stderr, "irrcache render: rank %d of %d: %s: %s; stopping all ranks\n", rank, ranks, a.scene,
                     err.message);
             ic_cli_cluster_abort(comm, 1);

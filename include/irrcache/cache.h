@@ -320,6 +320,14 @@ ic_result ic_cache_save(const ic_cache *cache, const char *path, uint64_t scene_
  * (IC_ERR_INVALID_ARG, before it is read). params may be NULL for defaults. */
 ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_t scene_hash, ic_cache **out,
                         ic_error *err);
+/* ic_cache_load in two steps, for a program that reads the file once and hands its bytes to several
+ * processes: the file's bytes (malloc'd into *data: free() them), checked only as a regular file within
+ * params->max_file_bytes; then the cache from those bytes, with every check of ic_cache_load (name: the
+ * file's path, for messages). */
+ic_result ic_cache_read_file(const char *path, const ic_cache_params *params, void **data, size_t *size,
+                             ic_error *err);
+ic_result ic_cache_load_memory(const char *name, const void *data, size_t size, const ic_cache_params *params,
+                               uint64_t scene_hash, ic_cache **out, ic_error *err);
 
 /* FNV-1a 64-bit hash of bytes, continuing from h (start with IC_FNV64_OFFSET); for scene hashes too. */
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size);

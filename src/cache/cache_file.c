@@ -367,21 +367,43 @@ static ic_result read_payloads(ic_cache *c, const char *path, const unsigned cha
     return rc;
 }
 
+ic_result ic_cache_read_file(const char *path, const ic_cache_params *params, void **data, size_t *size,
+                             ic_error *err)
+{
+    if (!path || !data || !size)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no path or no output buffer");
+    unsigned char *bytes = NULL;
+    ic_result rc = read_all(path, params ? params->max_file_bytes : 0, &bytes, size, err);
+    *data = bytes;
+    return rc;
+}
+
 ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_t scene_hash, ic_cache **out,
                         ic_error *err)
 {
     if (!path || !out)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no path or no output handle");
     *out = NULL;
+    void *data = NULL;
+    size_t size = 0;
+    ic_result rc = ic_cache_read_file(path, params, &data, &size, err);
+    if (rc == IC_OK)
+        rc = ic_cache_load_memory(path, data, size, params, scene_hash, out, err);
+    free(data);
+    return rc;
+}
+
+ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size, const ic_cache_params *params,
+                               uint64_t scene_hash, ic_cache **out, ic_error *err)
+{
+    if (!path || !out || (!bytes && size))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no name, no bytes or no output handle");
+    *out = NULL;
     ic_cache_params p;
     ic_result rc = ic_cache_params_resolve(params, &p, err);
     if (rc != IC_OK)
         return rc;
-    unsigned char *data = NULL;
-    size_t size = 0;
-    rc = read_all(path, params ? params->max_file_bytes : 0, &data, &size, err);
-    if (rc != IC_OK)
-        return rc;
+    const unsigned char *data = bytes;
 
     if (size >= 8 && memcmp(data, MAGIC, 8) != 0)
         rc = ic_error_set(err, IC_ERR_PARSE, "%s: not an irrcache cache file; " REBUILD_HINT, path);
@@ -392,10 +414,8 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
                           REBUILD_HINT, path, get_u32(data + 8), IC_CACHE_FILE_OLDEST, IC_CACHE_FILE_VERSION);
     else if (get_u32(data + 12) != PARAM_BYTES)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: corrupt header; " REBUILD_HINT, path);
-    if (rc != IC_OK) {
-        free(data);
+    if (rc != IC_OK)
         return rc;
-    }
     uint64_t count = get_u64(data + 24 + PARAM_BYTES);
     const int has_payloads = get_u32(data + 8) >= 2;
     const uint64_t per_record = RECORD_BYTES + (has_payloads ? 4u : 0u), fixed = HEADER_BYTES + 8 + (has_payloads ? 8u : 0u);
@@ -417,10 +437,8 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: too many records", path);
     else
         rc = check_params(path, data + 24, &p, err);
-    if (rc != IC_OK) {
-        free(data);
+    if (rc != IC_OK)
         return rc;
-    }
 
     ic_cache *c = NULL;
     rc = ic_cache_create(&p, &c, err);
@@ -447,7 +465,6 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
         if (has_payloads)
             rc = read_payloads(c, path, data + HEADER_BYTES + count * RECORD_BYTES + 8, payload_floats, err);
     }
-    free(data);
     if (rc == IC_OK) {
         ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
         if (ic_octree_build(&c->points, &pts, c->count) != IC_OK || ic_octree_build(&c->tree, &sph, c->count) != IC_OK)

@@ -60,6 +60,41 @@ typedef struct ic_state {
     ic_ctx *c;
 } ic_state;
 
+/* The cache file's records: read by rank 0 alone and broadcast (only it needs the file), then decoded and
+ * checked by every rank alike; rank 0's error, when it cannot read the file, becomes every rank's. */
+static ic_result load_records(ic_ctx *c, ic_cache **out, ic_error *err)
+{
+    if (!ic_comm_is_shared(c->comm))
+        return ic_cache_load(c->o.load_cache, &c->o.cache, ic_ic_records_hash(c), out, err);
+    struct {
+        int64_t result;
+        uint64_t size;
+        ic_error error;
+    } head;
+    memset(&head, 0, sizeof head);
+    void *data = NULL;
+    size_t size = 0;
+    if (c->comm->rank == 0) {
+        head.result = ic_cache_read_file(c->o.load_cache, &c->o.cache, &data, &size, &head.error);
+        head.size = size;
+    }
+    ic_result r = ic_comm_broadcast(c->comm, &head, sizeof head, 0, err);
+    if (r != IC_OK || head.result != IC_OK) {
+        free(data);
+        if (r == IC_OK)
+            *err = head.error;
+        return r != IC_OK ? r : (ic_result)head.result;
+    }
+    if (c->comm->rank != 0 && !(data = malloc(head.size ? head.size : 1)))
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the %llu bytes of %s",
+                            (unsigned long long)head.size, c->o.load_cache);
+    r = ic_comm_broadcast(c->comm, data, head.size, 0, err);
+    if (r == IC_OK)
+        r = ic_cache_load_memory(c->o.load_cache, data, head.size, &c->o.cache, ic_ic_records_hash(c), out, err);
+    free(data);
+    return r;
+}
+
 /* The records: loaded (refused, with the cache library's message, when made for another scene, other
  * gathering settings or other cache parameters), or built and re-indexed. Adds construction's own time,
  * outside gathering, insertion and the phases a strategy reports itself, to *t_candidates. */
@@ -69,7 +104,7 @@ static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt,
     if (c->o.load_cache) {
         ic_cache *loaded = NULL;
         double t0 = ic_seconds();
-        ic_result r = ic_cache_load(c->o.load_cache, &c->o.cache, ic_ic_records_hash(c), &loaded, err);
+        ic_result r = load_records(c, &loaded, err);
         if (r != IC_OK)
             return r;
         ic_cache_destroy(c->cache);
