@@ -7,9 +7,11 @@
  */
 #include "cluster.h"
 
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #ifdef IRRCACHE_MPI
 #include <mpi.h>
@@ -135,6 +137,12 @@ void ic_cli_cluster_abort(ic_comm *comm, int code)
     }
 }
 
+void ic_cli_cluster_broadcast(ic_comm *comm, void *buf, uint64_t bytes)
+{
+    if (comm && comm->size > 1 && mpi_broadcast(comm->user, buf, bytes, 0) != IC_OK)
+        MPI_Abort(MPI_COMM_WORLD, 1);
+}
+
 void ic_cli_cluster_gather(ic_comm *comm, const double *mine, int count, double *all)
 {
     if (!comm) {
@@ -164,6 +172,12 @@ void ic_cli_cluster_abort(ic_comm *comm, int code)
     (void)comm;
     (void)code;
 }
+void ic_cli_cluster_broadcast(ic_comm *comm, void *buf, uint64_t bytes)
+{
+    (void)comm;
+    (void)buf;
+    (void)bytes;
+}
 void ic_cli_cluster_gather(ic_comm *comm, const double *mine, int count, double *all)
 {
     (void)comm;
@@ -172,4 +186,30 @@ void ic_cli_cluster_gather(ic_comm *comm, const double *mine, int count, double 
 #endif
 
 int ic_cli_cluster_rank(const ic_comm *comm) { return comm ? comm->rank : 0; }
+
+int ic_cli_cluster_mute(int mute)
+{
+    if (!mute)
+        return -1;
+    fflush(stderr);
+    int saved = dup(2), null_fd = open("/dev/null", O_WRONLY);
+    if (saved >= 0 && null_fd >= 0)
+        dup2(null_fd, 2);
+    if (null_fd >= 0)
+        close(null_fd);
+    if (saved >= 0 && null_fd < 0) {
+        close(saved);
+        return -1;
+    }
+    return saved;
+}
+
+void ic_cli_cluster_unmute(int saved)
+{
+    if (saved < 0)
+        return;
+    fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+}
 int ic_cli_cluster_size(const ic_comm *comm) { return comm ? comm->size : 1; }

@@ -27,6 +27,12 @@ int ic_cli_cluster_size(const ic_comm *comm);
 int ic_cli_cluster_first_failure(ic_comm *comm, int failed);
 /* Ends every rank of the job with exit status `code` (one process: returns). */
 void ic_cli_cluster_abort(ic_comm *comm, int code);
+/* Collective: rank 0's bytes at buf copied to every rank. */
+void ic_cli_cluster_broadcast(ic_comm *comm, void *buf, uint64_t bytes);
+/* Silences this process's standard error (mute non-zero) until ic_cli_cluster_unmute(the returned
+ * value): ranks other than 0 parse the same command line as rank 0, which alone reports its errors. */
+int ic_cli_cluster_mute(int mute);
+void ic_cli_cluster_unmute(int saved);
 /* Collective: every rank's `count` values of `mine` into all (room for size × count, rank 0 only). */
 void ic_cli_cluster_gather(ic_comm *comm, const double *mine, int count, double *all);
 

@@ -11,6 +11,7 @@
  * no output file is written.
  */
 #include "cli.h"
+#include "cluster.h"
 #include "json_out.h"
 #include "points_grid.h"
 
@@ -24,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <time.h>
 
 #define EXIT_WORK 1
 #define EXIT_USAGE 2
@@ -294,8 +296,38 @@ static int write_json(const char *path, const ic_points_options *opt, const ic_p
     return ic_cli_write_json("points", path, root, 0);
 }
 
+static int points_command(int argc, char **argv, ic_comm *comm);
+
 int ic_cli_points(int argc, char **argv)
 {
+    int failed = 0;
+    ic_comm *comm = ic_cli_cluster_start(&argc, &argv, &failed);
+    if (failed)
+        return EXIT_WORK;
+    int rc = points_command(argc, argv, comm);
+    ic_cli_cluster_end(comm);
+    return rc;
+}
+
+/* Before the computation: the lowest failing rank says what failed (message, when not yet printed), every
+ * rank exits non-zero. Returns this rank's exit status, 0 when every rank may go on. */
+static int agree(ic_comm *comm, int status, const char *message)
+{
+    int first = ic_cli_cluster_first_failure(comm, status != 0);
+    if (first < 0)
+        return 0;
+    if (first == ic_cli_cluster_rank(comm) && message[0])
+        fprintf(stderr, "%s\n", message);
+    return status ? status : EXIT_WORK;
+}
+
+/* Under mpirun (cluster.h) every rank computes a share of the records and the points; ranks other than 0
+ * parse the same command line silently (rank 0 reports its errors), rank 0 alone reads a points file (so
+ * standard input works) and broadcasts it, and alone writes the results. */
+static int points_command(int argc, char **argv, ic_comm *comm)
+{
+    int rank = ic_cli_cluster_rank(comm), ranks = ic_cli_cluster_size(comm);
+    int muted = ic_cli_cluster_mute(rank != 0);
     const char *scene_path = NULL, *points_path = NULL, *out_path = NULL;
     out_format format = FORMAT_TEXT;
     int daylight_factor = 0, has_grid = 0, has_spacing = 0, has_height = 0, has_map_max = 0;
@@ -317,7 +349,8 @@ int ic_cli_points(int argc, char **argv)
             }
             scene_path = arg;
         } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
-            print_help(stdout);
+            if (rank == 0)
+                print_help(stdout);
             return 0;
         } else if (!strcmp(arg, "--daylight-factor")) {
             daylight_factor = 1;
@@ -439,9 +472,25 @@ int ic_cli_points(int argc, char **argv)
             return EXIT_USAGE;
         }
         count = cols * rows;
-    } else if (!read_points(points_path, &pts, &count)) {
-        return EXIT_WORK;
     }
+    ic_cli_cluster_unmute(muted);
+    char message[1400] = "";
+    int rc = !has_grid && rank == 0 && !read_points(points_path, &pts, &count) ? EXIT_WORK : 0;
+    if ((rc = agree(comm, rc, message)) != 0) {
+        free(pts);
+        return rc;
+    }
+    if (ranks > 1 && !has_grid) {
+        uint64_t n = count;
+        ic_cli_cluster_broadcast(comm, &n, sizeof n);
+        count = (uint32_t)n;
+        if (rank != 0 && !(pts = malloc(sizeof *pts * (count ? count : 1)))) {
+            fprintf(stderr, "irrcache points: rank %d of %d: out of memory for %u points\n", rank, ranks, count);
+            ic_cli_cluster_abort(comm, EXIT_WORK);
+        }
+        ic_cli_cluster_broadcast(comm, pts, sizeof *pts * count);
+    }
+    opt.comm = comm;
     const ic_sensor_point *prefix = has_grid ? pts : NULL;
     ic_error err = {0};
     ic_scene *scene = NULL;
@@ -449,16 +498,34 @@ int ic_cli_points(int argc, char **argv)
     ic_points_stats st;
     double df_lux = 0.0;
     int status = EXIT_WORK;
-    if (!res) {
-        fprintf(stderr, "irrcache points: out of memory for %u results\n", count);
-    } else if (ic_scene_load(scene_path, NULL, &scene, &err) != IC_OK) {
-        fprintf(stderr, "irrcache points: %s\n", err.message);
-    } else if (daylight_factor && ic_points_daylight_reference(scene, &df_lux, &err) != IC_OK) {
-        fprintf(stderr, "irrcache points: --daylight-factor: %s\n", err.message);
-    } else if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
+    if (!res)
+        snprintf(message, sizeof message, "irrcache points: out of memory for %u results", count);
+    else if (ic_scene_load(scene_path, NULL, &scene, &err) != IC_OK && ranks > 1)
+        snprintf(message, sizeof message, "irrcache points: rank %d of %d: %s", rank, ranks, err.message);
+    else if (!scene)
+        snprintf(message, sizeof message, "irrcache points: %s", err.message);
+    else if (daylight_factor && ic_points_daylight_reference(scene, &df_lux, &err) != IC_OK)
+        snprintf(message, sizeof message, "irrcache points: --daylight-factor: %s", err.message);
+    if ((rc = agree(comm, message[0] ? EXIT_WORK : 0, message)) != 0) {
+        ic_scene_free(scene);
+        free(res);
+        free(pts);
+        return rc;
+    }
+    if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
+        if (ranks > 1) {
+            /* As in render.c: rank 0 says a failure every rank meets; the others' abort ends the job. */
+            if (rank != 0)
+                nanosleep(&(struct timespec){1, 0}, NULL);
+            fprintf(stderr, "irrcache points: rank %d of %d: %s: %s; stopping all ranks\n", rank, ranks,
+                    has_grid ? "--grid" : points_path, err.message);
+            ic_cli_cluster_abort(comm, EXIT_WORK);
+        }
         fprintf(stderr, "irrcache points: %s: %s\n", has_grid ? "--grid" : points_path, err.message);
         if (err.code == IC_ERR_INVALID_ARG)
             status = EXIT_USAGE; /* an option the scene's settings make impossible */
+    } else if (rank != 0) {
+        status = 0; /* rank 0 writes the results */
     } else if (map_path && !ic_cli_grid_map(map_path, res, cols, rows, df_lux, map_max)) {
         /* the map first: when it cannot be written, no results file is left either */
     } else if (format == FORMAT_JSON) {

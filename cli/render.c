@@ -21,7 +21,6 @@
 #include "irrcache/render.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -219,20 +218,9 @@ static int write_records_json(const char *path, const ic_render_aovs *aovs)
  * same verdict, and rank 0 says it once). */
 static int parse_quietly_unless(int speak, int argc, char **argv, render_args *a)
 {
-    if (speak)
-        return ic_cli_parse(argc, argv, a);
-    fflush(stderr);
-    int saved = dup(2), null_fd = open("/dev/null", O_WRONLY);
-    if (saved >= 0 && null_fd >= 0)
-        dup2(null_fd, 2);
+    int saved = ic_cli_cluster_mute(!speak);
     int rc = ic_cli_parse(argc, argv, a);
-    fflush(stderr);
-    if (saved >= 0 && null_fd >= 0)
-        dup2(saved, 2);
-    if (saved >= 0)
-        close(saved);
-    if (null_fd >= 0)
-        close(null_fd);
+    ic_cli_cluster_unmute(saved);
     return rc;
 }
 

@@ -84,6 +84,9 @@ typedef struct ic_points_options {
     ic_ic_options ic;      /* the cache (integrator IC): accuracy, gathering, bounces, …; the strategy is
                               always the points' own (passes, see above); large emitters are always light-sampled; the
                               pixel radius bounds, the record filter and cache files do not apply */
+    ic_comm *comm;         /* the processes sharing the computation (irrcache/comm.h): each gathers a share of
+                              the records and estimates a share of the points, and every one returns all the
+                              results, the same bits as one process; NULL: one process */
 } ic_points_options;
 
 /* One point's result. */

@@ -4,10 +4,13 @@
  * light sampling and a cosine-distributed path per sample, MIS between them) or with the irradiance cache
  * (Ward et al. 1988: lazy records at the sensors, their interpolation for the environment and indirect
  * light, light sampling for every emitter at every point). Each point's random numbers are a hash of
- * (seed, point, sample): the results never depend on the thread count.
+ * (seed, point, sample): the results never depend on the thread count. Several processes (opt.comm)
+ * gather a share of the records each (ic_ic_gather_points) and estimate one contiguous block of the
+ * points each, then exchange the results: the same bits at any number of processes.
  */
 #include "irrcache/points.h"
 
+#include "core/comm.h"
 #include "core/sampling.h"
 #include "core/threads.h"
 #include "integrators/ic_internal.h"
@@ -78,6 +81,7 @@ typedef struct points_job {
     const ic_vec3 *p, *n;      /* points, unit normals */
     ic_point_result *out;
     uint64_t *rays;            /* per point (summed in order afterwards) */
+    uint32_t first;            /* this process's block of points starts here */
     uint64_t seed;
     int samples;               /* pt: paths; ic: light samples */
     uint32_t uncovered;        /* first point no record covered + 1 (0: none) */
@@ -161,7 +165,7 @@ static void point_pt(void *ctx, int64_t item, int thread)
 {
     (void)thread;
     points_job *job = ctx;
-    uint32_t i = (uint32_t)item;
+    uint32_t i = job->first + (uint32_t)item;
     double mean[4], sigma[4];
     uint64_t rays = 0;
     estimate_point(job, i, STREAM_PT, sample_pt, mean, sigma, &rays);
@@ -175,7 +179,7 @@ static void point_ic(void *ctx, int64_t item, int thread)
 {
     (void)thread;
     points_job *job = ctx;
-    uint32_t i = (uint32_t)item;
+    uint32_t i = job->first + (uint32_t)item;
     ic_vec3 E_cache;
     double sc[4];
     if (!ic_ic_points_indirect(job->ic, job->p[i], job->n[i], job->rel_var, &E_cache, sc)) {
@@ -285,9 +289,13 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
     job.out = out;
     job.rays = rays;
     job.seed = opt.seed;
+    uint64_t first, own;
+    ic_comm_block(count, ic_comm_size(opt.comm), ic_comm_rank(opt.comm), &first, &own);
+    job.first = (uint32_t)first;
+    uint64_t gather_rays = 0;
     if (opt.integrator == IC_INTEGRATOR_PT) {
         job.samples = opt.samples;
-        if ((r = ic_parallel_for(opt.threads, count, point_pt, &job)) != IC_OK)
+        if ((r = ic_parallel_for(opt.threads, (int64_t)own, point_pt, &job)) != IC_OK)
             ic_error_set(err, r, "sensor points: the worker threads could not start");
     } else {
         ic_render_options ro;
@@ -298,23 +306,32 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
         ro.seed = opt.seed;
         ro.has_seed = 1;
         ro.ic = opt.ic;
+        ro.comm = opt.comm;
         r = ic_ic_points_ctx_create(&tr, &ro, &ic, err);
         if (r == IC_OK)
             r = ic_ic_points_build(ic, p, n, count, job.rel_var, err);
         if (r == IC_OK) {
             st->records = ic_cache_count(ic->cache);
-            st->rays += (uint64_t)atomic_load(&ic->rays);
+            gather_rays = (uint64_t)atomic_load(&ic->rays);
             job.ic = ic;
             job.samples = opt.light_samples;
-            if ((r = ic_parallel_for(opt.threads, count, point_ic, &job)) != IC_OK)
+            if ((r = ic_parallel_for(opt.threads, (int64_t)own, point_ic, &job)) != IC_OK)
                 ic_error_set(err, r, "sensor points: the worker threads could not start");
         }
         if (r == IC_OK && job.uncovered)
             r = ic_error_set(err, IC_ERR_INTERNAL, "sensor point %u: no cache record covers it after construction",
                              job.uncovered - 1);
     }
-    for (uint32_t i = 0; i < count; ++i)
-        st->rays += rays[i];
+    /* Every process's block of results to every process; the rays of all. */
+    if (r == IC_OK)
+        r = ic_comm_allgather_blocks(opt.comm, out, count, sizeof *out, err);
+    if (r == IC_OK) {
+        double total = (double)gather_rays;
+        for (uint64_t i = first; i < first + own; ++i)
+            total += (double)rays[i];
+        if ((r = ic_comm_sum(opt.comm, &total, 1, err)) == IC_OK)
+            st->rays = (uint64_t)total;
+    }
 done:
     ic_ic_ctx_destroy(ic);
     ic_accel_destroy(accel);

@@ -2,7 +2,8 @@
 # test_mpi.sh IRRCACHE HAS_MPI — `mpirun -np N irrcache render` gives the bytes a single process gives:
 #   1. the Cornell box with the cache (batch; its image, cache file, record counts per pass) and with the
 #      path tracer, at 1, 2, 3 and 5 ranks of 1 or 2 threads each, against the same build run without
-#      mpirun (one process); the adaptive strategy and a loaded cache at 3 ranks;
+#      mpirun (one process); the adaptive strategy and a loaded cache at 3 ranks; `irrcache points` (cache
+#      and path tracer) at 2, 3 and 5 ranks;
 #   2. lazy construction under 2 ranks is refused with a message naming the strategy;
 #   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
 #      missing file) stops the job: non-zero exit within seconds, the message names the rank and the
@@ -67,6 +68,21 @@ mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --
 same "adaptive image, 3 ranks" ad-3.exr ad.exr
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 1 --load-cache ic.cache -o load-3.exr
 same "image from a loaded cache, 3 ranks" load-3.exr load.exr
+
+# Sensor points: the points read by rank 0 (here from standard input) and broadcast; records and points
+# shared among the ranks.
+python3 -c 'import random; random.seed(3)
+for i in range(48): print(random.uniform(-0.9, 0.9), random.uniform(0.05, 1.5), random.uniform(-0.9, 0.9), 0, 1, 0)' >pts.txt
+"$bin" points "$scene" --points pts.txt --threads 2 --rays 256 --light-samples 32 -o points.txt
+"$bin" points "$scene" --points pts.txt --integrator pt --samples 32 --threads 2 -o points-pt.txt
+for np in 2 3 5; do
+  mpirun --oversubscribe -np $np "$bin" points "$scene" --points - --threads 1 --rays 256 --light-samples 32 \
+    -o points-$np.txt <pts.txt
+  same "sensor points (cache), $np ranks" points-$np.txt points.txt
+  mpirun --oversubscribe -np $np "$bin" points "$scene" --points pts.txt --integrator pt --samples 32 --threads 1 \
+    -o points-pt-$np.txt
+  same "sensor points (path tracer), $np ranks" points-pt-$np.txt points-pt.txt
+done
 
 # Lazy construction is serial: refused under several ranks, with the reason.
 if mpirun --oversubscribe -np 2 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy lazy -o lazy.exr \
