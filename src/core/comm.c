@@ -2,6 +2,7 @@
 #include "core/comm.h"
 
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 static double now(void)
@@ -46,6 +47,44 @@ ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, siz
     comm->bytes += count * item_bytes - counts[comm->rank];
     free(counts);
     return r == IC_OK ? IC_OK : failed(err, r, "exchanging records");
+}
+
+ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, size_t item_bytes, uint64_t *total,
+                                    ic_error *err)
+{
+    *total = count;
+    if (!ic_comm_is_shared(comm))
+        return IC_OK;
+    size_t n = (size_t)comm->size;
+    uint64_t *counts = malloc(sizeof *counts * n), *sizes = malloc(sizeof *sizes * n);
+    if (!counts || !sizes) {
+        free(counts);
+        free(sizes);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for %d ranks' counts", comm->size);
+    }
+    counts[comm->rank] = count;
+    for (size_t r = 0; r < n; ++r)
+        sizes[r] = sizeof *counts;
+    double t0 = now();
+    ic_result res = comm->allgather(comm->user, &counts[comm->rank], counts, sizes);
+    uint64_t offset = 0, sum = 0;
+    for (size_t r = 0; r < n; ++r) {
+        if ((int)r < comm->rank)
+            offset += counts[r];
+        sum += counts[r];
+        sizes[r] = counts[r] * item_bytes;
+    }
+    if (res == IC_OK) {
+        char *base = items;
+        memmove(base + offset * item_bytes, base, count * item_bytes);
+        res = comm->allgather(comm->user, base + offset * item_bytes, base, sizes);
+    }
+    comm->seconds += now() - t0;
+    comm->bytes += (sum - count) * item_bytes + (n - 1) * sizeof *counts;
+    *total = sum;
+    free(counts);
+    free(sizes);
+    return res == IC_OK ? IC_OK : failed(err, res, "exchanging candidates");
 }
 
 ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err)

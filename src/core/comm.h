@@ -21,6 +21,11 @@ void ic_comm_block(uint64_t count, int size, int r, uint64_t *first, uint64_t *n
  * into all (room for count items) on every rank; this rank's block is already in place at its offset.
  * A no-op for one process. */
 ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, size_t item_bytes, ic_error *err);
+/* This rank's `count` items of `item_bytes` bytes at the start of items (room for every rank's) become
+ * every rank's items, in rank order, on every rank; *total gets their number. For one process *total =
+ * count and nothing moves. */
+ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, size_t item_bytes, uint64_t *total,
+                                    ic_error *err);
 /* Sums count doubles over the ranks, in place (a no-op for one process). */
 ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err);
 /* Copies root's bytes to every rank (a no-op for one process). */

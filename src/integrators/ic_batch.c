@@ -34,6 +34,7 @@ typedef struct world_job {
     uint8_t *slot_count;
     uint8_t *visited;          /* per eye path: look-up points visited (uncovered ones are in slots) */
     int stride, cols, rows;
+    int64_t first;             /* this process's block of eye paths starts here */
     uint64_t *rays;
 } world_job;
 
@@ -42,9 +43,10 @@ typedef struct world_job {
  * then the surfaces reached through glossy lobes — and every such point where no record is valid
  * becomes a candidate. (The seed collects hits on every bounce because its final render fetches the
  * cache along whole paths; ours path-traces record radiance, so deeper diffuse bounces never look up.) */
-static void world_path(void *p, int64_t item, int thread)
+static void world_path(void *p, int64_t own_item, int thread)
 {
     world_job *j = p;
+    int64_t item = j->first + own_item;
     ic_ctx *c = j->c;
     const ic_camera *cam = &c->tr->scene->camera;
     int bx = (int)(item % j->cols), by = (int)(item / j->cols);
@@ -126,25 +128,35 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
         free(j.rays);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for world-space candidates");
     }
-    ic_result r = ic_parallel_for(c->threads, items, world_path, &j);
+    /* Several processes (c->comm): a block of eye paths each; their candidates, in path order, exchanged. */
+    uint64_t first, own;
+    ic_comm_block((uint64_t)items, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &own);
+    j.first = (int64_t)first;
+    ic_result r = ic_parallel_for(c->threads, (int64_t)own, world_path, &j);
+    if (r != IC_OK)
+        ic_error_set(err, r, "could not start threads");
     for (int t = 0; t < c->threads; ++t)
         atomic_fetch_add(&c->rays, j.rays[t * PAD]);
-    uint32_t n = 0;
-    uint64_t visited = 0;
-    for (int64_t i = 0; i < items; ++i) {
+    uint64_t n = 0;
+    double visited = 0.0;
+    for (int64_t i = j.first; i < j.first + (int64_t)own; ++i) {
         visited += j.visited[i];
         for (int k = 0; k < j.slot_count[i]; ++k)
             j.slots[n++] = j.slots[i * WORLD_SLOTS + k];
     }
-    *uncovered_share = visited ? (double)n / (double)visited : 0.0;
+    if (r == IC_OK)
+        r = ic_comm_allgather_counted(c->comm, j.slots, n, sizeof *j.slots, &n, err);
+    if (r == IC_OK)
+        r = ic_comm_sum(c->comm, &visited, 1, err);
+    *uncovered_share = visited > 0.0 ? (double)n / visited : 0.0;
     const ic_scene *sc = c->tr->scene;
-    *out_count = ic_world_select(j.slots, n, sc->bounds_min, sc->bounds_max, c->o.cluster_size * c->scene_diag, 3,
-                                 30.0f);
+    *out_count = ic_world_select(j.slots, (uint32_t)n, sc->bounds_min, sc->bounds_max,
+                                 c->o.cluster_size * c->scene_diag, 3, 30.0f);
     *out = j.slots;
     free(j.slot_count);
     free(j.visited);
     free(j.rays);
-    return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
+    return r;
 }
 
 /* Candidates from dithering a need map; pixels that already made a record are dropped. */

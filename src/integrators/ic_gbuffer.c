@@ -106,16 +106,18 @@ typedef struct lookup_job {
     float *lum;                /* per pixel luminance of the look-up */
     uint8_t *covered;          /* per pixel: some record contributes */
     ic_cache_acceptance acceptance;
+    int first_row;             /* this process's block of rows starts here */
 } lookup_job;
 
 /* One row's look-ups, in batches of up to LOOKUP_BATCH pixels with a hint carried along the row
  * (ic_cache_query_batch: the answers of one look-up each, without the per-call costs). */
 enum { LOOKUP_BATCH = 64 };
 
-static void lookup_row(void *p, int64_t y, int thread)
+static void lookup_row(void *p, int64_t item, int thread)
 {
     (void)thread;
     lookup_job *j = p;
+    int64_t y = j->first_row + item;
     const ic_gbuffer *g = &j->c->g;
     ic_cache_hint hint = {0};
     ic_cache_lookup q[LOOKUP_BATCH];
@@ -140,8 +142,16 @@ static void lookup_row(void *p, int64_t y, int thread)
     }
 }
 
+/* Several processes (c->comm): a block of rows each, exchanged, so every process holds every answer. */
 ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc)
 {
-    lookup_job j = {c, lum, covered, acc};
-    return ic_parallel_for(c->threads, c->g.height, lookup_row, &j);
+    uint64_t first, rows;
+    ic_comm_block((uint64_t)c->g.height, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &rows);
+    lookup_job j = {c, lum, covered, acc, (int)first};
+    ic_result r = ic_parallel_for(c->threads, (int64_t)rows, lookup_row, &j);
+    if (r == IC_OK)
+        r = ic_comm_allgather_blocks(c->comm, lum, (uint64_t)c->g.height, sizeof *lum * (size_t)c->g.width, NULL);
+    if (r == IC_OK)
+        r = ic_comm_allgather_blocks(c->comm, covered, (uint64_t)c->g.height, (size_t)c->g.width, NULL);
+    return r;
 }
