@@ -237,6 +237,8 @@ typedef struct ic_render_stats {
     uint64_t rank_pixel_samples;    /* pixel samples this process rendered (the film, AOVs excluded) */
     double rank_comm_seconds;       /* seconds this process spent in opt.comm's operations */
     uint64_t rank_comm_bytes;       /* bytes it received through them */
+    double rank_comm_seconds_per_pass[32]; /* batch: of those, each construction pass's (records_per_pass's */
+    uint64_t rank_comm_bytes_per_pass[32]; /* passes; the last also holds the final coverage sweep) */
     int phase_count;
     struct {
         const char *name;  /* "accel", "render", … */

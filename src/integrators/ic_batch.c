@@ -203,6 +203,17 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_cand
     return IC_OK;
 }
 
+/* Adds this process's communication since the last call to pass `pass` of the statistics. */
+static void count_traffic(ic_ctx *c, ic_render_stats *st, int pass)
+{
+    if (!c->comm || pass < 0 || pass >= 32)
+        return;
+    st->rank_comm_seconds_per_pass[pass] += c->comm->seconds - c->comm_seconds_counted;
+    st->rank_comm_bytes_per_pass[pass] += c->comm->bytes - c->comm_bytes_counted;
+    c->comm_seconds_counted = c->comm->seconds;
+    c->comm_bytes_counted = c->comm->bytes;
+}
+
 ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
                              ic_error *err)
 {
@@ -213,6 +224,10 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     uint32_t *pix = malloc(sizeof *pix * npix);
     ic_candidate *cand = malloc(sizeof *cand * npix);
     ic_result r = IC_OK;
+    if (c->comm) {
+        c->comm_seconds_counted = c->comm->seconds;
+        c->comm_bytes_counted = c->comm->bytes;
+    }
     if (!need || !lum || !covered || !pix || !cand) {
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for the construction buffers");
         goto done;
@@ -228,6 +243,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     r = ic_ic_gather_and_insert(c, cand, n, pt, err);
     if (r != IC_OK)
         goto done;
+    count_traffic(c, st, 0);
     st->records_per_pass[0] = n;
     st->passes = 1;
     st->cut_short = 1; /* until the cache has converged */
@@ -268,6 +284,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         found += wn;
         if (pass < 32)
             st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
+        count_traffic(c, st, pass);
         st->passes = pass + 1;
         st->uncovered_share = uncovered;
         /* Converged: the final render's look-ups (the eye paths' points, measured before this pass's
@@ -283,6 +300,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     }
     uint32_t added;
     r = coverage_sweep(c, lum, covered, cand, pt, &added, err);
+    count_traffic(c, st, st->passes - 1);
 done:
     free(need);
     free(lum);

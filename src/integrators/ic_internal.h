@@ -66,6 +66,8 @@ typedef struct ic_ctx {
     ic_radiance *rad;          /* radiance caching on glossy lobes (ic_radiance.c); NULL when off */
     ic_comm *comm;             /* the processes sharing construction (ic_ic_gather_points); NULL: one */
     uint64_t gathered;         /* records whose hemispheres this process gathered */
+    double comm_seconds_counted; /* batch: c->comm's counters when last added to a pass's statistics */
+    uint64_t comm_bytes_counted;
 } ic_ctx;
 
 typedef struct phase_times {
