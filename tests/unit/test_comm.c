@@ -1,0 +1,287 @@
+/*
+ * test_comm.c — a render shared by several processes (irrcache/comm.h) gives the bits one process gives.
+ * The "processes" are threads of this program, each calling ic_render with its own ic_comm over an
+ * in-memory transport (a barrier and shared pointers), so the library's side runs in every build,
+ * the sanitizer build included, with no MPI: the cache (batch and adaptive), the path tracer, a loaded
+ * cache file, a time budget (every rank the same image) and the sensor points, at 2, 3 and 5 ranks, against
+ * one process with 2 threads. tests/mpi/test_mpi.sh does the same through mpirun.
+ */
+#include "test_util.h"
+
+#include "test_render_util.h"
+
+#include "irrcache/points.h"
+
+#include <pthread.h>
+#include <string.h>
+
+#define SCENE IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
+#define CACHE_FILE IC_TEST_TMP "/test_comm.cache"
+#define MAX_RANKS 5
+#define SIZE 32
+
+/* ---- the in-memory transport: every rank publishes what it has, waits for all, reads the others' */
+typedef struct transport {
+    int size;
+    pthread_barrier_t barrier;
+    const void *published[MAX_RANKS];
+} transport;
+
+typedef struct rank_link {
+    transport *t;
+    int rank;
+} rank_link;
+
+static ic_result fake_allgather(void *user, const void *send, void *recv, const uint64_t *counts)
+{
+    rank_link *l = user;
+    transport *t = l->t;
+    /* send may lie inside recv (in place): copy it out before anyone writes. */
+    void *own = malloc(counts[l->rank] ? counts[l->rank] : 1);
+    memcpy(own, send, counts[l->rank]);
+    t->published[l->rank] = own;
+    pthread_barrier_wait(&t->barrier);
+    uint64_t at = 0;
+    for (int r = 0; r < t->size; ++r) {
+        memcpy((char *)recv + at, t->published[r], counts[r]);
+        at += counts[r];
+    }
+    pthread_barrier_wait(&t->barrier);
+    free(own);
+    return IC_OK;
+}
+
+static ic_result fake_sum(void *user, double *values, uint64_t count)
+{
+    rank_link *l = user;
+    transport *t = l->t;
+    double *total = calloc(count ? count : 1, sizeof *total);
+    t->published[l->rank] = values;
+    pthread_barrier_wait(&t->barrier);
+    for (int r = 0; r < t->size; ++r)
+        for (uint64_t i = 0; i < count; ++i)
+            total[i] += ((const double *)t->published[r])[i];
+    pthread_barrier_wait(&t->barrier);
+    memcpy(values, total, sizeof *total * count);
+    free(total);
+    return IC_OK;
+}
+
+static ic_result fake_broadcast(void *user, void *buf, uint64_t bytes, int root)
+{
+    rank_link *l = user;
+    transport *t = l->t;
+    if (l->rank == root)
+        t->published[root] = buf;
+    pthread_barrier_wait(&t->barrier);
+    if (l->rank != root)
+        memcpy(buf, t->published[root], bytes);
+    pthread_barrier_wait(&t->barrier);
+    return IC_OK;
+}
+
+/* ---- one job: `size` ranks, each a thread running ic_render or ic_points_compute */
+typedef struct rank_job {
+    rank_link link;
+    ic_comm comm;
+    const ic_scene *scene;
+    ic_render_options opt;      /* render (when points is NULL) */
+    ic_image img;
+    ic_render_stats st;
+    const ic_sensor_point *points; /* sensor points instead of a render */
+    uint32_t point_count;
+    ic_points_options popt;
+    ic_point_result *results;
+    ic_result r;
+    ic_error err;
+} rank_job;
+
+static void *run_rank(void *p)
+{
+    rank_job *j = p;
+    if (j->points) {
+        j->popt.comm = &j->comm;
+        j->r = ic_points_compute(j->scene, j->points, j->point_count, &j->popt, j->results, NULL, &j->err);
+    } else {
+        j->opt.comm = &j->comm;
+        j->r = ic_render(j->scene, &j->opt, &j->img, &j->st, &j->err);
+    }
+    return NULL;
+}
+
+/* Runs the job on `size` ranks; jobs[r] must hold its options (and, for points, its buffers). */
+static int run_job(rank_job *jobs, int size)
+{
+    transport t;
+    memset(&t, 0, sizeof t);
+    t.size = size;
+    pthread_barrier_init(&t.barrier, NULL, (unsigned)size);
+    pthread_t th[MAX_RANKS];
+    for (int r = 0; r < size; ++r) {
+        jobs[r].link.t = &t;
+        jobs[r].link.rank = r;
+        jobs[r].comm = (ic_comm){.rank = r, .size = size, .user = &jobs[r].link, .allgather = fake_allgather,
+                                 .sum = fake_sum, .broadcast = fake_broadcast};
+        pthread_create(&th[r], NULL, run_rank, &jobs[r]);
+    }
+    int ok = 1;
+    for (int r = 0; r < size; ++r) {
+        pthread_join(th[r], NULL);
+        if (jobs[r].r != IC_OK) {
+            fprintf(stderr, "rank %d of %d: %s\n", r, size, jobs[r].err.message);
+            ok = 0;
+        }
+    }
+    pthread_barrier_destroy(&t.barrier);
+    return ok;
+}
+
+static int same_image(const ic_image *a, const ic_image *b)
+{
+    return a->width == b->width && a->height == b->height &&
+           !memcmp(a->rgb, b->rgb, sizeof *a->rgb * 3 * (size_t)a->width * a->height);
+}
+
+/* Renders with opt on one process (2 threads) and on each rank count (1 thread per rank): the same bits on
+ * every rank, the same records per pass, and the ranks' shares adding up to the whole. */
+static void check_render(const char *what, const ic_scene *scene, ic_render_options opt, int check_equal)
+{
+    ic_image ref = {0};
+    ic_render_stats ref_st;
+    ic_error err = {0};
+    opt.threads = 2;
+    CHECK(ic_render(scene, &opt, &ref, &ref_st, &err) == IC_OK, "%s: one process: %s", what, err.message);
+    static const int sizes[] = {2, 3, 5};
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; ++k) {
+        int size = sizes[k];
+        rank_job jobs[MAX_RANKS];
+        memset(jobs, 0, sizeof jobs);
+        for (int r = 0; r < size; ++r) {
+            jobs[r].scene = scene;
+            jobs[r].opt = opt;
+            jobs[r].opt.threads = 1;
+        }
+        int ok = run_job(jobs, size);
+        CHECK(ok, "%s: %d ranks failed", what, size);
+        if (!ok)
+            continue;
+        uint64_t gathered = 0, samples = 0;
+        for (int r = 0; r < size; ++r) {
+            CHECK(same_image(&jobs[r].img, &jobs[0].img), "%s: rank %d of %d has another image than rank 0", what,
+                  r, size);
+            CHECK(jobs[r].st.ranks == size, "%s: stats say %d ranks, not %d", what, jobs[r].st.ranks, size);
+            gathered += jobs[r].st.rank_records_gathered;
+            samples += jobs[r].st.rank_pixel_samples;
+        }
+        uint64_t want = check_equal ? ref_st.rank_pixel_samples : (uint64_t)jobs[0].st.spp * SIZE * SIZE;
+        CHECK(samples == want, "%s, %d ranks: %llu pixel samples, expected %llu", what, size,
+              (unsigned long long)samples, (unsigned long long)want);
+        if (check_equal) {
+            CHECK(same_image(&jobs[0].img, &ref), "%s, %d ranks: the image differs from one process's", what, size);
+            CHECK(jobs[0].st.records == ref_st.records && jobs[0].st.passes == ref_st.passes &&
+                      !memcmp(jobs[0].st.records_per_pass, ref_st.records_per_pass, sizeof ref_st.records_per_pass),
+                  "%s, %d ranks: %u records in %d passes, one process %u in %d", what, size, jobs[0].st.records,
+                  jobs[0].st.passes, ref_st.records, ref_st.passes);
+            CHECK(!opt.ic.load_cache ? gathered == ref_st.rank_records_gathered : gathered == 0,
+                  "%s, %d ranks: %llu records gathered in all, one process %llu", what, size,
+                  (unsigned long long)gathered, (unsigned long long)ref_st.rank_records_gathered);
+        }
+        for (int r = 0; r < size; ++r)
+            ic_image_free(&jobs[r].img);
+    }
+    ic_image_free(&ref);
+}
+
+static void check_points(const ic_scene *scene, ic_integrator integrator)
+{
+    enum { N = 40 };
+    ic_sensor_point pts[N];
+    for (int i = 0; i < N; ++i) {
+        pts[i].position = (ic_vec3){-0.8f + 1.6f * (float)(i % 8) / 7.0f, 0.1f + 0.3f * (float)(i / 8), 0.1f};
+        pts[i].normal = (ic_vec3){0.0f, 1.0f, 0.0f};
+    }
+    ic_points_options po = {0};
+    po.integrator = integrator;
+    po.samples = 32;
+    po.light_samples = 32;
+    po.ic.gather.theta_strata = 8;
+    po.ic.gather.phi_strata = 25;
+    po.threads = 2;
+    ic_point_result ref[N];
+    ic_error err = {0};
+    CHECK(ic_points_compute(scene, pts, N, &po, ref, NULL, &err) == IC_OK, "points, one process: %s", err.message);
+    static ic_point_result res[MAX_RANKS][N];
+    rank_job jobs[MAX_RANKS];
+    memset(jobs, 0, sizeof jobs);
+    memset(res, 0, sizeof res);
+    for (int r = 0; r < 3; ++r) {
+        jobs[r].scene = scene;
+        jobs[r].points = pts;
+        jobs[r].point_count = N;
+        jobs[r].popt = po;
+        jobs[r].popt.threads = 1;
+        jobs[r].results = res[r];
+    }
+    CHECK(run_job(jobs, 3), "points: 3 ranks failed");
+    for (int r = 0; r < 3; ++r)
+        CHECK(!memcmp(res[r], ref, sizeof ref), "points (%s), rank %d of 3: results differ from one process's",
+              integrator == IC_INTEGRATOR_IC ? "cache" : "path tracer", r);
+}
+
+int main(void)
+{
+    ic_error err = {0};
+    ic_scene *scene = NULL;
+    ic_scene_load_options lo = {0};
+    lo.width = SIZE;
+    lo.height = SIZE;
+    if (ic_scene_load(SCENE, &lo, &scene, &err) != IC_OK) {
+        fprintf(stderr, "%s\n", err.message);
+        return 1;
+    }
+    ic_render_options ic = {0};
+    ic.integrator = IC_INTEGRATOR_IC;
+    ic.spp = 8; /* adaptive sampling: the pilot's sums are combined before the allocation */
+    ic.ic.gather.theta_strata = 8;
+    ic.ic.gather.phi_strata = 25;
+    ic.ic.save_cache = CACHE_FILE;
+    check_render("cache, batch", scene, ic, 1);
+    ic.ic.save_cache = NULL;
+
+    ic_render_options adaptive = ic;
+    adaptive.ic.strategy = IC_STRATEGY_ADAPTIVE;
+    check_render("cache, adaptive", scene, adaptive, 1);
+
+    ic_render_options loaded = ic;
+    loaded.ic.load_cache = CACHE_FILE;
+    check_render("cache, loaded from a file", scene, loaded, 1);
+
+    ic_render_options pt = {0};
+    pt.integrator = IC_INTEGRATOR_PT;
+    pt.spp = 4;
+    check_render("path tracer", scene, pt, 1);
+
+    /* A time budget: passes sized by rank 0's clock, so every rank holds the same image (which depends on
+     * the clock, so not one process's). */
+    ic_render_options timed = pt;
+    timed.spp = 0;
+    timed.time_budget = 0.3;
+    check_render("path tracer, time budget", scene, timed, 0);
+
+    /* Lazy construction cannot be shared: refused, on every rank. */
+    rank_job jobs[2];
+    memset(jobs, 0, sizeof jobs);
+    for (int r = 0; r < 2; ++r) {
+        jobs[r].scene = scene;
+        jobs[r].opt = ic;
+        jobs[r].opt.ic.strategy = IC_STRATEGY_LAZY;
+    }
+    CHECK(!run_job(jobs, 2) && jobs[0].r == IC_ERR_UNSUPPORTED && strstr(jobs[0].err.message, "lazy"),
+          "lazy under 2 ranks: not refused with a message naming it (%s)", jobs[0].err.message);
+
+    check_points(scene, IC_INTEGRATOR_IC);
+    check_points(scene, IC_INTEGRATOR_PT);
+    ic_scene_free(scene);
+    remove(CACHE_FILE);
+    TEST_MAIN_END();
+}
