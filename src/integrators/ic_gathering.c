@@ -345,22 +345,51 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
     return r;
 }
 
-/* Several processes (c->comm): each gathers one contiguous block of the points (ic_comm_block), and the
- * blocks' results are exchanged, so every process holds every result, bit for bit what one process
- * would have gathered: a point's result depends only on the seed, its key and the records already in
- * the cache, which every process holds alike. */
+/* Several processes (c->comm): point i is gathered by rank i mod N (interleaved: neighbouring points,
+ * which cost alike, spread over every rank), and the results are exchanged, so every process holds every
+ * result, bit for bit what one process would have gathered: a point's result depends only on the seed,
+ * its key and the records already in the cache, which every process holds alike. */
 ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
                               ic_vec3 *levels, ic_error *err)
 {
-    uint64_t first, n;
-    ic_comm_block(count, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &n);
+    int ranks = ic_comm_size(c->comm), rank = ic_comm_rank(c->comm);
+    if (ranks == 1 || count == 0) {
+        c->gathered += count;
+        return gather_here(c, pts, count, out, levels, err);
+    }
+    /* Rank r takes count/N points, one more when r < count mod N: the sizes of ic_comm_block's blocks, so
+     * its results go to its block of a rank-ordered buffer, exchanged as blocks and then put in place. */
+    uint64_t first, own;
+    ic_comm_block(count, ranks, rank, &first, &own);
     size_t stride = (size_t)c->levels + 1;
-    ic_result r = gather_here(c, pts + first, (uint32_t)n, out + first, levels ? levels + first * stride : NULL, err);
-    c->gathered += n;
+    ic_gather_point *mine = malloc(sizeof *mine * (own ? own : 1));
+    ic_gather_result *all = malloc(sizeof *all * count);
+    ic_vec3 *all_levels = levels ? malloc(sizeof *all_levels * stride * count) : NULL;
+    ic_result r = IC_OK;
+    if (!mine || !all || (levels && !all_levels))
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u gather results", count);
+    for (uint64_t k = 0; r == IC_OK && k < own; ++k)
+        mine[k] = pts[(uint64_t)rank + k * (uint64_t)ranks];
     if (r == IC_OK)
-        r = ic_comm_allgather_blocks(c->comm, out, count, sizeof *out, err);
+        r = gather_here(c, mine, (uint32_t)own, all + first, levels ? all_levels + first * stride : NULL, err);
+    c->gathered += own;
+    if (r == IC_OK)
+        r = ic_comm_allgather_blocks(c->comm, all, count, sizeof *all, err);
     if (r == IC_OK && levels)
-        r = ic_comm_allgather_blocks(c->comm, levels, count, sizeof *levels * stride, err);
+        r = ic_comm_allgather_blocks(c->comm, all_levels, count, sizeof *all_levels * stride, err);
+    for (int q = 0; r == IC_OK && q < ranks; ++q) {
+        uint64_t q_first, q_own;
+        ic_comm_block(count, ranks, q, &q_first, &q_own);
+        for (uint64_t k = 0; k < q_own; ++k) {
+            uint64_t i = (uint64_t)q + k * (uint64_t)ranks;
+            out[i] = all[q_first + k];
+            if (levels)
+                memcpy(&levels[i * stride], &all_levels[(q_first + k) * stride], sizeof *levels * stride);
+        }
+    }
+    free(mine);
+    free(all);
+    free(all_levels);
     return r;
 }
 
