@@ -2,7 +2,7 @@
 # test_mpi.sh IRRCACHE HAS_MPI — `mpirun -np N irrcache render` gives the bytes a single process gives:
 #   1. the Cornell box with the cache (batch; its image, cache file, record counts per pass) and with the
 #      path tracer, at 1, 2, 3 and 5 ranks of 1 or 2 threads each, against the same build run without
-#      mpirun (one process); the adaptive strategy and a loaded cache at 3 ranks; `irrcache points` (cache
+#      mpirun (one process); the adaptive strategy, a loaded cache and radiance caching at 3 ranks; `irrcache points` (cache
 #      and path tracer) at 2, 3 and 5 ranks;
 #   2. lazy construction under 2 ranks is refused with a message naming the strategy;
 #   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
@@ -68,6 +68,14 @@ mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --
 same "adaptive image, 3 ranks" ad-3.exr ad.exr
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 1 --load-cache ic.cache -o load-3.exr
 same "image from a loaded cache, 3 ranks" load-3.exr load.exr
+
+# Radiance caching on the glossy floor: its records are gathered by every rank alike (not shared yet).
+glossy=$src/scenes/cornell-box-glossy/cornell-box-glossy-20.json
+"$bin" render "$glossy" "${common[@]}" "${ic[@]}" --radiance-cache on --threads 2 -o glossy.exr --save-cache glossy.cache
+mpirun --oversubscribe -np 3 "$bin" render "$glossy" "${common[@]}" "${ic[@]}" --radiance-cache on --threads 1 \
+  -o glossy-3.exr --save-cache glossy-3.cache
+same "radiance cache image, 3 ranks" glossy-3.exr glossy.exr
+same "radiance cache file, 3 ranks" glossy-3.cache glossy.cache
 
 # Sensor points: the points read by rank 0 (here from standard input) and broadcast; records and points
 # shared among the ranks.
