@@ -1,17 +1,19 @@
 #!/usr/bin/env python3
 """bench/mpi_model.py: what the runs of bench/mpi.sh measured, and a model of a render shared by N ranks.
 
-    python3 bench/mpi_model.py RUNS_DIR [--target STATS.json] [--ranks 4 16 64] [--links 1 10]
+    python3 bench/mpi_model.py RUNS_DIR [--target STATS.json] [--candidates-serial F] [--record-cv CV]
+                               [--tile-cv CV] [--ranks 4 16 64] [--links 1 10]
 
 Part 1 (measured, RUNS_DIR): the median seconds of each phase for 1 rank x 2 threads and 2 ranks x 1
 thread (runs alternated by bench/mpi.sh), their ratio, and rank 0's communication per construction pass
-(seconds, bytes) in the 2-rank runs. From the 1 rank x 1 thread run, the share of the "candidates" phase
-that does not divide among ranks: c(2 ranks) = s + p/2 and c(1) = s + p give s = 2 c(2) - c(1).
+(seconds, bytes) in the 2-rank runs.
 
 Part 2 (model, --target: the stats of a one-process render of the scene at the size that matters, e.g.
 Sponza at 1280x720). Each phase is either shared (gathering, the final render, the shared part of
-candidates) or done by every rank (loading, the accelerator, shading points, insertion, the record
-filter, the rest of candidates). With N ranks of the same threads:
+candidates: the world stage's eye paths and the look-up sweeps, --candidates-serial giving the rest, as
+timed inside one render) or done by every rank (the accelerator, shading points, insertion, the record
+filter, the rest of candidates, and whatever ic_render spends outside its phases). With N ranks of the
+same threads:
 
     T_N = serial + shared / N x imbalance(N) + communication(N)
 
@@ -23,8 +25,12 @@ filter, the rest of candidates). With N ranks of the same threads:
     ranks, 2 (N-1)/N of each per rank (a ring all-reduce);
   - latency: every collective as N - 1 ring steps of ALPHA (50 us at 1 Gb/s, 20 us at 10 Gb/s), about
     12 collectives per pass;
-  - imbalance: the 2-rank runs' gathering against half the 1-rank x 1-thread gathering gives I(2); the
-    excess grows like the expected maximum of N blocks, sqrt(2 ln N) / sqrt(2 ln 2).
+  - imbalance: a rank's share of a pass is m = n_p / N records (rounded up), and its cost the sum of m
+    record costs of relative spread --record-cv; the slowest of N ranks takes about
+    1 + cv sqrt(2 ln N) / sqrt(m) times the mean (the expected maximum of N normal sums), pass by pass;
+    likewise for the final render's tiles (m = tiles / N, --tile-cv). Interleaving (record i and tile t on
+    rank i mod N, t mod N) makes neighbouring, alike-costing work land on different ranks, so the sums
+    are near independent draws.
 
 Efficiency E(N) = T_1 / (N T_N). Python 3 standard library only.
 """
@@ -69,6 +75,10 @@ def main():
     ap.add_argument("--ranks", type=int, nargs="+", default=[4, 16, 64])
     ap.add_argument("--links", type=int, nargs="+", default=[1, 10], help="link speeds, Gb/s")
     ap.add_argument("--max-depth", type=int, default=8, help="the renders' --max-depth (levels = max-depth - 1)")
+    ap.add_argument("--candidates-serial", type=float, default=0.1,
+                    help="share of the candidates phase every rank does alike (clustering, dithering)")
+    ap.add_argument("--record-cv", type=float, default=0.5, help="relative spread of one record's gathering cost")
+    ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
     a = ap.parse_args()
 
     one = [load(p) for p in sorted(glob.glob(os.path.join(a.runs, "1x2-*.json")))]
@@ -96,20 +106,12 @@ def main():
         print("| %d | %d | %.1f | %.1f |" % (p, n, 1e3 * per_pass_s[p], per_pass_b[p] / 1e3))
 
     record_bytes = RESULT_BYTES + LEVEL_BYTES * a.max_depth
-    # The candidates phase: s + p from one thread, s + p / 2 from two ranks.
-    c1, c2 = phase(single, "candidates"), m2["candidates"]
-    cand_serial = min(max(2 * c2 - c1, 0.0) / c1, 1.0) if c1 > 0 else 1.0
-    g1, g2 = phase(single, "gathering"), m2["gathering"]
-    imbalance2 = max(g2 / (g1 / 2), 1.0) if g1 > 0 else 1.0
-    f1, f2 = phase(single, "final render"), m2["final render"]
-    final_imbalance2 = max(f2 / (f1 / 2), 1.0) if f1 > 0 else 1.0
-    rec_bytes_2 = sum(two[0]["records_per_pass"]) * record_bytes / 2
+    cand_serial = a.candidates_serial
+    rec_bytes_2 = two[0]["records"] * record_bytes / 2
     pass_bytes_2 = sum(per_pass_b)
     other_bytes_2 = max(pass_bytes_2 - rec_bytes_2, 0.0)
-    print("\nrecord: %d bytes exchanged; candidates phase not shared: %.0f %% (c = %.2f s at 1 rank x 1 thread, "
-          "%.2f s at 2 ranks x 1 thread); imbalance at 2 ranks: gathering %.2f, final render %.2f (waiting "
-          "included); bytes per rank beyond the records: %.2f MB"
-          % (record_bytes, 100 * cand_serial, c1, c2, imbalance2, final_imbalance2, other_bytes_2 / 1e6))
+    print("\nrecord: %d bytes exchanged; rank 0 received %.2f MB in the passes, %.2f MB of them beyond the "
+          "records (candidates, look-up sweeps)" % (record_bytes, pass_bytes_2 / 1e6, other_bytes_2 / 1e6))
 
     if not a.target:
         return
@@ -120,17 +122,22 @@ def main():
               "candidates": phase(t, "candidates") * (1 - cand_serial)}
     total_1 = t["seconds"]
     serial = total_1 - sum(shared.values())
-    records = sum(t["records_per_pass"])
+    records = t["records"]
     print("\n## model: %s at %dx%d, %d threads per rank: %.0f s in one process (%d records, %d passes); "
           "shared %.0f s (gathering %.0f, final render %.0f, candidates %.0f), every rank %.1f s"
           % (t["scene"], t["width"], t["height"], t["threads"], total_1, records, t["passes"],
              sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"], serial))
-    print("| ranks | link | received per rank (MB) | communication (s) | T_N (s) | speed-up | efficiency |")
-    print("|---|---|---|---|---|---|---|")
+    print("| ranks | link | imbalance (gathering, final) | received per rank (MB) | communication (s) | T_N (s) "
+          "| speed-up | efficiency |")
+    print("|---|---|---|---|---|---|---|---|")
+    tiles = math.ceil(t["width"] / 16) * math.ceil(t["height"] / 16)
+    passes = [p for p in t["records_per_pass"] if p > 0]
     for n in a.ranks:
-        grow = math.sqrt(2 * math.log(n)) / math.sqrt(2 * math.log(2))
-        imb_g = 1 + (imbalance2 - 1) * grow
-        imb_f = 1 + (final_imbalance2 - 1) * grow
+        z = math.sqrt(2 * math.log(n))
+        # Gathering: pass by pass, weighted by the pass's records.
+        imb_g = sum(p * math.ceil(p / n) / (p / n) * (1 + a.record_cv * z / math.sqrt(math.ceil(p / n)))
+                    for p in passes) / sum(passes)
+        imb_f = math.ceil(tiles / n) / (tiles / n) * (1 + a.tile_cv * z / math.sqrt(math.ceil(tiles / n)))
         share = (n - 1) / n
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 +
                   px * (4 + 3) * 8 * 2 * share)
@@ -139,8 +146,12 @@ def main():
             comm = volume * 8 / (gbps * 1e9) + latency
             tn = (serial + (shared["gathering"] + shared["candidates"]) / n * imb_g + shared["final render"] / n * imb_f
                   + comm)
-            print("| %d | %d Gb/s | %.1f | %.2f | %.1f | %.1f | %.2f |"
-                  % (n, gbps, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
+            print("| %d | %d Gb/s | %.2f, %.2f | %.1f | %.2f | %.1f | %.1f | %.2f |"
+                  % (n, gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
+        if n == a.ranks[-1]:
+            ideal = serial + sum(shared.values()) / n
+            print("\nwithout imbalance and communication, %d ranks: T_N = %.1f s, efficiency %.2f (Amdahl: %.1f s "
+                  "done by every rank)" % (n, ideal, total_1 / (n * ideal), serial))
 
 
 if __name__ == "__main__":
