@@ -393,6 +393,14 @@ ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t co
     return r;
 }
 
+int ic_ic_out_of_time_shared(ic_ctx *c)
+{
+    int32_t out = ic_seconds() > c->deadline;
+    /* A transport that fails ends the job (comm.h); till then, rank 0's answer or this rank's own. */
+    ic_comm_broadcast(c->comm, &out, sizeof out, 0, NULL);
+    return out;
+}
+
 ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_vec3 *levels, ic_error *err)
 {
     if (!c->levels || count == 0)

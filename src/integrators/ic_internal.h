@@ -118,8 +118,15 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
 /* Looks up every valid pixel: luminance of the estimate and whether any record contributes. */
 ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc);
-/* 1 once construction has spent its share of the render's time budget (c->deadline). */
-static inline int ic_ic_out_of_time(const ic_ctx *c) { return c->deadline > 0.0 && ic_seconds() > c->deadline; }
+/* 1 once construction has spent its share of the render's time budget (c->deadline). Several processes
+ * (c->comm) go by rank 0's clock, so that all stop at the same pass: a collective call then. */
+int ic_ic_out_of_time_shared(ic_ctx *c);
+static inline int ic_ic_out_of_time(ic_ctx *c)
+{
+    if (!(c->deadline > 0.0))
+        return 0;
+    return ic_comm_is_shared(c->comm) ? ic_ic_out_of_time_shared(c) : ic_seconds() > c->deadline;
+}
 /* Progress report, if the caller asked for it. */
 void ic_ic_report(const ic_render_options *opt, const char *phase, double fraction);
 /* Direct light of the final render at s (NEE; the environment is cached, not sampled here); sel: the

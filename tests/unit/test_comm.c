@@ -3,8 +3,9 @@
  * The "processes" are threads of this program, each calling ic_render with its own ic_comm over an
  * in-memory transport (a barrier and shared pointers), so the library's side runs in every build,
  * the sanitizer build included, with no MPI: the cache (batch and adaptive), the path tracer, a loaded
- * cache file, a time budget (every rank the same image) and the sensor points, at 2, 3 and 5 ranks, against
- * one process with 2 threads. tests/mpi/test_mpi.sh does the same through mpirun.
+ * cache file and the sensor points at 2, 3 and 5 ranks against one process with 2 threads; under a time
+ * budget (path tracer and cache) every rank the same image. tests/mpi/test_mpi.sh does the same through
+ * mpirun.
  */
 #include "test_util.h"
 
@@ -267,6 +268,11 @@ int main(void)
     timed.spp = 0;
     timed.time_budget = 0.3;
     check_render("path tracer, time budget", scene, timed, 0);
+    /* The cache under a time budget: construction stops at the pass rank 0's clock says, on every rank. */
+    ic_render_options timed_ic = ic;
+    timed_ic.spp = 0;
+    timed_ic.time_budget = 0.5;
+    check_render("cache, time budget", scene, timed_ic, 0);
 
     /* Lazy construction cannot be shared: refused, on every rank. */
     rank_job jobs[2];
