@@ -17,15 +17,15 @@ IRR="$BUILD/irrcache"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1  # a CI container runs as root
 mkdir -p "$OUT"
 common="--integrator ic --width $W --height $H -q"
-check() { cmp "$OUT/$1.exr" "$OUT/1x2-1.exr" || { echo "bench/mpi.sh: $1.exr differs from 1x2-1.exr" >&2; exit 1; }; }
+check() { cmp "$OUT/$1.pfm" "$OUT/1x2-1.pfm" || { echo "bench/mpi.sh: $1.pfm differs from 1x2-1.pfm" >&2; exit 1; }; }
 i=1
 while [ $i -le "$ROUNDS" ]; do
-    "$IRR" render "$SCENE" $common --threads 2 -o "$OUT/1x2-$i.exr" --stats "$OUT/1x2-$i.json"
+    "$IRR" render "$SCENE" $common --threads 2 -o "$OUT/1x2-$i.pfm" --stats "$OUT/1x2-$i.json"
     check 1x2-$i
-    mpirun -np 2 --bind-to core "$IRR" render "$SCENE" $common --threads 1 -o "$OUT/2x1-$i.exr" --stats "$OUT/2x1-$i.json"
+    mpirun -np 2 --bind-to core "$IRR" render "$SCENE" $common --threads 1 -o "$OUT/2x1-$i.pfm" --stats "$OUT/2x1-$i.json"
     check 2x1-$i
     i=$((i + 1))
 done
-"$IRR" render "$SCENE" $common --threads 1 -o "$OUT/1x1.exr" --stats "$OUT/1x1.json"
+"$IRR" render "$SCENE" $common --threads 1 -o "$OUT/1x1.pfm" --stats "$OUT/1x1.json"
 check 1x1
 echo "bench/mpi.sh: runs in $OUT; next: python3 bench/mpi_model.py $OUT"
