@@ -5,6 +5,13 @@
 #include <stddef.h>
 #include <string.h>
 
+#include <signal.h>
+
+/* Set by the signal handler (main.c): the first SIGINT or SIGTERM while ic_cli_rendering is set, which the
+ * render reads as its cancel flag (render.c). */
+extern volatile sig_atomic_t ic_cli_stop_signal;
+extern volatile sig_atomic_t ic_cli_rendering;
+
 /* irrcache render SCENE -o OUT [options] */
 int ic_cli_render(int argc, char **argv);
 /* irrcache diff A B [--json] [--heatmap FILE.png] */

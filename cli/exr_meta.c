@@ -45,6 +45,11 @@ void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cl
     m->settings = settings ? cJSON_PrintUnformatted(settings) : NULL;
     cJSON_Delete(settings);
     add(m, "irrcache:settings", m->settings);
+    /* An interrupted render's image is partial: how much of the final render it holds. */
+    if (st->cancelled) {
+        snprintf(m->text[4], sizeof m->text[4], "interrupted; %.3f of the final render's tiles", st->completed);
+        add(m, "irrcache:partial", m->text[4]);
+    }
 }
 
 void ic_cli_exr_meta_free(ic_cli_exr_meta *m)

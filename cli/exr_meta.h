@@ -18,8 +18,8 @@ typedef struct ic_cli_exr_meta {
 
 /* Fills m from the render's arguments and what it cost: irrcache:version, :scene, :scene_fnv1a64 (of the
  * scene file's bytes; absent if it cannot be read), :integrator, :seed, :spp, :seconds (fixed width),
- * :settings (the options as the stats JSON echoes them) and, for a render cut short by a time budget,
- * nothing more (the stats say so). Never fails: what cannot be made is left out. */
+ * :settings (the options as the stats JSON echoes them) and, for an interrupted render, :partial. Never
+ * fails: what cannot be made is left out. */
 void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cli_exr_meta *m);
 void ic_cli_exr_meta_free(ic_cli_exr_meta *m);
 

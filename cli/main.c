@@ -12,13 +12,27 @@
 #include <stdio.h>
 #include <string.h>
 
-/* A signal that ends the program while an output is being written must not leave its temporary file:
- * remove the library's temporary files (async-signal-safe), then die of the signal as if unhandled
- * (SA_RESETHAND restores the default action, SA_NODEFER lets raise deliver it at once), so the parent
- * still sees the signal. */
-static void on_fatal_signal(int sig)
+volatile sig_atomic_t ic_cli_stop_signal = 0;
+volatile sig_atomic_t ic_cli_rendering = 0;
+
+/* The first SIGINT or SIGTERM while a render runs (ic_cli_rendering) only asks it to stop
+ * (ic_cli_stop_signal, the render's cancel flag): the command then writes the image so far and exits
+ * 128 + the signal. Any other signal of the list, and a second one, ends the program: a signal that ends
+ * it while an output is being written must not leave its temporary file, so the library's temporary
+ * files are removed (async-signal-safe), the default action restored and the signal raised again
+ * (SA_NODEFER lets raise deliver it at once), so the parent still sees the signal. */
+static void on_signal(int sig)
 {
+    if (ic_cli_rendering && !ic_cli_stop_signal && (sig == SIGINT || sig == SIGTERM)) {
+        ic_cli_stop_signal = sig;
+        return;
+    }
     ic_remove_temporary_files();
+    struct sigaction dfl;
+    memset(&dfl, 0, sizeof dfl);
+    dfl.sa_handler = SIG_DFL;
+    sigemptyset(&dfl.sa_mask);
+    sigaction(sig, &dfl, NULL);
     raise(sig);
 }
 
@@ -33,9 +47,9 @@ static void install_signal_handlers(void)
             continue;
         struct sigaction sa;
         memset(&sa, 0, sizeof sa);
-        sa.sa_handler = on_fatal_signal;
+        sa.sa_handler = on_signal;
         sigemptyset(&sa.sa_mask);
-        sa.sa_flags = SA_RESETHAND | SA_NODEFER;
+        sa.sa_flags = SA_NODEFER;
         sigaction(sigs[i], &sa, NULL);
     }
 }

@@ -333,7 +333,10 @@ void ic_cli_print_help(FILE *f)
         }
         wrap(f, text, LEFT, at);
     }
-    fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error\n");
+    fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error, 130 or 143\n"
+               "interrupted by SIGINT or SIGTERM: the render stops at its next tile (during cache construction, at\n"
+               "the next pass, then renders one sample per pixel) and every output holds the image so far, marked\n"
+               "partial (EXR attribute irrcache:partial, \"interrupted\" in --stats); a second signal ends it at once\n");
 }
 
 /* A table cell cannot hold a bare '|'. */

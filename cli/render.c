@@ -122,6 +122,10 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
     cJSON *phases = cJSON_AddObjectToObject(o, "phases");
     for (int i = 0; i < st->phase_count; ++i)
         cJSON_AddNumberToObject(phases, st->phases[i].name, st->phases[i].seconds);
+    if (st->cancelled) { /* SIGINT or SIGTERM: the image is partial */
+        cJSON_AddBoolToObject(o, "interrupted", 1);
+        cJSON_AddNumberToObject(o, "completed", st->completed);
+    }
     /* How the ranks shared the work (MPI): only when there were several, so a single process's figures
      * read as they always did. */
     if (st->ranks > 1)
@@ -368,7 +372,14 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     }
     ic_image img = {0};
     ic_render_stats st;
+    /* One process: SIGINT or SIGTERM stops the render and the image so far is written (main.c). Under
+     * mpirun every rank must agree on the image, so a signal ends the job as before. */
+    if (ranks <= 1) {
+        opt.cancel = &ic_cli_stop_signal;
+        ic_cli_rendering = 1;
+    }
     ic_result r = ic_render(scene, &opt, &img, &st, &err);
+    ic_cli_rendering = 0;
     if (prog.enabled)
         fputc('\n', stderr);
     if (r != IC_OK) {
@@ -453,7 +464,16 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     }
     ic_cli_exr_meta_free(&meta);
     free_results(&img, &aovs, scene);
-    if (st.cut_by_time)
+    if (st.cancelled) {
+        const int sig = (int)ic_cli_stop_signal;
+        if (st.completed > 0.0)
+            fprintf(stderr, "irrcache render: interrupted by %s: the outputs hold the image so far (%.0f %% of the "
+                            "final render; the other tiles are black)\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
+                    100.0 * st.completed);
+        else
+            fprintf(stderr, "irrcache render: interrupted by %s during cache construction: the outputs hold a "
+                            "preview of one sample per pixel\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    } else if (st.cut_by_time)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
                         "(%d passes) before it converged; give more time for a converged cache\n", st.passes);
     else if (st.cut_short)
@@ -483,5 +503,8 @@ static int render_command(int argc, char **argv, ic_comm *comm)
             fprintf(stderr, ", %u emitting triangles lit through the records", st.cached_emitters);
         fputc('\n', stderr);
     }
+    /* An interrupted render whose outputs were written ends as the signal asked: 128 + its number. */
+    if (ok && st.cancelled)
+        return 128 + (int)ic_cli_stop_signal;
     return ok ? 0 : 1;
 }

@@ -21,6 +21,8 @@
 #include "irrcache/gather.h"
 #include "irrcache/image.h"
 
+#include <signal.h> /* sig_atomic_t */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -200,6 +202,11 @@ typedef struct ic_render_options {
     ic_comm *comm;         /* the processes sharing this render (irrcache/comm.h): every one calls ic_render
                               with the same options and gets the same image; NULL: one process. Must outlive
                               the call; its traffic counters are updated */
+    const volatile sig_atomic_t *cancel; /* optional flag (a signal handler's): once non-zero, cache construction
+                              stops at its next pass and the final render at its next tile (with a time
+                              budget, its next pass); a render stopped before its final render began renders
+                              one sample per pixel. The render then returns IC_OK with stats.cancelled set
+                              and the image it has: unrendered tiles are black. Ignored with a shared comm */
 } ic_render_options;
 
 #define IC_MAX_PHASES 12 /* room for every phase of every integrator, and the CLI's "load" */
@@ -213,6 +220,9 @@ typedef struct ic_render_stats {
     int spp_max;           /* the most samples one pixel took (adaptive sampling; else spp) */
     int threads;           /* threads used */
     uint64_t seed;         /* the seed the render used (the option's, else the scene file's, else the default) */
+    int cancelled;         /* 1: opt.cancel stopped the render early; the image is partial */
+    double completed;      /* share of the final render's tiles rendered (1 for a complete image; a
+                              one-sample preview after an interrupted construction counts 0) */
     uint32_t records;      /* cache records (integrator IC) */
     int passes;            /* construction passes (integrator IC) */
     uint32_t refinements;  /* adaptive: times a record's a_i was lowered */

@@ -68,7 +68,7 @@ typedef struct loop_ctx {
     void *user;
     double *accum;         /* width*height*3 running sums */
     double *sumsq;         /* adaptive pilot pass: per-pixel sums of squared luminance, else NULL */
-    const uint32_t *extra; /* adaptive second pass: samples of each pixel from s_begin, else NULL */
+    uint32_t *extra;       /* adaptive second pass: samples of each pixel from s_begin, else NULL */
     int tiles_x, tiles_y;
     int rank, ranks;       /* this process renders tiles rank, rank + ranks, … */
     int own_tiles;         /* how many that is */
@@ -76,6 +76,8 @@ typedef struct loop_ctx {
     uint64_t *rays;        /* per thread, padded */
     uint64_t *samples;     /* per thread, padded: pixel samples taken */
     atomic_int tiles_done;
+    atomic_int tiles_skipped; /* tiles left unrendered because loop.cancel was set */
+    int skip_on_cancel;    /* 1: a set loop.cancel skips the tiles not started yet */
     int total_tiles_all_passes;
     int tiles_before_pass;
     double start;
@@ -92,6 +94,15 @@ static void render_tile(void *p, int64_t item, int thread)
     int x0 = tx * TILE, y0 = ty * TILE;
     int x1 = x0 + TILE < cam->width ? x0 + TILE : cam->width;
     int y1 = y0 + TILE < cam->height ? y0 + TILE : cam->height;
+    if (c->skip_on_cancel && *c->loop->cancel) {
+        /* Interrupted: the tile keeps what earlier passes gave it (the adaptive pass's extra samples
+         * are taken back, so its pixels average what they have). */
+        for (int y = y0; c->extra && y < y1; ++y)
+            for (int x = x0; x < x1; ++x)
+                c->extra[y * cam->width + x] = 0;
+        atomic_fetch_add(&c->tiles_skipped, 1);
+        return;
+    }
     uint64_t rays = 0, samples = 0;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
@@ -314,6 +325,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         return r;
     size_t npix = (size_t)cam->width * (size_t)cam->height;
     int n0 = loop->spp / 4;
+    c.skip_on_cancel = loop->cancel && !ic_comm_is_shared(loop->comm);
     c.sumsq = calloc(npix, sizeof *c.sumsq);
     uint32_t *extra = malloc(npix * sizeof *extra);
     /* Progress counts tiles of both passes alike, so the pilot (a quarter of the samples) shows as half. */
@@ -355,6 +367,9 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         count_work(&c, threads, res);
         res->spp_done = (int)llround((double)taken / (double)npix);
         res->spp_max = (int)most;
+        int skipped = atomic_load(&c.tiles_skipped);
+        res->cancelled = skipped > 0;
+        res->completed = c.own_tiles ? 1.0 - (double)skipped / (2.0 * c.own_tiles) : 1.0;
     }
     res->seconds = ic_seconds() - c.start;
     free(c.sumsq);
@@ -382,7 +397,11 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
         return ic_error_set(err, IC_ERR_INVALID_ARG,
                             "--spp %d is too large for adaptive sampling (at most %d); lower it or add "
                             "--adaptive-sampling off", loop->spp, INT_MAX / IC_ADAPTIVE_CAP);
-    if (loop->adaptive)
+    /* Interrupted before the film began (during cache construction): one sample per pixel, every tile,
+     * so that there is an image to look at. */
+    const int can_cancel = loop->cancel && !ic_comm_is_shared(loop->comm);
+    const int preview = can_cancel && *loop->cancel;
+    if (loop->adaptive && !preview)
         return render_adaptive(loop, fn, user, out, res, err);
     int threads = ic_resolve_threads(loop->threads);
     loop_ctx c;
@@ -391,13 +410,21 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
         return r;
     size_t npix = (size_t)cam->width * (size_t)cam->height;
     c.start = ic_seconds();
+    /* One pass skips its tiles not yet started once interrupted; budgeted passes stop between passes, so
+     * that every pixel has the same samples. */
+    c.skip_on_cancel = can_cancel && !preview && !(loop->time_budget > 0.0);
+    int stopped = 0;
     /* Without a budget: one pass of all samples. With a budget: passes of growing size, stopping
      * before a pass that would overrun the budget (estimated from the previous pass). */
-    int spp_max = loop->spp > 0 ? loop->spp : (1 << 30);
+    int spp_max = preview ? 1 : loop->spp > 0 ? loop->spp : (1 << 30);
     int done = 0, pass_spp = loop->time_budget > 0.0 ? 1 : spp_max;
     c.total_tiles_all_passes = loop->time_budget > 0.0 ? 0 : c.own_tiles;
     double per_sample = 0.0;
     while (done < spp_max) {
+        if (can_cancel && !preview && done > 0 && *loop->cancel) {
+            stopped = 1;
+            break;
+        }
         if (pass_spp > spp_max - done)
             pass_spp = spp_max - done;
         if (loop->time_budget > 0.0 && done > 0) {
@@ -438,6 +465,9 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
         count_work(&c, threads, res);
         res->spp_done = done;
         res->spp_max = done;
+        int skipped = atomic_load(&c.tiles_skipped);
+        res->cancelled = preview || stopped || skipped > 0;
+        res->completed = preview ? 0.0 : c.own_tiles ? 1.0 - (double)skipped / c.own_tiles : 1.0;
     }
     res->seconds = ic_seconds() - c.start;
     free(c.accum);

@@ -36,6 +36,7 @@ typedef struct ic_image_loop {
     ic_progress_fn progress;
     void *progress_user;
     ic_comm *comm;         /* the processes sharing the image; NULL: one */
+    const volatile sig_atomic_t *cancel; /* ic_render_options.cancel (ignored with a shared comm) */
 } ic_image_loop;
 
 typedef struct ic_image_loop_result {
@@ -44,6 +45,8 @@ typedef struct ic_image_loop_result {
     uint64_t rays;         /* rays traced by the sample function (this process's) */
     uint64_t samples;      /* pixel samples this process took */
     double seconds;
+    int cancelled;         /* 1: loop.cancel cut the image short */
+    double completed;      /* share of the tiles rendered (0 for the one-sample preview) */
 } ic_image_loop_result;
 
 /* Primary ray through film position (fx, fy) in pixels (0,0 = top-left corner). */

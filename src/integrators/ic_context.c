@@ -101,6 +101,7 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     c->deadline = opt->time_budget > 0.0 ? ic_seconds() + IC_CONSTRUCTION_TIME_SHARE * opt->time_budget : 0.0;
     c->threads = ic_resolve_threads(opt->threads);
     c->comm = opt->comm;
+    c->cancel = opt->cancel;
     c->pixel_angle = ic_camera_pixel_angle(&tr->scene->camera);
     atomic_init(&c->rays, 0);
     resolve_options(c, &opt->ic, tr->scene);

@@ -65,6 +65,8 @@ typedef struct ic_ctx {
     uint32_t cached_emitters;  /* emitting triangles whose light the records carry */
     ic_radiance *rad;          /* radiance caching on glossy lobes (ic_radiance.c); NULL when off */
     ic_comm *comm;             /* the processes sharing construction (ic_ic_gather_points); NULL: one */
+    const volatile sig_atomic_t *cancel; /* ic_render_options.cancel: once set, construction stops at its
+                                  next pass as at a deadline (not with a shared comm, whose ranks must agree) */
     uint64_t gathered;         /* records whose hemispheres this process gathered */
     double comm_seconds_counted; /* batch: c->comm's counters when last added to a pass's statistics */
     uint64_t comm_bytes_counted;
@@ -123,6 +125,8 @@ ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acc
 int ic_ic_out_of_time_shared(ic_ctx *c);
 static inline int ic_ic_out_of_time(ic_ctx *c)
 {
+    if (c->cancel && *c->cancel && !ic_comm_is_shared(c->comm))
+        return 1;
     if (!(c->deadline > 0.0))
         return 0;
     return ic_comm_is_shared(c->comm) ? ic_ic_out_of_time_shared(c) : ic_seconds() > c->deadline;

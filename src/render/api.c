@@ -118,6 +118,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         loop.progress = opt.progress;
         loop.progress_user = opt.progress_user;
         loop.comm = opt.comm;
+        loop.cancel = opt.cancel;
         r = ic_render_image(&loop, it.ops->sample, it.self, out, &lr, err);
     }
     if (r == IC_OK) {
@@ -125,6 +126,8 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         st->rays += lr.rays;
         st->spp = lr.spp_done;
         st->spp_max = lr.spp_max;
+        st->cancelled = lr.cancelled;
+        st->completed = lr.completed;
         st->rank_pixel_samples = lr.samples;
         if (opt.aovs && it.ops->aovs)
             r = it.ops->aovs(it.self, out, &loop, &lr, opt.aovs, err);

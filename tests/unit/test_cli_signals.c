@@ -7,6 +7,7 @@
  * SIGXFSZ when its output exceeds a file-size limit.
  */
 #include "core/atomic_file.h"
+#include "irrcache/image.h"
 #include "test_util.h"
 #include "test_files.h"
 
@@ -17,6 +18,7 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #define DIR_ IC_TEST_TMP "/cli_signals"
@@ -71,6 +73,105 @@ static void die_while_writing(int sig, int exr_style)
     CHECK(!exists(DIR_ "/out.bin") && !exists(DIR_ "/out.exr"), "signal %d: no output either", sig);
 }
 
+/* Runs `irrcache render ARGS… -o DIR_/int.exr -o DIR_/int.png --stats DIR_/int.json` in a child with
+ * SIGINT and SIGTERM at their default (so the command installs its handler), sends `sig` after `delay`
+ * seconds, and returns the exit status (-1 if it died of a signal). stderr goes to DIR_/int.err. */
+static int interrupt_render(int sig, double delay, const char *const *args)
+{
+    pid_t pid = fork();
+    if (pid == 0) {
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        int fd = open(DIR_ "/int.err", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        dup2(fd, 2);
+        const char *argv[32] = {"irrcache", "render", IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", "-q",
+                                "-o", DIR_ "/int.exr", "-o", DIR_ "/int.png", "--stats", DIR_ "/int.json"};
+        int n = 10;
+        for (int k = 0; args[k] && n < 31; ++k)
+            argv[n++] = args[k];
+        argv[n] = NULL;
+        execv(IC_CLI_PATH, (char *const *)argv);
+        _exit(127);
+    }
+    struct timespec ts = {(time_t)delay, (long)((delay - (double)(time_t)delay) * 1e9)};
+    nanosleep(&ts, NULL);
+    kill(pid, sig);
+    int st = 0;
+    waitpid(pid, &st, 0);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static long file_size(const char *p)
+{
+    struct stat s;
+    return stat(p, &s) == 0 ? (long)s.st_size : -1;
+}
+
+/* SIGINT or SIGTERM during a long render (issue "An installable library", long renders): the command
+ * stops at the next tile, writes every output with the image so far (marked partial), replacing an
+ * older file only by a complete new one, leaves no temporary file, and exits 128 + the signal. During
+ * cache construction it stops construction and writes a one-sample preview. */
+static void test_interrupted_render(void)
+{
+    FILE *old = fopen(DIR_ "/int.png", "wb");
+    if (old)
+        fputs("an older output", old), fclose(old);
+    const char *final[] = {"--width", "256", "--height", "256", "--spp", "4096", "--adaptive-sampling", "off", NULL};
+    int rc = interrupt_render(SIGINT, 1.5, final);
+    char err_text[2048] = "";
+    FILE *e = fopen(DIR_ "/int.err", "r");
+    size_t n = e ? fread(err_text, 1, sizeof err_text - 1, e) : 0;
+    err_text[n] = 0;
+    if (e)
+        fclose(e);
+    CHECK(rc == 130, "SIGINT: exit 130 (got %d: %s)", rc, err_text);
+    CHECK(strstr(err_text, "interrupted by SIGINT") != NULL, "SIGINT: says so: %s", err_text);
+    ic_image img;
+    ic_error err;
+    CHECK(ic_image_read(DIR_ "/int.exr", &img, &err) == IC_OK && img.width == 256, "the partial EXR reads: %s",
+          err.message);
+    double sum = 0.0;
+    int black = 0;
+    for (int i = 0; img.rgb && i < 256 * 256; ++i) {
+        float v = img.rgb[3 * i] + img.rgb[3 * i + 1] + img.rgb[3 * i + 2];
+        sum += v;
+        black += v == 0.0f;
+    }
+    CHECK(sum > 0.0 && black > 0, "part of the image is rendered (sum %g), part is not (%d black pixels)", sum, black);
+    ic_image_free(&img);
+    char v[256];
+    CHECK(ic_image_exr_attribute(DIR_ "/int.exr", "irrcache:partial", v, sizeof v, &err) == IC_OK &&
+              strstr(v, "interrupted"),
+          "the EXR is marked partial: %s", v);
+    CHECK(file_size(DIR_ "/int.png") > 100 && ic_image_read(DIR_ "/int.png", &img, &err) == IC_OK,
+          "the older PNG is replaced by a complete one: %s", err.message);
+    ic_image_free(&img);
+    FILE *js = fopen(DIR_ "/int.json", "r");
+    char json[8192] = "";
+    n = js ? fread(json, 1, sizeof json - 1, js) : 0;
+    json[n] = 0;
+    if (js)
+        fclose(js);
+    CHECK(strstr(json, "\"interrupted\"") != NULL, "the stats say interrupted");
+    CHECK(test_count_temporaries(DIR_) == 0, "no temporary file left");
+
+    /* During cache construction (many rays per record): a preview of one sample per pixel. */
+    const char *construction[] = {"--integrator", "ic", "--width", "96", "--height", "96", "--rays", "20000",
+                                  "--spp", "64", NULL};
+    rc = interrupt_render(SIGTERM, 1.5, construction);
+    e = fopen(DIR_ "/int.err", "r");
+    n = e ? fread(err_text, 1, sizeof err_text - 1, e) : 0;
+    err_text[n] = 0;
+    if (e)
+        fclose(e);
+    CHECK(rc == 143, "SIGTERM during construction: exit 143 (got %d: %s)", rc, err_text);
+    CHECK(strstr(err_text, "preview") != NULL, "SIGTERM during construction: a preview: %s", err_text);
+    CHECK(ic_image_read(DIR_ "/int.exr", &img, &err) == IC_OK && img.width == 96, "the preview reads: %s",
+          err.message);
+    ic_image_free(&img);
+    CHECK(test_count_temporaries(DIR_) == 0, "no temporary file left");
+}
+
 int main(void)
 {
     CHECK(system("rm -rf '" DIR_ "' && mkdir -p '" DIR_ "'") == 0, "scratch folder");
@@ -108,5 +209,6 @@ int main(void)
     CHECK(WIFSIGNALED(st) && WTERMSIG(st) == SIGXFSZ, "the command died of SIGXFSZ (status %#x)", st);
     CHECK(test_count_temporaries(DIR_) == 0, "SIGXFSZ: the command left no temporary file");
     CHECK(!exists(DIR_ "/big.pfm"), "SIGXFSZ: no output");
+    test_interrupted_render();
     TEST_MAIN_END();
 }
