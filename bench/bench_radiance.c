@@ -140,7 +140,8 @@ int main(int argc, char **argv)
         phase_times pt = {0, 0};
         uint32_t made = 0, refined = 0;
         double t0 = ic_seconds();
-        if (ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) != IC_OK || ic_ic_build(c, &opt, &st, &pt, &err) != IC_OK ||
+        if (ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) != IC_OK || ic_ic_radiance_create(c, &err) != IC_OK ||
+            ic_ic_build(c, &opt, &st, &pt, &err) != IC_OK ||
             ic_ic_radiance_build(c, &opt, &pt, &made, &refined, &err) != IC_OK ||
             ic_cache_rebuild_index(c->cache, &err) != IC_OK)
             fail(err.message);
@@ -157,6 +158,7 @@ int main(int argc, char **argv)
         free(g.n);
         free(g.wo);
         free(g.material);
+        ic_ic_radiance_destroy(c->rad);
         ic_ic_ctx_destroy(c);
     }
     ic_accel_destroy(accel);

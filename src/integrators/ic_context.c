@@ -129,8 +129,6 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
         *gbuffer_seconds = ic_seconds() - t0;
     if (r == IC_OK && !ic_ic_select_large_emitters(c, tr->scene))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
-    if (r == IC_OK)
-        r = ic_ic_radiance_create(c, err);
     if (r != IC_OK) {
         ic_ic_ctx_destroy(c);
         return r;
@@ -148,7 +146,6 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     free(c->direct_pmf);
     free(c->direct_cdf);
     free(c->level_irr);
-    ic_ic_radiance_destroy(c->rad);
     free(c);
 }
 

@@ -150,6 +150,8 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     double t_gbuffer = 0.0, t_candidates = 0.0;
     phase_times pt = {0, 0};
     ic_result r = ic_ic_ctx_create(s->tr, s->opt, &s->c, &t_gbuffer, err);
+    if (r == IC_OK)
+        r = ic_ic_radiance_create(s->c, err); /* lobe tables, before a cache file is checked against them */
     if (r != IC_OK)
         return r;
     ic_ctx *c = s->c;
@@ -239,6 +241,8 @@ static void ic_destroy(void *self)
     ic_state *s = self;
     ic_pixel_lights_free(&s->fc.lights);
     free(s->fc.hints);
+    if (s->c)
+        ic_ic_radiance_destroy(s->c->rad);
     ic_ic_ctx_destroy(s->c);
     free(s);
 }

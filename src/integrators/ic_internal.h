@@ -187,7 +187,8 @@ ic_result ic_ic_record_views(const ic_ctx *c, ic_record_view **out, uint32_t *co
  * the integrator's prepare (ic_integrator.c) and by tests that run construction alone). gbuffer_seconds may be NULL. */
 ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, double *gbuffer_seconds,
                            ic_error *err);
-/* Frees a context, its cache (unless the caller took it and set c->cache = NULL) and buffers; NULL is a no-op. */
+/* Frees a context, its cache (unless the caller took it and set c->cache = NULL) and buffers; NULL is a
+ * no-op. Its radiance-cache state (c->rad) is the creator's to free first (ic_ic_radiance_destroy). */
 void ic_ic_ctx_destroy(ic_ctx *c);
 /* ---- construction strategies: peers behind one signature. Each fills c->cache from the shading
  * points, reports progress through opt, adds its own phases to st (if any) and its gathering and
