@@ -213,3 +213,16 @@ void ic_cli_cluster_unmute(int saved)
     close(saved);
 }
 int ic_cli_cluster_size(const ic_comm *comm) { return comm ? comm->size : 1; }
+
+int ic_cli_cluster_agree(ic_comm *comm, int status, const char *message, const char *command)
+{
+    int first = ic_cli_cluster_first_failure(comm, status != 0);
+    if (first < 0)
+        return 0;
+    if (first == ic_cli_cluster_rank(comm) && message[0])
+        fprintf(stderr, "%s\n", message);
+    else if (command && first == ic_cli_cluster_rank(comm) && first != 0)
+        fprintf(stderr, "%s: rank %d of %d: its command line is invalid; run it alone to see why\n", command, first,
+                ic_cli_cluster_size(comm));
+    return status ? status : 1;
+}

@@ -25,6 +25,11 @@ int ic_cli_cluster_rank(const ic_comm *comm);
 int ic_cli_cluster_size(const ic_comm *comm);
 /* Collective: the lowest rank whose `failed` is non-zero, or −1 when none failed. */
 int ic_cli_cluster_first_failure(ic_comm *comm, int failed);
+/* Collective, before the work: what failed on this rank (status, and its message not yet printed, may be
+ * empty) agreed on by every rank. The lowest failing rank prints its message, or, with `command` non-NULL
+ * and no message on a rank other than 0, a line saying its command line is invalid. Returns the status
+ * this rank exits with (1 when another rank failed), 0 when every rank may go on. */
+int ic_cli_cluster_agree(ic_comm *comm, int status, const char *message, const char *command);
 /* Ends every rank of the job with exit status `code` (one process: returns). */
 void ic_cli_cluster_abort(ic_comm *comm, int code);
 /* Collective: rank 0's bytes at buf copied to every rank. */

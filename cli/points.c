@@ -309,16 +309,10 @@ int ic_cli_points(int argc, char **argv)
     return rc;
 }
 
-/* Before the computation: the lowest failing rank says what failed (message, when not yet printed), every
- * rank exits non-zero. Returns this rank's exit status, 0 when every rank may go on. */
+/* Before the computation: what failed on this rank, agreed on by every rank (ic_cli_cluster_agree). */
 static int agree(ic_comm *comm, int status, const char *message)
 {
-    int first = ic_cli_cluster_first_failure(comm, status != 0);
-    if (first < 0)
-        return 0;
-    if (first == ic_cli_cluster_rank(comm) && message[0])
-        fprintf(stderr, "%s\n", message);
-    return status ? status : EXIT_WORK;
+    return ic_cli_cluster_agree(comm, status, message, NULL);
 }
 
 /* Under mpirun (cluster.h) every rank computes a share of the records and the points; ranks other than 0

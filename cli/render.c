@@ -266,19 +266,10 @@ int ic_cli_render(int argc, char **argv)
     return rc;
 }
 
-/* Before the render: what failed on this rank (status, and the message not yet printed), agreed on by
- * every rank. Returns the status this rank exits with, 0 when every rank may render. */
+/* Before the render: what failed on this rank, agreed on by every rank (ic_cli_cluster_agree). */
 static int agree(ic_comm *comm, int status, const char *message)
 {
-    int first = ic_cli_cluster_first_failure(comm, status != 0);
-    if (first < 0)
-        return 0;
-    if (first == ic_cli_cluster_rank(comm) && message[0])
-        fprintf(stderr, "%s\n", message);
-    else if (first == ic_cli_cluster_rank(comm) && first != 0)
-        fprintf(stderr, "irrcache render: rank %d of %d: its command line is invalid; run it alone to see why\n",
-                first, ic_cli_cluster_size(comm));
-    return status ? status : 1;
+    return ic_cli_cluster_agree(comm, status, message, "irrcache render");
 }
 
 static int render_command(int argc, char **argv, ic_comm *comm)
