@@ -12,7 +12,8 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 scene=$root/scenes/cornell-box/cornell-box.json
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 mkdir -p "$work/lk"
-"$new/bench/bench_lookup" --save "$work/lk" "$scene" 320 180 >/dev/null
+# Saved by the old build: a newer build reads every older cache file version.
+"$old/bench/bench_lookup" --save "$work/lk" "$scene" 320 180 >/dev/null
 phase() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['phases'][sys.argv[2]])" "$@"; }
 for r in $(seq "$rounds"); do
   for b in old new; do

@@ -107,9 +107,11 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "lazy (Ward et al. 1988, serial) or adaptive (Krivanek et al. 2006: each record's a refined until no " \
       "discontinuity is visible; docs/adaptive.md)") \
     X(ACCURACY, "--accuracy", "-a", IC_OPT_FLOAT, render.ic.cache.accuracy, 0.001, 100, "A", NAN, \
-      "0.15 (ward), 1 (tl)", "", IC_SCOPE_IC, "error bound a of the weights; smaller means more records") \
-    X(WEIGHT, "--weight", NULL, IC_OPT_CHOICE, render.ic.cache.weight, 0, 0, "ward|tl", NAN, "ward", "", IC_SCOPE_IC, \
-      "Ward or Tabellion-Lamorlette weights") \
+      "0.15 (ward, error), 1 (tl)", "", IC_SCOPE_IC, "error bound a of the weights; smaller means more records") \
+    X(WEIGHT, "--weight", NULL, IC_OPT_CHOICE, render.ic.cache.weight, 0, 0, "ward|tl|error", NAN, "ward", "", \
+      IC_SCOPE_IC, "interpolation weights: Ward's, Tabellion-Lamorlette's, or error: one minus the estimated " \
+      "second-order error over its bound, zero at the record's edge (after Schwarzhaupt et al. 2012; for " \
+      "--error hessian)") \
     X(RAYS, "--rays", NULL, IC_OPT_RAYS, render.ic.gather, 16, 1e7, "N", IC_DEFAULT_RAYS, "%g", "", IC_SCOPE_IC, \
       "hemisphere rays per record (stratified M x N, N about pi M)") \
     X(GATHER, "--gather", NULL, IC_OPT_CHOICE, render.ic.gather.method, 0, 0, "stratified|progressive|hemicube", \
@@ -120,6 +122,9 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "", IC_SCOPE_IC, "what sets a record's extent: Ward's split sphere (harmonic mean of the hit distances), or " \
       "the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error reaches --accuracy x E at " \
       "the record's edge (stratified or hemicube gather)") \
+    X(RECORD_SHAPE, "--record-shape", NULL, IC_OPT_CHOICE, render.ic.record_shape, 0, 0, "round|elliptical", NAN, \
+      "round", "", IC_SCOPE_IC, "with --error hessian: round records (the smaller semi-axis everywhere) or " \
+      "ellipses along the Hessian's eigenvectors, aspect at most 4") \
     X(RADIANCE_CACHE, "--radiance-cache", NULL, IC_OPT_ON_OFF, render.ic.radiance_cache, 0, 0, "on|off", NAN, \
       "off", "", IC_SCOPE_IC, "radiance caching (Krivanek et al. 2005): records of incoming radiance in " \
       "hemispherical harmonics serve the glossy lobe of first shading points whose Phong exponent is at most " \
@@ -173,6 +178,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "off", "", IC_SCOPE_IC, "hemisphere rays path-trace every bounce after their hit; by default, where " \
       "records of earlier passes cover a diffuse hit, they give its indirect light and only its direct light " \
       "is sampled (Ward's multiple-bounce scheme)") \
+    X(NO_GRADIENT_CLAMP, "--no-gradient-clamp", NULL, IC_OPT_FLAG_OFF, render.ic.cache.gradient_clamp, 0, 0, "", \
+      NAN, "off", "", IC_SCOPE_IC, "switch off gradient-magnitude clamping of R (Krivanek et al. 2006 §5.1)") \
     X(NO_NEIGHBOR_CLAMP, "--no-neighbor-clamp", NULL, IC_OPT_FLAG_OFF, render.ic.cache.neighbor_clamp, 0, 0, "", \
       NAN, "off", "", IC_SCOPE_IC, "switch off neighbour clamping (Krivanek et al. 2006 §5.2)") \
     X(NO_VALIDITY_CLAMP, "--no-validity-clamp", NULL, IC_OPT_FLAG_OFF, render.ic.cache.validity_clamp, 0, 0, "", \

@@ -108,6 +108,7 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         cJSON_AddNumberToObject(ext, "min", st->extent_min);
         cJSON_AddNumberToObject(ext, "mean", st->extent_mean);
         cJSON_AddNumberToObject(ext, "max", st->extent_max);
+        cJSON_AddNumberToObject(ext, "elliptical_share", st->records ? (double)st->ellipse_records / st->records : 0.0);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
         if (a->render.ic.radiance_cache == IC_CACHE_ON) {
             cJSON_AddNumberToObject(o, "irradiance_records", st->records - st->radiance_records);
@@ -226,6 +227,11 @@ static int write_records_json(const char *path, const ic_render_aovs *aovs)
         cJSON_AddBoolToObject(r, "visible", v->visible);
         if (v->is_radiance)
             cJSON_AddBoolToObject(r, "radiance", 1);
+        if (v->ellipse_ratio > 0.0f) {
+            cJSON_AddNumberToObject(r, "ellipse_ratio", v->ellipse_ratio);
+            const double ax[3] = {v->ellipse_axis.x, v->ellipse_axis.y, v->ellipse_axis.z};
+            cJSON_AddItemToObject(r, "minor_axis", cJSON_CreateDoubleArray(ax, 3));
+        }
         cJSON_AddItemToArray(list, r);
     }
     return ic_cli_write_json("render", path, list, 1);

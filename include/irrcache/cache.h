@@ -37,6 +37,24 @@
  *   number of threads; insertion and the record setters must not overlap any other call on the same
  *   cache. No call allocates on the query path; none prints or exits.
  *
+ * WEIGHTS
+ *   Ward's weight is the inverse of a first-order error estimate; Tabellion–Lamorlette's falls
+ *   linearly to zero. IC_WEIGHT_ERROR follows Schwarzhaupt et al. 2012: a record whose extent was set
+ *   where the second-order error ½dᵀHd reaches the allowed error (ic_gather_hessian_extent) errs at
+ *   displacement d by about that bound times δ_t², δ_t = |d|_i/(a_i R_i) (1 on the extent's edge); the
+ *   weight is one minus the estimated error over the bound, with the normal change δ_r measured like
+ *   Ward's, so that a record weighs what its extent promises and reaches zero exactly at its edge.
+ *
+ * ELLIPTICAL RECORDS
+ *   A record may have an elliptical extent in its tangent plane (Schwarzhaupt et al. 2012: the
+ *   eigenvectors of the irradiance Hessian): record.ellipse_ratio ρ in (0, 1) is the minor semi-axis
+ *   over the major, record.ellipse_axis the minor axis's direction. Distances in its weight are then
+ *   |d|_i² = |d|² + (1/ρ² − 1)(d·u)² (u the unit minor axis), so the extent a_i·R_i is the major
+ *   semi-axis and a_i·ρ·R_i the minor; with ρ = 0 or 1 the record is round and |d|_i = |d|. The octree
+ *   and every clamp use the sphere of the major semi-axis; clamp step 1 bounds both semi-axes alike
+ *   (so ρ may grow), steps 2–4 shrink R_i and keep ρ. Frozen look-ups of a cache holding an elliptical
+ *   record (or using IC_WEIGHT_ERROR) take the portable code path: round caches keep their SIMD speed.
+ *
  * RADII
  *   R_i (record.radius) is the clamped harmonic-mean distance used in the weights. The influence
  *   radius — the sphere outside which a record never contributes — is a_i·R_i for both weights:
@@ -96,7 +114,9 @@ typedef struct ic_cache ic_cache;
 /* Weighting function of the interpolation. */
 typedef enum ic_weight_kind {
     IC_WEIGHT_WARD = 0,       /* w = 1 / (|p−p_i|/R_i + sqrt(1 − n·n_i)), accept w > 1/a_i (Křivánek et al. 2006 §3) */
-    IC_WEIGHT_TABELLION = 1   /* w = 1 − κ_i·max(|p−p_i|/R_i, sqrt(1−n·n_i)/sqrt(1−cos 10°)), κ_i = 1/a_i, accept w > 0 */
+    IC_WEIGHT_TABELLION = 1,  /* w = 1 − κ_i·max(|p−p_i|/R_i, sqrt(1−n·n_i)/sqrt(1−cos 10°)), κ_i = 1/a_i, accept w > 0 */
+    IC_WEIGHT_ERROR = 2       /* w = 1 − (δ_t² + δ_r²), δ_t = |p−p_i|_i/(a_i R_i), δ_r = sqrt(1−n·n_i)/a_i, accept
+                                 w > 0: one minus the estimated second-order error over its bound (see WEIGHTS) */
 } ic_weight_kind;
 
 /* A switch where zero keeps the documented default. */
@@ -156,6 +176,9 @@ typedef struct ic_record {
     float accuracy;                   /* a_i; 0 on insertion means params.accuracy */
     float pixel_footprint;            /* world size of one pixel at the primary hit; 0 = unknown */
     uint32_t change_count;            /* times a_i or R_i changed after insertion */
+    ic_vec3 ellipse_axis;             /* elliptical extent: the minor semi-axis's direction (in the tangent
+                                         plane; projected and normalised on insertion); see ELLIPTICAL RECORDS */
+    float ellipse_ratio;              /* minor over major semi-axis in (0, 1]; 0 (or 1) = round */
     uint8_t bounce;                   /* bounce level the record serves (0 = first indirect bounce) */
     uint8_t flags;                    /* IC_RECORD_* */
 } ic_record;
@@ -214,6 +237,8 @@ const ic_cache_params *ic_cache_get_params(const ic_cache *cache);
 uint32_t ic_cache_count(const ic_cache *cache);
 /* Bytes of record storage per record (hot + cold arrays; octree references not included). */
 size_t ic_cache_bytes_per_record(void);
+/* Records with an elliptical extent (ellipse ratio below 1 after clamping). */
+uint32_t ic_cache_ellipse_count(const ic_cache *cache);
 /* Bytes the cache holds now: records, octree nodes and references, point index. */
 size_t ic_cache_memory_bytes(const ic_cache *cache);
 

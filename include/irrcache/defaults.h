@@ -39,6 +39,7 @@
 
 /* Irradiance cache (cache.h, render.h's ic_ic_options). */
 #define IC_DEFAULT_ACCURACY_WARD 0.15f   /* a of Ward's weight (0.3 before: at equal time its interpolation error left the low-pass error no better than the path tracer's on the Cornell box and stair-hall; BENCHMARKS.md) */
+#define IC_MAX_ELLIPSE_ASPECT 4.0f     /* elliptical records: major over minor semi-axis at most this (render.h: IC_SHAPE_ELLIPTICAL) */
 #define IC_DEFAULT_ACCURACY_TL 1.0f      /* a of the Tabellion–Lamorlette weight (κ = 1/a = 1) */
 #define IC_DEFAULT_MIN_RADIUS_PX 3.0f    /* smallest influence radius a·R, pixels at the primary hit */
 #define IC_DEFAULT_MAX_RADIUS_PX 48.0f   /* largest influence radius a·R, pixels at the primary hit */

@@ -84,6 +84,13 @@ typedef enum ic_error_metric {
                                   ½dᵀHd reaches accuracy × E at the edge a·R */
 } ic_error_metric;
 
+/* The shape of a record's extent under the Hessian metric. */
+typedef enum ic_record_shape {
+    IC_SHAPE_ROUND = 0,        /* a disc: the smaller semi-axis (the largest curvature) in every direction */
+    IC_SHAPE_ELLIPTICAL = 1    /* an ellipse along the Hessian's eigenvectors (Schwarzhaupt et al. 2012; cache.h:
+                                  ELLIPTICAL RECORDS), its aspect at most IC_MAX_ELLIPSE_ASPECT */
+} ic_record_shape;
+
 typedef struct ic_ic_options {
     ic_strategy strategy;
     ic_cache_params cache; /* weights, accuracy [0.15 Ward, 1 T–L], clamps; max_radius [scene diagonal/8] bounds R in
@@ -133,6 +140,7 @@ typedef struct ic_ic_options {
     int adaptive_max_passes; /* adaptive: safety bound on convergence passes [64] */
     ic_error_metric error; /* what sets a record's extent [split sphere]; the Hessian needs the stratified
                               or hemicube gather */
+    ic_record_shape record_shape; /* round or elliptical extents (elliptical needs the Hessian) [round] */
     ic_cache_switch radiance_cache; /* on: radiance records serve the glossy lobes of first shading points
                               whose Phong exponent is at most radiance_max_exponent (Křivánek et al. 2005);
                               off: glossy lobes are path traced [off] */
@@ -153,6 +161,8 @@ typedef struct ic_record_view {
     float radius_px;       /* influence radius in pixels at the record's depth */
     int visible;           /* 1 if the record lies on a surface the camera sees directly */
     int is_radiance;       /* 1 for a radiance record (ic_ic_options.radiance_cache), 0 for irradiance */
+    float ellipse_ratio;   /* an elliptical record's minor over major semi-axis (0: round) */
+    ic_vec3 ellipse_axis;  /* its minor axis, world space (zero for a round record) */
 } ic_record_view;
 
 /* Where the 2-D sample pairs of a pixel's samples come from. */
@@ -238,8 +248,9 @@ typedef struct ic_render_stats {
     double uncovered_share; /* batch: share of the last pass's eye-path look-up points no record covered */
     uint64_t gather_rays;  /* rays traced while gathering records (included in rays) */
     float extent_min, extent_mean, extent_max; /* records' influence radii a_i·R_i in scene units (what the
-                              split sphere or the Hessian set, after the clamps; integrator IC, 0 without
-                              records) */
+                              split sphere or the Hessian set, after the clamps; an ellipse's major semi-axis;
+                              integrator IC, 0 without records) */
+    uint32_t ellipse_records; /* records with an elliptical extent (ic_cache_ellipse_count) */
     /* How the render's processes shared it (opt.comm); the figures after `ranks` are this process's own
      * (rays, gather_rays and the image are the whole job's). */
     int ranks;             /* processes that rendered (1 without opt.comm) */

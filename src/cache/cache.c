@@ -22,11 +22,11 @@ ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *ou
         p = *in;
     else
         memset(&p, 0, sizeof p);
-    if (p.weight != IC_WEIGHT_WARD && p.weight != IC_WEIGHT_TABELLION)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: unknown weight kind %d; use IC_WEIGHT_WARD or "
-                            "IC_WEIGHT_TABELLION", (int)p.weight);
+    if (p.weight != IC_WEIGHT_WARD && p.weight != IC_WEIGHT_TABELLION && p.weight != IC_WEIGHT_ERROR)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: unknown weight kind %d; use IC_WEIGHT_WARD, "
+                            "IC_WEIGHT_TABELLION or IC_WEIGHT_ERROR", (int)p.weight);
     if (p.accuracy == 0.0f)
-        p.accuracy = p.weight == IC_WEIGHT_WARD ? IC_DEFAULT_ACCURACY_WARD : IC_DEFAULT_ACCURACY_TL;
+        p.accuracy = p.weight == IC_WEIGHT_TABELLION ? IC_DEFAULT_ACCURACY_TL : IC_DEFAULT_ACCURACY_WARD;
     if (p.final_accuracy_scale == 0.0f)
         p.final_accuracy_scale = IC_DEFAULT_FINAL_ACCURACY_SCALE;
     if (p.behind_tolerance == 0.0f)
@@ -122,6 +122,7 @@ void ic_cache_destroy(ic_cache *c)
     ic_frozen_free(&c->frozen);
     free(c->sphere);
     free(c->normal);
+    free(c->squeeze);
     free(c->cold);
     free(c->scratch);
     free(c->changed);
@@ -131,7 +132,8 @@ void ic_cache_destroy(ic_cache *c)
 
 const ic_cache_params *ic_cache_get_params(const ic_cache *c) { return &c->params; }
 uint32_t ic_cache_count(const ic_cache *c) { return c ? c->count : 0; }
-size_t ic_cache_bytes_per_record(void) { return 2 * sizeof(ic_float4) + sizeof(ic_record_cold); }
+size_t ic_cache_bytes_per_record(void) { return 3 * sizeof(ic_float4) + sizeof(ic_record_cold); }
+uint32_t ic_cache_ellipse_count(const ic_cache *c) { return c ? c->ellipse_count : 0; }
 
 size_t ic_cache_memory_bytes(const ic_cache *c)
 {
@@ -198,6 +200,10 @@ ic_result ic_cache_reserve(ic_cache *c, uint32_t n)
     if (!nn)
         return IC_ERR_OOM;
     c->normal = nn;
+    ic_float4 *sq = realloc(c->squeeze, (size_t)cap * sizeof *sq);
+    if (!sq)
+        return IC_ERR_OOM;
+    c->squeeze = sq;
     ic_record_cold *cd = realloc(c->cold, (size_t)cap * sizeof *cd);
     if (!cd)
         return IC_ERR_OOM;
@@ -208,11 +214,14 @@ ic_result ic_cache_reserve(ic_cache *c, uint32_t n)
 
 static int vec_finite(ic_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
 
-/* Checks record k of a batch; writes its step-1 radius to *radius. */
-static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k, float *radius, ic_error *err)
+/* Checks record k of a batch; writes its step-1 radius to *radius and its ellipse ratio after step 1
+ * to *rho (1: round). */
+static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k, float *radius, float *rho,
+                              ic_error *err)
 {
     int ok = vec_finite(r->position) && vec_finite(r->normal) && v3_len2(r->normal) > 0.0f &&
-             vec_finite(r->irradiance) && vec_finite(r->tangent) && vec_finite(r->sigma);
+             vec_finite(r->irradiance) && vec_finite(r->tangent) && vec_finite(r->sigma) &&
+             vec_finite(r->ellipse_axis);
     for (int ch = 0; ch < 3 && ok; ++ch)
         ok = vec_finite(r->grad_rot[ch]) && vec_finite(r->grad_trans[ch]);
     if (!ok)
@@ -225,19 +234,36 @@ static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k,
     if (!(r->harmonic_mean_dist > 0.0f))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has harmonic_mean_dist %g; "
                             "it must be positive", k, (double)r->harmonic_mean_dist);
-    *radius = ic_cache_clamp_record(&c->params, r);
+    if (!(r->ellipse_ratio >= 0.0f && r->ellipse_ratio <= 1.0f))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has ellipse ratio %g; it must "
+                            "be in (0, 1], or 0 for a round record", k, (double)r->ellipse_ratio);
+    *radius = ic_cache_clamp_radius(&c->params, r, r->harmonic_mean_dist);
     if (!(*radius > 0.0f && isfinite(*radius)))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has an infinite radius; "
                             "cap ray misses in the gatherer or set max_radius", k);
+    *rho = 1.0f;
+    if (r->ellipse_ratio > 0.0f && r->ellipse_ratio < 1.0f) {
+        /* Step 1 bounds both semi-axes alike (cache.h: ELLIPTICAL RECORDS). */
+        ic_vec3 n = v3_norm(r->normal), u = r->ellipse_axis;
+        u = v3_sub(u, v3_scale(n, v3_dot(u, n)));
+        if (!(v3_len2(u) > 1e-12f))
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch is elliptical but its "
+                                "ellipse axis is zero or along the normal", k);
+        float minor = ic_cache_clamp_radius(&c->params, r, r->harmonic_mean_dist * r->ellipse_ratio);
+        *rho = fminf(minor / *radius, 1.0f);
+    }
     return IC_OK;
 }
 
-static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radius)
+static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radius, float rho)
 {
     ic_vec3 n = v3_norm(r->normal);
     float a = r->accuracy > 0.0f ? r->accuracy : c->params.accuracy;
     c->sphere[i] = (ic_float4){r->position.x, r->position.y, r->position.z, radius};
     c->normal[i] = (ic_float4){n.x, n.y, n.z, a};
+    ic_vec3 u = rho < 1.0f ? v3_norm(v3_sub(r->ellipse_axis, v3_scale(n, v3_dot(r->ellipse_axis, n)))) : v3(0, 0, 0);
+    c->squeeze[i] = ic_squeeze_of(u, rho);
+    c->ellipse_count += rho < 1.0f;
     ic_record_cold *cd = &c->cold[i];
     memset(cd, 0, sizeof *cd);
     cd->irradiance = r->irradiance;
@@ -256,6 +282,8 @@ static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radi
 /* Undo a failed insertion (out of memory half-way): drop the new records and rebuild both trees. */
 static void roll_back(ic_cache *c, uint32_t first)
 {
+    for (uint32_t i = first; i < c->count; ++i)
+        c->ellipse_count -= c->squeeze[i].w < 1.0f;
     c->count = first;
     ic_cache_payload_truncate(c, first);
     ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
@@ -281,12 +309,15 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
      * so a refused batch thaws too — the rule stays simple: an insertion call thaws). */
     ic_frozen_free(&c->frozen);
     /* Validate everything before touching the cache: all-or-nothing. */
+    uint32_t ellipses = c->ellipse_count;
     for (uint32_t k = 0; k < n; ++k) {
-        float radius = 0.0f;
-        ic_result rc = check_record(c, &recs[k], k, &radius, err);
-        if (rc != IC_OK)
+        float radius = 0.0f, rho = 1.0f;
+        ic_result rc = check_record(c, &recs[k], k, &radius, &rho, err);
+        if (rc != IC_OK) {
+            c->ellipse_count = ellipses;
             return rc;
-        store_record(c, first + k, &recs[k], radius);
+        }
+        store_record(c, first + k, &recs[k], radius, rho);
     }
     c->count = first + n;
 
@@ -353,6 +384,7 @@ ic_result ic_cache_freeze(ic_cache *c, ic_error *err)
     if (ic_frozen_build(c) != IC_OK)
         return ic_error_set(err, IC_ERR_OOM, "cache: out of memory freezing the look-up layout (the cache "
                             "stays usable through its octree)");
+    ic_cache_select_frozen_query(c);
     return IC_OK;
 }
 
@@ -385,6 +417,11 @@ ic_result ic_cache_get_record(const ic_cache *c, uint32_t i, ic_record *out)
     out->change_count = cd->change_count;
     out->bounce = cd->bounce;
     out->flags = cd->flags;
+    const ic_float4 *e = &c->squeeze[i];
+    if (e->w < 1.0f) {
+        out->ellipse_axis = v3_norm(v3(e->x, e->y, e->z));
+        out->ellipse_ratio = e->w;
+    }
     return IC_OK;
 }
 

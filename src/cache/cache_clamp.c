@@ -27,9 +27,9 @@ static ic_vec3 lum_gradient(const ic_vec3 g[3])
     return v3_add(v3_add(v3_scale(g[0], 0.2126f), v3_scale(g[1], 0.7152f)), v3_scale(g[2], 0.0722f));
 }
 
-float ic_cache_clamp_record(const ic_cache_params *p, const ic_record *r)
+float ic_cache_clamp_radius(const ic_cache_params *p, const ic_record *r, float axis)
 {
-    float R = r->harmonic_mean_dist;
+    float R = axis;
     if (p->gradient_clamp == IC_CACHE_ON) {
         /* Křivánek et al. 2006 §5.1 eq. 2 on luminance Y: if |∇t Y|/Y > 1/R then R := Y/|∇t Y|.
          * The split-sphere model bounds the gradient by Y/R; a measured gradient above that bound

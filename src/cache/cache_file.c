@@ -11,14 +11,15 @@
  *                bounds, clamp switches and their parameters); look-up-only settings (final
  *                acceptance, behind tolerance, octree shape, threads) are free to change
  *   80  u64      record count N
- *   88  N × 156  records: p (3f), R, n (3f), a, E (3f), ∇r E (9f), ∇t E (9f), tangent (3f), σ (3f),
+ *   88  N × 172  records: p (3f), R, n (3f), a, E (3f), ∇r E (9f), ∇t E (9f), tangent (3f), σ (3f),
  *                harmonic-mean distance, pixel footprint, change count (u32), bounce (u8), flags (u8),
- *                2 zero bytes
+ *                2 zero bytes, then (version 3) the elliptical extent's squeeze k (3f) and ratio ρ
+ *                (cache.h: ELLIPTICAL RECORDS; 0, 0, 0, 1 for a round record); 156 bytes before version 3
  *   …   u64      (version 2) payload floats P in all records
  *   …   N × u32  (version 2) each record's payload length (0: none; cache.h ic_cache_set_payload)
  *   …   P × f32  (version 2) the payloads in record order
  *   end u64      FNV-1a 64 of every byte before it
- * Version 1 files (no payload section) still load.
+ * Version 1 files (no payload section) and version 2 files (no ellipses: every record round) still load.
  * The octree is not stored: loading rebuilds it from the records.
  */
 #include "cache_store.h"
@@ -32,12 +33,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define IC_CACHE_FILE_VERSION 2u
+#define IC_CACHE_FILE_VERSION 3u
 #define IC_CACHE_FILE_OLDEST 1u /* the oldest version still read */
 #define MAGIC "IRRCACHE"
 #define PARAM_BYTES 56u
 #define HEADER_BYTES (24u + PARAM_BYTES + 8u)
-#define RECORD_BYTES 156u
+#define RECORD_BYTES 172u
+#define RECORD_BYTES_V2 156u /* versions 1 and 2: no squeeze */
 #define REBUILD_HINT "delete it and build the cache again"
 /* Largest coordinate of a record's sphere (centre ± its octree radius) a file may hold: far beyond any
  * scene, and far enough below FLT_MAX (3.4e38) that the octree's bounds, their sums and its cell
@@ -168,10 +170,16 @@ static void encode_record(const ic_cache *c, uint32_t i, unsigned char *b)
     b[152] = cd->bounce;
     b[153] = cd->flags;
     b[154] = b[155] = 0;
+    const ic_float4 *e = &c->squeeze[i];
+    put_f32(b + 156, e->x);
+    put_f32(b + 160, e->y);
+    put_f32(b + 164, e->z);
+    put_f32(b + 168, e->w);
 }
 
-/* Returns 1 if the decoded record is usable (finite, positive radius and accuracy, unit-ish normal). */
-static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b)
+/* Returns 1 if the decoded record is usable (finite, positive radius and accuracy, unit-ish normal, a
+ * ratio in (0, 1] and a squeeze that matches it). has_squeeze: the file's records carry one. */
+static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b, int has_squeeze)
 {
     float f[37];
     for (int k = 0; k < 37; ++k)
@@ -197,7 +205,16 @@ static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b)
     cd->bounce = b[152];
     cd->flags = b[153];
     float nl = f[4] * f[4] + f[5] * f[5] + f[6] * f[6];
-    return f[3] > 0.0f && f[7] > 0.0f && fabsf(nl - 1.0f) < 1e-3f;
+    ic_float4 e = {0.0f, 0.0f, 0.0f, 1.0f};
+    if (has_squeeze)
+        e = (ic_float4){get_f32(b + 156), get_f32(b + 160), get_f32(b + 164), get_f32(b + 168)};
+    c->squeeze[i] = e;
+    /* |k|² = 1/ρ² − 1 within float rounding; a round record has k = 0. */
+    float k2 = e.x * e.x + e.y * e.y + e.z * e.z;
+    int squeeze_ok = isfinite(k2) && e.w > 0.0f && e.w <= 1.0f &&
+                     (e.w == 1.0f ? k2 == 0.0f : fabsf(k2 * e.w * e.w - (1.0f - e.w * e.w)) <= 1e-3f * (1.0f + k2 * e.w * e.w));
+    c->ellipse_count += e.w < 1.0f;
+    return f[3] > 0.0f && f[7] > 0.0f && fabsf(nl - 1.0f) < 1e-3f && squeeze_ok;
 }
 
 /* ---- save ------------------------------------------------------------------------------------- */
@@ -417,11 +434,12 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
     if (rc != IC_OK)
         return rc;
     uint64_t count = get_u64(data + 24 + PARAM_BYTES);
-    const int has_payloads = get_u32(data + 8) >= 2;
-    const uint64_t per_record = RECORD_BYTES + (has_payloads ? 4u : 0u), fixed = HEADER_BYTES + 8 + (has_payloads ? 8u : 0u);
+    const int has_payloads = get_u32(data + 8) >= 2, has_squeeze = get_u32(data + 8) >= 3;
+    const uint64_t rec_bytes = has_squeeze ? RECORD_BYTES : RECORD_BYTES_V2;
+    const uint64_t per_record = rec_bytes + (has_payloads ? 4u : 0u), fixed = HEADER_BYTES + 8 + (has_payloads ? 8u : 0u);
     uint64_t max_count = size >= fixed ? (size - fixed) / per_record : 0, payload_floats = 0;
     if (has_payloads && count <= max_count)
-        payload_floats = get_u64(data + HEADER_BYTES + count * RECORD_BYTES);
+        payload_floats = get_u64(data + HEADER_BYTES + count * rec_bytes);
     if (count > max_count || size < fixed ||
         payload_floats != (size - fixed - count * per_record) / 4 || size != fixed + count * per_record + 4 * payload_floats)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: %s (%zu bytes for %llu records); " REBUILD_HINT, path,
@@ -445,7 +463,7 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
     if (rc == IC_OK && ic_cache_reserve(c, (uint32_t)count) != IC_OK)
         rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory for %llu records", path, (unsigned long long)count);
     for (uint32_t i = 0; rc == IC_OK && i < count; ++i) {
-        if (!decode_record(c, i, data + HEADER_BYTES + (size_t)i * RECORD_BYTES)) {
+        if (!decode_record(c, i, data + HEADER_BYTES + (size_t)i * rec_bytes, has_squeeze)) {
             rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: record %u is invalid; " REBUILD_HINT, path, i);
             break;
         }
@@ -463,7 +481,7 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
     if (rc == IC_OK) {
         c->count = (uint32_t)count;
         if (has_payloads)
-            rc = read_payloads(c, path, data + HEADER_BYTES + count * RECORD_BYTES + 8, payload_floats, err);
+            rc = read_payloads(c, path, data + HEADER_BYTES + count * rec_bytes + 8, payload_floats, err);
     }
     if (rc == IC_OK) {
         ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);

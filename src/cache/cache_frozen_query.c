@@ -168,10 +168,12 @@ static void report_lanes(const ic_frozen_block *b, unsigned first, unsigned mask
     }
 }
 
-/* One block, entry by entry with ic_weight_test itself: the reference for the SIMD code below, and
- * the code where SSE2 is absent. Returns the block's number of contributors. */
-static unsigned block_portable(const ic_cache_params *params, const ic_frozen_block *b, ic_vec3 p, ic_vec3 n,
-                               float s, const ic_cache_lookup *q, ic_cache_estimate *out,
+/* One block, entry by entry with ic_weight_test itself: the reference for the SIMD code below, the
+ * code where SSE2 is absent, and the path of caches with elliptical records or the error weight
+ * (squeeze: the cache's squeeze array, read by record index; NULL when every record is round).
+ * Returns the block's number of contributors. */
+static unsigned block_portable(const ic_cache_params *params, const ic_float4 *squeeze, const ic_frozen_block *b,
+                               ic_vec3 p, ic_vec3 n, float s, const ic_cache_lookup *q, ic_cache_estimate *out,
                                float acc[3][IC_FROZEN_LANES], float wsum[IC_FROZEN_LANES])
 {
     float w[IC_FROZEN_LANES] = {0}, v[3][IC_FROZEN_LANES] = {{0}};
@@ -179,8 +181,9 @@ static unsigned block_portable(const ic_cache_params *params, const ic_frozen_bl
     for (unsigned k = 0; k < IC_FROZEN_LANES; ++k) {
         ic_float4 sp = {b->x[k], b->y[k], b->z[k], b->R[k]}, np = {b->nx[k], b->ny[k], b->nz[k], b->a[k]};
         ic_vec3 dp;
+        /* Padding entries (R = 0) pass no test; their index is 0, a valid record, for the squeeze. */
         if (b->bounce[k] != q->bounce || (b->flags[k] & IC_RECORD_DISABLED) ||
-            !ic_weight_test(params, &sp, &np, p, n, s, &w[k], &dp))
+            !ic_weight_test(params, &sp, &np, squeeze ? &squeeze[b->index[k]] : NULL, p, n, s, &w[k], &dp))
             continue;
         for (int ch = 0; ch < 3; ++ch) {
             /* The rotation term (n_i × n)·∇r E_i as n·(∇r E_i × n_i), the cross product made at freezing. */
@@ -241,7 +244,8 @@ static int query_frozen_portable(const ic_cache *c, const ic_cache_lookup *q, ic
     if (!blk)
         return 0;
     for (uint32_t b = 0; b < blocks; ++b)
-        contributors += block_portable(&c->params, &blk[b], q->position, q->normal, s, q, out, acc, wsum);
+        contributors += block_portable(&c->params, c->ellipse_count ? c->squeeze : NULL, &blk[b], q->position,
+                                       q->normal, s, q, out, acc, wsum);
     return finish_lanes(out, acc, wsum, contributors);
 }
 
@@ -586,14 +590,32 @@ int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path)
 #endif
     if (path == IC_LOOKUP_PORTABLE)
         c->query_frozen = query_frozen_portable;
+    ic_cache_select_frozen_query(c);
     return 1;
+}
+
+void ic_cache_select_frozen_query(ic_cache *c)
+{
+    /* The SIMD paths test round records with the Ward or T–L weight; anything else goes entry by entry. */
+    if (ic_cache_needs_portable(c))
+        c->query_frozen = query_frozen_portable;
+#if defined(IC_HAVE_AVX2_PATH)
+    else if (c->lookup_path == IC_LOOKUP_AVX2)
+        c->query_frozen = query_frozen_avx2;
+#endif
+#if defined(__SSE2__)
+    else if (c->lookup_path == IC_LOOKUP_SSE2)
+        c->query_frozen = query_frozen_sse2;
+#endif
+    else
+        c->query_frozen = query_frozen_portable;
 }
 
 size_t ic_cache_query_batch(const ic_cache *c, const ic_cache_lookup *q, size_t count, ic_cache_hint *hint,
                             ic_cache_estimate *out)
 {
 #if defined(IC_HAVE_AVX2_PATH)
-    if (c->frozen.is_valid && c->lookup_path == IC_LOOKUP_AVX2)
+    if (c->frozen.is_valid && c->query_frozen == query_frozen_avx2)
         return query_batch_avx2(c, q, count, hint, out);
 #endif
     size_t found = 0;

@@ -101,6 +101,9 @@ struct ic_cache {
     uint32_t count, cap;
     ic_float4 *sphere;           /* p_i, R_i */
     ic_float4 *normal;           /* n_i, a_i */
+    ic_float4 *squeeze;          /* elliptical extent (cache.h: ELLIPTICAL RECORDS): k = u·sqrt(1/ρ² − 1) and ρ;
+                                    (0, 0, 0, 1) for a round record */
+    uint32_t ellipse_count;      /* records with ρ < 1 */
     ic_record_cold *cold;
     ic_octree tree;              /* spheres of radius a_i·R_i·max(1, s): look-ups */
     ic_octree points;            /* positions: k-nearest and radius queries */
@@ -138,13 +141,14 @@ static inline ic_octree_items ic_cache_point_items(const ic_cache *c)
 #define IC_TL_NORMAL_SCALE 8.1131404f
 
 /*
- * The weight of a record (sp: position and R_i, np: normal and a_i) at (p, n) with acceptance
- * scale s; returns 0 if the record is rejected, else writes w_i(p) to *w and p − p_i to *dp. Each rejection test is labelled (after Radiance's
- * ambient.c habit). The first test is the influence sphere a_i·s·R_i of both weights; the octree
+ * The weight of a record (sp: position and R_i, np: normal and a_i, ep: its squeeze, NULL for a round
+ * record) at (p, n) with acceptance scale s; returns 0 if the record is rejected, else writes w_i(p) to
+ * *w and p − p_i to *dp. Each rejection test is labelled (after Radiance's ambient.c habit). The first
+ * test is the influence sphere a_i·s·R_i of every weight (an ellipse's major semi-axis); the octree
  * holds every sphere a point lies in, so the octree and a linear scan accept the same records.
  */
 static inline int ic_weight_test(const ic_cache_params *params, const ic_float4 *sp, const ic_float4 *np,
-                                 ic_vec3 p, ic_vec3 n, float s, float *w, ic_vec3 *dp)
+                                 const ic_float4 *ep, ic_vec3 p, ic_vec3 n, float s, float *w, ic_vec3 *dp)
 {
     ic_vec3 d = v3(p.x - sp->x, p.y - sp->y, p.z - sp->z);
     float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
@@ -160,8 +164,21 @@ static inline int ic_weight_test(const ic_cache_params *params, const ic_float4 
     float behind = 0.5f * (d.x * (n.x + np->x) + d.y * (n.y + np->y) + d.z * (n.z + np->z));
     if (behind < -params->behind_tolerance * r)
         return 0;
-    float dev = 1.0f - ndot, dist = sqrtf(d2) / R, ndev = sqrtf(dev > 0.0f ? dev : 0.0f);
-    if (params->weight == IC_WEIGHT_WARD) {
+    /* An elliptical extent: the metric |d|² + (k·d)² (a round record's k is zero: the same bits). */
+    float m2 = d2;
+    if (ep) {
+        float t = d.x * ep->x + d.y * ep->y + d.z * ep->z;
+        m2 = d2 + t * t;
+    }
+    float dev = 1.0f - ndot, dist = sqrtf(m2) / R, ndev = sqrtf(dev > 0.0f ? dev : 0.0f);
+    if (params->weight == IC_WEIGHT_ERROR) {
+        /* One minus the estimated error over its bound (cache.h: WEIGHTS). */
+        float dt = dist / a, dr = ndev / a;
+        float ww = 1.0f - (dt * dt + dr * dr);
+        if (!(ww > 0.0f))
+            return 0;
+        *w = ww;
+    } else if (params->weight == IC_WEIGHT_WARD) {
         /* Ward (Křivánek et al. 2006 §3): accept w > 1/a ⇔ denominator < a. */
         float denom = dist + ndev;
         if (!(denom < a))
@@ -183,7 +200,8 @@ static inline int ic_weight_test(const ic_cache_params *params, const ic_float4 
 static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, float s, float *w,
                                    ic_vec3 *dp)
 {
-    return ic_weight_test(&c->params, &c->sphere[i], &c->normal[i], p, n, s, w, dp);
+    return ic_weight_test(&c->params, &c->sphere[i], &c->normal[i], c->ellipse_count ? &c->squeeze[i] : NULL, p, n,
+                          s, w, dp);
 }
 
 /* The estimate's irradiance from the weighted sums acc[c] = Σ w_i E_i(p) of channel c and
@@ -213,8 +231,26 @@ int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path);
  * count, the indices are in c->scratch (grown as needed); IC_ERR_OOM → UINT32_MAX. */
 uint32_t ic_cache_reach(ic_cache *c, uint32_t i);
 
-/* Clamp step 1 for one record (gradient-magnitude clamp, then R bounds); returns R. */
-float ic_cache_clamp_record(const ic_cache_params *p, const ic_record *r);
+/* Clamp step 1 for one record (gradient-magnitude clamp, then R bounds) applied to a semi-axis
+ * `axis` (R before clamping: the harmonic-mean distance, or ρ times it for an ellipse's minor one);
+ * returns the clamped value. */
+float ic_cache_clamp_radius(const ic_cache_params *p, const ic_record *r, float axis);
+/* The squeeze of an elliptical extent (cache.h: ELLIPTICAL RECORDS) with unit minor axis u and ratio
+ * rho; (0, 0, 0, 1) for rho ≥ 1. */
+static inline ic_float4 ic_squeeze_of(ic_vec3 u, float rho)
+{
+    if (!(rho < 1.0f))
+        return (ic_float4){0.0f, 0.0f, 0.0f, 1.0f};
+    float k = sqrtf(1.0f / (rho * rho) - 1.0f);
+    return (ic_float4){u.x * k, u.y * k, u.z * k, rho};
+}
+/* 1 when frozen look-ups must take the portable path (elliptical records or the error weight). */
+static inline int ic_cache_needs_portable(const ic_cache *c)
+{
+    return c->ellipse_count > 0 || c->params.weight == IC_WEIGHT_ERROR;
+}
+/* Chooses c->query_frozen for c->lookup_path and the cache's records (cache_frozen_query.c). */
+void ic_cache_select_frozen_query(ic_cache *c);
 /* Step 2: validity-radius clamp of records first…count−1 (needs them in the point tree). */
 ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first);
 /* Step 3: gradient-difference scaling of records first…count−1 against all (needs both trees). */

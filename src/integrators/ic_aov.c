@@ -45,6 +45,10 @@ static ic_record_view view_of(const ic_ctx *c, const ic_record *rec)
     v.radius = rec->radius;
     v.accuracy = rec->accuracy;
     v.is_radiance = rec->bounce >= IC_BOUNCE_RADIANCE;
+    if (rec->ellipse_ratio > 0.0f && rec->ellipse_ratio < 1.0f) {
+        v.ellipse_ratio = rec->ellipse_ratio;
+        v.ellipse_axis = rec->ellipse_axis;
+    }
     float z;
     if (!project(cam, rec->position, &v.px, &v.py, &z))
         return v;
@@ -73,8 +77,25 @@ ic_result ic_ic_record_views(const ic_ctx *c, ic_record_view **out, uint32_t *co
     return IC_OK;
 }
 
-/* Records the camera sees are drawn as a dot with a circle of their influence radius a_i·R_i, over a
- * darkened copy of the image: irradiance records red in green rings, radiance records yellow in blue. */
+/* The outline of an elliptical record's extent: its edge in the tangent plane (semi-axes a_i·R_i and
+ * a_i·ρ·R_i), projected point by point, so the ellipse appears as the camera sees it. */
+static void draw_ellipse(const ic_ctx *c, ic_image *out, const ic_record *rec, const ic_record_view *v, ic_vec3 colour)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    float major = rec->accuracy * rec->radius, minor = major * rec->ellipse_ratio;
+    ic_vec3 u = rec->ellipse_axis, w = v3_cross(rec->normal, u); /* minor and major axes */
+    int steps = (int)(6.3f * v->radius_px) + 8;
+    for (int k = 0; k < steps; ++k) {
+        float t = 2.0f * IC_PI * (float)k / (float)steps, fx, fy, z;
+        ic_vec3 q = v3_add(rec->position, v3_add(v3_scale(w, major * cosf(t)), v3_scale(u, minor * sinf(t))));
+        if (project(cam, q, &fx, &fy, &z))
+            put(out, (int)fx, (int)fy, colour);
+    }
+}
+
+/* Records the camera sees are drawn as a dot with a circle of their influence radius a_i·R_i (an
+ * elliptical record: its ellipse, projected), over a darkened copy of the image: irradiance records red
+ * in green rings (elliptical ones in cyan), radiance records yellow in blue. */
 ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image *out)
 {
     ic_result r = ic_image_create(out, beauty->width, beauty->height);
@@ -93,7 +114,9 @@ ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image 
             continue;
         ic_vec3 ring = v.is_radiance ? v3(0.2f, 0.5f, 1.0f) : v3(0.1f, 1.0f, 0.2f);
         ic_vec3 dot = v.is_radiance ? v3(1.0f, 0.9f, 0.1f) : v3(1.0f, 0.15f, 0.1f);
-        int steps = (int)(6.3f * v.radius_px) + 8;
+        if (v.ellipse_ratio > 0.0f && v.radius_px >= 1.0f)
+            draw_ellipse(c, out, &rec, &v, v3(0.1f, 0.9f, 0.9f));
+        int steps = v.ellipse_ratio > 0.0f ? 0 : (int)(6.3f * v.radius_px) + 8;
         for (int k = 0; k < steps && v.radius_px >= 1.0f; ++k) {
             float a = 2.0f * IC_PI * (float)k / (float)steps;
             put(out, (int)(v.px + v.radius_px * cosf(a)), (int)(v.py + v.radius_px * sinf(a)), ring);

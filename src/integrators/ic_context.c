@@ -198,7 +198,7 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
     /* The hemicube's resolution rides with the method (zero for the other samplers, whose hashes stay). */
     int32_t method = (int32_t)c->o.gather.method |
                      (c->o.gather.method == IC_GATHER_HEMICUBE ? (int32_t)c->o.gather.hemicube_resolution << 8 : 0);
-    int32_t g[10] = {c->o.bounces | (int32_t)c->o.error << 16, c->o.no_gradients, method, (int32_t)c->o.gather.theta_strata,
+    int32_t g[10] = {c->o.bounces | (int32_t)c->o.error << 16 | (int32_t)c->o.record_shape << 20, c->o.no_gradients, method, (int32_t)c->o.gather.theta_strata,
                      (int32_t)c->o.gather.phi_strata, (int32_t)c->o.gather.max_rays, (int32_t)c->o.gather.tgrad,
                      (int32_t)c->o.strategy, c->hit_lookups, c->levels};
     /* The seed is left out on purpose: records built with one seed are as valid as any others, and a

@@ -461,15 +461,25 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
                                   : c->scene_diag;
     if (c->o.error == IC_ERROR_HESSIAN && gr->has_hessian) {
         /* Schwarzhaupt et al. 2012: first-order extrapolation errs by ½dᵀHd; the record reaches as far
-         * as that stays below accuracy × E, the isotropic extent (the smaller semi-axis). The weights
-         * accept |p − p_i| < a·R_i, so R_i is that extent over a; the cache's clamps then apply as to
-         * the split sphere's R. */
+         * as that stays below accuracy × E: a round record to the smaller semi-axis, an elliptical one
+         * to both (its aspect bounded by IC_MAX_ELLIPSE_ASPECT, so a nearly flat direction does not
+         * stretch it across the scene). The weights accept |p − p_i|_i < a·R_i, so R_i is the (major)
+         * extent over a; the cache's clamps then apply as to the split sphere's R. */
         ic_gather_extent_opts eo = {0};
         eo.rel_error = c->o.cache.accuracy;
         eo.max_radius = c->scene_diag;
         ic_gather_extent ext;
-        if (ic_gather_hessian_extent(gr, &eo, &ext) == IC_OK && ext.radius > 0.0f)
-            rec->harmonic_mean_dist = ext.radius / c->o.cache.accuracy;
+        if (ic_gather_hessian_extent(gr, &eo, &ext) == IC_OK && ext.radius > 0.0f) {
+            float major = ext.radius;
+            if (c->o.record_shape == IC_SHAPE_ELLIPTICAL) {
+                major = fminf(ext.semi_axis[1], IC_MAX_ELLIPSE_ASPECT * ext.semi_axis[0]);
+                if (major > ext.semi_axis[0]) {
+                    rec->ellipse_axis = ext.axis[0];
+                    rec->ellipse_ratio = ext.semi_axis[0] / major;
+                }
+            }
+            rec->harmonic_mean_dist = major / c->o.cache.accuracy;
+        }
     }
     rec->pixel_footprint = cand->footprint;
 }

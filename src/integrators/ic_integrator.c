@@ -34,6 +34,7 @@ static void record_extents(const ic_cache *cache, ic_render_stats *st)
     st->extent_min = n ? lo : 0.0f;
     st->extent_mean = n ? (float)(sum / n) : 0.0f;
     st->extent_max = hi;
+    st->ellipse_records = ic_cache_ellipse_count(cache);
 }
 
 static const ic_build_fn strategies[] = {
@@ -277,6 +278,11 @@ ic_result ic_ic_integrator_create(const ic_tracer *tr, const ic_render_options *
         return ic_error_set(err, IC_ERR_INVALID_ARG, "recursive caching builds its levels lazily; use the lazy strategy");
     if ((unsigned)opt->ic.error > IC_ERROR_HESSIAN)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "error metric %d unknown", (int)opt->ic.error);
+    if ((unsigned)opt->ic.record_shape > IC_SHAPE_ELLIPTICAL)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "record shape %d unknown", (int)opt->ic.record_shape);
+    if (opt->ic.record_shape == IC_SHAPE_ELLIPTICAL && opt->ic.error != IC_ERROR_HESSIAN)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "elliptical records take their axes from the irradiance "
+                            "Hessian; add --error hessian, or use round records");
     if (opt->ic.error == IC_ERROR_HESSIAN && opt->ic.gather.method == IC_GATHER_PROGRESSIVE)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "the Hessian error metric needs the stratified or hemicube "
                             "gather (the progressive sampler has no Hessian)");

@@ -33,6 +33,7 @@
 #include <stdint.h>
 #include <string.h>
 #include <sys/stat.h>
+#define FILE_RECORD_BYTES 172 /* bytes of a record in a version-3 cache file */
 #include <unistd.h>
 
 #include <time.h>
@@ -671,6 +672,145 @@ static void test_weights(void)
     }
 }
 
+/* ---- elliptical records (cache.h: ELLIPTICAL RECORDS) --------------------------------------------- */
+
+/* Every fourth record round, the others elliptical with a ratio in [0.15, 1) along a random tangent axis. */
+static ic_record *make_ellipses(uint32_t n, uint64_t seed)
+{
+    ic_record *r = make_records(n, seed);
+    for (uint32_t i = 0; i < n; ++i) {
+        if (i % 4 == 3)
+            continue;
+        ic_rng g = ic_rng_make(seed, i, 9, 0);
+        r[i].ellipse_axis = v3_add(random_in_plane(&g, r[i].normal, 1.0f), v3_scale(r[i].normal, 0.3f));
+        r[i].ellipse_ratio = 0.15f + 0.85f * ic_rng_float(&g);
+    }
+    return r;
+}
+
+static void test_ellipses(void)
+{
+    ic_error err;
+    /* One record, R = 1, a = 0.5, ρ = 0.25, minor axis along x (given tilted out of the plane: projected). */
+    const ic_weight_kind kinds[3] = {IC_WEIGHT_WARD, IC_WEIGHT_TABELLION, IC_WEIGHT_ERROR};
+    const char *kind_name[3] = {"Ward", "T-L", "error"};
+    for (int wk = 0; wk < 3; ++wk) {
+        ic_cache_params p = no_clamps(kinds[wk], 0.5f);
+        ic_cache *c = NULL;
+        CHECK(ic_cache_create(&p, &c, &err) == IC_OK, "create: %s", err.message);
+        ic_record r = plane_record(v3(0, 0, 0), 1.0f);
+        r.ellipse_axis = v3(2.0f, 0.0f, 0.5f);
+        r.ellipse_ratio = 0.25f;
+        CHECK(ic_cache_insert(c, &r, NULL, &err) == IC_OK, "insert: %s", err.message);
+        ic_record got;
+        ic_cache_get_record(c, 0, &got);
+        CHECK(ic_cache_ellipse_count(c) == 1 && got.ellipse_ratio == 0.25f, "%s: ratio %g, %u ellipses",
+              kind_name[wk], (double)got.ellipse_ratio, ic_cache_ellipse_count(c));
+        CHECK_NEAR(got.ellipse_axis.x, 1.0, 1e-6, "minor axis projected into the tangent plane");
+        /* The extent: a·R = 0.5 along the major axis (y), a·ρ·R = 0.125 along the minor (x); the
+         * rotational term is zero (same normal) so the edge is where the distance term reaches a. */
+        const ic_vec3 n = v3(0, 0, 1);
+        struct { ic_vec3 p; int in; } edge[6] = {
+            {v3(0, 0.495f, 0), 1}, {v3(0, 0.505f, 0), 0}, {v3(0.12375f, 0, 0), 1},
+            {v3(0.12625f, 0, 0), 0}, {v3(-0.12375f, 0, 0), 1}, {v3(0.1f, 0.4f, 0), 0}};
+        for (int k = 0; k < 6; ++k) {
+            float w;
+            int in = ic_cache_record_weight(c, 0, edge[k].p, n, IC_ACCEPT_CONSTRUCTION, &w);
+            CHECK(in == edge[k].in, "%s: point (%g, %g) %s the ellipse", kind_name[wk], (double)edge[k].p.x,
+                  (double)edge[k].p.y, edge[k].in ? "inside, rejected by" : "outside, accepted by");
+        }
+        /* Equal metric distance 0.25 (a quarter of R along y, 0.0625 = ρ/4 along x): equal weights,
+         * and what each formula gives: Ward 1/0.25, T–L 1 − 0.25/a, error 1 − (0.25/a)². */
+        float wy = 0, wx = 0;
+        ic_cache_record_weight(c, 0, v3(0, 0.25f, 0), n, IC_ACCEPT_CONSTRUCTION, &wy);
+        ic_cache_record_weight(c, 0, v3(0.0625f, 0, 0), n, IC_ACCEPT_CONSTRUCTION, &wx);
+        const float expect[3] = {4.0f, 0.5f, 0.75f};
+        CHECK_NEAR(wy, expect[wk], 1e-5, "weight at 0.25 along the major axis");
+        CHECK_NEAR(wx, expect[wk], 1e-5, "weight at 0.0625 along the minor axis");
+        ic_cache_destroy(c);
+    }
+    /* The error weight's normal term: one minus the squared deviation over a², like Ward's reach. */
+    {
+        ic_cache_params p = no_clamps(IC_WEIGHT_ERROR, 0.5f);
+        ic_cache *c = NULL;
+        ic_cache_create(&p, &c, &err);
+        ic_record r = plane_record(v3(0, 0, 0), 1.0f);
+        ic_cache_insert(c, &r, NULL, &err);
+        float th = 20.0f * IC_PI / 180.0f, w = 0;
+        ic_vec3 n = v3(0.0f, -sinf(th), cosf(th));
+        CHECK(ic_cache_record_weight(c, 0, v3(0.1f, 0, 0), n, IC_ACCEPT_CONSTRUCTION, &w), "error weight: 20° rejected");
+        float dt = 0.1f / 0.5f, dr = sqrtf(1.0f - cosf(th)) / 0.5f;
+        CHECK_NEAR(w, 1.0f - (dt * dt + dr * dr), 1e-5, "error weight with a tilted normal");
+        ic_cache_destroy(c);
+    }
+    /* Clamp step 1 bounds both semi-axes: a ceiling of 2 turns (10, 1) into (2, 1), ρ 0.1 → 0.5; a
+     * floor of 0.5 turns (1, 0.1) into (1, 0.5). */
+    {
+        ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.5f);
+        p.max_radius = 2.0f;
+        p.min_radius = 0.5f;
+        ic_cache *c = NULL;
+        ic_cache_create(&p, &c, &err);
+        ic_record r[3] = {plane_record(v3(0, 0, 0), 10.0f), plane_record(v3(50, 0, 0), 1.0f),
+                          plane_record(v3(99, 0, 0), 4.0f)};
+        r[0].ellipse_axis = r[1].ellipse_axis = r[2].ellipse_axis = v3(0, 1, 0);
+        r[0].ellipse_ratio = 0.1f;
+        r[1].ellipse_ratio = 0.1f;
+        r[2].ellipse_ratio = 0.5f; /* (4, 2) → (2, 2): round */
+        CHECK(ic_cache_insert_batch(c, r, 3, NULL, &err) == IC_OK, "insert: %s", err.message);
+        ic_record g[3];
+        for (int k = 0; k < 3; ++k)
+            ic_cache_get_record(c, (uint32_t)k, &g[k]);
+        CHECK_NEAR(g[0].radius, 2.0, 1e-6, "major axis under the ceiling");
+        CHECK_NEAR(g[0].ellipse_ratio, 0.5, 1e-6, "minor axis 1 under the ceiling of 2");
+        CHECK_NEAR(g[1].radius, 1.0, 1e-6, "major axis above the floor");
+        CHECK_NEAR(g[1].ellipse_ratio, 0.5, 1e-6, "minor axis raised to the floor");
+        CHECK(g[2].ellipse_ratio == 0.0f && ic_cache_ellipse_count(c) == 2, "an ellipse clamped round is round "
+              "(ratio %g, %u ellipses)", (double)g[2].ellipse_ratio, ic_cache_ellipse_count(c));
+        r[0].ellipse_ratio = 1.5f;
+        CHECK(ic_cache_insert(c, &r[0], NULL, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "ellipse ratio"),
+              "a ratio above 1 refused: %s", err.message);
+        r[0].ellipse_ratio = 0.5f;
+        r[0].ellipse_axis = v3(0, 0, 1);
+        CHECK(ic_cache_insert(c, &r[0], NULL, &err) == IC_ERR_INVALID_ARG && ic_cache_count(c) == 3,
+              "an ellipse axis along the normal refused: %s", err.message);
+        ic_cache_destroy(c);
+    }
+    /* A cache of ellipses: octree, frozen (every code path) and brute force agree; the file keeps them. */
+    const uint32_t n = 20000;
+    ic_record *recs = make_ellipses(n, 5);
+    for (int wk = 0; wk < 3; wk += 2) {
+        for (int which = 0; which < 6; which += 5) {
+            ic_cache_params p = clamp_config(kinds[wk], which);
+            ic_cache *c = build_cache(&p, recs, n);
+            char what[96];
+            snprintf(what, sizeof what, "ellipses, %s, %s", kind_name[wk], clamp_name[which]);
+            CHECK(ic_cache_ellipse_count(c) > n / 2, "%s: only %u ellipses", what, ic_cache_ellipse_count(c));
+            check_lookup_equals_brute_force(c, 6000, what);
+            check_frozen_identical(c, 2000, 1, what);
+            check_lookup_equals_brute_force(c, 3000, what);
+            if (which == 5) {
+                const char *path = IC_TEST_TMP "/test_cache_ellipses.icc";
+                CHECK(ic_cache_save(c, path, 7, &err) == IC_OK, "save: %s", err.message);
+                ic_cache *l = NULL;
+                CHECK(ic_cache_load(path, &p, 7, &l, &err) == IC_OK, "load: %s", err.message);
+                uint32_t differ = 0;
+                for (uint32_t i = 0; l && i < n; ++i) {
+                    ic_record a, b;
+                    ic_cache_get_record(c, i, &a);
+                    ic_cache_get_record(l, i, &b);
+                    differ += memcmp(&a, &b, sizeof a) != 0;
+                }
+                CHECK(l && differ == 0 && ic_cache_ellipse_count(l) == ic_cache_ellipse_count(c),
+                      "%s: %u records differ after a round trip", what, differ);
+                ic_cache_destroy(l);
+            }
+            ic_cache_destroy(c);
+        }
+    }
+    free(recs);
+}
+
 static void test_linear_field(void)
 {
     ic_error err;
@@ -1130,7 +1270,7 @@ static void test_file(void)
     CHECK(read_file(path, &d1, &s1) && read_file(path2, &d2, &s2), "read back");
     CHECK(s1 == s2 && memcmp(d1, d2, s1) == 0, "second save is not bit-identical (%zu vs %zu bytes)", s1, s2);
     /* Version 2: header, records, the payload section (total, per-record lengths, no floats here), checksum. */
-    CHECK(s1 == 88 + (size_t)n * 156 + 8 + 4 * (size_t)n + 8, "file size %zu", s1);
+    CHECK(s1 == 88 + (size_t)n * FILE_RECORD_BYTES + 8 + 4 * (size_t)n + 8, "file size %zu", s1);
 
     /* Truncated, corrupted, foreign files. */
     write_file(bad, d1, s1 - 10);
@@ -1164,7 +1304,7 @@ static void test_file(void)
         for (int k = 0; k < 4; ++k) {
             unsigned char *d = malloc(s1);
             memcpy(d, d1, s1);
-            size_t rec = 88 + 3 * 156; /* record 3: x at +0, R at +12 */
+            size_t rec = 88 + 3 * FILE_RECORD_BYTES; /* record 3: x at +0, R at +12 */
             if (huge[k][0] != 0.0f)
                 put_f32_le(d + rec, huge[k][0]);
             if (huge[k][1] != 0.0f)
@@ -1182,7 +1322,7 @@ static void test_file(void)
         /* Far but representable: accepted. */
         unsigned char *d = malloc(s1);
         memcpy(d, d1, s1);
-        put_f32_le(d + 88 + 3 * 156, 1e20f);
+        put_f32_le(d + 88 + 3 * FILE_RECORD_BYTES, 1e20f);
         resign(d, s1);
         write_file(bad, d, s1);
         ic_cache *x = NULL;
@@ -1359,7 +1499,7 @@ static void test_payloads(void)
     size_t size = 0;
     CHECK(read_file(path, &d, &size), "read back");
     /* Record 0's payload length raised by one: the lengths no longer add up. */
-    size_t lengths = 88 + (size_t)n * 156 + 8;
+    size_t lengths = 88 + (size_t)n * FILE_RECORD_BYTES + 8;
     d[lengths] += 1;
     resign(d, size);
     write_file(bad, d, size);
@@ -1371,10 +1511,12 @@ static void test_payloads(void)
     resign(d, size);
     write_file(bad, d, size);
     expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "a NaN in a payload");
-    /* The same records as a version-1 file: no payload section. */
+    /* The same records as a version-1 file: no payload section, no ellipse (156 bytes a record). */
     size_t v1 = 88 + (size_t)n * 156 + 8;
     unsigned char *o = malloc(v1);
-    memcpy(o, d, v1 - 8);
+    memcpy(o, d, 88);
+    for (uint32_t i = 0; i < n; ++i)
+        memcpy(o + 88 + (size_t)i * 156, d + 88 + (size_t)i * FILE_RECORD_BYTES, 156);
     o[8] = 1;
     resign(o, v1);
     write_file(bad, o, v1);
@@ -1592,6 +1734,7 @@ int main(void)
 {
     RUN(test_api_edges);
     RUN(test_weights);
+    RUN(test_ellipses);
     RUN(test_linear_field);
     RUN(test_gradient_clamps);
     RUN(test_neighbor_clamp);

@@ -1,10 +1,12 @@
 /*
  * test_ic.c — rendering with the irradiance cache (integrator IC) against the path-traced reference:
- *   1. the Cornell box: IC (batch, with and without gradients; lazy) within stated relMSE and LDR PSNR
- *      bounds of a path-traced reference, and every shading point covered after construction;
+ *   1. the Cornell box: IC (batch, with and without gradients; lazy; the Hessian metric with round and
+ *      elliptical records, Ward's and the error weight) within stated relMSE and LDR PSNR bounds of a
+ *      path-traced reference, and every shading point covered after construction;
  *   2. batch and lazy, batch with adaptive sampling and with hemisphere sets, hemicube gathering with
- *      batch, lazy and adaptive, the Hessian error metric with batch and lazy (the record filter is on in
- *      all): 1 and 2 threads give bit-identical images;
+ *      batch, lazy and adaptive, the Hessian error metric with batch and lazy, elliptical records with
+ *      batch (error weight) and adaptive (the record filter is on in all): 1 and 2 threads give
+ *      bit-identical images;
  *   3. a scene built to leak (a wall with a small gap above the floor, a bright light on the far side):
  *      without neighbor clamping (Křivánek et al. 2006 §5.2–5.3) records next to the gap extrapolate wrong light
  *      over the dark floor; with it the error near the gap falls;
@@ -62,14 +64,21 @@ static void test_cornell(void)
         const char *name;
         int strategy, no_gradients, recursive, bounces;
         double max_relmse, min_psnr_ldr;
+        int hessian, ellipses, error_weight;
     } cases[] = {
-        {"batch", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0},
-        {"batch, no gradients", IC_STRATEGY_BATCH, 1, 0, 0, 0.012, 33.0},
-        {"lazy", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0},
-        {"lazy, recursive (5 levels)", IC_STRATEGY_LAZY, 0, 1, 5, 0.012, 33.0},
+        {"batch", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 0, 0, 0},
+        {"batch, no gradients", IC_STRATEGY_BATCH, 1, 0, 0, 0.012, 33.0, 0, 0, 0},
+        {"lazy", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0, 0, 0, 0},
+        {"lazy, recursive (5 levels)", IC_STRATEGY_LAZY, 0, 1, 5, 0.012, 33.0, 0, 0, 0},
+        {"batch, Hessian", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 1, 0, 0},
+        {"batch, Hessian ellipses", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 1, 1, 0},
+        {"lazy, ellipses, error weight", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0, 1, 1, 1},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         ic_render_options o = ic_options();
+        o.ic.error = cases[k].hessian ? IC_ERROR_HESSIAN : IC_ERROR_SPLIT_SPHERE;
+        o.ic.record_shape = cases[k].ellipses ? IC_SHAPE_ELLIPTICAL : IC_SHAPE_ROUND;
+        o.ic.cache.weight = cases[k].error_weight ? IC_WEIGHT_ERROR : IC_WEIGHT_WARD;
         o.ic.strategy = cases[k].strategy;
         o.ic.no_gradients = cases[k].no_gradients;
         o.ic.recursive = cases[k].recursive;
@@ -188,11 +197,12 @@ static void test_cornell(void)
 
 static void test_threads(void)
 {
-    for (int variant = 0; variant < 10; ++variant) {
+    for (int variant = 0; variant < 12; ++variant) {
         /* variants 5–7: hemicube gathering with the batch, lazy and adaptive strategies; 8, 9: the
-         * Hessian error metric with batch and lazy */
+         * Hessian error metric with batch and lazy; 10, 11: elliptical records with batch (the error
+         * weight) and adaptive */
         int strategy = variant == 6 || variant == 9 ? IC_STRATEGY_LAZY
-                       : variant == 7 ? IC_STRATEGY_ADAPTIVE
+                       : variant == 7 || variant == 11 ? IC_STRATEGY_ADAPTIVE
                        : variant == 0 || variant >= 3 ? IC_STRATEGY_BATCH : IC_STRATEGY_LAZY;
         ic_image a = {0}, b = {0};
         ic_render_options o = ic_options();
@@ -206,6 +216,8 @@ static void test_threads(void)
         o.ic.record_noise = variant == 4 ? 0.02f : 0.0f;
         o.ic.gather.method = variant >= 5 && variant <= 7 ? IC_GATHER_HEMICUBE : IC_GATHER_STRATIFIED;
         o.ic.error = variant >= 8 ? IC_ERROR_HESSIAN : IC_ERROR_SPLIT_SPHERE;
+        o.ic.record_shape = variant >= 10 ? IC_SHAPE_ELLIPTICAL : IC_SHAPE_ROUND;
+        o.ic.cache.weight = variant == 10 ? IC_WEIGHT_ERROR : IC_WEIGHT_WARD;
         o.threads = 1;
         int ok = test_render(CORNELL, 48, 48, &o, &a, NULL);
         o.threads = 2;
@@ -229,6 +241,10 @@ static void test_threads(void)
             bad.ic.error = IC_ERROR_HESSIAN;
             bad.ic.gather.method = IC_GATHER_PROGRESSIVE;
             CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "the Hessian metric with the progressive gather refused");
+            ic_image_free(&none);
+            bad = o;
+            bad.ic.record_shape = IC_SHAPE_ELLIPTICAL;
+            CHECK(!test_render(CORNELL, 48, 48, &bad, &none, NULL), "elliptical records without the Hessian refused");
             ic_image_free(&none);
             bad = o;
             bad.ic.recursive = 1;
