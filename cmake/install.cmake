@@ -6,6 +6,8 @@
 #     lib/libic_core.a, libirrcache_cache.a, …       the libraries (static; shared with -DBUILD_SHARED_LIBS=ON)
 #     lib/cmake/irrcache/irrcacheConfig*.cmake       find_package(irrcache 0.1 REQUIRED [COMPONENTS cache render])
 #     lib/pkgconfig/irrcache.pc, irrcache-cache.pc   pkg-config --cflags --libs irrcache-cache
+#     share/man/man1/irrcache.1                      the manual page, made from the command's --help texts
+#     share/doc/irrcache/README.md, docs/*.md        the documentation
 #
 # Exported targets (namespace irrcache::): core (ic_core), cache (irrcache_cache: the cache and gathering,
 # ic_core, libm and threads only), image (irrcache_image), render (irrcache: the renderer), and the
@@ -32,6 +34,17 @@ if(NOT IRRCACHE_CACHE_ONLY)
   set_target_properties(irrcache PROPERTIES EXPORT_NAME render)
   set_target_properties(irrcache_cli PROPERTIES EXPORT_NAME irrcache)
   install(TARGETS irrcache_cli EXPORT irrcacheTargets RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  # The manual page runs the built command for its --help texts (not where the build cannot run it).
+  if(NOT CMAKE_CROSSCOMPILING)
+    add_custom_command(OUTPUT ${PROJECT_BINARY_DIR}/irrcache.1
+      COMMAND bash ${PROJECT_SOURCE_DIR}/scripts/make-man.sh $<TARGET_FILE:irrcache_cli> ${PROJECT_BINARY_DIR}/irrcache.1
+      DEPENDS irrcache_cli ${PROJECT_SOURCE_DIR}/scripts/make-man.sh
+      COMMENT "Manual page irrcache.1 from the command's --help")
+    add_custom_target(irrcache_man ALL DEPENDS ${PROJECT_BINARY_DIR}/irrcache.1)
+    install(FILES ${PROJECT_BINARY_DIR}/irrcache.1 DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
+  endif()
+  install(FILES README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+  install(DIRECTORY docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs FILES_MATCHING PATTERN "*.md")
 endif()
 install(TARGETS ${IC_INSTALL_LIBRARIES} EXPORT irrcacheTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}

@@ -5,6 +5,8 @@
 #   2. examples/ configured with find_package(irrcache) (CMAKE_PREFIX_PATH = the prefix) and built; both
 #      examples run, render_scene writes a non-empty image of the Cornell box (cache_only alone in an
 #      IRRCACHE_CACHE_ONLY build);
+#      the manual page (share/man/man1/irrcache.1) names every option of the installed command, and the
+#      documentation is under share/doc/irrcache;
 #   3. examples/cache_only.c compiled again with nothing but `pkg-config --cflags --libs irrcache-cache`
 #      (and render_scene.c with irrcache.pc), and run.
 # Skips (77) in a sanitizer build: its static libraries need the sanitizer runtimes on every link line,
@@ -33,6 +35,20 @@ for f in include/irrcache/cache.h include/irrcache/version.h lib/cmake/irrcache/
 done
 if [ "$cache_only" != ON ]; then
   [ -x "$prefix/bin/irrcache" ] || { echo "test_install: bin/irrcache not installed"; exit 1; }
+  # The manual page and the documentation; the page names every option the installed command has.
+  man1=$prefix/share/man/man1/irrcache.1
+  [ -s "$man1" ] && head -n1 "$man1" | grep -q '^\.TH IRRCACHE 1' || { echo "test_install: no manual page"; exit 1; }
+  [ -s "$prefix/share/doc/irrcache/README.md" ] && [ -s "$prefix/share/doc/irrcache/docs/scene-format.md" ] ||
+    { echo "test_install: documentation not installed"; exit 1; }
+  for cmd in render diff points; do
+    for opt in $("$prefix/bin/irrcache" "$cmd" --help | grep -o -- '^  --[a-z0-9-]*'); do
+      grep -q -- "^  $opt" "$man1" || { echo "test_install: the manual page lacks $cmd $opt"; exit 1; }
+    done
+  done
+  if command -v man >/dev/null; then
+    man -l "$man1" 2>"$tmp/man.err" | grep -q 'irradiance' && [ ! -s "$tmp/man.err" ] ||
+      { echo "test_install: man -l irrcache.1 failed: $(cat "$tmp/man.err")"; exit 1; }
+  fi
   "$prefix/bin/irrcache" --version
 fi
 # Public headers include only each other and the C library; installed targets point inside the prefix.
