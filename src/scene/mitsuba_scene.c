@@ -226,7 +226,7 @@ static ic_result parse_shape(ic_mts_ctx *c, const xmlNode *n)
     const char *type = ic_mts_attr_copy(c, n, "type", type_buf, sizeof type_buf);
     if (!type)
         return ic_mts_fail(c, n, IC_ERR_PARSE, "<shape> needs a type", NULL);
-    int is_file = !strcmp(type, "obj") || !strcmp(type, "ply");
+    int is_file = !strcmp(type, "obj") || !strcmp(type, "ply") || !strcmp(type, "serialized");
     int is_prim = !strcmp(type, "rectangle") || !strcmp(type, "disk") || !strcmp(type, "cube") || !strcmp(type, "sphere");
     if (!is_file && !is_prim) {
         char kind[80];
@@ -265,6 +265,17 @@ static ic_result parse_shape(ic_mts_ctx *c, const xmlNode *n)
         return ic_error_set(c->err, IC_ERR_IO, "%s: mesh '%s' not found; check the path", where, file);
     if (flip)
         ic_mts_warn_once(c, n, "flipNormals on a mesh file", "is not supported: the file's winding is kept");
+    if (!strcmp(type, "serialized")) {
+        /* A binary mesh of one material: the shape's BSDF (a diffuse default without one). */
+        int shape_index = 0;
+        xmlNode *ik = ic_mts_child(c, n, "integer", "shapeIndex");
+        if (ik && (!ic_mts_attr(c, ik, "value") || sscanf(ic_mts_attr(c, ik, "value"), "%d", &shape_index) != 1 ||
+                   shape_index < 0))
+            return ic_mts_fail(c, ik, IC_ERR_PARSE, "shapeIndex must be a non-negative integer", NULL);
+        if ((r = ic_scene_add_material(c->b, &mat, c->path, &index, c->err)) != IC_OK)
+            return r;
+        return ic_mesh_read_serialized(c->b, full, (uint32_t)shape_index, index, m, where, c->err);
+    }
     ic_scene *s = c->b->scene;
     uint32_t first_tri = s->triangle_count, first_mat = s->material_count;
     c->b->import_where = where;

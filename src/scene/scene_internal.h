@@ -106,6 +106,12 @@ void ic_scene_builder_release(ic_scene_builder *b);
 ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, const char *xform_where,
                          ic_error *err);
 
+/* Appends shape shape_index of a Mitsuba serialized mesh file (mesh_serialized.c) with one material,
+ * transformed by the row-major 4x4 xform: positions, vertex normals, triangles (texture coordinates and
+ * colours are not read). where ("scene.xml:12") names the shape in messages. */
+ic_result ic_mesh_read_serialized(ic_scene_builder *b, const char *path, uint32_t shape_index, uint32_t material,
+                                  const float xform[16], const char *where, ic_error *err);
+
 /* Loads (or finds already loaded) the texture at path into scene->textures; *index receives its
  * index. `owner` names who asked for it in messages ("mesh.obj: material 'wood'"). */
 ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const char *owner, int32_t *index,
