@@ -13,6 +13,8 @@
 #define MAX_DEFAULTS 64
 #define MAX_WARNED 64
 #define VALUE_MAX 1024
+#define MAX_DOCS 16             /* the scene file and the files it includes, in all */
+#define MAX_INCLUDE_DEPTH 8
 
 typedef struct ic_mts_ctx {
     ic_scene_builder *b;
@@ -20,7 +22,10 @@ typedef struct ic_mts_ctx {
     const char *path;
     char dir[IC_SCENE_PATH_MAX];
     ic_error *err;
-    xmlNode *root;
+    xmlNode *roots[MAX_DOCS];   /* the <scene> of the file and of every file it includes: ids are found in all */
+    xmlDoc *included[MAX_DOCS]; /* the included files' documents (freed by the loader) */
+    int root_count, include_depth;
+    int has_sensor;             /* sensors met so far: the first is the camera */
     char def_name[MAX_DEFAULTS][64], def_value[MAX_DEFAULTS][256];
     int def_count;
     char warned[MAX_WARNED][96]; /* element kinds already warned about */
@@ -29,8 +34,9 @@ typedef struct ic_mts_ctx {
     int next_value;
 } ic_mts_ctx;
 
-/* The element's line in the file. */
+/* The element's line in its file, and that file (the scene's or an included one's path). */
 int ic_mts_line(const xmlNode *n);
+const char *ic_mts_file(const ic_mts_ctx *c, const xmlNode *n);
 /* 1 if n is an element named name (any element if name is NULL). */
 int ic_mts_is_element(const xmlNode *n, const char *name);
 /* An attribute with every $name of a <default> replaced; NULL if absent. The text lives in one of four

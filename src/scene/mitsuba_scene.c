@@ -247,7 +247,7 @@ static ic_result parse_shape(ic_mts_ctx *c, const xmlNode *n)
     if (r != IC_OK)
         return r;
     char where[IC_SCENE_PATH_MAX + 32];
-    snprintf(where, sizeof where, "%s:%d", c->path, ic_mts_line(n));
+    snprintf(where, sizeof where, "%s:%d", ic_mts_file(c, n), ic_mts_line(n));
     uint32_t index;
     if (is_prim) {
         r = ic_scene_add_material(c->b, &mat, c->path, &index, c->err);
@@ -359,7 +359,7 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
         if ((r = ic_mts_float(c, n, "scale", 1.0f, &scale)) != IC_OK)
             return r;
         char full[IC_SCENE_PATH_MAX], where[IC_SCENE_PATH_MAX + 32];
-        snprintf(where, sizeof where, "%s:%d", c->path, ic_mts_line(n));
+        snprintf(where, sizeof where, "%s:%d", ic_mts_file(c, n), ic_mts_line(n));
         if (!ic_path_join(c->dir, file, full, sizeof full))
             return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "envmap path too long", NULL);
         if ((r = ic_scene_check_path(c->b, full, where, "environment map", c->err)) != IC_OK)
@@ -382,40 +382,9 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
     return IC_OK;
 }
 
-static ic_result parse_scene(ic_mts_ctx *c)
-{
-    ic_result r = IC_OK;
-    for (xmlNode *n = c->root->children; n; n = n->next)
-        if (ic_mts_is_element(n, "default") && c->def_count < MAX_DEFAULTS) {
-            const char *name = ic_mts_attr(c, n, "name"), *value = ic_mts_attr(c, n, "value");
-            if (!name || !value)
-                return ic_mts_fail(c, n, IC_ERR_PARSE, "<default> needs name and value", NULL);
-            snprintf(c->def_name[c->def_count], sizeof c->def_name[0], "%s", name);
-            snprintf(c->def_value[c->def_count], sizeof c->def_value[0], "%s", ic_mts_attr(c, n, "value"));
-            ++c->def_count;
-        }
-    int has_sensor = 0;
-    for (xmlNode *n = c->root->children; n && r == IC_OK; n = n->next) {
-        if (!ic_mts_is_element(n, NULL) || ic_mts_is_element(n, "default") || ic_mts_is_element(n, "bsdf") || ic_mts_is_element(n, "texture") ||
-            ic_mts_is_element(n, "integrator"))
-            continue; /* BSDFs and textures are read where they are referenced; the integrator is irrcache's */
-        if (ic_mts_is_element(n, "sensor")) {
-            r = has_sensor++ ? IC_OK : parse_sensor(c, n);
-        } else if (ic_mts_is_element(n, "shape")) {
-            r = parse_shape(c, n);
-        } else if (ic_mts_is_element(n, "emitter")) {
-            r = parse_emitter(c, n);
-        } else {
-            char kind[80];
-            snprintf(kind, sizeof kind, "<%.40s>", (const char *)n->name);
-            ic_mts_warn_once(c, n, kind, "is not supported and is left out");
-        }
-    }
-    c->b->scene->camera.width = has_sensor ? c->b->scene->camera.width : 0;
-    return r;
-}
-
-ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt, ic_error *err)
+/* Reads and parses the XML file at path (no network, no external entities or DTDs loaded, no messages
+ * printed); the document in *doc. */
+static ic_result read_doc(const char *path, const ic_scene_load_options *opt, xmlDoc **doc, ic_error *err)
 {
     char *text = NULL;
     size_t len = 0;
@@ -429,11 +398,10 @@ ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_
         free(text);
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: too large for the XML parser", path);
     }
-    /* no network, no external entities or DTDs loaded (the defaults), no messages printed */
     xmlInitParser();
-    xmlDoc *doc = xmlReadMemory(text, (int)len, path, NULL, XML_PARSE_NONET | XML_PARSE_NOWARNING | XML_PARSE_NOERROR);
+    *doc = xmlReadMemory(text, (int)len, path, NULL, XML_PARSE_NONET | XML_PARSE_NOWARNING | XML_PARSE_NOERROR);
     free(text);
-    if (!doc) {
+    if (!*doc) {
         const xmlError *e = xmlGetLastError();
         char msg[256] = "not well-formed XML";
         if (e && e->message) {
@@ -442,6 +410,85 @@ ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_
         }
         return ic_error_set(err, IC_ERR_PARSE, "%s:%d: %s; fix the XML", path, e ? e->line : 0, msg);
     }
+    return IC_OK;
+}
+
+static ic_result parse_scene(ic_mts_ctx *c, const xmlNode *root);
+
+/* <include filename="…"/>: the other file's <scene> is read as if its elements stood here. Its path is
+ * resolved against the scene file's folder (as Mitsuba 0.6's file resolver does), follows the folder
+ * rules of every scene path, and nests at most MAX_INCLUDE_DEPTH deep (a file including itself ends
+ * there). Ids defined in any of the files are found from all. */
+static ic_result parse_include(ic_mts_ctx *c, const xmlNode *n)
+{
+    const char *file = ic_mts_attr(c, n, "filename");
+    if (!file)
+        return ic_mts_fail(c, n, IC_ERR_PARSE, "<include> needs a filename", NULL);
+    char full[IC_SCENE_PATH_MAX], where[IC_SCENE_PATH_MAX + 32];
+    if (!ic_path_join(c->dir, file, full, sizeof full))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "include path too long", NULL);
+    snprintf(where, sizeof where, "%s:%d", ic_mts_file(c, n), ic_mts_line(n));
+    if (c->include_depth >= MAX_INCLUDE_DEPTH || c->root_count >= MAX_DOCS)
+        return ic_mts_fail(c, n, IC_ERR_UNSUPPORTED, "includes nest too deep or are too many (a file that includes "
+                           "itself?); at most 8 deep and 15 files: ", file);
+    ic_result r = ic_scene_check_path(c->b, full, where, "included file", c->err);
+    if (r != IC_OK)
+        return r;
+    if (!ic_path_exists(full))
+        return ic_error_set(c->err, IC_ERR_IO, "%s: included file '%s' not found; check the path", where, file);
+    xmlDoc *doc = NULL;
+    if ((r = read_doc(full, c->opt, &doc, c->err)) != IC_OK)
+        return r;
+    c->included[c->root_count - 1] = doc;
+    xmlNode *root = xmlDocGetRootElement(doc);
+    if (!ic_mts_is_element(root, "scene"))
+        return ic_mts_fail(c, root, IC_ERR_PARSE, "the root element of an included file must be <scene>", NULL);
+    c->roots[c->root_count++] = root;
+    ++c->include_depth;
+    r = parse_scene(c, root);
+    --c->include_depth;
+    return r;
+}
+
+static ic_result parse_scene(ic_mts_ctx *c, const xmlNode *root)
+{
+    ic_result r = IC_OK;
+    for (xmlNode *n = root->children; n; n = n->next)
+        if (ic_mts_is_element(n, "default") && c->def_count < MAX_DEFAULTS) {
+            const char *name = ic_mts_attr(c, n, "name"), *value = ic_mts_attr(c, n, "value");
+            if (!name || !value)
+                return ic_mts_fail(c, n, IC_ERR_PARSE, "<default> needs name and value", NULL);
+            snprintf(c->def_name[c->def_count], sizeof c->def_name[0], "%s", name);
+            snprintf(c->def_value[c->def_count], sizeof c->def_value[0], "%s", ic_mts_attr(c, n, "value"));
+            ++c->def_count;
+        }
+    for (xmlNode *n = root->children; n && r == IC_OK; n = n->next) {
+        if (!ic_mts_is_element(n, NULL) || ic_mts_is_element(n, "default") || ic_mts_is_element(n, "bsdf") || ic_mts_is_element(n, "texture") ||
+            ic_mts_is_element(n, "integrator"))
+            continue; /* BSDFs and textures are read where they are referenced; the integrator is irrcache's */
+        if (ic_mts_is_element(n, "sensor")) {
+            r = c->has_sensor++ ? IC_OK : parse_sensor(c, n);
+        } else if (ic_mts_is_element(n, "shape")) {
+            r = parse_shape(c, n);
+        } else if (ic_mts_is_element(n, "emitter")) {
+            r = parse_emitter(c, n);
+        } else if (ic_mts_is_element(n, "include")) {
+            r = parse_include(c, n);
+        } else {
+            char kind[80];
+            snprintf(kind, sizeof kind, "<%.40s>", (const char *)n->name);
+            ic_mts_warn_once(c, n, kind, "is not supported and is left out");
+        }
+    }
+    return r;
+}
+
+ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt, ic_error *err)
+{
+    xmlDoc *doc = NULL;
+    ic_result r = read_doc(path, opt, &doc, err);
+    if (r != IC_OK)
+        return r;
     ic_mts_ctx *c = calloc(1, sizeof *c);
     if (!c) {
         xmlFreeDoc(doc);
@@ -452,13 +499,18 @@ ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_
     c->path = path;
     c->err = err;
     ic_path_dirname(path, c->dir, sizeof c->dir);
-    c->root = xmlDocGetRootElement(doc);
-    ic_result r;
-    if (!ic_mts_is_element(c->root, "scene"))
-        r = ic_mts_fail(c, c->root, IC_ERR_PARSE, "the root element must be <scene> (a Mitsuba scene file)", NULL);
+    c->roots[0] = xmlDocGetRootElement(doc);
+    c->root_count = 1;
+    if (!ic_mts_is_element(c->roots[0], "scene"))
+        r = ic_mts_fail(c, c->roots[0], IC_ERR_PARSE, "the root element must be <scene> (a Mitsuba scene file)", NULL);
     else
-        r = parse_scene(c);
-    int has_camera = c->b->scene->camera.width > 0;
+        r = parse_scene(c, c->roots[0]);
+    int has_camera = c->has_sensor && c->b->scene->camera.width > 0;
+    if (!c->has_sensor)
+        c->b->scene->camera.width = 0;
+    for (int k = 0; k < MAX_DOCS; ++k)
+        if (c->included[k])
+            xmlFreeDoc(c->included[k]);
     free(c);
     xmlFreeDoc(doc);
     if (r != IC_OK)

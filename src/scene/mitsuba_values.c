@@ -11,6 +11,10 @@
 #include <string.h>
 
 int ic_mts_line(const xmlNode *n) { return n ? (int)xmlGetLineNo(n) : 0; }
+const char *ic_mts_file(const ic_mts_ctx *c, const xmlNode *n)
+{
+    return n && n->doc && n->doc->URL ? (const char *)n->doc->URL : c->path;
+}
 
 int ic_mts_is_element(const xmlNode *n, const char *name)
 {
@@ -66,12 +70,12 @@ void ic_mts_warn_once(ic_mts_ctx *c, const xmlNode *n, const char *kind, const c
             return;
     if (c->warned_count < MAX_WARNED)
         snprintf(c->warned[c->warned_count++], sizeof c->warned[0], "%s", kind);
-    ic_scene_warn(c->b->scene, "%s:%d: %s %s", c->path, ic_mts_line(n), kind, what);
+    ic_scene_warn(c->b->scene, "%s:%d: %s %s", ic_mts_file(c, n), ic_mts_line(n), kind, what);
 }
 
 ic_result ic_mts_fail(ic_mts_ctx *c, const xmlNode *n, ic_result r, const char *what, const char *detail)
 {
-    return ic_error_set(c->err, r, "%s:%d: %s%s", c->path, ic_mts_line(n), what, detail ? detail : "");
+    return ic_error_set(c->err, r, "%s:%d: %s%s", ic_mts_file(c, n), ic_mts_line(n), what, detail ? detail : "");
 }
 
 /* The child element <tag name="name"> (any tag if tag is NULL), or NULL. */
@@ -200,7 +204,7 @@ ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec
             return IC_OK;
         }
         char full[IC_SCENE_PATH_MAX], where[IC_SCENE_PATH_MAX + 32];
-        snprintf(where, sizeof where, "%s:%d", c->path, ic_mts_line(k));
+        snprintf(where, sizeof where, "%s:%d", ic_mts_file(c, k), ic_mts_line(k));
         if (!ic_path_join(c->dir, file, full, sizeof full))
             return ic_mts_fail(c, k, IC_ERR_INVALID_ARG, "texture path too long", NULL);
         ic_result r = ic_scene_check_path(c->b, full, where, "texture", c->err);
@@ -332,10 +336,11 @@ const xmlNode *ic_mts_find_by_id(ic_mts_ctx *c, const char *tag, const char *id_
 {
     char id[256];
     snprintf(id, sizeof id, "%s", id_in ? id_in : "");
-    for (xmlNode *t = c->root->children; t; t = t->next) {
-        const char *tid = ic_mts_is_element(t, tag) ? ic_mts_attr(c, t, "id") : NULL;
-        if (tid && !strcmp(tid, id))
-            return t;
-    }
+    for (int r = 0; r < c->root_count; ++r)
+        for (xmlNode *t = c->roots[r]->children; t; t = t->next) {
+            const char *tid = ic_mts_is_element(t, tag) ? ic_mts_attr(c, t, "id") : NULL;
+            if (tid && !strcmp(tid, id))
+                return t;
+        }
     return NULL;
 }

@@ -1,6 +1,6 @@
 /*
- * test_mitsuba_serialized.c — Mitsuba's serialized meshes (<shape type="serialized">), written here with
- * zlib in the layout Mitsuba 0.6 documents:
+ * test_mitsuba_files.c — what a Mitsuba scene reads from other files. Serialized meshes (<shape
+ * type="serialized">), written here with zlib in the layout Mitsuba 0.6 documents:
  *   1. a version-4 file of two shapes (a single-precision quad; a double-precision box with normals,
  *      texture coordinates and colours to skip) and its table of offsets: shapeIndex picks each, the
  *      transform applies, every vertex lands where it should;
@@ -8,6 +8,9 @@
  *   3. bad input gives one-line errors naming the XML file:line and what to do: a shapeIndex beyond the
  *      file's shapes, a file cut short (its table lost; a shape's stream cut), an index past the vertices,
  *      a file that is not serialized.
+ * And <include>: 4. an included file's shapes, BSDFs (referenced by id from the including file) and
+ *    defaults apply, and messages about its elements name it and its line; a file that includes itself
+ *    stops at the depth limit with a one-line error; a missing included file names the <include>'s line.
  */
 #include "test_util.h"
 
@@ -169,8 +172,65 @@ static void check_shape(const ic_scene *s, int box, const char *what)
     CHECK(!box || s->normals, "%s: the file's vertex normals are used", what);
 }
 
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (f) {
+        fputs(text, f);
+        fclose(f);
+    }
+}
+
+static void test_include(void)
+{
+    write_text(IC_TEST_TMP "/inc_materials.xml",
+               "<scene version=\"0.6.0\">\n"
+               "  <default name=\"refl\" value=\"0.25\"/>\n"
+               "  <bsdf type=\"diffuse\" id=\"grey\"><float name=\"reflectance\" value=\"$refl\"/></bsdf>\n"
+               "  <shape type=\"rectangle\"><transform name=\"toWorld\"><translate z=\"-3\"/></transform></shape>\n"
+               "  <shape type=\"hair\"/>\n"
+               "</scene>\n");
+    write_text(IC_TEST_TMP "/inc_main.xml",
+               "<scene version=\"0.6.0\">\n"
+               "  <include filename=\"inc_materials.xml\"/>\n"
+               "  <shape type=\"cube\"><ref id=\"grey\"/></shape>\n"
+               "</scene>\n");
+    ic_scene_load_options lo = {0};
+    lo.allow_outside_paths = 1;
+    ic_error err = {0};
+    ic_scene *s = NULL;
+    CHECK(ic_scene_load(IC_TEST_TMP "/inc_main.xml", &lo, &s, &err) == IC_OK, "a scene with an include loads: %s",
+          err.message);
+    if (s) {
+        CHECK(s->triangle_count == 12 + 2, "the included rectangle and the cube: %u triangles", s->triangle_count);
+        int grey = 0, below = 0;
+        for (uint32_t t = 0; t < s->triangle_count; ++t) {
+            grey += s->materials[s->triangle_material[t]].kd.x == 0.25f;
+            below += s->positions[s->triangles[3 * t]].z == -3.0f;
+        }
+        CHECK(grey == 12 && below == 2, "the cube takes the included BSDF with the included default (%d), the "
+              "rectangle its transform (%d)", grey, below);
+        const char *w = ic_scene_warnings(s);
+        CHECK(strstr(w, "inc_materials.xml:5:") && strstr(w, "hair"), "a warning names the included file's line: %s", w);
+        ic_scene_free(s);
+    }
+    write_text(IC_TEST_TMP "/inc_self.xml", "<scene version=\"0.6.0\">\n  <include filename=\"inc_self.xml\"/>\n</scene>\n");
+    s = NULL;
+    ic_result r = ic_scene_load(IC_TEST_TMP "/inc_self.xml", &lo, &s, &err);
+    CHECK(r != IC_OK && strstr(err.message, "inc_self.xml:2") && strstr(err.message, "nest too deep") &&
+              !strchr(err.message, '\n'), "a file including itself stops: %s", err.message);
+    ic_scene_free(s);
+    write_text(IC_TEST_TMP "/inc_missing.xml", "<scene version=\"0.6.0\">\n\n  <include filename=\"nowhere.xml\"/>\n</scene>\n");
+    s = NULL;
+    r = ic_scene_load(IC_TEST_TMP "/inc_missing.xml", &lo, &s, &err);
+    CHECK(r == IC_ERR_IO && strstr(err.message, "inc_missing.xml:3") && strstr(err.message, "nowhere.xml"),
+          "a missing included file: %s", err.message);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_include();
     const char *path = IC_TEST_TMP "/ser_v4.serialized";
     write_serialized(path, 4, 0, 0);
     ic_error err = {0};
