@@ -5,16 +5,8 @@
 # with test_install.sh (examples/cache_only.c through find_package and through pkg-config).
 # BUILD_DIR, a full build, gives the compiler; skips (77) where test_install.sh would (sanitizer builds).
 set -euo pipefail
-build=$(cd "${1:?usage: test_cache_only.sh BUILD_DIR}" && pwd)
+. "$(dirname "$0")/prologue.sh" cache-only "${1:-}"
 here=$(cd "$(dirname "$0")" && pwd)
-src=$(cd "$here/../.." && pwd)
-cache_var() { sed -n "s/^$1:[A-Z]*=//p" "$build/CMakeCache.txt"; }
-if [ "$(cache_var IC_SANITIZE)" = ON ] || [ "$(cache_var IC_FUZZ)" = ON ]; then
-  echo "skipped: a sanitizer build's static libraries cannot be linked without -fsanitize (test the Release build)"
-  exit 77
-fi
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/irrcache-cache-only.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT
 no_find=()
 for pkg in embree assimp cJSON OpenEXR ZLIB; do no_find+=("-DCMAKE_DISABLE_FIND_PACKAGE_$pkg=ON"); done
 echo "== configure and build with -DIRRCACHE_CACHE_ONLY=ON, renderer dependencies not findable"

@@ -12,19 +12,11 @@
 # Skips (77) in a sanitizer build: its static libraries need the sanitizer runtimes on every link line,
 # which an installed package's users do not add.
 set -euo pipefail
-build=$(cd "${1:?usage: test_install.sh BUILD_DIR}" && pwd)
-src=$(cd "$(dirname "$0")/../.." && pwd)
-cache_var() { sed -n "s/^$1:[A-Z]*=//p" "$build/CMakeCache.txt"; }
-if [ "$(cache_var IC_SANITIZE)" = ON ] || [ "$(cache_var IC_FUZZ)" = ON ]; then
-  echo "skipped: a sanitizer build's static libraries cannot be linked without -fsanitize (test the Release build)"
-  exit 77
-fi
+. "$(dirname "$0")/prologue.sh" install "${1:-}"
 cache_only=$(cache_var IRRCACHE_CACHE_ONLY)
 for tool in cmake pkg-config cc; do
   command -v "$tool" >/dev/null || { echo "test_install: $tool not found (scripts/deps.sh installs it)"; exit 1; }
 done
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/irrcache-install.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT
 prefix=$tmp/prefix
 
 echo "== install into $prefix"

@@ -5,19 +5,11 @@
 # package works through find_package and pkg-config (test_install.sh, the examples run against the
 # installed .so files). BUILD_DIR, a full build, gives the compiler; skips (77) in a sanitizer build.
 set -euo pipefail
-build=$(cd "${1:?usage: test_shared.sh BUILD_DIR}" && pwd)
+. "$(dirname "$0")/prologue.sh" shared "${1:-}"
 here=$(cd "$(dirname "$0")" && pwd)
-src=$(cd "$here/../.." && pwd)
-cache_var() { sed -n "s/^$1:[A-Z]*=//p" "$build/CMakeCache.txt"; }
-if [ "$(cache_var IC_SANITIZE)" = ON ] || [ "$(cache_var IC_FUZZ)" = ON ]; then
-  echo "skipped: sanitizer builds are tested static (test the Release build)"
-  exit 77
-fi
 for tool in readelf nm; do
   command -v "$tool" >/dev/null || { echo "test_shared: $tool not found (binutils)"; exit 1; }
 done
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/irrcache-shared.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT
 echo "== configure and build the cache alone with -DBUILD_SHARED_LIBS=ON"
 cmake -S "$src" -B "$tmp/build" -DIRRCACHE_CACHE_ONLY=ON -DBUILD_SHARED_LIBS=ON -DIC_WERROR=ON \
       -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPILER="$(cache_var CMAKE_C_COMPILER)" >"$tmp/configure.log" 2>&1 \
