@@ -116,6 +116,36 @@ void ic_warp_phong_lobe_inv(ic_vec3 d, float exponent, float *u1, float *u2)
     *u2 = phi / (2.0f * IC_PI);
 }
 
+/* 1 − cos θ of a unit direction about +z, from its sideways part where θ is small: sin²θ/(1 + cos θ). */
+static float one_minus_cos_z(ic_vec3 d)
+{
+    float s2 = d.x * d.x + d.y * d.y;
+    return d.z > 0.0f ? s2 / (1.0f + d.z) : 1.0f - d.z;
+}
+
+ic_vec3 ic_warp_uniform_cone(float u1, float u2, float one_minus_cos)
+{
+    /* 1 − cos θ uniform in [0, 1 − cos θ_max]; sin θ = sqrt(t (2 − t)) for t = 1 − cos θ */
+    float t = u1 * one_minus_cos;
+    float r = sqrtf(fmaxf(0.0f, t * (2.0f - t)));
+    float phi = 2.0f * IC_PI * u2;
+    return v3(r * cosf(phi), r * sinf(phi), 1.0f - t);
+}
+
+float ic_warp_uniform_cone_pdf(ic_vec3 d, float one_minus_cos)
+{
+    return one_minus_cos_z(d) <= one_minus_cos ? 1.0f / (2.0f * IC_PI * one_minus_cos) : 0.0f;
+}
+
+void ic_warp_uniform_cone_inv(ic_vec3 d, float one_minus_cos, float *u1, float *u2)
+{
+    float phi = atan2f(d.y, d.x);
+    if (phi < 0.0f)
+        phi += 2.0f * IC_PI;
+    *u1 = one_minus_cos_z(d) / one_minus_cos;
+    *u2 = phi / (2.0f * IC_PI);
+}
+
 void ic_warp_triangle(float u1, float u2, float *b1, float *b2)
 {
     float s = sqrtf(u1);

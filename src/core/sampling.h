@@ -36,6 +36,13 @@ ic_vec3 ic_warp_phong_lobe(float u1, float u2, float exponent);
 float ic_warp_phong_lobe_pdf(ic_vec3 d, float exponent);
 void ic_warp_phong_lobe_inv(ic_vec3 d, float exponent, float *u1, float *u2);
 
+/* Uniform over the cone of directions within θ_max of +z (a light's disc: the sun), given as
+ * one_minus_cos = 1 − cos θ_max > 0 so that a cone a fraction of a degree wide keeps its precision in
+ * float (1 − cos θ would round to a few hundred values); pdf = 1/(2π (1 − cos θ_max)) inside. */
+ic_vec3 ic_warp_uniform_cone(float u1, float u2, float one_minus_cos);
+float ic_warp_uniform_cone_pdf(ic_vec3 d, float one_minus_cos);
+void ic_warp_uniform_cone_inv(ic_vec3 d, float one_minus_cos, float *u1, float *u2);
+
 /* Uniform barycentrics (b1, b2) on a triangle (Heitz 2019 low-distortion map is not needed here:
  * the square-root parameterisation, PBR §13.6.4); b0 = 1 - b1 - b2. */
 void ic_warp_triangle(float u1, float u2, float *b1, float *b2);

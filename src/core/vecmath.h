@@ -72,6 +72,16 @@ static inline ic_vec3 ic_frame_to_local(const ic_frame *f, ic_vec3 w)
     return v3(v3_dot(w, f->t), v3_dot(w, f->b), v3_dot(w, f->n));
 }
 
+/* d rotated by deg degrees about +y, right-handed (+90° turns −z into −x): environments and skies
+ * turned about the up axis. */
+static inline ic_vec3 v3_rotate_y(ic_vec3 d, float deg)
+{
+    if (deg == 0.0f)
+        return d;
+    float a = deg * IC_PI / 180.0f, c = cosf(a), s = sinf(a);
+    return v3(c * d.x + s * d.z, d.y, -s * d.x + c * d.z);
+}
+
 /* Reflect direction d (pointing away from the surface) about normal n. */
 static inline ic_vec3 v3_reflect(ic_vec3 d, ic_vec3 n) { return v3_sub(v3_scale(n, 2.0f * v3_dot(d, n)), d); }
 

@@ -188,6 +188,8 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
                      s->sun.irradiance.x, s->sun.irradiance.y, s->sun.irradiance.z, (float)s->env.enabled,
                      s->env.radiance.x, s->env.radiance.y, s->env.radiance.z, s->env.rotation_deg};
     h = ic_fnv1a64(h, env, sizeof env);
+    if (s->sun.enabled && s->sun.angular_radius > 0.0f) /* a disc (a directional sun's hash stays) */
+        h = ic_fnv1a64(h, &s->sun.angular_radius, sizeof s->sun.angular_radius);
     if (s->env.image.rgb)
         h = ic_fnv1a64(h, s->env.image.rgb, sizeof(float) * 3 * (size_t)s->env.image.width * s->env.image.height);
     h = ic_fnv1a64(h, &c->cached_emitters, sizeof c->cached_emitters);

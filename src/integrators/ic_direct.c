@@ -7,17 +7,17 @@
 
 #include "core/sampling.h"
 
-/* Shadow-tested contribution of one light sample (weight for the glossy lobe's MIS given by wg). */
+/* Shadow-tested contribution of one light sample; mis_diffuse, mis_glossy: whether each lobe's share is
+ * MIS-weighted against that lobe's own sampling finding the light (the diffuse lobe's cosine sample in
+ * ic_ic_direct_light, the glossy lobe's in the final render's path). */
 static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, const ic_light_sample *ls,
-                           int mis, int glossy_traced, uint64_t *rays)
+                           int mis_diffuse, int mis_glossy, uint64_t *rays)
 {
     ic_vec3 fd, fg;
     ic_bsdf_eval_lobes(b, wo, ls->wi, &fd, &fg);
-    /* Each lobe is MIS-weighted against its own sampling: the diffuse lobe's cosine sample in
-     * ic_ic_direct_light, the glossy lobe's in the final render's path. */
     float cos_pdf = fmaxf(v3_dot(ls->wi, b->frame.n), 0.0f) * IC_INV_PI;
-    float wd = mis ? ic_power_heuristic(ls->pdf, cos_pdf) : 1.0f;
-    float wg = mis && glossy_traced ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
+    float wd = mis_diffuse ? ic_power_heuristic(ls->pdf, cos_pdf) : 1.0f;
+    float wg = mis_glossy ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
     ic_vec3 f = v3_add(v3_scale(fd, wd), v3_scale(fg, wg));
     if (v3_is_black(f) || v3_is_black(ls->radiance))
         return v3s(0.0f);
@@ -63,9 +63,12 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_light_selection
 }
 
 /* Direct light for the final render. The environment is in the records and is not sampled here; the
- * sun, a single delta light, is taken every time (choosing it among the lights would only add noise);
- * triangle and point lights are sampled once by power, and emitting triangles once more through the
- * diffuse lobe (MIS, power heuristic); the glossy lobe's BSDF sample is the final render's path. */
+ * sun, a single light, is taken every time (choosing it among the lights would only add noise): its
+ * direction, or a point of its disc, whose glossy share is MIS-weighted against the final render's
+ * glossy path finding the disc (ic_final.c; nothing else counts the sun: the records exclude it, so its
+ * diffuse share has full weight); triangle and point lights are sampled once by power, and emitting
+ * triangles once more through the diffuse lobe (MIS, power heuristic); the glossy lobe's BSDF sample is
+ * the final render's path. */
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                            const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
@@ -82,16 +85,15 @@ ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_
     ic_vec3 L = v3s(0.0f);
     const ic_scene *scene = c->tr->scene;
     if (scene->sun.enabled) {
+        float v1 = 0.0f, v2 = 0.0f;
+        if (scene->sun.angular_radius > 0.0f)
+            ic_rng_2d(rng, &v1, &v2); /* drawn for a disc only: a directional sun's scenes keep their numbers */
         ic_light_sample sun;
-        sun.wi = scene->sun.direction;
-        sun.dist = INFINITY;
-        sun.radiance = scene->sun.irradiance;
-        sun.pdf = 1.0f;
-        sun.is_delta = 1;
-        L = shade_light(c, s, b, wo, &sun, 0, glossy_traced, rays);
+        ic_scene_sample_sun(scene, v1, v2, &sun);
+        L = shade_light(c, s, b, wo, &sun, 0, !sun.is_delta && glossy_traced, rays);
     }
     ic_light_sample ls;
     if (ic_scene_sample_light_sel(scene, sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
-        L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, glossy_traced, rays));
+        L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, !ls.is_delta && glossy_traced, rays));
     return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
 }

@@ -82,9 +82,16 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
         ++*rays;
         ic_accel_intersect1(c->tr->accel, &ray, &hit);
         if (hit.triangle == IC_NO_HIT) {
-            /* The environment is never light-sampled in this integrator: full weight. */
-            if (!one_term)
+            /* The environment is never light-sampled in this integrator: full weight. The sun's disc is,
+             * at every vertex (ic_direct.c): a glossy sample that finds it is weighted against that. */
+            if (!one_term) {
                 L = v3_add(L, v3_mul(beta, ic_scene_env_radiance(scene, ray.dir)));
+                ic_vec3 sun = ic_scene_sun_radiance(scene, ray.dir);
+                if (!v3_is_black(sun)) {
+                    float w = prev_glossy ? ic_power_heuristic(prev_pdf, ic_scene_sun_disc_pdf(scene, ray.dir)) : 1.0f;
+                    L = v3_add(L, v3_scale(v3_mul(beta, sun), w));
+                }
+            }
             break;
         }
         ic_surface s;

@@ -40,6 +40,24 @@ ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf 
     return v3_scale(v3_mul(f, ls.radiance), cos_i * w / ls.pdf);
 }
 
+/* Light arriving along an escaping ray, times the path throughput beta: the environment and the sun's
+ * disc, each weighted against the light sampling that could have picked it (bsdf_pdf: the BSDF sample's
+ * pdf; 0 for a camera ray or a delta lobe, which light sampling cannot reproduce: full weight). */
+static ic_vec3 escaped_light(const ic_scene *scene, ic_vec3 dir, ic_vec3 beta, float bsdf_pdf,
+                             const ic_light_selection *sel)
+{
+    ic_vec3 c = v3s(0.0f), env = ic_scene_env_radiance(scene, dir), sun = ic_scene_sun_radiance(scene, dir);
+    if (!v3_is_black(env)) {
+        float w = bsdf_pdf > 0.0f ? ic_power_heuristic(bsdf_pdf, ic_scene_light_pdf_env(scene, dir)) : 1.0f;
+        c = v3_scale(v3_mul(beta, env), w);
+    }
+    if (!v3_is_black(sun)) {
+        float w = bsdf_pdf > 0.0f ? ic_power_heuristic(bsdf_pdf, ic_scene_light_pdf_sun(scene, sel, dir)) : 1.0f;
+        c = v3_add(c, v3_scale(v3_mul(beta, sun), w));
+    }
+    return c;
+}
+
 ic_vec3 ic_pt_li_from(const ic_tracer *tr, ic_ray ray, const ic_path_start *st, ic_rng *rng, uint64_t *rays)
 {
     return ic_pt_li_hit(tr, ray, NULL, st, rng, rays);
@@ -68,12 +86,9 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
             ic_accel_intersect1(tr->accel, &ray, &hit);
         }
         if (hit.triangle == IC_NO_HIT) {
-            ic_vec3 le = ic_scene_env_radiance(scene, ray.dir);
-            if (!v3_is_black(le)) {
-                float w = 1.0f;
-                if (!prev_specular && prev_pdf > 0.0f)
-                    w = ic_power_heuristic(prev_pdf, ic_scene_light_pdf_env(scene, ray.dir));
-                ic_vec3 c = v3_scale(v3_mul(beta, le), w);
+            int mis = !prev_specular && prev_pdf > 0.0f;
+            ic_vec3 c = escaped_light(scene, ray.dir, beta, mis ? prev_pdf : 0.0f, prev_sel);
+            if (!v3_is_black(c)) {
                 L = v3_add(L, c);
                 if (levels)
                     levels[depth - st->depth] = v3_add(levels[depth - st->depth], c);

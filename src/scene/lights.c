@@ -6,6 +6,7 @@
  *   triangles   Σ π·A·lum(Le) (× 2 if two-sided)          — emitted power
  *   points      Σ 4π·lum(I)                               — emitted power
  *   sun         π·r²·lum(E)                               — power crossing the scene's bounding sphere
+ *               (a directional sun, or a disc sampled uniformly by solid angle, PBR 3rd ed. §13.6's cone)
  *   environment 4π²·r²·mean lum(L) over the sphere         — same, for radiance arriving from all sides
  * (r = bounding-sphere radius). Within a class: triangles ∝ power (CDF, then a uniform point on the
  * triangle, PBR 3rd ed. §13.6.4), points ∝ power, the environment image ∝ lum·sin θ of texels (PBR 3rd
@@ -25,18 +26,10 @@
 /* ------------------------------------------------------------------------------------------------ */
 /* environment mapping: direction <-> (u, v) of the lat-long image (scene.h) */
 
-static ic_vec3 rotate_y(ic_vec3 d, float deg)
-{
-    if (deg == 0.0f)
-        return d;
-    float a = deg * IC_PI / 180.0f, c = cosf(a), s = sinf(a);
-    return v3(c * d.x + s * d.z, d.y, -s * d.x + c * d.z);
-}
-
 /* World direction → image (u, v) in [0,1]; the map is rotated by rotation_deg about +y. */
 static void env_dir_to_uv(const ic_environment *env, ic_vec3 d, float *u, float *v)
 {
-    ic_vec3 m = rotate_y(d, -env->rotation_deg);
+    ic_vec3 m = v3_rotate_y(d, -env->rotation_deg);
     *u = 0.5f + atan2f(m.x, -m.z) * (0.5f * IC_INV_PI);
     *v = acosf(ic_clampf(m.y, -1.0f, 1.0f)) * IC_INV_PI;
 }
@@ -46,7 +39,7 @@ static ic_vec3 env_uv_to_dir(const ic_environment *env, float u, float v)
     float phi = (u - 0.5f) * 2.0f * IC_PI, theta = v * IC_PI;
     float st = sinf(theta);
     ic_vec3 m = v3(st * sinf(phi), cosf(theta), -st * cosf(phi));
-    return rotate_y(m, env->rotation_deg);
+    return v3_rotate_y(m, env->rotation_deg);
 }
 
 static const float *texel(const ic_image *img, int x, int y)
@@ -112,6 +105,19 @@ static ic_result tabulate_sky(ic_scene *scene, ic_error *err)
         }
     env->radiance = v3s(1.0f);
     return IC_OK;
+}
+
+/* The sun's disc from its angular radius and irradiance (scene.h): a uniform radiance L over a cap of
+ * half-angle a gives ∫ L cos θ dω = L π sin² a at normal incidence. */
+static void prepare_sun_disc(ic_sun_light *sun)
+{
+    if (!sun->enabled || !(sun->angular_radius > 0.0f))
+        return;
+    double a = sun->angular_radius, sin_a = sin(a), half = sin(0.5 * a);
+    sun->one_minus_cos = (float)(2.0 * half * half);
+    sun->solid_angle = (float)(2.0 * 3.14159265358979323846 * 2.0 * half * half);
+    sun->radiance = v3_scale(sun->irradiance, (float)(1.0 / (3.14159265358979323846 * sin_a * sin_a)));
+    sun->frame = ic_frame_from_normal(sun->direction);
 }
 
 static ic_result build_env_tables(ic_scene *scene, ic_error *err)
@@ -182,6 +188,44 @@ static float env_pdf_image(const ic_environment *env, ic_vec3 d)
     float p_col = row[x + 1] - row[x];
     float pdf_uv = p_row * p_col * (float)w * (float)h;
     return pdf_uv / (2.0f * IC_PI * IC_PI * sin_theta);
+}
+
+float ic_scene_sun_disc_pdf(const ic_scene *scene, ic_vec3 wi)
+{
+    const ic_sun_light *sun = &scene->sun;
+    if (!sun->enabled || !(sun->angular_radius > 0.0f))
+        return 0.0f;
+    return ic_warp_uniform_cone_pdf(ic_frame_to_local(&sun->frame, wi), sun->one_minus_cos);
+}
+
+ic_vec3 ic_scene_sun_radiance(const ic_scene *scene, ic_vec3 wi)
+{
+    return ic_scene_sun_disc_pdf(scene, wi) > 0.0f ? scene->sun.radiance : v3s(0.0f);
+}
+
+float ic_scene_light_pdf_sun(const ic_scene *scene, const ic_light_selection *sel, ic_vec3 wi)
+{
+    return sel->sun > 0.0f ? sel->sun * ic_scene_sun_disc_pdf(scene, wi) : 0.0f;
+}
+
+int ic_scene_sample_sun(const ic_scene *scene, float u1, float u2, ic_light_sample *ls)
+{
+    const ic_sun_light *sun = &scene->sun;
+    if (!sun->enabled)
+        return 0;
+    ls->dist = INFINITY;
+    if (!(sun->angular_radius > 0.0f)) {
+        ls->wi = sun->direction;
+        ls->radiance = sun->irradiance;
+        ls->pdf = 1.0f;
+        ls->is_delta = 1;
+        return 1;
+    }
+    ls->wi = ic_frame_to_world(&sun->frame, ic_warp_uniform_cone(u1, u2, sun->one_minus_cos));
+    ls->radiance = sun->radiance;
+    ls->pdf = ic_warp_uniform_cone_pdf(v3(0.0f, 0.0f, 1.0f), sun->one_minus_cos);
+    ls->is_delta = 0;
+    return 1;
 }
 
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi)
@@ -335,6 +379,7 @@ ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
         if (r != IC_OK)
             return r;
     }
+    prepare_sun_disc(&s->sun);
     select_light_classes(s, tri_power, point_power);
     return IC_OK;
 }
@@ -535,14 +580,8 @@ int ic_scene_sample_light_sel(const ic_scene *scene, const ic_light_selection *s
         ok = sel->point > 0.0f && sample_point(scene, sel, p, ur, ls);
         break;
     case 2:
-        if (sel->sun > 0.0f) {
-            ls->wi = scene->sun.direction;
-            ls->dist = INFINITY;
-            ls->radiance = scene->sun.irradiance;
-            ls->pdf = sel->sun;
-            ls->is_delta = 1;
-            ok = 1;
-        }
+        ok = sel->sun > 0.0f && ic_scene_sample_sun(scene, u1, u2, ls);
+        ls->pdf *= sel->sun;
         break;
     default:
         ok = sel->env > 0.0f && sample_env(scene, sel, u1, u2, ls);

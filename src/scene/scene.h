@@ -100,10 +100,18 @@ static inline float ic_spot_falloff(const ic_spot_cone *c, ic_vec3 d)
     return t * t;
 }
 
+/* The sun: a directional light, or a disc of uniform radiance when angular_radius > 0 (a sky's sun). */
 typedef struct ic_sun_light {
     int enabled;
-    ic_vec3 direction;     /* unit vector from the scene towards the sun */
+    ic_vec3 direction;     /* unit vector from the scene towards the sun (the disc's centre) */
     ic_vec3 irradiance;    /* irradiance on a surface facing the sun (RGB) */
+    float angular_radius;  /* radians; 0: a directional (delta) light */
+    /* the disc, filled by ic_scene_build_lights when angular_radius > 0: */
+    float one_minus_cos;   /* 1 − cos(angular_radius) */
+    float solid_angle;     /* 2π (1 − cos angular_radius), sr */
+    ic_vec3 radiance;      /* irradiance / (π sin² angular_radius): a surface facing the sun receives
+                              exactly `irradiance` from it */
+    ic_frame frame;        /* about `direction`, for sampling the disc */
 } ic_sun_light;
 
 typedef struct ic_environment {
@@ -211,10 +219,10 @@ ic_vec3 ic_scene_env_radiance(const ic_scene *scene, ic_vec3 d);
 typedef struct ic_light_sample {
     ic_vec3 wi;            /* unit direction from the point towards the light */
     float dist;            /* distance to the light point (INFINITY for sun/environment) */
-    ic_vec3 radiance;      /* emitted radiance along -wi (area/env), or intensity/dist^2 for points,
-                              or irradiance for the sun: the integrand numerator */
+    ic_vec3 radiance;      /* emitted radiance along -wi (area/env/sun disc), or intensity/dist^2 for
+                              points, or irradiance for a directional sun: the integrand numerator */
     float pdf;             /* solid-angle pdf including light selection; 0 = failed sample */
-    int is_delta;          /* point or sun: no MIS with BSDF sampling */
+    int is_delta;          /* point or directional sun: no MIS with BSDF sampling */
 } ic_light_sample;
 
 /* Samples one light for point p (u0 chooses the light, u1,u2 the point on it). */
@@ -240,5 +248,17 @@ float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_sele
 int ic_scene_local_lights(const ic_scene *scene, ic_vec3 p, ic_vec3 n, const float *base_pmf, float *pmf, float *cdf);
 /* Solid-angle pdf of sampling the environment in direction wi (for MIS when a ray escapes). */
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
+/* The sun's disc as seen along wi (unit, pointing away from the scene): its radiance, 0 outside it or for
+ * a directional sun; an escaping ray adds it to the environment's (MIS-weighted where light sampling could
+ * have found it). */
+ic_vec3 ic_scene_sun_radiance(const ic_scene *scene, ic_vec3 wi);
+/* Solid-angle pdf of the disc's own sampling, 1/solid_angle inside it (0 outside or directional). */
+float ic_scene_sun_disc_pdf(const ic_scene *scene, ic_vec3 wi);
+/* The pdf with which ic_scene_sample_light_sel(sel) picks direction wi on the sun's disc: sel->sun times
+ * the disc's. */
+float ic_scene_light_pdf_sun(const ic_scene *scene, const ic_light_selection *sel, ic_vec3 wi);
+/* Samples the sun alone (no class selection in pdf): a uniform direction on its disc (u1, u2), or its
+ * direction with pdf 1 and is_delta set for a directional sun. Returns 0 without a sun. */
+int ic_scene_sample_sun(const ic_scene *scene, float u1, float u2, ic_light_sample *ls);
 
 #endif

@@ -151,9 +151,10 @@ static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
     if (!is_point && !is_sun)
         return ic_json_fail(c, type_line, IC_ERR_INVALID_ARG,
                             "unknown light type '%s'; use \"point\", \"spot\" or \"sun\"", type->valuestring);
-    const char *valid = is_point ? "type, position, intensity" : "type, direction, irradiance";
+    const char *valid = is_point ? "type, position, intensity" : "type, direction, irradiance, angular_radius_deg";
     ic_vec3 a = v3s(0.0f), e = v3s(0.0f);
     int has_a = 0, has_e = 0;
+    float radius_deg = 0.0f;
     const cJSON *it;
     ic_result r = IC_OK;
     cJSON_ArrayForEach(it, obj)
@@ -167,6 +168,12 @@ static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
         } else if (!strcmp(it->string, is_point ? "intensity" : "irradiance")) {
             r = ic_json_read_color(c, it, kl, &e);
             has_e = 1;
+        } else if (is_sun && !strcmp(it->string, "angular_radius_deg")) {
+            r = ic_json_read_float(c, it, kl, &radius_deg);
+            if (r == IC_OK && !(radius_deg >= 0.0f && radius_deg <= 45.0f))
+                return ic_json_fail(c, kl, IC_ERR_INVALID_ARG,
+                                    "lights[%d] sun 'angular_radius_deg' is %g; give 0 (a directional light) to 45",
+                                    index, (double)radius_deg);
         } else {
             return ic_json_unknown_key(c, kl, it->string, is_point ? "a point light" : "a sun light", valid);
         }
@@ -188,6 +195,7 @@ static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
         s->sun.enabled = 1;
         s->sun.direction = v3_norm(a);
         s->sun.irradiance = e;
+        s->sun.angular_radius = radius_deg * IC_PI / 180.0f;
         return IC_OK;
     }
     if (ic_scene_add_point_light(s, a, e, NULL) != IC_OK)

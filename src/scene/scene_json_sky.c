@@ -1,7 +1,7 @@
 /*
  * scene_json_sky.c — an "environment" that is an analytic daylight sky ("sky": "cie-overcast",
  * "cie-clear" or "perez"; sky.h, docs/scene-format.md "Skies"). The sky's sun, when it has one, becomes
- * the scene's sun light.
+ * the scene's sun light: a disc of IC_SKY_SUN_RADIUS_DEG.
  */
 #include "scene/json_context.h"
 
@@ -25,9 +25,9 @@ static ic_result read_ranged(json_ctx *c, const cJSON *it, int line, double lo, 
 static const char *const keys[] = {"sky",       "zenith_radiance", "zenith_luminance", "diffuse_horizontal",
                                    "direct_normal", "sun_direction", "month",         "day",
                                    "hour",      "latitude",        "longitude",        "meridian",
-                                   "ground_reflectance", "north"};
+                                   "ground_reflectance", "north",  "rotation_deg"};
 enum { K_SKY, K_ZRAD, K_ZLUM, K_DH, K_DN, K_SUNDIR, K_MONTH, K_DAY, K_HOUR, K_LAT, K_LON, K_MER, K_GROUND, K_NORTH,
-       K_COUNT };
+       K_ROT, K_COUNT };
 #define BIT(k) (1u << (k))
 #define DATE_KEYS (BIT(K_MONTH) | BIT(K_DAY) | BIT(K_HOUR) | BIT(K_LAT) | BIT(K_LON))
 
@@ -36,7 +36,7 @@ static ic_result read_keys(json_ctx *c, const cJSON *obj, ic_sky_params *p, unsi
 {
     static const char *valid = "sky, zenith_radiance, zenith_luminance, diffuse_horizontal, direct_normal, "
                                "sun_direction, month, day, hour, latitude, longitude, meridian, ground_reflectance, "
-                               "north";
+                               "north, rotation_deg";
     const cJSON *it;
     cJSON_ArrayForEach(it, obj)
     {
@@ -77,7 +77,12 @@ static ic_result read_keys(json_ctx *c, const cJSON *obj, ic_sky_params *p, unsi
                             &p->diffuse_horizontal);
             break;
         case K_DN:
-            r = read_ranged(c, it, kl, 0.0, 1e30, "give the direct normal irradiance in W/m2, >= 0", &p->direct_normal);
+            if (cJSON_IsString(it) && !strcmp(it->valuestring, "gensky")) {
+                p->direct_normal_gensky = 1;
+                break;
+            }
+            r = read_ranged(c, it, kl, 0.0, 1e30, "give the direct normal irradiance in W/m2, >= 0 (or \"gensky\")",
+                            &p->direct_normal);
             break;
         case K_SUNDIR:
             r = ic_json_read_vec3(c, it, kl, &p->sun_direction);
@@ -110,6 +115,10 @@ static ic_result read_keys(json_ctx *c, const cJSON *obj, ic_sky_params *p, unsi
             r = read_ranged(c, it, kl, 0.0, 1.0, "give the ground's reflectance, 0-1", &p->ground_reflectance);
             p->has_ground = 1;
             break;
+        case K_ROT:
+            r = read_ranged(c, it, kl, -360.0, 360.0, "give the sky's rotation about +y in degrees, -360 to 360",
+                            &p->rotation_deg);
+            break;
         default:
             r = ic_json_read_vec3(c, it, kl, &p->north);
             p->has_north = 1;
@@ -138,6 +147,11 @@ static ic_result check_keys(json_ctx *c, int line, const ic_sky_params *p, unsig
                             "(cd/m2) or 'diffuse_horizontal' (W/m2)",
                             model);
     }
+    if (p->direct_normal_gensky && p->model != IC_SKY_CIE_CLEAR)
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
+                            "'direct_normal': \"gensky\" is gensky's sun of its clear sky; give the %s sky's "
+                            "direct normal irradiance in W/m2",
+                            model);
     unsigned sun_keys = BIT(K_DN) | BIT(K_SUNDIR) | DATE_KEYS | BIT(K_MER);
     if (p->model == IC_SKY_CIE_OVERCAST) {
         if (given & sun_keys)
@@ -182,6 +196,7 @@ ic_result ic_json_parse_sky(json_ctx *c, const cJSON *obj, int line)
         s->sun.enabled = 1;
         s->sun.direction = s->env.sky.sun;
         s->sun.irradiance = v3s((float)s->env.sky.direct_normal);
+        s->sun.angular_radius = (float)(IC_SKY_SUN_RADIUS_DEG * 3.14159265358979323846 / 180.0);
     }
     return IC_OK;
 }

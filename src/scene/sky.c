@@ -14,6 +14,9 @@
  * sun): L_g = ρ_g E_h / π, as gensky's ground glow. The solar position uses the approximations of
  * Radiance's gensky (declination 0.4093 sin(2π(J − 81)/368), equation of time 0.170 sin(4π(J − 80)/373) −
  * 0.129 sin(2π(J − 8)/355) hours).
+ *
+ * The sun's disc (its radius, radiance and sampling) is the scene's sun light (scene.h, lights.c); here
+ * only its direct normal irradiance, given or gensky's default.
  */
 #include "scene/sky.h"
 
@@ -47,6 +50,12 @@ static const double clearness_bounds[7] = {1.065, 1.230, 1.500, 1.950, 2.800, 4.
 
 /* Solar constant (W/m²) of Perez et al. 1990's brightness Δ. */
 #define SOLAR_CONSTANT 1367.0
+
+double ic_sky_gensky_direct_normal(double alt)
+{
+    double sin_alt = sin(alt);
+    return 6e-5 * 1.5e9 / 208.0 * (1.147 - 0.147 / (sin_alt > 0.16 ? sin_alt : 0.16));
+}
 
 int ic_sky_day_of_year(int month, int day)
 {
@@ -156,7 +165,7 @@ static void perez_clearness_brightness(const ic_sky_params *p, double sun_zenith
         *delta = 0.2;
 }
 
-/* The sky frame from p->north (made horizontal and unit). */
+/* The sky frame from p->north (made horizontal and unit), turned by p->rotation_deg. */
 static int sky_frame(ic_sky *s, const ic_sky_params *p, char *why, size_t why_size)
 {
     s->up = v3(0.0f, 1.0f, 0.0f);
@@ -166,7 +175,7 @@ static int sky_frame(ic_sky *s, const ic_sky_params *p, char *why, size_t why_si
         snprintf(why, why_size, "'north' has no horizontal part; give a direction such as [0, 0, -1]");
         return 0;
     }
-    s->north = v3_norm(n);
+    s->north = v3_rotate_y(v3_norm(n), (float)p->rotation_deg);
     s->east = v3_cross(s->north, s->up);
     return 1;
 }
@@ -183,7 +192,7 @@ int ic_sky_init(ic_sky *s, const ic_sky_params *p, char *why, size_t why_size)
                 snprintf(why, why_size, "'sun_direction' is zero; give the direction towards the sun");
                 return 0;
             }
-            s->sun = v3_norm(p->sun_direction);
+            s->sun = v3_rotate_y(v3_norm(p->sun_direction), (float)p->rotation_deg);
         } else {
             double meridian = p->has_meridian ? p->meridian : 15.0 * floor(p->longitude / 15.0 + 0.5);
             double alt, az;
@@ -212,7 +221,8 @@ int ic_sky_init(ic_sky *s, const ic_sky_params *p, char *why, size_t why_size)
         s->zenith_radiance = p->zenith_radiance;
         s->horizontal = p->zenith_radiance * rel_h;
     }
-    s->direct_normal = p->direct_normal;
+    s->direct_normal = p->direct_normal_gensky ? ic_sky_gensky_direct_normal(PI_D / 2.0 - s->sun_zenith)
+                                               : p->direct_normal;
     double rho = p->has_ground ? p->ground_reflectance : 0.2;
     double sun_h = s->direct_normal * (s->model == IC_SKY_CIE_OVERCAST ? 0.0 : (double)s->sun.y);
     s->ground_radiance = rho * (s->horizontal + sun_h) / PI_D;

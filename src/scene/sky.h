@@ -6,7 +6,13 @@
  * ground reflectance below the horizon). docs/scene-format.md, "Skies", gives the formulas and units.
  *
  * The sky frame: +y is up (the environment's convention), `north` a horizontal direction (default −z),
- * east = north × up (+x by default). Radiances are the scene's radiometric units, W/(m²·sr); a luminance
+ * east = north × up (+x by default); `rotation_deg` turns the whole sky (its north and a given sun
+ * direction) about +y, right-handed as an environment map's rotation (+90° turns −z into −x).
+ *
+ * The sun of a clear or Perez sky is a disc of angular radius IC_SKY_SUN_RADIUS_DEG and uniform radiance
+ * E_dn / (π sin² radius), so that a surface facing it receives the direct normal irradiance E_dn; the
+ * scene makes it its sun light (scene_json_sky.c, lights.c). The sky's own distribution is evaluated
+ * everywhere, inside the disc too (the disc adds to it, as Radiance's solar source does to its sky). Radiances are the scene's radiometric units, W/(m²·sr); a luminance
  * L_v (cd/m²) is L_v / 179 W/(m²·sr) of white light (the 179 lm/W convention of docs/points.md).
  */
 #ifndef IC_SCENE_SKY_H
@@ -18,6 +24,9 @@
 
 /* Radiance's luminous efficacy of white light (lm/W), the one conversion between the two unit systems. */
 #define IC_SKY_EFFICACY 179.0
+/* The sun's mean angular radius (degrees): half its 0.533° mean apparent diameter; the disc spans
+ * 2π(1 − cos 0.2665°) = 6.80e-5 sr. */
+#define IC_SKY_SUN_RADIUS_DEG 0.2665
 
 typedef enum ic_sky_model {
     IC_SKY_NONE = 0,
@@ -33,6 +42,8 @@ typedef struct ic_sky_params {
     double diffuse_horizontal; /* W/m²: the sky's irradiance on an unobstructed horizontal plane (gensky -B,
                                   gendaylit -W's second value) */
     double direct_normal;      /* W/m²: the sun's irradiance at normal incidence (0: no sun) */
+    int direct_normal_gensky;  /* 1: direct_normal from the sun's altitude as gensky's default sun
+                                  (ic_sky_gensky_direct_normal) */
     int has_sun_direction;
     ic_vec3 sun_direction;     /* towards the sun, world space */
     int has_date;              /* month, day, hour, latitude, longitude given */
@@ -46,6 +57,7 @@ typedef struct ic_sky_params {
     double ground_reflectance; /* [0.2] */
     int has_north;
     ic_vec3 north;             /* horizontal direction of north [0, 0, −1] */
+    double rotation_deg;       /* the sky turned about +y (north and sun_direction with it) [0] */
 } ic_sky_params;
 
 /* A sky ready to evaluate. */
@@ -67,6 +79,10 @@ typedef struct ic_sky {
  * time; latitude, longitude and meridian in degrees (east positive). */
 void ic_sky_sun_position(int month, int day, double hour, double latitude, double longitude, double meridian,
                          double *altitude, double *azimuth);
+/* The direct normal irradiance (W/m²) of gensky's default sun at altitude alt (radians): its solar
+ * radiance 1.5e9/208 (1.147 − 0.147/max(sin alt, 0.16)) W/(m²·sr) (a luminance of 1.5e9 cd/m² at high
+ * sun, at 208 lm/W) over gensky's solar solid angle of 6e-5 sr. */
+double ic_sky_gensky_direct_normal(double alt);
 /* Day of the year (1–365, no leap day) of month/day. */
 int ic_sky_day_of_year(int month, int day);
 

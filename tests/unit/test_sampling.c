@@ -1,7 +1,7 @@
 /*
  * test_sampling.c — every warp in core/sampling.h: inversion (warp(inverse(x)) = x), the pdf
  * integrates to 1 over its domain (numerical quadrature), and the samples' distribution agrees with
- * the pdf (analytic cumulative probability of z > c). Plus frames and the counter-based RNG.
+ * the pdf (analytic cumulative probability of z > c); the sun-sized cone separately. Plus frames and the counter-based RNG.
  */
 #include "test_util.h"
 
@@ -26,12 +26,16 @@ static void i_us(ic_vec3 d, float e, float *a, float *b) { (void)e; ic_warp_unif
 static ic_vec3 w_ph(float a, float b, float e) { return ic_warp_phong_lobe(a, b, e); }
 static float p_ph(ic_vec3 d, float e) { return ic_warp_phong_lobe_pdf(d, e); }
 static void i_ph(ic_vec3 d, float e, float *a, float *b) { ic_warp_phong_lobe_inv(d, e, a, b); }
+static ic_vec3 w_cone(float a, float b, float e) { return ic_warp_uniform_cone(a, b, e); }
+static float p_cone(ic_vec3 d, float e) { return ic_warp_uniform_cone_pdf(d, e); }
+static void i_cone(ic_vec3 d, float e, float *a, float *b) { ic_warp_uniform_cone_inv(d, e, a, b); }
 
 /* P(z > c) for each warp, analytically. */
 static double cdf_cos(double c, double e) { (void)e; return c < 0 ? 1.0 : 1.0 - c * c; }
 static double cdf_uh(double c, double e) { (void)e; return c < 0 ? 1.0 : 1.0 - c; }
 static double cdf_us(double c, double e) { (void)e; return (1.0 - c) / 2.0; }
 static double cdf_ph(double c, double e) { return c < 0 ? 1.0 : 1.0 - pow(c, e + 1.0); }
+static double cdf_cone(double c, double e) { return c < 1.0 - e ? 1.0 : (1.0 - c) / e; }
 
 typedef struct warp_case {
     const char *name;
@@ -86,6 +90,35 @@ static void check_warp(const warp_case *w)
         double sd = sqrt(p * (1 - p) / n) + 1e-9;
         CHECK(fabs(got - p) < 5.0 * sd + 1e-6, "%s: P(z > %g) = %g, expected %g", w->name, cs[k], got, p);
     }
+}
+
+/* The sun's cone (angular radius 0.2665°, 1 − cos ≈ 1.08e-5): too small for the quadrature above, so:
+ * inversion in angle, every sample inside, the pdf times the cap's solid angle is 1, and the fraction of
+ * samples within half the radius is a quarter (the cap's area grows as θ²). */
+static void check_small_cone(void)
+{
+    double radius = 0.2665 * M_PI / 180.0, omc = 2.0 * sin(0.5 * radius) * sin(0.5 * radius);
+    ic_rng rng = ic_rng_make(9, 4, 5, 6);
+    double worst = 0.0;
+    int outside = 0, within_half = 0, n = 100000;
+    for (int i = 0; i < n; ++i) {
+        float u1 = ic_rng_float(&rng), u2 = ic_rng_float(&rng), a, b;
+        ic_vec3 d = ic_warp_uniform_cone(u1, u2, (float)omc);
+        outside += !(ic_warp_uniform_cone_pdf(d, (float)omc) > 0.0f);
+        double theta = asin(sqrt((double)d.x * d.x + (double)d.y * d.y));
+        within_half += theta < 0.5 * radius;
+        ic_warp_uniform_cone_inv(d, (float)omc, &a, &b);
+        ic_vec3 d2 = ic_warp_uniform_cone(a, b, (float)omc);
+        double e = v3_len(v3_sub(d, d2)) / radius;
+        worst = e > worst ? e : worst;
+    }
+    CHECK(worst < 1e-3, "small cone: warp(inverse(d)) = d to %g of the radius", worst);
+    CHECK(outside == 0, "small cone: every sample inside (%d outside)", outside);
+    ic_vec3 axis = {0.0f, 0.0f, 1.0f};
+    CHECK_NEAR(ic_warp_uniform_cone_pdf(axis, (float)omc) * 2.0 * M_PI * (1.0 - cos(radius)), 1.0, 1e-5,
+               "small cone: pdf × solid angle = 1");
+    double p = 0.25, got = (double)within_half / n;
+    CHECK(fabs(got - p) < 5.0 * sqrt(p * (1 - p) / n), "small cone: %g of the samples within half the radius", got);
 }
 
 static void check_disk_and_triangle(void)
@@ -303,9 +336,12 @@ int main(void)
         {"phong lobe n=1", w_ph, p_ph, i_ph, cdf_ph, 1.0f},
         {"phong lobe n=20", w_ph, p_ph, i_ph, cdf_ph, 20.0f},
         {"phong lobe n=500", w_ph, p_ph, i_ph, cdf_ph, 500.0f},
+        {"cone 1 - cos = 0.3", w_cone, p_cone, i_cone, cdf_cone, 0.3f},
+        {"cone 1 - cos = 1.5", w_cone, p_cone, i_cone, cdf_cone, 1.5f},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i)
         check_warp(&cases[i]);
+    check_small_cone();
     check_disk_and_triangle();
     check_frames();
     check_rng();

@@ -15,6 +15,7 @@
  *   6. through the renderer: `ic_points_compute` on an open plane gives 7π/9 L_z under the overcast sky
  *      and E_dh + E_dn sin α under the Perez sky, within the σ it reports;
  *   7. scene files with a bad sky are refused with a message naming the key.
+ * The sun's disc and the sky's rotation: test_sun.c.
  */
 #include "test_util.h"
 
@@ -278,6 +279,11 @@ static void test_bad(void)
         {"{\"sky\": \"cie-overcast\", \"zenith_radiance\": 1, \"north\": [0, 1, 0]}", "north"},
         {"{\"sky\": \"cie-overcast\", \"zenith_radiance\": 1, \"radiance\": 1}", "unknown"},
         {"{\"sky\": 3, \"zenith_radiance\": 1}", "sky"},
+        {"{\"sky\": \"cie-overcast\", \"zenith_radiance\": 1, \"rotation_deg\": 400}", "rotation_deg"},
+        {"{\"sky\": \"perez\", \"diffuse_horizontal\": 100, \"direct_normal\": \"gensky\", \"sun_direction\": [0, 1, 1]}",
+         "gensky"},
+        {"{\"sky\": \"cie-clear\", \"zenith_radiance\": 1, \"direct_normal\": \"bright\", \"sun_direction\": [0, 1, 1]}",
+         "direct_normal"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         ic_error err = {0};
