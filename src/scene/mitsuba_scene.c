@@ -295,6 +295,65 @@ static ic_result parse_shape(ic_mts_ctx *c, const xmlNode *n)
 
 /* ---- emitters ---- */
 
+/* Mitsuba's sun, sky and sunsky emitters as irrcache's CIE clear sky with gensky's default sun (a disc of
+ * the sun's size): the sun from sunDirection (towards the sun, world space) or from the date, time and
+ * place (Mitsuba's defaults: 10 July 2010, 15:00 at Tokyo, time zone +9), turned into a direction with
+ * irrcache's north (−z) and up (+y); `scale` multiplies both. Mitsuba's own sky models (Preetham,
+ * Hosek–Wilkie: turbidity, albedo) are not implemented: one warning says so. */
+static ic_result parse_daylight(ic_mts_ctx *c, const xmlNode *n, const char *type)
+{
+    ic_sky_params p;
+    memset(&p, 0, sizeof p);
+    p.model = IC_SKY_CIE_CLEAR;
+    p.direct_normal_gensky = 1;
+    float scale = 1.0f, v[9];
+    ic_result r = ic_mts_float(c, n, "scale", 1.0f, &scale);
+    xmlNode *dk = ic_mts_child(c, n, "vector", "sunDirection");
+    if (r == IC_OK && dk) {
+        ic_vec3 d;
+        if ((r = ic_mts_vec(c, dk, 0.0f, &d)) != IC_OK)
+            return r;
+        if (!(v3_len2(d) > 0.0f) || !(d.y > 0.0f))
+            return ic_mts_fail(c, dk, IC_ERR_INVALID_ARG, "sunDirection must point above the horizon (+y up)", NULL);
+        p.has_sun_direction = 1;
+        p.sun_direction = v3_norm(d);
+    } else if (r == IC_OK) {
+        static const char *names[9] = {"year", "month", "day", "hour", "minute", "second", "latitude",
+                                       "longitude", "timezone"};
+        static const float fallback[9] = {2010, 7, 10, 15, 0, 0, 35.6894f, 139.6917f, 9};
+        for (int k = 0; k < 9 && r == IC_OK; ++k)
+            r = ic_mts_float(c, n, names[k], fallback[k], &v[k]);
+        if (r != IC_OK)
+            return r;
+        p.has_date = 1;
+        p.month = (int)v[1];
+        p.day = (int)v[2];
+        p.hour = v[3] + v[4] / 60.0 + v[5] / 3600.0;
+        p.latitude = v[6];
+        p.longitude = v[7];
+        p.has_meridian = 1;
+        p.meridian = 15.0 * v[8];
+    }
+    if (r != IC_OK)
+        return r;
+    if (!(scale >= 0.0f))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "scale must not be negative", NULL);
+    char kind[80], why[256];
+    snprintf(kind, sizeof kind, "<emitter type=\"%s\">", type);
+    ic_mts_warn_once(c, n, kind, dk ? "is rendered as the CIE clear sky with gensky's sun (Mitsuba's sky model is "
+                                      "not implemented; turbidity and albedo are ignored)"
+                                    : "is rendered as the CIE clear sky with gensky's sun (Mitsuba's sky model is "
+                                      "not implemented); the sun's azimuth takes north as -z: give sunDirection to "
+                                      "place it exactly");
+    int with_sky = strcmp(type, "sun") != 0, with_sun = strcmp(type, "sky") != 0;
+    if (with_sky && c->b->scene->env.enabled)
+        return ic_mts_fail(c, n, IC_ERR_UNSUPPORTED, "a second environment emitter; irrcache renders one", NULL);
+    r = ic_scene_install_sky(c->b->scene, &p, with_sky, with_sun, scale, why, sizeof why);
+    if (r == IC_ERR_UNSUPPORTED)
+        return ic_mts_fail(c, n, r, "a second sun (sun, sunsky or directional emitter); irrcache renders one", NULL);
+    return r == IC_OK ? IC_OK : ic_mts_fail(c, n, r, "sun or sky: ", why);
+}
+
 static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
 {
     char type_buf[64];
@@ -347,6 +406,8 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
         s->sun.direction = v3_neg(v3_norm(d));
         return ic_mts_color(c, n, "irradiance", v3s(1.0f), &s->sun.irradiance, NULL);
     }
+    if (!strcmp(type, "sun") || !strcmp(type, "sky") || !strcmp(type, "sunsky"))
+        return parse_daylight(c, n, type);
     if (!strcmp(type, "envmap")) {
         char file_buf[IC_SCENE_PATH_MAX];
         const char *file = ic_mts_string(c, n, "filename");

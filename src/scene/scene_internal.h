@@ -106,6 +106,12 @@ void ic_scene_builder_release(ic_scene_builder *b);
 ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float *xform, const char *xform_where,
                          ic_error *err);
 
+/* Puts the sky p describes into the scene (scene_sky.c): as the environment (with_sky, radiance × scale)
+ * and its sun, if it has one, as the scene's sun disc (with_sun, irradiance × scale). IC_ERR_INVALID_ARG
+ * when p is no valid sky, IC_ERR_UNSUPPORTED when the scene has a sun already; why says what (no prefix). */
+ic_result ic_scene_install_sky(ic_scene *s, const ic_sky_params *p, int with_sky, int with_sun, float scale,
+                               char *why, size_t why_size);
+
 /* Appends shape shape_index of a Mitsuba serialized mesh file (mesh_serialized.c) with one material,
  * transformed by the row-major 4x4 xform: positions, vertex normals, triangles (texture coordinates and
  * colours are not read). where ("scene.xml:12") names the shape in messages. */

@@ -185,18 +185,8 @@ ic_result ic_json_parse_sky(json_ctx *c, const cJSON *obj, int line)
         return r;
     p.has_date = (given & DATE_KEYS) == DATE_KEYS;
     char why[256];
-    if (!ic_sky_init(&s->env.sky, &p, why, sizeof why))
-        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "environment sky: %s", why);
-    s->env.enabled = 1;
-    s->env.radiance = v3s(1.0f);
-    if (s->env.sky.direct_normal > 0.0) {
-        if (s->sun.enabled)
-            return ic_json_fail(c, line, IC_ERR_UNSUPPORTED,
-                                "the sky's sun ('direct_normal') and a sun light: give only one");
-        s->sun.enabled = 1;
-        s->sun.direction = s->env.sky.sun;
-        s->sun.irradiance = v3s((float)s->env.sky.direct_normal);
-        s->sun.angular_radius = (float)(IC_SKY_SUN_RADIUS_DEG * 3.14159265358979323846 / 180.0);
-    }
-    return IC_OK;
+    r = ic_scene_install_sky(s, &p, 1, 1, 1.0f, why, sizeof why);
+    if (r == IC_ERR_UNSUPPORTED)
+        return ic_json_fail(c, line, r, "the sky's sun ('direct_normal') and a sun light: give only one");
+    return r == IC_OK ? IC_OK : ic_json_fail(c, line, r, "environment sky: %s", why);
 }
