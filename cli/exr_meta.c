@@ -46,10 +46,14 @@ void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cl
     cJSON_Delete(settings);
     add(m, "irrcache:settings", m->settings);
     /* An interrupted render's image is partial: how much of the final render it holds. */
-    if (st->cancelled) {
-        snprintf(m->text[4], sizeof m->text[4], "interrupted; %.3f of the final render's tiles", st->completed);
-        add(m, "irrcache:partial", m->text[4]);
-    }
+    if (st->cancelled)
+        ic_cli_exr_meta_partial(m, "interrupted", st->completed);
+}
+
+void ic_cli_exr_meta_partial(ic_cli_exr_meta *m, const char *why, double completed)
+{
+    snprintf(m->text[4], sizeof m->text[4], "%s; %.3f of the final render", why, completed);
+    add(m, "irrcache:partial", m->text[4]);
 }
 
 void ic_cli_exr_meta_free(ic_cli_exr_meta *m)

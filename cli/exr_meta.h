@@ -21,6 +21,9 @@ typedef struct ic_cli_exr_meta {
  * :settings (the options as the stats JSON echoes them) and, for an interrupted render, :partial. Never
  * fails: what cannot be made is left out. */
 void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cli_exr_meta *m);
+/* Adds irrcache:partial, "WHY; F of the final render" (why: "interrupted", "checkpoint"; completed: the
+ * share F done). */
+void ic_cli_exr_meta_partial(ic_cli_exr_meta *m, const char *why, double completed);
 void ic_cli_exr_meta_free(ic_cli_exr_meta *m);
 
 #endif

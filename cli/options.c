@@ -334,9 +334,14 @@ void ic_cli_print_help(FILE *f)
         wrap(f, text, LEFT, at);
     }
     fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error, 130 or 143\n"
-               "interrupted by SIGINT or SIGTERM: the render stops at its next tile (during cache construction, at\n"
-               "the next pass, then renders one sample per pixel) and every output holds the image so far, marked\n"
-               "partial (EXR attribute irrcache:partial, \"interrupted\" in --stats); a second signal ends it at once\n");
+               "interrupted by SIGINT or SIGTERM: the render stops at its next tile and every output holds the\n"
+               "image so far, marked partial (EXR attribute irrcache:partial, \"interrupted\" in --stats). During\n"
+               "cache construction no new gather begins (a pass stops within a few records), and the records made\n"
+               "so far render one sample per pixel (a preview; where no record reaches, one path-traced ray). A\n"
+               "second signal ends it at once.\n"
+               "progress line (stderr a terminal): the phase and its share done, the render's elapsed time and\n"
+               "the time left of the whole render (construction, final render, AOVs); shown as '-' during cache\n"
+               "construction without --time, whose length depends on when the cache converges\n");
 }
 
 /* A table cell cannot hold a bare '|'. */

@@ -57,9 +57,17 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, IC_MAX_SPP, "N", NAN, "scene file, else 16 (pt) or 32 (ic)", "", \
       IC_SCOPE_ALL, "samples per pixel (with --time: the most to take)") \
     X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
-      "wall-time budget of the whole render, cache construction included: progressive passes " \
-      "until it is spent (equal-time comparisons); batch and adaptive cache construction stop after half " \
-      "of it (a warning and cut_by_time in the stats say so)") \
+      "wall-time budget of the whole render, from building the ray-tracing structure to the last sample " \
+      "(loading the scene and writing the outputs are outside it): cache construction (batch, adaptive, " \
+      "lazy) stops at its first pass or gather after half of it (a warning and cut_by_time in the stats " \
+      "say so), and the final render takes progressive passes until the rest is spent, at least one sample " \
+      "per pixel; radiance records and the --aov indirect and glossy re-renders come on top (equal-time " \
+      "comparisons)") \
+    X(CHECKPOINT, "--checkpoint", NULL, IC_OPT_DOUBLE, render.checkpoint_seconds, 0, 1e9, "SECONDS", NAN, "none", \
+      "s", IC_SCOPE_ALL, "every SECONDS of the final render's wall time, write every -o output with the image " \
+      "so far (unrendered tiles black; atomically; EXR marked irrcache:partial \"checkpoint\"); the final " \
+      "image replaces it and is the same as without. Cache construction has no image yet: the clock starts " \
+      "with the final render. AOVs come with the final image only") \
     X(INTEGRATOR, "--integrator", NULL, IC_OPT_CHOICE, render.integrator, 0, 0, "pt|ic", NAN, "pt", "", \
       IC_SCOPE_ALL, "pt: path-traced reference; ic: irradiance caching (indirect diffuse from the cache)") \
     X(MAX_DEPTH, "--max-depth", NULL, IC_OPT_INT, render.max_depth, 1, IC_MAX_MAX_DEPTH, "N", IC_DEFAULT_MAX_DEPTH, \

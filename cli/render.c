@@ -32,7 +32,7 @@ typedef ic_cli_args render_args;
 
 typedef struct progress_state {
     int enabled;
-    double start, last;
+    double last;
     const char *last_phase;
 } progress_state;
 
@@ -43,24 +43,25 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static void on_progress(void *user, const char *phase, double fraction)
+/* The progress line: the phase and its share, the render's elapsed time and the whole render's time left
+ * ('-' while the library cannot estimate it: cache construction without --time). */
+static void on_progress(void *user, const ic_render_progress *r)
 {
     progress_state *p = user;
     if (!p->enabled)
         return;
     double t = now_seconds();
-    int new_phase = p->last_phase != phase;
-    if (!new_phase && t - p->last < 0.1 && fraction < 1.0)
+    int new_phase = p->last_phase != r->phase;
+    if (!new_phase && t - p->last < 0.1 && r->fraction < 1.0)
         return;
     p->last = t;
-    p->last_phase = phase;
-    double el = t - p->start;
-    if (fraction > 0.0 && fraction <= 1.0) {
-        double eta = el / fraction - el;
-        fprintf(stderr, "\r%-16s %5.1f%%  elapsed %6.1fs  ETA %6.1fs ", phase, 100.0 * fraction, el, eta);
-    } else {
-        fprintf(stderr, "\r%-16s  elapsed %6.1fs ", phase, el);
-    }
+    p->last_phase = r->phase;
+    char share[16] = "", eta[32] = "ETA      -";
+    if (r->fraction >= 0.0)
+        snprintf(share, sizeof share, "%5.1f%%", 100.0 * fmin(r->fraction, 1.0));
+    if (r->eta >= 0.0)
+        snprintf(eta, sizeof eta, "ETA %6.1fs", r->eta);
+    fprintf(stderr, "\r%-16s %6s  elapsed %6.1fs  %s ", r->phase, share, r->elapsed, eta);
     fflush(stderr);
 }
 
@@ -210,6 +211,56 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
     return failed;
 }
 
+/* Writes img to every -o output, the first with `layers` (its EXR layers); returns how many failed, each
+ * said on stderr after `what`, and named in `failed` (may be NULL) after a comma. */
+static int write_outputs(const render_args *a, const ic_image *img, const ic_image_write_options *wo,
+                         const ic_image_layer *layers, uint32_t layer_count, const char *what, char *failed,
+                         size_t size)
+{
+    int n = 0;
+    for (int i = 0; i < a->output_count; ++i) {
+        ic_image_write_options wo_i = *wo;
+        if (i == 0) {
+            wo_i.layers = layers;
+            wo_i.layer_count = layer_count;
+        }
+        ic_error err;
+        if (ic_image_write(a->outputs[i], img, &wo_i, &err) == IC_OK)
+            continue;
+        fprintf(stderr, "irrcache render: %s %s\n", what, err.message);
+        if (failed)
+            snprintf(failed + strlen(failed), size - strlen(failed), "%s-o %s", failed[0] ? ", " : "",
+                     a->outputs[i]);
+        ++n;
+    }
+    return n;
+}
+
+/* --checkpoint: the final render's image so far into every -o output, marked partial. A write that fails
+ * is said and the render goes on (the next checkpoint, or the final image, tries again). */
+typedef struct checkpoint_state {
+    const render_args *a;
+    ic_image_write_options wo; /* exposure and half floats of the final outputs */
+} checkpoint_state;
+
+static void on_checkpoint(void *user, const ic_render_checkpoint *cp)
+{
+    const checkpoint_state *k = user;
+    ic_render_stats st;
+    memset(&st, 0, sizeof st);
+    st.seed = cp->seed;
+    st.spp = cp->spp;
+    st.seconds = cp->seconds;
+    ic_cli_exr_meta meta;
+    ic_cli_exr_meta_make(k->a, &st, &meta);
+    ic_cli_exr_meta_partial(&meta, "checkpoint", cp->completed);
+    ic_image_write_options wo = k->wo;
+    wo.meta = meta.items;
+    wo.meta_count = meta.count;
+    write_outputs(k->a, cp->image, &wo, NULL, 0, "--checkpoint: -o", NULL, 0);
+    ic_cli_exr_meta_free(&meta);
+}
+
 static int write_records_json(const char *path, const ic_render_aovs *aovs)
 {
     cJSON *list = cJSON_CreateArray();
@@ -322,7 +373,6 @@ static int render_command(int argc, char **argv, ic_comm *comm)
 
     progress_state prog = {0};
     prog.enabled = rank == 0 && !a.quiet && isatty(fileno(stderr));
-    prog.start = now_seconds();
 
     ic_error err = {0};
     ic_scene *scene = NULL;
@@ -351,8 +401,16 @@ static int render_command(int argc, char **argv, ic_comm *comm)
 
     ic_render_options opt = a.render;
     opt.comm = comm;
-    opt.progress = on_progress;
+    opt.progress_detail = on_progress;
     opt.progress_user = &prog;
+    ic_image_write_options wo = {0};
+    wo.exposure = a.given[IC_ARG_EXPOSURE] ? (float)a.exposure : ic_scene_exposure(scene);
+    wo.exr_half = a.exr_half;
+    checkpoint_state checkpoints = {&a, wo};
+    if (rank == 0 && opt.checkpoint_seconds > 0.0) { /* one process writes (the library ignores a shared comm) */
+        opt.checkpoint = on_checkpoint;
+        opt.checkpoint_user = &checkpoints;
+    }
     ic_render_aovs aovs;
     memset(&aovs, 0, sizeof aovs);
     if (a.records_json) {
@@ -417,9 +475,6 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         ++st.phase_count;
     }
     int w = img.width, h = img.height;
-    ic_image_write_options wo = {0};
-    wo.exposure = a.given[IC_ARG_EXPOSURE] ? (float)a.exposure : ic_scene_exposure(scene);
-    wo.exr_half = a.exr_half;
     ic_cli_exr_meta meta;
     ic_cli_exr_meta_make(&a, &st, &meta);
     wo.meta = meta.items;
@@ -437,17 +492,7 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     for (int k = 0; k < AOV_COUNT && opt.aovs && a.aov; ++k)
         if (aov_imgs[k]->rgb && aov_is_layer(a.outputs[0], k))
             layers[layer_count++] = (ic_image_layer){aov_files[k].name, aov_imgs[k]};
-    for (int i = 0; i < a.output_count; ++i) {
-        ic_image_write_options wo_i = wo;
-        if (i == 0) {
-            wo_i.layers = layers;
-            wo_i.layer_count = layer_count;
-        }
-        if (ic_image_write(a.outputs[i], &img, &wo_i, &err) != IC_OK) {
-            fprintf(stderr, "irrcache render: -o %s\n", err.message);
-            FAILED("-o", a.outputs[i]);
-        }
-    }
+    n_failed += write_outputs(&a, &img, &wo, layers, layer_count, "-o", failed, sizeof failed);
     if (opt.aovs && a.aov) {
         int n = write_aovs(a.outputs[0], &aovs, &wo);
         if (n)
@@ -469,7 +514,8 @@ static int render_command(int argc, char **argv, ic_comm *comm)
                     100.0 * st.completed);
         else
             fprintf(stderr, "irrcache render: interrupted by %s during cache construction: the outputs hold a "
-                            "preview of one sample per pixel\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+                            "preview of one sample per pixel from the %u records made so far\n",
+                    sig == SIGTERM ? "SIGTERM" : "SIGINT", st.records);
     } else if (st.cut_by_time)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
                         "(%d passes) before it converged; give more time for a converged cache\n", st.passes);

@@ -189,6 +189,30 @@ typedef struct ic_render_aovs {
                               red = accuracy/32 or less (log scale; Křivánek et al. 2006 figs. 7–9) */
 } ic_render_aovs;
 
+/* A progress report of ic_render (ic_render_options.progress_detail). */
+typedef struct ic_render_progress {
+    const char *phase;     /* what runs now: "cache passes", "final render", "indirect AOV", ... */
+    double fraction;       /* share of that phase done, in [0, 1]; < 0 when unknown */
+    double elapsed;        /* seconds since ic_render began */
+    double eta;            /* estimated seconds until ic_render returns: the rest of the whole render (cache
+                              construction, the final render, the AOVs it re-renders); < 0 while it cannot be
+                              estimated: during cache construction without a time budget, whose length
+                              depends on when the cache converges. With a time budget: what is left of it,
+                              plus the AOVs' re-renders (they follow the budget) */
+} ic_render_progress;
+typedef void (*ic_render_progress_fn)(void *user, const ic_render_progress *p);
+
+/* The final render's image so far, handed out by ic_render_options.checkpoint. */
+typedef struct ic_render_checkpoint {
+    const ic_image *image; /* borrowed for the call: each pixel the mean of the samples it holds; tiles not
+                              yet rendered are black (a time budget's later passes: their earlier samples) */
+    double completed;      /* share of the final render done (of its samples; with a time budget, of its time) */
+    double seconds;        /* since ic_render began */
+    int spp;               /* samples per pixel the final render aims at (0 with a time budget and no spp) */
+    uint64_t seed;         /* the seed the render uses */
+} ic_render_checkpoint;
+typedef void (*ic_checkpoint_fn)(void *user, const ic_render_checkpoint *cp);
+
 /* Render options; zero means default (or the scene file's value where it gives one). */
 typedef struct ic_render_options {
     ic_integrator integrator;
@@ -198,25 +222,38 @@ typedef struct ic_render_options {
     uint64_t seed;         /* random seed (default: scene file, else 1) */
     int has_seed;          /* 1: use `seed` even if it is 0 */
     double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent (the budget
-                              of the whole call: construction comes off the film's share, and the batch and
-                              adaptive strategies stop after IC_CONSTRUCTION_TIME_SHARE of it) */
+                              of the whole call: construction comes off the film's share, and the batch,
+                              adaptive and lazy strategies stop at their first pass, round or shading point
+                              after IC_CONSTRUCTION_TIME_SHARE of it; the film takes at least one sample per
+                              pixel; radiance records and the AOVs' re-renders are not cut) */
     ic_sampler sampler;    /* pixel, light and BSDF sample pairs [IC_SAMPLER_SOBOL] */
     ic_cache_switch adaptive_sampling; /* IC_CACHE_ON: spp is a mean per pixel; a pilot pass of spp/4, the
                               rest shared out by each pixel's relative noise (Frolov et al. 2012 §3.2; needs
                               spp ≥ 8, no time budget); IC_CACHE_OFF: even; IC_CACHE_DEFAULT: on for
                               integrator IC when spp ≥ 8 and there is no time budget, else off */
-    ic_progress_fn progress;
-    void *progress_user;
+    ic_progress_fn progress; /* each phase's share done (may be NULL) */
+    void *progress_user;   /* for progress and progress_detail */
+    ic_render_progress_fn progress_detail; /* the same reports with the whole render's elapsed time and
+                              estimated time left (may be NULL); called from one thread at a time */
+    double checkpoint_seconds; /* > 0 with checkpoint: every this many seconds of the final render's wall time
+                              (the clock starts with the final render: construction has no image), the
+                              render threads finish the tiles they hold and checkpoint gets the image so far
+                              on the calling thread (the time it takes is the render's); the final image is
+                              the same as without. Ignored with a shared comm */
+    ic_checkpoint_fn checkpoint;
+    void *checkpoint_user;
     ic_ic_options ic;      /* irradiance caching (integrator IC) */
     ic_render_aovs *aovs;  /* optional diagnostics (integrator IC); caller frees the images */
     ic_comm *comm;         /* the processes sharing this render (irrcache/comm.h): every one calls ic_render
                               with the same options and gets the same image; NULL: one process. Must outlive
                               the call; its traffic counters are updated */
     const volatile sig_atomic_t *cancel; /* optional flag (a signal handler's): once non-zero, cache construction
-                              stops at its next pass and the final render at its next tile (with a time
-                              budget, its next pass); a render stopped before its final render began renders
-                              one sample per pixel. The render then returns IC_OK with stats.cancelled set
-                              and the image it has: unrendered tiles are black. Ignored with a shared comm */
+                              stops within its current pass (no new gather begins; the records gathered
+                              are kept) and the final render at its next tile (with a time budget, its next
+                              pass); a render stopped before its final render began renders one sample per
+                              pixel from the records it has. The render then returns IC_OK with
+                              stats.cancelled set and the image it has: unrendered tiles are black. Ignored
+                              with a shared comm */
 } ic_render_options;
 
 #define IC_MAX_PHASES 12 /* room for every phase of every integrator, and the CLI's "load" */

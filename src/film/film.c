@@ -75,25 +75,44 @@ typedef struct loop_ctx {
     int s_begin, s_end;    /* samples of this pass */
     uint64_t *rays;        /* per thread, padded */
     uint64_t *samples;     /* per thread, padded: pixel samples taken */
-    atomic_int tiles_done;
     atomic_int tiles_skipped; /* tiles left unrendered because loop.cancel was set */
     int skip_on_cancel;    /* 1: a set loop.cancel skips the tiles not started yet */
-    int total_tiles_all_passes;
-    int tiles_before_pass;
+    atomic_ullong samples_done; /* pixel samples taken so far, all passes (progress) */
+    double samples_planned;   /* pixel samples of all passes (0 with a time budget: not known) */
+    uint64_t own_pixels;   /* pixels of this process's tiles */
     double start;
+    /* Checkpoints (loop.checkpoint; one process): a pass is rendered in rounds over the tiles not yet
+     * rendered; a round ends early when a checkpoint falls due. */
+    int checkpointing;
+    uint8_t *tile_state;   /* per tile, this pass: TILE_WAITING, TILE_RENDERED or TILE_SKIPPED */
+    int64_t *todo;         /* the tiles of the current round */
+    atomic_int pause;      /* 1: a checkpoint is due; tiles not begun wait for the next round */
+    double next_checkpoint;/* ic_seconds() at which the next one falls due */
 } loop_ctx;
 
+enum { TILE_WAITING = 0, TILE_RENDERED = 1, TILE_SKIPPED = 2 };
+
 #define RAY_PAD 8 /* uint64 slots between per-thread counters: no false sharing */
+
+/* The pixels [x0, x1) × [y0, y1) of tile t (of the whole image). */
+static void tile_rect(const loop_ctx *c, int64_t t, int *x0, int *y0, int *x1, int *y1)
+{
+    const ic_camera *cam = c->loop->camera;
+    *x0 = (int)(t % c->tiles_x) * TILE;
+    *y0 = (int)(t / c->tiles_x) * TILE;
+    *x1 = *x0 + TILE < cam->width ? *x0 + TILE : cam->width;
+    *y1 = *y0 + TILE < cam->height ? *y0 + TILE : cam->height;
+}
 
 static void render_tile(void *p, int64_t item, int thread)
 {
     loop_ctx *c = p;
     const ic_camera *cam = c->loop->camera;
+    if (c->todo)
+        item = c->todo[item];
     int64_t tile = (int64_t)c->rank + item * c->ranks;
-    int tx = (int)(tile % c->tiles_x), ty = (int)(tile / c->tiles_x);
-    int x0 = tx * TILE, y0 = ty * TILE;
-    int x1 = x0 + TILE < cam->width ? x0 + TILE : cam->width;
-    int y1 = y0 + TILE < cam->height ? y0 + TILE : cam->height;
+    int x0, y0, x1, y1;
+    tile_rect(c, tile, &x0, &y0, &x1, &y1);
     if (c->skip_on_cancel && *c->loop->cancel) {
         /* Interrupted: the tile keeps what earlier passes gave it (the adaptive pass's extra samples
          * are taken back, so its pixels average what they have). */
@@ -101,8 +120,12 @@ static void render_tile(void *p, int64_t item, int thread)
             for (int x = x0; x < x1; ++x)
                 c->extra[y * cam->width + x] = 0;
         atomic_fetch_add(&c->tiles_skipped, 1);
+        if (c->tile_state)
+            c->tile_state[item] = TILE_SKIPPED;
         return;
     }
+    if (c->checkpointing && atomic_load(&c->pause))
+        return; /* a checkpoint is due: this tile waits for the next round */
     uint64_t rays = 0, samples = 0;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
@@ -145,12 +168,20 @@ static void render_tile(void *p, int64_t item, int thread)
     }
     c->rays[thread * RAY_PAD] += rays;
     c->samples[thread * RAY_PAD] += samples;
-    int done = atomic_fetch_add(&c->tiles_done, 1) + 1;
-    if (thread == 0 && c->loop->progress)
-        c->loop->progress(c->loop->progress_user, c->loop->phase ? c->loop->phase : "render",
-                          c->total_tiles_all_passes > 0
-                              ? (double)(c->tiles_before_pass + done) / (double)c->total_tiles_all_passes
-                              : -1.0);
+    uint64_t done = atomic_fetch_add(&c->samples_done, samples) + samples;
+    if (c->tile_state) {
+        c->tile_state[item] = TILE_RENDERED;
+        if (ic_seconds() >= c->next_checkpoint)
+            atomic_store(&c->pause, 1);
+    }
+    /* Progress by samples (the adaptive pilot, a quarter of them, shows as a quarter), or under a time
+     * budget by time. */
+    if (thread == 0 && c->loop->progress) {
+        double f = c->samples_planned > 0.0  ? (double)done / c->samples_planned
+                   : c->loop->time_budget > 0.0 ? (ic_seconds() - c->start) / c->loop->time_budget
+                                                : -1.0;
+        c->loop->progress(c->loop->progress_user, c->loop->phase ? c->loop->phase : "render", fmin(1.0, f));
+    }
 }
 
 /* ---------------------------------------------------------------- adaptive sampling
@@ -237,6 +268,15 @@ static int allocate_samples(const double *accum, const double *sumsq, int n0, in
     return 1;
 }
 
+static void loop_free(loop_ctx *c)
+{
+    free(c->accum);
+    free(c->rays);
+    free(c->samples);
+    free(c->tile_state);
+    free(c->todo);
+}
+
 /* Allocates the loop's buffers (accumulators and per-thread ray counters). */
 static ic_result loop_init(loop_ctx *c, const ic_image_loop *loop, ic_sample_fn fn, void *user, int threads,
                            ic_error *err)
@@ -252,30 +292,90 @@ static ic_result loop_init(loop_ctx *c, const ic_image_loop *loop, ic_sample_fn 
     c->ranks = ic_comm_size(loop->comm);
     int tiles = c->tiles_x * c->tiles_y;
     c->own_tiles = tiles > c->rank ? (tiles - c->rank + c->ranks - 1) / c->ranks : 0;
+    for (int64_t t = c->rank; t < tiles; t += c->ranks) {
+        int x0, y0, x1, y1;
+        tile_rect(c, t, &x0, &y0, &x1, &y1);
+        c->own_pixels += (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0);
+    }
+    atomic_init(&c->samples_done, 0);
+    atomic_init(&c->pause, 0);
+    c->checkpointing = loop->checkpoint && loop->checkpoint_seconds > 0.0 && !ic_comm_is_shared(loop->comm);
     size_t npix = (size_t)cam->width * (size_t)cam->height;
     c->accum = calloc(npix * 3, sizeof(double));
     c->rays = calloc((size_t)threads * RAY_PAD, sizeof(uint64_t));
     c->samples = calloc((size_t)threads * RAY_PAD, sizeof(uint64_t));
-    if (!c->accum || !c->rays || !c->samples) {
-        free(c->accum);
-        free(c->rays);
-        free(c->samples);
+    if (c->checkpointing) {
+        c->tile_state = calloc((size_t)tiles, 1);
+        c->todo = malloc(sizeof *c->todo * (size_t)tiles);
+        c->next_checkpoint = ic_seconds() + loop->checkpoint_seconds;
+    }
+    if (!c->accum || !c->rays || !c->samples || (c->checkpointing && (!c->tile_state || !c->todo))) {
+        loop_free(c);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d image", cam->width, cam->height);
     }
     return IC_OK;
 }
 
-/* Runs samples [s_begin, s_end) (or each pixel's `extra` from s_begin) over every tile. */
+/* Hands the image so far to loop.checkpoint (between rounds: no thread renders). A pixel's value is
+ * the mean of the samples it holds: those of the earlier passes, and this pass's if its tile is done;
+ * a pixel with none is black. Without memory for the image the checkpoint is skipped. */
+static void take_checkpoint(loop_ctx *c)
+{
+    const ic_camera *cam = c->loop->camera;
+    ic_image img;
+    if (ic_image_create(&img, cam->width, cam->height) != IC_OK)
+        return;
+    for (int64_t t = 0; t < c->own_tiles; ++t) {
+        int x0, y0, x1, y1;
+        tile_rect(c, t, &x0, &y0, &x1, &y1);
+        int rendered = c->tile_state[t] == TILE_RENDERED;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                size_t i = (size_t)y * cam->width + x;
+                int n = !rendered ? c->s_begin : c->extra ? c->s_begin + (int)c->extra[i] : c->s_end;
+                for (int k = 0; k < 3; ++k)
+                    img.rgb[3 * i + k] = n > 0 ? (float)(c->accum[3 * i + k] / n) : 0.0f;
+            }
+    }
+    double completed = c->loop->time_budget > 0.0 ? fmin(1.0, (ic_seconds() - c->start) / c->loop->time_budget)
+                       : c->samples_planned > 0.0 ? fmin(1.0, (double)atomic_load(&c->samples_done) / c->samples_planned)
+                                                  : 0.0;
+    c->loop->checkpoint(c->loop->checkpoint_user, &img, completed);
+    ic_image_free(&img);
+}
+
+/* Runs samples [s_begin, s_end) (or each pixel's `extra` from s_begin) over every tile. With
+ * checkpoints, in rounds over the tiles still waiting, each ended early when a checkpoint falls due. */
 static ic_result loop_pass(loop_ctx *c, int threads, int s_begin, int s_end, ic_error *err)
 {
     c->s_begin = s_begin;
     c->s_end = s_end;
-    atomic_store(&c->tiles_done, 0);
-    ic_result r = ic_parallel_for(threads, c->own_tiles, render_tile, c);
-    if (r != IC_OK)
-        return ic_error_set(err, r, "could not start render threads");
-    c->tiles_before_pass += c->own_tiles;
-    return IC_OK;
+    if (!c->checkpointing) {
+        ic_result r = ic_parallel_for(threads, c->own_tiles, render_tile, c);
+        return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start render threads");
+    }
+    memset(c->tile_state, TILE_WAITING, (size_t)c->own_tiles);
+    for (;;) {
+        int64_t n = 0;
+        for (int64_t t = 0; t < c->own_tiles; ++t)
+            if (c->tile_state[t] == TILE_WAITING)
+                c->todo[n++] = t;
+        if (n == 0)
+            return IC_OK;
+        atomic_store(&c->pause, 0);
+        ic_result r = ic_parallel_for(threads, n, render_tile, c);
+        if (r != IC_OK)
+            return ic_error_set(err, r, "could not start render threads");
+        int waiting = 0;
+        for (int64_t t = 0; t < c->own_tiles && !waiting; ++t)
+            waiting = c->tile_state[t] == TILE_WAITING;
+        /* Due with tiles left: the image so far. (Due at the pass's end: at the next pass's first tile,
+         * or never when the render is done, whose image comes next anyway.) */
+        if (atomic_load(&c->pause) && waiting) {
+            take_checkpoint(c);
+            c->next_checkpoint = ic_seconds() + c->loop->checkpoint_seconds;
+        }
+    }
 }
 
 /* Zeroes the sums of the pixels other ranks render, so that adding every rank's sums gives each pixel
@@ -286,9 +386,8 @@ static void clear_other_ranks(loop_ctx *c, double *values, int per_pixel)
     for (int t = 0; t < c->tiles_x * c->tiles_y; ++t) {
         if (t % c->ranks == c->rank)
             continue;
-        int x0 = (t % c->tiles_x) * TILE, y0 = (t / c->tiles_x) * TILE;
-        int x1 = x0 + TILE < cam->width ? x0 + TILE : cam->width;
-        int y1 = y0 + TILE < cam->height ? y0 + TILE : cam->height;
+        int x0, y0, x1, y1;
+        tile_rect(c, t, &x0, &y0, &x1, &y1);
         for (int y = y0; y < y1; ++y)
             memset(&values[((size_t)y * cam->width + x0) * per_pixel], 0,
                    sizeof *values * (size_t)(x1 - x0) * per_pixel);
@@ -328,8 +427,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     c.skip_on_cancel = loop->cancel && !ic_comm_is_shared(loop->comm);
     c.sumsq = calloc(npix, sizeof *c.sumsq);
     uint32_t *extra = malloc(npix * sizeof *extra);
-    /* Progress counts tiles of both passes alike, so the pilot (a quarter of the samples) shows as half. */
-    c.total_tiles_all_passes = 2 * c.own_tiles;
+    c.samples_planned = (double)loop->spp * (double)c.own_pixels; /* the pilot's and the rest's */
     c.start = ic_seconds();
     if (!c.sumsq || !extra)
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
@@ -348,6 +446,16 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         free(c.sumsq);
         c.sumsq = NULL;
         c.extra = extra;
+        /* What progress counts now: the pilot's samples and the rest as shared out. */
+        double planned = (double)n0 * (double)c.own_pixels;
+        for (int64_t t = c.rank; t < (int64_t)c.tiles_x * c.tiles_y; t += c.ranks) {
+            int x0, y0, x1, y1;
+            tile_rect(&c, t, &x0, &y0, &x1, &y1);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x)
+                    planned += extra[(size_t)y * cam->width + x];
+        }
+        c.samples_planned = planned;
         r = loop_pass(&c, threads, n0, n0, err);
     }
     if (r == IC_OK)
@@ -374,9 +482,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     res->seconds = ic_seconds() - c.start;
     free(c.sumsq);
     free(extra);
-    free(c.accum);
-    free(c.rays);
-    free(c.samples);
+    loop_free(&c);
     return r;
 }
 
@@ -418,7 +524,7 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
      * before a pass that would overrun the budget (estimated from the previous pass). */
     int spp_max = preview ? 1 : loop->spp > 0 ? loop->spp : (1 << 30);
     int done = 0, pass_spp = loop->time_budget > 0.0 ? 1 : spp_max;
-    c.total_tiles_all_passes = loop->time_budget > 0.0 ? 0 : c.own_tiles;
+    c.samples_planned = loop->time_budget > 0.0 ? 0.0 : (double)spp_max * (double)c.own_pixels;
     double per_sample = 0.0;
     while (done < spp_max) {
         if (can_cancel && !preview && done > 0 && *loop->cancel) {
@@ -470,8 +576,6 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
         res->completed = preview ? 0.0 : c.own_tiles ? 1.0 - (double)skipped / c.own_tiles : 1.0;
     }
     res->seconds = ic_seconds() - c.start;
-    free(c.accum);
-    free(c.rays);
-    free(c.samples);
+    loop_free(&c);
     return r;
 }

@@ -37,6 +37,12 @@ typedef struct ic_image_loop {
     void *progress_user;
     ic_comm *comm;         /* the processes sharing the image; NULL: one */
     const volatile sig_atomic_t *cancel; /* ic_render_options.cancel (ignored with a shared comm) */
+    /* Checkpoints (ignored with a shared comm): every checkpoint_seconds of the loop's wall time, the
+     * threads finish the tiles they hold, checkpoint gets the image so far on the calling thread, and the
+     * rest of the pass goes on. Tiles are independent, so the image is the same with or without them. */
+    double checkpoint_seconds;
+    void (*checkpoint)(void *user, const ic_image *image, double completed);
+    void *checkpoint_user;
 } ic_image_loop;
 
 typedef struct ic_image_loop_result {

@@ -485,24 +485,31 @@ static ic_result add_records(adaptive *A, phase_times *pt, ic_error *err)
     ic_gather_result *gr = malloc(sizeof *gr * (n ? n : 1));
     ic_record *recs = malloc(sizeof *recs * (n ? n : 1));
     ic_vec3 *levels = c->levels ? malloc(sizeof *levels * ((size_t)c->levels + 1) * (n ? n : 1)) : NULL;
+    uint8_t *gathered = malloc(n ? n : 1);
     ic_result r = IC_OK;
     uint32_t first = ic_cache_count(c->cache);
-    if (!gp || !gr || !recs || (c->levels && !levels)) {
+    if (!gp || !gr || !recs || !gathered || (c->levels && !levels)) {
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u adaptive records", n);
         goto done;
     }
     for (uint32_t k = 0; k < n; ++k)
         gp[k] = ic_ic_gather_point_of(&A->cand[k]);
     double t0 = ic_seconds();
-    r = ic_ic_gather_points(c, gp, n, gr, levels, err);
+    r = ic_ic_gather_points(c, gp, n, gr, levels, gathered, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     if (r != IC_OK)
         goto done;
-    for (uint32_t k = 0; k < n; ++k) {
-        ic_ic_record_from_gather(c, &A->cand[k], &gr[k], &recs[k]);
-        recs[k].accuracy = A->cand_a[k];
+    /* Interrupted: the records gathered are kept, and construction ends after this round. */
+    uint32_t kept = ic_ic_keep_gathered(c, gathered, n, gr, levels);
+    for (uint32_t k = 0, i = 0; k < n; ++k) {
+        if (!gathered[k])
+            continue;
+        ic_ic_record_from_gather(c, &A->cand[k], &gr[i], &recs[i]);
+        recs[i].accuracy = A->cand_a[k];
+        ++i;
     }
+    n = kept;
     r = ic_cache_insert_batch(c->cache, recs, n, &first, err);
     if (r == IC_OK)
         r = ic_ic_keep_levels(c, first, n, levels, err);
@@ -528,6 +535,7 @@ done:
     free(gr);
     free(recs);
     free(levels);
+    free(gathered);
     return r;
 }
 
@@ -550,9 +558,10 @@ static ic_result converge(adaptive *A, const ic_render_options *opt, phase_times
     res->converged = 1;
     ic_result r = IC_OK;
     while (A->q_len > 0) {
-        if (res->passes >= c->o.adaptive_max_passes || (res->passes > 0 && ic_ic_out_of_time(c))) {
+        if (res->passes >= c->o.adaptive_max_passes || (res->passes > 0 && ic_ic_out_of_time(c)) ||
+            ic_ic_cancelled(c)) {
             res->converged = 0;
-            res->out_of_time = res->passes < c->o.adaptive_max_passes;
+            res->out_of_time = res->passes < c->o.adaptive_max_passes && !ic_ic_cancelled(c);
             break;
         }
         ic_ic_report(opt, "adaptive passes", (double)res->passes / (double)c->o.adaptive_max_passes);
@@ -565,7 +574,8 @@ static ic_result converge(adaptive *A, const ic_render_options *opt, phase_times
         for (;;) {
             while (A->q_len > 0)
                 process_point(A, dequeue(A));
-            if (A->n_uncovered == 0)
+            /* Interrupted: the pass ends with the records made so far (the queue is left as it is). */
+            if (A->n_uncovered == 0 || ic_ic_cancelled(c))
                 break;
             if ((r = add_records(A, pt, err)) != IC_OK)
                 return r;

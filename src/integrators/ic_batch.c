@@ -247,7 +247,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     st->records_per_pass[0] = n;
     st->passes = 1;
     st->cut_short = 1; /* until the cache has converged */
-    for (int pass = 1; pass <= c->o.max_passes; ++pass) {
+    for (int pass = 1; pass <= c->o.max_passes && !ic_ic_cancelled(c); ++pass) {
         ic_ic_report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
         uint32_t found = 0, before = ic_cache_count(c->cache);
         if (pass <= c->o.screen_passes) {
@@ -272,6 +272,12 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
             if (r != IC_OK)
                 goto done;
         }
+        if (ic_ic_cancelled(c)) { /* interrupted inside the screen stage: the pass ends here */
+            if (pass < 32)
+                st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
+            st->passes = pass + 1;
+            break;
+        }
         ic_candidate *wc = NULL;
         uint32_t wn = 0;
         double uncovered = 1.0;
@@ -294,7 +300,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
             break;
         }
         if (ic_ic_out_of_time(c)) {
-            st->cut_by_time = 1;
+            st->cut_by_time = !ic_ic_cancelled(c);
             break;
         }
     }

@@ -286,6 +286,7 @@ typedef struct gather_job {
     const ic_gather_point *pts;
     ic_gather_result *out;
     ic_vec3 *levels;
+    uint8_t *gathered;           /* per point: 1 once gathered */
     uint32_t count;
     atomic_int status;           /* first failure, IC_OK if none */
 } gather_job;
@@ -297,6 +298,8 @@ static void gather_item(void *p, int64_t item, int thread)
     uint32_t end = j->count - first < GATHER_CHUNK_POINTS ? j->count : first + GATHER_CHUNK_POINTS;
     size_t stride = (size_t)j->c->levels + 1;
     for (uint32_t i = first; i < end; ++i) {
+        if (ic_ic_cancelled(j->c))
+            return; /* interrupted: the points not begun stay ungathered */
         ic_result r = ic_ic_gather_one(&j->workers[thread], j->gatherers[thread], &j->pts[i], &j->out[i],
                                        j->levels ? &j->levels[i * stride] : NULL);
         if (r != IC_OK) {
@@ -304,15 +307,17 @@ static void gather_item(void *p, int64_t item, int thread)
             atomic_compare_exchange_strong(&j->status, &expected, (int)r);
             return;
         }
+        j->gathered[i] = 1;
     }
 }
 
 /* Gathers count points on this process's threads. */
 static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
-                             ic_vec3 *levels, ic_error *err)
+                             ic_vec3 *levels, uint8_t *gathered, ic_error *err)
 {
     if (count == 0)
         return IC_OK;
+    memset(gathered, 0, count);
     int64_t items = ((int64_t)count + GATHER_CHUNK_POINTS - 1) / GATHER_CHUNK_POINTS;
     int threads = c->threads < items ? c->threads : (int)items;
     gather_job j;
@@ -321,6 +326,7 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
     j.pts = pts;
     j.out = out;
     j.levels = levels;
+    j.gathered = gathered;
     j.count = count;
     atomic_init(&j.status, IC_OK);
     j.workers = calloc((size_t)threads, sizeof *j.workers);
@@ -350,28 +356,34 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
  * result, bit for bit what one process would have gathered: a point's result depends only on the seed,
  * its key and the records already in the cache, which every process holds alike. */
 ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
-                              ic_vec3 *levels, ic_error *err)
+                              ic_vec3 *levels, uint8_t *gathered, ic_error *err)
 {
     int ranks = ic_comm_size(c->comm), rank = ic_comm_rank(c->comm);
     if (ranks == 1 || count == 0) {
-        c->gathered += count;
-        return gather_here(c, pts, count, out, levels, err);
+        ic_result r = gather_here(c, pts, count, out, levels, gathered, err);
+        for (uint32_t i = 0; i < count; ++i)
+            c->gathered += gathered[i];
+        return r;
     }
+    /* Shared: never cancelled (ic_ic_cancelled), so every point is gathered. */
+    memset(gathered, 1, count);
     /* Rank r takes count/N points, one more when r < count mod N: the sizes of ic_comm_block's blocks, so
      * its results go to its block of a rank-ordered buffer, exchanged as blocks and then put in place. */
     uint64_t first, own;
     ic_comm_block(count, ranks, rank, &first, &own);
     size_t stride = (size_t)c->levels + 1;
     ic_gather_point *mine = malloc(sizeof *mine * (own ? own : 1));
+    uint8_t *mine_gathered = malloc(own ? own : 1);
     ic_gather_result *all = malloc(sizeof *all * count);
     ic_vec3 *all_levels = levels ? malloc(sizeof *all_levels * stride * count) : NULL;
     ic_result r = IC_OK;
-    if (!mine || !all || (levels && !all_levels))
+    if (!mine || !mine_gathered || !all || (levels && !all_levels))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u gather results", count);
     for (uint64_t k = 0; r == IC_OK && k < own; ++k)
         mine[k] = pts[(uint64_t)rank + k * (uint64_t)ranks];
     if (r == IC_OK)
-        r = gather_here(c, mine, (uint32_t)own, all + first, levels ? all_levels + first * stride : NULL, err);
+        r = gather_here(c, mine, (uint32_t)own, all + first, levels ? all_levels + first * stride : NULL,
+                        mine_gathered, err);
     c->gathered += own;
     if (r == IC_OK)
         r = ic_comm_allgather_blocks(c->comm, all, count, sizeof *all, err);
@@ -388,6 +400,7 @@ ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t co
         }
     }
     free(mine);
+    free(mine_gathered);
     free(all);
     free(all_levels);
     return r;
@@ -399,6 +412,24 @@ int ic_ic_out_of_time_shared(ic_ctx *c)
     /* A transport that fails ends the job (comm.h); till then, rank 0's answer or this rank's own. */
     ic_comm_broadcast(c->comm, &out, sizeof out, 0, NULL);
     return out;
+}
+
+uint32_t ic_ic_keep_gathered(const ic_ctx *c, const uint8_t *gathered, uint32_t count, ic_gather_result *res,
+                             ic_vec3 *levels)
+{
+    size_t stride = (size_t)c->levels + 1;
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        if (!gathered[i])
+            continue;
+        if (k != i) {
+            res[k] = res[i];
+            if (levels)
+                memmove(&levels[k * stride], &levels[i * stride], sizeof *levels * stride);
+        }
+        ++k;
+    }
+    return k;
 }
 
 ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_vec3 *levels, ic_error *err)
@@ -504,31 +535,39 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
     ic_gather_result *res = malloc(sizeof *res * count);
     ic_record *recs = malloc(sizeof *recs * count);
     ic_vec3 *levels = c->levels ? malloc(sizeof *levels * stride * count) : NULL;
+    uint8_t *gathered = malloc(count);
     ic_result r = IC_OK;
-    if (!pts || !res || !recs || (c->levels && !levels)) {
+    if (!pts || !res || !recs || !gathered || (c->levels && !levels)) {
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u cache candidates", count);
         goto done;
     }
     for (uint32_t i = 0; i < count; ++i)
         pts[i] = ic_ic_gather_point_of(&cand[i]);
     double t0 = ic_seconds();
-    r = ic_ic_gather_points(c, pts, count, res, levels, err);
+    r = ic_ic_gather_points(c, pts, count, res, levels, gathered, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     if (r != IC_OK)
         goto done;
-    for (uint32_t i = 0; i < count; ++i)
-        ic_ic_record_from_gather(c, &cand[i], &res[i], &recs[i]);
+    /* The gathered ones, in candidate order (all of them unless the render was interrupted). */
+    uint32_t kept = ic_ic_keep_gathered(c, gathered, count, res, levels);
+    for (uint32_t i = 0, k = 0; i < count; ++i) {
+        if (!gathered[i])
+            continue;
+        ic_ic_record_from_gather(c, &cand[i], &res[k], &recs[k]);
+        ++k;
+    }
     uint32_t first = 0;
-    r = ic_cache_insert_batch(c->cache, recs, count, &first, err);
+    r = ic_cache_insert_batch(c->cache, recs, kept, &first, err);
     if (r == IC_OK)
-        r = ic_ic_keep_levels(c, first, count, levels, err);
+        r = ic_ic_keep_levels(c, first, kept, levels, err);
     pt->insert += ic_seconds() - t1;
 done:
     free(pts);
     free(res);
     free(recs);
     free(levels);
+    free(gathered);
     return r;
 }
 

@@ -98,9 +98,15 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
 ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
                            ic_vec3 *levels);
 /* Gathers count points in parallel (one gatherer per thread; each point's result depends only on the
- * seed and its key, never on the thread count); levels: (c->levels + 1) entries per point, or NULL. */
+ * seed and its key, never on the thread count); levels: (c->levels + 1) entries per point, or NULL.
+ * gathered[i] is set to 1 for each point gathered; once the render is cancelled (ic_ic_cancelled) the
+ * points not yet begun are skipped (0), so that an interrupt stops a pass within a few gathers. */
 ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
-                              ic_vec3 *levels, ic_error *err);
+                              ic_vec3 *levels, uint8_t *gathered, ic_error *err);
+/* Moves the results (and level splits, levels may be NULL) of the points gathered[i] marks to the front,
+ * in order; returns how many there are. */
+uint32_t ic_ic_keep_gathered(const ic_ctx *c, const uint8_t *gathered, uint32_t count, ic_gather_result *res,
+                             ic_vec3 *levels);
 /* Keeps the level split of records first…first+count−1 (they must follow the last kept one); a no-op
  * without levels. */
 ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_vec3 *levels, ic_error *err);
@@ -114,7 +120,8 @@ ic_result ic_ic_levels_from_payloads(ic_ctx *c, ic_error *err);
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
 /* Gather point (offset origin, normal, key) of a candidate. */
 ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);
-/* Gathers count candidates in parallel and inserts them as one batch. */
+/* Gathers count candidates in parallel and inserts them as one batch (those gathered, when the render
+ * is cancelled during the gathers). */
 ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err);
 /* Candidate at a pixel's shading point; tag distinguishes keys of different stages. */
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
@@ -123,9 +130,15 @@ ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acc
 /* 1 once construction has spent its share of the render's time budget (c->deadline). Several processes
  * (c->comm) go by rank 0's clock, so that all stop at the same pass: a collective call then. */
 int ic_ic_out_of_time_shared(ic_ctx *c);
+/* 1 once the caller's cancel flag is set (one process only: ranks sharing a render must agree, so there
+ * the flag is ignored). Cheap: construction checks it between gathers, inside a pass. */
+static inline int ic_ic_cancelled(const ic_ctx *c)
+{
+    return c->cancel && *c->cancel && !ic_comm_is_shared(c->comm);
+}
 static inline int ic_ic_out_of_time(ic_ctx *c)
 {
-    if (c->cancel && *c->cancel && !ic_comm_is_shared(c->comm))
+    if (ic_ic_cancelled(c))
         return 1;
     if (!(c->deadline > 0.0))
         return 0;

@@ -128,12 +128,17 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
     }
     size_t npix = (size_t)c->g.width * c->g.height;
     double t_insert = 0.0, t0 = ic_seconds();
-    /* Raster order, then again while a pixel lost its cover to a later record's neighbor clamping. */
-    for (int round = 0; round < 8 && r == IC_OK; ++round) {
+    /* Raster order, then again while a pixel lost its cover to a later record's neighbor clamping. An
+     * interrupt or the time budget's construction share stops it at the next pixel: the points left
+     * uncovered take the final render's fallback. */
+    int stopped = 0;
+    for (int round = 0; round < 8 && r == IC_OK && !stopped; ++round) {
         uint32_t added = 0;
         for (size_t i = 0; i < npix && r == IC_OK; ++i) {
             if ((i & 4095) == 0 && round == 0)
                 ic_ic_report(opt, "lazy cache", (double)i / (double)npix);
+            if ((stopped = ic_ic_out_of_time(c)) != 0)
+                break;
             if (!c->g.valid[i])
                 continue;
             ic_cache_lookup q = ic_cache_lookup_at(c->g.p[i], c->g.n[i], IC_ACCEPT_CONSTRUCTION);
@@ -174,5 +179,7 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
         ic_gatherer_destroy(ls.g[k]);
     st->passes = 1;
     st->records_per_pass[0] = ic_cache_count(c->cache);
+    st->cut_short = stopped;
+    st->cut_by_time = stopped && !ic_ic_cancelled(c);
     return r;
 }

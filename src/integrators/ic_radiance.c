@@ -246,11 +246,16 @@ typedef struct rad_job {
     const ic_candidate *cand;
     ic_gather_radiance_result *res;
     atomic_int status;
+    atomic_int skipped;          /* 1: the render was cancelled before every candidate was gathered */
 } rad_job;
 
 static void rad_item(void *p, int64_t item, int thread)
 {
     rad_job *j = p;
+    if (ic_ic_cancelled(j->c)) {
+        atomic_store(&j->skipped, 1);
+        return;
+    }
     const ic_candidate *cd = &j->cand[item];
     ic_gather_point gp = ic_ic_gather_point_of(cd);
     ic_frame f = ic_frame_from_normal(cd->n);
@@ -302,6 +307,7 @@ static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t cou
     j.c = c;
     j.cand = cand;
     atomic_init(&j.status, IC_OK);
+    atomic_init(&j.skipped, 0);
     float *payload = malloc(sizeof *payload * floats * count);
     ic_record *recs = malloc(sizeof *recs * count);
     j.res = calloc(count, sizeof *j.res);
@@ -336,6 +342,9 @@ static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t cou
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     uint32_t first = 0;
+    /* Interrupted: the batch is dropped, and construction ends. */
+    if (r == IC_OK && atomic_load(&j.skipped))
+        count = 0;
     if (r == IC_OK) {
         for (uint32_t i = 0; i < count; ++i)
             record_of(c, &cand[i], &j.res[i], k, &recs[i]);
@@ -380,7 +389,7 @@ static ic_result cover(ic_ctx *c, const ic_render_options *opt, glossy_points *g
     const int steps = (int)(sizeof spacing / sizeof spacing[0]);
     const ic_camera *cam = &c->tr->scene->camera;
     ic_result r = IC_OK;
-    for (int s = 0; r == IC_OK && s < steps; ++s) {
+    for (int s = 0; r == IC_OK && s < steps && !ic_ic_cancelled(c); ++s) {
         int sp = spacing[s];
         uint32_t count = 0;
         for (int y = sp / 2; y < cam->height; y += sp)
@@ -491,7 +500,8 @@ ic_result ic_ic_radiance_build(ic_ctx *c, const ic_render_options *opt, phase_ti
     if (r == IC_OK)
         r = cover(c, opt, &g, cand, pt, made, err);
     /* The adaptive strategy refines the radiance records too, until a pass neither shrinks nor adds one. */
-    for (int pass = 0; r == IC_OK && c->o.strategy == IC_STRATEGY_ADAPTIVE && pass < c->o.adaptive_max_passes;
+    for (int pass = 0; r == IC_OK && c->o.strategy == IC_STRATEGY_ADAPTIVE && pass < c->o.adaptive_max_passes &&
+                       !ic_ic_cancelled(c);
          ++pass) {
         double t0 = ic_seconds();
         uint32_t refined = refine(c, &g), added = 0;

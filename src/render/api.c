@@ -3,7 +3,9 @@
  * settings and the defaults, builds the accelerator, makes the chosen integrator (integrator.h),
  * prepares it, runs the film's image loop over its sample function, asks it for its AOVs, and fills
  * the statistics. Several processes (opt.comm, irrcache/comm.h) share construction and the image; the
- * ray counts are summed over them at the end.
+ * ray counts are summed over them at the end. Progress reports pass through here on their way to the
+ * caller, gaining the whole render's elapsed time and an estimate of the time left; so do the final
+ * render's checkpoints, gaining the seed and the time.
  */
 #include "irrcache/render.h"
 
@@ -23,6 +25,73 @@ void ic_scene_resolution(const ic_scene *scene, int *width, int *height)
 }
 
 float ic_scene_exposure(const ic_scene *scene) { return scene->settings.has_exposure ? scene->settings.exposure : 0.0f; }
+
+/* Where the render is, for the whole-render estimates of the progress reports. */
+typedef enum render_stage { STAGE_PREPARE, STAGE_IMAGE, STAGE_AOVS } render_stage;
+
+typedef struct render_clock {
+    const ic_render_options *caller; /* the callbacks and their user pointer */
+    double t0;             /* ic_seconds() when ic_render began */
+    double budget;         /* time_budget, 0 for none */
+    render_stage stage;
+    double image_start;    /* the final render's start */
+    double image_seconds;  /* its duration, once done */
+    int aov_loops;         /* image loops the AOVs re-render with the final render's samples */
+    int aov_started;       /* of them, begun */
+    const char *aov_phase; /* the one running */
+    double aov_start;
+    int spp;
+    uint64_t seed;
+} render_clock;
+
+/* Seconds until ic_render returns, or −1 when not known yet. An AOV loop takes the final render's
+ * samples again, so each is estimated at the final render's duration (its samples cost less: this
+ * errs long). */
+static double time_left(const render_clock *k, double fraction, double now)
+{
+    double budget_left = fmax(k->t0 + k->budget - now, 0.0);
+    if (k->stage == STAGE_PREPARE)
+        return k->budget > 0.0 ? budget_left * (1.0 + k->aov_loops) : -1.0;
+    if (k->stage == STAGE_IMAGE) {
+        double spent = now - k->image_start, left;
+        if (k->budget > 0.0)
+            left = budget_left;
+        else if (fraction > 0.0)
+            left = spent / fmin(fraction, 1.0) - spent;
+        else
+            return -1.0;
+        return left + k->aov_loops * (spent + left);
+    }
+    double spent = now - k->aov_start;
+    double left = fraction > 0.0 ? spent / fmin(fraction, 1.0) - spent : fmax(k->image_seconds - spent, 0.0);
+    return left + (k->aov_loops - k->aov_started) * k->image_seconds;
+}
+
+/* ic_progress_fn of every phase: the caller's reports, plain and detailed. */
+static void report(void *user, const char *phase, double fraction)
+{
+    render_clock *k = user;
+    if (k->caller->progress)
+        k->caller->progress(k->caller->progress_user, phase, fraction);
+    if (!k->caller->progress_detail)
+        return;
+    double now = ic_seconds();
+    if (k->stage == STAGE_AOVS && phase != k->aov_phase) {
+        k->aov_phase = phase;
+        k->aov_start = now;
+        ++k->aov_started;
+    }
+    ic_render_progress p = {phase, fraction, now - k->t0, time_left(k, fraction, now)};
+    k->caller->progress_detail(k->caller->progress_user, &p);
+}
+
+/* The film's checkpoint, handed to the caller's. */
+static void checkpoint(void *user, const ic_image *image, double completed)
+{
+    render_clock *k = user;
+    ic_render_checkpoint cp = {image, completed, ic_seconds() - k->t0, k->spp, k->seed};
+    k->caller->checkpoint(k->caller->checkpoint_user, &cp);
+}
 
 /* The integrators, by ic_integrator value. */
 static const ic_integrator_create_fn integrators[] = {
@@ -82,6 +151,22 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     uint64_t comm_bytes0 = opt.comm ? opt.comm->bytes : 0;
 
     double t0 = ic_seconds();
+    /* Every report goes through the clock (the integrator reads opt.progress). */
+    const ic_render_options caller = opt;
+    render_clock clock;
+    memset(&clock, 0, sizeof clock);
+    clock.caller = &caller;
+    clock.t0 = t0;
+    clock.budget = opt.time_budget;
+    clock.stage = STAGE_PREPARE;
+    clock.spp = opt.spp;
+    clock.seed = opt.seed;
+    if (opt.aovs && opt.integrator == IC_INTEGRATOR_IC)
+        clock.aov_loops = (opt.aovs->want_indirect != 0) + (opt.aovs->want_glossy != 0);
+    if (opt.progress || opt.progress_detail) {
+        opt.progress = report;
+        opt.progress_user = &clock;
+    }
     ic_accel *accel = NULL;
     if ((r = ic_accel_create(scene, &accel, err)) != IC_OK)
         return r;
@@ -119,7 +204,17 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         loop.progress_user = opt.progress_user;
         loop.comm = opt.comm;
         loop.cancel = opt.cancel;
+        if (opt.checkpoint && opt.checkpoint_seconds > 0.0) {
+            loop.checkpoint_seconds = opt.checkpoint_seconds;
+            loop.checkpoint = checkpoint;
+            loop.checkpoint_user = &clock;
+        }
+        clock.stage = STAGE_IMAGE;
+        clock.image_start = ic_seconds();
         r = ic_render_image(&loop, it.ops->sample, it.self, out, &lr, err);
+        clock.image_seconds = ic_seconds() - clock.image_start;
+        clock.stage = STAGE_AOVS;
+        loop.checkpoint = NULL; /* the AOVs are written with the final image */
     }
     if (r == IC_OK) {
         ic_stats_add_phase(st, it.ops->stats_phase, lr.seconds);

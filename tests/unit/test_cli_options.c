@@ -4,6 +4,7 @@
  * --name=value means the same as --name value, `--` ends the options, and each kind of bad value is a
  * usage error (exit 2) with one line naming the option.
  */
+#include "test_files.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -16,24 +17,14 @@
 
 static char out_text[1 << 17], err_text[8192];
 
-static size_t slurp(const char *path, char *buf, size_t size)
-{
-    FILE *f = fopen(path, "rb");
-    size_t n = f ? fread(buf, 1, size - 1, f) : 0;
-    buf[n] = 0;
-    if (f)
-        fclose(f);
-    return n;
-}
-
 /* Runs `irrcache ARGS`, stdout into out_text and stderr into err_text; returns the exit status. */
 static int run(const char *args)
 {
     char cmd[4096];
     snprintf(cmd, sizeof cmd, "%s %s >%s.out 2>%s.err", CLI, args, TMP, TMP);
     int st = system(cmd);
-    slurp(TMP ".out", out_text, sizeof out_text);
-    slurp(TMP ".err", err_text, sizeof err_text);
+    test_read_text(TMP ".out", out_text, sizeof out_text);
+    test_read_text(TMP ".err", err_text, sizeof err_text);
     return st == -1 || !WIFEXITED(st) ? -1 : WEXITSTATUS(st);
 }
 
@@ -48,7 +39,7 @@ static int lines(const char *s)
 static void readme_matches_table(void)
 {
     static char readme[1 << 18];
-    CHECK(slurp(IC_SOURCE_DIR "/README.md", readme, sizeof readme) > 0, "README.md readable");
+    CHECK(test_read_text(IC_SOURCE_DIR "/README.md", readme, sizeof readme) > 0, "README.md readable");
     const char *b = strstr(readme, "<!-- options:begin"), *e = strstr(readme, "<!-- options:end -->");
     CHECK(b && e && b < e, "README.md has the options markers");
     if (!b || !e || b > e)
@@ -89,9 +80,9 @@ static void value_forms(void)
     CHECK(run(cmd) == 0, "render with --name=value: %s", err_text);
     snprintf(cmd, sizeof cmd, "render -o " TMP "_c.exr %s --accuracy=0.5 --stats " TMP "_c.json -- " CORNELL, common);
     CHECK(run(cmd) == 0, "render with the scene after --: %s", err_text);
-    slurp(TMP "_a.json", a, sizeof a);
-    slurp(TMP "_b.json", b, sizeof b);
-    slurp(TMP "_c.json", c, sizeof c);
+    test_read_text(TMP "_a.json", a, sizeof a);
+    test_read_text(TMP "_b.json", b, sizeof b);
+    test_read_text(TMP "_c.json", c, sizeof c);
     const char *ra = strstr(a, "\"records\""), *rb = strstr(b, "\"records\""), *rc = strstr(c, "\"records\"");
     CHECK(ra && rb && rc && atoi(ra + 10) > 0 && atoi(ra + 10) == atoi(rb + 10) && atoi(ra + 10) == atoi(rc + 10),
           "the three forms build the same cache");
@@ -136,7 +127,7 @@ static void stats_json(void)
              "--integrator=ic --rays 64 --seed 007 --stats " TMP "_s.json", dir);
     CHECK(run(cmd) == 0, "render through the odd path: %s", err_text);
     static char js[1 << 15];
-    slurp(TMP "_s.json", js, sizeof js);
+    test_read_text(TMP "_s.json", js, sizeof js);
     CHECK(strstr(js, "_we\\\"ird\\\\dir_é/cornell-box.json\""), "the path is escaped: %.200s", js);
     CHECK(strstr(js, "\"settings\"") && strstr(js, "\"rays\":\t64") && strstr(js, "\"max_passes\":\t30") &&
               strstr(js, "\"integrator\":\t\"ic\""),
@@ -152,7 +143,7 @@ static void stats_json(void)
         snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_p.exr --width 16 --height 16 --spp 2 -q "
                  "--integrator ic --rays 64 --strategy %s --stats " TMP "_p.json", strategies[i]);
         CHECK(run(cmd) == 0, "render with %s: %s", strategies[i], err_text);
-        slurp(TMP "_p.json", js, sizeof js);
+        test_read_text(TMP "_p.json", js, sizeof js);
         const char *ph = strstr(js, "\"phases\"");
         CHECK(ph && strstr(ph, "\"load\"") && strstr(ph, "\"accel\"") && strstr(ph, "\"gathering\"") &&
                   strstr(ph, "\"final render\""),
@@ -169,13 +160,13 @@ static void cut_short(void)
     char cmd[1024];
     snprintf(cmd, sizeof cmd, "%s --max-passes 1", base);
     CHECK(run(cmd) == 0, "render with --max-passes 1: %s", err_text);
-    slurp(TMP "_cs.json", js, sizeof js);
+    test_read_text(TMP "_cs.json", js, sizeof js);
     CHECK(strstr(js, "\"cut_short\":\ttrue") && strstr(err_text, "warning") && strstr(err_text, "--max-passes") &&
               lines(err_text) == 1,
           "one pass is cut short and says so: '%s'", err_text);
     snprintf(cmd, sizeof cmd, "%s --max-passes 100 --min-candidates 1000000", base);
     CHECK(run(cmd) == 0, "render that converges: %s", err_text);
-    slurp(TMP "_cs.json", js, sizeof js);
+    test_read_text(TMP "_cs.json", js, sizeof js);
     CHECK(strstr(js, "\"cut_short\":\tfalse") && !strstr(err_text, "warning"), "a converged build does not warn");
     /* The records' extents: positive, ordered, and within the pixel bounds' reach of the box (scene
      * diagonal about 3.5 units). */

@@ -5,6 +5,11 @@
  * SIGXFSZ that calls it and re-raises the signal. Checked in a child that dies of SIGTERM or SIGINT in
  * the middle of an atomic write (the handler being the command's), and on the command itself killed by
  * SIGXFSZ when its output exceeds a file-size limit.
+ *
+ * Long renders (issue "An installable library", item 5): SIGINT or SIGTERM during the final render or
+ * inside a cache construction pass (batch, adaptive, lazy) ends the command soon with complete, partial
+ * outputs and 128 + the signal; --checkpoint writes complete, readable images while the render runs and
+ * leaves the final image as it would be without.
  */
 #include "core/atomic_file.h"
 #include "irrcache/image.h"
@@ -12,6 +17,7 @@
 #include "test_files.h"
 
 #include <dirent.h>
+#include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
 #include <string.h>
@@ -73,10 +79,41 @@ static void die_while_writing(int sig, int exr_style)
     CHECK(!exists(DIR_ "/out.bin") && !exists(DIR_ "/out.exr"), "signal %d: no output either", sig);
 }
 
-/* Runs `irrcache render ARGS… -o DIR_/int.exr -o DIR_/int.png --stats DIR_/int.json` in a child with
- * SIGINT and SIGTERM at their default (so the command installs its handler), sends `sig` after `delay`
- * seconds, and returns the exit status (-1 if it died of a signal). stderr goes to DIR_/int.err. */
-static int interrupt_render(int sig, double delay, const char *const *args)
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Waits for pid for at most `limit` seconds (then kills it: a hang); returns the exit status, -1 if it
+ * died of a signal or had to be killed, and the seconds waited in *waited. */
+static int wait_bounded(pid_t pid, double limit, double *waited)
+{
+    double t0 = now_seconds();
+    int st = 0;
+    for (;;) {
+        pid_t got = waitpid(pid, &st, WNOHANG);
+        if (got == pid)
+            break;
+        if (got < 0 && errno != EINTR)
+            return -1;
+        if (now_seconds() - t0 > limit) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &st, 0);
+            *waited = now_seconds() - t0;
+            return -1;
+        }
+        nanosleep(&(struct timespec){0, 10000000}, NULL);
+    }
+    *waited = now_seconds() - t0;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+/* Starts `irrcache render ARGS… -o DIR_/int.exr -o DIR_/int.png --stats DIR_/int.json` in a child with
+ * SIGINT and SIGTERM at their default (so the command installs its handler); stderr goes to
+ * DIR_/int.err. */
+static pid_t start_render(const char *const *args)
 {
     pid_t pid = fork();
     if (pid == 0) {
@@ -93,12 +130,25 @@ static int interrupt_render(int sig, double delay, const char *const *args)
         execv(IC_CLI_PATH, (char *const *)argv);
         _exit(127);
     }
+    return pid;
+}
+
+/* Sends `sig` to a render (start_render) after `delay` seconds and returns its exit status (-1 if it died
+ * of a signal, or did not end within 30 s of the signal: a hang, not a slow machine); *after gets the
+ * seconds from the signal to the exit. */
+static int interrupt_render_timed(int sig, double delay, const char *const *args, double *after)
+{
+    pid_t pid = start_render(args);
     struct timespec ts = {(time_t)delay, (long)((delay - (double)(time_t)delay) * 1e9)};
     nanosleep(&ts, NULL);
     kill(pid, sig);
-    int st = 0;
-    waitpid(pid, &st, 0);
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return wait_bounded(pid, 30.0, after);
+}
+
+static int interrupt_render(int sig, double delay, const char *const *args)
+{
+    double after;
+    return interrupt_render_timed(sig, delay, args, &after);
 }
 
 static long file_size(const char *p)
@@ -118,12 +168,8 @@ static void test_interrupted_render(void)
         fputs("an older output", old), fclose(old);
     const char *final[] = {"--width", "256", "--height", "256", "--spp", "4096", "--adaptive-sampling", "off", NULL};
     int rc = interrupt_render(SIGINT, 1.5, final);
-    char err_text[2048] = "";
-    FILE *e = fopen(DIR_ "/int.err", "r");
-    size_t n = e ? fread(err_text, 1, sizeof err_text - 1, e) : 0;
-    err_text[n] = 0;
-    if (e)
-        fclose(e);
+    char err_text[2048];
+    test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
     CHECK(rc == 130, "SIGINT: exit 130 (got %d: %s)", rc, err_text);
     CHECK(strstr(err_text, "interrupted by SIGINT") != NULL, "SIGINT: says so: %s", err_text);
     ic_image img;
@@ -146,12 +192,8 @@ static void test_interrupted_render(void)
     CHECK(file_size(DIR_ "/int.png") > 100 && ic_image_read(DIR_ "/int.png", &img, &err) == IC_OK,
           "the older PNG is replaced by a complete one: %s", err.message);
     ic_image_free(&img);
-    FILE *js = fopen(DIR_ "/int.json", "r");
-    char json[8192] = "";
-    n = js ? fread(json, 1, sizeof json - 1, js) : 0;
-    json[n] = 0;
-    if (js)
-        fclose(js);
+    char json[8192];
+    test_read_text(DIR_ "/int.json", json, sizeof json);
     CHECK(strstr(json, "\"interrupted\"") != NULL, "the stats say interrupted");
     CHECK(test_count_temporaries(DIR_) == 0, "no temporary file left");
 
@@ -159,17 +201,125 @@ static void test_interrupted_render(void)
     const char *construction[] = {"--integrator", "ic", "--width", "96", "--height", "96", "--rays", "20000",
                                   "--spp", "64", NULL};
     rc = interrupt_render(SIGTERM, 1.5, construction);
-    e = fopen(DIR_ "/int.err", "r");
-    n = e ? fread(err_text, 1, sizeof err_text - 1, e) : 0;
-    err_text[n] = 0;
-    if (e)
-        fclose(e);
+    test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
     CHECK(rc == 143, "SIGTERM during construction: exit 143 (got %d: %s)", rc, err_text);
     CHECK(strstr(err_text, "preview") != NULL, "SIGTERM during construction: a preview: %s", err_text);
     CHECK(ic_image_read(DIR_ "/int.exr", &img, &err) == IC_OK && img.width == 96, "the preview reads: %s",
           err.message);
     ic_image_free(&img);
     CHECK(test_count_temporaries(DIR_) == 0, "no temporary file left");
+}
+
+/* SIGINT inside the first construction pass of each strategy (the pass alone takes minutes here: 20,000
+ * rays per record): the command stops within a few gathers and writes a complete preview from the
+ * records made so far. The bound is a hang detector, not a timing. */
+static void test_interrupted_construction(void)
+{
+    static const char *const strategies[] = {"batch", "adaptive", "lazy"};
+    for (int k = 0; k < 3; ++k) {
+        const char *args[] = {"--integrator", "ic", "--strategy", strategies[k], "--width", "96", "--height", "96",
+                              "--rays", "20000", "--spp", "64", "--threads", "2", NULL};
+        double after = 0.0;
+        int rc = interrupt_render_timed(SIGINT, 1.5, args, &after);
+        char err_text[2048], json[8192];
+        test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
+        test_read_text(DIR_ "/int.json", json, sizeof json);
+        printf("%s: SIGINT inside construction: exit %d, %.2f s after the signal\n", strategies[k], rc, after);
+        CHECK(rc == 130, "%s: SIGINT during construction: exit 130 within 30 s (got %d after %.1f s: %s)",
+              strategies[k], rc, after, err_text);
+        CHECK(strstr(err_text, "preview") != NULL, "%s: a preview: %s", strategies[k], err_text);
+        ic_image img;
+        ic_error err;
+        double sum = 0.0;
+        int finite = 1;
+        int read = ic_image_read(DIR_ "/int.exr", &img, &err) == IC_OK;
+        for (int i = 0; read && i < 96 * 96 * 3; ++i) {
+            finite &= isfinite(img.rgb[i]) != 0;
+            sum += img.rgb[i];
+        }
+        CHECK(read && img.width == 96 && finite && sum > 0.0, "%s: the preview is a complete image (sum %g): %s",
+              strategies[k], sum, read ? "" : err.message);
+        if (read)
+            ic_image_free(&img);
+        char v[256] = "";
+        CHECK(ic_image_exr_attribute(DIR_ "/int.exr", "irrcache:partial", v, sizeof v, &err) == IC_OK &&
+                  strstr(v, "interrupted"), "%s: marked partial: %s", strategies[k], v);
+        CHECK(strstr(json, "\"interrupted\"") != NULL && !strstr(json, "\"cut_by_time\":true"),
+              "%s: the stats say interrupted (not cut by time)", strategies[k]);
+        CHECK(test_count_temporaries(DIR_) == 0, "%s: no temporary file left", strategies[k]);
+    }
+}
+
+/* --checkpoint: while the render runs, its outputs appear as complete images marked "checkpoint"; the
+ * final outputs replace them, unmarked, and are those of the same render without checkpoints. */
+static void test_checkpoints(void)
+{
+    remove(DIR_ "/int.exr");
+    remove(DIR_ "/int.png");
+    remove(DIR_ "/int.pfm");
+    const char *args[] = {"--width", "64", "--height", "64", "--spp", "128", "--threads", "2", "--checkpoint",
+                          "0.05", "-o", DIR_ "/int.pfm", NULL};
+    pid_t pid = start_render(args);
+    int seen = 0, unreadable = 0, st = 0, seen_format[3] = {0, 0, 0};
+    double t0 = now_seconds();
+    while (waitpid(pid, &st, WNOHANG) == 0) {
+        char v[256] = "";
+        ic_error err;
+        if (ic_image_exr_attribute(DIR_ "/int.exr", "irrcache:partial", v, sizeof v, &err) == IC_OK &&
+            strstr(v, "checkpoint")) {
+            /* Every output there is reads whole (the PNG and the PFM follow the EXR's first write). */
+            const char *paths[] = {DIR_ "/int.exr", DIR_ "/int.png", DIR_ "/int.pfm"};
+            for (int k = 0; k < 3; ++k) {
+                ic_image img;
+                if (k > 0 && file_size(paths[k]) < 0)
+                    continue;
+                int ok = ic_image_read(paths[k], &img, &err) == IC_OK;
+                ok = ok && img.width == 64 && img.height == 64;
+                if (ok)
+                    ic_image_free(&img);
+                seen_format[k] += ok;
+                unreadable += !ok;
+            }
+            ++seen;
+        }
+        if (now_seconds() - t0 > 300.0) { /* a hang */
+            kill(pid, SIGKILL);
+            waitpid(pid, &st, 0);
+            break;
+        }
+        nanosleep(&(struct timespec){0, 5000000}, NULL);
+    }
+    char err_text[2048];
+    test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
+    CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "--checkpoint: the render succeeds (status %#x): %s", st, err_text);
+    printf("--checkpoint 0.05: %d checkpoint reads while rendering\n", seen);
+    CHECK(seen > 0 && seen_format[0] && seen_format[1] && seen_format[2],
+          "--checkpoint: checkpoints appeared while the render ran (EXR, PNG, PFM: %d, %d, %d)", seen_format[0],
+          seen_format[1], seen_format[2]);
+    CHECK(unreadable == 0, "--checkpoint: every checkpoint seen was a complete image in every format (%d of %d not)",
+          unreadable, seen);
+    char v[256] = "";
+    ic_error err;
+    CHECK(ic_image_exr_attribute(DIR_ "/int.exr", "irrcache:partial", v, sizeof v, &err) == IC_ERR_INVALID_ARG,
+          "--checkpoint: the final EXR is not marked partial (%s)", v);
+    CHECK(test_count_temporaries(DIR_) == 0, "--checkpoint: no temporary file left");
+    CHECK(rename(DIR_ "/int.pfm", DIR_ "/checkpointed.pfm") == 0, "keep the checkpointed render's image");
+    const char *plain[] = {"--width", "64", "--height", "64", "--spp", "128", "--threads", "1", "-o",
+                           DIR_ "/int.pfm", NULL};
+    double waited;
+    CHECK(wait_bounded(start_render(plain), 300.0, &waited) == 0, "the render without checkpoints succeeds");
+    FILE *a = fopen(DIR_ "/int.pfm", "rb"), *b = fopen(DIR_ "/checkpointed.pfm", "rb");
+    int same = a && b;
+    for (int ca = 0, cb = 0; same && ca != EOF;) {
+        ca = fgetc(a);
+        cb = fgetc(b);
+        same = ca == cb;
+    }
+    if (a)
+        fclose(a);
+    if (b)
+        fclose(b);
+    CHECK(same, "--checkpoint (2 threads) gives the bytes of the render without it (1 thread)");
 }
 
 int main(void)
@@ -210,5 +360,7 @@ int main(void)
     CHECK(test_count_temporaries(DIR_) == 0, "SIGXFSZ: the command left no temporary file");
     CHECK(!exists(DIR_ "/big.pfm"), "SIGXFSZ: no output");
     test_interrupted_render();
+    test_interrupted_construction();
+    test_checkpoints();
     TEST_MAIN_END();
 }

@@ -1,0 +1,242 @@
+/*
+ * test_long_render.c — what a long render offers its caller through irrcache/render.h (issue "An
+ * installable library", long renders):
+ *
+ *   - checkpoints: the final render's image so far, handed out while it runs. A checkpoint of a
+ *     one-pass render holds, per tile, either the final pixels exactly or black; checkpoints never change
+ *     the final image (same bits with and without, on one thread or two), with adaptive sampling and
+ *     with a time budget too;
+ *   - progress reports with the whole render's elapsed time and time left: unknown (< 0) while the cache
+ *     is built without a budget, known during the final render, and within the budget with one;
+ *   - an interrupt during cache construction: every strategy stops before its next gather and renders a
+ *     complete one-sample preview from the records it has (none, when the flag is set at its start).
+ */
+#include "irrcache/render.h"
+#include "test_render_util.h"
+#include "test_util.h"
+
+#include <string.h>
+
+#define CORNELL IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
+#define W 48
+#define H 40
+
+/* What the checkpoints of one render looked like. */
+typedef struct checkpoints {
+    int count;
+    int bad_size;          /* a checkpoint of the wrong size or with a non-finite pixel */
+    int completed_backwards; /* `completed` went down, or left [0, 1] */
+    double last_completed;
+    float *first;          /* the first checkpoint's pixels (malloc'd) */
+} checkpoints;
+
+static void on_checkpoint(void *user, const ic_render_checkpoint *cp)
+{
+    checkpoints *k = user;
+    const ic_image *img = cp->image;
+    size_t n = (size_t)W * H * 3;
+    if (img->width != W || img->height != H)
+        ++k->bad_size;
+    for (size_t i = 0; img->width == W && img->height == H && i < n; ++i)
+        if (!isfinite(img->rgb[i]))
+            ++k->bad_size;
+    if (cp->completed < k->last_completed || cp->completed < 0.0 || cp->completed > 1.0)
+        ++k->completed_backwards;
+    k->last_completed = cp->completed;
+    if (!k->first && img->width == W && img->height == H && (k->first = malloc(sizeof *k->first * n)))
+        memcpy(k->first, img->rgb, sizeof *k->first * n);
+    ++k->count;
+}
+
+/* Renders the Cornell box with o on `threads` threads, with checkpoints as often as the film can take
+ * them (every round of tiles) when k is given. */
+static int render(ic_render_options o, int threads, checkpoints *k, ic_image *img, ic_render_stats *st)
+{
+    o.threads = threads;
+    o.has_seed = 1;
+    o.seed = 7;
+    if (k) {
+        memset(k, 0, sizeof *k);
+        o.checkpoint_seconds = 1e-9;
+        o.checkpoint = on_checkpoint;
+        o.checkpoint_user = k;
+    }
+    memset(img, 0, sizeof *img);
+    return test_render(CORNELL, W, H, &o, img, st);
+}
+
+static int same_pixels(const ic_image *a, const ic_image *b)
+{
+    return a->width == b->width && a->height == b->height && a->rgb && b->rgb &&
+           !memcmp(a->rgb, b->rgb, sizeof *a->rgb * (size_t)a->width * a->height * 3);
+}
+
+/* Checkpoints leave the final image alone: the same bits with them (on 1 and 2 threads) as without. */
+static void check_unchanged(const char *what, ic_render_options o, int want_partial_tiles)
+{
+    ic_image plain, one, two;
+    ic_render_stats st;
+    checkpoints k1, k2;
+    CHECK(render(o, 2, NULL, &plain, &st), "%s: render", what);
+    CHECK(render(o, 1, &k1, &one, &st), "%s: render with checkpoints, 1 thread", what);
+    CHECK(render(o, 2, &k2, &two, &st), "%s: render with checkpoints, 2 threads", what);
+    CHECK(same_pixels(&plain, &one) && same_pixels(&plain, &two),
+          "%s: checkpoints do not change the final image (1 and 2 threads)", what);
+    CHECK(k1.count > 0 && k2.count > 0, "%s: checkpoints were taken (%d, %d)", what, k1.count, k2.count);
+    CHECK(k1.bad_size == 0 && k2.bad_size == 0, "%s: every checkpoint is a whole, finite image", what);
+    CHECK(k1.completed_backwards == 0 && k2.completed_backwards == 0, "%s: completed grows within [0, 1]", what);
+    /* One pass of all samples: a tile is black until it is done, then final (the same sums, the same
+     * division); a checkpoint comes only with tiles left, so one is black somewhere. */
+    if (want_partial_tiles && k1.first && plain.rgb) {
+        int other = 0, black = 0, final = 0;
+        for (int t = 0; t < W * H; ++t) {
+            const float *c = &k1.first[3 * t], *f = &plain.rgb[3 * t];
+            int is_black = c[0] == 0.0f && c[1] == 0.0f && c[2] == 0.0f;
+            int is_final = !memcmp(c, f, sizeof *c * 3);
+            black += is_black && !is_final;
+            final += is_final;
+            other += !is_black && !is_final;
+        }
+        CHECK(other == 0 && black > 0, "%s: the first checkpoint is the final pixels or black (%d final, %d black, "
+              "%d other)", what, final, black, other);
+    }
+    free(k1.first);
+    free(k2.first);
+    ic_image_free(&plain);
+    ic_image_free(&one);
+    ic_image_free(&two);
+}
+
+/* Progress reports of one render. */
+typedef struct reports {
+    int count;
+    int construction_known;   /* construction reports with eta >= 0 */
+    int final_known;          /* final-render reports with eta >= 0 */
+    int final_reports;
+    int over_budget;          /* reports whose eta exceeds the budget left */
+    int elapsed_backwards;
+    double last_elapsed;
+    double budget;
+} reports;
+
+static void on_report(void *user, const ic_render_progress *p)
+{
+    reports *r = user;
+    ++r->count;
+    if (p->elapsed < r->last_elapsed)
+        ++r->elapsed_backwards;
+    r->last_elapsed = p->elapsed;
+    int final = !strcmp(p->phase, "final render");
+    r->final_reports += final;
+    if (final)
+        r->final_known += p->eta >= 0.0;
+    else
+        r->construction_known += p->eta >= 0.0;
+    if (r->budget > 0.0 && (p->eta < 0.0 || p->eta > fmax(r->budget - p->elapsed, 0.0) + 1e-9))
+        ++r->over_budget;
+}
+
+static void check_reports(void)
+{
+    ic_render_options o = {0};
+    o.integrator = IC_INTEGRATOR_IC;
+    o.spp = 16;
+    o.ic.gather.theta_strata = 8;
+    o.ic.gather.phi_strata = 25;
+    reports r;
+    memset(&r, 0, sizeof r);
+    o.progress_detail = on_report;
+    o.progress_user = &r;
+    ic_image img;
+    ic_render_stats st;
+    CHECK(render(o, 2, NULL, &img, &st), "render with progress");
+    ic_image_free(&img);
+    CHECK(r.count > 0 && r.final_reports > 0, "reports came (%d, %d of the final render)", r.count, r.final_reports);
+    CHECK(r.construction_known == 0, "no time left is claimed while the cache is built without a budget (%d)",
+          r.construction_known);
+    CHECK(r.final_known == r.final_reports, "the final render's reports all know the time left (%d of %d)",
+          r.final_known, r.final_reports);
+    CHECK(r.elapsed_backwards == 0, "elapsed never goes back");
+
+    /* With a budget, the time left is what is left of it, from the first report on. */
+    memset(&r, 0, sizeof r);
+    r.budget = o.time_budget = 2.0;
+    o.spp = 0;
+    CHECK(render(o, 2, NULL, &img, &st), "render with a budget");
+    ic_image_free(&img);
+    CHECK(r.count > 0 && r.over_budget == 0, "with a budget, every report's time left is within it (%d of %d "
+          "outside)", r.over_budget, r.count);
+}
+
+/* The cancel flag, set by the first construction report: before any gather. */
+typedef struct canceller {
+    volatile sig_atomic_t flag;
+    const char *phase;     /* the report that sets it */
+} canceller;
+
+static void cancel_at(void *user, const char *phase, double fraction)
+{
+    (void)fraction;
+    canceller *c = user;
+    if (!strcmp(phase, c->phase))
+        c->flag = 1;
+}
+
+static void check_interrupted_construction(void)
+{
+    static const struct {
+        ic_strategy strategy;
+        const char *phase, *name;
+    } cases[] = {{IC_STRATEGY_BATCH, "cache pass 0", "batch"},
+                 {IC_STRATEGY_ADAPTIVE, "adaptive passes", "adaptive"},
+                 {IC_STRATEGY_LAZY, "lazy cache", "lazy"}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        canceller c = {0, cases[i].phase};
+        ic_render_options o = {0};
+        o.integrator = IC_INTEGRATOR_IC;
+        o.ic.strategy = cases[i].strategy;
+        o.spp = 64;
+        /* Rays enough that finishing the construction would take minutes: it must not. */
+        o.ic.gather.theta_strata = 80;
+        o.ic.gather.phi_strata = 250;
+        o.progress = cancel_at;
+        o.progress_user = &c;
+        o.cancel = &c.flag;
+        ic_image img;
+        ic_render_stats st;
+        CHECK(render(o, 2, NULL, &img, &st), "%s: interrupted render returns", cases[i].name);
+        int finite = 0;
+        double mean = img.rgb ? test_image_mean(&img, &finite) : 0.0;
+        CHECK(img.width == W && img.height == H && finite && mean > 0.0,
+              "%s: a complete preview (mean %g)", cases[i].name, mean);
+        CHECK(st.cancelled && st.completed == 0.0 && st.spp == 1, "%s: cancelled (%d), completed %g, %d spp",
+              cases[i].name, st.cancelled, st.completed, st.spp);
+        CHECK(st.records == 0, "%s: set before the first gather, no record was gathered (%u)", cases[i].name,
+              st.records);
+        CHECK(!st.cut_by_time, "%s: an interrupt is not a time budget", cases[i].name);
+        ic_image_free(&img);
+    }
+}
+
+int main(void)
+{
+    ic_render_options pt = {0};
+    pt.spp = 16;
+    check_unchanged("path tracing, one pass", pt, 1);
+
+    ic_render_options ic = {0};
+    ic.integrator = IC_INTEGRATOR_IC;
+    ic.spp = 16; /* adaptive sampling: a pilot and the rest */
+    ic.ic.gather.theta_strata = 8;
+    ic.ic.gather.phi_strata = 25;
+    check_unchanged("irradiance caching, adaptive sampling", ic, 0);
+
+    ic_render_options timed = pt;
+    timed.spp = 8; /* passes of 1, 2, 4, 1 samples: a budget that never runs out */
+    timed.time_budget = 1e6;
+    check_unchanged("path tracing, passes under a time budget", timed, 0);
+
+    check_reports();
+    check_interrupted_construction();
+    TEST_MAIN_END();
+}
