@@ -57,12 +57,12 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(SPP, "--spp", NULL, IC_OPT_INT, render.spp, 1, IC_MAX_SPP, "N", NAN, "scene file, else 16 (pt) or 32 (ic)", "", \
       IC_SCOPE_ALL, "samples per pixel (with --time: the most to take)") \
     X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
-      "wall-time budget of the whole render, from building the ray-tracing structure to the last sample " \
-      "(loading the scene and writing the outputs are outside it): cache construction (batch, adaptive, " \
-      "lazy) stops at its first pass or gather after half of it (a warning and cut_by_time in the stats " \
-      "say so), and the final render takes progressive passes until the rest is spent, at least one sample " \
-      "per pixel; radiance records and the --aov indirect and glossy re-renders come on top (equal-time " \
-      "comparisons)") \
+      "wall-time budget of the whole render (equal-time comparisons), from building the ray-tracing " \
+      "structure to the last sample; loading the scene and writing the outputs are outside it. Cache " \
+      "construction (batch, adaptive, lazy) stops at its first pass (lazy: shading point) after half of it " \
+      "(a warning and cut_by_time in the stats say so); the final render takes progressive passes until the " \
+      "rest is spent, at least one sample per pixel. Radiance records and the --aov indirect and glossy " \
+      "re-renders come on top") \
     X(CHECKPOINT, "--checkpoint", NULL, IC_OPT_DOUBLE, render.checkpoint_seconds, 0, 1e9, "SECONDS", NAN, "none", \
       "s", IC_SCOPE_ALL, "every SECONDS of the final render's wall time, write every -o output with the image " \
       "so far (unrendered tiles black; atomically; EXR marked irrcache:partial \"checkpoint\"); the final " \
