@@ -233,15 +233,6 @@ typedef struct ic_render_options {
                               integrator IC when spp ≥ 8 and there is no time budget, else off */
     ic_progress_fn progress; /* each phase's share done (may be NULL) */
     void *progress_user;   /* for progress and progress_detail */
-    ic_render_progress_fn progress_detail; /* the same reports with the whole render's elapsed time and
-                              estimated time left (may be NULL); called from one thread at a time */
-    double checkpoint_seconds; /* > 0 with checkpoint: every this many seconds of the final render's wall time
-                              (the clock starts with the final render: construction has no image), the
-                              render threads finish the tiles they hold and checkpoint gets the image so far
-                              on the calling thread (the time it takes is the render's); the final image is
-                              the same as without. Ignored with a shared comm */
-    ic_checkpoint_fn checkpoint;
-    void *checkpoint_user;
     ic_ic_options ic;      /* irradiance caching (integrator IC) */
     ic_render_aovs *aovs;  /* optional diagnostics (integrator IC); caller frees the images */
     ic_comm *comm;         /* the processes sharing this render (irrcache/comm.h): every one calls ic_render
@@ -254,6 +245,15 @@ typedef struct ic_render_options {
                               pixel from the records it has. The render then returns IC_OK with
                               stats.cancelled set and the image it has: unrendered tiles are black. Ignored
                               with a shared comm */
+    ic_render_progress_fn progress_detail; /* progress's reports with the whole render's elapsed time and
+                              estimated time left (may be NULL); called from one thread at a time */
+    double checkpoint_seconds; /* > 0 with checkpoint: every this many seconds of the final render's wall time
+                              (the clock starts with the final render: construction has no image), the
+                              render threads finish the tiles they hold and checkpoint gets the image so far
+                              on the calling thread (the time it takes is the render's); the final image is
+                              the same as without. Ignored with a shared comm */
+    ic_checkpoint_fn checkpoint;
+    void *checkpoint_user;
 } ic_render_options;
 
 #define IC_MAX_PHASES 12 /* room for every phase of every integrator, and the CLI's "load" */
