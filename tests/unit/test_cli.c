@@ -8,6 +8,7 @@
  * whatever bytes the scene path holds.
  */
 #include "test_util.h"
+#include "test_files.h"
 
 #include <string.h>
 #include <sys/stat.h>
@@ -25,16 +26,8 @@ static char err_text[8192];
 static int run(const char *args)
 {
     char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s %s 2>%s >/dev/null", CLI, args, ERR);
-    int st = system(cmd);
-    FILE *f = fopen(ERR, "r");
-    size_t n = f ? fread(err_text, 1, sizeof err_text - 1, f) : 0;
-    err_text[n] = 0;
-    if (f)
-        fclose(f);
-    if (st == -1 || !WIFEXITED(st))
-        return -1;
-    return WEXITSTATUS(st);
+    snprintf(cmd, sizeof cmd, "%s %s >/dev/null", CLI, args);
+    return test_run_capture(cmd, ERR, err_text, sizeof err_text);
 }
 
 static int file_exists(const char *p)

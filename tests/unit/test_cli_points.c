@@ -28,16 +28,8 @@ static char err_text[8192];
 static int run(const char *args, const char *out_path)
 {
     char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s points %s 2>%s >%s", CLI, args, ERR, out_path ? out_path : "/dev/null");
-    int st = system(cmd);
-    FILE *f = fopen(ERR, "r");
-    size_t n = f ? fread(err_text, 1, sizeof err_text - 1, f) : 0;
-    err_text[n] = 0;
-    if (f)
-        fclose(f);
-    if (st == -1 || !WIFEXITED(st))
-        return -1;
-    return WEXITSTATUS(st);
+    snprintf(cmd, sizeof cmd, "%s points %s >%s", CLI, args, out_path ? out_path : "/dev/null");
+    return test_run_capture(cmd, ERR, err_text, sizeof err_text);
 }
 
 static char *slurp(const char *path)

@@ -1,12 +1,14 @@
 /*
- * test_files.h — file-system helpers shared by the command-line tests.
+ * test_files.h — file-system and command helpers shared by the command-line tests.
  */
 #ifndef IC_TEST_FILES_H
 #define IC_TEST_FILES_H
 
 #include <dirent.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 
 /* Reads up to size − 1 bytes of path into buf, terminated ("" when it cannot be read); returns the count. */
 static inline size_t test_read_text(const char *path, char *buf, size_t size)
@@ -29,6 +31,19 @@ static inline int test_count_temporaries(const char *dir)
     if (d)
         closedir(d);
     return n;
+}
+
+/* Runs the shell command line cmd with its stderr sent to err_path and read back into text (size bytes,
+ * NUL-terminated); returns the exit status, or -1 if the command crashed or could not run. */
+static inline int test_run_capture(const char *cmd, const char *err_path, char *text, size_t size)
+{
+    char line[8192];
+    snprintf(line, sizeof line, "%s 2>%s", cmd, err_path);
+    int st = system(line);
+    test_read_text(err_path, text, size);
+    if (st == -1 || !WIFEXITED(st))
+        return -1;
+    return WEXITSTATUS(st);
 }
 
 #endif

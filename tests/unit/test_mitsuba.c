@@ -10,6 +10,7 @@
  *      file:line.
  */
 #include "test_util.h"
+#include "test_render_util.h"
 
 #include "irrcache/render.h"
 #include "scene/scene.h"
@@ -17,14 +18,6 @@
 #include <stdio.h>
 #include <string.h>
 
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (!f)
-        exit(1);
-    fputs(text, f);
-    fclose(f);
-}
 
 static ic_scene *load(const char *path, ic_error *err)
 {
@@ -41,12 +34,7 @@ static int render(const ic_scene *s, ic_image *img)
     ic_render_options opt = {0};
     opt.spp = 4;
     opt.threads = 2;
-    ic_render_stats st;
-    ic_error err = {0};
-    int ok = ic_render(s, &opt, img, &st, &err) == IC_OK;
-    if (!ok)
-        fprintf(stderr, "render: %s\n", err.message);
-    return ok;
+    return test_render_loaded(s, &opt, img);
 }
 
 static void test_cornell(void)
@@ -64,12 +52,12 @@ static void test_cornell(void)
              "  <shape type=\"obj\"><string name=\"filename\" value=\"%s/scenes/cornell-box/CornellBox-Original.obj\"/></shape>\n"
              "</scene>\n",
              IC_SOURCE_DIR);
-    write_text(IC_TEST_TMP "/cornell_mts.xml", xml);
+    test_write_file(IC_TEST_TMP "/cornell_mts.xml", xml);
     snprintf(json, sizeof json,
              "{\"camera\": {\"eye\": [0, 1, 3.9], \"target\": [0, 1, 0], \"up\": [0, 1, 0], \"fov_y\": 39.3, "
              "\"width\": 32, \"height\": 32},\n \"meshes\": [{\"path\": \"%s/scenes/cornell-box/CornellBox-Original.obj\"}]}\n",
              IC_SOURCE_DIR);
-    write_text(IC_TEST_TMP "/cornell_mts.json", json);
+    test_write_file(IC_TEST_TMP "/cornell_mts.json", json);
     ic_error err = {0};
     ic_scene *a = load(IC_TEST_TMP "/cornell_mts.xml", &err), *b = NULL;
     CHECK(a != NULL, "Mitsuba Cornell box loads: %s", err.message);
@@ -114,23 +102,14 @@ static double floor_centre(const char *name, const char *lights)
              "  </shape>\n%s</scene>\n",
              lights);
     snprintf(path, sizeof path, IC_TEST_TMP "/%s.xml", name);
-    write_text(path, xml);
+    test_write_file(path, xml);
     ic_error err = {0};
     ic_scene *s = load(path, &err);
     CHECK(s != NULL, "%s loads: %s", name, err.message);
-    if (!s)
-        return -1.0;
-    double mean = -1.0;
-    ic_image img = {0};
-    if (render(s, &img)) {
-        mean = 0.0;
-        for (int y = 6; y < 10; ++y)
-            for (int x = 6; x < 10; ++x)
-                mean += img.rgb[3 * (y * 16 + x) + 1] / 16.0;
-    }
-    ic_image_free(&img);
-    ic_scene_free(s);
-    return mean;
+    ic_render_options opt = {0};
+    opt.spp = 4;
+    opt.threads = 2;
+    return s ? test_scene_box_mean(s, &opt, 6, 6, 4, 1) : -1.0;
 }
 
 static void test_analytic(void)
@@ -163,7 +142,7 @@ static void test_materials_and_warnings(void)
         "  <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/></bsdf></shape>\n"
         "  <shape type=\"hair\"/>\n"
         "</scene>\n";
-    write_text(IC_TEST_TMP "/mts_materials.xml", xml);
+    test_write_file(IC_TEST_TMP "/mts_materials.xml", xml);
     ic_error err = {0};
     ic_scene *s = load(IC_TEST_TMP "/mts_materials.xml", &err);
     CHECK(s != NULL, "materials scene loads: %s", err.message);
@@ -195,13 +174,13 @@ static void test_materials_and_warnings(void)
           "the unsupported shape named with file:line: %s", w);
     ic_scene_free(s);
 
-    write_text(IC_TEST_TMP "/mts_bad.xml", "<scene>\n  <shape type=\"obj\">\n</scene>\n");
+    test_write_file(IC_TEST_TMP "/mts_bad.xml", "<scene>\n  <shape type=\"obj\">\n</scene>\n");
     s = NULL;
     ic_scene_load_options lo = {0};
     ic_result r = ic_scene_load(IC_TEST_TMP "/mts_bad.xml", &lo, &s, &err);
     CHECK(r == IC_ERR_PARSE && strstr(err.message, "mts_bad.xml:4: "), "malformed XML: file:line (%s)", err.message);
     ic_scene_free(s);
-    write_text(IC_TEST_TMP "/mts_ref.xml", "<scene>\n<shape type=\"cube\"><ref id=\"nosuch\"/></shape>\n</scene>\n");
+    test_write_file(IC_TEST_TMP "/mts_ref.xml", "<scene>\n<shape type=\"cube\"><ref id=\"nosuch\"/></shape>\n</scene>\n");
     r = ic_scene_load(IC_TEST_TMP "/mts_ref.xml", &lo, &s, &err);
     CHECK(r == IC_ERR_PARSE && strstr(err.message, "mts_ref.xml:2") && strstr(err.message, "nosuch"),
           "unknown reference: file:line and the id (%s)", err.message);

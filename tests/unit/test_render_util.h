@@ -45,6 +45,35 @@ static inline int test_render(const char *scene_path, int width, int height, con
     return r == IC_OK;
 }
 
+/* Renders a loaded scene with opt into img; 0 (the error printed) on failure. */
+static inline int test_render_loaded(const ic_scene *scene, const ic_render_options *opt, ic_image *img)
+{
+    ic_render_stats st;
+    ic_error err = {0};
+    if (ic_render(scene, opt, img, &st, &err) == IC_OK)
+        return 1;
+    fprintf(stderr, "render: %s\n", err.message);
+    return 0;
+}
+
+/* Renders scene with opt and returns the mean of channel over the size × size pixels from (x0, y0); -1 if
+ * the render fails (the error is printed). The scene is freed. */
+static inline double test_scene_box_mean(ic_scene *scene, const ic_render_options *opt, int x0, int y0, int size,
+                                         int channel)
+{
+    ic_image img = {0};
+    double mean = -1.0;
+    if (test_render_loaded(scene, opt, &img)) {
+        mean = 0.0;
+        for (int y = y0; y < y0 + size; ++y)
+            for (int x = x0; x < x0 + size; ++x)
+                mean += img.rgb[3 * ((size_t)y * img.width + x) + channel] / ((double)size * size);
+    }
+    ic_image_free(&img);
+    ic_scene_free(scene);
+    return mean;
+}
+
 /* Mean of all channels; *finite is 0 if any value is NaN or infinite. */
 static inline double test_image_mean(const ic_image *img, int *finite)
 {
