@@ -13,6 +13,7 @@
  * are rendered as GGX of the same α. Directions: Mitsuba's sensor looks down its +Z with +Y up.
  */
 #include "scene/mitsuba_internal.h"
+#include "scene/tessellate.h"
 
 #include "core/read_file.h"
 #include "core/vecmath.h"
@@ -129,13 +130,12 @@ static ic_result shape_material(ic_mts_ctx *c, const xmlNode *n, ic_material *m,
     return r;
 }
 
-/* Triangles of a primitive shape in its local frame: rectangle, disk, cube, sphere. */
+/* Triangles of a primitive shape in its local frame: rectangle, disk, cube, sphere (tessellate.h). */
 static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, uint32_t material, const float m[16],
                            int flip, const char *where)
 {
-    enum { SEG = 64, RINGS = 32, MAXV = (RINGS + 1) * (SEG + 1) };
-    ic_vec3 *p = malloc(sizeof *p * MAXV * 2), *nn = p ? p + MAXV : NULL;
-    uint32_t *tri = malloc(sizeof *tri * RINGS * SEG * 6), nv = 0, nt = 0;
+    ic_vec3 *p = malloc(sizeof *p * IC_TESS_MAX_VERTICES * 2), *nn = p ? p + IC_TESS_MAX_VERTICES : NULL;
+    uint32_t *tri = malloc(sizeof *tri * IC_TESS_MAX_TRIANGLES * 3), nv = 0, nt = 0;
     if (!p || !tri) {
         free(p);
         free(tri);
@@ -150,15 +150,7 @@ static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, ui
         memcpy(tri, t, sizeof t);
         nt = 2;
     } else if (!strcmp(type, "disk")) {
-        p[nv++] = v3s(0.0f);
-        for (int i = 0; i < SEG; ++i) {
-            float a = 2.0f * IC_PI * i / SEG;
-            p[nv++] = v3(cosf(a), sinf(a), 0.0f);
-            tri[3 * nt] = 0;
-            tri[3 * nt + 1] = 1 + i;
-            tri[3 * nt + 2] = 1 + (i + 1) % SEG;
-            ++nt;
-        }
+        ic_tess_ring(v3s(0.0f), v3(1.0f, 0.0f, 0.0f), v3(0.0f, 1.0f, 0.0f), 0.0f, 1.0f, p, tri, &nv, &nt);
     } else if (!strcmp(type, "cube")) {
         for (int face = 0; face < 6; ++face) { /* axis face/2, side ± */
             int ax = face / 2;
@@ -189,31 +181,11 @@ static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, ui
             free(tri);
             return r;
         }
-        for (int j = 0; j <= RINGS; ++j)
-            for (int i = 0; i <= SEG; ++i) {
-                float th = IC_PI * j / RINGS, ph = 2.0f * IC_PI * i / SEG;
-                ic_vec3 d = v3(sinf(th) * cosf(ph), sinf(th) * sinf(ph), cosf(th));
-                nn[nv] = d;
-                p[nv++] = v3_add(centre, v3_scale(d, radius));
-            }
-        for (int j = 0; j < RINGS; ++j)
-            for (int i = 0; i < SEG; ++i) {
-                uint32_t a = j * (SEG + 1) + i, b = a + SEG + 1;
-                uint32_t t[6] = {a, b, a + 1, a + 1, b, b + 1}; /* outward winding */
-                memcpy(&tri[3 * nt], t, sizeof t);
-                nt += 2;
-            }
+        ic_tess_sphere(centre, radius, p, nn, tri, &nv, &nt);
         normals = nn;
     }
     if (flip)
-        for (uint32_t t = 0; t < nt; ++t) {
-            uint32_t s = tri[3 * t + 1];
-            tri[3 * t + 1] = tri[3 * t + 2];
-            tri[3 * t + 2] = s;
-        }
-    if (flip && normals)
-        for (uint32_t i = 0; i < nv; ++i)
-            nn[i] = v3_neg(nn[i]);
+        ic_tess_flip(normals ? nn : NULL, nv, tri, nt);
     ic_result r = ic_scene_append_triangles(c->b, p, normals, nv, tri, nt, material, m, where, c->err);
     free(p);
     free(tri);
