@@ -1,8 +1,8 @@
 /*
  * scene.h — the renderer's scene: one flattened triangle soup, materials, lights, camera, settings.
  *
- * Loaded from a JSON scene file (scene_json.c, cJSON) or a bare mesh (.obj .gltf .glb .ply, through
- * assimp in mesh_import.c). Instances are flattened at load: every triangle lives in world space in
+ * Loaded from a JSON scene file (scene_json.c, cJSON), a Mitsuba or Radiance scene file (mitsuba_scene.c,
+ * radiance_scene.c) or a bare mesh (.obj .gltf .glb .ply, through assimp in mesh_import.c). Instances are flattened at load: every triangle lives in world space in
  * the arrays below, so the accelerator (src/geom) builds one Embree geometry and a hit's primitive
  * id indexes these arrays directly. Read-only once loaded; shared by all threads.
  *

@@ -85,6 +85,8 @@ ic_result ic_scene_append_triangles(ic_scene_builder *b, const ic_vec3 *p, const
                                     const char *where, ic_error *err);
 /* Reads a Mitsuba 0.6/3 XML scene (mitsuba_scene.c). */
 ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt, ic_error *err);
+/* Reads a Radiance .rad scene (radiance_scene.c) and the view file opt->view names. */
+ic_result ic_scene_load_radiance(ic_scene_builder *b, const char *path, const ic_scene_load_options *opt, ic_error *err);
 /* Appends a point light, a spot light when cone is given; IC_ERR_OOM leaves the scene as it was. */
 ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intensity, const ic_spot_cone *cone);
 /* Reads the cameras and KHR_lights_punctual lights of the glTF file at path (gltf_scene.c) into the scene:

@@ -1,6 +1,7 @@
 /*
  * scene_load.c — ic_scene_load, the loading entry point: it picks the front end by extension. ".json"
- * goes to scene_json.c, ".xml" (a Mitsuba scene) to mitsuba_scene.c; a bare mesh (.obj .gltf .glb .ply, or any of these gzip-compressed as
+ * goes to scene_json.c, ".xml" (a Mitsuba scene) to mitsuba_scene.c, ".rad" (a Radiance scene, with the view
+ * file of opt->view) to radiance_scene.c; a bare mesh (.obj .gltf .glb .ply, or any of these gzip-compressed as
  * NAME.EXT.gz) is imported as is and gets a fitted camera
  * and, when it has no emitter, a constant white sky (radiance 1), so any mesh renders without a scene
  * file (docs/scene-format.md). A glTF file brings its own camera and lights (gltf_scene.c) where it has them.
@@ -107,7 +108,12 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
         snprintf(mesh_ext, sizeof mesh_ext, "%s", ext);
     }
     ic_result r;
-    if ((!strcmp(ext, ".json") || !strcmp(ext, ".xml")) && opt->camera && opt->camera[0]) {
+    if (opt->view && opt->view[0] && strcmp(ext, ".rad")) {
+        r = ic_error_set(err, IC_ERR_INVALID_ARG,
+                         "%s: a view file (--view %s) is for Radiance scenes (.rad); this scene has its own camera or "
+                         "gets a fitted one",
+                         path, opt->view);
+    } else if ((!strcmp(ext, ".json") || !strcmp(ext, ".xml") || !strcmp(ext, ".rad")) && opt->camera && opt->camera[0]) {
         r = ic_error_set(err, IC_ERR_INVALID_ARG,
                          "%s: a camera name (--camera %s) is for glTF files; this scene has its own camera", path,
                          opt->camera);
@@ -115,12 +121,14 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
         r = ic_scene_load_json(&b, path, opt, err);
     } else if (!strcmp(ext, ".xml")) {
         r = ic_scene_load_mitsuba(&b, path, opt, err);
+    } else if (!strcmp(ext, ".rad")) {
+        r = ic_scene_load_radiance(&b, path, opt, err);
     } else if (!strcmp(mesh_ext, ".obj") || !strcmp(mesh_ext, ".gltf") || !strcmp(mesh_ext, ".glb") ||
                !strcmp(mesh_ext, ".ply")) {
         r = load_bare_mesh(&b, path, opt, err);
     } else {
         r = ic_error_set(err, IC_ERR_UNSUPPORTED,
-                         "%s: unknown scene type '%s%s'; give a .json or Mitsuba .xml scene or a .obj, .gltf, .glb "
+                         "%s: unknown scene type '%s%s'; give a .json, Mitsuba .xml or Radiance .rad scene or a .obj, .gltf, .glb "
                          "or .ply mesh (or one of these gzip-compressed, as .obj.gz)",
                          path, strcmp(ext, ".gz") ? "" : mesh_ext, ext);
     }

@@ -1,0 +1,176 @@
+/*
+ * radiance_view.c — the camera of a Radiance view file: its lines that start with rview, rpict or rvu (a
+ * command line) or with VIEW= (a picture header), whose view options (Larson & Shakespeare 1998) apply in order:
+ *
+ *   -vtv perspective (the only type irrcache renders; -vtl -vta -vth -vtc -vts are refused), -vp eye,
+ *   -vd direction, -vu up, -vh and -vv the full horizontal and vertical angles in degrees, -vs and -vl the
+ *   view shift and lift (0 only: irrcache's camera looks through the image's centre), -vo and -va the
+ *   clipping distances (warned about and ignored); -vf (a view from another file) is refused.
+ *
+ * Other options on those lines (rpict's -x, -ab, ...) are skipped. Radiance's defaults stand for what the
+ * file leaves out: -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 45 -vv 45. As rpict does, the image is the largest that
+ * fits the requested width × height with square pixels: the dimension the view's aspect does not fill shrinks.
+ */
+#include "scene/radiance_internal.h"
+
+#include "core/read_file.h"
+#include "irrcache/defaults.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct view {
+    ic_vec3 vp, vd, vu;
+    double vh, vv, vs, vl;
+    int has_clip;
+} view;
+
+static int numbers(char **words, int count, int at, int n, double *out)
+{
+    if (at + n > count)
+        return 0;
+    for (int i = 0; i < n; ++i) {
+        char *end;
+        out[i] = strtod(words[at + i], &end);
+        if (*end || end == words[at + i] || !isfinite(out[i]))
+            return 0;
+    }
+    return 1;
+}
+
+/* Applies the view options among words[from..count) to v. */
+static ic_result options(const char *path, int line, char **words, int count, int from, view *v, ic_error *err)
+{
+    static const struct { char type; const char *what; } types[] = {
+        {'l', "parallel"}, {'a', "angular fisheye"}, {'h', "hemispherical fisheye"}, {'c', "cylindrical panorama"},
+        {'s', "planisphere (stereographic)"}};
+    for (int i = from; i < count; ++i) {
+        const char *o = words[i];
+        if (o[0] != '-' || o[1] != 'v') /* another program option or its value */
+            continue;
+        double x[3];
+        const char *opt = o + 2;
+        if (opt[0] == 't') {
+            if (opt[1] == 'v' && !opt[2])
+                continue;
+            for (size_t k = 0; k < sizeof types / sizeof types[0]; ++k)
+                if (opt[1] == types[k].type && !opt[2])
+                    return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                                        "%s:%d: %s is a %s view, which irrcache does not render; use a perspective "
+                                        "view (-vtv)",
+                                        path, line, o, types[k].what);
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%d: unknown view type '%s'; use -vtv (perspective)", path, line, o);
+        }
+        int n3 = !strcmp(opt, "p") || !strcmp(opt, "d") || !strcmp(opt, "u");
+        int n1 = !strcmp(opt, "h") || !strcmp(opt, "v") || !strcmp(opt, "s") || !strcmp(opt, "l") ||
+                 !strcmp(opt, "o") || !strcmp(opt, "a");
+        if (!strcmp(opt, "f"))
+            return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                                "%s:%d: -vf (a view read from another file) is not followed; put that view's options "
+                                "in this file",
+                                path, line);
+        if (!n3 && !n1)
+            return ic_error_set(err, IC_ERR_PARSE,
+                                "%s:%d: unknown view option '%s'; the view options are -vt -vp -vd -vu -vh -vv -vs -vl "
+                                "-vo -va",
+                                path, line, o);
+        if (!numbers(words, count, i + 1, n3 ? 3 : 1, x))
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%d: %s needs %d number%s after it", path, line, o, n3 ? 3 : 1,
+                                n3 ? "s" : "");
+        i += n3 ? 3 : 1;
+        ic_vec3 vec = v3((float)x[0], (float)x[1], (float)x[2]);
+        switch (opt[0]) {
+        case 'p': v->vp = vec; break;
+        case 'd': v->vd = vec; break;
+        case 'u': v->vu = vec; break;
+        case 'h': v->vh = x[0]; break;
+        case 'v': v->vv = x[0]; break;
+        case 's': v->vs = x[0]; break;
+        case 'l': v->vl = x[0]; break;
+        default: v->has_clip |= x[0] != 0.0; break; /* -vo, -va */
+        }
+    }
+    return IC_OK;
+}
+
+ic_result ic_rad_read_view(const char *path, const ic_scene_load_options *opt, ic_scene *scene, ic_error *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    ic_result r = ic_read_regular_file(path, "view file", 1u << 20, "a view file is a few lines of options", &text, &len,
+                                       NULL, err);
+    if (r != IC_OK)
+        return r;
+    view v = {v3s(0.0f), v3(0.0f, 1.0f, 0.0f), v3(0.0f, 0.0f, 1.0f), 45.0, 45.0, 0.0, 0.0, 0};
+    int found = 0, line = 0, last_line = 0;
+    char *words[256];
+    for (char *s = text, *next; r == IC_OK && s && s < text + len; s = next) {
+        ++line;
+        next = memchr(s, '\n', (size_t)(text + len - s));
+        if (next)
+            *next++ = '\0';
+        int count = 0;
+        for (char *w = s; *w && count < 256;) { /* split at white space, in place */
+            while (*w && strchr(" \t\r\f\v", *w))
+                *w++ = '\0';
+            if (*w)
+                words[count++] = w;
+            while (*w && !strchr(" \t\r\f\v", *w))
+                ++w;
+        }
+        if (count == 0)
+            continue;
+        const char *prog = strrchr(words[0], '/') ? strrchr(words[0], '/') + 1 : words[0];
+        int from;
+        if (!strcmp(prog, "rview") || !strcmp(prog, "rpict") || !strcmp(prog, "rvu") || !strcmp(words[0], "VIEW="))
+            from = 1;
+        else if (!strncmp(words[0], "VIEW=", 5)) /* "VIEW=-vtv ..." */
+            words[0] += 5, from = 0;
+        else
+            continue;
+        found = 1;
+        last_line = line;
+        r = options(path, line, words, count, from, &v, err);
+    }
+    free(text);
+    if (r != IC_OK)
+        return r;
+    if (!found)
+        return ic_error_set(err, IC_ERR_PARSE,
+                            "%s: no view in it; a view file has a line starting with rview, rpict or VIEW= followed by "
+                            "view options (-vp x y z -vd x y z ...)",
+                            path);
+    ic_vec3 side = v3_cross(v.vd, v.vu);
+    if (!(v3_len2(v.vd) > 0.0f) || !(v3_len2(side) > 1e-12f * v3_len2(v.vd) * v3_len2(v.vu)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s:%d: the view direction (-vd) must be non-zero and not parallel to the up vector (-vu)",
+                            path, last_line);
+    if (!(v.vh > 0.0 && v.vh < 180.0 && v.vv > 0.0 && v.vv < 180.0))
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s:%d: -vh and -vv must be in (0, 180) degrees for a perspective view (given %g and %g)",
+                            path, last_line, v.vh, v.vv);
+    if (v.vs != 0.0 || v.vl != 0.0)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                            "%s:%d: a shifted or lifted view (-vs %g -vl %g) is not supported; irrcache's camera looks "
+                            "through the image's centre: use -vs 0 -vl 0",
+                            path, last_line, v.vs, v.vl);
+    if (v.has_clip)
+        ic_scene_warn(scene, "%s:%d: the clipping distances -vo and -va are ignored", path, last_line);
+    double deg = 3.14159265358979323846 / 180.0;
+    double aspect = tan(0.5 * v.vh * deg) / tan(0.5 * v.vv * deg); /* width / height */
+    int w = opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH, h = opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT;
+    if ((double)w / h > aspect)
+        w = (int)fmax(1.0, floor(h * aspect + 0.5));
+    else
+        h = (int)fmax(1.0, floor(w / aspect + 0.5));
+    ic_camera *cam = &scene->camera;
+    cam->eye = v.vp;
+    cam->target = v3_add(v.vp, v3_norm(v.vd));
+    cam->up = v3_norm(v.vu);
+    cam->fov_y_deg = (float)v.vv;
+    cam->width = w;
+    cam->height = h;
+    return IC_OK;
+}

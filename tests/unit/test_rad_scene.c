@@ -1,0 +1,351 @@
+/*
+ * test_rad_scene.c — Radiance scene files (.rad) and view files, against the JSON scene and analytic answers:
+ *   1. scenes/cornell-box/cornell-box.rad with cornell-box.vf renders as the JSON scene whose light reflects
+ *      nothing (a Radiance light does not), image for image; and against scenes/cornell-box/cornell-box.json
+ *      itself, its difference stays below the noise of two renders of the JSON scene with other seeds;
+ *      1 and 2 threads give the same image;
+ *   2. a floor (plastic without specularity, ρ = 0.5) under a 360° glow source of radiance 2 shows ρ·L = 1;
+ *      under a small source (the sun), ρ·L·Ω/π; under a light sphere, ρ·L·sin²α (the sphere's irradiance);
+ *   3. geometry: a concave polygon keeps its area (ear clipping), sphere vertices lie on the sphere, ring and
+ *      cylinder areas are within the tessellation's 0.16 % of the true ones, cones face out and tubes in;
+ *   4. materials and modifiers: plastic, metal, glass, mirror, trans, alias, illum, a mixture, a pattern;
+ *      a mesh through its OBJ file with a transform;
+ *   5. errors: "!" command lines, instance, undefined modifiers, wrong argument counts, a truncated file and
+ *      bad views name file:line; unsupported kinds warn once.
+ */
+#include "test_util.h"
+#include "test_render_util.h"
+
+#include "irrcache/render.h"
+#include "scene/scene.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#define PI_D 3.14159265358979323846
+
+
+static ic_scene *load_view(const char *path, const char *view, int size, ic_error *err)
+{
+    ic_scene_load_options lo = {0};
+    lo.allow_outside_paths = 1;
+    lo.view = view;
+    lo.width = lo.height = size;
+    ic_scene *s = NULL;
+    if (ic_scene_load(path, &lo, &s, err) != IC_OK)
+        return NULL;
+    return s;
+}
+
+static int render(const ic_scene *s, int spp, uint64_t seed, int threads, ic_image *img)
+{
+    ic_render_options opt = {0};
+    opt.spp = spp;
+    opt.threads = threads;
+    opt.seed = seed;
+    opt.has_seed = 1;
+    return test_render_loaded(s, &opt, img);
+}
+
+/* Σ(a − b)² / Σ b² over every channel. */
+static double rel_sq_error(const ic_image *a, const ic_image *b)
+{
+    double num = 0.0, den = 0.0;
+    for (size_t i = 0; i < (size_t)a->width * a->height * 3; ++i) {
+        num += (a->rgb[i] - b->rgb[i]) * (double)(a->rgb[i] - b->rgb[i]);
+        den += b->rgb[i] * (double)b->rgb[i];
+    }
+    return den > 0.0 ? num / den : 0.0;
+}
+
+static void test_cornell(void)
+{
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"camera\": {\"eye\": [0, 1, 3.9], \"target\": [0, 1, 0], \"up\": [0, 1, 0], \"fov_y\": 39.3, "
+             "\"width\": 32, \"height\": 32},\n \"meshes\": [{\"path\": \"%s/scenes/cornell-box/CornellBox-Original.obj\"}],\n"
+             " \"materials\": {\"light\": {\"kd\": [0, 0, 0]}}}\n",
+             IC_SOURCE_DIR);
+    test_write_file(IC_TEST_TMP "/cornell_rad.json", json);
+    ic_error err = {0};
+    ic_scene *a = load_view(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.rad",
+                            IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.vf", 32, &err);
+    CHECK(a != NULL, "Radiance Cornell box loads: %s", err.message);
+    ic_scene *b = load_view(IC_TEST_TMP "/cornell_rad.json", NULL, 32, &err);
+    CHECK(b != NULL, "JSON Cornell box loads: %s", err.message);
+    ic_scene *c = load_view(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", NULL, 32, &err);
+    CHECK(c != NULL, "scenes/cornell-box/cornell-box.json loads: %s", err.message);
+    if (a && b && c) {
+        CHECK(a->camera.width == 32 && a->camera.height == 32 && fabsf(a->camera.fov_y_deg - 39.3f) < 1e-4f,
+              "view: 32x32 (square view), fov 39.3: %dx%d %g", a->camera.width, a->camera.height,
+              (double)a->camera.fov_y_deg);
+        CHECK(a->triangle_count == b->triangle_count && a->tri_light_count == b->tri_light_count,
+              "the same triangles and emitters: %u/%u %u/%u", a->triangle_count, b->triangle_count,
+              a->tri_light_count, b->tri_light_count);
+        ic_image ia = {0}, ib = {0}, ic = {0}, id = {0}, i2 = {0};
+        if (render(a, 4, 1, 2, &ia) && render(b, 4, 1, 2, &ib)) {
+            double e = rel_sq_error(&ia, &ib);
+            printf("cornell .rad vs JSON (black light), same seed: relative squared error %g\n", e);
+            CHECK(e <= 1e-6, "the .rad scene renders as the JSON one with a black light (relative squared error %g)",
+                  e);
+        }
+        if (render(a, 4, 1, 1, &i2))
+            CHECK(rel_sq_error(&i2, &ia) == 0.0, "1 and 2 threads: the same image");
+        /* against the scene file as it is (its light reflects 0.78): other seeds measure the noise */
+        ic_image_free(&ib);
+        if (render(a, 16, 3, 2, &ia) && render(c, 16, 4, 2, &ib) && render(c, 16, 5, 2, &ic) &&
+            render(a, 16, 6, 2, &id)) {
+            double diff = rel_sq_error(&ia, &ib), noise = rel_sq_error(&ic, &ib), own = rel_sq_error(&id, &ia);
+            printf("cornell .rad vs cornell-box.json: %g; JSON vs JSON, other seeds: %g; .rad vs .rad: %g\n", diff,
+                   noise, own);
+            CHECK(diff <= 1.2 * noise, "rad vs JSON: relative squared error %g, JSON vs JSON (other seeds) %g", diff,
+                  noise);
+            CHECK(own <= 1.2 * noise, "rad vs rad (other seeds) %g, within the JSON's noise %g", own, noise);
+        }
+        ic_image_free(&ia);
+        ic_image_free(&ib);
+        ic_image_free(&ic);
+        ic_image_free(&id);
+        ic_image_free(&i2);
+    }
+    ic_scene_free(a);
+    ic_scene_free(b);
+    ic_scene_free(c);
+}
+
+/* A 2000 m floor (ρ = 0.5, facing +z) seen from 2 m above; extra: the lights. Mean of the centre pixels. */
+static double floor_centre(const char *name, const char *lights, int spp)
+{
+    char rad[2048], path[512];
+    snprintf(rad, sizeof rad,
+             "void plastic grey\n0\n0\n5 .5 .5 .5 0 0\n"
+             "grey polygon floor\n0\n0\n12\n -1000 -1000 0\n 1000 -1000 0\n 1000 1000 0\n -1000 1000 0\n%s",
+             lights);
+    snprintf(path, sizeof path, IC_TEST_TMP "/%s.rad", name);
+    test_write_file(path, rad);
+    test_write_file(IC_TEST_TMP "/floor.vf", "# looking down\nrpict -x 100 -vtv -vp 0 0 2 -vd 0 0 -1 -vu 0 1 0 -vh 10 -vv 10 -ab 2\n");
+    ic_error err = {0};
+    ic_scene *s = load_view(path, IC_TEST_TMP "/floor.vf", 16, &err);
+    CHECK(s != NULL, "%s loads: %s", name, err.message);
+    ic_render_options opt = {0};
+    opt.spp = spp;
+    opt.threads = 2;
+    return s ? test_scene_box_mean(s, &opt, 6, 6, 4, 1) : -1.0;
+}
+
+static void test_analytic(void)
+{
+    double sky = floor_centre("rad_sky", "void glow skyglow\n0\n0\n4 2 2 2 0\nskyglow source sky\n0\n0\n4 0 0 1 360\n", 4);
+    CHECK(fabs(sky - 1.0) < 0.03, "floor under a 360-degree glow source: %g, expected rho L = 1", sky);
+    /* the sun: 0.5° across, radiance 1e5: irradiance L Ω */
+    double omega = 2.0 * PI_D * (1.0 - cos(0.25 * PI_D / 180.0));
+    double sun = floor_centre("rad_sun", "void light sunlight\n0\n0\n3 1e5 1e5 1e5\nsunlight source sun\n0\n0\n4 0 0 1 0.5\n", 4);
+    double want = 0.5 * 1e5 * omega / PI_D;
+    CHECK(fabs(sun - want) < 1e-3 * want, "floor under a small source: %g, expected rho L Omega / pi = %g", sun, want);
+    /* a light sphere of radius 0.5 centred 3 m above: E = π L sin²α, sin α = 0.5/3 */
+    double ball = floor_centre("rad_ball", "void light bulb\n0\n0\n3 10 10 10\nbulb sphere ball\n0\n0\n4 0 0 3 0.5\n", 64);
+    double want_ball = 0.5 * 10.0 * (0.5 / 3.0) * (0.5 / 3.0);
+    printf("floor: glow source %g (1), sun %g (%g), light sphere %g (%g)\n", sky, sun, want, ball, want_ball);
+    CHECK(fabs(ball - want_ball) < 0.01 * want_ball, "floor under a light sphere: %g, expected rho L sin^2(alpha) = %g",
+          ball, want_ball);
+}
+
+static double triangle_area(const ic_scene *s, uint32_t t)
+{
+    ic_vec3 a = s->positions[s->triangles[3 * t]], b = s->positions[s->triangles[3 * t + 1]],
+            c = s->positions[s->triangles[3 * t + 2]];
+    return 0.5 * v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+}
+
+static const ic_material *material_named(const ic_scene *s, const char *name)
+{
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        if (!strcmp(s->materials[m].name, name))
+            return &s->materials[m];
+    return NULL;
+}
+
+static void test_geometry_and_materials(void)
+{
+    char rad[8192];
+    snprintf(rad, sizeof rad,
+             "# every shape, each with its own material\n"
+             "void plastic cpoly 0 0 5 .5 .5 .5 0 0\n"
+             "void plastic cball 0 0 5 .5 .5 .5 .05 .1\n"
+             "void metal cring 0 0 5 .8 .6 .2 .9 .05\n"
+             "void metal ccyl 0 0 5 .8 .8 .8 1 0\n"
+             "void glass cglass 0 0 3 .9 .9 .9\n"
+             "void mirror ctube 0 0 3 .7 .7 .7\n"
+             "void brightfunc dirt 2 dirt dirt.cal 0 0\n"
+             "void brightfunc dirt2 2 dirt dirt.cal 0 0\n"
+             "dirt trans ctrans 0 0 7 .6 .6 .6 0 0 .5 .5\n"
+             "void alias cpoly2 cpoly\n"
+             "void illum window 1 cglass 0 3 100 100 100\n"
+             "void illum hole 0 0 3 100 100 100\n"
+             "void mixfunc mix 4 cball cring mixer . 0 0\n"
+             "cpoly polygon C\n0\n0\n24  0 0 0  3 0 0  3 1 0  1 1 0  1 2 0  3 2 0  3 3 0  0 3 0\n"
+             "cball sphere ball\n0\n0\n4 1 2 3 0.5\n"
+             "cring ring ring\n0\n0\n8 0 0 5  0 0 1  1 2\n"
+             "ccyl cylinder cyl\n0\n0\n7 10 0 0  10 0 4  1\n"
+             "ctube tube tube\n0\n0\n7 20 0 0  20 0 4  1\n"
+             "cglass cone cone\n0\n0\n8 30 0 0  30 0 2  1 0\n"
+             "ctrans polygon t 0 0 9 0 0 9 1 0 9 0 1 9\n"
+             "cpoly2 polygon a 0 0 9 0 0 8 1 0 8 0 1 8\n"
+             "window polygon w 0 0 9 0 0 7 1 0 7 0 1 7\n"
+             "hole polygon h 0 0 9 0 0 6 1 0 6 0 1 6\n"
+             "void polygon v 0 0 9 0 0 5 1 0 5 0 1 5\n"
+             "mix polygon m 0 0 9 0 0 4 1 0 4 0 1 4\n"
+             "void mesh box 5 %s/scenes/cornell-box/CornellBox-Original.obj -t 100 0 0 0 0\n",
+             IC_SOURCE_DIR);
+    test_write_file(IC_TEST_TMP "/rad_shapes.rad", rad);
+    ic_error err = {0};
+    ic_scene *s = load_view(IC_TEST_TMP "/rad_shapes.rad", NULL, 16, &err);
+    CHECK(s != NULL, "shapes scene loads: %s", err.message);
+    if (!s)
+        return;
+    double area[16] = {0};
+    int sphere_off = 0, cone_in = 0, tube_out = 0, poly_down = 0, mesh_tris = 0;
+    const char *names[] = {"cpoly", "cball", "cring", "ccyl", "ctube", "cglass"};
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        const ic_material *m = &s->materials[s->triangle_material[t]];
+        ic_vec3 a = s->positions[s->triangles[3 * t]], b = s->positions[s->triangles[3 * t + 1]],
+                c = s->positions[s->triangles[3 * t + 2]];
+        ic_vec3 ng = v3_cross(v3_sub(b, a), v3_sub(c, a)), centroid = v3_scale(v3_add(a, v3_add(b, c)), 1.0f / 3.0f);
+        for (int k = 0; k < 6; ++k)
+            if (!strcmp(m->name, names[k]))
+                area[k] += triangle_area(s, t);
+        if (!strcmp(m->name, "cpoly") && centroid.z == 0.0f)
+            poly_down += ng.z <= 0.0f;
+        if (!strcmp(m->name, "cball"))
+            for (int k = 0; k < 3; ++k)
+                sphere_off |= fabsf(v3_len(v3_sub(s->positions[s->triangles[3 * t + k]], v3(1, 2, 3))) - 0.5f) > 1e-5f;
+        if (!strcmp(m->name, "ccyl"))
+            cone_in += v3_dot(ng, v3_sub(centroid, v3(10, 0, centroid.z))) <= 0.0f;
+        if (!strcmp(m->name, "ctube"))
+            tube_out += v3_dot(ng, v3_sub(centroid, v3(20, 0, centroid.z))) >= 0.0f;
+        mesh_tris += centroid.x > 90.0f;
+    }
+    CHECK(fabs(area[0] - 7.0) < 1e-5, "the C-shaped polygon: area 7, nothing overlapping: %g", area[0]);
+    CHECK(!poly_down, "every polygon triangle faces +z (counter-clockwise vertices)");
+    CHECK(!sphere_off && fabs(area[1] / (PI_D) - 1.0) < 0.005, "sphere: vertices on it, area %g of pi", area[1]);
+    CHECK(fabs(area[2] / (3.0 * PI_D) - 1.0) < 0.002, "ring: area %g of 3 pi", area[2]);
+    CHECK(fabs(area[3] / (8.0 * PI_D) - 1.0) < 0.002 && !cone_in, "cylinder: area %g of 8 pi, facing out", area[3]);
+    CHECK(fabs(area[4] / (8.0 * PI_D) - 1.0) < 0.002 && !tube_out, "tube: area %g of 8 pi, facing in", area[4]);
+    double cone_area = PI_D * 1.0 * sqrt(1.0 + 4.0);
+    printf("areas / true: sphere %.5f ring %.5f cylinder %.5f tube %.5f cone %.5f\n", area[1] / PI_D,
+           area[2] / (3.0 * PI_D), area[3] / (8.0 * PI_D), area[4] / (8.0 * PI_D), area[5] / cone_area);
+    CHECK(area[5] > 0.99 * cone_area && area[5] < cone_area, "cone: area %g of pi r l = %g", area[5], cone_area);
+    CHECK(mesh_tris > 20, "the mesh's OBJ moved by -t 100 0 0: %d triangles", mesh_tris);
+
+    const ic_material *m = material_named(s, "cball");
+    CHECK(m && m->type == IC_MAT_PLASTIC && fabsf(m->alpha - 0.1f) < 1e-6f &&
+              fabsf(powf((m->ior - 1.0f) / (m->ior + 1.0f), 2.0f) - 0.05f) < 1e-5f && m->ks.x == 1.0f,
+          "plastic: a coat reflecting spec = 0.05 at normal incidence, alpha = roughness");
+    m = material_named(s, "cring");
+    CHECK(m && m->type == IC_MAT_PLASTIC && m->ks.y == 0.6f && m->kd.z == 0.2f, "metal (spec 0.9): a coat tinted by the colour");
+    m = material_named(s, "ccyl");
+    CHECK(m && m->type == IC_MAT_CONDUCTOR && m->ks.x == 0.8f, "metal (spec 1): a conductor of F0 = colour");
+    m = material_named(s, "ctube");
+    CHECK(m && m->type == IC_MAT_MIRROR && m->ks.x == 0.7f, "mirror");
+    m = material_named(s, "cglass");
+    CHECK(m && m->type == IC_MAT_GLASS && fabsf(m->ior - 1.52f) < 1e-6f, "glass: index 1.52");
+    m = material_named(s, "ctrans");
+    CHECK(m && m->type == IC_MAT_DIFFUSE && fabsf(m->kd.x - 0.3f) < 1e-6f, "trans: its reflection, colour (1 - trans)");
+    m = material_named(s, "window");
+    CHECK(m && m->type == IC_MAT_GLASS, "illum with an alternate: rendered as it");
+    m = material_named(s, "mix");
+    CHECK(m && m->type == IC_MAT_PLASTIC && fabsf(m->alpha - 0.1f) < 1e-6f, "a mixture: its first material");
+    CHECK(!material_named(s, "hole") && !material_named(s, "v"), "void and an illum without alternate: left out");
+    const char *w = ic_scene_warnings(s);
+    const char *bf = strstr(w, "brightfunc");
+    CHECK(bf && !strstr(bf + 1, "brightfunc"), "one warning for the two patterns: %s", w);
+    CHECK(strstr(w, "rad_shapes.rad:8:") && strstr(w, "rad_shapes.rad:10: trans") && strstr(w, "void"),
+          "warnings name file:line: %s", w);
+    ic_scene_free(s);
+}
+
+/* Loads text as a scene (and view as its view file, when given); the error must hold each of want[]. */
+static void expect_error(const char *name, const char *text, const char *view, const char *const *want)
+{
+    char path[512], vpath[512];
+    snprintf(path, sizeof path, IC_TEST_TMP "/%s.rad", name);
+    test_write_file(path, text);
+    if (view) {
+        snprintf(vpath, sizeof vpath, IC_TEST_TMP "/%s.vf", name);
+        test_write_file(vpath, view);
+    }
+    ic_error err = {0};
+    ic_scene *s = load_view(path, view ? vpath : NULL, 16, &err);
+    CHECK(s == NULL, "%s is refused", name);
+    ic_scene_free(s);
+    int ok = !strchr(err.message, '\n');
+    for (int i = 0; want[i]; ++i)
+        ok &= strstr(err.message, want[i]) != NULL;
+    CHECK(ok, "%s: one line naming what is wrong and where: %s", name, err.message);
+}
+
+static void test_errors(void)
+{
+    ic_error err = {0};
+    const char *good = "void light l 0 0 3 1 1 1\nl polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n";
+    expect_error("rad_cmd", "# a generator\nvoid plastic p 0 0 5 .5 .5 .5 0 0\n!xform -t 1 0 0 other.rad\n", NULL,
+                 (const char *[]){"rad_cmd.rad:3:", "!xform -t 1 0 0 other.rad", "runs a command", NULL});
+    expect_error("rad_inst", "void instance i 1 model.oct 0 0\n", NULL,
+                 (const char *[]){"rad_inst.rad:1:", "instance 'i'", "octree", NULL});
+    expect_error("rad_undef", "\nnosuch polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n", NULL,
+                 (const char *[]){"rad_undef.rad:2:", "'nosuch'", "not defined", NULL});
+    expect_error("rad_count", "void plastic p\n0\n0\n4 .5 .5 .5 0\n", NULL,
+                 (const char *[]){"rad_count.rad:1:", "needs 5 real arguments", NULL});
+    expect_error("rad_nan", "void plastic p 0 0 5 .5 .5 x 0 0\n", NULL,
+                 (const char *[]){"rad_nan.rad:1:", "'x'", "not a finite number", NULL});
+    expect_error("rad_trunc", "\nvoid plastic p 0 0 5 .5 .5\n", NULL,
+                 (const char *[]){"rad_trunc.rad:2:", "ends where a real argument of plastic 'p'", NULL});
+    expect_error("rad_poly", "void plastic p 0 0 5 .5 .5 .5 0 0\np polygon q 0 0 6 0 0 0 1 0 0\n", NULL,
+                 (const char *[]){"rad_poly.rad:2:", "at least 3 vertices", NULL});
+    expect_error("rad_fisheye", good, "rview -vta -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0\n",
+                 (const char *[]){"rad_fisheye.vf:1:", "-vta", "angular fisheye", "-vtv", NULL});
+    expect_error("rad_shift", good, "\nVIEW= -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vs 0.2\n",
+                 (const char *[]){"rad_shift.vf:2:", "-vs", NULL});
+    expect_error("rad_noview", good, "just words\n", (const char *[]){"rad_noview.vf", "no view", NULL});
+
+    expect_error("rad_word", "void plastic p 0 0 5 .5 .5 .5 0 0\n\nvoid\n", NULL,
+                 (const char *[]){"rad_word.rad:3:", "the type of this primitive", NULL});
+    FILE *f = fopen(IC_TEST_TMP "/rad_nul.rad", "wb"); /* a NUL byte is no white space, nor the end */
+    if (f) {
+        fwrite("void plastic p 0 0 5 .5 .5 .5 0 0\n\0 x\n", 1, 41, f);
+        fclose(f);
+    }
+    ic_scene *s = load_view(IC_TEST_TMP "/rad_nul.rad", NULL, 16, &err);
+    CHECK(!s && strstr(err.message, "rad_nul.rad:2:") && strstr(err.message, "NUL"), "a NUL byte: %s", err.message);
+    ic_scene_free(s);
+
+    /* a view file is for .rad scenes */
+    ic_scene_load_options lo = {0};
+    lo.view = IC_TEST_TMP "/floor.vf";
+    s = NULL;
+    ic_result r = ic_scene_load(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", &lo, &s, &err);
+    CHECK(r == IC_ERR_INVALID_ARG && strstr(err.message, "--view"), "--view on a JSON scene: %s", err.message);
+    ic_scene_free(s);
+
+    /* unsupported kinds warn once, naming the first place */
+    test_write_file(IC_TEST_TMP "/rad_warn.rad",
+               "void light l 0 0 3 1 1 1\nvoid plasfunc f 2 a b 0 5 .5 .5 .5 0 0\nvoid plasfunc g 2 a b 0 5 .5 .5 .5 0 0\n"
+               "l polygon p 0 0 9 0 0 0 1 0 0 0 1 0\nvoid prism1 z 0 0 0\nvoid prism1 y 0 0 0\n");
+    s = load_view(IC_TEST_TMP "/rad_warn.rad", NULL, 16, &err);
+    CHECK(s != NULL, "warned scene loads: %s", err.message);
+    if (s) {
+        const char *w = ic_scene_warnings(s), *pf = strstr(w, "plasfunc"), *pr = strstr(w, "prism1");
+        CHECK(pf && !strstr(pf + 1, "plasfunc") && strstr(w, "rad_warn.rad:2: plasfunc"), "plasfunc once: %s", w);
+        CHECK(pr && !strstr(pr + 1, "prism1") && strstr(w, "rad_warn.rad:5: prism1"), "prism1 once: %s", w);
+    }
+    ic_scene_free(s);
+}
+
+int main(void)
+{
+    test_cornell();
+    test_analytic();
+    test_geometry_and_materials();
+    test_errors();
+    TEST_MAIN_END();
+}
