@@ -102,9 +102,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "environment map accepted, checked from the file's header before it is read (at most 2^28)") \
     X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
       IC_DEFAULT_MAX_MESH_ELEMENTS, "16777216", "", IC_SCOPE_ALL, "largest vertex or face count of one mesh " \
-      "file, checked from a PLY header before it is read, and on the meshes imported") \
+      "file, checked from a PLY header before it is read, and on the meshes imported (for a .rad scene: the " \
+      "vertices of all its surfaces)") \
     X(MAX_SCENE_BYTES, "--max-scene-bytes", NULL, IC_OPT_BYTES, load.max_scene_bytes, 1, 1099511627776.0, "N", \
-      IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest JSON scene file read, " \
+      IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest scene file (JSON, Mitsuba, Radiance) read, " \
       "checked before it is read (a suffix K, M, G multiplies by 2^10, 2^20, 2^30; mesh files have " \
       "--max-mesh-elements)") \
     X(ALLOW_OUTSIDE_PATHS, "--allow-outside-paths", NULL, IC_OPT_FLAG, load.allow_outside_paths, 0, 0, "", NAN, \
