@@ -236,6 +236,9 @@ static void test_geometry_and_materials(void)
     CHECK(s != NULL, "shapes scene loads: %s", err.message);
     if (!s)
         return;
+    ic_vec3 look = v3_sub(s->camera.target, s->camera.eye);
+    CHECK(look.x == 0.0f && look.y > 0.0f && look.z == 0.0f && s->camera.up.z == 1.0f,
+          "without a view: a fitted camera looking along +y with +z up");
     double area[16] = {0};
     int sphere_off = 0, cone_in = 0, tube_out = 0, poly_down = 0, mesh_tris = 0;
     const char *names[] = {"cpoly", "cball", "cring", "ccyl", "ctube", "cglass"};
