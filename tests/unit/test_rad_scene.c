@@ -348,7 +348,8 @@ static void test_errors(void)
                  (const char *[]){"rad_word.rad:3:", "the type of this primitive", NULL});
     FILE *f = fopen(IC_TEST_TMP "/rad_nul.rad", "wb"); /* a NUL byte is no white space, nor the end */
     if (f) {
-        fwrite("void plastic p 0 0 5 .5 .5 .5 0 0\n\0 x\n", 1, 41, f);
+        static const char nul[] = "void plastic p 0 0 5 .5 .5 .5 0 0\n\0 x\n";
+        fwrite(nul, 1, sizeof nul - 1, f);
         fclose(f);
     }
     ic_scene *s = load_view(IC_TEST_TMP "/rad_nul.rad", NULL, 16, &err);
