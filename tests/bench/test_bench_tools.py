@@ -16,6 +16,7 @@ sys.dont_write_bytecode = True  # no __pycache__ folders in the source tree
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 
 from report import analysis, check, plot, pngio  # noqa: E402
+import accuracy_sweep  # noqa: E402
 
 
 def encode_with_filters(width, height, channels, pixels, filters):
@@ -259,6 +260,28 @@ class CheckTest(unittest.TestCase):
         with open(os.path.join(self.out, "report.html"), "a") as f:
             f.write('<img src="missing.png">')
         self.assertTrue(any("missing.png" in p for p in check.check_results(r, self.out)))
+
+
+class AccuracySweepTest(unittest.TestCase):
+    """bench/accuracy_sweep.py: records at equal error along a baseline's lower envelope."""
+
+    def test_envelope_drops_dominated_points(self):
+        # (records, error): 300 records with more error than 200 records is not on the envelope
+        front = accuracy_sweep.envelope([(100, 4.0), (300, 3.0), (200, 2.0), (400, 1.0)])
+        self.assertEqual(front, [(100, 4.0), (200, 2.0), (400, 1.0)])
+
+    def test_power_law_is_interpolated_exactly(self):
+        # error = 1e4 / records²: log-log linear, so any error between two points maps back exactly
+        front = accuracy_sweep.envelope([(r, 1e4 / r ** 2) for r in (100, 200, 400, 800)])
+        for records in (100, 150, 333, 800):
+            self.assertAlmostEqual(accuracy_sweep.records_at(front, 1e4 / records ** 2), records, places=6)
+
+    def test_no_extrapolation(self):
+        front = accuracy_sweep.envelope([(100, 4.0), (400, 1.0)])
+        self.assertIsNone(accuracy_sweep.records_at(front, 5.0))
+        self.assertIsNone(accuracy_sweep.records_at(front, 0.5))
+        self.assertIsNone(accuracy_sweep.records_at([], 1.0))
+        self.assertEqual(accuracy_sweep.records_at([(100, 2.0)], 2.0), 100)
 
 
 if __name__ == "__main__":
