@@ -27,8 +27,9 @@ time on a possibly shared machine: compare within one run); "-" where the error 
 baseline's range (no extrapolation). The issue's goal is a records ratio of at most 0.5 on two of three
 scenes.
 
-Runs are cached in --out (a JSON line per run, keyed by the render's arguments, the reference and the
-binary's bytes), so adding a configuration later renders only the new one (`--force` renders again).
+Runs are cached in --out (a JSON line per run, keyed by the render's arguments and the reference, and
+valid for the binary that made them, or for any with --any-binary), so adding a configuration later
+renders only the new one (`--force` renders again).
 One render at a time; Python 3 standard library only.
 """
 
@@ -115,6 +116,9 @@ def main():
     ap.add_argument("--md", help="write the table as Markdown here")
     ap.add_argument("--irrcache", default=os.path.join(ROOT, "build", "irrcache"))
     ap.add_argument("--force", action="store_true", help="render again even where a run is cached")
+    ap.add_argument("--any-binary", action="store_true",
+                    help="reuse cached runs made by another build of irrcache (when its change is known to leave "
+                         "them alone, e.g. a new configuration's option); by default they render again")
     argv = sys.argv[1:]
     cut = argv.index("--") if "--" in argv else len(argv)
     args = ap.parse_args(argv[:cut])
@@ -163,8 +167,10 @@ def main():
                 runs = []
                 for seed in seeds:
                     opts = base + (["--seed", seed] if seed else [])
-                    key = hashlib.sha256(json.dumps([args.scene, opts, ref_key, binary_key]).encode()).hexdigest()[:20]
+                    key = hashlib.sha256(json.dumps([args.scene, opts, ref_key]).encode()).hexdigest()[:20]
                     rec = None if args.force else cached.get(key)
+                    if rec is not None and rec.get("binary") != binary_key and not args.any_binary:
+                        rec = None
                     if rec is None:
                         stem = os.path.join(args.out, "%s-%s-%s-%g%s" % (scene_name, vname, cname, acc,
                                                                           "-s" + seed if seed else ""))
@@ -173,8 +179,8 @@ def main():
                         with open(stem + ".json") as f:
                             stats = json.load(f)
                         d = equal_time.diff(args.irrcache, stem + ".pfm", ref)
-                        rec = {"key": key, "scene": args.scene, "variant": vname, "config": cname, "accuracy": acc,
-                               "options": opts, "records": stats.get("records"), "seconds": stats["seconds"],
+                        rec = {"key": key, "binary": binary_key, "scene": args.scene, "variant": vname,
+                               "config": cname, "accuracy": acc, "options": opts, "records": stats.get("records"), "seconds": stats["seconds"],
                                "rays": stats["rays"], "relmse": d["relmse"], "relmse_lowpass": d["relmse_lowpass"],
                                "reference_noise": noise}
                         with open(cache_path, "a") as f:
