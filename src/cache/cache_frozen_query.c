@@ -580,16 +580,6 @@ int ic_cache_set_lookup_path(ic_cache *c, ic_lookup_path path)
         path > IC_LOOKUP_AVX2)
         return 0;
     c->lookup_path = path;
-#if defined(IC_HAVE_AVX2_PATH)
-    if (path == IC_LOOKUP_AVX2)
-        c->query_frozen = query_frozen_avx2;
-#endif
-#if defined(__SSE2__)
-    if (path == IC_LOOKUP_SSE2)
-        c->query_frozen = query_frozen_sse2;
-#endif
-    if (path == IC_LOOKUP_PORTABLE)
-        c->query_frozen = query_frozen_portable;
     ic_cache_select_frozen_query(c);
     return 1;
 }
