@@ -297,6 +297,76 @@ static void record_of(const ic_ctx *c, const ic_candidate *cd, const ic_gather_r
     rec->bounce = (uint8_t)IC_BOUNCE_RADIANCE;
 }
 
+/* Gathers the job's count candidates with its threads into j->res (whose coefficient buffers are
+ * payload's rows of `floats`). Ranks sharing the render split them as ic_ic_gather_points does: rank r
+ * gathers candidates r, r + N, …, the results and coefficients are exchanged, and every rank holds
+ * every one, bit for bit what one process gathers (a result depends only on the seed and its key). */
+static ic_result gather_shared(ic_ctx *c, rad_job *j, uint32_t count, int threads, float *payload, uint32_t floats,
+                               ic_error *err)
+{
+    int ranks = ic_comm_size(c->comm), rank = ic_comm_rank(c->comm);
+    uint64_t first = 0, own = count;
+    if (ranks > 1)
+        ic_comm_block(count, ranks, rank, &first, &own);
+    const ic_candidate *all_cand = j->cand;
+    ic_gather_radiance_result *all_res = j->res;
+    ic_candidate *mine = NULL;
+    float *block = NULL;
+    ic_gather_radiance_result *block_res = NULL;
+    ic_result r = IC_OK;
+    if (ranks > 1) {
+        /* This rank's candidates, gathered into its block of a rank-ordered buffer. */
+        mine = malloc(sizeof *mine * (own ? own : 1));
+        block = malloc(sizeof *block * floats * (count ? count : 1));
+        block_res = calloc(count ? count : 1, sizeof *block_res);
+        if (!mine || !block || !block_res)
+            r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u radiance records", count);
+        for (uint64_t k = 0; r == IC_OK && k < own; ++k) {
+            mine[k] = all_cand[(uint64_t)rank + k * (uint64_t)ranks];
+            ic_gather_radiance_result *g = &block_res[first + k];
+            g->coeffs = block + (first + k) * floats;
+            g->grad_t = g->coeffs + floats / 3;
+            g->grad_b = g->coeffs + 2 * (floats / 3);
+        }
+        j->cand = mine;
+        j->res = block_res + first;
+    }
+    int t = threads < (int)own ? threads : (int)own;
+    if (r == IC_OK && own) {
+        r = ic_parallel_for(t > 0 ? t : 1, (int64_t)own, rad_item, j);
+        if (r != IC_OK)
+            ic_error_set(err, r, "could not start %d gathering threads", t);
+        else if ((r = (ic_result)atomic_load(&j->status)) != IC_OK)
+            ic_error_set(err, r, "gathering a radiance record failed (%s)", ic_result_name(r));
+    }
+    j->cand = all_cand;
+    j->res = all_res;
+    c->gathered += own;
+    if (ranks > 1) {
+        if (r == IC_OK)
+            r = ic_comm_allgather_blocks(c->comm, block, count, sizeof *block * floats, err);
+        if (r == IC_OK)
+            r = ic_comm_allgather_blocks(c->comm, block_res, count, sizeof *block_res, err);
+        for (int q = 0; r == IC_OK && q < ranks; ++q) {
+            uint64_t q_first, q_own;
+            ic_comm_block(count, ranks, q, &q_first, &q_own);
+            for (uint64_t k = 0; k < q_own; ++k) {
+                uint64_t i = (uint64_t)q + k * (uint64_t)ranks;
+                ic_gather_radiance_result g = block_res[q_first + k]; /* its pointers were the sender's */
+                g.coeffs = all_res[i].coeffs;
+                g.grad_t = all_res[i].grad_t;
+                g.grad_b = all_res[i].grad_b;
+                all_res[i] = g;
+                memcpy(payload + i * floats, block + (q_first + k) * floats, sizeof *payload * floats);
+            }
+        }
+    }
+    free(mine);
+    free(block);
+    free(block_res);
+    return r;
+}
+
 /* Gathers count candidates in parallel and inserts them, with their coefficients, as one batch. */
 static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err)
 {
@@ -332,13 +402,8 @@ static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t cou
         r = ic_gatherer_create(&go, ic_ic_gather_trace, &j.workers[t], &j.gatherers[t], err);
     }
     double t0 = ic_seconds();
-    if (r == IC_OK) {
-        r = ic_parallel_for(threads, count, rad_item, &j);
-        if (r != IC_OK)
-            ic_error_set(err, r, "could not start %d gathering threads", threads);
-        else if ((r = (ic_result)atomic_load(&j.status)) != IC_OK)
-            ic_error_set(err, r, "gathering a radiance record failed (%s)", ic_result_name(r));
-    }
+    if (r == IC_OK)
+        r = gather_shared(c, &j, count, threads, payload, floats, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     uint32_t first = 0;
