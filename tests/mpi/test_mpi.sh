@@ -7,7 +7,8 @@
 #   2. lazy construction under 2 ranks is refused with a message naming the strategy;
 #   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
 #      missing file) stops the job: non-zero exit within seconds, the message names the rank and the
-#      file, and no output is written.
+#      file, and no output is written;
+#   4. a rank killed during the final render ends the job within seconds, leaving no output or temporary file.
 # Images are compared as PFM (the pixels alone: an EXR's header says how long the render took).
 # Skips (77) when the build has no MPI. Runs as root in CI through Open MPI's own switches (set here,
 # never in the program).
@@ -70,7 +71,7 @@ same "adaptive image, 3 ranks" ad-3.pfm ad.pfm
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 1 --load-cache ic.cache -o load-3.pfm
 same "image from a loaded cache, 3 ranks" load-3.pfm load.pfm
 
-# Radiance caching on the glossy floor: its records are gathered by every rank alike (not shared yet).
+# Radiance caching on the glossy floor: its records are split among the ranks like irradiance records.
 glossy=$src/scenes/cornell-box-glossy/cornell-box-glossy-20.json
 "$bin" render "$glossy" "${common[@]}" "${ic[@]}" --radiance-cache on --threads 2 -o glossy.pfm --save-cache glossy.cache
 mpirun --oversubscribe -np 3 "$bin" render "$glossy" "${common[@]}" "${ic[@]}" --radiance-cache on --threads 1 \
@@ -116,6 +117,27 @@ if [ "$(grep -c "irrcache render" bad.err)" != 1 ]; then
   echo "FAIL: a rank without its scene: not exactly one message:"; cat bad.err; fail=1
 fi
 if ls bad.pfm* >/dev/null 2>&1; then echo "FAIL: a rank without its scene: an output was written"; fail=1; fi
+
+# A rank that dies in the middle of the render (killed by a signal) ends the job: non-zero exit within
+# seconds, and neither an output nor a temporary file is left behind.
+mpirun --oversubscribe -np 2 "$bin" render "$scene" --width 96 --height 96 --quiet --integrator ic --spp 4096 \
+  --threads 1 -o killed.pfm 2>killed.err &
+job=$!
+victim=
+for _ in $(seq 1 100); do # mpirun starts the ranks as its children: the last of the two
+  [ "$(pgrep -c -P $job)" -ge 2 ] && victim=$(pgrep -n -P $job) && break
+  sleep 0.1
+done
+sleep 2
+start=$(date +%s)
+if [ -n "$victim" ]; then kill -KILL "$victim"; fi
+if wait $job; then echo "FAIL: a rank killed during the render: the job exited 0"; fail=1; fi
+took=$(( $(date +%s) - start ))
+if [ -z "$victim" ]; then echo "FAIL: a rank killed during the render: no rank process found"; fail=1; fi
+if [ $took -gt 20 ]; then echo "FAIL: a rank killed during the render: the job took ${took}s to stop"; fail=1; fi
+if ls killed.pfm* >/dev/null 2>&1; then
+  echo "FAIL: a rank killed during the render: an output or temporary file was left:"; ls -a; fail=1
+fi
 
 [ $fail = 0 ] && echo "mpi: every rank count gave the single process's bytes"
 exit $fail
