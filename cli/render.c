@@ -66,7 +66,7 @@ static void on_progress(void *user, const ic_render_progress *r)
 }
 
 /* What each rank reports of its share (ic_render_stats' rank_ fields and its wall time), gathered to rank 0. */
-#define RANK_FIGURES (5 + 2 * 32)
+#define RANK_FIGURES (6 + 2 * 32)
 static void rank_figures(const ic_render_stats *st, double f[RANK_FIGURES])
 {
     f[0] = (double)st->rank_records_gathered;
@@ -74,9 +74,10 @@ static void rank_figures(const ic_render_stats *st, double f[RANK_FIGURES])
     f[2] = st->rank_comm_seconds;
     f[3] = (double)st->rank_comm_bytes;
     f[4] = st->seconds;
+    f[5] = st->rank_render_seconds;
     for (int p = 0; p < 32; ++p) {
-        f[5 + p] = st->rank_comm_seconds_per_pass[p];
-        f[5 + 32 + p] = (double)st->rank_comm_bytes_per_pass[p];
+        f[6 + p] = st->rank_comm_seconds_per_pass[p];
+        f[6 + 32 + p] = (double)st->rank_comm_bytes_per_pass[p];
     }
 }
 
@@ -141,13 +142,14 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         cJSON_AddNumberToObject(rk, "comm_seconds", f[2]);
         cJSON_AddItemToObject(rk, "comm_bytes", ic_cli_json_u64((uint64_t)f[3]));
         cJSON_AddNumberToObject(rk, "seconds", f[4]);
+        cJSON_AddNumberToObject(rk, "render_seconds", f[5]);
         if (a->render.integrator == IC_INTEGRATOR_IC && a->render.ic.strategy == IC_STRATEGY_BATCH &&
             !a->render.ic.load_cache) {
             cJSON *sec = cJSON_AddArrayToObject(rk, "comm_seconds_per_pass");
             cJSON *bytes = cJSON_AddArrayToObject(rk, "comm_bytes_per_pass");
             for (int p = 0; p < st->passes && p < 32; ++p) {
-                cJSON_AddItemToArray(sec, cJSON_CreateNumber(f[5 + p]));
-                cJSON_AddItemToArray(bytes, ic_cli_json_u64((uint64_t)f[5 + 32 + p]));
+                cJSON_AddItemToArray(sec, cJSON_CreateNumber(f[6 + p]));
+                cJSON_AddItemToArray(bytes, ic_cli_json_u64((uint64_t)f[6 + 32 + p]));
             }
         }
         cJSON_AddItemToArray(per_rank, rk);

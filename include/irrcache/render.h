@@ -295,6 +295,7 @@ typedef struct ic_render_stats {
     int ranks;             /* processes that rendered (1 without opt.comm) */
     uint64_t rank_records_gathered; /* records whose hemispheres this process gathered */
     uint64_t rank_pixel_samples;    /* pixel samples this process rendered (the film, AOVs excluded) */
+    double rank_render_seconds;     /* seconds it spent rendering them (waiting for other ranks excluded) */
     double rank_comm_seconds;       /* seconds this process spent in opt.comm's operations */
     uint64_t rank_comm_bytes;       /* bytes it received through them */
     double rank_comm_seconds_per_pass[32]; /* batch: of those, each construction pass's (records_per_pass's */

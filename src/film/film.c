@@ -70,8 +70,11 @@ typedef struct loop_ctx {
     double *sumsq;         /* adaptive pilot pass: per-pixel sums of squared luminance, else NULL */
     uint32_t *extra;       /* adaptive second pass: samples of each pixel from s_begin, else NULL */
     int tiles_x, tiles_y;
-    int rank, ranks;       /* this process renders tiles rank, rank + ranks, … */
+    int rank, ranks;       /* this process renders tiles rank, rank + ranks, … (or owned[]) */
     int own_tiles;         /* how many that is */
+    int64_t *owned;        /* the tiles this process renders when not interleaved (NULL: interleaved) */
+    int *owner;            /* with owned: each tile's rank */
+    double *tile_seconds;  /* several ranks, adaptive pilot: each tile's render time (this rank's tiles) */
     int s_begin, s_end;    /* samples of this pass */
     uint64_t *rays;        /* per thread, padded */
     uint64_t *samples;     /* per thread, padded: pixel samples taken */
@@ -88,6 +91,7 @@ typedef struct loop_ctx {
     int64_t *todo;         /* the tiles of the current round */
     atomic_int pause;      /* 1: a checkpoint is due; tiles not begun wait for the next round */
     double next_checkpoint;/* ic_seconds() at which the next one falls due */
+    double busy;           /* seconds in loop_pass */
 } loop_ctx;
 
 enum { TILE_WAITING = 0, TILE_RENDERED = 1, TILE_SKIPPED = 2 };
@@ -110,9 +114,10 @@ static void render_tile(void *p, int64_t item, int thread)
     const ic_camera *cam = c->loop->camera;
     if (c->todo)
         item = c->todo[item];
-    int64_t tile = (int64_t)c->rank + item * c->ranks;
+    int64_t tile = c->owned ? c->owned[item] : (int64_t)c->rank + item * c->ranks;
     int x0, y0, x1, y1;
     tile_rect(c, tile, &x0, &y0, &x1, &y1);
+    double tile_start = c->tile_seconds ? ic_seconds() : 0.0;
     if (c->skip_on_cancel && *c->loop->cancel) {
         /* Interrupted: the tile keeps what earlier passes gave it (the adaptive pass's extra samples
          * are taken back, so its pixels average what they have). */
@@ -168,6 +173,8 @@ static void render_tile(void *p, int64_t item, int thread)
     }
     c->rays[thread * RAY_PAD] += rays;
     c->samples[thread * RAY_PAD] += samples;
+    if (c->tile_seconds)
+        c->tile_seconds[tile] = ic_seconds() - tile_start;
     uint64_t done = atomic_fetch_add(&c->samples_done, samples) + samples;
     if (c->tile_state) {
         c->tile_state[item] = TILE_RENDERED;
@@ -275,6 +282,9 @@ static void loop_free(loop_ctx *c)
     free(c->samples);
     free(c->tile_state);
     free(c->todo);
+    free(c->owned);
+    free(c->owner);
+    free(c->tile_seconds);
 }
 
 /* Allocates the loop's buffers (accumulators and per-thread ray counters). */
@@ -346,7 +356,16 @@ static void take_checkpoint(loop_ctx *c)
 
 /* Runs samples [s_begin, s_end) (or each pixel's `extra` from s_begin) over every tile. With
  * checkpoints, in rounds over the tiles still waiting, each ended early when a checkpoint falls due. */
+static ic_result loop_pass_timed(loop_ctx *c, int threads, int s_begin, int s_end, ic_error *err);
 static ic_result loop_pass(loop_ctx *c, int threads, int s_begin, int s_end, ic_error *err)
+{
+    double t0 = ic_seconds();
+    ic_result r = loop_pass_timed(c, threads, s_begin, s_end, err);
+    c->busy += ic_seconds() - t0;
+    return r;
+}
+
+static ic_result loop_pass_timed(loop_ctx *c, int threads, int s_begin, int s_end, ic_error *err)
 {
     c->s_begin = s_begin;
     c->s_end = s_end;
@@ -384,7 +403,7 @@ static void clear_other_ranks(loop_ctx *c, double *values, int per_pixel)
 {
     const ic_camera *cam = c->loop->camera;
     for (int t = 0; t < c->tiles_x * c->tiles_y; ++t) {
-        if (t % c->ranks == c->rank)
+        if ((c->owner ? c->owner[t] : t % c->ranks) == c->rank)
             continue;
         int x0, y0, x1, y1;
         tile_rect(c, t, &x0, &y0, &x1, &y1);
@@ -413,6 +432,69 @@ static void count_work(const loop_ctx *c, int threads, ic_image_loop_result *res
     }
 }
 
+/* Several ranks, adaptive sampling: the pilot's interleaved split gives each rank about the same pixels,
+ * but the second pass's samples follow the noise, so its cost per tile varies many times over. Each
+ * tile's cost is estimated as its pilot seconds per sample times the samples the allocation gives it;
+ * the pilot times are summed over the ranks (each tile was timed by one), so every rank holds the same
+ * costs and makes the same split: longest tile first to the least loaded rank (Graham's LPT rule; ties to
+ * the lower index). Which rank renders a tile does not change its pixels, so the image stays the same. */
+static ic_result balance_second_pass(loop_ctx *c, int n0, ic_error *err)
+{
+    const ic_camera *cam = c->loop->camera;
+    const int tiles = c->tiles_x * c->tiles_y;
+    ic_result r = ic_comm_sum(c->loop->comm, c->tile_seconds, (uint64_t)tiles, err);
+    double *cost = malloc(sizeof *cost * (size_t)tiles), *load = calloc((size_t)c->ranks, sizeof *load);
+    int64_t *order = malloc(sizeof *order * (size_t)tiles);
+    c->owner = malloc(sizeof *c->owner * (size_t)tiles);
+    c->owned = malloc(sizeof *c->owned * (size_t)tiles);
+    if (r == IC_OK && (!cost || !load || !order || !c->owner || !c->owned))
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for sharing out %d tiles", tiles);
+    for (int t = 0; r == IC_OK && t < tiles; ++t) {
+        int x0, y0, x1, y1;
+        tile_rect(c, t, &x0, &y0, &x1, &y1);
+        double samples = 0.0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x)
+                samples += c->extra[(size_t)y * cam->width + x];
+        double pilot = (double)n0 * (x1 - x0) * (y1 - y0);
+        cost[t] = samples * c->tile_seconds[t] / pilot;
+        order[t] = t;
+    }
+    /* Most costly first (a shell sort: thousands of tiles at most). */
+    for (int gap = tiles / 2; r == IC_OK && gap > 0; gap /= 2)
+        for (int i = gap; i < tiles; ++i) {
+            int64_t t = order[i];
+            int j = i;
+            for (; j >= gap && (cost[order[j - gap]] < cost[t] ||
+                                (cost[order[j - gap]] == cost[t] && order[j - gap] > t)); j -= gap)
+                order[j] = order[j - gap];
+            order[j] = t;
+        }
+    c->own_tiles = 0;
+    c->own_pixels = 0;
+    for (int i = 0; r == IC_OK && i < tiles; ++i) {
+        int best = 0;
+        for (int q = 1; q < c->ranks; ++q)
+            if (load[q] < load[best])
+                best = q;
+        int64_t t = order[i];
+        load[best] += cost[t];
+        c->owner[t] = best;
+        if (best == c->rank) {
+            int x0, y0, x1, y1;
+            tile_rect(c, t, &x0, &y0, &x1, &y1);
+            c->owned[c->own_tiles++] = t;
+            c->own_pixels += (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0);
+        }
+    }
+    free(cost);
+    free(load);
+    free(order);
+    free(c->tile_seconds);
+    c->tile_seconds = NULL;
+    return r;
+}
+
 static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, void *user, ic_image *out,
                                  ic_image_loop_result *res, ic_error *err)
 {
@@ -427,9 +509,11 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     c.skip_on_cancel = loop->cancel && !ic_comm_is_shared(loop->comm);
     c.sumsq = calloc(npix, sizeof *c.sumsq);
     uint32_t *extra = malloc(npix * sizeof *extra);
+    if (c.ranks > 1)
+        c.tile_seconds = calloc((size_t)c.tiles_x * c.tiles_y, sizeof *c.tile_seconds);
     c.samples_planned = (double)loop->spp * (double)c.own_pixels; /* the pilot's and the rest's */
     c.start = ic_seconds();
-    if (!c.sumsq || !extra)
+    if (!c.sumsq || !extra || (c.ranks > 1 && !c.tile_seconds))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
                          cam->height);
     if (r == IC_OK)
@@ -446,9 +530,12 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         free(c.sumsq);
         c.sumsq = NULL;
         c.extra = extra;
-        /* What progress counts now: the pilot's samples and the rest as shared out. */
         double planned = (double)n0 * (double)c.own_pixels;
-        for (int64_t t = c.rank; t < (int64_t)c.tiles_x * c.tiles_y; t += c.ranks) {
+        if (c.ranks > 1)
+            r = balance_second_pass(&c, n0, err);
+        /* What progress counts now: the pilot's samples and the rest as shared out. */
+        for (int64_t i = 0; r == IC_OK && i < c.own_tiles; ++i) {
+            int64_t t = c.owned ? c.owned[i] : (int64_t)c.rank + i * c.ranks;
             int x0, y0, x1, y1;
             tile_rect(&c, t, &x0, &y0, &x1, &y1);
             for (int y = y0; y < y1; ++y)
@@ -456,7 +543,8 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
                     planned += extra[(size_t)y * cam->width + x];
         }
         c.samples_planned = planned;
-        r = loop_pass(&c, threads, n0, n0, err);
+        if (r == IC_OK)
+            r = loop_pass(&c, threads, n0, n0, err);
     }
     if (r == IC_OK)
         r = combine_ranks(&c, c.accum, 3, err);
@@ -480,6 +568,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         res->completed = c.own_tiles ? 1.0 - (double)skipped / (2.0 * c.own_tiles) : 1.0;
     }
     res->seconds = ic_seconds() - c.start;
+    res->busy_seconds = c.busy;
     free(c.sumsq);
     free(extra);
     loop_free(&c);
@@ -576,6 +665,7 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
         res->completed = preview ? 0.0 : c.own_tiles ? 1.0 - (double)skipped / c.own_tiles : 1.0;
     }
     res->seconds = ic_seconds() - c.start;
+    res->busy_seconds = c.busy;
     loop_free(&c);
     return r;
 }

@@ -51,6 +51,7 @@ typedef struct ic_image_loop_result {
     uint64_t rays;         /* rays traced by the sample function (this process's) */
     uint64_t samples;      /* pixel samples this process took */
     double seconds;
+    double busy_seconds;   /* of those, rendering this process's tiles (not waiting for other ranks) */
     int cancelled;         /* 1: loop.cancel cut the image short */
     double completed;      /* share of the tiles rendered (0 for the one-sample preview) */
 } ic_image_loop_result;

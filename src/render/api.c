@@ -224,6 +224,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         st->cancelled = lr.cancelled;
         st->completed = lr.completed;
         st->rank_pixel_samples = lr.samples;
+        st->rank_render_seconds = lr.busy_seconds;
         if (opt.aovs && it.ops->aovs)
             r = it.ops->aovs(it.self, out, &loop, &lr, opt.aovs, err);
     }
