@@ -12,7 +12,8 @@
 # Exported targets (namespace irrcache::): core (ic_core), cache (irrcache_cache: the cache and gathering,
 # ic_core, libm and threads only), image (irrcache_image), render (irrcache: the renderer), and the
 # command irrcache::irrcache. The libraries are static, so the renderer's private dependencies (Embree,
-# assimp, cJSON, OpenEXR, zlib, libxml2) appear in its link interface and irrcacheConfig.cmake finds them.
+# assimp, cJSON, OpenEXR, zlib, libxml2) and the image library's (OpenEXR, libjpeg) appear in their link
+# interfaces and irrcacheConfig.cmake finds them.
 include(CMakePackageConfigHelpers)
 
 # The same names for a project that takes irrcache in with add_subdirectory.

@@ -3,7 +3,7 @@
 set -euo pipefail
 # libopenmpi-dev and openmpi-bin: the MPI build of the command (mpirun -np N irrcache render …).
 # clang and libclang-rt-dev (libFuzzer and the sanitizer runtimes): the fuzz stage of scripts/test.sh.
-pkgs=(build-essential cmake pkg-config libembree-dev libassimp-dev libcjson-dev libopenexr-dev libstb-dev zlib1g-dev libxml2-dev python3
+pkgs=(build-essential cmake pkg-config libembree-dev libassimp-dev libcjson-dev libopenexr-dev libjpeg-dev libstb-dev zlib1g-dev libxml2-dev python3
       libopenmpi-dev openmpi-bin
       clang libclang-rt-dev)
 missing=()

@@ -44,8 +44,9 @@ ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, i
                             lim->raise ? lim->raise : "use a smaller image");
     ic_result r = ic_image_create(img, width, height);
     if (r == IC_ERR_INVALID_ARG)
-        return ic_error_set(err, IC_ERR_PARSE, "%s: image size %dx%d is invalid or larger than %dx%d; check the file",
-                            path, width, height, IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_SIDE);
+        return ic_error_set(err, IC_ERR_PARSE, "%s: image size %dx%d is invalid or larger than %dx%d or %zu pixels; "
+                            "check the file", path, width, height, IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_SIDE,
+                            IC_IMAGE_MAX_PIXELS);
     if (r != IC_OK)
         return ic_error_set(err, r, "%s: out of memory for a %dx%d image; free memory or use a smaller image", path,
                             width, height);

@@ -44,11 +44,16 @@ ic_result ic_image_read_hdr(const char *path, const ic_image_limit *lim, ic_imag
 /* Radiance RGBE (.hdr), flat (not run-length encoded) scanlines. */
 ic_result ic_image_write_hdr(const char *path, const ic_image *img, ic_error *err);
 
-/* Through stb_image: 8/16-bit PNG and JPEG (sRGB, converted to linear). */
-ic_result ic_image_read_stb(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);
+/* 8/16-bit PNG (through stb_image) and JPEG (ic_image_decode_jpeg), told apart by their first bytes; sRGB,
+ * converted to linear. */
+ic_result ic_image_read_ldr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);
 /* The same for PNG or JPEG bytes in memory; name labels them in messages. */
-ic_result ic_image_decode_stb(const unsigned char *bytes, size_t n, const char *name, const ic_image_limit *lim,
+ic_result ic_image_decode_ldr(const unsigned char *bytes, size_t n, const char *name, const ic_image_limit *lim,
                               ic_image *out, ic_error *err);
+/* JPEG through libjpeg: baseline, progressive or arithmetic-coded, greyscale (replicated to RGB) or colour;
+ * CMYK refused; every libjpeg error or warning (damaged data) is an IC_ERR_PARSE naming the file. */
+ic_result ic_image_decode_jpeg(const unsigned char *bytes, size_t n, const char *name, const ic_image_limit *lim,
+                               ic_image *out, ic_error *err);
 /* 8-bit sRGB PNG after scaling by 2^exposure. */
 ic_result ic_image_write_png(const char *path, const ic_image *img, float exposure, ic_error *err);
 

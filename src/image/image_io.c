@@ -2,8 +2,8 @@
  * image_io.c — the format dispatch of ic_image_read / ic_image_write (include/irrcache/image.h).
  *
  * Reading sniffs the file's first bytes (the extension may lie: a renamed .exr is still read);
- * writing picks the format from the extension. The per-format code lives in exr.c, pfm.c, rgbe.c
- * and ldr.c (PNG/JPEG through stb).
+ * writing picks the format from the extension. The per-format code lives in exr.c, pfm.c, rgbe.c,
+ * ldr.c (PNG through stb) and jpeg.c (JPEG through libjpeg).
  */
 #include "image_internal.h"
 
@@ -83,7 +83,7 @@ ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *rai
         return ic_image_read_hdr(path, lim, out, err);
     if ((n == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') || /* PNG */
         (n >= 3 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff))               /* JPEG */
-        return ic_image_read_stb(path, lim, out, err);
+        return ic_image_read_ldr(path, lim, out, err);
     return ic_error_set(err, IC_ERR_UNSUPPORTED,
                         "%s: not an image format irrcache reads; convert it to OpenEXR, PFM, Radiance HDR, "
                         "PNG or JPEG",
@@ -104,7 +104,7 @@ ic_result ic_image_decode_memory(const void *data, size_t size, const char *name
         return ic_error_set(err, IC_ERR_PARSE, "%s: the image is empty", name);
     if ((size >= 4 && m[0] == 0x89 && m[1] == 'P' && m[2] == 'N' && m[3] == 'G') ||
         (size >= 3 && m[0] == 0xff && m[1] == 0xd8 && m[2] == 0xff))
-        return ic_image_decode_stb(m, size, name, &limit, out, err);
+        return ic_image_decode_ldr(m, size, name, &limit, out, err);
     return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: an embedded image must be PNG or JPEG; convert it", name);
 }
 

@@ -1,9 +1,11 @@
 /*
- * ldr.c — 8-bit images through stb: reading PNG and JPEG (8- or 16-bit sRGB, converted to linear)
- * and writing 8-bit sRGB PNG (from linear images, or bytes as given).
+ * ldr.c — 8-bit images: reading PNG through stb_image (8- or 16-bit sRGB, converted to linear) and JPEG
+ * through jpeg.c (libjpeg), told apart by their first bytes, and writing 8-bit sRGB PNG through
+ * stb_image_write (from linear images, or bytes as given).
  *
  * Alpha is dropped on read and grey images are replicated to RGB. PNG output applies the exposure
- * (2^stops), then the sRGB curve, clamped to [0, 255]; NaN becomes 0.
+ * (2^stops), then the sRGB curve, clamped to [0, 255]; NaN becomes 0. stb_image is compiled without its
+ * JPEG decoder (stb_impl.c), so a JPEG never reaches it.
  */
 #include "image_internal.h"
 
@@ -21,58 +23,8 @@
 static ic_result decode_failed(const char *path, ic_error *err)
 {
     const char *why = stbi_failure_reason();
-    return ic_error_set(err, IC_ERR_PARSE, "%s: cannot decode image (%s); check that it is a valid PNG or JPEG file",
+    return ic_error_set(err, IC_ERR_PARSE, "%s: cannot decode image (%s); check that it is a valid PNG file",
                         path, why ? why : "unknown reason");
-}
-
-/* 1 if every Huffman table of the JPEG in b declares at most 256 codes (ITU-T T.81 §B.2.4.2: the counts
- * L1…L16 of a DHT table sum to at most 256) and every DHT segment holds whole tables; 1 for data that is
- * not a JPEG. stb_image 2.27, the one Debian 12 ships, writes past its code-length array when a table
- * declares more (found by the image_png fuzz target), so such a file never reaches it — nor one whose
- * SOI follows fill bytes (0xFF 0xFF 0xD8, found the same way), which stb_image takes as a JPEG too. Markers
- * are walked from SOI; entropy-coded data between them is skipped byte by byte (0xFF00 is a stuffed byte, RSTn and
- * TEM carry no length), which also reaches the DHT segments between a progressive JPEG's scans. */
-static int jpeg_huffman_ok(const unsigned char *b, size_t n)
-{
-    /* SOI may follow fill bytes (0xFF …, T.81 §B.1.1.2), as stb_image accepts it. */
-    size_t i = 0;
-    while (i < n && b[i] == 0xFF)
-        ++i;
-    if (i == 0 || i >= n || b[i] != 0xD8)
-        return 1;
-    ++i;
-    while (i + 1 < n) {
-        unsigned m = b[i + 1];
-        if (b[i] != 0xFF || m == 0xFF) {
-            ++i;
-            continue;
-        }
-        if (m == 0x00 || m == 0x01 || (m >= 0xD0 && m <= 0xD7)) {
-            i += 2;
-            continue;
-        }
-        if (m == 0xD9 || i + 4 > n)
-            break;
-        size_t len = ((size_t)b[i + 2] << 8) | b[i + 3], end = i + 2 + len;
-        if (m == 0xC4) {
-            if (len < 2 || end > n)
-                return 0;
-            for (size_t p = i + 4; p < end;) {
-                if (p + 17 > end)
-                    return 0;
-                unsigned codes = 0;
-                for (int k = 1; k <= 16; ++k)
-                    codes += b[p + k];
-                if (codes > 256)
-                    return 0;
-                p += 17 + codes;
-                if (p > end)
-                    return 0;
-            }
-        }
-        i = len >= 2 ? end : i + 2;
-    }
-    return 1;
 }
 
 static uint32_t be32(const unsigned char *b)
@@ -138,31 +90,31 @@ static unsigned char *read_whole(const char *path, size_t *n)
     return buf;
 }
 
-ic_result ic_image_read_stb(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
+ic_result ic_image_read_ldr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
     size_t n = 0;
     unsigned char *bytes = read_whole(path, &n);
     if (!bytes)
         return ic_error_set(err, IC_ERR_IO, "%s: cannot read the image; check the file and its permissions", path);
-    ic_result r = ic_image_decode_stb(bytes, n, path, lim, out, err);
+    ic_result r = ic_image_decode_ldr(bytes, n, path, lim, out, err);
     free(bytes);
     return r;
 }
 
-ic_result ic_image_decode_stb(const unsigned char *bytes, size_t n, const char *name, const ic_image_limit *lim,
+ic_result ic_image_decode_ldr(const unsigned char *bytes, size_t n, const char *name, const ic_image_limit *lim,
                               ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
+    /* SOI (T.81 §B.1.1.3): a JPEG; anything else is PNG or nothing stb_image can read. */
+    if (n >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8)
+        return ic_image_decode_jpeg(bytes, n, name, lim, out, err);
     if (n >= INT_MAX)
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: image of %zu bytes is too large to decode", name, n);
-    if (!jpeg_huffman_ok(bytes, n))
-        return ic_error_set(err, IC_ERR_PARSE, "%s: a JPEG Huffman table declares more than 256 codes or overruns "
-                            "its segment; re-save the image with another program", name);
     size_t m = 0;
     unsigned char *cleaned = png_without_empty_idat(bytes, n, &m);
     if (cleaned) {
-        ic_result r = ic_image_decode_stb(cleaned, m, name, lim, out, err);
+        ic_result r = ic_image_decode_ldr(cleaned, m, name, lim, out, err);
         free(cleaned);
         return r;
     }

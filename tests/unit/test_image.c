@@ -611,30 +611,6 @@ static void test_bad_input(void)
     ic_image_free(&small);
 }
 
-/* A JPEG whose Huffman table declares 257 codes (found by fuzzing: stb_image 2.27 writes past its
- * arrays on it) is refused before stb decodes it; a valid JPEG of the fuzz seeds still reads. */
-static void test_jpeg_huffman(void)
-{
-    const char *bad = IC_SOURCE_DIR "/tests/fuzz/regress/image_png/stb_build_huffman_oob.jpg";
-    ic_image img = {0};
-    ic_error err = {0};
-    CHECK(ic_image_read(bad, &img, &err) == IC_ERR_PARSE && strstr(err.message, "Huffman") &&
-              strstr(err.message, "stb_build_huffman_oob.jpg"),
-          "an oversized JPEG Huffman table is refused naming the file: %s", err.message);
-    ic_image_free(&img);
-    /* The same table in a JPEG whose SOI follows a fill byte (FF FF D8): ic_image_read does not take it
-     * for an image at all, and the PNG/JPEG reader itself (which stb_image would decode it with) refuses
-     * its table. */
-    const char *filled = IC_SOURCE_DIR "/tests/fuzz/regress/image_png/stb_build_huffman_fill_bytes.jpg";
-    memset(&err, 0, sizeof err);
-    CHECK(ic_image_read(filled, &img, &err) != IC_OK, "a JPEG with a fill byte before SOI is not read");
-    ic_image_free(&img);
-    memset(&err, 0, sizeof err);
-    CHECK(ic_image_read_stb(filled, NULL, &img, &err) == IC_ERR_PARSE && strstr(err.message, "Huffman"),
-          "an oversized Huffman table after a fill byte is refused: %s", err.message);
-    ic_image_free(&img);
-}
-
 /* Text attributes written to an EXR header come back as written (float and half), an attribute not
  * written is reported, a bad name is refused before anything is written, other formats ignore them. */
 static void test_exr_metadata(void)
@@ -819,7 +795,6 @@ int main(void)
     test_hdr_variants();
     test_metrics();
     test_lowpass();
-    test_jpeg_huffman();
     test_heatmap();
     test_heatmap_fixed_scale();
     test_bad_input();
