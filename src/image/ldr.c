@@ -37,7 +37,7 @@ static uint32_t be32(const unsigned char *b)
  * image data is the concatenation of all IDAT chunks), but stb_image 2.27 offsets its NULL buffer by the
  * first IDAT's zero length ("applying zero offset to null pointer", found by the image_png fuzz target),
  * so the chunk, which carries no data, is dropped before stb_image sees the file. Chunks are walked by
- * their lengths; a length that runs past the end stops the walk (stb_image reports the truncation). */
+ * their lengths (png_chunk_overrun has refused one that runs past the end). */
 static unsigned char *png_without_empty_idat(const unsigned char *b, size_t n, size_t *m)
 {
     static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
@@ -69,6 +69,25 @@ static unsigned char *png_without_empty_idat(const unsigned char *b, size_t n, s
     memcpy(out + o, b + i, n - i); /* a truncated tail, as it was */
     *m = o + (n - i);
     return out;
+}
+
+/* The offset of the first PNG chunk before IEND whose declared length (with its type and CRC) runs past the
+ * end of the data, or 0 when none does or the data is not a PNG. stb_image 2.27 grows its IDAT buffer to the
+ * declared length before reading the chunk, so a 117-byte file declaring a 1 GB IDAT made it allocate 2 GB
+ * (found by the image_png fuzz target); such a file is truncated or damaged (ISO/IEC 15948 §5.3: a chunk
+ * holds as many bytes as its length says) and never reaches stb_image. */
+static size_t png_chunk_overrun(const unsigned char *b, size_t n)
+{
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+    if (n < 8 || memcmp(b, signature, 8) != 0)
+        return 0;
+    for (size_t i = 8; i + 8 <= n && memcmp(b + i + 4, "IEND", 4) != 0;) {
+        uint32_t len = be32(b + i);
+        if (len > n - i || n - i - len < 12)
+            return i;
+        i += 12 + (size_t)len;
+    }
+    return 0;
 }
 
 /* Reads a file whole; NULL if it cannot be read or does not fit stb_image's int length. */
@@ -111,6 +130,11 @@ ic_result ic_image_decode_ldr(const unsigned char *bytes, size_t n, const char *
         return ic_image_decode_jpeg(bytes, n, name, lim, out, err);
     if (n >= INT_MAX)
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: image of %zu bytes is too large to decode", name, n);
+    size_t overrun = png_chunk_overrun(bytes, n);
+    if (overrun)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: the PNG chunk at byte %zu declares %lu data bytes, but the file "
+                            "ends %zu bytes after its header (data and a 4-byte CRC); the file is truncated or "
+                            "damaged", name, overrun, (unsigned long)be32(bytes + overrun), n - overrun - 8);
     size_t m = 0;
     unsigned char *cleaned = png_without_empty_idat(bytes, n, &m);
     if (cleaned) {

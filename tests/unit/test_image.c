@@ -715,6 +715,23 @@ static uint32_t crc32_png(const unsigned char *b, size_t n)
     return c ^ 0xFFFFFFFFu;
 }
 
+/* Writes img as a PNG to path and reads the file back into png[4096]: its length in *n and the offset of
+ * its first IDAT chunk, or 0 if it has none. */
+static size_t png_with_idat(const char *path, const ic_image *img, unsigned char png[4096], size_t *n)
+{
+    ic_error err;
+    CHECK(ic_image_write(path, img, NULL, &err) == IC_OK, "write PNG: %s", err.message);
+    FILE *f = fopen(path, "rb");
+    *n = f ? fread(png, 1, 4096, f) : 0;
+    if (f)
+        fclose(f);
+    size_t at = 8;
+    while (at + 8 <= *n && memcmp(png + at + 4, "IDAT", 4) != 0)
+        at += 12 + ((size_t)png[at] << 24 | (size_t)png[at + 1] << 16 | (size_t)png[at + 2] << 8 | png[at + 3]);
+    CHECK(at + 8 <= *n, "the PNG has an IDAT chunk");
+    return at + 8 <= *n ? at : 0;
+}
+
 /* An empty IDAT chunk is valid PNG (the image data is all IDATs concatenated) but made stb_image 2.27
  * offset a NULL pointer (fuzz target image_png): the reader drops it first and decodes the same pixels. */
 static void test_png_empty_idat(void)
@@ -724,18 +741,12 @@ static void test_png_empty_idat(void)
     for (int i = 0; i < 6 * 4 * 3; ++i)
         img.rgb[i] = (float)(i % 7) / 7.0f;
     ic_error err;
-    CHECK(ic_image_write(SCRATCH "/idat.png", &img, NULL, &err) == IC_OK, "write PNG: %s", err.message);
-    FILE *f = fopen(SCRATCH "/idat.png", "rb");
     unsigned char png[4096], with[4096 + 12];
-    size_t n = f ? fread(png, 1, sizeof png, f) : 0;
-    if (f)
-        fclose(f);
-    size_t at = 8;
-    while (at + 8 <= n && memcmp(png + at + 4, "IDAT", 4) != 0)
-        at += 12 + ((size_t)png[at] << 24 | (size_t)png[at + 1] << 16 | (size_t)png[at + 2] << 8 | png[at + 3]);
-    CHECK(at + 8 <= n, "the PNG has an IDAT chunk");
-    if (at + 8 > n)
+    size_t n = 0, at = png_with_idat(SCRATCH "/idat.png", &img, png, &n);
+    if (!at) {
+        ic_image_free(&img);
         return;
+    }
     /* An empty IDAT (length 0, type, CRC of the type) before the first one. */
     memcpy(with, png, at);
     unsigned char empty[12] = {0, 0, 0, 0, 'I', 'D', 'A', 'T', 0, 0, 0, 0};
@@ -757,6 +768,32 @@ static void test_png_empty_idat(void)
     ic_image_free(&a);
     ic_image_free(&b);
     ic_image_free(&img);
+}
+
+/* A PNG chunk whose length runs past the end of the file (stb_image 2.27 grew its buffer to a declared
+ * 1 GB IDAT, 2 GB, before reading it: fuzz target image_png) is refused naming the file; so is one cut
+ * inside its CRC. The same PNG whole still reads. */
+static void test_png_chunk_overrun(void)
+{
+    ic_image img;
+    CHECK(ic_image_create(&img, 5, 3) == IC_OK, "create");
+    ic_error err;
+    unsigned char png[4096];
+    size_t n = 0, at = png_with_idat(SCRATCH "/chunks.png", &img, png, &n);
+    ic_image_free(&img);
+    if (!at)
+        return;
+    size_t idat_len = (size_t)png[at] << 24 | (size_t)png[at + 1] << 16 | (size_t)png[at + 2] << 8 | png[at + 3];
+    CHECK(ic_image_decode_memory(png, n, "whole.png", 0, NULL, &img, &err) == IC_OK, "whole: %s", err.message);
+    ic_image_free(&img);
+    CHECK(ic_image_decode_memory(png, at + 8 + idat_len + 2, "cut.png", 0, NULL, &img, &err) == IC_ERR_PARSE &&
+              strstr(err.message, "cut.png") && strstr(err.message, "truncated"),
+          "a PNG cut in an IDAT's CRC: %s", err.message);
+    png[at] = 0x41; /* about 1 GB */
+    write_bytes(scratch("overrun.png"), png, n);
+    CHECK(ic_image_read(scratch("overrun.png"), &img, &err) == IC_ERR_PARSE && strstr(err.message, "overrun.png") &&
+              strstr(err.message, "truncated") && img.rgb == NULL,
+          "an IDAT declaring 1 GB: %s", err.message);
 }
 
 /* Tiled OpenEXR (environment maps are often tiled) reads as the same pixels as it was written, float and
@@ -801,5 +838,6 @@ int main(void)
     test_exr_metadata();
     test_tiled_exr();
     test_png_empty_idat();
+    test_png_chunk_overrun();
     TEST_MAIN_END();
 }
