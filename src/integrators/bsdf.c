@@ -21,11 +21,22 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
         n = v3_neg(n);
         b->ng = v3_neg(s->ng);
     }
+    if (m->normal_texture > 0) {
+        /* a mapped normal may face away from the viewer though the surface does not: bend it towards wo
+         * until wo stands sin 3° above its horizon (else the point would be black) */
+        float c = v3_dot(wo, n);
+        if (c < 0.0523f)
+            n = v3_norm(v3_add(n, v3_scale(wo, 0.0523f - c)));
+    }
     b->frame = ic_frame_from_normal(n);
     float ld = v3_lum(b->kd), ls = v3_lum(b->ks);
     b->p_diffuse = (b->type == IC_MAT_GLOSSY) ? (ld + ls > 0.0f ? ld / (ld + ls) : 1.0f) : 1.0f;
-    if (b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC || b->type == IC_MAT_ROUGH_GLASS)
-        ic_mf_init(b, m, fmaxf(v3_dot(wo, n), 0.0f), ic_scene_texture_tint(scene, s));
+    if (b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC || b->type == IC_MAT_ROUGH_GLASS) {
+        float alpha = m->alpha, metallic = m->metallic;
+        if (m->roughness_texture > 0 || m->metallic_texture > 0)
+            ic_scene_microfacet_params(scene, s, &alpha, &metallic);
+        ic_mf_init(b, m, alpha, metallic, fmaxf(v3_dot(wo, n), 0.0f), ic_scene_texture_tint(scene, s));
+    }
 }
 
 static int is_microfacet(const ic_bsdf *b) { return b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC; }

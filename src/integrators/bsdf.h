@@ -28,6 +28,8 @@ typedef struct ic_bsdf {
     ic_vec3 eta, k;        /* conductor: complex index (k all 0: Schlick from F0 = ks) */
     const float *coat_albedo; /* plastic: the coat's E(μ) table (borrowed from the material) */
     float coat_albedo_avg; /* plastic: its cosine-weighted mean */
+    float metal;           /* plastic: weight of the conductor lobe (glTF's metallic), 0 for a plain plastic */
+    ic_vec3 metal_f0;      /* plastic with metal > 0: the conductor lobe's F0 (the base colour) */
     float p_diffuse;       /* probability of sampling the diffuse lobe (glossy, plastic) */
     ic_frame frame;        /* around the shading normal */
     ic_vec3 ng;            /* geometric normal */

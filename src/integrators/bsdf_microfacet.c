@@ -10,16 +10,19 @@
  * reflects exactly what arrives (E(μo) + (1 − E(μo))·1): the energy the single-scattering coat loses at
  * high roughness goes to the base instead of vanishing. The bsdf's kd holds kd·(1 − E(μo)), the base's
  * albedo under uniform light, and ic_bsdf_diffuse_factor the factor (1 − E(μi))/(1 − Ē).
+ * Metallic m (glTF 2.0 appendix B): the plastic's whole BRDF times 1 − m plus m times a conductor of
+ * Schlick F0 = the base colour with the same GGX lobe, f = (1 − m)·f_plastic + m·f_metal; linear in m, so
+ * a texel with m = 0 is the plastic and m = 1 the conductor exactly.
  */
 #include "bsdf_microfacet.h"
 
-void ic_mf_init(ic_bsdf *b, const ic_material *m, float cos_o, ic_vec3 tint)
+void ic_mf_init(ic_bsdf *b, const ic_material *m, float alpha, float metallic, float cos_o, ic_vec3 tint)
 {
-    b->alpha = fmaxf(m->alpha, IC_GGX_ALPHA_MIN);
+    b->alpha = fmaxf(alpha, IC_GGX_ALPHA_MIN);
     b->eta = m->eta;
     b->k = m->k;
-    b->coat_albedo = m->coat_albedo;
-    b->coat_albedo_avg = m->coat_albedo_avg;
+    b->coat_albedo = ic_scene_coat_table(m, alpha, &b->coat_albedo_avg);
+    b->metal = 0.0f;
     if (b->type == IC_MAT_ROUGH_GLASS) {
         b->kd = v3s(0.0f);
         b->p_diffuse = 0.0f;
@@ -31,9 +34,16 @@ void ic_mf_init(ic_bsdf *b, const ic_material *m, float cos_o, ic_vec3 tint)
         b->p_diffuse = 0.0f;
         return;
     }
-    float e_o = ic_coat_albedo(m->coat_albedo, cos_o);
+    float e_o = ic_coat_albedo(b->coat_albedo, cos_o);
+    float ls = e_o * v3_lum(b->ks);
+    if (metallic > 0.0f) {
+        b->metal = fminf(metallic, 1.0f);
+        b->metal_f0 = b->kd;
+        b->kd = v3_scale(b->kd, 1.0f - b->metal);
+        ls = (1.0f - b->metal) * ls + b->metal * v3_lum(ic_fresnel_schlick(cos_o, b->metal_f0));
+    }
     b->kd = v3_scale(b->kd, 1.0f - e_o);
-    float ld = v3_lum(b->kd), ls = e_o * v3_lum(b->ks);
+    float ld = v3_lum(b->kd);
     b->p_diffuse = ld + ls > 0.0f ? ld / (ld + ls) : 1.0f;
 }
 
@@ -44,7 +54,10 @@ ic_vec3 ic_mf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
     ic_vec3 h = v3_norm(v3_add(wo, wi));
     float c = v3_dot(wo, h);
     ic_vec3 F;
-    if (b->type == IC_MAT_PLASTIC)
+    if (b->type == IC_MAT_PLASTIC && b->metal > 0.0f)
+        F = v3_add(v3_scale(b->ks, (1.0f - b->metal) * ic_fresnel_dielectric(c, b->ior)),
+                   v3_scale(ic_fresnel_schlick(c, b->metal_f0), b->metal));
+    else if (b->type == IC_MAT_PLASTIC)
         F = v3_scale(b->ks, ic_fresnel_dielectric(c, b->ior));
     else if (v3_is_black(b->k))
         F = ic_fresnel_schlick(c, b->ks);

@@ -7,9 +7,10 @@
 
 #include "bsdf.h"
 
-/* Sets the microfacet fields of b for material m seen at cos θo = cos_o, tint being the material's
- * texture value at the point (1 without one): conductor F0 and plastic effective base albedo. */
-void ic_mf_init(ic_bsdf *b, const ic_material *m, float cos_o, ic_vec3 tint);
+/* Sets the microfacet fields of b for material m seen at cos θo = cos_o, with GGX α alpha and metallic
+ * at the point (ic_scene_microfacet_params), tint being the material's texture value there (1 without
+ * one): conductor F0 and plastic effective base albedo. */
+void ic_mf_init(ic_bsdf *b, const ic_material *m, float alpha, float metallic, float cos_o, ic_vec3 tint);
 /* The GGX lobe f(wo, wi) (conductor: all of it; plastic: the coat). */
 ic_vec3 ic_mf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
 /* Solid-angle pdf of ic_mf_sample_glossy choosing wi. */

@@ -139,7 +139,7 @@ ic_result ic_ic_radiance_create(ic_ctx *c, ic_error *err)
         const ic_material *mat = &s->materials[m];
         r->table_of[m][0] = r->table_of[m][1] = r->table_of[m][2] = -1;
         if ((mat->type == IC_MAT_CONDUCTOR || mat->type == IC_MAT_PLASTIC) && mat->kd_texture < 0 &&
-            mat->alpha >= alpha_min) {
+            mat->roughness_texture <= 0 && mat->metallic_texture <= 0 && mat->alpha >= alpha_min) {
             rc = microfacet_tables(r, s, m, err);
             served = 1;
             continue;

@@ -570,7 +570,7 @@ static const struct aiTexture *find_embedded(const struct aiScene *ai, const cha
 /* A texture held in the mesh file (a .glb's images, a "*N" reference): decoded from memory (PNG or JPEG), or
  * taken as uncompressed texels; labelled "mesh#name" so that materials sharing it share one texture. */
 static ic_result embedded_texture(ic_scene_builder *b, const struct aiScene *ai, const char *rel, const char *mesh_path,
-                                  const char *owner, int32_t *index, ic_error *err)
+                                  int is_data, const char *owner, int32_t *index, ic_error *err)
 {
     const struct aiTexture *et = find_embedded(ai, rel);
     if (!et || !et->pcData)
@@ -579,7 +579,7 @@ static ic_result embedded_texture(ic_scene_builder *b, const struct aiScene *ai,
     snprintf(label, sizeof label, "%.900s#%.100s", mesh_path, rel);
     ic_scene *s = b->scene;
     for (uint32_t i = 0; i < s->texture_count; ++i)
-        if (!strcmp(s->textures[i].path, label)) {
+        if (!strcmp(s->textures[i].path, label) && s->textures[i].is_data == is_data) {
             *index = (int32_t)i;
             return IC_OK;
         }
@@ -604,7 +604,31 @@ static ic_result embedded_texture(ic_scene_builder *b, const struct aiScene *ai,
     }
     if (r != IC_OK)
         return ic_error_set(err, r, "%s: %s", owner, ierr.message);
-    return ic_scene_texture_add(b, label, &img, owner, index, err);
+    return ic_scene_texture_add_as(b, label, is_data, &img, owner, index, err);
+}
+
+/* The texture a material names by path rel (embedded, or a file from tex_dir, else mesh_dir), loaded as colours
+ * or values (is_data) into *index. */
+static ic_result material_texture(ic_scene_builder *b, const struct aiScene *ai, const char *rel, int is_data,
+                                  const char *mesh_path, const char *mesh_dir, const char *tex_dir, const char *name,
+                                  int32_t *index, ic_error *err)
+{
+    char full[IC_SCENE_PATH_MAX], alt[IC_SCENE_PATH_MAX], owner[IC_SCENE_PATH_MAX + 160];
+    snprintf(owner, sizeof owner, "%s: material '%s'", mesh_path, name);
+    if (rel[0] == '*' || find_embedded(ai, rel))
+        return embedded_texture(b, ai, rel, mesh_path, is_data, owner, index, err);
+    if (!ic_path_join(tex_dir, rel, full, sizeof full) || !ic_path_join(mesh_dir, rel, alt, sizeof alt))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
+    if (!ic_path_exists(full) && ic_path_exists(alt))
+        snprintf(full, sizeof full, "%s", alt);
+    if (ic_path_exists(full)) {
+        char kind[200];
+        snprintf(kind, sizeof kind, "texture of material '%s',", name);
+        ic_result rc = check_named_file(b, mesh_path, kind, full, err);
+        if (rc != IC_OK)
+            return rc;
+    }
+    return ic_scene_texture_load_as(b, full, is_data, owner, index, err);
 }
 
 /* mesh_dir: the mesh's folder; tex_dir: where its materials' texture paths start (an OBJ's MTL folder),
@@ -631,27 +655,37 @@ static ic_result convert_material(ic_scene_builder *b, const struct aiScene *ai,
     m->ks = clamp_color(m->ks);
     m->emission = clamp_color(m->emission);
 
-    char rel[IC_SCENE_PATH_MAX], full[IC_SCENE_PATH_MAX], owner[IC_SCENE_PATH_MAX + 160];
-    if (texture_path(am, aiTextureType_BASE_COLOR, rel, sizeof rel) ||
-        texture_path(am, aiTextureType_DIFFUSE, rel, sizeof rel)) {
-        snprintf(owner, sizeof owner, "%s: material '%s'", mesh_path, m->name);
-        if (rel[0] == '*' || find_embedded(ai, rel))
-            return embedded_texture(b, ai, rel, mesh_path, owner, &m->kd_texture, err);
-        char alt[IC_SCENE_PATH_MAX];
-        if (!ic_path_join(tex_dir, rel, full, sizeof full) || !ic_path_join(mesh_dir, rel, alt, sizeof alt))
-            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: texture path too long; shorten it", owner);
-        if (!ic_path_exists(full) && ic_path_exists(alt))
-            snprintf(full, sizeof full, "%s", alt);
-        if (ic_path_exists(full)) {
-            char kind[200];
-            snprintf(kind, sizeof kind, "texture of material '%s',", m->name);
-            ic_result rc = check_named_file(b, mesh_path, kind, full, err);
-            if (rc != IC_OK)
-                return rc;
-        }
-        return ic_scene_texture_load(b, full, owner, &m->kd_texture, err);
+    ic_result rc = IC_OK;
+    char rel[IC_SCENE_PATH_MAX];
+    int32_t index = -1;
+    if (texture_path(am, aiTextureType_BASE_COLOR, rel, sizeof rel) || texture_path(am, aiTextureType_DIFFUSE, rel, sizeof rel))
+        rc = material_texture(b, ai, rel, 0, mesh_path, mesh_dir, tex_dir, m->name, &m->kd_texture, err);
+    /* a tangent-space normal map (glTF's normalTexture with its scale, MTL's `norm`) */
+    if (rc == IC_OK && texture_path(am, aiTextureType_NORMALS, rel, sizeof rel)) {
+        rc = material_texture(b, ai, rel, 1, mesh_path, mesh_dir, tex_dir, m->name, &index, err);
+        m->normal_texture = index + 1;
+        m->normal_scale = 1.0f;
+        ai_real f;
+        unsigned n = 1;
+        if (aiGetMaterialFloatArray(am, "$tex.scale", aiTextureType_NORMALS, 0, &f, &n) == aiReturn_SUCCESS && n == 1)
+            m->normal_scale = (float)f;
     }
-    return IC_OK;
+    if (rc != IC_OK || !gltf_strength)
+        return rc;
+    /* glTF's metallicRoughnessTexture (assimp 5.2 files it as UNKNOWN; later versions also as METALNESS):
+     * roughness from its green channel, metallic from its blue one */
+    if (texture_path(am, aiTextureType_UNKNOWN, rel, sizeof rel) || texture_path(am, aiTextureType_METALNESS, rel, sizeof rel)) {
+        rc = material_texture(b, ai, rel, 1, mesh_path, mesh_dir, tex_dir, m->name, &index, err);
+        if (rc != IC_OK)
+            return rc;
+        m->roughness_texture = m->metallic_texture = index + 1;
+        m->metallic = ic_clampf(float_or(am, "$mat.metallicFactor", 1.0f), 0.0f, 1.0f);
+        if (m->type == IC_MAT_CONDUCTOR) { /* metallic varies over the surface: the blend of the plastic */
+            m->type = IC_MAT_PLASTIC;
+            m->ks = v3s(1.0f);
+        }
+    }
+    return rc;
 }
 
 static int grow(void **p, size_t elem, size_t count)
@@ -670,6 +704,10 @@ static int grow_vertices(ic_scene *s, uint32_t add, int want_normals, int want_u
     size_t old = s->vertex_count, total = old + add;
     if (!grow((void **)&s->positions, sizeof *s->positions, total))
         return 0;
+    if (s->tangents && !grow((void **)&s->tangents, sizeof *s->tangents * 4, total))
+        return 0;
+    if (s->tangents) /* vertices without one: from their triangle's texture coordinates */
+        memset(s->tangents + 4 * old, 0, sizeof *s->tangents * 4 * add);
     if (want_normals || s->normals) {
         int fresh = s->normals == NULL;
         if (!grow((void **)&s->normals, sizeof *s->normals, total))
@@ -719,18 +757,46 @@ static ic_vec3 xform_normal(const float n[9], struct aiVector3D v)
     return (l > 0.0f && isfinite(l)) ? v3_scale(r, 1.0f / l) : v3s(0.0f);
 }
 
+/* The tangent frame of a vertex through the transform (m4 for the tangent and bitangent, nm for the normal)
+ * as ic_scene.tangents holds it: the unit tangent and the bitangent's sign; zero if there is none. */
+static void xform_tangent(const float m4[16], const float nm[9], const struct aiMesh *mesh, unsigned v, float out[4])
+{
+    memset(out, 0, sizeof(float) * 4);
+    if (!mesh->mTangents || !mesh->mBitangents || !mesh->mNormals)
+        return;
+    struct aiVector3D ta = mesh->mTangents[v], ba = mesh->mBitangents[v];
+    ic_vec3 t = v3(m4[0] * ta.x + m4[1] * ta.y + m4[2] * ta.z, m4[4] * ta.x + m4[5] * ta.y + m4[6] * ta.z,
+                   m4[8] * ta.x + m4[9] * ta.y + m4[10] * ta.z);
+    ic_vec3 bt = v3(m4[0] * ba.x + m4[1] * ba.y + m4[2] * ba.z, m4[4] * ba.x + m4[5] * ba.y + m4[6] * ba.z,
+                    m4[8] * ba.x + m4[9] * ba.y + m4[10] * ba.z);
+    ic_vec3 n = xform_normal(nm, mesh->mNormals[v]);
+    float len = v3_len(t);
+    if (!(len > 0.0f) || !isfinite(len) || !isfinite(v3_len(bt)))
+        return;
+    out[0] = t.x / len;
+    out[1] = t.y / len;
+    out[2] = t.z / len;
+    out[3] = v3_dot(v3_cross(n, t), bt) < 0.0f ? -1.0f : 1.0f;
+}
+
 static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
-                               const float m4[16], const char *xform_where, uint32_t material_base, ic_error *err)
+                               const float m4[16], const char *xform_where, uint32_t material_base, int use_tangents,
+                               ic_error *err)
 {
     ic_scene *s = b->scene;
     size_t add_vertices = 0, add_faces = 0;
-    int any_normals = 0, any_uvs = 0;
+    int any_normals = 0, any_uvs = 0, any_tangents = 0;
     for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
         const struct aiMesh *mesh = ai->mMeshes[i];
         add_vertices += mesh->mNumVertices;
         add_faces += mesh->mNumFaces;
         any_normals |= mesh->mNormals != NULL;
         any_uvs |= mesh->mTextureCoords[0] != NULL;
+        any_tangents |= use_tangents && mesh->mTangents != NULL;
+    }
+    if (any_tangents && !s->tangents) { /* the first mesh with tangents: the vertices before it have none */
+        if (!(s->tangents = calloc(4 * ((size_t)s->vertex_count ? s->vertex_count : 1), sizeof *s->tangents)))
+            return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its geometry", mesh_path);
     }
     size_t max_elements = ic_scene_max_mesh_elements(b->opt);
     if (add_vertices > max_elements || add_faces > max_elements)
@@ -778,6 +844,8 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             s->positions[base + v] = q;
             if (s->normals)
                 s->normals[base + v] = mesh->mNormals ? xform_normal(nm, mesh->mNormals[v]) : v3s(0.0f);
+            if (s->tangents && use_tangents)
+                xform_tangent(m4, nm, mesh, v, s->tangents + 4 * ((size_t)base + v));
             if (s->uvs) {
                 const struct aiVector3D *uv = mesh->mTextureCoords[0];
                 s->uvs[2 * (base + v) + 0] = uv && isfinite(uv[v].x) ? uv[v].x : 0.0f;
@@ -929,6 +997,15 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
                             mesh_path, aiGetErrorString());
     }
     float *strengths = NULL;
+    /* tangents only for a file with a normal map: MikkTSpace-like ones where the file gives none */
+    int normal_mapped = 0;
+    for (unsigned i = 0; i < ai->mNumMaterials; ++i)
+        normal_mapped |= aiGetMaterialTextureCount(ai->mMaterials[i], aiTextureType_NORMALS) > 0;
+    if (normal_mapped && !(ai = aiApplyPostProcessing(ai, aiProcess_CalcTangentSpace))) {
+        free(src.data);
+        return ic_error_set(err, IC_ERR_PARSE, "%s: cannot compute the tangents of the normal-mapped mesh (%s)",
+                            mesh_path, aiGetErrorString());
+    }
     if ((ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || ai->mNumMeshes == 0) {
         r = ic_error_set(err, IC_ERR_PARSE, "%s: the file holds no triangle mesh; export the geometry as triangles",
                          mesh_path);
@@ -979,7 +1056,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     float identity[16];
     ic_mat4_identity(identity);
     uint32_t tris_before = s->triangle_count, dropped_before = s->dropped_degenerate;
-    r = append_meshes(b, ai, mesh_path, xform ? xform : identity, xform_where, material_base, err);
+    r = append_meshes(b, ai, mesh_path, xform ? xform : identity, xform_where, material_base, normal_mapped, err);
     if (r == IC_OK && s->triangle_count == tris_before)
         r = ic_error_set(err, IC_ERR_PARSE,
                          "%s: no usable triangle (%u of zero area dropped; points and lines are ignored); fix the "

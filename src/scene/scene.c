@@ -227,32 +227,16 @@ static uint8_t *srgb8_texels(const float *rgb, size_t n, float linear[256])
     return bytes;
 }
 
-ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const char *owner, int32_t *index,
-                                ic_error *err)
+/* 1 if the file at path holds values beyond 8 or 16 bits per channel (no sRGB curve to undo). */
+static int is_hdr_path(const char *path)
 {
-    ic_scene *scene = b->scene;
-    for (uint32_t i = 0; i < scene->texture_count; ++i)
-        if (!strcmp(scene->textures[i].path, path)) {
-            *index = (int32_t)i;
-            return IC_OK;
-        }
-    if (!ic_path_exists(path)) {
-        char abs_path[IC_SCENE_PATH_MAX];
-        ic_path_absolute(path, abs_path, sizeof abs_path);
-        return ic_error_set(err, IC_ERR_IO, "%s: texture '%s' not found (resolved to %s); check the path", owner,
-                            path, abs_path);
-    }
-    ic_image img;
-    ic_error ierr;
-    ic_result r = ic_image_read_max(path, ic_scene_max_texture_pixels(b->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &img,
-                                    &ierr);
-    if (r != IC_OK)
-        return ic_error_set(err, r, "%s: %s", owner, ierr.message);
-    return ic_scene_texture_add(b, path, &img, owner, index, err);
+    char ext[16];
+    ic_path_extension(path, ext, sizeof ext);
+    return !strcmp(ext, ".hdr") || !strcmp(ext, ".exr") || !strcmp(ext, ".pfm");
 }
 
-ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img_in, const char *owner,
-                               int32_t *index, ic_error *err)
+ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_data, ic_image *img_in,
+                                  const char *owner, int32_t *index, ic_error *err)
 {
     ic_scene *scene = b->scene;
     ic_image img = *img_in;
@@ -268,13 +252,58 @@ ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *
     snprintf(t->path, sizeof t->path, "%.1023s", path);
     t->width = img.width;
     t->height = img.height;
-    t->srgb8 = srgb8_texels(img.rgb, (size_t)img.width * (size_t)img.height * 3, t->linear);
-    if (t->srgb8)
+    t->is_data = is_data;
+    size_t n = (size_t)img.width * (size_t)img.height * 3;
+    t->srgb8 = srgb8_texels(img.rgb, n, t->linear);
+    if (t->srgb8) {
         ic_image_free(&img);
-    else
+        if (is_data) /* the bytes are values v/255: the decoder's sRGB curve does not apply */
+            for (int v = 0; v < 256; ++v)
+                t->linear[v] = (float)v / 255.0f;
+    } else {
         t->rgb = img.rgb; /* ownership moves to the scene; released with ic_image_free in ic_scene_free */
+        if (is_data && !is_hdr_path(path)) /* a 16-bit file: undo the decoder's sRGB curve */
+            for (size_t i = 0; i < n; ++i)
+                t->rgb[i] = ic_linear_to_srgb(t->rgb[i]);
+    }
     *index = (int32_t)scene->texture_count++;
     return IC_OK;
+}
+
+ic_result ic_scene_texture_load_as(ic_scene_builder *b, const char *path, int is_data, const char *owner,
+                                   int32_t *index, ic_error *err)
+{
+    ic_scene *scene = b->scene;
+    for (uint32_t i = 0; i < scene->texture_count; ++i)
+        if (!strcmp(scene->textures[i].path, path) && scene->textures[i].is_data == is_data) {
+            *index = (int32_t)i;
+            return IC_OK;
+        }
+    if (!ic_path_exists(path)) {
+        char abs_path[IC_SCENE_PATH_MAX];
+        ic_path_absolute(path, abs_path, sizeof abs_path);
+        return ic_error_set(err, IC_ERR_IO, "%s: texture '%s' not found (resolved to %s); check the path", owner,
+                            path, abs_path);
+    }
+    ic_image img;
+    ic_error ierr;
+    ic_result r = ic_image_read_max(path, ic_scene_max_texture_pixels(b->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &img,
+                                    &ierr);
+    if (r != IC_OK)
+        return ic_error_set(err, r, "%s: texture '%s': %s", owner, path, ierr.message);
+    return ic_scene_texture_add_as(b, path, is_data, &img, owner, index, err);
+}
+
+ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const char *owner, int32_t *index,
+                                ic_error *err)
+{
+    return ic_scene_texture_load_as(b, path, 0, owner, index, err);
+}
+
+ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *img_in, const char *owner,
+                               int32_t *index, ic_error *err)
+{
+    return ic_scene_texture_add_as(b, path, 0, img_in, owner, index, err);
 }
 
 /* ------------------------------------------------------------------------------------------------ */
@@ -369,11 +398,26 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
                                 "degenerate); fix the light's geometry or remove its emission",
                                 b->mesh_paths[b->material_mesh[m]], s->materials[m].name, b->material_dropped[m]);
     }
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        s->has_normal_maps |= s->materials[m].normal_texture > 0;
     /* a rough plastic's diffuse base is scaled by what its coat does not reflect: tabulated once here */
     for (uint32_t m = 0; m < s->material_count; ++m) {
         ic_material *mat = &s->materials[m];
-        if (mat->type == IC_MAT_PLASTIC)
-            ic_coat_albedo_table(mat->ior > 1.0f ? mat->ior : 1.5f, mat->alpha, mat->coat_albedo, &mat->coat_albedo_avg);
+        if (mat->type != IC_MAT_PLASTIC)
+            continue;
+        float ior = mat->ior > 1.0f ? mat->ior : 1.5f;
+        ic_coat_albedo_table(ior, mat->alpha, mat->coat_albedo, &mat->coat_albedo_avg);
+        if (mat->roughness_texture <= 0)
+            continue;
+        /* a textured roughness: one table per roughness step, the nearest used at each point */
+        mat->coat_albedo_rough = malloc(sizeof(float) * IC_COAT_ROUGH_STEPS * (IC_COAT_TABLE + 1));
+        if (!mat->coat_albedo_rough)
+            return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for material '%s'",
+                                b->mesh_paths[b->material_mesh[m]], mat->name);
+        for (int j = 0; j < IC_COAT_ROUGH_STEPS; ++j) {
+            float r = (float)j / (IC_COAT_ROUGH_STEPS - 1), *t = mat->coat_albedo_rough + j * (IC_COAT_TABLE + 1);
+            ic_coat_albedo_table(ior, r * r, t, &t[IC_COAT_TABLE]);
+        }
     }
     if (s->triangle_count > 0) {
         ic_vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
@@ -409,8 +453,11 @@ void ic_scene_free(ic_scene *s)
     free(s->positions);
     free(s->normals);
     free(s->uvs);
+    free(s->tangents);
     free(s->triangles);
     free(s->triangle_material);
+    for (uint32_t i = 0; i < s->material_count; ++i)
+        free(s->materials[i].coat_albedo_rough);
     free(s->materials);
     for (uint32_t i = 0; i < s->texture_count; ++i) {
         ic_image img = {s->textures[i].width, s->textures[i].height, s->textures[i].rgb};

@@ -27,6 +27,8 @@
  * same texels bit for bit in a quarter of the memory, so fewer cache misses. Others keep floats. */
 typedef struct ic_texture {
     char path[1024];       /* resolved path, for messages */
+    int is_data;           /* 1: values as stored (roughness, metallic, normal maps), not colours: an 8-bit or
+                              16-bit file's values are v/255 (v/65535) without the sRGB curve */
     int width, height;
     float *rgb;            /* width*height*3 floats, or NULL when srgb8 holds the texels */
     uint8_t *srgb8;        /* width*height*3 sRGB bytes, or NULL */
@@ -67,7 +69,20 @@ typedef struct ic_material {
     ic_vec3 eta, k;        /* conductor: complex index of refraction (k all 0: use ks as F0) */
     float coat_albedo[IC_COAT_TABLE]; /* plastic: the coat's directional albedo E(μ), filled at load */
     float coat_albedo_avg; /* plastic: its cosine-weighted mean */
+    /* textures of the microfacet parameters and the shading normal (scene_query.c), each 1 + the index
+     * into scene.textures and 0 for none, so that a zeroed material has none: */
+    float metallic;        /* plastic: blend towards a Schlick conductor of F0 = kd (glTF's metallic), 0..1 */
+    int32_t roughness_texture; /* its green channel g scales the roughness: α = alpha·g² (glTF's rule) */
+    int32_t metallic_texture;  /* its blue channel b scales metallic: metallic·b (plastic only) */
+    int32_t normal_texture;    /* tangent-space normal map (+x along u, +y along v, +z the shading normal) */
+    float normal_scale;    /* glTF's normalTexture.scale: the map's x and y are multiplied by it */
+    float *coat_albedo_rough; /* plastic with a roughness texture: IC_COAT_ROUGH_STEPS tables of
+                              IC_COAT_TABLE + 1 floats (E(μ) then its mean) at roughness j/(steps−1);
+                              owned by the scene, filled at load */
 } ic_material;
+
+/* Roughness steps of a textured plastic's coat tables (the nearest is used). */
+#define IC_COAT_ROUGH_STEPS 32
 
 /* Emissive triangle as a light. */
 typedef struct ic_tri_light {
@@ -168,6 +183,9 @@ struct ic_scene {
     uint32_t material_count;
     ic_texture *textures;
     uint32_t texture_count;
+    float *tangents;       /* vertex_count*4: unit tangent and the bitangent's sign (w = ±1), or NULL; a zero
+                              tangent means "from the triangle's texture coordinates" (scene_query.c) */
+    int has_normal_maps;   /* 1 if any material has a normal_texture (ic_scene_surface looks only then) */
     uint32_t dropped_degenerate; /* zero-area triangles dropped at load (not an error) */
     /* lights */
     ic_tri_light *tri_lights;
@@ -204,8 +222,13 @@ typedef struct ic_surface {
     uint32_t triangle;
 } ic_surface;
 
-/* Fills s for triangle tri at barycentrics (u, v). */
+/* Fills s for triangle tri at barycentrics (u, v); a normal-mapped material's ns is the mapped normal. */
 void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_surface *s);
+/* GGX α and metallic of the material at a surface: the factors times their textures (without a texture,
+ * alpha and metallic themselves). */
+void ic_scene_microfacet_params(const ic_scene *scene, const ic_surface *s, float *alpha, float *metallic);
+/* The coat albedo table (IC_COAT_TABLE values) of a plastic at a point of GGX α, and its mean. */
+const float *ic_scene_coat_table(const ic_material *m, float alpha, float *average);
 /* Diffuse albedo at a surface (kd × texture). */
 ic_vec3 ic_scene_albedo(const ic_scene *scene, const ic_surface *s);
 /* The material's texture value at a surface (1 without a texture): kd's factor, and a conductor's F0's. */

@@ -125,6 +125,13 @@ ic_result ic_mesh_read_serialized(ic_scene_builder *b, const char *path, uint32_
 ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const char *owner, int32_t *index,
                                 ic_error *err);
 
+/* ic_scene_texture_load and ic_scene_texture_add for a texture of values rather than colours when is_data
+ * is 1 (roughness, metallic, normal maps: ic_texture's is_data); a file loaded both ways is two textures. */
+ic_result ic_scene_texture_load_as(ic_scene_builder *b, const char *path, int is_data, const char *owner,
+                                   int32_t *index, ic_error *err);
+ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_data, ic_image *img,
+                                  const char *owner, int32_t *index, ic_error *err);
+
 /* Validates, computes bounds and builds the light tables. `where` names the scene for messages. */
 ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err);
 

@@ -28,6 +28,7 @@ static ic_result parse_material_type(json_ctx *c, const cJSON *it, int line, ic_
 typedef struct material_override {
     ic_material m;               /* the values given */
     int has_type, has_kd, has_ks, has_ns, has_em, has_two, has_ior, has_tex, has_alpha, has_eta, has_k;
+    int has_rough_tex, has_metal_tex, has_metal, has_normal_tex, has_normal_scale;
     int32_t tex;                 /* kd_texture: the texture's index, -1 for none */
 } material_override;
 
@@ -65,9 +66,9 @@ static ic_result unknown_material(json_ctx *c, const char *name, int line)
                         known[0] ? known : "(none)");
 }
 
-/* "kd_texture": loads the texture at the path (resolved like every path) into the scene and sets *tex
- * to its index; an empty path leaves *tex as it is (no texture). */
-static ic_result read_texture(json_ctx *c, const cJSON *it, int kl, int32_t *tex)
+/* "kd_texture" (is_data 0) and the value textures (1): loads the texture at the path (resolved like every
+ * path) into the scene and sets *tex to its index; an empty path leaves *tex as it is (no texture). */
+static ic_result read_texture(json_ctx *c, const cJSON *it, int kl, int is_data, int32_t *tex)
 {
     const char *p = "";
     ic_result r = ic_json_read_string(c, it, kl, &p);
@@ -76,15 +77,25 @@ static ic_result read_texture(json_ctx *c, const cJSON *it, int kl, int32_t *tex
         r = ic_json_resolve_path(c, p, kl, "texture", full, sizeof full);
         snprintf(owner, sizeof owner, "%s:%d", c->path, kl);
         if (r == IC_OK)
-            r = ic_scene_texture_load(c->b, full, owner, tex, c->err);
+            r = ic_scene_texture_load_as(c->b, full, is_data, owner, tex, c->err);
     }
+    return r;
+}
+
+/* A value texture's key: its index + 1 into *slot (ic_material's convention), 0 for an empty path. */
+static ic_result read_data_texture(json_ctx *c, const cJSON *it, int kl, int32_t *slot)
+{
+    int32_t index = -1;
+    ic_result r = read_texture(c, it, kl, 1, &index);
+    *slot = index + 1;
     return r;
 }
 
 /* Reads key `it` (at line kl) of an override into o. */
 static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, material_override *o)
 {
-    static const char *valid = "type, kd, ks, ns, emission, two_sided, ior, kd_texture, alpha, eta, k";
+    static const char *valid = "type, kd, ks, ns, emission, two_sided, ior, kd_texture, alpha, eta, k, "
+                                "roughness_texture, metallic, metallic_texture, normal_texture, normal_scale";
     ic_result r = IC_OK;
     if (!strcmp(it->string, "type")) {
         r = parse_material_type(c, it, kl, &o->m.type);
@@ -125,8 +136,27 @@ static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, materia
         r = ic_json_read_color(c, it, kl, &o->m.k);
         o->has_k = 1;
     } else if (!strcmp(it->string, "kd_texture")) {
-        r = read_texture(c, it, kl, &o->tex);
+        r = read_texture(c, it, kl, 0, &o->tex);
         o->has_tex = 1;
+    } else if (!strcmp(it->string, "roughness_texture")) {
+        r = read_data_texture(c, it, kl, &o->m.roughness_texture);
+        o->has_rough_tex = 1;
+    } else if (!strcmp(it->string, "metallic_texture")) {
+        r = read_data_texture(c, it, kl, &o->m.metallic_texture);
+        o->has_metal_tex = 1;
+    } else if (!strcmp(it->string, "normal_texture")) {
+        r = read_data_texture(c, it, kl, &o->m.normal_texture);
+        o->has_normal_tex = 1;
+    } else if (!strcmp(it->string, "metallic")) {
+        r = ic_json_read_float(c, it, kl, &o->m.metallic);
+        if (r == IC_OK && !(o->m.metallic >= 0.0f && o->m.metallic <= 1.0f))
+            return ic_json_fail(c, kl, IC_ERR_INVALID_ARG, "'metallic' must be in [0, 1]");
+        o->has_metal = 1;
+    } else if (!strcmp(it->string, "normal_scale")) {
+        r = ic_json_read_float(c, it, kl, &o->m.normal_scale);
+        if (r == IC_OK && !(o->m.normal_scale >= 0.0f && o->m.normal_scale <= 100.0f))
+            return ic_json_fail(c, kl, IC_ERR_INVALID_ARG, "'normal_scale' must be in [0, 100]");
+        o->has_normal_scale = 1;
     } else {
         return ic_json_unknown_key(c, kl, it->string, "a material override", valid);
     }
@@ -162,6 +192,21 @@ static void apply_override(ic_scene *s, const char *name, const material_overrid
             m->eta = o->m.eta;
         if (o->has_k)
             m->k = o->m.k;
+        if (o->has_rough_tex)
+            m->roughness_texture = o->m.roughness_texture;
+        if (o->has_metal_tex)
+            m->metallic_texture = o->m.metallic_texture;
+        if (o->has_metal)
+            m->metallic = o->m.metallic;
+        else if (o->has_metal_tex) /* a metallic texture alone: its values are the metallic */
+            m->metallic = 1.0f;
+        if (o->has_normal_tex) {
+            m->normal_texture = o->m.normal_texture;
+            if (!o->has_normal_scale && !(m->normal_scale > 0.0f))
+                m->normal_scale = 1.0f;
+        }
+        if (o->has_normal_scale)
+            m->normal_scale = o->m.normal_scale;
         /* keep the type usable: a glossy lobe needs an exponent, a mirror or glass a tint */
         if (m->type == IC_MAT_GLOSSY && !(m->ns >= 1.0f))
             m->ns = 1.0f;

@@ -6,10 +6,89 @@
  * is interpolated from vertex normals, or equals ng where the mesh has none (a zero vertex normal marks
  * a vertex without one, see mesh_import.c), and is flipped into ng's hemisphere so that shading and
  * geometry agree about which side is the front.
+ *
+ * Normal maps (a material's normal_texture): the texel c gives the tangent-space normal
+ * (2c − 1) with x and y scaled by normal_scale, in the frame (T, B, n) of the interpolated shading normal n,
+ * the tangent T (the mesh's, else ∂p/∂u of the triangle's texture coordinates) made orthogonal to n and
+ * B = ±n × T, its sign the bitangent's handedness (the mesh's w, else that of ∂p/∂v); this is the frame
+ * MikkTSpace bakes against (Mikkelsen 2008 §4). A mapped normal is kept at least sin 3° above the geometric
+ * horizon (bent towards ng), so that no texel turns the front of a surface into its back.
  */
 #include "scene/scene.h"
 
 #include <math.h>
+
+static ic_vec3 texture_lookup(const ic_texture *t, float s_coord, float t_coord);
+
+/* Least height of a mapped normal above the geometric horizon: sin 3°. */
+#define NORMAL_MAP_MIN_COS 0.0523f
+
+/* Tangent (unit, orthogonal to n) and the bitangent's sign at barycentrics (w, u, v) of the triangle with
+ * vertex indices idx; 0 if the triangle's texture coordinates are degenerate and the mesh gives none. */
+static int shading_tangent(const ic_scene *scene, const uint32_t *idx, float w, float u, float v, ic_vec3 n,
+                           ic_vec3 *t_out, float *sign)
+{
+    ic_vec3 t = v3s(0.0f);
+    *sign = 1.0f;
+    if (scene->tangents) {
+        const float *a = scene->tangents + 4 * (size_t)idx[0], *b = scene->tangents + 4 * (size_t)idx[1],
+                    *c = scene->tangents + 4 * (size_t)idx[2];
+        if (a[3] != 0.0f && b[3] != 0.0f && c[3] != 0.0f) {
+            t = v3(w * a[0] + u * b[0] + v * c[0], w * a[1] + u * b[1] + v * c[1], w * a[2] + u * b[2] + v * c[2]);
+            *sign = w * a[3] + u * b[3] + v * c[3] < 0.0f ? -1.0f : 1.0f;
+        }
+    }
+    if (v3_is_black(t) && scene->uvs) {
+        ic_vec3 p0 = scene->positions[idx[0]];
+        ic_vec3 e1 = v3_sub(scene->positions[idx[1]], p0), e2 = v3_sub(scene->positions[idx[2]], p0);
+        const float *t0 = scene->uvs + 2 * (size_t)idx[0], *t1 = scene->uvs + 2 * (size_t)idx[1],
+                    *t2 = scene->uvs + 2 * (size_t)idx[2];
+        float du1 = t1[0] - t0[0], dv1 = t1[1] - t0[1], du2 = t2[0] - t0[0], dv2 = t2[1] - t0[1];
+        float det = du1 * dv2 - du2 * dv1;
+        if (det == 0.0f || !isfinite(det))
+            return 0;
+        ic_vec3 dpdu = v3_scale(v3_sub(v3_scale(e1, dv2), v3_scale(e2, dv1)), 1.0f / det);
+        ic_vec3 dpdv = v3_scale(v3_sub(v3_scale(e2, du1), v3_scale(e1, du2)), 1.0f / det);
+        t = dpdu;
+        *sign = v3_dot(v3_cross(n, dpdu), dpdv) < 0.0f ? -1.0f : 1.0f;
+    }
+    t = v3_sub(t, v3_scale(n, v3_dot(n, t)));
+    float len = v3_len(t);
+    if (!(len > 1e-12f) || !isfinite(len))
+        return 0;
+    *t_out = v3_scale(t, 1.0f / len);
+    return 1;
+}
+
+/* s->ns replaced by the material's normal map at s->uv (see the top of the file). */
+static void apply_normal_map(const ic_scene *scene, const ic_material *m, const uint32_t *idx, float w, float u,
+                             float v, ic_surface *s)
+{
+    const ic_texture *tex = &scene->textures[m->normal_texture - 1];
+    ic_vec3 t;
+    float sign;
+    if (tex->width <= 0 || !isfinite(s->uv[0]) || !isfinite(s->uv[1]) ||
+        !shading_tangent(scene, idx, w, u, v, s->ns, &t, &sign))
+        return;
+    ic_vec3 c = texture_lookup(tex, s->uv[0], s->uv[1]);
+    float scale = m->normal_scale;
+    ic_vec3 b = v3_scale(v3_cross(s->ns, t), sign);
+    ic_vec3 n = v3_add(v3_add(v3_scale(t, (2.0f * c.x - 1.0f) * scale), v3_scale(b, (2.0f * c.y - 1.0f) * scale)),
+                       v3_scale(s->ns, 2.0f * c.z - 1.0f));
+    float h = v3_dot(n, s->ng), len = v3_len(n);
+    if (!(len > 1e-12f) || !isfinite(len))
+        return;
+    n = v3_scale(n, 1.0f / len);
+    h /= len;
+    if (h < NORMAL_MAP_MIN_COS) { /* bend towards ng until it stands NORMAL_MAP_MIN_COS above the horizon */
+        ic_vec3 side = v3_sub(n, v3_scale(s->ng, h));
+        float sl = v3_len(side);
+        n = sl > 1e-12f ? v3_add(v3_scale(side, sqrtf(1.0f - NORMAL_MAP_MIN_COS * NORMAL_MAP_MIN_COS) / sl),
+                                 v3_scale(s->ng, NORMAL_MAP_MIN_COS))
+                        : s->ng;
+    }
+    s->ns = n;
+}
 
 void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_surface *s)
 {
@@ -40,6 +119,8 @@ void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_
     }
     s->material = scene->triangle_material[tri];
     s->triangle = tri;
+    if (scene->has_normal_maps && scene->materials[s->material].normal_texture > 0)
+        apply_normal_map(scene, &scene->materials[s->material], idx, w, u, v, s);
 }
 
 /* Bilinear texel look-up with repeat wrap; uv (0,0) is the image's bottom-left corner (OBJ/assimp
@@ -89,6 +170,32 @@ ic_vec3 ic_scene_texture_tint(const ic_scene *scene, const ic_surface *s)
     if (t->width <= 0 || t->height <= 0 || !isfinite(s->uv[0]) || !isfinite(s->uv[1]))
         return v3s(1.0f);
     return texture_lookup(t, s->uv[0], s->uv[1]);
+}
+
+void ic_scene_microfacet_params(const ic_scene *scene, const ic_surface *s, float *alpha, float *metallic)
+{
+    const ic_material *m = &scene->materials[s->material];
+    *alpha = m->alpha;
+    *metallic = m->metallic;
+    if (!isfinite(s->uv[0]) || !isfinite(s->uv[1]))
+        return;
+    if (m->roughness_texture > 0) { /* glTF: roughness = factor × g, α = roughness² */
+        float g = texture_lookup(&scene->textures[m->roughness_texture - 1], s->uv[0], s->uv[1]).y;
+        *alpha = m->alpha * g * g;
+    }
+    if (m->metallic_texture > 0)
+        *metallic = m->metallic * texture_lookup(&scene->textures[m->metallic_texture - 1], s->uv[0], s->uv[1]).z;
+}
+
+const float *ic_scene_coat_table(const ic_material *m, float alpha, float *average)
+{
+    *average = m->coat_albedo_avg;
+    if (!m->coat_albedo_rough)
+        return m->coat_albedo;
+    int j = (int)(sqrtf(fmaxf(alpha, 0.0f)) * (IC_COAT_ROUGH_STEPS - 1) + 0.5f);
+    j = j < 0 ? 0 : j > IC_COAT_ROUGH_STEPS - 1 ? IC_COAT_ROUGH_STEPS - 1 : j;
+    *average = m->coat_albedo_rough[j * (IC_COAT_TABLE + 1) + IC_COAT_TABLE];
+    return m->coat_albedo_rough + j * (IC_COAT_TABLE + 1);
 }
 
 ic_vec3 ic_scene_emission(const ic_scene *scene, const ic_surface *s, ic_vec3 wo)
