@@ -29,6 +29,9 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
             n = v3_norm(v3_add(n, v3_scale(wo, 0.0523f - c)));
     }
     b->frame = ic_frame_from_normal(n);
+    /* records are keyed on the interpolated normal of a normal-mapped surface (docs/scene-format.md,
+     * "Normal maps and the cache") */
+    b->cache_n = m->normal_texture > 0 ? (v3_dot(s->ns_smooth, b->ng) < 0.0f ? v3_neg(s->ns_smooth) : s->ns_smooth) : n;
     float ld = v3_lum(b->kd), ls = v3_lum(b->ks);
     b->p_diffuse = (b->type == IC_MAT_GLOSSY) ? (ld + ls > 0.0f ? ld / (ld + ls) : 1.0f) : 1.0f;
     if (b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC || b->type == IC_MAT_ROUGH_GLASS) {

@@ -32,6 +32,8 @@ typedef struct ic_bsdf {
     ic_vec3 metal_f0;      /* plastic with metal > 0: the conductor lobe's F0 (the base colour) */
     float p_diffuse;       /* probability of sampling the diffuse lobe (glossy, plastic) */
     ic_frame frame;        /* around the shading normal */
+    ic_vec3 cache_n;       /* the normal the irradiance cache uses here: frame.n, or with a normal map the
+                              interpolated normal on frame.n's side (records keyed on it, docs/scene-format.md) */
     ic_vec3 ng;            /* geometric normal */
 } ic_bsdf;
 

@@ -77,11 +77,11 @@ static void world_path(void *p, int64_t own_item, int thread)
         ic_bsdf_init(&b, c->tr->scene, &s, wo);
         ic_bsdf_sample bs;
         if (ic_bsdf_has_smooth(&b)) {
-            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.frame.n, IC_ACCEPT_CONSTRUCTION);
+            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
             ic_cache_estimate e;
             if (!ic_cache_query(c->cache, &q, &e)) {
                 out[n].p = s.p;
-                out[n].n = b.frame.n;
+                out[n].n = b.cache_n;
                 /* A pixel's footprint at the point: the camera's directly, and the path length times the
                  * pixel angle behind reflections (a mirror's ray differential; a glossy lobe widens it,
                  * so this bounds the records from below without making them smaller than they may

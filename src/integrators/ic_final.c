@@ -16,13 +16,36 @@
  * through glass (depth d) may take only B − d of them, the interpolation of the records' level T_{B−d}
  * (ic_ic_level_estimates). Taking the full value there added one bounce per glass or glossy vertex: +5 %
  * behind a glass panel of a white hall, where each bounce returns most of the light. */
-static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n, int depth, ic_cache_hint *hint,
-                                 ic_rng *rng, uint64_t *rays, int *from_cache)
+/* The records' irradiance, keyed on the interpolated normal, turned to the mapped normal n by each
+ * contribution's rotational gradient (Ward & Heckbert 1992 §3): E_i + (n_i × (n − n_c))·∇r E_i, the record's
+ * value at n_c being E_i + (n_i × n_c)·∇r E_i. */
+static ic_vec3 rotate_to_mapped(const ic_ctx *c, const ic_cache_contribution *contrib, uint32_t count, ic_vec3 n_c,
+                                ic_vec3 n, ic_vec3 fallback)
+{
+    float acc[3] = {0.0f, 0.0f, 0.0f}, wsum = 0.0f;
+    ic_vec3 dn = v3_sub(n, n_c);
+    for (uint32_t i = 0; i < count; ++i) {
+        ic_record r;
+        if (ic_cache_get_record(c->cache, contrib[i].record, &r) != IC_OK)
+            return fallback;
+        ic_vec3 rot = v3_cross(r.normal, dn);
+        const float v[3] = {contrib[i].value.x, contrib[i].value.y, contrib[i].value.z};
+        for (int ch = 0; ch < 3; ++ch)
+            acc[ch] += contrib[i].weight * fmaxf(v[ch] + v3_dot(rot, r.grad_rot[ch]), 0.0f);
+        wsum += contrib[i].weight;
+    }
+    return wsum > 0.0f ? v3_scale(v3(acc[0], acc[1], acc[2]), 1.0f / wsum) : fallback;
+}
+
+static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, int depth,
+                                 ic_cache_hint *hint, ic_rng *rng, uint64_t *rays, int *from_cache)
 {
     ic_cache_contribution contrib[LOOKUP_CAPACITY];
-    ic_cache_lookup q = ic_cache_lookup_at(s->p, n, IC_ACCEPT_FINAL);
+    ic_vec3 n = b->frame.n;
+    ic_cache_lookup q = ic_cache_lookup_at(s->p, b->cache_n, IC_ACCEPT_FINAL);
     const int level = c->levels - depth;
-    if (depth > 0 && c->levels) {
+    const int mapped = b->cache_n.x != n.x || b->cache_n.y != n.y || b->cache_n.z != n.z;
+    if ((depth > 0 && c->levels) || mapped) {
         q.contributions = contrib;
         q.contribution_capacity = LOOKUP_CAPACITY;
     }
@@ -30,13 +53,19 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, ic_vec3 n
     if (ic_cache_query_hinted(c->cache, &q, hint, &e)) {
         *from_cache = 1;
         ic_vec3 E;
-        if (q.contributions && ic_ic_level_estimates(c, contrib, e.contributions_written, level > 0 ? level : 0, 1, &E))
+        if (depth > 0 && c->levels &&
+            ic_ic_level_estimates(c, contrib, e.contributions_written, level > 0 ? level : 0, 1, &E))
             return E;
+        if (mapped && e.contributions_written == e.contributor_count)
+            return rotate_to_mapped(c, contrib, e.contributions_written, b->cache_n, n, e.irradiance);
         return e.irradiance;
     }
     *from_cache = 0;
     ic_frame f = ic_frame_from_normal(n);
     ic_vec3 d = ic_frame_to_world(&f, ic_warp_cosine_hemisphere(ic_rng_float(rng), ic_rng_float(rng)));
+    /* below the surface (about a mapped normal): the BSDF passes nothing */
+    if (c->tr->scene->materials[s->material].normal_texture > 0 && v3_dot(d, b->ng) <= 0.0f)
+        return v3s(0.0f);
     ic_ray ray = ic_spawn_ray(s, d);
     ic_hit hit;
     ++*rays;
@@ -119,7 +148,7 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
             prev_glossy = 0;
         } else {
             int from_cache;
-            ic_vec3 E = cached_irradiance(c, &s, b.frame.n, depth, hint, rng, rays, &from_cache);
+            ic_vec3 E = cached_irradiance(c, &s, &b, depth, hint, rng, rays, &from_cache);
             ic_vec3 indirect = v3_mul(v3_scale(b.kd, IC_INV_PI), E);
             if (fc->indirect_only)
                 return v3_mul(beta, indirect);

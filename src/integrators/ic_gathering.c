@@ -91,7 +91,7 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
         return 0;
     ic_cache_contribution contrib[LOOKUP_CAPACITY];
-    ic_cache_lookup q = ic_cache_lookup_at(s.p, b.frame.n, IC_ACCEPT_FINAL);
+    ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_FINAL);
     q.contributions = contrib;
     q.contribution_capacity = LOOKUP_CAPACITY;
     ic_cache_estimate e;

@@ -62,7 +62,7 @@ static void gbuffer_row(void *p, int64_t y, int thread)
         c->g.valid[i] = (uint8_t)ic_ic_shading_point(c->tr, ray, &s, &b, &wo, &t_primary, &j->rays[thread * PAD]);
         if (c->g.valid[i]) {
             c->g.p[i] = s.p;
-            c->g.n[i] = b.frame.n;
+            c->g.n[i] = b.cache_n;
             c->g.footprint[i] = t_primary * c->pixel_angle;
         }
     }

@@ -22,7 +22,7 @@ void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b)
     memset(s, 0, sizeof *s);
     s->p = p;
     s->ng = n;
-    s->ns = n;
+    s->ns = s->ns_smooth = n;
     s->triangle = IC_NO_HIT;
     memset(b, 0, sizeof *b);
     b->type = IC_MAT_DIFFUSE;

@@ -79,7 +79,7 @@ static ic_result microfacet_tables(ic_radiance *r, const ic_scene *s, uint32_t m
     ic_surface surf;
     memset(&surf, 0, sizeof surf);
     surf.material = m;
-    surf.ng = surf.ns = v3(0.0f, 0.0f, 1.0f);
+    surf.ng = surf.ns = surf.ns_smooth = v3(0.0f, 0.0f, 1.0f);
     surf.triangle = IC_NO_HIT;
     bsdf_lobe lobe[3];
     ic_bsdf_init(&lobe[0].b, s, &surf, v3(0.0f, 0.0f, 1.0f));

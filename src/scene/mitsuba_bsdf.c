@@ -28,6 +28,26 @@ static int conductor_preset(const char *name, ic_vec3 *eta, ic_vec3 *k)
     return 0;
 }
 
+/* A normalmap BSDF's <texture name="normalmap" type="bitmap"> (or a <ref> to one) as the material's
+ * tangent-space normal map (scene_query.c), read as values. */
+static ic_result normal_map(ic_mts_ctx *c, const xmlNode *n, ic_material *m)
+{
+    xmlNode *k = ic_mts_child(c, n, NULL, "normalmap");
+    if (ic_mts_is_element(k, "ref"))
+        k = (xmlNode *)ic_mts_find_by_id(c, "texture", ic_mts_attr(c, k, "id") ? ic_mts_attr(c, k, "id") : "");
+    int32_t index = -1;
+    int loaded = 0;
+    ic_result r = k && ic_mts_is_element(k, "texture") ? ic_mts_texture(c, k, 1, &index, &loaded) : IC_OK;
+    if (r == IC_OK && !loaded) {
+        ic_mts_warn_once(c, n, "<bsdf type=\"normalmap\"> without a bitmap texture named normalmap",
+                         "is not supported: its inner BSDF is used alone");
+        return IC_OK;
+    }
+    m->normal_texture = index + 1;
+    m->normal_scale = 1.0f;
+    return r;
+}
+
 ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth)
 {
     char type_buf[64];
@@ -40,21 +60,22 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
     int is_wrapper = !strcmp(type, "twosided") || !strcmp(type, "bumpmap") || !strcmp(type, "normalmap") ||
                      !strcmp(type, "mask") || !strcmp(type, "blendbsdf") || !strcmp(type, "coating");
     if (is_wrapper) {
-        if (strcmp(type, "twosided")) {
+        if (strcmp(type, "twosided") && strcmp(type, "normalmap")) {
             char kind[80];
             snprintf(kind, sizeof kind, "<bsdf type=\"%s\">", type);
             ic_mts_warn_once(c, n, kind, "is not supported: its (first) inner BSDF is used alone");
         }
-        for (xmlNode *k = n->children; k; k = k->next) {
+        const xmlNode *inner = NULL;
+        for (xmlNode *k = n->children; k && !inner; k = k->next) {
             if (ic_mts_is_element(k, "bsdf"))
-                return ic_mts_bsdf(c, k, m, depth + 1);
-            if (ic_mts_is_element(k, "ref")) {
-                const xmlNode *t = ic_mts_find_by_id(c, "bsdf", ic_mts_attr(c, k, "id") ? ic_mts_attr(c, k, "id") : "");
-                if (t)
-                    return ic_mts_bsdf(c, t, m, depth + 1);
-            }
+                inner = k;
+            else if (ic_mts_is_element(k, "ref"))
+                inner = ic_mts_find_by_id(c, "bsdf", ic_mts_attr(c, k, "id") ? ic_mts_attr(c, k, "id") : "");
         }
-        return ic_mts_fail(c, n, IC_ERR_PARSE, "this BSDF wraps no BSDF", NULL);
+        if (!inner)
+            return ic_mts_fail(c, n, IC_ERR_PARSE, "this BSDF wraps no BSDF", NULL);
+        ic_result r = ic_mts_bsdf(c, inner, m, depth + 1);
+        return r == IC_OK && !strcmp(type, "normalmap") ? normal_map(c, n, m) : r;
     }
     ic_result r = IC_OK;
     float ext = 1.000277f, in = 1.5046f;

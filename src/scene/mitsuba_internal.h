@@ -55,6 +55,9 @@ int ic_mts_numbers(const char *s, float *out, int n);
 ic_result ic_mts_float(ic_mts_ctx *c, const xmlNode *n, const char *name, float fallback, float *out);
 const char *ic_mts_string(ic_mts_ctx *c, const xmlNode *n, const char *name);
 ic_result ic_mts_ior(ic_mts_ctx *c, const xmlNode *n, const char *name, float fallback, float *out);
+/* A <texture type="bitmap"> element k loaded into the scene (as values when is_data: ic_texture's is_data);
+ * *loaded is 0 (and nothing happens) for any other texture. */
+ic_result ic_mts_texture(ic_mts_ctx *c, const xmlNode *k, int is_data, int32_t *index, int *loaded);
 /* A colour (rgb, srgb, spectrum, float); a bitmap texture goes to *texture (when not NULL), colour 1. */
 ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec3 fallback, ic_vec3 *out,
                        int32_t *texture);

@@ -152,6 +152,25 @@ ic_result ic_mts_ior(ic_mts_ctx *c, const xmlNode *n, const char *name, float fa
     return ic_mts_fail(c, k, IC_ERR_UNSUPPORTED, "unknown index of refraction name for ", name);
 }
 
+ic_result ic_mts_texture(ic_mts_ctx *c, const xmlNode *k, int is_data, int32_t *index, int *loaded)
+{
+    *loaded = 0;
+    char type_buf[64];
+    const char *type = ic_mts_attr_copy(c, k, "type", type_buf, sizeof type_buf);
+    const char *file = ic_mts_string(c, k, "filename");
+    if (!type || strcmp(type, "bitmap") || !file)
+        return IC_OK;
+    char full[IC_SCENE_PATH_MAX], where[IC_SCENE_PATH_MAX + 32];
+    snprintf(where, sizeof where, "%s:%d", ic_mts_file(c, k), ic_mts_line(k));
+    if (!ic_path_join(c->dir, file, full, sizeof full))
+        return ic_mts_fail(c, k, IC_ERR_INVALID_ARG, "texture path too long", NULL);
+    ic_result r = ic_scene_check_path(c->b, full, where, "texture", c->err);
+    if (r == IC_OK)
+        r = ic_scene_texture_load_as(c->b, full, is_data, where, index, c->err);
+    *loaded = 1;
+    return r;
+}
+
 /* A colour: <rgb>, <srgb>, <spectrum> (one value; a wavelength list is averaged, with a warning) or a
  * <float>. A <texture type="bitmap"> is loaded into *texture (when texture is not NULL) with colour 1. */
 ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec3 fallback, ic_vec3 *out,
@@ -195,21 +214,13 @@ ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec
             return ic_mts_fail(c, k, IC_ERR_PARSE, "not a number: value of ", name);
         }
     } else if (ic_mts_is_element(k, "texture")) {
-        char type_buf[64];
-        const char *type = ic_mts_attr_copy(c, k, "type", type_buf, sizeof type_buf);
-        const char *file = ic_mts_string(c, k, "filename");
-        if (!texture || !type || strcmp(type, "bitmap") || !file) {
+        int loaded = 0;
+        ic_result r = texture ? ic_mts_texture(c, k, 0, texture, &loaded) : IC_OK;
+        if (!loaded) {
             ic_mts_warn_once(c, k, "<texture> other than a bitmap", "is not supported: a grey 0.5 is used");
             *out = v3s(0.5f);
             return IC_OK;
         }
-        char full[IC_SCENE_PATH_MAX], where[IC_SCENE_PATH_MAX + 32];
-        snprintf(where, sizeof where, "%s:%d", ic_mts_file(c, k), ic_mts_line(k));
-        if (!ic_path_join(c->dir, file, full, sizeof full))
-            return ic_mts_fail(c, k, IC_ERR_INVALID_ARG, "texture path too long", NULL);
-        ic_result r = ic_scene_check_path(c->b, full, where, "texture", c->err);
-        if (r == IC_OK)
-            r = ic_scene_texture_load(c->b, full, where, texture, c->err);
         *out = v3s(1.0f);
         return r;
     } else {

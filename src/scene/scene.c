@@ -414,7 +414,14 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
         if (!mat->coat_albedo_rough)
             return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for material '%s'",
                                 b->mesh_paths[b->material_mesh[m]], mat->name);
-        for (int j = 0; j < IC_COAT_ROUGH_STEPS; ++j) {
+        const ic_material *same = NULL; /* the tables depend on the index alone: computed once per index */
+        for (uint32_t k = 0; k < m && !same; ++k)
+            if (s->materials[k].coat_albedo_rough && (s->materials[k].ior > 1.0f ? s->materials[k].ior : 1.5f) == ior)
+                same = &s->materials[k];
+        if (same)
+            memcpy(mat->coat_albedo_rough, same->coat_albedo_rough,
+                   sizeof(float) * IC_COAT_ROUGH_STEPS * (IC_COAT_TABLE + 1));
+        for (int j = 0; j < IC_COAT_ROUGH_STEPS && !same; ++j) {
             float r = (float)j / (IC_COAT_ROUGH_STEPS - 1), *t = mat->coat_albedo_rough + j * (IC_COAT_TABLE + 1);
             ic_coat_albedo_table(ior, r * r, t, &t[IC_COAT_TABLE]);
         }

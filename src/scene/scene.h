@@ -217,6 +217,7 @@ typedef struct ic_surface {
     ic_vec3 p;             /* position */
     ic_vec3 ng;            /* unit geometric normal (winding order) */
     ic_vec3 ns;            /* unit shading normal (= ng if no normals), flipped to ng's side */
+    ic_vec3 ns_smooth;     /* ns before a normal map (the interpolated normal; = ns without a map) */
     float uv[2];           /* texture coordinates (0 if none) */
     uint32_t material;
     uint32_t triangle;

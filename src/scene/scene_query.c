@@ -119,6 +119,7 @@ void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_
     }
     s->material = scene->triangle_material[tri];
     s->triangle = tri;
+    s->ns_smooth = s->ns;
     if (scene->has_normal_maps && scene->materials[s->material].normal_texture > 0)
         apply_normal_map(scene, &scene->materials[s->material], idx, w, u, v, s);
 }
