@@ -7,15 +7,6 @@
 
 #include "core/sampling.h"
 
-/* Indirect diffuse irradiance at a camera path's vertex `depth`: the cache (final acceptance), or,
- * where no record reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one
- * cosine-distributed hemisphere ray that returns what a record's ray would: E ≈ π·L.
- *
- * The bounce count stays the path tracer's at every vertex, not only the first: a record holds the light
- * of B bounces after its point, right for a vertex seen directly; a vertex seen in a glossy reflection or
- * through glass (depth d) may take only B − d of them, the interpolation of the records' level T_{B−d}
- * (ic_ic_level_estimates). Taking the full value there added one bounce per glass or glossy vertex: +5 %
- * behind a glass panel of a white hall, where each bounce returns most of the light. */
 /* The records' irradiance, keyed on the interpolated normal, turned to the mapped normal n by each
  * contribution's rotational gradient (Ward & Heckbert 1992 §3): E_i + (n_i × (n − n_c))·∇r E_i, the record's
  * value at n_c being E_i + (n_i × n_c)·∇r E_i. */
@@ -37,6 +28,19 @@ static ic_vec3 rotate_to_mapped(const ic_ctx *c, const ic_cache_contribution *co
     return wsum > 0.0f ? v3_scale(v3(acc[0], acc[1], acc[2]), 1.0f / wsum) : fallback;
 }
 
+/* Indirect diffuse irradiance at a camera path's vertex `depth`: the cache (final acceptance), or,
+ * where no record reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one
+ * cosine-distributed hemisphere ray that returns what a record's ray would: E ≈ π·L.
+ *
+ * The bounce count stays the path tracer's at every vertex, not only the first: a record holds the light
+ * of B bounces after its point, right for a vertex seen directly; a vertex seen in a glossy reflection or
+ * through glass (depth d) may take only B − d of them, the interpolation of the records' level T_{B−d}
+ * (ic_ic_level_estimates). Taking the full value there added one bounce per glass or glossy vertex: +5 %
+ * behind a glass panel of a white hall, where each bounce returns most of the light.
+ *
+ * A normal-mapped point looks the cache up with its interpolated normal (b->cache_n, which the records are
+ * keyed on) and turns the value to the mapped normal (rotate_to_mapped; not where a deeper vertex takes a
+ * bounce level, nor in a pile-up beyond LOOKUP_CAPACITY); its fallback ray is drawn about the mapped normal. */
 static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, int depth,
                                  ic_cache_hint *hint, ic_rng *rng, uint64_t *rays, int *from_cache)
 {

@@ -290,7 +290,7 @@ ic_result ic_scene_texture_load_as(ic_scene_builder *b, const char *path, int is
     ic_result r = ic_image_read_max(path, ic_scene_max_texture_pixels(b->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &img,
                                     &ierr);
     if (r != IC_OK)
-        return ic_error_set(err, r, "%s: texture '%s': %s", owner, path, ierr.message);
+        return ic_error_set(err, r, "%s: %s", owner, ierr.message);
     return ic_scene_texture_add_as(b, path, is_data, &img, owner, index, err);
 }
 

@@ -185,6 +185,14 @@ static void test_metallic_halves(void)
     CHECK(tl > 0.0 && fabs(tl - pl) <= 1e-4 * pl, "metallic 0 half %g = the plastic %g", tl, pl);
     CHECK(tr > 0.0 && fabs(tr - cr) <= 1e-3 * cr, "metallic 1 half %g = the conductor %g", tr, cr);
     CHECK(fabs(pl - cr) > 0.05 * pl, "the two halves differ (%g, %g): the test can tell them apart", pl, cr);
+    /* the blend is linear in metallic: m = 0.5 renders the mean of the two (the sampling differs, so
+     * within the noise of 128 samples per pixel over 18 x 20 pixels) */
+    const char *half = "{\"type\": \"plastic\", \"kd\": [0.8, 0.5, 0.2], \"alpha\": 0.2, \"metallic\": 0.5}";
+    double h = render_mean("tx_metal_half", "tx_plane", half, lights, IC_INTEGRATOR_PT, 128, 3, 21);
+    double p2 = render_mean("tx_metal_pl", "tx_plane", plastic, lights, IC_INTEGRATOR_PT, 128, 3, 21);
+    double c2 = render_mean("tx_metal_co", "tx_plane", conductor, lights, IC_INTEGRATOR_PT, 128, 3, 21);
+    CHECK(fabs(h - 0.5 * (p2 + c2)) < 0.01 * h, "metallic 0.5: %g, the mean of plastic and conductor %g", h,
+          0.5 * (p2 + c2));
 }
 
 /* Lambert radiance of the floor (kd 0.5) lit by a sun from direction sun_dir alone, normal-mapped by g_tilt. */
