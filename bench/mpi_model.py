@@ -28,9 +28,11 @@ same threads:
   - imbalance: a rank's share of a pass is m = n_p / N records (rounded up), and its cost the sum of m
     record costs of relative spread --record-cv; the slowest of N ranks takes about
     1 + cv sqrt(2 ln N) / sqrt(m) times the mean (the expected maximum of N normal sums), pass by pass;
-    likewise for the final render's tiles (m = tiles / N, --tile-cv). Interleaving (record i and tile t on
+    likewise for the adaptive pilot's tiles (m = tiles / N, --tile-cv). Interleaving (record i and tile t on
     rank i mod N, t mod N) makes neighbouring, alike-costing work land on different ranks, so the sums
-    are near independent draws.
+    are near independent draws. The second adaptive pass (three quarters of the samples) is shared out by
+    measured cost (longest first to the least loaded rank): its slowest rank is over the mean by at most
+    one tile (--interleaved-final models it interleaved like the pilot).
 
 Efficiency E(N) = T_1 / (N T_N). Python 3 standard library only.
 """
@@ -79,6 +81,9 @@ def main():
                     help="share of the candidates phase every rank does alike (clustering, dithering)")
     ap.add_argument("--record-cv", type=float, default=0.5, help="relative spread of one record's gathering cost")
     ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
+    ap.add_argument("--interleaved-final", action="store_true",
+                    help="model the final render's tiles all interleaved (before the second adaptive pass was "
+                         "shared out by cost)")
     a = ap.parse_args()
 
     one = [load(p) for p in sorted(glob.glob(os.path.join(a.runs, "1x2-*.json")))]
@@ -138,6 +143,11 @@ def main():
         imb_g = sum(p * math.ceil(p / n) / (p / n) * (1 + a.record_cv * z / math.sqrt(math.ceil(p / n)))
                     for p in passes) / sum(passes)
         imb_f = math.ceil(tiles / n) / (tiles / n) * (1 + a.tile_cv * z / math.sqrt(math.ceil(tiles / n)))
+        if not a.interleaved_final:
+            # The pilot (a quarter of the samples) stays interleaved; the rest is shared out by cost, longest
+            # tile first to the least loaded rank, whose excess is at most one tile (taken as 1 + 3 cv times
+            # the mean tile) over a mean load of tiles / N tiles.
+            imb_f = 0.25 * imb_f + 0.75 * (1 + (1 + 3 * a.tile_cv) / (tiles / n))
         share = (n - 1) / n
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 +
                   px * (4 + 3) * 8 * 2 * share)
