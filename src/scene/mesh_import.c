@@ -11,9 +11,9 @@
  * - OBJ/MTL (and other Phong-style formats): illum 4/6/7, or d < 1 with Ni > 1, is glass (ior Ni);
  *   illum 3/5 with Ks > 0 and Ns >= 10000 is a mirror tinted Ks; Ks > 0 and Ns > 0 is glossy
  *   (Lambert Kd + normalized modified Phong Ks, exponent Ns); otherwise diffuse. Ke is emission.
- * - glTF: base colour (factor × texture), metallic m and roughness r: kd = base (1 - m),
- *   ks = mix(0.04, base, m), Phong exponent n = 2/α² - 2 with α = r², clamped to [1, 10000]; a
- *   metal (m > 0.5) with n at the clamp is a mirror; KHR_materials_transmission > 0 is glass;
+ * - glTF: base colour (factor × texture), metallic m and roughness r on the GGX models (α = r²):
+ *   m = 1 a rough conductor, else a rough plastic blended with the conductor by m (convert_gltf);
+ *   KHR_materials_transmission > 0 is glass;
  *   emission = emissiveFactor × KHR_materials_emissive_strength; doubleSided emits both ways.
  *   (assimp 5.2 drops KHR_materials_emissive_strength, so we read it from the file's JSON ourselves.)
  *
@@ -490,9 +490,11 @@ static float *gltf_emissive_strengths(const mesh_source *src, unsigned count)
     return out;
 }
 
-/* glTF's metallic-roughness material on the microfacet models: a metal (metallic ≥ 0.5) is a rough
- * conductor with F0 = base colour, anything else a rough plastic with base kd = base colour under a coat
- * of index ior (F0 = 0.04 at the default 1.5); GGX α = roughness² (the glTF specification's appendix B). */
+/* glTF's metallic-roughness material on the microfacet models: a metal (metallic 1) is a rough
+ * conductor with F0 = base colour, a dielectric (metallic 0) a rough plastic with base kd = base colour
+ * under a coat of index ior (F0 = 0.04 at the default 1.5), and metallic m in between the plastic blended
+ * with the conductor, (1 − m)·plastic + m·conductor; GGX α = roughness² (the glTF specification's
+ * appendix B). */
 static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_material *m)
 {
     ic_vec3 base = color_or(am, "$clr.base", color_or(am, "$clr.diffuse", v3s(1.0f)));
@@ -510,12 +512,13 @@ static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_ma
     if (transmission > 0.0f) {
         m->type = m->alpha > 0.0f ? IC_MAT_ROUGH_GLASS : IC_MAT_GLASS;
         m->ks = v3s(1.0f);
-    } else if (metal >= 0.5f) {
+    } else if (metal >= 1.0f) {
         m->type = IC_MAT_CONDUCTOR;
         m->ks = m->kd;
     } else {
         m->type = IC_MAT_PLASTIC;
         m->ks = v3s(1.0f);
+        m->metallic = metal;
     }
 }
 

@@ -360,6 +360,20 @@ static void test_gltf(void)
     snprintf(plain, sizeof plain, "{\"name\": \"m\", %s}}", pbr);
     double a = gltf_mean("tx_gltf_mr", textured, NULL), b = gltf_mean("tx_gltf_plain", plain, NULL);
     CHECK(a > 0.0 && fabs(a - b) <= 1e-4 * b, "glTF metallicRoughnessTexture of metallic 1: %g, the conductor %g", a, b);
+    /* A constant metallic factor between 0 and 1 blends the plastic and the conductor linearly (the
+     * specification's mix), not rounded to either; the same light samples make the three renders agree
+     * to float rounding. */
+    double mix[3];
+    for (int k = 0; k < 3; ++k) {
+        char mat[512], name[64];
+        snprintf(mat, sizeof mat, "{\"name\": \"m\", \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.8, 0.5, 0.2, 1], "
+                 "\"roughnessFactor\": 0.5, \"metallicFactor\": %s}}", k == 0 ? "0" : k == 1 ? "0.25" : "1");
+        snprintf(name, sizeof name, "tx_gltf_metal%d", k);
+        mix[k] = gltf_mean(name, mat, NULL);
+    }
+    double lin = 0.75 * mix[0] + 0.25 * mix[2];
+    CHECK(mix[0] > 0.0 && fabs(mix[0] - mix[2]) > 0.05 * mix[2] && fabs(mix[1] - lin) <= 0.01 * lin,
+          "glTF metallicFactor 0.25: %g, the blend of plastic %g and conductor %g is %g", mix[1], mix[0], mix[2], lin);
     /* the normal map tilts 30° towards +u = +x, the sun stands 30° from the zenith towards +x */
     const char *grey = "{\"name\": \"m\", \"pbrMetallicRoughness\": {\"metallicFactor\": 0}";
     char mapped[512], flat[512];
