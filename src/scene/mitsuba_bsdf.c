@@ -83,10 +83,24 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
     const char *base = rough ? type + 5 : type;
     if (rough) {
         xmlNode *a = ic_mts_child(c, n, NULL, "alpha");
-        if (a && !ic_mts_is_element(a, "float"))
-            ic_mts_warn_once(c, a, "a textured roughness", "is not supported: alpha 0.1 is used");
-        else
+        if (ic_mts_is_element(a, "ref"))
+            a = (xmlNode *)ic_mts_find_by_id(c, "texture", ic_mts_attr(c, a, "id") ? ic_mts_attr(c, a, "id") : "");
+        if (a && !ic_mts_is_element(a, "float")) {
+            /* a bitmap of α per texel (its luminance, read as values) */
+            int32_t index = -1;
+            int loaded = 0;
+            r = ic_mts_is_element(a, "texture") ? ic_mts_texture(c, a, 1, &index, &loaded) : IC_OK;
+            if (r == IC_OK && loaded) {
+                m->roughness_texture = index + 1;
+                m->roughness_is_alpha = 1;
+                m->alpha = 1.0f;
+            } else if (r == IC_OK) {
+                ic_mts_warn_once(c, a, "a roughness texture other than a bitmap", "is not supported: alpha 0.1 is used");
+                m->alpha = 0.1f;
+            }
+        } else {
             r = ic_mts_float(c, n, "alpha", 0.1f, &m->alpha);
+        }
         const char *dist = ic_mts_string(c, n, "distribution");
         if (r == IC_OK && dist && strcmp(dist, "ggx"))
             ic_mts_warn_once(c, n, "a microfacet distribution other than GGX", "is rendered as GGX of the same alpha");

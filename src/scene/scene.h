@@ -72,7 +72,9 @@ typedef struct ic_material {
     /* textures of the microfacet parameters and the shading normal (scene_query.c), each 1 + the index
      * into scene.textures and 0 for none, so that a zeroed material has none: */
     float metallic;        /* plastic: blend towards a Schlick conductor of F0 = kd (glTF's metallic), 0..1 */
-    int32_t roughness_texture; /* its green channel g scales the roughness: α = alpha·g² (glTF's rule) */
+    int32_t roughness_texture; /* its green channel g scales the roughness: α = alpha·g² (glTF's rule), or
+                              with roughness_is_alpha its luminance y is α itself: α = alpha·y (Mitsuba's) */
+    int roughness_is_alpha;
     int32_t metallic_texture;  /* its blue channel b scales metallic: metallic·b (plastic only) */
     int32_t normal_texture;    /* tangent-space normal map (+x along u, +y along v, +z the shading normal) */
     float normal_scale;    /* glTF's normalTexture.scale: the map's x and y are multiplied by it */

@@ -180,9 +180,12 @@ void ic_scene_microfacet_params(const ic_scene *scene, const ic_surface *s, floa
     *metallic = m->metallic;
     if (!isfinite(s->uv[0]) || !isfinite(s->uv[1]))
         return;
-    if (m->roughness_texture > 0) { /* glTF: roughness = factor × g, α = roughness² */
-        float g = texture_lookup(&scene->textures[m->roughness_texture - 1], s->uv[0], s->uv[1]).y;
-        *alpha = m->alpha * g * g;
+    if (m->roughness_texture > 0) {
+        ic_vec3 t = texture_lookup(&scene->textures[m->roughness_texture - 1], s->uv[0], s->uv[1]);
+        if (m->roughness_is_alpha) /* Mitsuba: the texture is α */
+            *alpha = fminf(m->alpha * (0.2126f * t.x + 0.7152f * t.y + 0.0722f * t.z), 1.0f);
+        else /* glTF: roughness = factor × g, α = roughness² */
+            *alpha = m->alpha * t.y * t.y;
     }
     if (m->metallic_texture > 0)
         *metallic = m->metallic * texture_lookup(&scene->textures[m->metallic_texture - 1], s->uv[0], s->uv[1]).z;

@@ -387,29 +387,58 @@ static void test_gltf(void)
           want * cos(PI_F / 6.0));
 }
 
-static void test_mitsuba(void)
+/* The mean of the middle of a Mitsuba scene: the plane tx_plane.obj with `bsdf` under a sun 30° from the
+ * zenith, seen from above. */
+static double mitsuba_mean(const char *name, const char *bsdf)
 {
-    char xml[2048];
+    char xml[2048], path[256];
     snprintf(xml, sizeof xml,
              "<scene version=\"0.6.0\">\n"
              "  <sensor type=\"perspective\"><float name=\"fov\" value=\"60\"/>\n"
              "    <transform name=\"toWorld\"><lookat origin=\"0, 1, 0\" target=\"0, 0, 0\" up=\"0, 0, -1\"/></transform>\n"
              "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"24\"/><integer name=\"height\" value=\"24\"/></film>\n"
              "  </sensor>\n"
-             "  <shape type=\"obj\"><string name=\"filename\" value=\"tx_plane.obj\"/>\n"
-             "    <bsdf type=\"normalmap\"><texture name=\"normalmap\" type=\"bitmap\">"
-             "<string name=\"filename\" value=\"tx_tilt_u.pfm\"/></texture>\n"
-             "      <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/></bsdf></bsdf></shape>\n"
+             "  <shape type=\"obj\"><string name=\"filename\" value=\"tx_plane.obj\"/>\n    %s</shape>\n"
              "  <emitter type=\"directional\"><vector name=\"direction\" x=\"-0.5\" y=\"-0.8660254\" z=\"0\"/>"
              "<rgb name=\"irradiance\" value=\"2\"/></emitter>\n"
-             "</scene>\n");
-    test_write_file(IC_TEST_TMP "/tx_mitsuba.xml", xml);
+             "</scene>\n", bsdf);
+    snprintf(path, sizeof path, IC_TEST_TMP "/%s.xml", name);
+    test_write_file(path, xml);
     ic_image img = {0};
-    double want = 0.5 / PI_F * 2.0, m = -1.0;
-    if (render(IC_TEST_TMP "/tx_mitsuba.xml", IC_INTEGRATOR_PT, 1, 1, &img))
+    double m = -1.0;
+    if (render(path, IC_INTEGRATOR_PT, 1, 1, &img))
         m = region_mean(&img, 4, 20, 1);
     ic_image_free(&img);
+    return m;
+}
+
+static void tex_alpha_03(int x, int y, int w, float c[3]) /* Mitsuba: α = 0.3 in every texel */
+{
+    (void)x, (void)y, (void)w;
+    c[0] = c[1] = c[2] = 0.3f;
+}
+
+static void test_mitsuba(void)
+{
+    double m = mitsuba_mean("tx_mitsuba",
+                            "<bsdf type=\"normalmap\"><texture name=\"normalmap\" type=\"bitmap\">"
+                            "<string name=\"filename\" value=\"tx_tilt_u.pfm\"/></texture>\n"
+                            "      <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/></bsdf></bsdf>");
+    double want = 0.5 / PI_F * 2.0;
     CHECK(fabs(m - want) < 1e-4 * want, "Mitsuba normalmap turns the normal to the sun: %g (expected %g)", m, want);
+    /* A bitmap as a rough conductor's alpha is α itself (Mitsuba's convention, not glTF's roughness²). */
+    write_texture(IC_TEST_TMP "/tx_alpha.pfm", 4, 4, tex_alpha_03);
+    const char *conductor = "<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/>"
+                            "<rgb name=\"specularReflectance\" value=\"0.9\"/>%s</bsdf>";
+    char a_tex[512], a_03[512], a_01[512];
+    snprintf(a_tex, sizeof a_tex, conductor,
+             "<texture name=\"alpha\" type=\"bitmap\"><string name=\"filename\" value=\"tx_alpha.pfm\"/></texture>");
+    snprintf(a_03, sizeof a_03, conductor, "<float name=\"alpha\" value=\"0.3\"/>");
+    snprintf(a_01, sizeof a_01, conductor, "<float name=\"alpha\" value=\"0.1\"/>");
+    double t = mitsuba_mean("tx_mts_alpha_tex", a_tex), f = mitsuba_mean("tx_mts_alpha_03", a_03),
+           g = mitsuba_mean("tx_mts_alpha_01", a_01);
+    CHECK(t > 0.0 && fabs(t - f) <= 1e-4 * f && fabs(g - f) > 0.05 * f,
+          "Mitsuba bitmap alpha 0.3: %g, float alpha 0.3: %g (alpha 0.1: %g)", t, f, g);
 }
 
 static void test_bad_textures(void)
