@@ -47,7 +47,9 @@ static glossy_pts first_hits(const ic_ctx *c)
         fail("out of memory");
     for (int y = 0; y < cam->height; ++y)
         for (int x = 0; x < cam->width; ++x) {
-            ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
+            ic_ray ray;
+            if (!ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, &ray))
+                continue;
             ic_hit hit;
             ic_accel_intersect1(c->tr->accel, &ray, &hit);
             if (hit.triangle == IC_NO_HIT)

@@ -156,7 +156,7 @@ int main(int argc, char **argv)
     ic_hit *hits = malloc(n * sizeof *hits);
     for (int y = 0; y < cam->height; ++y)
         for (int x = 0; x < cam->width; ++x)
-            cam_rays[(size_t)y * cam->width + x] = ic_camera_ray(cam, x + 0.5f, y + 0.5f);
+            (void)ic_camera_ray(cam, x + 0.5f, y + 0.5f, &cam_rays[(size_t)y * cam->width + x]);
     /* Hemisphere rays: 16 cosine-distributed rays from each of n/16 primary hit points, in gather order. */
     ic_accel_intersect_n(accel, cam_rays, hits, (uint32_t)n, 1);
     size_t m = 0;

@@ -96,7 +96,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(CAMERA, "--camera", NULL, IC_OPT_STRING, load.camera, 0, 0, "NAME", NAN, "the file's first", "", \
       IC_SCOPE_ALL, "a glTF scene's camera to render from, by its node's or its own name (glTF files only)") \
     X(VIEW, "--view", NULL, IC_OPT_STRING, load.view, 0, 0, "FILE.vf", NAN, "a fitted camera", "", IC_SCOPE_ALL, \
-      "a Radiance view file to render a .rad scene from (rview/rpict options; perspective -vtv only)") \
+      "a Radiance view file to render a .rad scene from (rview/rpict options -vt -vp -vd -vu -vh -vv -vs -vl -vo)") \
     X(MAX_TEXTURE_PIXELS, "--max-texture-pixels", NULL, IC_OPT_INT, load.max_texture_pixels, 1, 1 << 28, "N", \
       IC_DEFAULT_MAX_TEXTURE_PIXELS, "67108864 (8192 x 8192)", "px", IC_SCOPE_ALL, "largest texture or " \
       "environment map accepted, checked from the file's header before it is read (at most 2^28)") \

@@ -36,22 +36,163 @@ static camera_basis basis_of(const ic_camera *c)
     return b;
 }
 
-ic_ray ic_camera_ray(const ic_camera *cam, float fx, float fy)
+/* The ray of the non-perspective projections through centred image coordinates (x, y) (+y up), in the
+ * camera frame: forward, right, up components of the direction (not normalised for the cylinder, whose
+ * fore clipping is along the axis), and for the parallel view the origin's offset. 0 outside the image's
+ * projection (a fisheye's circle). After Radiance's image.c (Larson & Shakespeare 1998). */
+static int local_ray(const ic_camera *c, double x, double y, double d[3], double o[2])
 {
-    camera_basis b = basis_of(cam);
-    float sx = (2.0f * fx / (float)cam->width - 1.0f) * b.tan_half_y * b.aspect;
-    float sy = (1.0f - 2.0f * fy / (float)cam->height) * b.tan_half_y;
-    ic_ray r;
-    r.org = b.eye;
-    r.dir = v3_norm(v3_add(b.forward, v3_add(v3_scale(b.right, sx), v3_scale(b.up, sy))));
-    r.tnear = 0.0f;
-    r.tfar = INFINITY;
-    return r;
+    double a = x * ic_projection_extent(c->projection, c->size_x, 1), b = y * ic_projection_extent(c->projection, c->size_y, 0);
+    o[0] = o[1] = 0.0;
+    switch (c->projection) {
+    case IC_PROJECTION_PARALLEL:
+        o[0] = a, o[1] = b;
+        d[0] = 1.0, d[1] = d[2] = 0.0;
+        return 1;
+    case IC_PROJECTION_HEMISPHERICAL: { /* (a, b) is the direction's projection onto the image plane */
+        double z2 = 1.0 - a * a - b * b;
+        if (z2 < 0.0)
+            return 0;
+        d[0] = sqrt(z2), d[1] = a, d[2] = b;
+        return 1;
+    }
+    case IC_PROJECTION_ANGULAR: { /* the radius is the angle from the axis over π */
+        double r = sqrt(a * a + b * b);
+        if (r > 1.0)
+            return 0;
+        double s = r > 1e-9 ? sin(3.14159265358979323846 * r) / r : 3.14159265358979323846;
+        d[0] = cos(3.14159265358979323846 * r), d[1] = a * s, d[2] = b * s;
+        return 1;
+    }
+    case IC_PROJECTION_CYLINDRICAL: /* a is the azimuth in radians, b the height on a unit-distance wall */
+        d[0] = cos(a), d[1] = sin(a), d[2] = b;
+        return 1;
+    default: { /* stereographic: the radius is tan(θ/2), so cos θ = (1 − r²)/(1 + r²), sin θ = r (1 + cos θ) */
+        double r2 = a * a + b * b, z = (1.0 - r2) / (1.0 + r2);
+        d[0] = z, d[1] = a * (1.0 + z), d[2] = b * (1.0 + z);
+        return 1;
+    }
+    }
 }
 
-float ic_camera_pixel_angle(const ic_camera *cam)
+int ic_camera_ray(const ic_camera *cam, float fx, float fy, ic_ray *ray)
+{
+    camera_basis b = basis_of(cam);
+    ray->tnear = 0.0f;
+    ray->tfar = INFINITY;
+    if (cam->projection == IC_PROJECTION_PERSPECTIVE) {
+        float sx = (2.0f * fx / (float)cam->width - 1.0f + 2.0f * cam->shift) * b.tan_half_y * b.aspect;
+        float sy = (1.0f - 2.0f * fy / (float)cam->height + 2.0f * cam->lift) * b.tan_half_y;
+        ic_vec3 dir = v3_add(b.forward, v3_add(v3_scale(b.right, sx), v3_scale(b.up, sy)));
+        ray->org = cam->clip_near > 0.0f ? v3_add(b.eye, v3_scale(dir, cam->clip_near)) : b.eye;
+        ray->dir = v3_norm(dir);
+        return 1;
+    }
+    double x = (double)fx / cam->width - 0.5 + cam->shift, y = 0.5 - (double)fy / cam->height + cam->lift;
+    double d[3], o[2];
+    if (!local_ray(cam, x, y, d, o)) {
+        ray->org = b.eye;
+        ray->dir = b.forward;
+        return 0;
+    }
+    ic_vec3 dir = v3_add(v3_scale(b.forward, (float)d[0]),
+                         v3_add(v3_scale(b.right, (float)d[1]), v3_scale(b.up, (float)d[2])));
+    ray->org = v3_add(b.eye, v3_add(v3_scale(b.right, (float)o[0]), v3_scale(b.up, (float)o[1])));
+    ray->org = v3_add(ray->org, v3_scale(dir, cam->clip_near));
+    ray->dir = v3_norm(dir);
+    return 1;
+}
+
+/* Width of one pixel's footprint at distance 1 along the view axis of a perspective camera. */
+static float pixel_angle(const ic_camera *cam)
 {
     return 2.0f * tanf(0.5f * cam->fov_y_deg * IC_PI / 180.0f) / (float)cam->height;
+}
+
+/* The angle between the rays through two film positions (0 when either is outside the image). */
+static float ray_angle(const ic_camera *cam, float fx0, float fy0, float fx1, float fy1)
+{
+    ic_ray a, b;
+    if (!ic_camera_ray(cam, fx0, fy0, &a) || !ic_camera_ray(cam, fx1, fy1, &b))
+        return 0.0f;
+    return 2.0f * asinf(fminf(1.0f, 0.5f * v3_len(v3_sub(a.dir, b.dir))));
+}
+
+float ic_camera_footprint(const ic_camera *cam, float fx, float fy, float t)
+{
+    if (cam->projection == IC_PROJECTION_PERSPECTIVE)
+        return t * pixel_angle(cam);
+    if (cam->projection == IC_PROJECTION_PARALLEL)
+        return cam->size_y / (float)cam->height;
+    /* The local angle across one pixel, by central differences (one-sided at a fisheye's rim), the
+     * geometric mean of the horizontal and vertical ones (pixels of these projections are not square in
+     * angle: a fisheye's narrow radially near its rim). */
+    float ax = ray_angle(cam, fx - 0.5f, fy, fx + 0.5f, fy), ay = ray_angle(cam, fx, fy - 0.5f, fx, fy + 0.5f);
+    if (ax == 0.0f)
+        ax = 2.0f * fmaxf(ray_angle(cam, fx - 0.5f, fy, fx, fy), ray_angle(cam, fx, fy, fx + 0.5f, fy));
+    if (ay == 0.0f)
+        ay = 2.0f * fmaxf(ray_angle(cam, fx, fy - 0.5f, fx, fy), ray_angle(cam, fx, fy, fx, fy + 0.5f));
+    float a = ax > 0.0f && ay > 0.0f ? sqrtf(ax * ay) : fmaxf(ax, ay);
+    return (t + cam->clip_near) * a;
+}
+
+int ic_camera_project(const ic_camera *cam, ic_vec3 p, float *fx, float *fy, float *depth)
+{
+    camera_basis b = basis_of(cam);
+    ic_vec3 d = v3_sub(p, b.eye);
+    if (cam->projection == IC_PROJECTION_PERSPECTIVE) { /* in float, as the records' views always were */
+        float z = v3_dot(d, b.forward);
+        if (z <= 0.0f)
+            return 0;
+        float sx = v3_dot(d, b.right) / (z * b.tan_half_y * b.aspect), sy = v3_dot(d, b.up) / (z * b.tan_half_y);
+        *fx = (sx + 1.0f - 2.0f * cam->shift) * 0.5f * (float)cam->width;
+        *fy = (1.0f - sy + 2.0f * cam->lift) * 0.5f * (float)cam->height;
+        *depth = z; /* the footprint of perspective pixels grows with the depth */
+        return 1;
+    }
+    double f = v3_dot(d, b.forward), r = v3_dot(d, b.right), u = v3_dot(d, b.up), x, y;
+    double len = sqrt(f * f + r * r + u * u);
+    double ex = ic_projection_extent(cam->projection, cam->size_x, 1);
+    double ey = ic_projection_extent(cam->projection, cam->size_y, 0);
+    if (!(len > 0.0))
+        return 0;
+    double cf = f / len, cr = r / len, cu = u / len;
+    *depth = (float)len;
+    switch (cam->projection) {
+    case IC_PROJECTION_PARALLEL:
+        if (f <= 0.0)
+            return 0;
+        x = r / ex, y = u / ey;
+        *depth = (float)f;
+        break;
+    case IC_PROJECTION_HEMISPHERICAL:
+        if (cf < 0.0)
+            return 0;
+        x = cr / ex, y = cu / ey;
+        break;
+    case IC_PROJECTION_ANGULAR: {
+        double s = sqrt(cr * cr + cu * cu), th = atan2(s, cf) / 3.14159265358979323846;
+        double k = s > 1e-12 ? th / s : 0.0;
+        x = cr * k / ex, y = cu * k / ey;
+        break;
+    }
+    case IC_PROJECTION_CYLINDRICAL: {
+        double h = sqrt(cf * cf + cr * cr);
+        if (!(h > 0.0))
+            return 0;
+        x = atan2(cr, cf) / ex, y = cu / h / ey;
+        break;
+    }
+    default:
+        if (cf <= -1.0 + 1e-12)
+            return 0;
+        x = cr / (1.0 + cf) / ex, y = cu / (1.0 + cf) / ey;
+        break;
+    }
+    *depth -= cam->clip_near;
+    *fx = (float)((x + 0.5 - cam->shift) * cam->width);
+    *fy = (float)((0.5 - y + cam->lift) * cam->height);
+    return 1;
 }
 
 /* Tent filter of radius 1 pixel, sampled exactly (filter importance sampling): offset in [-1, 1]. */
@@ -150,8 +291,10 @@ static void render_tile(void *p, int64_t item, int thread)
                 ic_rng_2d(&rng, &u, &v);
                 float fx = (float)x + 0.5f + tent_sample(u);
                 float fy = (float)y + 0.5f + tent_sample(v);
-                ic_ray ray = ic_camera_ray(cam, fx, fy);
-                ic_vec3 L = c->fn(c->user, &ray, pixel, &rng, thread, &rays);
+                ic_ray ray;
+                /* Outside a fisheye's circle the image is black, as Radiance leaves it. */
+                ic_vec3 L = ic_camera_ray(cam, fx, fy, &ray) ? c->fn(c->user, &ray, pixel, &rng, thread, &rays)
+                                                            : v3s(0.0f);
                 /* A NaN or Inf sample would poison the pixel forever: drop it. */
                 if (v3_is_finite(L)) {
                     sum[0] += L.x;

@@ -56,10 +56,19 @@ typedef struct ic_image_loop_result {
     double completed;      /* share of the tiles rendered (0 for the one-sample preview) */
 } ic_image_loop_result;
 
-/* Primary ray through film position (fx, fy) in pixels (0,0 = top-left corner). */
-ic_ray ic_camera_ray(const ic_camera *cam, float fx, float fy);
-/* Width of one pixel's footprint at distance 1 along the view axis (for pixel-sized radii). */
-float ic_camera_pixel_angle(const ic_camera *cam);
+/* Primary ray through film position (fx, fy) in pixels (0,0 = top-left corner), of the camera's
+ * projection. Returns 0 (and a ray that must not be traced) where the position lies outside what the
+ * projection covers: outside a fisheye's circle, whose pixels are black. */
+int ic_camera_ray(const ic_camera *cam, float fx, float fy, ic_ray *ray);
+/* World-space width of the pixel at film position (fx, fy) at distance t along its ray (for pixel-sized
+ * radii): t · pixel angle for perspective (as the cache always measured it), the constant pixel width of a
+ * parallel view, and for the other projections the local angle across that pixel (the geometric mean of
+ * the horizontal and vertical ones) times the distance. */
+float ic_camera_footprint(const ic_camera *cam, float fx, float fy, float t);
+/* Film position of world point p, and the distance at which to evaluate ic_camera_footprint there (the
+ * depth along the axis for perspective and parallel views, the distance from the eye otherwise). Returns 0
+ * if the projection does not see p (behind the camera, or behind a hemispherical fisheye). */
+int ic_camera_project(const ic_camera *cam, ic_vec3 p, float *fx, float *fy, float *depth);
 
 /* Renders into out (allocated here, width×height of the camera). */
 ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *ctx, ic_image *out,

@@ -118,8 +118,10 @@ typedef struct adaptive {
 static int surface_at_pixel(const ic_ctx *c, uint32_t pixel, ic_surface *s, ic_bsdf *b, ic_vec3 *wo, uint64_t *rays)
 {
     const ic_camera *cam = &c->tr->scene->camera;
-    ic_ray ray = ic_camera_ray(cam, (float)(pixel % (uint32_t)cam->width) + 0.5f,
-                               (float)(pixel / (uint32_t)cam->width) + 0.5f);
+    ic_ray ray;
+    if (!ic_camera_ray(cam, (float)(pixel % (uint32_t)cam->width) + 0.5f, (float)(pixel / (uint32_t)cam->width) + 0.5f,
+                       &ray))
+        return 0;
     return ic_ic_shading_point(c->tr, ray, s, b, wo, NULL, rays);
 }
 

@@ -7,23 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int project(const ic_camera *cam, ic_vec3 p, float *fx, float *fy, float *depth)
-{
-    ic_vec3 fwd = v3_norm(v3_sub(cam->target, cam->eye));
-    ic_vec3 right = v3_norm(v3_cross(fwd, cam->up));
-    ic_vec3 up = v3_cross(right, fwd);
-    ic_vec3 d = v3_sub(p, cam->eye);
-    float z = v3_dot(d, fwd);
-    if (z <= 0.0f)
-        return 0;
-    float th = tanf(0.5f * cam->fov_y_deg * IC_PI / 180.0f), aspect = (float)cam->width / (float)cam->height;
-    float sx = v3_dot(d, right) / (z * th * aspect), sy = v3_dot(d, up) / (z * th);
-    *fx = (sx + 1.0f) * 0.5f * (float)cam->width;
-    *fy = (1.0f - sy) * 0.5f * (float)cam->height;
-    *depth = z;
-    return 1;
-}
-
 static void put(ic_image *img, int x, int y, ic_vec3 c)
 {
     if (x < 0 || y < 0 || x >= img->width || y >= img->height)
@@ -50,9 +33,9 @@ static ic_record_view view_of(const ic_ctx *c, const ic_record *rec)
         v.ellipse_axis = rec->ellipse_axis;
     }
     float z;
-    if (!project(cam, rec->position, &v.px, &v.py, &z))
+    if (!ic_camera_project(cam, rec->position, &v.px, &v.py, &z))
         return v;
-    v.radius_px = rec->accuracy * rec->radius / (z * c->pixel_angle);
+    v.radius_px = rec->accuracy * rec->radius / ic_camera_footprint(cam, v.px, v.py, z);
     int px = (int)v.px, py = (int)v.py;
     if (px < 0 || py < 0 || px >= cam->width || py >= cam->height)
         return v;
@@ -88,7 +71,7 @@ static void draw_ellipse(const ic_ctx *c, ic_image *out, const ic_record *rec, c
     for (int k = 0; k < steps; ++k) {
         float t = 2.0f * IC_PI * (float)k / (float)steps, fx, fy, z;
         ic_vec3 q = v3_add(rec->position, v3_add(v3_scale(w, major * cosf(t)), v3_scale(u, minor * sinf(t))));
-        if (project(cam, q, &fx, &fy, &z))
+        if (ic_camera_project(cam, q, &fx, &fy, &z))
             put(out, (int)fx, (int)fy, colour);
     }
 }

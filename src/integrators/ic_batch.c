@@ -58,12 +58,15 @@ static void world_path(void *p, int64_t own_item, int thread)
     if (y >= cam->height)
         y = cam->height - 1;
     uint32_t pixel = (uint32_t)(y * cam->width + x);
-    ic_ray ray = ic_camera_ray(cam, (float)x + ic_rng_float(&rng), (float)y + ic_rng_float(&rng));
+    ic_ray ray;
     ic_candidate *out = &j->slots[item * WORLD_SLOTS];
     int n = 0, smooth_hits = 0;
+    /* Outside a fisheye's circle the path ends before it starts. */
+    int bounce_end = ic_camera_ray(cam, (float)x + ic_rng_float(&rng), (float)y + ic_rng_float(&rng), &ray)
+                         ? MAX_SPECULAR_CHAIN : -1;
     float t_path = 0.0f; /* length of the path from the camera to this hit */
     uint64_t *rays = &j->rays[thread * PAD];
-    for (int bounce = 0; bounce <= MAX_SPECULAR_CHAIN && smooth_hits < WORLD_SLOTS; ++bounce) {
+    for (int bounce = 0; bounce <= bounce_end && smooth_hits < WORLD_SLOTS; ++bounce) {
         ic_hit hit;
         ++*rays;
         ic_accel_intersect1(c->tr->accel, &ray, &hit);
@@ -87,7 +90,7 @@ static void world_path(void *p, int64_t own_item, int thread)
                  * so this bounds the records from below without making them smaller than they may
                  * be). Without it, records seen in a glossy floor had no size floor and construction
                  * never converged there. */
-                out[n].footprint = t_path * c->pixel_angle;
+                out[n].footprint = ic_camera_footprint(cam, (float)x + 0.5f, (float)y + 0.5f, t_path);
                 out[n].key = ((uint64_t)pixel << 8) | (uint64_t)(0x80 | (j->pass & 0x1f) << 2 | (smooth_hits & 3));
                 ++n;
             }

@@ -102,7 +102,6 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     c->threads = ic_resolve_threads(opt->threads);
     c->comm = opt->comm;
     c->cancel = opt->cancel;
-    c->pixel_angle = ic_camera_pixel_angle(&tr->scene->camera);
     atomic_init(&c->rays, 0);
     resolve_options(c, &opt->ic, tr->scene);
     float sel_sum = tr->scene->light_select.tri + tr->scene->light_select.point;

@@ -54,16 +54,17 @@ static void gbuffer_row(void *p, int64_t y, int thread)
     const ic_camera *cam = &c->tr->scene->camera;
     for (int x = 0; x < cam->width; ++x) {
         size_t i = (size_t)y * cam->width + x;
-        ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
+        ic_ray ray;
         ic_surface s;
         ic_bsdf b;
         ic_vec3 wo;
         float t_primary = 0.0f;
-        c->g.valid[i] = (uint8_t)ic_ic_shading_point(c->tr, ray, &s, &b, &wo, &t_primary, &j->rays[thread * PAD]);
+        c->g.valid[i] = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, &ray) &&
+                        ic_ic_shading_point(c->tr, ray, &s, &b, &wo, &t_primary, &j->rays[thread * PAD]);
         if (c->g.valid[i]) {
             c->g.p[i] = s.p;
             c->g.n[i] = b.cache_n;
-            c->g.footprint[i] = t_primary * c->pixel_angle;
+            c->g.footprint[i] = ic_camera_footprint(cam, (float)x + 0.5f, (float)y + 0.5f, t_primary);
         }
     }
 }

@@ -38,7 +38,6 @@ typedef struct ic_ctx {
     ic_cache *cache;
     uint64_t seed;
     int threads;
-    float pixel_angle;
     float scene_diag;
     atomic_ullong rays;        /* gathering rays (added once per trace call) */
     ic_gbuffer g;

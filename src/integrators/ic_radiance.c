@@ -217,10 +217,12 @@ static void points_row(void *p, int64_t y, int thread)
     const ic_camera *cam = &c->tr->scene->camera;
     for (int x = 0; x < cam->width; ++x) {
         size_t i = (size_t)y * cam->width + x;
-        ic_ray ray = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f);
+        ic_ray ray;
+        j->g->valid[i] = j->g->gathered[i] = 0;
+        if (!ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, &ray))
+            continue;
         ic_hit hit;
         ic_accel_intersect1(c->tr->accel, &ray, &hit);
-        j->g->valid[i] = j->g->gathered[i] = 0;
         if (hit.triangle == IC_NO_HIT)
             continue;
         ic_surface s;
@@ -233,7 +235,7 @@ static void points_row(void *p, int64_t y, int thread)
         j->g->n[i] = b.frame.n;
         j->g->wo[i] = v3_neg(ray.dir);
         j->g->material[i] = s.material;
-        j->g->footprint[i] = hit.t * c->pixel_angle;
+        j->g->footprint[i] = ic_camera_footprint(cam, (float)x + 0.5f, (float)y + 0.5f, hit.t);
         j->g->valid[i] = 1;
     }
 }

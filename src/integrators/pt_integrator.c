@@ -41,11 +41,14 @@ static ic_vec3 pt_sample(void *self, const ic_ray *ray, uint32_t pixel, ic_rng *
         if (ic_pixel_lights_need_point(&p->lights, thread, pixel)) {
             const ic_camera *cam = &scene->camera;
             uint32_t a = ic_pixel_lights_anchor(&p->lights, pixel);
-            ic_ray centre = ic_camera_ray(cam, (float)(a % (uint32_t)cam->width) + 0.5f,
-                                          (float)(a / (uint32_t)cam->width) + 0.5f);
+            ic_ray centre;
             ic_hit hit;
-            ++*rays;
-            ic_accel_intersect1(p->tr->accel, &centre, &hit);
+            hit.triangle = IC_NO_HIT;
+            if (ic_camera_ray(cam, (float)(a % (uint32_t)cam->width) + 0.5f, (float)(a / (uint32_t)cam->width) + 0.5f,
+                              &centre)) {
+                ++*rays;
+                ic_accel_intersect1(p->tr->accel, &centre, &hit);
+            }
             if (hit.triangle != IC_NO_HIT) {
                 ic_surface s;
                 ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);

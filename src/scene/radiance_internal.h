@@ -66,7 +66,7 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out);
 
 /* Reads a Radiance view file (radiance_view.c): the camera it gives, at the resolution that fits
  * opt's width × height (else the defaults) with square pixels, as rpict does. Options other than the
- * view's are skipped; clipping planes are warned about into scene's warnings. */
+ * view's are skipped; the aft clipping distance is warned about into scene's warnings. */
 ic_result ic_rad_read_view(const char *path, const ic_scene_load_options *opt, ic_scene *scene, ic_error *err);
 
 #endif

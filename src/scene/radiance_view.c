@@ -2,14 +2,18 @@
  * radiance_view.c — the camera of a Radiance view file: its lines that start with rview, rpict or rvu (a
  * command line) or with VIEW= (a picture header), whose view options (Larson & Shakespeare 1998) apply in order:
  *
- *   -vtv perspective (the only type irrcache renders; -vtl -vta -vth -vtc -vts are refused), -vp eye,
- *   -vd direction, -vu up, -vh and -vv the full horizontal and vertical angles in degrees, -vs and -vl the
- *   view shift and lift (0 only: irrcache's camera looks through the image's centre), -vo and -va the
- *   clipping distances (warned about and ignored); -vf (a view from another file) is refused.
+ *   -vt the view type: v perspective, l parallel, h hemispherical fisheye, a angular fisheye, c cylindrical
+ *   panorama, s planisphere (stereographic fisheye); -vp eye, -vd direction, -vu up, -vh and -vv the full
+ *   horizontal and vertical view sizes (degrees; world units for a parallel view), -vs and -vl the view
+ *   shift and lift (the image plane moved by these fractions of its width and height), -vo the fore
+ *   clipping distance (rays start that far out), -va the aft clipping distance (warned about and
+ *   ignored); -vf (a view from another file) is refused.
  *
  * Other options on those lines (rpict's -x, -ab, ...) are skipped. Radiance's defaults stand for what the
  * file leaves out: -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 45 -vv 45. As rpict does, the image is the largest that
- * fits the requested width × height with square pixels: the dimension the view's aspect does not fill shrinks.
+ * fits the requested width × height with square pixels: the dimension the view's aspect does not fill shrinks
+ * (the aspect is that of the image plane: ic_projection_extent). A perspective view keeps -vv and takes its
+ * horizontal angle from that image's aspect, as irrcache's pinhole camera always has.
  */
 #include "scene/radiance_internal.h"
 
@@ -23,9 +27,35 @@
 
 typedef struct view {
     ic_vec3 vp, vd, vu;
-    double vh, vv, vs, vl;
-    int has_clip;
+    double vh, vv, vs, vl, vo, va;
+    char type;
 } view;
+
+/* The view types, their projections and the largest sizes Radiance accepts for them (degrees; is_open:
+ * the size must stay below it, as the projection's plane runs to infinity there). */
+static const struct {
+    char type;
+    ic_projection projection;
+    double max_size;
+    int is_open;
+    const char *what;
+} types[] = {
+    {'v', IC_PROJECTION_PERSPECTIVE, 180.0, 1, "perspective"},
+    {'l', IC_PROJECTION_PARALLEL, INFINITY, 1, "parallel"},
+    {'h', IC_PROJECTION_HEMISPHERICAL, 180.0, 0, "hemispherical fisheye"},
+    {'a', IC_PROJECTION_ANGULAR, 360.0, 0, "angular fisheye"},
+    {'c', IC_PROJECTION_CYLINDRICAL, 360.0, 0, "cylindrical panorama"},
+    {'s', IC_PROJECTION_STEREOGRAPHIC, 360.0, 1, "planisphere"},
+};
+enum { TYPE_COUNT = sizeof types / sizeof types[0] };
+
+static int type_index(char t)
+{
+    for (int k = 0; k < TYPE_COUNT; ++k)
+        if (types[k].type == t)
+            return k;
+    return -1;
+}
 
 static int numbers(char **words, int count, int at, int n, double *out)
 {
@@ -43,9 +73,6 @@ static int numbers(char **words, int count, int at, int n, double *out)
 /* Applies the view options among words[from..count) to v. */
 static ic_result options(const char *path, int line, char **words, int count, int from, view *v, ic_error *err)
 {
-    static const struct { char type; const char *what; } types[] = {
-        {'l', "parallel"}, {'a', "angular fisheye"}, {'h', "hemispherical fisheye"}, {'c', "cylindrical panorama"},
-        {'s', "planisphere (stereographic)"}};
     for (int i = from; i < count; ++i) {
         const char *o = words[i];
         if (o[0] != '-' || o[1] != 'v') /* another program option or its value */
@@ -53,15 +80,15 @@ static ic_result options(const char *path, int line, char **words, int count, in
         double x[3];
         const char *opt = o + 2;
         if (opt[0] == 't') {
-            if (opt[1] == 'v' && !opt[2])
+            if (opt[1] && !opt[2] && type_index(opt[1]) >= 0) {
+                v->type = opt[1];
                 continue;
-            for (size_t k = 0; k < sizeof types / sizeof types[0]; ++k)
-                if (opt[1] == types[k].type && !opt[2])
-                    return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                                        "%s:%d: %s is a %s view, which irrcache does not render; use a perspective "
-                                        "view (-vtv)",
-                                        path, line, o, types[k].what);
-            return ic_error_set(err, IC_ERR_PARSE, "%s:%d: unknown view type '%s'; use -vtv (perspective)", path, line, o);
+            }
+            return ic_error_set(err, IC_ERR_PARSE,
+                                "%s:%d: unknown view type '%s'; the types are -vtv (perspective), -vtl (parallel), "
+                                "-vth and -vta (hemispherical and angular fisheye), -vtc (cylindrical) and -vts "
+                                "(planisphere)",
+                                path, line, o);
         }
         int n3 = !strcmp(opt, "p") || !strcmp(opt, "d") || !strcmp(opt, "u");
         int n1 = !strcmp(opt, "h") || !strcmp(opt, "v") || !strcmp(opt, "s") || !strcmp(opt, "l") ||
@@ -89,7 +116,8 @@ static ic_result options(const char *path, int line, char **words, int count, in
         case 'v': v->vv = x[0]; break;
         case 's': v->vs = x[0]; break;
         case 'l': v->vl = x[0]; break;
-        default: v->has_clip |= x[0] != 0.0; break; /* -vo, -va */
+        case 'o': v->vo = x[0]; break;
+        default: v->va = x[0]; break;
         }
     }
     return IC_OK;
@@ -103,7 +131,7 @@ ic_result ic_rad_read_view(const char *path, const ic_scene_load_options *opt, i
                                        NULL, err);
     if (r != IC_OK)
         return r;
-    view v = {v3s(0.0f), v3(0.0f, 1.0f, 0.0f), v3(0.0f, 0.0f, 1.0f), 45.0, 45.0, 0.0, 0.0, 0};
+    view v = {v3s(0.0f), v3(0.0f, 1.0f, 0.0f), v3(0.0f, 0.0f, 1.0f), 45.0, 45.0, 0.0, 0.0, 0.0, 0.0, 'v'};
     int found = 0, line = 0, last_line = 0;
     char *words[256];
     for (char *s = text, *next; r == IC_OK && s && s < text + len; s = next) {
@@ -147,19 +175,29 @@ ic_result ic_rad_read_view(const char *path, const ic_scene_load_options *opt, i
         return ic_error_set(err, IC_ERR_INVALID_ARG,
                             "%s:%d: the view direction (-vd) must be non-zero and not parallel to the up vector (-vu)",
                             path, last_line);
-    if (!(v.vh > 0.0 && v.vh < 180.0 && v.vv > 0.0 && v.vv < 180.0))
+    const int k = type_index(v.type);
+    const double max = types[k].max_size;
+    if (!(v.vh > 0.0 && v.vv > 0.0 &&
+          (types[k].is_open ? v.vh < max && v.vv < max : v.vh <= max && v.vv <= max)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s:%d: -vh and -vv must be in (0, %g%s for a %s view (given %g and %g)",
+                            path, last_line, max, types[k].is_open ? ")" : "]", types[k].what, v.vh, v.vv);
+    if (types[k].projection == IC_PROJECTION_CYLINDRICAL && !(v.vv < 180.0))
         return ic_error_set(err, IC_ERR_INVALID_ARG,
-                            "%s:%d: -vh and -vv must be in (0, 180) degrees for a perspective view (given %g and %g)",
-                            path, last_line, v.vh, v.vv);
-    if (v.vs != 0.0 || v.vl != 0.0)
-        return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                            "%s:%d: a shifted or lifted view (-vs %g -vl %g) is not supported; irrcache's camera looks "
-                            "through the image's centre: use -vs 0 -vl 0",
+                            "%s:%d: -vv must be below 180 degrees for a cylindrical view (perspective up; given %g)",
+                            path, last_line, v.vv);
+    if (!(fabs(v.vs) <= 100.0 && fabs(v.vl) <= 100.0))
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "%s:%d: -vs and -vl are fractions of the image's width and height; give them within "
+                            "[-100, 100] (given %g and %g)",
                             path, last_line, v.vs, v.vl);
-    if (v.has_clip)
-        ic_scene_warn(scene, "%s:%d: the clipping distances -vo and -va are ignored", path, last_line);
-    double deg = 3.14159265358979323846 / 180.0;
-    double aspect = tan(0.5 * v.vh * deg) / tan(0.5 * v.vv * deg); /* width / height */
+    if (!(v.vo >= 0.0))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s:%d: the fore clipping distance -vo must be >= 0 (given %g)",
+                            path, last_line, v.vo);
+    if (v.va != 0.0)
+        ic_scene_warn(scene, "%s:%d: the aft clipping distance -va is ignored: everything beyond the fore plane is seen",
+                      path, last_line);
+    double aspect = ic_projection_extent(types[k].projection, v.vh, 1) / /* width / height */
+                    ic_projection_extent(types[k].projection, v.vv, 0);
     int w = opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH, h = opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT;
     if ((double)w / h > aspect)
         w = (int)fmax(1.0, floor(h * aspect + 0.5));
@@ -172,5 +210,11 @@ ic_result ic_rad_read_view(const char *path, const ic_scene_load_options *opt, i
     cam->fov_y_deg = (float)v.vv;
     cam->width = w;
     cam->height = h;
+    cam->projection = types[k].projection;
+    cam->size_x = (float)v.vh;
+    cam->size_y = (float)v.vv;
+    cam->shift = (float)v.vs;
+    cam->lift = (float)v.vl;
+    cam->clip_near = (float)v.vo;
     return IC_OK;
 }

@@ -357,6 +357,19 @@ ic_result ic_scene_add_point_light(ic_scene *s, ic_vec3 position, ic_vec3 intens
 /* ------------------------------------------------------------------------------------------------ */
 /* camera */
 
+double ic_projection_extent(ic_projection p, double size, int is_horizontal)
+{
+    const double deg = 3.14159265358979323846 / 180.0;
+    switch (p) {
+    case IC_PROJECTION_PARALLEL: return size;
+    case IC_PROJECTION_HEMISPHERICAL: return 2.0 * sin(0.5 * size * deg);
+    case IC_PROJECTION_ANGULAR: return size / 180.0; /* in units of π: the circle's rim is at 1 */
+    case IC_PROJECTION_CYLINDRICAL: return is_horizontal ? size * deg : 2.0 * tan(0.5 * size * deg);
+    case IC_PROJECTION_STEREOGRAPHIC: return 2.0 * tan(0.25 * size * deg);
+    default: return 2.0 * tan(0.5 * size * deg);
+    }
+}
+
 void ic_scene_fit_camera(ic_scene *scene, int width, int height)
 {
     ic_camera *cam = &scene->camera;

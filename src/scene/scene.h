@@ -154,11 +154,35 @@ typedef struct ic_light_selection {
     const float *tri_pmf;  /* its probabilities (tri_light_count entries) */
 } ic_light_selection;
 
+/* How the image maps to directions (Radiance's view types, Larson & Shakespeare 1998; film.c gives the
+ * formulas). Zero is the pinhole every scene format has. */
+typedef enum ic_projection {
+    IC_PROJECTION_PERSPECTIVE = 0, /* pinhole: fov_y_deg, the horizontal angle from the image's aspect */
+    IC_PROJECTION_PARALLEL,        /* orthographic: size_x × size_y world units */
+    IC_PROJECTION_HEMISPHERICAL,   /* fisheye, orthographic onto the view hemisphere (radius ∝ sin θ) */
+    IC_PROJECTION_ANGULAR,         /* fisheye, equidistant (radius ∝ θ) */
+    IC_PROJECTION_CYLINDRICAL,     /* panorama: angle across, perspective up */
+    IC_PROJECTION_STEREOGRAPHIC    /* planisphere fisheye (radius ∝ tan θ/2) */
+} ic_projection;
+
 typedef struct ic_camera {
     ic_vec3 eye, target, up;
     float fov_y_deg;       /* vertical full angle (horizontal fov is converted at load) */
     int width, height;     /* image resolution */
+    ic_projection projection; /* 0: perspective */
+    float size_x, size_y;  /* the other projections: full horizontal and vertical view size, in degrees
+                              (parallel: world units) */
+    float shift, lift;     /* the image plane moved right and up by these fractions of its width and
+                              height (Radiance -vs, -vl); 0: centred on the view direction */
+    float clip_near;       /* rays start this far out (Radiance -vo: measured along the view axis for
+                              perspective, parallel and cylindrical, along the ray for the fisheyes); 0: none */
 } ic_camera;
+
+/* The image-plane extent of a view size under projection p (Radiance's |hvec| or |vvec|; scene.c): what
+ * the centred image coordinate in [-1/2, 1/2] is multiplied by before the projection's formula (film.c).
+ * size is in degrees (parallel: world units); is_horizontal matters for the cylinder only. The ratio of
+ * the horizontal to the vertical extent is the aspect of the view's square-pixel image. */
+double ic_projection_extent(ic_projection p, double size, int is_horizontal);
 
 /* Render settings a scene file may give; 0 means "not given" (the CLI or defaults decide). */
 typedef struct ic_scene_settings {

@@ -1,6 +1,6 @@
 /*
  * test_cli_rad.c — `irrcache render model.rad --view model.vf` from the command line: the Cornell box
- * renders with its view's resolution; a "!" command line and a bad view each give a non-zero exit and one
+ * renders with its view's resolution, and from a fisheye view; a "!" command line and a bad view each give a non-zero exit and one
  * line on stderr naming file:line (and the command, which is never run: the file it would create stays
  * absent); --view with a JSON scene is refused.
  */
@@ -46,11 +46,15 @@ int main(void)
               stat(marker, &st) != 0,
           "a command line: refused (exit %d), named with file:line, never run: %s", rc, err_text);
 
-    test_write_file(IC_TEST_TMP "/cli_rad.vf", "rpict -vth -vp 0 1 3 -vd 0 0 -1\n");
+    test_write_file(IC_TEST_TMP "/cli_rad_fish.vf", "rpict -vth -vp 0 1 3 -vd 0 0 -1 -vu 0 1 0 -vh 180 -vv 180\n");
+    rc = render(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.rad --view " IC_TEST_TMP "/cli_rad_fish.vf --width 16 "
+                "--height 16 --spp 1 --threads 2 -o " IC_TEST_TMP "/cli_rad_fish.png");
+    CHECK(rc == 0, "a fisheye view renders: exit %d, %s", rc, err_text);
+    test_write_file(IC_TEST_TMP "/cli_rad.vf", "rpict -vth -vp 0 1 3 -vd 0 0 -1 -vu 0 1 0 -vh 200\n");
     rc = render(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.rad --view " IC_TEST_TMP "/cli_rad.vf -o " IC_TEST_TMP
                 "/cli_rad_vf.png");
-    CHECK(rc != 0 && one_line() && strstr(err_text, "cli_rad.vf:1:") && strstr(err_text, "-vth"),
-          "a fisheye view: refused (exit %d): %s", rc, err_text);
+    CHECK(rc != 0 && one_line() && strstr(err_text, "cli_rad.vf:1:") && strstr(err_text, "hemispherical"),
+          "a fisheye view wider than 180 degrees: refused (exit %d): %s", rc, err_text);
 
     rc = render(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json --view " IC_SOURCE_DIR
                 "/scenes/cornell-box/cornell-box.vf -o " IC_TEST_TMP "/cli_rad_json.png");

@@ -338,10 +338,8 @@ static void test_errors(void)
                  (const char *[]){"rad_trunc.rad:2:", "ends where a real argument of plastic 'p'", NULL});
     expect_error("rad_poly", "void plastic p 0 0 5 .5 .5 .5 0 0\np polygon q 0 0 6 0 0 0 1 0 0\n", NULL,
                  (const char *[]){"rad_poly.rad:2:", "at least 3 vertices", NULL});
-    expect_error("rad_fisheye", good, "rview -vta -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0\n",
-                 (const char *[]){"rad_fisheye.vf:1:", "-vta", "angular fisheye", "-vtv", NULL});
-    expect_error("rad_shift", good, "\nVIEW= -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vs 0.2\n",
-                 (const char *[]){"rad_shift.vf:2:", "-vs", NULL});
+    expect_error("rad_fisheye", good, "rview -vta -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 400\n",
+                 (const char *[]){"rad_fisheye.vf:1:", "-vh", "angular fisheye", NULL});
     expect_error("rad_noview", good, "just words\n", (const char *[]){"rad_noview.vf", "no view", NULL});
 
     expect_error("rad_word", "void plastic p 0 0 5 .5 .5 .5 0 0\n\nvoid\n", NULL,
