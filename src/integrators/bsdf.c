@@ -42,6 +42,44 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
     }
 }
 
+void ic_thin_glass(float cos_i, float ior, ic_vec3 tn, ic_vec3 *R, ic_vec3 *T)
+{
+    float ci = ic_clampf(fabsf(cos_i), 1e-6f, 1.0f);
+    float ct = sqrtf(1.0f - (1.0f - ci * ci) / (ior * ior)); /* inside the sheet */
+    float rs = (ci - ior * ct) / (ci + ior * ct), rp = (ior * ci - ct) / (ior * ci + ct);
+    float r[2] = {rs * rs, rp * rp};
+    float tc[3] = {tn.x, tn.y, tn.z}, rr[3] = {0, 0, 0}, tt[3] = {0, 0, 0};
+    for (int c = 0; c < 3; ++c) {
+        float d = tc[c] > 0.0f ? powf(fminf(tc[c], 1.0f), 1.0f / ct) : 0.0f; /* one slanted pass */
+        for (int k = 0; k < 2; ++k) {
+            float denom = 1.0f - r[k] * r[k] * d * d;
+            rr[c] += 0.5f * (r[k] + (1.0f - r[k]) * (1.0f - r[k]) * r[k] * d * d / denom);
+            tt[c] += 0.5f * (1.0f - r[k]) * (1.0f - r[k]) * d / denom;
+        }
+    }
+    *R = v3(rr[0], rr[1], rr[2]);
+    *T = v3(tt[0], tt[1], tt[2]);
+}
+
+/* The thin pane's probability of reflecting: R's share of R + T by luminance. */
+static float thin_glass_reflect(ic_vec3 R, ic_vec3 T)
+{
+    float lr = v3_lum(R), lt = v3_lum(T);
+    return lr + lt > 0.0f ? lr / (lr + lt) : 0.0f;
+}
+
+float ic_bsdf_reflect_probability(const ic_bsdf *b, ic_vec3 wo)
+{
+    if (b->type == IC_MAT_GLASS || b->type == IC_MAT_ROUGH_GLASS)
+        return ic_fresnel_dielectric(v3_dot(wo, b->frame.n), b->ior);
+    if (b->type == IC_MAT_THIN_GLASS) {
+        ic_vec3 R, T;
+        ic_thin_glass(v3_dot(wo, b->frame.n), b->ior, b->ks, &R, &T);
+        return thin_glass_reflect(R, T);
+    }
+    return 1.0f;
+}
+
 static int is_microfacet(const ic_bsdf *b) { return b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC; }
 
 ic_vec3 ic_bsdf_glossy_local(const ic_bsdf *b, ic_vec3 wi_local, ic_vec3 wo_local)
@@ -222,6 +260,21 @@ int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u
          * keeps the estimator energy-consistent with the eye-side convention of most renderers. */
         out->weight = v3s(1.0f);
         return 1;
+    }
+    case IC_MAT_THIN_GLASS: { /* the frame faces wo (a pane has no inside); transmission goes straight on */
+        ic_vec3 R, T;
+        ic_thin_glass(v3_dot(wo, b->frame.n), b->ior, b->ks, &R, &T);
+        float p = thin_glass_reflect(R, T);
+        out->is_specular = 1;
+        out->pdf = 1.0f;
+        if (u0 < p) {
+            out->wi = v3_reflect(wo, b->frame.n);
+            out->weight = v3_scale(R, 1.0f / p);
+            return v3_dot(out->wi, b->ng) > 0.0f;
+        }
+        out->wi = v3_neg(wo);
+        out->weight = v3_scale(T, 1.0f / (1.0f - p));
+        return p < 1.0f;
     }
     case IC_MAT_CONDUCTOR:
         return ic_bsdf_sample_glossy(b, wo, u1, u2, out);

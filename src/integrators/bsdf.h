@@ -4,7 +4,8 @@
  * Lambertian (kd/π), the normalized modified Phong lobe (Lafortune & Willems 1994: ks·(n+2)/(2π)·cos^n α,
  * α between the mirror direction of wo and wi), the ideal mirror and the smooth dielectric (Fresnel
  * reflection/refraction, Schlick-free exact dielectric Fresnel), and the GGX microfacet rough conductor and
- * rough plastic (bsdf_microfacet.c). All directions are world space and point away from the surface; `ns`
+ * rough plastic (bsdf_microfacet.c), and the thin pane (reflection and transmission of a sheet summed over
+ * its inter-reflections, as Radiance's glass; Born & Wolf §1.6 for the slab). All directions are world space and point away from the surface; `ns`
  * is the shading normal on the side of wo for opaque materials.
  *
  * Every non-delta material splits into the same two lobes, which is how the cache's final render treats
@@ -44,6 +45,12 @@ typedef struct ic_bsdf_sample {
     int is_specular;       /* delta lobe: no MIS, no NEE */
 } ic_bsdf_sample;
 
+/* A thin pane of index ior whose one pass at normal incidence transmits tn (per channel), lit at cos θ =
+ * cos_i: its reflectance and transmittance summed over the reflections inside it, for each polarisation
+ * (Fresnel r, path transmission d = tn^(1/cos θt)): R = r + (1−r)² r d²/(1 − r²d²), T = (1−r)² d/(1 − r²d²),
+ * averaged over s and p. With tn = 1, R + T = 1. */
+void ic_thin_glass(float cos_i, float ior, ic_vec3 tn, ic_vec3 *R, ic_vec3 *T);
+
 /* Sets up the BSDF at surface s seen from direction wo. */
 void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec3 wo);
 /* 1 if the material has a non-delta lobe (light sampling makes sense). */
@@ -52,6 +59,10 @@ static inline int ic_bsdf_has_smooth(const ic_bsdf *b)
     return b->type == IC_MAT_DIFFUSE || b->type == IC_MAT_GLOSSY || b->type == IC_MAT_CONDUCTOR ||
            b->type == IC_MAT_PLASTIC;
 }
+/* Probability with which ic_bsdf_sample_dir reflects, for materials that reflect or transmit ideally
+ * (glass: Fresnel; thin glass: its share of R + T); 1 for the others. The shading-point search follows the
+ * larger branch. */
+float ic_bsdf_reflect_probability(const ic_bsdf *b, ic_vec3 wo);
 /* f(wo, wi) of the non-delta lobes (0 for delta materials). */
 ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi);
 /* Solid-angle pdf of ic_bsdf_sample choosing wi. */

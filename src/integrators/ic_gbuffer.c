@@ -30,9 +30,7 @@ int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf 
         if (ic_bsdf_has_smooth(b))
             return 1;
         ic_bsdf_sample bs;
-        float F = b->type == IC_MAT_GLASS || b->type == IC_MAT_ROUGH_GLASS
-                      ? ic_fresnel_dielectric(v3_dot(*wo, b->frame.n), b->ior)
-                      : 1.0f;
+        float F = ic_bsdf_reflect_probability(b, *wo);
         if (!ic_bsdf_sample_dir(b, *wo, F > 0.5f ? 0.0f : 0.999f, 0.5f, 0.5f, &bs))
             return 0;
         ray = ic_spawn_ray(s, bs.wi);

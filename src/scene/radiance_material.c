@@ -10,8 +10,9 @@
  *   ((n − 1)/(n + 1))² = spec), tinted by the colour for metal, over a Lambertian base of the colour (the
  *   coat passes it 1 − spec of the light: colour·(1 − spec) again), with GGX α = rough (Ward's rough is an
  *   rms slope, as Beckmann's and GGX's α are). A metal with spec ≥ 0.99 is a GGX conductor of F0 colour.
- *   trans: its reflected part only (the surface is opaque). glass, dielectric: irrcache's refracting
- *   dielectric. mirror: a mirror. light, glow, spotlight: area emitters of that radiance.
+ *   trans: its reflected part only (the surface is opaque). glass: irrcache's thin pane, of the colour's
+ *   transmissivity and the index (1.52 by default), as Radiance's glass computes it. dielectric: irrcache's
+ *   refracting dielectric. mirror: a mirror. light, glow, spotlight: area emitters of that radiance.
  */
 #include "scene/radiance_internal.h"
 
@@ -182,18 +183,18 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
         if ((r = glass ? need_reals(c, 3, 4, "red green blue [index]") : need_reals(c, 5, 5, "red green blue index hartmann")) ==
                 IC_OK &&
             (r = colour(c, &col)) == IC_OK) {
-            if (glass)
-                ic_rad_warn_once(c, c->prim_line, kind,
-                                 "is rendered as a solid refracting dielectric (Radiance's glass is a thin pane), "
-                                 "colourless");
-            else if (col.x != 1.0f || col.y != 1.0f || col.z != 1.0f)
+            if (!glass && (col.x != 1.0f || col.y != 1.0f || col.z != 1.0f))
                 ic_rad_warn_once(c, c->prim_line, "dielectric with a colour", "is rendered colourless (no absorption)");
             double n = glass ? (c->real_count == 4 ? c->reals[3] : 1.52) : c->reals[3];
             if (!(n >= 1.0 && n <= 10.0))
                 return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
                                    "%s '%s': the index of refraction must be in [1, 10] (given %g)", t, c->id, n);
-            m->type = IC_MAT_GLASS;
-            m->ks = v3s(1.0f);
+            if (glass && !(col.x <= 1.0f && col.y <= 1.0f && col.z <= 1.0f))
+                return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
+                                   "glass '%s': the transmissivity must be in [0, 1] per channel (given %g %g %g)",
+                                   c->id, (double)col.x, (double)col.y, (double)col.z);
+            m->type = glass ? IC_MAT_THIN_GLASS : IC_MAT_GLASS;
+            m->ks = glass ? col : v3s(1.0f);
             m->ior = (float)n;
         }
     } else if (!strcmp(t, "mirror")) {

@@ -50,8 +50,12 @@ typedef enum ic_material_type {
                               eta + i·k when k is non-zero, else Schlick's from the colour ks = F0 (× texture) */
     IC_MAT_PLASTIC,        /* rough plastic: GGX dielectric coat (index ior, roughness alpha, tint ks) over
                               a Lambertian base kd (× texture), coupled as Kelemen & Szirmay-Kalos 2001 */
-    IC_MAT_ROUGH_GLASS     /* rough dielectric: GGX reflection and refraction (Walter et al. 2007), index
+    IC_MAT_ROUGH_GLASS,    /* rough dielectric: GGX reflection and refraction (Walter et al. 2007), index
                               ior, roughness alpha; traced like glass (no light sampling through it) */
+    IC_MAT_THIN_GLASS      /* thin pane (Radiance's glass): two parallel faces of index ior a negligible
+                              distance apart, ks the transmissivity of one pass through the sheet at normal
+                              incidence; ideal reflection and straight-through transmission, each summed over
+                              the inter-reflections in the sheet; traced like glass */
 } ic_material_type;
 
 typedef struct ic_material {
@@ -59,7 +63,7 @@ typedef struct ic_material {
     ic_material_type type;
     ic_vec3 kd;            /* diffuse albedo (linear RGB) */
     int32_t kd_texture;    /* index into scene.textures, or -1 */
-    ic_vec3 ks;            /* specular albedo (glossy lobe or mirror tint) */
+    ic_vec3 ks;            /* specular albedo (glossy lobe or mirror tint; thin glass: transmissivity) */
     float ns;              /* Phong exponent (glossy) */
     ic_vec3 emission;      /* emitted radiance (one-sided, along the geometric normal's side the
                               triangle's winding gives; see `two_sided_emission`) */

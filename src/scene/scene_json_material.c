@@ -11,16 +11,17 @@
 
 static ic_result parse_material_type(json_ctx *c, const cJSON *it, int line, ic_material_type *type)
 {
-    static const char *names[] = {"diffuse", "glossy", "mirror", "glass", "conductor", "plastic", "rough_glass"};
+    static const char *names[] = {"diffuse",   "glossy",  "mirror",      "glass",
+                                  "conductor", "plastic", "rough_glass", "thin_glass"};
     if (cJSON_IsString(it))
-        for (int k = 0; k < 7; ++k)
+        for (int k = 0; k < (int)(sizeof names / sizeof names[0]); ++k)
             if (!strcmp(it->valuestring, names[k])) {
                 *type = (ic_material_type)k;
                 return IC_OK;
             }
     return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
                         "unknown material type '%s'; use \"diffuse\", \"glossy\", \"mirror\", "
-                        "\"glass\", \"conductor\", \"plastic\" or \"rough_glass\"",
+                        "\"glass\", \"conductor\", \"plastic\", \"rough_glass\" or \"thin_glass\"",
                         cJSON_IsString(it) ? it->valuestring : "(not a string)");
 }
 
@@ -211,7 +212,7 @@ static void apply_override(ic_scene *s, const char *name, const material_overrid
         if (m->type == IC_MAT_GLOSSY && !(m->ns >= 1.0f))
             m->ns = 1.0f;
         if ((m->type == IC_MAT_MIRROR || m->type == IC_MAT_GLASS || m->type == IC_MAT_CONDUCTOR ||
-             m->type == IC_MAT_PLASTIC || m->type == IC_MAT_ROUGH_GLASS) &&
+             m->type == IC_MAT_PLASTIC || m->type == IC_MAT_ROUGH_GLASS || m->type == IC_MAT_THIN_GLASS) &&
             v3_is_black(m->ks) && !o->has_ks)
             m->ks = v3s(1.0f);
         /* a complex index needs its real part: a missing one is that of a pure absorber (1) */

@@ -284,11 +284,12 @@ static void test_geometry_and_materials(void)
     m = material_named(s, "ctube");
     CHECK(m && m->type == IC_MAT_MIRROR && m->ks.x == 0.7f, "mirror");
     m = material_named(s, "cglass");
-    CHECK(m && m->type == IC_MAT_GLASS && fabsf(m->ior - 1.52f) < 1e-6f, "glass: index 1.52");
+    CHECK(m && m->type == IC_MAT_THIN_GLASS && fabsf(m->ior - 1.52f) < 1e-6f && m->ks.x == 0.9f,
+          "glass: a thin pane of index 1.52, transmissivity the colour");
     m = material_named(s, "ctrans");
     CHECK(m && m->type == IC_MAT_DIFFUSE && fabsf(m->kd.x - 0.3f) < 1e-6f, "trans: its reflection, colour (1 - trans)");
     m = material_named(s, "window");
-    CHECK(m && m->type == IC_MAT_GLASS, "illum with an alternate: rendered as it");
+    CHECK(m && m->type == IC_MAT_THIN_GLASS, "illum with an alternate: rendered as it");
     m = material_named(s, "mix");
     CHECK(m && m->type == IC_MAT_PLASTIC && fabsf(m->alpha - 0.1f) < 1e-6f, "a mixture: its first material");
     CHECK(!material_named(s, "hole") && !material_named(s, "v"), "void and an illum without alternate: left out");
