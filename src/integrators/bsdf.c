@@ -34,6 +34,13 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
     b->cache_n = m->normal_texture > 0 ? (v3_dot(s->ns_smooth, b->ng) < 0.0f ? v3_neg(s->ns_smooth) : s->ns_smooth) : n;
     float ld = v3_lum(b->kd), ls = v3_lum(b->ks);
     b->p_diffuse = (b->type == IC_MAT_GLOSSY) ? (ld + ls > 0.0f ? ld / (ld + ls) : 1.0f) : 1.0f;
+    if (b->type == IC_MAT_TRANSLUCENT) { /* lobes picked by their albedos' luminance */
+        b->kt = m->kt;
+        b->kt_specular = m->kt_specular;
+        float lt = v3_lum(b->kt), lst = v3_lum(b->kt_specular);
+        b->p_diffuse = ld + lt + lst > 0.0f ? ld / (ld + lt + lst) : 1.0f;
+        b->p_straight = lt + lst > 0.0f ? lst / (lt + lst) : 0.0f;
+    }
     if (b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC || b->type == IC_MAT_ROUGH_GLASS) {
         float alpha = m->alpha, metallic = m->metallic;
         if (m->roughness_texture > 0 || m->metallic_texture > 0)
@@ -84,7 +91,7 @@ static int is_microfacet(const ic_bsdf *b) { return b->type == IC_MAT_CONDUCTOR 
 
 ic_vec3 ic_bsdf_glossy_local(const ic_bsdf *b, ic_vec3 wi_local, ic_vec3 wo_local)
 {
-    if (!ic_bsdf_has_glossy(b) || wi_local.z <= 0.0f || wo_local.z <= 0.0f)
+    if (!ic_bsdf_has_glossy(b) || wi_local.z <= 0.0f || wo_local.z <= 0.0f || b->type == IC_MAT_TRANSLUCENT)
         return v3s(0.0f);
     if (is_microfacet(b))
         return ic_mf_glossy(b, wo_local, wi_local);
@@ -99,9 +106,27 @@ static float phong_cos(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
     return fmaxf(0.0f, v3_dot(r, wi));
 }
 
+/* Which side of the translucent sheet wi leaves on: 1 wo's, −1 the other, 0 where the shading and geometric
+ * normals disagree (no light through interpolated normals). */
+static int translucent_side(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
+{
+    float ci = v3_dot(wi, b->frame.n), gi = v3_dot(wi, b->ng);
+    if (v3_dot(wo, b->frame.n) <= 0.0f)
+        return 0;
+    return ci > 0.0f && gi > 0.0f ? 1 : ci < 0.0f && gi < 0.0f ? -1 : 0;
+}
+
 void ic_bsdf_eval_lobes(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *diffuse, ic_vec3 *glossy)
 {
     *diffuse = *glossy = v3s(0.0f);
+    if (b->type == IC_MAT_TRANSLUCENT) {
+        int side = translucent_side(b, wo, wi);
+        if (side > 0)
+            *diffuse = v3_scale(b->kd, IC_INV_PI);
+        else if (side < 0)
+            *glossy = v3_scale(b->kt, IC_INV_PI);
+        return;
+    }
     if (!ic_bsdf_has_smooth(b) || v3_dot(wo, b->frame.n) <= 0.0f || v3_dot(wi, b->frame.n) <= 0.0f ||
         v3_dot(wi, b->ng) <= 0.0f)
         return;
@@ -117,6 +142,10 @@ void ic_bsdf_eval_lobes(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *diffu
 
 float ic_bsdf_pdf_glossy(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
+    if (b->type == IC_MAT_TRANSLUCENT) /* the diffuse transmission's cosine below the sheet */
+        return ic_bsdf_has_glossy(b) && translucent_side(b, wo, wi) < 0
+                   ? (1.0f - b->p_straight) * fabsf(v3_dot(wi, b->frame.n)) * IC_INV_PI
+                   : 0.0f;
     if (!ic_bsdf_has_glossy(b) || v3_dot(wi, b->frame.n) <= 0.0f || v3_dot(wo, b->frame.n) <= 0.0f)
         return 0.0f;
     if (is_microfacet(b))
@@ -139,6 +168,26 @@ static int sample_microfacet_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, floa
     return !v3_is_black(out->weight);
 }
 
+/* The translucent sheet's transmission: straight on with probability p_straight (a delta), else a cosine
+ * below the sheet (weight = f·|cos|/pdf of this lobe alone). */
+static int sample_transmission(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_bsdf_sample *out)
+{
+    if (u1 < b->p_straight) {
+        out->wi = v3_neg(wo);
+        out->weight = v3_scale(b->kt_specular, 1.0f / b->p_straight);
+        out->pdf = 1.0f;
+        out->is_specular = 1;
+        return 1;
+    }
+    ic_vec3 l = ic_warp_cosine_hemisphere(fminf((u1 - b->p_straight) / (1.0f - b->p_straight), 0.99999994f), u2);
+    out->wi = ic_frame_to_world(&b->frame, v3(l.x, l.y, -l.z));
+    out->pdf = ic_bsdf_pdf_glossy(b, wo, out->wi);
+    if (!(out->pdf > 0.0f))
+        return 0;
+    out->weight = v3_scale(b->kt, 1.0f / (1.0f - b->p_straight));
+    return !v3_is_black(out->weight);
+}
+
 int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_bsdf_sample *out)
 {
     out->is_specular = 0;
@@ -146,6 +195,8 @@ int ic_bsdf_sample_glossy(const ic_bsdf *b, ic_vec3 wo, float u1, float u2, ic_b
         return 0;
     if (is_microfacet(b))
         return sample_microfacet_glossy(b, wo, u1, u2, out);
+    if (b->type == IC_MAT_TRANSLUCENT)
+        return sample_transmission(b, wo, u1, u2, out);
     ic_frame rf = ic_frame_from_normal(v3_reflect(wo, b->frame.n));
     out->wi = ic_frame_to_world(&rf, ic_warp_phong_lobe(u1, u2, b->ns));
     float cos_i = v3_dot(out->wi, b->frame.n);
@@ -168,6 +219,11 @@ static int rough_glass_local(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *
 
 ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
+    if (b->type == IC_MAT_TRANSLUCENT) {
+        ic_vec3 fd, fg;
+        ic_bsdf_eval_lobes(b, wo, wi, &fd, &fg);
+        return v3_add(fd, fg);
+    }
     if (b->type == IC_MAT_ROUGH_GLASS) {
         ic_vec3 wo_l, wi_l;
         return rough_glass_local(b, wo, wi, &wo_l, &wi_l) ? v3s(ic_mf_dielectric_f(b, wo_l, wi_l)) : v3s(0.0f);
@@ -198,6 +254,12 @@ ic_vec3 ic_bsdf_eval(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 
 float ic_bsdf_pdf(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi)
 {
+    if (b->type == IC_MAT_TRANSLUCENT) {
+        int side = translucent_side(b, wo, wi);
+        return side > 0   ? b->p_diffuse * v3_dot(wi, b->frame.n) * IC_INV_PI
+               : side < 0 ? (1.0f - b->p_diffuse) * ic_bsdf_pdf_glossy(b, wo, wi)
+                          : 0.0f;
+    }
     if (b->type == IC_MAT_ROUGH_GLASS) {
         ic_vec3 wo_l, wi_l;
         return rough_glass_local(b, wo, wi, &wo_l, &wi_l) ? ic_mf_dielectric_pdf(b, wo_l, wi_l) : 0.0f;
@@ -278,6 +340,25 @@ int ic_bsdf_sample_dir(const ic_bsdf *b, ic_vec3 wo, float u0, float u1, float u
     }
     case IC_MAT_CONDUCTOR:
         return ic_bsdf_sample_glossy(b, wo, u1, u2, out);
+    case IC_MAT_TRANSLUCENT: {
+        if (v3_dot(wo, b->frame.n) <= 0.0f)
+            return 0;
+        if (u0 < b->p_diffuse) {
+            out->wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(u1, u2));
+        } else {
+            if (!sample_transmission(b, wo, u1, u2, out))
+                return 0;
+            if (out->is_specular) {
+                out->weight = v3_scale(out->weight, 1.0f / (1.0f - b->p_diffuse));
+                return 1;
+            }
+        }
+        out->pdf = ic_bsdf_pdf(b, wo, out->wi);
+        if (!(out->pdf > 0.0f))
+            return 0;
+        out->weight = v3_scale(ic_bsdf_eval(b, wo, out->wi), fabsf(v3_dot(out->wi, b->frame.n)) / out->pdf);
+        return !v3_is_black(out->weight);
+    }
     case IC_MAT_ROUGH_GLASS: {
         /* followed like the smooth glass (is_specular: no light sampling at the vertex, so what its
          * sampled direction finds counts fully); the weight is the lobe's f·|cos|/pdf */

@@ -5,13 +5,17 @@
  * α between the mirror direction of wo and wi), the ideal mirror and the smooth dielectric (Fresnel
  * reflection/refraction, Schlick-free exact dielectric Fresnel), and the GGX microfacet rough conductor and
  * rough plastic (bsdf_microfacet.c), and the thin pane (reflection and transmission of a sheet summed over
- * its inter-reflections, as Radiance's glass; Born & Wolf §1.6 for the slab). All directions are world space and point away from the surface; `ns`
+ * its inter-reflections, as Radiance's glass; Born & Wolf §1.6 for the slab), and the translucent sheet
+ * (Radiance's trans without its specular reflection: Lambertian reflection, Lambertian transmission and
+ * straight-through transmission). All directions are world space and point away from the surface; `ns`
  * is the shading normal on the side of wo for opaque materials.
  *
  * Every non-delta material splits into the same two lobes, which is how the cache's final render treats
  * them all alike: a diffuse lobe that is kd/π times a factor of wi whose cosine-weighted mean is 1 (so
  * kd/π·E is its exact reflection of uniform light; the factor is 1 except for rough plastic), cached, and
- * a glossy lobe (Phong or GGX) that is sampled.
+ * a glossy lobe (Phong or GGX) that is sampled. The translucent sheet's transmission takes the glossy lobe's
+ * place (sampled, never cached): its diffuse part is a smooth lobe below the surface, its straight part a
+ * delta that the glossy sampler returns as is_specular.
  */
 #ifndef IC_INTEGRATORS_BSDF_H
 #define IC_INTEGRATORS_BSDF_H
@@ -27,6 +31,8 @@ typedef struct ic_bsdf {
     float ior;             /* glass, plastic's coat */
     float alpha;           /* GGX roughness (conductor, plastic) */
     ic_vec3 eta, k;        /* conductor: complex index (k all 0: Schlick from F0 = ks) */
+    ic_vec3 kt, kt_specular; /* translucent: diffuse and straight-through transmittance */
+    float p_straight;      /* translucent: probability that the transmission lobe's sample goes straight on */
     const float *coat_albedo; /* plastic: the coat's E(μ) table (borrowed from the material) */
     float coat_albedo_avg; /* plastic: its cosine-weighted mean */
     float metal;           /* plastic: weight of the conductor lobe (glTF's metallic), 0 for a plain plastic */
@@ -57,7 +63,7 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
 static inline int ic_bsdf_has_smooth(const ic_bsdf *b)
 {
     return b->type == IC_MAT_DIFFUSE || b->type == IC_MAT_GLOSSY || b->type == IC_MAT_CONDUCTOR ||
-           b->type == IC_MAT_PLASTIC;
+           b->type == IC_MAT_PLASTIC || b->type == IC_MAT_TRANSLUCENT;
 }
 /* Probability with which ic_bsdf_sample_dir reflects, for materials that reflect or transmit ideally
  * (glass: Fresnel; thin glass: its share of R + T); 1 for the others. The shading-point search follows the
@@ -75,6 +81,8 @@ void ic_bsdf_eval_lobes(const ic_bsdf *b, ic_vec3 wo, ic_vec3 wi, ic_vec3 *diffu
 /* 1 if the material has a glossy lobe. */
 static inline int ic_bsdf_has_glossy(const ic_bsdf *b)
 {
+    if (b->type == IC_MAT_TRANSLUCENT)
+        return v3_maxc(b->kt) > 0.0f || v3_maxc(b->kt_specular) > 0.0f;
     return (b->type == IC_MAT_GLOSSY || b->type == IC_MAT_CONDUCTOR || b->type == IC_MAT_PLASTIC) &&
            v3_maxc(b->ks) > 0.0f;
 }

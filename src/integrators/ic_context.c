@@ -162,6 +162,10 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
         float f[14] = {m->kd.x, m->kd.y, m->kd.z, m->ks.x, m->ks.y, m->ks.z, m->ns, m->emission.x, m->emission.y,
                        m->emission.z, m->ior, (float)m->type, (float)m->kd_texture, (float)m->two_sided_emission};
         h = ic_fnv1a64(h, f, sizeof f);
+        if (m->type == IC_MAT_TRANSLUCENT) { /* (other materials' hashes stay as they were) */
+            float t[6] = {m->kt.x, m->kt.y, m->kt.z, m->kt_specular.x, m->kt_specular.y, m->kt_specular.z};
+            h = ic_fnv1a64(h, t, sizeof t);
+        }
     }
     for (uint32_t i = 0; i < s->texture_count; ++i) {
         /* The texel values as floats, however they are stored (the hash streams: same bytes, same hash). */

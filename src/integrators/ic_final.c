@@ -179,7 +179,7 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
             if (!ic_bsdf_has_glossy(&b) || !ic_bsdf_sample_glossy(&b, wo, u1, u2, &bs))
                 break;
             beta = v3_mul(beta, bs.weight);
-            prev_glossy = 1;
+            prev_glossy = !bs.is_specular; /* a translucent sheet's straight transmission: no MIS */
             prev_pdf = bs.pdf;
         }
         prev_p = s.p;

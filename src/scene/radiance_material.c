@@ -10,7 +10,9 @@
  *   ((n − 1)/(n + 1))² = spec), tinted by the colour for metal, over a Lambertian base of the colour (the
  *   coat passes it 1 − spec of the light: colour·(1 − spec) again), with GGX α = rough (Ward's rough is an
  *   rms slope, as Beckmann's and GGX's α are). A metal with spec ≥ 0.99 is a GGX conductor of F0 colour.
- *   trans: its reflected part only (the surface is opaque). glass: irrcache's thin pane, of the colour's
+ *   trans: a translucent sheet: Lambertian reflection colour·(1 − spec)·(1 − trans), Lambertian transmission
+ *   colour·(1 − spec)·trans·(1 − tspec), straight-through transmission colour·(1 − spec)·trans·tspec (its
+ *   specular reflection left out, warned). glass: irrcache's thin pane, of the colour's
  *   transmissivity and the index (1.52 by default), as Radiance's glass computes it. dielectric: irrcache's
  *   refracting dielectric. mirror: a mirror. light, glow, spotlight: area emitters of that radiance.
  */
@@ -167,16 +169,24 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
             (r = colour(c, &col)) == IC_OK)
             r = specular_material(c, col, c->reals[3], sqrt(fabs(c->reals[4] * c->reals[5])), is_metal, m);
     } else if (!strcmp(t, "trans") || !strcmp(t, "transfunc") || !strcmp(t, "transdata")) {
-        ic_rad_warn_once(c, c->prim_line, kind,
-                         "is rendered opaque: its reflection only (the transmitted light is not rendered)");
         if ((r = need_reals(c, 7, 7, "red green blue specularity roughness transmissivity transmitted-specular")) ==
                 IC_OK &&
             (r = colour(c, &col)) == IC_OK) {
-            double trans = c->reals[5];
-            if (!(trans >= 0.0 && trans <= 1.0 && c->reals[6] >= 0.0 && c->reals[6] <= 1.0))
+            double spec = c->reals[3], trans = c->reals[5], tspec = c->reals[6];
+            if (!(trans >= 0.0 && trans <= 1.0 && tspec >= 0.0 && tspec <= 1.0 && spec >= 0.0 && spec <= 1.0))
                 return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
-                                   "trans '%s': transmissivity and transmitted specular must be in [0, 1]", c->id);
-            r = specular_material(c, v3_scale(col, (float)(1.0 - trans)), c->reals[3], c->reals[4], 0, m);
+                                   "trans '%s': specularity, transmissivity and transmitted specular must be in [0, 1]",
+                                   c->id);
+            if (spec > 0.0 || (c->reals[4] > 0.0 && trans * tspec > 0.0))
+                ic_rad_warn_once(c, c->prim_line, "trans with specularity or roughness",
+                                 "is rendered without its specular reflection (the sheet reflects spec less) and with "
+                                 "its specular transmission unblurred (straight through)");
+            /* Radiance's split: of the light not reflected specularly (1 − spec), trans is transmitted, tspec
+             * of that straight through; the colour tints all but the specular reflection */
+            m->type = IC_MAT_TRANSLUCENT;
+            m->kd = v3_scale(col, (float)((1.0 - spec) * (1.0 - trans)));
+            m->kt = v3_scale(col, (float)((1.0 - spec) * trans * (1.0 - tspec)));
+            m->kt_specular = v3_scale(col, (float)((1.0 - spec) * trans * tspec));
         }
     } else if (!strcmp(t, "glass") || !strcmp(t, "dielectric")) {
         int glass = !strcmp(t, "glass");

@@ -52,10 +52,13 @@ typedef enum ic_material_type {
                               a Lambertian base kd (× texture), coupled as Kelemen & Szirmay-Kalos 2001 */
     IC_MAT_ROUGH_GLASS,    /* rough dielectric: GGX reflection and refraction (Walter et al. 2007), index
                               ior, roughness alpha; traced like glass (no light sampling through it) */
-    IC_MAT_THIN_GLASS      /* thin pane (Radiance's glass): two parallel faces of index ior a negligible
+    IC_MAT_THIN_GLASS,     /* thin pane (Radiance's glass): two parallel faces of index ior a negligible
                               distance apart, ks the transmissivity of one pass through the sheet at normal
                               incidence; ideal reflection and straight-through transmission, each summed over
                               the inter-reflections in the sheet; traced like glass */
+    IC_MAT_TRANSLUCENT     /* thin diffusing sheet (Radiance's trans): Lambertian reflection kd on either
+                              side, Lambertian transmission kt to the other side, and straight-through
+                              transmission kt_specular */
 } ic_material_type;
 
 typedef struct ic_material {
@@ -71,6 +74,7 @@ typedef struct ic_material {
     float ior;             /* index of refraction (glass, plastic's coat), default 1.5 */
     float alpha;           /* GGX roughness α of conductor, plastic and rough glass (glTF's roughness squared) */
     ic_vec3 eta, k;        /* conductor: complex index of refraction (k all 0: use ks as F0) */
+    ic_vec3 kt, kt_specular; /* translucent: diffuse and straight-through transmittance */
     float coat_albedo[IC_COAT_TABLE]; /* plastic: the coat's directional albedo E(μ), filled at load */
     float coat_albedo_avg; /* plastic: its cosine-weighted mean */
     /* textures of the microfacet parameters and the shading normal (scene_query.c), each 1 + the index

@@ -12,7 +12,7 @@
 static ic_result parse_material_type(json_ctx *c, const cJSON *it, int line, ic_material_type *type)
 {
     static const char *names[] = {"diffuse",   "glossy",  "mirror",      "glass",
-                                  "conductor", "plastic", "rough_glass", "thin_glass"};
+                                  "conductor", "plastic", "rough_glass", "thin_glass", "translucent"};
     if (cJSON_IsString(it))
         for (int k = 0; k < (int)(sizeof names / sizeof names[0]); ++k)
             if (!strcmp(it->valuestring, names[k])) {
@@ -21,7 +21,7 @@ static ic_result parse_material_type(json_ctx *c, const cJSON *it, int line, ic_
             }
     return ic_json_fail(c, line, IC_ERR_INVALID_ARG,
                         "unknown material type '%s'; use \"diffuse\", \"glossy\", \"mirror\", "
-                        "\"glass\", \"conductor\", \"plastic\", \"rough_glass\" or \"thin_glass\"",
+                        "\"glass\", \"conductor\", \"plastic\", \"rough_glass\", \"thin_glass\" or \"translucent\"",
                         cJSON_IsString(it) ? it->valuestring : "(not a string)");
 }
 
@@ -29,7 +29,7 @@ static ic_result parse_material_type(json_ctx *c, const cJSON *it, int line, ic_
 typedef struct material_override {
     ic_material m;               /* the values given */
     int has_type, has_kd, has_ks, has_ns, has_em, has_two, has_ior, has_tex, has_alpha, has_eta, has_k;
-    int has_rough_tex, has_metal_tex, has_metal, has_normal_tex, has_normal_scale;
+    int has_rough_tex, has_metal_tex, has_metal, has_normal_tex, has_normal_scale, has_kt, has_kt_specular;
     int32_t tex;                 /* kd_texture: the texture's index, -1 for none */
 } material_override;
 
@@ -96,7 +96,8 @@ static ic_result read_data_texture(json_ctx *c, const cJSON *it, int kl, int32_t
 static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, material_override *o)
 {
     static const char *valid = "type, kd, ks, ns, emission, two_sided, ior, kd_texture, alpha, eta, k, "
-                                "roughness_texture, metallic, metallic_texture, normal_texture, normal_scale";
+                                "roughness_texture, metallic, metallic_texture, normal_texture, normal_scale, kt, "
+                                "kt_specular";
     ic_result r = IC_OK;
     if (!strcmp(it->string, "type")) {
         r = parse_material_type(c, it, kl, &o->m.type);
@@ -136,6 +137,12 @@ static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, materia
     } else if (!strcmp(it->string, "k")) {
         r = ic_json_read_color(c, it, kl, &o->m.k);
         o->has_k = 1;
+    } else if (!strcmp(it->string, "kt")) {
+        r = ic_json_read_color(c, it, kl, &o->m.kt);
+        o->has_kt = 1;
+    } else if (!strcmp(it->string, "kt_specular")) {
+        r = ic_json_read_color(c, it, kl, &o->m.kt_specular);
+        o->has_kt_specular = 1;
     } else if (!strcmp(it->string, "kd_texture")) {
         r = read_texture(c, it, kl, 0, &o->tex);
         o->has_tex = 1;
@@ -208,6 +215,10 @@ static void apply_override(ic_scene *s, const char *name, const material_overrid
         }
         if (o->has_normal_scale)
             m->normal_scale = o->m.normal_scale;
+        if (o->has_kt)
+            m->kt = o->m.kt;
+        if (o->has_kt_specular)
+            m->kt_specular = o->m.kt_specular;
         /* keep the type usable: a glossy lobe needs an exponent, a mirror or glass a tint */
         if (m->type == IC_MAT_GLOSSY && !(m->ns >= 1.0f))
             m->ns = 1.0f;

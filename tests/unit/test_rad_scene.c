@@ -211,7 +211,7 @@ static void test_geometry_and_materials(void)
              "void mirror ctube 0 0 3 .7 .7 .7\n"
              "void brightfunc dirt 2 dirt dirt.cal 0 0\n"
              "void brightfunc dirt2 2 dirt dirt.cal 0 0\n"
-             "dirt trans ctrans 0 0 7 .6 .6 .6 0 0 .5 .5\n"
+             "dirt trans ctrans 0 0 7 .6 .6 .6 .04 0 .5 .5\n"
              "void alias cpoly2 cpoly\n"
              "void illum window 1 cglass 0 3 100 100 100\n"
              "void illum hole 0 0 3 100 100 100\n"
@@ -287,7 +287,10 @@ static void test_geometry_and_materials(void)
     CHECK(m && m->type == IC_MAT_THIN_GLASS && fabsf(m->ior - 1.52f) < 1e-6f && m->ks.x == 0.9f,
           "glass: a thin pane of index 1.52, transmissivity the colour");
     m = material_named(s, "ctrans");
-    CHECK(m && m->type == IC_MAT_DIFFUSE && fabsf(m->kd.x - 0.3f) < 1e-6f, "trans: its reflection, colour (1 - trans)");
+    CHECK(m && m->type == IC_MAT_TRANSLUCENT && fabsf(m->kd.x - 0.288f) < 1e-6f && fabsf(m->kt.x - 0.144f) < 1e-6f &&
+              fabsf(m->kt_specular.x - 0.144f) < 1e-6f,
+          "trans: reflection colour (1 - spec)(1 - trans), diffuse and straight transmission colour (1 - spec) trans "
+          "(1 -/· tspec)");
     m = material_named(s, "window");
     CHECK(m && m->type == IC_MAT_THIN_GLASS, "illum with an alternate: rendered as it");
     m = material_named(s, "mix");
