@@ -146,9 +146,8 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
         m->eta = v3_scale(m->eta, 1.0f / ext);
         m->k = v3_scale(m->k, 1.0f / ext);
     } else if (!strcmp(base, "dielectric") || !strcmp(type, "thindielectric")) {
-        if (!strcmp(type, "thindielectric"))
-            ic_mts_warn_once(c, n, "<bsdf type=\"thindielectric\">", "is rendered as a solid dielectric");
-        m->type = rough ? IC_MAT_ROUGH_GLASS : IC_MAT_GLASS;
+        /* thindielectric: a pane without absorption (irrcache sums the inter-reflections per polarisation) */
+        m->type = !strcmp(type, "thindielectric") ? IC_MAT_THIN_GLASS : rough ? IC_MAT_ROUGH_GLASS : IC_MAT_GLASS;
         m->ks = v3s(1.0f);
         r = ic_mts_ior(c, n, "intIOR", 1.5046f, &in);
         if (r == IC_OK)

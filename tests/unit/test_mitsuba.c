@@ -4,8 +4,8 @@
  *      with the same camera;
  *   2. a rectangle floor (diffuse 0.5, scaled by a transform) under a constant emitter of radiance 2 shows
  *      ρ·L = 1; under a point light, ρ·I/(π·h²);
- *   3. BSDFs: roughconductor by name (gold's complex index), roughplastic's index, dielectric, twosided and
- *      references by id, <default> substitution, sphere and cube shapes with their transforms;
+ *   3. BSDFs: roughconductor by name (gold's complex index), roughplastic's index, dielectric, thindielectric (a
+ *      thin pane), twosided and references by id, <default> substitution, sphere and cube shapes with their transforms;
  *   4. unsupported elements give one warning per kind naming file:line; malformed XML is an error naming
  *      file:line.
  */
@@ -141,6 +141,7 @@ static void test_materials_and_warnings(void)
         "  <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/></bsdf></shape>\n"
         "  <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/></bsdf></shape>\n"
         "  <shape type=\"hair\"/>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"thindielectric\"><float name=\"intIOR\" value=\"1.5\"/></bsdf></shape>\n"
         "</scene>\n";
     test_write_file(IC_TEST_TMP "/mts_materials.xml", xml);
     ic_error err = {0};
@@ -164,9 +165,11 @@ static void test_materials_and_warnings(void)
             CHECK(p.x >= 8.0f - 1e-4f && p.x <= 12.0f + 1e-4f, "cube scaled by 2, then moved by 10: x = %g", p.x);
         } else if (m->type == IC_MAT_GLASS && !seen[3]++) {
             CHECK(fabsf(m->ior - 1.33f / 1.000277f) < 1e-4f && m->emission.x == 3.0f, "dielectric with an area emitter");
+        } else if (m->type == IC_MAT_THIN_GLASS && !seen[4]++) {
+            CHECK(fabsf(m->ior - 1.5f / 1.000277f) < 1e-4f && m->ks.x == 1.0f, "thindielectric: a clear thin pane");
         }
     }
-    CHECK(seen[0] && !seen[1] && seen[2] && seen[3], "every shape imported with its material");
+    CHECK(seen[0] && !seen[1] && seen[2] && seen[3] && seen[4], "every shape imported with its material");
     const char *w = ic_scene_warnings(s);
     const char *bump = strstr(w, "bumpmap");
     CHECK(bump && !strstr(bump + 1, "bumpmap"), "one warning for the two bump maps: %s", w);
