@@ -1,5 +1,6 @@
-/* error.c — result names and the one-line error record (include/irrcache/common.h). */
+/* error.c — result names and the one-line error record (include/irrcache/common.h, core/error_at.h). */
 #include "irrcache/common.h"
+#include "core/error_at.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -30,4 +31,24 @@ ic_result ic_error_set(ic_error *err, ic_result code, const char *fmt, ...)
         err->code = code;
     }
     return code;
+}
+
+ic_result ic_error_vset_at(ic_error *err, ic_result code, const char *path, int line, const char *fmt, va_list ap)
+{
+    if (err) {
+        int n = snprintf(err->message, sizeof err->message, "%s:%d: ", path ? path : "?", line);
+        if (n >= 0 && (size_t)n < sizeof err->message)
+            vsnprintf(err->message + n, sizeof err->message - (size_t)n, fmt, ap);
+        err->code = code;
+    }
+    return code;
+}
+
+ic_result ic_error_set_at(ic_error *err, ic_result code, const char *path, int line, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    ic_result r = ic_error_vset_at(err, code, path, line, fmt, ap);
+    va_end(ap);
+    return r;
 }

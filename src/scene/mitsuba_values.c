@@ -5,6 +5,8 @@
  */
 #include "scene/mitsuba_internal.h"
 
+#include "core/error_at.h"
+
 #include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -75,7 +77,7 @@ void ic_mts_warn_once(ic_mts_ctx *c, const xmlNode *n, const char *kind, const c
 
 ic_result ic_mts_fail(ic_mts_ctx *c, const xmlNode *n, ic_result r, const char *what, const char *detail)
 {
-    return ic_error_set(c->err, r, "%s:%d: %s%s", ic_mts_file(c, n), ic_mts_line(n), what, detail ? detail : "");
+    return ic_error_set_at(c->err, r, ic_mts_file(c, n), ic_mts_line(n), "%s%s", what, detail ? detail : "");
 }
 
 /* The child element <tag name="name"> (any tag if tag is NULL), or NULL. */

@@ -17,6 +17,7 @@
 #include "scene/radiance_internal.h"
 #include "scene/tessellate.h"
 
+#include "core/error_at.h"
 #include "core/read_file.h"
 #include "irrcache/defaults.h"
 
@@ -36,12 +37,11 @@ typedef struct geometry {
 
 ic_result ic_rad_fail(ic_rad_ctx *c, int line, ic_result r, const char *fmt, ...)
 {
-    char msg[512];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    ic_result rc = ic_error_vset_at(c->err, r, c->path, line, fmt, ap);
     va_end(ap);
-    return ic_error_set(c->err, r, "%s:%d: %s", c->path, line, msg);
+    return rc;
 }
 
 void ic_rad_warn_once(ic_rad_ctx *c, int line, const char *kind, const char *what)

@@ -5,6 +5,7 @@
  */
 #include "scene/json_context.h"
 
+#include "core/error_at.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -182,12 +183,11 @@ int ic_json_locate_object_start(json_ctx *c)
 
 ic_result ic_json_fail(json_ctx *c, int line, ic_result code, const char *fmt, ...)
 {
-    char msg[900];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    ic_result r = ic_error_vset_at(c->err, code, c->path, line, fmt, ap);
     va_end(ap);
-    return ic_error_set(c->err, code, "%s:%d: %s", c->path, line, msg);
+    return r;
 }
 
 ic_result ic_json_unknown_key(json_ctx *c, int line, const char *key, const char *where, const char *valid)
