@@ -42,6 +42,7 @@ ci_runs() {
     mesh_ply) echo 45000 ;;
     scene_json) echo 50000 ;;
     scene_radiance) echo 10000 ;;
+    view_radiance) echo 30000 ;;
     *) echo 10000 ;; # a new target: give it its own line once its speed is measured
   esac
 }

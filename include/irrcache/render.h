@@ -47,7 +47,7 @@ typedef struct ic_scene_load_options {
     const char *camera;    /* a glTF scene: the name (a node's or a camera's) of the camera to render from
                               (NULL: the first perspective camera); any other scene refuses a name */
     const char *view;      /* a Radiance scene (.rad): the view file (rview/rpict options -vt -vp -vd -vu -vh -vv
-                              -vs -vl) to render from (NULL: a camera fitted to the scene); others refuse it */
+                              -vs -vl -vo -va) to render from (NULL: a camera fitted to the scene); others refuse it */
 } ic_scene_load_options;
 
 /* Loads a scene file (JSON, Mitsuba .xml, Radiance .rad) or a bare mesh (.obj .gltf .glb .ply); on failure *out is NULL and err
