@@ -75,9 +75,7 @@ static ic_result parse_sensor(ic_mts_ctx *c, const xmlNode *n)
     cam->width = c->opt->width > 0 ? c->opt->width : (int)w;
     cam->height = c->opt->height > 0 ? c->opt->height : (int)h;
     /* fovAxis: x (default), y, diagonal, smaller, larger */
-    const char *axis = ic_mts_string(c, n, "fovAxis");
-    if (!axis)
-        axis = ic_mts_string(c, n, "fov_axis");
+    const char *axis = ic_mts_string(c, n, "fovAxis"); /* Mitsuba 3: fov_axis */
     float aw = (float)cam->width, ah = (float)cam->height, t = tanf(0.5f * fov * IC_PI / 180.0f);
     if (!axis || !strcmp(axis, "x") || (!strcmp(axis, "smaller") && aw <= ah) || (!strcmp(axis, "larger") && aw >= ah))
         t *= ah / aw;

@@ -80,14 +80,34 @@ ic_result ic_mts_fail(ic_mts_ctx *c, const xmlNode *n, ic_result r, const char *
     return ic_error_set_at(c->err, r, ic_mts_file(c, n), ic_mts_line(n), "%s%s", what, detail ? detail : "");
 }
 
-/* The child element <tag name="name"> (any tag if tag is NULL), or NULL. */
+/* A parameter name as Mitsuba 3 spells it: Mitsuba 0.6's camelCase in snake_case, a run of capitals one
+ * word ("intIOR" and "int_ior", "toWorld" and "to_world", "diffuseReflectance" and "diffuse_reflectance"). */
+static void snake_case(const char *in, char *out, size_t size)
+{
+    size_t o = 0;
+    for (size_t i = 0; in[i] && o + 2 < size; ++i) {
+        unsigned char ch = (unsigned char)in[i];
+        if (isupper(ch) && i > 0 && (islower((unsigned char)in[i - 1]) || isdigit((unsigned char)in[i - 1])))
+            out[o++] = '_';
+        out[o++] = (char)tolower(ch);
+    }
+    out[o] = '\0';
+}
+
+/* The child element <tag name="name"> (any tag if tag is NULL), or NULL; the name in either version's
+ * spelling (snake_case). */
 xmlNode *ic_mts_child(ic_mts_ctx *c, const xmlNode *n, const char *tag, const char *name)
 {
+    char want[64], have[64];
+    snake_case(name, want, sizeof want);
     for (xmlNode *k = n->children; k; k = k->next) {
         if (!ic_mts_is_element(k, tag))
             continue;
         const char *nm = ic_mts_attr(c, k, "name");
-        if (nm && !strcmp(nm, name))
+        if (!nm)
+            continue;
+        snake_case(nm, have, sizeof have);
+        if (!strcmp(have, want))
             return k;
     }
     return NULL;
@@ -335,9 +355,7 @@ static ic_result parse_transform(ic_mts_ctx *c, const xmlNode *t, float m[16])
 
 ic_result ic_mts_to_world(ic_mts_ctx *c, const xmlNode *n, float m[16])
 {
-    xmlNode *t = ic_mts_child(c, n, "transform", "toWorld");
-    if (!t)
-        t = ic_mts_child(c, n, "transform", "to_world");
+    xmlNode *t = ic_mts_child(c, n, "transform", "toWorld"); /* Mitsuba 3: to_world */
     if (!t) {
         ic_mat4_identity(m);
         return IC_OK;

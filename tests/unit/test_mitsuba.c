@@ -122,31 +122,16 @@ static void test_analytic(void)
     CHECK(fabs(pt - want) < 2e-3 * want, "floor under a point light: %g, expected rho I/(pi h^2) = %g", pt, want);
 }
 
-static void test_materials_and_warnings(void)
+/* Loads xml (written as `file`) and checks every shape's material and the warnings. */
+static void check_materials(const char *xml, const char *file)
 {
-    const char *xml =
-        "<scene version=\"0.6.0\">\n"
-        "  <default name=\"a\" value=\"0.3\"/>\n"
-        "  <default name=\"alpha\" value=\"0.7\"/>\n"
-        "  <bsdf type=\"roughconductor\" id=\"gold\"><string name=\"material\" value=\"Au\"/>"
-        "<float name=\"alpha\" value=\"$a\"/></bsdf>\n"
-        "  <bsdf type=\"twosided\" id=\"paint\"><bsdf type=\"roughplastic\"><float name=\"intIOR\" value=\"1.6\"/><float name=\"alpha\" value=\"$alpha\"/>"
-        "<rgb name=\"diffuseReflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf></bsdf>\n"
-        "  <shape type=\"sphere\"><point name=\"center\" x=\"1\" y=\"2\" z=\"3\"/><float name=\"radius\" value=\"0.5\"/>"
-        "<ref id=\"gold\"/></shape>\n"
-        "  <shape type=\"cube\"><transform name=\"toWorld\"><scale value=\"2\"/><translate x=\"10\"/></transform>"
-        "<ref id=\"paint\"/></shape>\n"
-        "  <shape type=\"rectangle\"><bsdf type=\"dielectric\"><float name=\"intIOR\" value=\"1.33\"/></bsdf>"
-        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"3\"/></emitter></shape>\n"
-        "  <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/></bsdf></shape>\n"
-        "  <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/></bsdf></shape>\n"
-        "  <shape type=\"hair\"/>\n"
-        "  <shape type=\"rectangle\"><bsdf type=\"thindielectric\"><float name=\"intIOR\" value=\"1.5\"/></bsdf></shape>\n"
-        "</scene>\n";
-    test_write_file(IC_TEST_TMP "/mts_materials.xml", xml);
+    char path[256], place[64];
+    snprintf(path, sizeof path, IC_TEST_TMP "/%s", file);
+    snprintf(place, sizeof place, "%s:11:", file);
+    test_write_file(path, xml);
     ic_error err = {0};
-    ic_scene *s = load(IC_TEST_TMP "/mts_materials.xml", &err);
-    CHECK(s != NULL, "materials scene loads: %s", err.message);
+    ic_scene *s = load(path, &err);
+    CHECK(s != NULL, "%s loads: %s", file, err.message);
     if (!s)
         return;
     int seen[8] = {0};
@@ -173,12 +158,50 @@ static void test_materials_and_warnings(void)
     const char *w = ic_scene_warnings(s);
     const char *bump = strstr(w, "bumpmap");
     CHECK(bump && !strstr(bump + 1, "bumpmap"), "one warning for the two bump maps: %s", w);
-    CHECK(strstr(w, "mts_materials.xml:11:") && strstr(w, "hair"),
+    CHECK(strstr(w, place) && strstr(w, "hair"),
           "the unsupported shape named with file:line: %s", w);
     ic_scene_free(s);
+}
 
+static void test_materials_and_warnings(void)
+{
+    const char *xml =
+        "<scene version=\"0.6.0\">\n"
+        "  <default name=\"a\" value=\"0.3\"/>\n"
+        "  <default name=\"alpha\" value=\"0.7\"/>\n"
+        "  <bsdf type=\"roughconductor\" id=\"gold\"><string name=\"material\" value=\"Au\"/>"
+        "<float name=\"alpha\" value=\"$a\"/></bsdf>\n"
+        "  <bsdf type=\"twosided\" id=\"paint\"><bsdf type=\"roughplastic\"><float name=\"intIOR\" value=\"1.6\"/><float name=\"alpha\" value=\"$alpha\"/>"
+        "<rgb name=\"diffuseReflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf></bsdf>\n"
+        "  <shape type=\"sphere\"><point name=\"center\" x=\"1\" y=\"2\" z=\"3\"/><float name=\"radius\" value=\"0.5\"/>"
+        "<ref id=\"gold\"/></shape>\n"
+        "  <shape type=\"cube\"><transform name=\"toWorld\"><scale value=\"2\"/><translate x=\"10\"/></transform>"
+        "<ref id=\"paint\"/></shape>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"dielectric\"><float name=\"intIOR\" value=\"1.33\"/></bsdf>"
+        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"3\"/></emitter></shape>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/></bsdf></shape>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/></bsdf></shape>\n"
+        "  <shape type=\"hair\"/>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"thindielectric\"><float name=\"intIOR\" value=\"1.5\"/></bsdf></shape>\n"
+        "</scene>\n";
+    check_materials(xml, "mts_materials.xml");
+    /* Mitsuba 3 spells the parameters in snake_case: the same scene, the same materials. */
+    char v3[4096];
+    snprintf(v3, sizeof v3, "%s", xml);
+    const char *from[] = {"version=\"0.6.0\"", "intIOR", "diffuseReflectance", "toWorld"},
+               *to[] = {"version=\"3.0.0\"", "int_ior", "diffuse_reflectance", "to_world"};
+    for (int k = 0; k < 4; ++k)
+        for (char *p = strstr(v3, from[k]); p; p = strstr(p, from[k])) {
+            size_t lf = strlen(from[k]), lt = strlen(to[k]);
+            memmove(p + lt, p + lf, strlen(p + lf) + 1);
+            memcpy(p, to[k], lt);
+        }
+    CHECK(!strstr(v3, "intIOR") && strstr(v3, "int_ior") && strstr(v3, "to_world"), "the Mitsuba 3 spelling");
+    check_materials(v3, "mts_materials_v3.xml");
+
+    ic_error err = {0};
+    ic_scene *s = NULL;
     test_write_file(IC_TEST_TMP "/mts_bad.xml", "<scene>\n  <shape type=\"obj\">\n</scene>\n");
-    s = NULL;
     ic_scene_load_options lo = {0};
     ic_result r = ic_scene_load(IC_TEST_TMP "/mts_bad.xml", &lo, &s, &err);
     CHECK(r == IC_ERR_PARSE && strstr(err.message, "mts_bad.xml:4: "), "malformed XML: file:line (%s)", err.message);
