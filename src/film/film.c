@@ -582,16 +582,30 @@ static void count_work(const loop_ctx *c, int threads, ic_image_loop_result *res
  * the pilot times are summed over the ranks (each tile was timed by one), so every rank holds the same
  * costs and makes the same split: longest tile first to the least loaded rank (Graham's LPT rule; ties to
  * the lower index). Which rank renders a tile does not change its pixels, so the image stays the same. */
+typedef struct tile_cost {
+    double cost;
+    int64_t tile;
+} tile_cost;
+
+/* Most costly first, ties by tile index: a total order, so every rank sorts alike. */
+static int cmp_tile_cost(const void *a, const void *b)
+{
+    const tile_cost *x = a, *y = b;
+    if (x->cost != y->cost)
+        return x->cost > y->cost ? -1 : 1;
+    return (x->tile > y->tile) - (x->tile < y->tile);
+}
+
 static ic_result balance_second_pass(loop_ctx *c, int n0, ic_error *err)
 {
     const ic_camera *cam = c->loop->camera;
     const int tiles = c->tiles_x * c->tiles_y;
     ic_result r = ic_comm_sum(c->loop->comm, c->tile_seconds, (uint64_t)tiles, err);
-    double *cost = malloc(sizeof *cost * (size_t)tiles), *load = calloc((size_t)c->ranks, sizeof *load);
-    int64_t *order = malloc(sizeof *order * (size_t)tiles);
+    double *load = calloc((size_t)c->ranks, sizeof *load);
+    tile_cost *order = malloc(sizeof *order * (size_t)tiles);
     c->owner = malloc(sizeof *c->owner * (size_t)tiles);
     c->owned = malloc(sizeof *c->owned * (size_t)tiles);
-    if (r == IC_OK && (!cost || !load || !order || !c->owner || !c->owned))
+    if (r == IC_OK && (!load || !order || !c->owner || !c->owned))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for sharing out %d tiles", tiles);
     for (int t = 0; r == IC_OK && t < tiles; ++t) {
         int x0, y0, x1, y1;
@@ -601,19 +615,11 @@ static ic_result balance_second_pass(loop_ctx *c, int n0, ic_error *err)
             for (int x = x0; x < x1; ++x)
                 samples += c->extra[(size_t)y * cam->width + x];
         double pilot = (double)n0 * (x1 - x0) * (y1 - y0);
-        cost[t] = samples * c->tile_seconds[t] / pilot;
-        order[t] = t;
+        order[t].cost = samples * c->tile_seconds[t] / pilot;
+        order[t].tile = t;
     }
-    /* Most costly first (a shell sort: thousands of tiles at most). */
-    for (int gap = tiles / 2; r == IC_OK && gap > 0; gap /= 2)
-        for (int i = gap; i < tiles; ++i) {
-            int64_t t = order[i];
-            int j = i;
-            for (; j >= gap && (cost[order[j - gap]] < cost[t] ||
-                                (cost[order[j - gap]] == cost[t] && order[j - gap] > t)); j -= gap)
-                order[j] = order[j - gap];
-            order[j] = t;
-        }
+    if (r == IC_OK)
+        qsort(order, (size_t)tiles, sizeof *order, cmp_tile_cost);
     c->own_tiles = 0;
     c->own_pixels = 0;
     for (int i = 0; r == IC_OK && i < tiles; ++i) {
@@ -621,8 +627,8 @@ static ic_result balance_second_pass(loop_ctx *c, int n0, ic_error *err)
         for (int q = 1; q < c->ranks; ++q)
             if (load[q] < load[best])
                 best = q;
-        int64_t t = order[i];
-        load[best] += cost[t];
+        int64_t t = order[i].tile;
+        load[best] += order[i].cost;
         c->owner[t] = best;
         if (best == c->rank) {
             int x0, y0, x1, y1;
@@ -631,7 +637,6 @@ static ic_result balance_second_pass(loop_ctx *c, int n0, ic_error *err)
             c->own_pixels += (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0);
         }
     }
-    free(cost);
     free(load);
     free(order);
     free(c->tile_seconds);
