@@ -271,6 +271,7 @@ static int write_json(const char *path, const ic_points_options *opt, const ic_p
     cJSON_AddStringToObject(root, "integrator", opt->integrator == IC_INTEGRATOR_IC ? "ic" : "pt");
     cJSON_AddNumberToObject(root, "luminous_efficacy", IC_LUMINOUS_EFFICACY);
     cJSON_AddItemToObject(root, "records", ic_cli_json_u64(st->records));
+    cJSON_AddItemToObject(root, "hit_records", ic_cli_json_u64(st->hit_records));
     cJSON_AddNumberToObject(root, "seconds", st->seconds);
     if (df_lux > 0.0)
         cJSON_AddNumberToObject(root, "daylight_reference_lux", df_lux);

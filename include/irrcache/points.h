@@ -18,12 +18,14 @@
  *                     between the two.
  *   IC_INTEGRATOR_IC  irradiance caching (Ward et al. 1988): a record is gathered at a sensor where a
  *                     look-up finds none (in passes over the points in input order, each pass's records
- *                     gathered in parallel), so neighbouring sensors share records; each point's
+ *                     gathered in parallel), so neighbouring sensors share records; before them, with
+ *                     max_depth ≥ 3, records where the sensors' hemisphere rays land (walls, ceiling),
+ *                     from which those rays read the bounces after their hits; each point's
  *                     indirect light (and the sky's, as Radiance's ambient calculation treats a glow
  *                     sky) is interpolated from them, while the sun, point lights and emitting surfaces
  *                     are light-sampled at every point (`light_samples` samples, never interpolated).
  *                     σ adds the interpolation's variance (the records' relative variance, pooled over
- *                     all records, weighed as the interpolation weighs them) to the direct part's; it
+ *                     the sensors' records, weighed as the interpolation weighs them) to the direct part's; it
  *                     does not include the interpolation's bias (a record's value moved to a nearby
  *                     point by its gradients), which the cache's accuracy parameter bounds.
  *
@@ -101,8 +103,10 @@ typedef struct ic_point_result {
 typedef struct ic_points_stats {
     double seconds;        /* wall time of ic_points_compute */
     uint64_t rays;         /* rays traced */
-    uint32_t records;      /* cache records made (integrator IC) */
+    uint32_t records;      /* cache records made at the sensors (integrator IC) */
     int threads;           /* threads used */
+    uint32_t hit_records;  /* records made where the sensors' hemisphere rays land (integrator IC with
+                              max_depth ≥ 3: the bounces after those hits are read from them) */
 } ic_points_stats;
 
 /* Illuminance (lux) of irradiance E by Radiance's convention. */

@@ -462,6 +462,7 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
     rec->normal = cand->n;
     rec->tangent = ic_frame_from_normal(cand->n).t;
     rec->irradiance = gr->irradiance;
+    rec->bounce = c->record_bounce;
     if (!c->o.no_gradients) {
         /* Gradient-magnitude clamping (Křivánek et al. 2006 §5.1, eq. 2) bounds the extrapolated change by shrinking
          * R to Y/|∇t Y|; where the R floor (R_min, pixel bound) stops that, the linear model would be

@@ -43,6 +43,8 @@ typedef struct ic_ctx {
     ic_gbuffer g;
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
+    uint8_t record_bounce;     /* the bounce field of the records gathered from candidates: 0, or the
+                                  sensors' own kind while ic_ic_points_build makes theirs */
     double deadline;           /* ic_seconds() past which batch and adaptive construction stop (a time
                                   budget's construction share); 0: none */
     int levels;                /* with hit_lookups: bounces B, whose levels the records keep apart;
@@ -263,12 +265,14 @@ void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b);
 /* A context for sensor points: opt resolved as for a render, lazy, every emitter light-sampled, no record
  * filter, no cache files, and no shading points of the camera. */
 ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, ic_error *err);
-/* Construction over the sensors (p[i], unit n[i]): in passes, the points no record covers, in input order,
- * each unless it lies within reach of one taken before it in the pass; the pass's records gathered in
- * parallel and inserted as one batch (the records do not depend on the thread count); freezes the cache.
- * rel_var gets the records' mean relative variance (σ_i/E_i)² of R, G, B and luminance. */
+/* Construction over the sensors (p[i], unit n[i]): first, with hit look-ups, records where the sensors'
+ * hemisphere rays land (*hit_records of them, a kind apart from the sensors'); then in passes, the points
+ * no sensor record covers, in input order, each unless it lies within reach of one taken before it in the
+ * pass; the pass's records gathered in parallel and inserted as one batch (the records do not depend on
+ * the thread count); freezes the cache. rel_var gets the sensor records' mean relative variance
+ * (σ_i/E_i)² of R, G, B and luminance. */
 ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
-                             ic_error *err);
+                             uint32_t *hit_records, ic_error *err);
 /* The interpolated irradiance at (p, n) (environment and indirect light) and the σ of R, G, B and luminance
  * (Radiance's weights), each record's σ being rel_var's relative σ times its value; 0 if no record
  * contributes. */

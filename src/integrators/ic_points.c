@@ -9,13 +9,21 @@
 
 #include "irrcache/points.h"
 
+#include "core/sampling.h"
+#include "integrators/ic_world.h"
+
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define POINT_KEY_TAG 0x73656e736f72ULL /* keys of sensor records, apart from the image's */
 #define MAX_ROUNDS 8                    /* most records gathered at one point (neighbour clamping) */
 #define CONTRIBUTION_CAPACITY 256
+/* The sensors' records are a kind of their own (the cache's bounce field): a sensor reads only sensor
+ * records, and the hit stage's records, which serve the hemisphere rays' hits, never stand in for a
+ * sensor's own gather (they have 1/64 of its rays). */
+#define SENSOR_BOUNCE (IC_BOUNCE_RADIANCE - 1u)
 
 void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b)
 {
@@ -134,8 +142,98 @@ static void grid_add(taken_grid *g, const ic_vec3 *pts, uint32_t i)
     *head = i + 1;
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Probe rays per sensor and pass of the hit stage, and its most passes. */
+#define HIT_PROBES 16
+#define HIT_MAX_PASSES 12
+#define HIT_STRATA_DIV 8 /* the hit records' strata: a sensor record's over this, in θ and in φ */
+
+/* The hit stage: records where the sensors' hemisphere rays land, before the sensors' own (Ward's
+ * multiple bounces as Radiance's ambient file serves them, the world-space stage of Frolov et al. 2012
+ * §3.1.3 with probe rays from the sensors in place of eye paths). A sensor record's rays then read the
+ * irradiance at their hits from these records (ic_ic_gather_trace's look-ups) instead of tracing a path
+ * each, and every sensor shares them. Each pass traces HIT_PROBES cosine-distributed rays from every
+ * sensor; the diffuse hits that no record accepts are clustered as the world stage clusters eye-path
+ * hits and gathered; passes stop when fewer than `uncovered` of the probes' hits go uncovered, or a pass
+ * finds fewer than `min_candidates`. Deterministic: the probes depend on the seed, the sensor and the
+ * pass only, and the candidates are collected in sensor order. */
+static ic_result hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, phase_times *times,
+                           ic_error *err)
+{
+    if (!c->hit_lookups)
+        return IC_OK;
+    const ic_scene *scene = c->tr->scene;
+    size_t cap = (size_t)count * HIT_PROBES;
+    ic_candidate *cand = malloc(sizeof *cand * cap);
+    float *dist = malloc(sizeof *dist * cap);
+    if (!cand || !dist) {
+        free(cand);
+        free(dist);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the sensors' probe rays (%u sensors)", count);
+    }
+    ic_result r = IC_OK;
+    for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK; ++pass) {
+        uint32_t m = 0, visited = 0;
+        for (uint32_t i = 0; i < count; ++i) {
+            ic_frame f = ic_frame_from_normal(n[i]);
+            for (uint32_t k = 0; k < HIT_PROBES; ++k) {
+                ic_rng rng = ic_rng_make(c->seed ^ POINT_KEY_TAG, i, (uint64_t)pass, k);
+                float u1, u2;
+                ic_rng_2d(&rng, &u1, &u2);
+                ic_ray ray = {p[i], ic_frame_to_world(&f, ic_warp_cosine_hemisphere(u1, u2)), 0.0f, INFINITY};
+                ic_hit hit;
+                ic_accel_intersect1(c->tr->accel, &ray, &hit);
+                if (hit.triangle == IC_NO_HIT)
+                    continue;
+                ic_surface s;
+                ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+                ic_bsdf b;
+                ic_bsdf_init(&b, scene, &s, v3_neg(ray.dir));
+                if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
+                    continue; /* only diffuse hits look the cache up */
+                ++visited;
+                ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
+                ic_cache_estimate e;
+                if (ic_cache_query(c->cache, &q, &e))
+                    continue;
+                dist[m] = hit.t;
+                ic_candidate *cd = &cand[m++];
+                cd->p = s.p;
+                cd->n = b.cache_n;
+                cd->footprint = 0.0f;
+                cd->key = ic_hash4(POINT_KEY_TAG ^ 0x686974ULL, i, (uint64_t)pass, k);
+            }
+        }
+        atomic_fetch_add_explicit(&c->rays, (uint64_t)count * HIT_PROBES, memory_order_relaxed);
+        if (m < (uint32_t)c->o.min_candidates || (double)m <= c->o.uncovered * (double)visited)
+            break;
+        /* Clusters about a record's size: the accuracy times the median distance of the uncovered hits (a
+         * record's R is about the distance its hemisphere rays travel). The scene's diagonal, which sizes
+         * the image's world stage, says nothing here: a ground plane around a house makes it huge. */
+        qsort(dist, m, sizeof *dist, cmp_float);
+        float box = c->o.cache.accuracy * dist[m / 2];
+        m = ic_world_select(cand, m, scene->bounds_min, scene->bounds_max, box, 3, 30.0f);
+        /* Their rays: an eighth of the strata each way, 1/64 of a sensor record's. A sensor's rays read
+         * hundreds of them, so their noise averages out; measured on the overcast sky-room (BENCHMARKS.md,
+         * "A daylit room"), 1/16 and 1/256 of the rays both took longer to a 2 % error. */
+        ic_gather_opts keep = c->o.gather;
+        c->o.gather.theta_strata = (c->o.gather.theta_strata + HIT_STRATA_DIV - 1) / HIT_STRATA_DIV;
+        c->o.gather.phi_strata = (c->o.gather.phi_strata + HIT_STRATA_DIV - 1) / HIT_STRATA_DIV;
+        r = ic_ic_gather_and_insert(c, cand, m, times, err);
+        c->o.gather = keep;
+    }
+    free(cand);
+    free(dist);
+    return r;
+}
+
 ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
-                             ic_error *err)
+                             uint32_t *hit_records, ic_error *err)
 {
     /* A record accepts a look-up only within a_i·R_i of itself (both weights' distance term), and R_i is at
      * most the larger of the radius bounds: sensors farther apart than that can never share a record, so
@@ -161,6 +259,10 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
                       ? IC_OK
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
     phase_times times = {0.0, 0.0};
+    if (r == IC_OK)
+        r = hit_stage(c, p, n, count, &times, err);
+    const uint32_t first_sensor_record = r == IC_OK ? ic_cache_count(c->cache) : 0;
+    *hit_records = first_sensor_record;
     /* Passes: the uncovered points in input order, each taken unless it lies within reach of one already
      * taken this pass (it waits for the next pass, where their record may cover it); the pass's records
      * are gathered in parallel and inserted as one batch. What is taken depends only on the points and the
@@ -174,6 +276,7 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
             if (gathered[i] >= MAX_ROUNDS)
                 continue;
             ic_cache_lookup q = ic_cache_lookup_at(p[i], n[i], IC_ACCEPT_CONSTRUCTION);
+            q.bounce = SENSOR_BOUNCE;
             ic_cache_estimate e;
             if (ic_cache_query(c->cache, &q, &e))
                 continue;
@@ -191,7 +294,9 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
         }
         if (taken == 0)
             break;
+        c->record_bounce = SENSOR_BOUNCE;
         r = ic_ic_gather_and_insert(c, cand, taken, &times, err);
+        c->record_bounce = 0;
     }
     free(gathered);
     free(cand);
@@ -207,7 +312,7 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
     double sum[4] = {0.0, 0.0, 0.0, 0.0};
     uint32_t used[4] = {0, 0, 0, 0};
     uint32_t records = r == IC_OK ? ic_cache_count(c->cache) : 0;
-    for (uint32_t k = 0; k < records; ++k) {
+    for (uint32_t k = first_sensor_record; k < records; ++k) { /* the sensors' records */
         ic_record rec;
         if (ic_cache_get_record(c->cache, k, &rec) != IC_OK)
             continue;
@@ -232,6 +337,7 @@ int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const double re
 {
     ic_cache_contribution contrib[CONTRIBUTION_CAPACITY];
     ic_cache_lookup q = ic_cache_lookup_at(p, n, IC_ACCEPT_FINAL);
+    q.bounce = SENSOR_BOUNCE;
     q.contributions = contrib;
     q.contribution_capacity = CONTRIBUTION_CAPACITY;
     ic_cache_estimate e;

@@ -43,12 +43,12 @@ ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf 
 /* Light arriving along an escaping ray, times the path throughput beta: the environment and the sun's
  * disc, each weighted against the light sampling that could have picked it (bsdf_pdf: the BSDF sample's
  * pdf; 0 for a camera ray or a delta lobe, which light sampling cannot reproduce: full weight). */
-static ic_vec3 escaped_light(const ic_scene *scene, ic_vec3 dir, ic_vec3 beta, float bsdf_pdf,
+static ic_vec3 escaped_light(const ic_scene *scene, ic_vec3 org, ic_vec3 dir, ic_vec3 beta, float bsdf_pdf,
                              const ic_light_selection *sel)
 {
     ic_vec3 c = v3s(0.0f), env = ic_scene_env_radiance(scene, dir), sun = ic_scene_sun_radiance(scene, dir);
     if (!v3_is_black(env)) {
-        float w = bsdf_pdf > 0.0f ? ic_power_heuristic(bsdf_pdf, ic_scene_light_pdf_env(scene, dir)) : 1.0f;
+        float w = bsdf_pdf > 0.0f ? ic_power_heuristic(bsdf_pdf, ic_scene_light_pdf_env_at(scene, org, dir)) : 1.0f;
         c = v3_scale(v3_mul(beta, env), w);
     }
     if (!v3_is_black(sun)) {
@@ -87,7 +87,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
         }
         if (hit.triangle == IC_NO_HIT) {
             int mis = !prev_specular && prev_pdf > 0.0f;
-            ic_vec3 c = escaped_light(scene, ray.dir, beta, mis ? prev_pdf : 0.0f, prev_sel);
+            ic_vec3 c = escaped_light(scene, ray.org, ray.dir, beta, mis ? prev_pdf : 0.0f, prev_sel);
             if (!v3_is_black(c)) {
                 L = v3_add(L, c);
                 if (levels)

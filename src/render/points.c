@@ -309,9 +309,9 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
         ro.comm = opt.comm;
         r = ic_ic_points_ctx_create(&tr, &ro, &ic, err);
         if (r == IC_OK)
-            r = ic_ic_points_build(ic, p, n, count, job.rel_var, err);
+            r = ic_ic_points_build(ic, p, n, count, job.rel_var, &st->hit_records, err);
         if (r == IC_OK) {
-            st->records = ic_cache_count(ic->cache);
+            st->records = ic_cache_count(ic->cache) - st->hit_records;
             gather_rays = (uint64_t)atomic_load(&ic->rays);
             job.ic = ic;
             job.samples = opt.light_samples;

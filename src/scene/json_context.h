@@ -76,6 +76,8 @@ ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const c
 
 /* "environment" (scene_json_light.c). */
 ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line);
+/* An environment's "portals": an array of parallelograms, each four corners in order (scene_json_light.c). */
+ic_result ic_json_parse_portals(json_ctx *c, const cJSON *arr, int line);
 /* "environment" that names a "sky" (scene_json_sky.c). */
 ic_result ic_json_parse_sky(json_ctx *c, const cJSON *obj, int line);
 /* "lights": point lights and at most one sun (scene_json_light.c). */

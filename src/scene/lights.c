@@ -228,6 +228,15 @@ int ic_scene_sample_sun(const ic_scene *scene, float u1, float u2, ic_light_samp
     return 1;
 }
 
+float ic_scene_light_pdf_env_at(const ic_scene *scene, ic_vec3 p, ic_vec3 wi)
+{
+    if (!scene->env.portal_count || !ic_scene_portals_apply(scene, p))
+        return ic_scene_light_pdf_env(scene, wi);
+    if (!scene->env.enabled || !(scene->light_select.env > 0.0f))
+        return 0.0f;
+    return scene->light_select.env * ic_scene_portal_pdf(scene, p, wi);
+}
+
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi)
 {
     const ic_environment *env = &scene->env;
@@ -350,6 +359,16 @@ static void select_light_classes(ic_scene *s, double w_tri, double w_point)
     double w_env = 0.0;
     if (s->env.enabled && (s->env.image.width <= 0 || s->env.total_weight > 0.0f))
         w_env = 4.0 * IC_PI * IC_PI * radius * radius * env_mean_lum(&s->env);
+    if (s->env.enabled && s->env.portal_count) {
+        /* Through portals, the power that enters: the sky's over the openings' area (π L̄ A), the sun's
+         * over their area facing it. */
+        w_env = IC_PI * s->env.portal_area * env_mean_lum(&s->env);
+        double facing = 0.0;
+        for (uint32_t k = 0; k < s->env.portal_count; ++k)
+            facing += s->env.portals[k].area * fabsf(v3_dot(s->env.portals[k].normal, s->sun.direction));
+        if (s->sun.enabled)
+            w_sun = facing * v3_lum(s->sun.irradiance);
+    }
     double sum = w_tri + w_point + w_sun + w_env;
     memset(&s->light_select, 0, sizeof s->light_select);
     if (sum > 0.0 && isfinite(sum)) {
@@ -379,6 +398,9 @@ ic_result ic_scene_build_lights(ic_scene *s, ic_error *err)
         if (r != IC_OK)
             return r;
     }
+    r = ic_scene_build_portals(s, err);
+    if (r != IC_OK)
+        return r;
     prepare_sun_disc(&s->sun);
     select_light_classes(s, tri_power, point_power);
     return IC_OK;
@@ -519,11 +541,21 @@ static int sample_point(const ic_scene *s, const ic_light_selection *sel, ic_vec
     return ls->pdf > 0.0f;
 }
 
-static int sample_env(const ic_scene *s, const ic_light_selection *sel, float u1, float u2, ic_light_sample *ls)
+static int sample_env(const ic_scene *s, const ic_light_selection *sel, ic_vec3 p, float u0, float u1, float u2,
+                      ic_light_sample *ls)
 {
     const ic_environment *env = &s->env;
     ls->dist = INFINITY;
     ls->is_delta = 0;
+    if (env->portal_count && ic_scene_portals_apply(s, p)) {
+        ic_vec3 q;
+        float pdf;
+        if (!ic_scene_sample_portal(s, p, u0, u1, u2, &ls->wi, &q, &pdf))
+            return 0;
+        ls->pdf = sel->env * pdf;
+        ls->radiance = ic_scene_env_radiance(s, ls->wi);
+        return ls->pdf > 0.0f && isfinite(ls->pdf);
+    }
     if (env->image.width <= 0) {
         ls->wi = ic_warp_uniform_sphere(u1, u2);
         ls->pdf = sel->env * (0.25f * IC_INV_PI);
@@ -584,7 +616,7 @@ int ic_scene_sample_light_sel(const ic_scene *scene, const ic_light_selection *s
         ls->pdf *= sel->sun;
         break;
     default:
-        ok = sel->env > 0.0f && sample_env(scene, sel, u1, u2, ls);
+        ok = sel->env > 0.0f && sample_env(scene, sel, p, ur, u1, u2, ls);
         break;
     }
     if (!ok)

@@ -496,5 +496,7 @@ void ic_scene_free(ic_scene *s)
     ic_image_free(&s->env.image);
     free(s->env.marginal_cdf);
     free(s->env.conditional_cdf);
+    free(s->env.portals);
+    free(s->env.portal_cdf);
     free(s);
 }

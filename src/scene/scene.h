@@ -139,6 +139,17 @@ typedef struct ic_sun_light {
     ic_frame frame;        /* about `direction`, for sampling the disc */
 } ic_sun_light;
 
+/* A portal: a parallelogram opening (a window) through which the interior sees the environment. Light
+ * sampling of the environment then picks points on the portals instead of directions on the sphere, and
+ * the cache's hemisphere gathers take the light through them by the same sampling (docs/scene-format.md,
+ * "Portals"). */
+typedef struct ic_portal {
+    ic_vec3 corner;        /* one corner; the opening is corner + a edge1 + b edge2, a, b in [0, 1] */
+    ic_vec3 edge1, edge2;
+    ic_vec3 normal;        /* unit, edge1 × edge2 normalised: it points into the interior */
+    float area;
+} ic_portal;
+
 typedef struct ic_environment {
     int enabled;
     ic_vec3 radiance;      /* constant radiance, or a multiplier on the image */
@@ -151,6 +162,10 @@ typedef struct ic_environment {
     float total_weight;    /* sum over texels of lum * sin(theta) */
     ic_sky sky;            /* an analytic daylight sky (model != IC_SKY_NONE): it gives the radiance, and
                               `image` holds it tabulated only for importance sampling (lights.c) */
+    ic_portal *portals;    /* NULL: none, the environment is sampled over the whole sphere */
+    uint32_t portal_count;
+    float *portal_cdf;     /* portal_count + 1, by area (filled by ic_scene_build_lights) */
+    float portal_area;     /* their total area */
 } ic_environment;
 
 /* Probability with which ic_scene_sample_light picks each class of light; they sum to 1 (all 0 when
@@ -306,6 +321,22 @@ float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_sele
 int ic_scene_local_lights(const ic_scene *scene, ic_vec3 p, ic_vec3 n, const float *base_pmf, float *pmf, float *cdf);
 /* Solid-angle pdf of sampling the environment in direction wi (for MIS when a ray escapes). */
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
+/* The same with portals taken into account: the solid-angle pdf of environment light sampling from p
+ * (from a point inside a portal, 0 along a direction through no portal). */
+float ic_scene_light_pdf_env_at(const ic_scene *scene, ic_vec3 p, ic_vec3 wi);
+/* Portals (portals.c). A direction from p to a point uniform over the portals' total area (u0 picks the
+ * portal by area, u1, u2 the point on it); *pdf is the solid-angle pdf of that direction, summed over
+ * every portal it crosses (ic_scene_portal_pdf), *q the point, *cos_q |cos| at the portal. Returns 0
+ * without portals or when p lies in a portal's plane. */
+int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1, float u2, ic_vec3 *wi, ic_vec3 *q,
+                           float *pdf);
+/* The solid-angle pdf of ic_scene_sample_portal picking direction wi (unit) from p: 0 if the ray leaves
+ * through no portal (the portals p is inside of). */
+float ic_scene_portal_pdf(const ic_scene *scene, ic_vec3 p, ic_vec3 wi);
+/* 1 if p is on the interior side of some portal: its sky is sampled through the portals. */
+int ic_scene_portals_apply(const ic_scene *scene, ic_vec3 p);
+/* Distance along wi from p to the nearest portal it leaves through; INFINITY if none. */
+float ic_scene_portal_crossing(const ic_scene *scene, ic_vec3 p, ic_vec3 wi);
 /* The sun's disc as seen along wi (unit, pointing away from the scene): its radiance, 0 outside it or for
  * a directional sun; an escaping ray adds it to the environment's (MIS-weighted where light sampling could
  * have found it). */

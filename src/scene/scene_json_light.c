@@ -10,9 +10,36 @@
 #include <stdlib.h>
 #include <string.h>
 
+ic_result ic_json_parse_portals(json_ctx *c, const cJSON *arr, int line)
+{
+    static const char *hint = "give \"portals\": [[[x, y, z], [x, y, z], [x, y, z], [x, y, z]], ...], each "
+                              "portal the four corners of a window, in order around it";
+    if (!cJSON_IsArray(arr) || cJSON_GetArraySize(arr) == 0)
+        return ic_json_fail(c, line, IC_ERR_PARSE, "environment 'portals' is not a non-empty array; %s", hint);
+    const cJSON *portal;
+    int k = 0;
+    cJSON_ArrayForEach(portal, arr)
+    {
+        ++k;
+        if (!cJSON_IsArray(portal) || cJSON_GetArraySize(portal) != 4)
+            return ic_json_fail(c, line, IC_ERR_PARSE, "portal %d is not an array of four corners; %s", k, hint);
+        ic_vec3 corners[4];
+        for (int i = 0; i < 4; ++i) {
+            ic_result r = ic_json_read_vec3(c, cJSON_GetArrayItem(portal, i), line, &corners[i]);
+            if (r != IC_OK)
+                return r;
+        }
+        ic_error perr;
+        ic_result r = ic_scene_add_portal(c->b->scene, corners, &perr);
+        if (r != IC_OK)
+            return ic_json_fail(c, line, r, "portal %d: %s", k, perr.message);
+    }
+    return IC_OK;
+}
+
 ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
 {
-    static const char *valid = "radiance, map, scale, rotation_deg (or sky: see the scene format's Skies)";
+    static const char *valid = "radiance, map, scale, rotation_deg, portals (or sky: see the scene format's Skies)";
     ic_environment *env = &c->b->scene->env;
     ic_result r = ic_json_expect_object(c, obj, line);
     if (r != IC_OK)
@@ -39,6 +66,8 @@ ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
             has_scale = 1;
         } else if (!strcmp(it->string, "rotation_deg")) {
             r = ic_json_read_float(c, it, kl, &env->rotation_deg);
+        } else if (!strcmp(it->string, "portals")) {
+            r = ic_json_parse_portals(c, it, kl);
         } else {
             return ic_json_unknown_key(c, kl, it->string, "environment", valid);
         }

@@ -25,9 +25,9 @@ static ic_result read_ranged(json_ctx *c, const cJSON *it, int line, double lo, 
 static const char *const keys[] = {"sky",       "zenith_radiance", "zenith_luminance", "diffuse_horizontal",
                                    "direct_normal", "sun_direction", "month",         "day",
                                    "hour",      "latitude",        "longitude",        "meridian",
-                                   "ground_reflectance", "north",  "rotation_deg"};
+                                   "ground_reflectance", "north",  "rotation_deg",     "portals"};
 enum { K_SKY, K_ZRAD, K_ZLUM, K_DH, K_DN, K_SUNDIR, K_MONTH, K_DAY, K_HOUR, K_LAT, K_LON, K_MER, K_GROUND, K_NORTH,
-       K_ROT, K_COUNT };
+       K_ROT, K_PORTALS, K_COUNT };
 #define BIT(k) (1u << (k))
 #define DATE_KEYS (BIT(K_MONTH) | BIT(K_DAY) | BIT(K_HOUR) | BIT(K_LAT) | BIT(K_LON))
 
@@ -36,7 +36,7 @@ static ic_result read_keys(json_ctx *c, const cJSON *obj, ic_sky_params *p, unsi
 {
     static const char *valid = "sky, zenith_radiance, zenith_luminance, diffuse_horizontal, direct_normal, "
                                "sun_direction, month, day, hour, latitude, longitude, meridian, ground_reflectance, "
-                               "north, rotation_deg";
+                               "north, rotation_deg, portals";
     const cJSON *it;
     cJSON_ArrayForEach(it, obj)
     {
@@ -118,6 +118,9 @@ static ic_result read_keys(json_ctx *c, const cJSON *obj, ic_sky_params *p, unsi
         case K_ROT:
             r = read_ranged(c, it, kl, -360.0, 360.0, "give the sky's rotation about +y in degrees, -360 to 360",
                             &p->rotation_deg);
+            break;
+        case K_PORTALS:
+            r = ic_json_parse_portals(c, it, kl);
             break;
         default:
             r = ic_json_read_vec3(c, it, kl, &p->north);

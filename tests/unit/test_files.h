@@ -1,5 +1,5 @@
 /*
- * test_files.h — file-system and command helpers shared by the command-line tests.
+ * test_files.h — file-system and command helpers shared by the tests.
  */
 #ifndef IC_TEST_FILES_H
 #define IC_TEST_FILES_H
@@ -19,6 +19,16 @@ static inline size_t test_read_text(const char *path, char *buf, size_t size)
     if (f)
         fclose(f);
     return n;
+}
+
+/* Writes text to path; 1 on success. */
+static inline int test_write_text(const char *path, const char *text)
+{
+    FILE *fp = fopen(path, "w");
+    if (!fp)
+        return 0;
+    fputs(text, fp);
+    return fclose(fp) == 0;
 }
 
 /* Files under dir whose name holds ".tmp." (left-over temporaries of an atomic write). */

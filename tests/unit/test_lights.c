@@ -14,6 +14,7 @@
 #include "core/sampling.h"
 #include "irrcache/image.h"
 #include "scene/scene.h"
+#include "test_files.h"
 #include "test_util.h"
 
 #include <stdint.h>
@@ -202,15 +203,6 @@ static void test_mixed_selection(void)
     ic_scene_free(s);
 }
 
-static int write_text(const char *path, const char *text)
-{
-    FILE *fp = fopen(path, "w");
-    if (!fp)
-        return 0;
-    fputs(text, fp);
-    return fclose(fp) == 0;
-}
-
 static void test_environment_map(void)
 {
     /* 64 × 32 lat-long map: a vertical gradient and a small bright block */
@@ -229,7 +221,7 @@ static void test_environment_map(void)
     const char *map = IC_TEST_TMP "/scene_env.pfm", *json = IC_TEST_TMP "/scene_env.json";
     CHECK(ic_image_write(map, &img, NULL, &err) == IC_OK, "write env map: %s", err.message);
     ic_image_free(&img);
-    CHECK(write_text(json, "{\n \"meshes\": [{\"path\": \"" IC_SOURCE_DIR "/tests/scenes/plain_quad.obj\"}],\n"
+    CHECK(test_write_text(json, "{\n \"meshes\": [{\"path\": \"" IC_SOURCE_DIR "/tests/scenes/plain_quad.obj\"}],\n"
                            " \"environment\": {\"map\": \"scene_env.pfm\", \"scale\": 2, \"rotation_deg\": 30}\n}\n"),
           "write scene");
     ic_scene *s = load(json);
