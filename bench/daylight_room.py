@@ -32,7 +32,8 @@ def points(exe, scene, spacing, extra, out):
     subprocess.run(cmd, check=True)
     with open(out) as f:
         d = json.load(f)
-    return d["seconds"], [p["illuminance"] for p in d["points"]], [p["sigma"] for p in d["points"]], d["records"]
+    records = "%d + %d" % (d["records"], d.get("hit_records", 0))  # the sensors' + the hit stage's
+    return d["seconds"], [p["illuminance"] for p in d["points"]], [p["sigma"] for p in d["points"]], records
 
 
 def mean_error(values, ref):
@@ -70,7 +71,7 @@ def main():
                     times.append(t)
                     err = mean_error(v, ref)
                 rows.append((" ".join(settings[k]), statistics.median(times), err, rec))
-        print("| setting | records | seconds (median of %d) | mean error |" % a.repeats)
+        print("| setting | records (sensors + hits) | seconds (median of %d) | mean error |" % a.repeats)
         print("|---|---|---|---|")
         for s, t, e, rec in rows:
             print("| `%s` | %s | %.4f | %.2f %% |" % (s, rec if "ic" in s else "—", t, 100 * e))
@@ -93,7 +94,7 @@ def main():
                     t, v, _, rec = points(a.irrcache, scene, spacing, setting, out)
                     times.append(t)
                 t = statistics.median(times)
-                print("ic, %d sensors (spacing %g m): %.3f s, %d records, %.0f sensors/s" %
+                print("ic, %d sensors (spacing %g m): %.3f s, %s records, %.0f sensors/s" %
                       (len(v), spacing, t, rec, len(v) / t))
     return 0
 

@@ -150,6 +150,7 @@ static int cmp_float(const void *a, const void *b)
 
 /* Probe rays per sensor and pass of the hit stage, and its most passes. */
 #define HIT_PROBES 16
+#define HIT_PROBES_MAX 4096 /* in all, per pass */
 #define HIT_MAX_PASSES 12
 #define HIT_STRATA_DIV 8 /* the hit records' strata: a sensor record's over this, in θ and in φ */
 
@@ -158,7 +159,7 @@ static int cmp_float(const void *a, const void *b)
  * §3.1.3 with probe rays from the sensors in place of eye paths). A sensor record's rays then read the
  * irradiance at their hits from these records (ic_ic_gather_trace's look-ups) instead of tracing a path
  * each, and every sensor shares them. Each pass traces HIT_PROBES cosine-distributed rays from every
- * sensor; the diffuse hits that no record accepts are clustered as the world stage clusters eye-path
+ * sensor (at most HIT_PROBES_MAX in all, spread evenly over the sensors); the diffuse hits that no record accepts are clustered as the world stage clusters eye-path
  * hits and gathered; passes stop when fewer than `uncovered` of the probes' hits go uncovered, or a pass
  * finds fewer than `min_candidates`. Deterministic: the probes depend on the seed, the sensor and the
  * pass only, and the candidates are collected in sensor order. */
@@ -168,7 +169,10 @@ static ic_result hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32
     if (!c->hit_lookups)
         return IC_OK;
     const ic_scene *scene = c->tr->scene;
-    size_t cap = (size_t)count * HIT_PROBES;
+    /* Probes per pass: HIT_PROBES per sensor up to HIT_PROBES_MAX in all, spread evenly over the sensors
+     * (the hit records describe the room, whose size does not grow with the sensors). */
+    const uint32_t probes = count > HIT_PROBES_MAX / HIT_PROBES ? HIT_PROBES_MAX : count * HIT_PROBES;
+    size_t cap = probes;
     ic_candidate *cand = malloc(sizeof *cand * cap);
     float *dist = malloc(sizeof *dist * cap);
     if (!cand || !dist) {
@@ -179,37 +183,36 @@ static ic_result hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32
     ic_result r = IC_OK;
     for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK; ++pass) {
         uint32_t m = 0, visited = 0;
-        for (uint32_t i = 0; i < count; ++i) {
+        for (uint32_t k = 0; k < probes; ++k) {
+            uint32_t i = (uint32_t)((uint64_t)k * count / probes);
             ic_frame f = ic_frame_from_normal(n[i]);
-            for (uint32_t k = 0; k < HIT_PROBES; ++k) {
-                ic_rng rng = ic_rng_make(c->seed ^ POINT_KEY_TAG, i, (uint64_t)pass, k);
-                float u1, u2;
-                ic_rng_2d(&rng, &u1, &u2);
-                ic_ray ray = {p[i], ic_frame_to_world(&f, ic_warp_cosine_hemisphere(u1, u2)), 0.0f, INFINITY};
-                ic_hit hit;
-                ic_accel_intersect1(c->tr->accel, &ray, &hit);
-                if (hit.triangle == IC_NO_HIT)
-                    continue;
-                ic_surface s;
-                ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
-                ic_bsdf b;
-                ic_bsdf_init(&b, scene, &s, v3_neg(ray.dir));
-                if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
-                    continue; /* only diffuse hits look the cache up */
-                ++visited;
-                ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
-                ic_cache_estimate e;
-                if (ic_cache_query(c->cache, &q, &e))
-                    continue;
-                dist[m] = hit.t;
-                ic_candidate *cd = &cand[m++];
-                cd->p = s.p;
-                cd->n = b.cache_n;
-                cd->footprint = 0.0f;
-                cd->key = ic_hash4(POINT_KEY_TAG ^ 0x686974ULL, i, (uint64_t)pass, k);
-            }
+            ic_rng rng = ic_rng_make(c->seed ^ POINT_KEY_TAG, i, (uint64_t)pass, k);
+            float u1, u2;
+            ic_rng_2d(&rng, &u1, &u2);
+            ic_ray ray = {p[i], ic_frame_to_world(&f, ic_warp_cosine_hemisphere(u1, u2)), 0.0f, INFINITY};
+            ic_hit hit;
+            ic_accel_intersect1(c->tr->accel, &ray, &hit);
+            if (hit.triangle == IC_NO_HIT)
+                continue;
+            ic_surface s;
+            ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+            ic_bsdf b;
+            ic_bsdf_init(&b, scene, &s, v3_neg(ray.dir));
+            if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
+                continue; /* only diffuse hits look the cache up */
+            ++visited;
+            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
+            ic_cache_estimate e;
+            if (ic_cache_query(c->cache, &q, &e))
+                continue;
+            dist[m] = hit.t;
+            ic_candidate *cd = &cand[m++];
+            cd->p = s.p;
+            cd->n = b.cache_n;
+            cd->footprint = 0.0f;
+            cd->key = ic_hash4(POINT_KEY_TAG ^ 0x686974ULL, i, (uint64_t)pass, k);
         }
-        atomic_fetch_add_explicit(&c->rays, (uint64_t)count * HIT_PROBES, memory_order_relaxed);
+        atomic_fetch_add_explicit(&c->rays, probes, memory_order_relaxed);
         if (m < (uint32_t)c->o.min_candidates || (double)m <= c->o.uncovered * (double)visited)
             break;
         /* Clusters about a record's size: the accuracy times the median distance of the uncovered hits (a
