@@ -3,9 +3,10 @@
  * declares, through which an interior sees its sky. A point uniform over the portals' total area seen
  * from p gives a direction whose solid-angle pdf is dist² / (A · |cos θ_q|) (θ_q at the portal), summed
  * over every portal the direction leaves through; directions through no portal have pdf 0 and are left
- * to other sampling (BSDF sampling under MIS in the path tracer, the hemisphere strata in a record's
- * gather). This is the portal idea of production renderers (Bitterli et al. 2015 §2 review it) in its
- * plainest form, area sampling; it keeps its variance low wherever the opening is not seen edge-on.
+ * to other sampling (BSDF sampling under MIS). This is the portal idea of production renderers in its
+ * plainest form, uniform sampling of the portals' area (the baseline Bitterli et al. 2015 compare their
+ * environment-aware portal sampling against); its variance stays low wherever an opening is not seen
+ * edge-on, but it ignores how the sky's radiance varies across the opening.
  * A portal's normal points into the interior: only points on that side of a portal see light through
  * it, and a point outside every portal (the ground in front of the house) samples the sky as if there
  * were no portals.
