@@ -139,6 +139,11 @@ ic_result ic_scene_add_portal(ic_scene *s, const ic_vec3 corners[4], ic_error *e
                             "around it: the third corner is %g away from where the other three put it",
                             (double)v3_len(v3_sub(far, corners[2])));
     ic_environment *env = &s->env;
+    if (env->portal_count >= IC_MAX_PORTALS)
+        return ic_error_set(err, IC_ERR_INVALID_ARG,
+                            "more than %d portals: every light sample looks at each of them; cover "
+                            "neighbouring windows with one portal",
+                            IC_MAX_PORTALS);
     ic_portal *grown = realloc(env->portals, sizeof *grown * (env->portal_count + 1));
     if (!grown)
         return ic_error_set(err, IC_ERR_OOM, "out of memory for the portals");

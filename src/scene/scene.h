@@ -143,6 +143,7 @@ typedef struct ic_sun_light {
  * sampling of the environment then picks points on the portals instead of directions on the sphere, and
  * the cache's hemisphere gathers take the light through them by the same sampling (docs/scene-format.md,
  * "Portals"). */
+#define IC_MAX_PORTALS 256 /* a scene's most portals (each light sample and pdf looks at every one) */
 typedef struct ic_portal {
     ic_vec3 corner;        /* one corner; the opening is corner + a edge1 + b edge2, a, b in [0, 1] */
     ic_vec3 edge1, edge2;

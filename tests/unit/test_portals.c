@@ -183,7 +183,7 @@ static void test_sky_room(void)
 
 static void expect_refusal(const char *name, const char *portals, const char *words)
 {
-    char text[2048];
+    static char text[64 * (IC_MAX_PORTALS + 2) + 1024];
     snprintf(text, sizeof text,
              "{\n \"meshes\": [{\"path\": \"" IC_SOURCE_DIR "/tests/scenes/plain_quad.obj\"}],\n"
              " \"environment\": {\"radiance\": [1, 1, 1],\n   \"portals\": %s}\n}\n",
@@ -202,6 +202,15 @@ static void test_bad_portals(void)
     expect_refusal("portal_flat.json", "[[[0, 1, 0], [1, 1, 0], [2, 1, 0], [1, 1, 0]]]", "degenerate");
     expect_refusal("portal_object.json", "{\"corner\": [0, 0, 0]}", "non-empty array");
     expect_refusal("portal_nan.json", "[[[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, \"x\"]]]", "");
+    /* One more than the limit, each a unit square along x. */
+    static char many[64 * (IC_MAX_PORTALS + 1) + 8];
+    size_t len = 0;
+    many[len++] = '[';
+    for (int k = 0; k <= IC_MAX_PORTALS; ++k)
+        len += (size_t)snprintf(many + len, sizeof many - len, "%s[[%d, 1, 0], [%d, 1, 0], [%d, 1, 1], [%d, 1, 1]]",
+                                k ? ", " : "", 2 * k, 2 * k + 1, 2 * k + 1, 2 * k);
+    snprintf(many + len, sizeof many - len, "]");
+    expect_refusal("portal_many.json", many, "more than 256 portals");
 }
 
 int main(void)
