@@ -17,6 +17,7 @@
  */
 #include "scene/radiance_internal.h"
 
+#include "core/error_at.h"
 #include "core/read_file.h"
 #include "irrcache/defaults.h"
 
@@ -84,28 +85,27 @@ static ic_result options(const char *path, int line, char **words, int count, in
                 v->type = opt[1];
                 continue;
             }
-            return ic_error_set(err, IC_ERR_PARSE,
-                                "%s:%d: unknown view type '%s'; the types are -vtv (perspective), -vtl (parallel), "
-                                "-vth and -vta (hemispherical and angular fisheye), -vtc (cylindrical) and -vts "
-                                "(planisphere)",
-                                path, line, o);
+            return ic_error_set_at(err, IC_ERR_PARSE, path, line,
+                                   "unknown view type '%s'; the types are -vtv (perspective), -vtl (parallel), -vth "
+                                   "and -vta (hemispherical and angular fisheye), -vtc (cylindrical) and -vts "
+                                   "(planisphere)",
+                                   o);
         }
         int n3 = !strcmp(opt, "p") || !strcmp(opt, "d") || !strcmp(opt, "u");
         int n1 = !strcmp(opt, "h") || !strcmp(opt, "v") || !strcmp(opt, "s") || !strcmp(opt, "l") ||
                  !strcmp(opt, "o") || !strcmp(opt, "a");
         if (!strcmp(opt, "f"))
-            return ic_error_set(err, IC_ERR_UNSUPPORTED,
-                                "%s:%d: -vf (a view read from another file) is not followed; put that view's options "
-                                "in this file",
-                                path, line);
+            return ic_error_set_at(err, IC_ERR_UNSUPPORTED, path, line,
+                                   "-vf (a view read from another file) is not followed; put that view's options in "
+                                   "this file");
         if (!n3 && !n1)
-            return ic_error_set(err, IC_ERR_PARSE,
-                                "%s:%d: unknown view option '%s'; the view options are -vt -vp -vd -vu -vh -vv -vs -vl "
-                                "-vo -va",
-                                path, line, o);
+            return ic_error_set_at(err, IC_ERR_PARSE, path, line,
+                                   "unknown view option '%s'; the view options are -vt -vp -vd -vu -vh -vv -vs -vl -vo "
+                                   "-va",
+                                   o);
         if (!numbers(words, count, i + 1, n3 ? 3 : 1, x))
-            return ic_error_set(err, IC_ERR_PARSE, "%s:%d: %s needs %d number%s after it", path, line, o, n3 ? 3 : 1,
-                                n3 ? "s" : "");
+            return ic_error_set_at(err, IC_ERR_PARSE, path, line, "%s needs %d number%s after it", o, n3 ? 3 : 1,
+                                   n3 ? "s" : "");
         i += n3 ? 3 : 1;
         ic_vec3 vec = v3((float)x[0], (float)x[1], (float)x[2]);
         switch (opt[0]) {
@@ -172,27 +172,26 @@ ic_result ic_rad_read_view(const char *path, const ic_scene_load_options *opt, i
                             path);
     ic_vec3 side = v3_cross(v.vd, v.vu);
     if (!(v3_len2(v.vd) > 0.0f) || !(v3_len2(side) > 1e-12f * v3_len2(v.vd) * v3_len2(v.vu)))
-        return ic_error_set(err, IC_ERR_INVALID_ARG,
-                            "%s:%d: the view direction (-vd) must be non-zero and not parallel to the up vector (-vu)",
-                            path, last_line);
+        return ic_error_set_at(err, IC_ERR_INVALID_ARG, path, last_line,
+                               "the view direction (-vd) must be non-zero and not parallel to the up vector (-vu)");
     const int k = type_index(v.type);
     const double max = types[k].max_size;
     if (!(v.vh > 0.0 && v.vv > 0.0 &&
           (types[k].is_open ? v.vh < max && v.vv < max : v.vh <= max && v.vv <= max)))
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s:%d: -vh and -vv must be in (0, %g%s for a %s view (given %g and %g)",
-                            path, last_line, max, types[k].is_open ? ")" : "]", types[k].what, v.vh, v.vv);
+        return ic_error_set_at(err, IC_ERR_INVALID_ARG, path, last_line,
+                               "-vh and -vv must be in (0, %g%s for a %s view (given %g and %g)", max,
+                               types[k].is_open ? ")" : "]", types[k].what, v.vh, v.vv);
     if (types[k].projection == IC_PROJECTION_CYLINDRICAL && !(v.vv < 180.0))
-        return ic_error_set(err, IC_ERR_INVALID_ARG,
-                            "%s:%d: -vv must be below 180 degrees for a cylindrical view (perspective up; given %g)",
-                            path, last_line, v.vv);
+        return ic_error_set_at(err, IC_ERR_INVALID_ARG, path, last_line,
+                               "-vv must be below 180 degrees for a cylindrical view (perspective up; given %g)", v.vv);
     if (!(fabs(v.vs) <= 100.0 && fabs(v.vl) <= 100.0))
-        return ic_error_set(err, IC_ERR_INVALID_ARG,
-                            "%s:%d: -vs and -vl are fractions of the image's width and height; give them within "
-                            "[-100, 100] (given %g and %g)",
-                            path, last_line, v.vs, v.vl);
+        return ic_error_set_at(err, IC_ERR_INVALID_ARG, path, last_line,
+                               "-vs and -vl are fractions of the image's width and height; give them within "
+                               "[-100, 100] (given %g and %g)",
+                               v.vs, v.vl);
     if (!(v.vo >= 0.0))
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s:%d: the fore clipping distance -vo must be >= 0 (given %g)",
-                            path, last_line, v.vo);
+        return ic_error_set_at(err, IC_ERR_INVALID_ARG, path, last_line,
+                               "the fore clipping distance -vo must be >= 0 (given %g)", v.vo);
     if (v.va != 0.0)
         ic_scene_warn(scene, "%s:%d: the aft clipping distance -va is ignored: everything beyond the fore plane is seen",
                       path, last_line);
