@@ -546,9 +546,5 @@ ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_
     xmlFreeDoc(doc);
     if (r != IC_OK)
         return r;
-    r = ic_scene_finalize(b, err);
-    if (r == IC_OK && !has_camera)
-        ic_scene_fit_camera(b->scene, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
-                            opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
-    return r;
+    return ic_scene_finalize_and_fit(b, has_camera, err);
 }

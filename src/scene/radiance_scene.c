@@ -757,17 +757,16 @@ ic_result ic_scene_load_radiance(ic_scene_builder *b, const char *path, const ic
     free(c->mods);
     free(c);
     free(text);
+    const int has_view = opt->view && opt->view[0];
     if (r == IC_OK)
-        r = ic_scene_finalize(b, err);
+        r = ic_scene_finalize_and_fit(b, has_view, err);
     if (r != IC_OK)
         return r;
-    if (opt->view && opt->view[0])
+    if (has_view)
         return ic_rad_read_view(opt->view, opt, b->scene, err);
     /* no view: the fitted camera turned to Radiance's default orientation (-vd 0 1 0 -vu 0 0 1), at the
      * same distance, which frames the bounding sphere from any side */
     ic_camera *cam = &b->scene->camera;
-    ic_scene_fit_camera(b->scene, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
-                        opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
     cam->eye = v3_sub(cam->target, v3(0.0f, v3_len(v3_sub(cam->eye, cam->target)), 0.0f));
     cam->up = v3(0.0f, 0.0f, 1.0f);
     return IC_OK;

@@ -452,6 +452,15 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
     return ic_scene_build_lights(s, err);
 }
 
+ic_result ic_scene_finalize_and_fit(ic_scene_builder *b, int has_camera, ic_error *err)
+{
+    ic_result r = ic_scene_finalize(b, err);
+    if (r == IC_OK && !has_camera)
+        ic_scene_fit_camera(b->scene, b->opt->width > 0 ? b->opt->width : IC_DEFAULT_WIDTH,
+                            b->opt->height > 0 ? b->opt->height : IC_DEFAULT_HEIGHT);
+    return r;
+}
+
 /* ------------------------------------------------------------------------------------------------ */
 /* load / free */
 

@@ -134,6 +134,9 @@ ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_
 
 /* Validates, computes bounds and builds the light tables. `where` names the scene for messages. */
 ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err);
+/* A loader's last step: ic_scene_finalize, then, unless the file gave a camera (has_camera), a fitted one
+ * (ic_scene_fit_camera) as wide and high as the load options ask, else the defaults. */
+ic_result ic_scene_finalize_and_fit(ic_scene_builder *b, int has_camera, ic_error *err);
 
 /* Builds tri_lights, the CDFs, the environment importance tables and the light selection (lights.c). */
 ic_result ic_scene_build_lights(ic_scene *scene, ic_error *err);

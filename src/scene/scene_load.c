@@ -50,13 +50,7 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
         s->env.enabled = 1;
         s->env.radiance = v3s(1.0f);
     }
-    r = ic_scene_finalize(b, err);
-    if (r != IC_OK)
-        return r;
-    if (!has_camera)
-        ic_scene_fit_camera(s, opt->width > 0 ? opt->width : IC_DEFAULT_WIDTH,
-                            opt->height > 0 ? opt->height : IC_DEFAULT_HEIGHT);
-    return IC_OK;
+    return ic_scene_finalize_and_fit(b, has_camera, err);
 }
 
 ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_scene **out, ic_error *err)
