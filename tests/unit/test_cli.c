@@ -23,26 +23,7 @@
 static char err_text[8192];
 
 /* Runs the command line (stderr captured); returns the exit status, or -1 if it crashed. */
-static int run(const char *args)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s %s >/dev/null", CLI, args);
-    return test_run_capture(cmd, ERR, err_text, sizeof err_text);
-}
-
-static int file_exists(const char *p)
-{
-    struct stat s;
-    return stat(p, &s) == 0;
-}
-
-static int line_count(const char *s)
-{
-    int n = 0;
-    for (; *s; ++s)
-        n += *s == '\n';
-    return n;
-}
+static int run(const char *args) { return test_run_quiet(ERR, err_text, sizeof err_text, "%s %s", CLI, args); }
 
 typedef struct bad_case {
     const char *what;
@@ -58,9 +39,9 @@ static void check_bad(const bad_case *c)
     snprintf(args, sizeof args, "render %s -q", c->args);
     int rc = run(args);
     CHECK(rc == c->exit_code, "%s: exit %d, expected %d (stderr: %s)", c->what, rc, c->exit_code, err_text);
-    CHECK(line_count(err_text) == 1, "%s: one line on stderr, got: %s", c->what, err_text);
+    CHECK(test_line_count(err_text) == 1, "%s: one line on stderr, got: %s", c->what, err_text);
     CHECK(strstr(err_text, c->must_name) != NULL, "%s: message names '%s': %s", c->what, c->must_name, err_text);
-    CHECK(!file_exists(OUT), "%s: no output written", c->what);
+    CHECK(!test_file_exists(OUT), "%s: no output written", c->what);
 }
 
 /* The JSON files (--stats, --records-json) go through cJSON's writer: a scene path with a double quote,
@@ -177,7 +158,7 @@ int main(void)
     int rc = run("render " SCENES "degenerate.json -o " OUT " -o " IC_TEST_TMP "/cli_out.png --spp 2 --width 16 "
                  "--height 16 -q --stats " IC_TEST_TMP "/cli_stats.json");
     CHECK(rc == 0, "degenerate triangles are not an error (exit %d: %s)", rc, err_text);
-    CHECK(file_exists(OUT) && file_exists(IC_TEST_TMP "/cli_out.png"), "both outputs written");
+    CHECK(test_file_exists(OUT) && test_file_exists(IC_TEST_TMP "/cli_out.png"), "both outputs written");
     f = fopen(IC_TEST_TMP "/cli_stats.json", "r");
     char stats[4096] = {0};
     if (f) {
@@ -192,7 +173,7 @@ int main(void)
     /* A Mitsuba scene with an element irrcache does not render: rendered, with one warning line naming it. */
     rc = run("render " SCENES "mitsuba_warn.xml -o " OUT " --spp 1 --width 8 --height 8 -q");
     CHECK(rc == 0 && strstr(err_text, "warning: ") && strstr(err_text, "mitsuba_warn.xml:3: <shape type=\"hair\">") &&
-              line_count(err_text) == 1,
+              test_line_count(err_text) == 1,
           "one warning line for the unsupported shape (exit %d): %s", rc, err_text);
     rc = run("render " SCENES "mitsuba_warn.xml -o " OUT " --camera front -q");
     CHECK(rc == 1 && strstr(err_text, "--camera front"), "--camera is refused for a Mitsuba scene: %s", err_text);
@@ -200,7 +181,7 @@ int main(void)
     /* A scene nothing lights: rendered (exit 0) with a one-line warning that the image is black. */
     rc = run("render " SCENES "no_light.json -o " OUT " --spp 1 -q");
     CHECK(rc == 0 && strstr(err_text, "warning: ") && strstr(err_text, "no_light.json has no light") &&
-              strstr(err_text, "black") && line_count(err_text) == 1,
+              strstr(err_text, "black") && test_line_count(err_text) == 1,
           "no light: a warning (exit %d: %s)", rc, err_text);
     rc = run("render " SCENES "quad_light.obj -o " OUT " --spp 1 --width 8 --height 8 -q");
     CHECK(rc == 0 && err_text[0] == '\0', "a lit scene: no warning (exit %d: %s)", rc, err_text);
@@ -227,7 +208,8 @@ int main(void)
     /* --max-cache-bytes: below the file's size it is refused naming the option; "1M" is far above it. */
     remove(OUT);
     snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --max-cache-bytes 100", ic, OUT, IC_TEST_TMP);
-    CHECK(run(cmd) == 1 && strstr(err_text, "--max-cache-bytes") && line_count(err_text) == 1 && !file_exists(OUT),
+    CHECK(run(cmd) == 1 && strstr(err_text, "--max-cache-bytes") && test_line_count(err_text) == 1 &&
+              !test_file_exists(OUT),
           "a cache over --max-cache-bytes refused: %s", err_text);
     snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --max-cache-bytes 1M", ic, OUT, IC_TEST_TMP);
     CHECK(run(cmd) == 0, "--max-cache-bytes 1M loads it: %s", err_text);
@@ -241,7 +223,7 @@ int main(void)
         fclose(fc);
     remove(OUT);
     snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --rays 100", ic, OUT, IC_TEST_TMP);
-    CHECK(run(cmd) == 1 && strstr(err_text, "ic.icc") && line_count(err_text) == 1 && !file_exists(OUT),
+    CHECK(run(cmd) == 1 && strstr(err_text, "ic.icc") && test_line_count(err_text) == 1 && !test_file_exists(OUT),
           "cache made with other settings refused: %s", err_text);
     FILE *full = fopen(IC_TEST_TMP "/ic.icc", "rb"), *cut = fopen(IC_TEST_TMP "/ic_cut.icc", "wb");
     if (full && cut) {
@@ -254,25 +236,26 @@ int main(void)
     if (cut)
         fclose(cut);
     snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic_cut.icc", ic, OUT, IC_TEST_TMP);
-    CHECK(run(cmd) == 1 && strstr(err_text, "ic_cut.icc") && !file_exists(OUT), "truncated cache refused: %s",
+    CHECK(run(cmd) == 1 && strstr(err_text, "ic_cut.icc") && !test_file_exists(OUT), "truncated cache refused: %s",
           err_text);
 
     /* Adaptive sampling it cannot do is refused before anything is rendered. */
     snprintf(cmd, sizeof cmd, "%s -o %s --adaptive-sampling on --time 1", ic, OUT);
-    CHECK(run(cmd) == 2 && strstr(err_text, "--time") && line_count(err_text) == 1 && !file_exists(OUT),
+    CHECK(run(cmd) == 2 && strstr(err_text, "--time") && test_line_count(err_text) == 1 && !test_file_exists(OUT),
           "--adaptive-sampling on with --time refused: %s", err_text);
     snprintf(cmd, sizeof cmd, "%s -o %s --adaptive-sampling on --spp 4", ic, OUT);
-    CHECK(run(cmd) == 2 && strstr(err_text, "--spp") && line_count(err_text) == 1 && !file_exists(OUT),
+    CHECK(run(cmd) == 2 && strstr(err_text, "--spp") && test_line_count(err_text) == 1 && !test_file_exists(OUT),
           "--adaptive-sampling on with 4 spp refused: %s", err_text);
     snprintf(cmd, sizeof cmd, "%s -o %s --adaptive-sampling maybe", ic, OUT);
-    CHECK(run(cmd) == 2 && strstr(err_text, "on|off") && !file_exists(OUT), "--adaptive-sampling maybe refused: %s",
-          err_text);
+    CHECK(run(cmd) == 2 && strstr(err_text, "on|off") && !test_file_exists(OUT),
+          "--adaptive-sampling maybe refused: %s", err_text);
 
     /* A large-emitter threshold that is not a share of the hemisphere is refused. */
     const char *bad_shares[] = {"abc", "0", "-0.1", "2"};
     for (int k = 0; k < 4; ++k) {
         snprintf(cmd, sizeof cmd, "%s -o %s --large-emitters %s", ic, OUT, bad_shares[k]);
-        CHECK(run(cmd) == 2 && strstr(err_text, "--large-emitters") && line_count(err_text) == 1 && !file_exists(OUT),
+        CHECK(run(cmd) == 2 && strstr(err_text, "--large-emitters") && test_line_count(err_text) == 1 &&
+                  !test_file_exists(OUT),
               "--large-emitters %s refused: %s", bad_shares[k], err_text);
     }
 

@@ -43,20 +43,6 @@ static char *slurp(const char *path)
     return buf;
 }
 
-static int file_exists(const char *p)
-{
-    struct stat s;
-    return stat(p, &s) == 0;
-}
-
-static int line_count(const char *s)
-{
-    int n = 0;
-    for (; *s; ++s)
-        n += *s == '\n';
-    return n;
-}
-
 static void test_outputs(void)
 {
     test_write_file(DIR "/pts.txt", "# two sensors on a work plane, one on the left wall\n"
@@ -68,7 +54,7 @@ static void test_outputs(void)
     CHECK(run(SCENE " --points " DIR "/pts.txt --threads 1", DIR "/a.txt") == 0, "text to stdout: %s", err_text);
     char a[4096];
     snprintf(a, sizeof a, "%s", slurp(DIR "/a.txt"));
-    CHECK(line_count(a) == 3, "one line per point: %d", line_count(a));
+    CHECK(test_line_count(a) == 3, "one line per point: %d", test_line_count(a));
     double v[5] = {0};
     CHECK(sscanf(a, "%lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4]) == 5, "five numbers per line: %s", a);
     double lux = 179.0 * (0.265074126 * v[0] + 0.670114631 * v[1] + 0.064811243 * v[2]);
@@ -82,7 +68,7 @@ static void test_outputs(void)
           "csv: %s", err_text);
     const char *csv = slurp(DIR "/c.csv");
     CHECK(strncmp(csv, "irradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux\n", 65) == 0 &&
-              line_count(csv) == 4,
+              test_line_count(csv) == 4,
           "csv: a header and three rows: %s", csv);
     CHECK(run(SCENE " --points " DIR "/pts.txt --format json -o " DIR "/d.json", NULL) == 0, "json: %s", err_text);
     const char *json = slurp(DIR "/d.json");
@@ -100,7 +86,7 @@ static void test_daylight_factor(void)
     snprintf(args, sizeof args, "%s --points %s/room.txt --daylight-factor --format csv", room, DIR);
     CHECK(run(args, DIR "/df.csv") == 0, "daylight factor: %s", err_text);
     const char *csv = slurp(DIR "/df.csv");
-    CHECK(strstr(csv, ",daylight_factor_percent,daylight_factor_sigma_percent\n") && line_count(csv) == 3,
+    CHECK(strstr(csv, ",daylight_factor_percent,daylight_factor_sigma_percent\n") && test_line_count(csv) == 3,
           "csv header names the daylight factor: %s", csv);
     const char *row = strchr(csv, '\n');
     double v[7] = {0};
@@ -111,7 +97,7 @@ static void test_daylight_factor(void)
     CHECK_NEAR(v[6], 100.0 * v[4] / ref, 1e-3 * v[6] + 1e-6, "its sigma likewise");
     unlink(DIR "/df-out.txt");
     CHECK(run(SCENE " --points " DIR "/pts.txt --daylight-factor -o " DIR "/df-out.txt", NULL) == 1 &&
-              strstr(err_text, "cie-overcast") && !file_exists(DIR "/df-out.txt"),
+              strstr(err_text, "cie-overcast") && !test_file_exists(DIR "/df-out.txt"),
           "no overcast sky: exit 1, no output: %s", err_text);
 }
 
@@ -126,7 +112,7 @@ static void test_grid_map(void)
     CHECK(run(args, DIR "/grid.txt") == 0, "grid and map: %s", err_text);
     char grid[65536];
     snprintf(grid, sizeof grid, "%s", slurp(DIR "/grid.txt"));
-    CHECK(line_count(grid) == 16, "a 2 x 2 m floor at 0.5 m: 16 rows (%d)", line_count(grid));
+    CHECK(test_line_count(grid) == 16, "a 2 x 2 m floor at 0.5 m: 16 rows (%d)", test_line_count(grid));
     double v[11] = {0};
     CHECK(sscanf(grid, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6],
                  &v[7], &v[8], &v[9], &v[10]) == 11 &&
@@ -199,8 +185,8 @@ static void test_bad_files(void)
         int st = run(SCENE " --points " DIR "/bad.txt -o " DIR "/bad-out.txt", NULL);
         CHECK(st == 1, "%s: exit %d, expected 1", c->what, st);
         CHECK(strstr(err_text, c->must_name) != NULL, "%s: message names '%s': %s", c->what, c->must_name, err_text);
-        CHECK(line_count(err_text) == 1, "%s: one line: %s", c->what, err_text);
-        CHECK(!file_exists(DIR "/bad-out.txt"), "%s: no output file", c->what);
+        CHECK(test_line_count(err_text) == 1, "%s: one line: %s", c->what, err_text);
+        CHECK(!test_file_exists(DIR "/bad-out.txt"), "%s: no output file", c->what);
     }
     CHECK(test_count_temporaries(DIR) == 0, "no temporaries left");
     CHECK(run(SCENE " --points " DIR "/missing.txt", NULL) == 1 && strstr(err_text, "missing.txt"),

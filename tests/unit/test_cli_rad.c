@@ -19,9 +19,7 @@ static char err_text[8192];
 /* Runs `irrcache render ARGS` (stderr captured); the exit status, or -1 if it crashed. */
 static int render(const char *args)
 {
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s render %s >/dev/null", CLI, args);
-    return test_run_capture(cmd, ERR, err_text, sizeof err_text);
+    return test_run_quiet(ERR, err_text, sizeof err_text, "%s render %s", CLI, args);
 }
 
 static int one_line(void) { return strchr(err_text, '\n') == strrchr(err_text, '\n') && err_text[0]; }

@@ -5,9 +5,11 @@
 #define IC_TEST_FILES_H
 
 #include <dirent.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 /* Reads up to size − 1 bytes of path into buf, terminated ("" when it cannot be read); returns the count. */
@@ -29,6 +31,22 @@ static inline int test_write_text(const char *path, const char *text)
         return 0;
     fputs(text, fp);
     return fclose(fp) == 0;
+}
+
+/* 1 if something exists at path. */
+static inline int test_file_exists(const char *path)
+{
+    struct stat s;
+    return stat(path, &s) == 0;
+}
+
+/* The number of newlines in s. */
+static inline int test_line_count(const char *s)
+{
+    int n = 0;
+    for (; *s; ++s)
+        n += *s == '\n';
+    return n;
 }
 
 /* Files under dir whose name holds ".tmp." (left-over temporaries of an atomic write). */
@@ -54,6 +72,24 @@ static inline int test_run_capture(const char *cmd, const char *err_path, char *
     if (st == -1 || !WIFEXITED(st))
         return -1;
     return WEXITSTATUS(st);
+}
+
+/* test_run_capture of the command line printf-style fmt makes, its stdout discarded. */
+static inline int test_run_quiet(const char *err_path, char *text, size_t size, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+static inline int test_run_quiet(const char *err_path, char *text, size_t size, const char *fmt, ...)
+{
+    char cmd[8000];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(cmd, sizeof cmd, fmt, ap);
+    va_end(ap);
+    if (n >= 0 && (size_t)n < sizeof cmd)
+        snprintf(cmd + n, sizeof cmd - (size_t)n, " >/dev/null");
+    return test_run_capture(cmd, err_path, text, size);
 }
 
 #endif

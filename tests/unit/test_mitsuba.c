@@ -21,11 +21,8 @@
 
 static ic_scene *load(const char *path, ic_error *err)
 {
-    ic_scene_load_options lo = {0};
-    lo.allow_outside_paths = 1;
-    ic_scene *s = NULL;
-    if (ic_scene_load(path, &lo, &s, err) != IC_OK)
-        return NULL;
+    ic_scene *s;
+    test_load_scene(path, NULL, 0, 0, 1, &s, err);
     return s;
 }
 

@@ -13,6 +13,8 @@
  *    stops at the depth limit with a one-line error; a missing included file names the <include>'s line.
  */
 #include "test_util.h"
+#include "test_files.h"
+#include "test_render_util.h"
 
 #include "scene/scene.h"
 
@@ -145,15 +147,10 @@ static ic_result load_shape(const char *mesh, int shape_index, ic_scene **s, ic_
              "  </shape>\n"
              "</scene>\n",
              mesh, shape_index);
-    FILE *fp = fopen(IC_TEST_TMP "/ser.xml", "w");
-    if (!fp)
-        return IC_ERR_IO;
-    fputs(xml, fp);
-    fclose(fp);
-    ic_scene_load_options lo = {0};
-    lo.allow_outside_paths = 1;
     *s = NULL;
-    return ic_scene_load(IC_TEST_TMP "/ser.xml", &lo, s, err);
+    if (!test_write_text(IC_TEST_TMP "/ser.xml", xml))
+        return IC_ERR_IO;
+    return test_load_scene(IC_TEST_TMP "/ser.xml", NULL, 0, 0, 1, s, err);
 }
 
 /* Every vertex of the loaded shape is 2·v + (10, 0, 0) for a vertex v of the expected shape. */
@@ -172,35 +169,24 @@ static void check_shape(const ic_scene *s, int box, const char *what)
     CHECK(!box || s->normals, "%s: the file's vertex normals are used", what);
 }
 
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (f) {
-        fputs(text, f);
-        fclose(f);
-    }
-}
-
 static void test_include(void)
 {
-    write_text(IC_TEST_TMP "/inc_materials.xml",
+    test_write_text(IC_TEST_TMP "/inc_materials.xml",
                "<scene version=\"0.6.0\">\n"
                "  <default name=\"refl\" value=\"0.25\"/>\n"
                "  <bsdf type=\"diffuse\" id=\"grey\"><float name=\"reflectance\" value=\"$refl\"/></bsdf>\n"
                "  <shape type=\"rectangle\"><transform name=\"toWorld\"><translate z=\"-3\"/></transform></shape>\n"
                "  <shape type=\"hair\"/>\n"
                "</scene>\n");
-    write_text(IC_TEST_TMP "/inc_main.xml",
+    test_write_text(IC_TEST_TMP "/inc_main.xml",
                "<scene version=\"0.6.0\">\n"
                "  <include filename=\"inc_materials.xml\"/>\n"
                "  <shape type=\"cube\"><ref id=\"grey\"/></shape>\n"
                "</scene>\n");
-    ic_scene_load_options lo = {0};
-    lo.allow_outside_paths = 1;
     ic_error err = {0};
     ic_scene *s = NULL;
-    CHECK(ic_scene_load(IC_TEST_TMP "/inc_main.xml", &lo, &s, &err) == IC_OK, "a scene with an include loads: %s",
-          err.message);
+    CHECK(test_load_scene(IC_TEST_TMP "/inc_main.xml", NULL, 0, 0, 1, &s, &err) == IC_OK,
+          "a scene with an include loads: %s", err.message);
     if (s) {
         CHECK(s->triangle_count == 12 + 2, "the included rectangle and the cube: %u triangles", s->triangle_count);
         int grey = 0, below = 0;
@@ -214,15 +200,15 @@ static void test_include(void)
         CHECK(strstr(w, "inc_materials.xml:5:") && strstr(w, "hair"), "a warning names the included file's line: %s", w);
         ic_scene_free(s);
     }
-    write_text(IC_TEST_TMP "/inc_self.xml", "<scene version=\"0.6.0\">\n  <include filename=\"inc_self.xml\"/>\n</scene>\n");
+    test_write_text(IC_TEST_TMP "/inc_self.xml", "<scene version=\"0.6.0\">\n  <include filename=\"inc_self.xml\"/>\n</scene>\n");
     s = NULL;
-    ic_result r = ic_scene_load(IC_TEST_TMP "/inc_self.xml", &lo, &s, &err);
+    ic_result r = test_load_scene(IC_TEST_TMP "/inc_self.xml", NULL, 0, 0, 1, &s, &err);
     CHECK(r != IC_OK && strstr(err.message, "inc_self.xml:2") && strstr(err.message, "nest too deep") &&
               !strchr(err.message, '\n'), "a file including itself stops: %s", err.message);
     ic_scene_free(s);
-    write_text(IC_TEST_TMP "/inc_missing.xml", "<scene version=\"0.6.0\">\n\n  <include filename=\"nowhere.xml\"/>\n</scene>\n");
+    test_write_text(IC_TEST_TMP "/inc_missing.xml", "<scene version=\"0.6.0\">\n\n  <include filename=\"nowhere.xml\"/>\n</scene>\n");
     s = NULL;
-    r = ic_scene_load(IC_TEST_TMP "/inc_missing.xml", &lo, &s, &err);
+    r = test_load_scene(IC_TEST_TMP "/inc_missing.xml", NULL, 0, 0, 1, &s, &err);
     CHECK(r == IC_ERR_IO && strstr(err.message, "inc_missing.xml:3") && strstr(err.message, "nowhere.xml"),
           "a missing included file: %s", err.message);
     ic_scene_free(s);

@@ -6,6 +6,8 @@
  * and a second sky are one-line errors naming file:line; the approximation is warned once.
  */
 #include "test_util.h"
+#include "test_files.h"
+#include "test_render_util.h"
 
 #include "scene/scene.h"
 
@@ -21,14 +23,10 @@ static ic_scene *load_emitter(const char *emitter, ic_error *err)
              "  %s\n"
              "</scene>\n",
              emitter);
-    FILE *f = fopen(IC_TEST_TMP "/mts_sky.xml", "w");
-    if (!f)
-        return NULL;
-    fputs(xml, f);
-    fclose(f);
-    ic_scene_load_options lo = {0};
     ic_scene *s = NULL;
-    return ic_scene_load(IC_TEST_TMP "/mts_sky.xml", &lo, &s, err) == IC_OK ? s : NULL;
+    if (test_write_text(IC_TEST_TMP "/mts_sky.xml", xml))
+        test_load_scene(IC_TEST_TMP "/mts_sky.xml", NULL, 0, 0, 0, &s, err);
+    return s;
 }
 
 int main(void)

@@ -29,25 +29,17 @@
 #endif
 
 
+/* The scene at path, size × size pixels, from the view file view (NULL: none); NULL (err set) on failure. */
 static ic_scene *load_view(const char *path, const char *view, int size, ic_error *err)
 {
-    ic_scene_load_options lo = {0};
-    lo.allow_outside_paths = 1;
-    lo.view = view;
-    lo.width = lo.height = size;
-    ic_scene *s = NULL;
-    if (ic_scene_load(path, &lo, &s, err) != IC_OK)
-        return NULL;
+    ic_scene *s;
+    test_load_scene(path, view, size, size, 1, &s, err);
     return s;
 }
 
 static int render(const ic_scene *s, int spp, uint64_t seed, int threads, ic_image *img)
 {
-    ic_render_options opt = {0};
-    opt.spp = spp;
-    opt.threads = threads;
-    opt.seed = seed;
-    opt.has_seed = 1;
+    ic_render_options opt = test_seeded_options(spp, threads, seed);
     return test_render_loaded(s, &opt, img);
 }
 
@@ -307,21 +299,9 @@ static void test_geometry_and_materials(void)
 /* Loads text as a scene (and view as its view file, when given); the error must hold each of want[]. */
 static void expect_error(const char *name, const char *text, const char *view, const char *const *want)
 {
-    char path[512], vpath[512];
-    snprintf(path, sizeof path, IC_TEST_TMP "/%s.rad", name);
-    test_write_file(path, text);
-    if (view) {
-        snprintf(vpath, sizeof vpath, IC_TEST_TMP "/%s.vf", name);
-        test_write_file(vpath, view);
-    }
     ic_error err = {0};
-    ic_scene *s = load_view(path, view ? vpath : NULL, 16, &err);
-    CHECK(s == NULL, "%s is refused", name);
-    ic_scene_free(s);
-    int ok = !strchr(err.message, '\n');
-    for (int i = 0; want[i]; ++i)
-        ok &= strstr(err.message, want[i]) != NULL;
-    CHECK(ok, "%s: one line naming what is wrong and where: %s", name, err.message);
+    ic_scene *s = test_load_rad_text(name, text, view, 16, 1, &err);
+    test_check_refused(name, s, &err, want);
 }
 
 static void test_errors(void)

@@ -21,30 +21,10 @@
 
 #define PI_D 3.14159265358979323846
 
-static ic_scene *load(const char *name, const char *rad, const char *view, int size, ic_error *err)
-{
-    char path[512], vpath[512];
-    snprintf(path, sizeof path, IC_TEST_TMP "/%s.rad", name);
-    snprintf(vpath, sizeof vpath, IC_TEST_TMP "/%s.vf", name);
-    test_write_file(path, rad);
-    test_write_file(vpath, view);
-    ic_scene_load_options lo = {0};
-    lo.view = vpath;
-    lo.width = lo.height = size;
-    ic_scene *s = NULL;
-    if (ic_scene_load(path, &lo, &s, err) != IC_OK)
-        return NULL;
-    return s;
-}
-
 static int render(const ic_scene *s, ic_integrator integrator, int spp, int threads, ic_image *img)
 {
-    ic_render_options opt = {0};
+    ic_render_options opt = test_seeded_options(spp, threads, 3);
     opt.integrator = integrator;
-    opt.spp = spp;
-    opt.threads = threads;
-    opt.seed = 3;
-    opt.has_seed = 1;
     opt.ic.gather.theta_strata = 8; /* 8 × 25 rays: enough for a floor under a uniform sky */
     return test_render_loaded(s, &opt, img);
 }
@@ -91,7 +71,7 @@ static void test_fisheyes(void)
         {"vf_pls", "rview -vts -vp 0 0 1 -vd 0 0 1 -vu 0 1 0 -vh 180 -vv 180\n", 0},
     };
     for (size_t k = 0; k < sizeof up / sizeof up[0]; ++k) {
-        ic_scene *s = load(up[k].name, sky_floor, up[k].view, 32, &err);
+        ic_scene *s = test_load_rad_text(up[k].name, sky_floor, up[k].view, 32, 0, &err);
         CHECK(s && s->camera.width == 32 && s->camera.height == 32, "%s loads square: %s", up[k].name, err.message);
         ic_image img = {0};
         if (s && render(s, IC_INTEGRATOR_PT, 4, 2, &img)) {
@@ -109,7 +89,8 @@ static void test_fisheyes(void)
 
     /* an angular 360° fisheye along the floor: sky above the horizon, ρ L = 1 below; both integrators, and
      * 1 vs 2 threads */
-    ic_scene *s = load("vf_ang360", sky_floor, "rview -vta -vp 0 0 1 -vd 0 1 0 -vu 0 0 1 -vh 360 -vv 360\n", 32, &err);
+    ic_scene *s = test_load_rad_text("vf_ang360", sky_floor,
+                                     "rview -vta -vp 0 0 1 -vd 0 1 0 -vu 0 0 1 -vh 360 -vv 360\n", 32, 0, &err);
     CHECK(s != NULL, "angular 360 loads: %s", err.message);
     static const ic_integrator integrators[] = {IC_INTEGRATOR_PT, IC_INTEGRATOR_IC};
     for (int k = 0; s && k < 2; ++k) {
@@ -167,9 +148,9 @@ static void test_shift_lift(void)
     double wide = 2.0 * atan(2.0 * tan(20.0 * PI_D / 180.0)) * 180.0 / PI_D;
     char view[256];
     snprintf(view, sizeof view, "rview -vtv -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh %.9g -vv %.9g\n", wide, wide);
-    ic_scene *w = load("vf_wide", rad, view, 64, &err);
-    ic_scene *n = load("vf_shift", rad, "rview -vtv -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 40 -vv 40 -vs 0.25 -vl 0.25\n", 32,
-                       &err);
+    ic_scene *w = test_load_rad_text("vf_wide", rad, view, 64, 0, &err);
+    ic_scene *n = test_load_rad_text(
+        "vf_shift", rad, "rview -vtv -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 40 -vv 40 -vs 0.25 -vl 0.25\n", 32, 0, &err);
     CHECK(w && n, "views load: %s", err.message);
     ic_image iw = {0}, in = {0};
     if (w && n && render(w, IC_INTEGRATOR_PT, 64, 2, &iw) && render(n, IC_INTEGRATOR_PT, 64, 2, &in)) {
@@ -188,8 +169,10 @@ static void test_shift_lift(void)
     /* parallel: 8 × 8 world units fill 32 × 32 pixels, one square per 4 pixels; the top-left square is
      * column -4, row 3 (colour (−4 + 6) mod 3 = 2: blue); a cylinder of 90° × 60° looks at the wall's centre
      * (column 0 row 0 right of and above the centre: colour 0, red) */
-    ic_scene *p = load("vf_par", rad, "rview -vtl -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 8 -vv 8\n", 32, &err);
-    ic_scene *c = load("vf_cyl", rad, "rview -vtc -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 90 -vv 60\n", 32, &err);
+    ic_scene *p = test_load_rad_text("vf_par", rad, "rview -vtl -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 8 -vv 8\n", 32, 0,
+                                     &err);
+    ic_scene *c = test_load_rad_text("vf_cyl", rad, "rview -vtc -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 90 -vv 60\n", 32, 0,
+                                     &err);
     CHECK(p && c, "parallel and cylindrical views load: %s", err.message);
     ic_image ip = {0}, ic = {0};
     if (p && render(p, IC_INTEGRATOR_PT, 4, 2, &ip)) {
@@ -218,13 +201,8 @@ static void test_shift_lift(void)
 static void expect_error(const char *name, const char *view, const char *const *want)
 {
     ic_error err = {0};
-    ic_scene *s = load(name, sky_floor, view, 16, &err);
-    CHECK(s == NULL, "%s is refused", name);
-    ic_scene_free(s);
-    int ok = !strchr(err.message, '\n');
-    for (int i = 0; want[i]; ++i)
-        ok &= strstr(err.message, want[i]) != NULL;
-    CHECK(ok, "%s: one line naming what is wrong and where: %s", name, err.message);
+    ic_scene *s = test_load_rad_text(name, sky_floor, view, 16, 0, &err);
+    test_check_refused(name, s, &err, want);
 }
 
 static void test_errors(void)

@@ -5,11 +5,14 @@
 #ifndef IC_TEST_RENDER_UTIL_H
 #define IC_TEST_RENDER_UTIL_H
 
+#include "test_util.h"
+
 #include "irrcache/render.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Writes text to path or aborts the test program. */
 static inline void test_write_file(const char *path, const char *text)
@@ -21,6 +24,59 @@ static inline void test_write_file(const char *path, const char *text)
     }
     fputs(text, f);
     fclose(f);
+}
+
+/* Loads the scene file at path into *out (NULL on failure, err set) at width × height pixels (0: the file's),
+ * with the view file view (NULL: none), reading files outside its folder when allow_outside_paths is 1. */
+static inline ic_result test_load_scene(const char *path, const char *view, int width, int height,
+                                        int allow_outside_paths, ic_scene **out, ic_error *err)
+{
+    ic_scene_load_options lo = {0};
+    lo.view = view;
+    lo.width = width;
+    lo.height = height;
+    lo.allow_outside_paths = allow_outside_paths;
+    *out = NULL;
+    return ic_scene_load(path, &lo, out, err);
+}
+
+/* Writes IC_TEST_TMP/NAME.rad holding rad and, unless view is NULL, NAME.vf holding view, and loads the first
+ * from the second at size × size pixels (test_load_scene); NULL (err set) on failure. */
+static inline ic_scene *test_load_rad_text(const char *name, const char *rad, const char *view, int size,
+                                           int allow_outside_paths, ic_error *err)
+{
+    char path[512], vpath[512];
+    snprintf(path, sizeof path, IC_TEST_TMP "/%s.rad", name);
+    snprintf(vpath, sizeof vpath, IC_TEST_TMP "/%s.vf", name);
+    test_write_file(path, rad);
+    if (view)
+        test_write_file(vpath, view);
+    ic_scene *s;
+    test_load_scene(path, view ? vpath : NULL, size, size, allow_outside_paths, &s, err);
+    return s;
+}
+
+/* Checks that a load failed (s is NULL; freed all the same) with a one-line message holding every string of
+ * want (NULL-terminated); name labels the checks. */
+static inline void test_check_refused(const char *name, ic_scene *s, const ic_error *err, const char *const *want)
+{
+    CHECK(s == NULL, "%s is refused", name);
+    ic_scene_free(s);
+    int ok = !strchr(err->message, '\n');
+    for (int i = 0; want[i]; ++i)
+        ok &= strstr(err->message, want[i]) != NULL;
+    CHECK(ok, "%s: one line naming what is wrong and where: %s", name, err->message);
+}
+
+/* Render options of spp samples a pixel on threads threads, seeded with seed; the rest defaults. */
+static inline ic_render_options test_seeded_options(int spp, int threads, uint64_t seed)
+{
+    ic_render_options opt = {0};
+    opt.spp = spp;
+    opt.threads = threads;
+    opt.seed = seed;
+    opt.has_seed = 1;
+    return opt;
 }
 
 /* Loads scene_path (with an optional resolution override) and renders it with opt into img.

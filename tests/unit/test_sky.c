@@ -45,12 +45,8 @@ static ic_scene *load_sky(const char *environment, ic_error *err)
     snprintf(text, sizeof text,
              "{\n  \"meshes\": [{\"path\": \"sky_plane.obj\"}],\n  \"environment\": %s\n}\n", environment);
     test_write_file(IC_TEST_TMP "/sky_scene.json", text);
-    ic_scene *scene = NULL;
-    ic_scene_load_options lo = {0};
-    lo.width = 16;
-    lo.height = 16;
-    if (ic_scene_load(IC_TEST_TMP "/sky_scene.json", &lo, &scene, err) != IC_OK)
-        return NULL;
+    ic_scene *scene;
+    test_load_scene(IC_TEST_TMP "/sky_scene.json", NULL, 16, 16, 0, &scene, err);
     return scene;
 }
 

@@ -47,13 +47,27 @@ static ic_scene *load_sun(const char *members, int material, ic_error *err)
     char text[2048];
     snprintf(text, sizeof text, "{\n  \"meshes\": [{\"path\": \"sun_plane.obj\"}],\n  %s\n}\n", members);
     test_write_file(IC_TEST_TMP "/sun_scene.json", text);
-    ic_scene *scene = NULL;
-    ic_scene_load_options lo = {0};
-    lo.width = 24;
-    lo.height = 16;
-    if (ic_scene_load(IC_TEST_TMP "/sun_scene.json", &lo, &scene, err) != IC_OK)
-        return NULL;
+    ic_scene *scene;
+    test_load_scene(IC_TEST_TMP "/sun_scene.json", NULL, 24, 16, 0, &scene, err);
     return scene;
+}
+
+/* load_sun for a test that needs the scene: failing to load is a failed check, named what. */
+static ic_scene *load_sun_checked(const char *members, int material, const char *what)
+{
+    ic_error err = {0};
+    ic_scene *s = load_sun(members, material, &err);
+    CHECK(s != NULL, "%s: %s", what, err.message);
+    return s;
+}
+
+/* Options of the sensor-point computation with the cache (is_ic) or the path tracer, samples a sensor. */
+static ic_points_options points_options(int is_ic, int samples)
+{
+    ic_points_options opt = {0};
+    opt.integrator = is_ic ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT;
+    opt.samples = samples;
+    return opt;
 }
 
 /* The Perez sky of these tests: the sun 35° up, 30° from north towards east (north is −z). */
@@ -85,9 +99,7 @@ static double sky_irradiance(const ic_scene *s, ic_vec3 n, double ground_radianc
 
 static void test_disc(void)
 {
-    ic_error err = {0};
-    ic_scene *s = load_sun(PEREZ_SKY(""), DIFFUSE, &err);
-    CHECK(s != NULL, "perez with sun loads: %s", err.message);
+    ic_scene *s = load_sun_checked(PEREZ_SKY(""), DIFFUSE, "perez with sun loads");
     if (!s)
         return;
     const ic_sun_light *sun = &s->sun;
@@ -115,6 +127,7 @@ static void test_disc(void)
     ic_vec3 up = {0, 1, 0};
     CHECK(ic_scene_sun_radiance(s, up).y == 0.0f, "the sky elsewhere has no sun in it");
     ic_scene_free(s);
+    ic_error err = {0};
     /* gensky's default sun: 6e-5 sr x 1.5e9/208 (1.147 - 0.147/max(sin alt, 0.16)) */
     s = load_sun("\"environment\": {\"sky\": \"cie-clear\", \"zenith_radiance\": 20, \"direct_normal\": \"gensky\", "
                  "\"sun_direction\": [0, 1, 1]}",
@@ -149,9 +162,7 @@ static double disc_irradiance(const ic_scene *s, ic_vec3 n, int n_samples)
 
 static void test_disc_sampling(void)
 {
-    ic_error err = {0};
-    ic_scene *s = load_sun(PEREZ_SKY(""), DIFFUSE, &err);
-    CHECK(s != NULL, "loads: %s", err.message);
+    ic_scene *s = load_sun_checked(PEREZ_SKY(""), DIFFUSE, "loads");
     if (!s)
         return;
     ic_vec3 sd = s->sun.direction, up = {0, 1, 0};
@@ -214,9 +225,7 @@ static void test_points_and_rotation(void)
     compass_points(s, pts);
     compass_points(r, pts_r);
     for (int integ = 0; integ < 2; ++integ) {
-        ic_points_options opt = {0};
-        opt.integrator = integ ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT;
-        opt.samples = 2048;
+        ic_points_options opt = points_options(integ, 2048);
         ic_point_result res[5], res_r[5];
         int ok = ic_points_compute(s, pts, 5, &opt, res, NULL, &err) == IC_OK &&
                  ic_points_compute(r, pts_r, 5, &opt, res_r, NULL, &err) == IC_OK;
@@ -253,10 +262,9 @@ static void test_points_and_rotation(void)
 static void test_wide_disc(void)
 {
     ic_error err = {0};
-    ic_scene *s = load_sun("\"lights\": [{\"type\": \"sun\", \"direction\": [0, 1, 0], \"irradiance\": 100, "
-                           "\"angular_radius_deg\": 20}]",
-                           BLACK, &err);
-    CHECK(s != NULL, "a sun light with a 20 degree disc loads: %s", err.message);
+    ic_scene *s = load_sun_checked("\"lights\": [{\"type\": \"sun\", \"direction\": [0, 1, 0], \"irradiance\": 100, "
+                                   "\"angular_radius_deg\": 20}]",
+                                   BLACK, "a sun light with a 20 degree disc loads");
     if (!s)
         return;
     ic_scene *bad = load_sun("\"lights\": [{\"type\": \"sun\", \"direction\": [0, 1, 0], \"irradiance\": 1, "
@@ -271,9 +279,7 @@ static void test_wide_disc(void)
                               {{0, 1, 0}, {(float)sin(40.0 * PI_D / 180.0), (float)cos(40.0 * PI_D / 180.0), 0}},
                               {{0, 1, 0}, {1, 0, 0}}};
     for (int integ = 0; integ < 2; ++integ) {
-        ic_points_options opt = {0};
-        opt.integrator = integ ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT;
-        opt.samples = 1024;
+        ic_points_options opt = points_options(integ, 1024);
         ic_point_result res[3];
         CHECK(ic_points_compute(s, pts, 3, &opt, res, NULL, &err) == IC_OK, "computes: %s", err.message);
         for (int k = 0; k < 3; ++k) {
@@ -292,14 +298,11 @@ static void test_wide_disc(void)
  * its glossy share weighted against the final render's glossy path) give the same image on average. */
 static void test_glossy_mis(void)
 {
-    ic_error err = {0};
-    ic_scene *s = load_sun("\"camera\": {\"eye\": [0, 1, 3], \"target\": [0.4096, 0.4264, 2.2906], \"up\": [0, 1, 0], "
-                           "\"fov_y\": 50, \"width\": 32, \"height\": 24},\n  "
-                           "\"lights\": [{\"type\": \"sun\", \"direction\": [0.4096, 0.5736, -0.7094], \"irradiance\": 100, "
-                           "\"angular_radius_deg\": 10}],\n  \"environment\": {\"radiance\": 0.5}",
-                           GLOSSY, &err);
-    CHECK(s != NULL, "glossy floor loads: %s", err.message);
-    ic_scene_free(s);
+    ic_scene_free(load_sun_checked(
+        "\"camera\": {\"eye\": [0, 1, 3], \"target\": [0.4096, 0.4264, 2.2906], \"up\": [0, 1, 0], \"fov_y\": 50, "
+        "\"width\": 32, \"height\": 24},\n  \"lights\": [{\"type\": \"sun\", \"direction\": [0.4096, 0.5736, -0.7094], "
+        "\"irradiance\": 100, \"angular_radius_deg\": 10}],\n  \"environment\": {\"radiance\": 0.5}",
+        GLOSSY, "glossy floor loads"));
     double mean[2] = {0.0, 0.0};
     for (int integ = 0; integ < 2; ++integ) {
         ic_render_options opt = {0};
@@ -318,20 +321,18 @@ static void test_glossy_mis(void)
 
 static void test_threads(void)
 {
-    ic_error err = {0};
     /* the camera looks down at the floor towards the sun, whose reflection is in view (and the sun too) */
-    ic_scene *s = load_sun("\"camera\": {\"eye\": [0, 1, 3], \"target\": [0.4096, 0.9, -0.709], \"up\": [0, 1, 0], "
-                           "\"fov_y\": 70, \"width\": 24, \"height\": 16},\n  " PEREZ_SKY(", \"rotation_deg\": 20"),
-                           GLOSSY, &err);
-    CHECK(s != NULL, "glossy floor loads: %s", err.message);
+    ic_scene *s = load_sun_checked(
+        "\"camera\": {\"eye\": [0, 1, 3], \"target\": [0.4096, 0.9, -0.709], \"up\": [0, 1, 0], \"fov_y\": 70, "
+        "\"width\": 24, \"height\": 16},\n  " PEREZ_SKY(", \"rotation_deg\": 20"),
+        GLOSSY, "glossy floor loads");
     if (!s)
         return;
+    ic_error err = {0};
     ic_sensor_point pts[5];
     compass_points(s, pts);
     for (int integ = 0; integ < 2; ++integ) {
-        ic_points_options opt = {0};
-        opt.integrator = integ ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT;
-        opt.samples = 64;
+        ic_points_options opt = points_options(integ, 64);
         ic_point_result a[5], b[5];
         opt.threads = 1;
         int ok = ic_points_compute(s, pts, 5, &opt, a, NULL, &err) == IC_OK;
