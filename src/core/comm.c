@@ -87,6 +87,51 @@ ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, 
     return res == IC_OK ? IC_OK : failed(err, res, "exchanging candidates");
 }
 
+ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, uint64_t count, int arrays,
+                               void *const *out, const size_t *out_bytes, ic_comm_gather_fn gather, void *user,
+                               const char *what, uint64_t *own, ic_error *err)
+{
+    int ranks = ic_comm_size(comm), rank = ic_comm_rank(comm);
+    *own = count;
+    if (arrays > IC_COMM_SHARE_MAX_ARRAYS)
+        return ic_error_set(err, IC_ERR_INTERNAL, "%d output arrays to share; at most %d", arrays,
+                            IC_COMM_SHARE_MAX_ARRAYS);
+    if (ranks == 1 || count == 0)
+        return gather(user, in, count, out, err);
+    uint64_t first;
+    ic_comm_block(count, ranks, rank, &first, own);
+    char *mine = malloc(in_bytes * (*own ? *own : 1));
+    char *all[IC_COMM_SHARE_MAX_ARRAYS] = {0};
+    void *block[IC_COMM_SHARE_MAX_ARRAYS] = {0};
+    ic_result r = mine ? IC_OK : IC_ERR_OOM;
+    for (int a = 0; a < arrays && r == IC_OK; ++a) {
+        all[a] = calloc(count, out_bytes[a]);
+        block[a] = all[a] ? all[a] + first * out_bytes[a] : NULL;
+        r = all[a] ? IC_OK : IC_ERR_OOM;
+    }
+    if (r != IC_OK)
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for %llu %s", (unsigned long long)count, what);
+    for (uint64_t k = 0; r == IC_OK && k < *own; ++k)
+        memcpy(mine + k * in_bytes, (const char *)in + ((uint64_t)rank + k * (uint64_t)ranks) * in_bytes, in_bytes);
+    if (r == IC_OK)
+        r = gather(user, mine, *own, block, err);
+    for (int a = 0; a < arrays && r == IC_OK; ++a)
+        r = ic_comm_allgather_blocks(comm, all[a], count, out_bytes[a], err);
+    for (int q = 0; r == IC_OK && q < ranks; ++q) {
+        uint64_t q_first, q_own;
+        ic_comm_block(count, ranks, q, &q_first, &q_own);
+        for (uint64_t k = 0; k < q_own; ++k) {
+            uint64_t i = (uint64_t)q + k * (uint64_t)ranks;
+            for (int a = 0; a < arrays; ++a)
+                memcpy((char *)out[a] + i * out_bytes[a], all[a] + (q_first + k) * out_bytes[a], out_bytes[a]);
+        }
+    }
+    free(mine);
+    for (int a = 0; a < arrays; ++a)
+        free(all[a]);
+    return r;
+}
+
 ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err)
 {
     if (!ic_comm_is_shared(comm) || count == 0)

@@ -26,6 +26,18 @@ ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, siz
  * count and nothing moves. */
 ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, size_t item_bytes, uint64_t *total,
                                     ic_error *err);
+/* Gathers results for `count` items (a gather: `arrays` output arrays, out_bytes[a] bytes an item) on a
+ * share of the ranks each and leaves every item's results on every rank in out[a], in item order. Rank r
+ * of N takes items r, r + N, r + 2N, … (interleaved: neighbouring items, which cost alike, spread over every
+ * rank): their inputs (in: count items of in_bytes) are picked into a contiguous array, gather is called
+ * once on them, writing to its block of rank-ordered buffers (ic_comm_block's sizes), and the blocks are
+ * exchanged and put back in item order. For one process (or no items) gather runs once on in and out
+ * themselves. *own gets the number of items this rank gathered; `what` names the items in messages. */
+#define IC_COMM_SHARE_MAX_ARRAYS 4
+typedef ic_result (*ic_comm_gather_fn)(void *user, const void *in, uint64_t n, void *const *out, ic_error *err);
+ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, uint64_t count, int arrays,
+                               void *const *out, const size_t *out_bytes, ic_comm_gather_fn gather, void *user,
+                               const char *what, uint64_t *own, ic_error *err);
 /* Sums count doubles over the ranks, in place (a no-op for one process). */
 ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err);
 /* Copies root's bytes to every rank (a no-op for one process). */

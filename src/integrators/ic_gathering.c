@@ -351,58 +351,51 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
     return r;
 }
 
-/* Several processes (c->comm): point i is gathered by rank i mod N (interleaved: neighbouring points,
- * which cost alike, spread over every rank), and the results are exchanged, so every process holds every
- * result, bit for bit what one process would have gathered: a point's result depends only on the seed,
- * its key and the records already in the cache, which every process holds alike. */
+/* What gather_block gathers points with: the context and where the points' gathered flags go. */
+typedef struct gather_points_job {
+    ic_ctx *c;
+    uint8_t *gathered;
+    int has_levels;
+} gather_points_job;
+
+/* ic_comm_gather_fn of ic_ic_gather_points: n points into out[0] (results) and out[1] (bounce levels, if
+ * kept). */
+static ic_result gather_block(void *user, const void *pts, uint64_t n, void *const *out, ic_error *err)
+{
+    gather_points_job *u = user;
+    return gather_here(u->c, pts, (uint32_t)n, out[0], u->has_levels ? out[1] : NULL, u->gathered, err);
+}
+
+/* Several processes (c->comm): point i is gathered by rank i mod N (ic_comm_share_gather: neighbouring
+ * points, which cost alike, spread over every rank), and the results are exchanged, so every process holds
+ * every result, bit for bit what one process would have gathered: a point's result depends only on the
+ * seed, its key and the records already in the cache, which every process holds alike. */
 ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
                               ic_vec3 *levels, uint8_t *gathered, ic_error *err)
 {
-    int ranks = ic_comm_size(c->comm), rank = ic_comm_rank(c->comm);
-    if (ranks == 1 || count == 0) {
-        ic_result r = gather_here(c, pts, count, out, levels, gathered, err);
+    const int shared = ic_comm_size(c->comm) > 1 && count > 0;
+    gather_points_job u = {c, gathered, levels != NULL};
+    if (shared) {
+        /* Shared: never cancelled (ic_ic_cancelled), so every point is gathered; this rank's own flags
+         * go to scratch. */
+        memset(gathered, 1, count);
+        u.gathered = malloc(count);
+        if (!u.gathered)
+            return ic_error_set(err, IC_ERR_OOM, "out of memory for %u gather results", count);
+    }
+    size_t stride = (size_t)c->levels + 1;
+    void *const outs[2] = {out, levels};
+    const size_t sizes[2] = {sizeof *out, sizeof *levels * stride};
+    uint64_t own;
+    ic_result r = ic_comm_share_gather(c->comm, pts, sizeof *pts, count, levels ? 2 : 1, outs, sizes, gather_block,
+                                       &u, "gather results", &own, err);
+    if (shared) {
+        c->gathered += own;
+        free(u.gathered);
+    } else {
         for (uint32_t i = 0; i < count; ++i)
             c->gathered += gathered[i];
-        return r;
     }
-    /* Shared: never cancelled (ic_ic_cancelled), so every point is gathered. */
-    memset(gathered, 1, count);
-    /* Rank r takes count/N points, one more when r < count mod N: the sizes of ic_comm_block's blocks, so
-     * its results go to its block of a rank-ordered buffer, exchanged as blocks and then put in place. */
-    uint64_t first, own;
-    ic_comm_block(count, ranks, rank, &first, &own);
-    size_t stride = (size_t)c->levels + 1;
-    ic_gather_point *mine = malloc(sizeof *mine * (own ? own : 1));
-    uint8_t *mine_gathered = malloc(own ? own : 1);
-    ic_gather_result *all = malloc(sizeof *all * count);
-    ic_vec3 *all_levels = levels ? malloc(sizeof *all_levels * stride * count) : NULL;
-    ic_result r = IC_OK;
-    if (!mine || !mine_gathered || !all || (levels && !all_levels))
-        r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u gather results", count);
-    for (uint64_t k = 0; r == IC_OK && k < own; ++k)
-        mine[k] = pts[(uint64_t)rank + k * (uint64_t)ranks];
-    if (r == IC_OK)
-        r = gather_here(c, mine, (uint32_t)own, all + first, levels ? all_levels + first * stride : NULL,
-                        mine_gathered, err);
-    c->gathered += own;
-    if (r == IC_OK)
-        r = ic_comm_allgather_blocks(c->comm, all, count, sizeof *all, err);
-    if (r == IC_OK && levels)
-        r = ic_comm_allgather_blocks(c->comm, all_levels, count, sizeof *all_levels * stride, err);
-    for (int q = 0; r == IC_OK && q < ranks; ++q) {
-        uint64_t q_first, q_own;
-        ic_comm_block(count, ranks, q, &q_first, &q_own);
-        for (uint64_t k = 0; k < q_own; ++k) {
-            uint64_t i = (uint64_t)q + k * (uint64_t)ranks;
-            out[i] = all[q_first + k];
-            if (levels)
-                memcpy(&levels[i * stride], &all_levels[(q_first + k) * stride], sizeof *levels * stride);
-        }
-    }
-    free(mine);
-    free(mine_gathered);
-    free(all);
-    free(all_levels);
     return r;
 }
 

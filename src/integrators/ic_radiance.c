@@ -299,43 +299,38 @@ static void record_of(const ic_ctx *c, const ic_candidate *cd, const ic_gather_r
     rec->bounce = (uint8_t)IC_BOUNCE_RADIANCE;
 }
 
-/* Gathers the job's count candidates with its threads into j->res (whose coefficient buffers are
- * payload's rows of `floats`). Ranks sharing the render split them as ic_ic_gather_points does: rank r
- * gathers candidates r, r + N, …, the results and coefficients are exchanged, and every rank holds
- * every one, bit for bit what one process gathers (a result depends only on the seed and its key). */
-static ic_result gather_shared(ic_ctx *c, rad_job *j, uint32_t count, int threads, float *payload, uint32_t floats,
-                               ic_error *err)
+/* Points n results at their rows of `floats` coefficients in coeffs: Λ, then its t and b gradients. */
+static void point_results(ic_gather_radiance_result *res, float *coeffs, uint64_t n, uint32_t floats)
 {
-    int ranks = ic_comm_size(c->comm), rank = ic_comm_rank(c->comm);
-    uint64_t first = 0, own = count;
-    if (ranks > 1)
-        ic_comm_block(count, ranks, rank, &first, &own);
+    for (uint64_t i = 0; i < n; ++i) {
+        res[i].coeffs = coeffs + i * floats;
+        res[i].grad_t = res[i].coeffs + floats / 3;
+        res[i].grad_b = res[i].coeffs + 2 * (floats / 3);
+    }
+}
+
+/* What gather_block gathers candidates with. */
+typedef struct rad_share {
+    rad_job *j;
+    int threads;
+    uint32_t floats; /* coefficients a result */
+} rad_share;
+
+/* ic_comm_gather_fn of gather_shared: n candidates on the job's threads into out[1] (results), whose
+ * coefficients go to out[0]. */
+static ic_result gather_block(void *user, const void *cand, uint64_t n, void *const *out, ic_error *err)
+{
+    rad_share *u = user;
+    rad_job *j = u->j;
     const ic_candidate *all_cand = j->cand;
     ic_gather_radiance_result *all_res = j->res;
-    ic_candidate *mine = NULL;
-    float *block = NULL;
-    ic_gather_radiance_result *block_res = NULL;
+    j->cand = cand;
+    j->res = out[1];
+    point_results(j->res, out[0], n, u->floats);
+    int t = u->threads < (int)n ? u->threads : (int)n;
     ic_result r = IC_OK;
-    if (ranks > 1) {
-        /* This rank's candidates, gathered into its block of a rank-ordered buffer. */
-        mine = malloc(sizeof *mine * (own ? own : 1));
-        block = malloc(sizeof *block * floats * (count ? count : 1));
-        block_res = calloc(count ? count : 1, sizeof *block_res);
-        if (!mine || !block || !block_res)
-            r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u radiance records", count);
-        for (uint64_t k = 0; r == IC_OK && k < own; ++k) {
-            mine[k] = all_cand[(uint64_t)rank + k * (uint64_t)ranks];
-            ic_gather_radiance_result *g = &block_res[first + k];
-            g->coeffs = block + (first + k) * floats;
-            g->grad_t = g->coeffs + floats / 3;
-            g->grad_b = g->coeffs + 2 * (floats / 3);
-        }
-        j->cand = mine;
-        j->res = block_res + first;
-    }
-    int t = threads < (int)own ? threads : (int)own;
-    if (r == IC_OK && own) {
-        r = ic_parallel_for(t > 0 ? t : 1, (int64_t)own, rad_item, j);
+    if (n) {
+        r = ic_parallel_for(t > 0 ? t : 1, (int64_t)n, rad_item, j);
         if (r != IC_OK)
             ic_error_set(err, r, "could not start %d gathering threads", t);
         else if ((r = (ic_result)atomic_load(&j->status)) != IC_OK)
@@ -343,29 +338,25 @@ static ic_result gather_shared(ic_ctx *c, rad_job *j, uint32_t count, int thread
     }
     j->cand = all_cand;
     j->res = all_res;
+    return r;
+}
+
+/* Gathers the job's count candidates with its threads into j->res (whose coefficient buffers are
+ * payload's rows of `floats`). Ranks sharing the render split them as ic_ic_gather_points does
+ * (ic_comm_share_gather): rank r gathers candidates r, r + N, …, the results and coefficients are
+ * exchanged, and every rank holds every one, bit for bit what one process gathers (a result depends only
+ * on the seed and its key). */
+static ic_result gather_shared(ic_ctx *c, rad_job *j, uint32_t count, int threads, float *payload, uint32_t floats,
+                               ic_error *err)
+{
+    rad_share u = {j, threads, floats};
+    void *const outs[2] = {payload, j->res};
+    const size_t sizes[2] = {sizeof *payload * floats, sizeof *j->res};
+    uint64_t own;
+    ic_result r = ic_comm_share_gather(c->comm, j->cand, sizeof *j->cand, count, 2, outs, sizes, gather_block, &u,
+                                       "radiance records", &own, err);
     c->gathered += own;
-    if (ranks > 1) {
-        if (r == IC_OK)
-            r = ic_comm_allgather_blocks(c->comm, block, count, sizeof *block * floats, err);
-        if (r == IC_OK)
-            r = ic_comm_allgather_blocks(c->comm, block_res, count, sizeof *block_res, err);
-        for (int q = 0; r == IC_OK && q < ranks; ++q) {
-            uint64_t q_first, q_own;
-            ic_comm_block(count, ranks, q, &q_first, &q_own);
-            for (uint64_t k = 0; k < q_own; ++k) {
-                uint64_t i = (uint64_t)q + k * (uint64_t)ranks;
-                ic_gather_radiance_result g = block_res[q_first + k]; /* its pointers were the sender's */
-                g.coeffs = all_res[i].coeffs;
-                g.grad_t = all_res[i].grad_t;
-                g.grad_b = all_res[i].grad_b;
-                all_res[i] = g;
-                memcpy(payload + i * floats, block + (q_first + k) * floats, sizeof *payload * floats);
-            }
-        }
-    }
-    free(mine);
-    free(block);
-    free(block_res);
+    point_results(j->res, payload, count, floats); /* the exchanged results' pointers were their senders' */
     return r;
 }
 
@@ -388,11 +379,8 @@ static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t cou
     ic_result r = payload && recs && j.res && j.workers && j.gatherers
                       ? IC_OK
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for %u radiance records", count);
-    for (uint32_t i = 0; r == IC_OK && i < count; ++i) {
-        j.res[i].coeffs = payload + (size_t)i * floats;
-        j.res[i].grad_t = j.res[i].coeffs + 3 * k;
-        j.res[i].grad_b = j.res[i].coeffs + 6 * k;
-    }
+    if (r == IC_OK)
+        point_results(j.res, payload, count, floats);
     /* The radiance records' own ray count, as M × N strata with N ≈ πM (the gather uses their product). */
     ic_gather_opts go = c->o.gather;
     double irradiance_rays = go.theta_strata && go.phi_strata ? (double)go.theta_strata * go.phi_strata : IC_DEFAULT_RAYS;
