@@ -1,12 +1,13 @@
 /*
  * portals.c — sampling the environment through portals: parallelogram openings (windows) that the scene
- * declares, through which an interior sees its sky. A point uniform over the portals' total area seen
- * from p gives a direction whose solid-angle pdf is dist² / (A · |cos θ_q|) (θ_q at the portal), summed
- * over every portal the direction leaves through; directions through no portal have pdf 0 and are left
- * to other sampling (BSDF sampling under MIS). This is the portal idea of production renderers in its
- * plainest form, uniform sampling of the portals' area (the baseline Bitterli et al. 2015 compare their
- * environment-aware portal sampling against); its variance stays low wherever an opening is not seen
- * edge-on, but it ignores how the sky's radiance varies across the opening.
+ * declares, through which an interior sees its sky. From a point p inside of some portals, a portal is
+ * picked by the solid angle it subtends at p, then a direction through it: uniform in its solid angle for
+ * a rectangle (the spherical rectangle of Ureña et al. 2013), or towards a point uniform over its area
+ * for another parallelogram (pdf dist² / (A · |cos θ_q|)). A direction's pdf sums this over every portal
+ * it leaves through; directions through no portal have pdf 0 and are left to other sampling (BSDF
+ * sampling under MIS). This is portal sampling as production renderers do it, uniform over the opening's
+ * solid angle — the baseline Bitterli et al. 2015 compare their environment-aware portal sampling
+ * against; it ignores how the sky's radiance varies across the opening.
  * A portal's normal points into the interior: only points on that side of a portal see light through
  * it, and a point outside every portal (the ground in front of the house) samples the sky as if there
  * were no portals.
@@ -59,19 +60,127 @@ float ic_scene_portal_crossing(const ic_scene *scene, ic_vec3 p, ic_vec3 wi)
     return nearest;
 }
 
+/* A rectangle seen from p as a spherical rectangle (Ureña et al. 2013 §3): p's coordinates in the
+ * rectangle's frame (x0 … x1 along its first edge, y0 … y1 along its second, z0 < 0 off its plane), the
+ * constants of its inversion and its solid angle S. */
+typedef struct srect {
+    ic_vec3 o, x, y, z;          /* p, and the frame: x, y along the edges, z towards p's side negated */
+    double x0, x1, y0, y1, z0;
+    double b0, b1, k, S;
+} srect;
+
+static double angle_between(const double a[3], const double b[3])
+{
+    double c = -(a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+    return acos(c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c));
+}
+
+static void unit_cross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+    double l = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+    for (int i = 0; i < 3 && l > 0.0; ++i)
+        out[i] /= l;
+}
+
+/* Fills r for rectangle pt seen from p; returns its solid angle (0 when p lies in its plane). */
+static double srect_init(const ic_portal *pt, ic_vec3 p, srect *r)
+{
+    double ex = v3_len(pt->edge1), ey = v3_len(pt->edge2);
+    r->o = p;
+    r->x = v3_scale(pt->edge1, (float)(1.0 / ex));
+    r->y = v3_scale(pt->edge2, (float)(1.0 / ey));
+    r->z = v3_cross(r->x, r->y);
+    ic_vec3 d = v3_sub(pt->corner, p);
+    r->z0 = v3_dot(d, r->z);
+    if (r->z0 > 0.0) {
+        r->z = v3_neg(r->z);
+        r->z0 = -r->z0;
+    }
+    if (!(r->z0 < -1e-7 * (ex + ey)))
+        return r->S = 0.0;
+    r->x0 = v3_dot(d, r->x);
+    r->y0 = v3_dot(d, r->y);
+    r->x1 = r->x0 + ex;
+    r->y1 = r->y0 + ey;
+    const double v00[3] = {r->x0, r->y0, r->z0}, v01[3] = {r->x0, r->y1, r->z0}, v10[3] = {r->x1, r->y0, r->z0},
+                 v11[3] = {r->x1, r->y1, r->z0};
+    double n0[3], n1[3], n2[3], n3[3];
+    unit_cross(v00, v10, n0);
+    unit_cross(v10, v11, n1);
+    unit_cross(v11, v01, n2);
+    unit_cross(v01, v00, n3);
+    double g0 = angle_between(n0, n1), g1 = angle_between(n1, n2), g2 = angle_between(n2, n3),
+           g3 = angle_between(n3, n0);
+    r->b0 = n0[2];
+    r->b1 = n2[2];
+    r->k = 2.0 * 3.14159265358979323846 - g2 - g3;
+    r->S = g0 + g1 - r->k;
+    return r->S > 0.0 && isfinite(r->S) ? r->S : (r->S = 0.0);
+}
+
+/* The direction for (u, v) in [0,1)², uniform in the spherical rectangle's solid angle (Ureña et al. 2013
+ * §4: the first coordinate inverts the area of the sub-rectangle left of xu, the second the height along
+ * the chosen column). *q is where it meets the rectangle. */
+static ic_vec3 srect_sample(const srect *r, double u, double v, ic_vec3 *q)
+{
+    double au = u * r->S + r->k;
+    double fu = (cos(au) * r->b0 - r->b1) / sin(au);
+    double cu = (fu >= 0.0 ? 1.0 : -1.0) / sqrt(fu * fu + r->b0 * r->b0);
+    cu = cu < -1.0 ? -1.0 : (cu > 1.0 ? 1.0 : cu);
+    double xu = -(cu * r->z0) / fmax(sqrt(1.0 - cu * cu), 1e-300);
+    xu = xu < r->x0 ? r->x0 : (xu > r->x1 ? r->x1 : xu);
+    double dd = sqrt(xu * xu + r->z0 * r->z0);
+    double h0 = r->y0 / sqrt(dd * dd + r->y0 * r->y0), h1 = r->y1 / sqrt(dd * dd + r->y1 * r->y1);
+    double hv = h0 + v * (h1 - h0), hv2 = hv * hv;
+    double yv = hv2 < 1.0 - 1e-12 ? hv * dd / sqrt(1.0 - hv2) : r->y1;
+    ic_vec3 local = v3_add(v3_add(v3_scale(r->x, (float)xu), v3_scale(r->y, (float)yv)), v3_scale(r->z, (float)r->z0));
+    *q = v3_add(r->o, local);
+    return v3_norm(local);
+}
+
+/* How much of the sampling portal pt gets at p: its solid angle (a rectangle), or the area estimate
+ * A |cos θ| / d² at its centre (another parallelogram), at most 2π; 0 when p is not inside of it. */
+static double portal_weight(const ic_portal *pt, ic_vec3 p)
+{
+    if (!inside_of(pt, p))
+        return 0.0;
+    if (pt->rectangle) {
+        srect r;
+        return srect_init(pt, p, &r);
+    }
+    ic_vec3 c = v3_add(pt->corner, v3_scale(v3_add(pt->edge1, pt->edge2), 0.5f));
+    ic_vec3 d = v3_sub(c, p);
+    double d2 = v3_len2(d);
+    if (!(d2 > 0.0))
+        return 0.0;
+    double w = pt->area * fabs(v3_dot(d, pt->normal)) / (d2 * sqrt(d2));
+    return fmin(w, 2.0 * 3.14159265358979323846);
+}
+
 float ic_scene_portal_pdf(const ic_scene *scene, ic_vec3 p, ic_vec3 wi)
 {
     const ic_environment *env = &scene->env;
-    if (!env->portal_count || !(env->portal_area > 0.0f))
+    if (!env->portal_count)
         return 0.0f;
-    float pdf = 0.0f;
+    double total = 0.0, pdf = 0.0;
     for (uint32_t k = 0; k < env->portal_count; ++k) {
         const ic_portal *pt = &env->portals[k];
+        double w = portal_weight(pt, p);
+        total += w;
+        if (!(w > 0.0))
+            continue;
         float t = portal_hit(pt, p, wi);
-        if (t > 0.0f)
-            pdf += t * t / (env->portal_area * fabsf(v3_dot(wi, pt->normal)));
+        if (!(t > 0.0f))
+            continue;
+        /* within the portal: 1/Ω (rectangle) or the area pdf, times the portal's share (below) */
+        pdf += pt->rectangle ? 1.0 : w * (double)t * t / (pt->area * fabs(v3_dot(wi, pt->normal)));
     }
-    return isfinite(pdf) ? pdf : 0.0f;
+    /* Σ_k (w_k / W) pdf_k: for a rectangle pdf_k = 1/w_k, so its term is 1/W. */
+    pdf = total > 0.0 ? pdf / total : 0.0;
+    return isfinite(pdf) ? (float)pdf : 0.0f;
 }
 
 int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1, float u2, ic_vec3 *wi, ic_vec3 *q,
@@ -79,20 +188,32 @@ int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1,
 {
     const ic_environment *env = &scene->env;
     *pdf = 0.0f;
-    if (!env->portal_count || !(env->portal_area > 0.0f))
+    if (!env->portal_count)
+        return 0;
+    double w[IC_MAX_PORTALS], total = 0.0;
+    for (uint32_t k = 0; k < env->portal_count; ++k)
+        total += w[k] = portal_weight(&env->portals[k], p);
+    if (!(total > 0.0))
         return 0;
     uint32_t k = 0;
-    while (k + 1 < env->portal_count && u0 >= env->portal_cdf[k + 1])
-        ++k;
-    const ic_portal *pt = &env->portals[k];
-    if (!inside_of(pt, p))
-        return 0; /* a portal p is outside of: no light through it */
-    *q = v3_madd(v3_madd(pt->corner, pt->edge1, u1), pt->edge2, u2);
-    ic_vec3 d = v3_sub(*q, p);
-    float dist = v3_len(d);
-    if (!(dist > 0.0f))
+    double acc = w[0], target = (double)u0 * total;
+    while (k + 1 < env->portal_count && (acc <= target || !(w[k] > 0.0)))
+        acc += w[++k];
+    if (!(w[k] > 0.0))
         return 0;
-    *wi = v3_scale(d, 1.0f / dist);
+    const ic_portal *pt = &env->portals[k];
+    if (pt->rectangle) {
+        srect r;
+        srect_init(pt, p, &r);
+        *wi = srect_sample(&r, u1, u2, q);
+    } else {
+        *q = v3_madd(v3_madd(pt->corner, pt->edge1, u1), pt->edge2, u2);
+        ic_vec3 d = v3_sub(*q, p);
+        float dist = v3_len(d);
+        if (!(dist > 0.0f))
+            return 0;
+        *wi = v3_scale(d, 1.0f / dist);
+    }
     if (!(fabsf(v3_dot(*wi, pt->normal)) > 1e-6f))
         return 0; /* the opening seen edge-on */
     *pdf = ic_scene_portal_pdf(scene, p, *wi);
@@ -101,24 +222,11 @@ int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1,
 
 ic_result ic_scene_build_portals(ic_scene *s, ic_error *err)
 {
+    (void)err;
     ic_environment *env = &s->env;
-    free(env->portal_cdf);
-    env->portal_cdf = NULL;
-    env->portal_area = 0.0f;
-    if (!env->portal_count)
-        return IC_OK;
-    env->portal_cdf = malloc(sizeof(float) * (env->portal_count + 1));
-    if (!env->portal_cdf)
-        return ic_error_set(err, IC_ERR_OOM, "out of memory for the portals");
     double total = 0.0;
-    env->portal_cdf[0] = 0.0f;
-    for (uint32_t k = 0; k < env->portal_count; ++k) {
+    for (uint32_t k = 0; k < env->portal_count; ++k)
         total += env->portals[k].area;
-        env->portal_cdf[k + 1] = (float)total;
-    }
-    for (uint32_t k = 1; k <= env->portal_count; ++k)
-        env->portal_cdf[k] = (float)(env->portal_cdf[k] / total);
-    env->portal_cdf[env->portal_count] = 1.0f;
     env->portal_area = (float)total;
     return IC_OK;
 }
@@ -154,5 +262,6 @@ ic_result ic_scene_add_portal(ic_scene *s, const ic_vec3 corners[4], ic_error *e
     pt->edge2 = e2;
     pt->normal = v3_scale(c, 1.0f / area);
     pt->area = area;
+    pt->rectangle = fabsf(v3_dot(e1, e2)) <= 1e-4f * v3_len(e1) * v3_len(e2);
     return IC_OK;
 }

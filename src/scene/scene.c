@@ -506,6 +506,5 @@ void ic_scene_free(ic_scene *s)
     free(s->env.marginal_cdf);
     free(s->env.conditional_cdf);
     free(s->env.portals);
-    free(s->env.portal_cdf);
     free(s);
 }

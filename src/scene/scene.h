@@ -149,6 +149,7 @@ typedef struct ic_portal {
     ic_vec3 edge1, edge2;
     ic_vec3 normal;        /* unit, edge1 × edge2 normalised: it points into the interior */
     float area;
+    int rectangle;         /* edges at right angles: sampled by solid angle (portals.c), else by area */
 } ic_portal;
 
 typedef struct ic_environment {
@@ -165,8 +166,7 @@ typedef struct ic_environment {
                               `image` holds it tabulated only for importance sampling (lights.c) */
     ic_portal *portals;    /* NULL: none, the environment is sampled over the whole sphere */
     uint32_t portal_count;
-    float *portal_cdf;     /* portal_count + 1, by area (filled by ic_scene_build_lights) */
-    float portal_area;     /* their total area */
+    float portal_area;     /* their total area (filled by ic_scene_build_lights) */
 } ic_environment;
 
 /* Probability with which ic_scene_sample_light picks each class of light; they sum to 1 (all 0 when
@@ -325,10 +325,11 @@ float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
 /* The same with portals taken into account: the solid-angle pdf of environment light sampling from p
  * (from a point inside a portal, 0 along a direction through no portal). */
 float ic_scene_light_pdf_env_at(const ic_scene *scene, ic_vec3 p, ic_vec3 wi);
-/* Portals (portals.c). A direction from p to a point uniform over the portals' total area (u0 picks the
- * portal by area, u1, u2 the point on it); *pdf is the solid-angle pdf of that direction, summed over
- * every portal it crosses (ic_scene_portal_pdf), *q the point, *cos_q |cos| at the portal. Returns 0
- * without portals or when p lies in a portal's plane. */
+/* Portals (portals.c). A direction from p through a portal: u0 picks one of the portals p is inside of,
+ * by the solid angle it subtends at p, and (u1, u2) a direction uniform in that solid angle (a rectangle)
+ * or a point uniform over its area (another parallelogram); *q is the point on the portal and *pdf the
+ * solid-angle pdf of the direction, summed over every portal it leaves through (ic_scene_portal_pdf).
+ * Returns 0 without portals, when p is inside of none, or for an opening seen edge-on. */
 int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1, float u2, ic_vec3 *wi, ic_vec3 *q,
                            float *pdf);
 /* The solid-angle pdf of ic_scene_sample_portal picking direction wi (unit) from p: 0 if the ray leaves

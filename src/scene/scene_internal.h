@@ -141,7 +141,7 @@ ic_result ic_scene_finalize_and_fit(ic_scene_builder *b, int has_camera, ic_erro
 /* Builds tri_lights, the CDFs, the environment importance tables and the light selection (lights.c). */
 ic_result ic_scene_build_lights(ic_scene *scene, ic_error *err);
 /* Portals (portals.c): appends the parallelogram with these corners, in order around it (refused with a
- * message if degenerate or not a parallelogram); builds the by-area table (from ic_scene_build_lights). */
+ * message if degenerate or not a parallelogram); sums their area (from ic_scene_build_lights). */
 ic_result ic_scene_add_portal(ic_scene *scene, const ic_vec3 corners[4], ic_error *err);
 ic_result ic_scene_build_portals(ic_scene *scene, ic_error *err);
 

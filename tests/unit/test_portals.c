@@ -3,6 +3,8 @@
  *
  * - Under a 2 × 1 portal, 1.5 above a receiver under its corner, a constant sky L gives through it
  *   π L F with F the point-to-parallel-rectangle form factor: portal sampling's estimate matches.
+ * - A rectangle (solid-angle sampling) beside a skewed parallelogram (area sampling): the sampler's pdf
+ *   is ic_scene_portal_pdf's and integrates to 1 from three points.
  * - Every sample's pdf is what ic_scene_portal_pdf returns for its direction, the pdf integrates to 1
  *   over the sphere, it is 0 along directions through no portal, and ic_scene_light_pdf_env_at agrees
  *   with the light sampler's pdf.
@@ -134,6 +136,47 @@ static void test_sampling(void)
     ic_scene_free(s);
 }
 
+/* A rectangle (sampled by solid angle) beside a skewed parallelogram (sampled by area): from points
+ * below both, every sample's pdf is ic_scene_portal_pdf's, and the pdf integrates to 1. */
+static void test_mixed_portals(void)
+{
+    ic_error err = {0};
+    ic_scene *s = load_text("portal_mixed.json",
+                            "{\n \"meshes\": [{\"path\": \"" IC_SOURCE_DIR "/tests/scenes/plain_quad.obj\",\n"
+                            "   \"transform\": {\"translate\": [50, -20, 50]}}],\n"
+                            " \"environment\": {\"radiance\": [1, 1, 1], \"portals\": [\n"
+                            "   [[0, 1.5, 0], [2, 1.5, 0], [2, 1.5, 1], [0, 1.5, 1]],\n"
+                            "   [[3, 2, 0], [5, 2, 0], [5.5, 2, 1], [3.5, 2, 1]]]}\n}\n",
+                            &err);
+    CHECK(s != NULL, "mixed portals load: %s", err.message);
+    if (!s)
+        return;
+    CHECK(s->env.portal_count == 2 && s->env.portals[0].rectangle && !s->env.portals[1].rectangle,
+          "a rectangle and a skewed parallelogram");
+    uint64_t st = 0x243f6a8885a308d3ULL;
+    const ic_vec3 at[3] = {v3(1.0f, 0.0f, 0.5f), v3(4.0f, 0.5f, 0.2f), v3(2.5f, 1.4f, 0.5f)};
+    for (int i = 0; i < 3; ++i) {
+        int pdf_bad = 0, n = 0;
+        for (int k = 0; k < 100000; ++k) {
+            ic_vec3 wi, q;
+            float pdf;
+            if (!ic_scene_sample_portal(s, at[i], rnd(&st), rnd(&st), rnd(&st), &wi, &q, &pdf))
+                continue;
+            ++n;
+            pdf_bad += fabsf(pdf - ic_scene_portal_pdf(s, at[i], wi)) > 2e-3f * pdf;
+        }
+        double integral = 0.0;
+        const int M = 400000;
+        for (int k = 0; k < M; ++k)
+            integral += ic_scene_portal_pdf(s, at[i], ic_warp_uniform_sphere(rnd(&st), rnd(&st))) * 4.0 * PI / M;
+        printf("mixed portals, point %d: %d samples, pdf integral %.4f\n", i, n, integral);
+        CHECK(n > 99000 && pdf_bad == 0, "point %d: %d samples, %d with another pdf than ic_scene_portal_pdf", i, n,
+              pdf_bad);
+        CHECK(fabs(integral - 1.0) < 0.02, "point %d: the pdf integrates to %.4f", i, integral);
+    }
+    ic_scene_free(s);
+}
+
 /* The sky-room's direct light (max depth 1) at four sensors, with and without its portals. */
 static void test_sky_room(void)
 {
@@ -216,6 +259,7 @@ static void test_bad_portals(void)
 int main(void)
 {
     test_sampling();
+    test_mixed_portals();
     test_sky_room();
     test_bad_portals();
     TEST_MAIN_END();
