@@ -11,7 +11,9 @@
  * - every vertex index of a face, line or point names a vertex (1 to N, or -1 to -n for the n read so
  *   far): for an index past the end assimp throws "vertex index out of range" while it holds the meshes
  *   it has built, which leak (found by the mesh_obj fuzz target: a `mtllib` line without its line end
- *   swallowed the first vertex, and the second material's face named vertex 4 of 3).
+ *   swallowed the first vertex, and the second material's face named vertex 4 of 3). assimp takes every
+ *   line whose first letter is f, l or p for a face, line or point, whatever follows the letter ("f3 4"
+ *   is a face naming vertex 4: also found by the fuzzer), so these are checked the same way.
  */
 #include "scene/mesh_check.h"
 
@@ -190,8 +192,10 @@ ic_result ic_obj_check(FILE *fp, const char *path, ic_error *err)
         }
         if (line[0] == 'v' && (line[1] == ' ' || line[1] == '\t'))
             r = check_vertex_line(line + 2, path, at, ++vertices, err);
-        else if ((line[0] == 'f' || line[0] == 'l' || line[0] == 'p') && (line[1] == ' ' || line[1] == '\t'))
-            r = check_face_line(line + 2, path, at, vertices, &far, err);
+        else if (line[0] == 'f' || line[0] == 'l' || line[0] == 'p')
+            /* assimp reads any line that starts with one of these letters as a face, line or point, its
+             * first word ("f", or "f3", "fo") skipped */
+            r = check_face_line(line + strcspn(line, " \t"), path, at, vertices, &far, err);
         if (r != IC_OK)
             break;
     }

@@ -51,6 +51,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* Phong exponents at or above this are treated as ideal mirrors (illum 3/5, glTF metals). */
@@ -265,6 +266,13 @@ static struct aiFile *source_fs_open(struct aiFileIO *io, const char *name, cons
         }
         if ((fp = fopen(name, mode)) == NULL)
             return NULL;
+        /* Only regular files: a directory (an MTL named ".") opens, then reports an absurd size, and assimp
+         * leaks the stream when the reserve for it throws (found by the mesh_obj fuzz target). */
+        struct stat st;
+        if (fstat(fileno(fp), &st) != 0 || !S_ISREG(st.st_mode)) {
+            fclose(fp);
+            return NULL;
+        }
     }
     source_file *sf = calloc(1, sizeof *sf);
     if (!sf) {
