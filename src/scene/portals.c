@@ -160,27 +160,42 @@ static double portal_weight(const ic_portal *pt, ic_vec3 p)
     return fmin(w, 2.0 * 3.14159265358979323846);
 }
 
-float ic_scene_portal_pdf(const ic_scene *scene, ic_vec3 p, ic_vec3 wi)
+/* Every portal's weight at p (portal_weight) into w[], and their sum. */
+static double portal_weights(const ic_environment *env, ic_vec3 p, double *w)
 {
-    const ic_environment *env = &scene->env;
-    if (!env->portal_count)
-        return 0.0f;
-    double total = 0.0, pdf = 0.0;
+    double total = 0.0;
+    for (uint32_t k = 0; k < env->portal_count; ++k)
+        total += w[k] = portal_weight(&env->portals[k], p);
+    return total;
+}
+
+/* The pdf of ic_scene_portal_pdf from the weights portal_weights gave at p. */
+static float portals_pdf(const ic_environment *env, ic_vec3 p, ic_vec3 wi, const double *w, double total)
+{
+    double pdf = 0.0;
     for (uint32_t k = 0; k < env->portal_count; ++k) {
         const ic_portal *pt = &env->portals[k];
-        double w = portal_weight(pt, p);
-        total += w;
-        if (!(w > 0.0))
+        if (!(w[k] > 0.0))
             continue;
         float t = portal_hit(pt, p, wi);
         if (!(t > 0.0f))
             continue;
         /* within the portal: 1/Ω (rectangle) or the area pdf, times the portal's share (below) */
-        pdf += pt->rectangle ? 1.0 : w * (double)t * t / (pt->area * fabs(v3_dot(wi, pt->normal)));
+        pdf += pt->rectangle ? 1.0 : w[k] * (double)t * t / (pt->area * fabs(v3_dot(wi, pt->normal)));
     }
     /* Σ_k (w_k / W) pdf_k: for a rectangle pdf_k = 1/w_k, so its term is 1/W. */
     pdf = total > 0.0 ? pdf / total : 0.0;
     return isfinite(pdf) ? (float)pdf : 0.0f;
+}
+
+float ic_scene_portal_pdf(const ic_scene *scene, ic_vec3 p, ic_vec3 wi)
+{
+    const ic_environment *env = &scene->env;
+    if (!env->portal_count)
+        return 0.0f;
+    double w[IC_MAX_PORTALS];
+    double total = portal_weights(env, p, w);
+    return portals_pdf(env, p, wi, w, total);
 }
 
 int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1, float u2, ic_vec3 *wi, ic_vec3 *q,
@@ -190,9 +205,8 @@ int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1,
     *pdf = 0.0f;
     if (!env->portal_count)
         return 0;
-    double w[IC_MAX_PORTALS], total = 0.0;
-    for (uint32_t k = 0; k < env->portal_count; ++k)
-        total += w[k] = portal_weight(&env->portals[k], p);
+    double w[IC_MAX_PORTALS];
+    double total = portal_weights(env, p, w);
     if (!(total > 0.0))
         return 0;
     uint32_t k = 0;
@@ -216,7 +230,7 @@ int ic_scene_sample_portal(const ic_scene *scene, ic_vec3 p, float u0, float u1,
     }
     if (!(fabsf(v3_dot(*wi, pt->normal)) > 1e-6f))
         return 0; /* the opening seen edge-on */
-    *pdf = ic_scene_portal_pdf(scene, p, *wi);
+    *pdf = portals_pdf(env, p, *wi, w, total); /* the weights at p, not computed twice */
     return *pdf > 0.0f && isfinite(*pdf);
 }
 
