@@ -13,7 +13,10 @@
  *   it has built, which leak (found by the mesh_obj fuzz target: a `mtllib` line without its line end
  *   swallowed the first vertex, and the second material's face named vertex 4 of 3). assimp takes every
  *   line whose first letter is f, l or p for a face, line or point, whatever follows the letter ("f3 4"
- *   is a face naming vertex 4: also found by the fuzzer), so these are checked the same way.
+ *   is a face naming vertex 4: also found by the fuzzer), so these are checked the same way;
+ * - a line element (l) names at least two vertices: for a line of one, assimp sizes the mesh's vertex
+ *   array as for none and throws ("no vertices" or "bad vertex index"), leaking the meshes built before it
+ *   (found by the fuzzer: `o r` then `l 4`).
  */
 #include "scene/mesh_check.h"
 
@@ -139,11 +142,12 @@ static ic_result check_vertex_line(char *c, const char *path, long line_no, long
     return IC_OK;
 }
 
-static ic_result check_face_line(char *c, const char *path, long line_no, long long vertices_so_far,
+static ic_result check_face_line(char kind, char *c, const char *path, long line_no, long long vertices_so_far,
                                  obj_far_index *far, ic_error *err)
 {
     char *save = NULL;
-    for (char *w = strtok_r(c, " \t", &save); w; w = strtok_r(NULL, " \t", &save)) {
+    int references = 0;
+    for (char *w = strtok_r(c, " \t", &save); w; w = strtok_r(NULL, " \t", &save), ++references) {
         /* v, v/vt, v//vn or v/vt/vn */
         long long idx[3] = {0, 0, 0};
         int present[3] = {0, 0, 0}, parts = 0, ok = 1;
@@ -167,6 +171,9 @@ static ic_result check_face_line(char *c, const char *path, long line_no, long l
             far->line = line_no;
         }
     }
+    if (kind == 'l' && references == 1)
+        return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: a line element (l) names one vertex; a line joins at least "
+                            "two: fix or remove the line", path, line_no);
     return IC_OK;
 }
 
@@ -195,7 +202,7 @@ ic_result ic_obj_check(FILE *fp, const char *path, ic_error *err)
         else if (line[0] == 'f' || line[0] == 'l' || line[0] == 'p')
             /* assimp reads any line that starts with one of these letters as a face, line or point, its
              * first word ("f", or "f3", "fo") skipped */
-            r = check_face_line(line + strcspn(line, " \t"), path, at, vertices, &far, err);
+            r = check_face_line(line[0], line + strcspn(line, " \t"), path, at, vertices, &far, err);
         if (r != IC_OK)
             break;
     }
