@@ -16,6 +16,10 @@
  *   them unchecked (SEGV in JoinIdenticalVertices);
  * - an ascii value must be a number of its property's type: assimp throws on a word where a number
  *   belongs and leaks the element it was filling.
+ * - lines end with \n or \r\n: assimp also ends a line at a lone \r, so "pro\rperty float y" declared a
+ *   property for us and none for it, and the binary records it read were shorter (SEGV); it also skips one
+ *   \n after end_header's line end, even as the first byte of binary data, and the check skips it too;
+ * - an element it does not know by name must come after the ones with instances (ply_known_element).
  * And, as before, every element count against the caller's limit (before the body is read), and every
  * vertex's x, y, z finite even where no face uses it (assimp drops such a vertex silently).
  */
@@ -59,6 +63,7 @@ typedef struct ply_file {
     const char *path;
     ic_error *err;
     int format;                      /* 0 ascii, 1 binary little-endian, 2 binary big-endian */
+    int crlf;                        /* the header line just read ended with \r\n (else \n or the end) */
     long line;                       /* the line just read (header, or an ascii instance) */
     ply_element el[PLY_MAX_ELEMENTS];
     int el_count;
@@ -105,14 +110,36 @@ static double ply_value(const unsigned char *p, int size, int is_float, int is_s
     return (double)u;
 }
 
+/* The elements assimp 5.2 knows by name. For any other it takes the element's count from the start of its
+ * name (0, or the digits a name begins with), so it skips none of its instances and reads them as the next
+ * element's (found by the mesh_ply fuzz target: a custom element before the faces gave faces of garbage
+ * indices, SEGV in post-processing; a name of a hundred digits, a 34 GB allocation). */
+static int ply_known_element(const char *name)
+{
+    static const char *const known[] = {"vertex", "face", "tristrips", "edge", "material"};
+    for (size_t i = 0; i < sizeof known / sizeof known[0]; ++i)
+        if (!strcmp(name, known[i]))
+            return 1;
+    return 0;
+}
+
 /* Reads one header line into line (without its line end). Returns 1, 0 at the end of the file, or -1 with
  * the error set (too long, or a control byte: no exporter writes one, and assimp's parser trips on NUL). */
 static int header_line(ply_file *f, char *line)
 {
     int n = 0, c;
+    f->crlf = 0;
     while ((c = getc(f->fp)) != EOF && c != '\n') {
-        if (c == '\r')
-            continue;
+        if (c == '\r') {
+            int d = getc(f->fp);
+            if (d == '\n') {
+                f->crlf = 1;
+                break;
+            }
+            ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: a carriage return inside a PLY header line (assimp ends the "
+                         "line there); end lines with \\n or \\r\\n: export the mesh again", f->path, f->line);
+            return -1;
+        }
         if ((c < 0x20 && c != '\t') || c == 0x7f) {
             ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: the PLY header holds the byte 0x%02x, which is not text; "
                          "the file is corrupt: export the mesh again", f->path, f->line, c);
@@ -180,6 +207,13 @@ static int read_header(ply_file *f)
                 return header_error(f, IC_ERR_PARSE, "text after 'end_header'; fix the header");
             if (f->format < 0)
                 return header_error(f, IC_ERR_PARSE, "PLY header has no 'format' line; export the mesh again");
+            if (f->format > 0 && !f->crlf) {
+                /* assimp skips one \n after the line end of end_header (the \n of \r\n, or a blank line), even
+                 * where it is the first byte of the binary data: check the data it reads */
+                int c = getc(f->fp);
+                if (c != '\n' && c != EOF)
+                    ungetc(c, f->fp);
+            }
             return 1;
         }
         if (!strcmp(w[0], "format")) {
@@ -427,8 +461,17 @@ static int ascii_line(ply_file *f)
     int n = 0, c;
     ++f->line;
     while ((c = getc_unlocked(f->fp)) != EOF && c != '\n') {
-        if (c == '\r')
-            continue;
+        if (c == '\r') {
+            int d = getc_unlocked(f->fp);
+            if (d == '\n')
+                break;
+            if (d == EOF)
+                continue;
+            ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: a carriage return inside a line of ascii PLY data (assimp "
+                         "ends the line there); end lines with \\n or \\r\\n: export the mesh again", f->path,
+                         f->line);
+            return -1;
+        }
         if (c == '\0' || c == '\f' || c == '\v') {
             ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: the byte 0x%02x in ascii PLY data; the file is corrupt: "
                          "export the mesh again", f->path, f->line, c);
@@ -517,6 +560,17 @@ ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elemen
                              "header", path, e->name, e->count);
         if (!strcmp(e->name, "vertex"))
             f->vertices = e->count;
+        if (r == IC_OK && !ply_known_element(e->name) && e->count > 0) {
+            int later = 0;
+            for (int k = i + 1; k < f->el_count; ++k)
+                later |= f->el[k].count > 0;
+            if (later || isdigit((unsigned char)e->name[0]))
+                r = ic_error_set(err, IC_ERR_UNSUPPORTED,
+                                 "%s: PLY element '%s' (%llu instances) is not one the importer reads (vertex, face, "
+                                 "tristrips, edge, material), and it misreads what follows such an element; remove "
+                                 "it or move it after the others",
+                                 path, e->name, e->count);
+        }
     }
     if (r == IC_OK && f->format == 0 && (f->text = malloc(PLY_MAX_ASCII_LINE)) == NULL)
         r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);

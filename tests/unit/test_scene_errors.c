@@ -97,6 +97,64 @@ static void test_hostile_meshes(void)
                  NULL, NULL);
     expect_error(REGRESS "mesh_ply/assimp_leak.ply", NULL, IC_ERR_PARSE, "assimp_leak.ply:7: the PLY header holds "
                  "the byte 0x02", "export the mesh again", NULL);
+    /* Where assimp reads a PLY otherwise than its grammar says: one \n after end_header skipped (the check
+     * now reads the body from there too, so the face's count is the 0 that assimp read: it aborted), an
+     * element name of digits taken as the element's count (34 GB), a lone \r ending a header line. */
+    expect_error(REGRESS "mesh_ply/assimp_abort_blank_line_after_header.ply", NULL, IC_ERR_PARSE,
+                 "assimp_abort_blank_line_after_header.ply: face 1 has a list 'vertex_indices' of 0 items", NULL, NULL);
+    expect_error(REGRESS "mesh_ply/assimp_34gb_alloc_digit_element.ply", NULL, IC_ERR_UNSUPPORTED,
+                 "assimp_34gb_alloc_digit_element.ply: PLY element '3333", "is not one the importer reads",
+                 "move it after the others");
+    expect_error(REGRESS "mesh_ply/assimp_segv_lone_cr.ply", NULL, IC_ERR_PARSE,
+                 "assimp_segv_lone_cr.ply:5: a carriage return inside a PLY header line", NULL, NULL);
+    {
+        /* Each cause alone in a binary file: a custom element before the faces (assimp read its count as 0
+         * and the faces from its bytes), a lone \r in ascii data; a blank line after end_header and \r\n
+         * line ends still load, and a custom element after the faces is ignored. */
+        static const char bin_head[] = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                       "property float y\nproperty float z\n";
+        static const char face_head[] = "element face 1\nproperty list uchar int vertex_indices\n";
+        const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        const int32_t idx[3] = {0, 1, 2};
+        char bin[1024];
+        size_t n;
+#define PUT(p, len) (memcpy(bin + n, (p), (len)), n += (len))
+#define BODY() (PUT(xyz, sizeof xyz), bin[n++] = 3, PUT(idx, sizeof idx))
+        n = 0;
+        PUT(bin_head, strlen(bin_head));
+        PUT("element foo 2\nproperty uchar a\n", 31);
+        PUT(face_head, strlen(face_head));
+        PUT("end_header\n", 11);
+        PUT(xyz, sizeof xyz);
+        PUT("\7\7", 2);
+        bin[n++] = 3;
+        PUT(idx, sizeof idx);
+        expect_error(write_tmp("custom_element.ply", bin, (long)n), NULL, IC_ERR_UNSUPPORTED,
+                     "custom_element.ply: PLY element 'foo' (2 instances) is not one the importer reads", NULL, NULL);
+        const char *blank[3] = {"end_header\n\n", "end_header\r\n", "element foo 2\nproperty uchar a\nend_header\n"};
+        for (int k = 0; k < 3; ++k) {
+            n = 0;
+            PUT(bin_head, strlen(bin_head));
+            PUT(face_head, strlen(face_head));
+            PUT(blank[k], strlen(blank[k]));
+            BODY();
+            if (k == 2)
+                PUT("\7\7", 2);
+            ic_scene *scene = NULL;
+            ic_error err;
+            memset(&err, 0, sizeof err);
+            ic_result r = ic_scene_load(write_tmp("blank_after_header.ply", bin, (long)n), NULL, &scene, &err);
+            CHECK(r == IC_OK && scene && scene->triangle_count == 1 && scene->bounds_max.x == 1.0f &&
+                      scene->bounds_max.y == 1.0f && scene->bounds_min.x == 0.0f,
+                  "binary PLY variant %d loads its one triangle (%s)", k, err.message);
+            ic_scene_free(scene);
+        }
+#undef BODY
+#undef PUT
+        snprintf(text, sizeof text, "%s0 0 0\n1 0\r0\n0 1 0\n3 0 1 2\n", ply_head);
+        expect_error(write_tmp("lone_cr_ascii.ply", text, -1), NULL, IC_ERR_PARSE,
+                     "lone_cr_ascii.ply:11: a carriage return inside a line of ascii PLY data", NULL, NULL);
+    }
     expect_error(REGRESS "mesh_gltf/assimp_leak.gltf", NULL, IC_ERR_PARSE, "assimp_leak.gltf: buffers[0]: character "
                  "24 of the base64 data", "not base64", NULL);
     /* Each cause alone, in an otherwise valid file. PLY: a word where a number belongs (assimp threw and
