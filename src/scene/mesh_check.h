@@ -31,10 +31,12 @@ ic_result ic_mtl_check(const char *mtl_path, ic_error *err);
 /* 1 if v is negative or not a number: no meaning as an albedo or a radiance. */
 int ic_bad_color_component(float v);
 
-/* Binary glTF (mesh_check_gltf.c): the header's and every chunk's length against the bytes fp holds; IC_OK
- * for anything that is not binary glTF. */
+/* glTF (mesh_check_gltf.c), what assimp's glTF 2 importer must accept lest assimp offer the file to every
+ * other importer: ic_glb_check for a .glb (magic "glTF", version 2, the JSON and BIN chunks' lengths against
+ * the bytes fp holds), ic_gltf_check for a .gltf (text, not binary); then for both, strictly valid JSON
+ * with "asset": {"version": "2…"}, each buffer's and image's data URI valid base64 (of the buffer's
+ * byteLength), each buffer file as long as its byteLength. */
 ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err);
-/* glTF, text or binary: each buffer's and image's data URI holds valid base64. */
 ic_result ic_gltf_check(FILE *fp, const char *path, ic_error *err);
 /* The JSON text of a glTF file (.gltf: the file; .glb: its JSON chunk), malloc'd and NUL-terminated, at most
  * 64 MiB; NULL if there is none or it cannot be read. *len gets its length. */

@@ -8,7 +8,9 @@
  *   declare before it reads anything, so a 516-byte file declaring a 2.8 GB JSON chunk (found by the
  *   mesh_glb fuzz target) allocated 2.8 GB; here every length is checked against the bytes the file holds,
  *   and the total against a header and a chunk (a total of 0 let a 4 GB chunk through to the importer,
- *   found by the fuzz stage of the test suite).
+ *   found by the fuzz stage of the test suite). assimp reads a file as binary by its magic, whatever the
+ *   extension, so a .gltf is checked the same way; a file shorter than the header is refused (assimp read
+ *   past the end of a 20-byte .gltf beginning "glTF": found by the mesh_gltf fuzz target).
  * - Data URIs ("data:...;base64,..." in a buffer's or an image's uri): assimp 5.2's base64 decoder
  *   allocates the output and then throws on a character outside the alphabet (or a length that is not a
  *   multiple of 4), leaking the output (found by the mesh_gltf fuzz target: a replacement character in a
@@ -26,6 +28,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
+static ic_result check_json(FILE *fp, const char *path, ic_error *err);
+
 /* Largest JSON text read for the checks (a glTF file's JSON describes; buffers hold the data). */
 #define GLTF_MAX_JSON ((size_t)64 << 20)
 
@@ -40,8 +44,13 @@ ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err)
     if (fseek(fp, 0, SEEK_END) != 0)
         return IC_OK; /* not seekable: the importer reports what it finds */
     long size = ftell(fp);
-    if (size < 0 || fseek(fp, 0, SEEK_SET) != 0 || fread(h, 1, sizeof h, fp) != sizeof h || memcmp(h, "glTF", 4))
-        return IC_OK; /* too short or not binary glTF: the importer reports what it is */
+    size_t got = size < 0 || fseek(fp, 0, SEEK_SET) != 0 ? 0 : fread(h, 1, sizeof h, fp);
+    if (got < 4 || memcmp(h, "glTF", 4))
+        return ic_error_set(err, IC_ERR_PARSE, "%s: not binary glTF (it does not begin with 'glTF'); a text glTF "
+                            "file is named .gltf: rename it or export the model again", path);
+    if (got < sizeof h) /* assimp reads the header past the end of such a file (found by the fuzzer) */
+        return ic_error_set(err, IC_ERR_PARSE, "%s: a binary glTF file of %ld bytes, shorter than its 12-byte "
+                            "header; the file is truncated: export it again", path, size);
     uint32_t total = le32(h + 8);
     if (le32(h + 4) != 2)
         return ic_error_set(err, IC_ERR_PARSE, "%s: binary glTF version %u; only version 2 is read (export it as "
@@ -52,22 +61,24 @@ ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err)
     if (total < 12 + 8) /* no room for the JSON chunk's header: the chunk walk below would check nothing */
         return ic_error_set(err, IC_ERR_PARSE, "%s: the binary glTF header declares %u bytes, too few for a header "
                             "and a JSON chunk; the file is corrupt: export it again", path, total);
-    for (uint64_t at = 12; at + 8 <= total;) {
+    /* The JSON chunk at byte 12, then (where the total leaves room for its header) the BIN chunk after the
+     * JSON padded to 4 bytes, where the importer looks for it. */
+    for (uint64_t at = 12, k = 0; k < 2 && at + 8 <= total; ++k) {
         unsigned char c[8];
         if (fseek(fp, (long)at, SEEK_SET) != 0 || fread(c, 1, sizeof c, fp) != sizeof c)
             return ic_error_set(err, IC_ERR_PARSE, "%s: cannot read the chunk header at byte %llu; export the file "
                                 "again", path, (unsigned long long)at);
         uint64_t len = le32(c);
-        if (at == 12 && memcmp(c + 4, "JSON", 4))
-            return ic_error_set(err, IC_ERR_PARSE, "%s: the first chunk of a binary glTF must be JSON; export the "
-                                "file again", path);
+        if (memcmp(c + 4, k == 0 ? "JSON" : "BIN\0", 4))
+            return ic_error_set(err, IC_ERR_PARSE, "%s: the %s chunk of a binary glTF must be %s; export the file "
+                                "again", path, k == 0 ? "first" : "second", k == 0 ? "JSON" : "BIN");
         if (at + 8 + len > total)
             return ic_error_set(err, IC_ERR_PARSE, "%s: the chunk at byte %llu declares %llu bytes, past the file's "
                                 "%u; the file is truncated or corrupt: export it again", path,
                                 (unsigned long long)at, (unsigned long long)len, total);
-        at += 8 + len;
+        at += 8 + ((len + 3) & ~(uint64_t)3);
     }
-    return IC_OK;
+    return check_json(fp, path, err);
 }
 
 char *ic_gltf_json(FILE *fp, size_t *len)
@@ -171,17 +182,171 @@ static ic_result check_uris(const cJSON *root, const char *name, const char *pat
     return IC_OK;
 }
 
-ic_result ic_gltf_check(FILE *fp, const char *path, ic_error *err)
+/* ---- The JSON text as the importer's parser (rapidjson, default flags) takes it --------------------- */
+
+/* RFC 8259's grammar, strictly: if any of it fails, assimp's glTF importer declines the file and assimp
+ * offers it to every other importer by content, one of which (OpenGEX) looped for ever or read past its
+ * buffer on a fuzzed file. No control character outside whitespace (none unescaped in a string), numbers
+ * without leading zeros or a bare point, at most JSON_MAX_DEPTH nested values, only whitespace after the
+ * root. The text ends at its first NUL, as the importer's in-place parse does. Returns the offset of the
+ * first error, or len if the text is valid. */
+#define JSON_MAX_DEPTH 512
+
+typedef struct json_in {
+    const char *s;
+    size_t i, len;
+} json_in;
+
+static void json_ws(json_in *in)
+{
+    while (in->i < in->len && (in->s[in->i] == ' ' || in->s[in->i] == '\t' || in->s[in->i] == '\n' ||
+                               in->s[in->i] == '\r'))
+        ++in->i;
+}
+
+static int json_digits(json_in *in)
+{
+    size_t from = in->i;
+    while (in->i < in->len && in->s[in->i] >= '0' && in->s[in->i] <= '9')
+        ++in->i;
+    return in->i > from;
+}
+
+static int json_string(json_in *in)
+{
+    ++in->i; /* the opening quote */
+    while (in->i < in->len) {
+        unsigned char c = (unsigned char)in->s[in->i++];
+        if (c == '"')
+            return 1;
+        if (c < 0x20)
+            return 0;
+        if (c == '\\') {
+            if (in->i >= in->len)
+                return 0;
+            c = (unsigned char)in->s[in->i++];
+            if (c == 'u') {
+                for (int k = 0; k < 4; ++k, ++in->i)
+                    if (in->i >= in->len || !strchr("0123456789abcdefABCDEF", in->s[in->i]) || !in->s[in->i])
+                        return 0;
+            } else if (!strchr("\"\\/bfnrt", c) || !c) {
+                return 0;
+            }
+        }
+    }
+    return 0;
+}
+
+static int json_value(json_in *in, int depth)
+{
+    json_ws(in);
+    if (in->i >= in->len || depth > JSON_MAX_DEPTH)
+        return 0;
+    char c = in->s[in->i];
+    if (c == '{' || c == '[') {
+        char close = c == '{' ? '}' : ']';
+        ++in->i;
+        json_ws(in);
+        if (in->i < in->len && in->s[in->i] == close) {
+            ++in->i;
+            return 1;
+        }
+        for (;;) {
+            if (c == '{') {
+                json_ws(in);
+                if (in->i >= in->len || in->s[in->i] != '"' || !json_string(in))
+                    return 0;
+                json_ws(in);
+                if (in->i >= in->len || in->s[in->i++] != ':')
+                    return 0;
+            }
+            if (!json_value(in, depth + 1))
+                return 0;
+            json_ws(in);
+            if (in->i >= in->len)
+                return 0;
+            char d = in->s[in->i++];
+            if (d == close)
+                return 1;
+            if (d != ',')
+                return 0;
+        }
+    }
+    if (c == '"')
+        return json_string(in);
+    if (c == '-' || (c >= '0' && c <= '9')) {
+        if (c == '-')
+            ++in->i;
+        if (in->i < in->len && in->s[in->i] == '0')
+            ++in->i;
+        else if (!json_digits(in))
+            return 0;
+        if (in->i < in->len && in->s[in->i] == '.' && (++in->i, !json_digits(in)))
+            return 0;
+        if (in->i < in->len && (in->s[in->i] == 'e' || in->s[in->i] == 'E')) {
+            ++in->i;
+            if (in->i < in->len && (in->s[in->i] == '+' || in->s[in->i] == '-'))
+                ++in->i;
+            if (!json_digits(in))
+                return 0;
+        }
+        return 1;
+    }
+    static const char *const words[] = {"true", "false", "null"};
+    for (int k = 0; k < 3; ++k) {
+        size_t n = strlen(words[k]);
+        if (in->len - in->i >= n && !memcmp(in->s + in->i, words[k], n)) {
+            in->i += n;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static size_t json_error_at(const char *text, size_t len)
+{
+    const char *nul = memchr(text, '\0', len);
+    json_in in = {text, 0, nul ? (size_t)(nul - text) : len};
+    if (!json_value(&in, 0))
+        return in.i;
+    json_ws(&in);
+    return in.i == in.len ? len : in.i;
+}
+
+/* The JSON of a glTF file (ic_gltf_json: a .gltf's text, a .glb's JSON chunk) as the importer needs it. */
+static ic_result check_json(FILE *fp, const char *path, ic_error *err)
 {
     size_t len;
     char *text = ic_gltf_json(fp, &len);
-    cJSON *root = text ? cJSON_ParseWithLength(text, len) : NULL;
+    if (!text)
+        return ic_error_set(err, IC_ERR_PARSE, "%s: no glTF JSON could be read (empty, or larger than %zu MiB); "
+                            "export the model again", path, GLTF_MAX_JSON >> 20);
+    size_t at = json_error_at(text, len);
+    cJSON *root = at == len ? cJSON_ParseWithLength(text, len) : NULL;
     free(text);
     if (!root)
-        return IC_OK; /* the importer reports what it finds */
-    ic_result r = check_uris(root, "buffers", path, err);
+        return ic_error_set(err, IC_ERR_PARSE, "%s: the glTF JSON is not valid JSON at byte %zu of its text; export "
+                            "the model again", path, (at < len ? at : 0) + 1);
+    /* The importer takes only an object whose "asset" object has a "version" string beginning with 2. */
+    const cJSON *asset = cJSON_IsObject(root) ? cJSON_GetObjectItemCaseSensitive(root, "asset") : NULL;
+    const cJSON *version = cJSON_IsObject(asset) ? cJSON_GetObjectItemCaseSensitive(asset, "version") : NULL;
+    ic_result r = IC_OK;
+    if (!cJSON_IsString(version) || version->valuestring[0] != '2')
+        r = ic_error_set(err, IC_ERR_PARSE, "%s: not a glTF 2.0 file (no \"asset\": {\"version\": \"2.0\"}); "
+                         "export it as glTF 2.0", path);
+    if (r == IC_OK)
+        r = check_uris(root, "buffers", path, err);
     if (r == IC_OK)
         r = check_uris(root, "images", path, err);
     cJSON_Delete(root);
     return r;
+}
+
+ic_result ic_gltf_check(FILE *fp, const char *path, ic_error *err)
+{
+    unsigned char magic[4];
+    if (fseek(fp, 0, SEEK_SET) == 0 && fread(magic, 1, 4, fp) == 4 && !memcmp(magic, "glTF", 4))
+        return ic_error_set(err, IC_ERR_PARSE, "%s: binary glTF in a file named .gltf (the importer reads a .gltf "
+                            "as text); rename it .glb", path);
+    return check_json(fp, path, err);
 }

@@ -987,7 +987,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
          ((r = run_check(&src, ic_obj_check, err)) != IC_OK || (r = check_obj_materials(b, &src, dir, err)) != IC_OK)) ||
         (!strcmp(ext, ".ply") && (r = check_ply(&src, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK) ||
         (!strcmp(ext, ".glb") && (r = run_check(&src, ic_glb_check, err)) != IC_OK) ||
-        (is_gltf && (r = run_check(&src, ic_gltf_check, err)) != IC_OK)) {
+        (!strcmp(ext, ".gltf") && (r = run_check(&src, ic_gltf_check, err)) != IC_OK)) {
         free(src.data);
         return r;
     }
