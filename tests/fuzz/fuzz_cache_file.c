@@ -2,11 +2,16 @@
  * fuzz_cache_file.c — ic_cache_load of a cache file (layout: src/cache/cache_file.c).
  *
  * A mutated file would almost never pass the loader's checks before record decoding, so the harness
- * "re-signs" every input of at least a header's length first: the record count is set from the length
- * (a partial last record is cut off), the trailing FNV-1a 64 checksum is recomputed, and the scene hash
- * and the cache parameters the load asks for are those the file's header holds. Magic, version and
- * parameter values stay as mutated, so their checks are fuzzed too. A loaded cache is then looked up at
- * each of its first records, which reads the octree and the frozen layout built from the file's values.
+ * "re-signs" every input of at least a header's length first, by the layout of the version its header
+ * names: version 1, the record count from the length (a partial last record cut off); versions 2 and 3
+ * (records of 156 and 172 bytes, then the payload section: a float total, a length per record, the
+ * floats), the header's count kept where the length holds that many records and their lengths (else the
+ * most it holds), the float total from the bytes left, and the records' lengths, in order, cut so that
+ * they add up to it (the last one takes the rest). Then the trailing FNV-1a 64 checksum is recomputed,
+ * and the scene hash and the cache parameters the load asks for are those the file's header holds.
+ * Magic, version, parameter values, record fields and payload contents stay as mutated, so their checks
+ * are fuzzed too. A loaded cache is then looked up at each of its first records, which reads the octree
+ * and the frozen layout built from the file's values.
  */
 #include "fuzz_util.h"
 
@@ -15,7 +20,9 @@
 #define HEADER_BYTES 88u
 #define PARAM_OFFSET 24u
 #define COUNT_OFFSET 80u
-#define RECORD_BYTES 156u
+#define VERSION_OFFSET 8u
+#define RECORD_BYTES_V1 156u /* versions 1 and 2 */
+#define RECORD_BYTES_V3 172u
 #define MAX_QUERIES 64u
 
 static uint32_t get_u32(const unsigned char *b)
@@ -33,10 +40,50 @@ static float get_f32(const unsigned char *b)
     memcpy(&f, &v, 4);
     return f;
 }
+static void put_u32(unsigned char *b, uint32_t v)
+{
+    for (int k = 0; k < 4; ++k)
+        b[k] = (unsigned char)(v >> (8 * k));
+}
 static void put_u64(unsigned char *b, uint64_t v)
 {
-    for (int k = 0; k < 8; ++k)
-        b[k] = (unsigned char)(v >> (8 * k));
+    put_u32(b, (uint32_t)v);
+    put_u32(b + 4, (uint32_t)(v >> 32));
+}
+
+/* Makes buf (size bytes, at least a header and a checksum) a consistent file of its version's layout;
+ * returns its new size (never larger). */
+static size_t resign(unsigned char *buf, size_t size)
+{
+    uint32_t version = get_u32(buf + VERSION_OFFSET);
+    uint64_t body = size - HEADER_BYTES - 8;
+    if (version != 2 && version != 3) {
+        uint64_t count = body / RECORD_BYTES_V1;
+        put_u64(buf + COUNT_OFFSET, count);
+        size = HEADER_BYTES + 8 + count * RECORD_BYTES_V1;
+    } else {
+        uint64_t rec = version == 3 ? RECORD_BYTES_V3 : RECORD_BYTES_V1;
+        uint64_t most = body >= 8 ? (body - 8) / (rec + 4) : 0, count = get_u64(buf + COUNT_OFFSET);
+        if (body < 8)
+            return size; /* no room for the payload total: the loader says "truncated" */
+        if (count > most)
+            count = most;
+        uint64_t floats = (body - 8 - count * (rec + 4)) / 4, left = floats;
+        unsigned char *lengths = buf + HEADER_BYTES + count * rec + 8;
+        for (uint64_t i = 0; i < count; ++i) {
+            uint64_t n = i + 1 == count ? left : get_u32(lengths + 4 * i);
+            n = n < left ? n : left;
+            put_u32(lengths + 4 * i, (uint32_t)n);
+            left -= n;
+        }
+        if (count == 0)
+            floats = 0;
+        put_u64(buf + COUNT_OFFSET, count);
+        put_u64(buf + HEADER_BYTES + count * rec, floats);
+        size = HEADER_BYTES + count * rec + 8 + 4 * count + 4 * floats + 8;
+    }
+    put_u64(buf + size - 8, ic_fnv1a64(IC_FNV64_OFFSET, buf, size - 8));
+    return size;
 }
 
 /* The parameter block, in file order (cache_file.c: param_fields). */
@@ -71,10 +118,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (size)
         memcpy(buf, data, size);
     if (size >= HEADER_BYTES + 8) {
-        uint64_t count = (size - HEADER_BYTES - 8) / RECORD_BYTES;
-        size = HEADER_BYTES + 8 + count * RECORD_BYTES;
-        put_u64(buf + COUNT_OFFSET, count);
-        put_u64(buf + size - 8, ic_fnv1a64(IC_FNV64_OFFSET, buf, size - 8));
+        size = resign(buf, size);
         scene_hash = get_u64(buf + 16);
         decode_params(buf + PARAM_OFFSET, &params);
     }
