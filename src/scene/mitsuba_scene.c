@@ -389,6 +389,9 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
             return ic_mts_fail(c, n, IC_ERR_PARSE, "envmap needs <string name=\"filename\">", NULL);
         if ((r = ic_mts_float(c, n, "scale", 1.0f, &scale)) != IC_OK)
             return r;
+        if (!(scale >= 0.0f) || !isfinite(scale))
+            return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "envmap: a negative or non-finite scale",
+                               "; give a finite scale >= 0");
         char full[IC_SCENE_PATH_MAX], where[IC_SCENE_PATH_MAX + 32];
         snprintf(where, sizeof where, "%s:%d", ic_mts_file(c, n), ic_mts_line(n));
         if (!ic_path_join(c->dir, file, full, sizeof full))
@@ -401,6 +404,8 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
                               &ierr);
         if (r != IC_OK)
             return ic_error_set(c->err, r, "%s: %s", where, ierr.message);
+        if ((r = ic_scene_check_env_map(&s->env.image, file_buf, ic_mts_file(c, n), ic_mts_line(n), c->err)) != IC_OK)
+            return r;
         s->env.enabled = 1;
         s->env.radiance = v3s(scale);
         ic_mts_warn_once(c, n, "<emitter type=\"envmap\">",

@@ -8,6 +8,7 @@
 #endif
 #include "scene/scene_internal.h"
 
+#include "core/error_at.h"
 #include "core/vecmath.h"
 
 #include <errno.h>
@@ -308,6 +309,24 @@ ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *
 
 /* ------------------------------------------------------------------------------------------------ */
 /* warnings */
+
+ic_result ic_scene_check_env_map(const ic_image *m, const char *name, const char *file, int line, ic_error *err)
+{
+    /* Radiance is never negative: a negative or non-finite texel would give negative pixels and a broken
+     * light-sampling distribution, so the map is refused rather than silently clamped. */
+    for (size_t i = 0; i < (size_t)m->width * (size_t)m->height * 3; ++i) {
+        float v = m->rgb[i];
+        if (!(v >= 0.0f) || !isfinite(v)) {
+            size_t px = i / 3;
+            static const char *const channel[3] = {"red", "green", "blue"};
+            return ic_error_set_at(err, IC_ERR_INVALID_ARG, file, line,
+                                   "environment map '%s': texel (%zu, %zu) has a %s value of %g; radiance must be "
+                                   "finite and >= 0, fix the map",
+                                   name, px % (size_t)m->width, px / (size_t)m->width, channel[i % 3], (double)v);
+        }
+    }
+    return IC_OK;
+}
 
 void ic_scene_warn(ic_scene *s, const char *fmt, ...)
 {

@@ -99,19 +99,8 @@ ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
                           &ierr);
     if (r != IC_OK)
         return ic_json_fail(c, map_line, r, "environment map: %s", ierr.message);
-    /* Radiance is never negative: a negative or non-finite texel would give negative pixels and a
-     * broken light-sampling distribution, so the map is refused rather than silently clamped. */
-    const ic_image *m = &env->image;
-    for (size_t i = 0; i < (size_t)m->width * (size_t)m->height * 3; ++i) {
-        float v = m->rgb[i];
-        if (!(v >= 0.0f) || !isfinite(v)) {
-            size_t px = i / 3;
-            return ic_json_fail(c, map_line, IC_ERR_INVALID_ARG,
-                                "environment map '%s': texel (%zu, %zu) has a %s value of %g; radiance must be "
-                                "finite and >= 0, fix the map",
-                                map, px % (size_t)m->width, px / (size_t)m->width, i % 3 == 0 ? "red" : i % 3 == 1 ? "green" : "blue", (double)v);
-        }
-    }
+    if ((r = ic_scene_check_env_map(&env->image, map, c->path, map_line, c->err)) != IC_OK)
+        return r;
     env->radiance = scale;
     return IC_OK;
 }

@@ -346,6 +346,20 @@ int main(void)
             fclose(js);
         expect_error(IC_TEST_TMP "/scene_errors_negsky.json", NULL, IC_ERR_INVALID_ARG, "scene_errors_negsky.json:3:",
                      "'scene_errors_negsky.pfm': texel (1, 0) has a green value of -2", "fix the map");
+        /* the same map as a Mitsuba envmap, and a negative scale */
+        ic_scene_load_options outside = {0};
+        outside.allow_outside_paths = 1;
+        static const char *const mts[2] = {"", "    <float name=\"scale\" value=\"-1\"/>\n"};
+        for (int k = 0; k < 2; ++k) {
+            char xml[1024];
+            snprintf(xml, sizeof xml, "<scene version=\"0.6.0\">\n  <shape type=\"obj\"><string name=\"filename\" "
+                     "value=\"%s\"/></shape>\n  <emitter type=\"envmap\">\n    <string name=\"filename\" "
+                     "value=\"scene_errors_negsky.pfm\"/>\n%s  </emitter>\n</scene>\n", SCENES "quad_light.obj", mts[k]);
+            expect_error(write_tmp("scene_errors_negsky.xml", xml, -1), &outside, IC_ERR_INVALID_ARG,
+                         "scene_errors_negsky.xml:3:", k ? "envmap: a negative or non-finite scale; give"
+                                                         : "'scene_errors_negsky.pfm': texel (1, 0) has a green value of -2",
+                         NULL);
+        }
     }
     /* a mesh that does not exist: the line of its "path" and the absolute path it resolved to */
     expect_error(SCENES "missing_mesh.json", NULL, IC_ERR_IO, "missing_mesh.json:5:",

@@ -2,7 +2,8 @@
  * test_scene_paths.c — files a scene names stay inside the scene file's folder tree and the shared scenes
  * folder unless allow_outside_paths (--allow-outside-paths) is set (issue "Hardening": "a glTF buffer URI
  * may point anywhere on disk"; docs/scene-format.md, "Paths"): a mesh, an MTL file, a glTF buffer, a
- * texture and an environment map outside are refused with one line naming the scene file (and line), the
+ * texture and an environment map outside (JSON; a Mitsuba envmap, a Radiance mesh) are refused with one
+ * line naming the scene file (and line), the
  * file and the option; a symbolic link inside that points outside is refused (real paths are compared);
  * the same scenes load with the option; "shared:" paths still load.
  *
@@ -200,6 +201,16 @@ int main(void)
     expect_loads(T "/scene/inside.json", NULL);
     expect_loads(T "/scene/m/inside.gltf", NULL);
     expect_outside(T "/scene/env.json", "env.json:3:", "environment map '../outside.pfm'", T "/outside.pfm");
+
+    /* The other scene formats: a Mitsuba envmap and a Radiance mesh outside the folder tree. */
+    write_text(T "/scene/env.xml", "<scene version=\"0.6.0\">\n"
+                                   "  <shape type=\"obj\"><string name=\"filename\" value=\"plain_quad.obj\"/></shape>\n"
+                                   "  <emitter type=\"envmap\">\n"
+                                   "    <string name=\"filename\" value=\"../outside.pfm\"/>\n"
+                                   "  </emitter>\n</scene>\n");
+    expect_outside(T "/scene/env.xml", "env.xml:3:", "environment map", T "/outside.pfm");
+    write_text(T "/scene/mesh.rad", "void light glow\n0\n0\n3 1 1 1\n\nvoid mesh box\n1 ../outside.obj\n0\n0\n");
+    expect_outside(T "/scene/mesh.rad", "mesh.rad:", "mesh", T "/outside.obj");
 
     /* shared: paths resolve outside the scene's folder and load; a file beside the shared folder does not */
     copy_file(SCENES "quad_light.obj", T "/shared/quad.obj");
