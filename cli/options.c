@@ -32,7 +32,9 @@ typedef struct opt_def {
 static const opt_def options[IC_ARG_COUNT] = {IC_RENDER_OPTIONS(IC_OPT_ROW)};
 #undef IC_OPT_ROW
 
-#define ERR(...) (fprintf(stderr, "irrcache render: " __VA_ARGS__), fputc('\n', stderr), 2)
+/* The command named in messages: render, or points while ic_cli_parse_load_option parses for it. */
+static const char *err_command = "render";
+#define ERR(...) (fprintf(stderr, "irrcache %s: ", err_command), fprintf(stderr, __VA_ARGS__), fputc('\n', stderr), 2)
 
 static const char *scope_prefix(ic_opt_scope s)
 {
@@ -280,6 +282,41 @@ int ic_cli_parse(int argc, char **argv, ic_cli_args *a)
         a->given[id] = val;
     }
     return check(a);
+}
+
+int ic_cli_parse_load_option(int argc, char **argv, int *i, ic_cli_args *a, const char *command)
+{
+    static const ic_arg_id load_ids[] = {IC_ARG_MAX_TEXTURE_PIXELS, IC_ARG_MAX_MESH_ELEMENTS, IC_ARG_MAX_SCENE_BYTES,
+                                         IC_ARG_ALLOW_OUTSIDE_PATHS};
+    const char *arg = argv[*i];
+    const char *eq = strchr(arg, '=');
+    size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+    int id = find_option(arg, len), is_load = 0;
+    for (size_t k = 0; k < sizeof load_ids / sizeof load_ids[0]; ++k)
+        is_load |= id == (int)load_ids[k];
+    if (!is_load)
+        return 0;
+    err_command = command;
+    const opt_def *o = &options[id];
+    const char *val = "";
+    int rc = 0;
+    if (takes_value(o->kind)) {
+        if (eq)
+            val = eq + 1;
+        else if (*i + 1 < argc)
+            val = argv[++*i];
+        else
+            rc = ERR("%s needs a value (%s)", o->name, o->value_name);
+    } else if (eq) {
+        rc = ERR("%s takes no value; drop '=%s'", o->name, eq + 1);
+    }
+    if (!rc)
+        rc = store(a, o, val);
+    err_command = "render";
+    if (rc)
+        return -1;
+    a->given[id] = val;
+    return 1;
 }
 
 /* Writes text from column `indent` on, wrapped at IC_CLI_HELP_COLUMNS; `at` is the current column. */

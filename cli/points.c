@@ -13,6 +13,7 @@
 #include "cli.h"
 #include "cluster.h"
 #include "json_out.h"
+#include "options.h"
 #include "points_grid.h"
 
 #include "core/atomic_file.h"
@@ -31,6 +32,11 @@
 #define EXIT_USAGE 2
 
 typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON } out_format;
+
+/* The points file's limits: lines (a sensor's six numbers and a comment fit many times over) and, as
+ * --max-points, their count, so that neither /dev/zero nor a runaway generator grows memory unbounded. */
+#define MAX_POINT_LINE 4096
+#define DEFAULT_MAX_POINTS (1 << 24)
 
 static void print_help(FILE *out)
 {
@@ -77,11 +83,14 @@ static void print_help(FILE *out)
             "                     before it arrives; ic needs 2 or more (default: the scene file's, else %d)\n"
             "  --seed N           random seed (default: the scene file's, else %d)\n"
             "  --threads N        threads, 0 = all cores; results do not depend on it (default: 0)\n"
+            "  --max-points N     most points read from --points (default: %d); a line is at most %d bytes\n"
+            "  --max-texture-pixels N, --max-mesh-elements N, --max-scene-bytes N, --allow-outside-paths\n"
+            "                     what the scene may read, as for irrcache render (see its --help)\n"
             "  -h, --help         show this help\n"
             "\n"
             "exit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n",
             IC_DEFAULT_GRID_HEIGHT, IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, (double)IC_DEFAULT_ACCURACY_WARD,
-            IC_DEFAULT_RAYS, IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED);
+            IC_DEFAULT_RAYS, IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED, DEFAULT_MAX_POINTS, MAX_POINT_LINE);
 }
 
 
@@ -169,7 +178,23 @@ static int parse_line(char *line, ic_sensor_point *pt, char *why, size_t why_siz
 
 /* Reads every point of path ('-': stdin) into *out (malloc'd); prints the one-line error and returns 0
  * on failure. */
-static int read_points(const char *path, ic_sensor_point **out, uint32_t *count)
+/* The next line of f into buf (MAX_POINT_LINE + 1 bytes; its newline dropped), *len its length: 1, 0 at
+ * the end, -1 if it is longer than MAX_POINT_LINE (the rest is not read), -2 if it holds a NUL byte. */
+static int next_line(FILE *f, char *buf, ssize_t *len)
+{
+    int c, n = 0, nul = 0;
+    while ((c = getc(f)) != EOF && c != '\n') {
+        if (n == MAX_POINT_LINE)
+            return -1;
+        nul |= c == '\0';
+        buf[n++] = (char)c;
+    }
+    buf[n] = '\0';
+    *len = n;
+    return nul ? -2 : c == EOF && n == 0 ? 0 : 1;
+}
+
+static int read_points(const char *path, uint32_t max_points, ic_sensor_point **out, uint32_t *count)
 {
     int is_stdin = strcmp(path, "-") == 0;
     const char *name = is_stdin ? "<stdin>" : path;
@@ -179,15 +204,24 @@ static int read_points(const char *path, ic_sensor_point **out, uint32_t *count)
         return 0;
     }
     ic_sensor_point *pts = NULL;
-    size_t n = 0, cap = 0, line_cap = 0;
+    size_t n = 0, cap = 0;
     char *line = NULL;
     long line_no = 0;
     int ok = 1;
     ssize_t len;
-    while ((len = getline(&line, &line_cap, f)) >= 0) {
+    line = malloc(MAX_POINT_LINE + 1);
+    if (!line) {
+        fprintf(stderr, "irrcache points: out of memory\n");
+        ok = 0;
+    }
+    int got;
+    while (line && (got = next_line(f, line, &len)) != 0) {
         ++line_no;
-        if (memchr(line, '\0', (size_t)len)) {
-            fprintf(stderr, "irrcache points: %s:%ld: a NUL byte; give a text file\n", name, line_no);
+        if (got < 0) {
+            fprintf(stderr, got == -1 ? "irrcache points: %s:%ld: a line longer than %d bytes; give one point 'x y z "
+                                        "nx ny nz' a line\n"
+                                      : "irrcache points: %s:%ld: a NUL byte; give a text file\n",
+                    name, line_no, MAX_POINT_LINE);
             ok = 0;
             break;
         }
@@ -201,9 +235,9 @@ static int read_points(const char *path, ic_sensor_point **out, uint32_t *count)
         }
         if (r == 0)
             continue;
-        if (n == UINT32_MAX) {
-            fprintf(stderr, "irrcache points: %s:%ld: more than %u points; split the file\n", name, line_no,
-                    UINT32_MAX);
+        if (n == max_points) {
+            fprintf(stderr, "irrcache points: %s:%ld: more than %u points (--max-points); raise it if the memory is "
+                    "there, or split the file\n", name, line_no, max_points);
             ok = 0;
             break;
         }
@@ -333,9 +367,12 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     ic_points_options opt;
     memset(&opt, 0, sizeof opt);
     opt.integrator = IC_INTEGRATOR_IC;
+    ic_cli_args load_args; /* the scene-loading options, parsed by render's table */
+    memset(&load_args, 0, sizeof load_args);
+    long long max_points = DEFAULT_MAX_POINTS;
     for (int i = 1; i < argc; ++i) {
         const char *arg = argv[i], *value;
-        int missing = 0;
+        int missing = 0, load_option = 0;
         long long v = 0;
         if (arg[0] != '-' || arg[1] == '\0') {
             if (scene_path) {
@@ -347,6 +384,12 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             if (rank == 0)
                 print_help(stdout);
             return 0;
+        } else if ((load_option = ic_cli_parse_load_option(argc, argv, &i, &load_args, "points")) != 0) {
+            if (load_option < 0)
+                return EXIT_USAGE;
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-points", &missing)) != NULL) {
+            if (!parse_int("--max-points", value, 1, UINT32_MAX, &max_points))
+                return EXIT_USAGE;
         } else if (!strcmp(arg, "--daylight-factor")) {
             daylight_factor = 1;
         } else if (!strcmp(arg, "--grid")) {
@@ -470,7 +513,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     }
     ic_cli_cluster_unmute(muted);
     char message[1400] = "";
-    int rc = !has_grid && rank == 0 && !read_points(points_path, &pts, &count) ? EXIT_WORK : 0;
+    int rc = !has_grid && rank == 0 && !read_points(points_path, (uint32_t)max_points, &pts, &count) ? EXIT_WORK : 0;
     if ((rc = agree(comm, rc, message)) != 0) {
         free(pts);
         return rc;
@@ -495,7 +538,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     int status = EXIT_WORK;
     if (!res)
         snprintf(message, sizeof message, "irrcache points: out of memory for %u results", count);
-    else if (ic_scene_load(scene_path, NULL, &scene, &err) != IC_OK && ranks > 1)
+    else if (ic_scene_load(scene_path, &load_args.load, &scene, &err) != IC_OK && ranks > 1)
         snprintf(message, sizeof message, "irrcache points: rank %d of %d: %s", rank, ranks, err.message);
     else if (!scene)
         snprintf(message, sizeof message, "irrcache points: %s", err.message);

@@ -97,6 +97,8 @@ static void bad_values(void)
         {"--spp=", "--spp"},
         {"--quiet=yes", "--quiet"},
         {"--width 70000", "--width"},
+        {"--threads 1e9", "--threads"},
+        {"--threads 1000000000", "--threads"},
         {"--accuracy=-1 --integrator ic", "--accuracy"},
         {"--integrator=xyz", "pt|ic"},
         {"--aov indirect,nope --integrator ic", "nope"},

@@ -196,6 +196,28 @@ static void test_bad_files(void)
     CHECK(run(SCENE " --points " DIR "/pts.txt --samples 0", NULL) == 2, "--samples 0: usage error");
     CHECK(run(SCENE " --points " DIR "/pts.txt --max-depth 1", NULL) == 2 && strstr(err_text, "max depth 1"),
           "the cache at --max-depth 1: usage error: %s", err_text);
+    /* Bounded reading: a line of /dev/zero, an overlong line, more points than --max-points. */
+    CHECK(run(SCENE " --points /dev/zero", NULL) == 1 && strstr(err_text, "/dev/zero:1: a line longer than 4096"),
+          "/dev/zero: exit 1 at its first line: %s", err_text);
+    {
+        static char line[5000];
+        memset(line, '1', sizeof line - 2);
+        line[sizeof line - 2] = '\n';
+        test_write_file(DIR "/long.txt", line);
+        CHECK(run(SCENE " --points " DIR "/long.txt", NULL) == 1 && strstr(err_text, "long.txt:1: a line longer"),
+              "a 5000-byte line: exit 1: %s", err_text);
+    }
+    test_write_file(DIR "/three.txt", "0 1 0 0 1 0\n0 1 0 0 1 0\n0 1 0 0 1 0\n");
+    CHECK(run(SCENE " --points " DIR "/three.txt --max-points 2", NULL) == 1 &&
+              strstr(err_text, "three.txt:3: more than 2 points (--max-points)"),
+          "--max-points 2 with three points: exit 1 naming the line: %s", err_text);
+    /* The scene-loading limits of render, named by this command. */
+    CHECK(run(SCENE " --points " DIR "/three.txt --max-scene-bytes 10", NULL) == 1 &&
+              strstr(err_text, "more than the limit of 10 bytes") && strstr(err_text, "--max-scene-bytes"),
+          "--max-scene-bytes 10: the scene refused: %s", err_text);
+    CHECK(run(SCENE " --points " DIR "/three.txt --max-mesh-elements", NULL) == 2 &&
+              strstr(err_text, "irrcache points: --max-mesh-elements needs a value"),
+          "--max-mesh-elements without a value: usage error of points: %s", err_text);
 }
 
 int main(void)
