@@ -284,8 +284,12 @@ static int read_header(ply_file *f)
                          "type (uchar or int)", p->name);
                 return header_error(f, IC_ERR_PARSE, msg);
             }
-            p->is_index = is_list && (!strcmp(e->name, "face") || !strcmp(e->name, "tristrips")) &&
-                          (!strcmp(p->name, "vertex_indices") || !strcmp(p->name, "vertex_index"));
+            /* a face's vertex_indices (or vertex_index) list; any list of a tristrips element, since assimp
+             * reads a strip from its list whatever the list is called (found by the fuzzer: a strip list
+             * named "vertex_indiceq" was not checked, and its indices past the vertices crashed assimp) */
+            p->is_index = is_list && ((!strcmp(e->name, "face") && (!strcmp(p->name, "vertex_indices") ||
+                                                                    !strcmp(p->name, "vertex_index"))) ||
+                                      !strcmp(e->name, "tristrips"));
             if (p->is_index && p->is_float) {
                 snprintf(msg, sizeof msg, "the vertex indices of '%s' are of a floating-point type; give them an "
                          "integer type (int or uint)", e->name);
@@ -560,15 +564,16 @@ ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elemen
                              "header", path, e->name, e->count);
         if (!strcmp(e->name, "vertex"))
             f->vertices = e->count;
-        if (r == IC_OK && !ply_known_element(e->name) && e->count > 0) {
+        if (r == IC_OK && !ply_known_element(e->name) && (e->count > 0 || isdigit((unsigned char)e->name[0]))) {
             int later = 0;
             for (int k = i + 1; k < f->el_count; ++k)
                 later |= f->el[k].count > 0;
             if (later || isdigit((unsigned char)e->name[0]))
                 r = ic_error_set(err, IC_ERR_UNSUPPORTED,
                                  "%s: PLY element '%s' (%llu instances) is not one the importer reads (vertex, face, "
-                                 "tristrips, edge, material), and it misreads what follows such an element; remove "
-                                 "it or move it after the others",
+                                 "tristrips, edge, material), and it misreads what follows such an element (or, for "
+                                 "a name that begins with digits, takes them for its count); remove it or move it "
+                                 "after the others, under a name that begins with a letter",
                                  path, e->name, e->count);
         }
     }

@@ -107,6 +107,11 @@ static void test_hostile_meshes(void)
                  "move it after the others");
     expect_error(REGRESS "mesh_ply/assimp_segv_lone_cr.ply", NULL, IC_ERR_PARSE,
                  "assimp_segv_lone_cr.ply:5: a carriage return inside a PLY header line", NULL, NULL);
+    expect_error(REGRESS "mesh_ply/assimp_segv_tristrips_list_name.ply", NULL, IC_ERR_PARSE,
+                 "assimp_segv_tristrips_list_name.ply: tristrips 1 names vertex 2880154539, but the file has 3", NULL,
+                 NULL);
+    expect_error(REGRESS "mesh_ply/assimp_oom_digit_element_no_instances.ply", NULL, IC_ERR_UNSUPPORTED,
+                 "assimp_oom_digit_element_no_instances.ply: PLY element '8888", "(0 instances)", "begins with a letter");
     {
         /* Each cause alone in a binary file: a custom element before the faces (assimp read its count as 0
          * and the faces from its bytes), a lone \r in ascii data; a blank line after end_header and \r\n
