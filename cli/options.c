@@ -434,8 +434,10 @@ static void json_key(const char *name, char *buf, size_t size)
 /* A float default as written (0.01, not 0.0099999998). */
 static cJSON *default_number(const opt_def *o)
 {
+    /* %g: a float default as written (0.15, not 0.150000006); a whole number in full (2^26, not 6.71089e7) */
     char buf[32];
-    snprintf(buf, sizeof buf, "%g", o->def);
+    double d = (double)o->def;
+    snprintf(buf, sizeof buf, d == floor(d) && fabs(d) < 9007199254740992.0 ? "%.0f" : "%g", d);
     return cJSON_CreateNumber(strtod(buf, NULL));
 }
 

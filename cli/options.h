@@ -108,6 +108,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest scene file (JSON, Mitsuba, Radiance) read, " \
       "checked before it is read (a suffix K, M, G multiplies by 2^10, 2^20, 2^30; mesh files have " \
       "--max-mesh-elements)") \
+    X(MAX_IMAGE_PIXELS, "--max-image-pixels", NULL, IC_OPT_BYTES, render.max_image_pixels, 1, 4294967296.0, "N", \
+      (double)IC_DEFAULT_MAX_IMAGE_PIXELS, "134217728 (16384 x 8192)", "px", IC_SCOPE_ALL, "largest image rendered " \
+      "(width x height), checked before anything is allocated for it; about 80 bytes a pixel (a suffix K, M, G " \
+      "multiplies by 2^10, 2^20, 2^30)") \
     X(ALLOW_OUTSIDE_PATHS, "--allow-outside-paths", NULL, IC_OPT_FLAG, load.allow_outside_paths, 0, 0, "", NAN, \
       "off", "", IC_SCOPE_ALL, "let a scene read files outside its own folder tree and the shared scenes folder " \
       "(meshes, MTL files, glTF buffers, textures, environment maps; symbolic links resolved)") \

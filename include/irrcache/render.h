@@ -256,6 +256,8 @@ typedef struct ic_render_options {
                               the same as without. Ignored with a shared comm */
     ic_checkpoint_fn checkpoint;
     void *checkpoint_user;
+    uint64_t max_image_pixels; /* largest width x height rendered, checked before anything is allocated for
+                              the image (0: IC_DEFAULT_MAX_IMAGE_PIXELS, 16384 x 8192) */
 } ic_render_options;
 
 #define IC_MAX_PHASES 12 /* room for every phase of every integrator, and the CLI's "load" */

@@ -115,6 +115,14 @@ static ic_result resolve_options(const ic_scene *scene, ic_render_options *opt, 
                             "IC_CACHE_DEFAULT", (int)opt->adaptive_sampling);
     if (opt->sampler != IC_SAMPLER_SOBOL && opt->sampler != IC_SAMPLER_RANDOM)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "unknown sampler %d; use sobol or random", (int)opt->sampler);
+    uint64_t pixels = (uint64_t)scene->camera.width * (uint64_t)scene->camera.height;
+    uint64_t max_pixels = opt->max_image_pixels ? opt->max_image_pixels : IC_DEFAULT_MAX_IMAGE_PIXELS;
+    if (pixels > max_pixels)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "an image of %d x %d = %llu pixels, more than the limit of %llu; "
+                            "render it smaller, or raise the limit with --max-image-pixels (max_image_pixels of "
+                            "ic_render_options) if the memory is there (about 80 bytes a pixel)",
+                            scene->camera.width, scene->camera.height, (unsigned long long)pixels,
+                            (unsigned long long)max_pixels);
     if ((unsigned)opt->integrator >= INTEGRATOR_COUNT || !integrators[opt->integrator])
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "integrator %d is not available in this build",
                             (int)opt->integrator);

@@ -123,6 +123,10 @@ int main(void)
          "raise the limit with --max-texture-pixels"},
         {"scene over --max-scene-bytes", IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json -o " OUT
          " --max-scene-bytes 100", 1, "raise the limit with --max-scene-bytes"},
+        {"image over --max-image-pixels", SCENES "plain_quad.obj -o " OUT " --width 64 --height 65 --max-image-pixels 4K",
+         1, "an image of 64 x 65 = 4160 pixels, more than the limit of 4096"},
+        {"image over the default limit", SCENES "plain_quad.obj -o " OUT " --width 65536 --height 65536", 1,
+         "raise the limit with --max-image-pixels"},
         {"--max-scene-bytes of 0", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 0", 2,
          "--max-scene-bytes 0: expected a size in bytes"},
         {"--max-scene-bytes with an unknown suffix", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 64Q", 2,
