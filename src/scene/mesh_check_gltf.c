@@ -139,6 +139,11 @@ static ic_result check_buffer_file(const char *path, int i, const char *uri, dou
                         uri, (long long)st.st_size);
 }
 
+/* Longest header of a data URI ("data:" to ','): assimp 5.2 keeps the offsets of its parts in signed chars,
+ * so past 127 they wrap and it decodes from elsewhere in the text, throws and leaks its buffer (found by the
+ * mesh_gltf fuzz target: a 170-character media type). */
+#define DATA_URI_MAX_HEAD 120
+
 /* Checks the URIs of array `name` ("buffers", "images"): data URIs hold valid base64 (of a buffer's
  * byteLength), a buffer's file is as long as its byteLength. */
 static ic_result check_uris(const cJSON *root, const char *name, const char *path, ic_error *err)
@@ -163,6 +168,10 @@ static ic_result check_uris(const cJSON *root, const char *name, const char *pat
             return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: a data URI without ',' before its data; export the "
                                 "file again", path, name, i);
         size_t head = (size_t)(comma - uri->valuestring);
+        if (head > DATA_URI_MAX_HEAD)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: a data URI whose media type and parameters (before "
+                                "',') run to %zu characters, more than %d; shorten them (data:application/octet-"
+                                "stream;base64,...)", path, name, i, head, DATA_URI_MAX_HEAD);
         if (head < 7 || strncmp(comma - 7, ";base64", 7))
             continue; /* not base64: percent-encoded text, which assimp does not decode */
         const char *data = comma + 1;

@@ -259,6 +259,9 @@ static void test_hostile_meshes(void)
                  NULL);
     expect_error(write_tmp("not_json.gltf", "xlTF{indexarraycene_", -1), NULL, IC_ERR_PARSE,
                  "not_json.gltf: the glTF JSON is not valid JSON at byte 1", NULL, NULL);
+    expect_error(REGRESS "mesh_gltf/assimp_leak_long_data_uri_header.gltf", NULL, IC_ERR_PARSE,
+                 "assimp_leak_long_data_uri_header.gltf: buffers[0]: a data URI whose media type and parameters",
+                 "162 characters, more than 120", NULL);
     {
         /* A .glb whose second chunk is not BIN (the importer looks for it after the JSON padded to 4). */
         FILE *fp = fopen(IC_SOURCE_DIR "/tests/fuzz/corpus/mesh_glb/triangle.glb", "rb");
