@@ -370,7 +370,8 @@ void ic_cli_print_help(FILE *f)
         }
         wrap(f, text, LEFT, at);
     }
-    fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error, 130 or 143\n"
+    fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error, 3 the render\n"
+               "finished but an output could not be written (each such output named; the others written), 130 or 143\n"
                "interrupted by SIGINT or SIGTERM: the render stops at its next tile and every output holds the\n"
                "image so far, marked partial (EXR attribute irrcache:partial, \"interrupted\" in --stats). During\n"
                "cache construction no new gather begins (a pass stops within a few records), and the records made\n"

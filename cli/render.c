@@ -3,7 +3,8 @@
  *
  * The options are declared once, in options.h. Every output (images, AOVs, --stats, --records-json,
  * --save-cache) is checked before rendering starts (outputs.h), so a long render is never lost to a
- * typo; when one output still fails at the end, the others are written and the exit status is 1.
+ * typo; when one output still fails at the end, the others are written and the exit status is 3 (the
+ * render itself finished: a caller can tell that from 1, a failure before or during the render).
  *
  * Under mpirun (cluster.h) every rank renders its share; rank 0 alone checks and writes the outputs and
  * shows progress. A failure before the render (options, outputs, the scene on any rank) is agreed on:
@@ -64,6 +65,9 @@ static void on_progress(void *user, const ic_render_progress *r)
     fprintf(stderr, "\r%-16s %6s  elapsed %6.1fs  %s ", r->phase, share, r->elapsed, eta);
     fflush(stderr);
 }
+
+/* The exit status when the render finished but an output could not be written (--help). */
+#define EXIT_OUTPUT_FAILED 3
 
 /* What each rank reports of its share (ic_render_stats' rank_ fields and its wall time), gathered to rank 0. */
 #define RANK_FIGURES (6 + 2 * 32)
@@ -551,5 +555,5 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     /* An interrupted render whose outputs were written ends as the signal asked: 128 + its number. */
     if (ok && st.cancelled)
         return 128 + (int)ic_cli_stop_signal;
-    return ok ? 0 : 1;
+    return ok ? 0 : EXIT_OUTPUT_FAILED;
 }

@@ -140,12 +140,12 @@ int main(void)
     refused("--stats = scene", "--stats " QUAD SMALL, "--stats", QUAD, "scene file");
 
     /* A failure at the end costs only that output: the PFM (48x48: 27 kB) exceeds the 16 kB limit, the
-     * PNG and the stats (a few kB) are still written; exit 1 names the failed one. */
+     * PNG and the stats (a few kB) are still written; exit 3 (rendered, an output failed) names the failed one. */
     const char *cmd = CLI " render " CORNELL " -o " DIR_ "/end/big.pfm -o " DIR_ "/end/small.png --stats " DIR_
                       "/end/stats.json --width 48 --height 48 --spp 1 -q";
     CHECK(system("mkdir -p '" DIR_ "/end'") == 0, "end folder");
     int rc = run_limited(cmd, 16384);
-    CHECK(rc == 1, "a late failure exits 1 (got %d: %s)", rc, err_text);
+    CHECK(rc == 3, "a late failure exits 3 (got %d: %s)", rc, err_text);
     CHECK(strstr(err_text, "-o " DIR_ "/end/big.pfm") && strstr(err_text, "could not be written"),
           "the message names the failed output: %s", err_text);
     CHECK(!strstr(err_text, "small.png") && !strstr(err_text, "stats.json"), "only the failed one is named: %s",
@@ -156,12 +156,12 @@ int main(void)
     CHECK(test_count_temporaries(DIR_ "/end") == 0, "no temporary file left");
 
     /* A cache file that cannot be written (over the limit at save time) costs only itself: the render
-     * goes on, its image is written, exit 1 names --save-cache. */
+     * goes on, its image is written, exit 3 names --save-cache. */
     const char *save = CLI " render " CORNELL " --integrator ic -o " DIR_ "/save/img.png --save-cache " DIR_
                        "/save/c.irc --width 48 --height 48 --spp 1 -q";
     CHECK(system("mkdir -p '" DIR_ "/save'") == 0, "save folder");
     rc = run_limited(save, 16384);
-    CHECK(rc == 1, "a failed --save-cache exits 1 (got %d: %s)", rc, err_text);
+    CHECK(rc == 3, "a failed --save-cache exits 3 (got %d: %s)", rc, err_text);
     CHECK(strstr(err_text, "--save-cache " DIR_ "/save/c.irc") != NULL, "the message names the cache file: %s",
           err_text);
     CHECK(exists(DIR_ "/save/img.png") && !exists(DIR_ "/save/c.irc"), "the image is written, the cache is not");
