@@ -102,7 +102,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "environment map accepted, checked from the file's header before it is read (at most 2^28)") \
     X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
       IC_DEFAULT_MAX_MESH_ELEMENTS, "16777216", "", IC_SCOPE_ALL, "largest vertex or face count of one mesh " \
-      "file, checked from a PLY header before it is read, and on the meshes imported (for a .rad scene: the " \
+      "file, checked from a PLY header or counted in an OBJ file before it is imported, and on the meshes imported (for a .rad scene: the " \
       "vertices of all its surfaces)") \
     X(MAX_SCENE_BYTES, "--max-scene-bytes", NULL, IC_OPT_BYTES, load.max_scene_bytes, 1, 1099511627776.0, "N", \
       IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest scene file (JSON, Mitsuba, Radiance) read, " \

@@ -177,13 +177,13 @@ static ic_result check_face_line(char kind, char *c, const char *path, long line
     return IC_OK;
 }
 
-ic_result ic_obj_check(FILE *fp, const char *path, ic_error *err)
+ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err)
 {
     char *line = malloc(OBJ_MAX_LINE);
     if (!line)
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
     long line_no = 0;
-    long long vertices = 0;
+    long long vertices = 0, faces = 0;
     obj_far_index far = {0, 0};
     ic_result r = IC_OK;
     flockfile(fp);
@@ -203,6 +203,12 @@ ic_result ic_obj_check(FILE *fp, const char *path, ic_error *err)
             /* assimp reads any line that starts with one of these letters as a face, line or point, its
              * first word ("f", or "f3", "fo") skipped */
             r = check_face_line(line[0], line + strcspn(line, " \t"), path, at, vertices, &far, err);
+        if (r == IC_OK && line[0] == 'f')
+            ++faces;
+        if (r == IC_OK && ((unsigned long long)vertices > max_elements || (unsigned long long)faces > max_elements))
+            r = ic_error_set(err, IC_ERR_UNSUPPORTED, "%s:%ld: more than %llu %s, the limit; raise it with "
+                             "--max-mesh-elements (max_mesh_elements of ic_scene_load_options) if the mesh is really "
+                             "this large", path, at, max_elements, faces > (long long)max_elements ? "faces" : "vertices");
         if (r != IC_OK)
             break;
     }

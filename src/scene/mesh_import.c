@@ -334,12 +334,15 @@ static ic_result run_check(const mesh_source *src, ic_result (*check)(FILE *, co
     return r;
 }
 
-static ic_result check_ply(const mesh_source *src, unsigned long long max_elements, ic_error *err)
+/* run_check for the checks that also count elements against max_elements (PLY, OBJ). */
+static ic_result run_check_max(const mesh_source *src,
+                               ic_result (*check)(FILE *, const char *, unsigned long long, ic_error *),
+                               unsigned long long max_elements, ic_error *err)
 {
     FILE *fp = source_open(src);
     if (!fp)
         return IC_OK;
-    ic_result r = ic_ply_check(fp, src->path, max_elements, err);
+    ic_result r = check(fp, src->path, max_elements, err);
     fclose(fp);
     return r;
 }
@@ -984,8 +987,9 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     else
         snprintf(tex_dir, sizeof tex_dir, "%s", dir);
     if ((!strcmp(ext, ".obj") &&
-         ((r = run_check(&src, ic_obj_check, err)) != IC_OK || (r = check_obj_materials(b, &src, dir, err)) != IC_OK)) ||
-        (!strcmp(ext, ".ply") && (r = check_ply(&src, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK) ||
+         ((r = run_check_max(&src, ic_obj_check, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK ||
+          (r = check_obj_materials(b, &src, dir, err)) != IC_OK)) ||
+        (!strcmp(ext, ".ply") && (r = run_check_max(&src, ic_ply_check, ic_scene_max_mesh_elements(b->opt), err)) != IC_OK) ||
         (!strcmp(ext, ".glb") && (r = run_check(&src, ic_glb_check, err)) != IC_OK) ||
         (!strcmp(ext, ".gltf") && (r = run_check(&src, ic_gltf_check, err)) != IC_OK)) {
         free(src.data);

@@ -200,6 +200,21 @@ static void test_hostile_meshes(void)
      * line 6, as assimp splits lines). */
     expect_error(write_tmp("hostile_line.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no r\nl 1\n", -1), NULL,
                  IC_ERR_PARSE, "hostile_line.obj:6: a line element (l) names one vertex", "fix or remove", NULL);
+    {
+        /* the element limit counted before assimp reads the file: 4 vertices, 2 faces against 3 and 1 */
+        ic_scene_load_options lim = {0};
+        lim.max_mesh_elements = 3;
+        const char *quad = write_tmp("limit.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n", -1);
+        expect_error(quad, &lim, IC_ERR_UNSUPPORTED, "limit.obj:4: more than 3 vertices", "--max-mesh-elements", NULL);
+        lim.max_mesh_elements = 4;
+        expect_error(write_tmp("limit_faces.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\nf 1 2 3\n"
+                               "f 1 3 4\nf 1 2 4\n", -1), &lim, IC_ERR_UNSUPPORTED, "limit_faces.obj:9: more than 4 faces",
+                     NULL, NULL);
+        ic_scene *ok = NULL;
+        CHECK(ic_scene_load(IC_TEST_TMP "/limit.obj", &lim, &ok, NULL) == IC_OK,
+              "4 vertices and 2 faces load at a limit of 4");
+        ic_scene_free(ok);
+    }
     expect_error(REGRESS "mesh_obj/assimp_leak_line_one_vertex.obj", NULL, IC_ERR_PARSE,
                  "assimp_leak_line_one_vertex.obj:7: a line element (l) names one vertex", NULL, NULL);
     /* glTF: a data URI that is not base64 (assimp's decoder leaked its output). */
@@ -439,8 +454,8 @@ int main(void)
         small.max_mesh_elements = 2; /* triangle.ply: 3 vertices */
         expect_error(SCENES "triangle.ply", &small, IC_ERR_UNSUPPORTED, "declares 3 of element 'vertex'",
                      "limit of 2", "--max-mesh-elements");
-        expect_error(SCENES "plain_quad.obj", &small, IC_ERR_UNSUPPORTED, "plain_quad.obj: 4 vertices",
-                     "limit of 2", "--max-mesh-elements");
+        expect_error(SCENES "plain_quad.obj", &small, IC_ERR_UNSUPPORTED, "plain_quad.obj:5: more than 2 vertices",
+                     "--max-mesh-elements", NULL);
         small.max_mesh_elements = 4;
         ic_scene *ok = NULL;
         ic_error e;
