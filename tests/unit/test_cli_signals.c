@@ -3,8 +3,9 @@
  * item 5). The library registers each temporary name while it exists, and ic_remove_temporary_files
  * (async-signal-safe) removes them; the command installs a handler for SIGINT, SIGTERM, SIGHUP and
  * SIGXFSZ that calls it and re-raises the signal. Checked in a child that dies of SIGTERM or SIGINT in
- * the middle of an atomic write (the handler being the command's), and on the command itself killed by
- * SIGXFSZ when its output exceeds a file-size limit.
+ * the middle of an atomic write (the handler being the command's), on the command itself sent SIGTERM or
+ * SIGINT the moment its image's temporary file appears, and killed by SIGXFSZ when its output exceeds a
+ * file-size limit.
  *
  * Long renders (issue "An installable library", item 5): SIGINT or SIGTERM during the final render or
  * inside a cache construction pass (batch, adaptive, lazy) ends the command soon with complete, partial
@@ -77,6 +78,54 @@ static void die_while_writing(int sig, int exr_style)
     CHECK(test_count_temporaries(DIR_) == 0, "signal %d%s: no temporary file left", sig,
           exr_style ? " (two writes)" : "");
     CHECK(!exists(DIR_ "/out.bin") && !exists(DIR_ "/out.exr"), "signal %d: no output either", sig);
+}
+
+/* The command itself, sent `sig` while it writes its image: a 2048 x 2048 PFM (48 MB) is rendered with one
+ * sample a pixel, and the signal goes the moment its temporary file appears in the folder. The write may
+ * finish first on a fast disk: up to five tries, and one must catch it. */
+static void command_killed_while_writing(int sig)
+{
+    const char *dir = DIR_ "/writing";
+    mkdir(dir, 0755);
+    int caught = 0;
+    for (int attempt = 0; attempt < 5 && !caught; ++attempt) {
+        unlink(DIR_ "/writing/big.pfm");
+        pid_t pid = fork();
+        if (pid == 0) {
+            signal(SIGINT, SIG_DFL);
+            signal(SIGTERM, SIG_DFL);
+            int fd = open("/dev/null", O_WRONLY);
+            dup2(fd, 2);
+            execl(IC_CLI_PATH, "irrcache", "render", IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", "-o",
+                  DIR_ "/writing/big.pfm", "--width", "2048", "--height", "2048", "--spp", "1", "--threads", "2",
+                  "-q", (char *)NULL);
+            _exit(127);
+        }
+        int st = 0, done = 0;
+        while (!done) {
+            if (test_count_temporaries(dir) > 0) {
+                kill(pid, sig);
+                waitpid(pid, &st, 0);
+                done = 1;
+            } else if (waitpid(pid, &st, WNOHANG) == pid) {
+                done = 2; /* ended before a temporary file was seen */
+            } else {
+                usleep(200);
+            }
+        }
+        if (WIFSIGNALED(st) && WTERMSIG(st) == sig) {
+            caught = 1;
+            printf("signal %d: reached the command during its write at try %d\n", sig, attempt + 1);
+            CHECK(test_count_temporaries(dir) == 0, "signal %d during the command's write: no temporary file left",
+                  sig);
+            CHECK(!exists(DIR_ "/writing/big.pfm"), "signal %d during the command's write: no output", sig);
+        } else {
+            CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "signal %d: the command ended otherwise (status %#x)", sig,
+                  st);
+        }
+    }
+    CHECK(caught, "signal %d reached the command during its write in one of five tries", sig);
+    CHECK(test_count_temporaries(dir) == 0, "signal %d: no temporary file left after the tries", sig);
 }
 
 static double now_seconds(void)
@@ -341,6 +390,8 @@ int main(void)
 
     die_while_writing(SIGTERM, 0);
     die_while_writing(SIGINT, 1);
+    command_killed_while_writing(SIGTERM);
+    command_killed_while_writing(SIGINT);
 
     /* The command, killed by SIGXFSZ while its image exceeds a 16 kB file-size limit (48x48 PFM: 27 kB). */
     pid_t pid = fork();
