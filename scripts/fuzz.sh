@@ -41,6 +41,7 @@ ci_runs() {
     mesh_obj) echo 6000 ;;
     mesh_ply) echo 45000 ;;
     scene_json) echo 50000 ;;
+    scene_mitsuba) echo 10000 ;;
     scene_radiance) echo 10000 ;;
     view_radiance) echo 30000 ;;
     *) echo 10000 ;; # a new target: give it its own line once its speed is measured
