@@ -20,13 +20,10 @@ static void size_text(uint64_t n, char *out, size_t size)
         snprintf(out, size, "%llu bytes", (unsigned long long)n);
 }
 
-ic_result ic_read_regular_file(const char *path, const char *what, uint64_t max_bytes, const char *limit_hint,
-                               char **data, size_t *size, int *open_errno, ic_error *err)
+/* Opens path without blocking and checks with fstat that it is a regular file; *fd and *st on success. */
+static ic_result open_checked(const char *path, const char *what, int *fd_out, struct stat *st, int *open_errno,
+                              ic_error *err)
 {
-    *data = NULL;
-    *size = 0;
-    if (open_errno)
-        *open_errno = 0;
     /* O_NONBLOCK: opening a FIFO without a writer returns at once instead of waiting for one. */
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
@@ -35,23 +32,55 @@ ic_result ic_read_regular_file(const char *path, const char *what, uint64_t max_
             *open_errno = e;
         return ic_error_set(err, IC_ERR_IO, "%s: cannot open the %s (%s); check the path", path, what, strerror(e));
     }
-    struct stat st;
-    if (fstat(fd, &st) != 0) {
+    if (fstat(fd, st) != 0) {
         int e = errno;
         close(fd);
         return ic_error_set(err, IC_ERR_IO, "%s: cannot read the %s (%s); check the file", path, what, strerror(e));
     }
-    if (S_ISDIR(st.st_mode)) {
+    if (S_ISDIR(st->st_mode)) {
         close(fd);
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: is a folder, not a %s; give the path of the file in it",
                             path, what);
     }
-    if (!S_ISREG(st.st_mode)) {
+    if (!S_ISREG(st->st_mode)) {
         close(fd);
         return ic_error_set(err, IC_ERR_INVALID_ARG,
                             "%s: is not a regular file (a pipe, device or socket); give the path of a %s", path,
                             what);
     }
+    *fd_out = fd;
+    return IC_OK;
+}
+
+ic_result ic_open_regular_file(const char *path, const char *what, FILE **fp, ic_error *err)
+{
+    *fp = NULL;
+    int fd;
+    struct stat st;
+    ic_result r = open_checked(path, what, &fd, &st, NULL, err);
+    if (r != IC_OK)
+        return r;
+    int flags = fcntl(fd, F_GETFL);
+    if (flags < 0 || fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0 || (*fp = fdopen(fd, "rb")) == NULL) {
+        int e = errno;
+        close(fd);
+        return ic_error_set(err, IC_ERR_IO, "%s: cannot open the %s (%s); check the file", path, what, strerror(e));
+    }
+    return IC_OK;
+}
+
+ic_result ic_read_regular_file(const char *path, const char *what, uint64_t max_bytes, const char *limit_hint,
+                               char **data, size_t *size, int *open_errno, ic_error *err)
+{
+    *data = NULL;
+    *size = 0;
+    if (open_errno)
+        *open_errno = 0;
+    int fd;
+    struct stat st;
+    ic_result r0 = open_checked(path, what, &fd, &st, open_errno, err);
+    if (r0 != IC_OK)
+        return r0;
     if ((uint64_t)st.st_size > max_bytes || (uint64_t)st.st_size >= SIZE_MAX) {
         close(fd);
         char have[64], limit[64];

@@ -12,6 +12,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 /* Reads the whole of path (what: "scene file", "cache file", for messages) into a malloc'd buffer with a
  * NUL after its last byte. Refuses a path that is not a regular file ("is a folder", "is not a regular
@@ -20,5 +21,10 @@
  * itself fails, *open_errno (may be NULL) receives its errno and IC_ERR_IO is returned. */
 ic_result ic_read_regular_file(const char *path, const char *what, uint64_t max_bytes, const char *limit_hint,
                                char **data, size_t *size, int *open_errno, ic_error *err);
+
+/* Opens path for reading as ic_read_regular_file does (without blocking on a FIFO; a folder, pipe, device
+ * or socket refused with the same messages, what naming the file's role: "image", "mesh file") and
+ * returns it as a blocking stream in *fp; IC_ERR_IO with "cannot open" if the open fails. */
+ic_result ic_open_regular_file(const char *path, const char *what, FILE **fp, ic_error *err);
 
 #endif

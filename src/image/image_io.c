@@ -6,6 +6,7 @@
  * ldr.c (PNG through stb) and jpeg.c (JPEG through libjpeg).
  */
 #include "image_internal.h"
+#include "core/read_file.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -61,10 +62,11 @@ ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *rai
     if (!path || !*path)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "empty image path; give a file name");
 
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot read (%s); check the path and its permissions", path,
-                            strerror(errno));
+    FILE *fp;
+    /* never blocks on a FIFO; a folder or device is refused by name */
+    ic_result opened = ic_open_regular_file(path, "PNG, JPEG, EXR, HDR or PFM file", &fp, err);
+    if (opened != IC_OK)
+        return opened;
     unsigned char magic[4] = {0};
     size_t n = fread(magic, 1, sizeof magic, fp);
     int read_error = ferror(fp);

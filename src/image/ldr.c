@@ -8,6 +8,7 @@
  * JPEG decoder (stb_impl.c), so a JPEG never reaches it.
  */
 #include "image_internal.h"
+#include "core/read_file.h"
 
 #include "core/atomic_file.h"
 
@@ -94,8 +95,8 @@ static size_t png_chunk_overrun(const unsigned char *b, size_t n)
 static unsigned char *read_whole(const char *path, size_t *n)
 {
     *n = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    FILE *f;
+    if (ic_open_regular_file(path, "PNG, JPEG, EXR, HDR or PFM file", &f, NULL) != IC_OK)
         return NULL;
     unsigned char *buf = NULL;
     long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;

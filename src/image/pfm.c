@@ -7,6 +7,7 @@
  * bit-exactly, NaN and Inf included (the metrics and writers decide what to do with them).
  */
 #include "image_internal.h"
+#include "core/read_file.h"
 
 #include "core/atomic_file.h"
 
@@ -36,10 +37,10 @@ static float swap_float(float v)
 ic_result ic_image_read_pfm(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot read (%s); check the path and its permissions", path,
-                            strerror(errno));
+    FILE *fp;
+    ic_result opened = ic_open_regular_file(path, "PNG, JPEG, EXR, HDR or PFM file", &fp, err);
+    if (opened != IC_OK)
+        return opened;
 
     char kind[3] = {0};
     int width = 0, height = 0;

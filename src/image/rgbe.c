@@ -14,6 +14,7 @@
  * the radiance the file describes. XYZE files and other orientations are refused.
  */
 #include "image_internal.h"
+#include "core/read_file.h"
 
 #include "core/atomic_file.h"
 
@@ -192,10 +193,10 @@ static int read_scanline(FILE *fp, unsigned char *line, int width)
 ic_result ic_image_read_hdr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot read (%s); check the path and its permissions", path,
-                            strerror(errno));
+    FILE *fp;
+    ic_result opened = ic_open_regular_file(path, "PNG, JPEG, EXR, HDR or PFM file", &fp, err);
+    if (opened != IC_OK)
+        return opened;
     int width = 0, height = 0;
     double exposure = 1.0;
     ic_result r = read_header(path, fp, &width, &height, &exposure, err);

@@ -32,6 +32,7 @@
  * refuse them with a message naming the file and the line or element.
  */
 #include "scene/scene_internal.h"
+#include "core/read_file.h"
 
 #include "scene/mesh_check.h"
 
@@ -72,10 +73,10 @@ static ic_result gunzip_file(const char *path, char **out, size_t *size, ic_erro
 {
     *out = NULL;
     *size = 0;
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot open the compressed mesh (%s); check the path", path,
-                            strerror(errno));
+    FILE *fp;
+    ic_result opened = ic_open_regular_file(path, "compressed mesh", &fp, err);
+    if (opened != IC_OK)
+        return opened;
     enum { CHUNK = 1 << 16 };
     z_stream z;
     memset(&z, 0, sizeof z);
@@ -156,8 +157,14 @@ static ic_result source_load(const char *path, mesh_source *src, ic_error *err)
     snprintf(src->name, sizeof src->name, "%s", path);
     char ext[16];
     ic_path_extension(path, ext, sizeof ext);
-    if (strcmp(ext, ".gz") != 0)
-        return IC_OK;
+    if (strcmp(ext, ".gz") != 0) {
+        /* a FIFO would block the structure check's read for ever: only a regular file goes on */
+        FILE *fp;
+        ic_result r = ic_path_exists(path) ? ic_open_regular_file(path, "mesh file", &fp, err) : IC_OK;
+        if (r == IC_OK && ic_path_exists(path))
+            fclose(fp);
+        return r;
+    }
     src->name[strlen(src->name) - 3] = '\0';
     return gunzip_file(path, &src->data, &src->size, err);
 }

@@ -30,6 +30,13 @@ int ic_path_exists(const char *path)
     return stat(path, &st) == 0 && S_ISREG(st.st_mode);
 }
 
+const char *ic_path_missing(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && !S_ISREG(st.st_mode) ? "is not a regular file (a folder, pipe or device)"
+                                                        : "not found";
+}
+
 void ic_path_dirname(const char *path, char *dir, size_t size)
 {
     const char *slash = strrchr(path, '/');
@@ -283,8 +290,8 @@ ic_result ic_scene_texture_load_as(ic_scene_builder *b, const char *path, int is
     if (!ic_path_exists(path)) {
         char abs_path[IC_SCENE_PATH_MAX];
         ic_path_absolute(path, abs_path, sizeof abs_path);
-        return ic_error_set(err, IC_ERR_IO, "%s: texture '%s' not found (resolved to %s); check the path", owner,
-                            path, abs_path);
+        return ic_error_set(err, IC_ERR_IO, "%s: texture '%s' %s (resolved to %s); check the path", owner, path,
+                            ic_path_missing(path), abs_path);
     }
     ic_image img;
     ic_error ierr;

@@ -158,6 +158,9 @@ ic_result ic_scene_load_json(ic_scene_builder *b, const char *path, const ic_sce
 
 /* Path helpers (scene.c). */
 int ic_path_exists(const char *path);                  /* regular file that can be opened */
+/* Why ic_path_exists(path) is 0, for messages: "not found", or "is not a regular file (a folder, pipe or
+ * device)" where something else is there. */
+const char *ic_path_missing(const char *path);
 void ic_path_dirname(const char *path, char *dir, size_t size); /* "." for a bare name */
 /* dir/rel unless rel is absolute; backslashes in rel become slashes. Returns 0 if it does not fit. */
 int ic_path_join(const char *dir, const char *rel, char *out, size_t size);

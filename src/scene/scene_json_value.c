@@ -356,8 +356,8 @@ ic_result ic_json_resolve_path(json_ctx *c, const char *given, int line, const c
     if (!ic_path_exists(out)) {
         char abs_path[IC_SCENE_PATH_MAX];
         ic_path_absolute(out, abs_path, sizeof abs_path);
-        return ic_json_fail(c, line, IC_ERR_IO, "%s '%s' not found (resolved to %s); check the path", what, given,
-                            abs_path);
+        return ic_json_fail(c, line, IC_ERR_IO, "%s '%s' %s (resolved to %s); check the path", what, given,
+                            ic_path_missing(out), abs_path);
     }
     return check_inside(c, given, line, what, out);
 }

@@ -21,7 +21,8 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
     if (!ic_path_exists(path)) {
         char abs_path[IC_SCENE_PATH_MAX];
         ic_path_absolute(path, abs_path, sizeof abs_path);
-        return ic_error_set(err, IC_ERR_IO, "%s: mesh not found (resolved to %s); check the path", path, abs_path);
+        return ic_error_set(err, IC_ERR_IO, "%s: mesh %s (resolved to %s); check the path", path,
+                            ic_path_missing(path), abs_path);
     }
     b->import_where = path;
     ic_result r = ic_mesh_import(b, path, NULL, NULL, err);

@@ -2,6 +2,7 @@
  * test_scene_errors.c — every class of bad scene input gives the right ic_result and a one-line message
  * that names the file, the line (JSON and OBJ) and what to do; *out stays NULL and nothing leaks.
  */
+#include "irrcache/image.h"
 #include "scene/scene.h"
 #include "test_util.h"
 
@@ -508,6 +509,27 @@ int main(void)
     expect_error(fifo_obj, NULL, IC_ERR_INVALID_ARG, "scene_errors_fifo.obj", "is not a regular file", NULL);
     expect_error(zero_json, NULL, IC_ERR_INVALID_ARG, "scene_errors_zero.json", "is not a regular file", NULL);
     expect_error("/dev/zero", NULL, IC_ERR_INVALID_ARG, "/dev/zero", "is not a regular file", NULL);
+    {
+        /* the files a scene names: an environment map and a mesh that are pipes */
+        const char *fifo_pfm = IC_TEST_TMP "/scene_errors_fifo.pfm", *fifo_mesh = IC_TEST_TMP "/scene_errors_fifo2.obj";
+        unlink(fifo_pfm);
+        unlink(fifo_mesh);
+        CHECK(mkfifo(fifo_pfm, 0644) == 0 && mkfifo(fifo_mesh, 0644) == 0, "pipes named by a scene");
+        static char json[1024];
+        snprintf(json, sizeof json, "{\n  \"meshes\": [ { \"path\": \"%s\" } ],\n  \"environment\": { \"map\": "
+                 "\"scene_errors_fifo.pfm\" }\n}\n", SCENES "quad_light.obj");
+        ic_scene_load_options outside = {0};
+        outside.allow_outside_paths = 1;
+        expect_error(write_tmp("scene_errors_fifo_env.json", json, -1), &outside, IC_ERR_IO,
+                     "environment map 'scene_errors_fifo.pfm' is not a regular file", NULL, NULL);
+        expect_error(write_tmp("scene_errors_fifo_mesh.json", "{\n  \"meshes\": [ { \"path\": "
+                               "\"scene_errors_fifo2.obj\" } ]\n}\n", -1), NULL, IC_ERR_IO,
+                     "mesh 'scene_errors_fifo2.obj' is not a regular file", NULL, NULL);
+        ic_image img;
+        ic_error ierr;
+        CHECK(ic_image_read(fifo_pfm, &img, &ierr) == IC_ERR_INVALID_ARG && strstr(ierr.message, "not a regular file"),
+              "ic_image_read of a pipe: refused at once: %s", ierr.message);
+    }
     alarm(0);
     const char *big_json = IC_TEST_TMP "/scene_errors_big.json"; /* sparse: 65 MiB on no disk */
     FILE *fb = fopen(big_json, "wb");
