@@ -23,6 +23,7 @@
 
 #include <cjson/cJSON.h>
 
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -322,6 +323,117 @@ static size_t json_error_at(const char *text, size_t len)
     return in.i == in.len ? len : in.i;
 }
 
+/* ---- Accessors and buffer views against the data they read (glTF 2.0 §3.6, §5.1, §5.11) ------------ */
+
+/* obj[key] as a whole number in [lo, hi]: 1, 0 if absent (*v = dflt), -1 if present but not such a number. */
+static int whole(const cJSON *obj, const char *key, double lo, double hi, double dflt, double *v)
+{
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+    *v = dflt;
+    if (!it)
+        return 0;
+    if (!cJSON_IsNumber(it) || it->valuedouble != floor(it->valuedouble) || it->valuedouble < lo ||
+        it->valuedouble > hi)
+        return -1;
+    *v = it->valuedouble;
+    return 1;
+}
+
+static int array_size(const cJSON *root, const char *key)
+{
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(root, key);
+    return cJSON_IsArray(a) ? cJSON_GetArraySize(a) : 0;
+}
+
+/* Bytes of one element of an accessor: componentType's size times the type's components, a matrix's
+ * columns each padded to 4 bytes (§3.6.2.4); 0 for an unknown type. */
+static double element_bytes(double component_type, const char *type)
+{
+    static const struct { int code, size; } comps[] = {{5120, 1}, {5121, 1}, {5122, 2}, {5123, 2}, {5125, 4}, {5126, 4}};
+    static const struct { const char *name; int rows, cols; } types[] = {
+        {"SCALAR", 1, 1}, {"VEC2", 2, 1}, {"VEC3", 3, 1}, {"VEC4", 4, 1}, {"MAT2", 2, 2}, {"MAT3", 3, 3}, {"MAT4", 4, 4}};
+    int size = 0;
+    for (size_t k = 0; k < sizeof comps / sizeof comps[0]; ++k)
+        if (component_type == comps[k].code)
+            size = comps[k].size;
+    for (size_t k = 0; size && type && k < sizeof types / sizeof types[0]; ++k)
+        if (!strcmp(type, types[k].name)) {
+            int column = types[k].rows * size;
+            if (types[k].cols > 1)
+                column = (column + 3) & ~3;
+            return (double)column * types[k].cols;
+        }
+    return 0.0;
+}
+
+/* assimp 5.2 reads an accessor's elements with few checks and throws on some bad ones while it holds what it
+ * allocated (found by the mesh_glb fuzz target: an index accessor without a valid count read past its
+ * view, "Invalid index 2, count out of range", 24 bytes leaked). So every view lies within its buffer,
+ * every accessor has a count, a component type and a type, and reads within its view, and every index a
+ * mesh primitive gives names an accessor. */
+static ic_result check_accessors(const cJSON *root, const char *path, ic_error *err)
+{
+    const double big = 9007199254740992.0; /* 2^53: any size a JSON number holds exactly */
+    int nb = array_size(root, "buffers"), nv = array_size(root, "bufferViews"), na = array_size(root, "accessors");
+    const cJSON *buffers = cJSON_GetObjectItemCaseSensitive(root, "buffers");
+    const cJSON *views = cJSON_GetObjectItemCaseSensitive(root, "bufferViews");
+    int i = 0;
+    for (const cJSON *v = nv ? views->child : NULL; v; v = v->next, ++i) {
+        double buffer, length, offset, stride, buffer_length;
+        if (whole(v, "buffer", 0, nb - 1, 0, &buffer) != 1 || whole(v, "byteLength", 1, big, 0, &length) != 1 ||
+            whole(v, "byteOffset", 0, big, 0, &offset) < 0 || whole(v, "byteStride", 4, 252, 0, &stride) < 0)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: bufferViews[%d]: needs a buffer (0 to %d), a byteLength >= 1, "
+                                "and if given a byteOffset >= 0 and a byteStride of 4 to 252; export the model again",
+                                path, i, nb - 1);
+        const cJSON *b = cJSON_GetArrayItem(buffers, (int)buffer);
+        if (whole(b, "byteLength", 1, big, -1, &buffer_length) == 1 && offset + length > buffer_length)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: bufferViews[%d]: bytes %.0f to %.0f, past the end of buffers[%.0f]"
+                                " (%.0f bytes); export the model again", path, i, offset, offset + length, buffer,
+                                buffer_length);
+    }
+    i = 0;
+    const cJSON *accessors = cJSON_GetObjectItemCaseSensitive(root, "accessors");
+    for (const cJSON *a = na ? accessors->child : NULL; a; a = a->next, ++i) {
+        double count, component, view, offset;
+        const cJSON *type = cJSON_GetObjectItemCaseSensitive(a, "type");
+        double elem = 0.0;
+        if (whole(a, "count", 1, big, 0, &count) != 1 || whole(a, "componentType", 0, big, 0, &component) != 1 ||
+            (elem = element_bytes(component, cJSON_IsString(type) ? type->valuestring : NULL)) == 0.0 ||
+            whole(a, "bufferView", 0, nv - 1, -1, &view) < 0 || whole(a, "byteOffset", 0, big, 0, &offset) < 0)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: accessors[%d]: needs a count >= 1, a componentType (5120 to "
+                                "5126), a type (SCALAR, VEC2 to VEC4, MAT2 to MAT4), and if given a bufferView (0 to "
+                                "%d) and a byteOffset >= 0; export the model again", path, i, nv - 1);
+        if (view < 0)
+            continue; /* no view: all zeros, or a sparse accessor's base */
+        const cJSON *v = cJSON_GetArrayItem(views, (int)view);
+        double length, stride;
+        whole(v, "byteLength", 1, big, 0, &length);
+        whole(v, "byteStride", 4, 252, 0, &stride);
+        double end = offset + (stride > 0.0 ? stride : elem) * (count - 1.0) + elem;
+        if (end > length)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: accessors[%d]: %.0f elements of %.0f bytes from byte %.0f read to "
+                                "byte %.0f of bufferViews[%.0f], which has %.0f; export the model again", path, i,
+                                count, elem, offset, end, view, length);
+    }
+    i = 0;
+    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
+    for (const cJSON *m = cJSON_IsArray(meshes) ? meshes->child : NULL; m; m = m->next, ++i) {
+        const cJSON *prims = cJSON_GetObjectItemCaseSensitive(m, "primitives");
+        for (const cJSON *p = cJSON_IsArray(prims) ? prims->child : NULL; p; p = p->next) {
+            double index;
+            int bad = whole(p, "indices", 0, na - 1, 0, &index) < 0;
+            const cJSON *attrs = cJSON_GetObjectItemCaseSensitive(p, "attributes");
+            for (const cJSON *at = cJSON_IsObject(attrs) ? attrs->child : NULL; at && !bad; at = at->next)
+                bad = !cJSON_IsNumber(at) || at->valuedouble != floor(at->valuedouble) || at->valuedouble < 0 ||
+                      at->valuedouble > na - 1;
+            if (bad)
+                return ic_error_set(err, IC_ERR_PARSE, "%s: meshes[%d]: a primitive's indices or attributes name no "
+                                    "accessor (there are %d); export the model again", path, i, na);
+        }
+    }
+    return IC_OK;
+}
+
 /* The JSON of a glTF file (ic_gltf_json: a .gltf's text, a .glb's JSON chunk) as the importer needs it. */
 static ic_result check_json(FILE *fp, const char *path, ic_error *err)
 {
@@ -347,6 +459,8 @@ static ic_result check_json(FILE *fp, const char *path, ic_error *err)
         r = check_uris(root, "buffers", path, err);
     if (r == IC_OK)
         r = check_uris(root, "images", path, err);
+    if (r == IC_OK)
+        r = check_accessors(root, path, err);
     cJSON_Delete(root);
     return r;
 }

@@ -275,6 +275,32 @@ static void test_hostile_meshes(void)
                  NULL);
     expect_error(write_tmp("not_json.gltf", "xlTF{indexarraycene_", -1), NULL, IC_ERR_PARSE,
                  "not_json.gltf: the glTF JSON is not valid JSON at byte 1", NULL, NULL);
+    expect_error(REGRESS "mesh_glb/assimp_leak_accessor_past_view.glb", NULL, IC_ERR_PARSE,
+                 "assimp_leak_accessor_past_view.glb: accessors[1]: 3 elements of 6 bytes from byte 0 read to byte 18 "
+                 "of bufferViews[1], which has 6", NULL, NULL);
+    {
+        /* Each accessor rule alone, on triangle.gltf: a view past its buffer, an accessor without a count, a
+         * primitive naming no accessor. */
+        static char g[8192], bad[8300];
+        FILE *fp = fopen(SCENES "triangle.gltf", "rb");
+        size_t n = fp ? fread(g, 1, sizeof g - 1, fp) : 0;
+        if (fp)
+            fclose(fp);
+        g[n] = '\0';
+        static const struct { const char *from, *to, *name, *want; } edits[] = {
+            {"\"byteLength\": 36", "\"byteLength\": 99", "view_past_buffer.gltf", "bufferViews[0]: bytes 0 to 99, past"},
+            {"\"count\": 3", "\"cuont\": 3", "no_count.gltf", "accessors[0]: needs a count"},
+            {"\"indices\": 1", "\"indices\": 7", "bad_indices.gltf", "meshes[0]: a primitive's indices"},
+        };
+        for (size_t k = 0; k < sizeof edits / sizeof edits[0]; ++k) {
+            const char *at = strstr(g, edits[k].from);
+            CHECK(at != NULL, "triangle.gltf holds '%s'", edits[k].from);
+            if (!at)
+                continue;
+            snprintf(bad, sizeof bad, "%.*s%s%s", (int)(at - g), g, edits[k].to, at + strlen(edits[k].from));
+            expect_error(write_tmp(edits[k].name, bad, -1), NULL, IC_ERR_PARSE, edits[k].name, edits[k].want, NULL);
+        }
+    }
     expect_error(REGRESS "mesh_gltf/assimp_leak_long_data_uri_header.gltf", NULL, IC_ERR_PARSE,
                  "assimp_leak_long_data_uri_header.gltf: buffers[0]: a data URI whose media type and parameters",
                  "162 characters, more than 120", NULL);
