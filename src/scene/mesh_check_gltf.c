@@ -403,6 +403,27 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
             return ic_error_set(err, IC_ERR_PARSE, "%s: accessors[%d]: needs a count >= 1, a componentType (5120 to "
                                 "5126), a type (SCALAR, VEC2 to VEC4, MAT2 to MAT4), and if given a bufferView (0 to "
                                 "%d) and a byteOffset >= 0; export the model again", path, i, nv - 1);
+        const cJSON *sparse = cJSON_GetObjectItemCaseSensitive(a, "sparse");
+        if (sparse) {
+            /* count replaced elements: their indices (one component each) and values read within their views */
+            const cJSON *ix = cJSON_GetObjectItemCaseSensitive(sparse, "indices");
+            const cJSON *vals = cJSON_GetObjectItemCaseSensitive(sparse, "values");
+            double sc, iv, io, ict, vv, vo, il = 0.0, vl = 0.0;
+            double isz = 0.0;
+            int ok = whole(sparse, "count", 1, count, 0, &sc) == 1 && whole(ix, "bufferView", 0, nv - 1, 0, &iv) == 1 &&
+                     whole(ix, "byteOffset", 0, big, 0, &io) >= 0 && whole(ix, "componentType", 0, big, 0, &ict) == 1 &&
+                     (isz = element_bytes(ict, "SCALAR")) > 0.0 && ict != 5120 && ict != 5122 && ict != 5126 &&
+                     whole(vals, "bufferView", 0, nv - 1, 0, &vv) == 1 && whole(vals, "byteOffset", 0, big, 0, &vo) >= 0;
+            if (ok) {
+                whole(cJSON_GetArrayItem(views, (int)iv), "byteLength", 1, big, 0, &il);
+                whole(cJSON_GetArrayItem(views, (int)vv), "byteLength", 1, big, 0, &vl);
+                ok = io + isz * sc <= il && vo + elem * sc <= vl;
+            }
+            if (!ok)
+                return ic_error_set(err, IC_ERR_PARSE, "%s: accessors[%d]: its sparse part needs a count (1 to the "
+                                    "accessor's), indices (an unsigned componentType) and values in bufferViews that "
+                                    "hold them; export the model again", path, i);
+        }
         if (view < 0)
             continue; /* no view: all zeros, or a sparse accessor's base */
         const cJSON *v = cJSON_GetArrayItem(views, (int)view);
@@ -429,6 +450,52 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
             if (bad)
                 return ic_error_set(err, IC_ERR_PARSE, "%s: meshes[%d]: a primitive's indices or attributes name no "
                                     "accessor (there are %d); export the model again", path, i, na);
+        }
+    }
+    /* every other reference by index names an element of its array */
+    static const struct { const char *array, *key, *target; } refs[] = {
+        {"textures", "source", "images"}, {"textures", "sampler", "samplers"}, {"images", "bufferView", "bufferViews"},
+        {"nodes", "mesh", "meshes"}, {"nodes", "camera", "cameras"}, {"nodes", "skin", "skins"}, {"scene", NULL, "scenes"},
+    };
+    for (size_t k = 0; k < sizeof refs / sizeof refs[0]; ++k) {
+        int n = array_size(root, refs[k].target);
+        double v;
+        if (!refs[k].key) { /* a top-level index */
+            if (whole(root, refs[k].array, 0, n - 1, 0, &v) < 0)
+                return ic_error_set(err, IC_ERR_PARSE, "%s: \"%s\" names no element of \"%s\" (there are %d); export "
+                                    "the model again", path, refs[k].array, refs[k].target, n);
+            continue;
+        }
+        const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, refs[k].array);
+        i = 0;
+        for (const cJSON *e = cJSON_IsArray(arr) ? arr->child : NULL; e; e = e->next, ++i)
+            if (whole(e, refs[k].key, 0, n - 1, 0, &v) < 0)
+                return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: \"%s\" names no element of \"%s\" (there are %d); "
+                                    "export the model again", path, refs[k].array, i, refs[k].key, refs[k].target, n);
+    }
+    /* node children and scene roots name nodes; primitives' materials name materials */
+    int nn = array_size(root, "nodes"), nm = array_size(root, "materials");
+    static const struct { const char *array, *list; } lists[] = {{"nodes", "children"}, {"scenes", "nodes"}};
+    for (size_t k = 0; k < sizeof lists / sizeof lists[0]; ++k) {
+        const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, lists[k].array);
+        i = 0;
+        for (const cJSON *e = cJSON_IsArray(arr) ? arr->child : NULL; e; e = e->next, ++i) {
+            const cJSON *l = cJSON_GetObjectItemCaseSensitive(e, lists[k].list);
+            for (const cJSON *x = cJSON_IsArray(l) ? l->child : NULL; x; x = x->next)
+                if (!cJSON_IsNumber(x) || x->valuedouble != floor(x->valuedouble) || x->valuedouble < 0 ||
+                    x->valuedouble > nn - 1)
+                    return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: \"%s\" names no node (there are %d); export "
+                                        "the model again", path, lists[k].array, i, lists[k].list, nn);
+        }
+    }
+    i = 0;
+    for (const cJSON *m = cJSON_IsArray(meshes) ? meshes->child : NULL; m; m = m->next, ++i) {
+        const cJSON *prims = cJSON_GetObjectItemCaseSensitive(m, "primitives");
+        for (const cJSON *p = cJSON_IsArray(prims) ? prims->child : NULL; p; p = p->next) {
+            double v;
+            if (whole(p, "material", 0, nm - 1, 0, &v) < 0)
+                return ic_error_set(err, IC_ERR_PARSE, "%s: meshes[%d]: a primitive's material names no material "
+                                    "(there are %d); export the model again", path, i, nm);
         }
     }
     return IC_OK;

@@ -291,6 +291,12 @@ static void test_hostile_meshes(void)
             {"\"byteLength\": 36", "\"byteLength\": 99", "view_past_buffer.gltf", "bufferViews[0]: bytes 0 to 99, past"},
             {"\"count\": 3", "\"cuont\": 3", "no_count.gltf", "accessors[0]: needs a count"},
             {"\"indices\": 1", "\"indices\": 7", "bad_indices.gltf", "meshes[0]: a primitive's indices"},
+            {"\"mesh\": 0", "\"mesh\": 5", "bad_mesh.gltf", "nodes[0]: \"mesh\" names no element of \"meshes\""},
+            {"\"material\": 0", "\"material\": 9", "bad_material.gltf", "a primitive's material names no material"},
+            {"\"scene\": 0", "\"scene\": 2", "bad_scene.gltf", "\"scene\" names no element of \"scenes\""},
+            {"\"count\": 3,", "\"count\": 3, \"sparse\": {\"count\": 2, \"indices\": {\"bufferView\": 1, "
+             "\"componentType\": 5125}, \"values\": {\"bufferView\": 1}},", "bad_sparse.gltf",
+             "accessors[0]: its sparse part"},
         };
         for (size_t k = 0; k < sizeof edits / sizeof edits[0]; ++k) {
             const char *at = strstr(g, edits[k].from);
