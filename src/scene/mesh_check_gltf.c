@@ -379,7 +379,7 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
     const cJSON *views = cJSON_GetObjectItemCaseSensitive(root, "bufferViews");
     int i = 0;
     for (const cJSON *v = nv ? views->child : NULL; v; v = v->next, ++i) {
-        double buffer, length, offset, stride, buffer_length;
+        double buffer = 0.0, length = 0.0, offset = 0.0, stride = 0.0, buffer_length = 0.0;
         if (whole(v, "buffer", 0, nb - 1, 0, &buffer) != 1 || whole(v, "byteLength", 1, big, 0, &length) != 1 ||
             whole(v, "byteOffset", 0, big, 0, &offset) < 0 || whole(v, "byteStride", 4, 252, 0, &stride) < 0)
             return ic_error_set(err, IC_ERR_PARSE, "%s: bufferViews[%d]: needs a buffer (0 to %d), a byteLength >= 1, "
@@ -394,7 +394,7 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
     i = 0;
     const cJSON *accessors = cJSON_GetObjectItemCaseSensitive(root, "accessors");
     for (const cJSON *a = na ? accessors->child : NULL; a; a = a->next, ++i) {
-        double count, component, view, offset;
+        double count = 0.0, component = 0.0, view = -1.0, offset = 0.0;
         const cJSON *type = cJSON_GetObjectItemCaseSensitive(a, "type");
         double elem = 0.0;
         if (whole(a, "count", 1, big, 0, &count) != 1 || whole(a, "componentType", 0, big, 0, &component) != 1 ||
@@ -408,7 +408,7 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
             /* count replaced elements: their indices (one component each) and values read within their views */
             const cJSON *ix = cJSON_GetObjectItemCaseSensitive(sparse, "indices");
             const cJSON *vals = cJSON_GetObjectItemCaseSensitive(sparse, "values");
-            double sc, iv, io, ict, vv, vo, il = 0.0, vl = 0.0;
+            double sc = 0.0, iv = 0.0, io = 0.0, ict = 0.0, vv = 0.0, vo = 0.0, il = 0.0, vl = 0.0;
             double isz = 0.0;
             int ok = whole(sparse, "count", 1, count, 0, &sc) == 1 && whole(ix, "bufferView", 0, nv - 1, 0, &iv) == 1 &&
                      whole(ix, "byteOffset", 0, big, 0, &io) >= 0 && whole(ix, "componentType", 0, big, 0, &ict) == 1 &&
@@ -427,7 +427,7 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
         if (view < 0)
             continue; /* no view: all zeros, or a sparse accessor's base */
         const cJSON *v = cJSON_GetArrayItem(views, (int)view);
-        double length, stride;
+        double length = 0.0, stride = 0.0;
         whole(v, "byteLength", 1, big, 0, &length);
         whole(v, "byteStride", 4, 252, 0, &stride);
         double end = offset + (stride > 0.0 ? stride : elem) * (count - 1.0) + elem;
