@@ -40,7 +40,7 @@ int ic_bad_color_component(float v);
 ic_result ic_glb_check(FILE *fp, const char *path, ic_error *err);
 ic_result ic_gltf_check(FILE *fp, const char *path, ic_error *err);
 /* The JSON text of a glTF file (.gltf: the file; .glb: its JSON chunk), malloc'd and NUL-terminated, at most
- * 64 MiB; NULL if there is none or it cannot be read. *len gets its length. */
+ * 1 GiB; NULL if there is none or it cannot be read. *len gets its length. */
 char *ic_gltf_json(FILE *fp, size_t *len);
 
 #endif

@@ -31,8 +31,9 @@
 
 static ic_result check_json(FILE *fp, const char *path, ic_error *err);
 
-/* Largest JSON text read for the checks (a glTF file's JSON describes; buffers hold the data). */
-#define GLTF_MAX_JSON ((size_t)64 << 20)
+/* Largest JSON text read for the checks: 1 GiB, since a .gltf may hold its buffers inline as base64 (a
+ * larger one is refused: its buffers belong in .bin files or a .glb). */
+#define GLTF_MAX_JSON ((size_t)1 << 30)
 
 static uint32_t le32(const unsigned char *p)
 {
@@ -507,8 +508,8 @@ static ic_result check_json(FILE *fp, const char *path, ic_error *err)
     size_t len;
     char *text = ic_gltf_json(fp, &len);
     if (!text)
-        return ic_error_set(err, IC_ERR_PARSE, "%s: no glTF JSON could be read (empty, or larger than %zu MiB); "
-                            "export the model again", path, GLTF_MAX_JSON >> 20);
+        return ic_error_set(err, IC_ERR_PARSE, "%s: no glTF JSON could be read (empty, or larger than %zu MiB: keep "
+                            "the buffers in .bin files, or export a .glb)", path, GLTF_MAX_JSON >> 20);
     size_t at = json_error_at(text, len);
     cJSON *root = at == len ? cJSON_ParseWithLength(text, len) : NULL;
     free(text);
