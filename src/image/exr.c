@@ -3,9 +3,10 @@
  *
  * Writing: one scanline part, channels R, G, B as 32-bit float or 16-bit half, ZIP compression
  * (lossless, so float round trips are bit-exact), written to a temporary name and renamed.
- * Reading: the first part of a scanline file; the data window becomes the image; R, G, B (missing
- * ones read as 0) or, failing those, Y (grey); half and float channels are converted to float by the
- * library's unpacker. Tiled, deep, sub-sampled and UINT images are refused with a message.
+ * Reading: the first part of a scanline or tiled file (its full-resolution level); the data window
+ * becomes the image; R, G, B (missing ones read as 0) or, failing those, Y (grey); half and float
+ * channels are converted to float by our own unpacker (unpack_to_float says why). Deep images and UINT
+ * or sub-sampled colour channels are refused with a message.
  * The library's own error printing is silenced: this module only reports through ic_error.
  */
 #include "image_internal.h"
@@ -15,6 +16,7 @@
 #include <OpenEXR/openexr.h>
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -110,6 +112,64 @@ static ic_result check_layout(const char *path, exr_const_context_t ctxt, const 
     return IC_OK;
 }
 
+/* IEEE 754 binary16 to float (exact: every half is a float). */
+static float half_to_float(uint16_t h)
+{
+    const uint32_t sign = (uint32_t)(h & 0x8000u) << 16, exponent = (h >> 10) & 0x1fu, mantissa = h & 0x3ffu;
+    uint32_t bits;
+    if (exponent == 0x1f) /* infinity or NaN */
+        bits = sign | 0x7f800000u | (mantissa << 13);
+    else if (exponent != 0) /* normal: rebias 15 -> 127 */
+        bits = sign | ((exponent + 112u) << 23) | (mantissa << 13);
+    else { /* zero or subnormal: mantissa * 2^-24 */
+        float f = ldexpf((float)mantissa, -24);
+        return sign ? -f : f;
+    }
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+/* Our own unpacker, in place of the library's: the unpacked chunk holds, line after line, each channel's
+ * samples of that line (little-endian, channels in the file's order; a y-sub-sampled channel only on its
+ * lines); the channels we want (half or float) become floats at decode_to_ptr, the others are stepped
+ * over. OpenEXR Core 3.1's own choice of fast path ignores channels left out (decode_to_ptr NULL): a half
+ * B and G beside a float channel we skip made it take a three-channel interleaved path that writes
+ * through the skipped channel's NULL pointer. */
+static exr_result_t unpack_to_float(exr_decode_pipeline_t *decode)
+{
+    const uint8_t *src = decode->unpacked_buffer;
+    const uint8_t *const end = src ? src + decode->chunk.unpacked_size : src;
+    for (int y = 0; y < decode->chunk.height; ++y) {
+        const int file_y = decode->chunk.start_y + y;
+        for (int c = 0; c < decode->channel_count; ++c) {
+            const exr_coding_channel_info_t *ch = &decode->channels[c];
+            if (ch->y_samples > 1 && file_y % ch->y_samples != 0)
+                continue; /* no samples of this channel on this line */
+            const size_t bytes = (size_t)ch->width * (size_t)ch->bytes_per_element;
+            if (ch->width < 0 || (size_t)(end - src) < bytes)
+                return EXR_ERR_CORRUPT_CHUNK;
+            if (ch->decode_to_ptr) {
+                uint8_t *out = ch->decode_to_ptr + (size_t)y * (size_t)ch->user_line_stride;
+                for (int x = 0; x < ch->width; ++x, out += ch->user_pixel_stride) {
+                    const uint8_t *s = src + (size_t)x * (size_t)ch->bytes_per_element;
+                    float v;
+                    if (ch->data_type == EXR_PIXEL_HALF)
+                        v = half_to_float((uint16_t)(s[0] | s[1] << 8));
+                    else if (ch->data_type == EXR_PIXEL_FLOAT) {
+                        uint32_t bits = (uint32_t)s[0] | (uint32_t)s[1] << 8 | (uint32_t)s[2] << 16 | (uint32_t)s[3] << 24;
+                        memcpy(&v, &bits, sizeof v);
+                    } else
+                        return EXR_ERR_INVALID_ARGUMENT; /* UINT: refused by check_layout before */
+                    memcpy(out, &v, sizeof v);
+                }
+            }
+            src += bytes;
+        }
+    }
+    return EXR_ERR_SUCCESS;
+}
+
 /* Decodes one chunk whose pixels start at (col, row) of img (relative to the data window). */
 static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_t *chunk, int col, int row,
                                  const char *layer, int grey, exr_decode_pipeline_t *decoder, int *initialized,
@@ -120,6 +180,14 @@ static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_
     if (rv != EXR_ERR_SUCCESS)
         return rv;
     *initialized = 1;
+    /* Uncompressed data is unpacked where it was read: a chunk shorter than its lines would leave the
+     * library's unpack buffer unwritten (and longer is corrupt too). */
+    exr_compression_t compression = EXR_COMPRESSION_NONE;
+    rv = exr_get_compression(ctxt, 0, &compression);
+    if (rv != EXR_ERR_SUCCESS)
+        return rv;
+    if (compression == EXR_COMPRESSION_NONE && chunk->packed_size != chunk->unpacked_size)
+        return EXR_ERR_CORRUPT_CHUNK;
     if (col < 0 || row < 0 || col + chunk->width > img->width || row + chunk->height > img->height)
         return EXR_ERR_BAD_CHUNK_LEADER;
     const size_t line_floats = (size_t)img->width * 3;
@@ -137,7 +205,11 @@ static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_
         ch->user_bytes_per_element = (int16_t)sizeof(float);
     }
     rv = exr_decoding_choose_default_routines(ctxt, 0, decoder);
-    return rv == EXR_ERR_SUCCESS ? exr_decoding_run(ctxt, 0, decoder) : rv;
+    if (rv != EXR_ERR_SUCCESS)
+        return rv;
+    if (decoder->unpack_and_convert_fn) /* NULL only when the library reads straight into our pointers */
+        decoder->unpack_and_convert_fn = unpack_to_float;
+    return exr_decoding_run(ctxt, 0, decoder);
 }
 
 /* Every chunk of part 0 into img: line groups of a scanline file, or the full-resolution level's tiles

@@ -1,6 +1,6 @@
 /*
  * test_exr_write.h — writing a tiled OpenEXR with OpenEXR's own API (as renderers and texture tools make
- * them), for the tests that read such files: test_image (the reader) and test_env_tiled (an environment
+ * them) and a scanline one with extra channels, for the tests that read such files: test_image (the reader) and test_env_tiled (an environment
  * map). The test links OpenEXR::OpenEXRCore.
  */
 #ifndef IC_TEST_EXR_WRITE_H
@@ -9,6 +9,25 @@
 #include "irrcache/image.h"
 
 #include <OpenEXR/openexr.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+/* The end of a chunk's encoding, once its channels' pointers are set: the library's routines, then run. */
+static inline exr_result_t test_exr_encode(exr_context_t ctxt, int part, exr_encode_pipeline_t *enc)
+{
+    exr_result_t rv = exr_encoding_choose_default_routines(ctxt, part, enc);
+    return rv == EXR_ERR_SUCCESS ? exr_encoding_run(ctxt, part, enc) : rv;
+}
+
+/* Closes the file; whether everything (rv, the last step before) succeeded. */
+static inline int test_exr_finish(exr_context_t *ctxt, exr_encode_pipeline_t *enc, int initialized, exr_result_t rv)
+{
+    if (initialized)
+        exr_encoding_destroy(*ctxt, enc);
+    exr_result_t fin = exr_finish(ctxt);
+    return rv == EXR_ERR_SUCCESS && fin == EXR_ERR_SUCCESS;
+}
 
 /* Writes img as a tiled OpenEXR (one level, tw × th tiles, the last row and column partial) with
  * OpenEXR's own API, in float or half: what renderers and texture tools produce. */
@@ -52,14 +71,85 @@ static inline int write_tiled_exr(const char *path, const ic_image *img, int tw,
                 ch->user_data_type = EXR_PIXEL_FLOAT;
                 ch->user_bytes_per_element = (int16_t)sizeof(float);
             }
-            rv = exr_encoding_choose_default_routines(ctxt, part, &enc);
-            if (rv == EXR_ERR_SUCCESS)
-                rv = exr_encoding_run(ctxt, part, &enc);
+            rv = test_exr_encode(ctxt, part, &enc);
         }
-    if (initialized)
-        exr_encoding_destroy(ctxt, &enc);
-    exr_result_t fin = exr_finish(&ctxt);
-    return rv == EXR_ERR_SUCCESS && fin == EXR_ERR_SUCCESS;
+    return test_exr_finish(&ctxt, &enc, initialized, rv);
+}
+
+/* One channel of write_scanline_exr's file: its name, its type and its vertical sub-sampling; its value
+ * at pixel (x, y) is img's R, G or B for those names (the first letter after an optional "layer."),
+ * img's R for "Y", and extra(x, y) = 0.25 (x + 2y) + 1 for any other. */
+typedef struct {
+    const char *name;
+    exr_pixel_type_t type;
+    int y_sampling;
+} test_exr_channel;
+
+static inline float test_exr_extra(int x, int y)
+{
+    return 0.25f * (float)(x + 2 * y) + 1.0f;
+}
+
+/* Writes img as a scanline OpenEXR with the given channels (in any order: the library sorts them), with
+ * OpenEXR's own API, as other tools write extra channels (alpha, depth, ids) beside the colour. */
+static inline int write_scanline_exr(const char *path, const ic_image *img, const test_exr_channel *channels,
+                                     int channel_count, exr_compression_t compression)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    exr_context_t ctxt = NULL;
+    exr_result_t rv = exr_start_write(&ctxt, path, EXR_WRITE_FILE_DIRECTLY, &init);
+    int part = 0;
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_add_part(ctxt, NULL, EXR_STORAGE_SCANLINE, &part);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_initialize_required_attr_simple(ctxt, part, img->width, img->height, compression);
+    for (int c = 0; c < channel_count && rv == EXR_ERR_SUCCESS; ++c)
+        rv = exr_add_channel(ctxt, part, channels[c].name, channels[c].type, EXR_PERCEPTUALLY_LOGARITHMIC, 1,
+                             channels[c].y_sampling);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_write_header(ctxt);
+    int32_t lines = 1;
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_get_scanlines_per_chunk(ctxt, part, &lines);
+    /* The extra channels' values, whole image, as floats (the library converts to half). */
+    float *extra = (float *)malloc(sizeof(float) * (size_t)img->width * (size_t)img->height);
+    if (!extra)
+        rv = EXR_ERR_OUT_OF_MEMORY;
+    for (int y = 0; extra && y < img->height; ++y)
+        for (int x = 0; x < img->width; ++x)
+            extra[(size_t)y * img->width + x] = test_exr_extra(x, y);
+    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    int initialized = 0;
+    for (int y = 0; y < img->height && rv == EXR_ERR_SUCCESS; y += lines) {
+        exr_chunk_info_t chunk;
+        rv = exr_write_scanline_chunk_info(ctxt, part, y, &chunk);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = initialized ? exr_encoding_update(ctxt, part, &chunk, &enc)
+                             : exr_encoding_initialize(ctxt, part, &chunk, &enc);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        initialized = 1;
+        for (int c = 0; c < enc.channel_count; ++c) {
+            exr_coding_channel_info_t *ch = &enc.channels[c];
+            const char *n = strchr(ch->channel_name, '.') ? strchr(ch->channel_name, '.') + 1 : ch->channel_name;
+            int slot = !strcmp(n, "R") || !strcmp(n, "Y") ? 0 : !strcmp(n, "G") ? 1 : !strcmp(n, "B") ? 2 : -1;
+            if (slot >= 0) {
+                ch->encode_from_ptr = (const uint8_t *)(img->rgb + 3 * (size_t)y * img->width + slot);
+                ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
+                ch->user_line_stride = 3 * img->width * (int32_t)sizeof(float);
+            } else {
+                ch->encode_from_ptr = (const uint8_t *)(extra + (size_t)y * img->width);
+                ch->user_pixel_stride = (int32_t)sizeof(float);
+                /* a sub-sampled channel's lines are every y_sampling-th line of the image */
+                ch->user_line_stride = ch->y_samples * img->width * (int32_t)sizeof(float);
+            }
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+            ch->user_bytes_per_element = (int16_t)sizeof(float);
+        }
+        rv = test_exr_encode(ctxt, part, &enc);
+    }
+    free(extra);
+    return test_exr_finish(&ctxt, &enc, initialized, rv);
 }
 
 #endif

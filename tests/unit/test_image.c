@@ -819,6 +819,79 @@ static void test_tiled_exr(void)
     ic_image_free(&img);
 }
 
+/* A scanline OpenEXR whose colour channels sit beside channels we do not read (alpha, depth, sub-sampled
+ * ones), in half and float mixed, reads as its colour, exactly (every value is exact in half). The first
+ * case made OpenEXR Core 3.1's own unpacker write through a NULL pointer (its three-channel fast path
+ * counted the skipped float channel); a fuzzer found it. */
+static void test_exr_extra_channels(void)
+{
+    const exr_pixel_type_t H = EXR_PIXEL_HALF, F = EXR_PIXEL_FLOAT;
+    const struct {
+        test_exr_channel ch[4];
+        int count, grey;
+        exr_compression_t compression;
+    } cases[] = {
+        {{{"B", H, 1}, {"G", H, 1}, {"X", F, 1}}, 3, 0, EXR_COMPRESSION_NONE},
+        {{{"B", H, 1}, {"G", H, 1}, {"X", F, 1}}, 3, 0, EXR_COMPRESSION_ZIP},
+        {{{"A", F, 1}, {"B", H, 1}, {"G", H, 1}, {"R", H, 1}}, 4, 0, EXR_COMPRESSION_ZIPS},
+        {{{"B", F, 1}, {"G", H, 1}, {"R", F, 1}, {"Z", H, 1}}, 4, 0, EXR_COMPRESSION_NONE},
+        {{{"R", H, 1}, {"G", H, 1}, {"B", H, 1}, {"s", H, 2}}, 4, 0, EXR_COMPRESSION_NONE},
+        {{{"Y", H, 1}, {"Z", F, 1}}, 2, 1, EXR_COMPRESSION_RLE},
+    };
+    ic_image img;
+    CHECK(ic_image_create(&img, 29, 6) == IC_OK, "create");
+    for (int i = 0; i < 29 * 6 * 3; ++i)
+        img.rgb[i] = 0.125f * (float)(i % 89) + 0.5f * (float)(i % 3) + 0.25f; /* exact in half */
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        CHECK(write_scanline_exr(SCRATCH "/extra.exr", &img, cases[k].ch, cases[k].count, cases[k].compression),
+              "EXR with extra channels written (case %zu)", k);
+        ic_image back;
+        ic_error err;
+        CHECK(ic_image_read(SCRATCH "/extra.exr", &back, &err) == IC_OK, "case %zu reads: %s", k, err.message);
+        int has[3] = {0, 0, 0};
+        for (int c = 0; c < cases[k].count; ++c)
+            for (int s = 0; s < 3; ++s)
+                has[s] |= !strcmp(cases[k].ch[c].name, (const char *[]){"R", "G", "B"}[s]);
+        int diff = back.width != img.width || back.height != img.height;
+        for (int i = 0; !diff && i < 29 * 6 * 3; ++i) {
+            float want = cases[k].grey ? img.rgb[i - i % 3] : has[i % 3] ? img.rgb[i] : 0.0f;
+            diff = back.rgb[i] != want;
+        }
+        CHECK(!diff, "case %zu: the colour read back is what was written (missing channels 0)", k);
+        ic_image_free(&back);
+    }
+
+    /* An uncompressed chunk whose size field is 4 bytes short of its lines: refused (the library would
+     * leave the rest of its buffer unwritten and we would read it). The first offset-table entry is the
+     * one 64-bit value equal to its own position plus the table's length (one chunk per line). */
+    CHECK(write_scanline_exr(SCRATCH "/short.exr", &img, cases[0].ch, cases[0].count, EXR_COMPRESSION_NONE),
+          "uncompressed EXR written");
+    unsigned char bytes[8192];
+    FILE *fp = fopen(SCRATCH "/short.exr", "rb");
+    size_t n = fp ? fread(bytes, 1, sizeof bytes, fp) : 0;
+    if (fp)
+        fclose(fp);
+    size_t chunk = 0;
+    for (size_t p = 0; !chunk && p + 8 <= n; ++p) {
+        uint64_t v = 0;
+        for (int b = 7; b >= 0; --b)
+            v = v << 8 | bytes[p + (size_t)b];
+        if (v == p + 8 * 6 && v + 8 <= n)
+            chunk = (size_t)v;
+    }
+    CHECK(chunk > 0 && n < sizeof bytes, "the first chunk of the uncompressed EXR found");
+    if (chunk > 0) {
+        bytes[chunk + 4] -= 4; /* its size: 29 × (2 + 2 + 4) = 232 bytes, so no borrow */
+        write_bytes(SCRATCH "/short.exr", bytes, n);
+        ic_image back;
+        ic_error err;
+        ic_result r = ic_image_read(SCRATCH "/short.exr", &back, &err);
+        CHECK(r == IC_ERR_CORRUPT && strstr(err.message, "short.exr") && back.rgb == NULL,
+              "an uncompressed chunk shorter than its lines: %s (%s)", ic_result_name(r), err.message);
+    }
+    ic_image_free(&img);
+}
+
 int main(void)
 {
     if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
@@ -837,6 +910,7 @@ int main(void)
     test_bad_input();
     test_exr_metadata();
     test_tiled_exr();
+    test_exr_extra_channels();
     test_png_empty_idat();
     test_png_chunk_overrun();
     TEST_MAIN_END();
