@@ -157,7 +157,8 @@ static exr_result_t unpack_to_float(exr_decode_pipeline_t *decode)
                     if (ch->data_type == EXR_PIXEL_HALF)
                         v = half_to_float((uint16_t)(s[0] | s[1] << 8));
                     else if (ch->data_type == EXR_PIXEL_FLOAT) {
-                        uint32_t bits = (uint32_t)s[0] | (uint32_t)s[1] << 8 | (uint32_t)s[2] << 16 | (uint32_t)s[3] << 24;
+                        uint32_t bits = (uint32_t)s[0] | (uint32_t)s[1] << 8 | (uint32_t)s[2] << 16 |
+                                        (uint32_t)s[3] << 24;
                         memcpy(&v, &bits, sizeof v);
                     } else
                         return EXR_ERR_INVALID_ARGUMENT; /* UINT: refused by check_layout before */

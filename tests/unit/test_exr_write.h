@@ -1,7 +1,8 @@
 /*
- * test_exr_write.h — writing a tiled OpenEXR with OpenEXR's own API (as renderers and texture tools make
- * them) and a scanline one with extra channels, for the tests that read such files: test_image (the reader) and test_env_tiled (an environment
- * map). The test links OpenEXR::OpenEXRCore.
+ * test_exr_write.h — OpenEXR files written with OpenEXR's own API, as renderers and texture tools make
+ * them: a tiled one, and a scanline one with extra channels beside the colour. For the tests that read
+ * such files: test_image (the reader) and test_env_tiled (an environment map). The test links
+ * OpenEXR::OpenEXRCore.
  */
 #ifndef IC_TEST_EXR_WRITE_H
 #define IC_TEST_EXR_WRITE_H
