@@ -877,8 +877,10 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
         uint32_t mat = material_base + mesh->mMaterialIndex;
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const struct aiFace *face = &mesh->mFaces[f];
-            if (face->mNumIndices != 3)
-                continue; /* points and lines have no surface */
+            if (face->mNumIndices != 3) { /* points and lines have no surface */
+                ++b->material_dropped[mat];
+                continue;
+            }
             uint32_t i0 = base + face->mIndices[0], i1 = base + face->mIndices[flip ? 2 : 1],
                      i2 = base + face->mIndices[flip ? 1 : 2];
             ic_vec3 p0 = s->positions[i0];

@@ -427,14 +427,15 @@ void ic_scene_fit_camera(ic_scene *scene, int width, int height)
 ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
 {
     ic_scene *s = b->scene;
-    /* an emitter all of whose triangles were degenerate cannot emit: almost surely an export bug */
+    /* an emitter all of whose faces were degenerate triangles, lines or points cannot emit: almost surely an
+     * export bug (and silent otherwise, whatever other lights the scene has) */
     for (uint32_t m = 0; m < s->material_count; ++m) {
         if (v3_is_black(s->materials[m].emission))
             continue;
         if (b->material_tris[m] == 0 && b->material_dropped[m] > 0)
             return ic_error_set(err, IC_ERR_PARSE,
-                                "%s: emissive material '%s' has zero total area (all %u of its triangles are "
-                                "degenerate); fix the light's geometry or remove its emission",
+                                "%s: emissive material '%s' has zero total area (all %u of its faces are degenerate "
+                                "triangles, lines or points); fix the light's geometry or remove its emission",
                                 b->mesh_paths[b->material_mesh[m]], s->materials[m].name, b->material_dropped[m]);
     }
     for (uint32_t m = 0; m < s->material_count; ++m)

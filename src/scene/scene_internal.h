@@ -22,7 +22,7 @@
 /* State kept while a scene is being assembled. */
 typedef struct ic_scene_builder {
     ic_scene *scene;
-    uint32_t *material_dropped; /* per material: degenerate triangles dropped (material_count) */
+    uint32_t *material_dropped; /* per material: degenerate triangles, lines and points dropped (material_count) */
     uint32_t *material_tris;    /* per material: triangles kept (material_count) */
     uint32_t *material_mesh;    /* per material: index into mesh_paths of the file that defined it */
     char **mesh_paths;          /* every imported mesh file, for messages (mesh_count) */

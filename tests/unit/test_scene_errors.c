@@ -499,6 +499,9 @@ int main(void)
     /* an emitter whose only triangle is degenerate */
     expect_error(SCENES "zero_area_light.json", NULL, IC_ERR_PARSE, "zero_area_light.obj", "'lamp'",
                  "zero total area");
+    /* an emitter with only a line and a point (no surface), beside a point light that would light the scene */
+    expect_error(SCENES "line_light.json", NULL, IC_ERR_PARSE, "line_light.obj", "'lamp'",
+                 "all 2 of its faces are degenerate triangles, lines or points");
     /* overrides: unknown material name, unknown type */
     expect_error(SCENES "unknown_material.json", NULL, IC_ERR_INVALID_ARG, "unknown_material.json:5:", "'marble'",
                  "'grey'");
