@@ -34,15 +34,23 @@ void ic_image_free(ic_image *img)
     memset(img, 0, sizeof *img);
 }
 
-ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, const ic_image_limit *lim,
-                                   ic_error *err)
+ic_result ic_image_check_size(const char *path, int width, int height, const ic_image_limit *lim, ic_error *err)
 {
     if (lim && lim->max_pixels > 0 && width > 0 && height > 0 &&
         (size_t)width * (size_t)height > lim->max_pixels)
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: %dx%d is %zu pixels, more than the limit of %zu; %s", path,
                             width, height, (size_t)width * (size_t)height, lim->max_pixels,
                             lim->raise ? lim->raise : "use a smaller image");
-    ic_result r = ic_image_create(img, width, height);
+    return IC_OK;
+}
+
+ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, const ic_image_limit *lim,
+                                   ic_error *err)
+{
+    ic_result r = ic_image_check_size(path, width, height, lim, err);
+    if (r != IC_OK)
+        return r;
+    r = ic_image_create(img, width, height);
     if (r == IC_ERR_INVALID_ARG)
         return ic_error_set(err, IC_ERR_PARSE, "%s: image size %dx%d is invalid or larger than %dx%d or %zu pixels; "
                             "check the file", path, width, height, IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_SIDE,

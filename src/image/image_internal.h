@@ -21,6 +21,8 @@ typedef struct ic_image_limit {
     const char *raise;     /* what to do when it is exceeded, or NULL */
 } ic_image_limit;
 
+/* IC_OK if width x height is within lim (may be NULL); else reports it against path, naming the limit. */
+ic_result ic_image_check_size(const char *path, int width, int height, const ic_image_limit *lim, ic_error *err);
 /* ic_image_create for a reader: reports a bad size, one over lim (may be NULL) or a failed allocation
  * against path. */
 ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, const ic_image_limit *lim,

@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.h"
 
+#include <inttypes.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -91,33 +92,109 @@ static size_t png_chunk_overrun(const unsigned char *b, size_t n)
     return 0;
 }
 
-/* Reads a file whole; NULL if it cannot be read or does not fit stb_image's int length. */
-static unsigned char *read_whole(const char *path, size_t *n)
+/* Bytes a PNG or JPEG may have beyond its pixels' need: 16 per declared pixel (far above either format's
+ * worst case) plus room for metadata. A larger file is damaged or hostile, and is refused before it is
+ * read into memory. */
+#define LDR_BYTES_PER_PIXEL 16u
+#define LDR_METADATA_BYTES ((size_t)16 << 20)
+
+/* The size a PNG (its IHDR, the first chunk: ISO/IEC 15948 §11.2.2) or a JPEG (its first frame header,
+ * SOF0..SOF15 but DHT, JPG and DAC: T.81 §B.2.2) declares, read through the stream's marker segments
+ * without reading their contents: 1 and *w, *h if found, 0 if not. */
+static int ldr_declared_size(FILE *f, uint32_t *w, uint32_t *h)
 {
+    unsigned char b[24];
+    if (fread(b, 1, 2, f) != 2)
+        return 0;
+    if (b[0] == 0x89) { /* PNG: signature (8), IHDR's length (4) and type (4), width, height */
+        if (fread(b + 2, 1, 22, f) != 22 || memcmp(b + 12, "IHDR", 4) != 0)
+            return 0;
+        *w = be32(b + 16);
+        *h = be32(b + 20);
+        return 1;
+    }
+    for (;;) { /* JPEG, after SOI: markers, each 0xFF (fill bytes allowed) and a code */
+        int c = fgetc(f);
+        if (c != 0xFF)
+            return 0;
+        while ((c = fgetc(f)) == 0xFF)
+            ;
+        if (c == EOF || c == 0xD9 || c == 0xDA) /* end of file, EOI or SOS before any frame header */
+            return 0;
+        if (c == 0x01 || (c >= 0xD0 && c <= 0xD7)) /* TEM, RSTn: no length */
+            continue;
+        if (fread(b, 1, 2, f) != 2)
+            return 0;
+        const long length = (long)b[0] << 8 | b[1]; /* includes its own two bytes */
+        if (c >= 0xC0 && c <= 0xCF && c != 0xC4 && c != 0xC8 && c != 0xCC) {
+            if (length < 8 || fread(b, 1, 5, f) != 5) /* precision, height, width */
+                return 0;
+            *h = (uint32_t)b[1] << 8 | b[2];
+            *w = (uint32_t)b[3] << 8 | b[4];
+            return 1;
+        }
+        if (length < 2 || fseek(f, length - 2, SEEK_CUR) != 0)
+            return 0;
+    }
+}
+
+/* Reads a PNG or JPEG file whole, once its header says it is worth reading: its declared size within the
+ * limit and the file no longer than that size can need. */
+static ic_result read_ldr_file(const char *path, const ic_image_limit *lim, unsigned char **out, size_t *n,
+                               ic_error *err)
+{
+    *out = NULL;
     *n = 0;
     FILE *f;
-    if (ic_open_regular_file(path, "PNG, JPEG, EXR, HDR or PFM file", &f, NULL) != IC_OK)
-        return NULL;
-    unsigned char *buf = NULL;
+    ic_result r = ic_open_regular_file(path, "PNG, JPEG, EXR, HDR or PFM file", &f, err);
+    if (r != IC_OK)
+        return r;
+    uint32_t w = 0, h = 0;
+    const int declared = ldr_declared_size(f, &w, &h);
     long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
-    if (size >= 0 && size < INT_MAX && fseek(f, 0, SEEK_SET) == 0 && (buf = malloc((size_t)size + 1)) != NULL &&
-        fread(buf, 1, (size_t)size, f) != (size_t)size) {
-        free(buf);
-        buf = NULL;
+    size_t allowed = LDR_METADATA_BYTES;
+    if (declared && w > 0 && h > 0 && w <= IC_IMAGE_MAX_SIDE && h <= IC_IMAGE_MAX_SIDE) {
+        r = ic_image_check_size(path, (int)w, (int)h, lim, err);
+        allowed += (size_t)w * h * LDR_BYTES_PER_PIXEL;
+    } else if (declared)
+        allowed = SIZE_MAX; /* an impossible size: the decoder reports it */
+    if (r == IC_OK && (size < 0 || (unsigned long)size >= (unsigned long)INT_MAX || fseek(f, 0, SEEK_SET) != 0))
+        r = ic_error_set(err, IC_ERR_IO, "%s: cannot read the image (or it is 2 GiB or larger); check the file", path);
+    if (r == IC_OK && (size_t)size > allowed) {
+        if (declared)
+            r = ic_error_set(err, IC_ERR_PARSE,
+                             "%s: %ld bytes, far more than its %" PRIu32 "x%" PRIu32 " pixels can need; the file is "
+                             "damaged or carries very large metadata, re-save it",
+                             path, size, w, h);
+        else
+            r = ic_error_set(err, IC_ERR_PARSE,
+                             "%s: %ld bytes and no image size in its header; the file is damaged, re-save it", path,
+                             size);
     }
+    unsigned char *buf = r == IC_OK ? malloc((size_t)size + 1) : NULL;
+    if (r == IC_OK && !buf)
+        r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory reading %ld bytes", path, size);
+    if (r == IC_OK && fread(buf, 1, (size_t)size, f) != (size_t)size)
+        r = ic_error_set(err, IC_ERR_IO, "%s: cannot read the image; check the file and its permissions", path);
     fclose(f);
-    *n = buf ? (size_t)size : 0;
-    return buf;
+    if (r != IC_OK) {
+        free(buf);
+        return r;
+    }
+    *out = buf;
+    *n = (size_t)size;
+    return IC_OK;
 }
 
 ic_result ic_image_read_ldr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
     memset(out, 0, sizeof *out);
     size_t n = 0;
-    unsigned char *bytes = read_whole(path, &n);
-    if (!bytes)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot read the image; check the file and its permissions", path);
-    ic_result r = ic_image_decode_ldr(bytes, n, path, lim, out, err);
+    unsigned char *bytes = NULL;
+    ic_result r = read_ldr_file(path, lim, &bytes, &n, err);
+    if (r != IC_OK)
+        return r;
+    r = ic_image_decode_ldr(bytes, n, path, lim, out, err);
     free(bytes);
     return r;
 }

@@ -892,6 +892,80 @@ static void test_exr_extra_channels(void)
     ic_image_free(&img);
 }
 
+/* Writes head (hn bytes), then fill zero bytes, then tail (tn bytes). */
+static void write_padded(const char *path, const void *head, size_t hn, size_t fill, const void *tail, size_t tn)
+{
+    FILE *fp = fopen(path, "wb");
+    CHECK(fp != NULL, "cannot create %s", path);
+    if (!fp)
+        return;
+    static const unsigned char zeros[65536];
+    fwrite(head, 1, hn, fp);
+    for (size_t left = fill; left > 0;) {
+        size_t k = left < sizeof zeros ? left : sizeof zeros;
+        fwrite(zeros, 1, k, fp);
+        left -= k;
+    }
+    fwrite(tail, 1, tn, fp);
+    fclose(fp);
+}
+
+/* A PNG or JPEG is judged by its header before it is read into memory: a file far larger than its declared
+ * pixels can need (or with no size in its header) is refused, a size beyond the caller's limit too, while a
+ * megabyte of metadata beside one pixel still reads. */
+static void test_ldr_header_first(void)
+{
+    ic_image img, back;
+    ic_error err;
+    CHECK(ic_image_create(&img, 1, 1) == IC_OK, "create");
+    img.rgb[0] = img.rgb[1] = img.rgb[2] = 0.5f;
+    CHECK(ic_image_write(scratch("one.png"), &img, NULL, &err) == IC_OK, "write: %s", err.message);
+    ic_image_free(&img);
+    unsigned char png[512];
+    FILE *fp = fopen(scratch("one.png"), "rb");
+    size_t n = fp ? fread(png, 1, sizeof png, fp) : 0;
+    if (fp)
+        fclose(fp);
+    CHECK(n > 33 && n < sizeof png && !memcmp(png + 12, "IHDR", 4), "a 1x1 PNG of %zu bytes", n);
+    /* after the signature and IHDR (33 bytes), a private ancillary chunk "prVt" of L zero bytes (and CRC) */
+    for (int big = 0; big <= 1; ++big) {
+        const size_t len = big ? (size_t)17 << 20 : (size_t)1 << 20;
+        unsigned char head[33 + 8];
+        memcpy(head, png, 33);
+        const unsigned char chunk[8] = {(unsigned char)(len >> 24), (unsigned char)(len >> 16),
+                                        (unsigned char)(len >> 8), (unsigned char)len, 'p', 'r', 'V', 't'};
+        memcpy(head + 33, chunk, 8);
+        write_padded(scratch("padded.png"), head, sizeof head, len + 4, png + 33, n - 33);
+        ic_result r = ic_image_read(scratch("padded.png"), &back, &err);
+        if (big)
+            CHECK(r == IC_ERR_PARSE && strstr(err.message, "padded.png") && strstr(err.message, "1x1 pixels") &&
+                      back.rgb == NULL,
+                  "a 1x1 PNG with 17 MiB of metadata: %s (%s)", ic_result_name(r), err.message);
+        else
+            CHECK(r == IC_OK && back.width == 1 && back.height == 1, "a 1x1 PNG with 1 MiB of metadata: %s",
+                  err.message);
+        ic_image_free(&back);
+    }
+    remove(scratch("padded.png"));
+
+    /* a JPEG with no frame header before its scan, 17 MiB long */
+    const unsigned char nosof[] = {0xFF, 0xD8, 0xFF, 0xFE, 0x00, 0x04, 'h', 'i', 0xFF, 0xDA, 0x00, 0x08};
+    write_padded(scratch("nosof.jpg"), nosof, sizeof nosof, (size_t)17 << 20, "\xFF\xD9", 2);
+    ic_result r = ic_image_read(scratch("nosof.jpg"), &back, &err);
+    CHECK(r == IC_ERR_PARSE && strstr(err.message, "nosof.jpg") && strstr(err.message, "no image size"),
+          "a 17 MiB JPEG without a frame header: %s (%s)", ic_result_name(r), err.message);
+    remove(scratch("nosof.jpg"));
+
+    /* a frame header of 3000 x 2000 behind 60 kB of APP1 (Exif) and a fill byte: over a limit of 10^6 pixels */
+    unsigned char app[] = {0xFF, 0xD8, 0xFF, 0xE1, 0xEA, 0x62}; /* 60,002 bytes: its length and 60,000 more */
+    const unsigned char sof[] = {0xFF, 0xFF, 0xC2, 0x00, 0x11, 0x08, 0x07, 0xD0, 0x0B, 0xB8, 0x03, 0x01, 0x22,
+                                 0x00, 0x02, 0x11, 0x01, 0x03, 0x11, 0x01, 0xFF, 0xD9};
+    write_padded(scratch("big.jpg"), app, sizeof app, 60000, sof, sizeof sof);
+    r = ic_image_read_max(scratch("big.jpg"), 1000000, "raise the limit", &back, &err);
+    CHECK(r == IC_ERR_UNSUPPORTED && strstr(err.message, "3000x2000") && strstr(err.message, "raise the limit"),
+          "a 3000x2000 JPEG over a 10^6-pixel limit: %s (%s)", ic_result_name(r), err.message);
+}
+
 int main(void)
 {
     if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
@@ -911,6 +985,7 @@ int main(void)
     test_exr_metadata();
     test_tiled_exr();
     test_exr_extra_channels();
+    test_ldr_header_first();
     test_png_empty_idat();
     test_png_chunk_overrun();
     TEST_MAIN_END();
