@@ -88,7 +88,6 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
     case IC_OPT_INT:
     case IC_OPT_SEED:
     case IC_OPT_RAYS: {
-        long long v = strtoll(val, &end, 10);
         if (o->kind == IC_OPT_SEED) {
             unsigned long long u = strtoull(val, &end, 10);
             if (errno || !*val || *end || val[0] == '-')
@@ -97,6 +96,7 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
             a->render.has_seed = 1;
             return 0;
         }
+        long long v = strtoll(val, &end, 10);
         if (errno || !*val || *end || v < (long long)o->min_value || v > (long long)o->max_value)
             return ERR("%s %s: expected an integer from %.0f to %.0f", o->name, val, o->min_value, o->max_value);
         if (o->kind == IC_OPT_INT) {
@@ -198,6 +198,25 @@ static int takes_value(ic_opt_kind k)
     return k != IC_OPT_FLAG && k != IC_OPT_FLAG_OFF && k != IC_OPT_FLAG_ON && k != IC_OPT_HELP;
 }
 
+/* The value of option o, written as argv[*i] (its '=' at eq, or NULL): after the '=', else the next
+ * argument (*i moves past it), "" for an option that takes none. NULL after a one-line usage error. */
+static const char *take_value(int argc, char **argv, int *i, const opt_def *o, const char *eq)
+{
+    if (takes_value(o->kind)) {
+        if (eq)
+            return eq + 1;
+        if (*i + 1 < argc)
+            return argv[++*i];
+        (void)ERR("%s needs a value (%s)", o->name, o->value_name);
+        return NULL;
+    }
+    if (eq) {
+        (void)ERR("%s takes no value; drop '=%s'", o->name, eq + 1);
+        return NULL;
+    }
+    return "";
+}
+
 static int find_option(const char *arg, size_t len)
 {
     for (int i = 0; i < IC_ARG_COUNT; ++i) {
@@ -263,17 +282,9 @@ int ic_cli_parse(int argc, char **argv, ic_cli_args *a)
         if (id < 0)
             return ERR("unknown option '%.*s'; see irrcache render --help", (int)len, arg);
         const opt_def *o = &options[id];
-        const char *val = "";
-        if (takes_value(o->kind)) {
-            if (eq)
-                val = eq + 1;
-            else if (i + 1 < argc)
-                val = argv[++i];
-            else
-                return ERR("%s needs a value (%s)", o->name, o->value_name);
-        } else if (eq) {
-            return ERR("%s takes no value; drop '=%s'", o->name, eq + 1);
-        }
+        const char *val = take_value(argc, argv, &i, o, eq);
+        if (!val)
+            return 2;
         if (o->kind == IC_OPT_HELP)
             return -1 - id;
         int rc = store(a, o, val);
@@ -284,34 +295,21 @@ int ic_cli_parse(int argc, char **argv, ic_cli_args *a)
     return check(a);
 }
 
-int ic_cli_parse_load_option(int argc, char **argv, int *i, ic_cli_args *a, const char *command)
+int ic_cli_parse_shared_option(int argc, char **argv, int *i, ic_cli_args *a, const char *command,
+                               const ic_arg_id *ids, size_t count)
 {
-    static const ic_arg_id load_ids[] = {IC_ARG_MAX_TEXTURE_PIXELS, IC_ARG_MAX_MESH_ELEMENTS, IC_ARG_MAX_SCENE_BYTES,
-                                         IC_ARG_ALLOW_OUTSIDE_PATHS};
     const char *arg = argv[*i];
-    const char *eq = strchr(arg, '=');
+    const char *eq = arg[0] == '-' && arg[1] == '-' ? strchr(arg, '=') : NULL;
     size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
-    int id = find_option(arg, len), is_load = 0;
-    for (size_t k = 0; k < sizeof load_ids / sizeof load_ids[0]; ++k)
-        is_load |= id == (int)load_ids[k];
-    if (!is_load)
+    int id = find_option(arg, len), shared = 0;
+    for (size_t k = 0; k < count; ++k)
+        shared |= id == (int)ids[k];
+    if (!shared)
         return 0;
     err_command = command;
     const opt_def *o = &options[id];
-    const char *val = "";
-    int rc = 0;
-    if (takes_value(o->kind)) {
-        if (eq)
-            val = eq + 1;
-        else if (*i + 1 < argc)
-            val = argv[++*i];
-        else
-            rc = ERR("%s needs a value (%s)", o->name, o->value_name);
-    } else if (eq) {
-        rc = ERR("%s takes no value; drop '=%s'", o->name, eq + 1);
-    }
-    if (!rc)
-        rc = store(a, o, val);
+    const char *val = take_value(argc, argv, i, o, eq);
+    int rc = val ? store(a, o, val) : 2;
     err_command = "render";
     if (rc)
         return -1;
@@ -347,6 +345,23 @@ static void option_left(const opt_def *o, char *buf, size_t size, const char *qu
              takes_value(o->kind) ? " " : "", takes_value(o->kind) ? o->value_name : "", quote, "");
 }
 
+void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width)
+{
+    const opt_def *o = &options[id];
+    char left[96], text[1024], def[96];
+    option_left(o, left, sizeof left, "");
+    default_string(o, def, sizeof def);
+    snprintf(text, sizeof text, "%s%s%s%s%s", scope_prefix(o->scope), o->help, def[0] ? " [default: " : "", def,
+             def[0] ? "]" : "");
+    int at = fprintf(f, "  %-*s", left_width - 2, left);
+    if (2 + (int)strlen(left) >= left_width) { /* no room for a space before the help: it starts below */
+        fputc('\n', f);
+        fprintf(f, "%*s", left_width, "");
+        at = left_width;
+    }
+    wrap(f, text, left_width, at);
+}
+
 void ic_cli_print_help(FILE *f)
 {
     fprintf(f, "usage: irrcache render SCENE -o OUT [options]\n\n"
@@ -354,22 +369,8 @@ void ic_cli_print_help(FILE *f)
                "each also gzip-compressed: .obj.gz).\n"
                "Options take their value as --name VALUE or --name=VALUE; -- ends the options.\n\n"
                "options:\n");
-    enum { LEFT = 30 };
-    for (int i = 0; i < IC_ARG_COUNT; ++i) {
-        const opt_def *o = &options[i];
-        char left[96], text[1024], def[96];
-        option_left(o, left, sizeof left, "");
-        default_string(o, def, sizeof def);
-        snprintf(text, sizeof text, "%s%s%s%s%s", scope_prefix(o->scope), o->help, def[0] ? " [default: " : "",
-                 def, def[0] ? "]" : "");
-        int at = fprintf(f, "  %-*s", LEFT - 2, left);
-        if (at > LEFT) {
-            fputc('\n', f);
-            fprintf(f, "%*s", LEFT, "");
-            at = LEFT;
-        }
-        wrap(f, text, LEFT, at);
-    }
+    for (int i = 0; i < IC_ARG_COUNT; ++i)
+        ic_cli_print_option(f, (ic_arg_id)i, 30);
     fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error, 3 the render\n"
                "finished but an output could not be written (each such output named; the others written), 130 or 143\n"
                "interrupted by SIGINT or SIGTERM: the render stops at its next tile and every output holds the\n"

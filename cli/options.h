@@ -258,11 +258,16 @@ typedef struct ic_cli_args {
 /* Parses argv (argv[0] is the command's name) into a. Returns 0, 2 on a usage error (one line on
  * stderr), or −1 − ID of a help option that was given (the caller prints it and exits 0). */
 int ic_cli_parse(int argc, char **argv, ic_cli_args *a);
-/* Parses argv[*i] into a->load if it is one of the options that limit or confine what a scene reads
- * (--max-texture-pixels, --max-mesh-elements, --max-scene-bytes, --allow-outside-paths: the rows above,
- * which other commands that load a scene take too); *i moves past its value. Returns 1 if it was one, 0
- * if not, -1 after a one-line message "irrcache COMMAND: ...". */
-int ic_cli_parse_load_option(int argc, char **argv, int *i, ic_cli_args *a, const char *command);
+/* For other commands that take some of render's options (the same names, values and meaning): parses
+ * argv[*i] into a if it is one of ids; *i moves past its value. Returns 1 if it was one, 0 if not, -1
+ * after a one-line message "irrcache COMMAND: ...". */
+int ic_cli_parse_shared_option(int argc, char **argv, int *i, ic_cli_args *a, const char *command,
+                               const ic_arg_id *ids, size_t count);
+/* The options that limit or confine what a scene reads, which every command that loads a scene takes. */
+#define IC_CLI_LOAD_OPTION_IDS                                                                                      \
+    IC_ARG_MAX_TEXTURE_PIXELS, IC_ARG_MAX_MESH_ELEMENTS, IC_ARG_MAX_SCENE_BYTES, IC_ARG_ALLOW_OUTSIDE_PATHS
+/* One option's line of --help, as render's: its name from column 2, its help (wrapped) from left_width. */
+void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width);
 /* --help and --help-markdown. */
 void ic_cli_print_help(FILE *f);
 void ic_cli_print_markdown(FILE *f);

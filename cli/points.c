@@ -38,6 +38,10 @@ typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON } out_format;
 #define MAX_POINT_LINE 4096
 #define DEFAULT_MAX_POINTS (1 << 24)
 
+/* The options points takes from render's table: their names, values, checks and help are render's. */
+static const ic_arg_id shared_ids[] = {IC_ARG_ACCURACY, IC_ARG_RAYS,           IC_ARG_MAX_DEPTH,
+                                       IC_ARG_SEED,     IC_ARG_THREADS,        IC_CLI_LOAD_OPTION_IDS};
+
 static void print_help(FILE *out)
 {
     fprintf(out,
@@ -76,21 +80,15 @@ static void print_help(FILE *out)
             "  --samples N        pt: paths per point, rounded up to a multiple of 16 (default: %d)\n"
             "  --light-samples N  ic: light samples per point for the direct light, rounded up to a\n"
             "                     multiple of 16 (default: %d)\n"
-            "  --accuracy A       ic: the cache's accuracy a (smaller: more records) (default: %g)\n"
-            "  --rays N           ic: hemisphere rays per record, stratified M x N with N about pi M (more:\n"
-            "                     less noise in each record) (default: %d)\n"
-            "  --max-depth N      scattering events, the sensor the first: light bounces at most N-1 times\n"
-            "                     before it arrives; ic needs 2 or more (default: the scene file's, else %d)\n"
-            "  --seed N           random seed (default: the scene file's, else %d)\n"
-            "  --threads N        threads, 0 = all cores; results do not depend on it (default: 0)\n"
             "  --max-points N     most points read from --points (default: %d); a line is at most %d bytes\n"
-            "  --max-texture-pixels N, --max-mesh-elements N, --max-scene-bytes N, --allow-outside-paths\n"
-            "                     what the scene may read, as for irrcache render (see its --help)\n"
             "  -h, --help         show this help\n"
-            "\n"
-            "exit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n",
-            IC_DEFAULT_GRID_HEIGHT, IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, (double)IC_DEFAULT_ACCURACY_WARD,
-            IC_DEFAULT_RAYS, IC_DEFAULT_MAX_DEPTH, IC_DEFAULT_SEED, DEFAULT_MAX_POINTS, MAX_POINT_LINE);
+            "options as for irrcache render (the sensor is the first scattering event; ic needs --max-depth 2\n"
+            "or more):\n",
+            IC_DEFAULT_GRID_HEIGHT, IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, DEFAULT_MAX_POINTS,
+            MAX_POINT_LINE);
+    for (size_t k = 0; k < sizeof shared_ids / sizeof shared_ids[0]; ++k)
+        ic_cli_print_option(out, shared_ids[k], 21);
+    fprintf(out, "\nexit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n");
 }
 
 
@@ -367,12 +365,12 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     ic_points_options opt;
     memset(&opt, 0, sizeof opt);
     opt.integrator = IC_INTEGRATOR_IC;
-    ic_cli_args load_args; /* the scene-loading options, parsed by render's table */
-    memset(&load_args, 0, sizeof load_args);
+    ic_cli_args args; /* the options shared with render (load limits, depth, seed, threads, cache), by its table */
+    memset(&args, 0, sizeof args);
     long long max_points = DEFAULT_MAX_POINTS;
     for (int i = 1; i < argc; ++i) {
         const char *arg = argv[i], *value;
-        int missing = 0, load_option = 0;
+        int missing = 0, shared = 0;
         long long v = 0;
         if (arg[0] != '-' || arg[1] == '\0') {
             if (scene_path) {
@@ -384,8 +382,9 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             if (rank == 0)
                 print_help(stdout);
             return 0;
-        } else if ((load_option = ic_cli_parse_load_option(argc, argv, &i, &load_args, "points")) != 0) {
-            if (load_option < 0)
+        } else if ((shared = ic_cli_parse_shared_option(argc, argv, &i, &args, "points", shared_ids,
+                                                        sizeof shared_ids / sizeof shared_ids[0])) != 0) {
+            if (shared < 0)
                 return EXIT_USAGE;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-points", &missing)) != NULL) {
             if (!parse_int("--max-points", value, 1, UINT32_MAX, &max_points))
@@ -448,36 +447,6 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             if (!parse_int("--light-samples", value, 1, IC_MAX_POINT_SAMPLES, &v))
                 return EXIT_USAGE;
             opt.light_samples = (int)v;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-depth", &missing)) != NULL) {
-            if (!parse_int("--max-depth", value, 1, IC_MAX_MAX_DEPTH, &v))
-                return EXIT_USAGE;
-            opt.max_depth = (int)v;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--threads", &missing)) != NULL) {
-            if (!parse_int("--threads", value, 0, 4096, &v))
-                return EXIT_USAGE;
-            opt.threads = (int)v;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--seed", &missing)) != NULL) {
-            if (!parse_int("--seed", value, 0, LLONG_MAX, &v))
-                return EXIT_USAGE;
-            opt.seed = (uint64_t)v;
-            opt.has_seed = 1;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--rays", &missing)) != NULL) {
-            if (!parse_int("--rays", value, 16, 10000000, &v))
-                return EXIT_USAGE;
-            /* M × N strata with N ≈ πM (Ward et al. 1988), as `render --rays` sets them. */
-            long m = lround(sqrt((double)v / 3.14159265358979));
-            m = m < 2 ? 2 : m;
-            opt.ic.gather.theta_strata = (uint32_t)m;
-            opt.ic.gather.phi_strata = (uint32_t)((v + m / 2) / m);
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--accuracy", &missing)) != NULL) {
-            char *end = NULL;
-            double a = strtod(value, &end);
-            if (end == value || *end != '\0' || !(a > 0.0) || a > 10.0) {
-                fprintf(stderr, "irrcache points: --accuracy %s: not a number in (0, 10]; give one such as 0.15\n",
-                        value);
-                return EXIT_USAGE;
-            }
-            opt.ic.cache.accuracy = (float)a;
         } else if (missing) {
             fprintf(stderr, "irrcache points: %s: missing value; see irrcache points --help\n", arg);
             return EXIT_USAGE;
@@ -486,6 +455,20 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             return EXIT_USAGE;
         }
     }
+    if (args.given[IC_ARG_MAX_DEPTH])
+        opt.max_depth = args.render.max_depth;
+    if (args.given[IC_ARG_THREADS])
+        opt.threads = args.render.threads;
+    if (args.given[IC_ARG_SEED]) {
+        opt.seed = args.render.seed;
+        opt.has_seed = 1;
+    }
+    if (args.given[IC_ARG_RAYS]) {
+        opt.ic.gather.theta_strata = args.render.ic.gather.theta_strata;
+        opt.ic.gather.phi_strata = args.render.ic.gather.phi_strata;
+    }
+    if (args.given[IC_ARG_ACCURACY])
+        opt.ic.cache.accuracy = args.render.ic.cache.accuracy;
     const char *misuse = !scene_path                          ? "no scene given"
                          : has_grid && points_path            ? "--grid and --points both given; give one"
                          : !has_grid && !points_path          ? "no --points FILE given ('-' reads standard input) and no --grid"
@@ -538,7 +521,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     int status = EXIT_WORK;
     if (!res)
         snprintf(message, sizeof message, "irrcache points: out of memory for %u results", count);
-    else if (ic_scene_load(scene_path, &load_args.load, &scene, &err) != IC_OK && ranks > 1)
+    else if (ic_scene_load(scene_path, &args.load, &scene, &err) != IC_OK && ranks > 1)
         snprintf(message, sizeof message, "irrcache points: rank %d of %d: %s", rank, ranks, err.message);
     else if (!scene)
         snprintf(message, sizeof message, "irrcache points: %s", err.message);

@@ -218,6 +218,16 @@ static void test_bad_files(void)
     CHECK(run(SCENE " --points " DIR "/three.txt --max-mesh-elements", NULL) == 2 &&
               strstr(err_text, "irrcache points: --max-mesh-elements needs a value"),
           "--max-mesh-elements without a value: usage error of points: %s", err_text);
+    /* The options shared with render take render's values and checks, named by this command. */
+    CHECK(run(SCENE " --points " DIR "/three.txt --accuracy 0", NULL) == 2 &&
+              strstr(err_text, "irrcache points: --accuracy 0: expected a number from 0.001 to 100"),
+          "--accuracy 0: render's range, named by points: %s", err_text);
+    CHECK(run(SCENE " --points " DIR "/three.txt --rays=4", NULL) == 2 &&
+              strstr(err_text, "irrcache points: --rays 4: expected an integer from 16 to 10000000"),
+          "--rays=4: render's range, its = form: %s", err_text);
+    CHECK(run(SCENE " --points " DIR "/three.txt --threads=1 --seed 18446744073709551615 --rays 64 --accuracy 0.5",
+              NULL) == 0,
+          "--threads=1, a seed of 2^64 - 1 (render's range): %s", err_text);
 }
 
 int main(void)
