@@ -326,6 +326,13 @@ static size_t json_error_at(const char *text, size_t len)
 
 /* ---- Accessors and buffer views against the data they read (glTF 2.0 §3.6, §5.1, §5.11) ------------ */
 
+/* Whether it is a whole number in [lo, hi]. */
+static int whole_value(const cJSON *it, double lo, double hi)
+{
+    return cJSON_IsNumber(it) && it->valuedouble == floor(it->valuedouble) && it->valuedouble >= lo &&
+           it->valuedouble <= hi;
+}
+
 /* obj[key] as a whole number in [lo, hi]: 1, 0 if absent (*v = dflt), -1 if present but not such a number. */
 static int whole(const cJSON *obj, const char *key, double lo, double hi, double dflt, double *v)
 {
@@ -333,8 +340,7 @@ static int whole(const cJSON *obj, const char *key, double lo, double hi, double
     *v = dflt;
     if (!it)
         return 0;
-    if (!cJSON_IsNumber(it) || it->valuedouble != floor(it->valuedouble) || it->valuedouble < lo ||
-        it->valuedouble > hi)
+    if (!whole_value(it, lo, hi))
         return -1;
     *v = it->valuedouble;
     return 1;
@@ -446,8 +452,7 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
             int bad = whole(p, "indices", 0, na - 1, 0, &index) < 0;
             const cJSON *attrs = cJSON_GetObjectItemCaseSensitive(p, "attributes");
             for (const cJSON *at = cJSON_IsObject(attrs) ? attrs->child : NULL; at && !bad; at = at->next)
-                bad = !cJSON_IsNumber(at) || at->valuedouble != floor(at->valuedouble) || at->valuedouble < 0 ||
-                      at->valuedouble > na - 1;
+                bad = !whole_value(at, 0, na - 1);
             if (bad)
                 return ic_error_set(err, IC_ERR_PARSE, "%s: meshes[%d]: a primitive's indices or attributes name no "
                                     "accessor (there are %d); export the model again", path, i, na);
@@ -483,8 +488,7 @@ static ic_result check_accessors(const cJSON *root, const char *path, ic_error *
         for (const cJSON *e = cJSON_IsArray(arr) ? arr->child : NULL; e; e = e->next, ++i) {
             const cJSON *l = cJSON_GetObjectItemCaseSensitive(e, lists[k].list);
             for (const cJSON *x = cJSON_IsArray(l) ? l->child : NULL; x; x = x->next)
-                if (!cJSON_IsNumber(x) || x->valuedouble != floor(x->valuedouble) || x->valuedouble < 0 ||
-                    x->valuedouble > nn - 1)
+                if (!whole_value(x, 0, nn - 1))
                     return ic_error_set(err, IC_ERR_PARSE, "%s: %s[%d]: \"%s\" names no node (there are %d); export "
                                         "the model again", path, lists[k].array, i, lists[k].list, nn);
         }
