@@ -67,7 +67,8 @@ fi
 work="$build/work"
 # Each harness writes every input to a file in a scratch folder of its own (tests/fuzz/fuzz_util.h, made
 # under $TMPDIR). On tmpfs that costs no disk I/O: on an ext4 mounted with discard, every rewrite waited
-# for the disk and the fuzzers used 40-80 % of their core.
+# for the disk and the fuzzers used 40-80 % of their core. Each libFuzzer process gets a folder of its own
+# there, removed when it ends (a harness that crashed could not remove its own).
 scratch="$work"
 if [ -d /dev/shm ] && [ -w /dev/shm ]; then scratch=/dev/shm; fi
 
@@ -81,7 +82,7 @@ fresh_corpus() {
 if [ "$mode" = ci ]; then
   # One target: its fixed work, then one result line in $work/$t/result.
   ci_target() {
-    local t=$1 exe="$build/tests/fuzz/fuzz_$1" runs start rc n secs
+    local t=$1 exe="$build/tests/fuzz/fuzz_$1" runs start rc n secs tmp
     runs=$(ci_runs "$t")
     fresh_corpus "$t"
     if [ ! -x "$exe" ]; then
@@ -95,10 +96,12 @@ if [ "$mode" = ci ]; then
     # runs of one seed try the same inputs. -timeout=60: generous, so that a loaded machine cannot turn a
     # slow input into a failure, while a hang (the PLY header that looped for ever) still fails.
     # -rss_limit_mb/-malloc_limit_mb: 2 GB.
-    TMPDIR="$scratch" "$exe" "$work/$t/corpus" -seed=1 -runs="$runs" -use_cmp=0 -reload=0 -timeout=60 \
+    tmp=$(mktemp -d "$scratch/irrcache-fuzz-run.XXXXXX")
+    TMPDIR="$tmp" "$exe" "$work/$t/corpus" -seed=1 -runs="$runs" -use_cmp=0 -reload=0 -timeout=60 \
       -rss_limit_mb=2048 -malloc_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/$t/artifacts/" \
       >"$work/$t/fuzz.log" 2>&1
     rc=$?
+    rm -rf "$tmp"
     secs=$((($(date +%s%N) - start) / 1000000000))
     n=$(sed -n 's/^stat::number_of_executed_units: *\([0-9]*\).*/\1/p' "$work/$t/fuzz.log" | tail -n1)
     if [ "$rc" -eq 0 ]; then
@@ -149,9 +152,11 @@ for t in "${targets[@]}"; do
     left=$((seconds - ($(date +%s) - start)))
     [ "$left" -gt 0 ] || break
     run=$((run + 1))
-    TMPDIR="$scratch" "$exe" "$work/$t/corpus" -max_total_time="$left" -timeout=10 -rss_limit_mb=2048 \
+    tmp=$(mktemp -d "$scratch/irrcache-fuzz-run.XXXXXX")
+    TMPDIR="$tmp" "$exe" "$work/$t/corpus" -max_total_time="$left" -timeout=10 -rss_limit_mb=2048 \
       -malloc_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/$t/run$run-" >"$log" 2>&1
     rc=$?
+    rm -rf "$tmp"
     n=$(sed -n 's/^stat::number_of_executed_units: *\([0-9]*\).*/\1/p' "$log" | tail -n1)
     execs=$((execs + ${n:-0}))
     cat "$log" >>"$work/$t/fuzz-all.log"
