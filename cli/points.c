@@ -39,8 +39,8 @@ typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON } out_format;
 #define DEFAULT_MAX_POINTS (1 << 24)
 
 /* The options points takes from render's table: their names, values, checks and help are render's. */
-static const ic_arg_id shared_ids[] = {IC_ARG_ACCURACY, IC_ARG_RAYS,           IC_ARG_MAX_DEPTH,
-                                       IC_ARG_SEED,     IC_ARG_THREADS,        IC_CLI_LOAD_OPTION_IDS};
+static const ic_arg_id shared_ids[] = {IC_ARG_ACCURACY, IC_ARG_RAYS, IC_ARG_MAX_DEPTH, IC_ARG_SEED, IC_ARG_THREADS,
+                                       IC_CLI_LOAD_OPTION_IDS};
 
 static void print_help(FILE *out)
 {
