@@ -28,18 +28,21 @@ static ic_vec3 rotate_to_mapped(const ic_ctx *c, const ic_cache_contribution *co
     return wsum > 0.0f ? v3_scale(v3(acc[0], acc[1], acc[2]), 1.0f / wsum) : fallback;
 }
 
-/* The per-pixel fallback's test (--pixel-fallback T): whether the records' interpolation at this point is
- * estimated to err by more than T relative to its value. The estimate is the larger of the records' own
- * noise through the weights, Σ (w_i/W)² σ_i², and their disagreement at the point, the weighted spread of
- * their extrapolated values over the effective record count W²/Σ w_i² (what the records' noise and an
- * interpolation that does not follow the light both leave: a step edge, a thin feature). Luminance
- * throughout; needs every contribution. */
+/* The per-pixel fallback's test (--pixel-fallback K): whether the records' interpolation at this point
+ * is estimated to err more than the final render's spp path-traced samples would, once the eye averages
+ * them over K pixels. The interpolation's error: the larger of the records' own noise through the
+ * weights, Σ (w_i/W)² σ_i², and their disagreement at the point, the weighted spread of their
+ * extrapolated values over the effective record count W²/Σ w_i² (what the records' noise and an
+ * interpolation that does not follow the light both leave). One path-traced sample's variance is taken
+ * from the records' as per-ray variance, σ_i² × rays per record (an underestimate for stratified records,
+ * so the test leans towards the cache). Luminance throughout. Fallback when
+ * error × spp × K / rays > Σ (w_i/W) σ_i² (fallback_factor = spp × K / rays). Needs every contribution. */
 static int interpolation_fails(const ic_ctx *c, const ic_cache_contribution *contrib, const ic_cache_estimate *e)
 {
     if (e->contributions_written != e->contributor_count || !(e->weight_sum > 0.0f))
         return 0;
     const float mean = v3_lum(e->irradiance), inv_w = 1.0f / e->weight_sum;
-    float u2 = 0.0f, spread = 0.0f, noise = 0.0f;
+    float u2 = 0.0f, spread = 0.0f, noise = 0.0f, ray_var = 0.0f;
     for (uint32_t i = 0; i < e->contributions_written; ++i) {
         ic_record r;
         if (ic_cache_get_record(c->cache, contrib[i].record, &r) != IC_OK)
@@ -48,8 +51,9 @@ static int interpolation_fails(const ic_ctx *c, const ic_cache_contribution *con
         u2 += u * u;
         spread += u * d * d;
         noise += u * u * s * s;
+        ray_var += u * s * s;
     }
-    return fmaxf(spread * u2, noise) > c->fallback_rel2 * mean * mean;
+    return fmaxf(spread * u2, noise) * c->fallback_factor > ray_var;
 }
 
 /* Indirect diffuse irradiance at a camera path's vertex `depth`: the cache (final acceptance), or,
@@ -74,7 +78,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, const ic_
     ic_cache_lookup q = ic_cache_lookup_at(s->p, b->cache_n, IC_ACCEPT_FINAL);
     const int level = c->levels - depth;
     const int mapped = b->cache_n.x != n.x || b->cache_n.y != n.y || b->cache_n.z != n.z;
-    const int test_fallback = depth == 0 && c->fallback_rel2 > 0.0f;
+    const int test_fallback = depth == 0 && c->fallback_factor > 0.0f;
     if ((depth > 0 && c->levels) || mapped || test_fallback) {
         q.contributions = contrib;
         q.contribution_capacity = LOOKUP_CAPACITY;

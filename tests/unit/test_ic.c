@@ -223,7 +223,7 @@ static void test_threads(void)
         o.ic.record_shape = variant >= 10 ? IC_SHAPE_ELLIPTICAL : IC_SHAPE_ROUND;
         o.ic.cache.weight = variant == 10 ? IC_WEIGHT_ERROR : IC_WEIGHT_WARD;
         o.ic.pixel_fallback.mode = variant == 12 ? IC_CACHE_ON : IC_CACHE_DEFAULT;
-        o.ic.pixel_fallback.value = variant == 12 ? 0.02f : 0.0f;
+        o.ic.pixel_fallback.value = variant == 12 ? 25.0f : 0.0f;
         /* A coarse cache (a few hundred records) is enough for the identity; the construction's cost
          * falls with the square of the accuracy. */
         o.ic.cache.accuracy = 0.4f;
