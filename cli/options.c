@@ -475,8 +475,6 @@ static cJSON *setting(const ic_cli_args *a, int id)
     case IC_OPT_NUMBER_OFF:
         if (given)
             return strcmp(given, "off") ? cJSON_CreateNumber(strtod(given, NULL)) : cJSON_CreateString("off");
-        if (!strcmp(o->default_text, "off")) /* off unless given (its def is the value when switched on) */
-            return cJSON_CreateString("off");
         break;
     case IC_OPT_STRING:
     case IC_OPT_LIST:

@@ -169,11 +169,6 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_DEFAULT_RECORD_FILTER, "%g", "", IC_SCOPE_IC, "record noise control: after construction each record's " \
       "value moves towards the kernel mean of its neighbours' within S times its influence radius, as far " \
       "as their noise explains their spread (docs/architecture.md); off: the records as gathered") \
-    X(PIXEL_FALLBACK, "--pixel-fallback", NULL, IC_OPT_NUMBER_OFF, render.ic.pixel_fallback, 0, 1e6, "K|off", \
-      IC_DEFAULT_PIXEL_FALLBACK, "off", "", IC_SCOPE_IC, "per-pixel error control: a pixel sample whose first " \
-      "diffuse hit finds the records' interpolation estimated to err more than path tracing would once the eye " \
-      "averages K pixels (the records' noise and their disagreement there, against their per-ray variance) " \
-      "traces its indirect light instead; off: the cache everywhere") \
     X(RECORD_SETS, "--record-sets", NULL, IC_OPT_INT, render.ic.record_sets, 1, 64, "N", IC_DEFAULT_RECORD_SETS, \
       "%g", "", IC_SCOPE_IC, "record noise control: a record whose relative noise is above --record-noise " \
       "gathers up to N independent hemisphere sets and keeps their mean") \

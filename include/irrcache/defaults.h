@@ -54,7 +54,6 @@
 #define IC_DEFAULT_RAYS (IC_DEFAULT_THETA_STRATA * IC_DEFAULT_PHI_STRATA) /* rays per record */
 #define IC_DEFAULT_LIGHT_SAMPLES 1       /* final render: light samples per shading point */
 #define IC_DEFAULT_LARGE_EMITTERS 0.01f  /* hemisphere share of a large emitter (ic_ic_options) */
-#define IC_DEFAULT_PIXEL_FALLBACK 50.0f  /* K of --pixel-fallback when switched on: pixels the eye averages */
 #define IC_DEFAULT_RECORD_FILTER 3.0f    /* neighbourhood of the record filter, in influence radii */
 #define IC_DEFAULT_RECORD_SETS 1         /* hemisphere sets a record may gather */
 #define IC_DEFAULT_RECORD_NOISE 0.05f    /* relative σ the sets aim at */

@@ -125,12 +125,6 @@ typedef struct ic_ic_options {
     int record_sets;       /* record noise control while gathering: most hemisphere sets a record
                               gathers while its relative σ is above record_noise [1] */
     float record_noise;    /* the relative σ of E those sets aim at [0.05] */
-    ic_switched_value pixel_fallback; /* final render, per-pixel error control (ic_final.c): where the
-                              irradiance interpolated at a first diffuse hit is estimated to err more than
-                              the final render's spp path-traced samples would once averaged over `value`
-                              pixels (the records' σ and their disagreement at the point, against the
-                              records' per-ray variance), that sample traces its indirect light instead;
-                              off: the cache everywhere [off; on without a value: IC_DEFAULT_PIXEL_FALLBACK] */
     int max_passes;        /* batch: most construction passes, a safety bound [30] */
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     float uncovered;       /* batch: converged when fewer than this share of a pass's eye-path look-up

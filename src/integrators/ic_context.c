@@ -41,8 +41,6 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.large_emitters.value = IC_DEFAULT_LARGE_EMITTERS;
     if (o.record_filter.value == 0.0f)
         o.record_filter.value = IC_DEFAULT_RECORD_FILTER;
-    if (o.pixel_fallback.value == 0.0f)
-        o.pixel_fallback.value = IC_DEFAULT_PIXEL_FALLBACK;
     if (o.record_sets <= 0)
         o.record_sets = IC_DEFAULT_RECORD_SETS;
     if (!(o.record_noise > 0.0f))
@@ -114,15 +112,6 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     c->light_sel_all = c->light_sel;
     c->gather_tr = *tr;
     c->gather_tr.pt.max_depth = c->o.bounces + 1;
-    if (c->o.pixel_fallback.mode == IC_CACHE_ON) {
-        const ic_gather_opts *g = &c->o.gather;
-        const double rays = g->method == IC_GATHER_HEMICUBE && g->hemicube_resolution
-                                ? 3.0 * g->hemicube_resolution * g->hemicube_resolution
-                            : g->theta_strata && g->phi_strata ? (double)g->theta_strata * g->phi_strata
-                                                               : IC_DEFAULT_RAYS;
-        const int spp = opt->spp > 0 ? opt->spp : IC_DEFAULT_SPP_IC;
-        c->fallback_factor = (float)(spp * (double)c->o.pixel_fallback.value / rays);
-    }
     /* With one bounce a hemisphere ray returns its hit's direct light alone; records hold more. */
     c->hit_lookups = !c->o.path_traced_gather && !c->o.recursive && c->o.bounces > 1 &&
                      c->o.bounces <= IC_LEVELS_MAX;

@@ -28,38 +28,9 @@ static ic_vec3 rotate_to_mapped(const ic_ctx *c, const ic_cache_contribution *co
     return wsum > 0.0f ? v3_scale(v3(acc[0], acc[1], acc[2]), 1.0f / wsum) : fallback;
 }
 
-/* The per-pixel fallback's test (--pixel-fallback K): whether the records' interpolation at this point
- * is estimated to err more than the final render's spp path-traced samples would, once the eye averages
- * them over K pixels. The interpolation's error: the larger of the records' own noise through the
- * weights, Σ (w_i/W)² σ_i², and their disagreement at the point, the weighted spread of their
- * extrapolated values over the effective record count W²/Σ w_i² (what the records' noise and an
- * interpolation that does not follow the light both leave). One path-traced sample's variance is taken
- * from the records' as per-ray variance, σ_i² × rays per record (an underestimate for stratified records,
- * so the test leans towards the cache). Luminance throughout. Fallback when
- * error × spp × K / rays > Σ (w_i/W) σ_i² (fallback_factor = spp × K / rays). Needs every contribution. */
-static int interpolation_fails(const ic_ctx *c, const ic_cache_contribution *contrib, const ic_cache_estimate *e)
-{
-    if (e->contributions_written != e->contributor_count || !(e->weight_sum > 0.0f))
-        return 0;
-    const float mean = v3_lum(e->irradiance), inv_w = 1.0f / e->weight_sum;
-    float u2 = 0.0f, spread = 0.0f, noise = 0.0f, ray_var = 0.0f;
-    for (uint32_t i = 0; i < e->contributions_written; ++i) {
-        ic_record r;
-        if (ic_cache_get_record(c->cache, contrib[i].record, &r) != IC_OK)
-            return 0;
-        const float u = contrib[i].weight * inv_w, d = v3_lum(contrib[i].value) - mean, s = v3_lum(r.sigma);
-        u2 += u * u;
-        spread += u * d * d;
-        noise += u * u * s * s;
-        ray_var += u * s * s;
-    }
-    return fmaxf(spread * u2, noise) * c->fallback_factor > ray_var;
-}
-
 /* Indirect diffuse irradiance at a camera path's vertex `depth`: the cache (final acceptance), or,
- * where no record reaches (points seen only through glossy paths, sub-pixel samples at silhouettes) or
- * where the pixel fallback judges the records' interpolation worse than path tracing (interpolation_fails),
- * one cosine-distributed hemisphere ray that returns what a record's ray would: E ≈ π·L.
+ * where no record reaches (points seen only through glossy paths, sub-pixel samples at silhouettes), one
+ * cosine-distributed hemisphere ray that returns what a record's ray would: E ≈ π·L.
  *
  * The bounce count stays the path tracer's at every vertex, not only the first: a record holds the light
  * of B bounces after its point, right for a vertex seen directly; a vertex seen in a glossy reflection or
@@ -78,13 +49,12 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, const ic_
     ic_cache_lookup q = ic_cache_lookup_at(s->p, b->cache_n, IC_ACCEPT_FINAL);
     const int level = c->levels - depth;
     const int mapped = b->cache_n.x != n.x || b->cache_n.y != n.y || b->cache_n.z != n.z;
-    const int test_fallback = depth == 0 && c->fallback_factor > 0.0f;
-    if ((depth > 0 && c->levels) || mapped || test_fallback) {
+    if ((depth > 0 && c->levels) || mapped) {
         q.contributions = contrib;
         q.contribution_capacity = LOOKUP_CAPACITY;
     }
     ic_cache_estimate e;
-    if (ic_cache_query_hinted(c->cache, &q, hint, &e) && !(test_fallback && interpolation_fails(c, contrib, &e))) {
+    if (ic_cache_query_hinted(c->cache, &q, hint, &e)) {
         *from_cache = 1;
         ic_vec3 E;
         if (depth > 0 && c->levels &&

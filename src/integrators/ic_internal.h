@@ -43,7 +43,6 @@ typedef struct ic_ctx {
     ic_gbuffer g;
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
-    float fallback_factor;     /* pixel fallback (ic_final.c): spp × K / rays per record; 0 = off */
     uint8_t record_bounce;     /* the bounce field of the records gathered from candidates: 0, or the
                                   sensors' own kind while ic_ic_points_build makes theirs */
     double deadline;           /* ic_seconds() past which batch and adaptive construction stop (a time

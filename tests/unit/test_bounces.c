@@ -42,7 +42,7 @@ static double reference_mean(const char *scene, int W, int H, int depth, int spp
 }
 
 static double cache_mean_gather(const char *scene, int W, int H, int depth, ic_strategy strategy, int path_traced,
-                                ic_gather_method method, float pixel_fallback, uint64_t *rays)
+                                ic_gather_method method)
 {
     ic_render_options o = {0};
     o.integrator = IC_INTEGRATOR_IC;
@@ -51,14 +51,9 @@ static double cache_mean_gather(const char *scene, int W, int H, int depth, ic_s
     o.ic.strategy = strategy;
     o.ic.path_traced_gather = path_traced;
     o.ic.gather.method = method;
-    o.ic.pixel_fallback.mode = pixel_fallback > 0.0f ? IC_CACHE_ON : IC_CACHE_OFF;
-    o.ic.pixel_fallback.value = pixel_fallback;
     ic_image img = {0};
-    ic_render_stats st = {0};
     int finite = 0;
-    CHECK(test_render(scene, W, H, &o, &img, &st), "cache render depth %d renders", depth);
-    if (rays)
-        *rays = st.rays;
+    CHECK(test_render(scene, W, H, &o, &img, NULL), "cache render depth %d renders", depth);
     double m = test_image_mean(&img, &finite);
     CHECK(finite, "cache render depth %d is finite", depth);
     ic_image_free(&img);
@@ -67,7 +62,7 @@ static double cache_mean_gather(const char *scene, int W, int H, int depth, ic_s
 
 static double cache_mean(const char *scene, int W, int H, int depth, ic_strategy strategy, int path_traced)
 {
-    return cache_mean_gather(scene, W, H, depth, strategy, path_traced, IC_GATHER_STRATIFIED, 0.0f, NULL);
+    return cache_mean_gather(scene, W, H, depth, strategy, path_traced, IC_GATHER_STRATIFIED);
 }
 
 static void test_scene_depths(const char *name, const char *scene, int W, int H, int spp, int all_depths)
@@ -101,21 +96,9 @@ static void test_scene_depths(const char *name, const char *scene, int W, int H,
             CHECK(fabs(adaptive) < 0.005, "%s depth 3: adaptive cache mean %+.3f %% off", name, 100.0 * adaptive);
             CHECK(fabs(traced) < 0.005, "%s depth 3: path-traced gather mean %+.3f %% off", name, 100.0 * traced);
             /* The hemicube's texels have unequal weights; its bounce levels are split by ray count. */
-            double cube =
-                cache_mean_gather(scene, W, H, D, IC_STRATEGY_BATCH, 0, IC_GATHER_HEMICUBE, 0.0f, NULL) / ref - 1.0;
+            double cube = cache_mean_gather(scene, W, H, D, IC_STRATEGY_BATCH, 0, IC_GATHER_HEMICUBE) / ref - 1.0;
             printf("%s depth 3: hemicube gather %+.4f %%\n", name, 100.0 * cube);
             CHECK(fabs(cube) < 0.005, "%s depth 3: hemicube gather mean %+.3f %% off", name, 100.0 * cube);
-            /* The per-pixel fallback at a factor that sends almost every first-hit sample to the path
-             * tracer's hemisphere ray: the same bounce count, and it really falls back (more rays). */
-            uint64_t rays_cache = 0, rays_fallback = 0;
-            cache_mean_gather(scene, W, H, D, IC_STRATEGY_BATCH, 0, IC_GATHER_STRATIFIED, 0.0f, &rays_cache);
-            double fb = cache_mean_gather(scene, W, H, D, IC_STRATEGY_BATCH, 0, IC_GATHER_STRATIFIED, 1e6f,
-                                          &rays_fallback) / ref - 1.0;
-            printf("%s depth 3: pixel fallback everywhere %+.4f %% (rays %llu against %llu)\n", name, 100.0 * fb,
-                   (unsigned long long)rays_fallback, (unsigned long long)rays_cache);
-            CHECK(fabs(fb) < 0.005, "%s depth 3: pixel fallback mean %+.3f %% off", name, 100.0 * fb);
-            CHECK(rays_fallback > rays_cache + (uint64_t)W * H * 8, "%s depth 3: the fallback traced its rays "
-                  "(%llu against %llu)", name, (unsigned long long)rays_fallback, (unsigned long long)rays_cache);
         }
     }
 }

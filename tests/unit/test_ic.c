@@ -5,8 +5,8 @@
  *      path-traced reference, and every shading point covered after construction;
  *   2. batch and lazy, batch with adaptive sampling and with hemisphere sets, hemicube gathering with
  *      batch, lazy and adaptive, the Hessian error metric with batch and lazy, elliptical records with
- *      batch (error weight) and adaptive, batch with the per-pixel fallback (the record filter is on in
- *      all): 1 and 2 threads give bit-identical images;
+ *      batch (error weight) and adaptive (the record filter is on in all): 1 and 2 threads give
+ *      bit-identical images;
  *   3. a scene built to leak (a wall with a small gap above the floor, a bright light on the far side):
  *      without neighbor clamping (Křivánek et al. 2006 §5.2–5.3) records next to the gap extrapolate wrong light
  *      over the dark floor; with it the error near the gap falls;
@@ -201,10 +201,10 @@ static void test_cornell(void)
 
 static void test_threads(void)
 {
-    for (int variant = 0; variant < 13; ++variant) {
+    for (int variant = 0; variant < 12; ++variant) {
         /* variants 5–7: hemicube gathering with the batch, lazy and adaptive strategies; 8, 9: the
          * Hessian error metric with batch and lazy; 10, 11: elliptical records with batch (the error
-         * weight) and adaptive; 12: batch with the per-pixel fallback */
+         * weight) and adaptive */
         int strategy = variant == 6 || variant == 9 ? IC_STRATEGY_LAZY
                        : variant == 7 || variant == 11 ? IC_STRATEGY_ADAPTIVE
                        : variant == 0 || variant >= 3 ? IC_STRATEGY_BATCH : IC_STRATEGY_LAZY;
@@ -222,8 +222,6 @@ static void test_threads(void)
         o.ic.error = variant >= 8 ? IC_ERROR_HESSIAN : IC_ERROR_SPLIT_SPHERE;
         o.ic.record_shape = variant >= 10 ? IC_SHAPE_ELLIPTICAL : IC_SHAPE_ROUND;
         o.ic.cache.weight = variant == 10 ? IC_WEIGHT_ERROR : IC_WEIGHT_WARD;
-        o.ic.pixel_fallback.mode = variant == 12 ? IC_CACHE_ON : IC_CACHE_DEFAULT;
-        o.ic.pixel_fallback.value = variant == 12 ? 25.0f : 0.0f;
         /* A coarse cache (a few hundred records) is enough for the identity; the construction's cost
          * falls with the square of the accuracy. */
         o.ic.cache.accuracy = 0.4f;
