@@ -14,6 +14,18 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The start of a chunk's encoding, once its chunk info is made: the pipeline set up on the first chunk,
+ * updated on the next ones. */
+static inline exr_result_t test_exr_begin(exr_context_t ctxt, int part, const exr_chunk_info_t *chunk,
+                                          exr_encode_pipeline_t *enc, int *initialized)
+{
+    exr_result_t rv = *initialized ? exr_encoding_update(ctxt, part, chunk, enc)
+                                   : exr_encoding_initialize(ctxt, part, chunk, enc);
+    if (rv == EXR_ERR_SUCCESS)
+        *initialized = 1;
+    return rv;
+}
+
 /* The end of a chunk's encoding, once its channels' pointers are set: the library's routines, then run. */
 static inline exr_result_t test_exr_encode(exr_context_t ctxt, int part, exr_encode_pipeline_t *enc)
 {
@@ -57,11 +69,9 @@ static inline int write_tiled_exr(const char *path, const ic_image *img, int tw,
             exr_chunk_info_t chunk;
             rv = exr_write_tile_chunk_info(ctxt, part, tx, ty, 0, 0, &chunk);
             if (rv == EXR_ERR_SUCCESS)
-                rv = initialized ? exr_encoding_update(ctxt, part, &chunk, &enc)
-                                 : exr_encoding_initialize(ctxt, part, &chunk, &enc);
+                rv = test_exr_begin(ctxt, part, &chunk, &enc, &initialized);
             if (rv != EXR_ERR_SUCCESS)
                 break;
-            initialized = 1;
             for (int c = 0; c < enc.channel_count; ++c) {
                 exr_coding_channel_info_t *ch = &enc.channels[c];
                 int slot = ch->channel_name[0] == 'R' ? 0 : ch->channel_name[0] == 'G' ? 1 : 2;
@@ -125,11 +135,9 @@ static inline int write_scanline_exr(const char *path, const ic_image *img, cons
         exr_chunk_info_t chunk;
         rv = exr_write_scanline_chunk_info(ctxt, part, y, &chunk);
         if (rv == EXR_ERR_SUCCESS)
-            rv = initialized ? exr_encoding_update(ctxt, part, &chunk, &enc)
-                             : exr_encoding_initialize(ctxt, part, &chunk, &enc);
+            rv = test_exr_begin(ctxt, part, &chunk, &enc, &initialized);
         if (rv != EXR_ERR_SUCCESS)
             break;
-        initialized = 1;
         for (int c = 0; c < enc.channel_count; ++c) {
             exr_coding_channel_info_t *ch = &enc.channels[c];
             const char *n = strchr(ch->channel_name, '.') ? strchr(ch->channel_name, '.') + 1 : ch->channel_name;
