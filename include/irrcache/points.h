@@ -21,9 +21,10 @@
  *                     gathered in parallel), so neighbouring sensors share records; before them, with
  *                     max_depth ≥ 3, records where the sensors' hemisphere rays land (walls, ceiling),
  *                     from which those rays read the bounces after their hits; each point's
- *                     indirect light (and the sky's, as Radiance's ambient calculation treats a glow
- *                     sky) is interpolated from them, while the sun, point lights and emitting surfaces
- *                     are light-sampled at every point (`light_samples` samples, never interpolated).
+ *                     indirect light is interpolated from them, while its direct light is sampled at
+ *                     every point (`light_samples` samples, never interpolated): the sun, point lights
+ *                     and emitting surfaces by light sampling, the sky (environment) by a light sample
+ *                     (through the portals) and a cosine ray, MIS between them.
  *                     σ adds the interpolation's variance (the records' relative variance, pooled over
  *                     the sensors' records, weighed as the interpolation weighs them) to the direct part's; it
  *                     does not include the interpolation's bias (a record's value moved to a nearby
@@ -75,7 +76,7 @@ typedef struct ic_points_options {
     ic_integrator integrator; /* IC_INTEGRATOR_PT (the zero value) or IC_INTEGRATOR_IC */
     int samples;           /* pt: paths per point, rounded up to a multiple of IC_POINT_REPLICATES
                               [IC_DEFAULT_POINT_SAMPLES] */
-    int light_samples;     /* ic: light samples per point for the direct part, rounded up likewise
+    int light_samples;     /* ic: samples per point for the direct part (emitters and sky), rounded up likewise
                               [IC_DEFAULT_POINT_LIGHT_SAMPLES] */
     int max_depth;         /* scattering events, the sensor being the first; the light a sensor receives has
                               bounced at most max_depth − 1 times; IC needs 2 or more (its records carry at

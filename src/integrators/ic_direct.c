@@ -97,3 +97,46 @@ ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_
         L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, !ls.is_delta && glossy_traced, rays));
     return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
 }
+
+ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_rng *rng, uint64_t *rays)
+{
+    const ic_scene *scene = c->tr->scene;
+    float u0 = ic_rng_1d(rng), u1, u2, v1, v2;
+    ic_rng_2d(rng, &u1, &u2);
+    ic_rng_2d(rng, &v1, &v2);
+    if (!scene->env.enabled || v3_is_black(b->kd))
+        return v3s(0.0f);
+    ic_vec3 L = v3s(0.0f);
+    /* The light sample: the environment as the only light (through the portals p is inside of). A
+     * constant environment without portals has none: uniform over the sphere, it would only add noise
+     * to the cosine ray, whose estimate of it varies with visibility alone. */
+    const int sampled = scene->env.image.width > 0 || (scene->env.portal_count && ic_scene_portals_apply(scene, s->p));
+    const ic_light_selection env_only = {0.0f, 0.0f, 0.0f, 1.0f, NULL, NULL};
+    ic_light_sample ls;
+    if (sampled && ic_scene_sample_light_sel(scene, &env_only, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f) {
+        float cos_l = v3_dot(ls.wi, b->frame.n);
+        if (cos_l > 0.0f && !v3_is_black(ls.radiance)) {
+            ic_ray shadow = ic_shadow_ray(s, &ls);
+            ++*rays;
+            if (!ic_accel_occluded1(c->tr->accel, &shadow)) {
+                float w = ic_power_heuristic(ls.pdf, cos_l * IC_INV_PI);
+                L = v3_scale(v3_mul(b->kd, ls.radiance),
+                             IC_INV_PI * cos_l * ic_bsdf_diffuse_factor(b, cos_l) * w / ls.pdf);
+            }
+        }
+    }
+    /* The cosine-distributed ray: the environment where it escapes, weighted against the light sample
+     * (directions through no portal have light pdf 0: the ray alone carries them, at full weight). */
+    ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(v1, v2));
+    float cos_i = v3_dot(wi, b->frame.n);
+    if (cos_i <= 0.0f || v3_dot(wi, b->ng) <= 0.0f)
+        return L;
+    ic_ray ray = ic_spawn_ray(s, wi);
+    ic_hit hit;
+    ++*rays;
+    ic_accel_intersect1(c->tr->accel, &ray, &hit);
+    if (hit.triangle != IC_NO_HIT)
+        return L;
+    float w = sampled ? ic_power_heuristic(cos_i * IC_INV_PI, ic_scene_env_pdf_at(scene, s->p, wi)) : 1.0f;
+    return v3_add(L, v3_scale(v3_mul(b->kd, ic_scene_env_radiance(scene, wi)), w * ic_bsdf_diffuse_factor(b, cos_i)));
+}

@@ -107,6 +107,19 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     return 1;
 }
 
+/* Whether a hemisphere ray from p escaping along d counts the environment (c->env_mode). */
+static int env_in_rays(const ic_ctx *c, ic_vec3 p, ic_vec3 d)
+{
+    switch (c->env_mode) {
+    case IC_ENV_AT_POINT:
+        return 0;
+    case IC_ENV_PORTAL_SAMPLES:
+        return !(ic_scene_portal_pdf(c->gather_tr.scene, p, d) > 0.0f);
+    default:
+        return 1;
+    }
+}
+
 /* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
  * is seeded from the ray itself (origin and direction bits), so it does not depend on which batch or
  * thread traced it. With levels, each ray's light is also split by bounce level into the worker's sums:
@@ -138,7 +151,8 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             ic_vec3 cum[IC_LEVELS_MAX + 1];
             if (hits[i].triangle == IC_NO_HIT) {
                 hit_dist[j] = INFINITY;
-                radiance[j] = ic_scene_env_radiance(tr->scene, rays[i].dir);
+                radiance[j] = env_in_rays(c, rays[i].org, rays[i].dir) ? ic_scene_env_radiance(tr->scene, rays[i].dir)
+                                                                      : v3s(0.0f);
                 for (int k = 0; k < B; ++k)
                     w->sum[k] = v3_add(w->sum[k], radiance[j]);
                 if (B)
@@ -247,8 +261,68 @@ static void add_set(ic_gather_result *a, const ic_gather_result *b, int k, ic_ve
     a->hit_count += b->hit_count;
 }
 
-ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
-                           ic_vec3 *levels)
+#define STREAM_PORTAL 0x706f7274616cULL /* rng purpose: a record's light samples through portals */
+/* A record's light samples through portals: one per PORTAL_SAMPLES_DIV of its rays, at least
+ * PORTAL_SAMPLES_MIN. The sensors' hit records (50 rays at the sensors' 3,200) had the same error with 8
+ * samples as with 50 (BENCHMARKS.md, "Sensor points"): their error is their indirect light's. */
+#define PORTAL_SAMPLES_DIV 8u
+#define PORTAL_SAMPLES_MIN 8
+
+/* IC_ENV_PORTAL_SAMPLES: the environment's irradiance through the portals pt lies inside of, from light
+ * samples uniform in the openings' solid angle (randomised Sobol' pairs keyed by the record), added to
+ * the record's irradiance, its bounce levels (the environment's own light is level 0) and, in
+ * quadrature, its σ. Its gradients stay the rays' (the light through the openings has none). */
+static void add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_result *out, ic_vec3 *levels)
+{
+    const ic_scene *scene = c->gather_tr.scene;
+    if (!scene->env.enabled || !scene->env.portal_count || !ic_scene_portals_apply(scene, pt->position))
+        return;
+    int n = (int)(out->ray_count / PORTAL_SAMPLES_DIV);
+    if (n < PORTAL_SAMPLES_MIN)
+        n = PORTAL_SAMPLES_MIN;
+    double sum[3] = {0.0, 0.0, 0.0}, sum2[3] = {0.0, 0.0, 0.0};
+    uint64_t key = ic_hash4(c->seed, pt->key, STREAM_PORTAL, 0);
+    for (int k = 0; k < n; ++k) {
+        ic_rng rng = ic_rng_make(c->seed, pt->key, (uint64_t)k, STREAM_PORTAL);
+        ic_rng_enable_lds(&rng, key, (uint32_t)k);
+        float u0 = ic_rng_1d(&rng), u1, u2;
+        ic_rng_2d(&rng, &u1, &u2);
+        ic_vec3 wi, q;
+        float pdf;
+        if (!ic_scene_sample_portal(scene, pt->position, u0, u1, u2, &wi, &q, &pdf) || !(pdf > 0.0f))
+            continue;
+        float cos_i = v3_dot(wi, pt->normal);
+        if (cos_i <= 0.0f)
+            continue;
+        ic_ray shadow = {pt->position, wi, 0.0f, INFINITY};
+        if (ic_accel_occluded1(c->gather_tr.accel, &shadow))
+            continue;
+        ic_vec3 e = v3_scale(ic_scene_env_radiance(scene, wi), cos_i / pdf);
+        const double v[3] = {e.x, e.y, e.z};
+        for (int ch = 0; ch < 3; ++ch) {
+            sum[ch] += v[ch];
+            sum2[ch] += v[ch] * v[ch];
+        }
+    }
+    atomic_fetch_add_explicit(&c->rays, (uint64_t)n, memory_order_relaxed);
+    float mean[3], sigma[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        double m = sum[ch] / n, var = (sum2[ch] - n * m * m) / (n - 1);
+        mean[ch] = (float)m;
+        sigma[ch] = (float)sqrt(fmax(var, 0.0) / n);
+    }
+    ic_vec3 E = v3(mean[0], mean[1], mean[2]);
+    out->irradiance = v3_add(out->irradiance, E);
+    out->sigma = v3(sqrtf(out->sigma.x * out->sigma.x + sigma[0] * sigma[0]),
+                    sqrtf(out->sigma.y * out->sigma.y + sigma[1] * sigma[1]),
+                    sqrtf(out->sigma.z * out->sigma.z + sigma[2] * sigma[2]));
+    for (int k = 0; levels && k <= c->levels; ++k)
+        levels[k] = v3_add(levels[k], E);
+}
+
+/* The point's sets (several with record noise control). */
+static ic_result gather_sets(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
+                             ic_vec3 *levels)
 {
     ic_ctx *c = w->c;
     ic_result r = gather_set(w, g, pt, out, levels);
@@ -274,6 +348,15 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
     /* The mean of k independent sets has 1/√k of one set's σ. */
     out->sigma = v3_scale(out->sigma, 1.0f / sqrtf((float)sets));
     return IC_OK;
+}
+
+ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
+                           ic_vec3 *levels)
+{
+    ic_result r = gather_sets(w, g, pt, out, levels);
+    if (r == IC_OK && w->c->env_mode == IC_ENV_PORTAL_SAMPLES)
+        add_portal_light(w->c, pt, out, levels);
+    return r;
 }
 
 /* Points per work item of ic_ic_gather_points: enough to amortise scheduling, small enough to balance. */

@@ -31,6 +31,15 @@
 #define IC_LEVELS_MAX 16   /* most bounces whose levels records keep apart for hit look-ups (beyond:
                               hemisphere rays are path-traced) */
 
+/* How a record takes the light of the environment that its hemisphere rays escape to. */
+enum {
+    IC_ENV_IN_RAYS = 0,      /* the rays count it (the image's records) */
+    IC_ENV_AT_POINT,         /* not at all: the points the record serves sample it (ic_ic_env_light) */
+    IC_ENV_PORTAL_SAMPLES    /* through portals by light samples (uniform in the openings' solid angle)
+                                added to the record, the rays counting only the directions through no
+                                portal */
+};
+
 typedef struct ic_ctx {
     const ic_tracer *tr;       /* scene, accel, path-tracing parameters of the final render */
     ic_tracer gather_tr;       /* same scene; max_depth set for record radiance (bounces) */
@@ -45,6 +54,8 @@ typedef struct ic_ctx {
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
     uint8_t record_bounce;     /* the bounce field of the records gathered from candidates: 0, or the
                                   sensors' own kind while ic_ic_points_build makes theirs */
+    uint8_t env_mode;          /* how the records gathered now take the environment their rays escape
+                                  to: IC_ENV_IN_RAYS, IC_ENV_AT_POINT or IC_ENV_PORTAL_SAMPLES */
     double deadline;           /* ic_seconds() past which batch and adaptive construction stop (a time
                                   budget's construction share); 0: none */
     int levels;                /* with hit_lookups: bounces B, whose levels the records keep apart;
@@ -156,6 +167,12 @@ ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
  * light, so light sampling alone carries its direct light, at full weight). */
 ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                                  const ic_light_selection *sel, int glossy_traced, ic_rng *rng, uint64_t *rays);
+
+/* The environment's light at a point whose records leave it out (IC_ENV_AT_POINT): one light sample of
+ * the environment alone (through the portals p is inside of) and one cosine-distributed ray that counts
+ * the environment where it escapes, MIS (power heuristic) between them; a constant environment seen
+ * without portals by the ray alone. b's diffuse lobe only. Five random numbers. */
+ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_rng *rng, uint64_t *rays);
 
 /* Shading points of every pixel centre into c->g (and c->has_record); gbuffer_free frees them. */
 ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err);

@@ -75,6 +75,10 @@ ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *
     c->gather_tr.accel = tr->accel;
     ic_ic_gbuffer_free(c);
     memset(&c->g, 0, sizeof c->g);
+    /* The hit stage's records take the sky through portals by light samples (IC_ENV_PORTAL_SAMPLES); the
+     * sensors' own records leave the sky out: each sensor samples it (ic_ic_env_light), so that direct
+     * light is never interpolated between sensors. */
+    c->env_mode = IC_ENV_PORTAL_SAMPLES;
     c->has_record = NULL;
     return IC_OK;
 }
@@ -298,8 +302,10 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
         if (taken == 0)
             break;
         c->record_bounce = SENSOR_BOUNCE;
+        c->env_mode = IC_ENV_AT_POINT;
         r = ic_ic_gather_and_insert(c, cand, taken, &times, err);
         c->record_bounce = 0;
+        c->env_mode = IC_ENV_PORTAL_SAMPLES;
     }
     free(gathered);
     free(cand);

@@ -2,8 +2,8 @@
  * points.c — ic_points_compute (irrcache/points.h), the sensor-point driver: checks the points and
  * options, builds the accelerator, and estimates each point's irradiance with the path tracer (Veach 1997:
  * light sampling and a cosine-distributed path per sample, MIS between them) or with the irradiance cache
- * (Ward et al. 1988: lazy records at the sensors, their interpolation for the environment and indirect
- * light, light sampling for every emitter at every point). Each point's random numbers are a hash of
+ * (Ward et al. 1988: lazy records at the sensors, their interpolation for the indirect light, light
+ * sampling for every emitter and the sky at every point). Each point's random numbers are a hash of
  * (seed, point, sample): the results never depend on the thread count. Several processes (opt.comm)
  * gather a share of the records each (ic_ic_gather_points) and estimate one contiguous block of the
  * points each, then exchange the results: the same bits at any number of processes.
@@ -113,11 +113,16 @@ static ic_vec3 sample_pt(const points_job *job, uint32_t i, const ic_surface *s,
     return v3_scale(L, IC_PI);
 }
 
-/* The cache estimator's direct part: light samples of the sun, point lights and emitting surfaces. */
+/* The cache estimator's direct part: light samples of the sun, point lights and emitting surfaces, and of
+ * the environment (the sensors' records leave out the sky their rays see directly, so that its light,
+ * which changes fast across a room lit through windows, is sampled at every sensor, not interpolated). */
 static ic_vec3 sample_direct(const points_job *job, uint32_t i, const ic_surface *s, const ic_bsdf *b, ic_rng *rng,
                              uint64_t *rays)
 {
-    return v3_scale(ic_ic_direct_light(job->ic, s, b, job->n[i], NULL, rng, rays), IC_PI);
+    ic_vec3 L = ic_ic_direct_light(job->ic, s, b, job->n[i], NULL, rng, rays);
+    if (job->tr->scene->env.enabled)
+        L = v3_add(L, ic_ic_env_light(job->ic, s, b, rng, rays));
+    return v3_scale(L, IC_PI);
 }
 
 /* job->samples samples of fn at sensor i as REPLICATES independent randomised quasi-Monte Carlo estimates

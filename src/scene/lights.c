@@ -228,13 +228,23 @@ int ic_scene_sample_sun(const ic_scene *scene, float u1, float u2, ic_light_samp
     return 1;
 }
 
+float ic_scene_env_pdf_at(const ic_scene *scene, ic_vec3 p, ic_vec3 wi)
+{
+    const ic_environment *env = &scene->env;
+    if (!env->enabled)
+        return 0.0f;
+    if (env->portal_count && ic_scene_portals_apply(scene, p))
+        return ic_scene_portal_pdf(scene, p, wi);
+    if (env->image.width <= 0)
+        return 0.25f * IC_INV_PI;
+    return env_pdf_image(env, wi);
+}
+
 float ic_scene_light_pdf_env_at(const ic_scene *scene, ic_vec3 p, ic_vec3 wi)
 {
-    if (!scene->env.portal_count || !ic_scene_portals_apply(scene, p))
-        return ic_scene_light_pdf_env(scene, wi);
-    if (!scene->env.enabled || !(scene->light_select.env > 0.0f))
+    if (!(scene->light_select.env > 0.0f))
         return 0.0f;
-    return scene->light_select.env * ic_scene_portal_pdf(scene, p, wi);
+    return scene->light_select.env * ic_scene_env_pdf_at(scene, p, wi);
 }
 
 float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi)

@@ -325,6 +325,8 @@ float ic_scene_light_pdf_env(const ic_scene *scene, ic_vec3 wi);
 /* The same with portals taken into account: the solid-angle pdf of environment light sampling from p
  * (from a point inside a portal, 0 along a direction through no portal). */
 float ic_scene_light_pdf_env_at(const ic_scene *scene, ic_vec3 p, ic_vec3 wi);
+/* The same as if the environment were the only light (a selection whose env class has probability 1). */
+float ic_scene_env_pdf_at(const ic_scene *scene, ic_vec3 p, ic_vec3 wi);
 /* Portals (portals.c). A direction from p through a portal: u0 picks one of the portals p is inside of,
  * by the solid angle it subtends at p, and (u1, u2) a direction uniform in that solid angle (a rectangle)
  * or a point uniform over its area (another parallelogram); *q is the point on the portal and *pdf the

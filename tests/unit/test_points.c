@@ -5,7 +5,10 @@
  *      its error stays within 2σ about 94 % of the time (σ from 16 replicates: 15 degrees of freedom;
  *      checked: at least 85 %);
  *   2. a sensor facing a single emitting rectangle: E by Lambert's polygon formula, both estimators; a
- *      closed white furnace (albedo and emission 0.5): E = π, every bounce summed;
+ *      row of sensors under a black square in the open sky, E = L(π − P) with P by Lambert's formula at
+ *      each: the sky is sampled at each sensor, never interpolated; sensors in a black cube under a
+ *      square skylight declared as a portal, E = P of the opening; a closed white furnace (albedo and
+ *      emission 0.5): E = π, every bounce summed;
  *   3. the Cornell box: the cache and the path tracer agree within their error bars (plus the cache's
  *      interpolation bias, which σ leaves out) at a few points; on an 8 × 8 work-plane grid the cache is
  *      within 2σ of an 8192-sample reference at 80 % of the points or more; on a 30 × 30 grid records are
@@ -173,6 +176,110 @@ static void test_emitting_polygon(void)
                   "%s point %d: E %.6g vs Lambert %.6g (sigma %.3g)", integ ? "ic" : "pt", i, res[i].irradiance.x,
                   expect, res[i].irradiance_sigma.x);
         }
+    }
+    ic_scene_free(scene);
+}
+
+/* Sky light is never interpolated between sensors: a black 0.2 m square 0.3 m above a row of upward
+ * sensors 2 cm apart (on a black ground, so there is no indirect light) casts its shadow on the sky:
+ * E = L (π − P), P the square's projected solid angle by Lambert's formula. The records the sensors share
+ * hold no sky light (their rays' sky is left to each sensor's own samples); when they held it, all 31
+ * sensors shared one record, and the sensors away from it took its shadowed sky (14 % off at the worst
+ * sensor, 27 σ). */
+static void test_sky_shadow(void)
+{
+    test_write_file(IC_TEST_TMP "/points_shade.mtl", "newmtl black\nKd 0 0 0\n");
+    test_write_file(IC_TEST_TMP "/points_shade.obj",
+                    "mtllib points_shade.mtl\nusemtl black\n"
+                    "v -100 0 -100\nv 100 0 -100\nv 100 0 100\nv -100 0 100\n"
+                    "v -0.1 0.35 -0.1\nv 0.1 0.35 -0.1\nv 0.1 0.35 0.1\nv -0.1 0.35 0.1\n"
+                    "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\n");
+    test_write_file(IC_TEST_TMP "/points_shade.json",
+                    "{\n"
+                    "  \"camera\": {\"eye\": [0, 1, 0], \"target\": [0, 0, 0.001], \"up\": [0, 0, -1],\n"
+                    "             \"fov_y\": 60, \"width\": 16, \"height\": 16},\n"
+                    "  \"meshes\": [{\"path\": \"points_shade.obj\"}],\n"
+                    "  \"environment\": {\"radiance\": [1, 1, 1]}\n"
+                    "}\n");
+    ic_scene *scene = load(IC_TEST_TMP "/points_shade.json");
+    if (!scene) {
+        CHECK(0, "shade scene loads");
+        return;
+    }
+    enum { N = 31 };
+    ic_sensor_point pts[N];
+    for (int i = 0; i < N; ++i)
+        pts[i] = sensor(-0.3f + 0.02f * (float)i, 0.05f, 0.0f, 0, 1, 0);
+    const ic_vec3 square[4] = {{-0.1f, 0.35f, -0.1f}, {0.1f, 0.35f, -0.1f}, {0.1f, 0.35f, 0.1f}, {-0.1f, 0.35f, 0.1f}};
+    ic_points_options opt = {0};
+    opt.integrator = IC_INTEGRATOR_IC;
+    ic_point_result res[N];
+    ic_points_stats st;
+    ic_error err = {0};
+    if (ic_points_compute(scene, pts, N, &opt, res, &st, &err) != IC_OK) {
+        CHECK(0, "shade computes: %s", err.message);
+        ic_scene_free(scene);
+        return;
+    }
+    double worst = 0.0, worst_sigmas = 0.0;
+    for (int i = 0; i < N; ++i) {
+        double expect = PI_D - polygon_irradiance(square, 4, pts[i].position, pts[i].normal);
+        double e = res[i].irradiance.y, sg = res[i].irradiance_sigma.y;
+        worst = fmax(worst, fabs(e - expect) / expect);
+        worst_sigmas = fmax(worst_sigmas, fabs(e - expect) / sg);
+        CHECK(fabs(e - expect) <= 4.0 * sg + 1e-3 * expect, "sensor %d (x %.2f): E %.6g, Lambert %.6g (sigma %.3g)", i,
+              (double)pts[i].position.x, e, expect, sg);
+    }
+    printf("sky shadow: %u records for %d sensors; worst error %.3f %% (%.1f sigma)\n", st.records, N, 100.0 * worst,
+           worst_sigmas);
+    CHECK(st.records < N, "the sensors share records (%u for %d)", st.records, N);
+    ic_scene_free(scene);
+}
+
+/* The sky through a portal, sampled at each sensor: a black 2 m cube whose ceiling has a 1 m square hole,
+ * declared as a portal, under a uniform sky (L = 1): an upward sensor inside receives E = P, the hole's
+ * projected solid angle by Lambert's formula, and nothing else (black walls: no indirect light). */
+static void test_sky_portal(void)
+{
+    test_write_file(IC_TEST_TMP "/points_skylight.mtl", "newmtl black\nKd 0 0 0\n");
+    /* Floor, four walls and the ceiling around the hole x, z in [0.5, 1.5]. */
+    test_write_file(IC_TEST_TMP "/points_skylight.obj",
+                    "mtllib points_skylight.mtl\nusemtl black\n"
+                    "v 0 0 0\nv 2 0 0\nv 2 0 2\nv 0 0 2\nv 0 2 0\nv 2 2 0\nv 2 2 2\nv 0 2 2\n"
+                    "v 0.5 2 0.5\nv 1.5 2 0.5\nv 1.5 2 1.5\nv 0.5 2 1.5\n"
+                    "f 1 2 3 4\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 4 8 5 1\n"
+                    "f 5 9 10 6\nf 6 10 11 7\nf 7 11 12 8\nf 8 12 9 5\n");
+    test_write_file(IC_TEST_TMP "/points_skylight.json",
+                    "{\n"
+                    "  \"camera\": {\"eye\": [1, 1, 1.9], \"target\": [1, 1, 0], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 60, \"width\": 16, \"height\": 16},\n"
+                    "  \"meshes\": [{\"path\": \"points_skylight.obj\"}],\n"
+                    "  \"environment\": {\"radiance\": [1, 1, 1],\n"
+                    "    \"portals\": [[[0.5, 2, 0.5], [1.5, 2, 0.5], [1.5, 2, 1.5], [0.5, 2, 1.5]]]}\n"
+                    "}\n");
+    ic_scene *scene = load(IC_TEST_TMP "/points_skylight.json");
+    if (!scene) {
+        CHECK(0, "skylight scene loads");
+        return;
+    }
+    const ic_vec3 hole[4] = {{0.5f, 2, 0.5f}, {1.5f, 2, 0.5f}, {1.5f, 2, 1.5f}, {0.5f, 2, 1.5f}};
+    ic_sensor_point pts[4] = {sensor(1, 0.5f, 1, 0, 1, 0), sensor(0.3f, 0.8f, 0.4f, 0, 1, 0),
+                              sensor(1.7f, 1.2f, 1.2f, 0, 1, 0), sensor(0.2f, 1.0f, 1.0f, 1, 0, 0)};
+    ic_points_options opt = {0};
+    opt.integrator = IC_INTEGRATOR_IC;
+    ic_point_result res[4];
+    ic_error err = {0};
+    if (ic_points_compute(scene, pts, 4, &opt, res, NULL, &err) != IC_OK) {
+        CHECK(0, "skylight computes: %s", err.message);
+        ic_scene_free(scene);
+        return;
+    }
+    for (int i = 0; i < 4; ++i) {
+        double expect = polygon_irradiance(hole, 4, pts[i].position, pts[i].normal);
+        double e = res[i].irradiance.y, sg = res[i].irradiance_sigma.y;
+        printf("skylight sensor %d: E = %.5f +- %.5f, Lambert %.5f\n", i, e, sg, expect);
+        CHECK(fabs(e - expect) <= 4.0 * sg + 2e-3 * expect, "skylight sensor %d: E %.6g, Lambert %.6g (sigma %.3g)", i,
+              e, expect, sg);
     }
     ic_scene_free(scene);
 }
@@ -390,6 +497,8 @@ int main(void)
     test_illuminance_convention();
     test_open_plane();
     test_emitting_polygon();
+    test_sky_shadow();
+    test_sky_portal();
     test_furnace();
     test_cornell();
     test_cornell_grid();
