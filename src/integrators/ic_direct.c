@@ -98,7 +98,8 @@ ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_
     return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
 }
 
-ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_rng *rng, uint64_t *rays)
+ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                        uint64_t *rays)
 {
     const ic_scene *scene = c->tr->scene;
     float u0 = ic_rng_1d(rng), u1, u2, v1, v2;
@@ -113,18 +114,8 @@ ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, 
     const int sampled = scene->env.image.width > 0 || (scene->env.portal_count && ic_scene_portals_apply(scene, s->p));
     const ic_light_selection env_only = {0.0f, 0.0f, 0.0f, 1.0f, NULL, NULL};
     ic_light_sample ls;
-    if (sampled && ic_scene_sample_light_sel(scene, &env_only, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f) {
-        float cos_l = v3_dot(ls.wi, b->frame.n);
-        if (cos_l > 0.0f && !v3_is_black(ls.radiance)) {
-            ic_ray shadow = ic_shadow_ray(s, &ls);
-            ++*rays;
-            if (!ic_accel_occluded1(c->tr->accel, &shadow)) {
-                float w = ic_power_heuristic(ls.pdf, cos_l * IC_INV_PI);
-                L = v3_scale(v3_mul(b->kd, ls.radiance),
-                             IC_INV_PI * cos_l * ic_bsdf_diffuse_factor(b, cos_l) * w / ls.pdf);
-            }
-        }
-    }
+    if (sampled && ic_scene_sample_light_sel(scene, &env_only, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
+        L = shade_light(c, s, b, wo, &ls, 1, 0, rays);
     /* The cosine-distributed ray: the environment where it escapes, weighted against the light sample
      * (directions through no portal have light pdf 0: the ray alone carries them, at full weight). */
     ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(v1, v2));

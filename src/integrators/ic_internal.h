@@ -172,7 +172,8 @@ ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_
  * the environment alone (through the portals p is inside of) and one cosine-distributed ray that counts
  * the environment where it escapes, MIS (power heuristic) between them; a constant environment seen
  * without portals by the ray alone. b's diffuse lobe only. Five random numbers. */
-ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_rng *rng, uint64_t *rays);
+ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                        uint64_t *rays);
 
 /* Shading points of every pixel centre into c->g (and c->has_record); gbuffer_free frees them. */
 ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err);

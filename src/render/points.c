@@ -121,7 +121,7 @@ static ic_vec3 sample_direct(const points_job *job, uint32_t i, const ic_surface
 {
     ic_vec3 L = ic_ic_direct_light(job->ic, s, b, job->n[i], NULL, rng, rays);
     if (job->tr->scene->env.enabled)
-        L = v3_add(L, ic_ic_env_light(job->ic, s, b, rng, rays));
+        L = v3_add(L, ic_ic_env_light(job->ic, s, b, job->n[i], rng, rays));
     return v3_scale(L, IC_PI);
 }
 
