@@ -9,11 +9,12 @@ thread (runs alternated by bench/mpi.sh), their ratio, and rank 0's communicatio
 (seconds, bytes) in the 2-rank runs.
 
 Part 2 (model, --target: the stats of a one-process render of the scene at the size that matters, e.g.
-Sponza at 1280x720). Each phase is either shared (gathering, the final render, the shared part of
-candidates: the world stage's eye paths and the look-up sweeps, --candidates-serial giving the rest, as
-timed inside one render) or done by every rank (the accelerator, shading points, insertion, the record
-filter, the rest of candidates, and whatever ic_render spends outside its phases). With N ranks of the
-same threads:
+Sponza at 1280x720). Each phase is either shared (gathering, the final render, and the batch strategy's
+"eye paths and look-ups": the world stage's eye paths and the look-up sweeps) or done by every rank (the
+accelerator, shading points, insertion, the record filter, "candidates": the need maps, dithering and
+clustering, and whatever ic_render spends outside its phases). Stats written before "eye paths and
+look-ups" was reported apart count it in "candidates"; --candidates-serial then says which share of that
+every rank does. With N ranks of the same threads:
 
     T_N = serial + shared / N x imbalance(N) + communication(N)
 
@@ -21,13 +22,15 @@ same threads:
     n_p x RECORD_BYTES (the gather result, 184 bytes, and the bounce levels, 12 bytes x (levels + 1));
   - candidates and look-up sweeps: the bytes the 2-rank runs measured beyond the records, scaled by the
     pixel count and by (N-1)/N against 1/2;
-  - the image: the adaptive pilot's sums (4 doubles per pixel) and the image (3 doubles) added over the
-    ranks, 2 (N-1)/N of each per rank (a ring all-reduce);
+  - the image: the adaptive pilot's sums (4 doubles per pixel) and the image (3 doubles), each rank's
+    tiles all-gathered, (N-1)/N of each per rank (--sum-image: added over the ranks as before, 2 (N-1)/N
+    of each, a ring all-reduce);
   - latency: every collective as N - 1 ring steps of ALPHA (50 us at 1 Gb/s, 20 us at 10 Gb/s), about
     12 collectives per pass;
   - imbalance: a rank's share of a pass is m = n_p / N records (rounded up), and its cost the sum of m
-    record costs of relative spread --record-cv; the slowest of N ranks takes about
-    1 + cv sqrt(2 ln N) / sqrt(m) times the mean (the expected maximum of N normal sums), pass by pass;
+    record costs of relative spread --record-cv (default: measured, see BENCHMARKS.md); the slowest of N
+    ranks takes about 1 + cv z_N / sqrt(m) times the mean, z_N the expected maximum of N standard normal
+    draws (computed; --sqrt2ln for the bound sqrt(2 ln N) used before), pass by pass;
     likewise for the adaptive pilot's tiles (m = tiles / N, --tile-cv). Interleaving (record i and tile t on
     rank i mod N, t mod N) makes neighbouring, alike-costing work land on different ranks, so the sums
     are near independent draws. The second adaptive pass (three quarters of the samples) is shared out by
@@ -48,6 +51,17 @@ RESULT_BYTES = 184  # sizeof(ic_gather_result)
 LEVEL_BYTES = 12    # one RGB level (ic_vec3)
 COLLECTIVES_PER_PASS = 12
 ALPHA = {1: 50e-6, 10: 20e-6}
+
+
+def expected_max_normal(n):
+    """E[max of n independent standard normal draws], by the midpoint rule over [-10, 10]."""
+    h, total = 1e-3, 0.0
+    for k in range(20000):
+        x = -10 + (k + 0.5) * h
+        pdf = math.exp(-0.5 * x * x) / math.sqrt(2 * math.pi)
+        cdf = 0.5 * (1 + math.erf(x / math.sqrt(2)))
+        total += x * n * pdf * cdf ** (n - 1) * h
+    return total
 
 
 def load(path):
@@ -79,7 +93,10 @@ def main():
     ap.add_argument("--max-depth", type=int, default=8, help="the renders' --max-depth (levels = max-depth - 1)")
     ap.add_argument("--candidates-serial", type=float, default=0.1,
                     help="share of the candidates phase every rank does alike (clustering, dithering)")
-    ap.add_argument("--record-cv", type=float, default=0.5, help="relative spread of one record's gathering cost")
+    ap.add_argument("--record-cv", type=float, default=0.22,
+                    help="relative spread of one record's gathering cost (0.22 measured on Sponza, BENCHMARKS.md)")
+    ap.add_argument("--sqrt2ln", action="store_true", help="the slowest rank's excess from the bound sqrt(2 ln N)")
+    ap.add_argument("--sum-image", action="store_true", help="model the image added over the ranks (all-reduce)")
     ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
     ap.add_argument("--interleaved-final", action="store_true",
                     help="model the final render's tiles all interleaved (before the second adaptive pass was "
@@ -123,8 +140,13 @@ def main():
     t = load(a.target)
     px = t["width"] * t["height"]
     px_ratio = px / (one[0]["width"] * one[0]["height"])
+    if "eye paths and look-ups" in t["phases"]:
+        shared_cand = phase(t, "eye paths and look-ups")
+        cand_serial = phase(t, "candidates") / (phase(t, "candidates") + shared_cand)
+    else:
+        shared_cand = phase(t, "candidates") * (1 - cand_serial)
     shared = {"gathering": phase(t, "gathering"), "final render": phase(t, "final render"),
-              "candidates": phase(t, "candidates") * (1 - cand_serial)}
+              "candidates": shared_cand}
     total_1 = t["seconds"]
     serial = total_1 - sum(shared.values())
     records = t["records"]
@@ -137,8 +159,10 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     tiles = math.ceil(t["width"] / 16) * math.ceil(t["height"] / 16)
     passes = [p for p in t["records_per_pass"] if p > 0]
+    print("(every rank does %.0f %% of the construction's own work: need maps, dithering, clustering)"
+          % (100 * cand_serial))
     for n in a.ranks:
-        z = math.sqrt(2 * math.log(n))
+        z = math.sqrt(2 * math.log(n)) if a.sqrt2ln else expected_max_normal(n)
         # Gathering: pass by pass, weighted by the pass's records.
         imb_g = sum(p * math.ceil(p / n) / (p / n) * (1 + a.record_cv * z / math.sqrt(math.ceil(p / n)))
                     for p in passes) / sum(passes)
@@ -150,7 +174,7 @@ def main():
             imb_f = 0.25 * imb_f + 0.75 * (1 + (1 + 3 * a.tile_cv) / (tiles / n))
         share = (n - 1) / n
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 +
-                  px * (4 + 3) * 8 * 2 * share)
+                  px * (4 + 3) * 8 * (2 if a.sum_image else 1) * share)
         for gbps in a.links:
             latency = COLLECTIVES_PER_PASS * t["passes"] * (n - 1) * ALPHA[gbps]
             comm = volume * 8 / (gbps * 1e9) + latency

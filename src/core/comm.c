@@ -26,6 +26,24 @@ static ic_result failed(ic_error *err, ic_result r, const char *what)
                         "message", what, ic_result_name(r));
 }
 
+ic_result ic_comm_allgather_sized(ic_comm *comm, void *all, const uint64_t *bytes, const char *what, ic_error *err)
+{
+    if (!ic_comm_is_shared(comm))
+        return IC_OK;
+    uint64_t mine = 0, total = 0;
+    for (int r = 0; r < comm->size; ++r) {
+        if (r < comm->rank)
+            mine += bytes[r];
+        total += bytes[r];
+    }
+    double t0 = now();
+    /* The transport reads this rank's block from its place in `all` (in-place all-gather). */
+    ic_result r = comm->allgather(comm->user, (const char *)all + mine, all, bytes);
+    comm->seconds += now() - t0;
+    comm->bytes += total - bytes[comm->rank];
+    return r == IC_OK ? IC_OK : failed(err, r, what);
+}
+
 ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, size_t item_bytes, ic_error *err)
 {
     if (!ic_comm_is_shared(comm))
@@ -33,20 +51,14 @@ ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, siz
     uint64_t *counts = malloc(sizeof *counts * (size_t)comm->size);
     if (!counts)
         return ic_error_set(err, IC_ERR_OOM, "out of memory for %d ranks' counts", comm->size);
-    uint64_t first, n, mine = 0;
+    uint64_t first, n;
     for (int r = 0; r < comm->size; ++r) {
         ic_comm_block(count, comm->size, r, &first, &n);
         counts[r] = n * item_bytes;
-        if (r == comm->rank)
-            mine = first * item_bytes;
     }
-    double t0 = now();
-    /* The transport reads this rank's block from its place in `all` (in-place all-gather). */
-    ic_result r = comm->allgather(comm->user, (const char *)all + mine, all, counts);
-    comm->seconds += now() - t0;
-    comm->bytes += count * item_bytes - counts[comm->rank];
+    ic_result r = ic_comm_allgather_sized(comm, all, counts, "exchanging records", err);
     free(counts);
-    return r == IC_OK ? IC_OK : failed(err, r, "exchanging records");
+    return r;
 }
 
 ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, size_t item_bytes, uint64_t *total,

@@ -17,6 +17,10 @@ static inline int ic_comm_size(const ic_comm *comm) { return ic_comm_is_shared(c
  * sizes differing by at most one): items [*first, *first + *n). */
 void ic_comm_block(uint64_t count, int size, int r, uint64_t *first, uint64_t *n);
 
+/* Every rank's block of bytes[r] bytes (the same array on every rank), in rank order, gathered into all
+ * on every rank; this rank's block is already in place at its offset (the sum of bytes[q], q < rank).
+ * A no-op for one process; `what` names the data in messages. */
+ic_result ic_comm_allgather_sized(ic_comm *comm, void *all, const uint64_t *bytes, const char *what, ic_error *err);
 /* Every rank's block of `item_bytes`-byte items under ic_comm_block's rule for `count` items, gathered
  * into all (room for count items) on every rank; this rank's block is already in place at its offset.
  * A no-op for one process. */

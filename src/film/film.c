@@ -541,30 +541,68 @@ static ic_result loop_pass_timed(loop_ctx *c, int threads, int s_begin, int s_en
     }
 }
 
-/* Zeroes the sums of the pixels other ranks render, so that adding every rank's sums gives each pixel
- * exactly its own rank's value (x + 0 = x: the same bits as one process). */
-static void clear_other_ranks(loop_ctx *c, double *values, int per_pixel)
+/* The rank that renders tile t. */
+static int tile_owner(const loop_ctx *c, int64_t t) { return c->owner ? c->owner[t] : (int)(t % c->ranks); }
+
+/* Copies tile t's rows between the image-wide array `values` (per_pixel doubles a pixel) and a packed
+ * block at `packed` (the tile's pixels row by row); to_packed chooses the direction. Returns the doubles
+ * copied. */
+static size_t copy_tile(const loop_ctx *c, int64_t t, double *values, double *packed, int per_pixel, int to_packed)
 {
     const ic_camera *cam = c->loop->camera;
-    for (int t = 0; t < c->tiles_x * c->tiles_y; ++t) {
-        if ((c->owner ? c->owner[t] : t % c->ranks) == c->rank)
-            continue;
-        int x0, y0, x1, y1;
-        tile_rect(c, t, &x0, &y0, &x1, &y1);
-        for (int y = y0; y < y1; ++y)
-            memset(&values[((size_t)y * cam->width + x0) * per_pixel], 0,
-                   sizeof *values * (size_t)(x1 - x0) * per_pixel);
+    int x0, y0, x1, y1;
+    tile_rect(c, t, &x0, &y0, &x1, &y1);
+    size_t row = (size_t)(x1 - x0) * (size_t)per_pixel, n = 0;
+    for (int y = y0; y < y1; ++y, n += row) {
+        double *v = &values[((size_t)y * cam->width + x0) * per_pixel];
+        if (to_packed)
+            memcpy(packed + n, v, sizeof *v * row);
+        else
+            memcpy(v, packed + n, sizeof *v * row);
     }
+    return n;
 }
 
-/* Adds the ranks' sums (a no-op for one process). */
+/* Every rank's pixels of its own tiles become every rank's (a no-op for one process): each packs its
+ * tiles, in tile order, into its block of one all-gather, and copies the other ranks' blocks back into
+ * their tiles. Each pixel keeps the bits its renderer computed, and a rank receives the image once
+ * ((N − 1)/N of it), half what a sum over the ranks moves. */
 static ic_result combine_ranks(loop_ctx *c, double *values, int per_pixel, ic_error *err)
 {
     if (c->ranks == 1)
         return IC_OK;
     const ic_camera *cam = c->loop->camera;
-    clear_other_ranks(c, values, per_pixel);
-    return ic_comm_sum(c->loop->comm, values, (uint64_t)cam->width * cam->height * per_pixel, err);
+    const int64_t tiles = (int64_t)c->tiles_x * c->tiles_y;
+    uint64_t *bytes = calloc((size_t)c->ranks, sizeof *bytes), *at = calloc((size_t)c->ranks, sizeof *at);
+    double *all = malloc(sizeof *all * (size_t)cam->width * cam->height * per_pixel);
+    if (!bytes || !at || !all) {
+        free(bytes);
+        free(at);
+        free(all);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for exchanging a %dx%d image", cam->width,
+                            cam->height);
+    }
+    for (int64_t t = 0; t < tiles; ++t) {
+        int x0, y0, x1, y1;
+        tile_rect(c, t, &x0, &y0, &x1, &y1);
+        bytes[tile_owner(c, t)] += sizeof *all * (size_t)(x1 - x0) * (y1 - y0) * per_pixel;
+    }
+    for (int q = 1; q < c->ranks; ++q)
+        at[q] = at[q - 1] + bytes[q - 1] / sizeof *all;
+    size_t n = at[c->rank];
+    for (int64_t t = 0; t < tiles; ++t)
+        if (tile_owner(c, t) == c->rank)
+            n += copy_tile(c, t, values, all + n, per_pixel, 1);
+    ic_result r = ic_comm_allgather_sized(c->loop->comm, all, bytes, "exchanging the image", err);
+    for (int64_t t = 0; r == IC_OK && t < tiles; ++t) {
+        int q = tile_owner(c, t);
+        if (q != c->rank)
+            at[q] += copy_tile(c, t, values, all + at[q], per_pixel, 0);
+    }
+    free(bytes);
+    free(at);
+    free(all);
+    return r;
 }
 
 /* This process's ray and sample counts into res. */

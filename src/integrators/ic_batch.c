@@ -107,9 +107,10 @@ static void world_path(void *p, int64_t own_item, int thread)
 }
 
 /* Collects world-stage candidates in item order (deterministic), then clusters and selects;
- * uncovered_share gets the share of the eye paths' look-up points that found no record. */
+ * uncovered_share gets the share of the eye paths' look-up points that found no record; the paths' own time
+ * is added to *sweep_seconds. */
 static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *out_count, double *uncovered_share,
-                             ic_error *err)
+                             double *sweep_seconds, ic_error *err)
 {
     const ic_camera *cam = &c->tr->scene->camera;
     world_job j;
@@ -135,7 +136,9 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
     uint64_t first, own;
     ic_comm_block((uint64_t)items, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &own);
     j.first = (int64_t)first;
+    double t0 = ic_seconds();
     ic_result r = ic_parallel_for(c->threads, (int64_t)own, world_path, &j);
+    *sweep_seconds += ic_seconds() - t0;
     if (r != IC_OK)
         ic_error_set(err, r, "could not start threads");
     for (int t = 0; t < c->threads; ++t)
@@ -162,6 +165,15 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
     return r;
 }
 
+/* ic_ic_lookup_all, its time outside the exchange between processes added to *sweep_seconds. */
+static ic_result timed_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, int want_lum, double *sweep_seconds)
+{
+    double t0 = ic_seconds(), comm0 = c->comm ? c->comm->seconds : 0.0;
+    ic_result r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION, want_lum);
+    *sweep_seconds += ic_seconds() - t0 - (c->comm ? c->comm->seconds - comm0 : 0.0);
+    return r;
+}
+
 /* Candidates from dithering a need map; pixels that already made a record are dropped. */
 static uint32_t dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix, ic_candidate *cand, uint64_t tag)
 {
@@ -179,13 +191,13 @@ static uint32_t dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix,
 /* Adds records at pixel centres that no record covers (construction acceptance), clustered so that
  * one record serves a whole uncovered patch; repeats until every shading point is covered. */
 static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_candidate *cand, phase_times *pt,
-                                uint32_t *added, ic_error *err)
+                                uint32_t *added, double *sweep_seconds, ic_error *err)
 {
     *added = 0;
     size_t npix = (size_t)c->g.width * c->g.height;
     /* Out of time, uncovered points take the final render's fallback (one path-traced hemisphere ray). */
     for (int round = 0; round < 16 && !ic_ic_out_of_time(c); ++round) {
-        ic_result r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+        ic_result r = timed_lookup_all(c, lum, covered, 0, sweep_seconds);
         if (r != IC_OK)
             return ic_error_set(err, r, "could not start threads");
         uint32_t n = 0;
@@ -227,6 +239,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     uint32_t *pix = malloc(sizeof *pix * npix);
     ic_candidate *cand = malloc(sizeof *cand * npix);
     ic_result r = IC_OK;
+    double sweeps = 0.0; /* seconds in the eye paths and look-up sweeps, exchanges excluded */
     if (c->comm) {
         c->comm_seconds_counted = c->comm->seconds;
         c->comm_bytes_counted = c->comm->bytes;
@@ -237,7 +250,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     }
     /* Pass 0: geometry discontinuity. */
     ic_ic_report(opt, "cache pass 0", 0.0);
-    r = ic_screen_geometry_need(&c->g, c->o.normal_weight, need);
+    r = ic_screen_geometry_need(&c->g, c->o.normal_weight, c->threads, need);
     if (r != IC_OK) {
         ic_error_set(err, r, "out of memory for the discontinuity map");
         goto done;
@@ -254,12 +267,12 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         ic_ic_report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
         uint32_t found = 0, before = ic_cache_count(c->cache);
         if (pass <= c->o.screen_passes) {
-            r = ic_ic_lookup_all(c, lum, covered, IC_ACCEPT_CONSTRUCTION);
+            r = timed_lookup_all(c, lum, covered, 1, &sweeps);
             if (r != IC_OK) {
                 ic_error_set(err, r, "could not start threads");
                 goto done;
             }
-            r = ic_screen_value_need(&c->g, lum, need);
+            r = ic_screen_value_need(&c->g, lum, c->threads, need);
             if (r != IC_OK) {
                 ic_error_set(err, r, "out of memory for the discontinuity map");
                 goto done;
@@ -284,7 +297,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         ic_candidate *wc = NULL;
         uint32_t wn = 0;
         double uncovered = 1.0;
-        r = world_stage(c, pass, &wc, &wn, &uncovered, err);
+        r = world_stage(c, pass, &wc, &wn, &uncovered, &sweeps, err);
         if (r == IC_OK)
             r = ic_ic_gather_and_insert(c, wc, wn, pt, err);
         free(wc);
@@ -308,8 +321,11 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         }
     }
     uint32_t added;
-    r = coverage_sweep(c, lum, covered, cand, pt, &added, err);
+    r = coverage_sweep(c, lum, covered, cand, pt, &added, &sweeps, err);
     count_traffic(c, st, st->passes - 1);
+    /* The part of construction that the processes share out (the rest of it, dithering and clustering,
+     * every process does alike): reported apart so that a scaling model can tell them apart. */
+    ic_stats_add_phase(st, "eye paths and look-ups", sweeps);
 done:
     free(need);
     free(lum);

@@ -137,8 +137,10 @@ ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);
 ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err);
 /* Candidate at a pixel's shading point; tag distinguishes keys of different stages. */
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
-/* Looks up every valid pixel: luminance of the estimate and whether any record contributes. */
-ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc);
+/* Looks up every valid pixel: luminance of the estimate and whether any record contributes. With several
+ * processes every one gets every pixel's `covered`, and its `lum` only if want_lum (otherwise the other
+ * ranks' rows of lum are left as they were). */
+ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc, int want_lum);
 /* 1 once construction has spent its share of the render's time budget (c->deadline). Several processes
  * (c->comm) go by rank 0's clock, so that all stop at the same pass: a collective call then. */
 int ic_ic_out_of_time_shared(ic_ctx *c);

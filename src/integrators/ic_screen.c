@@ -1,6 +1,7 @@
 /* ic_screen.c — discontinuity maps, mip pyramid, blend and dithering (ic_screen.h; Frolov et al. 2012 §3.1). */
 #include "ic_screen.h"
 
+#include "core/threads.h"
 #include "core/vecmath.h"
 
 #include <stdlib.h>
@@ -8,6 +9,8 @@
 
 #define MAX_LEVELS 6 /* 1, 2, 4, 8, 16, 32 pixels: the dithering spacings */
 
+/* One level of the pyramid: the channels its discontinuity reads (p, n, fp for geometry; val for values)
+ * and valid. Level 0 is the g-buffer itself (and the values), not a copy. */
 typedef struct level {
     int w, h;
     ic_vec3 *p, *n;
@@ -25,20 +28,23 @@ static void level_free(level *l)
     memset(l, 0, sizeof *l);
 }
 
-static int level_alloc(level *l, int w, int h)
+static int level_alloc(level *l, int w, int h, int geometry)
 {
     size_t n = (size_t)w * (size_t)h;
     l->w = w;
     l->h = h;
-    l->p = calloc(n, sizeof *l->p);
-    l->n = calloc(n, sizeof *l->n);
-    l->fp = calloc(n, sizeof *l->fp);
-    l->val = calloc(n, sizeof *l->val);
     l->valid = calloc(n, 1);
-    return l->p && l->n && l->fp && l->val && l->valid;
+    if (geometry) {
+        l->p = calloc(n, sizeof *l->p);
+        l->n = calloc(n, sizeof *l->n);
+        l->fp = calloc(n, sizeof *l->fp);
+        return l->valid && l->p && l->n && l->fp;
+    }
+    l->val = calloc(n, sizeof *l->val);
+    return l->valid && l->val;
 }
 
-/* Level l+1 averages the valid pixels of each 2×2 block of level l. */
+/* Level l+1 averages the valid pixels of each 2×2 block of level l (the channels level b has). */
 static void downsample(const level *a, level *b)
 {
     for (int y = 0; y < b->h; ++y) {
@@ -54,20 +60,26 @@ static void downsample(const level *a, level *b)
                     size_t i = (size_t)sy * a->w + sx;
                     if (!a->valid[i])
                         continue;
-                    p = v3_add(p, a->p[i]);
-                    n = v3_add(n, a->n[i]);
-                    fp += a->fp[i];
-                    val += a->val[i];
+                    if (b->p) {
+                        p = v3_add(p, a->p[i]);
+                        n = v3_add(n, a->n[i]);
+                        fp += a->fp[i];
+                    } else {
+                        val += a->val[i];
+                    }
                     ++cnt;
                 }
             }
             size_t o = (size_t)y * b->w + x;
             if (cnt) {
                 float inv = 1.0f / (float)cnt;
-                b->p[o] = v3_scale(p, inv);
-                b->n[o] = v3_norm(n);
-                b->fp[o] = fp * inv;
-                b->val[o] = val * inv;
+                if (b->p) {
+                    b->p[o] = v3_scale(p, inv);
+                    b->n[o] = v3_norm(n);
+                    b->fp[o] = fp * inv;
+                } else {
+                    b->val[o] = val * inv;
+                }
                 b->valid[o] = 1;
             }
         }
@@ -94,76 +106,121 @@ static float value_disc(const level *l, size_t i, size_t j, int lev, float k)
     return fabsf(a - b) / m;
 }
 
-static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc, float k, float *need)
+typedef struct disc_job {
+    const level *L;
+    int lev;
+    disc_fn disc;
+    float k;
+    float *d;              /* the level's texels: the largest discontinuity to a valid 4-neighbour */
+} disc_job;
+
+/* One row of a level's discontinuities. */
+static void disc_row(void *p, int64_t row, int thread)
 {
-    level lv[MAX_LEVELS];
-    memset(lv, 0, sizeof lv);
-    int nlev = 0;
-    ic_result r = IC_OK;
-    if (!level_alloc(&lv[0], g->width, g->height)) {
-        r = IC_ERR_OOM;
-        goto done;
+    (void)thread;
+    const disc_job *j = p;
+    const level *L = j->L;
+    const int ly = (int)row;
+    const int nx[4] = {-1, 1, 0, 0}, ny[4] = {0, 0, -1, 1};
+    for (int lx = 0; lx < L->w; ++lx) {
+        size_t i = (size_t)ly * L->w + lx;
+        float d = 0.0f;
+        if (L->valid[i]) {
+            for (int q = 0; q < 4; ++q) {
+                int ax = lx + nx[q], ay = ly + ny[q];
+                if (ax < 0 || ay < 0 || ax >= L->w || ay >= L->h)
+                    continue;
+                size_t jj = (size_t)ay * L->w + ax;
+                if (L->valid[jj])
+                    d = fmaxf(d, j->disc(L, i, jj, j->lev, j->k));
+            }
+        }
+        j->d[i] = d;
     }
-    size_t npix = (size_t)g->width * g->height;
-    memcpy(lv[0].p, g->p, npix * sizeof *g->p);
-    memcpy(lv[0].n, g->n, npix * sizeof *g->n);
-    memcpy(lv[0].fp, g->footprint, npix * sizeof *g->footprint);
-    memcpy(lv[0].valid, g->valid, npix);
-    if (values)
-        memcpy(lv[0].val, values, npix * sizeof *values);
-    nlev = 1;
+}
+
+typedef struct blend_job {
+    const ic_gbuffer *g;
+    const level *lv;
+    float *const *d;       /* each level's discontinuities */
+    int nlev;
+    float *need;
+} blend_job;
+
+/* One row of the blend of the up-scaled levels (nearest up-scaling). A discontinuity found at level l
+ * lies within about 2^l pixels, so level l is weighted 2^-l: near an edge the need is high and asks for
+ * the finest spacing, and it decays with the distance to the edge rather than flooding the whole 32×32
+ * block that a coarse level's texel covers. Each pixel adds its levels in order, whatever the row's
+ * thread. */
+static void blend_row(void *p, int64_t row, int thread)
+{
+    (void)thread;
+    const blend_job *j = p;
+    const ic_gbuffer *g = j->g;
+    const int y = (int)row;
+    for (int x = 0; x < g->width; ++x) {
+        size_t o = (size_t)y * g->width + x;
+        j->need[o] = 0.0f;
+        if (!g->valid[o])
+            continue;
+        for (int l = 0; l < j->nlev; ++l) {
+            const level *L = &j->lv[l];
+            size_t i = (size_t)(y >> l) * L->w + (size_t)(x >> l);
+            if (L->valid[i])
+                j->need[o] += j->d[l][i] / (float)(1 << l);
+        }
+    }
+}
+
+static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc, float k, int threads, float *need)
+{
+    const int geometry = values == NULL;
+    level lv[MAX_LEVELS];
+    float *d[MAX_LEVELS] = {0};
+    memset(lv, 0, sizeof lv);
+    /* Level 0 reads the g-buffer and the values where they are (const: never written below). */
+    level top = {g->width, g->height, g->p, g->n, g->footprint, (float *)values, g->valid};
+    lv[0] = top;
+    int nlev = 1;
+    ic_result r = IC_OK;
     while (nlev < MAX_LEVELS && lv[nlev - 1].w > 1 && lv[nlev - 1].h > 1) {
-        if (!level_alloc(&lv[nlev], (lv[nlev - 1].w + 1) / 2, (lv[nlev - 1].h + 1) / 2)) {
+        if (!level_alloc(&lv[nlev], (lv[nlev - 1].w + 1) / 2, (lv[nlev - 1].h + 1) / 2, geometry)) {
             r = IC_ERR_OOM;
             goto done;
         }
         downsample(&lv[nlev - 1], &lv[nlev]);
         ++nlev;
     }
-    memset(need, 0, npix * sizeof *need);
-    /* Blend of the up-scaled levels (nearest up-scaling). A discontinuity found at level l lies within
-     * about 2^l pixels, so level l is weighted 2^-l: near an edge the need is high and asks for the
-     * finest spacing, and it decays with the distance to the edge rather than flooding the whole
-     * 32×32 block that a coarse level's texel covers. */
-    for (int l = 0; l < nlev; ++l) {
-        const level *L = &lv[l];
-        for (int y = 0; y < g->height; ++y) {
-            for (int x = 0; x < g->width; ++x) {
-                size_t o = (size_t)y * g->width + x;
-                if (!g->valid[o])
-                    continue;
-                int lx = x >> l, ly = y >> l;
-                size_t i = (size_t)ly * L->w + lx;
-                if (!L->valid[i])
-                    continue;
-                float d = 0.0f;
-                const int nx[4] = {-1, 1, 0, 0}, ny[4] = {0, 0, -1, 1};
-                for (int q = 0; q < 4; ++q) {
-                    int ax = lx + nx[q], ay = ly + ny[q];
-                    if (ax < 0 || ay < 0 || ax >= L->w || ay >= L->h)
-                        continue;
-                    size_t j = (size_t)ay * L->w + ax;
-                    if (L->valid[j])
-                        d = fmaxf(d, disc(L, i, j, l, k));
-                }
-                need[o] += d / (float)(1 << l);
-            }
+    /* Each level's discontinuities once per texel, then the blend reads them. */
+    for (int l = 0; l < nlev && r == IC_OK; ++l) {
+        d[l] = malloc(sizeof *d[l] * (size_t)lv[l].w * (size_t)lv[l].h);
+        if (!d[l]) {
+            r = IC_ERR_OOM;
+            break;
         }
+        disc_job dj = {&lv[l], l, disc, k, d[l]};
+        r = ic_parallel_for(threads, lv[l].h, disc_row, &dj);
+    }
+    if (r == IC_OK) {
+        blend_job j = {g, lv, d, nlev, need};
+        r = ic_parallel_for(threads, g->height, blend_row, &j);
     }
 done:
     for (int l = 0; l < MAX_LEVELS; ++l)
+        free(d[l]);
+    for (int l = 1; l < MAX_LEVELS; ++l)
         level_free(&lv[l]);
     return r;
 }
 
-ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, float *need)
+ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, int threads, float *need)
 {
-    return need_map(g, NULL, geometry_disc, k_normal, need);
+    return need_map(g, NULL, geometry_disc, k_normal, threads, need);
 }
 
-ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, float *need)
+ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int threads, float *need)
 {
-    return need_map(g, luminance, value_disc, 0.0f, need);
+    return need_map(g, luminance, value_disc, 0.0f, threads, need);
 }
 
 uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, uint32_t *pixels)

@@ -24,14 +24,37 @@ typedef struct keyed {
     uint32_t index;
 } keyed;
 
-static int cmp_keyed(const void *a, const void *b)
+/* Byte b of the sort key (morton, key): bytes 0–7 the key's, 8–11 the Morton code's, least significant
+ * first. */
+static unsigned key_byte(const keyed *k, int b)
 {
-    const keyed *x = a, *y = b;
-    if (x->morton != y->morton)
-        return x->morton < y->morton ? -1 : 1;
-    if (x->key != y->key)
-        return x->key < y->key ? -1 : 1;
-    return 0;
+    return b < 8 ? (unsigned)(k->key >> (8 * b)) & 0xffu : (k->morton >> (8 * (b - 8))) & 0xffu;
+}
+
+/* Sorts by (morton, key) ascending: a least-significant-digit radix sort, one stable counting pass per
+ * byte, skipping the bytes every entry shares (most of the 64-bit key). The order is total for distinct
+ * keys, so it is the one a comparison sort gives. Returns the sorted array: a or tmp. */
+static keyed *radix_sort(keyed *a, keyed *tmp, uint32_t n)
+{
+    for (int b = 0; b < 12; ++b) {
+        uint32_t count[256] = {0};
+        for (uint32_t i = 0; i < n; ++i)
+            ++count[key_byte(&a[i], b)];
+        if (count[key_byte(&a[0], b)] == n)
+            continue; /* every entry has this byte: the pass would not move anything */
+        uint32_t at = 0;
+        for (int v = 0; v < 256; ++v) {
+            uint32_t c = count[v];
+            count[v] = at;
+            at += c;
+        }
+        for (uint32_t i = 0; i < n; ++i)
+            tmp[count[key_byte(&a[i], b)]++] = a[i];
+        keyed *t = a;
+        a = tmp;
+        tmp = t;
+    }
+    return a;
 }
 
 uint32_t ic_world_select(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3 hi, float max_box,
@@ -39,10 +62,11 @@ uint32_t ic_world_select(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3
 {
     if (count == 0)
         return 0;
-    keyed *order = malloc(sizeof *order * count);
+    keyed *order = malloc(sizeof *order * count), *spare = malloc(sizeof *spare * count);
     ic_candidate *sorted = malloc(sizeof *sorted * count);
-    if (!order || !sorted) {
+    if (!order || !spare || !sorted) {
         free(order);
+        free(spare);
         free(sorted);
         return 0;
     }
@@ -51,10 +75,11 @@ uint32_t ic_world_select(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3
         order[i].key = cand[i].key;
         order[i].index = i;
     }
-    qsort(order, count, sizeof *order, cmp_keyed);
+    const keyed *by = radix_sort(order, spare, count);
     for (uint32_t i = 0; i < count; ++i)
-        sorted[i] = cand[order[i].index];
+        sorted[i] = cand[by[i].index];
     free(order);
+    free(spare);
 
     const float cos_limit = cosf(normal_angle_deg * IC_PI / 180.0f);
     uint32_t kept = 0, start = 0;

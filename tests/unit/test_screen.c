@@ -1,0 +1,199 @@
+/*
+ * test_screen.c — the batch strategy's screen stage and world-stage selection (Frolov et al. 2012 §3.1)
+ * against plain re-statements of their definitions:
+ *   1. need maps (geometry and value discontinuity): every pixel equal, bit for bit, to a direct
+ *      evaluation of the definition (a 2×2 mip pyramid of the valid pixels, at each level the largest
+ *      discontinuity to a valid 4-neighbour, the levels' values at the pixel added with weight 2^-l in
+ *      level order), on a g-buffer with holes and odd sizes, with 1 and 3 threads;
+ *   2. world-stage selection keeps candidates in (Morton code, key) order: with clusters of one candidate
+ *      each, the output is the input sorted by a comparison sort, keys using all 64 bits and many
+ *      candidates sharing a Morton code.
+ */
+#include "test_util.h"
+
+#include "core/rng.h"
+#include "core/vecmath.h"
+#include "integrators/ic_screen.h"
+#include "integrators/ic_world.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define W 75
+#define H 43
+#define LEVELS 6
+
+/* ---- 1. need maps, by the definition ------------------------------------------------------------- */
+
+typedef struct ref_level {
+    int w, h;
+    ic_vec3 p[W * H], n[W * H];
+    float fp[W * H], val[W * H];
+    uint8_t valid[W * H];
+} ref_level;
+
+static float ref_disc(const ref_level *L, size_t i, size_t j, int lev, float k, int geometry)
+{
+    if (!geometry) {
+        float a = L->val[i], b = L->val[j];
+        return fabsf(a - b) / fmaxf(fmaxf(a, b), 1e-6f);
+    }
+    float nd = 1.0f - ic_clampf(v3_dot(L->n[i], L->n[j]), -1.0f, 1.0f);
+    float pixel = L->fp[i] * (float)(1 << lev);
+    float off = fabsf(v3_dot(L->n[i], v3_sub(L->p[j], L->p[i])));
+    return fminf(k * nd + (pixel > 0.0f ? off / pixel : 0.0f), k);
+}
+
+static void ref_need(const ic_gbuffer *g, const float *values, float k, float *need)
+{
+    static ref_level lv[LEVELS];
+    const int geometry = values == NULL;
+    memset(lv, 0, sizeof lv);
+    lv[0].w = g->width, lv[0].h = g->height;
+    for (int i = 0; i < g->width * g->height; ++i) {
+        lv[0].p[i] = g->p[i], lv[0].n[i] = g->n[i], lv[0].fp[i] = g->footprint[i];
+        lv[0].val[i] = values ? values[i] : 0.0f, lv[0].valid[i] = g->valid[i];
+    }
+    int nlev = 1;
+    while (nlev < LEVELS && lv[nlev - 1].w > 1 && lv[nlev - 1].h > 1) {
+        ref_level *a = &lv[nlev - 1], *b = &lv[nlev];
+        b->w = (a->w + 1) / 2, b->h = (a->h + 1) / 2;
+        for (int y = 0; y < b->h; ++y)
+            for (int x = 0; x < b->w; ++x) {
+                ic_vec3 p = v3s(0), n = v3s(0);
+                float fp = 0, val = 0;
+                int cnt = 0;
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx) {
+                        int sx = 2 * x + dx, sy = 2 * y + dy;
+                        if (sx >= a->w || sy >= a->h || !a->valid[sy * a->w + sx])
+                            continue;
+                        int i = sy * a->w + sx;
+                        p = v3_add(p, a->p[i]), n = v3_add(n, a->n[i]);
+                        fp += a->fp[i], val += a->val[i];
+                        ++cnt;
+                    }
+                int o = y * b->w + x;
+                if (cnt) {
+                    float inv = 1.0f / (float)cnt;
+                    b->p[o] = v3_scale(p, inv), b->n[o] = v3_norm(n);
+                    b->fp[o] = fp * inv, b->val[o] = val * inv, b->valid[o] = 1;
+                }
+            }
+        ++nlev;
+    }
+    for (int y = 0; y < g->height; ++y)
+        for (int x = 0; x < g->width; ++x) {
+            int o = y * g->width + x;
+            need[o] = 0.0f;
+            if (!g->valid[o])
+                continue;
+            for (int l = 0; l < nlev; ++l) {
+                const ref_level *L = &lv[l];
+                int lx = x >> l, ly = y >> l, i = ly * L->w + lx;
+                if (!L->valid[i])
+                    continue;
+                float d = 0.0f;
+                const int nx[4] = {-1, 1, 0, 0}, ny[4] = {0, 0, -1, 1};
+                for (int q = 0; q < 4; ++q) {
+                    int ax = lx + nx[q], ay = ly + ny[q];
+                    if (ax >= 0 && ay >= 0 && ax < L->w && ay < L->h && L->valid[ay * L->w + ax])
+                        d = fmaxf(d, ref_disc(L, (size_t)i, (size_t)(ay * L->w + ax), l, k, geometry));
+                }
+                need[o] += d / (float)(1 << l);
+            }
+        }
+}
+
+static void test_need_maps(void)
+{
+    static ic_vec3 p[W * H], n[W * H];
+    static float fp[W * H], lum[W * H], got[W * H], want[W * H];
+    static uint8_t valid[W * H];
+    ic_rng rng = ic_rng_make(11, 0, 0, 0);
+    /* Two walls meeting in a crease, a step in depth, noise, and holes (the sky, a window). */
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            int i = y * W + x;
+            float z = x < 40 ? 2.0f : 2.0f + 0.05f * (float)(x - 40);
+            if (y > 30)
+                z += 0.7f;
+            p[i] = v3(0.01f * (float)x, 0.01f * (float)y, z + 0.002f * ic_rng_float(&rng));
+            n[i] = x < 40 ? v3(0, 0, 1) : v3_norm(v3(-0.6f, 0.1f * ic_rng_float(&rng), 0.8f));
+            fp[i] = 0.01f * z;
+            lum[i] = (x < 20 ? 0.2f : 1.0f) * (1.0f + 0.3f * ic_rng_float(&rng)) + (y == 7 ? 5.0f : 0.0f);
+            valid[i] = !((x > 60 && y < 10) || (x + y) % 17 == 0);
+        }
+    ic_gbuffer g = {W, H, p, n, fp, valid};
+    for (int kind = 0; kind < 2; ++kind) {
+        const float *values = kind ? lum : NULL;
+        ref_need(&g, values, 4.0f, want);
+        for (int threads = 1; threads <= 3; threads += 2) {
+            memset(got, 0xff, sizeof got);
+            ic_result r = kind ? ic_screen_value_need(&g, lum, threads, got)
+                               : ic_screen_geometry_need(&g, 4.0f, threads, got);
+            CHECK(r == IC_OK, "%s need map: %s", kind ? "value" : "geometry", ic_result_name(r));
+            int differ = 0, positive = 0;
+            for (int i = 0; i < W * H; ++i) {
+                differ += memcmp(&got[i], &want[i], sizeof got[i]) != 0;
+                positive += want[i] > 0.0f;
+            }
+            CHECK(differ == 0, "%s need map, %d threads: %d of %d pixels differ from the definition",
+                  kind ? "value" : "geometry", threads, differ, W * H);
+            CHECK(positive > W * H / 10, "%s need map: only %d pixels see a discontinuity (the test scene "
+                  "should show many)", kind ? "value" : "geometry", positive);
+        }
+    }
+}
+
+/* ---- 2. world-stage selection order ------------------------------------------------------------- */
+
+typedef struct ref_entry {
+    uint32_t morton;
+    uint64_t key;
+} ref_entry;
+
+static int cmp_ref(const void *a, const void *b)
+{
+    const ref_entry *x = a, *y = b;
+    if (x->morton != y->morton)
+        return x->morton < y->morton ? -1 : 1;
+    return (x->key > y->key) - (x->key < y->key);
+}
+
+static void test_world_order(void)
+{
+    enum { N = 3000 };
+    static ic_candidate cand[N];
+    static ref_entry want[N];
+    ic_vec3 lo = v3(-1, -1, -1), hi = v3(1, 1, 1);
+    ic_rng rng = ic_rng_make(5, 0, 0, 0);
+    for (int i = 0; i < N; ++i) {
+        /* A third on a coarse lattice (many share a Morton cell, told apart by the key alone), the rest
+         * scattered; every position distinct, so each is a cluster of its own with max_box 0. */
+        float jitter = 1e-6f * (float)(i + 1);
+        ic_vec3 q = i % 3 == 0 ? v3(0.5f + jitter, -0.25f, 0.125f + jitter)
+                               : v3(2 * ic_rng_float(&rng) - 1, 2 * ic_rng_float(&rng) - 1, 2 * ic_rng_float(&rng) - 1);
+        cand[i].p = q;
+        cand[i].n = v3(0, 0, 1);
+        cand[i].footprint = 0.0f;
+        cand[i].key = ((uint64_t)ic_rng_below(&rng, 0xffffffffu) << 32) ^ (uint64_t)i << 3 ^ (uint64_t)(i % 7);
+        want[i].morton = ic_morton3(q, lo, hi);
+        want[i].key = cand[i].key;
+    }
+    qsort(want, N, sizeof *want, cmp_ref);
+    uint32_t kept = ic_world_select(cand, N, lo, hi, 0.0f, N, 30.0f);
+    CHECK(kept == N, "world select with one-candidate clusters kept %u of %d", kept, N);
+    int wrong = 0;
+    for (uint32_t i = 0; i < kept; ++i)
+        wrong += cand[i].key != want[i].key || ic_morton3(cand[i].p, lo, hi) != want[i].morton;
+    CHECK(wrong == 0, "world select: %d of %u candidates out of (Morton, key) order", wrong, kept);
+}
+
+int main(void)
+{
+    test_need_maps();
+    test_world_order();
+    TEST_MAIN_END();
+}
