@@ -9,10 +9,11 @@ thread (runs alternated by bench/mpi.sh), their ratio, and rank 0's communicatio
 (seconds, bytes) in the 2-rank runs.
 
 Part 2 (model, --target: the stats of a one-process render of the scene at the size that matters, e.g.
-Sponza at 1280x720). Each phase is either shared (gathering, the final render, and the batch strategy's
-"eye paths and look-ups": the world stage's eye paths and the look-up sweeps) or done by every rank (the
-accelerator, shading points, insertion, the record filter, "candidates": the need maps, dithering and
-clustering, and whatever ic_render spends outside its phases). Stats written before "eye paths and
+Sponza at 1280x720). Each phase is either shared (gathering, the final render, the batch strategy's
+"eye paths and look-ups": the world stage's eye paths and the look-up sweeps, the shading points, the
+record filter, and insertion's validity-radius clamp, --insertion-shared of insertion) or done by every
+rank (the accelerator, the rest of insertion, "candidates": the need maps, dithering and clustering, and
+whatever ic_render spends outside its phases). Stats written before "eye paths and
 look-ups" was reported apart count it in "candidates"; --candidates-serial then says which share of that
 every rank does. With N ranks of the same threads:
 
@@ -22,6 +23,7 @@ every rank does. With N ranks of the same threads:
     n_p x RECORD_BYTES (the gather result, 184 bytes, and the bounce levels, 12 bytes x (levels + 1));
   - candidates and look-up sweeps: the bytes the 2-rank runs measured beyond the records, scaled by the
     pixel count and by (N-1)/N against 1/2;
+  - the shading points (29 bytes a pixel) and the filtered records (88 bytes each), all-gathered once;
   - the image: the adaptive pilot's sums (4 doubles per pixel) and the image (3 doubles), each rank's
     tiles all-gathered, (N-1)/N of each per rank (--sum-image: added over the ranks as before, 2 (N-1)/N
     of each, a ring all-reduce);
@@ -95,6 +97,9 @@ def main():
                     help="share of the candidates phase every rank does alike (clustering, dithering)")
     ap.add_argument("--record-cv", type=float, default=0.22,
                     help="relative spread of one record's gathering cost (0.22 measured on Sponza, BENCHMARKS.md)")
+    ap.add_argument("--insertion-shared", type=float, default=0.28,
+                    help="share of insertion that the ranks divide (the validity clamp: 0.28 on Sponza 1280x720, "
+                         "BENCHMARKS.md)")
     ap.add_argument("--sqrt2ln", action="store_true", help="the slowest rank's excess from the bound sqrt(2 ln N)")
     ap.add_argument("--sum-image", action="store_true", help="model the image added over the ranks (all-reduce)")
     ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
@@ -146,14 +151,18 @@ def main():
     else:
         shared_cand = phase(t, "candidates") * (1 - cand_serial)
     shared = {"gathering": phase(t, "gathering"), "final render": phase(t, "final render"),
-              "candidates": shared_cand}
+              "candidates": shared_cand,
+              "points, filter, validity": phase(t, "shading points") + phase(t, "record filter") +
+                                          a.insertion_shared * phase(t, "insertion")}
     total_1 = t["seconds"]
     serial = total_1 - sum(shared.values())
     records = t["records"]
     print("\n## model: %s at %dx%d, %d threads per rank: %.0f s in one process (%d records, %d passes); "
-          "shared %.0f s (gathering %.0f, final render %.0f, candidates %.0f), every rank %.1f s"
+          "shared %.1f s (gathering %.1f, final render %.1f, eye paths and look-ups %.1f, shading points, record "
+          "filter and validity clamp %.2f), every rank %.2f s"
           % (t["scene"], t["width"], t["height"], t["threads"], total_1, records, t["passes"],
-             sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"], serial))
+             sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"],
+             shared["points, filter, validity"], serial))
     print("| ranks | link | imbalance (gathering, final) | received per rank (MB) | communication (s) | T_N (s) "
           "| speed-up | efficiency |")
     print("|---|---|---|---|---|---|---|---|")
@@ -174,12 +183,12 @@ def main():
             imb_f = 0.25 * imb_f + 0.75 * (1 + (1 + 3 * a.tile_cv) / (tiles / n))
         share = (n - 1) / n
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 +
-                  px * (4 + 3) * 8 * (2 if a.sum_image else 1) * share)
+                  px * (4 + 3) * 8 * (2 if a.sum_image else 1) * share + (px * 29 + records * 88) * share)
         for gbps in a.links:
             latency = COLLECTIVES_PER_PASS * t["passes"] * (n - 1) * ALPHA[gbps]
             comm = volume * 8 / (gbps * 1e9) + latency
-            tn = (serial + (shared["gathering"] + shared["candidates"]) / n * imb_g + shared["final render"] / n * imb_f
-                  + comm)
+            tn = (serial + (shared["gathering"] + shared["candidates"] + shared["points, filter, validity"]) / n * imb_g
+                  + shared["final render"] / n * imb_f + comm)
             print("| %d | %d Gb/s | %.2f, %.2f | %.1f | %.2f | %.1f | %.1f | %.2f |"
                   % (n, gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
         if n == a.ranks[-1]:

@@ -99,6 +99,7 @@
 #ifndef IRRCACHE_CACHE_H
 #define IRRCACHE_CACHE_H
 
+#include "irrcache/comm.h"
 #include "irrcache/common.h"
 #include "irrcache/defaults.h"
 
@@ -299,6 +300,12 @@ int ic_cache_query_linear(const ic_cache *cache, const ic_cache_lookup *q, ic_ca
 int ic_cache_record_weight(const ic_cache *cache, uint32_t index, ic_vec3 p, ic_vec3 n, ic_cache_acceptance acceptance,
                            float *weight);
 
+/* The processes (irrcache/comm.h) that make the same insertions, in the same order, into copies of this
+ * cache (NULL, the default: this process alone). Each then computes the validity-radius clamp for a
+ * block of every batch's new records and the blocks are exchanged, so every copy stays the same, bit for
+ * bit; insertion becomes a collective operation: every process must make every insertion call. The comm
+ * must outlive the insertions. */
+void ic_cache_set_comm(ic_cache *cache, ic_comm *comm);
 /* Copies record index into *out; IC_ERR_INVALID_ARG if index ≥ count. */
 ic_result ic_cache_get_record(const ic_cache *cache, uint32_t index, ic_record *out);
 /* Lowers a_i of record index (adaptive caching); raising it is refused. Counts a change. */

@@ -132,6 +132,11 @@ void ic_cache_destroy(ic_cache *c)
 
 const ic_cache_params *ic_cache_get_params(const ic_cache *c) { return &c->params; }
 uint32_t ic_cache_count(const ic_cache *c) { return c ? c->count : 0; }
+void ic_cache_set_comm(ic_cache *c, ic_comm *comm)
+{
+    if (c)
+        c->comm = comm;
+}
 size_t ic_cache_bytes_per_record(void) { return 3 * sizeof(ic_float4) + sizeof(ic_record_cold); }
 uint32_t ic_cache_ellipse_count(const ic_cache *c) { return c ? c->ellipse_count : 0; }
 

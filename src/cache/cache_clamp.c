@@ -14,6 +14,7 @@
  */
 #include "cache_store.h"
 
+#include "core/comm.h"
 #include "core/threads.h"
 
 #include <math.h>
@@ -174,16 +175,32 @@ static void validity_one(void *ctx, int64_t item, int thread)
 
 ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first)
 {
-    validity_job job = {c, first, c->params.validity_k,
-                        cosf(c->params.validity_angle_deg * (IC_PI / 180.0f))};
     uint32_t n = c->count - first;
-    /* Each item reads positions only and writes its own radius: any thread count, same result. */
-    if (n < 64) {
-        for (uint32_t k = 0; k < n; ++k)
+    /* Several processes (ic_cache_set_comm): a block of the new records each, their radii exchanged. */
+    uint64_t block, own;
+    ic_comm_block(n, ic_comm_size(c->comm), ic_comm_rank(c->comm), &block, &own);
+    validity_job job = {c, first + (uint32_t)block, c->params.validity_k,
+                        cosf(c->params.validity_angle_deg * (IC_PI / 180.0f))};
+    /* Each item reads positions only and writes its own radius: any thread or process count, same result. */
+    ic_result r = IC_OK;
+    if (own < 64) {
+        for (uint32_t k = 0; k < own; ++k)
             validity_one(&job, k, 0);
-        return IC_OK;
+    } else {
+        r = ic_parallel_for(c->params.threads, (int64_t)own, validity_one, &job);
     }
-    return ic_parallel_for(c->params.threads, n, validity_one, &job);
+    if (r != IC_OK || !ic_comm_is_shared(c->comm))
+        return r;
+    float *radius = malloc(sizeof *radius * (n ? n : 1));
+    if (!radius)
+        return IC_ERR_OOM;
+    for (uint64_t k = block; k < block + own; ++k)
+        radius[k] = c->sphere[first + k].w;
+    r = ic_comm_allgather_blocks(c->comm, radius, n, sizeof *radius, NULL);
+    for (uint32_t k = 0; r == IC_OK && k < n; ++k)
+        c->sphere[first + k].w = radius[k];
+    free(radius);
+    return r;
 }
 
 /* ---- Step 3: gradient-difference scaling (Castaño 2014) --------------------------------------- */

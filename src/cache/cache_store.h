@@ -98,6 +98,7 @@ size_t ic_frozen_bytes(const ic_frozen *f);
 
 struct ic_cache {
     ic_cache_params params;      /* resolved */
+    ic_comm *comm;               /* the processes that share its insertions (ic_cache_set_comm), or NULL */
     uint32_t count, cap;
     ic_float4 *sphere;           /* p_i, R_i */
     ic_float4 *normal;           /* n_i, a_i */

@@ -121,6 +121,7 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     c->o.gather.seed ^= opt->seed;
     c->o.cache.threads = opt->threads;
     ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);
+    ic_cache_set_comm(c->cache, c->comm); /* every process makes the same insertions */
     double t0 = ic_seconds();
     if (r == IC_OK)
         r = ic_ic_gbuffer_build(c, err);

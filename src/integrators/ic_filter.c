@@ -44,6 +44,7 @@ typedef struct filter_job {
     uint32_t **scratch;        /* per thread: NEIGHBOURS_MAX indices */
     float **kern;              /* per thread: kernel weights */
     ic_vec3 **val;             /* per thread: extrapolated values */
+    int64_t first;             /* this process's block of records starts here */
 } filter_job;
 
 static float lum(ic_vec3 v) { return v3_lum(v); }
@@ -58,9 +59,10 @@ static ic_vec3 extrapolate(const ic_record *j, const ic_record *i)
     return v3(e[0], e[1], e[2]);
 }
 
-static void filter_one(void *p, int64_t item, int thread)
+static void filter_one(void *p, int64_t own_item, int thread)
 {
     filter_job *j = p;
+    int64_t item = j->first + own_item;
     const ic_record *ri = &j->rec[item];
     ic_record *o = &j->out[item];
     *o = *ri;
@@ -136,7 +138,38 @@ static void filter_one(void *p, int64_t item, int thread)
     o->sigma = v3_scale(ri->sigma, sqrtf(keep * keep + lambda * lambda * of_mean * of_mean));
 }
 
-ic_result ic_ic_filter_cache(ic_cache *cache, int threads, float scale, ic_error *err)
+/* What the filter changes in a record, as the processes exchange it. */
+typedef struct filtered {
+    ic_vec3 irradiance, grad_rot[3], grad_trans[3], sigma;
+} filtered;
+
+/* Several processes: every rank's block [first, first + own) of out's filtered values to every rank. */
+static ic_result exchange_values(ic_comm *comm, ic_record *out, uint32_t n, uint64_t first, uint64_t own,
+                                 ic_error *err)
+{
+    if (!ic_comm_is_shared(comm))
+        return IC_OK;
+    filtered *v = malloc(sizeof *v * n);
+    if (!v)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for exchanging %u filtered records", n);
+    for (uint64_t i = first; i < first + own; ++i) {
+        v[i].irradiance = out[i].irradiance;
+        memcpy(v[i].grad_rot, out[i].grad_rot, sizeof v[i].grad_rot);
+        memcpy(v[i].grad_trans, out[i].grad_trans, sizeof v[i].grad_trans);
+        v[i].sigma = out[i].sigma;
+    }
+    ic_result r = ic_comm_allgather_blocks(comm, v, n, sizeof *v, err);
+    for (uint32_t i = 0; i < n && r == IC_OK; ++i) {
+        out[i].irradiance = v[i].irradiance;
+        memcpy(out[i].grad_rot, v[i].grad_rot, sizeof v[i].grad_rot);
+        memcpy(out[i].grad_trans, v[i].grad_trans, sizeof v[i].grad_trans);
+        out[i].sigma = v[i].sigma;
+    }
+    free(v);
+    return r;
+}
+
+ic_result ic_ic_filter_cache(ic_cache *cache, int threads, ic_comm *comm, float scale, ic_error *err)
 {
     uint32_t n = ic_cache_count(cache);
     if (n == 0 || !(scale > 0.0f))
@@ -165,9 +198,15 @@ ic_result ic_ic_filter_cache(ic_cache *cache, int threads, float scale, ic_error
             ic_cache_get_record(cache, i, &rec[i]);
         j.rec = rec;
         j.out = out;
-        r = ic_parallel_for(threads, n, filter_one, &j);
+        /* Several processes: a block of records each, their filtered values exchanged. */
+        uint64_t first, own;
+        ic_comm_block(n, ic_comm_size(comm), ic_comm_rank(comm), &first, &own);
+        j.first = (int64_t)first;
+        r = ic_parallel_for(threads, (int64_t)own, filter_one, &j);
         if (r != IC_OK)
             ic_error_set(err, r, "could not start threads");
+        else
+            r = exchange_values(comm, out, n, first, own, err);
         for (uint32_t i = 0; i < n && r == IC_OK; ++i)
             if ((r = ic_cache_set_record_value(cache, i, out[i].irradiance, out[i].grad_rot, out[i].grad_trans,
                                                out[i].sigma)) != IC_OK)

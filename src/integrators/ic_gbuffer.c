@@ -41,13 +41,15 @@ int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf 
 typedef struct gbuffer_job {
     ic_ctx *c;
     uint64_t *rays;            /* per thread, padded */
+    int first_row;             /* this process's block of rows starts here */
 } gbuffer_job;
 
 #define PAD 8
 
-static void gbuffer_row(void *p, int64_t y, int thread)
+static void gbuffer_row(void *p, int64_t item, int thread)
 {
     gbuffer_job *j = p;
+    int64_t y = j->first_row + item;
     ic_ctx *c = j->c;
     const ic_camera *cam = &c->tr->scene->camera;
     for (int x = 0; x < cam->width; ++x) {
@@ -83,12 +85,22 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err)
         free(rays);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for the shading-point buffers");
     }
-    gbuffer_job j = {c, rays};
-    ic_result r = ic_parallel_for(c->threads, cam->height, gbuffer_row, &j);
+    /* Several processes (c->comm): a block of rows each, exchanged, so every process holds every point. */
+    uint64_t first, rows;
+    ic_comm_block((uint64_t)cam->height, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &rows);
+    gbuffer_job j = {c, rays, (int)first};
+    ic_result r = ic_parallel_for(c->threads, (int64_t)rows, gbuffer_row, &j);
     for (int t = 0; t < c->threads; ++t)
         atomic_fetch_add(&c->rays, rays[t * PAD]);
     free(rays);
-    return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
+    if (r != IC_OK)
+        return ic_error_set(err, r, "could not start threads");
+    const size_t row_px = (size_t)cam->width;
+    void *buf[4] = {c->g.p, c->g.n, c->g.footprint, c->g.valid};
+    const size_t bytes[4] = {sizeof *c->g.p, sizeof *c->g.n, sizeof *c->g.footprint, 1};
+    for (int k = 0; k < 4 && r == IC_OK; ++k)
+        r = ic_comm_allgather_blocks(c->comm, buf[k], (uint64_t)cam->height, bytes[k] * row_px, err);
+    return r;
 }
 
 void ic_ic_gbuffer_free(ic_ctx *c)

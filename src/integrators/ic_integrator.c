@@ -126,7 +126,7 @@ static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt,
     *t_candidates = fmax(ic_seconds() - t0 - pt->gather - pt->insert - own, 0.0);
     if (c->o.record_filter.mode != IC_CACHE_OFF) {
         double tf = ic_seconds();
-        r = ic_ic_filter_cache(c->cache, c->threads, c->o.record_filter.value, err);
+        r = ic_ic_filter_cache(c->cache, c->threads, c->comm, c->o.record_filter.value, err);
         if (r != IC_OK)
             return r;
         ic_stats_add_phase(st, "record filter", ic_seconds() - tf);

@@ -238,10 +238,10 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
 /* Křivánek et al. 2006 §4 adaptive caching, Algorithm 1 over the G-buffer shading points (ic_adaptive.c). */
 ic_result ic_ic_build_adaptive(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt,
                                ic_error *err);
-/* Replaces every record's value by a robust mean over its neighbours within scale times its influence
- * radius (ic_filter.c), on `threads` threads (0: all cores; the result does not depend on it); a no-op
- * for scale ≤ 0. */
-ic_result ic_ic_filter_cache(ic_cache *cache, int threads, float scale, ic_error *err);
+/* Moves every record's value towards a mean over its neighbours within scale times its influence radius
+ * (ic_filter.c), on `threads` threads (0: all cores; the result does not depend on it) and, with a comm
+ * of several processes, a block of records on each, exchanged; a no-op for scale ≤ 0. */
+ic_result ic_ic_filter_cache(ic_cache *cache, int threads, ic_comm *comm, float scale, ic_error *err);
 /* The strategy of c's options (construction only, no final render; ic_integrator.c). */
 ic_result ic_ic_build(ic_ctx *c, const ic_render_options *opt, ic_render_stats *st, phase_times *pt, ic_error *err);
 /* The amap AOV: a_i of the heaviest contributing record per pixel centre on a colour ramp (log scale

@@ -4,13 +4,16 @@
  * in-memory transport (a barrier and shared pointers), so the library's side runs in every build,
  * the sanitizer build included, with no MPI: the cache (batch and adaptive), the path tracer, a loaded
  * cache file and the sensor points at 2, 3 and 5 ranks against one process with 2 threads; under a time
- * budget (path tracer and cache) every rank the same image. tests/mpi/test_mpi.sh does the same through
+ * budget (path tracer and cache) every rank the same image; cache insertions shared by 3 ranks
+ * (ic_cache_set_comm) the records one process makes. tests/mpi/test_mpi.sh does the same through
  * mpirun.
  */
 #include "test_util.h"
 
 #include "test_render_util.h"
 
+#include "core/rng.h"
+#include "irrcache/cache.h"
 #include "irrcache/points.h"
 
 #include <pthread.h>
@@ -93,6 +96,9 @@ typedef struct rank_job {
     uint32_t point_count;
     ic_points_options popt;
     ic_point_result *results;
+    const ic_record *records;      /* cache insertions instead of a render: batches of batch_size */
+    uint32_t record_count, batch_size;
+    ic_cache *cache;
     ic_result r;
     ic_error err;
 } rank_job;
@@ -100,7 +106,17 @@ typedef struct rank_job {
 static void *run_rank(void *p)
 {
     rank_job *j = p;
-    if (j->points) {
+    if (j->records) {
+        ic_cache_params cp = {0};
+        cp.threads = 1;
+        j->r = ic_cache_create(&cp, &j->cache, &j->err);
+        if (j->r == IC_OK)
+            ic_cache_set_comm(j->cache, &j->comm);
+        for (uint32_t at = 0; j->r == IC_OK && at < j->record_count; at += j->batch_size) {
+            uint32_t n = j->record_count - at < j->batch_size ? j->record_count - at : j->batch_size;
+            j->r = ic_cache_insert_batch(j->cache, j->records + at, n, NULL, &j->err);
+        }
+    } else if (j->points) {
         j->popt.comm = &j->comm;
         j->r = ic_points_compute(j->scene, j->points, j->point_count, &j->popt, j->results, NULL, &j->err);
     } else {
@@ -229,6 +245,56 @@ static void check_points(const ic_scene *scene, ic_integrator integrator)
               integrator == IC_INTEGRATOR_IC ? "cache" : "path tracer", r);
 }
 
+/* Insertions into copies of one cache shared by 3 ranks (ic_cache_set_comm: each clamps a block of every
+ * batch's validity radii): every copy's records, radii included, equal one process's. Batches of 300 give
+ * every rank a block above the clamp's threaded size, of 7 below it, of 1 some ranks with none. */
+static void check_cache_insertions(void)
+{
+    enum { N = 900 };
+    static ic_record recs[N];
+    ic_rng rng = ic_rng_make(3, 0, 0, 0);
+    for (int i = 0; i < N; ++i) {
+        memset(&recs[i], 0, sizeof recs[i]);
+        recs[i].position = (ic_vec3){4.0f * ic_rng_float(&rng), 0.0f, 4.0f * ic_rng_float(&rng)};
+        recs[i].normal = (ic_vec3){0.0f, 1.0f, 0.0f};
+        recs[i].irradiance = (ic_vec3){1.0f, 1.0f, 1.0f};
+        recs[i].harmonic_mean_dist = 0.05f + 2.0f * ic_rng_float(&rng);
+    }
+    static const uint32_t batches[] = {300, 7, 1};
+    for (size_t b = 0; b < sizeof batches / sizeof batches[0]; ++b) {
+        uint32_t count = batches[b] == 1 ? 40 : N;
+        rank_job one[1], jobs[3];
+        memset(one, 0, sizeof one);
+        memset(jobs, 0, sizeof jobs);
+        for (int r = 0; r < 3; ++r) {
+            jobs[r].records = recs;
+            jobs[r].record_count = count;
+            jobs[r].batch_size = batches[b];
+        }
+        one[0] = jobs[0];
+        CHECK(run_job(one, 1) && run_job(jobs, 3), "cache insertions in batches of %u failed", batches[b]);
+        int differ = 0, clamped = 0;
+        for (uint32_t i = 0; i < count && one[0].cache; ++i) {
+            ic_record a, c;
+            ic_cache_get_record(one[0].cache, i, &a);
+            clamped += a.radius < a.harmonic_mean_dist;
+            for (int r = 0; r < 3; ++r) {
+                if (!jobs[r].cache || ic_cache_get_record(jobs[r].cache, i, &c) != IC_OK) {
+                    ++differ;
+                    continue;
+                }
+                differ += memcmp(&a, &c, sizeof a) != 0;
+            }
+        }
+        CHECK(differ == 0, "cache insertions in batches of %u on 3 ranks: %d records differ from one process's",
+              batches[b], differ);
+        CHECK(clamped > 0, "cache insertions in batches of %u: no radius was clamped (nothing tested)", batches[b]);
+        ic_cache_destroy(one[0].cache);
+        for (int r = 0; r < 3; ++r)
+            ic_cache_destroy(jobs[r].cache);
+    }
+}
+
 int main(void)
 {
     ic_error err = {0};
@@ -287,6 +353,7 @@ int main(void)
 
     check_points(scene, IC_INTEGRATOR_IC);
     check_points(scene, IC_INTEGRATOR_PT);
+    check_cache_insertions();
     ic_scene_free(scene);
     remove(CACHE_FILE);
     TEST_MAIN_END();

@@ -108,7 +108,7 @@ static void test_noise(const char *name, truth_fn truth, ic_vec3 gradient)
     double bias0, bias1;
     double before = rms_error(c, truth, 0.0f, &bias0);
     ic_error err;
-    CHECK(ic_ic_filter_cache(c, 2, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "%s: filter runs", name);
+    CHECK(ic_ic_filter_cache(c, 2, NULL, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "%s: filter runs", name);
     double after = rms_error(c, truth, 0.0f, &bias1);
     printf("%s: record error %.4f before, %.4f after (mean %+.4f, %+.4f)\n", name, before, after, bias0, bias1);
     CHECK(after < 0.5 * before, "%s: error %.4f not cut by 2x from %.4f", name, after, before);
@@ -127,7 +127,7 @@ static void test_skewed(void)
     double before, after;
     rms_error(c, flat, 0.0f, &before);
     ic_error err;
-    CHECK(ic_ic_filter_cache(c, 2, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "skewed: filter runs");
+    CHECK(ic_ic_filter_cache(c, 2, NULL, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "skewed: filter runs");
     double rms = rms_error(c, flat, 0.0f, &after);
     printf("skewed: mean error %+.4f before, %+.4f after (rms after %.4f)\n", before, after, rms);
     CHECK(fabs(after - before) < 0.01, "skewed: the filter moved the records' mean by %+.4f", after - before);
@@ -143,7 +143,7 @@ static void test_step(void)
         return;
     double bias, before = rms_error(c, step, 0.3f, &bias);
     ic_error err;
-    CHECK(ic_ic_filter_cache(c, 2, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "step: filter runs");
+    CHECK(ic_ic_filter_cache(c, 2, NULL, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "step: filter runs");
     double worst = 0.0;
     for (uint32_t i = 0; i < ic_cache_count(c); ++i) {
         ic_record r;
@@ -180,7 +180,7 @@ static void test_corner(void)
         r.harmonic_mean_dist = 0.5f;
         ic_cache_insert(c, &r, NULL, &err);
     }
-    CHECK(ic_ic_filter_cache(c, 1, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "corner: filter runs");
+    CHECK(ic_ic_filter_cache(c, 1, NULL, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "corner: filter runs");
     int mixed = 0;
     for (uint32_t i = 0; i < ic_cache_count(c); ++i) {
         ic_record r;
@@ -201,7 +201,7 @@ static void test_curved(void)
         return;
     double bias, before = rms_error(c, bowl, 0.0f, &bias);
     ic_error err;
-    CHECK(ic_ic_filter_cache(c, 2, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "curved: filter runs");
+    CHECK(ic_ic_filter_cache(c, 2, NULL, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK, "curved: filter runs");
     double after = rms_error(c, bowl, 0.0f, &bias);
     printf("curved: record error %.4f before, %.4f after (sigma %.2f)\n", before, after, (double)sigma);
     CHECK(after < 1.3 * before, "curved: the filter biased the records: error %.4f from %.4f", after, before);
@@ -215,8 +215,8 @@ static void test_threads(void)
     CHECK(a && b, "threads: caches built");
     if (!a || !b)
         return;
-    ic_ic_filter_cache(a, 1, IC_DEFAULT_RECORD_FILTER, &err);
-    ic_ic_filter_cache(b, 2, IC_DEFAULT_RECORD_FILTER, &err);
+    ic_ic_filter_cache(a, 1, NULL, IC_DEFAULT_RECORD_FILTER, &err);
+    ic_ic_filter_cache(b, 2, NULL, IC_DEFAULT_RECORD_FILTER, &err);
     int same = 1;
     for (uint32_t i = 0; i < ic_cache_count(a); ++i) {
         ic_record x, y;
