@@ -163,13 +163,13 @@ def main():
           % (t["scene"], t["width"], t["height"], t["threads"], total_1, records, t["passes"],
              sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"],
              shared["points, filter, validity"], serial))
+    print("(every rank does %.0f %% of the construction's own work: need maps, dithering, clustering)"
+          % (100 * cand_serial))
     print("| ranks | link | imbalance (gathering, final) | received per rank (MB) | communication (s) | T_N (s) "
           "| speed-up | efficiency |")
     print("|---|---|---|---|---|---|---|---|")
     tiles = math.ceil(t["width"] / 16) * math.ceil(t["height"] / 16)
     passes = [p for p in t["records_per_pass"] if p > 0]
-    print("(every rank does %.0f %% of the construction's own work: need maps, dithering, clustering)"
-          % (100 * cand_serial))
     for n in a.ranks:
         z = math.sqrt(2 * math.log(n)) if a.sqrt2ln else expected_max_normal(n)
         # Gathering: pass by pass, weighted by the pass's records.
