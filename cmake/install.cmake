@@ -53,8 +53,9 @@ install(TARGETS ${IC_INSTALL_LIBRARIES} EXPORT irrcacheTargets
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # The cache-only install carries only the headers its libraries implement.
 if(IRRCACHE_CACHE_ONLY)
-  install(FILES include/irrcache/cache.h include/irrcache/common.h include/irrcache/defaults.h
-                include/irrcache/gather.h include/irrcache/hsh.h include/irrcache/version.h
+  install(FILES include/irrcache/cache.h include/irrcache/comm.h include/irrcache/common.h
+                include/irrcache/defaults.h include/irrcache/gather.h include/irrcache/hsh.h
+                include/irrcache/version.h
           DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/irrcache)
 else()
   install(DIRECTORY include/irrcache DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} FILES_MATCHING PATTERN "*.h")

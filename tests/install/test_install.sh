@@ -38,7 +38,7 @@ if [ "$cache_only" != ON ]; then
     done
   done
   if command -v man >/dev/null; then
-    man -l "$man1" 2>"$tmp/man.err" | grep -q 'irradiance' && [ ! -s "$tmp/man.err" ] ||
+    man -l "$man1" 2>"$tmp/man.err" | grep -c 'irradiance' >/dev/null && [ ! -s "$tmp/man.err" ] ||
       { echo "test_install: man -l irrcache.1 failed: $(cat "$tmp/man.err")"; exit 1; }
   fi
   "$prefix/bin/irrcache" --version
