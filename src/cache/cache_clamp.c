@@ -196,7 +196,7 @@ ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first)
         return IC_ERR_OOM;
     for (uint64_t k = block; k < block + own; ++k)
         radius[k] = c->sphere[first + k].w;
-    r = ic_comm_allgather_blocks(c->comm, radius, n, sizeof *radius, NULL);
+    r = ic_comm_allgather_blocks(c->comm, radius, n, sizeof *radius, "exchanging validity radii", NULL);
     for (uint32_t k = 0; r == IC_OK && k < n; ++k)
         c->sphere[first + k].w = radius[k];
     free(radius);

@@ -1,6 +1,7 @@
 /* comm.c — timed collective operations over a caller's transport (comm.h). */
 #include "core/comm.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -44,7 +45,8 @@ ic_result ic_comm_allgather_sized(ic_comm *comm, void *all, const uint64_t *byte
     return r == IC_OK ? IC_OK : failed(err, r, what);
 }
 
-ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, size_t item_bytes, ic_error *err)
+ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, size_t item_bytes, const char *what,
+                                   ic_error *err)
 {
     if (!ic_comm_is_shared(comm))
         return IC_OK;
@@ -56,7 +58,7 @@ ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, siz
         ic_comm_block(count, comm->size, r, &first, &n);
         counts[r] = n * item_bytes;
     }
-    ic_result r = ic_comm_allgather_sized(comm, all, counts, "exchanging records", err);
+    ic_result r = ic_comm_allgather_sized(comm, all, counts, what, err);
     free(counts);
     return r;
 }
@@ -127,8 +129,10 @@ ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, u
         memcpy(mine + k * in_bytes, (const char *)in + ((uint64_t)rank + k * (uint64_t)ranks) * in_bytes, in_bytes);
     if (r == IC_OK)
         r = gather(user, mine, *own, block, err);
+    char exchanging[96];
+    snprintf(exchanging, sizeof exchanging, "exchanging %s", what);
     for (int a = 0; a < arrays && r == IC_OK; ++a)
-        r = ic_comm_allgather_blocks(comm, all[a], count, out_bytes[a], err);
+        r = ic_comm_allgather_blocks(comm, all[a], count, out_bytes[a], exchanging, err);
     for (int q = 0; r == IC_OK && q < ranks; ++q) {
         uint64_t q_first, q_own;
         ic_comm_block(count, ranks, q, &q_first, &q_own);

@@ -23,8 +23,9 @@ void ic_comm_block(uint64_t count, int size, int r, uint64_t *first, uint64_t *n
 ic_result ic_comm_allgather_sized(ic_comm *comm, void *all, const uint64_t *bytes, const char *what, ic_error *err);
 /* Every rank's block of `item_bytes`-byte items under ic_comm_block's rule for `count` items, gathered
  * into all (room for count items) on every rank; this rank's block is already in place at its offset.
- * A no-op for one process. */
-ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, size_t item_bytes, ic_error *err);
+ * A no-op for one process; `what` names the data in messages. */
+ic_result ic_comm_allgather_blocks(ic_comm *comm, void *all, uint64_t count, size_t item_bytes, const char *what,
+                                   ic_error *err);
 /* This rank's `count` items of `item_bytes` bytes at the start of items (room for every rank's) become
  * every rank's items, in rank order, on every rank; *total gets their number. For one process *total =
  * count and nothing moves. */

@@ -158,7 +158,7 @@ static ic_result exchange_values(ic_comm *comm, ic_record *out, uint32_t n, uint
         memcpy(v[i].grad_trans, out[i].grad_trans, sizeof v[i].grad_trans);
         v[i].sigma = out[i].sigma;
     }
-    ic_result r = ic_comm_allgather_blocks(comm, v, n, sizeof *v, err);
+    ic_result r = ic_comm_allgather_blocks(comm, v, n, sizeof *v, "exchanging filtered records", err);
     for (uint32_t i = 0; i < n && r == IC_OK; ++i) {
         out[i].irradiance = v[i].irradiance;
         memcpy(out[i].grad_rot, v[i].grad_rot, sizeof v[i].grad_rot);

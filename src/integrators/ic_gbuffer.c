@@ -99,7 +99,8 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err)
     void *buf[4] = {c->g.p, c->g.n, c->g.footprint, c->g.valid};
     const size_t bytes[4] = {sizeof *c->g.p, sizeof *c->g.n, sizeof *c->g.footprint, 1};
     for (int k = 0; k < 4 && r == IC_OK; ++k)
-        r = ic_comm_allgather_blocks(c->comm, buf[k], (uint64_t)cam->height, bytes[k] * row_px, err);
+        r = ic_comm_allgather_blocks(c->comm, buf[k], (uint64_t)cam->height, bytes[k] * row_px,
+                                     "exchanging shading points", err);
     return r;
 }
 
@@ -197,7 +198,8 @@ ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acc
     lookup_job j = {c, lum, covered, acc, (int)first};
     ic_result r = ic_parallel_for(c->threads, (int64_t)rows, lookup_row, &j);
     if (r == IC_OK && want_lum)
-        r = ic_comm_allgather_blocks(c->comm, lum, (uint64_t)c->g.height, sizeof *lum * (size_t)c->g.width, NULL);
+        r = ic_comm_allgather_blocks(c->comm, lum, (uint64_t)c->g.height, sizeof *lum * (size_t)c->g.width,
+                                     "exchanging look-ups", NULL);
     if (r == IC_OK && ic_comm_is_shared(c->comm))
         r = exchange_covered(c, covered);
     return r;

@@ -329,7 +329,7 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
     }
     /* Every process's block of results to every process; the rays of all. */
     if (r == IC_OK)
-        r = ic_comm_allgather_blocks(opt.comm, out, count, sizeof *out, err);
+        r = ic_comm_allgather_blocks(opt.comm, out, count, sizeof *out, "exchanging sensor results", err);
     if (r == IC_OK) {
         double total = (double)gather_rays;
         for (uint64_t i = first; i < first + own; ++i)
