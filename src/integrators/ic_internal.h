@@ -135,6 +135,12 @@ ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);
 /* Gathers count candidates in parallel and inserts them as one batch (those gathered, when the render
  * is cancelled during the gathers). */
 ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err);
+/* The hit stage (ic_hit_stage.c): passes of probe rays from the count points p (normals n), cosine-
+ * distributed, the diffuse hits no record of kind `bounce` accepts clustered and gathered with the
+ * strata over strata_div each way, inserted as records of that kind. key_tag separates its random numbers
+ * and keys from other stages'. A no-op unless c->hit_lookups. */
+ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
+                          uint8_t bounce, uint32_t strata_div, phase_times *times, ic_error *err);
 /* Candidate at a pixel's shading point; tag distinguishes keys of different stages. */
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
 /* Looks up every valid pixel: luminance of the estimate and whether any record contributes. With several

@@ -18,6 +18,10 @@
 #include <string.h>
 
 #define POINT_KEY_TAG 0x73656e736f72ULL /* keys of sensor records, apart from the image's */
+/* The hit records' strata: a sensor record's over this, in θ and in φ (1/64 of its rays). A sensor's
+ * rays read hundreds of them, so their noise averages out; measured on the overcast sky-room
+ * (BENCHMARKS.md, "A daylit room"), 1/16 and 1/256 of the rays both took longer to a 2 % error. */
+#define HIT_STRATA_DIV 8
 #define MAX_ROUNDS 8                    /* most records gathered at one point (neighbour clamping) */
 #define CONTRIBUTION_CAPACITY 256
 /* The sensors' records are a kind of their own (the cache's bounce field): a sensor reads only sensor
@@ -146,99 +150,6 @@ static void grid_add(taken_grid *g, const ic_vec3 *pts, uint32_t i)
     *head = i + 1;
 }
 
-static int cmp_float(const void *a, const void *b)
-{
-    float x = *(const float *)a, y = *(const float *)b;
-    return x < y ? -1 : x > y;
-}
-
-/* Probe rays per sensor and pass of the hit stage, and its most passes. */
-#define HIT_PROBES 16
-#define HIT_PROBES_MAX 4096 /* in all, per pass */
-#define HIT_MAX_PASSES 12
-#define HIT_STRATA_DIV 8 /* the hit records' strata: a sensor record's over this, in θ and in φ */
-
-/* The hit stage: records where the sensors' hemisphere rays land, before the sensors' own (Ward's
- * multiple bounces as Radiance's ambient file serves them, the world-space stage of Frolov et al. 2012
- * §3.1.3 with probe rays from the sensors in place of eye paths). A sensor record's rays then read the
- * irradiance at their hits from these records (ic_ic_gather_trace's look-ups) instead of tracing a path
- * each, and every sensor shares them. Each pass traces HIT_PROBES cosine-distributed rays from every
- * sensor (at most HIT_PROBES_MAX in all, spread evenly over the sensors); the diffuse hits that no record accepts are clustered as the world stage clusters eye-path
- * hits and gathered; passes stop when fewer than `uncovered` of the probes' hits go uncovered, or a pass
- * finds fewer than `min_candidates`. Deterministic: the probes depend on the seed, the sensor and the
- * pass only, and the candidates are collected in sensor order. */
-static ic_result hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, phase_times *times,
-                           ic_error *err)
-{
-    if (!c->hit_lookups)
-        return IC_OK;
-    const ic_scene *scene = c->tr->scene;
-    /* Probes per pass: HIT_PROBES per sensor up to HIT_PROBES_MAX in all, spread evenly over the sensors
-     * (the hit records describe the room, whose size does not grow with the sensors). */
-    const uint32_t probes = count > HIT_PROBES_MAX / HIT_PROBES ? HIT_PROBES_MAX : count * HIT_PROBES;
-    size_t cap = probes;
-    ic_candidate *cand = malloc(sizeof *cand * cap);
-    float *dist = malloc(sizeof *dist * cap);
-    if (!cand || !dist) {
-        free(cand);
-        free(dist);
-        return ic_error_set(err, IC_ERR_OOM, "out of memory for the sensors' probe rays (%u sensors)", count);
-    }
-    ic_result r = IC_OK;
-    for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK; ++pass) {
-        uint32_t m = 0, visited = 0;
-        for (uint32_t k = 0; k < probes; ++k) {
-            uint32_t i = (uint32_t)((uint64_t)k * count / probes);
-            ic_frame f = ic_frame_from_normal(n[i]);
-            ic_rng rng = ic_rng_make(c->seed ^ POINT_KEY_TAG, i, (uint64_t)pass, k);
-            float u1, u2;
-            ic_rng_2d(&rng, &u1, &u2);
-            ic_ray ray = {p[i], ic_frame_to_world(&f, ic_warp_cosine_hemisphere(u1, u2)), 0.0f, INFINITY};
-            ic_hit hit;
-            ic_accel_intersect1(c->tr->accel, &ray, &hit);
-            if (hit.triangle == IC_NO_HIT)
-                continue;
-            ic_surface s;
-            ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
-            ic_bsdf b;
-            ic_bsdf_init(&b, scene, &s, v3_neg(ray.dir));
-            if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
-                continue; /* only diffuse hits look the cache up */
-            ++visited;
-            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
-            ic_cache_estimate e;
-            if (ic_cache_query(c->cache, &q, &e))
-                continue;
-            dist[m] = hit.t;
-            ic_candidate *cd = &cand[m++];
-            cd->p = s.p;
-            cd->n = b.cache_n;
-            cd->footprint = 0.0f;
-            cd->key = ic_hash4(POINT_KEY_TAG ^ 0x686974ULL, i, (uint64_t)pass, k);
-        }
-        atomic_fetch_add_explicit(&c->rays, probes, memory_order_relaxed);
-        if (m < (uint32_t)c->o.min_candidates || (double)m <= c->o.uncovered * (double)visited)
-            break;
-        /* Clusters about a record's size: the accuracy times the median distance of the uncovered hits (a
-         * record's R is about the distance its hemisphere rays travel). The scene's diagonal, which sizes
-         * the image's world stage, says nothing here: a ground plane around a house makes it huge. */
-        qsort(dist, m, sizeof *dist, cmp_float);
-        float box = c->o.cache.accuracy * dist[m / 2];
-        m = ic_world_select(cand, m, scene->bounds_min, scene->bounds_max, box, 3, 30.0f);
-        /* Their rays: an eighth of the strata each way, 1/64 of a sensor record's. A sensor's rays read
-         * hundreds of them, so their noise averages out; measured on the overcast sky-room (BENCHMARKS.md,
-         * "A daylit room"), 1/16 and 1/256 of the rays both took longer to a 2 % error. */
-        ic_gather_opts keep = c->o.gather;
-        c->o.gather.theta_strata = (c->o.gather.theta_strata + HIT_STRATA_DIV - 1) / HIT_STRATA_DIV;
-        c->o.gather.phi_strata = (c->o.gather.phi_strata + HIT_STRATA_DIV - 1) / HIT_STRATA_DIV;
-        r = ic_ic_gather_and_insert(c, cand, m, times, err);
-        c->o.gather = keep;
-    }
-    free(cand);
-    free(dist);
-    return r;
-}
-
 ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
                              uint32_t *hit_records, ic_error *err)
 {
@@ -267,7 +178,7 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
     phase_times times = {0.0, 0.0};
     if (r == IC_OK)
-        r = hit_stage(c, p, n, count, &times, err);
+        r = ic_ic_hit_stage(c, p, n, count, POINT_KEY_TAG, 0, HIT_STRATA_DIV, &times, err);
     const uint32_t first_sensor_record = r == IC_OK ? ic_cache_count(c->cache) : 0;
     *hit_records = first_sensor_record;
     /* Passes: the uncovered points in input order, each taken unless it lies within reach of one already

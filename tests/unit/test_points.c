@@ -354,6 +354,19 @@ static void test_cornell(void)
     opt.threads = 2;
     ok = ok && ic_points_compute(scene, pts, N, &opt, ic2, NULL, &err) == IC_OK;
     CHECK(ok && memcmp(ic, ic2, sizeof ic) == 0, "ic: 1 and 2 threads identical");
+    /* The default gathering grid given as zero (above) and spelled out are one grid: the hit records get
+     * the same fraction of it (they once took the sensors' whole grid when it was left at zero). */
+    ic_gather_opts grid;
+    ic_gather_opts_default(&grid);
+    opt.ic.gather.theta_strata = grid.theta_strata;
+    opt.ic.gather.phi_strata = (uint32_t)lround(3.14159265358979 * grid.theta_strata);
+    ic_points_stats st_explicit;
+    ok = ok && ic_points_compute(scene, pts, N, &opt, ic2, &st_explicit, &err) == IC_OK;
+    CHECK(ok && memcmp(ic, ic2, sizeof ic) == 0 && st_explicit.rays == st_ic.rays &&
+              st_explicit.hit_records == st_ic.hit_records,
+          "ic: the default grid and the same grid given explicitly agree (rays %llu vs %llu)",
+          (unsigned long long)st_ic.rays, (unsigned long long)st_explicit.rays);
+    opt.ic.gather.theta_strata = opt.ic.gather.phi_strata = 0;
     if (!ok) {
         ic_scene_free(scene);
         return;

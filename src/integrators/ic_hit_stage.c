@@ -1,0 +1,110 @@
+/*
+ * ic_hit_stage.c — records where hemisphere rays land, before the records they serve: Ward's multiple
+ * bounces as Radiance's ambient file serves them (Ward et al. 1988 §3), built as the world-space stage of
+ * Frolov et al. 2012 §3.1.3 builds records, with probe rays from given points in place of eye paths.
+ * The sensors' construction uses it: its records are the irradiance a sensor's rays read at their hits.
+ */
+#include "ic_internal.h"
+
+#include "core/sampling.h"
+#include "integrators/ic_world.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Probe rays per point and pass, and the most passes. */
+#define HIT_PROBES 16
+#define HIT_PROBES_MAX 4096 /* in all, per pass */
+#define HIT_MAX_PASSES 12
+
+/* A record's rays then read the irradiance at their hits from these records (ic_ic_gather_trace's
+ * look-ups) instead of tracing a path each. Each pass traces HIT_PROBES cosine-distributed rays from
+ * every point (at most HIT_PROBES_MAX in all, spread evenly over the points); the diffuse hits that no
+ * record accepts are clustered as the world stage clusters eye-path hits and gathered; passes stop when
+ * fewer than `uncovered` of the probes' hits go uncovered, or a pass finds fewer than `min_candidates`.
+ * Deterministic: the probes depend on the seed, the point and the pass only, and the candidates are
+ * collected in point order. */
+ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
+                          uint8_t bounce, uint32_t strata_div, phase_times *times, ic_error *err)
+{
+    if (!c->hit_lookups)
+        return IC_OK;
+    const ic_scene *scene = c->tr->scene;
+    /* Probes per pass: HIT_PROBES per point up to HIT_PROBES_MAX in all, spread evenly over the points
+     * (the hit records describe the scene, whose size does not grow with the points). */
+    const uint32_t probes = count > HIT_PROBES_MAX / HIT_PROBES ? HIT_PROBES_MAX : count * HIT_PROBES;
+    size_t cap = probes;
+    ic_candidate *cand = malloc(sizeof *cand * cap);
+    float *dist = malloc(sizeof *dist * cap);
+    if (!cand || !dist) {
+        free(cand);
+        free(dist);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for probe rays from %u points", count);
+    }
+    ic_result r = IC_OK;
+    for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK; ++pass) {
+        uint32_t m = 0, visited = 0;
+        for (uint32_t k = 0; k < probes; ++k) {
+            uint32_t i = (uint32_t)((uint64_t)k * count / probes);
+            ic_frame f = ic_frame_from_normal(n[i]);
+            ic_rng rng = ic_rng_make(c->seed ^ key_tag, i, (uint64_t)pass, k);
+            float u1, u2;
+            ic_rng_2d(&rng, &u1, &u2);
+            ic_ray ray = {p[i], ic_frame_to_world(&f, ic_warp_cosine_hemisphere(u1, u2)), 0.0f, INFINITY};
+            ic_hit hit;
+            ic_accel_intersect1(c->tr->accel, &ray, &hit);
+            if (hit.triangle == IC_NO_HIT)
+                continue;
+            ic_surface s;
+            ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+            ic_bsdf b;
+            ic_bsdf_init(&b, scene, &s, v3_neg(ray.dir));
+            if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
+                continue; /* only diffuse hits look the cache up */
+            ++visited;
+            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
+            q.bounce = bounce;
+            ic_cache_estimate e;
+            if (ic_cache_query(c->cache, &q, &e))
+                continue;
+            dist[m] = hit.t;
+            ic_candidate *cd = &cand[m++];
+            cd->p = s.p;
+            cd->n = b.cache_n;
+            cd->footprint = 0.0f;
+            cd->key = ic_hash4(key_tag ^ 0x686974ULL, i, (uint64_t)pass, k);
+        }
+        atomic_fetch_add_explicit(&c->rays, probes, memory_order_relaxed);
+        if (m < (uint32_t)c->o.min_candidates || (double)m <= c->o.uncovered * (double)visited)
+            break;
+        /* Clusters about a record's size: the accuracy times the median distance of the uncovered hits (a
+         * record's R is about the distance its hemisphere rays travel). The scene's diagonal, which sizes
+         * the image's world stage, says nothing here: a ground plane around a house makes it huge. */
+        qsort(dist, m, sizeof *dist, cmp_float);
+        float box = c->o.cache.accuracy * dist[m / 2];
+        m = ic_world_select(cand, m, scene->bounds_min, scene->bounds_max, box, 3, 30.0f);
+        /* Their rays: the strata over strata_div each way. */
+        ic_gather_opts keep = c->o.gather, d;
+        ic_gather_opts_default(&d);
+        uint8_t keep_bounce = c->record_bounce;
+        /* Zero strata mean the default grid: divide what they stand for, not zero. */
+        uint32_t M = keep.theta_strata ? keep.theta_strata : d.theta_strata;
+        uint32_t N = keep.phi_strata ? keep.phi_strata : (uint32_t)lround((double)IC_PI * M);
+        c->o.gather.theta_strata = (M + strata_div - 1) / strata_div;
+        c->o.gather.phi_strata = (N + strata_div - 1) / strata_div;
+        c->record_bounce = bounce;
+        r = ic_ic_gather_and_insert(c, cand, m, times, err);
+        c->o.gather = keep;
+        c->record_bounce = keep_bounce;
+    }
+    free(cand);
+    free(dist);
+    return r;
+}
+
