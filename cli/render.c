@@ -115,6 +115,7 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         cJSON_AddNumberToObject(ext, "mean", st->extent_mean);
         cJSON_AddNumberToObject(ext, "max", st->extent_max);
         cJSON_AddNumberToObject(ext, "elliptical_share", st->records ? (double)st->ellipse_records / st->records : 0.0);
+        cJSON_AddNumberToObject(o, "hit_records", st->hit_records);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
         if (a->render.ic.radiance_cache == IC_CACHE_ON) {
             cJSON_AddNumberToObject(o, "irradiance_records", st->records - st->radiance_records);
@@ -548,6 +549,8 @@ static int render_command(int argc, char **argv, ic_comm *comm)
             fprintf(stderr, ", %u records in %d passes", st.records, st.passes);
         if (st.radiance_records)
             fprintf(stderr, " (%u of them radiance records)", st.radiance_records);
+        if (st.hit_records)
+            fprintf(stderr, " (%u of them where hemisphere rays land)", st.hit_records);
         if (st.cached_emitters)
             fprintf(stderr, ", %u emitting triangles lit through the records", st.cached_emitters);
         fputc('\n', stderr);

@@ -109,6 +109,10 @@ typedef struct ic_ic_options {
     int path_traced_gather;/* 1: hemisphere rays path-trace every bounce after their hit; default: where
                               records already cover a diffuse hit, they give its indirect light (ic_gathering.c:
                               hit_from_cache) and only its direct light is sampled */
+    ic_cache_switch hit_records; /* batch, with hemisphere rays that read the bounces after their hit from
+                              the cache (not path_traced_gather, bounces ≥ 2): before the first pass, records
+                              of their own kind where probe rays from the shading points land, with 1/64 of the
+                              rays, which only hemisphere rays read (ic_batch.c); off: none [off] */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     ic_switched_value large_emitters; /* which emitters the records carry instead of light sampling: an
                               emitting material that covers at least `value` of the cosine-weighted
@@ -282,6 +286,8 @@ typedef struct ic_render_stats {
     int cut_by_time;       /* 1: construction stopped at its share of time_budget (cut_short is 1 too) */
     uint32_t cached_emitters; /* emitting triangles whose light the records carry (ic_ic_options.large_emitters) */
     uint32_t radiance_records; /* records of the radiance kind among `records` (ic_ic_options.radiance_cache) */
+    uint32_t hit_records;  /* records of the hit stage among `records` (ic_ic_options.hit_records), which only
+                              hemisphere rays read; record_extent leaves them out */
     uint32_t radiance_record_bytes; /* bytes one radiance record holds: the record and its coefficients */
     uint32_t records_per_pass[32];
     char save_error[1024]; /* ic_ic_options.save_cache could not be written: why (the render went on and

@@ -95,8 +95,13 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     q.contributions = contrib;
     q.contribution_capacity = LOOKUP_CAPACITY;
     ic_cache_estimate e;
-    if (!ic_cache_query(c->cache, &q, &e))
-        return 0;
+    if (!ic_cache_query(c->cache, &q, &e)) {
+        if (c->hit_kind < 0)
+            return 0;
+        q.bounce = (uint32_t)c->hit_kind;
+        if (!ic_cache_query(c->cache, &q, &e))
+            return 0;
+    }
     ic_vec3 albedo = v3_scale(b.kd, IC_INV_PI);
     ic_vec3 direct = ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays);
     const int B = c->levels;

@@ -48,7 +48,7 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         return ic_error_set(err, IC_ERR_OOM, "out of memory for probe rays from %u points", count);
     }
     ic_result r = IC_OK;
-    for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK; ++pass) {
+    for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK && !ic_ic_out_of_time(c) && !ic_ic_cancelled(c); ++pass) {
         uint32_t m = 0, visited = 0;
         for (uint32_t k = 0; k < probes; ++k) {
             uint32_t i = (uint32_t)((uint64_t)k * count / probes);

@@ -20,17 +20,23 @@
 /* Smallest, mean and largest influence radius a_i·R_i of the records (the stats' record extents). */
 static void record_extents(const ic_cache *cache, ic_render_stats *st)
 {
-    uint32_t n = ic_cache_count(cache);
+    uint32_t n = ic_cache_count(cache), hit = 0;
     double sum = 0.0;
     float lo = INFINITY, hi = 0.0f;
     for (uint32_t i = 0; i < n; ++i) {
         ic_record r;
         ic_cache_get_record(cache, i, &r);
+        if (r.bounce == IC_HIT_KIND) { /* the hit stage's: not the image's records */
+            ++hit;
+            continue;
+        }
         float e = r.accuracy * r.radius;
         sum += e;
         lo = fminf(lo, e);
         hi = fmaxf(hi, e);
     }
+    st->hit_records = hit;
+    n -= hit;
     st->extent_min = n ? lo : 0.0f;
     st->extent_mean = n ? (float)(sum / n) : 0.0f;
     st->extent_max = hi;

@@ -54,6 +54,8 @@ typedef struct ic_ctx {
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
     uint8_t record_bounce;     /* the bounce field of the records gathered from candidates: 0, or the
                                   sensors' own kind while ic_ic_points_build makes theirs */
+    int hit_kind;              /* ≥ 0: hemisphere rays' look-ups that no bounce-0 record accepts try the
+                                  records of this bounce field (an image's hit stage); −1: none */
     uint8_t env_mode;          /* how the records gathered now take the environment their rays escape
                                   to: IC_ENV_IN_RAYS, IC_ENV_AT_POINT or IC_ENV_PORTAL_SAMPLES */
     double deadline;           /* ic_seconds() past which batch and adaptive construction stop (a time
@@ -139,6 +141,8 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
  * distributed, the diffuse hits no record of kind `bounce` accepts clustered and gathered with the
  * strata over strata_div each way, inserted as records of that kind. key_tag separates its random numbers
  * and keys from other stages'. A no-op unless c->hit_lookups. */
+/* The bounce field of an image's hit-stage records: read only by hemisphere rays' look-ups. */
+#define IC_HIT_KIND (IC_BOUNCE_RADIANCE - 2u)
 ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
                           uint8_t bounce, uint32_t strata_div, phase_times *times, ic_error *err);
 /* Candidate at a pixel's shading point; tag distinguishes keys of different stages. */

@@ -70,6 +70,10 @@ mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --
 same "adaptive image, 3 ranks" ad-3.pfm ad.pfm
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 1 --load-cache ic.cache -o load-3.pfm
 same "image from a loaded cache, 3 ranks" load-3.pfm load.pfm
+# The hit stage (records where hemisphere rays land) gathers its records shared among the ranks too.
+"$bin" render "$scene" "${common[@]}" "${ic[@]}" --hit-records on --threads 2 -o hit.pfm
+mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --hit-records on --threads 1 -o hit-3.pfm
+same "batch image with hit records, 3 ranks" hit-3.pfm hit.pfm
 
 # Radiance caching on the glossy floor: its records are split among the ranks like irradiance records.
 glossy=$src/scenes/cornell-box-glossy/cornell-box-glossy-20.json

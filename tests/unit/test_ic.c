@@ -65,14 +65,15 @@ static void test_cornell(void)
         const char *name;
         int strategy, no_gradients, recursive, bounces;
         double max_relmse, min_psnr_ldr;
-        int hessian, ellipses, error_weight;
+        int hessian, ellipses, error_weight, hit_records;
     } cases[] = {
-        {"batch", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 0, 0, 0},
-        {"batch, no gradients", IC_STRATEGY_BATCH, 1, 0, 0, 0.012, 33.0, 0, 0, 0},
-        {"lazy", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0, 0, 0, 0},
-        {"lazy, recursive (5 levels)", IC_STRATEGY_LAZY, 0, 1, 5, 0.012, 33.0, 0, 0, 0},
-        {"batch, Hessian ellipses", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 1, 1, 0},
-        {"lazy, ellipses, error weight", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0, 1, 1, 1},
+        {"batch", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 0, 0, 0, 0},
+        {"batch, hit records", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 0, 0, 0, 1},
+        {"batch, no gradients", IC_STRATEGY_BATCH, 1, 0, 0, 0.012, 33.0, 0, 0, 0, 0},
+        {"lazy", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0, 0, 0, 0, 0},
+        {"lazy, recursive (5 levels)", IC_STRATEGY_LAZY, 0, 1, 5, 0.012, 33.0, 0, 0, 0, 0},
+        {"batch, Hessian ellipses", IC_STRATEGY_BATCH, 0, 0, 0, 0.012, 33.0, 1, 1, 0, 0},
+        {"lazy, ellipses, error weight", IC_STRATEGY_LAZY, 0, 0, 0, 0.012, 33.0, 1, 1, 1, 0},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         ic_render_options o = ic_options();
@@ -83,6 +84,9 @@ static void test_cornell(void)
         o.ic.no_gradients = cases[k].no_gradients;
         o.ic.recursive = cases[k].recursive;
         o.ic.bounces = cases[k].bounces;
+        o.ic.hit_records = cases[k].hit_records ? IC_CACHE_ON : IC_CACHE_DEFAULT;
+        if (cases[k].hit_records)
+            o.threads = 2;
         ic_render_aovs aovs = {0};
         aovs.want_density = 1;
         o.aovs = &aovs;
@@ -105,8 +109,23 @@ static void test_cornell(void)
         CHECK(m.relmse < mpt.relmse, "%s beats PT at equal spp (%.5f vs %.5f)", cases[k].name, m.relmse, mpt.relmse);
         /* Fewer records than pixels (the pixel bounds keep a·R ≥ 3 px on screen; the world stage adds
          * records where hemisphere rays land); recursive caching adds the deeper levels (off screen too). */
-        CHECK(st.records > 10 && st.records < (uint32_t)(cases[k].recursive ? 20 * W * H : W * H), "%s: %u records",
-              cases[k].name, st.records);
+        const uint32_t own = st.records - st.hit_records;
+        CHECK(own > 10 && own < (uint32_t)(cases[k].recursive ? 20 * W * H : W * H), "%s: %u records", cases[k].name,
+              own);
+        /* The hit stage's records, of their own kind, only where asked for; the image's records and their
+         * coverage (below) are checked without them, and the same on 1 and 2 threads. */
+        CHECK(cases[k].hit_records ? st.hit_records > 100 : st.hit_records == 0, "%s: %u hit records", cases[k].name,
+              st.hit_records);
+        if (cases[k].hit_records) {
+            ic_image one = {0};
+            ic_render_options o1 = o;
+            o1.threads = 1;
+            o1.aovs = NULL;
+            CHECK(test_render(CORNELL, W, H, &o1, &one, NULL) &&
+                      memcmp(one.rgb, img.rgb, sizeof(float) * 3 * W * H) == 0,
+                  "%s: 1 and %d threads give the same image", cases[k].name, o.threads);
+            ic_image_free(&one);
+        }
         /* The ceiling lamp covers 0.6 % of a shading point's hemisphere and is seen by 90 % of its light
          * samples: it stays light-sampled (test_window has the other case). */
         CHECK(st.cached_emitters == 0, "%s: the Cornell lamp is light-sampled (%u cached)", cases[k].name,
