@@ -54,7 +54,8 @@ ic_result ic_ic_record_views(const ic_ctx *c, ic_record_view **out, uint32_t *co
         return IC_ERR_OOM;
     for (uint32_t i = 0; i < n; ++i) {
         ic_record rec;
-        if (ic_cache_get_record(c->cache, i, &rec) == IC_OK)
+        /* The hit stage's records serve hemisphere rays only: the image's records are listed. */
+        if (ic_cache_get_record(c->cache, i, &rec) == IC_OK && rec.bounce != IC_HIT_KIND)
             (*out)[(*count)++] = view_of(c, &rec);
     }
     return IC_OK;
@@ -90,7 +91,7 @@ ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image 
     uint32_t count = ic_cache_count(c->cache);
     for (uint32_t i = 0; i < count; ++i) {
         ic_record rec;
-        if (ic_cache_get_record(c->cache, i, &rec) != IC_OK)
+        if (ic_cache_get_record(c->cache, i, &rec) != IC_OK || rec.bounce == IC_HIT_KIND)
             continue;
         ic_record_view v = view_of(c, &rec);
         if (!v.visible)
