@@ -234,7 +234,9 @@ static void count_traffic(ic_ctx *c, ic_render_stats *st, int pass)
  * diffuse hits on Sponza and staircase2 found no record of an earlier pass and path-traced their bounces,
  * which took most of the gathering's rays. The hit records are a kind of their own (IC_HIT_KIND): the
  * hemisphere rays' look-ups read them where no image record accepts, and nothing else does, so the
- * image is interpolated from its own records as before. Their rays: an eighth of the strata each way. */
+ * image is interpolated from its own records as before. Their rays: an eighth of the strata each way;
+ * no gradients: from a 2 × 7 grid they are noise that extrapolation turns into bias (a window-lit room's
+ * image mean −1.9 % with them over six seeds, −0.3 % without; BENCHMARKS.md). */
 #define IMAGE_HIT_STRATA_DIV 8
 #define IMAGE_HIT_KEY_TAG 0x696d616765686974ULL
 static ic_result image_hit_stage(ic_ctx *c, size_t npix, phase_times *pt, ic_error *err)
@@ -252,7 +254,7 @@ static ic_result image_hit_stage(ic_ctx *c, size_t npix, phase_times *pt, ic_err
             n[m++] = c->g.n[i];
         }
     c->hit_kind = (int)IC_HIT_KIND;
-    ic_result r = ic_ic_hit_stage(c, p, n, m, IMAGE_HIT_KEY_TAG, IC_HIT_KIND, IMAGE_HIT_STRATA_DIV, pt, err);
+    ic_result r = ic_ic_hit_stage(c, p, n, m, IMAGE_HIT_KEY_TAG, IC_HIT_KIND, IMAGE_HIT_STRATA_DIV, 0, pt, err);
     free(p);
     free(n);
     return r;

@@ -31,7 +31,7 @@ static int cmp_float(const void *a, const void *b)
  * Deterministic: the probes depend on the seed, the point and the pass only, and the candidates are
  * collected in point order. */
 ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
-                          uint8_t bounce, uint32_t strata_div, phase_times *times, ic_error *err)
+                          uint8_t bounce, uint32_t strata_div, int gradients, phase_times *times, ic_error *err)
 {
     if (!c->hit_lookups)
         return IC_OK;
@@ -99,9 +99,12 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         c->o.gather.theta_strata = (M + strata_div - 1) / strata_div;
         c->o.gather.phi_strata = (N + strata_div - 1) / strata_div;
         c->record_bounce = bounce;
+        int keep_no_gradients = c->o.no_gradients;
+        c->o.no_gradients = keep_no_gradients || !gradients;
         r = ic_ic_gather_and_insert(c, cand, m, times, err);
         c->o.gather = keep;
         c->record_bounce = keep_bounce;
+        c->o.no_gradients = keep_no_gradients;
     }
     free(cand);
     free(dist);

@@ -139,12 +139,13 @@ ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);
 ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err);
 /* The hit stage (ic_hit_stage.c): passes of probe rays from the count points p (normals n), cosine-
  * distributed, the diffuse hits no record of kind `bounce` accepts clustered and gathered with the
- * strata over strata_div each way, inserted as records of that kind. key_tag separates its random numbers
+ * strata over strata_div each way, inserted as records of that kind (without gradients unless
+ * `gradients`). key_tag separates its random numbers
  * and keys from other stages'. A no-op unless c->hit_lookups. */
 /* The bounce field of an image's hit-stage records: read only by hemisphere rays' look-ups. */
 #define IC_HIT_KIND (IC_BOUNCE_RADIANCE - 2u)
 ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
-                          uint8_t bounce, uint32_t strata_div, phase_times *times, ic_error *err);
+                          uint8_t bounce, uint32_t strata_div, int gradients, phase_times *times, ic_error *err);
 /* Candidate at a pixel's shading point; tag distinguishes keys of different stages. */
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
 /* Looks up every valid pixel: luminance of the estimate and whether any record contributes. With several

@@ -178,7 +178,7 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
     phase_times times = {0.0, 0.0};
     if (r == IC_OK)
-        r = ic_ic_hit_stage(c, p, n, count, POINT_KEY_TAG, 0, HIT_STRATA_DIV, &times, err);
+        r = ic_ic_hit_stage(c, p, n, count, POINT_KEY_TAG, 0, HIT_STRATA_DIV, 1, &times, err);
     const uint32_t first_sensor_record = r == IC_OK ? ic_cache_count(c->cache) : 0;
     *hit_records = first_sensor_record;
     /* Passes: the uncovered points in input order, each taken unless it lies within reach of one already
