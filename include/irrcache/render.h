@@ -297,7 +297,7 @@ typedef struct ic_render_stats {
     float extent_min, extent_mean, extent_max; /* records' influence radii a_i·R_i in scene units (what the
                               split sphere or the Hessian set, after the clamps; an ellipse's major semi-axis;
                               integrator IC, 0 without records) */
-    uint32_t ellipse_records; /* records with an elliptical extent (ic_cache_ellipse_count) */
+    uint32_t ellipse_records; /* records with an elliptical extent, hit-stage records left out */
     /* How the render's processes shared it (opt.comm); the figures after `ranks` are this process's own
      * (rays, gather_rays and the image are the whole job's). */
     int ranks;             /* processes that rendered (1 without opt.comm) */

@@ -17,10 +17,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Smallest, mean and largest influence radius a_i·R_i of the records (the stats' record extents). */
+/* Smallest, mean and largest influence radius a_i·R_i of the records and how many are ellipses (the stats' record
+ * extents), the hit stage's records counted apart. */
 static void record_extents(const ic_cache *cache, ic_render_stats *st)
 {
-    uint32_t n = ic_cache_count(cache), hit = 0;
+    uint32_t n = ic_cache_count(cache), hit = 0, ellipses = 0;
     double sum = 0.0;
     float lo = INFINITY, hi = 0.0f;
     for (uint32_t i = 0; i < n; ++i) {
@@ -30,6 +31,7 @@ static void record_extents(const ic_cache *cache, ic_render_stats *st)
             ++hit;
             continue;
         }
+        ellipses += r.ellipse_ratio > 0.0f && r.ellipse_ratio < 1.0f;
         float e = r.accuracy * r.radius;
         sum += e;
         lo = fminf(lo, e);
@@ -40,7 +42,7 @@ static void record_extents(const ic_cache *cache, ic_render_stats *st)
     st->extent_min = n ? lo : 0.0f;
     st->extent_mean = n ? (float)(sum / n) : 0.0f;
     st->extent_max = hi;
-    st->ellipse_records = ic_cache_ellipse_count(cache);
+    st->ellipse_records = ellipses;
 }
 
 static const ic_build_fn strategies[] = {
