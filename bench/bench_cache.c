@@ -180,7 +180,7 @@ static void mt_chunk(void *ctx, int64_t item, int thread)
     float s = 0.0f;
     ic_cache_hint hint = {0}; /* per chunk: the result never depends on how chunks meet threads */
     for (int64_t k = item * 10000; k < (item + 1) * 10000; ++k) {
-        ic_cache_lookup l = {job->q[k].p, job->q[k].n, IC_ACCEPT_FINAL, 0, NULL, 0};
+        ic_cache_lookup l = ic_cache_lookup_at(job->q[k].p, job->q[k].n, IC_ACCEPT_FINAL);
         ic_cache_estimate e;
         ic_cache_query_hinted(job->c, &l, &hint, &e);
         s += e.irradiance.x;
@@ -310,7 +310,7 @@ int main(int argc, char **argv)
     while (n < target) {
         ic_rng r = ic_rng_make(7, candidates++, 0, 0);
         surface_point s = sample_surface(boxes, &r);
-        ic_cache_lookup l = {s.p, s.n, IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
+        ic_cache_lookup l = ic_cache_lookup_at(s.p, s.n, IC_ACCEPT_CONSTRUCTION);
         ic_cache_estimate e;
         if (ic_cache_query(lazy, &l, &e))
             continue;

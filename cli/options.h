@@ -201,7 +201,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       NAN, "off", "", IC_SCOPE_IC, "switch off validity-radius clamping (Frolov et al. 2012 §4.2)") \
     X(GRADIENT_DIFFERENCE, "--gradient-difference", NULL, IC_OPT_FLAG_ON, render.ic.cache.gradient_difference, 0, 0, \
       "", NAN, "off", "", IC_SCOPE_IC, "gradient-difference record scaling (Castano 2014)") \
-    X(HIT_RECORDS, "--hit-records", NULL, IC_OPT_ON_OFF, render.ic.hit_records, 0, 0, "on|off", NAN, "off", "", \
+    X(HIT_RECORDS, "--hit-records", NULL, IC_OPT_ON_OFF, render.ic.hit_records, 0, 0, "on|off", NAN, "on", "", \
       IC_SCOPE_BATCH, "before the first pass, records where probe rays from the shading points land (1/16 of " \
       "the rays each), read only by the hemisphere rays of the image's records, which then path-trace fewer " \
       "bounces (no effect with --path-traced-gather or --bounces 1)") \

@@ -160,7 +160,8 @@ typedef struct ic_cache_params {
 
 /* Record flags. */
 enum {
-    IC_RECORD_DISABLED = 1u << 0      /* never contributes to look-ups (kept for indices and files) */
+    IC_RECORD_DISABLED = 1u << 0      /* never contributes to look-ups (kept in the record arrays, the
+                                         octree and files; a frozen cache's lists leave it out) */
 };
 
 /* One irradiance record (public, copied in and out; the cache stores it split hot/cold). */
@@ -213,6 +214,12 @@ typedef struct ic_cache_lookup {
     uint32_t bounce;                  /* only records of this bounce level contribute */
     ic_cache_contribution *contributions; /* optional caller buffer, NULL for none */
     uint32_t contribution_capacity;   /* entries available in contributions */
+    uint32_t fallback;                /* 0: none; else 1 + a second bounce level, whose records answer
+                                         where none of `bounce` contributes (one descent for both; the
+                                         result is what a look-up of `bounce`, then of the second level
+                                         if that one found nothing, would give) */
+    ic_cache_contribution *fallback_contributions; /* with fallback and contributions: scratch of
+                                         contribution_capacity entries for the second level's */
 } ic_cache_lookup;
 
 /* A look-up result. */

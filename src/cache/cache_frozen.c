@@ -204,6 +204,8 @@ static ic_result build_node(builder *b, uint32_t tn, uint32_t fpos, const cell *
     ic_octree_items items = ic_cache_tree_items(c);
     for (uint32_t k = 0; k < node.count; ++k) {
         uint32_t i = c->tree.refs[node.begin + k].index;
+        if (c->cold[i].flags & IC_RECORD_DISABLED)
+            continue; /* no look-up reads it: the lists leave it out */
         const ic_float4 *s = &c->sphere[i];
         float r = ic_octree_item_radius(&items, i);
         entry e = {s->x, s->y, s->z, r * r, i};

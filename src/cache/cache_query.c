@@ -68,11 +68,18 @@ int ic_cache_query(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimat
     return ic_cache_query_hinted(c, q, NULL, out);
 }
 
-/* ic_cache_query on the octree (the cache thawed). */
+/* ic_cache_query on the octree (the cache thawed). With a fallback level, its records are summed
+ * apart (into their own estimate and contribution buffer) on the same descent, and answer only where
+ * the asked level's do not. */
 static int query_octree(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
 {
-    float acc[3] = {0.0f, 0.0f, 0.0f};
+    float acc[3] = {0.0f, 0.0f, 0.0f}, acc2[3] = {0.0f, 0.0f, 0.0f};
     memset(out, 0, sizeof *out);
+    ic_cache_lookup q2 = *q;
+    q2.bounce = q->fallback - 1u;
+    q2.contributions = q->contributions ? q->fallback_contributions : NULL;
+    ic_cache_estimate e2;
+    memset(&e2, 0, sizeof e2);
     float s = q->acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
     ic_vec3 p = q->position, n = q->normal;
     uint32_t path[IC_OCTREE_MAX_DEPTH + 1];
@@ -93,19 +100,37 @@ static int query_octree(const ic_cache *c, const ic_cache_lookup *q, ic_cache_es
             uint32_t i = ref->index;
             float w;
             ic_vec3 dp;
-            if (ic_record_weight(c, i, p, n, s, &w, &dp) && eligible(c, i, q))
+            if (!ic_record_weight(c, i, p, n, s, &w, &dp))
+                continue;
+            if (eligible(c, i, q))
                 accumulate_record(c, i, n, w, dp, q, out, acc);
+            else if (q->fallback && eligible(c, i, &q2))
+                accumulate_record(c, i, n, w, dp, &q2, &e2, acc2);
         }
     }
-    return ic_estimate_finish(out, acc);
+    if (out->contributor_count || !e2.contributor_count)
+        return ic_estimate_finish(out, acc);
+    e2.records_tested = out->records_tested;
+    *out = e2;
+    if (q->contributions && e2.contributions_written)
+        memcpy(q->contributions, q2.contributions, sizeof *q->contributions * e2.contributions_written);
+    return ic_estimate_finish(out, acc2);
 }
 
 int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
 {
-    return c->frozen.is_valid ? c->query_frozen(c, q, hint, out) : query_octree(c, q, out);
+    if (!c->frozen.is_valid)
+        return query_octree(c, q, out);
+    /* The frozen layout's lists filter one level: the fallback is a second look-up. */
+    if (c->query_frozen(c, q, hint, out) || !q->fallback)
+        return out->contributor_count > 0;
+    ic_cache_lookup q2 = *q;
+    q2.bounce = q->fallback - 1u;
+    return c->query_frozen(c, &q2, hint, out);
 }
 
-int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
+/* ic_cache_query_linear for one level. */
+static int query_linear_level(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
 {
     float acc[3] = {0.0f, 0.0f, 0.0f};
     memset(out, 0, sizeof *out);
@@ -118,6 +143,15 @@ int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_
             accumulate_record(c, i, q->normal, w, dp, q, out, acc);
     }
     return ic_estimate_finish(out, acc);
+}
+
+int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
+{
+    if (query_linear_level(c, q, out) || !q->fallback)
+        return out->contributor_count > 0;
+    ic_cache_lookup q2 = *q;
+    q2.bounce = q->fallback - 1u;
+    return query_linear_level(c, &q2, out);
 }
 
 int ic_cache_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, ic_cache_acceptance acceptance,

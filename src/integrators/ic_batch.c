@@ -280,7 +280,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for the construction buffers");
         goto done;
     }
-    if (c->o.hit_records == IC_CACHE_ON && c->hit_lookups && !ic_ic_cancelled(c)) {
+    if (c->o.hit_records != IC_CACHE_OFF && c->hit_lookups && !ic_ic_cancelled(c)) {
         ic_ic_report(opt, "hit records", 0.0);
         r = image_hit_stage(c, npix, pt, err);
         if (r != IC_OK)

@@ -90,18 +90,17 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_bsdf_init(&b, scene, &s, wo);
     if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
         return 0;
-    ic_cache_contribution contrib[LOOKUP_CAPACITY];
+    ic_cache_contribution contrib[LOOKUP_CAPACITY], contrib_hit[LOOKUP_CAPACITY];
     ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_FINAL);
     q.contributions = contrib;
     q.contribution_capacity = LOOKUP_CAPACITY;
-    ic_cache_estimate e;
-    if (!ic_cache_query(c->cache, &q, &e)) {
-        if (c->hit_kind < 0)
-            return 0;
-        q.bounce = (uint32_t)c->hit_kind;
-        if (!ic_cache_query(c->cache, &q, &e))
-            return 0;
+    if (c->hit_kind >= 0) { /* the hit records, where no image record accepts */
+        q.fallback = 1u + (uint32_t)c->hit_kind;
+        q.fallback_contributions = contrib_hit;
     }
+    ic_cache_estimate e;
+    if (!ic_cache_query(c->cache, &q, &e))
+        return 0;
     ic_vec3 albedo = v3_scale(b.kd, IC_INV_PI);
     ic_vec3 direct = ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays);
     const int B = c->levels;

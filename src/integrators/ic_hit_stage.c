@@ -3,8 +3,8 @@
  * bounces as Radiance's ambient file serves them (Ward et al. 1988 §3), built as the world-space stage of
  * Frolov et al. 2012 §3.1.3 builds records, with probe rays from given points in place of eye paths.
  * The sensors' construction uses it (its records are the irradiance a sensor's rays read at their hits),
- * and so does batch construction of an image with --hit-records on (records of their own kind, without
- * gradients, that only hemisphere rays read: ic_batch.c).
+ * and so does batch construction of an image (--hit-records, on by default; records of their own kind,
+ * without gradients, that only hemisphere rays read: ic_batch.c).
  */
 #include "ic_internal.h"
 

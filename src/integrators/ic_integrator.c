@@ -146,9 +146,17 @@ static ic_result make_records(ic_state *s, ic_render_stats *st, phase_times *pt,
     st->refinements += refined;
     /* The final render reads a freshly built index: look-ups are faster than through the incrementally
      * grown one, and the summation order of every look-up is the same as after loading a cache file, so
-     * a saved and re-loaded cache renders the identical image. */
+     * a saved and re-loaded cache renders the identical image. The hit stage's records have served
+     * their hemisphere rays; disabled, they stay in the cache (and its file) but not in the index. */
     t0 = ic_seconds();
-    r = ic_cache_rebuild_index(c->cache, err);
+    for (uint32_t i = 0, n = ic_cache_count(c->cache); i < n && r == IC_OK; ++i) {
+        ic_record rec;
+        ic_cache_get_record(c->cache, i, &rec);
+        if (rec.bounce == IC_HIT_KIND)
+            r = ic_cache_set_record_flags(c->cache, i, (uint8_t)(rec.flags | IC_RECORD_DISABLED));
+    }
+    if (r == IC_OK)
+        r = ic_cache_rebuild_index(c->cache, err);
     pt->insert += ic_seconds() - t0;
     return r;
 }

@@ -54,8 +54,9 @@ typedef struct ic_ctx {
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
     uint8_t record_bounce;     /* the bounce field of the records gathered from candidates: 0, or the
                                   sensors' own kind while ic_ic_points_build makes theirs */
-    int hit_kind;              /* ≥ 0: hemisphere rays' look-ups that no bounce-0 record accepts try the
-                                  records of this bounce field (an image's hit stage); −1: none */
+    int hit_kind;              /* ≥ 0: hemisphere rays' look-ups that no bounce-0 record accepts take the
+                                  records of this bounce field (an image's hit stage; one look-up for both,
+                                  ic_cache_lookup.fallback); −1: none */
     uint8_t env_mode;          /* how the records gathered now take the environment their rays escape
                                   to: IC_ENV_IN_RAYS, IC_ENV_AT_POINT or IC_ENV_PORTAL_SAMPLES */
     double deadline;           /* ic_seconds() past which batch and adaptive construction stop (a time

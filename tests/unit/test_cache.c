@@ -633,7 +633,9 @@ static void test_weights(void)
         float th = (wk ? 5.0f : 20.0f) * IC_PI / 180.0f;
         ic_vec3 n = v3(0.0f, -sinf(th), cosf(th));
         ic_cache_contribution con[4];
-        ic_cache_lookup q = {v3(0.3f, 0.0f, 0.0f), n, IC_ACCEPT_CONSTRUCTION, 0, con, 4};
+        ic_cache_lookup q = ic_cache_lookup_at(v3(0.3f, 0.0f, 0.0f), n, IC_ACCEPT_CONSTRUCTION);
+        q.contributions = con;
+        q.contribution_capacity = 4;
         ic_cache_estimate e;
         float dist = 0.3f / 2.0f, ndev = sqrtf(1.0f - cosf(th));
         float w_expect = wk ? 1.0f - fmaxf(dist, ndev / sqrtf(1.0f - cosf(10.0f * IC_PI / 180.0f))) / a
@@ -836,7 +838,7 @@ static void test_linear_field(void)
         int hits = 0;
         for (int k = 0; k < 2000; ++k) {
             ic_vec3 pos = v3(1.0f + 8.0f * ic_rng_float(&r), 1.0f + 8.0f * ic_rng_float(&r), 0.0f);
-            ic_cache_lookup q = {pos, v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
+            ic_cache_lookup q = ic_cache_lookup_at(pos, v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION);
             ic_cache_estimate e;
             if (!ic_cache_query(c, &q, &e))
                 continue;
@@ -1440,6 +1442,115 @@ static void test_frozen_bounce_levels(void)
     free(recs);
 }
 
+/* A look-up with a fallback level answers as a look-up of its level, then of the fallback level where
+ * the first found nothing: bit for bit on the octree (one descent for both), by linear scan, frozen
+ * (each code path, with hints) and in batches; and the frozen answers agree with the octree's. Level 0
+ * is sparse (a quarter of the records), so that both outcomes occur; every seventh record is disabled,
+ * which the frozen lists leave out. */
+static void ask_fallback(const ic_cache *c, const ic_cache_lookup *q, int linear, ic_cache_hint *hint, answer *a)
+{
+    static ic_cache_contribution scratch[ID_CONTRIB];
+    ic_cache_lookup l = *q;
+    l.contributions = a->con;
+    l.contribution_capacity = ID_CONTRIB;
+    l.fallback_contributions = scratch;
+    memset(a->con, 0, sizeof a->con);
+    a->hit = linear ? ic_cache_query_linear(c, &l, &a->e) : ic_cache_query_hinted(c, &l, hint, &a->e);
+}
+
+static void two_step(const ic_cache *c, const ic_cache_lookup *q, int linear, answer *a)
+{
+    ic_cache_lookup l = *q;
+    l.fallback = 0;
+    ask_fallback(c, &l, linear, NULL, a);
+    if (!a->hit) {
+        l.bounce = q->fallback - 1u;
+        ask_fallback(c, &l, linear, NULL, a);
+    }
+}
+
+static void test_fallback_level(void)
+{
+    const uint32_t n = 60000, queries = 3000;
+    ic_record *recs = make_records(n, 17);
+    for (uint32_t i = 0; i < n; ++i) { /* (i / 4: the plane a record lies on goes with i % 4) */
+        uint32_t kind = (i / 4) % 4;
+        recs[i].bounce = (uint8_t)(kind == 0 ? 0 : kind == 3 ? 2 : 126);
+    }
+    ic_cache_params p = clamp_config(IC_WEIGHT_WARD, 5);
+    ic_cache *c = build_cache(&p, recs, n);
+    for (uint32_t i = 0; i < n; i += 7)
+        ic_cache_set_record_flags(c, i, IC_RECORD_DISABLED);
+    ic_cache_thaw(c);
+    ic_cache_lookup *q = calloc(queries, sizeof *q);
+    answer *oct = malloc(queries * sizeof *oct), *got = malloc(sizeof *got), *want = malloc(sizeof *want);
+    ic_cache_estimate *batch = malloc(queries * sizeof *batch);
+    uint32_t first = 0, second = 0, none = 0, both = 0, differ_octree = 0, differ_linear = 0;
+    for (uint32_t k = 0; k < queries; ++k) {
+        make_query(c, 23, k, p.final_accuracy_scale, &q[k].position, &q[k].normal);
+        q[k].acceptance = k % 2 ? IC_ACCEPT_FINAL : IC_ACCEPT_CONSTRUCTION;
+        q[k].fallback = 1u + 126u;
+        ask_fallback(c, &q[k], 0, NULL, &oct[k]);
+        two_step(c, &q[k], 0, want);
+        differ_octree += !same_answer(&oct[k], want);
+        ask_fallback(c, &q[k], 1, NULL, got);
+        two_step(c, &q[k], 1, want);
+        /* (the linear scan sums in record order: the same contributors, in another order) */
+        differ_linear += !same_answer(got, want) || got->hit != oct[k].hit ||
+                         got->e.contributor_count != oct[k].e.contributor_count;
+        ic_cache_lookup only = q[k];
+        only.fallback = 0;
+        ask_fallback(c, &only, 0, NULL, want);
+        if (want->hit) {
+            only.bounce = 126;
+            ask_fallback(c, &only, 0, NULL, want);
+            both += want->hit; /* where preferring the level matters */
+        }
+        if (!oct[k].hit)
+            ++none;
+        else if (oct[k].e.contributions_written && recs[oct[k].con[0].record].bounce == 0)
+            ++first;
+        else
+            ++second;
+    }
+    CHECK(differ_octree == 0 && differ_linear == 0,
+          "fallback look-ups: %u octree and %u linear answers differ from two look-ups", differ_octree, differ_linear);
+    CHECK(first > queries / 20 && second > queries / 20 && both > queries / 50,
+          "fallback look-ups: %u answered by the level (%u where the fallback level would have answered too), %u "
+          "by the fallback, %u by none (each must occur)", first, both, second, none);
+    ic_error err;
+    CHECK(ic_cache_freeze(c, &err) == IC_OK && ic_cache_is_frozen(c), "freeze: %s", err.message);
+    uint32_t differ_frozen = 0, differ_batch = 0;
+    for (int path = IC_LOOKUP_PORTABLE; path <= IC_LOOKUP_AVX2; ++path) {
+        if (!ic_cache_set_lookup_path(c, (ic_lookup_path)path))
+            continue;
+        ic_cache_hint hint = {0};
+        for (uint32_t k = 0; k < queries; ++k) {
+            ask_fallback(c, &q[k], 0, &hint, got);
+            two_step(c, &q[k], 0, want);
+            differ_frozen += !same_answer(got, want) || !octree_agrees(got, &oct[k]);
+        }
+        ic_cache_hint bh = {0};
+        ic_cache_query_batch(c, q, queries, &bh, batch);
+        for (uint32_t k = 0; k < queries; ++k) {
+            two_step(c, &q[k], 0, want);
+            differ_batch += (batch[k].contributor_count > 0) != want->hit ||
+                            batch[k].contributor_count != want->e.contributor_count ||
+                            memcmp(&batch[k].irradiance, &want->e.irradiance, sizeof batch[k].irradiance) != 0;
+        }
+    }
+    ic_cache_set_lookup_path(c, IC_LOOKUP_BEST);
+    CHECK(differ_frozen == 0 && differ_batch == 0, "fallback look-ups, frozen: %u answers and %u in batches differ",
+          differ_frozen, differ_batch);
+    free(q);
+    free(oct);
+    free(got);
+    free(want);
+    free(batch);
+    ic_cache_destroy(c);
+    free(recs);
+}
+
 /* Payloads (radiance records' coefficients): set and read back, replaced, kept through a save and a
  * load bit for bit, refused when corrupt; a version-1 file (no payload section) still loads; records of
  * the radiance kind (bounce IC_BOUNCE_RADIANCE) never answer an irradiance look-up and vice versa. */
@@ -1585,7 +1696,7 @@ static void test_freeze_lifecycle(void)
     ic_cache *e = NULL;
     CHECK(ic_cache_create(NULL, &e, &err) == IC_OK && ic_cache_rebuild_index(e, &err) == IC_OK &&
           ic_cache_is_frozen(e), "empty cache did not freeze");
-    ic_cache_lookup q = {recs[0].position, recs[0].normal, IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
+    ic_cache_lookup q = ic_cache_lookup_at(recs[0].position, recs[0].normal, IC_ACCEPT_CONSTRUCTION);
     ic_cache_estimate est;
     ic_cache_hint hint = {0};
     CHECK(!ic_cache_query_hinted(e, &q, &hint, &est) && hint.leaf == 0, "empty frozen cache answered");
@@ -1608,7 +1719,7 @@ static void test_api_edges(void)
     CHECK(ic_cache_create(NULL, &c, &err) == IC_OK, "default create");
     CHECK(ic_cache_get_params(c)->accuracy == IC_DEFAULT_ACCURACY_WARD && ic_cache_get_params(c)->validity_k == 6,
           "defaults: the renderer's (irrcache/defaults.h)");
-    ic_cache_lookup q = {v3(0, 0, 0), v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION, 0, NULL, 0};
+    ic_cache_lookup q = ic_cache_lookup_at(v3(0, 0, 0), v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION);
     ic_cache_estimate e;
     CHECK(!ic_cache_query(c, &q, &e) && e.contributor_count == 0, "empty cache answered");
     uint32_t idx[4];
@@ -1747,6 +1858,7 @@ int main(void)
     RUN(test_payloads);
     RUN(test_freeze_lifecycle);
     RUN(test_frozen_bounce_levels);
+    RUN(test_fallback_level);
     RUN(test_crowded_lookups);
     RUN(test_index_stats);
     RUN(test_lookup_vs_brute_force);

@@ -212,14 +212,14 @@ int main(void)
         fclose(fb);
     /* Another seed re-uses the records (the seed is not part of the cache's identity) and draws new
      * final-render samples: the image changes. */
-    /* --max-cache-bytes: below the file's size it is refused naming the option; "1M" is far above it. */
+    /* --max-cache-bytes: below the file's size it is refused naming the option; "8M" is far above it. */
     remove(OUT);
     snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --max-cache-bytes 100", ic, OUT, IC_TEST_TMP);
     CHECK(run(cmd) == 1 && strstr(err_text, "--max-cache-bytes") && test_line_count(err_text) == 1 &&
               !test_file_exists(OUT),
           "a cache over --max-cache-bytes refused: %s", err_text);
-    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --max-cache-bytes 1M", ic, OUT, IC_TEST_TMP);
-    CHECK(run(cmd) == 0, "--max-cache-bytes 1M loads it: %s", err_text);
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --max-cache-bytes 8M", ic, OUT, IC_TEST_TMP);
+    CHECK(run(cmd) == 0, "--max-cache-bytes 8M loads it: %s", err_text);
     snprintf(cmd, sizeof cmd, "%s -o %s/ic_c.pfm --load-cache %s/ic.icc --seed 5", ic, IC_TEST_TMP, IC_TEST_TMP);
     CHECK(run(cmd) == 0, "render from the saved cache with another seed: %s", err_text);
     FILE *fc = fopen(IC_TEST_TMP "/ic_c.pfm", "rb");

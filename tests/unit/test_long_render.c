@@ -187,7 +187,7 @@ static void check_interrupted_construction(void)
     static const struct {
         ic_strategy strategy;
         const char *phase, *name;
-    } cases[] = {{IC_STRATEGY_BATCH, "cache pass 0", "batch"},
+    } cases[] = {{IC_STRATEGY_BATCH, "hit records", "batch"},
                  {IC_STRATEGY_ADAPTIVE, "adaptive passes", "adaptive"},
                  {IC_STRATEGY_LAZY, "lazy cache", "lazy"}};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
