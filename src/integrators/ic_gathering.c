@@ -45,15 +45,13 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
         if (ct->record >= c->level_records)
             return 0;
         const ic_vec3 *T = &c->level_irr[(size_t)ct->record * (size_t)(B + 1)];
-        const float tb[3] = {T[B].x, T[B].y, T[B].z}, v[3] = {ct->value.x, ct->value.y, ct->value.z};
-        for (int k = 0; k < levels; ++k) {
-            const ic_vec3 Tk = T[first + k];
-            const float tk[3] = {Tk.x, Tk.y, Tk.z};
-            float x[3];
-            for (int ch = 0; ch < 3; ++ch)
-                x[ch] = tb[ch] > 0.0f ? ct->weight * v[ch] * (tk[ch] / tb[ch]) : 0.0f;
-            E[k] = v3_add(E[k], v3(x[0], x[1], x[2]));
-        }
+        /* w·E_i(p)/E_i per channel once, then times each level's T_k. */
+        const ic_vec3 tb = T[B];
+        const ic_vec3 scale = v3(tb.x > 0.0f ? ct->weight * ct->value.x / tb.x : 0.0f,
+                                 tb.y > 0.0f ? ct->weight * ct->value.y / tb.y : 0.0f,
+                                 tb.z > 0.0f ? ct->weight * ct->value.z / tb.z : 0.0f);
+        for (int k = 0; k < levels; ++k)
+            E[k] = v3_add(E[k], v3_mul(scale, T[first + k]));
         wsum += ct->weight;
     }
     float inv = wsum > 0.0f ? 1.0f / wsum : 0.0f;
