@@ -336,6 +336,8 @@ static ic_result gather_sets(ic_gather_worker *w, ic_gatherer *g, const ic_gathe
         return IC_OK;
     float ratio = s / (y * c->o.record_noise);
     int sets = ratio * ratio > (float)c->o.record_sets ? c->o.record_sets : (int)ceilf(ratio * ratio);
+    if (sets <= 1) /* one set is enough (a σ of zero too: every ray returned the same light) */
+        return IC_OK;
     const int B = c->levels;
     ic_vec3 blev[IC_LEVELS_MAX + 1];
     for (int k = 1; k < sets; ++k) {

@@ -65,6 +65,19 @@ static void test_open_plane(void)
     /* E = pi * L_sky = 2 pi; radiance = rho/pi * E = 0.5 * 2 = 1. */
     CHECK_NEAR(mean, 1.0, 0.02, "open plane radiance (expected rho * L_sky = 1)");
     ic_image_free(&img);
+    /* The cache with record noise control: every hemisphere ray sees the sky, so each record's σ is
+     * zero and it needs no second set (a zero σ once asked for none at all, and scaled σ by 1/√0). */
+    opt.integrator = IC_INTEGRATOR_IC;
+    opt.spp = 8;
+    opt.ic.record_sets = 4;
+    CHECK(test_render(IC_TEST_TMP "/plane.json", 0, 0, &opt, &img, NULL), "open plane renders with the cache and "
+          "--record-sets 4");
+    if (!img.rgb)
+        return;
+    mean = test_image_mean(&img, &finite);
+    CHECK(finite, "open plane, cache: all pixels finite");
+    CHECK_NEAR(mean, 1.0, 0.02, "open plane radiance with the cache (expected rho * L_sky = 1)");
+    ic_image_free(&img);
 }
 
 static void test_thread_independence(void)
