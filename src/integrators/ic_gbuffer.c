@@ -104,6 +104,39 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err)
     return r;
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+#define VIEW_SAMPLES 65536u
+
+float ic_ic_view_extent(const ic_ctx *c)
+{
+    size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
+    for (size_t i = 0; i < npix; ++i)
+        valid += c->g.valid[i];
+    if (valid == 0)
+        return 0.0f;
+    size_t stride = valid / VIEW_SAMPLES + 1, m = 0;
+    float *v = malloc(sizeof *v * (valid / stride + 1));
+    if (!v)
+        return 0.0f;
+    float d2 = 0.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+        m = 0;
+        for (size_t i = 0, k = 0; i < npix; ++i)
+            if (c->g.valid[i] && k++ % stride == 0)
+                v[m++] = v3_get(c->g.p[i], axis);
+        qsort(v, m, sizeof *v, cmp_float);
+        float span = v[(m - 1) * 95 / 100] - v[(m - 1) * 5 / 100];
+        d2 += span * span;
+    }
+    free(v);
+    return sqrtf(d2);
+}
+
 void ic_ic_gbuffer_free(ic_ctx *c)
 {
     free(c->g.p);

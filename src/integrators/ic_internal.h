@@ -48,6 +48,8 @@ typedef struct ic_ctx {
     uint64_t seed;
     int threads;
     float scene_diag;
+    float cluster_extent;      /* the length the world stage's and the coverage sweep's clusters scale
+                                  with: scene_diag, at most 2.5 times what the camera sees (ic_ic_view_extent) */
     atomic_ullong rays;        /* gathering rays (added once per trace call) */
     ic_gbuffer g;
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */
@@ -192,6 +194,10 @@ ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, 
 /* Shading points of every pixel centre into c->g (and c->has_record); gbuffer_free frees them. */
 ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err);
 void ic_ic_gbuffer_free(ic_ctx *c);
+/* The diagonal of the box between the 5th and 95th percentiles of the shading points' coordinates on each
+ * axis (at most VIEW_SAMPLES points, evenly through the image): the size of what the camera sees, which a
+ * far wall seen through a window barely moves; 0 without shading points. */
+float ic_ic_view_extent(const ic_ctx *c);
 /* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
  * emitter the records carry (zero for any other surface). */
 /* One gather at pt with g by the method of c's options (stratified, progressive or hemicube). */
