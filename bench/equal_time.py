@@ -114,11 +114,21 @@ def main():
     cut = argv.index("--") if "--" in argv else len(argv)
     args = ap.parse_args(argv[:cut])
     opts = argv[cut + 1:]  # after "--": irrcache render options
+    # Options this script sets itself: given again after "--" they would silently take over (the CLI
+    # keeps the last), e.g. a second --stats left this script reading an older run's statistics.
+    managed = ("--stats", "-o", "--output", "--integrator", "--width", "--height")
+    clash = [o for o in opts if o.split("=")[0] in managed]
+    if clash:
+        ap.error("%s after \"--\": this script sets it (use --width/--height before \"--\"; the statistics "
+                 "are in --out)" % clash[0])
     os.makedirs(args.refs, exist_ok=True)
     os.makedirs(args.out, exist_ok=True)
     ref, noise = reference(args)
     stem = os.path.join(args.out, "%s-%s" % (os.path.splitext(os.path.basename(args.scene))[0], args.name))
     size = ["--width", str(args.width), "--height", str(args.height)]
+    for stale in (stem + ".json", stem + "-pt.json"):  # a failed run must not leave an older one's figures
+        if os.path.exists(stale):
+            os.remove(stale)
     subprocess.run([args.irrcache, "render", args.scene, "--integrator", "ic", "-q", "-o", stem + ".pfm", "-o",
                     stem + ".png", "--stats", stem + ".json"] + size + opts, check=True)
     with open(stem + ".json") as f:
