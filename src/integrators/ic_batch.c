@@ -157,7 +157,7 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
     *uncovered_share = visited > 0.0 ? (double)n / visited : 0.0;
     const ic_scene *sc = c->tr->scene;
     *out_count = ic_world_select(j.slots, (uint32_t)n, sc->bounds_min, sc->bounds_max,
-                                 c->o.cluster_size * c->cluster_extent, 3, 30.0f);
+                                 c->o.cluster_size * c->work_extent, 3, 30.0f);
     *out = j.slots;
     free(j.slot_count);
     free(j.visited);
@@ -208,7 +208,7 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_cand
             return IC_OK;
         /* Small clusters: each selected record covers at least its own pixel, so this terminates. */
         const ic_scene *sc = c->tr->scene;
-        n = ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->cluster_extent, 3,
+        n = ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->work_extent, 3,
                             30.0f);
         r = ic_ic_gather_and_insert(c, cand, n, pt, err);
         if (r != IC_OK)

@@ -132,7 +132,7 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
      * fallback rays as white specks. At most 2.5 times what the camera sees (which leaves every bench scene
      * but the sky-room as it was: their views are 0.4–1 of their diagonals). */
     float view = r == IC_OK ? ic_ic_view_extent(c) : 0.0f;
-    c->cluster_extent = view > 0.0f ? fminf(c->scene_diag, 2.5f * view) : c->scene_diag;
+    c->work_extent = view > 0.0f ? fminf(c->scene_diag, 2.5f * view) : c->scene_diag;
     if (gbuffer_seconds)
         *gbuffer_seconds = ic_seconds() - t0;
     if (r == IC_OK && !ic_ic_select_large_emitters(c, tr->scene))

@@ -48,8 +48,9 @@ typedef struct ic_ctx {
     uint64_t seed;
     int threads;
     float scene_diag;
-    float cluster_extent;      /* the length the world stage's and the coverage sweep's clusters scale
-                                  with: scene_diag, at most 2.5 times what the camera sees (ic_ic_view_extent) */
+    float work_extent;         /* the length that candidate clusters (world stage, coverage sweep) and
+                                  recursive levels' footprints scale with: scene_diag, at most 2.5 times
+                                  what the camera sees (ic_ic_view_extent) */
     atomic_ullong rays;        /* gathering rays (added once per trace call) */
     ic_gbuffer g;
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */

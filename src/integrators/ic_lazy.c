@@ -70,8 +70,9 @@ static void recursive_trace(void *user, const ic_vec3 *origins, const ic_vec3 *d
         ic_vec3 L = ic_ic_direct_light(c, &s, &b, wo, last ? &c->light_sel_all : NULL, &rng, &nrays);
         if (!last && ls->status == IC_OK) {
             /* Deeper levels get the footprint of a pixel 1/128 of the scene wide, so the pixel bounds
-             * keep their records at least ~diagonal/85 apart (Radiance's -ar 128 plays this part). */
-            ic_vec3 E = level_irradiance(ls, lv->level + 1, &s, b.cache_n, c->scene_diag / 128.0f);
+             * keep their records at least ~1/85 of it apart (Radiance's -ar 128 plays this part); the
+             * scene's width as the camera sees it (ic_ctx.work_extent), not a ground plane's outside. */
+            ic_vec3 E = level_irradiance(ls, lv->level + 1, &s, b.cache_n, c->work_extent / 128.0f);
             L = v3_add(L, v3_mul(v3_scale(b.kd, IC_INV_PI), E));
         }
         radiance[j] = v3_add(radiance[j], L);
