@@ -573,11 +573,14 @@ static ic_result converge(adaptive *A, const ic_render_options *opt, phase_times
             A->rec[k].mark_reach = A->rec[k].accuracy * A->rec[k].radius;
             A->rec[k].mark_change = A->rec[k].change;
         }
+        int past_deadline = 0;
         for (;;) {
             while (A->q_len > 0)
                 process_point(A, dequeue(A));
-            /* Interrupted: the pass ends with the records made so far (the queue is left as it is). */
-            if (A->n_uncovered == 0 || ic_ic_cancelled(c))
+            /* Interrupted, or out of time (add_records would gather nothing more): the pass ends with
+             * the records made so far (the queue is left as it is). */
+            past_deadline = A->n_uncovered > 0 && ic_ic_past_deadline(c);
+            if (A->n_uncovered == 0 || ic_ic_cancelled(c) || past_deadline)
                 break;
             if ((r = add_records(A, pt, err)) != IC_OK)
                 return r;
@@ -598,6 +601,11 @@ static ic_result converge(adaptive *A, const ic_render_options *opt, phase_times
         if (res->passes < 32)
             res->records_per_pass[res->passes] = A->nrec - before;
         ++res->passes;
+        if (past_deadline) { /* points are left uncovered: cut by time, whatever the queue holds */
+            res->converged = 0;
+            res->out_of_time = 1;
+            break;
+        }
     }
     return IC_OK;
 }

@@ -255,7 +255,13 @@ static ic_result image_hit_stage(ic_ctx *c, size_t npix, phase_times *pt, ic_err
             n[m++] = c->g.n[i];
         }
     c->hit_kind = (int)IC_HIT_KIND;
+    /* With a time budget, the hit records take at most a quarter of construction's share: the image's
+     * own records come after them. */
+    const double deadline = c->deadline, now = ic_seconds();
+    if (deadline > 0.0)
+        c->deadline = now + 0.25 * fmax(deadline - now, 0.0);
     ic_result r = ic_ic_hit_stage(c, p, n, m, IMAGE_HIT_KEY_TAG, IC_HIT_KIND, IMAGE_HIT_STRATA_DIV, 0, pt, err);
+    c->deadline = deadline;
     free(p);
     free(n);
     return r;
@@ -293,12 +299,12 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         ic_error_set(err, r, "out of memory for the discontinuity map");
         goto done;
     }
-    uint32_t n = dithered_candidates(c, need, pix, cand, 0);
+    uint32_t n = dithered_candidates(c, need, pix, cand, 0), before0 = ic_cache_count(c->cache);
     r = ic_ic_gather_and_insert(c, cand, n, pt, err);
     if (r != IC_OK)
         goto done;
     count_traffic(c, st, 0);
-    st->records_per_pass[0] = n;
+    st->records_per_pass[0] = ic_cache_count(c->cache) - before0; /* fewer than n if time or an interrupt cut it */
     st->passes = 1;
     st->cut_short = 1; /* until the cache has converged */
     for (int pass = 1; pass <= c->o.max_passes && !ic_ic_cancelled(c); ++pass) {

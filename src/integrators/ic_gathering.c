@@ -385,8 +385,9 @@ static void gather_item(void *p, int64_t item, int thread)
     uint32_t end = j->count - first < GATHER_CHUNK_POINTS ? j->count : first + GATHER_CHUNK_POINTS;
     size_t stride = (size_t)j->c->levels + 1;
     for (uint32_t i = first; i < end; ++i) {
-        if (ic_ic_cancelled(j->c))
-            return; /* interrupted: the points not begun stay ungathered */
+        if (ic_ic_cancelled(j->c) || ic_ic_past_deadline(j->c))
+            return; /* interrupted, or construction's share of the time spent: the points not begun stay
+                       ungathered */
         ic_result r = ic_ic_gather_one(&j->workers[thread], j->gatherers[thread], &j->pts[i], &j->out[i],
                                        j->levels ? &j->levels[i * stride] : NULL);
         if (r != IC_OK) {

@@ -117,8 +117,9 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
                            ic_vec3 *levels);
 /* Gathers count points in parallel (one gatherer per thread; each point's result depends only on the
  * seed and its key, never on the thread count); levels: (c->levels + 1) entries per point, or NULL.
- * gathered[i] is set to 1 for each point gathered; once the render is cancelled (ic_ic_cancelled) the
- * points not yet begun are skipped (0), so that an interrupt stops a pass within a few gathers. */
+ * gathered[i] is set to 1 for each point gathered; once the render is cancelled (ic_ic_cancelled) or
+ * construction's time is up (ic_ic_past_deadline) the points not yet begun are skipped (0), so that an
+ * interrupt or the deadline stops a pass within a few gathers. */
 ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
                               ic_vec3 *levels, uint8_t *gathered, ic_error *err);
 /* Moves the results (and level splits, levels may be NULL) of the points gathered[i] marks to the front,
@@ -164,6 +165,14 @@ int ic_ic_out_of_time_shared(ic_ctx *c);
 static inline int ic_ic_cancelled(const ic_ctx *c)
 {
     return c->cancel && *c->cancel && !ic_comm_is_shared(c->comm);
+}
+/* 1 once construction's share of the time budget is spent, for one process: a pass stops gathering
+ * there (its points not begun stay ungathered), so that one large pass does not overrun the budget.
+ * Processes sharing a render gather whole passes (they must agree on every record) and stop between
+ * passes (ic_ic_out_of_time). */
+static inline int ic_ic_past_deadline(const ic_ctx *c)
+{
+    return c->deadline > 0.0 && !ic_comm_is_shared(c->comm) && ic_seconds() > c->deadline;
 }
 static inline int ic_ic_out_of_time(ic_ctx *c)
 {
