@@ -59,8 +59,9 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(TIME, "--time", NULL, IC_OPT_DOUBLE, render.time_budget, 0, 1e9, "SECONDS", NAN, "none", "s", IC_SCOPE_ALL, \
       "wall-time budget of the whole render (equal-time comparisons), from building the ray-tracing " \
       "structure to the last sample; loading the scene and writing the outputs are outside it. Cache " \
-      "construction (batch, adaptive, lazy) stops at its first pass (lazy: shading point) after half of it " \
-      "(a warning and cut_by_time in the stats say so); the final render takes progressive passes until the " \
+      "construction stops gathering when half of it is spent (batch and adaptive: inside a pass, or with " \
+      "several MPI processes at the end of the pass; lazy: after that shading point; a warning and " \
+      "cut_by_time in the stats say so); the final render takes progressive passes until the " \
       "rest is spent, at least one sample per pixel. Radiance records and the --aov indirect and glossy " \
       "re-renders come on top") \
     X(CHECKPOINT, "--checkpoint", NULL, IC_OPT_DOUBLE, render.checkpoint_seconds, 0, 1e9, "SECONDS", NAN, "none", \

@@ -228,9 +228,10 @@ typedef struct ic_render_options {
     uint64_t seed;         /* random seed (default: scene file, else 1) */
     int has_seed;          /* 1: use `seed` even if it is 0 */
     double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent (the budget
-                              of the whole call: construction comes off the film's share, and the batch,
-                              adaptive and lazy strategies stop at their first pass, round or shading point
-                              after IC_CONSTRUCTION_TIME_SHARE of it; the film takes at least one sample per
+                              of the whole call: construction comes off the film's share, and stops
+                              gathering after IC_CONSTRUCTION_TIME_SHARE of it — batch and adaptive inside
+                              a pass (several processes: at the pass's end), lazy after that shading
+                              point; the film takes at least one sample per
                               pixel; radiance records and the AOVs' re-renders are not cut) */
     ic_sampler sampler;    /* pixel, light and BSDF sample pairs [IC_SAMPLER_SOBOL] */
     ic_cache_switch adaptive_sampling; /* IC_CACHE_ON: spp is a mean per pixel; a pilot pass of spp/4, the
