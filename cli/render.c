@@ -114,9 +114,8 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         cJSON_AddNumberToObject(ext, "min", st->extent_min);
         cJSON_AddNumberToObject(ext, "mean", st->extent_mean);
         cJSON_AddNumberToObject(ext, "max", st->extent_max);
-        cJSON_AddNumberToObject(ext, "elliptical_share", st->records > st->hit_records
-                                                              ? (double)st->ellipse_records / (st->records - st->hit_records)
-                                                              : 0.0);
+        const uint32_t own = st->records - st->hit_records; /* the image's records */
+        cJSON_AddNumberToObject(ext, "elliptical_share", own ? (double)st->ellipse_records / own : 0.0);
         cJSON_AddNumberToObject(o, "hit_records", st->hit_records);
         cJSON_AddNumberToObject(o, "cached_emitters", st->cached_emitters);
         if (a->render.ic.radiance_cache == IC_CACHE_ON) {

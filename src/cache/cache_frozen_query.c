@@ -549,10 +549,14 @@ static IC_TARGET_AVX2 size_t query_batch_avx2(const ic_cache *c, const ic_cache_
             ring[k % AHEAD] = batch_leaf(f, q[k + AHEAD].position, &lo, &hi, cur);
             cur = ring[k % AHEAD] ? ring[k % AHEAD] : cur;
         }
-        if (query_leaf_avx2(c, &q[k], leaf, &out[k]))
+        if (query_leaf_avx2(c, &q[k], leaf, &out[k])) {
             ++found;
-        else if (q[k].fallback) /* rare: a second look-up, as ic_cache_query_hinted makes it */
-            found += (size_t)ic_cache_query_hinted(c, &q[k], NULL, &out[k]);
+        } else if (q[k].fallback) { /* rare: the fallback level's look-up, as ic_cache_query_hinted makes it */
+            ic_cache_lookup q2 = q[k];
+            q2.bounce = q2.fallback - 1u;
+            q2.fallback = 0;
+            found += (size_t)ic_cache_query_hinted(c, &q2, NULL, &out[k]);
+        }
     }
     if (hint && cur)
         hint->leaf = cur->id + 1u;

@@ -212,8 +212,9 @@ static double record_rays(const ic_gather_opts *g)
  * That 3.75 was a low draw of a heavy-tailed variance: with the pilot's fixed stream (pilot()) the same
  * window measures cv²_light 96 against cv²_gather 9.6 and is cached at K = 100 too; staircase2 at
  * 320×180, equal rays, seeds 1 and 2: relMSE 0.0043 → 0.0019, low-pass 0.000196, 0.000259 → 0.000292,
- * 0.000254 (BENCHMARKS.md, "The large-emitter pilot and the seed"). Stratification and the record filter lower the records' noise below cv²_gather / M, but a record's
- * error also spreads over a footprint wider than the eye's averaging.
+ * 0.000254 (BENCHMARKS.md, "The large-emitter pilot and the seed"). Stratification and the record
+ * filter lower the records' noise below cv²_gather / M, but a record's error also spreads over a
+ * footprint wider than the eye's averaging.
  *
  * A window seen through an opening (a large source most of whose area is hidden: light samples on it
  * mostly wasted, each visible one carrying a large weight) is such an emitter, and its irradiance
@@ -226,8 +227,8 @@ static double record_rays(const ic_gather_opts *g)
  * of its light samples: cv²_light 0.64, cv²_gather 79; cached, relMSE doubles). Measured (cv²_light,
  * cv²_gather): the Cornell box's lamp 0.11, 185, stair-hall's ceiling panel 0.018, 890, staircase2's
  * two outer window quads (102, 235; 59, 228) and a room's window with a bright outside behind it
- * (22, 95) are sampled, staircase2's middle window (96, 9.6) cached; an emitter is cached when light sampling is at least 4 times as noisy per
- * sample as the hemisphere rays (K·S / M = 4 at the defaults) — a large source mostly hidden behind a
+ * (22, 95) are sampled, staircase2's middle window (96, 9.6) cached; an emitter is cached when light
+ * sampling is at least 4 times as noisy per sample as the hemisphere rays (K·S / M = 4 at the defaults) — a large source mostly hidden behind a
  * narrow opening, or an emitting surface that surrounds the scene like a sky.
  *
  * Only a material that covers, at the median sampled shading point, at least large_emitters of the

@@ -104,12 +104,6 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err)
     return r;
 }
 
-static int cmp_float(const void *a, const void *b)
-{
-    float x = *(const float *)a, y = *(const float *)b;
-    return (x > y) - (x < y);
-}
-
 #define VIEW_SAMPLES 65536u
 
 float ic_ic_view_extent(const ic_ctx *c)
@@ -129,7 +123,7 @@ float ic_ic_view_extent(const ic_ctx *c)
         for (size_t i = 0, k = 0; i < npix; ++i)
             if (c->g.valid[i] && k++ % stride == 0)
                 v[m++] = v3_get(c->g.p[i], axis);
-        qsort(v, m, sizeof *v, cmp_float);
+        qsort(v, m, sizeof *v, ic_ic_cmp_float);
         float span = v[(m - 1) * 95 / 100] - v[(m - 1) * 5 / 100];
         d2 += span * span;
     }

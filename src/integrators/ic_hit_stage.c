@@ -14,12 +14,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-static int cmp_float(const void *a, const void *b)
-{
-    float x = *(const float *)a, y = *(const float *)b;
-    return x < y ? -1 : x > y;
-}
-
 /* Probe rays per point and pass, and the most passes. */
 #define HIT_PROBES 16
 #define HIT_PROBES_MAX 4096 /* in all, per pass */
@@ -88,7 +82,7 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         /* Clusters about a record's size: the accuracy times the median distance of the uncovered hits (a
          * record's R is about the distance its hemisphere rays travel). The scene's diagonal, which sizes
          * the image's world stage, says nothing here: a ground plane around a house makes it huge. */
-        qsort(dist, m, sizeof *dist, cmp_float);
+        qsort(dist, m, sizeof *dist, ic_ic_cmp_float);
         float box = c->o.cache.accuracy * dist[m / 2];
         m = ic_world_select(cand, m, scene->bounds_min, scene->bounds_max, box, 3, 30.0f);
         /* Their rays: the strata over strata_div each way. */
