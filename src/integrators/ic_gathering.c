@@ -76,9 +76,10 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
  * (T_k, ic_ctx.level_irr), and the look-up reads the interpolation of T_{k−1} for every level k the
  * ray reports: each contributor's gradient-extrapolated value scaled per channel by its T_{k−1}/E_i, the
  * same weights as the full estimate. cum[k] (k = 1…B) gets the light of at most k bounces after the
- * record; cum[B] is what the ray returns. */
+ * record; cum[B] is what the ray returns. The hit's surface and BSDF are left in *sp and *bp either way, for
+ * the path that the caller traces when this returns 0. */
 static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
-                          ic_vec3 *cum)
+                          ic_vec3 *cum, ic_surface *sp, ic_bsdf *bp)
 {
     const ic_scene *scene = c->tr->scene;
     ic_surface s;
@@ -86,6 +87,8 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_vec3 wo = v3_neg(ray->dir);
     ic_bsdf b;
     ic_bsdf_init(&b, scene, &s, wo);
+    *sp = s;
+    *bp = b;
     if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
         return 0;
     ic_cache_contribution contrib[LOOKUP_CAPACITY], contrib_hit[LOOKUP_CAPACITY];
@@ -171,7 +174,10 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             bits.f[5] = rays[i].dir.z;
             ic_rng rng = ic_rng_make(c->seed ^ 0x6761746865720000ULL, ((uint64_t)bits.u[0] << 32) | bits.u[1],
                                      ((uint64_t)bits.u[2] << 32) | bits.u[3], ((uint64_t)bits.u[4] << 32) | bits.u[5]);
-            if (c->hit_lookups && hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, cum)) {
+            ic_surface hs;
+            ic_bsdf hb;
+            const int looked = c->hit_lookups != 0;
+            if (looked && hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, cum, &hs, &hb)) {
                 radiance[j] = cum[B];
             } else {
                 /* The hit is the path's second vertex (the record is the first): depth 1. Its emission
@@ -179,7 +185,8 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
                 ic_vec3 by_events[IC_LEVELS_MAX + 1];
                 for (int k = 0; k <= B; ++k)
                     by_events[k] = v3s(0.0f);
-                ic_path_start st = {1, 0.0f, 1, 1, NULL, B ? by_events : NULL};
+                ic_path_start st = {1, 0.0f, 1, 1, NULL, B ? by_events : NULL, looked ? &hs : NULL,
+                                    looked ? &hb : NULL};
                 radiance[j] = ic_pt_li_hit(tr, rays[i], &hits[i], &st, &rng, &nrays);
                 if (B) {
                     cum[0] = by_events[0];

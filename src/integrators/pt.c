@@ -76,6 +76,8 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
     int skip_emission = st->skip_first_emission;
     ic_vec3 prev_p = ray.org;
     ic_vec3 *levels = st->levels;
+    const ic_surface *given_s = first_hit ? st->first_surface : NULL;
+    const ic_bsdf *given_b = given_s ? st->first_bsdf : NULL;
     for (int depth = st->depth;; ++depth) {
         ic_hit hit;
         if (first_hit) {
@@ -96,7 +98,11 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
             break;
         }
         ic_surface s;
-        ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+        if (given_s)
+            s = *given_s;
+        else
+            ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+        given_s = NULL;
         ic_vec3 wo = v3_neg(ray.dir);
         ic_vec3 le = skip_emission ? v3s(0.0f) : ic_scene_emission(scene, &s, wo);
         skip_emission = 0;
@@ -113,7 +119,11 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
         if (depth >= tr->pt.max_depth)
             break;
         ic_bsdf b;
-        ic_bsdf_init(&b, scene, &s, wo);
+        if (given_b)
+            b = *given_b;
+        else
+            ic_bsdf_init(&b, scene, &s, wo);
+        given_b = NULL;
         ic_vec3 direct = v3_mul(beta, ic_direct_light(tr, &s, &b, wo, sel, rng, rays));
         L = v3_add(L, direct);
         if (levels)
@@ -138,7 +148,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
 
 ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
-    ic_path_start st = {0, 0.0f, 1, 0, sel, NULL};
+    ic_path_start st = {0, 0.0f, 1, 0, sel, NULL, NULL, NULL};
     return ic_pt_li_from(tr, ray, &st, rng, rays);
 }
 

@@ -72,6 +72,9 @@ typedef struct ic_path_start {
     ic_vec3 *levels;       /* optional (NULL: none), max_depth − depth + 1 entries: each contribution is
                               also added to levels[k], k the scattering events it made after the ray's
                               origin (emission found at the first hit: 0; that hit's light sample: 1) */
+    const ic_surface *first_surface; /* optional, with a known first hit (ic_pt_li_hit): its surface and */
+    const ic_bsdf *first_bsdf;       /* BSDF towards the ray's origin, as the caller already computed them
+                                        (NULL: computed here) */
 } ic_path_start;
 
 /* Path-traced radiance arriving at the ray's origin along ray, continuing a path described by st. */

@@ -125,29 +125,43 @@ void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_
 }
 
 /* Bilinear texel look-up with repeat wrap; uv (0,0) is the image's bottom-left corner (OBJ/assimp
- * convention) while the image's first row is its top. */
+ * convention) while the image's first row is its top. The four texels' offsets are found once (one
+ * wrap per axis, the second column and row by a step that wraps at the edge), and each is read as
+ * three channels in a row. */
 static ic_vec3 texture_lookup(const ic_texture *t, float s_coord, float t_coord)
 {
     float x = (s_coord - floorf(s_coord)) * (float)t->width - 0.5f;
     float y = (1.0f - (t_coord - floorf(t_coord))) * (float)t->height - 0.5f;
     float fx0 = floorf(x), fy0 = floorf(y);
     float fx = x - fx0, fy = y - fy0;
-    int x0 = (int)fx0, y0 = (int)fy0;
-    int xs[2], ys[2];
-    for (int k = 0; k < 2; ++k) {
-        int xi = (x0 + k) % t->width, yi = (y0 + k) % t->height;
-        xs[k] = xi < 0 ? xi + t->width : xi;
-        ys[k] = yi < 0 ? yi + t->height : yi;
+    int x0 = (int)fx0 % t->width, y0 = (int)fy0 % t->height;
+    x0 += x0 < 0 ? t->width : 0;
+    y0 += y0 < 0 ? t->height : 0;
+    int x1 = x0 + 1 == t->width ? 0 : x0 + 1, y1 = y0 + 1 == t->height ? 0 : y0 + 1;
+    const size_t row = (size_t)t->width, i00 = 3 * ((size_t)y0 * row + (size_t)x0),
+                 i01 = 3 * ((size_t)y0 * row + (size_t)x1), i10 = 3 * ((size_t)y1 * row + (size_t)x0),
+                 i11 = 3 * ((size_t)y1 * row + (size_t)x1);
+    float v[4][3];
+    if (t->srgb8) {
+        const uint8_t *b = t->srgb8;
+        for (int c = 0; c < 3; ++c) {
+            v[0][c] = t->linear[b[i00 + (size_t)c]];
+            v[1][c] = t->linear[b[i01 + (size_t)c]];
+            v[2][c] = t->linear[b[i10 + (size_t)c]];
+            v[3][c] = t->linear[b[i11 + (size_t)c]];
+        }
+    } else {
+        for (int c = 0; c < 3; ++c) {
+            v[0][c] = t->rgb[i00 + (size_t)c];
+            v[1][c] = t->rgb[i01 + (size_t)c];
+            v[2][c] = t->rgb[i10 + (size_t)c];
+            v[3][c] = t->rgb[i11 + (size_t)c];
+        }
     }
     ic_vec3 r;
     float *out = &r.x;
-    for (int c = 0; c < 3; ++c) {
-        float a = ic_texture_value(t, 3 * ((size_t)ys[0] * (size_t)t->width + (size_t)xs[0]) + (size_t)c);
-        float b = ic_texture_value(t, 3 * ((size_t)ys[0] * (size_t)t->width + (size_t)xs[1]) + (size_t)c);
-        float d = ic_texture_value(t, 3 * ((size_t)ys[1] * (size_t)t->width + (size_t)xs[0]) + (size_t)c);
-        float e = ic_texture_value(t, 3 * ((size_t)ys[1] * (size_t)t->width + (size_t)xs[1]) + (size_t)c);
-        out[c] = (1.0f - fy) * ((1.0f - fx) * a + fx * b) + fy * ((1.0f - fx) * d + fx * e);
-    }
+    for (int c = 0; c < 3; ++c)
+        out[c] = (1.0f - fy) * ((1.0f - fx) * v[0][c] + fx * v[1][c]) + fy * ((1.0f - fx) * v[2][c] + fx * v[3][c]);
     return r;
 }
 

@@ -523,6 +523,57 @@ static void test_texture_storage(void)
     CHECK(differ == 0, "%d texel values differ from the files' floats", differ);
     ic_image_free(&back);
     ic_image_free(&img);
+    /* The bilinear look-up, through a material of each texture, against the formula written out with
+     * the wrap taken as a true modulo: at the edges, just inside them, exactly on texel centres and
+     * far outside [0, 1] on both sides (repeat). */
+    s->materials = calloc(2, sizeof *s->materials);
+    if (s->materials) {
+        s->material_count = 2;
+        s->materials[0].kd_texture = 0;
+        s->materials[1].kd_texture = 1;
+        const float fixed[] = {0.0f, 1.0f, -1.0f, -1e-9f, 1e-9f, 1.0f - 1e-7f, 0.5f / 37.0f, 36.5f / 37.0f, 0.5f / 23.0f,
+                               -2.25f, 3.75f, 1e3f + 0.125f};
+        const int nf = (int)(sizeof fixed / sizeof fixed[0]);
+        int bad = 0;
+        uint64_t state = 12345;
+        for (int k = 0; k < 4000; ++k) {
+            float u, v;
+            if (k < nf * nf) {
+                u = fixed[k % nf];
+                v = fixed[k / nf];
+            } else {
+                state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+                u = (float)((double)(state >> 11) / 9007199254740992.0 * 8.0 - 4.0);
+                state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+                v = (float)((double)(state >> 11) / 9007199254740992.0 * 8.0 - 4.0);
+            }
+            for (int m = 0; m < 2; ++m) {
+                const ic_texture *t = &s->textures[m];
+                ic_surface srf;
+                memset(&srf, 0, sizeof srf);
+                srf.material = (uint32_t)m;
+                srf.uv[0] = u;
+                srf.uv[1] = v;
+                ic_vec3 got = ic_scene_texture_tint(s, &srf);
+                double x = (double)((u - floorf(u)) * (float)t->width - 0.5f);
+                double y = (double)((1.0f - (v - floorf(v))) * (float)t->height - 0.5f);
+                double x0 = floor(x), y0 = floor(y), fx = x - x0, fy = y - y0;
+                const float *g = &got.x;
+                for (int ch = 0; ch < 3; ++ch) {
+                    double want = 0.0;
+                    for (int dy = 0; dy < 2; ++dy)
+                        for (int dx = 0; dx < 2; ++dx) {
+                            long xi = (((long)x0 + dx) % t->width + t->width) % t->width;
+                            long yi = (((long)y0 + dy) % t->height + t->height) % t->height;
+                            double w = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy);
+                            want += w * ic_texture_value(t, 3 * ((size_t)yi * (size_t)t->width + (size_t)xi) + (size_t)ch);
+                        }
+                    bad += !(fabs(g[ch] - want) < 1e-5);
+                }
+            }
+        }
+        CHECK(bad == 0, "%d bilinear look-ups differ from the formula", bad);
+    }
     ic_scene_free(s);
 }
 
