@@ -1,7 +1,8 @@
 /*
  * ic_direct.c — direct light as the cache integrator estimates it (the final render, and the direct part
  * of what a hemisphere ray returns): the sun every time, one light sample by the selection, and emitting
- * triangles once more through the diffuse lobe (MIS); the environment is in the records.
+ * triangles once more through the diffuse lobe (MIS); the environment is in the records. At a hemisphere
+ * ray's hit that the records serve, the light sample alone (ic_ic_direct_light_at_hit).
  */
 #include "ic_internal.h"
 
@@ -75,11 +76,13 @@ ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *
     return ic_ic_direct_light_lobes(c, s, b, wo, sel, 1, rng, rays);
 }
 
-ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
-                                 const ic_light_selection *sel, int glossy_traced, ic_rng *rng, uint64_t *rays)
+/* The sun (every time) and one light sample by the selection sel; weigh_diffuse: whether the light
+ * sample's diffuse share is MIS-weighted against the diffuse lobe's cosine ray (diffuse_emission_sample),
+ * glossy_traced: whether both glossy shares are weighted against the final render's glossy path. */
+static ic_vec3 sun_and_light_sample(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                                    const ic_light_selection *sel, int glossy_traced, int weigh_diffuse, ic_rng *rng,
+                                    uint64_t *rays)
 {
-    if (!sel)
-        sel = &c->light_sel;
     float u0 = ic_rng_1d(rng), u1, u2;
     ic_rng_2d(rng, &u1, &u2);
     ic_vec3 L = v3s(0.0f);
@@ -94,8 +97,23 @@ ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_
     }
     ic_light_sample ls;
     if (ic_scene_sample_light_sel(scene, sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
-        L = v3_add(L, shade_light(c, s, b, wo, &ls, !ls.is_delta, !ls.is_delta && glossy_traced, rays));
+        L = v3_add(L, shade_light(c, s, b, wo, &ls, weigh_diffuse && !ls.is_delta, !ls.is_delta && glossy_traced, rays));
+    return L;
+}
+
+ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                                 const ic_light_selection *sel, int glossy_traced, ic_rng *rng, uint64_t *rays)
+{
+    if (!sel)
+        sel = &c->light_sel;
+    ic_vec3 L = sun_and_light_sample(c, s, b, wo, sel, glossy_traced, 1, rng, rays);
     return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
+}
+
+ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                                  uint64_t *rays)
+{
+    return sun_and_light_sample(c, s, b, wo, &c->light_sel, 0, 0, rng, rays);
 }
 
 ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,

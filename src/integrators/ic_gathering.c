@@ -61,10 +61,10 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
 }
 
 /* Radiance leaving a hemisphere ray's hit towards the record, with the cache standing in for the
- * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light by
- * the final render's estimator (records hold no light of the emitters it samples; ic_ic_direct_light
- * adds it). This is Ward's multiple-bounce scheme (the ambient value of a point is its records'
- * interpolation, Radiance's -ab) inside the batch passes: a pass's records serve the next passes' rays,
+ * bounces after the hit: kd/π · E(hit) from the records already made, plus the hit's direct light from
+ * the lights the final render samples (records hold none of it; ic_ic_direct_light_at_hit). This is
+ * Ward's multiple-bounce scheme (the ambient value of a point is its records' interpolation, Radiance's
+ * -ab) inside the batch passes: a pass's records serve the next passes' rays,
  * and the world-space stage puts records where these rays land (Frolov et al. 2012 §3.1.3), which is
  * what makes the look-ups hit; it cuts record cost, which Frolov et al. 2012 §4.6 measures as most of
  * the construction time. Only purely diffuse hits are taken (a glossy hit needs its lobe traced);
@@ -103,7 +103,7 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     if (!ic_cache_query(c->cache, &q, &e))
         return 0;
     ic_vec3 albedo = v3_scale(b.kd, IC_INV_PI);
-    ic_vec3 direct = ic_ic_direct_light(c, &s, &b, wo, NULL, rng, rays);
+    ic_vec3 direct = ic_ic_direct_light_at_hit(c, &s, &b, wo, rng, rays);
     const int B = c->levels;
     ic_vec3 E[IC_LEVELS_MAX];
     ic_ic_level_estimates(c, contrib, e.contributions_written, 0, B, E);

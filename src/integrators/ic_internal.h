@@ -184,6 +184,15 @@ static inline int ic_ic_out_of_time(ic_ctx *c)
 }
 /* Progress report, if the caller asked for it. */
 void ic_ic_report(const ic_render_options *opt, const char *phase, double fraction);
+/* Direct light at a hemisphere ray's diffuse hit that the records serve: the sun and one light sample by
+ * the selection, each at full weight, without the diffuse lobe's cosine ray that ic_ic_direct_light
+ * weighs them against (MIS). The ray's value is averaged with the record's hundreds of others, where that
+ * ray's lower variance next to a small emitter is not seen (the same low-pass error within 1 % on every
+ * bench scene with emitters), while it cost a full intersection per hit: 7–13 % of the gathering's rays
+ * (BENCHMARKS.md, "Direct light at the hemisphere rays' hits"). Unbiased: light sampling reaches every
+ * emitter the final render samples; the records carry the others. */
+ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
+                                  uint64_t *rays);
 /* Direct light of the final render at s (NEE; the environment is cached, not sampled here); sel: the
  * pixel's local light selection, NULL for the whole-scene one. */
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
