@@ -228,8 +228,9 @@ static double record_rays(const ic_gather_opts *g)
  * cv²_gather): the Cornell box's lamp 0.11, 185, stair-hall's ceiling panel 0.018, 890, staircase2's
  * two outer window quads (102, 235; 59, 228) and a room's window with a bright outside behind it
  * (22, 95) are sampled, staircase2's middle window (96, 9.6) cached; an emitter is cached when light
- * sampling is at least 4 times as noisy per sample as the hemisphere rays (K·S / M = 4 at the defaults) — a large source mostly hidden behind a
- * narrow opening, or an emitting surface that surrounds the scene like a sky.
+ * sampling is at least 4 times as noisy per sample as the hemisphere rays (K·S / M = 4 at the
+ * defaults) — a large source mostly hidden behind a narrow opening, or an emitting surface that
+ * surrounds the scene like a sky.
  *
  * Only a material that covers, at the median sampled shading point, at least large_emitters of the
  * cosine-weighted hemisphere (hemisphere_share, unoccluded) is piloted; a smaller one is light-sampled

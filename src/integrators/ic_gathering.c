@@ -76,23 +76,19 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
  * (T_k, ic_ctx.level_irr), and the look-up reads the interpolation of T_{k−1} for every level k the
  * ray reports: each contributor's gradient-extrapolated value scaled per channel by its T_{k−1}/E_i, the
  * same weights as the full estimate. cum[k] (k = 1…B) gets the light of at most k bounces after the
- * record; cum[B] is what the ray returns. The hit's surface and BSDF are left in *sp and *bp either way, for
- * the path that the caller traces when this returns 0. */
+ * record; cum[B] is what the ray returns. The hit's surface and BSDF are made in the caller's *s and *b,
+ * which the path that the caller traces when this returns 0 reuses. */
 static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
-                          ic_vec3 *cum, ic_surface *sp, ic_bsdf *bp)
+                          ic_vec3 *cum, ic_surface *s, ic_bsdf *b)
 {
     const ic_scene *scene = c->tr->scene;
-    ic_surface s;
-    ic_scene_surface(scene, hit->triangle, hit->u, hit->v, &s);
+    ic_scene_surface(scene, hit->triangle, hit->u, hit->v, s);
     ic_vec3 wo = v3_neg(ray->dir);
-    ic_bsdf b;
-    ic_bsdf_init(&b, scene, &s, wo);
-    *sp = s;
-    *bp = b;
-    if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
+    ic_bsdf_init(b, scene, s, wo);
+    if (!ic_bsdf_has_smooth(b) || ic_bsdf_has_glossy(b))
         return 0;
     ic_cache_contribution contrib[LOOKUP_CAPACITY], contrib_hit[LOOKUP_CAPACITY];
-    ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_FINAL);
+    ic_cache_lookup q = ic_cache_lookup_at(s->p, b->cache_n, IC_ACCEPT_FINAL);
     q.contributions = contrib;
     q.contribution_capacity = LOOKUP_CAPACITY;
     if (c->hit_kind >= 0) { /* the hit records, where no image record accepts */
@@ -102,8 +98,8 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     ic_cache_estimate e;
     if (!ic_cache_query(c->cache, &q, &e))
         return 0;
-    ic_vec3 albedo = v3_scale(b.kd, IC_INV_PI);
-    ic_vec3 direct = ic_ic_direct_light_at_hit(c, &s, &b, wo, rng, rays);
+    ic_vec3 albedo = v3_scale(b->kd, IC_INV_PI);
+    ic_vec3 direct = ic_ic_direct_light_at_hit(c, s, b, wo, rng, rays);
     const int B = c->levels;
     ic_vec3 E[IC_LEVELS_MAX];
     ic_ic_level_estimates(c, contrib, e.contributions_written, 0, B, E);
