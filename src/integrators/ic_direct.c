@@ -2,7 +2,8 @@
  * ic_direct.c — direct light as the cache integrator estimates it (the final render, and the direct part
  * of what a hemisphere ray returns): the sun every time, one light sample by the selection, and emitting
  * triangles once more through the diffuse lobe (MIS); the environment is in the records. At a hemisphere
- * ray's hit that the records serve, the light sample alone (ic_ic_direct_light_at_hit).
+ * ray's hit that the records serve, the light sample alone unless a large emitter is light-sampled
+ * (ic_ic_direct_light_at_hit).
  */
 #include "ic_internal.h"
 
@@ -113,6 +114,8 @@ ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_
 ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                                   uint64_t *rays)
 {
+    if (c->large_sampled)
+        return ic_ic_direct_light_lobes(c, s, b, wo, &c->light_sel, 0, rng, rays);
     return sun_and_light_sample(c, s, b, wo, &c->light_sel, 0, 0, rng, rays);
 }
 

@@ -238,9 +238,12 @@ static double record_rays(const ic_gather_opts *g)
  * a = 0.01). The pilot costs PILOT_SAMPLES shadow rays at each of at most PILOT_POINTS shading points
  * per material piloted (8,192 rays; a few ms).
  *
- * Marks in cached_mat[m] (zeroed, material_count entries) each emitting material the records carry.
- * Returns 0 when out of memory. */
-static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, uint8_t *cached_mat)
+ * Marks in cached_mat[m] (zeroed, material_count entries) each emitting material the records carry
+ * (none unless cached_allowed: large_emitters off still pilots, for the flag), and sets *large_sampled
+ * where a piloted material stays light-sampled though its light samples are noisier per sample than
+ * the hemisphere rays (cv²_light > cv²_gather; ic_ctx.large_sampled). Returns 0 when out of memory. */
+static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, int cached_allowed,
+                            uint8_t *cached_mat, int *large_sampled)
 {
     size_t npix = (size_t)c->g.width * c->g.height;
     /* At most ~1024 shading points, evenly through the image, and fewer where there are so many
@@ -289,7 +292,11 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, ui
             continue;
         double cv2_light = INFINITY, cv2_gather = INFINITY;
         ok = pilot(c, s, m, pilot_stride, &cv2_light, &cv2_gather);
-        cached_mat[m] = ok && cv2_light / light_per_pixel > cv2_gather / rays_per_record;
+        cached_mat[m] = cached_allowed && ok && cv2_light / light_per_pixel > cv2_gather / rays_per_record;
+        /* Light-sampled, and its plain light samples noisier than cosine rays would be: the served hits
+         * pair each light sample with a cosine ray (ic_ctx.large_sampled). */
+        if (ok && !cached_mat[m] && cv2_light > cv2_gather)
+            *large_sampled = 1;
     }
     free(slot);
     free(share);
@@ -326,7 +333,7 @@ static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *c
 
 int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
 {
-    if (c->o.large_emitters.mode == IC_CACHE_OFF || s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
+    if (s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
         return 1;
     size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
     for (size_t i = 0; i < npix; ++i)
@@ -334,10 +341,13 @@ int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
     if (valid == 0)
         return 1;
     uint8_t *cached_mat = calloc(s->material_count ? s->material_count : 1, 1);
-    if (!cached_mat || !choose_materials(c, s, valid, cached_mat)) {
+    const int cached_allowed = c->o.large_emitters.mode != IC_CACHE_OFF;
+    int large_sampled = 0;
+    if (!cached_mat || !choose_materials(c, s, valid, cached_allowed, cached_mat, &large_sampled)) {
         free(cached_mat);
         return 0;
     }
+    c->large_sampled = large_sampled;
     uint32_t cached = 0;
     double kept = 0.0;
     for (uint32_t i = 0; i < s->tri_light_count; ++i) {

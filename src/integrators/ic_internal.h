@@ -81,6 +81,10 @@ typedef struct ic_ctx {
                                   (ic_emitters.c); NULL when none is */
     float *direct_cdf;         /* its cdf (tri_light_count + 1) */
     uint32_t cached_emitters;  /* emitting triangles whose light the records carry */
+    int large_sampled;         /* 1: an emitter that covers at least large_emitters of the median shading
+                                  point's hemisphere is light-sampled though its plain light samples are
+                                  noisier than cosine rays (ic_emitters.c), and the hits that records
+                                  serve take the full MIS pair (ic_ic_direct_light_at_hit) */
     ic_radiance *rad;          /* radiance caching on glossy lobes (ic_radiance.c); NULL when off */
     ic_comm *comm;             /* the processes sharing construction (ic_ic_gather_points); NULL: one */
     const volatile sig_atomic_t *cancel; /* ic_render_options.cancel: once set, construction stops at its
@@ -190,7 +194,12 @@ void ic_ic_report(const ic_render_options *opt, const char *phase, double fracti
  * ray's lower variance next to a small emitter is not seen (the same low-pass error within 1 % on every
  * bench scene with emitters), while it cost a full intersection per hit: 7–13 % of the gathering's rays
  * (BENCHMARKS.md, "Direct light at the hemisphere rays' hits"). Unbiased: light sampling reaches every
- * emitter the final render samples; the records carry the others. */
+ * emitter the final render samples; the records carry the others. Where a large emitter is light-sampled
+ * though its plain light samples are noisier than cosine rays (ic_ctx.large_sampled), the MIS pair is
+ * kept: such a source's area samples are heavy-tailed (staircase2's middle window: cv² 96 a light
+ * sample against 9.6 a cosine ray), and one tail draw in a record is a blotch (that window sampled: the
+ * low-pass error 3× higher on one seed of three without the pair; BENCHMARKS.md, "Direct light at the
+ * hemisphere rays' hits"). */
 ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                                   uint64_t *rays);
 /* Direct light of the final render at s (NEE; the environment is cached, not sampled here); sel: the
