@@ -164,8 +164,9 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "cosine-weighted hemisphere at the image's median shading point, and whose light samples a pilot " \
       "measures to leave more error than the records' hemisphere rays, once its noise is averaged over the " \
       "~50 pixels the eye sees together (a large source mostly hidden behind an opening), " \
-      "lights the scene through the records instead of being light-sampled; off: sample every emitter. The " \
-      "summary line and the stats (cached_emitters) say when it happens") \
+      "lights the scene through the records instead of being light-sampled; off: sample every emitter (about " \
+      "twice the per-pixel noise where a cached window lit the scene, and fewer soft stains on some scenes: " \
+      "BENCHMARKS.md). The summary line and the stats (cached_emitters) say when it happens") \
     X(RECORD_FILTER, "--record-filter", NULL, IC_OPT_NUMBER_OFF, render.ic.record_filter, 0, 16, "S|off", \
       IC_DEFAULT_RECORD_FILTER, "%g", "", IC_SCOPE_IC, "record noise control: after construction each record's " \
       "value moves towards the kernel mean of its neighbours' within S times its influence radius, as far " \
