@@ -215,6 +215,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(UNCOVERED, "--uncovered", NULL, IC_OPT_FLOAT, render.ic.uncovered, 0.000001, 1, "F", IC_DEFAULT_UNCOVERED, \
       "%g", "", IC_SCOPE_BATCH, "construction has converged when fewer than F of a pass's eye-path look-up " \
       "points (where the final render reads the cache) find no record; the stats report the last pass's share") \
+    X(PASS_GROWTH, "--pass-growth", NULL, IC_OPT_NUMBER_OFF, render.ic.pass_growth, 0, 1, "F|off", \
+      IC_DEFAULT_PASS_GROWTH, "%g", "", IC_SCOPE_BATCH, "construction has also converged when a pass after the " \
+      "screen stage adds fewer than F times the image's records already made: later passes cover ever fewer look-ups " \
+      "(they fall back to a path-traced bounce) for the same rays; off: --uncovered alone decides") \
     X(WEBER, "--weber", NULL, IC_OPT_FLOAT, render.ic.weber, 0.0001, 1, "F", IC_DEFAULT_WEBER, "%g", "", \
       IC_SCOPE_ADAPTIVE, "Weber fraction of the discontinuity test; smaller means more records") \
     X(ADAPTIVE_GROWTH, "--adaptive-growth", NULL, IC_OPT_FLOAT, render.ic.adaptive_growth, 1, 100, "F", \

@@ -133,6 +133,9 @@ typedef struct ic_ic_options {
     int min_candidates;    /* batch: stop when a pass finds fewer new candidates [16] */
     float uncovered;       /* batch: converged when fewer than this share of a pass's eye-path look-up
                               points (where the final render will read the cache) find no record [0.001] */
+    ic_switched_value pass_growth; /* batch: converged, too, when a pass after the screen stage adds fewer
+                              records than `value` times the image's records already made (hit records do
+                              not count); off: only `uncovered` and min_candidates decide [0.02] */
     int screen_passes;     /* batch: passes with the screen-space irradiance stage [3] */
     float dither_threshold;/* batch: need at which dithering goes from 32- to 16-pixel spacing [0.5] */
     float normal_weight;   /* batch: k of k·normDiff + posDiff (Frolov et al. 2012 §3.1.1) [4] */

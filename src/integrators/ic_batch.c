@@ -11,8 +11,12 @@
  *   thread count) and inserted in one transaction (ic_cache_insert_batch: validity-radius clamping,
  *   neighbour clamping, in a fixed order). Converged when the share of the world stage's look-up points
  *   that find no record (the points where the final render will read the cache) falls below
- *   `uncovered` once the screen passes are done, or when a pass finds fewer than min_candidates;
- *   max_passes is a safety bound, and stopping there is reported (cut_short). A last coverage sweep
+ *   `uncovered` once the screen passes are done, or when such a pass adds fewer than pass_growth times
+ *   the image's records already made (late passes cover ever fewer look-ups, which otherwise take a
+ *   path-traced bounce, for the same rays a record: on Sponza and staircase2 the passes after the first
+ *   ~10 took 12–18 % of the rays for 3–6 % of the low-pass error; BENCHMARKS.md, "When batch
+ *   construction stops"), or when a pass finds fewer than min_candidates; max_passes is a safety bound, and stopping
+ *   there is reported (cut_short). A last coverage sweep
  *   adds records for any pixel centre still uncovered, so every primary shading point has at least one
  *   contributing record.
  */
@@ -292,6 +296,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         if (r != IC_OK)
             goto done;
     }
+    const uint32_t hit_records = ic_cache_count(c->cache);
     /* Pass 0: geometry discontinuity. */
     ic_ic_report(opt, "cache pass 0", 0.0);
     r = ic_screen_geometry_need(&c->g, c->o.normal_weight, c->threads, need);
@@ -355,7 +360,13 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         st->uncovered_share = uncovered;
         /* Converged: the final render's look-ups (the eye paths' points, measured before this pass's
          * records) almost all find records, and the screen stage has had its passes. */
-        if ((int)found < c->o.min_candidates || (uncovered < c->o.uncovered && pass >= c->o.screen_passes)) {
+        /* pass_growth: this pass added few records for the image's records already made (the hit records,
+         * which only hemisphere rays read, do not count: at 40×30 they outnumber the image's). */
+        const uint32_t added = ic_cache_count(c->cache) - before;
+        const int slowed = c->o.pass_growth.mode != IC_CACHE_OFF &&
+                           (double)added < (double)c->o.pass_growth.value * (double)(before - hit_records);
+        if ((int)found < c->o.min_candidates ||
+            (pass >= c->o.screen_passes && (uncovered < c->o.uncovered || slowed))) {
             st->cut_short = 0;
             break;
         }

@@ -51,6 +51,8 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
         o.min_candidates = IC_DEFAULT_MIN_CANDIDATES;
     if (!(o.uncovered > 0.0f))
         o.uncovered = IC_DEFAULT_UNCOVERED;
+    if (o.pass_growth.value == 0.0f)
+        o.pass_growth.value = IC_DEFAULT_PASS_GROWTH;
     if (o.screen_passes <= 0)
         o.screen_passes = IC_DEFAULT_SCREEN_PASSES;
     if (o.dither_threshold <= 0.0f)

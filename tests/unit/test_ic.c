@@ -25,6 +25,7 @@
 
 #include "test_render_util.h"
 
+#include "irrcache/defaults.h"
 #include "irrcache/image.h"
 
 #include <string.h>
@@ -557,13 +558,28 @@ static void test_convergence(void)
     ic_render_options o = ic_options();
     o.spp = 2;
     ic_image img = {0};
-    ic_render_stats st;
-    CHECK(test_render(CORNELL, 96, 96, &o, &img, &st), "batch renders");
-    printf("convergence: %d passes, %u records, uncovered share %.5f\n", st.passes, st.records, st.uncovered_share);
+    ic_render_stats st, grow;
+    /* By default a pass that adds fewer than 2 % of the image's records ends construction too (pass_growth): it
+     * stops no later than the uncovered share alone, and its last pass is such a pass or the share's. */
+    CHECK(test_render(CORNELL, 96, 96, &o, &img, &grow), "batch renders");
+    ic_image_free(&img);
+    o.ic.pass_growth.mode = IC_CACHE_OFF;
+    CHECK(test_render(CORNELL, 96, 96, &o, &img, &st), "batch renders with --pass-growth off");
+    printf("convergence: %d passes, %u records, uncovered share %.5f; with pass growth: %d passes, %u records, "
+           "share %.5f\n", st.passes, st.records, st.uncovered_share, grow.passes, grow.records, grow.uncovered_share);
     /* At this size a pass's last few candidates (min_candidates) may end it before the share does. */
     CHECK(!st.cut_short && st.uncovered_share < 0.01 && st.passes < 30,
-          "default batch converges on its criterion: cut short %d, share %.5f, %d passes", st.cut_short,
+          "batch converges on the uncovered share: cut short %d, share %.5f, %d passes", st.cut_short,
           st.uncovered_share, st.passes);
+    uint32_t made = 0;
+    for (int p = 0; p + 1 < grow.passes && p < 32; ++p)
+        made += grow.records_per_pass[p];
+    const int last = grow.passes - 1;
+    CHECK(!grow.cut_short && grow.passes <= st.passes && last < 32 &&
+              (grow.uncovered_share < 0.001 || grow.records_per_pass[last] < 0.02 * made ||
+               grow.passes == st.passes),
+          "pass growth: converged in %d passes (%d without), the last adding %u records to %u", grow.passes,
+          st.passes, last < 32 ? grow.records_per_pass[last] : 0u, made);
     ic_image_free(&img);
     ic_render_stats loose;
     o.ic.uncovered = 0.02f;
@@ -580,6 +596,31 @@ static void test_convergence(void)
           "a pass limit before convergence is reported: cut short %d, %d passes, share %.4f", cut.cut_short,
           cut.passes, cut.uncovered_share);
     ic_image_free(&img);
+    /* A share it cannot reach: without pass growth the pass limit cuts construction short; with it,
+     * construction ends on the first pass after the screen stage that adds fewer than 2 % of the image's
+     * records. */
+    ic_render_options strict = ic_options();
+    strict.spp = 2;
+    strict.ic.uncovered = 1e-6f;
+    ic_render_stats ss, sl;
+    CHECK(test_render(CORNELL, 96, 96, &strict, &img, &ss), "batch renders with --uncovered 1e-6");
+    ic_image_free(&img);
+    strict.ic.pass_growth.mode = IC_CACHE_OFF;
+    strict.ic.max_passes = 12;
+    CHECK(test_render(CORNELL, 96, 96, &strict, &img, &sl), "batch renders with --uncovered 1e-6, growth off");
+    ic_image_free(&img);
+    uint32_t before = 0; /* the image's records: hit records do not count */
+    int first_slow = -1;
+    for (int p = 0; p < ss.passes && p < 32; ++p) {
+        if (p >= IC_DEFAULT_SCREEN_PASSES && first_slow < 0 && ss.records_per_pass[p] < 0.02 * before)
+            first_slow = p;
+        before += ss.records_per_pass[p];
+    }
+    printf("pass growth: %d passes, %u records; growth off: %d passes (cut short %d)\n", ss.passes, ss.records,
+           sl.passes, sl.cut_short);
+    CHECK(!ss.cut_short && first_slow > 0 && ss.passes == first_slow + 1 && sl.cut_short,
+          "an unreachable share: growth ends construction at the first slow pass (%d passes, first slow %d, cut "
+          "short %d); without it the limit cuts it (cut short %d)", ss.passes, first_slow, ss.cut_short, sl.cut_short);
     /* A time budget far too small: batch and adaptive construction stop after their first pass, say so, and
      * the image is still made (uncovered points take the fallback ray). */
     for (int strategy = 0; strategy < 2; ++strategy) {
