@@ -61,7 +61,7 @@
 #define IC_DEFAULT_MAX_PASSES 30         /* batch construction: a safety bound (stats keep 32 passes) */
 #define IC_DEFAULT_UNCOVERED 0.001f      /* batch: converged below this share of uncovered look-up points */
 #define IC_DEFAULT_MIN_CANDIDATES 16
-#define IC_DEFAULT_PASS_GROWTH 0.02f     /* batch: converged when a pass adds fewer than this share of records */
+#define IC_DEFAULT_PASS_GROWTH 0.02f     /* batch: converged when a pass adds fewer than this share of the image's records */
 #define IC_DEFAULT_SCREEN_PASSES 3
 #define IC_DEFAULT_DITHER_THRESHOLD 0.5f
 #define IC_DEFAULT_NORMAL_WEIGHT 4.0f

@@ -15,10 +15,9 @@
  *   the image's records already made (late passes cover ever fewer look-ups, which otherwise take a
  *   path-traced bounce, for the same rays a record: on Sponza and staircase2 the passes after the first
  *   ~10 took 12–18 % of the rays for 3–6 % of the low-pass error; BENCHMARKS.md, "When batch
- *   construction stops"), or when a pass finds fewer than min_candidates; max_passes is a safety bound, and stopping
- *   there is reported (cut_short). A last coverage sweep
- *   adds records for any pixel centre still uncovered, so every primary shading point has at least one
- *   contributing record.
+ *   construction stops"), or when a pass finds fewer than min_candidates; max_passes is a safety bound,
+ *   and stopping there is reported (cut_short). A last coverage sweep adds records for any pixel centre
+ *   still uncovered, so every primary shading point has at least one contributing record.
  */
 #include "ic_internal.h"
 
@@ -353,16 +352,16 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         if (r != IC_OK)
             goto done;
         found += wn;
+        const uint32_t added = ic_cache_count(c->cache) - before;
         if (pass < 32)
-            st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
+            st->records_per_pass[pass] = added;
         count_traffic(c, st, pass);
         st->passes = pass + 1;
         st->uncovered_share = uncovered;
-        /* Converged: the final render's look-ups (the eye paths' points, measured before this pass's
-         * records) almost all find records, and the screen stage has had its passes. */
-        /* pass_growth: this pass added few records for the image's records already made (the hit records,
-         * which only hemisphere rays read, do not count: at 40×30 they outnumber the image's). */
-        const uint32_t added = ic_cache_count(c->cache) - before;
+        /* Converged, once the screen stage has had its passes: the final render's look-ups (the eye paths'
+         * points, measured before this pass's records) almost all find records, or this pass added few
+         * records for the image's records already made (pass_growth; the hit records, which only hemisphere
+         * rays read, do not count: at 40×30 they outnumber the image's). */
         const int slowed = c->o.pass_growth.mode != IC_CACHE_OFF &&
                            (double)added < (double)c->o.pass_growth.value * (double)(before - hit_records);
         if ((int)found < c->o.min_candidates ||

@@ -2,8 +2,8 @@
  * ic_direct.c — direct light as the cache integrator estimates it (the final render, and the direct part
  * of what a hemisphere ray returns): the sun every time, one light sample by the selection, and emitting
  * triangles once more through the diffuse lobe (MIS); the environment is in the records. At a hemisphere
- * ray's hit that the records serve, the light sample alone unless a large emitter is light-sampled
- * (ic_ic_direct_light_at_hit).
+ * ray's hit that the records serve, the light sample alone, unless a large emitter whose light samples are
+ * heavy-tailed is light-sampled (ic_ic_direct_light_at_hit).
  */
 #include "ic_internal.h"
 
