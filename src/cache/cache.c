@@ -109,6 +109,7 @@ ic_result ic_cache_create(const ic_cache_params *params, ic_cache **out, ic_erro
     ic_octree_init(&c->tree, p.leaf_capacity, p.max_depth);
     /* Points: small buckets keep k-nearest searches short; depth as deep as allowed. */
     ic_octree_init(&c->points, 8, IC_OCTREE_MAX_DEPTH);
+    c->tree.threads = c->points.threads = p.threads;
     *out = c;
     return IC_OK;
 }
@@ -329,22 +330,30 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
     ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
     ic_result rc = IC_OK;
     c->changed_len = 0;
-    for (uint32_t k = 0; k < n && rc == IC_OK; ++k)
+    /* A large batch (deterministic rule) rebuilds both trees, on the threads, instead of inserting
+     * into them one record at a time: the clamps ask the trees for sets of records (nearest, within
+     * reach), which do not depend on the tree's shape. */
+    const int large = n > 1 && (uint64_t)n * 8 >= c->count;
+    if (large)
+        rc = ic_octree_build(&c->points, &pts, c->count);
+    for (uint32_t k = 0; k < n && rc == IC_OK && !large; ++k)
         rc = ic_octree_insert(&c->points, &pts, first + k);
     if (rc == IC_OK && c->params.validity_clamp == IC_CACHE_ON)
         rc = ic_cache_validity_clamp(c, first);
     /* Steps 3 and 4 find "records whose sphere holds p_i" in the sphere octree, so the new records
      * go in now, with their radii after step 2; later shrinking leaves their references
      * conservative, never wrong. */
-    for (uint32_t k = 0; k < n && rc == IC_OK; ++k)
+    if (rc == IC_OK && large)
+        rc = ic_octree_build(&c->tree, &sph, c->count);
+    for (uint32_t k = 0; k < n && rc == IC_OK && !large; ++k)
         rc = ic_octree_insert(&c->tree, &sph, first + k);
     if (rc == IC_OK && c->params.gradient_difference == IC_CACHE_ON)
         rc = ic_cache_gradient_difference(c, first);
     if (rc == IC_OK && c->params.neighbor_clamp == IC_CACHE_ON)
         rc = ic_cache_neighbor_clamp(c, first);
-    /* A large batch rebuilds the octree to fit the final radii (deterministic rule); small ones only
+    /* After a large batch the sphere octree is built again to fit the final radii; small ones only
      * compact dead reference segments. */
-    if (rc == IC_OK && n > 1 && (uint64_t)n * 8 >= c->count)
+    if (rc == IC_OK && large)
         rc = ic_octree_build(&c->tree, &sph, c->count);
     if (rc == IC_OK)
         rc = ic_octree_compact(&c->tree);

@@ -3,11 +3,13 @@
  *
  * Insertion walks every leaf a sphere overlaps with an explicit fixed-size stack; a point (radius 0)
  * goes to exactly one leaf, chosen by the same octant rule as the look-up descent, so k-nearest and
- * radius queries never see an item twice. Queries allocate nothing.
+ * radius queries never see an item twice. A build is top-down, its subtrees on threads, and gives
+ * every segment exact capacity. Queries allocate nothing.
  */
 #include "octree.h"
 
 #include "core/morton.h"
+#include "core/threads.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -119,27 +121,6 @@ static ic_result add_children(ic_octree *t, uint32_t *first)
     *first = t->node_count;
     memset(&t->nodes[t->node_count], 0, 8 * sizeof(ic_octree_node));
     t->node_count += 8;
-    return IC_OK;
-}
-
-static ic_result reset_root(ic_octree *t, cube c)
-{
-    t->node_count = 0;
-    t->ref_end = 0;
-    t->ref_live = 0;
-    if (t->node_cap == 0) {
-        t->nodes = malloc(64 * sizeof *t->nodes);
-        if (!t->nodes)
-            return IC_ERR_OOM;
-        t->node_cap = 64;
-    }
-    memset(&t->nodes[0], 0, sizeof t->nodes[0]);
-    t->node_count = 1;
-    t->cx = c.cx;
-    t->cy = c.cy;
-    t->cz = c.cz;
-    t->half = c.h;
-    t->has_root = 1;
     return IC_OK;
 }
 
@@ -307,6 +288,186 @@ static int cmp_keyed(const void *a, const void *b)
     return (x->index > y->index) - (x->index < y->index);
 }
 
+/* Building top-down. A node of the build takes the items that reach it (in Morton order); it stays a
+ * leaf holding them all when they fit, the depth limit is reached or none is smaller than a child, as
+ * insertion's split rule says (maybe_split); otherwise it keeps the spheres as large as a child and
+ * hands each other item to every child it overlaps. Below TASK_DEPTH every node that splits is a task
+ * built on its own arrays, on any thread; the tasks are appended in their fixed order, so the tree
+ * does not depend on the thread count. */
+#define TASK_DEPTH 2
+#define PARALLEL_MIN_ITEMS 4096
+
+typedef struct part {
+    ic_octree_node *nodes;
+    uint32_t node_count, node_cap;
+    ic_octree_ref *refs;
+    size_t ref_count, ref_cap;
+    uint32_t *list; /* a stack of item lists, one per level of the current path */
+    size_t list_len, list_cap;
+} part;
+
+typedef struct task {
+    uint32_t slot, depth, count; /* the node's place in the top part; its items */
+    cube c;
+    uint32_t *items;
+    part p;                       /* its subtree; local node 0 is the task's node */
+    ic_result rc;
+} task;
+
+typedef struct builder {
+    const ic_octree *t;
+    const ic_octree_items *it;
+    const float *radius;          /* item_radius of every item */
+    task *tasks;                  /* the top part's tasks (NULL inside a task) */
+    uint32_t task_count, task_cap;
+} builder;
+
+static void part_free(part *p)
+{
+    free(p->nodes);
+    free(p->refs);
+    free(p->list);
+    memset(p, 0, sizeof *p);
+}
+
+/* Grows *array (elements of `size` bytes, *cap of them) to hold at least `need`, doubling. */
+static int grow_array(void **array, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap)
+        return 1;
+    size_t n = *cap ? *cap : 64;
+    while (n < need)
+        n *= 2;
+    void *a = realloc(*array, n * size);
+    if (!a)
+        return 0;
+    *array = a;
+    *cap = n;
+    return 1;
+}
+
+static int part_reserve(part *p, uint32_t nodes, size_t refs, size_t list)
+{
+    size_t node_cap = p->node_cap;
+    void *n = p->nodes, *r = p->refs, *l = p->list;
+    int ok = grow_array(&n, &node_cap, (size_t)p->node_count + nodes, sizeof *p->nodes);
+    p->nodes = n;
+    p->node_cap = (uint32_t)node_cap;
+    ok = ok && grow_array(&r, &p->ref_cap, p->ref_count + refs, sizeof *p->refs);
+    p->refs = r;
+    ok = ok && grow_array(&l, &p->list_cap, p->list_len + list, sizeof *p->list);
+    p->list = l;
+    return ok;
+}
+
+/* Node `slot` of part p, cube c at `depth`, takes the items p->list[begin, end). */
+static ic_result build_node(builder *b, part *p, uint32_t slot, cube c, uint32_t depth, size_t begin, size_t end)
+{
+    const ic_octree *t = b->t;
+    const uint32_t n = (uint32_t)(end - begin);
+    const float hc = 0.5f * c.h;
+    uint32_t down = 0;
+    if (n > t->leaf_capacity && depth < t->max_depth)
+        for (size_t k = begin; k < end; ++k)
+            down += !stays_at(b->radius[p->list[k]], hc);
+    if (down && b->tasks && depth == TASK_DEPTH) {
+        if (b->task_count == b->task_cap) {
+            size_t cap = b->task_cap;
+            void *a = b->tasks;
+            if (!grow_array(&a, &cap, (size_t)b->task_count + 1, sizeof *b->tasks))
+                return IC_ERR_OOM;
+            b->tasks = a;
+            b->task_cap = (uint32_t)cap;
+        }
+        task *k = &b->tasks[b->task_count];
+        memset(k, 0, sizeof *k);
+        k->items = malloc((size_t)n * sizeof *k->items);
+        if (!k->items)
+            return IC_ERR_OOM;
+        memcpy(k->items, &p->list[begin], (size_t)n * sizeof *k->items);
+        k->slot = slot;
+        k->depth = depth;
+        k->count = n;
+        k->c = c;
+        ++b->task_count;
+        return IC_OK;
+    }
+    /* The node's own references: all items of a leaf, the spheres as large as a child otherwise. */
+    if (!part_reserve(p, down ? 8 : 0, n, down ? 8 * (size_t)down : 0))
+        return IC_ERR_OOM;
+    ic_octree_node *node = &p->nodes[slot];
+    node->begin = (uint32_t)p->ref_count;
+    for (size_t k = begin; k < end; ++k) {
+        uint32_t i = p->list[k];
+        if (!down || stays_at(b->radius[i], hc))
+            p->refs[p->ref_count++] = make_ref(b->it, i, b->radius[i]);
+    }
+    node->count = node->cap = (uint32_t)(p->ref_count - node->begin);
+    node->child = 0;
+    if (!down)
+        return IC_OK;
+    const uint32_t first = p->node_count;
+    p->node_count += 8;
+    node->child = first;
+    size_t at[9];
+    for (unsigned o = 0; o < 8; ++o) {
+        at[o] = p->list_len;
+        /* Room for every item in this child: the reservation above covered 8 × down in all. */
+        for (size_t k = begin; k < end; ++k) {
+            uint32_t i = p->list[k];
+            float r = b->radius[i];
+            if (!stays_at(r, hc) && item_in_child(b->it, i, r, c, o))
+                p->list[p->list_len++] = i;
+        }
+    }
+    at[8] = p->list_len;
+    for (unsigned o = 0; o < 8; ++o) {
+        ic_result rc = build_node(b, p, first + o, child_cube(c, o), depth + 1, at[o], at[o + 1]);
+        if (rc != IC_OK)
+            return rc;
+    }
+    p->list_len = at[0];
+    return IC_OK;
+}
+
+static void run_task(void *ctx, int64_t k, int thread)
+{
+    (void)thread;
+    builder b = *(const builder *)ctx;
+    task *tk = &b.tasks[k];
+    b.tasks = NULL;
+    part *p = &tk->p;
+    tk->rc = IC_ERR_OOM;
+    if (!part_reserve(p, 1, 0, tk->count))
+        return;
+    p->node_count = 1;
+    memcpy(p->list, tk->items, (size_t)tk->count * sizeof *p->list);
+    p->list_len = tk->count;
+    tk->rc = build_node(&b, p, 0, tk->c, tk->depth, 0, tk->count);
+}
+
+/* Appends task k's subtree to the top part: its node 0 goes to its slot, the others after the top
+ * part's nodes, children and segments shifted. */
+static ic_result append_task(part *top, const task *k)
+{
+    const part *s = &k->p;
+    if (!part_reserve(top, s->node_count - 1, s->ref_count, 0))
+        return IC_ERR_OOM;
+    const uint32_t node_base = top->node_count - 1;
+    const size_t ref_base = top->ref_count;
+    for (uint32_t j = 0; j < s->node_count; ++j) {
+        ic_octree_node nd = s->nodes[j];
+        nd.begin += (uint32_t)ref_base;
+        if (nd.child)
+            nd.child += node_base;
+        top->nodes[j ? node_base + j : k->slot] = nd;
+    }
+    top->node_count += s->node_count - 1;
+    memcpy(&top->refs[ref_base], s->refs, s->ref_count * sizeof *s->refs);
+    top->ref_count += s->ref_count;
+    return IC_OK;
+}
+
 ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t count)
 {
     if (count == 0) {
@@ -316,28 +477,65 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
         return IC_OK;
     }
     cube root = fit_root(items, count);
-    ic_result rc = reset_root(t, root);
-    /* Insert along a Morton curve (ties by index: deterministic), so nodes and reference segments
-     * that are close in space end up close in memory — a look-up's descent then misses the
-     * processor caches less. */
+    /* Items in Morton order (ties by index: deterministic), so nodes and reference segments that are
+     * close in space end up close in memory — a look-up's descent then misses the processor caches
+     * less — and every node's references keep that order. */
     keyed *order = malloc((size_t)count * sizeof *order);
-    if (!order)
-        return rc == IC_OK ? IC_ERR_OOM : rc;
-    float scale = 1023.0f / (2.0f * root.h);
-    for (uint32_t i = 0; i < count; ++i) {
-        const ic_float4 *s = &items->sphere[i];
-        float u[3] = {(s->x - (root.cx - root.h)) * scale, (s->y - (root.cy - root.h)) * scale,
-                      (s->z - (root.cz - root.h)) * scale};
-        uint32_t q[3];
-        for (int a = 0; a < 3; ++a)
-            q[a] = u[a] <= 0.0f ? 0u : (u[a] >= 1023.0f ? 1023u : (uint32_t)u[a]);
-        order[i] = (keyed){ic_morton3_cells(q[0], q[1], q[2]), i};
+    float *radius = malloc((size_t)count * sizeof *radius);
+    builder b = {t, items, radius, NULL, 0, 0};
+    part top = {0};
+    ic_result rc = order && radius && part_reserve(&top, 1, 0, count) ? IC_OK : IC_ERR_OOM;
+    if (rc == IC_OK) {
+        float scale = 1023.0f / (2.0f * root.h);
+        for (uint32_t i = 0; i < count; ++i) {
+            const ic_float4 *s = &items->sphere[i];
+            float u[3] = {(s->x - (root.cx - root.h)) * scale, (s->y - (root.cy - root.h)) * scale,
+                          (s->z - (root.cz - root.h)) * scale};
+            uint32_t q[3];
+            for (int a = 0; a < 3; ++a)
+                q[a] = u[a] <= 0.0f ? 0u : (u[a] >= 1023.0f ? 1023u : (uint32_t)u[a]);
+            order[i] = (keyed){ic_morton3_cells(q[0], q[1], q[2]), i};
+            radius[i] = item_radius(items, i);
+        }
+        qsort(order, count, sizeof *order, cmp_keyed);
+        for (uint32_t k = 0; k < count; ++k)
+            top.list[k] = order[k].index;
+        top.list_len = count;
+        top.node_count = 1;
+        b.tasks = malloc(8 * sizeof *b.tasks);
+        b.task_cap = b.tasks ? 8 : 0;
+        rc = build_node(&b, &top, 0, root, 0, 0, count);
     }
-    qsort(order, count, sizeof *order, cmp_keyed);
-    for (uint32_t k = 0; k < count && rc == IC_OK; ++k)
-        rc = insert_item(t, items, order[k].index);
+    if (rc == IC_OK)
+        rc = ic_parallel_for(count >= PARALLEL_MIN_ITEMS ? t->threads : 1, b.task_count, run_task, &b);
+    for (uint32_t k = 0; k < b.task_count && rc == IC_OK; ++k)
+        rc = b.tasks[k].rc != IC_OK ? b.tasks[k].rc : append_task(&top, &b.tasks[k]);
+    for (uint32_t k = 0; k < b.task_count; ++k) {
+        free(b.tasks[k].items);
+        part_free(&b.tasks[k].p);
+    }
+    free(b.tasks);
     free(order);
-    return rc;
+    free(radius);
+    if (rc != IC_OK) {
+        part_free(&top);
+        return rc;
+    }
+    free(t->nodes);
+    free(t->refs);
+    free(top.list);
+    t->nodes = top.nodes;
+    t->node_count = top.node_count;
+    t->node_cap = top.node_cap;
+    t->refs = top.refs;
+    t->ref_end = t->ref_live = top.ref_count;
+    t->ref_cap = top.ref_cap;
+    t->cx = root.cx;
+    t->cy = root.cy;
+    t->cz = root.cz;
+    t->half = root.h;
+    t->has_root = 1;
+    return IC_OK;
 }
 
 ic_result ic_octree_insert(ic_octree *t, const ic_octree_items *items, uint32_t index)

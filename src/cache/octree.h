@@ -89,6 +89,7 @@ typedef struct ic_octree {
     float cx, cy, cz, half;    /* root cube: center and half side */
     int has_root;
     uint32_t leaf_capacity, max_depth;
+    int threads;               /* ic_octree_build's threads (0: all cores); the tree does not depend on them */
 } ic_octree;
 
 /* Empty tree. */
@@ -97,7 +98,9 @@ void ic_octree_init(ic_octree *t, uint32_t leaf_capacity, uint32_t max_depth);
 void ic_octree_free(ic_octree *t);
 /* Adds item `index`; items 0…index−1 must already be in the tree (the root grows by rebuilding). */
 ic_result ic_octree_insert(ic_octree *t, const ic_octree_items *items, uint32_t index);
-/* Empties the tree and inserts items 0…count−1 under a root fitted to all of them. */
+/* Empties the tree and builds it top-down from items 0…count−1 under a root fitted to all of them:
+ * the tree insertion would grow, except that a sphere as large as a child stays in the node it was
+ * handed to (insertion into a node split earlier sends it down one level). */
 ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t count);
 /* Compacts the reference array if more than half of it is dead. */
 ic_result ic_octree_compact(ic_octree *t);

@@ -1076,31 +1076,62 @@ static void test_gradient_clamps(void)
     ic_cache_destroy(c);
 }
 
+/* Insertion (clamps, trees built on the threads) and the index it leaves answer alike at 1 and 3
+ * threads: the same radii, octree shape and look-up bits, thawed and frozen. */
 static void test_thread_independence(void)
 {
-    const uint32_t n = 20000;
+    const uint32_t n = 20000, queries = 2000;
     ic_record *recs = make_dense(n, 13);
     ic_cache_params p = {0};
     p.gradient_difference = IC_CACHE_ON;
     float *radius[2];
+    ic_cache_estimate *est[2];
+    ic_cache_index_stats shape[2];
     for (int t = 0; t < 2; ++t) {
-        p.threads = t + 1;
+        p.threads = t ? 3 : 1;
         ic_cache *c;
         ic_error err;
         ic_cache_create(&p, &c, &err);
         ic_cache_insert_batch(c, recs, n / 2, NULL, &err);
         ic_cache_insert_batch(c, recs + n / 2, n / 2, NULL, &err);
         radius[t] = malloc(n * sizeof(float));
+        est[t] = calloc(2 * queries, sizeof **est);
         for (uint32_t i = 0; i < n; ++i) {
             ic_record r;
             ic_cache_get_record(c, i, &r);
             radius[t][i] = r.radius;
         }
+        /* Look-ups at record positions (where records overlap most), through the tree insertion left
+         * and through a rebuilt, frozen index. */
+        for (int frozen = 0; frozen < 2; ++frozen) {
+            if (frozen)
+                CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "rebuild: %s",
+                      err.message);
+            for (uint32_t q = 0; q < queries; ++q) {
+                const ic_record *r = &recs[(q * 7919u) % n];
+                ic_cache_lookup l = ic_cache_lookup_at(v3_add(r->position, v3(0.001f, -0.002f, 0.0f)), r->normal,
+                                                       IC_ACCEPT_FINAL);
+                ic_cache_query(c, &l, &est[t][frozen * queries + q]);
+            }
+        }
+        ic_cache_get_index_stats(c, &shape[t]);
         ic_cache_destroy(c);
     }
     CHECK(memcmp(radius[0], radius[1], n * sizeof(float)) == 0, "batch insertion depends on the thread count");
-    free(radius[0]);
-    free(radius[1]);
+    CHECK(shape[0].nodes == shape[1].nodes && shape[0].references == shape[1].references &&
+              shape[0].frozen_leaves == shape[1].frozen_leaves && shape[0].nodes > 64,
+          "the index depends on the thread count: %u / %u nodes", shape[0].nodes, shape[1].nodes);
+    uint32_t differ = 0, found = 0;
+    for (uint32_t q = 0; q < 2 * queries; ++q) {
+        differ += memcmp(&est[0][q], &est[1][q], sizeof **est) != 0;
+        found += est[0][q].contributor_count > 0;
+    }
+    CHECK(differ == 0 && found > queries, "%u of %u look-ups depend on the thread count (%u found records)", differ,
+          2 * queries, found);
+    for (int t = 0; t < 2; ++t) {
+        free(radius[t]);
+        free(est[t]);
+    }
     free(recs);
 }
 
