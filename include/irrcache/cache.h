@@ -78,12 +78,14 @@
  *
  * FROZEN LOOK-UPS (for the read-only final render)
  *   ic_cache_freeze (called by ic_cache_rebuild_index and ic_cache_load) copies the octree into a
- *   compact read-only layout: 4-byte nodes in depth-first order; per leaf, one contiguous list of the
- *   references on its root-to-leaf path whose sphere can reach the leaf, in path order, eight to a
- *   block with everything the look-up reads side by side — the weight test's fields (position, R_i,
- *   a_i, normal, bounce, flags) and the interpolation data (E_i and both gradients per channel) — so
- *   that the weight test and the extrapolation run eight entries at a time (AVX2, chosen at run time;
- *   four at a time with SSE2; a portable fallback) and a look-up reads one contiguous run of memory.
+ *   compact read-only layout, on params.threads threads (the same layout on any number): 4-byte
+ *   nodes, the top of the tree then its subtrees, each in depth-first order; per leaf, one contiguous
+ *   list of the references on its root-to-leaf path whose sphere can reach the leaf, in path order,
+ *   eight to a block with everything the look-up reads side by side — the weight test's fields
+ *   (position, R_i, a_i, normal, bounce, flags) and the interpolation data (E_i and both gradients per
+ *   channel) — so that the weight test and the extrapolation run eight entries at a time (AVX2,
+ *   chosen at run time; four at a time with SSE2; a portable fallback) and a look-up reads one
+ *   contiguous run of memory.
  *   A look-up descends (or, with a hint, stays in the previous leaf) and tests one list. A look-up
  *   without a contributions buffer takes a shorter route. A batch (ic_cache_query_batch) finds the
  *   leaves of its next points ahead and fetches the start of their lists, which pays on caches larger
@@ -147,7 +149,7 @@ typedef struct ic_cache_params {
     uint32_t leaf_capacity;           /* octree: split leaves holding more refs than this; default 12 */
     uint32_t max_depth;               /* octree depth limit, ≤ 32; default 20 */
     ic_cache_switch freeze;           /* ic_cache_rebuild_index and ic_cache_load freeze the cache; default on */
-    int threads;                      /* threads for batch insertion; default all cores */
+    int threads;                      /* threads for batch insertion and freezing; default all cores */
     uint64_t max_file_bytes;          /* largest file ic_cache_load reads, checked with fstat before reading;
                                          default IC_DEFAULT_MAX_CACHE_FILE_BYTES (4 GiB) */
 } ic_cache_params;

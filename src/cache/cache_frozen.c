@@ -16,9 +16,19 @@
  * are the thresholds the descent compares with (ancestors' centres, the root's faces). A hint check
  * "is p still in the previous leaf" therefore agrees with the descent to the last bit.
  *
+ * The cache's threads build it (c->params.threads) in two passes. The walk finds the nodes, the
+ * leaves' cells and their entries (record numbers): the top of the tree on the calling thread, the
+ * subtrees below it as tasks of their own, in parallel. Then, from the sizes found, every part's place
+ * in the layout, and the lists are written part by part in parallel, straight into their place (no
+ * copy, no spare capacity). Where the work is split depends on the tree alone, so the layout — lists,
+ * node numbers, leaf numbers, offsets — is the same for any thread count, and every list is the one a
+ * depth-first walk finds.
+ *
  * Building allocates; look-ups on the layout allocate nothing.
  */
 #include "cache_store.h"
+
+#include "core/threads.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -39,13 +49,61 @@ typedef struct cell {
     float lo[3], hi[3];
 } cell;
 
+/* The largest subtrees of at most 1/TASK_SHARE of the tree's nodes are the tasks. By size rather
+ * than by depth, as octrees of scenes are lopsided (Sponza's at 640×360, at depth 3: 16 subtrees, four
+ * of them holding 3/4 of the nodes): every task is small next to a thread's share of the work on any
+ * number of cores, while the top of the tree left to the calling thread stays small (Sponza's: 383 of
+ * 37713 nodes, in 482 tasks). A constant, so that the layout never depends on the thread count. */
+enum { TASK_SHARE = 128 };
+
+/* Trees of fewer nodes are frozen on the calling thread (the same parts, the same layout): starting
+ * threads would cost more than the build. */
+enum { PARALLEL_MIN_NODES = 1024 };
+
+/* A leaf the walk found: its cell, its entries (the part's record[first, first + count)) and the
+ * offset of its header from the start of the part's lists. */
+typedef struct leaf_plan {
+    float lo[3], hi[3];
+    uint32_t count;
+    size_t first;
+    size_t at;
+} leaf_plan;
+
+/* A subtree walked on its own: the top of the tree (the root's part), or a task, rooted at
+ * octree node tn with cell cl, whose slot in the layout is node[fpos] and whose ancestors' surviving
+ * entries are the builder's inputs[in_begin, in_end). The part numbers its nodes from 0 (node[0]: its
+ * root; a leaf: IC_FROZEN_LEAF | its number in `leaf`) and its leaves and lists from 0; the bases say
+ * where they go in the layout. */
+typedef struct part {
+    uint32_t tn, fpos;
+    cell cl;
+    size_t in_begin, in_end;
+    uint32_t *node;
+    uint32_t node_count;
+    size_t node_cap;
+    leaf_plan *leaf;
+    uint32_t leaf_count;
+    size_t leaf_cap;
+    uint32_t *record;            /* the leaves' entries, leaf after leaf */
+    size_t record_len, record_cap;
+    size_t list_len;             /* units its lists take */
+    uint32_t node_base;          /* node n ≥ 1 of the part is node_base + n of the layout */
+    uint32_t leaf_base;
+    size_t list_base;
+    ic_result rc;
+} part;
+
 typedef struct builder {
     const ic_cache *c;
-    ic_frozen *f;
+    part *p;                     /* the part being walked */
     entry *active;               /* a stack of lists, one per level of the current path */
     size_t active_cap;
-    size_t list_cap;             /* units allocated in f->list */
-    size_t leaf_cap;             /* entries allocated in f->leaf_at */
+    const uint32_t *size;        /* the root's part: nodes in each octree node's subtree; else NULL */
+    uint32_t task_nodes;         /* subtrees of at most this many nodes become tasks */
+    part *tasks;                 /* in the walk's order */
+    size_t task_count, task_cap;
+    entry *inputs;               /* the tasks' incoming entries, one run each */
+    size_t input_len, input_cap;
 } builder;
 
 /* Squared distance from (x, y, z) to the box [lo, hi], with the weight test's operation order. */
@@ -83,7 +141,7 @@ static ic_result grow(void **array, size_t *cap, size_t need, size_t size)
 {
     if (need <= *cap)
         return IC_OK;
-    size_t n = *cap ? *cap : 1024;
+    size_t n = *cap ? *cap : 64;
     while (n < need)
         n *= 2;
     void *a = realloc(*array, n * size);
@@ -102,48 +160,55 @@ static ic_result reserve_active(builder *b, size_t n)
     return rc;
 }
 
-/* Appends a leaf header and room for `count` entries to f->list; its offset (8-byte units) goes to
- * *offset. */
-static ic_result append_leaf(builder *b, uint32_t count, size_t *offset)
+/* Units a leaf with `count` entries takes in the list: its header and its blocks. */
+static size_t leaf_units(uint32_t count)
 {
-    ic_frozen *f = b->f;
     size_t blocks = ((size_t)count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES;
-    size_t units = (sizeof(ic_frozen_leaf) + blocks * sizeof(ic_frozen_block)) / 8;
-    void *list = f->list, *leaf_at = f->leaf_at;
-    ic_result rc = grow(&list, &b->list_cap, f->list_len + units, sizeof *f->list);
-    f->list = list;
+    return (sizeof(ic_frozen_leaf) + blocks * sizeof(ic_frozen_block)) / 8;
+}
+
+/* The list [begin, end) of b->active becomes the list of a leaf at node[fpos] of the part. */
+static ic_result plan_leaf(builder *b, uint32_t fpos, const cell *cl, size_t begin, size_t end)
+{
+    part *p = b->p;
+    uint32_t count = (uint32_t)(end - begin);
+    void *leaf = p->leaf, *record = p->record;
+    ic_result rc = grow(&leaf, &p->leaf_cap, (size_t)p->leaf_count + 1, sizeof *p->leaf);
+    p->leaf = leaf;
     if (rc == IC_OK)
-        rc = grow(&leaf_at, &b->leaf_cap, (size_t)f->leaf_count + 1, sizeof *f->leaf_at);
-    f->leaf_at = leaf_at;
-    /* Leaves are addressed by 31-bit offsets (16 GiB of lists). */
-    if (rc != IC_OK || f->list_len >= IC_FROZEN_LEAF)
+        rc = grow(&record, &p->record_cap, p->record_len + count, sizeof *p->record);
+    p->record = record;
+    if (rc != IC_OK)
         return IC_ERR_OOM;
-    *offset = f->list_len;
-    f->list_len += units;
+    leaf_plan *l = &p->leaf[p->leaf_count];
+    memcpy(l->lo, cl->lo, sizeof l->lo);
+    memcpy(l->hi, cl->hi, sizeof l->hi);
+    l->count = count;
+    l->first = p->record_len;
+    l->at = p->list_len;
+    for (size_t k = begin; k < end; ++k)
+        p->record[p->record_len++] = b->active[k].record;
+    p->list_len += leaf_units(count);
+    p->node[fpos] = IC_FROZEN_LEAF | p->leaf_count++;
     return IC_OK;
 }
 
-/* The list [begin, end) of b->active becomes the list of the leaf at f->node[fpos]. */
-static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t begin, size_t end)
+/* Writes the header and blocks of the leaf l plans, numbered id, with entries record[0, l->count), at
+ * `leaf`. */
+static void write_leaf(const ic_cache *c, ic_frozen_leaf *leaf, const leaf_plan *l, const uint32_t *record,
+                       uint32_t id)
 {
-    ic_frozen *f = b->f;
-    const ic_cache *c = b->c;
-    uint32_t count = (uint32_t)(end - begin), blocks = (count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES;
-    size_t at;
-    if (append_leaf(b, count, &at) != IC_OK)
-        return IC_ERR_OOM;
-    ic_frozen_leaf *leaf = (ic_frozen_leaf *)(f->list + at);
+    uint32_t count = l->count, blocks = (count + IC_FROZEN_LANES - 1) / IC_FROZEN_LANES;
     ic_frozen_block *blk = (ic_frozen_block *)(leaf + 1);
-    memcpy(leaf->lo, cl->lo, sizeof leaf->lo);
-    memcpy(leaf->hi, cl->hi, sizeof leaf->hi);
+    memcpy(leaf->lo, l->lo, sizeof leaf->lo);
+    memcpy(leaf->hi, l->hi, sizeof leaf->hi);
     leaf->count = count;
-    leaf->id = f->leaf_count;
-    leaf->all_eligible = count ? 1u + c->cold[b->active[begin].record].bounce : 0u;
+    leaf->id = id;
+    leaf->all_eligible = count ? 1u + c->cold[record[0]].bounce : 0u;
     leaf->unused = 0;
-    f->leaf_at[f->leaf_count++] = (uint32_t)at;
     memset(blk, 0, blocks * sizeof *blk); /* padding lanes: all zero, no distance passes */
     for (uint32_t k = 0; k < count; ++k) {
-        uint32_t i = b->active[begin + k].record, lane = k % IC_FROZEN_LANES;
+        uint32_t i = record[k], lane = k % IC_FROZEN_LANES;
         ic_frozen_block *o = &blk[k / IC_FROZEN_LANES];
         const ic_float4 *sp = &c->sphere[i], *np = &c->normal[i];
         o->x[lane] = sp->x;
@@ -170,9 +235,6 @@ static ic_result emit_leaf(builder *b, uint32_t fpos, const cell *cl, size_t beg
             }
         }
     }
-    f->entry_count += count;
-    f->node[fpos] = IC_FROZEN_LEAF | (uint32_t)at;
-    return IC_OK;
 }
 
 /* Copies the entries of b->active[begin, end) that reach cell cl to the top of the stack, in order;
@@ -187,15 +249,42 @@ static size_t filter(builder *b, const cell *cl, size_t begin, size_t end, size_
     return top;
 }
 
-/* Tree node tn with cell cl goes to f->node[fpos]; its ancestors' surviving entries are
- * b->active[parent_begin, parent_end). Depth-first, children in octant order. (Splitting cells below
- * the octree's leaves to shorten the lists was tried: one level halved the lists of the 300k-record
- * benchmark but tripled the entries and ran slower; see BENCHMARKS.md "Cache library".) */
+/* Records the subtree at octree node tn as a task, with a copy of its incoming entries
+ * b->active[begin, end); its slot stays 0 until the layout is written. */
+static ic_result add_task(builder *b, uint32_t tn, uint32_t fpos, const cell *cl, size_t begin, size_t end)
+{
+    void *tasks = b->tasks, *inputs = b->inputs;
+    ic_result rc = grow(&tasks, &b->task_cap, b->task_count + 1, sizeof *b->tasks);
+    b->tasks = tasks;
+    if (rc == IC_OK)
+        rc = grow(&inputs, &b->input_cap, b->input_len + (end - begin), sizeof *b->inputs);
+    b->inputs = inputs;
+    if (rc != IC_OK)
+        return IC_ERR_OOM;
+    if (end > begin)
+        memcpy(b->inputs + b->input_len, b->active + begin, (end - begin) * sizeof *b->active);
+    part *t = &b->tasks[b->task_count++];
+    memset(t, 0, sizeof *t);
+    t->tn = tn;
+    t->fpos = fpos;
+    t->cl = *cl;
+    t->in_begin = b->input_len;
+    t->in_end = b->input_len += end - begin;
+    b->p->node[fpos] = 0;
+    return IC_OK;
+}
+
+/* Octree node tn with cell cl goes to node[fpos] of the part; its ancestors' surviving
+ * entries are b->active[parent_begin, parent_end). Depth-first, children in octant order. (Splitting
+ * cells below the octree's leaves to shorten the lists was tried: one level halved the lists of the
+ * 300k-record benchmark but tripled the entries and ran slower; see BENCHMARKS.md "Cache library".) */
 static ic_result build_node(builder *b, uint32_t tn, uint32_t fpos, const cell *cl, size_t parent_begin,
                             size_t parent_end)
 {
     const ic_cache *c = b->c;
     const ic_octree_node node = c->tree.nodes[tn];
+    if (b->size && tn && node.child && b->size[tn] <= b->task_nodes)
+        return add_task(b, tn, fpos, cl, parent_begin, parent_end);
     if (reserve_active(b, parent_end + (parent_end - parent_begin) + node.count) != IC_OK)
         return IC_ERR_OOM;
     /* Ancestors' references that still reach this cell, in their order... */
@@ -213,11 +302,16 @@ static ic_result build_node(builder *b, uint32_t tn, uint32_t fpos, const cell *
             b->active[end++] = e;
     }
     if (!node.child)
-        return emit_leaf(b, fpos, cl, parent_end, end);
-    /* The frozen tree has the octree's shape: the node array was sized to it. */
-    uint32_t first = b->f->node_count;
-    b->f->node_count += 8;
-    b->f->node[fpos] = first;
+        return plan_leaf(b, fpos, cl, parent_end, end);
+    /* The frozen tree has the octree's shape, 8 contiguous children a node. */
+    part *p = b->p;
+    void *nodes = p->node;
+    if (grow(&nodes, &p->node_cap, (size_t)p->node_count + 8, sizeof *p->node) != IC_OK)
+        return IC_ERR_OOM;
+    p->node = nodes;
+    uint32_t first = p->node_count;
+    p->node_count += 8;
+    p->node[fpos] = first;
     for (unsigned o = 0; o < 8; ++o) {
         cell cc = child_cell(cl, o);
         ic_result rc = build_node(b, node.child + o, first + o, &cc, parent_end, end);
@@ -225,6 +319,135 @@ static ic_result build_node(builder *b, uint32_t tn, uint32_t fpos, const cell *
             return rc;
     }
     return IC_OK;
+}
+
+/* Walks part p from its root with the incoming entries in[0, n); a task's node and leaf arrays are
+ * sized to its subtree of `nodes` nodes from the start (and none of its arrays is left NULL). */
+static ic_result walk_part(builder *b, part *p, const entry *in, size_t n, uint32_t nodes)
+{
+    b->p = p;
+    void *node = p->node, *leaf = p->leaf, *record = p->record;
+    ic_result rc = grow(&node, &p->node_cap, nodes, sizeof *p->node);
+    p->node = node;
+    if (rc == IC_OK)
+        rc = grow(&leaf, &p->leaf_cap, 1u + (nodes - 1u) / 8u * 7u, sizeof *p->leaf);
+    p->leaf = leaf;
+    if (rc == IC_OK)
+        rc = grow(&record, &p->record_cap, 1, sizeof *p->record);
+    p->record = record;
+    if (rc == IC_OK)
+        rc = reserve_active(b, n);
+    if (rc != IC_OK)
+        return IC_ERR_OOM;
+    if (n)
+        memcpy(b->active, in, n * sizeof *b->active);
+    p->node_count = 1;
+    return build_node(b, p->tn, 0, &p->cl, 0, n);
+}
+
+/* size[n] = the nodes of node n's subtree, for every node below n; returns size[n]. */
+static uint32_t subtree_sizes(const ic_octree *t, uint32_t n, uint32_t *size)
+{
+    uint32_t s = 1, child = t->nodes[n].child;
+    if (child)
+        for (unsigned o = 0; o < 8; ++o)
+            s += subtree_sizes(t, child + o, size);
+    return size[n] = s;
+}
+
+static void free_part(part *p)
+{
+    free(p->node);
+    free(p->leaf);
+    free(p->record);
+}
+
+/* The parts: the root's, then the tasks in the walk's order. */
+typedef struct parts {
+    const ic_cache *c;
+    ic_frozen *f;
+    part *root;
+    part *tasks;
+    const entry *inputs;
+    const uint32_t *size;
+} parts;
+
+static part *part_at(const parts *ps, int64_t item) { return item ? &ps->tasks[item - 1] : ps->root; }
+
+/* Pass 1: task `item` walks its subtree, with a stack of its own. */
+static void walk_task(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    const parts *ps = ctx;
+    part *t = &ps->tasks[item];
+    builder b = {ps->c, t, NULL, 0, NULL, 0, NULL, 0, 0, NULL, 0, 0};
+    size_t n = t->in_end - t->in_begin;
+    t->rc = walk_part(&b, t, n ? ps->inputs + t->in_begin : NULL, n, ps->size[t->tn]);
+    free(b.active);
+}
+
+/* The layout's value of node value v of part p. */
+static uint32_t place(const part *p, uint32_t v)
+{
+    if (v & IC_FROZEN_LEAF)
+        return IC_FROZEN_LEAF | (uint32_t)(p->list_base + p->leaf[v & ~IC_FROZEN_LEAF].at);
+    return v + p->node_base;
+}
+
+/* Pass 2: part `item` writes its nodes (but its root's slot), leaves and lists into the layout. The
+ * parts' places do not overlap: any order, any thread. */
+static void write_part(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    const parts *ps = ctx;
+    const part *p = part_at(ps, item);
+    ic_frozen *f = ps->f;
+    for (uint32_t n = 1; n < p->node_count; ++n)
+        f->node[p->node_base + n] = place(p, p->node[n]);
+    for (uint32_t l = 0; l < p->leaf_count; ++l) {
+        size_t at = p->list_base + p->leaf[l].at;
+        f->leaf_at[p->leaf_base + l] = (uint32_t)at;
+        write_leaf(ps->c, (ic_frozen_leaf *)(f->list + at), &p->leaf[l], p->record + p->leaf[l].first,
+                   p->leaf_base + l);
+    }
+}
+
+/* Places the parts one after the other, in order, and sizes the layout's arrays to them. */
+static ic_result place_parts(const parts *ps, size_t count)
+{
+    ic_frozen *f = ps->f;
+    uint32_t node_end = 1, leaf_end = 0;
+    size_t list_end = 0;
+    for (size_t k = 0; k < count; ++k) {
+        part *p = part_at(ps, (int64_t)k);
+        if (p->rc != IC_OK)
+            return IC_ERR_OOM;
+        p->node_base = node_end - 1u;
+        p->leaf_base = leaf_end;
+        p->list_base = list_end;
+        /* Leaves are addressed by 31-bit offsets (16 GiB of lists); a part's are in ascending order. */
+        if (p->leaf_count && list_end + p->leaf[p->leaf_count - 1].at >= IC_FROZEN_LEAF)
+            return IC_ERR_OOM;
+        node_end += p->node_count - 1u;
+        leaf_end += p->leaf_count;
+        list_end += p->list_len;
+        f->entry_count += p->record_len;
+    }
+    f->node_count = node_end;
+    f->leaf_count = leaf_end;
+    f->list_len = list_end;
+    f->list = malloc((list_end ? list_end : 1) * sizeof *f->list);
+    f->leaf_at = malloc((leaf_end ? (size_t)leaf_end : 1) * sizeof *f->leaf_at);
+    return f->list && f->leaf_at ? IC_OK : IC_ERR_OOM;
+}
+
+/* ic_parallel_for, or this thread alone where no thread could be started: the items write their own
+ * places, so the outcome is the same. */
+static void run_items(int threads, int64_t count, ic_parallel_fn fn, void *ctx)
+{
+    if (ic_parallel_for(threads, count, fn, ctx) != IC_OK)
+        for (int64_t i = 0; i < count; ++i)
+            fn(ctx, i, 0);
 }
 
 void ic_frozen_free(ic_frozen *f)
@@ -250,34 +473,52 @@ ic_result ic_frozen_build(ic_cache *c)
         f->is_valid = 1;
         return IC_OK;
     }
-    f->node = malloc((size_t)t->node_count * sizeof *f->node);
-    builder b = {c, f, NULL, 0, 0, 0};
-    ic_result rc = f->node ? IC_OK : IC_ERR_OOM;
-    if (rc == IC_OK) {
-        f->cx = t->cx;
-        f->cy = t->cy;
-        f->cz = t->cz;
-        f->half = t->half;
-        cell root = {t->cx, t->cy, t->cz, t->half, {t->cx - t->half, t->cy - t->half, t->cz - t->half},
+    f->cx = t->cx;
+    f->cy = t->cy;
+    f->cz = t->cz;
+    f->half = t->half;
+    part root = {0};
+    root.cl = (cell){t->cx, t->cy, t->cz, t->half, {t->cx - t->half, t->cy - t->half, t->cz - t->half},
                      {t->cx + t->half, t->cy + t->half, t->cz + t->half}};
-        /* The root test is p ≤ centre + h (closed); p < the next float up says the same. */
-        for (int a = 0; a < 3; ++a) {
-            root.hi[a] = nextafterf(root.hi[a], INFINITY);
-            f->root_lo[a] = root.lo[a];
-            f->root_hi[a] = root.hi[a];
-        }
-        f->node_count = 1;
-        rc = build_node(&b, 0, 0, &root, 0, 0);
+    /* The root test is p ≤ centre + h (closed); p < the next float up says the same. */
+    for (int a = 0; a < 3; ++a) {
+        root.cl.hi[a] = nextafterf(root.cl.hi[a], INFINITY);
+        f->root_lo[a] = root.cl.lo[a];
+        f->root_hi[a] = root.cl.hi[a];
+    }
+    /* The top of the tree, collecting the tasks. */
+    uint32_t *size = malloc((size_t)t->node_count * sizeof *size);
+    builder b = {c, &root, NULL, 0, size, t->node_count / TASK_SHARE, NULL, 0, 0, NULL, 0, 0};
+    ic_result rc = size ? IC_OK : IC_ERR_OOM;
+    if (rc == IC_OK) {
+        subtree_sizes(t, 0, size);
+        rc = walk_part(&b, &root, NULL, 0, 1);
     }
     free(b.active);
+    parts ps = {c, f, &root, b.tasks, b.inputs, size};
+    int threads = t->node_count < PARALLEL_MIN_NODES ? 1 : c->params.threads;
+    if (rc == IC_OK) {
+        run_items(threads, (int64_t)b.task_count, walk_task, &ps);
+        f->node = malloc((size_t)t->node_count * sizeof *f->node);
+        rc = f->node ? place_parts(&ps, b.task_count + 1) : IC_ERR_OOM;
+    }
+    if (rc == IC_OK) {
+        run_items(threads, (int64_t)b.task_count + 1, write_part, &ps);
+        for (size_t k = 0; k <= b.task_count; ++k) {
+            const part *p = part_at(&ps, (int64_t)k);
+            f->node[p->fpos] = place(p, p->node[0]);
+        }
+    }
+    free_part(&root);
+    for (size_t k = 0; k < b.task_count; ++k)
+        free_part(&b.tasks[k]);
+    free(b.tasks);
+    free(b.inputs);
+    free(size);
     if (rc != IC_OK) {
         ic_frozen_free(f);
         return rc;
     }
-    /* Give back what the doubling and the worst-case reservations did not use. */
-    uint64_t *l = realloc(f->list, (f->list_len ? f->list_len : 1) * sizeof *l);
-    if (l)
-        f->list = l;
     f->has_root = 1;
     f->is_valid = 1;
     return IC_OK;

@@ -31,7 +31,8 @@ typedef struct ic_record_cold {
 
 /*
  * The frozen look-up layout (cache.h: FROZEN LOOK-UPS; built by cache_frozen.c). Everything a look-up
- * reads sits in two compact arrays, both in depth-first order:
+ * reads sits in two compact arrays, both in depth-first order within each part (the top of the tree,
+ * then its subtrees: cache_frozen.c):
  *   node — 4 bytes a node: the first of its 8 contiguous children, or IC_FROZEN_LEAF | the offset of
  *          the leaf in `list` (8-byte units);
  *   list — per leaf a header (its cell and entry count) followed by its entries, eight to a block,

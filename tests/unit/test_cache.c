@@ -9,6 +9,8 @@
  *     contributors in the same order, same sums) with and without hints — hints in query order, left
  *     over from far-away look-ups, garbage — and at points outside the root, and equals the linear
  *     scan too; insertions and record changes thaw it and look-ups stay exact; a rebuild re-freezes;
+ *     it is built alike on 1, 2, 3 and 8 threads (byte for byte) and its nodes, leaves and lists
+ *     tile its arrays exactly;
  *   - the weights and the extrapolation follow the formulas of Křivánek et al. 2006 §3 and
  *     Tabellion–Lamorlette (checked against hand-computed values), and a linear irradiance field is
  *     reproduced exactly;
@@ -1135,6 +1137,92 @@ static void test_thread_independence(void)
     free(recs);
 }
 
+/* The frozen layout's arrays are consistent: the descent's nodes reached from the root once each, every
+ * leaf reached once and numbered where leaf_at says, the leaves' lists tiling `list` exactly (no unit
+ * in two, none in none). A layout put together from parts at wrong offsets fails here even where the
+ * look-ups asked happen to agree. */
+static int frozen_consistent(const ic_frozen *f)
+{
+    if (!f->has_root || f->node_count == 0)
+        return 0;
+    uint32_t *stack = malloc((size_t)f->node_count * sizeof *stack), top = 0, nodes = 0, leaves = 0;
+    unsigned char *seen = calloc(f->leaf_count ? f->leaf_count : 1, 1), *used = calloc(f->list_len + 1, 1);
+    size_t units = 0;
+    int ok = stack && seen && used;
+    if (ok)
+        stack[top++] = f->node[0];
+    while (ok && top) {
+        uint32_t v = stack[--top];
+        ++nodes;
+        if (v & IC_FROZEN_LEAF) {
+            size_t at = v & ~IC_FROZEN_LEAF;
+            const ic_frozen_leaf *l = (const ic_frozen_leaf *)(f->list + at);
+            ok = at + sizeof *l / 8 <= f->list_len && l->id < f->leaf_count && !seen[l->id] &&
+                 f->leaf_at[l->id] == at;
+            if (ok) {
+                size_t len = (sizeof *l + (l->count + 7u) / 8u * sizeof(ic_frozen_block)) / 8;
+                seen[l->id] = 1;
+                ++leaves;
+                units += len;
+                ok = at + len <= f->list_len;
+                for (size_t u = at; ok && u < at + len; ++u)
+                    ok = !used[u]++;
+            }
+        } else {
+            ok = v > 0 && v + 8u <= f->node_count && top + 8u <= f->node_count;
+            for (unsigned o = 0; ok && o < 8; ++o)
+                stack[top++] = f->node[v + o];
+        }
+    }
+    free(stack);
+    free(seen);
+    free(used);
+    return ok && nodes == f->node_count && leaves == f->leaf_count && units == f->list_len;
+}
+
+/* The frozen layout of a cache of many tree levels, big enough to be built on threads, is the same
+ * byte for byte on 1, 2, 3 and 8 threads (params.threads, read at each freeze), consistent, and answers
+ * like the octree path (check_frozen_identical freezes on 3 threads). */
+static void test_frozen_threads(void)
+{
+    const uint32_t n = 30000;
+    ic_record *recs = make_records(n, 41);
+    ic_cache_params p = clamp_config(IC_WEIGHT_WARD, 5);
+    p.threads = 1;
+    ic_cache *c = NULL;
+    ic_error err;
+    CHECK(ic_cache_create(&p, &c, &err) == IC_OK && ic_cache_insert_batch(c, recs, n, NULL, &err) == IC_OK &&
+              ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c),
+          "cache: %s", err.message);
+    ic_cache_index_stats s;
+    ic_cache_get_index_stats(c, &s);
+    CHECK(s.nodes >= 8000 && s.depth >= 6, "the tree is too small to be frozen on threads: %u nodes, depth %u",
+          s.nodes, s.depth);
+    printf("  frozen on threads: %u nodes, depth %u, %u leaves of %.2f entries\n", s.nodes, s.depth,
+           s.frozen_leaves, s.frozen_list_entries);
+    ic_frozen one = c->frozen; /* taken over: the next freeze builds anew */
+    memset(&c->frozen, 0, sizeof c->frozen);
+    CHECK(frozen_consistent(&one), "1 thread: the frozen layout's arrays are inconsistent");
+    const int threads[3] = {2, 3, 8};
+    for (int k = 0; k < 3; ++k) {
+        c->params.threads = threads[k];
+        CHECK(ic_cache_freeze(c, &err) == IC_OK, "freeze: %s", err.message);
+        const ic_frozen *f = &c->frozen;
+        CHECK(f->node_count == one.node_count && f->leaf_count == one.leaf_count &&
+                  f->list_len == one.list_len && f->entry_count == one.entry_count &&
+                  memcmp(f->node, one.node, one.node_count * sizeof *one.node) == 0 &&
+                  memcmp(f->leaf_at, one.leaf_at, one.leaf_count * sizeof *one.leaf_at) == 0 &&
+                  memcmp(f->list, one.list, one.list_len * sizeof *one.list) == 0,
+              "the frozen layout on %d threads differs from the one on 1", threads[k]);
+    }
+    ic_frozen_free(&one);
+    c->params.threads = 3;
+    check_frozen_identical(c, 4000, 1, "frozen on 3 threads");
+    CHECK(frozen_consistent(&c->frozen), "3 threads: the frozen layout's arrays are inconsistent");
+    ic_cache_destroy(c);
+    free(recs);
+}
+
 /* ---- k-nearest and radius queries -------------------------------------------------------------- */
 
 static void test_point_queries(void)
@@ -1888,6 +1976,7 @@ int main(void)
     RUN(test_file);
     RUN(test_payloads);
     RUN(test_freeze_lifecycle);
+    RUN(test_frozen_threads);
     RUN(test_frozen_bounce_levels);
     RUN(test_fallback_level);
     RUN(test_crowded_lookups);
