@@ -285,13 +285,16 @@ static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radi
     cd->flags = r->flags;
 }
 
-/* Undo a failed insertion (out of memory half-way): drop the new records and rebuild both trees. */
+/* Undo a failed insertion (out of memory half-way): drop the new records and rebuild both trees; a
+ * build that fails too leaves its tree as it was, so the references to the dropped records go first. */
 static void roll_back(ic_cache *c, uint32_t first)
 {
     for (uint32_t i = first; i < c->count; ++i)
         c->ellipse_count -= c->squeeze[i].w < 1.0f;
     c->count = first;
     ic_cache_payload_truncate(c, first);
+    ic_octree_drop_from(&c->points, first);
+    ic_octree_drop_from(&c->tree, first);
     ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
     ic_octree_build(&c->points, &pts, first);
     ic_octree_build(&c->tree, &sph, first);

@@ -503,11 +503,12 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
         top.list_len = count;
         top.node_count = 1;
         b.tasks = malloc(8 * sizeof *b.tasks);
-        b.task_cap = b.tasks ? 8 : 0;
-        rc = build_node(&b, &top, 0, root, 0, 0, count);
+        b.task_cap = 8;
+        rc = b.tasks ? build_node(&b, &top, 0, root, 0, 0, count) : IC_ERR_OOM;
     }
-    if (rc == IC_OK)
-        rc = ic_parallel_for(count >= PARALLEL_MIN_ITEMS ? t->threads : 1, b.task_count, run_task, &b);
+    /* Threads that cannot be started ran nothing: the tasks then run on this one. */
+    if (rc == IC_OK && ic_parallel_for(count >= PARALLEL_MIN_ITEMS ? t->threads : 1, b.task_count, run_task, &b) != IC_OK)
+        rc = ic_parallel_for(1, b.task_count, run_task, &b);
     for (uint32_t k = 0; k < b.task_count && rc == IC_OK; ++k)
         rc = b.tasks[k].rc != IC_OK ? b.tasks[k].rc : append_task(&top, &b.tasks[k]);
     for (uint32_t k = 0; k < b.task_count; ++k) {
@@ -543,6 +544,18 @@ ic_result ic_octree_insert(ic_octree *t, const ic_octree_items *items, uint32_t 
     if (!t->has_root || !root_contains(t, items, index))
         return ic_octree_build(t, items, index + 1);
     return insert_item(t, items, index);
+}
+
+void ic_octree_drop_from(ic_octree *t, uint32_t first)
+{
+    for (uint32_t n = 0; n < t->node_count; ++n) {
+        ic_octree_node *node = &t->nodes[n];
+        uint32_t kept = 0;
+        for (uint32_t k = 0; k < node->count; ++k)
+            if (t->refs[node->begin + k].index < first)
+                t->refs[node->begin + kept++] = t->refs[node->begin + k];
+        node->count = kept;
+    }
 }
 
 ic_result ic_octree_compact(ic_octree *t)

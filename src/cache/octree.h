@@ -7,7 +7,8 @@
  *
  * Multiple references, stackless look-up (Frolov et al. 2012 §4.3): a sphere is referenced from every node it
  * overlaps on the level that matches its size — the first nodes on the way down whose half side is
- * at most its radius — or from the leaves above that level. Finding every sphere that holds p is
+ * at most its radius, or, in a tree built at once (ic_octree_build), whose children's half side is —
+ * or from the leaves above that level. Finding every sphere that holds p is
  * then one root-to-leaf descent with no stack and no backtracking, scanning the reference list of
  * each node on the path (almost always only the leaf's and one or two above it). Pure leaf storage,
  * as in Frolov et al. 2012, is the special case where all records are alike in size (which validity clamping
@@ -85,7 +86,7 @@ typedef struct ic_octree {
     uint32_t node_count, node_cap;
     ic_octree_ref *refs;       /* references, one segment per node */
     size_t ref_end, ref_cap;   /* used / allocated length of refs */
-    size_t ref_live;           /* sum of leaf capacities (the rest of ref_end is dead) */
+    size_t ref_live;           /* sum of the segments' capacities (the rest of ref_end is dead) */
     float cx, cy, cz, half;    /* root cube: center and half side */
     int has_root;
     uint32_t leaf_capacity, max_depth;
@@ -102,6 +103,9 @@ ic_result ic_octree_insert(ic_octree *t, const ic_octree_items *items, uint32_t 
  * the tree insertion would grow, except that a sphere as large as a child stays in the node it was
  * handed to (insertion into a node split earlier sends it down one level). */
 ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t count);
+/* Removes the references to items first… from every node, in place (allocates nothing, so it cannot
+ * fail): what a failed insertion leaves when the tree cannot be built again. */
+void ic_octree_drop_from(ic_octree *t, uint32_t first);
 /* Compacts the reference array if more than half of it is dead. */
 ic_result ic_octree_compact(ic_octree *t);
 /* Bytes held by the tree. */
