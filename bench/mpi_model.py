@@ -10,10 +10,10 @@ thread (runs alternated by bench/mpi.sh), their ratio, and rank 0's communicatio
 
 Part 2 (model, --target: the stats of a one-process render of the scene at the size that matters, e.g.
 Sponza at 1280x720). Each phase is either shared (gathering, the final render, the batch strategy's
-"eye paths and look-ups": the world stage's eye paths and the look-up sweeps, the shading points, the
+"eye paths and look-ups": the world stage's eye paths and the look-up sweeps, "need maps", the shading points, the
 record filter, and insertion's validity-radius clamp, --insertion-shared of insertion) or done by every
-rank (the accelerator, the rest of insertion, "candidates": the need maps, dithering and clustering, and
-whatever ic_render spends outside its phases). Stats written before "eye paths and
+rank (the accelerator, the rest of insertion, "candidates": dithering and clustering, and the need maps in
+stats written before "need maps" was reported apart, and whatever ic_render spends outside its phases). Stats written before "eye paths and
 look-ups" was reported apart count it in "candidates"; --candidates-serial then says which share of that
 every rank does. With N ranks of the same threads:
 
@@ -151,14 +151,14 @@ def main():
     else:
         shared_cand = phase(t, "candidates") * (1 - cand_serial)
     shared = {"gathering": phase(t, "gathering"), "final render": phase(t, "final render"),
-              "candidates": shared_cand,
+              "candidates": shared_cand + phase(t, "need maps"),
               "points, filter, validity": phase(t, "shading points") + phase(t, "record filter") +
                                           a.insertion_shared * phase(t, "insertion")}
     total_1 = t["seconds"]
     serial = total_1 - sum(shared.values())
     records = t["records"]
     print("\n## model: %s at %dx%d, %d threads per rank: %.0f s in one process (%d records, %d passes); "
-          "shared %.1f s (gathering %.1f, final render %.1f, eye paths and look-ups %.1f, shading points, record "
+          "shared %.1f s (gathering %.1f, final render %.1f, eye paths, look-ups and need maps %.1f, shading points, record "
           "filter and validity clamp %.2f), every rank %.2f s"
           % (t["scene"], t["width"], t["height"], t["threads"], total_1, records, t["passes"],
              sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"],

@@ -177,6 +177,24 @@ static ic_result timed_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, int w
     return r;
 }
 
+/* The need map (from geometry when lum is NULL, else from the look-ups' luminance): a block of rows on each
+ * process, exchanged; a row is the same whichever process makes it. Adds the seconds it took, the
+ * exchange excluded, to *seconds. */
+static ic_result shared_need(ic_ctx *c, const float *lum, float *need, double *seconds, ic_error *err)
+{
+    uint64_t first = 0, rows = 0;
+    ic_comm_block((uint64_t)c->g.height, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &rows);
+    const int y0 = (int)first, y1 = (int)(first + rows);
+    double t0 = ic_seconds();
+    ic_result r = lum ? ic_screen_value_need(&c->g, lum, c->threads, y0, y1, need)
+                      : ic_screen_geometry_need(&c->g, c->o.normal_weight, c->threads, y0, y1, need);
+    *seconds += ic_seconds() - t0;
+    if (r != IC_OK)
+        return ic_error_set(err, r, "out of memory for the discontinuity map");
+    return ic_comm_allgather_blocks(c->comm, need, (uint64_t)c->g.height, sizeof *need * (size_t)c->g.width,
+                                    "exchanging the need map", err);
+}
+
 /* Candidates from dithering a need map; pixels that already made a record are dropped. */
 static uint32_t dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix, ic_candidate *cand, uint64_t tag)
 {
@@ -281,6 +299,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     ic_candidate *cand = malloc(sizeof *cand * npix);
     ic_result r = IC_OK;
     double sweeps = 0.0; /* seconds in the eye paths and look-up sweeps, exchanges excluded */
+    double need_seconds = 0.0; /* in this process's rows of the need maps */
     if (c->comm) {
         c->comm_seconds_counted = c->comm->seconds;
         c->comm_bytes_counted = c->comm->bytes;
@@ -298,11 +317,8 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     const uint32_t hit_records = ic_cache_count(c->cache);
     /* Pass 0: geometry discontinuity. */
     ic_ic_report(opt, "cache pass 0", 0.0);
-    r = ic_screen_geometry_need(&c->g, c->o.normal_weight, c->threads, need);
-    if (r != IC_OK) {
-        ic_error_set(err, r, "out of memory for the discontinuity map");
+    if ((r = shared_need(c, NULL, need, &need_seconds, err)) != IC_OK)
         goto done;
-    }
     uint32_t n = dithered_candidates(c, need, pix, cand, 0), before0 = ic_cache_count(c->cache);
     r = ic_ic_gather_and_insert(c, cand, n, pt, err);
     if (r != IC_OK)
@@ -320,11 +336,8 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
                 ic_error_set(err, r, "could not start threads");
                 goto done;
             }
-            r = ic_screen_value_need(&c->g, lum, c->threads, need);
-            if (r != IC_OK) {
-                ic_error_set(err, r, "out of memory for the discontinuity map");
+            if ((r = shared_need(c, lum, need, &need_seconds, err)) != IC_OK)
                 goto done;
-            }
             /* Pixels no record covers ask for at least the 16-pixel spacing; later passes (and the
              * world stage, which clusters uncovered hits) fill what remains. */
             for (size_t i = 0; i < npix; ++i)
@@ -377,9 +390,10 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     uint32_t added;
     r = coverage_sweep(c, lum, covered, cand, pt, &added, &sweeps, err);
     count_traffic(c, st, st->passes - 1);
-    /* The part of construction that the processes share out (the rest of it, dithering and clustering,
+    /* The parts of construction that the processes share out (the rest of it, dithering and clustering,
      * every process does alike): reported apart so that a scaling model can tell them apart. */
     ic_stats_add_phase(st, "eye paths and look-ups", sweeps);
+    ic_stats_add_phase(st, "need maps", need_seconds);
 done:
     free(need);
     free(lum);

@@ -108,7 +108,7 @@ static float value_disc(const level *l, size_t i, size_t j, int lev, float k)
 
 typedef struct disc_job {
     const level *L;
-    int lev;
+    int lev, first_row;
     disc_fn disc;
     float k;
     float *d;              /* the level's texels: the largest discontinuity to a valid 4-neighbour */
@@ -120,7 +120,7 @@ static void disc_row(void *p, int64_t row, int thread)
     (void)thread;
     const disc_job *j = p;
     const level *L = j->L;
-    const int ly = (int)row;
+    const int ly = j->first_row + (int)row;
     const int nx[4] = {-1, 1, 0, 0}, ny[4] = {0, 0, -1, 1};
     for (int lx = 0; lx < L->w; ++lx) {
         size_t i = (size_t)ly * L->w + lx;
@@ -143,7 +143,7 @@ typedef struct blend_job {
     const ic_gbuffer *g;
     const level *lv;
     float *const *d;       /* each level's discontinuities */
-    int nlev;
+    int nlev, first_row;
     float *need;
 } blend_job;
 
@@ -157,7 +157,7 @@ static void blend_row(void *p, int64_t row, int thread)
     (void)thread;
     const blend_job *j = p;
     const ic_gbuffer *g = j->g;
-    const int y = (int)row;
+    const int y = j->first_row + (int)row;
     for (int x = 0; x < g->width; ++x) {
         size_t o = (size_t)y * g->width + x;
         j->need[o] = 0.0f;
@@ -172,8 +172,12 @@ static void blend_row(void *p, int64_t row, int thread)
     }
 }
 
-static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc, float k, int threads, float *need)
+/* Rows [y0, y1) of the need map; each level's discontinuities only on the rows those read. */
+static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc, float k, int threads, int y0, int y1,
+                          float *need)
 {
+    if (y0 < 0 || y1 > g->height || y0 >= y1)
+        return y0 == y1 ? IC_OK : IC_ERR_INVALID_ARG;
     const int geometry = values == NULL;
     level lv[MAX_LEVELS];
     float *d[MAX_LEVELS] = {0};
@@ -198,12 +202,13 @@ static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc
             r = IC_ERR_OOM;
             break;
         }
-        disc_job dj = {&lv[l], l, disc, k, d[l]};
-        r = ic_parallel_for(threads, lv[l].h, disc_row, &dj);
+        const int first = y0 >> l, last = (y1 - 1) >> l;
+        disc_job dj = {&lv[l], l, first, disc, k, d[l]};
+        r = ic_parallel_for(threads, last - first + 1, disc_row, &dj);
     }
     if (r == IC_OK) {
-        blend_job j = {g, lv, d, nlev, need};
-        r = ic_parallel_for(threads, g->height, blend_row, &j);
+        blend_job j = {g, lv, d, nlev, y0, need};
+        r = ic_parallel_for(threads, y1 - y0, blend_row, &j);
     }
 done:
     for (int l = 0; l < MAX_LEVELS; ++l)
@@ -213,14 +218,14 @@ done:
     return r;
 }
 
-ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, int threads, float *need)
+ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, int threads, int y0, int y1, float *need)
 {
-    return need_map(g, NULL, geometry_disc, k_normal, threads, need);
+    return need_map(g, NULL, geometry_disc, k_normal, threads, y0, y1, need);
 }
 
-ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int threads, float *need)
+ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int threads, int y0, int y1, float *need)
 {
-    return need_map(g, luminance, value_disc, 0.0f, threads, need);
+    return need_map(g, luminance, value_disc, 0.0f, threads, y0, y1, need);
 }
 
 uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, uint32_t *pixels)

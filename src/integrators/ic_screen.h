@@ -32,11 +32,13 @@ typedef struct ic_gbuffer {
     uint8_t *valid;        /* 1 if the pixel has a shading point */
 } ic_gbuffer;
 
-/* Need map from geometry: w*h floats (0 where invalid). k_normal weights the normal term. The blend
- * runs on `threads` threads (any count, the same map). */
-ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, int threads, float *need);
-/* Need map from per-pixel luminance values (e.g. cache look-ups); invalid pixels ignored. */
-ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int threads, float *need);
+/* Need map from geometry: rows [y0, y1) of a w*h map (0 where invalid; the other rows untouched, so
+ * processes can each make a block of rows and exchange them). k_normal weights the normal term. It runs
+ * on `threads` threads (any count, the same map). */
+ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, int threads, int y0, int y1, float *need);
+/* Need map from per-pixel luminance values (e.g. cache look-ups), rows [y0, y1); invalid pixels ignored. */
+ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int threads, int y0, int y1,
+                               float *need);
 /* Deterministic dithering: pixel (x, y) on the grid of spacing s ∈ {32,16,8,4,2} (the coarsest grid it
  * lies on) is chosen if its need asks for spacing ≤ s; need ≥ threshold·2^(i) asks for spacing 16 >> i
  * (i = 0..3), anything valid asks for 32. Writes chosen pixel indices in raster order; returns count. */
