@@ -339,8 +339,9 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
     const int large = n > 1 && (uint64_t)n * 8 >= c->count;
     if (large)
         rc = ic_octree_build(&c->points, &pts, c->count);
-    for (uint32_t k = 0; k < n && rc == IC_OK && !large; ++k)
-        rc = ic_octree_insert(&c->points, &pts, first + k);
+    else
+        for (uint32_t k = 0; k < n && rc == IC_OK; ++k)
+            rc = ic_octree_insert(&c->points, &pts, first + k);
     if (rc == IC_OK && c->params.validity_clamp == IC_CACHE_ON)
         rc = ic_cache_validity_clamp(c, first);
     /* Steps 3 and 4 find "records whose sphere holds p_i" in the sphere octree, so the new records
@@ -348,8 +349,9 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
      * conservative, never wrong. */
     if (rc == IC_OK && large)
         rc = ic_octree_build(&c->tree, &sph, c->count);
-    for (uint32_t k = 0; k < n && rc == IC_OK && !large; ++k)
-        rc = ic_octree_insert(&c->tree, &sph, first + k);
+    else
+        for (uint32_t k = 0; k < n && rc == IC_OK; ++k)
+            rc = ic_octree_insert(&c->tree, &sph, first + k);
     if (rc == IC_OK && c->params.gradient_difference == IC_CACHE_ON)
         rc = ic_cache_gradient_difference(c, first);
     if (rc == IC_OK && c->params.neighbor_clamp == IC_CACHE_ON)

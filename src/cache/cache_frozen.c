@@ -28,6 +28,7 @@
  */
 #include "cache_store.h"
 
+#include "core/grow.h"
 #include "core/threads.h"
 
 #include <math.h>
@@ -136,26 +137,11 @@ static cell child_cell(const cell *parent, unsigned octant)
     return c;
 }
 
-/* Grows *array (elements of `size` bytes, *cap of them) to hold at least `need`, doubling. */
-static ic_result grow(void **array, size_t *cap, size_t need, size_t size)
-{
-    if (need <= *cap)
-        return IC_OK;
-    size_t n = *cap ? *cap : 64;
-    while (n < need)
-        n *= 2;
-    void *a = realloc(*array, n * size);
-    if (!a)
-        return IC_ERR_OOM;
-    *array = a;
-    *cap = n;
-    return IC_OK;
-}
 
 static ic_result reserve_active(builder *b, size_t n)
 {
     void *a = b->active;
-    ic_result rc = grow(&a, &b->active_cap, n, sizeof *b->active);
+    ic_result rc = ic_grow(&a, &b->active_cap, n, sizeof *b->active);
     b->active = a;
     return rc;
 }
@@ -173,10 +159,10 @@ static ic_result plan_leaf(builder *b, uint32_t fpos, const cell *cl, size_t beg
     part *p = b->p;
     uint32_t count = (uint32_t)(end - begin);
     void *leaf = p->leaf, *record = p->record;
-    ic_result rc = grow(&leaf, &p->leaf_cap, (size_t)p->leaf_count + 1, sizeof *p->leaf);
+    ic_result rc = ic_grow(&leaf, &p->leaf_cap, (size_t)p->leaf_count + 1, sizeof *p->leaf);
     p->leaf = leaf;
     if (rc == IC_OK)
-        rc = grow(&record, &p->record_cap, p->record_len + count, sizeof *p->record);
+        rc = ic_grow(&record, &p->record_cap, p->record_len + count, sizeof *p->record);
     p->record = record;
     if (rc != IC_OK)
         return IC_ERR_OOM;
@@ -254,10 +240,10 @@ static size_t filter(builder *b, const cell *cl, size_t begin, size_t end, size_
 static ic_result add_task(builder *b, uint32_t tn, uint32_t fpos, const cell *cl, size_t begin, size_t end)
 {
     void *tasks = b->tasks, *inputs = b->inputs;
-    ic_result rc = grow(&tasks, &b->task_cap, b->task_count + 1, sizeof *b->tasks);
+    ic_result rc = ic_grow(&tasks, &b->task_cap, b->task_count + 1, sizeof *b->tasks);
     b->tasks = tasks;
     if (rc == IC_OK)
-        rc = grow(&inputs, &b->input_cap, b->input_len + (end - begin), sizeof *b->inputs);
+        rc = ic_grow(&inputs, &b->input_cap, b->input_len + (end - begin), sizeof *b->inputs);
     b->inputs = inputs;
     if (rc != IC_OK)
         return IC_ERR_OOM;
@@ -306,7 +292,7 @@ static ic_result build_node(builder *b, uint32_t tn, uint32_t fpos, const cell *
     /* The frozen tree has the octree's shape, 8 contiguous children a node. */
     part *p = b->p;
     void *nodes = p->node;
-    if (grow(&nodes, &p->node_cap, (size_t)p->node_count + 8, sizeof *p->node) != IC_OK)
+    if (ic_grow(&nodes, &p->node_cap, (size_t)p->node_count + 8, sizeof *p->node) != IC_OK)
         return IC_ERR_OOM;
     p->node = nodes;
     uint32_t first = p->node_count;
@@ -327,13 +313,13 @@ static ic_result walk_part(builder *b, part *p, const entry *in, size_t n, uint3
 {
     b->p = p;
     void *node = p->node, *leaf = p->leaf, *record = p->record;
-    ic_result rc = grow(&node, &p->node_cap, nodes, sizeof *p->node);
+    ic_result rc = ic_grow(&node, &p->node_cap, nodes, sizeof *p->node);
     p->node = node;
     if (rc == IC_OK)
-        rc = grow(&leaf, &p->leaf_cap, 1u + (nodes - 1u) / 8u * 7u, sizeof *p->leaf);
+        rc = ic_grow(&leaf, &p->leaf_cap, 1u + (nodes - 1u) / 8u * 7u, sizeof *p->leaf);
     p->leaf = leaf;
     if (rc == IC_OK)
-        rc = grow(&record, &p->record_cap, 1, sizeof *p->record);
+        rc = ic_grow(&record, &p->record_cap, 1, sizeof *p->record);
     p->record = record;
     if (rc == IC_OK)
         rc = reserve_active(b, n);

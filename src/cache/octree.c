@@ -8,6 +8,7 @@
  */
 #include "octree.h"
 
+#include "core/grow.h"
 #include "core/morton.h"
 #include "core/threads.h"
 
@@ -330,32 +331,17 @@ static void part_free(part *p)
     memset(p, 0, sizeof *p);
 }
 
-/* Grows *array (elements of `size` bytes, *cap of them) to hold at least `need`, doubling. */
-static int grow_array(void **array, size_t *cap, size_t need, size_t size)
-{
-    if (need <= *cap)
-        return 1;
-    size_t n = *cap ? *cap : 64;
-    while (n < need)
-        n *= 2;
-    void *a = realloc(*array, n * size);
-    if (!a)
-        return 0;
-    *array = a;
-    *cap = n;
-    return 1;
-}
 
 static int part_reserve(part *p, uint32_t nodes, size_t refs, size_t list)
 {
     size_t node_cap = p->node_cap;
     void *n = p->nodes, *r = p->refs, *l = p->list;
-    int ok = grow_array(&n, &node_cap, (size_t)p->node_count + nodes, sizeof *p->nodes);
+    int ok = ic_grow(&n, &node_cap, (size_t)p->node_count + nodes, sizeof *p->nodes) == IC_OK;
     p->nodes = n;
     p->node_cap = (uint32_t)node_cap;
-    ok = ok && grow_array(&r, &p->ref_cap, p->ref_count + refs, sizeof *p->refs);
+    ok = ok && ic_grow(&r, &p->ref_cap, p->ref_count + refs, sizeof *p->refs) == IC_OK;
     p->refs = r;
-    ok = ok && grow_array(&l, &p->list_cap, p->list_len + list, sizeof *p->list);
+    ok = ok && ic_grow(&l, &p->list_cap, p->list_len + list, sizeof *p->list) == IC_OK;
     p->list = l;
     return ok;
 }
@@ -374,7 +360,7 @@ static ic_result build_node(builder *b, part *p, uint32_t slot, cube c, uint32_t
         if (b->task_count == b->task_cap) {
             size_t cap = b->task_cap;
             void *a = b->tasks;
-            if (!grow_array(&a, &cap, (size_t)b->task_count + 1, sizeof *b->tasks))
+            if (ic_grow(&a, &cap, (size_t)b->task_count + 1, sizeof *b->tasks) != IC_OK)
                 return IC_ERR_OOM;
             b->tasks = a;
             b->task_cap = (uint32_t)cap;
@@ -507,7 +493,8 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
         rc = b.tasks ? build_node(&b, &top, 0, root, 0, 0, count) : IC_ERR_OOM;
     }
     /* Threads that cannot be started ran nothing: the tasks then run on this one. */
-    if (rc == IC_OK && ic_parallel_for(count >= PARALLEL_MIN_ITEMS ? t->threads : 1, b.task_count, run_task, &b) != IC_OK)
+    const int threads = count >= PARALLEL_MIN_ITEMS ? t->threads : 1;
+    if (rc == IC_OK && ic_parallel_for(threads, b.task_count, run_task, &b) != IC_OK)
         rc = ic_parallel_for(1, b.task_count, run_task, &b);
     for (uint32_t k = 0; k < b.task_count && rc == IC_OK; ++k)
         rc = b.tasks[k].rc != IC_OK ? b.tasks[k].rc : append_task(&top, &b.tasks[k]);
