@@ -24,9 +24,11 @@ every rank does. With N ranks of the same threads:
   - candidates and look-up sweeps: the bytes the 2-rank runs measured beyond the records, scaled by the
     pixel count and by (N-1)/N against 1/2;
   - the shading points (29 bytes a pixel) and the filtered records (88 bytes each), all-gathered once;
-  - the image: the adaptive pilot's sums (4 doubles per pixel) and the image (3 doubles), each rank's
-    tiles all-gathered, (N-1)/N of each per rank (--sum-image: added over the ranks as before, 2 (N-1)/N
-    of each, a ring all-reduce);
+  - the image: the adaptive pilot's relative variances (1 double per pixel) and the image (3 floats),
+    each rank's tiles all-gathered, (N-1)/N of each per rank, and the pilot's sums (3 doubles per pixel) of
+    the tiles whose second pass leaves the rank that rendered their pilot (--tiles-moved of them);
+    --film-doubles: the pilot's sums (4 doubles) and the image (3 doubles) as exchanged before; --sum-image:
+    those added over the ranks as before that, 2 (N-1)/N of each, a ring all-reduce;
   - latency: every collective as N - 1 ring steps of ALPHA (50 us at 1 Gb/s, 20 us at 10 Gb/s), about
     12 collectives per pass;
   - imbalance: a rank's share of a pass is m = n_p / N records (rounded up), and its cost the sum of m
@@ -101,6 +103,11 @@ def main():
                     help="share of insertion that the ranks divide (the validity clamp: 0.32-0.35 on Sponza 1280x720 "
                          "since the octrees and the frozen layout are built on the threads, 0.28 before; BENCHMARKS.md)")
     ap.add_argument("--sqrt2ln", action="store_true", help="the slowest rank's excess from the bound sqrt(2 ln N)")
+    ap.add_argument("--tiles-moved", type=float, default=0.014,
+                    help="share of the tiles whose adaptive second pass leaves the rank of their pilot (0.014 for "
+                         "Sponza 1280x720 at 16 ranks, from its measured tile costs; BENCHMARKS.md)")
+    ap.add_argument("--film-doubles", action="store_true",
+                    help="model the film's exchanges as before: the pilot's sums and the image all-gathered as doubles")
     ap.add_argument("--sum-image", action="store_true", help="model the image added over the ranks (all-reduce)")
     ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
     ap.add_argument("--interleaved-final", action="store_true",
@@ -182,8 +189,11 @@ def main():
             # the mean tile) over a mean load of tiles / N tiles.
             imb_f = 0.25 * imb_f + 0.75 * (1 + (1 + 3 * a.tile_cv) / (tiles / n))
         share = (n - 1) / n
-        volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 +
-                  px * (4 + 3) * 8 * (2 if a.sum_image else 1) * share + (px * 29 + records * 88) * share)
+        film = px * (8 + 12 + 24 * a.tiles_moved)
+        if a.film_doubles or a.sum_image:
+            film = px * (4 + 3) * 8 * (2 if a.sum_image else 1)
+        volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 + film * share +
+                  (px * 29 + records * 88) * share)
         for gbps in a.links:
             latency = COLLECTIVES_PER_PASS * t["passes"] * (n - 1) * ALPHA[gbps]
             comm = volume * 8 / (gbps * 1e9) + latency

@@ -352,23 +352,23 @@ static void render_tile(void *p, int64_t item, int thread)
  * image mean against the path-traced reference). */
 #define IC_ADAPTIVE_CAP 8
 
-static int allocate_samples(const double *accum, const double *sumsq, int n0, int spp, int width, int height,
-                            uint32_t *extra)
+/* The pilot's per-sample relative variance of pixel i's luminance, v = s²/(m² + 0.01). */
+static double relative_variance(const double *accum, const double *sumsq, int n0, size_t i)
+{
+    const double *a = &accum[3 * i];
+    double m = luminance(a[0], a[1], a[2]) / n0;
+    double var = fmax(sumsq[i] / n0 - m * m, 0.0) * n0 / (n0 - 1);
+    return var / (m * m + 0.01);
+}
+
+/* The second pass's samples of every pixel from the pilot's relative variances v (image-wide, taken over as
+ * scratch). 0 when out of memory. */
+static int allocate_samples(double *v, int n0, int spp, int width, int height, uint32_t *extra)
 {
     size_t npix = (size_t)width * (size_t)height;
-    double *v = malloc(npix * sizeof *v);
     float *sigma = malloc(npix * sizeof *sigma);
-    if (!v || !sigma) {
-        free(v);
-        free(sigma);
+    if (!sigma)
         return 0;
-    }
-    for (size_t i = 0; i < npix; ++i) {
-        const double *a = &accum[3 * i];
-        double m = luminance(a[0], a[1], a[2]) / n0;
-        double var = fmax(sumsq[i] / n0 - m * m, 0.0) * n0 / (n0 - 1);
-        v[i] = var / (m * m + 0.01);
-    }
     double total = 0.0;
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
@@ -414,7 +414,6 @@ static int allocate_samples(const double *accum, const double *sumsq, int n0, in
         extra[i] = (uint32_t)e;
         given += e;
     }
-    free(v);
     free(sigma);
     return 1;
 }
@@ -544,64 +543,94 @@ static ic_result loop_pass_timed(loop_ctx *c, int threads, int s_begin, int s_en
 /* The rank that renders tile t. */
 static int tile_owner(const loop_ctx *c, int64_t t) { return c->owner ? c->owner[t] : (int)(t % c->ranks); }
 
-/* Copies tile t's rows between the image-wide array `values` (per_pixel doubles a pixel) and a packed
- * block at `packed` (the tile's pixels row by row); to_packed chooses the direction. Returns the doubles
- * copied. */
-static size_t copy_tile(const loop_ctx *c, int64_t t, double *values, double *packed, int per_pixel, int to_packed)
+/* Copies tile t's rows between an image-wide plane of pixel_bytes a pixel and a packed block (the tile's
+ * pixels row by row); to_packed chooses the direction. Returns the bytes copied. */
+static size_t copy_tile(const loop_ctx *c, int64_t t, unsigned char *plane, unsigned char *packed, size_t pixel_bytes,
+                        int to_packed)
 {
     const ic_camera *cam = c->loop->camera;
     int x0, y0, x1, y1;
     tile_rect(c, t, &x0, &y0, &x1, &y1);
-    size_t row = (size_t)(x1 - x0) * (size_t)per_pixel, n = 0;
+    size_t row = (size_t)(x1 - x0) * pixel_bytes, n = 0;
     for (int y = y0; y < y1; ++y, n += row) {
-        double *v = &values[((size_t)y * cam->width + x0) * per_pixel];
+        unsigned char *v = plane + ((size_t)y * cam->width + x0) * pixel_bytes;
         if (to_packed)
-            memcpy(packed + n, v, sizeof *v * row);
+            memcpy(packed + n, v, row);
         else
-            memcpy(v, packed + n, sizeof *v * row);
+            memcpy(v, packed + n, row);
     }
     return n;
 }
 
-/* Every rank's pixels of its own tiles become every rank's (a no-op for one process): each packs its
- * tiles, in tile order, into its block of one all-gather, and copies the other ranks' blocks back into
- * their tiles. Each pixel keeps the bits its renderer computed, and a rank receives the image once
- * ((N − 1)/N of it), half what a sum over the ranks moves. */
-static ic_result combine_ranks(loop_ctx *c, double *values, int per_pixel, ic_error *err)
+/* Tiles of an image-wide plane (pixel_bytes a pixel), each held by one rank, become every rank's (a no-op
+ * for one process). from[t] is the rank that holds tile t, or -1 for a tile that stays where it is; NULL:
+ * each tile's renderer. Every rank packs its tiles, in tile order, into its block of one all-gather and
+ * copies the other ranks' blocks into their tiles, so each pixel keeps the bits its renderer computed. */
+static ic_result exchange_tiles(loop_ctx *c, void *plane, size_t pixel_bytes, const int *from, const char *what,
+                                ic_error *err)
 {
     if (c->ranks == 1)
         return IC_OK;
-    const ic_camera *cam = c->loop->camera;
     const int64_t tiles = (int64_t)c->tiles_x * c->tiles_y;
     uint64_t *bytes = calloc((size_t)c->ranks, sizeof *bytes), *at = calloc((size_t)c->ranks, sizeof *at);
-    double *all = malloc(sizeof *all * (size_t)cam->width * cam->height * per_pixel);
-    if (!bytes || !at || !all) {
+    for (int64_t t = 0; bytes && t < tiles; ++t) {
+        int q = from ? from[t] : tile_owner(c, t), x0, y0, x1, y1;
+        tile_rect(c, t, &x0, &y0, &x1, &y1);
+        if (q >= 0)
+            bytes[q] += pixel_bytes * (size_t)(x1 - x0) * (size_t)(y1 - y0);
+    }
+    uint64_t total = 0;
+    for (int q = 0; bytes && at && q < c->ranks; ++q) {
+        at[q] = total;
+        total += bytes[q];
+    }
+    unsigned char *all = bytes && at ? malloc(total ? total : 1) : NULL;
+    if (!all) {
         free(bytes);
         free(at);
-        free(all);
-        return ic_error_set(err, IC_ERR_OOM, "out of memory for exchanging a %dx%d image", cam->width,
-                            cam->height);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for %s (%d ranks)", what, c->ranks);
     }
-    for (int64_t t = 0; t < tiles; ++t) {
-        int x0, y0, x1, y1;
-        tile_rect(c, t, &x0, &y0, &x1, &y1);
-        bytes[tile_owner(c, t)] += sizeof *all * (size_t)(x1 - x0) * (y1 - y0) * per_pixel;
-    }
-    for (int q = 1; q < c->ranks; ++q)
-        at[q] = at[q - 1] + bytes[q - 1] / sizeof *all;
     size_t n = at[c->rank];
     for (int64_t t = 0; t < tiles; ++t)
-        if (tile_owner(c, t) == c->rank)
-            n += copy_tile(c, t, values, all + n, per_pixel, 1);
-    ic_result r = ic_comm_allgather_sized(c->loop->comm, all, bytes, "exchanging the image", err);
+        if ((from ? from[t] : tile_owner(c, t)) == c->rank)
+            n += copy_tile(c, t, plane, all + n, pixel_bytes, 1);
+    ic_result r = ic_comm_allgather_sized(c->loop->comm, all, bytes, what, err);
     for (int64_t t = 0; r == IC_OK && t < tiles; ++t) {
-        int q = tile_owner(c, t);
-        if (q != c->rank)
-            at[q] += copy_tile(c, t, values, all + at[q], per_pixel, 0);
+        int q = from ? from[t] : tile_owner(c, t);
+        if (q >= 0 && q != c->rank)
+            at[q] += copy_tile(c, t, plane, all + at[q], pixel_bytes, 0);
     }
     free(bytes);
     free(at);
     free(all);
+    return r;
+}
+
+/* The image from the running sums: each pixel's mean over its n samples (n0 + extra[i], or n0 for all with
+ * extra NULL), computed by the rank that rendered it, in float, then exchanged: a rank receives (N − 1)/N of
+ * the image as 12 bytes a pixel. */
+static ic_result finish_image(loop_ctx *c, int n0, const uint32_t *extra, ic_image *out, ic_error *err)
+{
+    const ic_camera *cam = c->loop->camera;
+    ic_result r = ic_image_create(out, cam->width, cam->height);
+    if (r != IC_OK)
+        return ic_error_set(err, r, "out of memory for a %dx%d image", cam->width, cam->height);
+    const int64_t tiles = (int64_t)c->tiles_x * c->tiles_y;
+    for (int64_t t = 0; t < tiles; ++t) {
+        if (tile_owner(c, t) != c->rank)
+            continue;
+        int x0, y0, x1, y1;
+        tile_rect(c, t, &x0, &y0, &x1, &y1);
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                size_t i = (size_t)y * cam->width + x;
+                uint32_t n = (uint32_t)n0 + (extra ? extra[i] : 0);
+                for (int k = 0; k < 3; ++k)
+                    out->rgb[3 * i + k] = (float)(c->accum[3 * i + k] / n);
+            }
+    }
+    if ((r = exchange_tiles(c, out->rgb, 3 * sizeof *out->rgb, NULL, "exchanging the image", err)) != IC_OK)
+        ic_image_free(out);
     return r;
 }
 
@@ -618,19 +647,21 @@ static void count_work(const loop_ctx *c, int threads, ic_image_loop_result *res
  * but the second pass's samples follow the noise, so its cost per tile varies many times over. Each
  * tile's cost is estimated as its pilot seconds per sample times the samples the allocation gives it;
  * the pilot times are summed over the ranks (each tile was timed by one), so every rank holds the same
- * costs and makes the same split: longest tile first to the least loaded rank (Graham's LPT rule; ties to
- * the lower index). Which rank renders a tile does not change its pixels, so the image stays the same. */
+ * costs and makes the same split. A tile stays on the rank that rendered its pilot (its home, which holds
+ * its sums) while that rank's load stays within the mean; the tiles that do not fit go, most costly first,
+ * to the least loaded rank (Graham's LPT rule; ties to the lower rank), and only their pilot sums move.
+ * Which rank renders a tile does not change its pixels, so the image stays the same. */
 typedef struct tile_cost {
     double cost;
     int64_t tile;
 } tile_cost;
 
-/* Most costly first, ties by tile index: a total order, so every rank sorts alike. */
+/* Least costly first, ties by tile index: a total order, so every rank sorts alike. */
 static int cmp_tile_cost(const void *a, const void *b)
 {
     const tile_cost *x = a, *y = b;
     if (x->cost != y->cost)
-        return x->cost > y->cost ? -1 : 1;
+        return x->cost < y->cost ? -1 : 1;
     return (x->tile > y->tile) - (x->tile < y->tile);
 }
 
@@ -639,11 +670,12 @@ static ic_result balance_second_pass(loop_ctx *c, int n0, ic_error *err)
     const ic_camera *cam = c->loop->camera;
     const int tiles = c->tiles_x * c->tiles_y;
     ic_result r = ic_comm_sum(c->loop->comm, c->tile_seconds, (uint64_t)tiles, err);
-    double *load = calloc((size_t)c->ranks, sizeof *load);
+    double *load = calloc((size_t)c->ranks, sizeof *load), total = 0.0;
     tile_cost *order = malloc(sizeof *order * (size_t)tiles);
+    int *moved = malloc(sizeof *moved * (size_t)tiles);
     c->owner = malloc(sizeof *c->owner * (size_t)tiles);
     c->owned = malloc(sizeof *c->owned * (size_t)tiles);
-    if (r == IC_OK && (!load || !order || !c->owner || !c->owned))
+    if (r == IC_OK && (!load || !order || !moved || !c->owner || !c->owned))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for sharing out %d tiles", tiles);
     for (int t = 0; r == IC_OK && t < tiles; ++t) {
         int x0, y0, x1, y1;
@@ -655,28 +687,51 @@ static ic_result balance_second_pass(loop_ctx *c, int n0, ic_error *err)
         double pilot = (double)n0 * (x1 - x0) * (y1 - y0);
         order[t].cost = samples * c->tile_seconds[t] / pilot;
         order[t].tile = t;
+        total += order[t].cost;
     }
     if (r == IC_OK)
         qsort(order, (size_t)tiles, sizeof *order, cmp_tile_cost);
-    c->own_tiles = 0;
-    c->own_pixels = 0;
+    /* Home first, least costly first, up to the mean load: a rank over it sets aside its costliest tiles,
+     * so few tiles move (1.4 % of Sponza's at 1280x720 and 16 ranks, against 18 % filling most costly
+     * first; BENCHMARKS.md). The set-aside tiles then go most costly first to the least loaded rank. */
+    const double mean = total / c->ranks;
+    int aside = 0;
     for (int i = 0; r == IC_OK && i < tiles; ++i) {
+        int64_t t = order[i].tile;
+        int home = (int)(t % c->ranks);
+        if (load[home] + order[i].cost <= mean) {
+            load[home] += order[i].cost;
+            c->owner[t] = home;
+        } else {
+            order[aside++] = order[i];
+        }
+    }
+    for (int i = aside - 1; r == IC_OK && i >= 0; --i) {
         int best = 0;
         for (int q = 1; q < c->ranks; ++q)
             if (load[q] < load[best])
                 best = q;
-        int64_t t = order[i].tile;
         load[best] += order[i].cost;
-        c->owner[t] = best;
-        if (best == c->rank) {
+        c->owner[order[i].tile] = best;
+    }
+    c->own_tiles = 0;
+    c->own_pixels = 0;
+    for (int t = 0; r == IC_OK && t < tiles; ++t) {
+        int home = t % c->ranks;
+        moved[t] = c->owner[t] != home ? home : -1;
+        if (c->owner[t] == c->rank) {
             int x0, y0, x1, y1;
             tile_rect(c, t, &x0, &y0, &x1, &y1);
             c->owned[c->own_tiles++] = t;
             c->own_pixels += (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0);
         }
     }
+    /* The moved tiles' pilot sums, from their homes. */
+    if (r == IC_OK)
+        r = exchange_tiles(c, c->accum, 3 * sizeof *c->accum, moved, "exchanging the pilot's sums", err);
     free(load);
     free(order);
+    free(moved);
     free(c->tile_seconds);
     c->tile_seconds = NULL;
     return r;
@@ -705,14 +760,25 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
                          cam->height);
     if (r == IC_OK)
         r = loop_pass(&c, threads, 0, n0, err);
-    /* Every rank shares out the rest from the whole pilot image, so all make the same allocation. */
-    if (r == IC_OK)
-        r = combine_ranks(&c, c.accum, 3, err);
-    if (r == IC_OK)
-        r = combine_ranks(&c, c.sumsq, 1, err);
-    if (r == IC_OK && !allocate_samples(c.accum, c.sumsq, n0, loop->spp, cam->width, cam->height, extra))
+    /* Every rank shares out the rest from the whole pilot's relative variances (each rank computes those of
+     * its own tiles and the ranks exchange them, 8 bytes a pixel), so all make the same allocation. */
+    double *v = r == IC_OK ? malloc(npix * sizeof *v) : NULL;
+    if (r == IC_OK && !v)
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
                          cam->height);
+    for (int64_t i = 0; r == IC_OK && i < c.own_tiles; ++i) {
+        int x0, y0, x1, y1;
+        tile_rect(&c, (int64_t)c.rank + i * c.ranks, &x0, &y0, &x1, &y1);
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x)
+                v[(size_t)y * cam->width + x] = relative_variance(c.accum, c.sumsq, n0, (size_t)y * cam->width + x);
+    }
+    if (r == IC_OK)
+        r = exchange_tiles(&c, v, sizeof *v, NULL, "exchanging the pilot's variances", err);
+    if (r == IC_OK && !allocate_samples(v, n0, loop->spp, cam->width, cam->height, extra))
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
+                         cam->height);
+    free(v);
     if (r == IC_OK) {
         free(c.sumsq);
         c.sumsq = NULL;
@@ -734,9 +800,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
             r = loop_pass(&c, threads, n0, n0, err);
     }
     if (r == IC_OK)
-        r = combine_ranks(&c, c.accum, 3, err);
-    if (r == IC_OK && (r = ic_image_create(out, cam->width, cam->height)) != IC_OK)
-        ic_error_set(err, r, "out of memory for a %dx%d image", cam->width, cam->height);
+        r = finish_image(&c, n0, extra, out, err);
     if (r == IC_OK) {
         uint64_t taken = 0;
         uint32_t most = 0;
@@ -744,8 +808,6 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
             uint32_t n = (uint32_t)n0 + extra[i];
             taken += n;
             most = n > most ? n : most;
-            for (int k = 0; k < 3; ++k)
-                out->rgb[3 * i + k] = (float)(c.accum[3 * i + k] / n);
         }
         count_work(&c, threads, res);
         res->spp_done = (int)llround((double)taken / (double)npix);
@@ -790,7 +852,6 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     ic_result r = loop_init(&c, loop, fn, user, threads, err);
     if (r != IC_OK)
         return r;
-    size_t npix = (size_t)cam->width * (size_t)cam->height;
     c.start = ic_seconds();
     /* One pass skips its tiles not yet started once interrupted; budgeted passes stop between passes, so
      * that every pixel has the same samples. */
@@ -832,18 +893,11 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
                            fmin(1.0, (ic_seconds() - c.start) / loop->time_budget));
         pass_spp *= 2;
     }
-    if (r == IC_OK)
-        r = combine_ranks(&c, c.accum, 3, err);
     if (r == IC_OK && done == 0)
         r = ic_error_set(err, IC_ERR_INVALID_ARG, "time budget too small for one sample per pixel; raise --time");
+    if (r == IC_OK)
+        r = finish_image(&c, done, NULL, out, err);
     if (r == IC_OK) {
-        r = ic_image_create(out, cam->width, cam->height);
-        if (r != IC_OK)
-            ic_error_set(err, r, "out of memory for a %dx%d image", cam->width, cam->height);
-    }
-    if (r == IC_OK) {
-        for (size_t i = 0; i < npix * 3; ++i)
-            out->rgb[i] = (float)(c.accum[i] / done);
         count_work(&c, threads, res);
         res->spp_done = done;
         res->spp_max = done;

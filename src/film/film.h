@@ -8,9 +8,9 @@
  *
  * Several processes (loop.comm): tile t is rendered by rank t mod size (a static interleave: neighbouring
  * tiles cost alike, so every rank gets a fair mix of cheap and expensive regions; the adaptive second
- * pass shares its tiles out by their measured cost), and every rank's tiles are all-gathered, each
- * pixel's sums copied from the one rank that rendered it, so the image is bit-identical to one
- * process's. Every rank returns the whole image.
+ * pass shares its tiles out by their measured cost, keeping each on its pilot's rank where the load
+ * allows), and every rank's finished pixels are all-gathered, each copied from the one rank that
+ * rendered it, so the image is bit-identical to one process's. Every rank returns the whole image.
  */
 #ifndef IC_FILM_FILM_H
 #define IC_FILM_FILM_H
