@@ -71,7 +71,8 @@
  *      only; a record with fewer than k distinct directions there is left alone).
  *   3. gradient-difference scaling (Castaño 2014): shrink pairs whose luminance gradients differ.
  *   4. neighbor clamping (Křivánek et al. 2006 §5.2), to a fixed point: |R_i − R_j| ≤ |p_i − p_j|
- *      for every pair within reach.
+ *      for every pair within reach (a sequential pass; the new records' neighbours are found
+ *      beforehand on params.threads threads).
  *   Two records i, j are "within reach" when |p_i − p_j| < max(a_i·R_i, a_j·R_j): one's position
  *   lies inside the other's (construction) influence sphere. Steps 2–4 only ever shrink radii, of new
  *   and existing records alike.
@@ -310,8 +311,9 @@ int ic_cache_record_weight(const ic_cache *cache, uint32_t index, ic_vec3 p, ic_
                            float *weight);
 
 /* The processes (irrcache/comm.h) that make the same insertions, in the same order, into copies of this
- * cache (NULL, the default: this process alone). Each then computes the validity-radius clamp for a
- * block of every batch's new records and the blocks are exchanged, so every copy stays the same, bit for
+ * cache (NULL, the default: this process alone). Each then computes the validity-radius clamp and the
+ * neighbours within reach (for neighbor clamping) of a block of every batch's new records and the blocks
+ * are exchanged, so every copy stays the same, bit for
  * bit; insertion becomes a collective operation: every process must make every insertion call. The comm
  * must outlive the insertions. */
 void ic_cache_set_comm(ic_cache *cache, ic_comm *comm);

@@ -10,14 +10,17 @@
  * "Within reach" (steps 3, 4): |p_i − p_j| < max(r_i, r_j). Steps 2–4 only ever lower R, and each is
  * deterministic: step 2 writes per-record slots from read-only inputs (so it runs in parallel),
  * step 3 computes every target from the radii before the step and then takes minima, step 4 is a
- * sequential label-correcting pass ordered by (R, index).
+ * sequential label-correcting pass ordered by (R, index), whose neighbour searches for the new records
+ * run in parallel beforehand.
  */
 #include "cache_store.h"
 
 #include "core/comm.h"
+#include "core/grow.h"
 #include "core/threads.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -54,43 +57,42 @@ float ic_cache_clamp_radius(const ic_cache_params *p, const ic_record *r, float 
 
 static float influence(const ic_cache *c, uint32_t i) { return c->normal[i].w * c->sphere[i].w; }
 
-static ic_result grow_scratch(ic_cache *c, uint32_t need)
+/* Grows an index buffer to hold `need` (doubling; unchanged on failure). */
+static ic_result grow_indices(uint32_t **buf, uint32_t *cap, uint32_t need)
 {
-    if (need <= c->scratch_cap)
-        return IC_OK;
-    uint32_t cap = c->scratch_cap ? c->scratch_cap : 256;
-    while (cap < need)
-        cap *= 2;
-    uint32_t *s = realloc(c->scratch, (size_t)cap * sizeof *s);
-    if (!s)
-        return IC_ERR_OOM;
-    c->scratch = s;
-    c->scratch_cap = cap;
-    return IC_OK;
+    size_t n = *cap;
+    ic_result r = ic_grow((void **)buf, &n, need, sizeof **buf);
+    if (r == IC_OK)
+        *cap = n > UINT32_MAX ? UINT32_MAX : (uint32_t)n;
+    return r;
 }
 
-uint32_t ic_cache_reach(ic_cache *c, uint32_t i)
+/* Records j ≠ i of i's bounce level within reach of i, into *buf (grown as needed, capacity *cap). Returns
+ * the count; UINT32_MAX when out of memory. Reads the cache only, so threads may call it at once with
+ * buffers of their own. */
+static uint32_t reach_into(const ic_cache *c, uint32_t i, uint32_t **buf, uint32_t *cap)
 {
     const ic_float4 *si = &c->sphere[i];
     ic_vec3 p = v3(si->x, si->y, si->z);
     float ri = influence(c, i), ri2 = ri * ri;
     ic_octree_items pts = ic_cache_point_items(c);
     /* j inside i's sphere: a radius query over positions. */
-    uint32_t n = ic_octree_radius(&c->points, &pts, p, ri, c->scratch, c->scratch_cap);
-    if (n > c->scratch_cap) {
-        if (grow_scratch(c, n) != IC_OK)
+    uint32_t n = ic_octree_radius(&c->points, &pts, p, ri, *buf, *cap);
+    if (n > *cap) {
+        if (grow_indices(buf, cap, n) != IC_OK)
             return UINT32_MAX;
-        n = ic_octree_radius(&c->points, &pts, p, ri, c->scratch, c->scratch_cap);
+        n = ic_octree_radius(&c->points, &pts, p, ri, *buf, *cap);
     }
     /* Drop i itself (distance 0 is inside its own sphere) and records of other bounce levels: levels are
      * separate caches that never interpolate together, so they do not clamp each other either. */
     uint8_t level = c->cold[i].bounce;
     uint32_t m = 0;
     for (uint32_t k = 0; k < n; ++k)
-        if (c->scratch[k] != i && c->cold[c->scratch[k]].bounce == level)
-            c->scratch[m++] = c->scratch[k];
+        if ((*buf)[k] != i && c->cold[(*buf)[k]].bounce == level)
+            (*buf)[m++] = (*buf)[k];
     /* i inside j's sphere: exactly the records the octree path through p_i references whose sphere
-     * holds p_i; those already found above are skipped by the complementary distance test. */
+     * holds p_i (the references are conservative: radii only shrink after a record goes in); those
+     * already found above are skipped by the complementary distance test. */
     uint32_t path[IC_OCTREE_MAX_DEPTH + 1];
     uint32_t len = ic_octree_path(&c->tree, p.x, p.y, p.z, path);
     for (uint32_t l = 0; l < len; ++l) {
@@ -102,14 +104,16 @@ uint32_t ic_cache_reach(ic_cache *c, uint32_t i)
             const ic_float4 *sj = &c->sphere[j];
             float d2 = ic_dist2(p.x, p.y, p.z, sj->x, sj->y, sj->z), rj = influence(c, j);
             if (!(d2 < ri2) && d2 < rj * rj) {
-                if (grow_scratch(c, m + 1) != IC_OK)
+                if (grow_indices(buf, cap, m + 1) != IC_OK)
                     return UINT32_MAX;
-                c->scratch[m++] = j;
+                (*buf)[m++] = j;
             }
         }
     }
     return m;
 }
+
+uint32_t ic_cache_reach(ic_cache *c, uint32_t i) { return reach_into(c, i, &c->scratch, &c->scratch_cap); }
 
 static float distance(const ic_cache *c, uint32_t i, uint32_t j)
 {
@@ -306,9 +310,130 @@ ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first)
  * between j and its own neighbours, so this runs to a fixed point: a label-correcting pass over a
  * min-heap keyed by (R, index). The heap starts with the new records; a popped record first pulls
  * (clamps itself by its neighbours), then pushes (clamps its neighbours, queueing those that
- * changed); existing records lowered by step 3 are seeds too. Radii only decrease, so it terminates, and at the end every pair within reach satisfies
- * |R_i − R_j| ≤ |p_i − p_j| — the triangle-inequality argument of the paper's Fig. 3.
+ * changed); existing records lowered by step 3 are seeds too. Radii only decrease, so it terminates, and at
+ * the end every pair within reach satisfies |R_i − R_j| ≤ |p_i − p_j| — the triangle-inequality argument of
+ * the paper's Fig. 3.
+ *
+ * The pass itself is sequential (who is within reach depends on the radii it lowers, so its result
+ * depends on its order), but finding neighbours, its costly part, is not: since radii only shrink, the
+ * records within reach of a new record when it is popped are among those within reach when the step
+ * begins. Those lists are found first, in parallel (on the cache's threads; with several processes a
+ * block of new records each, the lists exchanged), and the pass keeps the entries still within reach.
+ * The result is the sequential pass's, bit for bit. An existing record lowered on the way searches the
+ * octrees when popped, as before.
  */
+typedef struct reach_lists {
+    const ic_cache *c;
+    uint32_t first;        /* list k is record first + k's */
+    uint64_t *at;          /* per list of this block: (thread << 40) | offset in that thread's arena */
+    uint32_t *len;         /* per list of this block: its length */
+    uint32_t **arena;      /* per thread */
+    uint32_t *arena_len, *arena_cap;
+    uint32_t **buf;        /* per thread: one record's list as it is found */
+    uint32_t *buf_cap;
+    atomic_int failed;
+} reach_lists;
+
+static void find_list(void *ctx, int64_t item, int thread)
+{
+    reach_lists *L = ctx;
+    uint32_t n = reach_into(L->c, L->first + (uint32_t)item, &L->buf[thread], &L->buf_cap[thread]);
+    if (n == UINT32_MAX || grow_indices(&L->arena[thread], &L->arena_cap[thread], L->arena_len[thread] + n) != IC_OK) {
+        atomic_store(&L->failed, 1);
+        L->len[item] = 0;
+        return;
+    }
+    memcpy(L->arena[thread] + L->arena_len[thread], L->buf[thread], sizeof *L->buf[thread] * n);
+    L->at[item] = ((uint64_t)thread << 40) | L->arena_len[thread];
+    L->len[item] = n;
+    L->arena_len[thread] += n;
+}
+
+/* The lists of records [first, first + n) under the current radii, into *offset (n + 1 entries) and *index,
+ * in record order; a block each with several processes, exchanged. */
+static ic_result find_lists(ic_cache *c, uint32_t first, uint32_t n, uint32_t **offset, uint32_t **index)
+{
+    int threads = ic_resolve_threads(c->params.threads);
+    uint64_t block, own;
+    ic_comm_block(n, ic_comm_size(c->comm), ic_comm_rank(c->comm), &block, &own);
+    reach_lists L = {c, first + (uint32_t)block, NULL, NULL, NULL, NULL, NULL, NULL, NULL, 0};
+    L.at = malloc(sizeof *L.at * (own ? own : 1));
+    L.len = calloc(n ? n : 1, sizeof *L.len);
+    L.arena = calloc((size_t)threads, sizeof *L.arena);
+    L.arena_len = calloc((size_t)threads, sizeof *L.arena_len);
+    L.arena_cap = calloc((size_t)threads, sizeof *L.arena_cap);
+    L.buf = calloc((size_t)threads, sizeof *L.buf);
+    L.buf_cap = calloc((size_t)threads, sizeof *L.buf_cap);
+    *offset = malloc(sizeof **offset * ((size_t)n + 1));
+    *index = NULL;
+    ic_result r = L.at && L.len && L.arena && L.arena_len && L.arena_cap && L.buf && L.buf_cap && *offset ? IC_OK
+                                                                                                 : IC_ERR_OOM;
+    atomic_init(&L.failed, 0);
+    /* This block's lengths at their place in the lengths of all, for the exchange. */
+    uint32_t *all_len = L.len;
+    if (all_len)
+        L.len = all_len + block;
+    /* On the threads; on the calling thread alone for a small batch or where threads cannot start (then
+     * nothing ran). */
+    if (r == IC_OK && (own < 64 || ic_parallel_for(threads, (int64_t)own, find_list, &L) != IC_OK))
+        for (uint64_t k = 0; k < own; ++k)
+            find_list(&L, (int64_t)k, 0);
+    L.len = all_len;
+    if (r == IC_OK && atomic_load(&L.failed))
+        r = IC_ERR_OOM;
+    if (r == IC_OK)
+        r = ic_comm_allgather_blocks(c->comm, L.len, n, sizeof *L.len, "exchanging neighbour counts", NULL);
+    uint64_t total = 0;
+    for (uint32_t k = 0; r == IC_OK && k < n; ++k) {
+        (*offset)[k] = (uint32_t)total;
+        total += L.len[k];
+    }
+    if (r == IC_OK && total >= UINT32_MAX)
+        r = IC_ERR_OOM;
+    if (r == IC_OK) {
+        (*offset)[n] = (uint32_t)total;
+        *index = malloc(sizeof **index * (total ? total : 1));
+        r = *index ? IC_OK : IC_ERR_OOM;
+    }
+    for (uint64_t k = 0; r == IC_OK && k < own; ++k) {
+        uint64_t at = L.at[k];
+        memcpy(*index + (*offset)[block + k], L.arena[at >> 40] + (at & ((1ull << 40) - 1)),
+               sizeof **index * L.len[block + k]);
+    }
+    if (r == IC_OK && ic_comm_is_shared(c->comm)) {
+        /* Every rank's block of lists, in rank order: their sizes from the exchanged lengths. */
+        int ranks = ic_comm_size(c->comm);
+        uint64_t *bytes = calloc((size_t)ranks, sizeof *bytes);
+        if (!bytes)
+            r = IC_ERR_OOM;
+        for (int q = 0; r == IC_OK && q < ranks; ++q) {
+            uint64_t b0, bn;
+            ic_comm_block(n, ranks, q, &b0, &bn);
+            bytes[q] = sizeof **index * (uint64_t)((*offset)[b0 + bn] - (*offset)[b0]);
+        }
+        if (r == IC_OK)
+            r = ic_comm_allgather_sized(c->comm, *index, bytes, "exchanging neighbour lists", NULL);
+        free(bytes);
+    }
+    for (int t = 0; L.arena && t < threads; ++t)
+        free(L.arena[t]);
+    for (int t = 0; L.buf && t < threads; ++t)
+        free(L.buf[t]);
+    free(L.at);
+    free(L.len);
+    free(L.arena);
+    free(L.arena_len);
+    free(L.arena_cap);
+    free(L.buf);
+    free(L.buf_cap);
+    if (r != IC_OK) {
+        free(*offset);
+        free(*index);
+        *offset = *index = NULL;
+    }
+    return r;
+}
+
 typedef struct heap_entry {
     float radius;
     uint32_t record;
@@ -366,10 +491,30 @@ static heap_entry heap_pop(heap *h)
     return top;
 }
 
+/* The entries of list (found under radii no smaller than now) within reach of i now, into c->scratch: the
+ * tests of reach_into on the current radii, so the set is exactly the one it would find. UINT32_MAX when out
+ * of memory. */
+static uint32_t still_within_reach(ic_cache *c, uint32_t i, const uint32_t *list, uint32_t len)
+{
+    if (grow_indices(&c->scratch, &c->scratch_cap, len) != IC_OK)
+        return UINT32_MAX;
+    const ic_float4 *si = &c->sphere[i];
+    float ri = influence(c, i), ri2 = ri * ri;
+    uint32_t m = 0;
+    for (uint32_t k = 0; k < len; ++k) {
+        const ic_float4 *sj = &c->sphere[list[k]];
+        float d2 = ic_dist2(si->x, si->y, si->z, sj->x, sj->y, sj->z), rj = influence(c, list[k]);
+        if (d2 < ri2 || d2 < rj * rj)
+            c->scratch[m++] = list[k];
+    }
+    return m;
+}
+
 ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first)
 {
+    uint32_t *offset = NULL, *index = NULL;
+    ic_result rc = find_lists(c, first, c->count - first, &offset, &index);
     heap h = {NULL, 0, 0};
-    ic_result rc = IC_OK;
     /* Seeds: the new records, and existing ones that step 3 lowered. */
     for (uint32_t i = first; i < c->count && rc == IC_OK; ++i)
         if (!heap_push(&h, (heap_entry){c->sphere[i].w, i}))
@@ -382,7 +527,9 @@ ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first)
         uint32_t i = e.record;
         if (e.radius != c->sphere[i].w)
             continue; /* stale: i was lowered and queued again */
-        uint32_t n = ic_cache_reach(c, i);
+        uint32_t n = i >= first ? still_within_reach(c, i, index + offset[i - first],
+                                                     offset[i - first + 1] - offset[i - first])
+                                : ic_cache_reach(c, i);
         if (n == UINT32_MAX) {
             rc = IC_ERR_OOM;
             break;
@@ -413,5 +560,7 @@ ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first)
         }
     }
     free(h.v);
+    free(offset);
+    free(index);
     return rc;
 }

@@ -1078,6 +1078,129 @@ static void test_gradient_clamps(void)
     ic_cache_destroy(c);
 }
 
+/* Neighbour clamping against its definition, run by brute force: a label-correcting pass that pops the
+ * queued record of least (R, index), finds who is within reach now by scanning every record (squared
+ * float distances against each squared influence radius, as the cache tests them), pulls, then pushes.
+ * The cache finds its new records' neighbours in parallel beforehand and keeps those still within reach
+ * when popped; its radii must be the brute force's bit for bit, on 1 and 3 threads, over two batches (the
+ * second lowers records of the first, which then search the octrees as the pass reaches them). */
+typedef struct brute_clamp {
+    uint32_t count;
+    const ic_vec3 *pos;
+    const float *acc;
+    const uint8_t *level;
+    float *R;
+    uint8_t *queued;
+    uint32_t *reach; /* scratch: count entries */
+} brute_clamp;
+
+static void brute_neighbor_pass(brute_clamp *b, uint32_t first)
+{
+    for (uint32_t i = first; i < b->count; ++i)
+        b->queued[i] = 1;
+    for (;;) {
+        uint32_t i = UINT32_MAX;
+        for (uint32_t k = 0; k < b->count; ++k)
+            if (b->queued[k] && (i == UINT32_MAX || b->R[k] < b->R[i]))
+                i = k;
+        if (i == UINT32_MAX)
+            return;
+        b->queued[i] = 0;
+        /* Who is within reach when i is popped; then pull over them, then push. */
+        uint32_t m = 0;
+        float ri = b->acc[i] * b->R[i];
+        for (uint32_t j = 0; j < b->count; ++j) {
+            float dx = b->pos[i].x - b->pos[j].x, dy = b->pos[i].y - b->pos[j].y, dz = b->pos[i].z - b->pos[j].z;
+            float d2 = dx * dx + dy * dy + dz * dz, rj = b->acc[j] * b->R[j];
+            if (j != i && b->level[j] == b->level[i] && (d2 < ri * ri || d2 < rj * rj))
+                b->reach[m++] = j;
+        }
+        for (uint32_t k = 0; k < m; ++k)
+            b->R[i] = fminf(b->R[i], b->R[b->reach[k]] + v3_len(v3_sub(b->pos[i], b->pos[b->reach[k]])));
+        for (uint32_t k = 0; k < m; ++k) {
+            uint32_t j = b->reach[k];
+            float bound = b->R[i] + v3_len(v3_sub(b->pos[i], b->pos[j]));
+            if (bound < b->R[j]) {
+                b->R[j] = bound;
+                b->queued[j] = 1;
+            }
+        }
+    }
+}
+
+static void test_neighbor_clamp_brute_force(void)
+{
+    const uint32_t n = 3000, batch1 = 2000;
+    ic_record *recs = make_dense(n, 17);
+    for (uint32_t i = 0; i < n; ++i)
+        recs[i].bounce = (uint8_t)(i % 7 == 0); /* a second bounce level, which never clamps the first */
+    ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.3f);
+    p.validity_clamp = IC_CACHE_ON;
+    float *R = malloc(n * sizeof *R), *pre = malloc(n * sizeof *pre), *acc = malloc(n * sizeof *acc);
+    ic_vec3 *pos = malloc(n * sizeof *pos);
+    uint8_t *level = malloc(n), *queued = calloc(n, 1);
+    ic_error err;
+    /* The radii before step 4: the validity clamp reads positions only, so they are those of the same
+     * batches inserted without neighbour clamping. */
+    ic_cache *c = NULL;
+    ic_cache_create(&p, &c, &err);
+    ic_cache_insert_batch(c, recs, batch1, NULL, &err);
+    ic_cache_insert_batch(c, recs + batch1, n - batch1, NULL, &err);
+    for (uint32_t i = 0; i < n; ++i) {
+        ic_record r;
+        ic_cache_get_record(c, i, &r);
+        pre[i] = r.radius;
+        pos[i] = r.position;
+        acc[i] = r.accuracy;
+        level[i] = r.bounce;
+    }
+    ic_cache_destroy(c);
+    uint32_t *reach = malloc(n * sizeof *reach);
+    brute_clamp b = {batch1, pos, acc, level, R, queued, reach};
+    memcpy(R, pre, n * sizeof *R);
+    brute_neighbor_pass(&b, 0);
+    float *after1 = malloc(batch1 * sizeof *after1);
+    memcpy(after1, R, batch1 * sizeof *after1);
+    b.count = n;
+    brute_neighbor_pass(&b, batch1);
+    uint32_t lowered = 0, old_lowered = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        lowered += R[i] < pre[i];
+        old_lowered += i < batch1 && R[i] < after1[i];
+    }
+    CHECK(lowered > n / 10 && old_lowered > 20, "the test needs lowered radii, also of the first batch by the second: %u, %u",
+          lowered, old_lowered);
+    p.neighbor_clamp = IC_CACHE_ON;
+    for (int t = 0; t < 2; ++t) {
+        p.threads = t ? 3 : 1;
+        ic_cache_create(&p, &c, &err);
+        ic_cache_insert_batch(c, recs, batch1, NULL, &err);
+        ic_cache_insert_batch(c, recs + batch1, n - batch1, NULL, &err);
+        uint32_t bad = 0, worst = 0;
+        float got = 0.0f;
+        for (uint32_t i = 0; i < n; ++i) {
+            ic_record r;
+            ic_cache_get_record(c, i, &r);
+            if (r.radius != R[i] && bad++ == 0)
+                worst = i, got = r.radius;
+        }
+        CHECK(bad == 0, "%d thread(s): %u radii differ from the brute-force pass (record %u: %g, want %g)",
+              p.threads, bad, worst, (double)got, (double)R[worst]);
+        ic_cache_destroy(c);
+    }
+    printf("  neighbor clamp against brute force: %u of %u radii lowered, %u of the first batch's by the second\n",
+           lowered, n, old_lowered);
+    free(R);
+    free(pre);
+    free(acc);
+    free(pos);
+    free(level);
+    free(queued);
+    free(reach);
+    free(after1);
+    free(recs);
+}
+
 /* Insertion (clamps, trees built on the threads) and the index it leaves answer alike at 1 and 3
  * threads: the same radii, octree shape and look-up bits, thawed and frozen. */
 static void test_thread_independence(void)
@@ -1970,6 +2093,7 @@ int main(void)
     RUN(test_linear_field);
     RUN(test_gradient_clamps);
     RUN(test_neighbor_clamp);
+    RUN(test_neighbor_clamp_brute_force);
     RUN(test_validity_clamp);
     RUN(test_thread_independence);
     RUN(test_point_queries);
