@@ -11,7 +11,7 @@ thread (runs alternated by bench/mpi.sh), their ratio, and rank 0's communicatio
 Part 2 (model, --target: the stats of a one-process render of the scene at the size that matters, e.g.
 Sponza at 1280x720). Each phase is either shared (gathering, the final render, the batch strategy's
 "eye paths and look-ups": the world stage's eye paths and the look-up sweeps, "need maps", the shading points, the
-record filter, and insertion's validity-radius clamp, --insertion-shared of insertion) or done by every
+record filter, and insertion's validity-radius clamp and neighbour search, --insertion-shared of insertion) or done by every
 rank (the accelerator, the rest of insertion, "candidates": dithering and clustering, and the need maps in
 stats written before "need maps" was reported apart, and whatever ic_render spends outside its phases). Stats written before "eye paths and
 look-ups" was reported apart count it in "candidates"; --candidates-serial then says which share of that
@@ -30,7 +30,7 @@ every rank does. With N ranks of the same threads:
     --film-doubles: the pilot's sums (4 doubles) and the image (3 doubles) as exchanged before; --sum-image:
     those added over the ranks as before that, 2 (N-1)/N of each, a ring all-reduce;
   - latency: every collective as N - 1 ring steps of ALPHA (50 us at 1 Gb/s, 20 us at 10 Gb/s), about
-    12 collectives per pass;
+    14 collectives per pass (12, and 2 for the neighbour lists of neighbour clamping);
   - imbalance: a rank's share of a pass is m = n_p / N records (rounded up), and its cost the sum of m
     record costs of relative spread --record-cv (default: measured, see BENCHMARKS.md); the slowest of N
     ranks takes about 1 + cv z_N / sqrt(m) times the mean, z_N the expected maximum of N standard normal
@@ -53,7 +53,7 @@ import statistics
 
 RESULT_BYTES = 184  # sizeof(ic_gather_result)
 LEVEL_BYTES = 12    # one RGB level (ic_vec3)
-COLLECTIVES_PER_PASS = 12
+COLLECTIVES_PER_PASS = 14
 ALPHA = {1: 50e-6, 10: 20e-6}
 
 
@@ -99,9 +99,10 @@ def main():
                     help="share of the candidates phase every rank does alike (clustering, dithering)")
     ap.add_argument("--record-cv", type=float, default=0.22,
                     help="relative spread of one record's gathering cost (0.22 measured on Sponza, BENCHMARKS.md)")
-    ap.add_argument("--insertion-shared", type=float, default=0.34,
-                    help="share of insertion that the ranks divide (the validity clamp: 0.32-0.35 on Sponza 1280x720 "
-                         "since the octrees and the frozen layout are built on the threads, 0.28 before; BENCHMARKS.md)")
+    ap.add_argument("--insertion-shared", type=float, default=0.48,
+                    help="share of insertion that the ranks divide (the validity clamp and neighbour clamping's "
+                         "neighbour search: 0.48-0.49 on Sponza 1280x720; the validity clamp alone 0.32-0.35, and "
+                         "0.28 before the octrees and the frozen layout were built on the threads; BENCHMARKS.md)")
     ap.add_argument("--sqrt2ln", action="store_true", help="the slowest rank's excess from the bound sqrt(2 ln N)")
     ap.add_argument("--tiles-moved", type=float, default=0.014,
                     help="share of the tiles whose adaptive second pass leaves the rank of their pilot (0.014 for "
@@ -109,6 +110,9 @@ def main():
     ap.add_argument("--film-doubles", action="store_true",
                     help="model the film's exchanges as before: the pilot's sums and the image all-gathered as doubles")
     ap.add_argument("--sum-image", action="store_true", help="model the image added over the ranks (all-reduce)")
+    ap.add_argument("--collectives", type=int, default=COLLECTIVES_PER_PASS,
+                    help="collectives per construction pass (%d; 12 before the neighbour lists were shared)"
+                         % COLLECTIVES_PER_PASS)
     ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
     ap.add_argument("--interleaved-final", action="store_true",
                     help="model the final render's tiles all interleaved (before the second adaptive pass was "
@@ -166,7 +170,7 @@ def main():
     records = t["records"]
     print("\n## model: %s at %dx%d, %d threads per rank: %.0f s in one process (%d records, %d passes); "
           "shared %.1f s (gathering %.1f, final render %.1f, eye paths, look-ups and need maps %.1f, shading points, record "
-          "filter and validity clamp %.2f), every rank %.2f s"
+          "filter, validity clamp and neighbour search %.2f), every rank %.2f s"
           % (t["scene"], t["width"], t["height"], t["threads"], total_1, records, t["passes"],
              sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"],
              shared["points, filter, validity"], serial))
@@ -195,7 +199,7 @@ def main():
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 + film * share +
                   (px * 29 + records * 88) * share)
         for gbps in a.links:
-            latency = COLLECTIVES_PER_PASS * t["passes"] * (n - 1) * ALPHA[gbps]
+            latency = a.collectives * t["passes"] * (n - 1) * ALPHA[gbps]
             comm = volume * 8 / (gbps * 1e9) + latency
             tn = (serial + (shared["gathering"] + shared["candidates"] + shared["points, filter, validity"]) / n * imb_g
                   + shared["final render"] / n * imb_f + comm)
