@@ -338,13 +338,16 @@ static void find_list(void *ctx, int64_t item, int thread)
 {
     reach_lists *L = ctx;
     uint32_t n = reach_into(L->c, L->first + (uint32_t)item, &L->buf[thread], &L->buf_cap[thread]);
-    if (n == UINT32_MAX || grow_indices(&L->arena[thread], &L->arena_cap[thread], L->arena_len[thread] + n) != IC_OK) {
+    L->at[item] = ((uint64_t)thread << 40) | L->arena_len[thread];
+    L->len[item] = 0;
+    if (n == 0)
+        return; /* nothing to copy (the arena may not exist yet) */
+    if (n == UINT32_MAX || n > UINT32_MAX - L->arena_len[thread] ||
+        grow_indices(&L->arena[thread], &L->arena_cap[thread], L->arena_len[thread] + n) != IC_OK) {
         atomic_store(&L->failed, 1);
-        L->len[item] = 0;
         return;
     }
     memcpy(L->arena[thread] + L->arena_len[thread], L->buf[thread], sizeof *L->buf[thread] * n);
-    L->at[item] = ((uint64_t)thread << 40) | L->arena_len[thread];
     L->len[item] = n;
     L->arena_len[thread] += n;
 }
@@ -397,8 +400,9 @@ static ic_result find_lists(ic_cache *c, uint32_t first, uint32_t n, uint32_t **
     }
     for (uint64_t k = 0; r == IC_OK && k < own; ++k) {
         uint64_t at = L.at[k];
-        memcpy(*index + (*offset)[block + k], L.arena[at >> 40] + (at & ((1ull << 40) - 1)),
-               sizeof **index * L.len[block + k]);
+        if (L.len[block + k] > 0)
+            memcpy(*index + (*offset)[block + k], L.arena[at >> 40] + (at & ((1ull << 40) - 1)),
+                   sizeof **index * L.len[block + k]);
     }
     if (r == IC_OK && ic_comm_is_shared(c->comm)) {
         /* Every rank's block of lists, in rank order: their sizes from the exchanged lengths. */

@@ -1082,8 +1082,9 @@ static void test_gradient_clamps(void)
  * queued record of least (R, index), finds who is within reach now by scanning every record (squared
  * float distances against each squared influence radius, as the cache tests them), pulls, then pushes.
  * The cache finds its new records' neighbours in parallel beforehand and keeps those still within reach
- * when popped; its radii must be the brute force's bit for bit, on 1 and 3 threads, over two batches (the
- * second lowers records of the first, which then search the octrees as the pass reaches them). */
+ * when popped; its radii must be the brute force's bit for bit, on 1 and 3 threads, over two large batches
+ * (the second lowers records of the first, which then search the octrees as the pass reaches them) and
+ * then single records (inserted into the octrees one at a time). */
 typedef struct brute_clamp {
     uint32_t count;
     const ic_vec3 *pos;
@@ -1128,9 +1129,19 @@ static void brute_neighbor_pass(brute_clamp *b, uint32_t first)
     }
 }
 
+/* Records [0, a) and [a, b) as two batches, then [b, n) one at a time; 0 on a failed insertion. */
+static int insert_in_steps(ic_cache *c, const ic_record *recs, uint32_t a, uint32_t b, uint32_t n, ic_error *err)
+{
+    int ok = ic_cache_insert_batch(c, recs, a, NULL, err) == IC_OK &&
+             ic_cache_insert_batch(c, recs + a, b - a, NULL, err) == IC_OK;
+    for (uint32_t k = b; ok && k < n; ++k)
+        ok = ic_cache_insert(c, &recs[k], NULL, err) == IC_OK;
+    return ok;
+}
+
 static void test_neighbor_clamp_brute_force(void)
 {
-    const uint32_t n = 3000, batch1 = 2000;
+    const uint32_t n = 3000, batch1 = 2000, batch2 = 2800; /* then singles up to n */
     ic_record *recs = make_dense(n, 17);
     for (uint32_t i = 0; i < n; ++i)
         recs[i].bounce = (uint8_t)(i % 7 == 0); /* a second bounce level, which never clamps the first */
@@ -1143,12 +1154,11 @@ static void test_neighbor_clamp_brute_force(void)
     /* The radii before step 4: the validity clamp reads positions only, so they are those of the same
      * batches inserted without neighbour clamping. */
     ic_cache *c = NULL;
-    ic_cache_create(&p, &c, &err);
-    ic_cache_insert_batch(c, recs, batch1, NULL, &err);
-    ic_cache_insert_batch(c, recs + batch1, n - batch1, NULL, &err);
-    for (uint32_t i = 0; i < n; ++i) {
+    int ok = ic_cache_create(&p, &c, &err) == IC_OK && insert_in_steps(c, recs, batch1, batch2, n, &err);
+    CHECK(ok, "inserting without neighbour clamping: %s", err.message);
+    for (uint32_t i = 0; ok && i < n; ++i) {
         ic_record r;
-        ic_cache_get_record(c, i, &r);
+        ok = ic_cache_get_record(c, i, &r) == IC_OK;
         pre[i] = r.radius;
         pos[i] = r.position;
         acc[i] = r.accuracy;
@@ -1161,26 +1171,30 @@ static void test_neighbor_clamp_brute_force(void)
     brute_neighbor_pass(&b, 0);
     float *after1 = malloc(batch1 * sizeof *after1);
     memcpy(after1, R, batch1 * sizeof *after1);
-    b.count = n;
+    b.count = batch2;
     brute_neighbor_pass(&b, batch1);
+    for (uint32_t k = batch2; k < n; ++k) {
+        b.count = k + 1;
+        brute_neighbor_pass(&b, k);
+    }
     uint32_t lowered = 0, old_lowered = 0;
     for (uint32_t i = 0; i < n; ++i) {
         lowered += R[i] < pre[i];
         old_lowered += i < batch1 && R[i] < after1[i];
     }
-    CHECK(lowered > n / 10 && old_lowered > 20, "the test needs lowered radii, also of the first batch by the second: %u, %u",
+    CHECK(lowered > n / 10 && old_lowered > 20, "the test needs lowered radii, also of the first batch by later insertions: %u, %u",
           lowered, old_lowered);
     p.neighbor_clamp = IC_CACHE_ON;
     for (int t = 0; t < 2; ++t) {
         p.threads = t ? 3 : 1;
-        ic_cache_create(&p, &c, &err);
-        ic_cache_insert_batch(c, recs, batch1, NULL, &err);
-        ic_cache_insert_batch(c, recs + batch1, n - batch1, NULL, &err);
+        ok = ic_cache_create(&p, &c, &err) == IC_OK && insert_in_steps(c, recs, batch1, batch2, n, &err);
+        CHECK(ok, "inserting with neighbour clamping: %s", err.message);
         uint32_t bad = 0, worst = 0;
         float got = 0.0f;
-        for (uint32_t i = 0; i < n; ++i) {
+        for (uint32_t i = 0; ok && i < n; ++i) {
             ic_record r;
-            ic_cache_get_record(c, i, &r);
+            if (ic_cache_get_record(c, i, &r) != IC_OK)
+                r.radius = -1.0f;
             if (r.radius != R[i] && bad++ == 0)
                 worst = i, got = r.radius;
         }
@@ -1188,7 +1202,7 @@ static void test_neighbor_clamp_brute_force(void)
               p.threads, bad, worst, (double)got, (double)R[worst]);
         ic_cache_destroy(c);
     }
-    printf("  neighbor clamp against brute force: %u of %u radii lowered, %u of the first batch's by the second\n",
+    printf("  neighbor clamp against brute force: %u of %u radii lowered, %u of the first batch's by later insertions\n",
            lowered, n, old_lowered);
     free(R);
     free(pre);
