@@ -250,13 +250,19 @@ static void tile_rect(const loop_ctx *c, int64_t t, int *x0, int *y0, int *x1, i
     *y1 = *y0 + TILE < cam->height ? *y0 + TILE : cam->height;
 }
 
+/* The i-th of this process's tiles: owned[i], or the interleave's rank + i·ranks. */
+static int64_t own_tile(const loop_ctx *c, int64_t i)
+{
+    return c->owned ? c->owned[i] : (int64_t)c->rank + i * c->ranks;
+}
+
 static void render_tile(void *p, int64_t item, int thread)
 {
     loop_ctx *c = p;
     const ic_camera *cam = c->loop->camera;
     if (c->todo)
         item = c->todo[item];
-    int64_t tile = c->owned ? c->owned[item] : (int64_t)c->rank + item * c->ranks;
+    int64_t tile = own_tile(c, item);
     int x0, y0, x1, y1;
     tile_rect(c, tile, &x0, &y0, &x1, &y1);
     double tile_start = c->tile_seconds ? ic_seconds() : 0.0;
@@ -566,6 +572,8 @@ static size_t copy_tile(const loop_ctx *c, int64_t t, unsigned char *plane, unsi
  * for one process). from[t] is the rank that holds tile t, or -1 for a tile that stays where it is; NULL:
  * each tile's renderer. Every rank packs its tiles, in tile order, into its block of one all-gather and
  * copies the other ranks' blocks into their tiles, so each pixel keeps the bits its renderer computed. */
+static int tile_sender(const loop_ctx *c, const int *from, int64_t t) { return from ? from[t] : tile_owner(c, t); }
+
 static ic_result exchange_tiles(loop_ctx *c, void *plane, size_t pixel_bytes, const int *from, const char *what,
                                 ic_error *err)
 {
@@ -574,7 +582,7 @@ static ic_result exchange_tiles(loop_ctx *c, void *plane, size_t pixel_bytes, co
     const int64_t tiles = (int64_t)c->tiles_x * c->tiles_y;
     uint64_t *bytes = calloc((size_t)c->ranks, sizeof *bytes), *at = calloc((size_t)c->ranks, sizeof *at);
     for (int64_t t = 0; bytes && t < tiles; ++t) {
-        int q = from ? from[t] : tile_owner(c, t), x0, y0, x1, y1;
+        int q = tile_sender(c, from, t), x0, y0, x1, y1;
         tile_rect(c, t, &x0, &y0, &x1, &y1);
         if (q >= 0)
             bytes[q] += pixel_bytes * (size_t)(x1 - x0) * (size_t)(y1 - y0);
@@ -592,11 +600,11 @@ static ic_result exchange_tiles(loop_ctx *c, void *plane, size_t pixel_bytes, co
     }
     size_t n = at[c->rank];
     for (int64_t t = 0; t < tiles; ++t)
-        if ((from ? from[t] : tile_owner(c, t)) == c->rank)
+        if (tile_sender(c, from, t) == c->rank)
             n += copy_tile(c, t, plane, all + n, pixel_bytes, 1);
     ic_result r = ic_comm_allgather_sized(c->loop->comm, all, bytes, what, err);
     for (int64_t t = 0; r == IC_OK && t < tiles; ++t) {
-        int q = from ? from[t] : tile_owner(c, t);
+        int q = tile_sender(c, from, t);
         if (q >= 0 && q != c->rank)
             at[q] += copy_tile(c, t, plane, all + at[q], pixel_bytes, 0);
     }
@@ -768,10 +776,12 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
                          cam->height);
     for (int64_t i = 0; r == IC_OK && i < c.own_tiles; ++i) {
         int x0, y0, x1, y1;
-        tile_rect(&c, (int64_t)c.rank + i * c.ranks, &x0, &y0, &x1, &y1);
+        tile_rect(&c, own_tile(&c, i), &x0, &y0, &x1, &y1);
         for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x)
-                v[(size_t)y * cam->width + x] = relative_variance(c.accum, c.sumsq, n0, (size_t)y * cam->width + x);
+            for (int x = x0; x < x1; ++x) {
+                size_t px = (size_t)y * cam->width + x;
+                v[px] = relative_variance(c.accum, c.sumsq, n0, px);
+            }
     }
     if (r == IC_OK)
         r = exchange_tiles(&c, v, sizeof *v, NULL, "exchanging the pilot's variances", err);
@@ -788,7 +798,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
             r = balance_second_pass(&c, n0, err);
         /* What progress counts now: the pilot's samples and the rest as shared out. */
         for (int64_t i = 0; r == IC_OK && i < c.own_tiles; ++i) {
-            int64_t t = c.owned ? c.owned[i] : (int64_t)c.rank + i * c.ranks;
+            int64_t t = own_tile(&c, i);
             int x0, y0, x1, y1;
             tile_rect(&c, t, &x0, &y0, &x1, &y1);
             for (int y = y0; y < y1; ++y)
