@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """Unit tests of bench/report (no rendering): the PNG decoder against every row filter, crops, the
 equal-quality interpolation and extrapolation against an exact 1/spp curve, the BENCHMARKS.md marker
-rewrite (text outside the markers untouched), the SVG plots, and the consistency checks catching a bad run.
+rewrite (text outside the markers untouched), the SVG plots, the consistency checks catching a bad run, and
+bench/gather_oracle.py's reading of its measurement lines (and that its patch still applies to the tree).
 Run: python3 tests/bench/test_bench_tools.py (CTest: bench_tools)."""
 
 import os
+import shutil
 import struct
+import subprocess
 import sys
 import tempfile
 import unittest
@@ -17,6 +20,7 @@ sys.path.insert(0, os.path.join(ROOT, "bench"))
 
 from report import analysis, check, plot, pngio  # noqa: E402
 import accuracy_sweep  # noqa: E402
+import gather_oracle  # noqa: E402
 
 
 def encode_with_filters(width, height, channels, pixels, filters):
@@ -282,6 +286,50 @@ class AccuracySweepTest(unittest.TestCase):
         self.assertIsNone(accuracy_sweep.records_at(front, 0.5))
         self.assertIsNone(accuracy_sweep.records_at([], 1.0))
         self.assertEqual(accuracy_sweep.records_at([(100, 2.0)], 2.0), 100)
+
+
+def oracle_line(mean, strat, unstrat, neyman, alloc25, alloc100, classes, cells=800):
+    """One ORACLE line as bench/gather_oracle.patch prints it."""
+    head = "ORACLE %d %g %g %g %g |" % (cells, mean, strat, unstrat, neyman)
+    return head + " %s | %s |" % (" ".join("%g" % v for v in alloc25), " ".join("%g" % v for v in alloc100)) + \
+        " " + " ".join("%g" % v for v in classes)
+
+
+class GatherOracleTest(unittest.TestCase):
+    def test_summary_of_two_records(self):
+        # Record 1 (mean 2) and record 2 (mean 1): relative variances 0.01 and 0.03, so the mean is 0.02.
+        classes1 = [10, 4, 0.04, 30, 8, 0.0] + [0] * 18     # escaped 10 rays, read records 30
+        classes2 = [0, 0, 0, 20, 1, 0.02] + [0] * 18
+        lines = [
+            oracle_line(2.0, 0.04, 0.08, 0.01, [0.04, 0.02, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04], [0.04] * 8,
+                        classes1),
+            "ORACLE 800 1 0.03 | truncated by another thread's line",
+            oracle_line(1.0, 0.03, 0.06, 0.0075, [0.03, 0.015, 0.03, 0.03, 0.03, 0.03, 0.03, 0.03], [0.03] * 8,
+                        classes2),
+            oracle_line(1.0, 1.0, 1.0, 1.0, [1.0] * 8, [1.0] * 8, classes2, cells=50),  # a hit record's grid
+        ]
+        rows = gather_oracle.parse(lines, 800)
+        self.assertEqual(len(rows), 2)
+        r = gather_oracle.summarize(rows)
+        self.assertAlmostEqual(r["strat"], 0.02)
+        self.assertAlmostEqual(r["unstrat"], 0.04)
+        self.assertAlmostEqual(r["neyman"], 0.005)
+        self.assertAlmostEqual(r["gains"][0][0], 2.0)   # the oracle sigma halves both records' variance
+        self.assertAlmostEqual(r["gains"][0][1], 1.0)
+        names = [c[0] for c in r["classes"]]
+        self.assertEqual(names, ["escaped", "read records"])
+        rays, light, var = r["classes"][0][1]
+        self.assertAlmostEqual(rays, 10 / 60)
+        self.assertAlmostEqual(light, (4 / 2) / (4 / 2 + 8 / 2 + 1))
+        self.assertAlmostEqual(var, (0.04 / 4) / (0.04 / 4 + 0.02 / 1))  # each over its record's mean squared
+
+    def test_patch_applies(self):
+        git = shutil.which("git")
+        if not git or not os.path.isdir(os.path.join(ROOT, ".git")):
+            self.skipTest("not a git checkout")
+        p = subprocess.run([git, "apply", "--check", os.path.join(ROOT, "bench", "gather_oracle.patch")], cwd=ROOT,
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.assertEqual(p.returncode, 0, "bench/gather_oracle.patch no longer applies: " + p.stdout)
 
 
 if __name__ == "__main__":
