@@ -6,7 +6,8 @@ Needs a build with the measurement patch (it prints from inside the library, so 
     git apply bench/gather_oracle.patch
     cmake -S . -B build-oracle -DCMAKE_BUILD_TYPE=Release && cmake --build build-oracle -j2 --target irrcache_cli
     git apply -R bench/gather_oracle.patch
-    python3 bench/gather_oracle.py scenes/staircase2.json --irrcache build-oracle/irrcache --width 320 --height 180
+    python3 bench/gather_oracle.py scenes/staircase2.json --irrcache build-oracle/irrcache --width 320 --height 180 \
+        [-- more irrcache render options]
 
 Every K-th record's stratified gather (--every) is repeated 16 times with fresh jitter in each cell, which
 gives each cell's ray mean mu_k and variance sigma_k^2. The script prints, over those records (each weighed
@@ -66,8 +67,11 @@ def main():
     ap.add_argument("--every", type=int, default=25, help="measure every K-th record [25]")
     ap.add_argument("--cells", type=int, default=800, help="the image records' grid (M x N) [800]")
     ap.add_argument("--log", help="parse this stderr log instead of rendering")
-    ap.add_argument("options", nargs="*", help="more irrcache options, after --")
-    a = ap.parse_args()
+    ap.epilog = "more irrcache render options go after --"
+    argv = sys.argv[1:]
+    extra = argv[argv.index("--") + 1:] if "--" in argv else []
+    a = ap.parse_args(argv[:argv.index("--")] if "--" in argv else argv)
+    a.options = extra
     if not a.log and not os.access(a.irrcache, os.X_OK):
         sys.exit("gather_oracle: %s is not an executable; build one with bench/gather_oracle.patch applied "
                  "(see the top of this file) or pass --irrcache" % a.irrcache)
