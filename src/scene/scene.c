@@ -210,6 +210,10 @@ void ic_mat4_mul(const float a[16], const float b[16], float out[16])
 /* ------------------------------------------------------------------------------------------------ */
 /* textures */
 
+/* Buckets of the linear range when texels are matched to bytes: 1/4096 is narrower than the gap between
+ * any two bytes' linear values (the smallest, next to 0, is 1/3295). */
+#define SRGB8_BUCKETS 4096
+
 /* The n texel values as sRGB bytes when every one is exactly ic_srgb8_to_linear of a byte (the table
  * goes to linear); else NULL (HDR files, 16-bit files, or no memory), and the floats stay. */
 static uint8_t *srgb8_texels(const float *rgb, size_t n, float linear[256])
@@ -219,10 +223,16 @@ static uint8_t *srgb8_texels(const float *rgb, size_t n, float linear[256])
     uint8_t *bytes = malloc(n ? n : 1);
     if (!bytes)
         return NULL;
+    /* The encoder's byte at the bucket's low end, for SRGB8_BUCKETS buckets of [0, 1]: narrower than the
+     * spacing of the table's entries, so a texel's byte is its bucket's or a neighbour (without a power
+     * function per texel). */
+    uint8_t bucket_byte[SRGB8_BUCKETS + 1];
+    for (int k = 0; k <= SRGB8_BUCKETS; ++k)
+        bucket_byte[k] = ic_linear_to_srgb8((float)k / SRGB8_BUCKETS);
     for (size_t i = 0; i < n; ++i) {
         float x = rgb[i];
-        /* The table increases, so the byte is the encoder's guess or a neighbour. */
-        int guess = isfinite(x) && x >= 0.0f && x <= 1.0f ? ic_linear_to_srgb8(x) : -2, found = -1;
+        /* The table increases, so the byte is the guess or a neighbour. */
+        int guess = isfinite(x) && x >= 0.0f && x <= 1.0f ? bucket_byte[(int)(x * SRGB8_BUCKETS)] : -2, found = -1;
         for (int k = guess - 1; k <= guess + 1 && found < 0; ++k)
             if (k >= 0 && k < 256 && memcmp(&linear[k], &x, sizeof x) == 0)
                 found = k;

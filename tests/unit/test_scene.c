@@ -5,6 +5,7 @@
  * bilinear textures, one-sided emission), and gzip-compressed meshes (.obj.gz: same triangles, MTL and
  * textures from the folder of the .gz file; a truncated or corrupt file is a one-line error naming it).
  */
+#include "irrcache/image.h"
 #include "scene/scene.h"
 #include "scene/scene_internal.h" /* ic_scene_texture_load */
 #include "test_util.h"
@@ -262,6 +263,49 @@ static void write_all(const char *path, const unsigned char *data, size_t size)
 {
     FILE *f = fopen(path, "wb");
     CHECK(f && fwrite(data, 1, size, f) == size && fclose(f) == 0, "write %s", path);
+}
+
+/* An 8-bit texture is kept as its sRGB bytes (a quarter of the floats' memory) when every texel is one of
+ * the 256 values the decoder gives, and as floats otherwise: a PNG holding every byte value in every
+ * channel comes back as those bytes, each reading the decoder's value; the same texels with one value off
+ * the table stay floats. */
+static void test_texture_bytes(void)
+{
+    ic_image img = {0};
+    ic_error err = {0};
+    CHECK(ic_image_create(&img, 256, 2) == IC_OK, "texture image");
+    for (int k = 0; k < 512; ++k)
+        for (int c = 0; c < 3; ++c)
+            img.rgb[3 * k + c] = ic_srgb8_to_linear((uint8_t)((k + 85 * c) % 256));
+    CHECK(ic_image_write(IC_TEST_TMP "/bytes.png", &img, NULL, &err) == IC_OK, "PNG written: %s", err.message);
+    img.rgb[7] = 0.5f * (ic_srgb8_to_linear(200) + ic_srgb8_to_linear(201)); /* no byte decodes to this */
+    CHECK(ic_image_write(IC_TEST_TMP "/bytes.pfm", &img, NULL, &err) == IC_OK, "PFM written: %s", err.message);
+    const char *obj = "mtllib bytes.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                      "usemtl png\nf 1/1 2/2 3/3\nusemtl pfm\nf 1/1 3/3 2/2\n";
+    const char *mtl = "newmtl png\nKd 1 1 1\nmap_Kd bytes.png\nnewmtl pfm\nKd 1 1 1\nmap_Kd bytes.pfm\n";
+    write_all(IC_TEST_TMP "/bytes.obj", (const unsigned char *)obj, strlen(obj));
+    write_all(IC_TEST_TMP "/bytes.mtl", (const unsigned char *)mtl, strlen(mtl));
+    ic_scene *s = load(IC_TEST_TMP "/bytes.obj", NULL);
+    if (s) {
+        const ic_texture *png = NULL, *pfm = NULL;
+        for (uint32_t t = 0; t < s->texture_count; ++t) {
+            if (strstr(s->textures[t].path, "bytes.png"))
+                png = &s->textures[t];
+            if (strstr(s->textures[t].path, "bytes.pfm"))
+                pfm = &s->textures[t];
+        }
+        CHECK(png && png->srgb8 && !png->rgb, "8-bit texture kept as bytes");
+        int wrong = 0;
+        for (int i = 0; png && png->srgb8 && i < 3 * 512; ++i) {
+            int k = i / 3, c = i % 3;
+            uint8_t want = (uint8_t)((k + 85 * c) % 256);
+            wrong += png->srgb8[i] != want || ic_texture_value(png, (size_t)i) != ic_srgb8_to_linear(want);
+        }
+        CHECK(wrong == 0, "every byte value read back (%d texels wrong)", wrong);
+        CHECK(pfm && !pfm->srgb8 && pfm->rgb && pfm->rgb[7] == img.rgb[7], "a value off the table keeps the floats");
+        ic_scene_free(s);
+    }
+    ic_image_free(&img);
 }
 
 /* A gzip copy of the file at from (zlib's gzip writer, best compression). */
@@ -585,6 +629,7 @@ int main(void)
     test_degenerate_dropped();
     test_bare_mesh_and_queries();
     test_mtl_folder();
+    test_texture_bytes();
     test_gltf_and_ply();
     test_light_count();
     test_render_caps();
