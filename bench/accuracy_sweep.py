@@ -18,7 +18,9 @@ and the same for the low-pass relMSE) is printed beside the errors and should be
 With --seeds every point is rendered once per seed and its row is the mean (records, seconds, errors):
 a single seed's low-pass error varies by about ±15 % on the Cornell box at 160×160 (BENCHMARKS.md).
 
-For each point the table gives the accuracy, records, seconds, rays, relMSE and low-pass relMSE, and two
+"Records" are the image's own, which the criterion places: the hit records (the batch strategy's records
+where hemisphere rays land, `--hit-records`, placed by the hits and not by the error metric) are counted
+apart. For each point the table gives the accuracy, records, seconds, rays, relMSE and low-pass relMSE, and two
 ratios against the baselines (`--baseline`, default `ward` and `tl`: the split-sphere criteria): the records
 the best baseline needs for the same error, interpolated log-log along its lower envelope (the fewest
 records reaching at most that error), divided into this point's records (below 1: fewer records than the
@@ -171,6 +173,8 @@ def main():
                     rec = None if args.force else cached.get(key)
                     if rec is not None and rec.get("binary") != binary_key and not args.any_binary:
                         rec = None
+                    if rec is not None and "hit_records" not in rec:  # cached before image records were apart
+                        rec = None
                     if rec is None:
                         stem = os.path.join(args.out, "%s-%s-%s-%g%s" % (scene_name, vname, cname, acc,
                                                                           "-s" + seed if seed else ""))
@@ -180,7 +184,9 @@ def main():
                             stats = json.load(f)
                         d = equal_time.diff(args.irrcache, stem + ".pfm", ref)
                         rec = {"key": key, "binary": binary_key, "scene": args.scene, "variant": vname,
-                               "config": cname, "accuracy": acc, "options": opts, "records": stats.get("records"), "seconds": stats["seconds"],
+                               "config": cname, "accuracy": acc, "options": opts,
+                               "records": stats.get("records", 0) - stats.get("hit_records", 0),
+                               "hit_records": stats.get("hit_records", 0), "seconds": stats["seconds"],
                                "rays": stats["rays"], "relmse": d["relmse"], "relmse_lowpass": d["relmse_lowpass"],
                                "reference_noise": noise}
                         with open(cache_path, "a") as f:
@@ -189,11 +195,12 @@ def main():
                     runs.append(rec)
                 # One row per point: the mean over the seeds.
                 row = {"variant": vname, "config": cname, "accuracy": acc, "seeds": len(runs)}
-                for field in ("records", "seconds", "rays", "relmse", "relmse_lowpass"):
+                for field in ("records", "hit_records", "seconds", "rays", "relmse", "relmse_lowpass"):
                     row[field] = sum(r[field] for r in runs) / len(runs)
                 rows.append(row)
-                print("%-8s %-10s a=%-6g %7.0f records %7.2f s  relMSE %.3g  low-pass %.3g" % (
-                    vname, cname, acc, row["records"], row["seconds"], row["relmse"], row["relmse_lowpass"]),
+                print("%-8s %-10s a=%-6g %7.0f records (+%.0f hit records) %7.2f s  relMSE %.3g  low-pass %.3g" % (
+                    vname, cname, acc, row["records"], row["hit_records"], row["seconds"], row["relmse"],
+                    row["relmse_lowpass"]),
                     flush=True)
 
     # Ratios against the best baseline of the same variant: records (and seconds) the baseline's lower
