@@ -76,7 +76,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, const ic_
     ic_accel_intersect1(c->tr->accel, &ray, &hit);
     if (hit.triangle == IC_NO_HIT)
         return v3_scale(ic_scene_env_radiance(c->tr->scene, d), IC_PI);
-    ic_path_start st = {depth + 1, 0.0f, 1, 1, NULL, NULL, NULL, NULL};
+    ic_path_start st = {depth + 1, 0.0f, 1, 1, NULL, NULL, NULL, NULL, NULL, NULL};
     ic_vec3 L = v3_add(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), ic_ic_cached_emission(c, &ray, &hit));
     return v3_scale(L, IC_PI);
 }

@@ -124,6 +124,18 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
         else
             ic_bsdf_init(&b, scene, &s, wo);
         given_b = NULL;
+        const int remaining = tr->pt.max_depth - depth;
+        ic_vec3 inc[IC_PT_CACHED_MAX + 1];
+        if (st->cached && depth > st->depth && remaining <= IC_PT_CACHED_MAX &&
+            st->cached(st->cached_user, &s, &b, wo, remaining, rng, rays, inc)) {
+            for (int j = 1; j <= remaining; ++j) {
+                ic_vec3 c = v3_mul(beta, inc[j]);
+                L = v3_add(L, c);
+                if (levels)
+                    levels[depth - st->depth + j] = v3_add(levels[depth - st->depth + j], c);
+            }
+            break;
+        }
         ic_vec3 direct = v3_mul(beta, ic_direct_light(tr, &s, &b, wo, sel, rng, rays));
         L = v3_add(L, direct);
         if (levels)
@@ -148,7 +160,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
 
 ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
-    ic_path_start st = {0, 0.0f, 1, 0, sel, NULL, NULL, NULL};
+    ic_path_start st = {0, 0.0f, 1, 0, sel, NULL, NULL, NULL, NULL, NULL};
     return ic_pt_li_from(tr, ray, &st, rng, rays);
 }
 

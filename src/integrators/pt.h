@@ -75,7 +75,16 @@ typedef struct ic_path_start {
     const ic_surface *first_surface; /* optional, with a known first hit (ic_pt_li_hit): its surface and */
     const ic_bsdf *first_bsdf;       /* BSDF towards the ray's origin, as the caller already computed them
                                         (NULL: computed here) */
+    /* Optional (NULL: none): at a vertex after the first, the rest of the path's light from a cache. It
+     * returns 1 and fills inc[j], j = 1 … remaining (the scattering events the path may still make, the
+     * vertex's own reflection the first; at most IC_PT_CACHED_MAX), with the light the vertex sends
+     * towards wo by exactly j of them, its emission left out; the path ends there. 0: the path goes on. */
+    int (*cached)(void *user, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int remaining, ic_rng *rng,
+                  uint64_t *rays, ic_vec3 *inc);
+    void *cached_user;
 } ic_path_start;
+
+#define IC_PT_CACHED_MAX 16
 
 /* Path-traced radiance arriving at the ray's origin along ray, continuing a path described by st. */
 ic_vec3 ic_pt_li_from(const ic_tracer *tr, ic_ray ray, const ic_path_start *st, ic_rng *rng, uint64_t *rays);
