@@ -21,7 +21,9 @@ by its own mean squared, so that every record counts by its relative noise):
   cells (leave-one-out, unbiased) and by its neighbours' spread (adaptive super-sampling);
 - by ray class (escaped, read records, path-traced from an uncovered diffuse hit, path-traced from a glossy
   or specular hit; each also with a cached emitter hit): its share of the rays, of the light and of the
-  within-cell variance (the noise the record carries).
+  within-cell variance (the noise the record carries). "Path-traced" is the class of the first hit: since
+  the paths from such hits read the records at a later vertex (ic_path_start.cached), those two classes
+  hold what is left of the continuation's noise, not all of a path's.
 
 The repeated gathers read the same cache, so the noise of the records they read (hit records) is not part
 of these variances: it is shared by every record that reads them.
