@@ -75,6 +75,7 @@ static void test_scene_depths(const char *name, const char *scene, int W, int H,
      * method; the other depths take the same code paths and are checked by the release build. */
 #ifdef IC_TEST_SANITIZED
     const int depth_count = 1;
+    (void)depths_n;
 #else
     const int depth_count = depths_n;
 #endif
