@@ -75,10 +75,10 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
  * that is to hold B bounces may take only B − 1 of them. Each record keeps its irradiance split by level
  * (T_k, ic_ctx.level_irr), and the look-up reads the interpolation of T_{k−1} for every level k the
  * ray reports: each contributor's gradient-extrapolated value scaled per channel by its T_{k−1}/E_i, the
- * same weights as the full estimate. cum[k] (k = 1…B) gets the light of at most k bounces after the
- * point looked up; at a first hit cum[B] is what the ray returns. read_records does it at surface s (levels = B at a first hit,
- * fewer at a later vertex of a path); hit_from_cache makes the hit's surface and BSDF in the caller's *s
- * and *b, which the path that the caller traces when it returns 0 reuses. */
+ * same weights as the full estimate. cum[k] (k = 1…levels) gets the light of at most k bounces after
+ * the point looked up; at a first hit (levels = B) cum[B] is what the ray returns. read_records does it
+ * at surface s; hit_from_cache makes the hit's surface and BSDF in the caller's *s and *b, which the
+ * path that the caller traces when it returns 0 reuses. */
 static int read_records(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int levels,
                         ic_rng *rng, uint64_t *rays, ic_vec3 *cum)
 {
@@ -117,12 +117,13 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
 
 /* ic_path_start.cached for the path a hemisphere ray traces from a hit that read no records (a glossy hit,
  * or a diffuse one that no record reaches): at the first later diffuse vertex the records reach, they
- * stand in for the rest of the path, as at the first hit, and the path ends there. The continuation was most of a record's noise: on Sponza, averaging
- * 16 continuations of every such ray divided a record's variance by 6–14, on staircase2 by 2.2; reading
- * the records at the later vertices lowered their low-pass error by 28 and 13 % (three seeds) with 8 and
- * 15 % fewer rays, and every other scene's by 11–25 % (BENCHMARKS.md, "The records read at every vertex of a hemisphere ray's path"). The bounce count stays
- * exact: a vertex that may make `remaining` more scattering events reads the records' levels up to
- * T_{remaining − 1}, and inc[j] is the light of exactly j events from it. */
+ * stand in for the rest of the path, as at the first hit, and the path ends there. The continuation was
+ * most of a record's noise: on Sponza, averaging 16 continuations of every such ray divided a record's
+ * variance by 6–14, on staircase2 by 2.2; reading the records at the later vertices lowered their
+ * low-pass error by 28 and 13 % (three seeds) with 8 and 15 % fewer rays, and every other scene's by
+ * 11–25 % (BENCHMARKS.md, "The records read at every vertex of a hemisphere ray's path"). The bounce
+ * count stays exact: a vertex that may make `remaining` more scattering events reads the records'
+ * levels up to T_{remaining − 1}, and inc[j] is the light of exactly j events from it. */
 _Static_assert(IC_LEVELS_MAX <= IC_PT_CACHED_MAX, "a vertex's increments fit the path tracer's array");
 
 static int later_from_cache(void *user, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int remaining,

@@ -125,16 +125,17 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
             ic_bsdf_init(&b, scene, &s, wo);
         given_b = NULL;
         const int remaining = tr->pt.max_depth - depth;
-        ic_vec3 inc[IC_PT_CACHED_MAX + 1];
-        if (st->cached && depth > st->depth && remaining <= IC_PT_CACHED_MAX &&
-            st->cached(st->cached_user, &s, &b, wo, remaining, rng, rays, inc)) {
-            for (int j = 1; j <= remaining; ++j) {
-                ic_vec3 c = v3_mul(beta, inc[j]);
-                L = v3_add(L, c);
-                if (levels)
-                    levels[depth - st->depth + j] = v3_add(levels[depth - st->depth + j], c);
+        if (st->cached && depth > st->depth && remaining <= IC_PT_CACHED_MAX) {
+            ic_vec3 inc[IC_PT_CACHED_MAX + 1];
+            if (st->cached(st->cached_user, &s, &b, wo, remaining, rng, rays, inc)) {
+                for (int j = 1; j <= remaining; ++j) {
+                    ic_vec3 c = v3_mul(beta, inc[j]);
+                    L = v3_add(L, c);
+                    if (levels)
+                        levels[depth - st->depth + j] = v3_add(levels[depth - st->depth + j], c);
+                }
+                break;
             }
-            break;
         }
         ic_vec3 direct = v3_mul(beta, ic_direct_light(tr, &s, &b, wo, sel, rng, rays));
         L = v3_add(L, direct);

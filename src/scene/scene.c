@@ -223,9 +223,8 @@ static uint8_t *srgb8_texels(const float *rgb, size_t n, float linear[256])
     uint8_t *bytes = malloc(n ? n : 1);
     if (!bytes)
         return NULL;
-    /* The encoder's byte at the bucket's low end, for SRGB8_BUCKETS buckets of [0, 1]: narrower than the
-     * spacing of the table's entries, so a texel's byte is its bucket's or a neighbour (without a power
-     * function per texel). */
+    /* The encoder's byte at each bucket's low end: a texel's byte is its bucket's or a neighbour (without a
+     * power function per texel). */
     uint8_t bucket_byte[SRGB8_BUCKETS + 1];
     for (int k = 0; k <= SRGB8_BUCKETS; ++k)
         bucket_byte[k] = ic_linear_to_srgb8((float)k / SRGB8_BUCKETS);
