@@ -9,17 +9,26 @@
 
 #include "core/sampling.h"
 
-/* Shadow-tested contribution of one light sample; mis_diffuse, mis_glossy: whether each lobe's share is
- * MIS-weighted against that lobe's own sampling finding the light (the diffuse lobe's cosine sample in
- * ic_ic_direct_light, the glossy lobe's in the final render's path). */
+/* The glossy lobe's share of a light sample under glossy mode g (IC_GLOSSY_*, ic_internal.h): full weight, MIS
+ * against the lobe's own sample (not for a delta light, which no BSDF sample finds), or none. */
+static int glossy_share(int g, int is_delta)
+{
+    return g == IC_GLOSSY_MIS && is_delta ? IC_GLOSSY_FULL : g;
+}
+
+/* Shadow-tested contribution of one light sample; mis_diffuse: whether the diffuse lobe's share is
+ * MIS-weighted against its cosine sample finding the light (ic_ic_direct_light); glossy: the glossy
+ * lobe's share (IC_GLOSSY_*; the lobe's own sample is the final render's path, or the gather's). */
 static ic_vec3 shade_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, const ic_light_sample *ls,
-                           int mis_diffuse, int mis_glossy, uint64_t *rays)
+                           int mis_diffuse, int glossy, uint64_t *rays)
 {
     ic_vec3 fd, fg;
     ic_bsdf_eval_lobes(b, wo, ls->wi, &fd, &fg);
     float cos_pdf = fmaxf(v3_dot(ls->wi, b->frame.n), 0.0f) * IC_INV_PI;
     float wd = mis_diffuse ? ic_power_heuristic(ls->pdf, cos_pdf) : 1.0f;
-    float wg = mis_glossy ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi)) : 1.0f;
+    float wg = glossy == IC_GLOSSY_MIS    ? ic_power_heuristic(ls->pdf, ic_bsdf_pdf_glossy(b, wo, ls->wi))
+               : glossy == IC_GLOSSY_NONE ? 0.0f
+                                          : 1.0f;
     ic_vec3 f = v3_add(v3_scale(fd, wd), v3_scale(fg, wg));
     if (v3_is_black(f) || v3_is_black(ls->radiance))
         return v3s(0.0f);
@@ -74,14 +83,14 @@ static ic_vec3 diffuse_emission_sample(const ic_ctx *c, const ic_light_selection
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                            const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
-    return ic_ic_direct_light_lobes(c, s, b, wo, sel, 1, rng, rays);
+    return ic_ic_direct_light_lobes(c, s, b, wo, sel, IC_GLOSSY_MIS, rng, rays);
 }
 
 /* The sun (every time) and one light sample by the selection sel; weigh_diffuse: whether the light
  * sample's diffuse share is MIS-weighted against the diffuse lobe's cosine ray (diffuse_emission_sample),
- * glossy_traced: whether both glossy shares are weighted against the final render's glossy path. */
+ * glossy: how both glossy shares count (IC_GLOSSY_*). */
 static ic_vec3 sun_and_light_sample(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
-                                    const ic_light_selection *sel, int glossy_traced, int weigh_diffuse, ic_rng *rng,
+                                    const ic_light_selection *sel, int glossy, int weigh_diffuse, ic_rng *rng,
                                     uint64_t *rays)
 {
     float u0 = ic_rng_1d(rng), u1, u2;
@@ -94,29 +103,30 @@ static ic_vec3 sun_and_light_sample(const ic_ctx *c, const ic_surface *s, const 
             ic_rng_2d(rng, &v1, &v2); /* drawn for a disc only: a directional sun's scenes keep their numbers */
         ic_light_sample sun;
         ic_scene_sample_sun(scene, v1, v2, &sun);
-        L = shade_light(c, s, b, wo, &sun, 0, !sun.is_delta && glossy_traced, rays);
+        L = shade_light(c, s, b, wo, &sun, 0, glossy_share(glossy, sun.is_delta), rays);
     }
     ic_light_sample ls;
     if (ic_scene_sample_light_sel(scene, sel, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
-        L = v3_add(L, shade_light(c, s, b, wo, &ls, weigh_diffuse && !ls.is_delta, !ls.is_delta && glossy_traced, rays));
+        L = v3_add(L, shade_light(c, s, b, wo, &ls, weigh_diffuse && !ls.is_delta, glossy_share(glossy, ls.is_delta),
+                                  rays));
     return L;
 }
 
 ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
-                                 const ic_light_selection *sel, int glossy_traced, ic_rng *rng, uint64_t *rays)
+                                 const ic_light_selection *sel, int glossy, ic_rng *rng, uint64_t *rays)
 {
     if (!sel)
         sel = &c->light_sel;
-    ic_vec3 L = sun_and_light_sample(c, s, b, wo, sel, glossy_traced, 1, rng, rays);
+    ic_vec3 L = sun_and_light_sample(c, s, b, wo, sel, glossy, 1, rng, rays);
     return v3_add(L, diffuse_emission_sample(c, sel, s, b, rng, rays));
 }
 
-ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
-                                  uint64_t *rays)
+ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int glossy,
+                                  ic_rng *rng, uint64_t *rays)
 {
     if (c->large_sampled)
-        return ic_ic_direct_light_lobes(c, s, b, wo, &c->light_sel, 0, rng, rays);
-    return sun_and_light_sample(c, s, b, wo, &c->light_sel, 0, 0, rng, rays);
+        return ic_ic_direct_light_lobes(c, s, b, wo, &c->light_sel, glossy, rng, rays);
+    return sun_and_light_sample(c, s, b, wo, &c->light_sel, glossy, 0, rng, rays);
 }
 
 ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
@@ -136,7 +146,7 @@ ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, 
     const ic_light_selection env_only = {0.0f, 0.0f, 0.0f, 1.0f, NULL, NULL};
     ic_light_sample ls;
     if (sampled && ic_scene_sample_light_sel(scene, &env_only, s->p, u0, u1, u2, &ls) && ls.pdf > 0.0f)
-        L = shade_light(c, s, b, wo, &ls, 1, 0, rays);
+        L = shade_light(c, s, b, wo, &ls, 1, IC_GLOSSY_FULL, rays);
     /* The cosine-distributed ray: the environment where it escapes, weighted against the light sample
      * (directions through no portal have light pdf 0: the ray alone carries them, at full weight). */
     ic_vec3 wi = ic_frame_to_world(&b->frame, ic_warp_cosine_hemisphere(v1, v2));

@@ -76,7 +76,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, const ic_
     ic_accel_intersect1(c->tr->accel, &ray, &hit);
     if (hit.triangle == IC_NO_HIT)
         return v3_scale(ic_scene_env_radiance(c->tr->scene, d), IC_PI);
-    ic_path_start st = {depth + 1, 0.0f, 1, 1, NULL, NULL, NULL, NULL, NULL, NULL};
+    ic_path_start st = {depth + 1, 0.0f, 1, 1, NULL, NULL, NULL, NULL, NULL, NULL, 0};
     ic_vec3 L = v3_add(ic_pt_li_hit(&c->gather_tr, ray, &hit, &st, rng, rays), ic_ic_cached_emission(c, &ray, &hit));
     return v3_scale(L, IC_PI);
 }
@@ -166,8 +166,9 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
             /* Several light samples per shading point: with indirect light from the cache, the direct
              * light's noise is what is left, and shadow rays are the cheapest rays there are. */
             ic_vec3 direct = v3s(0.0f);
+            const int glossy_mode = glossy_cached ? IC_GLOSSY_FULL : IC_GLOSSY_MIS;
             for (int k = 0; k < c->o.light_samples; ++k)
-                direct = v3_add(direct, ic_ic_direct_light_lobes(c, &s, &b, wo, sel, !glossy_cached, rng, rays));
+                direct = v3_add(direct, ic_ic_direct_light_lobes(c, &s, &b, wo, sel, glossy_mode, rng, rays));
             prev_sel = sel;
             sel = &c->light_sel;
             direct = v3_scale(direct, 1.0f / (float)c->o.light_samples);

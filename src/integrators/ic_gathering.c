@@ -67,9 +67,10 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
  * -ab) inside the batch passes: a pass's records serve the next passes' rays,
  * and the world-space stage puts records where these rays land (Frolov et al. 2012 §3.1.3), which is
  * what makes the look-ups hit; it cuts record cost, which Frolov et al. 2012 §4.6 measures as most of
- * the construction time. Only purely diffuse hits are taken (a glossy hit needs its lobe traced);
- * returns 0 where no record reaches, and the caller path-traces. Deterministic: within a pass the cache
- * is read-only.
+ * the construction time. A hit with a glossy lobe beside its diffuse one takes the records for the
+ * diffuse lobe and traces the glossy lobe on (add_glossy_lobe); a glossy or specular surface without a
+ * diffuse lobe is not read. Returns 0 where no record reaches, and the caller path-traces. Deterministic:
+ * within a pass the cache is read-only.
  *
  * The bounce count stays exact: the records met here hold B bounces of their own, and a ray of a record
  * that is to hold B bounces may take only B − 1 of them. Each record keeps its irradiance split by level
@@ -79,10 +80,55 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
  * the point looked up; at a first hit (levels = B) cum[B] is what the ray returns. read_records does it
  * at surface s; hit_from_cache makes the hit's surface and BSDF in the caller's *s and *b, which the
  * path that the caller traces when it returns 0 reuses. */
+static int later_from_cache(void *user, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int remaining,
+                            ic_rng *rng, uint64_t *rays, ic_vec3 *inc);
+
+/* The glossy lobe of a vertex whose diffuse lobe the records serve (read_records), added to cum[k], k =
+ * 1 … levels: its share of a light sample (the path tracer's selection, MIS-weighted against the lobe's
+ * own sample), then the lobe's sample, path traced on, its later vertices reading the records
+ * (later_from_cache). Light found j events after the vertex's reflection counts from cum[j + 1] up. This
+ * is the path tracer's own estimate restricted to the glossy lobe, so its weights stay consistent along
+ * the path; only the diffuse lobe's sampled direction is replaced by the records. The lobe is traced
+ * with the probability p that the BSDF's own sampling gives it, its light weighted 1/p: traced every
+ * time, it cost staircase2 (k_d up to 1 beside k_s 0.04 on the wood and tiles) 6–9 % more time for 2–4 %
+ * less low-pass error; at p, 2–5 % less with 4–5 % fewer rays (BENCHMARKS.md, "A glossy hit's diffuse
+ * lobe from the records"). */
+static void add_glossy_lobe(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int levels,
+                            ic_rng *rng, uint64_t *rays, ic_vec3 *cum)
+{
+    const ic_tracer *tr = &c->gather_tr;
+    const float p = b->p_diffuse < 1.0f ? 1.0f - b->p_diffuse : 1.0f;
+    if (ic_rng_1d(rng) >= p)
+        return;
+    ic_vec3 direct = v3_scale(ic_direct_light_glossy(tr, s, b, wo, &tr->scene->light_select, rng, rays), 1.0f / p);
+    float u1, u2;
+    ic_rng_2d(rng, &u1, &u2);
+    ic_bsdf_sample bs;
+    if (!ic_bsdf_sample_glossy(b, wo, u1, u2, &bs)) {
+        for (int k = 1; k <= levels; ++k)
+            cum[k] = v3_add(cum[k], direct);
+        return;
+    }
+    ic_vec3 by_events[IC_LEVELS_MAX + 1];
+    for (int k = 0; k < levels; ++k)
+        by_events[k] = v3s(0.0f);
+    ic_path_start st = {tr->pt.max_depth - levels + 1, bs.pdf, bs.is_specular, 0, NULL, by_events, NULL, NULL,
+                        later_from_cache, (void *)c, 1};
+    ic_pt_li_from(tr, ic_spawn_ray(s, bs.wi), &st, rng, rays);
+    ic_vec3 acc = direct;
+    for (int k = 1; k <= levels; ++k) {
+        acc = v3_add(acc, v3_mul(v3_scale(bs.weight, 1.0f / p), by_events[k - 1]));
+        cum[k] = v3_add(cum[k], acc);
+    }
+}
+
 static int read_records(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int levels,
                         ic_rng *rng, uint64_t *rays, ic_vec3 *cum)
 {
-    if (!ic_bsdf_has_smooth(b) || ic_bsdf_has_glossy(b))
+    /* A glossy lobe is traced on (add_glossy_lobe) where a diffuse one beside it reads the records; a
+     * glossy surface without a diffuse lobe is path traced by the caller. */
+    const int glossy = ic_bsdf_has_glossy(b);
+    if (!ic_bsdf_has_smooth(b) || (glossy && v3_is_black(b->kd)))
         return 0;
     ic_cache_contribution contrib[LOOKUP_CAPACITY], contrib_hit[LOOKUP_CAPACITY];
     ic_cache_lookup q = ic_cache_lookup_at(s->p, b->cache_n, IC_ACCEPT_FINAL);
@@ -99,9 +145,11 @@ static int read_records(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, 
     if (!ic_ic_level_estimates(c, contrib, e.contributions_written, 0, levels, E))
         return 0; /* a contributor without levels: the caller path-traces, no random number drawn */
     ic_vec3 albedo = v3_scale(b->kd, IC_INV_PI);
-    ic_vec3 direct = ic_ic_direct_light_at_hit(c, s, b, wo, rng, rays);
+    ic_vec3 direct = ic_ic_direct_light_at_hit(c, s, b, wo, glossy ? IC_GLOSSY_NONE : IC_GLOSSY_FULL, rng, rays);
     for (int k = 1; k <= levels; ++k)
         cum[k] = v3_add(direct, v3_mul(albedo, E[k - 1]));
+    if (glossy)
+        add_glossy_lobe(c, s, b, wo, levels, rng, rays, cum);
     return 1;
 }
 
@@ -115,8 +163,8 @@ static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit,
     return read_records(c, s, b, wo, c->levels, rng, rays, cum);
 }
 
-/* ic_path_start.cached for the path a hemisphere ray traces from a hit that read no records (a glossy hit,
- * or a diffuse one that no record reaches): at the first later diffuse vertex the records reach, they
+/* ic_path_start.cached for the path a hemisphere ray traces from a hit that read no records (a glossy or
+ * specular hit, or a diffuse one that no record reaches): at the first later vertex the records reach, they
  * stand in for the rest of the path, as at the first hit, and the path ends there. The continuation was
  * most of a record's noise: on Sponza, averaging 16 continuations of every such ray divided a record's
  * variance by 6–14, on staircase2 by 2.2; reading the records at the later vertices lowered their
@@ -213,7 +261,7 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
                 for (int k = 0; k <= B; ++k)
                     by_events[k] = v3s(0.0f);
                 ic_path_start st = {1, 0.0f, 1, 1, NULL, B ? by_events : NULL, looked ? &hs : NULL,
-                                    looked ? &hb : NULL, NULL, NULL};
+                                    looked ? &hb : NULL, NULL, NULL, 0};
                 if (looked) { /* the path's later diffuse vertices read the records too */
                     st.cached = later_from_cache;
                     st.cached_user = c;

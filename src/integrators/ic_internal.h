@@ -188,7 +188,13 @@ static inline int ic_ic_out_of_time(ic_ctx *c)
 }
 /* Progress report, if the caller asked for it. */
 void ic_ic_report(const ic_render_options *opt, const char *phase, double fraction);
-/* Direct light at a hemisphere ray's diffuse hit that the records serve: the sun and one light sample by
+/* How direct light at a surface counts its glossy lobe's share of each light sample: at full weight
+ * (light sampling alone carries it: the glossy lobe's indirect light comes from radiance records), MIS-
+ * weighted against the glossy lobe's own sample, which continues the path (power heuristic; a delta
+ * light at full weight), or not at all (the caller estimates the glossy lobe apart). */
+enum { IC_GLOSSY_FULL = 0, IC_GLOSSY_MIS = 1, IC_GLOSSY_NONE = 2 };
+
+/* Direct light at a hemisphere ray's hit that the records serve: the sun and one light sample by
  * the selection, each at full weight, without the diffuse lobe's cosine ray that ic_ic_direct_light
  * weighs them against (MIS). The ray's value is averaged with the record's hundreds of others, where that
  * ray's lower variance next to a small emitter is not seen (the same low-pass error within 1 % on every
@@ -200,17 +206,16 @@ void ic_ic_report(const ic_render_options *opt, const char *phase, double fracti
  * sample against 9.6 a cosine ray), and one tail draw in a record is a blotch (that window sampled: the
  * low-pass error 3× higher on one seed of three without the pair; BENCHMARKS.md, "Direct light at the
  * hemisphere rays' hits"). */
-ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
-                                  uint64_t *rays);
+ic_vec3 ic_ic_direct_light_at_hit(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int glossy,
+                                  ic_rng *rng, uint64_t *rays);
 /* Direct light of the final render at s (NEE; the environment is cached, not sampled here); sel: the
  * pixel's local light selection, NULL for the whole-scene one. */
 ic_vec3 ic_ic_direct_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                            const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
-/* The same, saying whether the glossy lobe's own sample will continue the path (1, as above: its light
- * samples are MIS-weighted against it) or not (0: the radiance records give the glossy lobe's indirect
- * light, so light sampling alone carries its direct light, at full weight). */
+/* The same, with the glossy lobe's share counted as `glossy` says (IC_GLOSSY_MIS above; IC_GLOSSY_FULL
+ * where radiance records give the glossy lobe's indirect light). */
 ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
-                                 const ic_light_selection *sel, int glossy_traced, ic_rng *rng, uint64_t *rays);
+                                 const ic_light_selection *sel, int glossy, ic_rng *rng, uint64_t *rays);
 
 /* The environment's light at a point whose records leave it out (IC_ENV_AT_POINT): one light sample of
  * the environment alone (through the portals p is inside of) and one cosine-distributed ray that counts

@@ -18,8 +18,10 @@ ic_pt_params ic_pt_params_resolve(ic_pt_params p)
     return p;
 }
 
-ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
-                        const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
+/* One light sample at s by sel, reflected towards wo by b's non-delta lobes (glossy_only: by its glossy
+ * lobe alone) and MIS-weighted against sampling what it reflects by. */
+static ic_vec3 light_sample(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                            const ic_light_selection *sel, int glossy_only, ic_rng *rng, uint64_t *rays)
 {
     float u0 = ic_rng_1d(rng), u1, u2;
     ic_rng_2d(rng, &u1, &u2);
@@ -28,7 +30,11 @@ ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf 
     ic_light_sample ls;
     if (!ic_scene_sample_light_sel(tr->scene, sel, s->p, u0, u1, u2, &ls) || ls.pdf <= 0.0f)
         return v3s(0.0f);
-    ic_vec3 f = ic_bsdf_eval(b, wo, ls.wi);
+    ic_vec3 f, fd;
+    if (glossy_only)
+        ic_bsdf_eval_lobes(b, wo, ls.wi, &fd, &f);
+    else
+        f = ic_bsdf_eval(b, wo, ls.wi);
     if (v3_is_black(f) || v3_is_black(ls.radiance))
         return v3s(0.0f);
     ic_ray shadow = ic_shadow_ray(s, &ls);
@@ -36,8 +42,21 @@ ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf 
     if (ic_accel_occluded1(tr->accel, &shadow))
         return v3s(0.0f);
     float cos_i = fabsf(v3_dot(ls.wi, b->frame.n));
-    float w = ls.is_delta ? 1.0f : ic_power_heuristic(ls.pdf, ic_bsdf_pdf(b, wo, ls.wi));
+    float pdf_b = glossy_only ? ic_bsdf_pdf_glossy(b, wo, ls.wi) : ic_bsdf_pdf(b, wo, ls.wi);
+    float w = ls.is_delta ? 1.0f : ic_power_heuristic(ls.pdf, pdf_b);
     return v3_scale(v3_mul(f, ls.radiance), cos_i * w / ls.pdf);
+}
+
+ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                        const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
+{
+    return light_sample(tr, s, b, wo, sel, 0, rng, rays);
+}
+
+ic_vec3 ic_direct_light_glossy(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                               const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
+{
+    return light_sample(tr, s, b, wo, sel, 1, rng, rays);
 }
 
 /* Light arriving along an escaping ray, times the path throughput beta: the environment and the sun's
@@ -125,7 +144,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
             ic_bsdf_init(&b, scene, &s, wo);
         given_b = NULL;
         const int remaining = tr->pt.max_depth - depth;
-        if (st->cached && depth > st->depth && remaining <= IC_PT_CACHED_MAX) {
+        if (st->cached && (depth > st->depth || st->cached_at_first) && remaining <= IC_PT_CACHED_MAX) {
             ic_vec3 inc[IC_PT_CACHED_MAX + 1];
             if (st->cached(st->cached_user, &s, &b, wo, remaining, rng, rays, inc)) {
                 for (int j = 1; j <= remaining; ++j) {
@@ -161,7 +180,7 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
 
 ic_vec3 ic_pt_li(const ic_tracer *tr, ic_ray ray, const ic_light_selection *sel, ic_rng *rng, uint64_t *rays)
 {
-    ic_path_start st = {0, 0.0f, 1, 0, sel, NULL, NULL, NULL, NULL, NULL};
+    ic_path_start st = {0, 0.0f, 1, 0, sel, NULL, NULL, NULL, NULL, NULL, 0};
     return ic_pt_li_from(tr, ray, &st, rng, rays);
 }
 

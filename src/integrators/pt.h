@@ -82,6 +82,8 @@ typedef struct ic_path_start {
     int (*cached)(void *user, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int remaining, ic_rng *rng,
                   uint64_t *rays, ic_vec3 *inc);
     void *cached_user;
+    int cached_at_first;   /* 1: cached applies at the first vertex too (a path that starts at a vertex whose
+                              own look-up was made already: 0) */
 } ic_path_start;
 
 #define IC_PT_CACHED_MAX 16
@@ -97,6 +99,10 @@ ic_vec3 ic_pt_li_hit(const ic_tracer *tr, ic_ray ray, const ic_hit *first_hit, c
  * BSDF sampling). */
 ic_vec3 ic_direct_light(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
                         const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
+/* The same for b's glossy lobe alone, MIS-weighted against sampling that lobe (ic_bsdf_sample_glossy):
+ * where a path's diffuse lobe is estimated otherwise and only its glossy lobe goes on. */
+ic_vec3 ic_direct_light_glossy(const ic_tracer *tr, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo,
+                               const ic_light_selection *sel, ic_rng *rng, uint64_t *rays);
 
 /* A ray leaving surface s in direction dir, its origin moved off the surface (no self-hits). */
 static inline ic_ray ic_spawn_ray(const ic_surface *s, ic_vec3 dir)

@@ -9,7 +9,8 @@
  * which must be well below the tolerance for the comparison to mean anything. The same holds for the
  * lazy and adaptive strategies, which use the same gathering; and --path-traced-gather, which takes no
  * look-ups, agrees with the default. A second box, with a glass tall box, a mirror short box and a
- * glossy floor, checks depth 3 where the final render's look-ups sit behind glass and in reflections.
+ * glossy floor, checks depth 3 where the final render's look-ups sit behind glass and in reflections; a
+ * third, every wall varnished, the hemisphere rays' hits with a glossy lobe beside the diffuse one.
  */
 #include "test_util.h"
 
@@ -19,6 +20,7 @@
 
 #define CORNELL IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
 #define CORNELL_GLASS IC_SOURCE_DIR "/scenes/cornell-box/cornell-box-glass.json"
+#define CORNELL_VARNISHED IC_SOURCE_DIR "/scenes/cornell-box/cornell-box-varnished.json"
 
 /* Mean of the path tracer over two seeds, and their relative difference (its noise). */
 static double reference_mean(const char *scene, int W, int H, int depth, int spp, double *noise)
@@ -116,5 +118,9 @@ int main(void)
      * their next diffuse vertex with the levels left (ic_path_start.cached): at depth 8 several of them.
      * There the light through the glass makes the reference noisy: 2048 samples (0.24 % at 256). */
     test_scene_depths("cornell with glass, mirror and glossy floor", CORNELL_GLASS, 96, 96, 256, 3, 2048, 0);
+    /* Every wall varnished (a diffuse and a Phong lobe): a hemisphere ray's hit reads the records for its
+     * diffuse lobe and traces its glossy lobe on (ic_gathering.c, add_glossy_lobe), whose light must land
+     * in the right bounce levels and carry the weight of the probability that traced it. */
+    test_scene_depths("varnished cornell", CORNELL_VARNISHED, 96, 96, 256, 3, 1024, 0);
     TEST_MAIN_END();
 }
