@@ -32,6 +32,12 @@ typedef struct heat_scale {
     int automatic; /* 1: the image's 99th percentile (--max-error auto); 0: fixed */
 } heat_scale;
 
+/* --blotch-map: where (NULL: none) and its scale. */
+typedef struct blotch_opts {
+    const char *path;
+    float max_error;
+} blotch_opts;
+
 static void print_help(FILE *out)
 {
     fprintf(out, "usage: irrcache diff A B [options]\n"
@@ -58,10 +64,15 @@ static void print_help(FILE *out)
           "                     heat maps of two images against one reference compare (a pixel with\n"
           "                     the same error has the same colour); 'auto' (or 0): the 99th percentile\n"
           "                     of this image's errors, which does not compare (default: %g)\n"
+          "  --blotch-map FILE  write a map of the low-pass error that relMSE lp measures, signed:\n"
+          "                     both images blurred (sigma = 2 pixels), then (a-b)/(|b|+0.01) of their\n"
+          "                     luma, red where A is brighter, blue where darker, black where they\n"
+          "                     agree; pixel noise is blurred away, blotches and bias stay (default: none)\n"
+          "  --blotch-max-error E  the blotch map's full colour, a fixed scale (default: %g)\n"
           "  -h, --help         show this help\n"
           "\n"
           "exit status: 0 success, 1 unreadable/unwritable image or size mismatch, 2 usage error\n",
-          (double)IC_DEFAULT_HEATMAP_MAX_ERROR);
+          (double)IC_DEFAULT_HEATMAP_MAX_ERROR, (double)IC_DEFAULT_BLOTCH_MAX_ERROR);
 }
 
 
@@ -76,7 +87,8 @@ static void add_metric(cJSON *o, const char *key, double v)
         cJSON_AddNullToObject(o, key); /* never produced by ic_image_compare; kept valid JSON regardless */
 }
 
-static int print_json(const ic_image *img, const ic_image_metrics *m, const char *heatmap, const heat_scale *hs)
+static int print_json(const ic_image *img, const ic_image_metrics *m, const char *heatmap, const heat_scale *hs,
+                      const blotch_opts *bo)
 {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "width", img->width);
@@ -93,6 +105,10 @@ static int print_json(const ic_image *img, const ic_image_metrics *m, const char
         cJSON_AddNumberToObject(o, "heatmap_max_error", hs->max_error);
         cJSON_AddStringToObject(o, "heatmap_scale", hs->automatic ? "p99" : "fixed");
     }
+    if (bo->path) {
+        cJSON_AddStringToObject(o, "blotch_map", bo->path);
+        cJSON_AddNumberToObject(o, "blotch_max_error", bo->max_error);
+    }
     return ic_cli_write_json("diff", NULL, o, 0);
 }
 
@@ -105,7 +121,7 @@ static void print_db(FILE *out, const char *label, double db)
 }
 
 static void print_table(FILE *out, const char *a, const char *b, const ic_image *img, const ic_image_metrics *m,
-                        const char *heatmap, const heat_scale *hs)
+                        const char *heatmap, const heat_scale *hs, const blotch_opts *bo)
 {
     fprintf(out, "%-10s %s\n%-10s %s\n%-10s %d x %d\n", "image", a, "reference", b, "size", img->width,
             img->height);
@@ -119,6 +135,9 @@ static void print_table(FILE *out, const char *a, const char *b, const ic_image 
     if (heatmap)
         fprintf(out, "%-10s %s (relative error 0 = blue to %g = red: %s)\n", "heat map", heatmap,
                 (double)hs->max_error, hs->automatic ? "this image's 99th percentile" : "fixed scale");
+    if (bo->path)
+        fprintf(out, "%-10s %s (low-pass relative error: red A brighter, blue darker, full at %g)\n", "blotches",
+                bo->path, (double)bo->max_error);
 }
 
 /* --max-error auto: the image's 99th percentile (the default scale where the image has no error). */
@@ -139,6 +158,7 @@ int ic_cli_diff(int argc, char **argv)
     int npaths = 0, json = 0, options_done = 0;
     const char *heatmap = NULL;
     heat_scale scale = {IC_DEFAULT_HEATMAP_MAX_ERROR, 0};
+    blotch_opts blotch = {NULL, IC_DEFAULT_BLOTCH_MAX_ERROR};
 
     for (int i = 1; i < argc; ++i) {
         const char *arg = argv[i], *value;
@@ -164,6 +184,22 @@ int ic_cli_diff(int argc, char **argv)
                 return EXIT_USAGE;
             }
             heatmap = value;
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--blotch-map", &missing)) != NULL) {
+            if (!ic_image_is_writable_format(value)) {
+                fprintf(stderr, "irrcache diff: %s: unknown blotch-map format; name it .png (or .exr, .pfm, .hdr)\n",
+                        value);
+                return EXIT_USAGE;
+            }
+            blotch.path = value;
+        } else if ((value = ic_cli_option_value(argc, argv, &i, "--blotch-max-error", &missing)) != NULL) {
+            char *end = NULL;
+            double e = strtod(value, &end);
+            if (end == value || *end != '\0' || !(e > 0.0) || !isfinite(e) || e > 3e38) {
+                fprintf(stderr, "irrcache diff: --blotch-max-error %s: not a number > 0; give a relative error such "
+                        "as 0.05\n", value);
+                return EXIT_USAGE;
+            }
+            blotch.max_error = (float)e;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-error", &missing)) != NULL) {
             char *end = NULL;
             double e = strcmp(value, "auto") == 0 ? 0.0 : strtod(value, &end);
@@ -189,7 +225,7 @@ int ic_cli_diff(int argc, char **argv)
     }
 
     ic_error err = {0};
-    ic_image img = {0}, ref = {0}, heat = {0};
+    ic_image img = {0}, ref = {0}, heat = {0}, blot = {0};
     ic_image_metrics metrics;
     int status = EXIT_IO;
     if (ic_image_read(paths[0], &img, &err) != IC_OK || ic_image_read(paths[1], &ref, &err) != IC_OK) {
@@ -203,13 +239,17 @@ int ic_cli_diff(int argc, char **argv)
                            ic_image_heatmap(&img, &ref, scale.max_error, &heat, &err) != IC_OK ||
                            ic_image_write(heatmap, &heat, NULL, &err) != IC_OK)) {
         fprintf(stderr, "irrcache diff: %s\n", err.message);
+    } else if (blotch.path && (ic_image_blotch_map(&img, &ref, blotch.max_error, &blot, &err) != IC_OK ||
+                               ic_image_write(blotch.path, &blot, NULL, &err) != IC_OK)) {
+        fprintf(stderr, "irrcache diff: %s\n", err.message);
     } else {
         status = 0;
-        if (json && !print_json(&img, &metrics, heatmap, &scale))
+        if (json && !print_json(&img, &metrics, heatmap, &scale, &blotch))
             status = EXIT_IO;
         else if (!json)
-            print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap, &scale);
+            print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap, &scale, &blotch);
     }
+    ic_image_free(&blot);
     ic_image_free(&heat);
     ic_image_free(&ref);
     ic_image_free(&img);

@@ -40,6 +40,8 @@
 /* Error heat maps (image.h, irrcache diff). */
 #define IC_DEFAULT_HEATMAP_MAX_ERROR 0.5f /* relative error shown as full red: one fixed scale, so heat maps of
                                              different images against one reference compare (bench/run's too) */
+#define IC_DEFAULT_BLOTCH_MAX_ERROR 0.05f /* blotch maps: the low-pass relative error shown at full colour (a
+                                             cache's blotches are a few per cent; pixel noise is blurred away) */
 
 /* Irradiance cache (cache.h, render.h's ic_ic_options). */
 #define IC_DEFAULT_ACCURACY_WARD 0.15f   /* a of Ward's weight (0.3 before: at equal time its interpolation error left the low-pass error no better than the path tracer's on the Cornell box and stair-hall; BENCHMARKS.md) */

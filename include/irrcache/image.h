@@ -143,6 +143,14 @@ ic_result ic_image_compare(const ic_image *img, const ic_image *ref, ic_image_me
  * (PNG) shows the ramp as designed; pixels where either image is NaN/Inf are magenta. */
 ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err);
 
+/* Map of the low-frequency error that relmse_lowpass measures, signed: both images blurred by the same
+ * Gaussian (σ = IC_LOWPASS_SIGMA pixels), then (a − r)/(|r| + 0.01) of their luma, red where img is
+ * brighter than ref and blue where it is darker, black where they agree, full colour at ±max_err and
+ * beyond (0 = IC_DEFAULT_BLOTCH_MAX_ERROR). Pixel noise is blurred away, so what shows is an interpolated
+ * cache's blotches and any bias. Written into out (allocated); the colours are linear, so that an sRGB
+ * output shows the ramp as designed. Non-finite input values count as 0, as in the metrics. */
+ic_result ic_image_blotch_map(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err);
+
 /* The q-quantile (q in [0, 1]) of the per-pixel relative error ic_image_heatmap shows, over the finite
  * pixels (0 if there are none): a scale fitted to one image (`irrcache diff --max-error auto` uses q = 0.99),
  * which makes that image's heat map use the whole ramp but not compare with another's. */

@@ -280,18 +280,55 @@ ic_result ic_image_heatmap_quantile(const ic_image *img, const ic_image *ref, do
     return IC_OK;
 }
 
-ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err)
+/* What a false-colour map of img against ref (a heat map, a blotch map) checks first: the pair, the output
+ * and its scale *max_err (finite, ≥ 0; 0 becomes the default def). */
+static ic_result map_arguments(const ic_image *img, const ic_image *ref, float *max_err, float def, ic_image *out,
+                               const char *what, ic_error *err)
 {
     if (out)
         memset(out, 0, sizeof *out);
     ic_result r = check_pair(img, ref, err);
     if (r != IC_OK)
         return r;
-    if (!out || !(max_err >= 0.0f) || !isfinite(max_err)) /* also NaN */
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "heat map: maximum error must be finite and >= 0 (0 = the "
-                            "default %g)", (double)IC_DEFAULT_HEATMAP_MAX_ERROR);
-    if (max_err == 0.0f)
-        max_err = IC_DEFAULT_HEATMAP_MAX_ERROR;
+    if (!out || !(*max_err >= 0.0f) || !isfinite(*max_err)) /* also NaN */
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: maximum error must be finite and >= 0 (0 = the default %g)",
+                            what, (double)def);
+    if (*max_err == 0.0f)
+        *max_err = def;
+    return IC_OK;
+}
+
+ic_result ic_image_blotch_map(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err)
+{
+    ic_result r = map_arguments(img, ref, &max_err, IC_DEFAULT_BLOTCH_MAX_ERROR, out, "blotch map", err);
+    if (r != IC_OK)
+        return r;
+    const size_t pixels = (size_t)img->width * (size_t)img->height, count = 3 * pixels;
+    float *buf = malloc(sizeof *buf * count * 3);
+    if (!buf || ic_image_create(out, img->width, img->height) != IC_OK) {
+        free(buf);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d blotch map", img->width, img->height);
+    }
+    float *a = buf, *b = buf + count, *tmp = buf + 2 * count;
+    gaussian_blur(img->rgb, img->width, img->height, tmp, a);
+    gaussian_blur(ref->rgb, ref->width, ref->height, tmp, b);
+    for (size_t p = 0; p < pixels; ++p) {
+        float ya = linear_luma(a + 3 * p), yb = linear_luma(b + 3 * p);
+        float t = fminf(fabsf(ya - yb) / (fabsf(yb) + HEATMAP_EPSILON) / max_err, 1.0f);
+        float *dst = out->rgb + 3 * p;
+        dst[0] = ya > yb ? ic_srgb_to_linear(t) : 0.0f;
+        dst[1] = 0.0f;
+        dst[2] = ya < yb ? ic_srgb_to_linear(t) : 0.0f;
+    }
+    free(buf);
+    return IC_OK;
+}
+
+ic_result ic_image_heatmap(const ic_image *img, const ic_image *ref, float max_err, ic_image *out, ic_error *err)
+{
+    ic_result r = map_arguments(img, ref, &max_err, IC_DEFAULT_HEATMAP_MAX_ERROR, out, "heat map", err);
+    if (r != IC_OK)
+        return r;
     r = ic_image_create(out, img->width, img->height);
     if (r != IC_OK)
         return ic_error_set(err, r, "out of memory for a %dx%d heat map", img->width, img->height);

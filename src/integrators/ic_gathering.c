@@ -91,7 +91,7 @@ static int later_from_cache(void *user, const ic_surface *s, const ic_bsdf *b, i
  * the path; only the diffuse lobe's sampled direction is replaced by the records. The lobe is traced
  * with the probability p that the BSDF's own sampling gives it, its light weighted 1/p: traced every
  * time, it cost staircase2 (k_d up to 1 beside k_s 0.04 on the wood and tiles) 6–9 % more time for 2–4 %
- * less low-pass error; at p, 2–5 % less with 4–5 % fewer rays (BENCHMARKS.md, "A glossy hit's diffuse
+ * less low-pass error; at p, 1–5 % less with 3–5 % fewer rays (BENCHMARKS.md, "A glossy hit's diffuse
  * lobe from the records"). */
 static void add_glossy_lobe(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int levels,
                             ic_rng *rng, uint64_t *rays, ic_vec3 *cum)

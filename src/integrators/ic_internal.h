@@ -195,7 +195,8 @@ void ic_ic_report(const ic_render_options *opt, const char *phase, double fracti
 enum { IC_GLOSSY_FULL = 0, IC_GLOSSY_MIS = 1, IC_GLOSSY_NONE = 2 };
 
 /* Direct light at a hemisphere ray's hit that the records serve: the sun and one light sample by
- * the selection, each at full weight, without the diffuse lobe's cosine ray that ic_ic_direct_light
+ * the selection, the diffuse lobe's share at full weight and the glossy lobe's as `glossy` says
+ * (IC_GLOSSY_NONE where the glossy lobe is traced on apart), without the cosine ray that ic_ic_direct_light
  * weighs them against (MIS). The ray's value is averaged with the record's hundreds of others, where that
  * ray's lower variance next to a small emitter is not seen (the same low-pass error within 1 % on every
  * bench scene with emitters), while it cost a full intersection per hit: 7–13 % of the gathering's rays

@@ -75,7 +75,8 @@ typedef struct ic_path_start {
     const ic_surface *first_surface; /* optional, with a known first hit (ic_pt_li_hit): its surface and */
     const ic_bsdf *first_bsdf;       /* BSDF towards the ray's origin, as the caller already computed them
                                         (NULL: computed here) */
-    /* Optional (NULL: none): at a vertex after the first, the rest of the path's light from a cache. It
+    /* Optional (NULL: none): at a vertex after the first (at the first too with cached_at_first), the rest
+     * of the path's light from a cache. It
      * returns 1 and fills inc[j], j = 1 … remaining (the scattering events the path may still make, the
      * vertex's own reflection the first; at most IC_PT_CACHED_MAX), with the light the vertex sends
      * towards wo by exactly j of them, its emission left out; the path ends there. 0: the path goes on. */

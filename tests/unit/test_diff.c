@@ -1,6 +1,7 @@
 /*
  * test_diff.c — the `irrcache diff` sub-command: JSON and table output, exit codes, error lines
- * and the heat map, whose default scale is fixed (two images' maps against one reference compare).
+ * and the heat map, whose default scale is fixed (two images' maps against one reference compare), and the
+ * blotch map.
  *
  * cli/diff.c and json_out.c are compiled into this test (they depend on the image library and cJSON only), so the command is
  * tested without building the whole renderer; stdout and stderr are captured through files.
@@ -220,6 +221,23 @@ int main(void)
 
     heat_maps_compare();
 
+    /* The blotch map: written, recorded in the JSON and the table, a uniform offset (A brighter by 20 %)
+     * red all over at the default scale. */
+    const char *blotch = SCRATCH "/blotch.png";
+    remove(blotch);
+    const char *blotch_args[] = {off, ref, "--json", "--blotch-map", blotch};
+    CHECK(run_diff(5, blotch_args) == 0 && strstr(out_text, "\"blotch_map\":\"" SCRATCH "/blotch.png\"") &&
+              json_value(out_text, "blotch_max_error") == (double)IC_DEFAULT_BLOTCH_MAX_ERROR,
+          "blotch map in the JSON: %s %s", out_text, err_text);
+    CHECK(ic_image_read(blotch, &map, &err) == IC_OK && map.width == 16 && map.height == 12 && map.rgb[0] > 0.99f &&
+              map.rgb[2] == 0.0f,
+          "blotch map: red where A is brighter: %s", err.message);
+    ic_image_free(&map);
+    const char *blotch_table[] = {off, ref, "--blotch-map", blotch, "--blotch-max-error", "0.5"};
+    CHECK(run_diff(6, blotch_table) == 0 && strstr(out_text, "blotch.png (low-pass relative error") &&
+              strstr(out_text, "full at 0.5)"),
+          "the table names the blotch map and its scale: %s", out_text);
+
     /* `--` ends the options: what follows is an image path even if it starts with "--". */
     const char *dashdash[] = {"--json", "--", off, ref};
     CHECK(run_diff(4, dashdash) == 0 && out_text[0] == '{', "--json -- A B: %s", err_text);
@@ -238,6 +256,7 @@ int main(void)
     const char *help[] = {"--help"};
     CHECK(run_diff(1, help) == 0, "help exit");
     CHECK(strstr(out_text, "--json") && strstr(out_text, "--heatmap") && strstr(out_text, "--max-error") &&
+              strstr(out_text, "--blotch-map") && strstr(out_text, "--blotch-max-error") &&
               strstr(out_text, "default") && strstr(out_text, "999 in JSON"),
           "help: %s", out_text);
     CHECK(strstr(out_text, "exit status: 0 success, 1 ") && strstr(out_text, "2 usage error"),
@@ -256,6 +275,12 @@ int main(void)
     CHECK(run_diff(3, no_value) == 2 && strstr(err_text, "--heatmap"), "missing value: %s", err_text);
     const char *bad_format[] = {off, ref, "--heatmap", SCRATCH "/heat.jpg"};
     CHECK(run_diff(4, bad_format) == 2 && strstr(err_text, "heat.jpg"), "heat-map format: %s", err_text);
+    const char *bad_blotch_format[] = {off, ref, "--blotch-map", SCRATCH "/blotch.jpg"};
+    CHECK(run_diff(4, bad_blotch_format) == 2 && one_line(err_text) && strstr(err_text, "blotch.jpg"),
+          "blotch-map format: %s", err_text);
+    const char *bad_blotch_max[] = {off, ref, "--blotch-map", blotch, "--blotch-max-error", "0"};
+    CHECK(run_diff(6, bad_blotch_max) == 2 && one_line(err_text) && strstr(err_text, "--blotch-max-error 0"),
+          "a blotch scale of 0: %s", err_text);
     const char *bad_max[] = {off, ref, "--max-error", "lots"};
     CHECK(run_diff(4, bad_max) == 2 && strstr(err_text, "lots"), "bad --max-error: %s", err_text);
 

@@ -465,6 +465,59 @@ static void test_heatmap(void)
     ic_image_free(&ref);
 }
 
+/* The blotch map: pixel noise blurred away, a low-frequency error kept with its sign. A 64 × 64 reference
+ * of 1; the image has ±20 % checkerboard noise on every pixel (σ = 2 pixels leaves e^(−2π²σ²/4) ≈ 3·10⁻⁹
+ * of it), a +10 % square at the top left and a −10 % one at the bottom right (16 × 16 each). */
+static void test_blotch_map(void)
+{
+    ic_error err = {0};
+    const int W = 64;
+    ic_image ref = constant(W, W, 1.0f), img = constant(W, W, 1.0f), map = {0};
+    for (int y = 0; y < W; ++y)
+        for (int x = 0; x < W; ++x) {
+            float v = (x + y) % 2 ? 1.2f : 0.8f;
+            if (x >= 8 && x < 24 && y >= 8 && y < 24)
+                v *= 1.1f;
+            if (x >= 40 && x < 56 && y >= 40 && y < 56)
+                v *= 0.9f;
+            for (int c = 0; c < 3; ++c)
+                img.rgb[3 * ((size_t)y * W + x) + c] = v;
+        }
+    CHECK(ic_image_blotch_map(&img, &ref, 0.0f, &map, &err) == IC_OK && map.rgb && map.width == W,
+          "blotch map: %s", err.message);
+    if (map.rgb) {
+        const float *bright = map.rgb + 3 * (16 * W + 16), *dark = map.rgb + 3 * (48 * W + 48),
+                    *calm = map.rgb + 3 * (8 * W + 40);
+        /* 10 % is past the default full scale (5 %): full red, full blue; the noise alone: black. */
+        CHECK(bright[0] == 1.0f && bright[1] == 0.0f && bright[2] == 0.0f, "a brighter blotch is red: %g %g %g",
+              bright[0], bright[1], bright[2]);
+        CHECK(dark[0] == 0.0f && dark[1] == 0.0f && dark[2] == 1.0f, "a darker blotch is blue: %g %g %g", dark[0],
+              dark[1], dark[2]);
+        CHECK(calm[0] < 1e-3f && calm[2] < 1e-3f, "pixel noise is blurred away: %g %g", calm[0], calm[2]);
+    }
+    ic_image_free(&map);
+    /* On a scale of 0.2 the blotch's 10 % (over |r| + 0.01) is half of full colour, sRGB-encoded. */
+    CHECK(ic_image_blotch_map(&img, &ref, 0.2f, &map, &err) == IC_OK, "blotch map: %s", err.message);
+    if (map.rgb)
+        CHECK_NEAR(map.rgb[3 * (16 * W + 16)], ic_srgb_to_linear(0.1f / 1.01f / 0.2f), 2e-3,
+                   "half the scale, half the ramp");
+    ic_image_free(&map);
+    CHECK(ic_image_blotch_map(&ref, &ref, 0.0f, &map, &err) == IC_OK && map.rgb, "identical: %s", err.message);
+    int black = map.rgb != NULL;
+    for (size_t i = 0; black && i < (size_t)W * W * 3; ++i)
+        black = map.rgb[i] == 0.0f;
+    CHECK(black, "identical images: an all-black map");
+    ic_image_free(&map);
+    CHECK(ic_image_blotch_map(&img, &ref, -1.0f, &map, &err) == IC_ERR_INVALID_ARG && !map.rgb,
+          "a negative scale is refused");
+    ic_image small = constant(8, 8, 1.0f);
+    CHECK(ic_image_blotch_map(&small, &ref, 0.0f, &map, &err) == IC_ERR_INVALID_ARG && !map.rgb,
+          "a size mismatch is refused");
+    ic_image_free(&small);
+    ic_image_free(&img);
+    ic_image_free(&ref);
+}
+
 /* The default scale is fixed: two images whose pixel 5 has the same error, one with small errors elsewhere
  * and one with large ones, give pixel 5 the same colour (a scale fitted to each image, such as its 99th
  * percentile, would show it red in the first and green in the second). */
@@ -979,6 +1032,7 @@ int main(void)
     test_hdr_variants();
     test_metrics();
     test_lowpass();
+    test_blotch_map();
     test_heatmap();
     test_heatmap_fixed_scale();
     test_bad_input();
