@@ -270,7 +270,9 @@ def _scene_section(s, results):
     parts.append('<h3>Error against time</h3><div class="plots">%s%s</div>' % (e_svg, s_svg))
 
     parts.append("<h3>Side by side</h3><p class=\"note\">Each cache render with default settings, the path tracer "
-                 "given the same time, and their error heat maps (relative luma error; full red = %g).</p>"
+                 "given the same time, their error heat maps (relative luma error; full red = %g) and, where "
+                 "the build has them, their blotch maps (the error left after a blur of 2 pixels: red brighter "
+                 "than the reference, blue darker; full at 0.05).</p>"
                  % results.get("heatmap_max", 0))
     parts.append('<div class="row">%s</div>' % _figure(ref["png"], "<b>reference</b><br>%d spp" % ref["spp"], w, h))
     for c in s["cache"]:
@@ -283,6 +285,10 @@ def _scene_section(s, results):
         row.append(_figure(c["heatmap"], "<b>heat map</b>, cache", w, h, "heat"))
         if pt:
             row.append(_figure(pt["heatmap"], "<b>heat map</b>, path tracer", w, h, "heat"))
+        if c.get("blotch"):
+            row.append(_figure(c["blotch"], "<b>blotches</b>, cache", w, h, "heat"))
+        if pt and pt.get("blotch"):
+            row.append(_figure(pt["blotch"], "<b>blotches</b>, path tracer", w, h, "heat"))
         parts.append('<div class="row">%s</div>' % "".join(row))
 
     if s.get("crops"):
