@@ -14,7 +14,7 @@ extern volatile sig_atomic_t ic_cli_rendering;
 
 /* irrcache render SCENE -o OUT [options] */
 int ic_cli_render(int argc, char **argv);
-/* irrcache diff A B [--json] [--heatmap FILE.png] */
+/* irrcache diff A B [--json] [--heatmap FILE.png] [--blotch-map FILE.png] */
 int ic_cli_diff(int argc, char **argv);
 /* irrcache points SCENE --points FILE|- [-o FILE] [--format text|csv|json] */
 int ic_cli_points(int argc, char **argv);

@@ -1,7 +1,8 @@
 /*
  * diff.c — `irrcache diff A B`: error metrics of image A against the reference B (RMSE, relMSE,
  * PSNR on linear HDR and on 8-bit sRGB, SSIM; see include/irrcache/image.h), as a short table or
- * one JSON object, and optionally a false-colour heat map of the per-pixel relative error. The heat map's
+ * one JSON object, and optionally a false-colour heat map of the per-pixel relative error and a blotch map of
+ * the low-pass error (signed: red brighter, blue darker; ic_image_blotch_map). The heat map's
  * scale is fixed (IC_DEFAULT_HEATMAP_MAX_ERROR, or --max-error), not fitted to the image, so the maps of
  * two images against one reference compare; the scale used is printed (table) or recorded (JSON).
  *
@@ -56,7 +57,8 @@ static void print_help(FILE *out)
           "  --json             print one JSON object: width, height, rmse, relmse, relmse_lowpass,\n"
           "                     psnr_hdr, psnr_ldr, ssim, nonfinite; with --heatmap also heatmap,\n"
           "                     heatmap_max_error (the scale used) and heatmap_scale (\"fixed\" or\n"
-          "                     \"p99\") (default: a table, which prints the scale on its heat-map line)\n"
+          "                     \"p99\"); with --blotch-map also blotch_map and blotch_max_error\n"
+          "                     (default: a table, which prints the scale on its heat-map line)\n"
           "  --heatmap FILE     write a false-colour map of the per-pixel relative luma error\n"
           "                     |a-b|/(|b|+0.01): blue = 0 ... red = --max-error and above (.png, .exr,\n"
           "                     .pfm or .hdr; magenta = NaN/Inf) (default: none)\n"
@@ -194,7 +196,7 @@ int ic_cli_diff(int argc, char **argv)
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--blotch-max-error", &missing)) != NULL) {
             char *end = NULL;
             double e = strtod(value, &end);
-            if (end == value || *end != '\0' || !(e > 0.0) || !isfinite(e) || e > 3e38) {
+            if (end == value || *end != '\0' || !((float)e > 0.0f) || !isfinite(e) || e > 3e38) {
                 fprintf(stderr, "irrcache diff: --blotch-max-error %s: not a number > 0; give a relative error such "
                         "as 0.05\n", value);
                 return EXIT_USAGE;

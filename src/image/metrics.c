@@ -305,9 +305,10 @@ ic_result ic_image_blotch_map(const ic_image *img, const ic_image *ref, float ma
         return r;
     const size_t pixels = (size_t)img->width * (size_t)img->height, count = 3 * pixels;
     float *buf = malloc(sizeof *buf * count * 3);
-    if (!buf || ic_image_create(out, img->width, img->height) != IC_OK) {
+    r = buf ? ic_image_create(out, img->width, img->height) : IC_ERR_OOM;
+    if (r != IC_OK) {
         free(buf);
-        return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d blotch map", img->width, img->height);
+        return ic_error_set(err, r, "out of memory for a %dx%d blotch map", img->width, img->height);
     }
     float *a = buf, *b = buf + count, *tmp = buf + 2 * count;
     gaussian_blur(img->rgb, img->width, img->height, tmp, a);
