@@ -100,24 +100,23 @@ static void add_glossy_lobe(const ic_ctx *c, const ic_surface *s, const ic_bsdf 
     const float p = b->p_diffuse < 1.0f ? 1.0f - b->p_diffuse : 1.0f;
     if (ic_rng_1d(rng) >= p)
         return;
-    ic_vec3 direct = v3_scale(ic_direct_light_glossy(tr, s, b, wo, &tr->scene->light_select, rng, rays), 1.0f / p);
+    const float inv_p = 1.0f / p;
+    ic_vec3 direct = v3_scale(ic_direct_light_glossy(tr, s, b, wo, &tr->scene->light_select, rng, rays), inv_p);
     float u1, u2;
     ic_rng_2d(rng, &u1, &u2);
-    ic_bsdf_sample bs;
-    if (!ic_bsdf_sample_glossy(b, wo, u1, u2, &bs)) {
-        for (int k = 1; k <= levels; ++k)
-            cum[k] = v3_add(cum[k], direct);
-        return;
-    }
-    ic_vec3 by_events[IC_LEVELS_MAX + 1];
+    ic_vec3 by_events[IC_LEVELS_MAX + 1], weight = v3s(0.0f);
     for (int k = 0; k < levels; ++k)
         by_events[k] = v3s(0.0f);
-    ic_path_start st = {tr->pt.max_depth - levels + 1, bs.pdf, bs.is_specular, 0, NULL, by_events, NULL, NULL,
-                        later_from_cache, (void *)c, 1};
-    ic_pt_li_from(tr, ic_spawn_ray(s, bs.wi), &st, rng, rays);
+    ic_bsdf_sample bs;
+    if (ic_bsdf_sample_glossy(b, wo, u1, u2, &bs)) {
+        ic_path_start st = {tr->pt.max_depth - levels + 1, bs.pdf, bs.is_specular, 0, NULL, by_events, NULL, NULL,
+                            later_from_cache, (void *)c, 1};
+        ic_pt_li_from(tr, ic_spawn_ray(s, bs.wi), &st, rng, rays);
+        weight = v3_scale(bs.weight, inv_p);
+    }
     ic_vec3 acc = direct;
     for (int k = 1; k <= levels; ++k) {
-        acc = v3_add(acc, v3_mul(v3_scale(bs.weight, 1.0f / p), by_events[k - 1]));
+        acc = v3_add(acc, v3_mul(weight, by_events[k - 1]));
         cum[k] = v3_add(cum[k], acc);
     }
 }

@@ -76,10 +76,10 @@ typedef struct ic_path_start {
     const ic_bsdf *first_bsdf;       /* BSDF towards the ray's origin, as the caller already computed them
                                         (NULL: computed here) */
     /* Optional (NULL: none): at a vertex after the first (at the first too with cached_at_first), the rest
-     * of the path's light from a cache. It
-     * returns 1 and fills inc[j], j = 1 … remaining (the scattering events the path may still make, the
-     * vertex's own reflection the first; at most IC_PT_CACHED_MAX), with the light the vertex sends
-     * towards wo by exactly j of them, its emission left out; the path ends there. 0: the path goes on. */
+     * of the path's light from a cache. It returns 1 and fills inc[j], j = 1 … remaining (the scattering
+     * events the path may still make, the vertex's own reflection the first; at most IC_PT_CACHED_MAX),
+     * with the light the vertex sends towards wo by exactly j of them, its emission left out; the path
+     * ends there. 0: the path goes on. */
     int (*cached)(void *user, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int remaining, ic_rng *rng,
                   uint64_t *rays, ic_vec3 *inc);
     void *cached_user;
