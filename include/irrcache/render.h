@@ -111,7 +111,7 @@ typedef struct ic_ic_options {
                               hit_from_cache) and only its direct light is sampled */
     ic_cache_switch hit_records; /* batch, with hemisphere rays that read the bounces after their hit from
                               the cache (not path_traced_gather, bounces ≥ 2): before the first pass, records
-                              of their own kind where probe rays from the shading points land, with 1/16 of the
+                              of their own kind where probe rays from the shading points land, with 1/4 of the
                               rays, which only hemisphere rays read (ic_batch.c); off: none [on] */
     int light_samples;     /* final render: light samples per shading point and pixel sample [1] */
     ic_switched_value large_emitters; /* which emitters the records carry instead of light sampling: an

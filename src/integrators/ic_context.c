@@ -155,6 +155,7 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     ic_ic_gbuffer_free(c);
     free(c->direct_pmf);
     free(c->direct_cdf);
+    free(c->cached_cdf);
     free(c->level_irr);
     free(c);
 }

@@ -310,18 +310,24 @@ static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *c
 {
     c->direct_pmf = malloc(sizeof *c->direct_pmf * s->tri_light_count);
     c->direct_cdf = malloc(sizeof *c->direct_cdf * (s->tri_light_count + 1));
-    if (!c->direct_pmf || !c->direct_cdf)
+    c->cached_cdf = malloc(sizeof *c->cached_cdf * (s->tri_light_count + 1));
+    if (!c->direct_pmf || !c->direct_cdf || !c->cached_cdf)
         return 0;
-    double sum = 0.0;
+    const double cached = (double)s->tri_light_power - kept;
+    double sum = 0.0, sum_cached = 0.0;
     c->direct_cdf[0] = 0.0f;
+    c->cached_cdf[0] = 0.0f;
     for (uint32_t i = 0; i < s->tri_light_count; ++i) {
         int big = cached_mat[s->triangle_material[s->tri_lights[i].triangle]];
         c->direct_pmf[i] = big || !(kept > 0.0) ? 0.0f : (float)(s->tri_lights[i].power / kept);
         sum += c->direct_pmf[i];
         c->direct_cdf[i + 1] = (float)sum;
+        sum_cached += big && cached > 0.0 ? s->tri_lights[i].power / cached : 0.0;
+        c->cached_cdf[i + 1] = (float)sum_cached;
     }
     if (kept > 0.0)
         c->direct_cdf[s->tri_light_count] = 1.0f;
+    c->cached_cdf[s->tri_light_count] = 1.0f;
     /* The class probabilities follow the power left to sample. */
     double tri = c->light_sel.tri * kept / s->tri_light_power, point = c->light_sel.point;
     c->light_sel.tri = tri + point > 0.0 ? (float)(tri / (tri + point)) : 0.0f;

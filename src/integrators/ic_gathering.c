@@ -5,6 +5,7 @@
  */
 #include "ic_internal.h"
 
+#include "core/sampling.h"
 #include "core/threads.h"
 
 #include <stdatomic.h>
@@ -18,6 +19,27 @@ static int emitter_is_cached(const ic_ctx *c, uint32_t tri)
         return 0;
     int32_t li = c->tr->scene->triangle_light[tri];
     return li >= 0 && !(c->direct_pmf[li] > 0.0f);
+}
+
+/* Solid-angle density, at the point seeing it, of a light sample of the cached emitters (add_cached_emitter_light)
+ * that lands on emitting triangle li at distance dist along dir. */
+static float cached_light_pdf(const ic_ctx *c, int32_t li, ic_vec3 dir, float dist)
+{
+    const ic_tri_light *l = &c->tr->scene->tri_lights[li];
+    float cos_l = fabsf(v3_dot(dir, l->normal)), pmf = c->cached_cdf[li + 1] - c->cached_cdf[li];
+    return cos_l > 0.0f && l->area > 0.0f ? pmf / l->area * dist * dist / cos_l : 0.0f;
+}
+
+/* The balance heuristic's weight of a hemisphere ray's hit on a cached emitter against the point's light
+ * samples of them (Veach 1997 §9.2, with n_r cosine-distributed rays and n_l light samples). */
+static float cached_ray_weight(const ic_gather_worker *w, const ic_ray *ray, const ic_hit *hit)
+{
+    const ic_ctx *c = w->c;
+    if (!(w->mis_lights > 0.0f))
+        return 1.0f;
+    float cos_p = v3_dot(ray->dir, w->pt->normal), pr = w->mis_rays * fmaxf(cos_p, 0.0f) / IC_PI;
+    float pl = w->mis_lights * cached_light_pdf(c, c->tr->scene->triangle_light[hit->triangle], ray->dir, hit->t);
+    return pr + pl > 0.0f ? pr / (pr + pl) : 0.0f;
 }
 
 /* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
@@ -274,6 +296,8 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             }
             /* ... unless it comes from a large emitter, which the records carry (level 0). */
             ic_vec3 emitted = ic_ic_cached_emission(c, &rays[i], &hits[i]);
+            if (emitted.x > 0.0f || emitted.y > 0.0f || emitted.z > 0.0f)
+                emitted = v3_scale(emitted, cached_ray_weight(w, &rays[i], &hits[i]));
             radiance[j] = v3_add(radiance[j], emitted);
             if (B) {
                 w->sum[0] = v3_add(w->sum[0], emitted);
@@ -348,6 +372,41 @@ static void add_set(ic_gather_result *a, const ic_gather_result *b, int k, ic_ve
     a->hit_count += b->hit_count;
 }
 
+/* Running sums of a point's light samples (add_portal_light, add_cached_emitter_light), per channel. */
+typedef struct light_sums {
+    double sum[3], sum2[3];
+} light_sums;
+
+static void light_sums_add(light_sums *s, ic_vec3 e)
+{
+    const double v[3] = {e.x, e.y, e.z};
+    for (int ch = 0; ch < 3; ++ch) {
+        s->sum[ch] += v[ch];
+        s->sum2[ch] += v[ch] * v[ch];
+    }
+}
+
+/* Adds times × the mean of the n samples in s to out's irradiance and to every level (light that reaches
+ * the point directly is level 0 and up), and its σ to out's σ in quadrature; counts the n shadow rays. */
+static void add_light_estimate(ic_ctx *c, const light_sums *s, int n, float times, ic_gather_result *out,
+                               ic_vec3 *levels)
+{
+    atomic_fetch_add_explicit(&c->rays, (uint64_t)n, memory_order_relaxed);
+    float mean[3], sigma[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        double m = s->sum[ch] / n, var = n > 1 ? (s->sum2[ch] - n * m * m) / (n - 1) : 0.0;
+        mean[ch] = (float)m * times;
+        sigma[ch] = (float)sqrt(fmax(var, 0.0) / n) * times;
+    }
+    ic_vec3 E = v3(mean[0], mean[1], mean[2]);
+    out->irradiance = v3_add(out->irradiance, E);
+    out->sigma = v3(sqrtf(out->sigma.x * out->sigma.x + sigma[0] * sigma[0]),
+                    sqrtf(out->sigma.y * out->sigma.y + sigma[1] * sigma[1]),
+                    sqrtf(out->sigma.z * out->sigma.z + sigma[2] * sigma[2]));
+    for (int k = 0; levels && k <= c->levels; ++k)
+        levels[k] = v3_add(levels[k], E);
+}
+
 #define STREAM_PORTAL 0x706f7274616cULL /* rng purpose: a record's light samples through portals */
 /* A record's light samples through portals: one per PORTAL_SAMPLES_DIV of its rays, at least
  * PORTAL_SAMPLES_MIN. The sensors' hit records (50 rays at the sensors' 3,200) had the same error with 8
@@ -367,7 +426,7 @@ static void add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_res
     int n = (int)(out->ray_count / PORTAL_SAMPLES_DIV);
     if (n < PORTAL_SAMPLES_MIN)
         n = PORTAL_SAMPLES_MIN;
-    double sum[3] = {0.0, 0.0, 0.0}, sum2[3] = {0.0, 0.0, 0.0};
+    light_sums ls = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
     uint64_t key = ic_hash4(c->seed, pt->key, STREAM_PORTAL, 0);
     for (int k = 0; k < n; ++k) {
         ic_rng rng = ic_rng_make(c->seed, pt->key, (uint64_t)k, STREAM_PORTAL);
@@ -384,27 +443,9 @@ static void add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_res
         ic_ray shadow = {pt->position, wi, 0.0f, INFINITY};
         if (ic_accel_occluded1(c->gather_tr.accel, &shadow))
             continue;
-        ic_vec3 e = v3_scale(ic_scene_env_radiance(scene, wi), cos_i / pdf);
-        const double v[3] = {e.x, e.y, e.z};
-        for (int ch = 0; ch < 3; ++ch) {
-            sum[ch] += v[ch];
-            sum2[ch] += v[ch] * v[ch];
-        }
+        light_sums_add(&ls, v3_scale(ic_scene_env_radiance(scene, wi), cos_i / pdf));
     }
-    atomic_fetch_add_explicit(&c->rays, (uint64_t)n, memory_order_relaxed);
-    float mean[3], sigma[3];
-    for (int ch = 0; ch < 3; ++ch) {
-        double m = sum[ch] / n, var = (sum2[ch] - n * m * m) / (n - 1);
-        mean[ch] = (float)m;
-        sigma[ch] = (float)sqrt(fmax(var, 0.0) / n);
-    }
-    ic_vec3 E = v3(mean[0], mean[1], mean[2]);
-    out->irradiance = v3_add(out->irradiance, E);
-    out->sigma = v3(sqrtf(out->sigma.x * out->sigma.x + sigma[0] * sigma[0]),
-                    sqrtf(out->sigma.y * out->sigma.y + sigma[1] * sigma[1]),
-                    sqrtf(out->sigma.z * out->sigma.z + sigma[2] * sigma[2]));
-    for (int k = 0; levels && k <= c->levels; ++k)
-        levels[k] = v3_add(levels[k], E);
+    add_light_estimate(c, &ls, n, 1.0f, out, levels);
 }
 
 /* The point's sets (several with record noise control). */
@@ -439,12 +480,88 @@ static ic_result gather_sets(ic_gather_worker *w, ic_gatherer *g, const ic_gathe
     return IC_OK;
 }
 
+#define STREAM_EMITTER 0x656d6974ULL /* rng purpose: a hit record's light samples of the cached emitters */
+
+/* With emitter_mis: the cached emitters' direct light at pt from n_l light samples (a triangle by power
+ * among them, a point on it by area), each weighted by the balance heuristic against the point's n_r
+ * hemisphere rays, which count their hits on those emitters with the complementary weight
+ * (cached_ray_weight): E = Σ_j Le_j cos θ_j / (n_r p_r(ω_j) + n_l p_l(ω_j)). A few light samples
+ * find an emitter that a hit record's few dozen rays would hit by chance, or not at all (a window seen
+ * past balusters); the sum joins the record's irradiance, its levels (the emitters' own light is
+ * level 0) and, in quadrature, its σ. */
+static void add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *pt, ic_gather_result *out,
+                                     ic_vec3 *levels)
+{
+    ic_ctx *c = w->c;
+    const ic_scene *scene = c->gather_tr.scene;
+    const uint32_t nl = scene->tri_light_count, n = (uint32_t)w->mis_lights;
+    light_sums ls = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    uint64_t key = ic_hash4(c->seed, pt->key, STREAM_EMITTER, 0);
+    for (uint32_t k = 0; k < n; ++k) {
+        ic_rng rng = ic_rng_make(c->seed, pt->key, (uint64_t)k, STREAM_EMITTER);
+        ic_rng_enable_lds(&rng, key, k);
+        float u0 = ic_rng_1d(&rng), u1, u2;
+        ic_rng_2d(&rng, &u1, &u2);
+        uint32_t lo = 0, hi = nl - 1; /* the last triangle whose cdf entry is at most u0 */
+        while (lo < hi) {
+            uint32_t mid = (lo + hi + 1) / 2;
+            if (c->cached_cdf[mid] <= u0)
+                lo = mid;
+            else
+                hi = mid - 1;
+        }
+        if (!(c->cached_cdf[lo + 1] > c->cached_cdf[lo]))
+            continue;
+        const ic_tri_light *l = &scene->tri_lights[lo];
+        float b1, b2;
+        ic_warp_triangle(u1, u2, &b1, &b2);
+        ic_surface s;
+        ic_scene_surface(scene, l->triangle, b1, b2, &s);
+        ic_vec3 d = v3_sub(s.p, pt->position);
+        float dist = v3_len(d);
+        if (!(dist > 0.0f))
+            continue;
+        d = v3_scale(d, 1.0f / dist);
+        float cos_p = v3_dot(d, pt->normal);
+        if (cos_p <= 0.0f)
+            continue;
+        ic_vec3 le = ic_scene_emission(scene, &s, v3_neg(d));
+        if (!(le.x > 0.0f || le.y > 0.0f || le.z > 0.0f))
+            continue;
+        ic_ray shadow = {pt->position, d, 0.0f, dist * (1.0f - 1e-3f)};
+        if (ic_accel_occluded1(c->gather_tr.accel, &shadow))
+            continue;
+        float pr = w->mis_rays * cos_p / IC_PI, pl = w->mis_lights * cached_light_pdf(c, (int32_t)lo, d, dist);
+        if (!(pr + pl > 0.0f))
+            continue;
+        light_sums_add(&ls, v3_scale(le, cos_p / (pr + pl)));
+    }
+    /* The estimate is the samples' sum (each is weighted for all n together): n times their mean. */
+    add_light_estimate(c, &ls, (int)n, (float)n, out, levels);
+}
+
 ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
                            ic_vec3 *levels)
 {
+    ic_ctx *c = w->c;
+    w->pt = pt;
+    w->mis_rays = w->mis_lights = 0.0f;
+    if (c->emitter_mis && c->cached_emitters && c->cached_cdf && c->o.gather.method == IC_GATHER_STRATIFIED &&
+        c->o.record_sets <= 1) {
+        ic_gather_opts d;
+        ic_gather_opts_default(&d);
+        uint32_t m = c->o.gather.theta_strata ? c->o.gather.theta_strata : d.theta_strata;
+        uint32_t n = c->o.gather.phi_strata ? c->o.gather.phi_strata : (uint32_t)lround((double)IC_PI * m);
+        uint32_t nl = m * n / PORTAL_SAMPLES_DIV;
+        w->mis_rays = (float)(m * n);
+        w->mis_lights = (float)(nl < PORTAL_SAMPLES_MIN ? PORTAL_SAMPLES_MIN : nl);
+    }
     ic_result r = gather_sets(w, g, pt, out, levels);
-    if (r == IC_OK && w->c->env_mode == IC_ENV_PORTAL_SAMPLES)
-        add_portal_light(w->c, pt, out, levels);
+    if (r == IC_OK && w->mis_lights > 0.0f)
+        add_cached_emitter_light(w, pt, out, levels);
+    if (r == IC_OK && c->env_mode == IC_ENV_PORTAL_SAMPLES)
+        add_portal_light(c, pt, out, levels);
+    w->mis_lights = 0.0f;
     return r;
 }
 

@@ -81,6 +81,12 @@ typedef struct ic_ctx {
                                   (ic_emitters.c); NULL when none is */
     float *direct_cdf;         /* its cdf (tri_light_count + 1) */
     uint32_t cached_emitters;  /* emitting triangles whose light the records carry */
+    float *cached_cdf;         /* with cached emitters: a cdf over the emitting triangles (tri_light_count
+                                  + 1) that picks the cached ones by power, for light samples of them
+                                  (ic_ctx.emitter_mis) */
+    int emitter_mis;           /* 1 while the hit stage gathers: its records take the cached emitters'
+                                  light from their rays and from light samples, MIS-weighted
+                                  (ic_gathering.c, add_cached_emitter_light) */
     int large_sampled;         /* 1: an emitter that covers at least large_emitters of the median shading
                                   point's hemisphere is light-sampled though its plain light samples are
                                   noisier than cosine rays (ic_emitters.c), and the hits that records
@@ -110,6 +116,10 @@ int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf 
 typedef struct ic_gather_worker {
     ic_ctx *c;
     ic_vec3 sum[IC_LEVELS_MAX + 1];
+    /* With c->emitter_mis: the point being gathered, and the counts of its hemisphere rays and of its
+     * light samples of the cached emitters (0: their light from the rays alone). */
+    const ic_gather_point *pt;
+    float mis_rays, mis_lights;
 } ic_gather_worker;
 /* Trace callback of hemisphere gathering (ic_trace_fn; user = ic_gather_worker): see ic.h for what it
  * returns. */
