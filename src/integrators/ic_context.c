@@ -116,6 +116,7 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     c->gather_tr.pt.max_depth = c->o.bounces + 1;
     /* With one bounce a hemisphere ray returns its hit's direct light alone; records hold more. */
     c->hit_kind = -1;
+    c->emitter_mis = 1;
     c->hit_lookups = !c->o.path_traced_gather && !c->o.recursive && c->o.bounces > 1 &&
                      c->o.bounces <= IC_LEVELS_MAX;
     /* The level split serves the hit look-ups and the final render's vertices behind glass or glossy

@@ -480,15 +480,16 @@ static ic_result gather_sets(ic_gather_worker *w, ic_gatherer *g, const ic_gathe
     return IC_OK;
 }
 
-#define STREAM_EMITTER 0x656d6974ULL /* rng purpose: a hit record's light samples of the cached emitters */
+#define STREAM_EMITTER 0x656d6974ULL /* rng purpose: a record's light samples of the cached emitters */
 
 /* With emitter_mis: the cached emitters' direct light at pt from n_l light samples (a triangle by power
  * among them, a point on it by area), each weighted by the balance heuristic against the point's n_r
  * hemisphere rays, which count their hits on those emitters with the complementary weight
- * (cached_ray_weight): E = Σ_j Le_j cos θ_j / (n_r p_r(ω_j) + n_l p_l(ω_j)). A few light samples
- * find an emitter that a hit record's few dozen rays would hit by chance, or not at all (a window seen
- * past balusters); the sum joins the record's irradiance, its levels (the emitters' own light is
- * level 0) and, in quadrature, its σ. */
+ * (cached_ray_weight): E = Σ_j Le_j cos θ_j / (n_r p_r(ω_j) + n_l p_l(ω_j)). The light samples find
+ * an emitter that a record's rays would hit in a few cells, or that a hit record's few hundred would
+ * hit by chance (a window seen past balusters); the sum joins the record's irradiance, its levels (the
+ * emitters' own light is level 0) and, in quadrature, its σ. Its gradients stay the rays' (which now
+ * carry only their weighted share of the emitters' light). */
 static void add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *pt, ic_gather_result *out,
                                      ic_vec3 *levels)
 {

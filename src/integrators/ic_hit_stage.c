@@ -97,9 +97,7 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         c->record_bounce = bounce;
         int keep_no_gradients = c->o.no_gradients;
         c->o.no_gradients = keep_no_gradients || !gradients;
-        c->emitter_mis = 1;
         r = ic_ic_gather_and_insert(c, cand, m, times, err);
-        c->emitter_mis = 0;
         c->o.gather = keep;
         c->record_bounce = keep_bounce;
         c->o.no_gradients = keep_no_gradients;

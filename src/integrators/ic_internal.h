@@ -84,9 +84,10 @@ typedef struct ic_ctx {
     float *cached_cdf;         /* with cached emitters: a cdf over the emitting triangles (tri_light_count
                                   + 1) that picks the cached ones by power, for light samples of them
                                   (ic_ctx.emitter_mis) */
-    int emitter_mis;           /* 1 while the hit stage gathers: its records take the cached emitters'
-                                  light from their rays and from light samples, MIS-weighted
-                                  (ic_gathering.c, add_cached_emitter_light) */
+    int emitter_mis;           /* 1 (set by ic_ic_ctx_create): the records gathered take the cached
+                                  emitters' light from their rays and from light samples of them,
+                                  MIS-weighted (ic_gathering.c, add_cached_emitter_light); 0: from
+                                  their rays alone (tests compare the two) */
     int large_sampled;         /* 1: an emitter that covers at least large_emitters of the median shading
                                   point's hemisphere is light-sampled though its plain light samples are
                                   noisier than cosine rays (ic_emitters.c), and the hits that records

@@ -1,7 +1,7 @@
 /*
- * test_emitter_mis.c — the hit stage's records take a cached large emitter's light from their hemisphere
- * rays and from light samples of the cached emitters, both weighted by the balance heuristic
- * (ic_gathering.c, add_cached_emitter_light). Checked on a black room lit by one emitting window pane,
+ * test_emitter_mis.c — a record takes a cached large emitter's light from its hemisphere rays and from
+ * light samples of the cached emitters, both weighted by the balance heuristic (ic_gathering.c,
+ * add_cached_emitter_light). Checked on a black room lit by one emitting window pane,
  * where a record's irradiance is the pane's direct light alone and Lambert's polygon formula gives it
  * exactly: the estimate is unbiased with and without the light samples, the light samples cut its
  * variance, and the result does not depend on the thread count.
@@ -121,7 +121,7 @@ int main(void)
     opt.max_depth = 8;
     opt.seed = 3;
     opt.has_seed = 1;
-    opt.ic.gather.theta_strata = 4; /* 4 × 13 = 52 rays: a hit record's share of the default 800 */
+    opt.ic.gather.theta_strata = 4; /* 4 × 13 = 52 rays: few, where hitting the pane or not weighs most */
     opt.ic.gather.phi_strata = 13;
     ic_ctx *c = NULL;
     int ok = ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) == IC_OK;
