@@ -481,6 +481,12 @@ static ic_result gather_sets(ic_gather_worker *w, ic_gatherer *g, const ic_gathe
 }
 
 #define STREAM_EMITTER 0x656d6974ULL /* rng purpose: a record's light samples of the cached emitters */
+/* A record's light samples of the cached emitters: one per EMITTER_SAMPLES_DIV of its rays, at least
+ * EMITTER_SAMPLES_MIN. On staircase2 (448×252, six seeds) one per 16 rays left 7 % less low-pass error
+ * than one per 8 with fewer rays, and one per 4 or 32 more (BENCHMARKS.md): the fewer the light
+ * samples, the more of the emitter's light the rays keep, and with it their gradients. */
+#define EMITTER_SAMPLES_DIV 16u
+#define EMITTER_SAMPLES_MIN 8
 
 /* With emitter_mis: the cached emitters' direct light at pt from n_l light samples (a triangle by power
  * among them, a point on it by area), each weighted by the balance heuristic against the point's n_r
@@ -553,9 +559,9 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
         ic_gather_opts_default(&d);
         uint32_t m = c->o.gather.theta_strata ? c->o.gather.theta_strata : d.theta_strata;
         uint32_t n = c->o.gather.phi_strata ? c->o.gather.phi_strata : (uint32_t)lround((double)IC_PI * m);
-        uint32_t nl = m * n / PORTAL_SAMPLES_DIV;
+        uint32_t nl = m * n / EMITTER_SAMPLES_DIV;
         w->mis_rays = (float)(m * n);
-        w->mis_lights = (float)(nl < PORTAL_SAMPLES_MIN ? PORTAL_SAMPLES_MIN : nl);
+        w->mis_lights = (float)(nl < EMITTER_SAMPLES_MIN ? EMITTER_SAMPLES_MIN : nl);
     }
     ic_result r = gather_sets(w, g, pt, out, levels);
     if (r == IC_OK && w->mis_lights > 0.0f)
