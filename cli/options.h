@@ -205,7 +205,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "", NAN, "off", "", IC_SCOPE_IC, "gradient-difference record scaling (Castano 2014)") \
     X(HIT_RECORDS, "--hit-records", NULL, IC_OPT_ON_OFF, render.ic.hit_records, 0, 0, "on|off", NAN, "on", "", \
       IC_SCOPE_BATCH, "before the first pass, records where probe rays from the shading points land (1/4 of " \
-      "the rays each, and light samples of the emitters the records carry), read only by the hemisphere rays of the image's records, which then path-trace fewer " \
+      "the rays each), read only by the hemisphere rays of the image's records, which then path-trace fewer " \
       "bounces (no effect with --path-traced-gather or --bounces 1)") \
     X(MAX_PASSES, "--max-passes", NULL, IC_OPT_INT, render.ic.max_passes, 1, 1000, "N", IC_DEFAULT_MAX_PASSES, "%g", \
       "", IC_SCOPE_BATCH, "most construction passes: a safety bound (a warning says when it stops construction)") \

@@ -258,8 +258,8 @@ static void count_traffic(ic_ctx *c, ic_render_stats *st, int pass)
  * image is interpolated from its own records as before. Their rays: half the strata each way (1/4 of
  * a record's): every image record reads many of them, so their error is shared, and with 1/16 one
  * staircase2 seed in six was 1.5 times worse than the others (1/64 left a window-lit room's mean moving
- * by ±2.5 % from seed to seed); no gradients: from a 2 × 7 grid they were noise that extrapolation
- * turned into bias (that room's mean −1.9 % over six seeds; BENCHMARKS.md). */
+ * by ±2.5 % from seed to seed); no gradients: from the 2 × 7 grid of 1/64 of the rays they were noise
+ * that extrapolation turned into bias (that room's mean −1.9 % over six seeds; BENCHMARKS.md). */
 #define IMAGE_HIT_STRATA_DIV 2
 #define IMAGE_HIT_KEY_TAG 0x696d616765686974ULL
 static ic_result image_hit_stage(ic_ctx *c, size_t npix, phase_times *pt, ic_error *err)

@@ -304,8 +304,32 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, in
     return ok;
 }
 
+/* A cdf (tri_light_count + 1 entries) over the emitting triangles that are cached (want 1) or not
+ * (want 0), by power, normalised by their own total; from the last such triangle on it is exactly 1, so
+ * that rounding never gives the others a share. pmf (may be NULL) gets each triangle's probability. */
+static void power_cdf(const ic_scene *s, const uint8_t *cached_mat, int want, float *pmf, float *cdf)
+{
+    double total = 0.0, sum = 0.0;
+    uint32_t last = 0;
+    for (uint32_t i = 0; i < s->tri_light_count; ++i)
+        if ((cached_mat[s->triangle_material[s->tri_lights[i].triangle]] != 0) == want) {
+            total += s->tri_lights[i].power;
+            last = i + 1;
+        }
+    cdf[0] = 0.0f;
+    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
+        int in = (cached_mat[s->triangle_material[s->tri_lights[i].triangle]] != 0) == want;
+        double p = in && total > 0.0 ? s->tri_lights[i].power / total : 0.0;
+        if (pmf)
+            pmf[i] = (float)p;
+        sum += p;
+        cdf[i + 1] = i + 1 >= last && total > 0.0 ? 1.0f : (float)sum;
+    }
+}
+
 /* The final render's distribution over the emitting triangles left to sample (direct_pmf/direct_cdf),
- * and light_sel narrowed to them. Returns 0 when out of memory. */
+ * the cached ones' for the records' light samples of them (cached_cdf), and light_sel narrowed to the
+ * former. Returns 0 when out of memory. */
 static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *cached_mat, double kept)
 {
     c->direct_pmf = malloc(sizeof *c->direct_pmf * s->tri_light_count);
@@ -313,21 +337,8 @@ static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *c
     c->cached_cdf = malloc(sizeof *c->cached_cdf * (s->tri_light_count + 1));
     if (!c->direct_pmf || !c->direct_cdf || !c->cached_cdf)
         return 0;
-    const double cached = (double)s->tri_light_power - kept;
-    double sum = 0.0, sum_cached = 0.0;
-    c->direct_cdf[0] = 0.0f;
-    c->cached_cdf[0] = 0.0f;
-    for (uint32_t i = 0; i < s->tri_light_count; ++i) {
-        int big = cached_mat[s->triangle_material[s->tri_lights[i].triangle]];
-        c->direct_pmf[i] = big || !(kept > 0.0) ? 0.0f : (float)(s->tri_lights[i].power / kept);
-        sum += c->direct_pmf[i];
-        c->direct_cdf[i + 1] = (float)sum;
-        sum_cached += big && cached > 0.0 ? s->tri_lights[i].power / cached : 0.0;
-        c->cached_cdf[i + 1] = (float)sum_cached;
-    }
-    if (kept > 0.0)
-        c->direct_cdf[s->tri_light_count] = 1.0f;
-    c->cached_cdf[s->tri_light_count] = 1.0f;
+    power_cdf(s, cached_mat, 0, c->direct_pmf, c->direct_cdf);
+    power_cdf(s, cached_mat, 1, NULL, c->cached_cdf);
     /* The class probabilities follow the power left to sample. */
     double tri = c->light_sel.tri * kept / s->tri_light_power, point = c->light_sel.point;
     c->light_sel.tri = tri + point > 0.0 ? (float)(tri / (tri + point)) : 0.0f;

@@ -553,14 +553,12 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
     ic_ctx *c = w->c;
     w->pt = pt;
     w->mis_rays = w->mis_lights = 0.0f;
-    if (c->emitter_mis && c->cached_emitters && c->cached_cdf && c->o.gather.method == IC_GATHER_STRATIFIED &&
+    /* Stratified gathering of one set only: its rays are cosine-distributed, n_r of them. */
+    const ic_gather_opts *go = ic_gatherer_opts(g);
+    if (c->emitter_mis && c->cached_emitters && c->cached_cdf && go && go->method == IC_GATHER_STRATIFIED &&
         c->o.record_sets <= 1) {
-        ic_gather_opts d;
-        ic_gather_opts_default(&d);
-        uint32_t m = c->o.gather.theta_strata ? c->o.gather.theta_strata : d.theta_strata;
-        uint32_t n = c->o.gather.phi_strata ? c->o.gather.phi_strata : (uint32_t)lround((double)IC_PI * m);
-        uint32_t nl = m * n / EMITTER_SAMPLES_DIV;
-        w->mis_rays = (float)(m * n);
+        uint32_t rays = go->theta_strata * go->phi_strata, nl = rays / EMITTER_SAMPLES_DIV;
+        w->mis_rays = (float)rays;
         w->mis_lights = (float)(nl < EMITTER_SAMPLES_MIN ? EMITTER_SAMPLES_MIN : nl);
     }
     ic_result r = gather_sets(w, g, pt, out, levels);

@@ -58,10 +58,13 @@ static int cache_every_emitter(ic_ctx *c, const ic_scene *s)
     }
     c->cached_cdf[nl] = 1.0f;
     c->cached_emitters = nl;
+    c->light_sel.tri = 0.0f; /* the final render's selection had pointed into the arrays freed above */
+    c->light_sel.tri_pmf = NULL;
+    c->light_sel.tri_cdf = NULL;
     return 1;
 }
 
-/* Gathers KEYS records at pts[p] (keys differ) with the hit stage's light samples on or off; out gets
+/* Gathers KEYS records at `at` (keys differ) with the cached emitters' light samples on or off; out gets
  * the luminance of each. */
 static int gather(ic_ctx *c, const ic_gather_point *at, int mis, int threads, double *out)
 {
