@@ -5,7 +5,6 @@
  */
 #include "ic_internal.h"
 
-#include "core/sampling.h"
 #include "core/threads.h"
 
 #include <stdatomic.h>
@@ -21,24 +20,16 @@ static int emitter_is_cached(const ic_ctx *c, uint32_t tri)
     return li >= 0 && !(c->direct_pmf[li] > 0.0f);
 }
 
-/* Solid-angle density, at the point seeing it, of a light sample of the cached emitters (add_cached_emitter_light)
- * that lands on emitting triangle li at distance dist along dir. */
-static float cached_light_pdf(const ic_ctx *c, int32_t li, ic_vec3 dir, float dist)
-{
-    const ic_tri_light *l = &c->tr->scene->tri_lights[li];
-    float cos_l = fabsf(v3_dot(dir, l->normal)), pmf = c->cached_cdf[li + 1] - c->cached_cdf[li];
-    return cos_l > 0.0f && l->area > 0.0f ? pmf / l->area * dist * dist / cos_l : 0.0f;
-}
-
 /* The balance heuristic's weight of a hemisphere ray's hit on a cached emitter against the point's light
- * samples of them (Veach 1997 §9.2, with n_r cosine-distributed rays and n_l light samples). */
+ * samples of them (ic_light_samples.c; Veach 1997 §9.2, with n_r cosine-distributed rays and n_l light
+ * samples). */
 static float cached_ray_weight(const ic_gather_worker *w, const ic_ray *ray, const ic_hit *hit)
 {
     const ic_ctx *c = w->c;
     if (!(w->mis_lights > 0.0f))
         return 1.0f;
     float cos_p = v3_dot(ray->dir, w->pt->normal), pr = w->mis_rays * fmaxf(cos_p, 0.0f) / IC_PI;
-    float pl = w->mis_lights * cached_light_pdf(c, c->tr->scene->triangle_light[hit->triangle], ray->dir, hit->t);
+    float pl = w->mis_lights * ic_ic_cached_light_pdf(c, c->tr->scene->triangle_light[hit->triangle], ray->dir, hit->t);
     return pr + pl > 0.0f ? pr / (pr + pl) : 0.0f;
 }
 
@@ -372,82 +363,6 @@ static void add_set(ic_gather_result *a, const ic_gather_result *b, int k, ic_ve
     a->hit_count += b->hit_count;
 }
 
-/* Running sums of a point's light samples (add_portal_light, add_cached_emitter_light), per channel. */
-typedef struct light_sums {
-    double sum[3], sum2[3];
-} light_sums;
-
-static void light_sums_add(light_sums *s, ic_vec3 e)
-{
-    const double v[3] = {e.x, e.y, e.z};
-    for (int ch = 0; ch < 3; ++ch) {
-        s->sum[ch] += v[ch];
-        s->sum2[ch] += v[ch] * v[ch];
-    }
-}
-
-/* Adds times × the mean of the n samples in s to out's irradiance and to every level (light that reaches
- * the point directly is level 0 and up), and its σ to out's σ in quadrature; counts the n shadow rays. */
-static void add_light_estimate(ic_ctx *c, const light_sums *s, int n, float times, ic_gather_result *out,
-                               ic_vec3 *levels)
-{
-    atomic_fetch_add_explicit(&c->rays, (uint64_t)n, memory_order_relaxed);
-    float mean[3], sigma[3];
-    for (int ch = 0; ch < 3; ++ch) {
-        double m = s->sum[ch] / n, var = n > 1 ? (s->sum2[ch] - n * m * m) / (n - 1) : 0.0;
-        mean[ch] = (float)m * times;
-        sigma[ch] = (float)sqrt(fmax(var, 0.0) / n) * times;
-    }
-    ic_vec3 E = v3(mean[0], mean[1], mean[2]);
-    out->irradiance = v3_add(out->irradiance, E);
-    out->sigma = v3(sqrtf(out->sigma.x * out->sigma.x + sigma[0] * sigma[0]),
-                    sqrtf(out->sigma.y * out->sigma.y + sigma[1] * sigma[1]),
-                    sqrtf(out->sigma.z * out->sigma.z + sigma[2] * sigma[2]));
-    for (int k = 0; levels && k <= c->levels; ++k)
-        levels[k] = v3_add(levels[k], E);
-}
-
-#define STREAM_PORTAL 0x706f7274616cULL /* rng purpose: a record's light samples through portals */
-/* A record's light samples through portals: one per PORTAL_SAMPLES_DIV of its rays, at least
- * PORTAL_SAMPLES_MIN. The sensors' hit records (50 rays at the sensors' 3,200) had the same error with 8
- * samples as with 50 (BENCHMARKS.md, "Sensor points"): their error is their indirect light's. */
-#define PORTAL_SAMPLES_DIV 8u
-#define PORTAL_SAMPLES_MIN 8
-
-/* IC_ENV_PORTAL_SAMPLES: the environment's irradiance through the portals pt lies inside of, from light
- * samples uniform in the openings' solid angle (randomised Sobol' pairs keyed by the record), added to
- * the record's irradiance, its bounce levels (the environment's own light is level 0) and, in
- * quadrature, its σ. Its gradients stay the rays' (the light through the openings has none). */
-static void add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_result *out, ic_vec3 *levels)
-{
-    const ic_scene *scene = c->gather_tr.scene;
-    if (!scene->env.enabled || !scene->env.portal_count || !ic_scene_portals_apply(scene, pt->position))
-        return;
-    int n = (int)(out->ray_count / PORTAL_SAMPLES_DIV);
-    if (n < PORTAL_SAMPLES_MIN)
-        n = PORTAL_SAMPLES_MIN;
-    light_sums ls = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
-    uint64_t key = ic_hash4(c->seed, pt->key, STREAM_PORTAL, 0);
-    for (int k = 0; k < n; ++k) {
-        ic_rng rng = ic_rng_make(c->seed, pt->key, (uint64_t)k, STREAM_PORTAL);
-        ic_rng_enable_lds(&rng, key, (uint32_t)k);
-        float u0 = ic_rng_1d(&rng), u1, u2;
-        ic_rng_2d(&rng, &u1, &u2);
-        ic_vec3 wi, q;
-        float pdf;
-        if (!ic_scene_sample_portal(scene, pt->position, u0, u1, u2, &wi, &q, &pdf) || !(pdf > 0.0f))
-            continue;
-        float cos_i = v3_dot(wi, pt->normal);
-        if (cos_i <= 0.0f)
-            continue;
-        ic_ray shadow = {pt->position, wi, 0.0f, INFINITY};
-        if (ic_accel_occluded1(c->gather_tr.accel, &shadow))
-            continue;
-        light_sums_add(&ls, v3_scale(ic_scene_env_radiance(scene, wi), cos_i / pdf));
-    }
-    add_light_estimate(c, &ls, n, 1.0f, out, levels);
-}
-
 /* The point's sets (several with record noise control). */
 static ic_result gather_sets(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
                              ic_vec3 *levels)
@@ -480,73 +395,6 @@ static ic_result gather_sets(ic_gather_worker *w, ic_gatherer *g, const ic_gathe
     return IC_OK;
 }
 
-#define STREAM_EMITTER 0x656d6974ULL /* rng purpose: a record's light samples of the cached emitters */
-/* A record's light samples of the cached emitters: one per EMITTER_SAMPLES_DIV of its rays, at least
- * EMITTER_SAMPLES_MIN. On staircase2 (448×252, six seeds) one per 16 rays left 7 % less low-pass error
- * than one per 8 with fewer rays, and one per 4 or 32 more (BENCHMARKS.md): the fewer the light
- * samples, the more of the emitter's light the rays keep, and with it their gradients. */
-#define EMITTER_SAMPLES_DIV 16u
-#define EMITTER_SAMPLES_MIN 8
-
-/* With emitter_mis: the cached emitters' direct light at pt from n_l light samples (a triangle by power
- * among them, a point on it by area), each weighted by the balance heuristic against the point's n_r
- * hemisphere rays, which count their hits on those emitters with the complementary weight
- * (cached_ray_weight): E = Σ_j Le_j cos θ_j / (n_r p_r(ω_j) + n_l p_l(ω_j)). The light samples find
- * an emitter that a record's rays would hit in a few cells, or that a hit record's few hundred would
- * hit by chance (a window seen past balusters); the sum joins the record's irradiance, its levels (the
- * emitters' own light is level 0) and, in quadrature, its σ. Its gradients stay the rays' (which now
- * carry only their weighted share of the emitters' light). */
-static void add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *pt, ic_gather_result *out,
-                                     ic_vec3 *levels)
-{
-    ic_ctx *c = w->c;
-    const ic_scene *scene = c->gather_tr.scene;
-    const uint32_t nl = scene->tri_light_count, n = (uint32_t)w->mis_lights;
-    light_sums ls = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
-    uint64_t key = ic_hash4(c->seed, pt->key, STREAM_EMITTER, 0);
-    for (uint32_t k = 0; k < n; ++k) {
-        ic_rng rng = ic_rng_make(c->seed, pt->key, (uint64_t)k, STREAM_EMITTER);
-        ic_rng_enable_lds(&rng, key, k);
-        float u0 = ic_rng_1d(&rng), u1, u2;
-        ic_rng_2d(&rng, &u1, &u2);
-        uint32_t lo = 0, hi = nl - 1; /* the last triangle whose cdf entry is at most u0 */
-        while (lo < hi) {
-            uint32_t mid = (lo + hi + 1) / 2;
-            if (c->cached_cdf[mid] <= u0)
-                lo = mid;
-            else
-                hi = mid - 1;
-        }
-        if (!(c->cached_cdf[lo + 1] > c->cached_cdf[lo]))
-            continue;
-        const ic_tri_light *l = &scene->tri_lights[lo];
-        float b1, b2;
-        ic_warp_triangle(u1, u2, &b1, &b2);
-        ic_surface s;
-        ic_scene_surface(scene, l->triangle, b1, b2, &s);
-        ic_vec3 d = v3_sub(s.p, pt->position);
-        float dist = v3_len(d);
-        if (!(dist > 0.0f))
-            continue;
-        d = v3_scale(d, 1.0f / dist);
-        float cos_p = v3_dot(d, pt->normal);
-        if (cos_p <= 0.0f)
-            continue;
-        ic_vec3 le = ic_scene_emission(scene, &s, v3_neg(d));
-        if (!(le.x > 0.0f || le.y > 0.0f || le.z > 0.0f))
-            continue;
-        ic_ray shadow = {pt->position, d, 0.0f, dist * (1.0f - 1e-3f)};
-        if (ic_accel_occluded1(c->gather_tr.accel, &shadow))
-            continue;
-        float pr = w->mis_rays * cos_p / IC_PI, pl = w->mis_lights * cached_light_pdf(c, (int32_t)lo, d, dist);
-        if (!(pr + pl > 0.0f))
-            continue;
-        light_sums_add(&ls, v3_scale(le, cos_p / (pr + pl)));
-    }
-    /* The estimate is the samples' sum (each is weighted for all n together): n times their mean. */
-    add_light_estimate(c, &ls, (int)n, (float)n, out, levels);
-}
-
 ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
                            ic_vec3 *levels)
 {
@@ -557,15 +405,15 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
     const ic_gather_opts *go = ic_gatherer_opts(g);
     if (c->emitter_mis && c->cached_emitters && c->cached_cdf && go && go->method == IC_GATHER_STRATIFIED &&
         c->o.record_sets <= 1) {
-        uint32_t rays = go->theta_strata * go->phi_strata, nl = rays / EMITTER_SAMPLES_DIV;
+        uint32_t rays = go->theta_strata * go->phi_strata;
         w->mis_rays = (float)rays;
-        w->mis_lights = (float)(nl < EMITTER_SAMPLES_MIN ? EMITTER_SAMPLES_MIN : nl);
+        w->mis_lights = (float)ic_ic_emitter_light_samples(rays);
     }
     ic_result r = gather_sets(w, g, pt, out, levels);
     if (r == IC_OK && w->mis_lights > 0.0f)
-        add_cached_emitter_light(w, pt, out, levels);
+        ic_ic_add_cached_emitter_light(w, pt, out, levels);
     if (r == IC_OK && c->env_mode == IC_ENV_PORTAL_SAMPLES)
-        add_portal_light(c, pt, out, levels);
+        ic_ic_add_portal_light(c, pt, out, levels);
     w->mis_lights = 0.0f;
     return r;
 }

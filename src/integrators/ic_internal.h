@@ -86,7 +86,7 @@ typedef struct ic_ctx {
                                   (ic_ctx.emitter_mis) */
     int emitter_mis;           /* 1 (set by ic_ic_ctx_create): the records gathered take the cached
                                   emitters' light from their rays and from light samples of them,
-                                  MIS-weighted (ic_gathering.c, add_cached_emitter_light); 0: from
+                                  MIS-weighted (ic_light_samples.c); 0: from
                                   their rays alone (tests compare the two) */
     int large_sampled;         /* 1: an emitter that covers at least large_emitters of the median shading
                                   point's hemisphere is light-sampled though its plain light samples are
@@ -130,6 +130,19 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
  * split: levels[k] = T_k for k = 0…c->levels (may be NULL without levels). */
 ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_point *pt, ic_gather_result *out,
                            ic_vec3 *levels);
+/* Light samples a record adds to its rays' estimate (ic_light_samples.c). With c->env_mode ==
+ * IC_ENV_PORTAL_SAMPLES: the environment through the portals pt lies inside of. With w->mis_lights > 0:
+ * the cached emitters' light, w->mis_lights samples weighted against w->mis_rays rays (the balance
+ * heuristic; the rays' hits take ic_ic_cached_light_pdf into their weights). Both add to out's
+ * irradiance, σ and every bounce level. */
+void ic_ic_add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_result *out, ic_vec3 *levels);
+void ic_ic_add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *pt, ic_gather_result *out,
+                                    ic_vec3 *levels);
+/* Solid-angle density of a light sample of the cached emitters landing on emitting triangle li at distance
+ * dist along the unit direction dir. */
+float ic_ic_cached_light_pdf(const ic_ctx *c, int32_t li, ic_vec3 dir, float dist);
+/* The light samples of the cached emitters a record of `rays` hemisphere rays takes. */
+uint32_t ic_ic_emitter_light_samples(uint32_t rays);
 /* Gathers count points in parallel (one gatherer per thread; each point's result depends only on the
  * seed and its key, never on the thread count); levels: (c->levels + 1) entries per point, or NULL.
  * gathered[i] is set to 1 for each point gathered; once the render is cancelled (ic_ic_cancelled) or

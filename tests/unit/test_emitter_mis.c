@@ -1,6 +1,6 @@
 /*
  * test_emitter_mis.c — a record takes a cached large emitter's light from its hemisphere rays and from
- * light samples of the cached emitters, both weighted by the balance heuristic (ic_gathering.c,
+ * light samples of the cached emitters, both weighted by the balance heuristic (ic_light_samples.c,
  * add_cached_emitter_light). Checked on a black room lit by one emitting window pane,
  * where a record's irradiance is the pane's direct light alone and Lambert's polygon formula gives it
  * exactly: the estimate is unbiased with and without the light samples, the light samples cut its
