@@ -156,6 +156,7 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     ic_ic_gbuffer_free(c);
     free(c->direct_pmf);
     free(c->direct_cdf);
+    free(c->cached_pmf);
     free(c->cached_cdf);
     free(c->level_irr);
     free(c);

@@ -306,7 +306,7 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, in
 
 /* A cdf (tri_light_count + 1 entries) over the emitting triangles that are cached (want 1) or not
  * (want 0), by power, normalised by their own total; from the last such triangle on it is exactly 1, so
- * that rounding never gives the others a share. pmf (may be NULL) gets each triangle's probability. */
+ * that rounding never gives the others a share. pmf gets each triangle's probability. */
 static void power_cdf(const ic_scene *s, const uint8_t *cached_mat, int want, float *pmf, float *cdf)
 {
     double total = 0.0, sum = 0.0;
@@ -320,25 +320,25 @@ static void power_cdf(const ic_scene *s, const uint8_t *cached_mat, int want, fl
     for (uint32_t i = 0; i < s->tri_light_count; ++i) {
         int in = (cached_mat[s->triangle_material[s->tri_lights[i].triangle]] != 0) == want;
         double p = in && total > 0.0 ? s->tri_lights[i].power / total : 0.0;
-        if (pmf)
-            pmf[i] = (float)p;
+        pmf[i] = (float)p;
         sum += p;
         cdf[i + 1] = i + 1 >= last && total > 0.0 ? 1.0f : (float)sum;
     }
 }
 
 /* The final render's distribution over the emitting triangles left to sample (direct_pmf/direct_cdf),
- * the cached ones' for the records' light samples of them (cached_cdf), and light_sel narrowed to the
+ * the cached ones' for the records' light samples of them (cached_pmf/cached_cdf), and light_sel narrowed to the
  * former. Returns 0 when out of memory. */
 static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *cached_mat, double kept)
 {
     c->direct_pmf = malloc(sizeof *c->direct_pmf * s->tri_light_count);
     c->direct_cdf = malloc(sizeof *c->direct_cdf * (s->tri_light_count + 1));
+    c->cached_pmf = malloc(sizeof *c->cached_pmf * s->tri_light_count);
     c->cached_cdf = malloc(sizeof *c->cached_cdf * (s->tri_light_count + 1));
-    if (!c->direct_pmf || !c->direct_cdf || !c->cached_cdf)
+    if (!c->direct_pmf || !c->direct_cdf || !c->cached_pmf || !c->cached_cdf)
         return 0;
     power_cdf(s, cached_mat, 0, c->direct_pmf, c->direct_cdf);
-    power_cdf(s, cached_mat, 1, NULL, c->cached_cdf);
+    power_cdf(s, cached_mat, 1, c->cached_pmf, c->cached_cdf);
     /* The class probabilities follow the power left to sample. */
     double tri = c->light_sel.tri * kept / s->tri_light_power, point = c->light_sel.point;
     c->light_sel.tri = tri + point > 0.0 ? (float)(tri / (tri + point)) : 0.0f;

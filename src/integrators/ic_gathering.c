@@ -29,7 +29,9 @@ static float cached_ray_weight(const ic_gather_worker *w, const ic_ray *ray, con
     if (!(w->mis_lights > 0.0f))
         return 1.0f;
     float cos_p = v3_dot(ray->dir, w->pt->normal), pr = w->mis_rays * fmaxf(cos_p, 0.0f) / IC_PI;
-    float pl = w->mis_lights * ic_ic_cached_light_pdf(c, c->tr->scene->triangle_light[hit->triangle], ray->dir, hit->t);
+    const ic_light_selection sel = ic_ic_cached_selection(c);
+    float pl = w->mis_lights * ic_scene_light_pdf_triangle_sel(c->tr->scene, &sel, ray->org, hit->triangle, ray->dir,
+                                                                hit->t);
     return pr + pl > 0.0f ? pr / (pr + pl) : 0.0f;
 }
 
@@ -287,7 +289,7 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             }
             /* ... unless it comes from a large emitter, which the records carry (level 0). */
             ic_vec3 emitted = ic_ic_cached_emission(c, &rays[i], &hits[i]);
-            if (emitted.x > 0.0f || emitted.y > 0.0f || emitted.z > 0.0f)
+            if (!v3_is_black(emitted))
                 emitted = v3_scale(emitted, cached_ray_weight(w, &rays[i], &hits[i]));
             radiance[j] = v3_add(radiance[j], emitted);
             if (B) {
@@ -403,7 +405,7 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
     w->mis_rays = w->mis_lights = 0.0f;
     /* Stratified gathering of one set only: its rays are cosine-distributed, n_r of them. */
     const ic_gather_opts *go = ic_gatherer_opts(g);
-    if (c->emitter_mis && c->cached_emitters && c->cached_cdf && go && go->method == IC_GATHER_STRATIFIED &&
+    if (c->emitter_mis && c->cached_emitters && c->cached_pmf && go && go->method == IC_GATHER_STRATIFIED &&
         c->o.record_sets <= 1) {
         uint32_t rays = go->theta_strata * go->phi_strata;
         w->mis_rays = (float)rays;

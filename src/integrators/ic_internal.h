@@ -81,9 +81,10 @@ typedef struct ic_ctx {
                                   (ic_emitters.c); NULL when none is */
     float *direct_cdf;         /* its cdf (tri_light_count + 1) */
     uint32_t cached_emitters;  /* emitting triangles whose light the records carry */
-    float *cached_cdf;         /* with cached emitters: a cdf over the emitting triangles (tri_light_count
-                                  + 1) that picks the cached ones by power, for light samples of them
-                                  (ic_ctx.emitter_mis) */
+    float *cached_pmf;         /* with cached emitters: a distribution over the emitting triangles
+                                  (tri_light_count) that picks the cached ones by power, for light
+                                  samples of them (ic_ctx.emitter_mis; ic_ic_cached_selection) */
+    float *cached_cdf;         /* its cdf (tri_light_count + 1) */
     int emitter_mis;           /* 1 (set by ic_ic_ctx_create): the records gathered take the cached
                                   emitters' light from their rays and from light samples of them,
                                   MIS-weighted (ic_light_samples.c); 0: from
@@ -138,9 +139,9 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
 void ic_ic_add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_result *out, ic_vec3 *levels);
 void ic_ic_add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *pt, ic_gather_result *out,
                                     ic_vec3 *levels);
-/* Solid-angle density of a light sample of the cached emitters landing on emitting triangle li at distance
- * dist along the unit direction dir. */
-float ic_ic_cached_light_pdf(const ic_ctx *c, int32_t li, ic_vec3 dir, float dist);
+/* The light selection that samples only the cached emitters, by power (c->cached_pmf): the scene's own
+ * light sampling and its pdf (ic_scene_sample_light_sel, ic_scene_light_pdf_triangle_sel) take it. */
+ic_light_selection ic_ic_cached_selection(const ic_ctx *c);
 /* The light samples of the cached emitters a record of `rays` hemisphere rays takes. */
 uint32_t ic_ic_emitter_light_samples(uint32_t rays);
 /* Gathers count points in parallel (one gatherer per thread; each point's result depends only on the

@@ -5,8 +5,6 @@
  */
 #include "ic_internal.h"
 
-#include "core/sampling.h"
-
 #include <stdatomic.h>
 
 /* Running sums of a point's light samples, per channel. */
@@ -85,15 +83,6 @@ void ic_ic_add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_resu
     add_light_estimate(c, &ls, n, 1.0f, out, levels);
 }
 
-/* Solid-angle density, at the point seeing it, of a light sample of the cached emitters (ic_ic_add_cached_emitter_light)
- * that lands on emitting triangle li at distance dist along dir. */
-float ic_ic_cached_light_pdf(const ic_ctx *c, int32_t li, ic_vec3 dir, float dist)
-{
-    const ic_tri_light *l = &c->tr->scene->tri_lights[li];
-    float cos_l = fabsf(v3_dot(dir, l->normal)), pmf = c->cached_cdf[li + 1] - c->cached_cdf[li];
-    return cos_l > 0.0f && l->area > 0.0f ? pmf / l->area * dist * dist / cos_l : 0.0f;
-}
-
 #define STREAM_EMITTER 0x656d6974ULL /* rng purpose: a record's light samples of the cached emitters */
 /* A record's light samples of the cached emitters: one per EMITTER_SAMPLES_DIV of its rays, at least
  * EMITTER_SAMPLES_MIN. On staircase2 (448×252, six seeds) one per 16 rays left 7 % less low-pass error
@@ -108,20 +97,27 @@ uint32_t ic_ic_emitter_light_samples(uint32_t rays)
     return n < EMITTER_SAMPLES_MIN ? EMITTER_SAMPLES_MIN : n;
 }
 
-/* With emitter_mis: the cached emitters' direct light at pt from n_l light samples (a triangle by power
- * among them, a point on it by area), each weighted by the balance heuristic against the point's n_r
+/* With emitter_mis: the cached emitters' direct light at pt from n_l light samples (the scene's light
+ * sampling restricted to them: a triangle by power among them, a point on it by area), each weighted by the balance heuristic against the point's n_r
  * hemisphere rays, which count their hits on those emitters with the complementary weight
- * (ic_gathering.c, cached_ray_weight): E = Σ_j Le_j cos θ_j / (n_r p_r(ω_j) + n_l p_l(ω_j)). The light samples find
- * an emitter that a record's rays would hit in a few cells, or that a hit record's few hundred would
+ * (ic_gathering.c, cached_ray_weight): E = Σ_j Le_j cos θ_j / (n_r p_r(ω_j) + n_l p_l(ω_j)). The light
+ * samples find an emitter that a record's rays would hit in a few cells, or that a hit record's few hundred would
  * hit by chance (a window seen past balusters); the sum joins the record's irradiance, its levels (the
  * emitters' own light is level 0) and, in quadrature, its σ. Its gradients stay the rays' (which now
  * carry only their weighted share of the emitters' light). */
+ic_light_selection ic_ic_cached_selection(const ic_ctx *c)
+{
+    ic_light_selection sel = {1.0f, 0.0f, 0.0f, 0.0f, c->cached_cdf, c->cached_pmf};
+    return sel;
+}
+
 void ic_ic_add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *pt, ic_gather_result *out,
                                     ic_vec3 *levels)
 {
     ic_ctx *c = w->c;
     const ic_scene *scene = c->gather_tr.scene;
-    const uint32_t nl = scene->tri_light_count, n = (uint32_t)w->mis_lights;
+    const ic_light_selection sel = ic_ic_cached_selection(c);
+    const uint32_t n = (uint32_t)w->mis_lights;
     light_sums ls = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
     uint64_t key = ic_hash4(c->seed, pt->key, STREAM_EMITTER, 0);
     for (uint32_t k = 0; k < n; ++k) {
@@ -129,39 +125,17 @@ void ic_ic_add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *
         ic_rng_enable_lds(&rng, key, k);
         float u0 = ic_rng_1d(&rng), u1, u2;
         ic_rng_2d(&rng, &u1, &u2);
-        uint32_t lo = 0, hi = nl - 1; /* the last triangle whose cdf entry is at most u0 */
-        while (lo < hi) {
-            uint32_t mid = (lo + hi + 1) / 2;
-            if (c->cached_cdf[mid] <= u0)
-                lo = mid;
-            else
-                hi = mid - 1;
-        }
-        if (!(c->cached_cdf[lo + 1] > c->cached_cdf[lo]))
+        ic_light_sample l;
+        if (!ic_scene_sample_light_sel(scene, &sel, pt->position, u0, u1, u2, &l))
             continue;
-        const ic_tri_light *l = &scene->tri_lights[lo];
-        float b1, b2;
-        ic_warp_triangle(u1, u2, &b1, &b2);
-        ic_surface s;
-        ic_scene_surface(scene, l->triangle, b1, b2, &s);
-        ic_vec3 d = v3_sub(s.p, pt->position);
-        float dist = v3_len(d);
-        if (!(dist > 0.0f))
-            continue;
-        d = v3_scale(d, 1.0f / dist);
-        float cos_p = v3_dot(d, pt->normal);
+        float cos_p = v3_dot(l.wi, pt->normal);
         if (cos_p <= 0.0f)
             continue;
-        ic_vec3 le = ic_scene_emission(scene, &s, v3_neg(d));
-        if (!(le.x > 0.0f || le.y > 0.0f || le.z > 0.0f))
-            continue;
-        ic_ray shadow = {pt->position, d, 0.0f, dist * (1.0f - 1e-3f)};
+        ic_ray shadow = {pt->position, l.wi, 0.0f, l.dist * (1.0f - 1e-3f)};
         if (ic_accel_occluded1(c->gather_tr.accel, &shadow))
             continue;
-        float pr = w->mis_rays * cos_p / IC_PI, pl = w->mis_lights * ic_ic_cached_light_pdf(c, (int32_t)lo, d, dist);
-        if (!(pr + pl > 0.0f))
-            continue;
-        light_sums_add(&ls, v3_scale(le, cos_p / (pr + pl)));
+        float pr = w->mis_rays * cos_p / IC_PI, pl = w->mis_lights * l.pdf;
+        light_sums_add(&ls, v3_scale(l.radiance, cos_p / (pr + pl)));
     }
     /* The estimate is the samples' sum (each is weighted for all n together): n times their mean. */
     add_light_estimate(c, &ls, (int)n, (float)n, out, levels);

@@ -44,16 +44,19 @@ static int cache_every_emitter(ic_ctx *c, const ic_scene *s)
     const uint32_t nl = s->tri_light_count;
     free(c->direct_pmf);
     free(c->direct_cdf);
+    free(c->cached_pmf);
     free(c->cached_cdf);
     c->direct_pmf = calloc(nl, sizeof *c->direct_pmf);
     c->direct_cdf = calloc(nl + 1, sizeof *c->direct_cdf);
+    c->cached_pmf = malloc(sizeof *c->cached_pmf * nl);
     c->cached_cdf = malloc(sizeof *c->cached_cdf * (nl + 1));
-    if (!c->direct_pmf || !c->direct_cdf || !c->cached_cdf)
+    if (!c->direct_pmf || !c->direct_cdf || !c->cached_pmf || !c->cached_cdf)
         return 0;
     double sum = 0.0;
     c->cached_cdf[0] = 0.0f;
     for (uint32_t i = 0; i < nl; ++i) {
-        sum += s->tri_lights[i].power / s->tri_light_power;
+        c->cached_pmf[i] = s->tri_lights[i].power / s->tri_light_power;
+        sum += c->cached_pmf[i];
         c->cached_cdf[i + 1] = (float)sum;
     }
     c->cached_cdf[nl] = 1.0f;
