@@ -177,54 +177,85 @@ static ic_result timed_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, int w
     return r;
 }
 
-/* The need map (from geometry when lum is NULL, else from the look-ups' luminance): a block of rows on each
- * process, exchanged; a row is the same whichever process makes it. Adds the seconds it took, the
- * exchange excluded, to *seconds. */
-static ic_result shared_need(ic_ctx *c, const float *lum, float *need, double *seconds, ic_error *err)
+/* This process's block of rows [*y0, *y1) (ic_comm_block's rule; the whole image for one process). Each
+ * process makes the need map, dithers and looks for uncovered pixels on its own rows; only the chosen
+ * pixels are exchanged. */
+static void own_rows(const ic_ctx *c, int *y0, int *y1)
 {
     uint64_t first = 0, rows = 0;
     ic_comm_block((uint64_t)c->g.height, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &rows);
-    const int y0 = (int)first, y1 = (int)(first + rows);
+    *y0 = (int)first;
+    *y1 = (int)(first + rows);
+}
+
+/* The need map (from geometry when lum is NULL, else from the look-ups' luminance) on this process's rows,
+ * the same there whichever process makes it. Adds the seconds it took to *seconds. */
+static ic_result own_need(ic_ctx *c, const float *lum, float *need, double *seconds, ic_error *err)
+{
+    int y0, y1;
+    own_rows(c, &y0, &y1);
     double t0 = ic_seconds();
     ic_result r = lum ? ic_screen_value_need(&c->g, lum, c->threads, y0, y1, need)
                       : ic_screen_geometry_need(&c->g, c->o.normal_weight, c->threads, y0, y1, need);
     *seconds += ic_seconds() - t0;
-    if (r != IC_OK)
-        return ic_error_set(err, r, "out of memory for the discontinuity map");
-    return ic_comm_allgather_blocks(c->comm, need, (uint64_t)c->g.height, sizeof *need * (size_t)c->g.width,
-                                    "exchanging the need map", err);
+    return r == IC_OK ? IC_OK : ic_error_set(err, r, "out of memory for the discontinuity map");
 }
 
-/* Candidates from dithering a need map; pixels that already made a record are dropped. */
-static uint32_t dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix, ic_candidate *cand, uint64_t tag)
+/* pix[0, n) (room for one a pixel), this process's chosen pixels in raster order, become every process's
+ * in raster order (the blocks of rows are in rank order), and candidates at them into cand; *count gets
+ * their number. */
+static ic_result pixel_candidates(ic_ctx *c, uint32_t *pix, uint32_t n, ic_candidate *cand, uint64_t tag,
+                                  uint32_t *count, ic_error *err)
 {
-    uint32_t np = ic_screen_dither(&c->g, need, c->o.dither_threshold, pix);
+    uint64_t total = n;
+    ic_result r = ic_comm_allgather_counted(c->comm, pix, n, sizeof *pix, &total, err);
+    if (r != IC_OK)
+        return r;
+    for (uint64_t i = 0; i < total; ++i)
+        cand[i] = ic_ic_candidate_at_pixel(c, pix[i], tag);
+    *count = (uint32_t)total;
+    return IC_OK;
+}
+
+/* Candidates from dithering a need map (this process's rows, then exchanged); pixels that already made a
+ * record are dropped (has_record: only a row's own process reads or marks it). */
+static ic_result dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix, ic_candidate *cand, uint64_t tag,
+                                     uint32_t *count, ic_error *err)
+{
+    int y0, y1;
+    own_rows(c, &y0, &y1);
+    uint32_t np = ic_screen_dither(&c->g, need, c->o.dither_threshold, y0, y1, pix);
     uint32_t n = 0;
     for (uint32_t i = 0; i < np; ++i) {
         if (c->has_record[pix[i]])
             continue;
         c->has_record[pix[i]] = 1;
-        cand[n++] = ic_ic_candidate_at_pixel(c, pix[i], tag);
+        pix[n++] = pix[i];
     }
-    return n;
+    return pixel_candidates(c, pix, n, cand, tag, count, err);
 }
 
 /* Adds records at pixel centres that no record covers (construction acceptance), clustered so that
  * one record serves a whole uncovered patch; repeats until every shading point is covered. */
-static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, ic_candidate *cand, phase_times *pt,
-                                uint32_t *added, double *sweep_seconds, ic_error *err)
+static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, uint32_t *pix, ic_candidate *cand,
+                                phase_times *pt, uint32_t *added, double *sweep_seconds, ic_error *err)
 {
     *added = 0;
-    size_t npix = (size_t)c->g.width * c->g.height;
+    int y0, y1;
+    own_rows(c, &y0, &y1);
+    const size_t first = (size_t)y0 * (size_t)c->g.width, end = (size_t)y1 * (size_t)c->g.width;
     /* Out of time, uncovered points take the final render's fallback (one path-traced hemisphere ray). */
     for (int round = 0; round < 16 && !ic_ic_out_of_time(c); ++round) {
         ic_result r = timed_lookup_all(c, lum, covered, 0, sweep_seconds);
         if (r != IC_OK)
             return ic_error_set(err, r, "could not start threads");
-        uint32_t n = 0;
-        for (size_t i = 0; i < npix; ++i)
+        uint32_t own = 0, n = 0;
+        for (size_t i = first; i < end; ++i)
             if (c->g.valid[i] && !covered[i])
-                cand[n++] = ic_ic_candidate_at_pixel(c, (uint32_t)i, 0x40 | (uint64_t)round);
+                pix[own++] = (uint32_t)i;
+        r = pixel_candidates(c, pix, own, cand, 0x40 | (uint64_t)round, &n, err);
+        if (r != IC_OK)
+            return r;
         if (n == 0)
             return IC_OK;
         /* Small clusters: each selected record covers at least its own pixel, so this terminates. */
@@ -318,9 +349,10 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     const uint32_t hit_records = ic_cache_count(c->cache);
     /* Pass 0: geometry discontinuity. */
     ic_ic_report(opt, "cache pass 0", 0.0);
-    if ((r = shared_need(c, NULL, need, &need_seconds, err)) != IC_OK)
+    uint32_t n = 0, before0 = ic_cache_count(c->cache);
+    if ((r = own_need(c, NULL, need, &need_seconds, err)) != IC_OK ||
+        (r = dithered_candidates(c, need, pix, cand, 0, &n, err)) != IC_OK)
         goto done;
-    uint32_t n = dithered_candidates(c, need, pix, cand, 0), before0 = ic_cache_count(c->cache);
     r = ic_ic_gather_and_insert(c, cand, n, pt, err);
     if (r != IC_OK)
         goto done;
@@ -337,14 +369,17 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
                 ic_error_set(err, r, "could not start threads");
                 goto done;
             }
-            if ((r = shared_need(c, lum, need, &need_seconds, err)) != IC_OK)
+            if ((r = own_need(c, lum, need, &need_seconds, err)) != IC_OK)
                 goto done;
             /* Pixels no record covers ask for at least the 16-pixel spacing; later passes (and the
              * world stage, which clusters uncovered hits) fill what remains. */
-            for (size_t i = 0; i < npix; ++i)
+            int y0, y1;
+            own_rows(c, &y0, &y1);
+            for (size_t i = (size_t)y0 * c->g.width; i < (size_t)y1 * c->g.width; ++i)
                 if (c->g.valid[i] && !covered[i])
                     need[i] = fmaxf(need[i], c->o.dither_threshold);
-            n = dithered_candidates(c, need, pix, cand, (uint64_t)pass);
+            if ((r = dithered_candidates(c, need, pix, cand, (uint64_t)pass, &n, err)) != IC_OK)
+                goto done;
             found += n;
             r = ic_ic_gather_and_insert(c, cand, n, pt, err);
             if (r != IC_OK)
@@ -389,9 +424,9 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         }
     }
     uint32_t added;
-    r = coverage_sweep(c, lum, covered, cand, pt, &added, &sweeps, err);
+    r = coverage_sweep(c, lum, covered, pix, cand, pt, &added, &sweeps, err);
     count_traffic(c, st, st->passes - 1);
-    /* The parts of construction that the processes share out (the rest of it, dithering and clustering,
+    /* The parts of construction that the processes share out (the rest of it, clustering,
      * every process does alike): reported apart so that a scaling model can tell them apart. */
     ic_stats_add_phase(st, "eye paths and look-ups", sweeps);
     ic_stats_add_phase(st, "need maps", need_seconds);

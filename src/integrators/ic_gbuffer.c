@@ -181,43 +181,9 @@ static void lookup_row(void *p, int64_t item, int thread)
     }
 }
 
-/* Several processes: every rank's block of rows of `covered` (one byte a pixel here) to every rank, sent
- * as one bit a pixel. */
-static ic_result exchange_covered(ic_ctx *c, uint8_t *covered)
-{
-    const int ranks = ic_comm_size(c->comm), rank = ic_comm_rank(c->comm);
-    const uint64_t width = (uint64_t)c->g.width;
-    uint64_t *bytes = malloc(sizeof *bytes * (size_t)ranks);
-    uint8_t *bits = malloc(((uint64_t)c->g.height * width + 7) / 8 + (size_t)ranks);
-    ic_result r = bytes && bits ? IC_OK : IC_ERR_OOM;
-    uint64_t at = 0, mine = 0, first, rows;
-    for (int q = 0; r == IC_OK && q < ranks; ++q) {
-        ic_comm_block((uint64_t)c->g.height, ranks, q, &first, &rows);
-        bytes[q] = (rows * width + 7) / 8;
-        if (q == rank)
-            mine = at;
-        at += bytes[q];
-    }
-    if (r == IC_OK) {
-        ic_comm_block((uint64_t)c->g.height, ranks, rank, &first, &rows);
-        memset(bits + mine, 0, bytes[rank]);
-        for (uint64_t k = 0; k < rows * width; ++k)
-            bits[mine + k / 8] |= (uint8_t)(covered[first * width + k] << (k % 8));
-        r = ic_comm_allgather_sized(c->comm, bits, bytes, "exchanging the cache's coverage", NULL);
-    }
-    uint64_t off = 0;
-    for (int q = 0; r == IC_OK && q < ranks; off += bytes[q], ++q) {
-        ic_comm_block((uint64_t)c->g.height, ranks, q, &first, &rows);
-        for (uint64_t k = 0; q != rank && k < rows * width; ++k)
-            covered[first * width + k] = (uint8_t)((bits[off + k / 8] >> (k % 8)) & 1);
-    }
-    free(bytes);
-    free(bits);
-    return r;
-}
-
-/* Several processes (c->comm): a block of rows each, exchanged, so every process holds every answer
- * (the luminances only when asked for: the coverage sweeps need `covered` alone). */
+/* Several processes (c->comm): a block of rows each. The luminances, when asked for, are exchanged so that
+ * every process holds them all (a need map's row reads its neighbourhood on the pyramid's coarse levels);
+ * `covered` stays on the rows' own process, which alone reads it. */
 ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc, int want_lum)
 {
     uint64_t first, rows;
@@ -227,7 +193,5 @@ ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acc
     if (r == IC_OK && want_lum)
         r = ic_comm_allgather_blocks(c->comm, lum, (uint64_t)c->g.height, sizeof *lum * (size_t)c->g.width,
                                      "exchanging look-ups", NULL);
-    if (r == IC_OK && ic_comm_is_shared(c->comm))
-        r = exchange_covered(c, covered);
     return r;
 }

@@ -183,8 +183,8 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
 /* Candidate at a pixel's shading point; tag distinguishes keys of different stages. */
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag);
 /* Looks up every valid pixel: luminance of the estimate and whether any record contributes. With several
- * processes every one gets every pixel's `covered`, and its `lum` only if want_lum (otherwise the other
- * ranks' rows of lum are left as they were). */
+ * processes each looks up its block of rows (ic_comm_block) and gets every pixel's `lum` if want_lum;
+ * the other ranks' rows of `covered` (and of lum without want_lum) are left as they were. */
 ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc, int want_lum);
 /* 1 once construction has spent its share of the render's time budget (c->deadline). Several processes
  * (c->comm) go by rank 0's clock, so that all stop at the same pass: a collective call then. */

@@ -228,10 +228,10 @@ ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int 
     return need_map(g, luminance, value_disc, 0.0f, threads, y0, y1, need);
 }
 
-uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, uint32_t *pixels)
+uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, int y0, int y1, uint32_t *pixels)
 {
     uint32_t count = 0;
-    for (int y = 0; y < g->height; ++y) {
+    for (int y = y0 < 0 ? 0 : y0; y < y1 && y < g->height; ++y) {
         for (int x = 0; x < g->width; ++x) {
             size_t o = (size_t)y * g->width + x;
             if (!g->valid[o] || (x & 1) || (y & 1))

@@ -39,9 +39,11 @@ ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, int threa
 /* Need map from per-pixel luminance values (e.g. cache look-ups), rows [y0, y1); invalid pixels ignored. */
 ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int threads, int y0, int y1,
                                float *need);
-/* Deterministic dithering: pixel (x, y) on the grid of spacing s ∈ {32,16,8,4,2} (the coarsest grid it
- * lies on) is chosen if its need asks for spacing ≤ s; need ≥ threshold·2^(i) asks for spacing 16 >> i
- * (i = 0..3), anything valid asks for 32. Writes chosen pixel indices in raster order; returns count. */
-uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, uint32_t *pixels);
+/* Deterministic dithering of rows [y0, y1): pixel (x, y) on the grid of spacing s ∈ {32,16,8,4,2} (the
+ * coarsest grid it lies on) is chosen if its need asks for spacing ≤ s; need ≥ threshold·2^(i) asks for
+ * spacing 16 >> i (i = 0..3), anything valid asks for 32. Each pixel's choice reads its own need alone, so
+ * blocks of rows dithered apart give the whole image's choice. Writes chosen pixel indices in raster
+ * order; returns count. */
+uint32_t ic_screen_dither(const ic_gbuffer *g, const float *need, float threshold, int y0, int y1, uint32_t *pixels);
 
 #endif

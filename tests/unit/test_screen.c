@@ -7,7 +7,10 @@
  *      level order), on a g-buffer with holes and odd sizes, with 1 and 3 threads;
  *   2. world-stage selection keeps candidates in (Morton code, key) order: with clusters of one candidate
  *      each, the output is the input sorted by a comparison sort, keys using all 64 bits and many
- *      candidates sharing a Morton code.
+ *      candidates sharing a Morton code;
+ *   3. dithering: the chosen pixels are those of the definition (a valid pixel on the coarsest grid of
+ *      spacing s ∈ {2, …, 32} it lies on is chosen when its need asks for spacing ≤ s), in raster order,
+ *      and blocks of rows dithered apart and put end to end (as several processes do) give the same list.
  */
 #include "test_util.h"
 
@@ -198,9 +201,53 @@ static void test_world_order(void)
     CHECK(wrong == 0, "world select: %d of %u candidates out of (Morton, key) order", wrong, kept);
 }
 
+/* ---- 3. dithering, by the definition --------------------------------------------------------------- */
+
+static void test_dither(void)
+{
+    static ic_vec3 p[W * H], n[W * H];
+    static float fp[W * H], need[W * H];
+    static uint8_t valid[W * H];
+    static uint32_t got[W * H], want[W * H], blocks[W * H];
+    const float thr = 0.25f;
+    ic_rng rng = ic_rng_make(17, 0, 0, 0);
+    for (int i = 0; i < W * H; ++i) {
+        need[i] = 10.0f * thr * ic_rng_float(&rng) * ic_rng_float(&rng);
+        valid[i] = i % 13 != 0;
+    }
+    uint32_t m = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const int i = y * W + x;
+            if (!valid[i] || x % 2 || y % 2)
+                continue;
+            int grid = 2;
+            while (grid < 32 && x % (2 * grid) == 0 && y % (2 * grid) == 0)
+                grid *= 2;
+            const float v = need[i];
+            const int asks = v >= 8 * thr ? 2 : v >= 4 * thr ? 4 : v >= 2 * thr ? 8 : v >= thr ? 16 : 32;
+            if (asks <= grid)
+                want[m++] = (uint32_t)i;
+        }
+    ic_gbuffer g = {W, H, p, n, fp, valid};
+    uint32_t whole = ic_screen_dither(&g, need, thr, 0, H, got);
+    int wrong = whole != m;
+    for (uint32_t k = 0; k < m && !wrong; ++k)
+        wrong = got[k] != want[k];
+    CHECK(!wrong, "dithering chose %u pixels, the definition %u (or another list)", whole, m);
+    CHECK(m > 40 && m < (uint32_t)(W * H / 4), "dithering test: %u chosen pixels (the need should choose some)", m);
+    const int cuts[] = {0, 1, 6, 17, 18, 40, H};
+    uint32_t at = 0;
+    for (int b = 0; b < 6; ++b)
+        at += ic_screen_dither(&g, need, thr, cuts[b], cuts[b + 1], blocks + at);
+    CHECK(at == m && memcmp(blocks, want, sizeof *want * m) == 0,
+          "dithering in blocks of rows: %u pixels against %u, or another list", at, m);
+}
+
 int main(void)
 {
     test_need_maps();
     test_world_order();
+    test_dither();
     TEST_MAIN_END();
 }
