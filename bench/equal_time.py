@@ -8,7 +8,8 @@ scene, measured against a path-traced reference whose own noise is reported besi
 The reference is rendered once (cached in --refs, keyed by the scene file's bytes, the size and the
 sample count) as two halves with independent seeds; its relMSE against the truth is about a quarter of
 the halves' relMSE against each other, and that figure is printed as the reference's noise (relMSE and
-low-pass relMSE). Then the cache renders with the given options (`--integrator ic` is added), and the
+low-pass relMSE); the ratio of the two errors is also printed with that noise taken off both (their errors
+against the truth, since the reference's noise is independent of theirs). Then the cache renders with the given options (`--integrator ic` is added), and the
 path tracer renders with `--time` set to the cache render's own `seconds` from its stats (`--equal time`,
 the default) or with the sample count that spends as many rays as the cache render did (`--equal rays`:
 independent of the machine's load, so runs on a shared machine compare; the path tracer's rays per sample
@@ -157,6 +158,11 @@ def main():
     if pt:
         line += " | path tracer relMSE %.3g low-pass %.3g | ratio %.2f, low-pass %.2f" % (
             pt["relmse"], pt["relmse_lowpass"], pt["relmse"] / ic["relmse"], pt["relmse_lowpass"] / ic["relmse_lowpass"])
+        # Each image's error against the reference holds the reference's own noise besides its own (they
+        # are independent): taken off both, the ratio of the two images' errors against the truth.
+        if ic["relmse"] > noise["relmse"]:
+            rec["ratio_less_noise"] = (pt["relmse"] - noise["relmse"]) / (ic["relmse"] - noise["relmse"])
+            line += " (%.2f less the reference's noise)" % rec["ratio_less_noise"]
     line += " | reference noise %.2g, low-pass %.2g" % (noise["relmse"], noise["relmse_lowpass"])
     print(line, flush=True)
     if args.json_out:

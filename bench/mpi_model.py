@@ -12,7 +12,7 @@ Part 2 (model, --target: the stats of a one-process render of the scene at the s
 Sponza at 1280x720). Each phase is either shared (gathering, the final render, the batch strategy's
 "eye paths and look-ups": the world stage's eye paths and the look-up sweeps, "need maps", the shading points, the
 record filter, and insertion's validity-radius clamp and neighbour search, --insertion-shared of insertion) or done by every
-rank (the accelerator, the rest of insertion, "candidates": dithering and clustering, and the need maps in
+rank (the accelerator, the rest of insertion, "candidates": clustering (and dithering before each rank dithered its own rows), and the need maps in
 stats written before "need maps" was reported apart, and whatever ic_render spends outside its phases). Stats written before "eye paths and
 look-ups" was reported apart count it in "candidates"; --candidates-serial then says which share of that
 every rank does. With N ranks of the same threads:
@@ -96,7 +96,7 @@ def main():
     ap.add_argument("--links", type=int, nargs="+", default=[1, 10], help="link speeds, Gb/s")
     ap.add_argument("--max-depth", type=int, default=8, help="the renders' --max-depth (levels = max-depth - 1)")
     ap.add_argument("--candidates-serial", type=float, default=0.1,
-                    help="share of the candidates phase every rank does alike (clustering, dithering)")
+                    help="share of the candidates phase every rank does alike (clustering)")
     ap.add_argument("--record-cv", type=float, default=0.22,
                     help="relative spread of one record's gathering cost (0.22 measured on Sponza, BENCHMARKS.md)")
     ap.add_argument("--insertion-shared", type=float, default=0.48,
@@ -174,7 +174,7 @@ def main():
           % (t["scene"], t["width"], t["height"], t["threads"], total_1, records, t["passes"],
              sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"],
              shared["points, filter, validity"], serial))
-    print("(every rank does %.0f %% of the construction's own work: need maps, dithering, clustering)"
+    print("(every rank does %.0f %% of the candidates phase alike: clustering)"
           % (100 * cand_serial))
     print("| ranks | link | imbalance (gathering, final) | received per rank (MB) | communication (s) | T_N (s) "
           "| speed-up | efficiency |")
