@@ -218,12 +218,14 @@ static ic_result pixel_candidates(ic_ctx *c, uint32_t *pix, uint32_t n, ic_candi
 }
 
 /* Candidates from dithering a need map (this process's rows, then exchanged); pixels that already made a
- * record are dropped (has_record: only a row's own process reads or marks it). */
+ * record are dropped (has_record: only a row's own process reads or marks it). The dithering's seconds
+ * are added to *seconds (a share of the work the processes divide, like the need map's). */
 static ic_result dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix, ic_candidate *cand, uint64_t tag,
-                                     uint32_t *count, ic_error *err)
+                                     uint32_t *count, double *seconds, ic_error *err)
 {
     int y0, y1;
     own_rows(c, &y0, &y1);
+    double t0 = ic_seconds();
     uint32_t np = ic_screen_dither(&c->g, need, c->o.dither_threshold, y0, y1, pix);
     uint32_t n = 0;
     for (uint32_t i = 0; i < np; ++i) {
@@ -232,6 +234,7 @@ static ic_result dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix
         c->has_record[pix[i]] = 1;
         pix[n++] = pix[i];
     }
+    *seconds += ic_seconds() - t0;
     return pixel_candidates(c, pix, n, cand, tag, count, err);
 }
 
@@ -331,7 +334,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     ic_candidate *cand = malloc(sizeof *cand * npix);
     ic_result r = IC_OK;
     double sweeps = 0.0; /* seconds in the eye paths and look-up sweeps, exchanges excluded */
-    double need_seconds = 0.0; /* in this process's rows of the need maps */
+    double need_seconds = 0.0; /* in this process's rows of the need maps and their dithering */
     if (c->comm) {
         c->comm_seconds_counted = c->comm->seconds;
         c->comm_bytes_counted = c->comm->bytes;
@@ -351,7 +354,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     ic_ic_report(opt, "cache pass 0", 0.0);
     uint32_t n = 0, before0 = ic_cache_count(c->cache);
     if ((r = own_need(c, NULL, need, &need_seconds, err)) != IC_OK ||
-        (r = dithered_candidates(c, need, pix, cand, 0, &n, err)) != IC_OK)
+        (r = dithered_candidates(c, need, pix, cand, 0, &n, &need_seconds, err)) != IC_OK)
         goto done;
     r = ic_ic_gather_and_insert(c, cand, n, pt, err);
     if (r != IC_OK)
@@ -378,7 +381,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
             for (size_t i = (size_t)y0 * c->g.width; i < (size_t)y1 * c->g.width; ++i)
                 if (c->g.valid[i] && !covered[i])
                     need[i] = fmaxf(need[i], c->o.dither_threshold);
-            if ((r = dithered_candidates(c, need, pix, cand, (uint64_t)pass, &n, err)) != IC_OK)
+            if ((r = dithered_candidates(c, need, pix, cand, (uint64_t)pass, &n, &need_seconds, err)) != IC_OK)
                 goto done;
             found += n;
             r = ic_ic_gather_and_insert(c, cand, n, pt, err);

@@ -236,9 +236,10 @@ static void test_dither(void)
         wrong = got[k] != want[k];
     CHECK(!wrong, "dithering chose %u pixels, the definition %u (or another list)", whole, m);
     CHECK(m > 40 && m < (uint32_t)(W * H / 4), "dithering test: %u chosen pixels (the need should choose some)", m);
-    const int cuts[] = {0, 1, 6, 17, 18, 40, H};
+    /* Blocks of odd sizes, and empty ones (more processes than rows), one of them past the last row. */
+    const int cuts[] = {0, 1, 6, 17, 17, 18, 40, H, H};
     uint32_t at = 0;
-    for (int b = 0; b < 6; ++b)
+    for (size_t b = 0; b + 1 < sizeof cuts / sizeof cuts[0]; ++b)
         at += ic_screen_dither(&g, need, thr, cuts[b], cuts[b + 1], blocks + at);
     CHECK(at == m && memcmp(blocks, want, sizeof *want * m) == 0,
           "dithering in blocks of rows: %u pixels against %u, or another list", at, m);
