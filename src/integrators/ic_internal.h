@@ -134,8 +134,8 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
 /* Light samples a record adds to its rays' estimate (ic_light_samples.c). With c->env_mode ==
  * IC_ENV_PORTAL_SAMPLES: the environment through the portals pt lies inside of. With w->mis_lights > 0:
  * the cached emitters' light, w->mis_lights samples weighted against w->mis_rays rays (the balance
- * heuristic; the rays' hits take ic_ic_cached_light_pdf into their weights). Both add to out's
- * irradiance, σ and every bounce level. */
+ * heuristic; the rays' hits weigh themselves with the same selection's pdf,
+ * ic_scene_light_pdf_triangle_sel). Both add to out's irradiance, σ and every bounce level. */
 void ic_ic_add_portal_light(ic_ctx *c, const ic_gather_point *pt, ic_gather_result *out, ic_vec3 *levels);
 void ic_ic_add_cached_emitter_light(ic_gather_worker *w, const ic_gather_point *pt, ic_gather_result *out,
                                     ic_vec3 *levels);
