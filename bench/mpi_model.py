@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """bench/mpi_model.py: what the runs of bench/mpi.sh measured, and a model of a render shared by N ranks.
 
-    python3 bench/mpi_model.py RUNS_DIR [--target STATS.json] [--candidates-serial F] [--record-cv CV]
+    python3 bench/mpi_model.py RUNS_DIR [--target STATS.json] [--measured STATS_N.json] [--candidates-serial F] [--record-cv CV]
                                [--tile-cv CV] [--ranks 4 16 64] [--links 1 10]
 
 Part 1 (measured, RUNS_DIR): the median seconds of each phase for 1 rank x 2 threads and 2 ranks x 1
@@ -10,7 +10,7 @@ thread (runs alternated by bench/mpi.sh), their ratio, and rank 0's communicatio
 
 Part 2 (model, --target: the stats of a one-process render of the scene at the size that matters, e.g.
 Sponza at 1280x720). Each phase is either shared (gathering, the final render, the batch strategy's
-"eye paths and look-ups": the world stage's eye paths and the look-up sweeps, "need maps", the shading points, the
+"eye paths and look-ups": the world stage's eye paths and the look-up sweeps, "need maps", "clustering", the shading points, the
 record filter, and insertion's validity-radius clamp and neighbour search, --insertion-shared of insertion) or done by every
 rank (the accelerator, the rest of insertion, "candidates": clustering (and dithering before each rank dithered its own rows), and the need maps in
 stats written before "need maps" was reported apart, and whatever ic_render spends outside its phases). Stats written before "eye paths and
@@ -22,7 +22,10 @@ every rank does. With N ranks of the same threads:
   - records: every pass's records are all-gathered; each rank receives (N-1)/N of
     n_p x RECORD_BYTES (the gather result, 184 bytes, and the bounce levels, 12 bytes x (levels + 1));
   - candidates and look-up sweeps: the bytes the 2-rank runs measured beyond the records, scaled by the
-    pixel count and by (N-1)/N against 1/2;
+    pixel count and by (N-1)/N against 1/2 (as all-gathers: since the world stage's candidates go to their
+    Morton range's rank and the look-ups' luminance only to the ranks whose rows are near, both
+    all-to-alls, this overstates them at more ranks; --measured replaces the whole estimate by the bytes
+    of a real run);
   - the shading points (29 bytes a pixel) and the filtered records (88 bytes each), all-gathered once;
   - the image: the adaptive pilot's relative variances (1 double per pixel) and the image (3 floats),
     each rank's tiles all-gathered, (N-1)/N of each per rank, and the pilot's sums (3 doubles per pixel) of
@@ -30,7 +33,9 @@ every rank does. With N ranks of the same threads:
     --film-doubles: the pilot's sums (4 doubles) and the image (3 doubles) as exchanged before; --sum-image:
     those added over the ranks as before that, 2 (N-1)/N of each, a ring all-reduce;
   - latency: every collective as N - 1 ring steps of ALPHA (50 us at 1 Gb/s, 20 us at 10 Gb/s), about
-    14 collectives per pass (12, and 2 for the neighbour lists of neighbour clamping);
+    17 collectives per pass (12, 2 for the neighbour lists of neighbour clamping, and since the world
+    stage's candidates are clustered on their Morton range's rank 6 instead of 3 for them: counts per
+    bucket, the all-to-all, the ranges' ends, their first runs, and the kept candidates' counts and data);
   - imbalance: a rank's share of a pass is m = n_p / N records (rounded up), and its cost the sum of m
     record costs of relative spread --record-cv (default: measured, see BENCHMARKS.md); the slowest of N
     ranks takes about 1 + cv z_N / sqrt(m) times the mean, z_N the expected maximum of N standard normal
@@ -53,7 +58,7 @@ import statistics
 
 RESULT_BYTES = 184  # sizeof(ic_gather_result)
 LEVEL_BYTES = 12    # one RGB level (ic_vec3)
-COLLECTIVES_PER_PASS = 14
+COLLECTIVES_PER_PASS = 17
 ALPHA = {1: 50e-6, 10: 20e-6}
 
 
@@ -114,6 +119,10 @@ def main():
                     help="collectives per construction pass (%d; 12 before the neighbour lists were shared)"
                          % COLLECTIVES_PER_PASS)
     ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
+    ap.add_argument("--measured", action="append", default=[], metavar="STATS.json",
+                    help="the stats of a real N-rank run of the target (mpirun --oversubscribe on one machine "
+                         "will do: bytes do not depend on the machine): its largest per-rank received bytes "
+                         "stand in for the model's at N ranks")
     ap.add_argument("--interleaved-final", action="store_true",
                     help="model the final render's tiles all interleaved (before the second adaptive pass was "
                          "shared out by cost)")
@@ -162,7 +171,7 @@ def main():
     else:
         shared_cand = phase(t, "candidates") * (1 - cand_serial)
     shared = {"gathering": phase(t, "gathering"), "final render": phase(t, "final render"),
-              "candidates": shared_cand + phase(t, "need maps"),
+              "candidates": shared_cand + phase(t, "need maps") + phase(t, "clustering"),
               "points, filter, validity": phase(t, "shading points") + phase(t, "record filter") +
                                           a.insertion_shared * phase(t, "insertion")}
     total_1 = t["seconds"]
@@ -181,7 +190,11 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     tiles = math.ceil(t["width"] / 16) * math.ceil(t["height"] / 16)
     passes = [p for p in t["records_per_pass"] if p > 0]
-    for n in a.ranks:
+    measured = {}
+    for m in a.measured:
+        d = load(m)
+        measured[d["ranks"]] = max(r["comm_bytes"] for r in d["per_rank"])
+    for n in sorted(set(a.ranks) | set(measured)):
         z = math.sqrt(2 * math.log(n)) if a.sqrt2ln else expected_max_normal(n)
         # Gathering: pass by pass, weighted by the pass's records.
         imb_g = sum(p * math.ceil(p / n) / (p / n) * (1 + a.record_cv * z / math.sqrt(math.ceil(p / n)))
@@ -198,14 +211,16 @@ def main():
             film = px * (4 + 3) * 8 * (2 if a.sum_image else 1)
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 + film * share +
                   (px * 29 + records * 88) * share)
+        if n in measured:
+            volume = measured[n]
         for gbps in a.links:
             latency = a.collectives * t["passes"] * (n - 1) * ALPHA[gbps]
             comm = volume * 8 / (gbps * 1e9) + latency
             tn = (serial + (shared["gathering"] + shared["candidates"] + shared["points, filter, validity"]) / n * imb_g
                   + shared["final render"] / n * imb_f + comm)
-            print("| %d | %d Gb/s | %.2f, %.2f | %.1f | %.2f | %.1f | %.1f | %.2f |"
-                  % (n, gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
-        if n == a.ranks[-1]:
+            print("| %d%s | %d Gb/s | %.2f, %.2f | %.1f | %.2f | %.1f | %.1f | %.2f |"
+                  % (n, " (bytes measured)" if n in measured else "", gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
+        if n == max(set(a.ranks) | set(measured)):
             ideal = serial + sum(shared.values()) / n
             print("\nwithout imbalance and communication, %d ranks: T_N = %.1f s, efficiency %.2f (Amdahl: %.1f s "
                   "done by every rank)" % (n, ideal, total_1 / (n * ideal), serial))

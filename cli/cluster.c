@@ -18,24 +18,46 @@
 
 typedef struct mpi_comm {
     ic_comm comm;
-    int *counts, *displs; /* per rank, for MPI_Allgatherv */
+    int *counts, *displs;   /* per rank, for MPI_Allgatherv and the receiving side of MPI_Alltoallv */
+    int *scounts, *sdispls; /* per rank, the sending side of MPI_Alltoallv */
 } mpi_comm;
+
+/* counts (bytes per rank) as MPI's int counts and displacements; 0 if a count or the total exceeds an int. */
+static int int_counts(const uint64_t *bytes, int size, int *counts, int *displs)
+{
+    uint64_t total = 0;
+    for (int r = 0; r < size; ++r) {
+        if (bytes[r] > (uint64_t)INT32_MAX || total > (uint64_t)INT32_MAX)
+            return 0;
+        counts[r] = (int)bytes[r];
+        displs[r] = (int)total;
+        total += bytes[r];
+    }
+    return 1;
+}
 
 /* MPI counts and displacements are int: an exchange above 2 GiB in all is refused (IC_ERR_UNSUPPORTED). */
 static ic_result mpi_allgather(void *user, const void *send, void *recv, const uint64_t *counts)
 {
     mpi_comm *m = user;
-    uint64_t total = 0;
-    for (int r = 0; r < m->comm.size; ++r) {
-        if (counts[r] > (uint64_t)INT32_MAX || total > (uint64_t)INT32_MAX)
-            return IC_ERR_UNSUPPORTED;
-        m->counts[r] = (int)counts[r];
-        m->displs[r] = (int)total;
-        total += counts[r];
-    }
+    if (!int_counts(counts, m->comm.size, m->counts, m->displs))
+        return IC_ERR_UNSUPPORTED;
     const void *s = send == (const char *)recv + m->displs[m->comm.rank] ? MPI_IN_PLACE : send;
     int rc = MPI_Allgatherv(s, m->counts[m->comm.rank], MPI_BYTE, recv, m->counts, m->displs, MPI_BYTE,
                             MPI_COMM_WORLD);
+    return rc == MPI_SUCCESS ? IC_OK : IC_ERR_IO;
+}
+
+/* The same limit as the all-gather: above 2 GiB to or from one rank, refused. */
+static ic_result mpi_alltoall(void *user, const void *send, const uint64_t *send_counts, void *recv,
+                              const uint64_t *recv_counts)
+{
+    mpi_comm *m = user;
+    if (!int_counts(send_counts, m->comm.size, m->scounts, m->sdispls) ||
+        !int_counts(recv_counts, m->comm.size, m->counts, m->displs))
+        return IC_ERR_UNSUPPORTED;
+    int rc = MPI_Alltoallv(send, m->scounts, m->sdispls, MPI_BYTE, recv, m->counts, m->displs, MPI_BYTE,
+                           MPI_COMM_WORLD);
     return rc == MPI_SUCCESS ? IC_OK : IC_ERR_IO;
 }
 
@@ -93,8 +115,10 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
     if (m) {
         m->counts = calloc((size_t)size, sizeof *m->counts);
         m->displs = calloc((size_t)size, sizeof *m->displs);
+        m->scounts = calloc((size_t)size, sizeof *m->scounts);
+        m->sdispls = calloc((size_t)size, sizeof *m->sdispls);
     }
-    if (!m || !m->counts || !m->displs) {
+    if (!m || !m->counts || !m->displs || !m->scounts || !m->sdispls) {
         fprintf(stderr, "irrcache: out of memory starting %d MPI ranks\n", size);
         MPI_Abort(MPI_COMM_WORLD, 1);
         return NULL;
@@ -105,6 +129,7 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
     m->comm.allgather = mpi_allgather;
     m->comm.sum = mpi_sum;
     m->comm.broadcast = mpi_broadcast;
+    m->comm.alltoall = mpi_alltoall;
     return &m->comm;
 }
 
@@ -116,6 +141,8 @@ void ic_cli_cluster_end(ic_comm *comm)
     MPI_Finalize();
     free(m->counts);
     free(m->displs);
+    free(m->scounts);
+    free(m->sdispls);
     free(m);
 }
 

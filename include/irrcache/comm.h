@@ -3,7 +3,7 @@
  * ranks, one per node) exchanges data, without the library linking any message-passing library.
  *
  * The caller fills an ic_comm with its rank, the number of processes and three collective operations
- * over its own transport (the irrcache command does so over MPI), and passes it in
+ * (a fourth, all-to-all, is optional) over its own transport (the irrcache command does so over MPI), and passes it in
  * ic_render_options.comm. Every process then calls ic_render with the same scene and options: the
  * cache's construction gathers each pass's records on one share of the processes each and exchanges
  * them, so every process holds the same cache; the final render divides the image's tiles among them;
@@ -36,6 +36,13 @@ typedef struct ic_comm {
     ic_result (*sum)(void *user, double *values, uint64_t count);
     /* root's `bytes` bytes at buf copied into buf on every other rank. */
     ic_result (*broadcast)(void *user, void *buf, uint64_t bytes, int root);
+    /* All-to-all (optional): this rank sends send_counts[q] bytes to rank q, the blocks lying in send in
+     * rank order; recv (room for the sum of recv_counts) gets recv_counts[q] bytes from each rank q, in
+     * rank order. recv_counts[q] on this rank equals send_counts[rank] on rank q. NULL: the library
+     * emulates it with allgather, which moves every rank's whole send buffer to every rank (correct, but
+     * without the saving in bytes that data meant for one rank allows). */
+    ic_result (*alltoall)(void *user, const void *send, const uint64_t *send_counts, void *recv,
+                          const uint64_t *recv_counts);
     /* Kept by the library: seconds spent in the operations above and bytes they received, over the
      * comm's lifetime (zero them to start counting). */
     double seconds;

@@ -148,6 +148,69 @@ ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, u
     return r;
 }
 
+ic_result ic_comm_alltoall(ic_comm *comm, const void *send, const uint64_t *matrix, void *recv, const char *what,
+                           ic_error *err)
+{
+    if (!ic_comm_is_shared(comm)) {
+        memcpy(recv, send, matrix[0]);
+        return IC_OK;
+    }
+    const size_t n = (size_t)comm->size, me = (size_t)comm->rank;
+    uint64_t *out = malloc(sizeof *out * n), *in = malloc(sizeof *in * n);
+    if (!out || !in) {
+        free(out);
+        free(in);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for %d ranks' counts", comm->size);
+    }
+    uint64_t received = 0, all_bytes = 0, mine_at = 0;
+    for (size_t q = 0; q < n; ++q) {
+        out[q] = matrix[me * n + q];
+        in[q] = matrix[q * n + me];
+        received += q == me ? 0 : in[q];
+    }
+    double t0 = now();
+    ic_result r = IC_OK;
+    if (comm->alltoall) {
+        r = comm->alltoall(comm->user, send, out, recv, in);
+        comm->bytes += received;
+    } else {
+        /* Every rank's whole buffer to every rank (out[] reused as the buffers' sizes). */
+        for (size_t q = 0; q < n; ++q) {
+            uint64_t sz = 0;
+            for (size_t k = 0; k < n; ++k)
+                sz += matrix[q * n + k];
+            if (q < me)
+                mine_at += sz;
+            all_bytes += sz;
+            out[q] = sz;
+        }
+        char *all = malloc(all_bytes ? all_bytes : 1);
+        if (!all) {
+            r = IC_ERR_OOM;
+        } else {
+            memcpy(all + mine_at, send, out[me]);
+            r = comm->allgather(comm->user, all + mine_at, all, out);
+            uint64_t at = 0, put = 0;
+            for (size_t q = 0; r == IC_OK && q < n; ++q) {
+                uint64_t skip = 0;
+                for (size_t k = 0; k < me; ++k)
+                    skip += matrix[q * n + k];
+                memcpy((char *)recv + put, all + at + skip, in[q]);
+                put += in[q];
+                at += out[q];
+            }
+            free(all);
+        }
+        comm->bytes += all_bytes - out[me];
+    }
+    comm->seconds += now() - t0;
+    free(out);
+    free(in);
+    if (r == IC_ERR_OOM)
+        return ic_error_set(err, r, "out of memory for %s (%d ranks)", what, comm->size);
+    return r == IC_OK ? IC_OK : failed(err, r, what);
+}
+
 ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err)
 {
     if (!ic_comm_is_shared(comm) || count == 0)

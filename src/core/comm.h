@@ -43,6 +43,13 @@ typedef ic_result (*ic_comm_gather_fn)(void *user, const void *in, uint64_t n, v
 ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, uint64_t count, int arrays,
                                void *const *out, const size_t *out_bytes, ic_comm_gather_fn gather, void *user,
                                const char *what, uint64_t *own, ic_error *err);
+/* All-to-all: matrix[q * N + r] is the bytes rank q sends rank r (the same N × N matrix on every rank, so
+ * each knows what it receives and where its blocks lie in the others' buffers). send holds this rank's
+ * blocks in rank order; recv (room for the column's sum) gets the blocks sent to this rank, in rank order.
+ * Through the comm's alltoall or, without one, an all-gather of every rank's whole send buffer from which
+ * each keeps its own blocks. For one process the one block is copied. `what` names the data in messages. */
+ic_result ic_comm_alltoall(ic_comm *comm, const void *send, const uint64_t *matrix, void *recv, const char *what,
+                           ic_error *err);
 /* Sums count doubles over the ranks, in place (a no-op for one process). */
 ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err);
 /* Copies root's bytes to every rank (a no-op for one process). */

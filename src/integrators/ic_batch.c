@@ -111,9 +111,9 @@ static void world_path(void *p, int64_t own_item, int thread)
 
 /* Collects world-stage candidates in item order (deterministic), then clusters and selects;
  * uncovered_share gets the share of the eye paths' look-up points that found no record; the paths' own time
- * is added to *sweep_seconds. */
+ * is added to *sweep_seconds, the clustering's (exchanges excluded) to *cluster_seconds. */
 static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *out_count, double *uncovered_share,
-                             double *sweep_seconds, ic_error *err)
+                             double *sweep_seconds, double *cluster_seconds, ic_error *err)
 {
     const ic_camera *cam = &c->tr->scene->camera;
     world_job j;
@@ -153,15 +153,20 @@ static ic_result world_stage(ic_ctx *c, int pass, ic_candidate **out, uint32_t *
         for (int k = 0; k < j.slot_count[i]; ++k)
             j.slots[n++] = j.slots[i * WORLD_SLOTS + k];
     }
-    if (r == IC_OK)
-        r = ic_comm_allgather_counted(c->comm, j.slots, n, sizeof *j.slots, &n, err);
-    if (r == IC_OK)
-        r = ic_comm_sum(c->comm, &visited, 1, err);
-    *uncovered_share = visited > 0.0 ? (double)n / visited : 0.0;
-    const ic_scene *sc = c->tr->scene;
-    *out_count = ic_world_select(j.slots, (uint32_t)n, sc->bounds_min, sc->bounds_max,
-                                 c->o.cluster_size * c->work_extent, 3, 30.0f);
-    *out = j.slots;
+    /* Clustered where they lie on the Morton order: under several processes each clusters a range of it
+     * and only the kept candidates go to every process (ic_world_select_shared). */
+    uint64_t total = n;
+    if (r == IC_OK) {
+        const ic_scene *sc = c->tr->scene;
+        double t1 = ic_seconds(), comm1 = c->comm ? c->comm->seconds : 0.0;
+        r = ic_world_select_shared(c->comm, j.slots, (uint32_t)n, sc->bounds_min, sc->bounds_max,
+                                   c->o.cluster_size * c->work_extent, 3, 30.0f, out, out_count, &total, &visited,
+                                   err);
+        *cluster_seconds += ic_seconds() - t1 - (c->comm ? c->comm->seconds - comm1 : 0.0);
+    } else {
+        free(j.slots);
+    }
+    *uncovered_share = visited > 0.0 ? (double)total / visited : 0.0;
     free(j.slot_count);
     free(j.visited);
     free(j.rays);
@@ -328,13 +333,14 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
 {
     size_t npix = (size_t)c->g.width * c->g.height;
     float *need = malloc(sizeof *need * npix);
-    float *lum = malloc(sizeof *lum * npix);
+    float *lum = calloc(npix, sizeof *lum); /* rows no need map of this process reads stay 0 */
     uint8_t *covered = malloc(npix);
     uint32_t *pix = malloc(sizeof *pix * npix);
     ic_candidate *cand = malloc(sizeof *cand * npix);
     ic_result r = IC_OK;
     double sweeps = 0.0; /* seconds in the eye paths and look-up sweeps, exchanges excluded */
     double need_seconds = 0.0; /* in this process's rows of the need maps and their dithering */
+    double cluster_seconds = 0.0; /* in this process's range of the world stage's Morton order */
     if (c->comm) {
         c->comm_seconds_counted = c->comm->seconds;
         c->comm_bytes_counted = c->comm->bytes;
@@ -369,7 +375,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         if (pass <= c->o.screen_passes) {
             r = timed_lookup_all(c, lum, covered, 1, &sweeps);
             if (r != IC_OK) {
-                ic_error_set(err, r, "could not start threads");
+                ic_error_set(err, r, "the look-up sweep of cache pass %d failed (%s)", pass, ic_result_name(r));
                 goto done;
             }
             if ((r = own_need(c, lum, need, &need_seconds, err)) != IC_OK)
@@ -397,7 +403,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         ic_candidate *wc = NULL;
         uint32_t wn = 0;
         double uncovered = 1.0;
-        r = world_stage(c, pass, &wc, &wn, &uncovered, &sweeps, err);
+        r = world_stage(c, pass, &wc, &wn, &uncovered, &sweeps, &cluster_seconds, err);
         if (r == IC_OK)
             r = ic_ic_gather_and_insert(c, wc, wn, pt, err);
         free(wc);
@@ -433,6 +439,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
      * every process does alike): reported apart so that a scaling model can tell them apart. */
     ic_stats_add_phase(st, "eye paths and look-ups", sweeps);
     ic_stats_add_phase(st, "need maps", need_seconds);
+    ic_stats_add_phase(st, "clustering", cluster_seconds);
 done:
     free(need);
     free(lum);

@@ -9,6 +9,7 @@
 
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Follows a camera ray through ideal specular surfaces to the first surface with a smooth lobe.
  * Glass takes the more likely branch (refraction unless Fresnel reflection dominates): the shading
@@ -181,8 +182,77 @@ static void lookup_row(void *p, int64_t item, int thread)
     }
 }
 
-/* Several processes (c->comm): a block of rows each. The luminances, when asked for, are exchanged so that
- * every process holds them all (a need map's row reads its neighbourhood on the pyramid's coarse levels);
+/* Several processes: rank q's block of rows [b[q], b[q + 1]) goes to every other rank whose band (its
+ * block widened by IC_SCREEN_HALO rows each way, what its need map reads) it meets; *band gets this
+ * rank's. Each block's rows stay in order, so the all-to-all's blocks land row after row. */
+static void band_of(const uint64_t *b, int r, int height, int64_t *lo, int64_t *hi)
+{
+    *lo = (int64_t)b[r] - IC_SCREEN_HALO > 0 ? (int64_t)b[r] - IC_SCREEN_HALO : 0;
+    *hi = (int64_t)b[r + 1] + IC_SCREEN_HALO < height ? (int64_t)b[r + 1] + IC_SCREEN_HALO : height;
+}
+
+static ic_result exchange_band(ic_ctx *c, float *lum)
+{
+    const int n = ic_comm_size(c->comm), me = ic_comm_rank(c->comm), h = c->g.height;
+    const size_t row = sizeof *lum * (size_t)c->g.width;
+    uint64_t *b = malloc(sizeof *b * ((size_t)n + 1)), *matrix = malloc(sizeof *matrix * (size_t)n * (size_t)n);
+    float *send = NULL, *recv = NULL;
+    ic_result r = b && matrix ? IC_OK : IC_ERR_OOM;
+    uint64_t out_rows = 0, in_rows = 0;
+    for (int q = 0; r == IC_OK && q <= n; ++q) {
+        uint64_t first, rows;
+        ic_comm_block((uint64_t)h, n, q < n ? q : n - 1, &first, &rows);
+        b[q] = q < n ? first : first + rows;
+    }
+    /* matrix[q][t]: the rows of q's block inside t's band (none to itself). */
+    for (int q = 0; r == IC_OK && q < n; ++q)
+        for (int t = 0; t < n; ++t) {
+            int64_t lo, hi;
+            band_of(b, t, h, &lo, &hi);
+            int64_t a = lo > (int64_t)b[q] ? lo : (int64_t)b[q], z = hi < (int64_t)b[q + 1] ? hi : (int64_t)b[q + 1];
+            uint64_t rows = q != t && z > a ? (uint64_t)(z - a) : 0;
+            matrix[(size_t)q * n + t] = rows * row;
+            out_rows += q == me ? rows : 0;
+            in_rows += t == me ? rows : 0;
+        }
+    if (r == IC_OK) {
+        send = malloc(out_rows ? out_rows * row : 1);
+        recv = malloc(in_rows ? in_rows * row : 1);
+        r = send && recv ? IC_OK : IC_ERR_OOM;
+    }
+    if (r == IC_OK) {
+        char *put = (char *)send;
+        for (int t = 0; t < n; ++t) {
+            int64_t lo, hi;
+            band_of(b, t, h, &lo, &hi);
+            int64_t a = lo > (int64_t)b[me] ? lo : (int64_t)b[me];
+            uint64_t bytes = matrix[(size_t)me * n + t];
+            memcpy(put, lum + (size_t)a * c->g.width, bytes);
+            put += bytes;
+        }
+        r = ic_comm_alltoall(c->comm, send, matrix, recv, "exchanging look-ups", NULL);
+    }
+    if (r == IC_OK) {
+        int64_t lo, hi;
+        band_of(b, me, h, &lo, &hi);
+        const char *get = (const char *)recv;
+        for (int q = 0; q < n; ++q) {
+            int64_t a = lo > (int64_t)b[q] ? lo : (int64_t)b[q];
+            uint64_t bytes = matrix[(size_t)q * n + me];
+            memcpy(lum + (size_t)a * c->g.width, get, bytes);
+            get += bytes;
+        }
+    }
+    free(b);
+    free(matrix);
+    free(send);
+    free(recv);
+    return r;
+}
+
+/* Several processes (c->comm): a block of rows each. The luminances, when asked for, go to the processes
+ * whose need maps read them (a band of IC_SCREEN_HALO rows around each block, the pyramid's coarse levels'
+ * reach); rows outside this process's band keep whatever they held, which its need map never reads.
  * `covered` stays on the rows' own process, which alone reads it. */
 ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acceptance acc, int want_lum)
 {
@@ -190,8 +260,7 @@ ic_result ic_ic_lookup_all(ic_ctx *c, float *lum, uint8_t *covered, ic_cache_acc
     ic_comm_block((uint64_t)c->g.height, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &rows);
     lookup_job j = {c, lum, covered, acc, (int)first};
     ic_result r = ic_parallel_for(c->threads, (int64_t)rows, lookup_row, &j);
-    if (r == IC_OK && want_lum)
-        r = ic_comm_allgather_blocks(c->comm, lum, (uint64_t)c->g.height, sizeof *lum * (size_t)c->g.width,
-                                     "exchanging look-ups", NULL);
+    if (r == IC_OK && want_lum && ic_comm_is_shared(c->comm))
+        r = exchange_band(c, lum);
     return r;
 }

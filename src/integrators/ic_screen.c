@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_LEVELS 6 /* 1, 2, 4, 8, 16, 32 pixels: the dithering spacings */
 
 /* One level of the pyramid: the channels its discontinuity reads (p, n, fp for geometry; val for values)
  * and valid. Level 0 is the g-buffer itself (and the values), not a copy. */
@@ -179,15 +178,15 @@ static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc
     if (y0 < 0 || y1 > g->height || y0 >= y1)
         return y0 == y1 ? IC_OK : IC_ERR_INVALID_ARG;
     const int geometry = values == NULL;
-    level lv[MAX_LEVELS];
-    float *d[MAX_LEVELS] = {0};
+    level lv[IC_SCREEN_LEVELS];
+    float *d[IC_SCREEN_LEVELS] = {0};
     memset(lv, 0, sizeof lv);
     /* Level 0 reads the g-buffer and the values where they are (const: never written below). */
     level top = {g->width, g->height, g->p, g->n, g->footprint, (float *)values, g->valid};
     lv[0] = top;
     int nlev = 1;
     ic_result r = IC_OK;
-    while (nlev < MAX_LEVELS && lv[nlev - 1].w > 1 && lv[nlev - 1].h > 1) {
+    while (nlev < IC_SCREEN_LEVELS && lv[nlev - 1].w > 1 && lv[nlev - 1].h > 1) {
         if (!level_alloc(&lv[nlev], (lv[nlev - 1].w + 1) / 2, (lv[nlev - 1].h + 1) / 2, geometry)) {
             r = IC_ERR_OOM;
             goto done;
@@ -211,9 +210,9 @@ static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc
         r = ic_parallel_for(threads, y1 - y0, blend_row, &j);
     }
 done:
-    for (int l = 0; l < MAX_LEVELS; ++l)
+    for (int l = 0; l < IC_SCREEN_LEVELS; ++l)
         free(d[l]);
-    for (int l = 1; l < MAX_LEVELS; ++l)
+    for (int l = 1; l < IC_SCREEN_LEVELS; ++l)
         level_free(&lv[l]);
     return r;
 }

@@ -36,6 +36,12 @@ typedef struct ic_gbuffer {
  * processes can each make a block of rows and exchange them). k_normal weights the normal term. It runs
  * on `threads` threads (any count, the same map). */
 ic_result ic_screen_geometry_need(const ic_gbuffer *g, float k_normal, int threads, int y0, int y1, float *need);
+/* The pyramid's levels: 1, 2, 4, 8, 16 and 32 pixels, the dithering spacings. */
+#define IC_SCREEN_LEVELS 6
+/* The rows on either side of [y0, y1) that a need map of those rows reads (the coarsest level's texel
+ * rows around theirs): values outside [y0 − IC_SCREEN_HALO, y1 + IC_SCREEN_HALO) do not change it, so a
+ * process that makes a block of rows needs only that band of the values. */
+#define IC_SCREEN_HALO (2 << (IC_SCREEN_LEVELS - 1))
 /* Need map from per-pixel luminance values (e.g. cache look-ups), rows [y0, y1); invalid pixels ignored. */
 ic_result ic_screen_value_need(const ic_gbuffer *g, const float *luminance, int threads, int y0, int y1,
                                float *need);

@@ -13,6 +13,7 @@
 #include "test_render_util.h"
 
 #include "core/rng.h"
+#include "integrators/ic_world.h"
 #include "irrcache/cache.h"
 #include "irrcache/points.h"
 
@@ -84,6 +85,31 @@ static ic_result fake_broadcast(void *user, void *buf, uint64_t bytes, int root)
     return IC_OK;
 }
 
+/* All-to-all: every rank publishes its buffer and its counts, then reads its block of each. */
+static const uint64_t *published_counts[MAX_RANKS];
+static ic_result fake_alltoall(void *user, const void *send, const uint64_t *send_counts, void *recv,
+                               const uint64_t *recv_counts)
+{
+    rank_link *l = user;
+    transport *t = l->t;
+    t->published[l->rank] = send;
+    published_counts[l->rank] = send_counts;
+    pthread_barrier_wait(&t->barrier);
+    uint64_t put = 0;
+    for (int q = 0; q < t->size; ++q) {
+        uint64_t skip = 0;
+        for (int k = 0; k < l->rank; ++k)
+            skip += published_counts[q][k];
+        if (published_counts[q][l->rank] != recv_counts[q])
+            fprintf(stderr, "rank %d expects %llu bytes from rank %d, which sends %llu\n", l->rank,
+                    (unsigned long long)recv_counts[q], q, (unsigned long long)published_counts[q][l->rank]);
+        memcpy((char *)recv + put, (const char *)t->published[q] + skip, recv_counts[q]);
+        put += recv_counts[q];
+    }
+    pthread_barrier_wait(&t->barrier);
+    return IC_OK;
+}
+
 /* ---- one job: `size` ranks, each a thread running ic_render or ic_points_compute */
 typedef struct rank_job {
     rank_link link;
@@ -137,8 +163,10 @@ static int run_job(rank_job *jobs, int size)
     for (int r = 0; r < size; ++r) {
         jobs[r].link.t = &t;
         jobs[r].link.rank = r;
+        /* Two ranks without an all-to-all (the library emulates it with the all-gather), more with one. */
         jobs[r].comm = (ic_comm){.rank = r, .size = size, .user = &jobs[r].link, .allgather = fake_allgather,
-                                 .sum = fake_sum, .broadcast = fake_broadcast};
+                                 .sum = fake_sum, .broadcast = fake_broadcast,
+                                 .alltoall = size > 2 ? fake_alltoall : NULL};
         pthread_create(&th[r], NULL, run_rank, &jobs[r]);
     }
     int ok = 1;
@@ -295,8 +323,111 @@ static void check_cache_insertions(void)
     }
 }
 
+/* ---- the world stage's clustering over several processes: each holds a share of the candidates, and
+ * every one gets what ic_world_select gives for them all at once, bit for bit */
+typedef struct world_rank {
+    rank_link link;
+    ic_comm comm;
+    ic_candidate *own;
+    uint32_t own_count;
+    float max_box;
+    ic_candidate *out;
+    uint32_t kept;
+    uint64_t total;
+    double visited;
+    ic_result r;
+    ic_error err;
+} world_rank;
+
+static const ic_vec3 WORLD_LO = {-1.0f, -1.0f, -1.0f}, WORLD_HI = {1.0f, 1.0f, 1.0f};
+
+static void *run_world_rank(void *p)
+{
+    world_rank *w = p;
+    w->r = ic_world_select_shared(&w->comm, w->own, w->own_count, WORLD_LO, WORLD_HI, w->max_box, 3, 30.0f, &w->out,
+                                  &w->kept, &w->total, &w->visited, &w->err);
+    return NULL;
+}
+
+/* count candidates from `make` (index → candidate), dealt to `size` ranks in blocks of `deal`. */
+static void check_world(const char *what, const ic_candidate *all, uint32_t count, float max_box, int size, int deal,
+                        int alltoall)
+{
+    ic_candidate *want = malloc(sizeof *want * count);
+    memcpy(want, all, sizeof *want * count);
+    uint32_t kept = ic_world_select(want, count, WORLD_LO, WORLD_HI, max_box, 3, 30.0f);
+    transport t;
+    memset(&t, 0, sizeof t);
+    t.size = size;
+    pthread_barrier_init(&t.barrier, NULL, (unsigned)size);
+    world_rank w[MAX_RANKS];
+    pthread_t th[MAX_RANKS];
+    memset(w, 0, sizeof w);
+    for (int r = 0; r < size; ++r) {
+        w[r].own = malloc(sizeof *w[r].own * (count + 1));
+        for (uint32_t i = 0; i < count; ++i)
+            if ((int)(i / (uint32_t)deal) % size == r)
+                w[r].own[w[r].own_count++] = all[i];
+        w[r].visited = r + 1.0;
+        w[r].max_box = max_box;
+        w[r].link = (rank_link){&t, r};
+        w[r].comm = (ic_comm){.rank = r, .size = size, .user = &w[r].link, .allgather = fake_allgather,
+                              .sum = fake_sum, .broadcast = fake_broadcast, .alltoall = alltoall ? fake_alltoall : NULL};
+        pthread_create(&th[r], NULL, run_world_rank, &w[r]);
+    }
+    for (int r = 0; r < size; ++r)
+        pthread_join(th[r], NULL);
+    pthread_barrier_destroy(&t.barrier);
+    for (int r = 0; r < size; ++r) {
+        CHECK(w[r].r == IC_OK, "%s, %d ranks: rank %d failed: %s", what, size, r, w[r].err.message);
+        CHECK(w[r].total == count && w[r].visited == size * (size + 1) / 2.0,
+              "%s, %d ranks: rank %d counted %llu candidates and %g visited, not %u and %g", what, size, r,
+              (unsigned long long)w[r].total, w[r].visited, count, size * (size + 1) / 2.0);
+        CHECK(w[r].kept == kept && (!kept || !memcmp(w[r].out, want, sizeof *want * kept)),
+              "%s, %d ranks%s: rank %d kept %u candidates, one process %u, or not the same", what, size,
+              alltoall ? "" : " (emulated all-to-all)", r, w[r].kept, kept);
+        free(w[r].out);
+    }
+    free(want);
+}
+
+static void test_world_select(void)
+{
+    enum { COUNT = 4000 };
+    ic_candidate *c = malloc(sizeof *c * COUNT);
+    ic_rng rng = ic_rng_make(23, 0, 0, 0);
+    /* Three quarters in a dense patch (no gap between Morton neighbours inside it at the larger boxes, so
+     * clusters cross the ranges' ends and heads run over whole ranges), the rest scattered. The normal
+     * follows the position (one direction where x > 0.5, another where y > 0.5, a third elsewhere), so a
+     * cluster's second and third kept candidates lie far along the order: a cluster cut short at a
+     * range's end loses them. */
+    for (uint32_t i = 0; i < COUNT; ++i) {
+        float s = i % 4 ? 0.05f : 1.0f;
+        c[i].p = (ic_vec3){s * (2.0f * ic_rng_float(&rng) - 1.0f), s * (2.0f * ic_rng_float(&rng) - 1.0f),
+                           i % 4 ? 0.0f : 2.0f * ic_rng_float(&rng) - 1.0f};
+        int d = c[i].p.x > 0.5f ? 0 : c[i].p.y > 0.5f ? 1 : 2;
+        c[i].n = (ic_vec3){d == 0 ? 1.0f : 0.0f, d == 1 ? 1.0f : 0.0f, d == 2 ? 1.0f : 0.0f};
+        c[i].footprint = 0.0f;
+        c[i].key = (uint64_t)i * 2654435761u;
+    }
+    const float boxes[] = {0.0f, 0.01f, 0.2f, 5.0f};
+    for (int b = 0; b < 4; ++b)
+        for (int size = 2; size <= MAX_RANKS; ++size) {
+            char what[64];
+            snprintf(what, sizeof what, "world select, box %g", boxes[b]);
+            check_world(what, c, COUNT, boxes[b], size, 7, size != 4);
+        }
+    /* Every candidate in one Morton bucket: all ranges but one empty. */
+    for (uint32_t i = 0; i < COUNT; ++i)
+        c[i].p = (ic_vec3){0.3f + 1e-4f * ic_rng_float(&rng), 0.3f, 0.3f};
+    check_world("world select, one bucket", c, COUNT, 1e-5f, 5, 1, 1);
+    check_world("world select, no candidates", c, 0, 1e-5f, 3, 1, 1);
+    free(c);
+}
+
 int main(void)
 {
+    test_world_select();
     ic_error err = {0};
     ic_scene *scene = NULL;
     ic_scene_load_options lo = {0};

@@ -4,7 +4,8 @@
  *   1. need maps (geometry and value discontinuity): every pixel equal, bit for bit, to a direct
  *      evaluation of the definition (a 2×2 mip pyramid of the valid pixels, at each level the largest
  *      discontinuity to a valid 4-neighbour, the levels' values at the pixel added with weight 2^-l in
- *      level order), on a g-buffer with holes and odd sizes, with 1 and 3 threads;
+ *      level order), on a g-buffer with holes and odd sizes, with 1 and 3 threads; a block of rows reads
+ *      values IC_SCREEN_HALO rows away and no farther;
  *   2. world-stage selection keeps candidates in (Morton code, key) order: with clusters of one candidate
  *      each, the output is the input sorted by a comparison sort, keys using all 64 bits and many
  *      candidates sharing a Morton code;
@@ -157,6 +158,49 @@ static void test_need_maps(void)
     }
 }
 
+/* The value map of a block of rows reads IC_SCREEN_HALO rows of values on either side and no more, which
+ * is what lets several processes exchange only that band: values outside it replaced by garbage leave the
+ * block's map unchanged bit for bit. The block starts 31 rows past a 32-row boundary, where the coarsest
+ * level reaches farthest, 63 rows: garbage from 62 rows away changes the map. */
+static void test_halo(void)
+{
+    enum { W2 = 37, H2 = 320 };
+    static ic_vec3 p[W2 * H2], n[W2 * H2];
+    static float fp[W2 * H2], lum[W2 * H2], junk[W2 * H2], want[W2 * H2], got[W2 * H2];
+    static uint8_t valid[W2 * H2];
+    ic_rng rng = ic_rng_make(29, 0, 0, 0);
+    for (int i = 0; i < W2 * H2; ++i) {
+        int x = i % W2, y = i / W2;
+        p[i] = v3(0.01f * (float)x, 0.01f * (float)y, 2.0f);
+        n[i] = v3(0, 0, 1);
+        fp[i] = 0.01f;
+        lum[i] = 1.0f + ic_rng_float(&rng) + (y % 50 < 3 ? 4.0f : 0.0f);
+        valid[i] = (x * 7 + y) % 23 != 0;
+    }
+    ic_gbuffer g = {W2, H2, p, n, fp, valid};
+    const int y0 = 4 * 32 + 31, y1 = y0 + 45;
+    ic_result r = ic_screen_value_need(&g, lum, 2, y0, y1, want);
+    for (int reach = IC_SCREEN_HALO; r == IC_OK && reach >= IC_SCREEN_HALO - 2; reach -= 2) {
+        /* Garbage on every row but [y0 − reach, y1 + reach). */
+        for (int i = 0; i < W2 * H2; ++i) {
+            int y = i / W2;
+            junk[i] = y >= y0 - reach && y < y1 + reach ? lum[i] : 1e3f * ic_rng_float(&rng);
+        }
+        memset(got, 0, sizeof got);
+        r = ic_screen_value_need(&g, junk, 2, y0, y1, got);
+        int differ = 0;
+        for (int i = y0 * W2; i < y1 * W2; ++i)
+            differ += memcmp(&got[i], &want[i], sizeof got[i]) != 0;
+        if (reach == IC_SCREEN_HALO)
+            CHECK(differ == 0, "value need map of rows [%d, %d): %d pixels changed by values more than %d rows "
+                  "away", y0, y1, differ, IC_SCREEN_HALO);
+        else
+            CHECK(differ > 0, "value need map of rows [%d, %d): values %d rows away changed nothing (the band "
+                  "could be narrower than IC_SCREEN_HALO)", y0, y1, reach);
+    }
+    CHECK(r == IC_OK, "value need map: %s", ic_result_name(r));
+}
+
 /* ---- 2. world-stage selection order ------------------------------------------------------------- */
 
 typedef struct ref_entry {
@@ -248,6 +292,7 @@ static void test_dither(void)
 int main(void)
 {
     test_need_maps();
+    test_halo();
     test_world_order();
     test_dither();
     TEST_MAIN_END();
