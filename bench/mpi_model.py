@@ -20,7 +20,8 @@ every rank does. With N ranks of the same threads:
     T_N = serial + shared / N x imbalance(N) + communication(N)
 
   - records: every pass's records are all-gathered; each rank receives (N-1)/N of
-    n_p x RECORD_BYTES (the gather result, 184 bytes, and the bounce levels, 12 bytes x (levels + 1));
+    n_p x RECORD_BYTES (the gather result less its Hessian, 116 bytes, and the bounce levels, 12 bytes x
+    (levels + 1));
   - candidates and look-up sweeps: the bytes the 2-rank runs measured beyond the records, scaled by the
     pixel count and by (N-1)/N against 1/2 (as all-gathers: since the world stage's candidates go to their
     Morton range's rank and the look-ups' luminance only to the ranks whose rows are near, both
@@ -56,7 +57,7 @@ import math
 import os
 import statistics
 
-RESULT_BYTES = 184  # sizeof(ic_gather_result)
+RESULT_BYTES = 116  # the bytes of ic_gather_result that travel: all but its 64 bytes of Hessian (180 in all)
 LEVEL_BYTES = 12    # one RGB level (ic_vec3)
 COLLECTIVES_PER_PASS = 17
 ALPHA = {1: 50e-6, 10: 20e-6}

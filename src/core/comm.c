@@ -102,8 +102,8 @@ ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, 
 }
 
 ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, uint64_t count, int arrays,
-                               void *const *out, const size_t *out_bytes, ic_comm_gather_fn gather, void *user,
-                               const char *what, uint64_t *own, ic_error *err)
+                               void *const *out, const size_t *out_bytes, const size_t *sent_bytes,
+                               ic_comm_gather_fn gather, void *user, const char *what, uint64_t *own, ic_error *err)
 {
     int ranks = ic_comm_size(comm), rank = ic_comm_rank(comm);
     *own = count;
@@ -131,15 +131,24 @@ ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, u
         r = gather(user, mine, *own, block, err);
     char exchanging[96];
     snprintf(exchanging, sizeof exchanging, "exchanging %s", what);
-    for (int a = 0; a < arrays && r == IC_OK; ++a)
-        r = ic_comm_allgather_blocks(comm, all[a], count, out_bytes[a], exchanging, err);
+    size_t sent[IC_COMM_SHARE_MAX_ARRAYS];
+    for (int a = 0; a < arrays && r == IC_OK; ++a) {
+        /* Only each item's first sent[a] bytes travel: this rank's block packed to that stride in place. */
+        sent[a] = sent_bytes && sent_bytes[a] < out_bytes[a] ? sent_bytes[a] : out_bytes[a];
+        for (uint64_t k = 0; sent[a] < out_bytes[a] && k < *own; ++k)
+            memmove(all[a] + (first + k) * sent[a], all[a] + (first + k) * out_bytes[a], sent[a]);
+        r = ic_comm_allgather_blocks(comm, all[a], count, sent[a], exchanging, err);
+    }
     for (int q = 0; r == IC_OK && q < ranks; ++q) {
         uint64_t q_first, q_own;
         ic_comm_block(count, ranks, q, &q_first, &q_own);
         for (uint64_t k = 0; k < q_own; ++k) {
             uint64_t i = (uint64_t)q + k * (uint64_t)ranks;
-            for (int a = 0; a < arrays; ++a)
-                memcpy((char *)out[a] + i * out_bytes[a], all[a] + (q_first + k) * out_bytes[a], out_bytes[a]);
+            for (int a = 0; a < arrays; ++a) {
+                char *to = (char *)out[a] + i * out_bytes[a];
+                memcpy(to, all[a] + (q_first + k) * sent[a], sent[a]);
+                memset(to + sent[a], 0, out_bytes[a] - sent[a]);
+            }
         }
     }
     free(mine);

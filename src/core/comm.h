@@ -36,13 +36,15 @@ ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, 
  * of N takes items r, r + N, r + 2N, … (interleaved: neighbouring items, which cost alike, spread over every
  * rank): their inputs (in: count items of in_bytes) are picked into a contiguous array, gather is called
  * once on them, writing to its block of rank-ordered buffers (ic_comm_block's sizes), and the blocks are
- * exchanged and put back in item order. For one process (or no items) gather runs once on in and out
+ * exchanged and put back in item order. sent_bytes (NULL: whole items) says how much of each item of
+ * array a travels, its first sent_bytes[a] bytes: the gather must leave the rest of every item zero, and
+ * the other ranks' items get zeros there. For one process (or no items) gather runs once on in and out
  * themselves. *own gets the number of items this rank gathered; `what` names the items in messages. */
 #define IC_COMM_SHARE_MAX_ARRAYS 4
 typedef ic_result (*ic_comm_gather_fn)(void *user, const void *in, uint64_t n, void *const *out, ic_error *err);
 ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, uint64_t count, int arrays,
-                               void *const *out, const size_t *out_bytes, ic_comm_gather_fn gather, void *user,
-                               const char *what, uint64_t *own, ic_error *err);
+                               void *const *out, const size_t *out_bytes, const size_t *sent_bytes,
+                               ic_comm_gather_fn gather, void *user, const char *what, uint64_t *own, ic_error *err);
 /* All-to-all: matrix[q * N + r] is the bytes rank q sends rank r (the same N × N matrix on every rank, so
  * each knows what it receives and where its blocks lie in the others' buffers). send holds this rank's
  * blocks in rank order; recv (room for the column's sum) gets the blocks sent to this rank, in rank order.

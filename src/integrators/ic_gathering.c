@@ -8,6 +8,7 @@
 #include "core/threads.h"
 
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -531,9 +532,15 @@ ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t co
     size_t stride = (size_t)c->levels + 1;
     void *const outs[2] = {out, levels};
     const size_t sizes[2] = {sizeof *out, sizeof *levels * stride};
+    /* Without a Hessian the gatherers leave a result's second-order fields (its last 64 bytes) zero: they
+     * stay home (a quarter of the bytes a record sends without its levels). */
+    _Static_assert(offsetof(ic_gather_result, has_hessian) + sizeof(int) + 2 * sizeof(ic_vec3) + 9 * sizeof(float) ==
+                       sizeof(ic_gather_result), "the second-order fields end the result");
+    const size_t sent[2] = {c->o.gather.with_hessian ? sizeof *out : offsetof(ic_gather_result, has_hessian),
+                            sizes[1]};
     uint64_t own;
-    ic_result r = ic_comm_share_gather(c->comm, pts, sizeof *pts, count, levels ? 2 : 1, outs, sizes, gather_block,
-                                       &u, "gather results", &own, err);
+    ic_result r = ic_comm_share_gather(c->comm, pts, sizeof *pts, count, levels ? 2 : 1, outs, sizes, sent,
+                                       gather_block, &u, "gather results", &own, err);
     if (shared) {
         c->gathered += own;
         free(u.gathered);

@@ -353,8 +353,8 @@ static ic_result gather_shared(ic_ctx *c, rad_job *j, uint32_t count, int thread
     void *const outs[2] = {payload, j->res};
     const size_t sizes[2] = {sizeof *payload * floats, sizeof *j->res};
     uint64_t own;
-    ic_result r = ic_comm_share_gather(c->comm, j->cand, sizeof *j->cand, count, 2, outs, sizes, gather_block, &u,
-                                       "radiance records", &own, err);
+    ic_result r = ic_comm_share_gather(c->comm, j->cand, sizeof *j->cand, count, 2, outs, sizes, NULL, gather_block,
+                                       &u, "radiance records", &own, err);
     c->gathered += own;
     point_results(j->res, payload, count, floats); /* the exchanged results' pointers were their senders' */
     return r;

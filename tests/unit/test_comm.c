@@ -2,10 +2,11 @@
  * test_comm.c — a render shared by several processes (irrcache/comm.h) gives the bits one process gives.
  * The "processes" are threads of this program, each calling ic_render with its own ic_comm over an
  * in-memory transport (a barrier and shared pointers), so the library's side runs in every build,
- * the sanitizer build included, with no MPI: the cache (batch and adaptive), the path tracer, a loaded
- * cache file and the sensor points at 2, 3 and 5 ranks against one process with 2 threads; under a time
- * budget (path tracer and cache) every rank the same image; cache insertions shared by 3 ranks
- * (ic_cache_set_comm) the records one process makes. tests/mpi/test_mpi.sh does the same through
+ * the sanitizer build included, with no MPI: the cache (batch and adaptive; elliptical Hessian records),
+ * the path tracer, a loaded cache file and the sensor points at 2, 3 and 5 ranks against one process with
+ * 2 threads; under a time budget (path tracer and cache) every rank the same image; cache insertions shared
+ * by 3 ranks (ic_cache_set_comm) the records one process makes; the world stage's clustering over 2–5
+ * ranks the selection of one process. tests/mpi/test_mpi.sh does the same through
  * mpirun.
  */
 #include "test_util.h"
@@ -453,6 +454,12 @@ int main(void)
     ic_render_options loaded = ic;
     loaded.ic.load_cache = CACHE_FILE;
     check_render("cache, loaded from a file", scene, loaded, 1);
+
+    /* The Hessian's fields travel with the records only when the error metric fills them. */
+    ic_render_options hessian = ic;
+    hessian.ic.error = IC_ERROR_HESSIAN;
+    hessian.ic.record_shape = IC_SHAPE_ELLIPTICAL;
+    check_render("cache, Hessian error, elliptical records", scene, hessian, 1);
 
     ic_render_options pt = {0};
     pt.integrator = IC_INTEGRATOR_PT;
