@@ -15,7 +15,8 @@ record filter, and insertion's validity-radius clamp and neighbour search, --ins
 rank (the accelerator, the rest of insertion, "candidates": clustering (and dithering before each rank dithered its own rows), and the need maps in
 stats written before "need maps" was reported apart, and whatever ic_render spends outside its phases). Stats written before "eye paths and
 look-ups" was reported apart count it in "candidates"; --candidates-serial then says which share of that
-every rank does. With N ranks of the same threads:
+every rank does; every rank also computes the shading points of 128 rows around its own (the band its need
+maps read), taken as that share of the "shading points" phase. With N ranks of the same threads:
 
     T_N = serial + shared / N x imbalance(N) + communication(N)
 
@@ -27,7 +28,9 @@ every rank does. With N ranks of the same threads:
     Morton range's rank and the look-ups' luminance only to the ranks whose rows are near, both
     all-to-alls, this overstates them at more ranks; --measured replaces the whole estimate by the bytes
     of a real run);
-  - the shading points (29 bytes a pixel) and the filtered records (88 bytes each), all-gathered once;
+  - whether each pixel has a shading point (1 byte a pixel: each rank computes the points of its rows and
+    of a band around them, 29 bytes a pixel before) and the filtered records (88 bytes each), all-gathered
+    once;
   - the image: the adaptive pilot's relative variances (1 double per pixel) and the image (3 floats),
     each rank's tiles all-gathered, (N-1)/N of each per rank, and the pilot's sums (3 doubles per pixel) of
     the tiles whose second pass leaves the rank that rendered their pilot (--tiles-moved of them);
@@ -177,6 +180,9 @@ def main():
                                           a.insertion_shared * phase(t, "insertion")}
     total_1 = t["seconds"]
     serial = total_1 - sum(shared.values())
+    # Every rank also computes the shading points of the band around its rows (IC_SCREEN_HALO, 64 rows on
+    # either side) that its need maps read.
+    band = phase(t, "shading points") * min(2 * 64, t["height"]) / t["height"]
     records = t["records"]
     print("\n## model: %s at %dx%d, %d threads per rank: %.0f s in one process (%d records, %d passes); "
           "shared %.1f s (gathering %.1f, final render %.1f, eye paths, look-ups and need maps %.1f, shading points, record "
@@ -211,13 +217,13 @@ def main():
         if a.film_doubles or a.sum_image:
             film = px * (4 + 3) * 8 * (2 if a.sum_image else 1)
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 + film * share +
-                  (px * 29 + records * 88) * share)
+                  (px * 1 + records * 88) * share)
         if n in measured:
             volume = measured[n]
         for gbps in a.links:
             latency = a.collectives * t["passes"] * (n - 1) * ALPHA[gbps]
             comm = volume * 8 / (gbps * 1e9) + latency
-            tn = (serial + (shared["gathering"] + shared["candidates"] + shared["points, filter, validity"]) / n * imb_g
+            tn = (serial + (band if n > 1 else 0.0) + (shared["gathering"] + shared["candidates"] + shared["points, filter, validity"]) / n * imb_g
                   + shared["final render"] / n * imb_f + comm)
             print("| %d%s | %d Gb/s | %.2f, %.2f | %.1f | %.2f | %.1f | %.1f | %.2f |"
                   % (n, " (bytes measured)" if n in measured else "", gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))

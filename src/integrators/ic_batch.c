@@ -303,18 +303,27 @@ static void count_traffic(ic_ctx *c, ic_render_stats *st, int pass)
 #define IMAGE_HIT_KEY_TAG 0x696d616765686974ULL
 static ic_result image_hit_stage(ic_ctx *c, size_t npix, phase_times *pt, ic_error *err)
 {
-    ic_vec3 *p = malloc(sizeof *p * npix), *n = malloc(sizeof *n * npix);
+    /* The valid pixels in raster order are the points; the stage reads only its probes' (filled from
+     * ic_ic_gbuffer_point: under several processes a pixel's row may be another's). */
+    uint32_t m = 0;
+    for (size_t i = 0; i < npix; ++i)
+        m += c->g.valid[i];
+    ic_vec3 *p = calloc(m ? m : 1, sizeof *p), *n = calloc(m ? m : 1, sizeof *n);
     if (!p || !n) {
         free(p);
         free(n);
-        return ic_error_set(err, IC_ERR_OOM, "out of memory for the hit stage's %zu points", npix);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the hit stage's %u points", m);
     }
-    uint32_t m = 0;
-    for (size_t i = 0; i < npix; ++i)
-        if (c->g.valid[i]) {
-            p[m] = c->g.p[i];
-            n[m++] = c->g.n[i];
-        }
+    const uint32_t probes = ic_ic_hit_probes(m);
+    for (uint32_t i = 0, k = 0, at = 0; k < probes && i < npix; ++i) {
+        if (!c->g.valid[i])
+            continue;
+        if (ic_ic_hit_probe_point(k, m) == at)
+            ic_ic_gbuffer_point(c, i, &p[at], &n[at], NULL);
+        while (k < probes && ic_ic_hit_probe_point(k, m) <= at)
+            ++k;
+        ++at;
+    }
     c->hit_kind = (int)IC_HIT_KIND;
     /* With a time budget, the hit records take at most a quarter of construction's share: the image's
      * own records come after them. */

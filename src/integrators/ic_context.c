@@ -127,8 +127,10 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     ic_result r = ic_cache_create(&c->o.cache, &c->cache, err);
     ic_cache_set_comm(c->cache, c->comm); /* every process makes the same insertions */
     double t0 = ic_seconds();
+    /* Every pixel's shading point on every process only where something reads them all: the adaptive
+     * strategy's shading points and the AOVs (the records' views among them). */
     if (r == IC_OK)
-        r = ic_ic_gbuffer_build(c, err);
+        r = ic_ic_gbuffer_build(c, c->o.strategy == IC_STRATEGY_ADAPTIVE || opt->aovs != NULL, err);
     /* Clusters of candidates scale with the scene's size, but a room inside a large ground plane (the
      * sky-room's 120 m of ground around 4 m of room) made boxes the size of the room: a few candidates a
      * pass, construction stopping with 15 % of the eye paths' points uncovered, and the final render's

@@ -110,7 +110,8 @@ static int pilot(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride, 
     for (size_t i = 0, k = 0; i < npix && count; ++i) {
         if (!c->g.valid[i] || k++ % stride)
             continue;
-        const ic_vec3 p = c->g.p[i], n = c->g.n[i];
+        ic_vec3 p, n;
+        ic_ic_gbuffer_point(c, (uint32_t)i, &p, &n, NULL);
         /* The final render's selection over m's triangles at p: cdf, unnormalised (its total is m's
          * share of the triangle lights). */
         int have_local = local && ic_scene_local_lights(s, p, n, NULL, pmf, all_cdf);
@@ -270,7 +271,8 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, in
     for (size_t i = 0, k = 0; ok && i < npix; ++i) {
         if (!c->g.valid[i] || k++ % stride)
             continue;
-        ic_vec3 p = c->g.p[i], n = c->g.n[i];
+        ic_vec3 p, n;
+        ic_ic_gbuffer_point(c, (uint32_t)i, &p, &n, NULL);
         for (uint32_t li = 0; li < s->tri_light_count; ++li) {
             const ic_tri_light *l = &s->tri_lights[li];
             uint32_t t = l->triangle;

@@ -105,8 +105,11 @@ ic_vec3 ic_ic_final_sample(void *p, const ic_ray *camera_ray, uint32_t pixel, ic
     const ic_light_selection *sel = NULL, *prev_sel = &c->light_sel;
     const int one_term = fc->indirect_only || fc->glossy_only; /* an AOV: one term of the first vertex */
     if (!one_term && fc->lights.count && pixel < (uint32_t)c->g.width * (uint32_t)c->g.height) {
-        uint32_t a = ic_pixel_lights_anchor(&fc->lights, pixel);
-        sel = ic_pixel_lights_get(&fc->lights, scene, thread, pixel, c->g.valid[a], c->g.p[a], c->g.n[a], &local);
+        int have = 0;
+        ic_vec3 ap = v3s(0.0f), an = v3s(0.0f);
+        if (ic_pixel_lights_need_point(&fc->lights, thread, pixel))
+            have = ic_ic_gbuffer_point(c, ic_pixel_lights_anchor(&fc->lights, pixel), &ap, &an, NULL);
+        sel = ic_pixel_lights_get(&fc->lights, scene, thread, pixel, have, ap, an, &local);
     }
     if (!sel)
         sel = &c->light_sel;

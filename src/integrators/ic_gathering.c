@@ -720,9 +720,7 @@ done:
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag)
 {
     ic_candidate cd;
-    cd.p = c->g.p[pixel];
-    cd.n = c->g.n[pixel];
-    cd.footprint = c->g.footprint[pixel];
+    ic_ic_gbuffer_point(c, pixel, &cd.p, &cd.n, &cd.footprint);
     cd.key = ((uint64_t)pixel << 8) | tag;
     return cd;
 }

@@ -42,35 +42,61 @@ int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf 
 typedef struct gbuffer_job {
     ic_ctx *c;
     uint64_t *rays;            /* per thread, padded */
-    int first_row;             /* this process's block of rows starts here */
+    int first_row;             /* the rows to compute start here */
 } gbuffer_job;
 
 #define PAD 8
 
+/* Pixel (x, y)'s shading point: the one definition the G-buffer and ic_ic_gbuffer_point share. */
+static int shade_pixel(const ic_ctx *c, int x, int y, ic_vec3 *p, ic_vec3 *n, float *footprint, uint64_t *rays)
+{
+    const ic_camera *cam = &c->tr->scene->camera;
+    ic_ray ray;
+    ic_surface s;
+    ic_bsdf b;
+    ic_vec3 wo;
+    float t_primary = 0.0f;
+    if (!ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, &ray) ||
+        !ic_ic_shading_point(c->tr, ray, &s, &b, &wo, &t_primary, rays))
+        return 0;
+    *p = s.p;
+    *n = b.cache_n;
+    *footprint = ic_camera_footprint(cam, (float)x + 0.5f, (float)y + 0.5f, t_primary);
+    return 1;
+}
+
 static void gbuffer_row(void *p, int64_t item, int thread)
 {
     gbuffer_job *j = p;
-    int64_t y = j->first_row + item;
+    int y = j->first_row + (int)item;
     ic_ctx *c = j->c;
-    const ic_camera *cam = &c->tr->scene->camera;
-    for (int x = 0; x < cam->width; ++x) {
-        size_t i = (size_t)y * cam->width + x;
-        ic_ray ray;
-        ic_surface s;
-        ic_bsdf b;
-        ic_vec3 wo;
-        float t_primary = 0.0f;
-        c->g.valid[i] = ic_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, &ray) &&
-                        ic_ic_shading_point(c->tr, ray, &s, &b, &wo, &t_primary, &j->rays[thread * PAD]);
-        if (c->g.valid[i]) {
-            c->g.p[i] = s.p;
-            c->g.n[i] = b.cache_n;
-            c->g.footprint[i] = ic_camera_footprint(cam, (float)x + 0.5f, (float)y + 0.5f, t_primary);
-        }
+    for (int x = 0; x < c->g.width; ++x) {
+        size_t i = (size_t)y * c->g.width + x;
+        c->g.valid[i] = (uint8_t)shade_pixel(c, x, y, &c->g.p[i], &c->g.n[i], &c->g.footprint[i],
+                                             &j->rays[thread * PAD]);
     }
 }
 
-ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err)
+int ic_ic_gbuffer_point(const ic_ctx *c, uint32_t pixel, ic_vec3 *p, ic_vec3 *n, float *footprint)
+{
+    if (!c->g.valid[pixel])
+        return 0;
+    const int y = (int)(pixel / (uint32_t)c->g.width), x = (int)(pixel % (uint32_t)c->g.width);
+    float fp;
+    if (y >= c->g_rows[0] && y < c->g_rows[1]) {
+        *p = c->g.p[pixel];
+        *n = c->g.n[pixel];
+        fp = c->g.footprint[pixel];
+    } else {
+        uint64_t rays = 0;
+        shade_pixel(c, x, y, p, n, &fp, &rays);
+    }
+    if (footprint)
+        *footprint = fp;
+    return 1;
+}
+
+ic_result ic_ic_gbuffer_build(ic_ctx *c, int full, ic_error *err)
 {
     const ic_camera *cam = &c->tr->scene->camera;
     size_t n = (size_t)cam->width * cam->height;
@@ -86,22 +112,40 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err)
         free(rays);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for the shading-point buffers");
     }
-    /* Several processes (c->comm): a block of rows each, exchanged, so every process holds every point. */
+    /* Several processes (c->comm): a block of rows each, and the band around it unless full. */
     uint64_t first, rows;
     ic_comm_block((uint64_t)cam->height, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &rows);
-    gbuffer_job j = {c, rays, (int)first};
-    ic_result r = ic_parallel_for(c->threads, (int64_t)rows, gbuffer_row, &j);
+    const int shared = ic_comm_is_shared(c->comm), band = shared && !full;
+    const int y0 = (int)first, y1 = (int)(first + rows);
+    c->g_rows[0] = band ? (y0 - IC_SCREEN_HALO > 0 ? y0 - IC_SCREEN_HALO : 0) : shared ? y0 : 0;
+    c->g_rows[1] = band ? (y1 + IC_SCREEN_HALO < cam->height ? y1 + IC_SCREEN_HALO : cam->height)
+                        : shared ? y1 : cam->height;
+    /* This block's rows, counted; the band's other rows are the neighbours' (counted there). */
+    gbuffer_job j = {c, rays, y0};
+    ic_result r = ic_parallel_for(c->threads, (int64_t)(y1 - y0), gbuffer_row, &j);
     for (int t = 0; t < c->threads; ++t)
         atomic_fetch_add(&c->rays, rays[t * PAD]);
+    if (r == IC_OK && band) {
+        j.first_row = c->g_rows[0];
+        r = ic_parallel_for(c->threads, (int64_t)(y0 - c->g_rows[0]), gbuffer_row, &j);
+        j.first_row = y1;
+        if (r == IC_OK)
+            r = ic_parallel_for(c->threads, (int64_t)(c->g_rows[1] - y1), gbuffer_row, &j);
+    }
     free(rays);
     if (r != IC_OK)
         return ic_error_set(err, r, "could not start threads");
     const size_t row_px = (size_t)cam->width;
+    if (band) /* whether each pixel has a point: every process's block of rows */
+        return ic_comm_allgather_blocks(c->comm, c->g.valid, (uint64_t)cam->height, row_px,
+                                        "exchanging shading points", err);
     void *buf[4] = {c->g.p, c->g.n, c->g.footprint, c->g.valid};
     const size_t bytes[4] = {sizeof *c->g.p, sizeof *c->g.n, sizeof *c->g.footprint, 1};
     for (int k = 0; k < 4 && r == IC_OK; ++k)
         r = ic_comm_allgather_blocks(c->comm, buf[k], (uint64_t)cam->height, bytes[k] * row_px,
                                      "exchanging shading points", err);
+    c->g_rows[0] = 0;
+    c->g_rows[1] = cam->height;
     return r;
 }
 
@@ -115,19 +159,27 @@ float ic_ic_view_extent(const ic_ctx *c)
     if (valid == 0)
         return 0.0f;
     size_t stride = valid / VIEW_SAMPLES + 1, m = 0;
+    ic_vec3 *pts = malloc(sizeof *pts * (valid / stride + 1));
     float *v = malloc(sizeof *v * (valid / stride + 1));
-    if (!v)
+    if (!pts || !v) {
+        free(pts);
+        free(v);
         return 0.0f;
+    }
+    for (size_t i = 0, k = 0; i < npix; ++i) {
+        ic_vec3 nn;
+        if (c->g.valid[i] && k++ % stride == 0)
+            ic_ic_gbuffer_point(c, (uint32_t)i, &pts[m++], &nn, NULL);
+    }
     float d2 = 0.0f;
     for (int axis = 0; axis < 3; ++axis) {
-        m = 0;
-        for (size_t i = 0, k = 0; i < npix; ++i)
-            if (c->g.valid[i] && k++ % stride == 0)
-                v[m++] = v3_get(c->g.p[i], axis);
+        for (size_t k = 0; k < m; ++k)
+            v[k] = v3_get(pts[k], axis);
         qsort(v, m, sizeof *v, ic_ic_cmp_float);
         float span = v[(m - 1) * 95 / 100] - v[(m - 1) * 5 / 100];
         d2 += span * span;
     }
+    free(pts);
     free(v);
     return sqrtf(d2);
 }

@@ -26,15 +26,25 @@
  * fewer than `uncovered` of the probes' hits go uncovered, or a pass finds fewer than `min_candidates`.
  * Deterministic: the probes depend on the seed, the point and the pass only, and the candidates are
  * collected in point order. */
+/* Probes per pass: HIT_PROBES per point up to HIT_PROBES_MAX in all, spread evenly over the points
+ * (the hit records describe the scene, whose size does not grow with the points); probe k's point. */
+uint32_t ic_ic_hit_probes(uint32_t count)
+{
+    return count > HIT_PROBES_MAX / HIT_PROBES ? HIT_PROBES_MAX : count * HIT_PROBES;
+}
+
+uint32_t ic_ic_hit_probe_point(uint32_t k, uint32_t count)
+{
+    return (uint32_t)((uint64_t)k * count / ic_ic_hit_probes(count));
+}
+
 ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
                           uint8_t bounce, uint32_t strata_div, int gradients, phase_times *times, ic_error *err)
 {
     if (!c->hit_lookups)
         return IC_OK;
     const ic_scene *scene = c->tr->scene;
-    /* Probes per pass: HIT_PROBES per point up to HIT_PROBES_MAX in all, spread evenly over the points
-     * (the hit records describe the scene, whose size does not grow with the points). */
-    const uint32_t probes = count > HIT_PROBES_MAX / HIT_PROBES ? HIT_PROBES_MAX : count * HIT_PROBES;
+    const uint32_t probes = ic_ic_hit_probes(count);
     size_t cap = probes;
     ic_candidate *cand = malloc(sizeof *cand * cap);
     float *dist = malloc(sizeof *dist * cap);
@@ -47,7 +57,7 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
     for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK && !ic_ic_out_of_time(c) && !ic_ic_cancelled(c); ++pass) {
         uint32_t m = 0, visited = 0;
         for (uint32_t k = 0; k < probes; ++k) {
-            uint32_t i = (uint32_t)((uint64_t)k * count / probes);
+            uint32_t i = ic_ic_hit_probe_point(k, count);
             ic_frame f = ic_frame_from_normal(n[i]);
             ic_rng rng = ic_rng_make(c->seed ^ key_tag, i, (uint64_t)pass, k);
             float u1, u2;

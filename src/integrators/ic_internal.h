@@ -52,7 +52,9 @@ typedef struct ic_ctx {
                                   recursive levels' footprints scale with: scene_diag, at most 2.5 times
                                   what the camera sees (ic_ic_view_extent) */
     atomic_ullong rays;        /* gathering rays (added once per trace call) */
-    ic_gbuffer g;
+    ic_gbuffer g;              /* valid is held for every pixel; p, n and footprint only on rows
+                                  [g_rows[0], g_rows[1]) (ic_ic_gbuffer_point reads any pixel) */
+    int g_rows[2];
     uint8_t *has_record;       /* per pixel: a screen-space record was made here */
     int hit_lookups;           /* hemisphere rays take the bounces after their hit from the cache */
     uint8_t record_bounce;     /* the bounce field of the records gathered from candidates: 0, or the
@@ -175,7 +177,10 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
  * distributed, the diffuse hits no record of kind `bounce` accepts clustered and gathered with the
  * strata over strata_div each way, inserted as records of that kind (without gradients unless
  * `gradients`). key_tag separates its random numbers
- * and keys from other stages'. A no-op unless c->hit_lookups. */
+ * and keys from other stages'. A no-op unless c->hit_lookups. It reads only the points
+ * ic_ic_hit_probe_point(k, count) for k < ic_ic_hit_probes(count). */
+uint32_t ic_ic_hit_probes(uint32_t count);
+uint32_t ic_ic_hit_probe_point(uint32_t k, uint32_t count);
 /* The bounce field of an image's hit-stage records: read only by hemisphere rays' look-ups. */
 #define IC_HIT_KIND (IC_BOUNCE_RADIANCE - 2u)
 ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
@@ -257,9 +262,17 @@ static inline int ic_ic_cmp_float(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Shading points of every pixel centre into c->g (and c->has_record); gbuffer_free frees them. */
-ic_result ic_ic_gbuffer_build(ic_ctx *c, ic_error *err);
+/* Shading points of the pixel centres into c->g (and c->has_record); gbuffer_free frees them. One process,
+ * or full (several processes that read every pixel's point: the adaptive strategy, the AOVs), holds every
+ * point. Otherwise each process computes its block of rows and IC_SCREEN_HALO rows on either side (what
+ * its need maps read) and the processes exchange only whether each pixel has a point (a byte a pixel, not
+ * 29); other rows' points come from ic_ic_gbuffer_point. */
+ic_result ic_ic_gbuffer_build(ic_ctx *c, int full, ic_error *err);
 void ic_ic_gbuffer_free(ic_ctx *c);
+/* Pixel `pixel`'s shading point as the G-buffer has it, the same bits on every process: read where this
+ * process holds its row, else traced again (not counted as rays: the G-buffer counted it once). 0 if the
+ * pixel has none. footprint may be NULL. */
+int ic_ic_gbuffer_point(const ic_ctx *c, uint32_t pixel, ic_vec3 *p, ic_vec3 *n, float *footprint);
 /* The diagonal of the box between the 5th and 95th percentiles of the shading points' coordinates on each
  * axis (at most VIEW_SAMPLES points, evenly through the image): the size of what the camera sees, which a
  * far wall seen through a window barely moves; 0 without shading points. */

@@ -447,6 +447,21 @@ int main(void)
     check_render("cache, batch", scene, ic, 1);
     ic.ic.save_cache = NULL;
 
+    /* A tall image: each rank's band of shading points (its rows and IC_SCREEN_HALO on either side) leaves
+     * rows out, whose points come from ic_ic_gbuffer_point (the candidates, the hit stage's probes, the
+     * large-emitter pilot, the view extent, the final render's light blocks). */
+    ic_scene_load_options tall_lo = lo;
+    tall_lo.width = 12;
+    tall_lo.height = 300;
+    ic_scene *tall = NULL;
+    CHECK(ic_scene_load(SCENE, &tall_lo, &tall, &err) == IC_OK, "%s", err.message);
+    if (tall) {
+        ic_render_options tall_ic = ic;
+        tall_ic.ic.save_cache = NULL;
+        check_render("cache, batch, a 12x300 image", tall, tall_ic, 1);
+        ic_scene_free(tall);
+    }
+
     ic_render_options adaptive = ic;
     adaptive.ic.strategy = IC_STRATEGY_ADAPTIVE;
     check_render("cache, adaptive", scene, adaptive, 1);

@@ -199,6 +199,34 @@ static void test_halo(void)
                   "could be narrower than IC_SCREEN_HALO)", y0, y1, reach);
     }
     CHECK(r == IC_OK, "value need map: %s", ic_result_name(r));
+    /* The geometry map likewise: positions, normals and footprints outside the band (which a process of
+     * several does not compute) leave a block's map unchanged. */
+    static ic_vec3 p2[W2 * H2], n2[W2 * H2];
+    static float fp2[W2 * H2];
+    for (int i = 0; i < W2 * H2; ++i) {
+        int x = i % W2, y = i / W2;
+        p[i] = v3(0.01f * (float)x, 0.01f * (float)y, 2.0f + (y % 40 < 20 ? 0.3f : 0.0f) + 0.001f * ic_rng_float(&rng));
+        n[i] = v3_norm(v3(0.2f * ic_rng_float(&rng), x % 9 == 0 ? 0.5f : 0.0f, 1.0f));
+    }
+    r = ic_screen_geometry_need(&g, 4.0f, 2, y0, y1, want);
+    for (int i = 0; i < W2 * H2; ++i) {
+        int y = i / W2, in = y >= y0 - IC_SCREEN_HALO && y < y1 + IC_SCREEN_HALO;
+        p2[i] = in ? p[i] : v3(ic_rng_float(&rng), 0.0f, 0.0f);
+        n2[i] = in ? n[i] : v3(0.0f, 1.0f, 0.0f);
+        fp2[i] = in ? fp[i] : 0.0f;
+    }
+    ic_gbuffer g2 = {W2, H2, p2, n2, fp2, valid};
+    memset(got, 0, sizeof got);
+    if (r == IC_OK)
+        r = ic_screen_geometry_need(&g2, 4.0f, 2, y0, y1, got);
+    int differ = 0, positive = 0;
+    for (int i = y0 * W2; i < y1 * W2; ++i) {
+        differ += memcmp(&got[i], &want[i], sizeof got[i]) != 0;
+        positive += want[i] > 0.0f;
+    }
+    CHECK(r == IC_OK && differ == 0, "geometry need map of rows [%d, %d): %d pixels changed by points more than %d "
+          "rows away", y0, y1, differ, IC_SCREEN_HALO);
+    CHECK(positive > 0, "geometry need map of rows [%d, %d): no discontinuity (nothing tested)", y0, y1);
 }
 
 /* ---- 2. world-stage selection order ------------------------------------------------------------- */
