@@ -190,7 +190,7 @@ def main():
           % (t["scene"], t["width"], t["height"], t["threads"], total_1, records, t["passes"],
              sum(shared.values()), shared["gathering"], shared["final render"], shared["candidates"],
              shared["points, filter, validity"], serial))
-    print("(every rank does %.0f %% of the candidates phase alike: clustering)"
+    print("(the phase \"candidates\", what every rank does alike, is %.0f %% of the candidates work)"
           % (100 * cand_serial))
     print("| ranks | link | imbalance (gathering, final) | received per rank (MB) | communication (s) | T_N (s) "
           "| speed-up | efficiency |")
