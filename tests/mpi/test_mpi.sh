@@ -2,7 +2,8 @@
 # test_mpi.sh IRRCACHE HAS_MPI — `mpirun -np N irrcache render` gives the bytes a single process gives:
 #   1. the Cornell box with the cache (batch; its image, cache file, record counts per pass) and with the
 #      path tracer, at 1, 2, 3 and 5 ranks of 1 or 2 threads each, against the same build run without
-#      mpirun (one process); the adaptive strategy, a loaded cache and radiance caching at 3 ranks; `irrcache points` (cache
+#      mpirun (one process); the adaptive strategy, a loaded cache and radiance caching at 3 ranks, a 12x300
+#      image (bands of shading points and look-ups that leave rows out) at 3 and 5; `irrcache points` (cache
 #      and path tracer) at 2, 3 and 5 ranks;
 #   2. lazy construction under 2 ranks is refused with a message naming the strategy;
 #   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
@@ -74,6 +75,16 @@ same "image from a loaded cache, 3 ranks" load-3.pfm load.pfm
 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --hit-records on --threads 2 -o hit.pfm
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --hit-records on --threads 1 -o hit-3.pfm
 same "batch image with hit records, 3 ranks" hit-3.pfm hit.pfm
+
+# A tall image: each rank computes the shading points of its rows and a 64-row band around them, and the
+# look-ups' luminances travel only that far (an all-to-all), so here every rank's band leaves rows out.
+"$bin" render "$scene" --width 12 --height 300 --quiet "${ic[@]}" --threads 2 -o tall.pfm --save-cache tall.cache
+for np in 3 5; do
+  mpirun --oversubscribe -np $np "$bin" render "$scene" --width 12 --height 300 --quiet "${ic[@]}" --threads 1 \
+    -o tall-$np.pfm --save-cache tall-$np.cache
+  same "12x300 image, $np ranks" tall-$np.pfm tall.pfm
+  same "12x300 cache file, $np ranks" tall-$np.cache tall.cache
+done
 
 # Radiance caching on the glossy floor: its records are split among the ranks like irradiance records.
 glossy=$src/scenes/cornell-box-glossy/cornell-box-glossy-20.json
