@@ -117,9 +117,9 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, int full, ic_error *err)
     ic_comm_block((uint64_t)cam->height, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &rows);
     const int shared = ic_comm_is_shared(c->comm), band = shared && !full;
     const int y0 = (int)first, y1 = (int)(first + rows);
-    c->g_rows[0] = band ? (y0 - IC_SCREEN_HALO > 0 ? y0 - IC_SCREEN_HALO : 0) : shared ? y0 : 0;
-    c->g_rows[1] = band ? (y1 + IC_SCREEN_HALO < cam->height ? y1 + IC_SCREEN_HALO : cam->height)
-                        : shared ? y1 : cam->height;
+    /* What this process will hold once the exchange below is done. */
+    c->g_rows[0] = band ? (y0 - IC_SCREEN_HALO > 0 ? y0 - IC_SCREEN_HALO : 0) : 0;
+    c->g_rows[1] = band ? (y1 + IC_SCREEN_HALO < cam->height ? y1 + IC_SCREEN_HALO : cam->height) : cam->height;
     /* This block's rows, counted; the band's other rows are the neighbours' (counted there). */
     gbuffer_job j = {c, rays, y0};
     ic_result r = ic_parallel_for(c->threads, (int64_t)(y1 - y0), gbuffer_row, &j);
@@ -144,8 +144,6 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, int full, ic_error *err)
     for (int k = 0; k < 4 && r == IC_OK; ++k)
         r = ic_comm_allgather_blocks(c->comm, buf[k], (uint64_t)cam->height, bytes[k] * row_px,
                                      "exchanging shading points", err);
-    c->g_rows[0] = 0;
-    c->g_rows[1] = cam->height;
     return r;
 }
 
@@ -235,12 +233,15 @@ static void lookup_row(void *p, int64_t item, int thread)
 }
 
 /* Several processes: rank q's block of rows [b[q], b[q + 1]) goes to every other rank whose band (its
- * block widened by IC_SCREEN_HALO rows each way, what its need map reads) it meets; *band gets this
- * rank's. Each block's rows stay in order, so the all-to-all's blocks land row after row. */
-static void band_of(const uint64_t *b, int r, int height, int64_t *lo, int64_t *hi)
+ * block widened by IC_SCREEN_HALO rows each way, what its need map reads) it meets. The rows of q's block
+ * inside t's band: [*a, *z), empty when *z <= *a. Each block's rows stay in order, so the all-to-all's
+ * blocks land row after row. */
+static void band_part(const uint64_t *b, int q, int t, int height, int64_t *a, int64_t *z)
 {
-    *lo = (int64_t)b[r] - IC_SCREEN_HALO > 0 ? (int64_t)b[r] - IC_SCREEN_HALO : 0;
-    *hi = (int64_t)b[r + 1] + IC_SCREEN_HALO < height ? (int64_t)b[r + 1] + IC_SCREEN_HALO : height;
+    int64_t lo = (int64_t)b[t] - IC_SCREEN_HALO > 0 ? (int64_t)b[t] - IC_SCREEN_HALO : 0;
+    int64_t hi = (int64_t)b[t + 1] + IC_SCREEN_HALO < height ? (int64_t)b[t + 1] + IC_SCREEN_HALO : height;
+    *a = lo > (int64_t)b[q] ? lo : (int64_t)b[q];
+    *z = hi < (int64_t)b[q + 1] ? hi : (int64_t)b[q + 1];
 }
 
 static ic_result exchange_band(ic_ctx *c, float *lum)
@@ -259,9 +260,8 @@ static ic_result exchange_band(ic_ctx *c, float *lum)
     /* matrix[q][t]: the rows of q's block inside t's band (none to itself). */
     for (int q = 0; r == IC_OK && q < n; ++q)
         for (int t = 0; t < n; ++t) {
-            int64_t lo, hi;
-            band_of(b, t, h, &lo, &hi);
-            int64_t a = lo > (int64_t)b[q] ? lo : (int64_t)b[q], z = hi < (int64_t)b[q + 1] ? hi : (int64_t)b[q + 1];
+            int64_t a, z;
+            band_part(b, q, t, h, &a, &z);
             uint64_t rows = q != t && z > a ? (uint64_t)(z - a) : 0;
             matrix[(size_t)q * n + t] = rows * row;
             out_rows += q == me ? rows : 0;
@@ -275,9 +275,8 @@ static ic_result exchange_band(ic_ctx *c, float *lum)
     if (r == IC_OK) {
         char *put = (char *)send;
         for (int t = 0; t < n; ++t) {
-            int64_t lo, hi;
-            band_of(b, t, h, &lo, &hi);
-            int64_t a = lo > (int64_t)b[me] ? lo : (int64_t)b[me];
+            int64_t a, z;
+            band_part(b, me, t, h, &a, &z);
             uint64_t bytes = matrix[(size_t)me * n + t];
             memcpy(put, lum + (size_t)a * c->g.width, bytes);
             put += bytes;
@@ -285,11 +284,10 @@ static ic_result exchange_band(ic_ctx *c, float *lum)
         r = ic_comm_alltoall(c->comm, send, matrix, recv, "exchanging look-ups", NULL);
     }
     if (r == IC_OK) {
-        int64_t lo, hi;
-        band_of(b, me, h, &lo, &hi);
         const char *get = (const char *)recv;
         for (int q = 0; q < n; ++q) {
-            int64_t a = lo > (int64_t)b[q] ? lo : (int64_t)b[q];
+            int64_t a, z;
+            band_part(b, q, me, h, &a, &z);
             uint64_t bytes = matrix[(size_t)q * n + me];
             memcpy(lum + (size_t)a * c->g.width, get, bytes);
             get += bytes;

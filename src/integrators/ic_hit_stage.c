@@ -19,13 +19,6 @@
 #define HIT_PROBES_MAX 4096 /* in all, per pass */
 #define HIT_MAX_PASSES 12
 
-/* A record's rays then read the irradiance at their hits from these records (ic_ic_gather_trace's
- * look-ups) instead of tracing a path each. Each pass traces HIT_PROBES cosine-distributed rays from
- * every point (at most HIT_PROBES_MAX in all, spread evenly over the points); the diffuse hits that no
- * record accepts are clustered as the world stage clusters eye-path hits and gathered; passes stop when
- * fewer than `uncovered` of the probes' hits go uncovered, or a pass finds fewer than `min_candidates`.
- * Deterministic: the probes depend on the seed, the point and the pass only, and the candidates are
- * collected in point order. */
 /* Probes per pass: HIT_PROBES per point up to HIT_PROBES_MAX in all, spread evenly over the points
  * (the hit records describe the scene, whose size does not grow with the points); probe k's point. */
 uint32_t ic_ic_hit_probes(uint32_t count)
@@ -38,6 +31,13 @@ uint32_t ic_ic_hit_probe_point(uint32_t k, uint32_t count)
     return (uint32_t)((uint64_t)k * count / ic_ic_hit_probes(count));
 }
 
+/* A record's rays then read the irradiance at their hits from these records (ic_ic_gather_trace's
+ * look-ups) instead of tracing a path each. Each pass traces HIT_PROBES cosine-distributed rays from
+ * every point (at most HIT_PROBES_MAX in all, spread evenly over the points); the diffuse hits that no
+ * record accepts are clustered as the world stage clusters eye-path hits and gathered; passes stop when
+ * fewer than `uncovered` of the probes' hits go uncovered, or a pass finds fewer than `min_candidates`.
+ * Deterministic: the probes depend on the seed, the point and the pass only, and the candidates are
+ * collected in point order. */
 ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, uint64_t key_tag,
                           uint8_t bounce, uint32_t strata_div, int gradients, phase_times *times, ic_error *err)
 {
