@@ -150,6 +150,10 @@ typedef struct ic_portal {
     ic_vec3 normal;        /* unit, edge1 × edge2 normalised: it points into the interior */
     float area;
     int rectangle;         /* edges at right angles: sampled by solid angle (portals.c), else by area */
+    /* The rectangle's frame, which every point that samples it shares (portals.c): the edges' lengths
+     * and unit directions, and their cross product. */
+    double len1, len2;
+    ic_vec3 unit1, unit2, unit_normal;
 } ic_portal;
 
 typedef struct ic_environment {
