@@ -20,14 +20,19 @@ typedef struct mpi_comm {
     ic_comm comm;
     int *counts, *displs;   /* per rank, for MPI_Allgatherv and the receiving side of MPI_Alltoallv */
     int *scounts, *sdispls; /* per rank, the sending side of MPI_Alltoallv */
+    uint64_t allgather_limit; /* bytes above which an all-gather takes allgather_large: INT32_MAX, or less
+                                 from IRRCACHE_MPI_ALLGATHER_LIMIT, which tests/mpi sets to run that path
+                                 on small images */
+    int chunk;                /* bytes per call on that path */
 } mpi_comm;
 
-/* counts (bytes per rank) as MPI's int counts and displacements; 0 if a count or the total exceeds an int. */
-static int int_counts(const uint64_t *bytes, int size, int *counts, int *displs)
+/* counts (bytes per rank) as MPI's int counts and displacements; 0 if a count or the total exceeds limit
+ * (at most INT32_MAX). */
+static int int_counts(const uint64_t *bytes, int size, int *counts, int *displs, uint64_t limit)
 {
     uint64_t total = 0;
     for (int r = 0; r < size; ++r) {
-        if (bytes[r] > (uint64_t)INT32_MAX || total > (uint64_t)INT32_MAX)
+        if (bytes[r] > limit || total > limit)
             return 0;
         counts[r] = (int)bytes[r];
         displs[r] = (int)total;
@@ -36,25 +41,49 @@ static int int_counts(const uint64_t *bytes, int size, int *counts, int *displs)
     return 1;
 }
 
-/* MPI counts and displacements are int: an exchange above 2 GiB in all is refused (IC_ERR_UNSUPPORTED). */
+/* An all-gather too large for int counts and displacements (above 2 GiB in all: a huge image's pixels):
+ * each rank's block broadcast from it, in chunks. Slower than MPI_Allgatherv, but only such exchanges
+ * take it. */
+static ic_result allgather_large(const mpi_comm *m, const void *send, void *recv, const uint64_t *counts)
+{
+    uint64_t at = 0;
+    for (int r = 0; r < m->comm.size; ++r) {
+        char *block = (char *)recv + at;
+        if (r == m->comm.rank && send != block)
+            memmove(block, send, counts[r]);
+        for (uint64_t done = 0; done < counts[r];) {
+            int n = counts[r] - done > (uint64_t)m->chunk ? m->chunk : (int)(counts[r] - done);
+            if (MPI_Bcast(block + done, n, MPI_BYTE, r, MPI_COMM_WORLD) != MPI_SUCCESS)
+                return IC_ERR_IO;
+            done += (uint64_t)n;
+        }
+        at += counts[r];
+    }
+    return IC_OK;
+}
+
+/* MPI counts and displacements are int: an exchange above 2 GiB in all takes allgather_large. Every rank
+ * holds the same counts, so all take the same path. */
 static ic_result mpi_allgather(void *user, const void *send, void *recv, const uint64_t *counts)
 {
     mpi_comm *m = user;
-    if (!int_counts(counts, m->comm.size, m->counts, m->displs))
-        return IC_ERR_UNSUPPORTED;
+    if (!int_counts(counts, m->comm.size, m->counts, m->displs, m->allgather_limit))
+        return allgather_large(m, send, recv, counts);
     const void *s = send == (const char *)recv + m->displs[m->comm.rank] ? MPI_IN_PLACE : send;
     int rc = MPI_Allgatherv(s, m->counts[m->comm.rank], MPI_BYTE, recv, m->counts, m->displs, MPI_BYTE,
                             MPI_COMM_WORLD);
     return rc == MPI_SUCCESS ? IC_OK : IC_ERR_IO;
 }
 
-/* The same limit as the all-gather: above 2 GiB to or from one rank, refused. */
+/* Above 2 GiB to or from one rank, refused (IC_ERR_UNSUPPORTED): the library's all-to-alls move a band
+ * of rows or a range of candidates, far below that; a rank's counts are its own, so a large-exchange
+ * path would first need the ranks to agree on taking it, a collective every all-to-all would pay. */
 static ic_result mpi_alltoall(void *user, const void *send, const uint64_t *send_counts, void *recv,
                               const uint64_t *recv_counts)
 {
     mpi_comm *m = user;
-    if (!int_counts(send_counts, m->comm.size, m->scounts, m->sdispls) ||
-        !int_counts(recv_counts, m->comm.size, m->counts, m->displs))
+    if (!int_counts(send_counts, m->comm.size, m->scounts, m->sdispls, INT32_MAX) ||
+        !int_counts(recv_counts, m->comm.size, m->counts, m->displs, INT32_MAX))
         return IC_ERR_UNSUPPORTED;
     int rc = MPI_Alltoallv(send, m->scounts, m->sdispls, MPI_BYTE, recv, m->counts, m->displs, MPI_BYTE,
                            MPI_COMM_WORLD);
@@ -126,6 +155,13 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
     m->comm.size = size;
     MPI_Comm_rank(MPI_COMM_WORLD, &m->comm.rank);
     m->comm.user = m;
+    m->allgather_limit = INT32_MAX;
+    m->chunk = 1 << 30;
+    const char *limit = getenv("IRRCACHE_MPI_ALLGATHER_LIMIT");
+    if (limit && atoll(limit) > 0 && atoll(limit) < INT32_MAX) {
+        m->allgather_limit = (uint64_t)atoll(limit);
+        m->chunk = (int)(m->allgather_limit / 2 + 1);
+    }
     m->comm.allgather = mpi_allgather;
     m->comm.sum = mpi_sum;
     m->comm.broadcast = mpi_broadcast;

@@ -17,6 +17,7 @@
 #include "points_grid.h"
 
 #include "core/atomic_file.h"
+#include "irrcache/image.h"
 #include "irrcache/points.h"
 
 #include <errno.h>
@@ -160,22 +161,28 @@ static int parse_line(char *line, ic_sensor_point *pt, char *why, size_t why_siz
         snprintf(why, why_size, "%d number%s, expected 6: 'x y z nx ny nz'", count, count == 1 ? "" : "s");
         return -1;
     }
-    if (v[3] == 0.0 && v[4] == 0.0 && v[5] == 0.0) {
-        snprintf(why, why_size, "the normal (0 0 0) is zero; give the direction the sensor faces");
-        return -1;
-    }
-    for (int k = 0; k < 6; ++k)
+    for (int k = 0; k < 3; ++k)
+        if (fabs(v[k]) > IC_MAX_POINT_COORDINATE) {
+            snprintf(why, why_size, "coordinate %d (%g) lies beyond 1e18; give positions in the scene's units", k + 1,
+                     v[k]);
+            return -1;
+        }
+    for (int k = 3; k < 6; ++k)
         if (fabs(v[k]) > 3e38) {
             snprintf(why, why_size, "number %d is out of range; give values below 3e38", k + 1);
             return -1;
         }
     pt->position = (ic_vec3){(float)v[0], (float)v[1], (float)v[2]};
     pt->normal = (ic_vec3){(float)v[3], (float)v[4], (float)v[5]};
+    /* As stored (float): a normal like 1e-50 0 0 is zero there. */
+    if (pt->normal.x == 0.0f && pt->normal.y == 0.0f && pt->normal.z == 0.0f) {
+        snprintf(why, why_size, "the normal (%g %g %g) is zero or too small; give the direction the sensor faces",
+                 v[3], v[4], v[5]);
+        return -1;
+    }
     return 1;
 }
 
-/* Reads every point of path ('-': stdin) into *out (malloc'd); prints the one-line error and returns 0
- * on failure. */
 /* The next line of f into buf (MAX_POINT_LINE + 1 bytes; its newline dropped), *len its length: 1, 0 at
  * the end, -1 if it is longer than MAX_POINT_LINE (the rest is not read), -2 if it holds a NUL byte. */
 static int next_line(FILE *f, char *buf, ssize_t *len)
@@ -192,6 +199,8 @@ static int next_line(FILE *f, char *buf, ssize_t *len)
     return nul ? -2 : c == EOF && n == 0 ? 0 : 1;
 }
 
+/* Reads every point of path ('-': stdin) into *out (malloc'd); prints the one-line error and returns 0
+ * on failure. */
 static int read_points(const char *path, uint32_t max_points, ic_sensor_point **out, uint32_t *count)
 {
     int is_stdin = strcmp(path, "-") == 0;
@@ -330,6 +339,39 @@ static int write_json(const char *path, const ic_points_options *opt, const ic_p
 }
 
 static int points_command(int argc, char **argv, ic_comm *comm);
+
+/* Before the work: the output file can be created beside its path, and a --map of cols x rows cells
+ * fits the false-colour map's limits. 0 and the one-line message if not. */
+static int preflight(const char *out_path, const char *map_path, uint32_t cols, uint32_t rows, char *message,
+                     size_t size)
+{
+    const char *paths[2] = {out_path, map_path};
+    for (int k = 0; k < 2; ++k) {
+        ic_atomic_file f;
+        ic_error err = {0};
+        if (paths[k] && ic_atomic_file_open(&f, paths[k], &err) != IC_OK) {
+            snprintf(message, size, "irrcache points: %s%s", k ? "--map: " : "", err.message);
+            return 0;
+        }
+        if (paths[k])
+            ic_atomic_file_abort(&f);
+    }
+    if (!map_path)
+        return 1;
+    size_t n = (size_t)cols * rows;
+    double *zero = calloc(n ? n : 1, sizeof *zero);
+    uint8_t *rgb = NULL;
+    ic_falsecolor_options fo = {0};
+    ic_falsecolor_layout lay;
+    ic_error err = {0};
+    ic_result r = zero ? ic_falsecolor_render(zero, (int)cols, (int)rows, &fo, &rgb, &lay, &err) : IC_ERR_OOM;
+    free(zero);
+    free(rgb);
+    if (r != IC_OK)
+        snprintf(message, size, "irrcache points: --map %s: a %u x %u grid does not fit a map (%s); give a larger "
+                 "--spacing, or leave out --map", map_path, cols, rows, r == IC_ERR_OOM ? "out of memory" : err.message);
+    return r == IC_OK;
+}
 
 int ic_cli_points(int argc, char **argv)
 {
@@ -486,17 +528,25 @@ static int points_command(int argc, char **argv, ic_comm *comm)
 
     ic_sensor_point *pts = NULL;
     uint32_t count = 0, cols = 0, rows = 0;
-    if (has_grid) {
-        ic_error gerr = {0};
-        if (ic_points_grid(&grid, &pts, &cols, &rows, &gerr) != IC_OK) {
-            fprintf(stderr, "irrcache points: --grid: %s\n", gerr.message);
-            return EXIT_USAGE;
-        }
-        count = cols * rows;
-    }
     ic_cli_cluster_unmute(muted);
     char message[1400] = "";
-    int rc = !has_grid && rank == 0 && !read_points(points_path, (uint32_t)max_points, &pts, &count) ? EXIT_WORK : 0;
+    int rc = 0;
+    if (has_grid) {
+        /* Every rank makes the same grid; a failure on one (out of memory) must stop them all. */
+        ic_error gerr = {0};
+        ic_result gr = ic_points_grid(&grid, &pts, &cols, &rows, &gerr);
+        if (gr != IC_OK) {
+            snprintf(message, sizeof message, "irrcache points: %s--grid: %s", ranks > 1 && gr == IC_ERR_OOM ?
+                     "on one rank: " : "", gerr.message);
+            rc = gr == IC_ERR_OOM ? EXIT_WORK : EXIT_USAGE;
+        }
+        count = cols * rows;
+    } else if (rank == 0 && !read_points(points_path, (uint32_t)max_points, &pts, &count)) {
+        rc = EXIT_WORK;
+    }
+    /* What would fail only at the end, after all the work, is checked now (rank 0 writes). */
+    if (rc == 0 && rank == 0 && !preflight(out_path, map_path, cols, rows, message, sizeof message))
+        rc = EXIT_WORK;
     if ((rc = agree(comm, rc, message)) != 0) {
         free(pts);
         return rc;
@@ -542,9 +592,13 @@ static int points_command(int argc, char **argv, ic_comm *comm)
                     has_grid ? "--grid" : points_path, err.message);
             ic_cli_cluster_abort(comm, EXIT_WORK);
         }
-        fprintf(stderr, "irrcache points: %s: %s\n", has_grid ? "--grid" : points_path, err.message);
-        if (err.code == IC_ERR_INVALID_ARG)
-            status = EXIT_USAGE; /* an option the scene's settings make impossible */
+        if (err.code == IC_ERR_INVALID_ARG) {
+            /* an option the scene's settings make impossible (the points themselves were checked here) */
+            fprintf(stderr, "irrcache points: %s\n", err.message);
+            status = EXIT_USAGE;
+        } else {
+            fprintf(stderr, "irrcache points: %s: %s\n", has_grid ? "--grid" : points_path, err.message);
+        }
     } else if (rank != 0) {
         status = 0; /* rank 0 writes the results */
     } else if (map_path && !ic_cli_grid_map(map_path, res, cols, rows, df_lux, map_max)) {

@@ -64,11 +64,13 @@ extern "C" {
 #define IC_DEFAULT_GRID_HEIGHT 0.8          /* m: a work plane's height above the floor (ic_points_grid) */
 #define IC_POINT_REPLICATES 16              /* independent randomised quasi-Monte Carlo estimates per point,
                                                whose spread gives σ; samples round up to a multiple */
+#define IC_MAX_POINT_COORDINATE 1e18        /* a sensor's coordinates must lie within ±this: farther, the ray
+                                               tracer cannot start rays (ic_points_compute refuses them) */
 
 /* A sensor: where it is and which way it faces. */
 typedef struct ic_sensor_point {
     ic_vec3 position;      /* world space */
-    ic_vec3 normal;        /* any length > 0 (normalised here) */
+    ic_vec3 normal;        /* any finite length > 0 (normalised here) */
 } ic_sensor_point;
 
 /* Options; zero means default (given in brackets). */

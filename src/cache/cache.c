@@ -366,6 +366,9 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
         rc = ic_octree_compact(&c->points);
     if (rc != IC_OK) {
         roll_back(c, first);
+        if (rc != IC_ERR_OOM) /* the clamps' exchanges between processes (c->comm) */
+            return ic_error_set(err, rc, "cache: inserting %u records failed (%s) while the processes shared their "
+                                "clamps; they were dropped", n, ic_result_name(rc));
         return ic_error_set(err, rc, "cache: out of memory inserting %u records; they were dropped", n);
     }
     return IC_OK;

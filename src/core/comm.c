@@ -23,6 +23,9 @@ void ic_comm_block(uint64_t count, int size, int r, uint64_t *first, uint64_t *n
 
 static ic_result failed(ic_error *err, ic_result r, const char *what)
 {
+    if (r == IC_ERR_UNSUPPORTED)
+        return ic_error_set(err, r, "%s between the render's processes: too large for the transport (over 2 GiB "
+                            "to or from one process); give a smaller image or fewer points", what);
     return ic_error_set(err, r, "%s between the render's processes failed (%s); see the transport's own "
                         "message", what, ic_result_name(r));
 }
@@ -81,6 +84,12 @@ ic_result ic_comm_allgather_counted(ic_comm *comm, void *items, uint64_t count, 
         sizes[r] = sizeof *counts;
     double t0 = now();
     ic_result res = comm->allgather(comm->user, &counts[comm->rank], counts, sizes);
+    if (res != IC_OK) { /* the other ranks' counts never came: nothing to add up */
+        comm->seconds += now() - t0;
+        free(counts);
+        free(sizes);
+        return failed(err, res, "exchanging counts");
+    }
     uint64_t offset = 0, sum = 0;
     for (size_t r = 0; r < n; ++r) {
         if ((int)r < comm->rank)

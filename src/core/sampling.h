@@ -8,6 +8,8 @@
 #ifndef IC_CORE_SAMPLING_H
 #define IC_CORE_SAMPLING_H
 
+#include <float.h>
+
 #include "rng.h"
 #include "vecmath.h"
 
@@ -48,11 +50,18 @@ void ic_warp_uniform_cone_inv(ic_vec3 d, float one_minus_cos, float *u1, float *
 void ic_warp_triangle(float u1, float u2, float *b1, float *b2);
 void ic_warp_triangle_inv(float b1, float b2, float *u1, float *u2);
 
-/* Balance-free power heuristic (beta = 2) for MIS with one sample from each strategy. */
+/* Balance-free power heuristic (beta = 2) for MIS with one sample from each strategy. A pdf above
+ * about 1.8e19 (a small emitter seen from far away) squares to infinity in float; the weight is then
+ * taken from the pdfs' ratio in double, so that it stays in [0, 1] instead of inf / inf. */
 static inline float ic_power_heuristic(float pdf_a, float pdf_b)
 {
     float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
-    return (a + b) > 0.0f ? a / (a + b) : 0.0f;
+    if (a + b <= FLT_MAX) /* false for inf and NaN */
+        return (a + b) > 0.0f ? a / (a + b) : 0.0f;
+    if (!(pdf_a > 0.0f) || pdf_b != pdf_b)
+        return 0.0f;
+    double r = (double)pdf_b / (double)pdf_a;
+    return (float)(1.0 / (1.0 + r * r));
 }
 
 /* Radical inverse base 2 (van der Corput), for Hammersley sets. */

@@ -271,7 +271,7 @@ static void render_tile(void *p, int64_t item, int thread)
          * are taken back, so its pixels average what they have). */
         for (int y = y0; c->extra && y < y1; ++y)
             for (int x = x0; x < x1; ++x)
-                c->extra[y * cam->width + x] = 0;
+                c->extra[(size_t)y * cam->width + x] = 0;
         atomic_fetch_add(&c->tiles_skipped, 1);
         if (c->tile_state)
             c->tile_state[item] = TILE_SKIPPED;
@@ -282,7 +282,7 @@ static void render_tile(void *p, int64_t item, int thread)
     uint64_t rays = 0, samples = 0;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
-            uint32_t pixel = (uint32_t)(y * cam->width + x);
+            uint32_t pixel = (uint32_t)((size_t)y * cam->width + x);
             double sum[3] = {0, 0, 0};
             double sq = 0.0;
             uint64_t lds_key = ic_hash4(c->loop->seed, pixel, 0x736f626f6cULL, 0);
@@ -882,7 +882,8 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
             pass_spp = spp_max - done;
         if (loop->time_budget > 0.0 && done > 0) {
             double left = loop->time_budget - (ic_seconds() - c.start);
-            int fit = per_sample > 0.0 ? (int)(left / per_sample) : pass_spp;
+            /* in double first: a long budget over cheap samples exceeds an int */
+            int fit = per_sample > 0.0 ? (int)fmin(fmax(left / per_sample, 0.0), (double)pass_spp) : pass_spp;
             if (pass_spp > fit)
                 pass_spp = fit > 0 ? fit : 0;
             /* Rank 0's clock decides for all, so every pixel gets the same samples. */

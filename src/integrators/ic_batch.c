@@ -268,8 +268,11 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, uint32_
             return IC_OK;
         /* Small clusters: each selected record covers at least its own pixel, so this terminates. */
         const ic_scene *sc = c->tr->scene;
-        n = ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->work_extent, 3,
-                            30.0f);
+        uint32_t kept = 0;
+        if (ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->work_extent, 3,
+                            30.0f, &kept) != IC_OK)
+            return ic_error_set(err, IC_ERR_OOM, "out of memory sorting %u uncovered pixels", n);
+        n = kept;
         r = ic_ic_gather_and_insert(c, cand, n, pt, err);
         if (r != IC_OK)
             return r;

@@ -136,7 +136,9 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
      * pass, construction stopping with 15 % of the eye paths' points uncovered, and the final render's
      * fallback rays as white specks. At most 2.5 times what the camera sees (which leaves every bench scene
      * but the sky-room as it was: their views are 0.4–1 of their diagonals). */
-    float view = r == IC_OK ? ic_ic_view_extent(c) : 0.0f;
+    float view = 0.0f;
+    if (r == IC_OK && ic_ic_view_extent(c, &view) != IC_OK)
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the view's extent");
     c->work_extent = view > 0.0f ? fminf(c->scene_diag, 2.5f * view) : c->scene_diag;
     if (gbuffer_seconds)
         *gbuffer_seconds = ic_seconds() - t0;

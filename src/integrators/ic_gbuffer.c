@@ -149,20 +149,21 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, int full, ic_error *err)
 
 #define VIEW_SAMPLES 65536u
 
-float ic_ic_view_extent(const ic_ctx *c)
+ic_result ic_ic_view_extent(const ic_ctx *c, float *extent)
 {
+    *extent = 0.0f;
     size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
     for (size_t i = 0; i < npix; ++i)
         valid += c->g.valid[i];
     if (valid == 0)
-        return 0.0f;
+        return IC_OK;
     size_t stride = valid / VIEW_SAMPLES + 1, m = 0;
     ic_vec3 *pts = malloc(sizeof *pts * (valid / stride + 1));
     float *v = malloc(sizeof *v * (valid / stride + 1));
     if (!pts || !v) {
         free(pts);
         free(v);
-        return 0.0f;
+        return IC_ERR_OOM;
     }
     for (size_t i = 0, k = 0; i < npix; ++i) {
         ic_vec3 nn;
@@ -179,7 +180,8 @@ float ic_ic_view_extent(const ic_ctx *c)
     }
     free(pts);
     free(v);
-    return sqrtf(d2);
+    *extent = sqrtf(d2);
+    return IC_OK;
 }
 
 void ic_ic_gbuffer_free(ic_ctx *c)

@@ -94,7 +94,12 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
          * the image's world stage, says nothing here: a ground plane around a house makes it huge. */
         qsort(dist, m, sizeof *dist, ic_ic_cmp_float);
         float box = c->o.cache.accuracy * dist[m / 2];
-        m = ic_world_select(cand, m, scene->bounds_min, scene->bounds_max, box, 3, 30.0f);
+        uint32_t kept = 0;
+        if (ic_world_select(cand, m, scene->bounds_min, scene->bounds_max, box, 3, 30.0f, &kept) != IC_OK) {
+            r = ic_error_set(err, IC_ERR_OOM, "out of memory sorting %u hit-stage candidates", m);
+            break;
+        }
+        m = kept;
         /* Their rays: the strata over strata_div each way. */
         ic_gather_opts keep = c->o.gather, d;
         ic_gather_opts_default(&d);

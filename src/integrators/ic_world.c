@@ -124,12 +124,16 @@ uint32_t ic_world_cluster(ic_candidate *sorted, uint32_t count, float max_box, i
     return kept;
 }
 
-uint32_t ic_world_select(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3 hi, float max_box,
-                         int per_cluster, float normal_angle_deg)
+ic_result ic_world_select(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3 hi, float max_box,
+                          int per_cluster, float normal_angle_deg, uint32_t *kept)
 {
-    if (count == 0 || !ic_world_sort(cand, count, lo, hi))
-        return 0;
-    return ic_world_cluster(cand, count, max_box, per_cluster, normal_angle_deg);
+    *kept = 0;
+    if (count == 0)
+        return IC_OK;
+    if (!ic_world_sort(cand, count, lo, hi))
+        return IC_ERR_OOM;
+    *kept = ic_world_cluster(cand, count, max_box, per_cluster, normal_angle_deg);
+    return IC_OK;
 }
 
 /* ---------------------------------------------------------------- several processes */
@@ -163,7 +167,10 @@ ic_result ic_world_select_shared(ic_comm *comm, ic_candidate *own, uint32_t own_
     *kept = 0;
     *total = own_count;
     if (!ic_comm_is_shared(comm)) {
-        *kept = ic_world_select(own, own_count, lo, hi, max_box, per_cluster, normal_angle_deg);
+        if (ic_world_select(own, own_count, lo, hi, max_box, per_cluster, normal_angle_deg, kept) != IC_OK) {
+            free(own);
+            return ic_error_set(err, IC_ERR_OOM, "out of memory sorting %u world-space candidates", own_count);
+        }
         *out = own;
         return IC_OK;
     }

@@ -26,9 +26,11 @@ uint32_t ic_morton3(ic_vec3 p, ic_vec3 lo, ic_vec3 hi);
 /* Sorts cand (count) along the Morton curve of box [lo, hi] (ties by key), clusters them with a
  * bounding-box diagonal limit max_box, and keeps at most per_cluster candidates per cluster whose
  * normals differ pairwise by more than normal_angle_deg. Compacts the kept ones to the front of
- * cand and returns their number (deterministic for any input order). */
-uint32_t ic_world_select(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3 hi, float max_box,
-                         int per_cluster, float normal_angle_deg);
+ * cand and puts their number in *kept (deterministic for any input order). IC_ERR_OOM (cand untouched,
+ * *kept 0) when the sort finds no memory: a caller must not take that for "none kept", since under
+ * several processes the others would go on to an exchange this one skips. */
+ic_result ic_world_select(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3 hi, float max_box,
+                          int per_cluster, float normal_angle_deg, uint32_t *kept);
 
 /* The steps of ic_world_select, for processes that each hold a stretch of the Morton order.
  * ic_world_sort: cand in (Morton code, key) order; 0 if out of memory (cand untouched).

@@ -84,7 +84,8 @@ typedef struct points_job {
     uint32_t first;            /* this process's block of points starts here */
     uint64_t seed;
     int samples;               /* pt: paths; ic: light samples */
-    uint32_t uncovered;        /* first point no record covered + 1 (0: none) */
+    _Atomic uint32_t uncovered; /* lowest point no record covered, + 1 (0: none); the lowest, so that the
+                                   message does not depend on which thread found one first */
     double rel_var[4];         /* ic: the records' relative variance (R, G, B, luminance) */
 } points_job;
 
@@ -129,15 +130,19 @@ static ic_vec3 sample_direct(const points_job *job, uint32_t i, const ic_surface
  * (Owen 1995): each replicate draws its 2-D pairs from its own scrambling of the Sobol' sequence
  * (src/core/rng.h), so its samples cover the light's and the hemisphere's squares evenly (lower variance
  * than independent draws), while the replicates stay independent and unbiased: the spread of their means
- * gives σ. Samples are rounded up to a multiple of the replicates. */
+ * gives σ. Samples are rounded up to a multiple of the replicates (at least one each: fewer than
+ * IC_POINT_REPLICATES samples would leave σ from fewer replicates, or none). A sample that is not finite
+ * (NaN or Inf, from a degenerate configuration) counts as 0, as the image's film drops such samples. */
 static void estimate_point(const points_job *job, uint32_t i, uint64_t purpose, point_sample_fn fn, double mean[4],
                            double sigma[4], uint64_t *rays)
 {
     ic_surface s;
     ic_bsdf b;
     ic_ic_sensor(job->p[i], job->n[i], &s, &b);
-    int replicates = job->samples < IC_POINT_REPLICATES ? job->samples : IC_POINT_REPLICATES;
+    const int replicates = IC_POINT_REPLICATES;
     int per = (job->samples + replicates - 1) / replicates;
+    if (per < 1)
+        per = 1;
     sample_sums reps;
     memset(&reps, 0, sizeof reps);
     for (int r = 0; r < replicates; ++r) {
@@ -147,6 +152,8 @@ static void estimate_point(const points_job *job, uint32_t i, uint64_t purpose, 
             ic_rng rng = ic_rng_make(job->seed, i, (uint64_t)r * (uint64_t)per + (uint64_t)k, purpose);
             ic_rng_enable_lds(&rng, key, (uint32_t)k);
             ic_vec3 E = fn(job, i, &s, &b, &rng, rays);
+            if (!v3_is_finite(E))
+                continue;
             acc[0] += E.x;
             acc[1] += E.y;
             acc[2] += E.z;
@@ -189,7 +196,9 @@ static void point_ic(void *ctx, int64_t item, int thread)
     double sc[4];
     if (!ic_ic_points_indirect(job->ic, job->p[i], job->n[i], job->rel_var, &E_cache, sc)) {
         /* Construction leaves every sensor covered; a point it missed is reported, not guessed. */
-        job->uncovered = i + 1;
+        uint32_t seen = atomic_load(&job->uncovered);
+        while ((seen == 0 || seen > i + 1) && !atomic_compare_exchange_weak(&job->uncovered, &seen, i + 1)) {
+        }
         return;
     }
     double mean[4], sigma[4];
@@ -267,15 +276,22 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
         goto done;
     }
     for (uint32_t i = 0; i < count; ++i) {
-        ic_vec3 nn = points[i].normal;
-        float len = v3_len(nn);
-        if (!finite3(points[i].position) || !finite3(nn) || !(len > 0.0f) || !isfinite(len)) {
-            r = ic_error_set(err, IC_ERR_INVALID_ARG, "sensor point %u: %s; give a finite position and a non-zero "
-                             "normal", i, !(len > 0.0f) && finite3(nn) ? "zero normal" : "not a finite number");
+        ic_vec3 q = points[i].position, nn = points[i].normal;
+        /* The normal's length in double: float components up to 3.4e38 square without overflow. */
+        double len = sqrt((double)nn.x * nn.x + (double)nn.y * nn.y + (double)nn.z * nn.z);
+        const char *why = !finite3(q) || !finite3(nn) ? "a coordinate is not a finite number"
+                          : fabs(q.x) > IC_MAX_POINT_COORDINATE || fabs(q.y) > IC_MAX_POINT_COORDINATE ||
+                                  fabs(q.z) > IC_MAX_POINT_COORDINATE
+                              ? "a position coordinate lies beyond 1e18"
+                          : !(len > 0.0) ? "its normal is zero"
+                                         : NULL;
+        if (why) {
+            r = ic_error_set(err, IC_ERR_INVALID_ARG, "sensor points[%u] (0-based): %s; give a finite position within "
+                             "1e18 and a non-zero normal", i, why);
             goto done;
         }
-        p[i] = points[i].position;
-        n[i] = v3_scale(nn, 1.0f / len);
+        p[i] = q;
+        n[i] = v3((float)(nn.x / len), (float)(nn.y / len), (float)(nn.z / len));
     }
     if ((r = ic_accel_create(scene, &accel, err)) != IC_OK)
         goto done;
@@ -288,6 +304,7 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
 
     points_job job;
     memset(&job, 0, sizeof job);
+    atomic_init(&job.uncovered, 0);
     job.tr = &tr;
     job.p = p;
     job.n = n;
@@ -323,9 +340,10 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
             if ((r = ic_parallel_for(opt.threads, (int64_t)own, point_ic, &job)) != IC_OK)
                 ic_error_set(err, r, "sensor points: the worker threads could not start");
         }
-        if (r == IC_OK && job.uncovered)
-            r = ic_error_set(err, IC_ERR_INTERNAL, "sensor point %u: no cache record covers it after construction",
-                             job.uncovered - 1);
+        uint32_t uncovered = atomic_load(&job.uncovered);
+        if (r == IC_OK && uncovered)
+            r = ic_error_set(err, IC_ERR_INTERNAL, "sensor points[%u] (0-based): no cache record covers it after "
+                             "construction", uncovered - 1);
     }
     /* Every process's block of results to every process; the rays of all. */
     if (r == IC_OK)

@@ -36,7 +36,7 @@ ic_result ic_points_grid(const ic_points_grid_spec *g, ic_sensor_point **out, ui
                             "grid: no whole %g cell fits in %g x %g; give a smaller spacing", g->spacing, x1 - x0,
                             z1 - z0);
     if (nx * nz > (double)IC_MAX_GRID_POINTS)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "grid: %.0f x %.0f points is more than %u; give a larger spacing",
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "grid: %g x %g points is more than %u; give a larger spacing",
                             nx, nz, IC_MAX_GRID_POINTS);
     uint32_t c = (uint32_t)nx, r = (uint32_t)nz;
     ic_sensor_point *p = malloc(sizeof *p * (size_t)c * r);

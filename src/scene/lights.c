@@ -376,8 +376,10 @@ static void select_light_classes(ic_scene *s, double w_tri, double w_point)
         double facing = 0.0;
         for (uint32_t k = 0; k < s->env.portal_count; ++k)
             facing += s->env.portals[k].area * fabsf(v3_dot(s->env.portals[k].normal, s->sun.direction));
+        /* At least as if it met the openings at 3° (sin ≈ 0.05): a sun in the plane of every portal
+         * still lights the points outside them, and a delta light has no other way in than its samples. */
         if (s->sun.enabled)
-            w_sun = facing * v3_lum(s->sun.irradiance);
+            w_sun = fmax(facing, 0.05 * s->env.portal_area) * v3_lum(s->sun.irradiance);
     }
     double sum = w_tri + w_point + w_sun + w_env;
     memset(&s->light_select, 0, sizeof s->light_select);

@@ -25,7 +25,16 @@ ic_result ic_json_parse_portals(json_ctx *c, const cJSON *arr, int line)
             return ic_json_fail(c, line, IC_ERR_PARSE, "portal %d is not an array of four corners; %s", k, hint);
         ic_vec3 corners[4];
         for (int i = 0; i < 4; ++i) {
-            ic_result r = ic_json_read_vec3(c, cJSON_GetArrayItem(portal, i), line, &corners[i]);
+            const cJSON *q = cJSON_GetArrayItem(portal, i);
+            int ok = cJSON_IsArray(q) && cJSON_GetArraySize(q) == 3;
+            for (int a = 0; ok && a < 3; ++a) {
+                const cJSON *e = cJSON_GetArrayItem(q, a);
+                ok = cJSON_IsNumber(e) && isfinite(e->valuedouble) && fabs(e->valuedouble) <= 3.0e38;
+            }
+            if (!ok)
+                return ic_json_fail(c, line, IC_ERR_PARSE, "portal %d, corner %d is not [x, y, z] (3 finite numbers); %s",
+                                    k, i + 1, hint);
+            ic_result r = ic_json_read_vec3(c, q, line, &corners[i]);
             if (r != IC_OK)
                 return r;
         }

@@ -16,8 +16,10 @@ static ic_result read_ranged(json_ctx *c, const cJSON *it, int line, double lo, 
     ic_result r = ic_json_read_float(c, it, line, &f);
     if (r != IC_OK)
         return r;
-    if (!(f >= lo && f <= hi))
-        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "environment '%s' is %g; %s", it->string, (double)f, hint);
+    /* Compared as written (a double): the float nearest 1e30 is above 1e30. */
+    if (!(it->valuedouble >= lo && it->valuedouble <= hi))
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "environment '%s' is %g, outside [%g, %g]; %s", it->string,
+                            it->valuedouble, lo, hi, hint);
     *out = f;
     return IC_OK;
 }
@@ -169,6 +171,11 @@ static ic_result check_keys(json_ctx *c, int line, const ic_sky_params *p, unsig
                             "the %s sky needs the sun: either 'sun_direction' [x, y, z] or all of 'month', 'day', "
                             "'hour', 'latitude' and 'longitude' (and optionally 'meridian'), not both",
                             model);
+    /* The day must exist in its month (29 February is taken: the year is not given). */
+    static const int days_in[12] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+    if (date && p->day > days_in[p->month - 1])
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "'day' %d: month %d has %d days; give a day of that month",
+                            p->day, p->month, days_in[p->month - 1]);
     return IC_OK;
 }
 

@@ -236,13 +236,19 @@ ic_result ic_json_read_int(json_ctx *c, const cJSON *it, int line, double lo, do
 ic_result ic_json_read_vec3(json_ctx *c, const cJSON *it, int line, ic_vec3 *out)
 {
     float v[3];
+    /* An array's element has no key: it is then named by its place (its caller says which array). */
+    char what[200];
+    if (it && it->string)
+        snprintf(what, sizeof what, "'%.180s'", it->string);
+    else
+        snprintf(what, sizeof what, "an array element");
     if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 3)
-        return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be an array of 3 numbers, like [0, 1, 0]", it->string);
+        return ic_json_fail(c, line, IC_ERR_PARSE, "%s must be an array of 3 numbers, like [0, 1, 0]", what);
     for (int k = 0; k < 3; ++k) {
         const cJSON *e = cJSON_GetArrayItem(it, k);
         if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble) || fabs(e->valuedouble) > 3.0e38)
-            return ic_json_fail(c, line, IC_ERR_PARSE, "'%s' must be an array of 3 finite numbers, like [0, 1, 0]",
-                                it->string);
+            return ic_json_fail(c, line, IC_ERR_PARSE, "%s must be an array of 3 finite numbers, like [0, 1, 0]",
+                                what);
         v[k] = (float)e->valuedouble;
     }
     *out = v3(v[0], v[1], v[2]);

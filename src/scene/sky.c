@@ -159,6 +159,11 @@ static void perez_clearness_brightness(const ic_sky_params *p, double sun_zenith
         ecc = 1.00011 + 0.034221 * cos(a) + 0.00128 * sin(a) + 0.000719 * cos(2.0 * a) + 0.000077 * sin(2.0 * a);
     }
     *delta = p->diffuse_horizontal * air_mass / (SOLAR_CONSTANT * ecc);
+    /* The ranges the coefficients were fitted on, as gendaylit limits them (ε in [1, 12.01], Δ in
+     * [0.01, 0.6]): outside, a low sun's air mass drove Δ past 1 and the model put all the light at the
+     * horizon (a vertical sensor read 140 times the diffuse horizontal irradiance), or overflowed to NaN. */
+    *eps = fmin(fmax(*eps, 1.0), 12.01);
+    *delta = fmin(fmax(*delta, 0.01), 0.6);
     /* gendaylit's likelihood limit: in the intermediate bins Δ below 0.2 lies outside the data the
      * coefficients were fitted on */
     if (*eps > 1.065 && *eps < 2.8 && *delta < 0.2)

@@ -5,6 +5,7 @@
 #      mpirun (one process); the adaptive strategy, a loaded cache and radiance caching at 3 ranks, a 12x300
 #      image (bands of shading points and look-ups that leave rows out) at 3 and 5; `irrcache points` (cache
 #      and path tracer) at 2, 3 and 5 ranks;
+#      the path tracer at 3 ranks through the chunked all-gather of exchanges over 2 GiB (threshold lowered);
 #   2. lazy construction under 2 ranks is refused with a message naming the strategy;
 #   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
 #      missing file) stops the job: non-zero exit within seconds, the message names the rank and the
@@ -67,6 +68,11 @@ PY
   mpirun --oversubscribe -np $np "$bin" render "$scene" "${common[@]}" "${pt[@]}" --threads $((np % 2 + 1)) -o pt-$np.pfm
   same "path-traced image, $np ranks" pt-$np.pfm pt.pfm
 done
+# An all-gather too large for MPI's int counts (above 2 GiB: a huge image's pixels) goes rank by rank in
+# chunks; the test lowers the threshold to 1000 bytes so that the path tracer's image (19 kB) takes it.
+IRRCACHE_MPI_ALLGATHER_LIMIT=1000 mpirun --oversubscribe -x IRRCACHE_MPI_ALLGATHER_LIMIT -np 3 "$bin" render "$scene" \
+  "${common[@]}" "${pt[@]}" --threads 1 -o pt-large.pfm
+same "path-traced image through the large all-gather, 3 ranks" pt-large.pfm pt.pfm
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy adaptive --threads 1 -o ad-3.pfm
 same "adaptive image, 3 ranks" ad-3.pfm ad.pfm
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 1 --load-cache ic.cache -o load-3.pfm

@@ -176,6 +176,8 @@ static void test_bad_files(void)
         {"seven numbers", "0 1 0 0 1 0 7\n", "bad.txt:1: more than 6 numbers"},
         {"zero normal", "0 1 0 0 1 0\n0 1 0 0 0 0\n", "bad.txt:2: the normal (0 0 0) is zero"},
         {"not finite", "0 1 nan 0 1 0\n", "bad.txt:1: number 3 is not finite"},
+        {"far away", "1e20 1 0 0 1 0\n", "bad.txt:1: coordinate 1 (1e+20) lies beyond 1e18"},
+        {"a normal too small", "0 1 0 0 1 0\n# c\n0 1 0 1e-50 0 0\n", "bad.txt:3: the normal (1e-50 0 0) is zero or too small"},
         {"no points", "# nothing\n\n", "bad.txt: no points"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
@@ -194,8 +196,19 @@ static void test_bad_files(void)
     CHECK(run(SCENE, NULL) == 2, "no --points: usage error");
     CHECK(run(SCENE " --points " DIR "/pts.txt --format xml", NULL) == 2, "unknown format: usage error");
     CHECK(run(SCENE " --points " DIR "/pts.txt --samples 0", NULL) == 2, "--samples 0: usage error");
-    CHECK(run(SCENE " --points " DIR "/pts.txt --max-depth 1", NULL) == 2 && strstr(err_text, "max depth 1"),
-          "the cache at --max-depth 1: usage error: %s", err_text);
+    CHECK(run(SCENE " --points " DIR "/pts.txt --max-depth 1", NULL) == 2 && strstr(err_text, "max depth 1") &&
+              !strstr(err_text, "pts.txt:"),
+          "the cache at --max-depth 1: usage error, not blamed on the points file: %s", err_text);
+    /* What would fail at the end is found first: an output that cannot be written, a map too large. */
+    test_write_file(DIR "/one.txt", "0 1 0 0 1 0\n");
+    CHECK(run(SCENE " --points " DIR "/one.txt -o " DIR "/no/such/folder/out.txt", NULL) == 1 &&
+              strstr(err_text, "no/such/folder") && test_line_count(err_text) == 1,
+          "-o in a missing folder: exit 1 before the work: %s", err_text);
+    unlink(DIR "/big.png");
+    CHECK(run(SCENE " --grid 0 0 0 5000 1 1 --spacing 1 --map " DIR "/big.png -o " DIR "/big.txt", NULL) == 1 &&
+              strstr(err_text, "give a larger --spacing") && !test_file_exists(DIR "/big.png") &&
+              !test_file_exists(DIR "/big.txt"),
+          "a 5000 x 1 grid's map: exit 1 before the work, nothing written: %s", err_text);
     /* Bounded reading: a line of /dev/zero, an overlong line, more points than --max-points. */
     CHECK(run(SCENE " --points /dev/zero", NULL) == 1 && strstr(err_text, "/dev/zero:1: a line longer than 4096"),
           "/dev/zero: exit 1 at its first line: %s", err_text);

@@ -356,7 +356,8 @@ static void check_world(const char *what, const ic_candidate *all, uint32_t coun
 {
     ic_candidate *want = malloc(sizeof *want * count);
     memcpy(want, all, sizeof *want * count);
-    uint32_t kept = ic_world_select(want, count, WORLD_LO, WORLD_HI, max_box, 3, 30.0f);
+    uint32_t kept = 0;
+    CHECK(ic_world_select(want, count, WORLD_LO, WORLD_HI, max_box, 3, 30.0f, &kept) == IC_OK, "%s: select", what);
     transport t;
     memset(&t, 0, sizeof t);
     t.size = size;

@@ -447,7 +447,28 @@ static void test_bad_points(void)
     ic_point_result res[2];
     ic_error err = {0};
     CHECK(ic_points_compute(scene, pts, 2, NULL, res, NULL, &err) == IC_ERR_INVALID_ARG, "zero normal refused");
-    CHECK(strstr(err.message, "sensor point 1") != NULL, "message names the point: %s", err.message);
+    CHECK(strstr(err.message, "sensor points[1] (0-based): its normal is zero") != NULL, "message names the point: %s",
+          err.message);
+    /* Beyond 1e18 the ray tracer cannot start rays (it asserted); a tiny or a huge normal is a direction. */
+    pts[1] = sensor(2e18f, 1, 0, 0, 1, 0);
+    CHECK(ic_points_compute(scene, pts, 2, NULL, res, NULL, &err) == IC_ERR_INVALID_ARG &&
+              strstr(err.message, "sensor points[1] (0-based): a position coordinate lies beyond 1e18"),
+          "a position beyond 1e18 refused: %s", err.message);
+    ic_points_options small = {0};
+    small.samples = 16;
+    pts[1] = sensor(0, 1, 0, 0, 1e-40f, 0);
+    pts[0] = sensor(0, 1, 0, 0, 3e38f, 3e38f);
+    CHECK(ic_points_compute(scene, pts, 2, &small, res, NULL, &err) == IC_OK, "tiny and huge normals: %s",
+          err.message);
+    CHECK(isfinite(res[0].illuminance) && isfinite(res[1].illuminance) && res[1].illuminance > 0.0,
+          "their results are finite: %g, %g", res[0].illuminance, res[1].illuminance);
+    /* Fewer samples than replicates: still IC_POINT_REPLICATES of them, so that σ is an estimate. */
+    small.samples = 1;
+    pts[0] = sensor(0, 1, 0, 0, 1, 0);
+    CHECK(ic_points_compute(scene, pts, 1, &small, res, NULL, &err) == IC_OK && res[0].illuminance_sigma > 0.0,
+          "one sample asked: 16 taken, sigma %g > 0", res[0].illuminance_sigma);
+    pts[0] = sensor(0, 1, 0, 0, 1, 0);
+    pts[1] = sensor(0, 1, 0, 0, 0, 0);
     ic_points_options opt = {0};
     opt.samples = -1;
     CHECK(ic_points_compute(scene, pts, 1, &opt, res, NULL, &err) == IC_ERR_INVALID_ARG, "negative samples refused");

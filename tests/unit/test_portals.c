@@ -244,7 +244,9 @@ static void test_bad_portals(void)
     expect_refusal("portal_skew.json", "[[[0, 1, 0], [1, 1, 0], [1.5, 1, 1], [0, 1, 1]]]", "parallelogram");
     expect_refusal("portal_flat.json", "[[[0, 1, 0], [1, 1, 0], [2, 1, 0], [1, 1, 0]]]", "degenerate");
     expect_refusal("portal_object.json", "{\"corner\": [0, 0, 0]}", "non-empty array");
-    expect_refusal("portal_nan.json", "[[[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, \"x\"]]]", "");
+    expect_refusal("portal_nan.json", "[[[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, \"x\"]]]",
+                   "portal 1, corner 4 is not [x, y, z]");
+    expect_refusal("portal_2d.json", "[[[0, 1, 0], [1, 1], [1, 1, 1], [0, 1, 1]]]", "portal 1, corner 2 is not [x, y, z]");
     /* One more than the limit, each a unit square along x. */
     static char many[64 * (IC_MAX_PORTALS + 1) + 8];
     size_t len = 0;
@@ -256,8 +258,29 @@ static void test_bad_portals(void)
     expect_refusal("portal_many.json", many, "more than 256 portals");
 }
 
+/* A directional sun in the plane of every portal (here straight up, windows vertical) meets the openings
+ * edge-on; it must keep a share of the light samples all the same: a delta light has no other way in,
+ * and it lights the points outside the portals at full strength. */
+static void test_sun_in_portal_plane(void)
+{
+    ic_error err = {0};
+    ic_scene *s = load_text("portal_sun.json",
+                            "{\n \"meshes\": [{\"path\": \"" IC_SOURCE_DIR "/tests/scenes/plain_quad.obj\"}],\n"
+                            " \"lights\": [{\"type\": \"sun\", \"direction\": [0, 1, 0], \"irradiance\": [100, 100, 100]}],\n"
+                            " \"environment\": {\"radiance\": [1, 1, 1],\n"
+                            "   \"portals\": [[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]]}\n}\n",
+                            &err);
+    CHECK(s != NULL, "sun and a vertical portal load: %s", err.message);
+    if (!s)
+        return;
+    CHECK(s->sun.enabled && s->light_select.sun > 0.0f, "the sun keeps a share of the light samples: %g",
+          (double)s->light_select.sun);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_sun_in_portal_plane();
     test_sampling();
     test_mixed_portals();
     test_sky_room();

@@ -327,8 +327,25 @@ static void check_sobol_dim1(void)
           "first points 1/2, 3/4, 1/4");
 }
 
+/* The power heuristic in [0, 1] with pdfs whose squares overflow a float (a small emitter far away gave
+ * inf / inf = NaN, and NaN illuminance from `irrcache points`), and the same bits as a² / (a² + b²)
+ * wherever those stay finite. */
+static void check_power_heuristic(void)
+{
+    CHECK(ic_power_heuristic(2.0f, 1.0f) == 4.0f / 5.0f && ic_power_heuristic(0.0f, 0.0f) == 0.0f &&
+              ic_power_heuristic(0.0f, 3.0f) == 0.0f && ic_power_heuristic(1e18f, 1e18f) == 0.5f,
+          "finite squares: a^2 / (a^2 + b^2)");
+    float big = ic_power_heuristic(1e20f, 1.0f), small = ic_power_heuristic(1.0f, 1e20f),
+          even = ic_power_heuristic(3e38f, 3e38f), inf = ic_power_heuristic(INFINITY, 5.0f),
+          nan = ic_power_heuristic(NAN, 1.0f);
+    CHECK(big == 1.0f && small >= 0.0f && small < 1e-30f && even == 0.5f && inf == 1.0f && nan == 0.0f,
+          "overflowing squares: %g %g %g %g %g (1, about 1e-40, 0.5, 1, 0)", big, small, even, inf, nan);
+    CHECK(fabsf(ic_power_heuristic(3e19f, 2e19f) - 9.0f / 13.0f) < 1e-6f, "3e19 against 2e19: 9/13");
+}
+
 int main(void)
 {
+    check_power_heuristic();
     const warp_case cases[] = {
         {"cosine hemisphere", w_cos, p_cos, i_cos, cdf_cos, 0.0f},
         {"uniform hemisphere", w_uh, p_uh, i_uh, cdf_uh, 0.0f},

@@ -265,7 +265,8 @@ static void test_world_order(void)
         want[i].key = cand[i].key;
     }
     qsort(want, N, sizeof *want, cmp_ref);
-    uint32_t kept = ic_world_select(cand, N, lo, hi, 0.0f, N, 30.0f);
+    uint32_t kept = 0;
+    CHECK(ic_world_select(cand, N, lo, hi, 0.0f, N, 30.0f, &kept) == IC_OK, "world select ran");
     CHECK(kept == N, "world select with one-candidate clusters kept %u of %d", kept, N);
     int wrong = 0;
     for (uint32_t i = 0; i < kept; ++i)

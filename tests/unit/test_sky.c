@@ -161,6 +161,28 @@ static void test_perez(void)
     ic_sky_perez_coefficients(1.0, 0.3, 0.5, c);
     CHECK_NEAR(c[2], exp(pow(0.3 * (2.8 + 0.6004 * 0.5), 1.2375)) - 1.0, 1e-12, "bin 1: c");
     CHECK_NEAR(c[3], -exp(0.3 * (1.8734 + 0.6297 * 0.5)) + 0.9738 + 0.3 * 0.2809, 1e-12, "bin 1: d");
+    /* A low sun: Kasten's air mass puts Δ far above the fitted range unless it is held to [0.01, 0.6]
+     * as gendaylit holds it (Δ 1.13 here made the zenith 7e-16 and the horizon 8e6; 3000 W/m2 at 1°
+     * overflowed to NaN). The sky stays finite, positive, and normalised to the horizontal irradiance. */
+    static const char *low[] = {
+        "{\"sky\": \"perez\", \"diffuse_horizontal\": 150, \"direct_normal\": 0, \"sun_direction\": [0, 0.0872, 1]}",
+        "{\"sky\": \"perez\", \"diffuse_horizontal\": 3000, \"direct_normal\": 0, \"sun_direction\": [0, 0.01745, 1]}"};
+    for (int k = 0; k < 2; ++k) {
+        s = load_sky(low[k], &err);
+        CHECK(s != NULL, "low sun %d loads: %s", k, err.message);
+        if (!s)
+            continue;
+        CHECK(s->env.sky.brightness <= 0.6 && s->env.sky.brightness >= 0.01 && s->env.sky.clearness >= 1.0 &&
+                  s->env.sky.clearness <= 12.01,
+              "low sun %d: eps %g, delta %g within gendaylit's ranges", k, s->env.sky.clearness, s->env.sky.brightness);
+        ic_vec3 up = {0, 1, 0}, side = {0, 0.05f, 0.99875f};
+        float lz = ic_scene_env_radiance(s, up).y, lh = ic_scene_env_radiance(s, side).y;
+        CHECK(isfinite(lz) && isfinite(lh) && lz > 0.0f && lh < 100.0f * lz,
+              "low sun %d: zenith %g and horizon %g finite, the horizon not a hundred times the zenith", k, lz, lh);
+        double eh = horizontal_irradiance(s), want = k ? 3000.0 : 150.0;
+        CHECK(fabs(eh - want) <= 5e-3 * want, "low sun %d: normalised to the diffuse horizontal irradiance: %g", k, eh);
+        ic_scene_free(s);
+    }
 }
 
 static void test_sun_position(void)
@@ -280,6 +302,10 @@ static void test_bad(void)
          "gensky"},
         {"{\"sky\": \"cie-clear\", \"zenith_radiance\": 1, \"direct_normal\": \"bright\", \"sun_direction\": [0, 1, 1]}",
          "direct_normal"},
+        {"{\"sky\": \"cie-clear\", \"zenith_radiance\": 1, \"month\": 2, \"day\": 31, \"hour\": 12, \"latitude\": 50,"
+         " \"longitude\": 0}",
+         "month 2 has 29 days"},
+        {"{\"sky\": \"cie-overcast\", \"diffuse_horizontal\": 2e30}", "is 2e+30, outside [1e-30, 1e+30]"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         ic_error err = {0};
