@@ -214,7 +214,10 @@ static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b, int ha
     int squeeze_ok = isfinite(k2) && e.w > 0.0f && e.w <= 1.0f &&
                      (e.w == 1.0f ? k2 == 0.0f : fabsf(k2 * e.w * e.w - (1.0f - e.w * e.w)) <= 1e-3f * (1.0f + k2 * e.w * e.w));
     c->ellipse_count += e.w < 1.0f;
-    return f[3] > 0.0f && f[7] > 0.0f && fabsf(nl - 1.0f) < 1e-3f && squeeze_ok;
+    /* The invariants ic_cache_insert_batch holds a record to: a positive harmonic-mean distance and a
+     * footprint of at least 0 (ic_cache_get_record hands them out). */
+    return f[3] > 0.0f && f[7] > 0.0f && fabsf(nl - 1.0f) < 1e-3f && squeeze_ok && cd->harmonic_mean_dist > 0.0f &&
+           cd->pixel_footprint >= 0.0f;
 }
 
 /* ---- save ------------------------------------------------------------------------------------- */

@@ -24,9 +24,15 @@
 
 static ic_result decode_failed(const char *path, ic_error *err)
 {
+    /* stb_image's reason, printable: it can be empty, or quote a damaged chunk type's raw bytes. */
     const char *why = stbi_failure_reason();
+    char shown[64];
+    size_t k = 0;
+    for (; why && why[k] && k + 1 < sizeof shown; ++k)
+        shown[k] = why[k] >= 0x20 && why[k] < 0x7f ? why[k] : '?';
+    shown[k] = '\0';
     return ic_error_set(err, IC_ERR_PARSE, "%s: cannot decode image (%s); check that it is a valid PNG file",
-                        path, why ? why : "unknown reason");
+                        path, k ? shown : "its data is damaged or ends early");
 }
 
 static uint32_t be32(const unsigned char *b)
@@ -90,6 +96,44 @@ static size_t png_chunk_overrun(const unsigned char *b, size_t n)
         i += 12 + (size_t)len;
     }
     return 0;
+}
+
+/* The first critical PNG chunk, up to IEND, whose CRC-32 (ISO/IEC 15948 §5.3 and Annex D: over its type
+ * and data) does not match: its offset in *at and 1; 2 with *at = n when the chunks end without IEND; 0 when all
+ * match or the data is not a PNG. stb_image checks neither (nor the zlib stream's Adler-32), so a flipped
+ * byte in the pixel data decoded as wrong pixels. Chunks are walked by their lengths (png_chunk_overrun
+ * has refused one that runs past the end). */
+static int png_bad_chunk(const unsigned char *b, size_t n, size_t *at)
+{
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+    if (n < 8 || memcmp(b, signature, 8) != 0)
+        return 0;
+    uint32_t table[256];
+    for (uint32_t v = 0; v < 256; ++v) {
+        uint32_t c = v;
+        for (int k = 0; k < 8; ++k)
+            c = c & 1u ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+        table[v] = c;
+    }
+    for (size_t i = 8; i + 12 <= n;) {
+        uint32_t len = be32(b + i);
+        if (len > n - i - 12)
+            break;
+        uint32_t crc = 0xFFFFFFFFu;
+        for (size_t k = i + 4; k < i + 8 + (size_t)len; ++k)
+            crc = table[(crc ^ b[k]) & 0xFFu] ^ (crc >> 8);
+        /* As libpng does: a critical chunk (its type's first letter upper case) must match; an ancillary
+         * one that does not is metadata the decoder skips anyway. */
+        if ((crc ^ 0xFFFFFFFFu) != be32(b + i + 8 + len) && !(b[i + 4] & 0x20)) {
+            *at = i;
+            return 1;
+        }
+        if (memcmp(b + i + 4, "IEND", 4) == 0)
+            return 0;
+        i += 12 + (size_t)len;
+    }
+    *at = n;
+    return 2;
 }
 
 /* Bytes a PNG or JPEG may have beyond its pixels' need: 16 per declared pixel (far above either format's
@@ -213,6 +257,18 @@ ic_result ic_image_decode_ldr(const unsigned char *bytes, size_t n, const char *
         return ic_error_set(err, IC_ERR_PARSE, "%s: the PNG chunk at byte %zu declares %lu data bytes, but the file "
                             "ends %zu bytes after its header (data and a 4-byte CRC); the file is truncated or "
                             "damaged", name, overrun, (unsigned long)be32(bytes + overrun), n - overrun - 8);
+    size_t bad = 0;
+    int damaged = png_bad_chunk(bytes, n, &bad);
+    if (damaged == 1) {
+        char type[5] = {0};
+        for (int k = 0; k < 4; ++k)
+            type[k] = bytes[bad + 4 + k] >= 0x20 && bytes[bad + 4 + k] < 0x7f ? (char)bytes[bad + 4 + k] : '?';
+        return ic_error_set(err, IC_ERR_CORRUPT, "%s: the PNG chunk '%s' at byte %zu fails its CRC check; the file is "
+                            "damaged, re-create it", name, type, bad);
+    }
+    if (damaged == 2)
+        return ic_error_set(err, IC_ERR_CORRUPT, "%s: the PNG ends after %zu bytes without its IEND chunk; the file is "
+                            "truncated, re-create it", name, n);
     size_t m = 0;
     unsigned char *cleaned = png_without_empty_idat(bytes, n, &m);
     if (cleaned) {

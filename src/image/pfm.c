@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,11 +43,21 @@ ic_result ic_image_read_pfm(const char *path, const ic_image_limit *lim, ic_imag
     if (opened != IC_OK)
         return opened;
 
-    char kind[3] = {0};
+    char kind[3] = {0}, wtext[16] = {0}, htext[16] = {0};
     int width = 0, height = 0;
     double scale = 0.0;
     int ws = 0;
-    if (fscanf(fp, "%2s %d %d %lf", kind, &width, &height, &scale) != 4 || kind[0] != 'P' ||
+    /* The sizes read as text and converted with a range check: %d wraps 4294967297 to 1. */
+    int sized = fscanf(fp, "%2s %15s %15s %lf", kind, wtext, htext, &scale) == 4;
+    if (sized) {
+        char *e1 = NULL, *e2 = NULL;
+        errno = 0;
+        long w = strtol(wtext, &e1, 10), h = strtol(htext, &e2, 10);
+        sized = !errno && !*e1 && !*e2 && w >= INT_MIN && w <= INT_MAX && h >= INT_MIN && h <= INT_MAX;
+        width = sized ? (int)w : 0;
+        height = sized ? (int)h : 0;
+    }
+    if (!sized || kind[0] != 'P' ||
         (kind[1] != 'F' && kind[1] != 'f') || !isfinite(scale) || scale == 0.0 ||
         ((ws = fgetc(fp)) != '\n' && ws != ' ' && ws != '\t' && ws != '\r')) {
         fclose(fp);

@@ -19,6 +19,8 @@
 #include "core/atomic_file.h"
 
 #include <errno.h>
+#include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -114,9 +116,23 @@ static ic_result read_header(const char *path, FILE *fp, int *width, int *height
                 *exposure *= e; /* cumulative, per the format */
         }
     }
-    char y_sign, x_sign, y_axis, x_axis;
-    if (!read_line(fp, line, sizeof line) ||
-        sscanf(line, "%cY %d %cX %d", &y_sign, height, &x_sign, width) != 4) {
+    /* EXPOSURE lines multiply: their product must stay a positive finite number (1e-300 made every
+     * pixel infinite). */
+    if (!(*exposure > 1e-30 && *exposure < 1e30))
+        return ic_error_set(err, IC_ERR_CORRUPT, "%s: the header's EXPOSURE lines multiply to %g, outside 1e-30 to "
+                            "1e30; fix or remove them", path, *exposure);
+    char y_sign, x_sign, y_axis, x_axis, hs[16], ws[16];
+    if (read_line(fp, line, sizeof line) && sscanf(line, "%cY %15s %cX %15s", &y_sign, hs, &x_sign, ws) == 4) {
+        /* The sizes as numbers that fit an int, not %d (which wraps 4294967300 to 4). */
+        char *e1 = NULL, *e2 = NULL;
+        errno = 0;
+        long h = strtol(hs, &e1, 10), w = strtol(ws, &e2, 10);
+        if (errno || *e1 || *e2 || h < 0 || w < 0 || h > INT_MAX || w > INT_MAX)
+            return ic_error_set(err, IC_ERR_PARSE, "%s: resolution line \"%s\" has a size that is not a whole "
+                                "number up to %d; re-create the file", path, line, INT_MAX);
+        *height = (int)h;
+        *width = (int)w;
+    } else {
         if (sscanf(line, "%c%c %*d %c%c %*d", &y_sign, &y_axis, &x_sign, &x_axis) == 4)
             return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: picture orientation \"%s\" is not supported; re-orient it "
                                 "to \"-Y height +X width\" (pflip, protate)", path, line);
@@ -216,8 +232,17 @@ ic_result ic_image_read_hdr(const char *path, const ic_image_limit *lim, ic_imag
             const unsigned char *px = line + 4 * x;
             /* Radiance decodes to the middle of the mantissa's interval: (m + 0.5) · 2^(e-136). */
             double scale = px[3] ? ldexp(1.0, (int)px[3] - 136) / exposure : 0.0;
-            for (int c = 0; c < 3; ++c)
-                dst[3 * x + c] = px[3] ? (float)(((double)px[c] + 0.5) * scale) : 0.0f;
+            for (int c = 0; c < 3; ++c) {
+                double v = px[3] ? ((double)px[c] + 0.5) * scale : 0.0;
+                if (v > FLT_MAX) { /* a large exponent over a small EXPOSURE: beyond a float */
+                    r = ic_error_set(err, IC_ERR_CORRUPT, "%s: pixel (%d, %d) decodes to %g, beyond the range of a "
+                                     "float; check the file's EXPOSURE lines", path, x, y, v);
+                    break;
+                }
+                dst[3 * x + c] = (float)v;
+            }
+            if (r != IC_OK)
+                break;
         }
     }
     free(line);

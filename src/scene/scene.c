@@ -258,6 +258,22 @@ ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_
     ic_scene *scene = b->scene;
     ic_image img = *img_in;
     memset(img_in, 0, sizeof *img_in);
+    /* A float texture (PFM, EXR, HDR) can hold what no material may: a NaN or infinite texel, or a
+     * negative colour. Refused as an environment map's are, instead of dark walls or negative pixels. */
+    for (size_t i = 0; i < (size_t)img.width * (size_t)img.height * 3; ++i) {
+        float v = img.rgb[i];
+        if (!isfinite(v) || (!is_data && v < 0.0f)) {
+            size_t px = i / 3;
+            static const char *const channel[3] = {"red", "green", "blue"};
+            ic_error_set(err, IC_ERR_INVALID_ARG,
+                         "%s: texture '%s': texel (%zu, %zu) has a %s value of %g; a texture's values must be "
+                         "finite%s, fix the file",
+                         owner, path, px % (size_t)img.width, px / (size_t)img.width, channel[i % 3], (double)v,
+                         is_data ? "" : " and >= 0");
+            ic_image_free(&img);
+            return IC_ERR_INVALID_ARG;
+        }
+    }
     ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));
     if (!grown) {
         ic_image_free(&img);

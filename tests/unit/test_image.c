@@ -1019,6 +1019,53 @@ static void test_ldr_header_first(void)
           "a 3000x2000 JPEG over a 10^6-pixel limit: %s (%s)", ic_result_name(r), err.message);
 }
 
+/* Damage that used to decode as some image: a PNG's pixel data with a flipped byte (stb_image checks no
+ * CRC), a PNG without its IEND, sizes that %d wrapped (4294967297 read as 1), an EXPOSURE that made every
+ * pixel infinite. Each is refused, naming the file and the trouble. */
+static void test_damaged_files(void)
+{
+    ic_image img, back;
+    ic_error err;
+    CHECK(ic_image_create(&img, 6, 4) == IC_OK, "create");
+    for (int i = 0; i < 6 * 4 * 3; ++i)
+        img.rgb[i] = (float)(i % 5) / 5.0f;
+    unsigned char png[4096];
+    size_t n = 0, at = png_with_idat(SCRATCH "/crc.png", &img, png, &n);
+    ic_image_free(&img);
+    if (at) {
+        png[at + 8 + 2] ^= 0x10; /* a byte of the IDAT's data; its CRC unchanged */
+        write_bytes(SCRATCH "/crc.png", png, n);
+        ic_result r = ic_image_read(SCRATCH "/crc.png", &back, &err);
+        CHECK(r == IC_ERR_CORRUPT && strstr(err.message, "crc.png") && strstr(err.message, "'IDAT'") &&
+                  strstr(err.message, "fails its CRC check"),
+              "a flipped byte in the pixel data: %s (%s)", ic_result_name(r), err.message);
+        ic_image_free(&back);
+        png[at + 8 + 2] ^= 0x10;
+        write_bytes(SCRATCH "/noiend.png", png, n - 12); /* IEND is the last 12 bytes */
+        r = ic_image_read(SCRATCH "/noiend.png", &back, &err);
+        CHECK(r == IC_ERR_CORRUPT && strstr(err.message, "noiend.png") && strstr(err.message, "without its IEND"),
+              "no IEND: %s (%s)", ic_result_name(r), err.message);
+        ic_image_free(&back);
+    }
+    static const struct {
+        const char *name, *text, *words;
+    } cases[] = {
+        {"wrap.pfm", "PF\n4294967297 1\n-1.0\n", "malformed PFM header"},
+        {"wrap.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4294967300 +X 4\n", "not a whole number"},
+        {"exposure.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\nEXPOSURE=1e-300\n\n-Y 1 +X 1\n\x80\x80\x80\xff",
+         "EXPOSURE lines multiply to 1e-300"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s", SCRATCH, cases[k].name);
+        write_bytes(path, (const unsigned char *)cases[k].text, strlen(cases[k].text));
+        ic_result r = ic_image_read(path, &back, &err);
+        CHECK(r != IC_OK && strstr(err.message, cases[k].name) && strstr(err.message, cases[k].words),
+              "%s refused with '%s': %s", cases[k].name, cases[k].words, err.message);
+        ic_image_free(&back);
+    }
+}
+
 int main(void)
 {
     if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
@@ -1042,5 +1089,6 @@ int main(void)
     test_ldr_header_first();
     test_png_empty_idat();
     test_png_chunk_overrun();
+    test_damaged_files();
     TEST_MAIN_END();
 }

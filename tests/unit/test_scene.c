@@ -554,6 +554,25 @@ static void test_texture_storage(void)
     int32_t a = -1, b = -1;
     CHECK(ic_scene_texture_load(&builder, png, "test", &a, &err) == IC_OK && a == 0, "load png: %s", err.message);
     CHECK(ic_scene_texture_load(&builder, pfm, "test", &b, &err) == IC_OK && b == 1, "load pfm: %s", err.message);
+    /* A float texture with a negative or a NaN texel is refused, naming the texel (a negative kd gave
+     * negative pixels, a NaN dark walls); nothing is added to the scene. */
+    for (int k = 0; k < 2; ++k) {
+        char bad[512];
+        snprintf(bad, sizeof bad, "%s/texture_bad%d.pfm", IC_TEST_TMP, k);
+        const float px[6] = {0.5f, 0.5f, 0.5f, 0.5f, k ? NAN : -2.0f, 0.5f}; /* 2x1, little-endian */
+        FILE *f = fopen(bad, "wb");
+        if (f) {
+            fputs("PF\n2 1\n-1.0\n", f);
+            fwrite(px, sizeof px[0], 6, f);
+            fclose(f);
+        }
+        int32_t c = -1;
+        ic_result r = ic_scene_texture_load(&builder, bad, "test", &c, &err);
+        CHECK(r == IC_ERR_INVALID_ARG && strstr(err.message, "texture_bad") &&
+                  strstr(err.message, k ? "texel (1, 0) has a green value of nan" : "texel (1, 0) has a green value of -2") &&
+                  s->texture_count == 2,
+              "a %s texel refused: %s", k ? "NaN" : "negative", err.message);
+    }
     ic_image back;
     CHECK(ic_image_read(png, &back, &err) == IC_OK, "read png: %s", err.message);
     const ic_texture *t8 = &s->textures[0], *tf = &s->textures[1];
