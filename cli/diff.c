@@ -19,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #define EXIT_IO 1
 #define EXIT_USAGE 2
@@ -154,6 +155,15 @@ static int heat_scale_resolve(heat_scale *hs, const ic_image *img, const ic_imag
     return 1;
 }
 
+/* 1 if a and b name the same file: the same inode where both exist, else the same path as written. */
+static int same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    if (stat(a, &sa) == 0 && stat(b, &sb) == 0)
+        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    return strcmp(a, b) == 0;
+}
+
 int ic_cli_diff(int argc, char **argv)
 {
     const char *paths[2] = {NULL, NULL};
@@ -230,6 +240,20 @@ int ic_cli_diff(int argc, char **argv)
     ic_image img = {0}, ref = {0}, heat = {0}, blot = {0};
     ic_image_metrics metrics;
     int status = EXIT_IO;
+    /* A map must not overwrite an input, nor the other map (it silently replaced the image compared). */
+    const char *maps[2] = {heatmap, blotch.path};
+    for (int k = 0; k < 2; ++k) {
+        const char *clash = !maps[k] ? NULL
+                            : same_file(maps[k], paths[0]) ? paths[0]
+                            : same_file(maps[k], paths[1]) ? paths[1]
+                            : k == 1 && maps[0] && same_file(maps[1], maps[0]) ? "--heatmap"
+                                                                    : NULL;
+        if (clash) {
+            fprintf(stderr, "irrcache diff: %s %s: the same file as %s; give the map its own name\n",
+                    k ? "--blotch-map" : "--heatmap", maps[k], clash);
+            return EXIT_USAGE;
+        }
+    }
     if (ic_image_read(paths[0], &img, &err) != IC_OK || ic_image_read(paths[1], &ref, &err) != IC_OK) {
         fprintf(stderr, "irrcache diff: %s\n", err.message);
     } else if (img.width != ref.width || img.height != ref.height) {
@@ -248,8 +272,13 @@ int ic_cli_diff(int argc, char **argv)
         status = 0;
         if (json && !print_json(&img, &metrics, heatmap, &scale, &blotch))
             status = EXIT_IO;
-        else if (!json)
+        else if (!json) {
             print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap, &scale, &blotch);
+            if (fflush(stdout) != 0 || ferror(stdout)) { /* a full disk or /dev/full: the table is lost */
+                fprintf(stderr, "irrcache diff: standard output: write error\n");
+                status = EXIT_IO;
+            }
+        }
     }
     ic_image_free(&blot);
     ic_image_free(&heat);

@@ -178,13 +178,13 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_DEFAULT_RECORD_NOISE, "%g", "", IC_SCOPE_IC, "the relative noise (sigma / E) --record-sets aims at") \
     X(MIN_RADIUS_PX, "--min-radius-px", NULL, IC_OPT_FLOAT, render.ic.min_radius_px, 0, 1e6, "P", \
       IC_DEFAULT_MIN_RADIUS_PX, "%g", "px", IC_SCOPE_IC, "smallest influence radius a*R of a record, in pixels " \
-      "at its primary hit") \
-    X(MAX_RADIUS_PX, "--max-radius-px", NULL, IC_OPT_FLOAT, render.ic.max_radius_px, 0, 1e6, "P", \
+      "at its primary hit; 0: no floor") \
+    X(MAX_RADIUS_PX, "--max-radius-px", NULL, IC_OPT_FLOAT, render.ic.max_radius_px, 0.001, 1e6, "P", \
       IC_DEFAULT_MAX_RADIUS_PX, "%g", "px", IC_SCOPE_IC, "largest influence radius a*R of a record, in pixels " \
       "at its primary hit") \
     X(MIN_RADIUS, "--min-radius", NULL, IC_OPT_FLOAT, render.ic.cache.min_radius, 0, 1e30, "R", 0, "%g", \
       "world units", IC_SCOPE_IC, "smallest record radius R") \
-    X(MAX_RADIUS, "--max-radius", NULL, IC_OPT_FLOAT, render.ic.cache.max_radius, 0, 1e30, "R", NAN, \
+    X(MAX_RADIUS, "--max-radius", NULL, IC_OPT_FLOAT, render.ic.cache.max_radius, 1e-30, 1e30, "R", NAN, \
       "scene diagonal / 8", "world units", IC_SCOPE_IC, "largest record radius R") \
     X(FINAL_ACCURACY_SCALE, "--final-accuracy-scale", NULL, IC_OPT_FLOAT, render.ic.cache.final_accuracy_scale, 1, \
       100, "S", IC_DEFAULT_FINAL_ACCURACY_SCALE, "%g", "", IC_SCOPE_IC, "the final render accepts records up " \

@@ -26,6 +26,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -176,11 +177,11 @@ static const aov_file aov_files[] = {{"indirect", ".indirect.exr", "--aov indire
                                      {"amap", ".amap.png", "--aov amap"}};
 #define AOV_COUNT (int)(sizeof aov_files / sizeof aov_files[0])
 
-/* 1 if path names an OpenEXR file. */
+/* 1 if path names an OpenEXR file (.exr in any case, as the writer takes it). */
 static int is_exr(const char *path)
 {
     size_t n = strlen(path);
-    return n >= 4 && !strcmp(path + n - 4, ".exr");
+    return n >= 4 && !strcasecmp(path + n - 4, ".exr");
 }
 
 /* 1 if AOV k is a layer of the first output rather than a file of its own. */
@@ -408,6 +409,10 @@ static int render_command(int argc, char **argv, ic_comm *comm)
                         "so the image will be black; add an emitter, a light or an environment\n", a.scene);
 
     ic_render_options opt = a.render;
+    /* The library reads 0 as "the default" and a negative value as "none": --min-radius-px 0 asks for no
+     * floor (it gave the default 3 px without a word). */
+    if (a.given[IC_ARG_MIN_RADIUS_PX] && opt.ic.min_radius_px == 0.0f)
+        opt.ic.min_radius_px = -1.0f;
     opt.comm = comm;
     opt.progress_detail = on_progress;
     opt.progress_user = &prog;
@@ -510,7 +515,8 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         FAILED("--records-json", a.records_json);
     if (st.save_error[0]) {
         fprintf(stderr, "irrcache render: --save-cache %s\n", st.save_error);
-        FAILED("--save-cache", a.render.ic.save_cache);
+        if (!st.cancelled) /* an interrupted render leaves its cache unwritten on purpose; 130/143 says why */
+            FAILED("--save-cache", a.render.ic.save_cache);
     }
     ic_cli_exr_meta_free(&meta);
     free_results(&img, &aovs, scene);

@@ -21,12 +21,19 @@ void ic_bsdf_init(ic_bsdf *b, const ic_scene *scene, const ic_surface *s, ic_vec
         n = v3_neg(n);
         b->ng = v3_neg(s->ng);
     }
-    if (m->normal_texture > 0) {
-        /* a mapped normal may face away from the viewer though the surface does not: bend it towards wo
-         * until wo stands sin 3° above its horizon (else the point would be black) */
-        float c = v3_dot(wo, n);
-        if (c < 0.0523f)
-            n = v3_norm(v3_add(n, v3_scale(wo, 0.0523f - c)));
+    {
+        /* A shading normal may face away from the viewer though the surface does not: a mapped normal, or
+         * an interpolated one near a smooth mesh's silhouette (where every lobe returned 0: black
+         * fringes). It is bent towards wo until wo stands sin 3° above its horizon: a mapped normal
+         * whenever wo is lower than that, an interpolated one only when it faces away. A dielectric's
+         * normal keeps pointing outside (its frame's +z is the outside, whichever side wo is on), so it is
+         * bent on wo's side and turned back: bent as it was, a ray inside normal-mapped glass had its
+         * normal flipped (total internal reflection lost, rough glass letting nothing out). */
+        const float side = v3_dot(wo, b->ng) < 0.0f ? -1.0f : 1.0f;
+        ic_vec3 sn = v3_scale(n, side);
+        float c = v3_dot(wo, sn);
+        if (m->normal_texture > 0 ? c < 0.0523f : c < 0.0f)
+            n = v3_scale(v3_norm(v3_add(sn, v3_scale(wo, 0.0523f - c))), side);
     }
     b->frame = ic_frame_from_normal(n);
     /* records are keyed on the interpolated normal of a normal-mapped surface (docs/scene-format.md,

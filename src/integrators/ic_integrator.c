@@ -177,8 +177,13 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
     /* A cache file that cannot be written costs the file, not the render: the caller reports it. */
     st->save_error[0] = '\0';
     ic_error save_err = {0};
-    /* Every process holds the same cache (the level payloads too); rank 0 alone writes it. */
-    if (c->o.save_cache && (ic_ic_levels_to_payloads(c, &save_err) != IC_OK ||
+    /* Every process holds the same cache (the level payloads too); rank 0 alone writes it. An interrupted
+     * construction's records are not saved: a later --load-cache would take them for a whole cache (a
+     * SIGINT during the hit stage left a file of hit records only, which then rendered without a word). */
+    if (c->o.save_cache && ic_ic_cancelled(c))
+        snprintf(st->save_error, sizeof st->save_error, "%s: not written: the render was interrupted while the cache "
+                 "was being built, so it is incomplete", c->o.save_cache);
+    else if (c->o.save_cache && (ic_ic_levels_to_payloads(c, &save_err) != IC_OK ||
                             (ic_comm_rank(c->comm) == 0 &&
                              ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK)))
         snprintf(st->save_error, sizeof st->save_error, "%s", save_err.message);

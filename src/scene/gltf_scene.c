@@ -307,9 +307,15 @@ ic_result ic_gltf_read_scene(ic_scene_builder *b, const char *path, const char *
     if (w.has_camera) {
         ic_camera *c = &b->scene->camera;
         c->width = b->opt->width > 0 ? b->opt->width : IC_DEFAULT_WIDTH;
-        c->height = b->opt->height > 0 ? b->opt->height
-                    : w.aspect > 0.0f   ? (int)fmaxf(1.0f, roundf((float)c->width / w.aspect))
-                                        : IC_DEFAULT_HEIGHT;
+        /* the height from the camera's aspectRatio, refused when it gives no usable image (1e-7 gave
+         * -2147483648 rows through a float-to-int overflow) */
+        double rows = w.aspect > 0.0f ? fmax(1.0, round((double)c->width / w.aspect)) : IC_DEFAULT_HEIGHT;
+        if (b->opt->height <= 0 && !(rows <= 65536.0))
+            return ic_error_set(err, IC_ERR_INVALID_ARG,
+                                "%s: the camera's aspectRatio %g makes %d x %.0f pixels; give an aspectRatio that "
+                                "gives at most 65536 rows, or --height",
+                                path, (double)w.aspect, c->width, rows);
+        c->height = b->opt->height > 0 ? b->opt->height : (int)rows;
     }
     *has_camera = w.has_camera;
     *light_count = w.light_count;

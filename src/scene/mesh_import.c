@@ -526,7 +526,7 @@ static void convert_gltf(const struct aiMaterial *am, float file_strength, ic_ma
     m->two_sided_emission = int_or(am, "$mat.twosided", 0) != 0;
     float transmission = float_or(am, "$mat.transmission.factor", 0.0f);
     float ior = float_or(am, "$mat.refracti", 1.5f);
-    m->ior = ior > 1.0f ? ior : 1.5f;
+    m->ior = ior >= 1.0f ? ior : 1.5f; /* KHR_materials_ior allows 1 (no refraction, no coat) */
     if (transmission > 0.0f) {
         m->type = m->alpha > 0.0f ? IC_MAT_ROUGH_GLASS : IC_MAT_GLASS;
         m->ks = v3s(1.0f);
@@ -746,12 +746,15 @@ static int grow_vertices(ic_scene *s, uint32_t add, int want_normals, int want_u
     return 1;
 }
 
-/* Inverse transpose of the upper 3x3 of a row-major 4x4 (for normals), and its determinant. */
+/* Inverse transpose of the upper 3x3 of a row-major 4x4 (for normals), up to a positive scale, and its
+ * determinant. */
 static float normal_matrix(const float m[16], float n[9])
 {
     float a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
     float det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
-    /* cofactor matrix = det · inverse transpose; the scale does not matter as normals are renormalized */
+    /* cofactor matrix = det · inverse transpose; its scale does not matter as normals are renormalized, but
+     * its sign does: a mirroring transform (det < 0) turned every normal and the tangents' handedness
+     * around, so the cofactors are taken times the sign of det */
     n[0] = e * i - f * h;
     n[1] = -(d * i - f * g);
     n[2] = d * h - e * g;
@@ -761,6 +764,9 @@ static float normal_matrix(const float m[16], float n[9])
     n[6] = b * f - c * e;
     n[7] = -(a * f - c * d);
     n[8] = a * e - b * d;
+    if (det < 0.0f)
+        for (int k = 0; k < 9; ++k)
+            n[k] = -n[k];
     return det;
 }
 

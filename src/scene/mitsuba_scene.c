@@ -39,6 +39,7 @@ static ic_result parse_sensor(ic_mts_ctx *c, const xmlNode *n)
     if (!strcmp(type, "thinlens"))
         ic_mts_warn_once(c, n, "<sensor type=\"thinlens\">", "is rendered as a pinhole (no depth of field)");
     float m[16], fov = 0.0f, w = 768.0f, h = 576.0f, spp = 0.0f;
+    int diagonal_fov = 0; /* a focal length's field of view is the diagonal's */
     ic_result r = ic_mts_to_world(c, n, m);
     if (r == IC_OK)
         r = ic_mts_float(c, n, "fov", 0.0f, &fov);
@@ -47,10 +48,12 @@ static ic_result parse_sensor(ic_mts_ctx *c, const xmlNode *n)
         const char *fl = ic_mts_string(c, n, "focalLength");
         if (!fl)
             fl = ic_mts_string(c, n, "focal_length");
-        if (fl && sscanf(fl, "%fmm", &focal) == 1 && focal > 0.0f) /* 35 mm film: 36 mm wide */
-            fov = 2.0f * atanf(18.0f / focal) * 180.0f / IC_PI;
-        else
-            fov = 39.3077f; /* Mitsuba's default, a 50 mm lens */
+        /* Mitsuba turns a focal length into the field of view across the 35 mm frame's diagonal (36 x 24
+         * mm), on the diagonal axis; its default is 50 mm */
+        if (!(fl && sscanf(fl, "%fmm", &focal) == 1 && focal > 0.0f))
+            focal = 50.0f;
+        fov = 2.0f * atanf(sqrtf(36.0f * 36.0f + 24.0f * 24.0f) / (2.0f * focal)) * 180.0f / IC_PI;
+        diagonal_fov = 1;
     }
     if (r != IC_OK)
         return r;
@@ -75,7 +78,7 @@ static ic_result parse_sensor(ic_mts_ctx *c, const xmlNode *n)
     cam->width = c->opt->width > 0 ? c->opt->width : (int)w;
     cam->height = c->opt->height > 0 ? c->opt->height : (int)h;
     /* fovAxis: x (default), y, diagonal, smaller, larger */
-    const char *axis = ic_mts_string(c, n, "fovAxis"); /* Mitsuba 3: fov_axis */
+    const char *axis = diagonal_fov ? "diagonal" : ic_mts_string(c, n, "fovAxis"); /* Mitsuba 3: fov_axis */
     float aw = (float)cam->width, ah = (float)cam->height, t = tanf(0.5f * fov * IC_PI / 180.0f);
     if (!axis || !strcmp(axis, "x") || (!strcmp(axis, "smaller") && aw <= ah) || (!strcmp(axis, "larger") && aw >= ah))
         t *= ah / aw;
@@ -229,10 +232,11 @@ static ic_result parse_shape(ic_mts_ctx *c, const xmlNode *n)
     char full[IC_SCENE_PATH_MAX];
     if (!ic_path_join(c->dir, file, full, sizeof full))
         return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "mesh path too long", NULL);
-    if ((r = ic_scene_check_path(c->b, full, where, "mesh", c->err)) != IC_OK)
-        return r;
+    /* missing first: a file that is not there is not "outside the scene's folder" */
     if (!ic_path_exists(full))
         return ic_error_set(c->err, IC_ERR_IO, "%s: mesh '%s' not found; check the path", where, file);
+    if ((r = ic_scene_check_path(c->b, full, where, "mesh", c->err)) != IC_OK)
+        return r;
     if (flip)
         ic_mts_warn_once(c, n, "flipNormals on a mesh file", "is not supported: the file's winding is kept");
     if (!strcmp(type, "serialized")) {
@@ -467,11 +471,11 @@ static ic_result parse_include(ic_mts_ctx *c, const xmlNode *n)
     if (c->include_depth >= MAX_INCLUDE_DEPTH || c->root_count >= MAX_DOCS)
         return ic_mts_fail(c, n, IC_ERR_UNSUPPORTED, "includes nest too deep or are too many (a file that includes "
                            "itself?); at most 8 deep and 15 files: ", file);
+    if (!ic_path_exists(full))
+        return ic_error_set(c->err, IC_ERR_IO, "%s: included file '%s' not found; check the path", where, file);
     ic_result r = ic_scene_check_path(c->b, full, where, "included file", c->err);
     if (r != IC_OK)
         return r;
-    if (!ic_path_exists(full))
-        return ic_error_set(c->err, IC_ERR_IO, "%s: included file '%s' not found; check the path", where, file);
     xmlDoc *doc = NULL;
     if ((r = read_doc(full, c->opt, &doc, c->err)) != IC_OK)
         return r;

@@ -113,7 +113,9 @@ xmlNode *ic_mts_child(ic_mts_ctx *c, const xmlNode *n, const char *tag, const ch
     return NULL;
 }
 
-/* Up to n numbers separated by commas or spaces; returns how many were read. */
+/* Up to n numbers separated by commas or spaces; returns how many were read, -1 for a word that is not a
+ * number or a number that is not finite in a float (strtod reads "nan" and "inf", which reached the
+ * camera and the lights). */
 int ic_mts_numbers(const char *s, float *out, int n)
 {
     int k = 0;
@@ -124,7 +126,7 @@ int ic_mts_numbers(const char *s, float *out, int n)
             break;
         char *end;
         double v = strtod(s, &end);
-        if (end == s)
+        if (end == s || !(fabs(v) <= 3.0e38))
             return -1;
         out[k++] = (float)v;
         s = end;
@@ -142,7 +144,7 @@ ic_result ic_mts_float(ic_mts_ctx *c, const xmlNode *n, const char *name, float 
         return ic_mts_fail(c, k, IC_ERR_PARSE, "expected a <float> or <integer> for ", name);
     const char *v = ic_mts_attr(c, k, "value");
     if (ic_mts_numbers(v, out, 1) != 1 || !isfinite(*out))
-        return ic_mts_fail(c, k, IC_ERR_PARSE, "not a number: value of ", name);
+        return ic_mts_fail(c, k, IC_ERR_PARSE, "not a finite number; give one such as 0.5: value of ", name);
     return IC_OK;
 }
 
@@ -233,7 +235,7 @@ ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec
         } else if (ic_mts_numbers(val, v, 1) == 1) {
             *out = v3s(v[0]);
         } else {
-            return ic_mts_fail(c, k, IC_ERR_PARSE, "not a number: value of ", name);
+            return ic_mts_fail(c, k, IC_ERR_PARSE, "not a finite number; give one such as 0.5: value of ", name);
         }
     } else if (ic_mts_is_element(k, "texture")) {
         int loaded = 0;
@@ -270,7 +272,7 @@ ic_result ic_mts_vec(ic_mts_ctx *c, const xmlNode *k, float fallback, ic_vec3 *o
     for (int i = 0; i < 3; ++i) {
         const char *a = ic_mts_attr(c, k, axes[i]);
         if (a && ic_mts_numbers(a, &v[i], 1) != 1)
-            return ic_mts_fail(c, k, IC_ERR_PARSE, "not a number: attribute ", axes[i]);
+            return ic_mts_fail(c, k, IC_ERR_PARSE, "not a finite number; give one such as 0.5: attribute ", axes[i]);
     }
     *out = v3(v[0], v[1], v[2]);
     return IC_OK;

@@ -515,10 +515,11 @@ static ic_result mesh(ic_rad_ctx *c)
         return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED, "mesh '%s': '%s' is not an OBJ file; give an OBJ file",
                            c->id, c->strings[0]);
     }
-    if ((r = ic_scene_check_path(c->b, full, where, "mesh", c->err)) != IC_OK)
-        return r;
+    /* missing first: a file that is not there is not "outside the scene's folder" */
     if (!ic_path_exists(full))
         return ic_rad_fail(c, c->prim_line, IC_ERR_IO, "mesh '%s': '%s' not found; check the path", c->id, c->strings[0]);
+    if ((r = ic_scene_check_path(c->b, full, where, "mesh", c->err)) != IC_OK)
+        return r;
     uint32_t override = UINT32_MAX;
     if (strcmp(c->modifier, "void")) {
         if ((r = surface_material(c, &override)) != IC_OK || override == UINT32_MAX)

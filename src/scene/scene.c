@@ -470,7 +470,8 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
         ic_material *mat = &s->materials[m];
         if (mat->type != IC_MAT_PLASTIC)
             continue;
-        float ior = mat->ior > 1.0f ? mat->ior : 1.5f;
+        /* the index the BSDF uses (bsdf.c): 1 is a coat that reflects nothing, not 1.5 */
+        float ior = mat->ior > 0.0f ? mat->ior : 1.5f;
         ic_coat_albedo_table(ior, mat->alpha, mat->coat_albedo, &mat->coat_albedo_avg);
         if (mat->roughness_texture <= 0)
             continue;

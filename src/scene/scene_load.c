@@ -10,6 +10,7 @@
 
 #include "core/vecmath.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,6 +53,44 @@ static ic_result load_bare_mesh(ic_scene_builder *b, const char *path, const ic_
         s->env.radiance = v3s(1.0f);
     }
     return ic_scene_finalize_and_fit(b, has_camera, err);
+}
+
+static int far_or_nan(ic_vec3 v)
+{
+    return !(fabsf(v.x) <= 1e18f && fabsf(v.y) <= 1e18f && fabsf(v.z) <= 1e18f);
+}
+
+/* What every importer's camera and lights must be for the ray tracer to start rays (Embree asserts on a
+ * ray beyond about 1.8e19 or not finite): checked once here, whatever the format, since a NaN in a Mitsuba
+ * matrix, a glTF camera node moved 1e30 away or a Radiance view's -vp 0 -1e30 0 aborted the process. */
+static ic_result check_camera_and_lights(const ic_scene *s, const char *path, ic_error *err)
+{
+    const ic_camera *c = &s->camera;
+    ic_vec3 dir = v3_sub(c->target, c->eye);
+    const char *why = far_or_nan(c->eye) ? "its position is not finite or lies beyond 1e18"
+                      : far_or_nan(c->target) || !(v3_len2(dir) > 0.0f) || !isfinite(v3_len2(dir))
+                          ? "its view direction is zero or not finite"
+                      : far_or_nan(c->up) || !(v3_len2(v3_cross(dir, c->up)) > 0.0f) ||
+                              !isfinite(v3_len2(v3_cross(dir, c->up)))
+                          ? "its up direction is zero, not finite or along the view"
+                      : !(c->fov_y_deg > 0.0f && c->fov_y_deg < 180.0f) && c->projection == 0
+                          ? "its field of view is not between 0 and 180 degrees"
+                      : !(fabsf(c->size_x) <= 1e18f && fabsf(c->size_y) <= 1e18f && fabsf(c->clip_near) <= 1e18f &&
+                          fabsf(c->shift) <= 1e6f && fabsf(c->lift) <= 1e6f)
+                          ? "a view size, shift or clipping distance is not finite or beyond 1e18"
+                          : NULL;
+    if (why)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the camera is unusable: %s; fix the scene's camera (or view)",
+                            path, why);
+    for (uint32_t k = 0; k < s->point_light_count; ++k)
+        if (far_or_nan(s->point_lights[k].position) || !v3_is_finite(s->point_lights[k].intensity))
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: point light %u has a position that is not finite or "
+                                "lies beyond 1e18, or an intensity that is not finite; fix it", path, k + 1);
+    if (s->sun.enabled && (!v3_is_finite(s->sun.direction) || !(v3_len2(s->sun.direction) > 0.0f) ||
+                           !v3_is_finite(s->sun.irradiance)))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the sun's direction is zero or not finite, or its irradiance "
+                            "is not finite; fix it", path);
+    return IC_OK;
 }
 
 ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_scene **out, ic_error *err)
@@ -128,6 +167,8 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
                          path, strcmp(ext, ".gz") ? "" : mesh_ext, ext);
     }
     ic_scene_builder_release(&b);
+    if (r == IC_OK)
+        r = check_camera_and_lights(s, path, err);
     if (r != IC_OK) {
         ic_scene_free(s);
         return r;

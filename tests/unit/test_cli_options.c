@@ -153,6 +153,29 @@ static void stats_json(void)
     }
 }
 
+/* --min-radius-px 0 is no floor, as its help says: it gave the default 3 px (the library reads 0 as
+ * "default"), the same records and bytes. A tiny floor and 0 agree; the default makes fewer records. */
+static void radius_floor_zero(void)
+{
+    static char js[1 << 15];
+    int records[3] = {-1, -1, -1};
+    const char *floors[3] = {"0", "0.001", "3"};
+    for (int k = 0; k < 3; ++k) {
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_rf.pfm --width 48 --height 48 --spp 1 -q --integrator "
+                 "ic --rays 64 --min-radius-px %s --stats " TMP "_rf.json", floors[k]);
+        CHECK(run(cmd) == 0, "--min-radius-px %s: %s", floors[k], err_text);
+        test_read_text(TMP "_rf.json", js, sizeof js);
+        const char *r = strstr(js, "\"records\":");
+        records[k] = r ? atoi(r + strlen("\"records\":")) : -1;
+    }
+    CHECK(records[0] > 0 && records[0] == records[1] && records[2] < records[0],
+          "records with floors 0, 0.001, 3 px: %d, %d, %d", records[0], records[1], records[2]);
+    CHECK(run("render " CORNELL " -o " TMP "_rf.pfm --integrator ic --max-radius-px 0") == 2 &&
+              strstr(err_text, "--max-radius-px 0"),
+          "--max-radius-px 0 (no image at all) refused: %s", err_text);
+}
+
 /* Construction that a limit cuts short says so: a warning line and "cut_short" in the stats. */
 static void cut_short(void)
 {
@@ -182,6 +205,7 @@ static void cut_short(void)
 
 int main(void)
 {
+    radius_floor_zero();
     cut_short();
     stats_json();
     readme_matches_table();

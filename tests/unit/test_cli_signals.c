@@ -267,7 +267,8 @@ static void test_interrupted_construction(void)
     static const char *const strategies[] = {"batch", "adaptive", "lazy"};
     for (int k = 0; k < 3; ++k) {
         const char *args[] = {"--integrator", "ic", "--strategy", strategies[k], "--width", "96", "--height", "96",
-                              "--rays", "20000", "--spp", "64", "--threads", "2", NULL};
+                              "--rays", "20000", "--spp", "64", "--threads", "2", "--save-cache", DIR_ "/int.icc", NULL};
+        unlink(DIR_ "/int.icc");
         double after = 0.0;
         int rc = interrupt_render_timed(SIGINT, 1.5, args, &after);
         char err_text[2048], json[8192];
@@ -296,6 +297,10 @@ static void test_interrupted_construction(void)
         CHECK(strstr(json, "\"interrupted\"") != NULL && !strstr(json, "\"cut_by_time\":true"),
               "%s: the stats say interrupted (not cut by time)", strategies[k]);
         CHECK(test_count_temporaries(DIR_) == 0, "%s: no temporary file left", strategies[k]);
+        /* An interrupted construction's records are not saved: a later --load-cache would take them for a
+         * whole cache (a file of hit records only rendered without a word). */
+        CHECK(!test_file_exists(DIR_ "/int.icc") && strstr(err_text, "--save-cache") && strstr(err_text, "incomplete"),
+              "%s: no cache file from an interrupted construction, and it says so: %s", strategies[k], err_text);
     }
 }
 

@@ -165,6 +165,25 @@ int main(void)
     write_constant(small, 8, 8, 0.5f);
     remove(heat);
 
+    /* A map may not overwrite an image compared, nor the other map (--heatmap A replaced A, exit 0). */
+    {
+        const char *onto_input[] = {off, ref, "--heatmap", off};
+        FILE *f = fopen(off, "rb");
+        long before = f && fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+        if (f)
+            fclose(f);
+        CHECK(run_diff(4, onto_input) == 2 && strstr(err_text, "the same file as") && one_line(err_text),
+              "--heatmap onto an input: usage error: %s", err_text);
+        f = fopen(off, "rb");
+        long after = f && fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -2;
+        if (f)
+            fclose(f);
+        CHECK(before == after, "the input is untouched (%ld bytes, then %ld)", before, after);
+        const char *two_maps[] = {off, ref, "--heatmap", heat, "--blotch-map", heat};
+        CHECK(run_diff(6, two_maps) == 2 && strstr(err_text, "--blotch-map") && strstr(err_text, "--heatmap"),
+              "the two maps on one file: usage error: %s", err_text);
+    }
+
     /* Identical images: one JSON object, infinite PSNR as 999.0. */
     const char *identical[] = {same, ref, "--json"};
     CHECK(run_diff(3, identical) == 0, "identical: %s", err_text);

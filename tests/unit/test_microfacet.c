@@ -310,8 +310,59 @@ static void test_glossy_local(void)
     }
 }
 
+/* A BSDF at a surface whose shading normal ns differs from the geometric ng. */
+static void make_bsdf_at(ic_bsdf *b, ic_vec3 wo, ic_vec3 ng, ic_vec3 ns)
+{
+    memset(&g_scene, 0, sizeof g_scene);
+    g_scene.materials = &g_mat;
+    g_scene.material_count = 1;
+    ic_surface s;
+    memset(&s, 0, sizeof s);
+    s.ng = ng;
+    s.ns = s.ns_smooth = ns;
+    ic_bsdf_init(b, &g_scene, &s, wo);
+}
+
+/* The shading normal's bend towards the viewer. (1) Normal-mapped glass seen from inside keeps its
+ * frame's +z outside: at 135° from the outward normal (beyond the critical angle, 41.8° from the inward
+ * one) smooth glass reflects everything, and rough glass lets a ray at normal incidence out. Bent without
+ * regard to the side, the normal flipped: 66 % reflected, and rough glass refused every exit. (2) An
+ * interpolated normal facing away from the viewer near a silhouette (ns 15° from ng, wo 83° from ng, so
+ * wo·ns < 0 < wo·ng) is bent too: every lobe gave 0 there, a black fringe. */
+static void test_shading_normal_bends(void)
+{
+    ic_vec3 up = v3(0.0f, 0.0f, 1.0f);
+    set_material(IC_MAT_GLASS, 0.0f, v3s(0.0f), v3s(1.0f));
+    g_mat.normal_texture = 1; /* the flag alone: the mapped normal is given as ns */
+    ic_bsdf b;
+    make_bsdf_at(&b, dir_at(135.0f), up, up);
+    CHECK(b.frame.n.z > 0.99f && fabsf(ic_bsdf_reflect_probability(&b, dir_at(135.0f)) - 1.0f) < 1e-6f,
+          "normal-mapped glass from inside beyond the critical angle: frame z %g, reflected %g (1)", (double)b.frame.n.z,
+          (double)ic_bsdf_reflect_probability(&b, dir_at(135.0f)));
+    set_material(IC_MAT_ROUGH_GLASS, 0.05f, v3s(0.0f), v3s(1.0f));
+    g_mat.normal_texture = 1;
+    int out = 0;
+    for (int k = 0; k < 64; ++k) {
+        make_bsdf_at(&b, dir_at(180.0f), up, up);
+        ic_bsdf_sample bs;
+        out += ic_bsdf_sample_dir(&b, dir_at(180.0f), 0.999f, (k + 0.5f) / 64.0f, 0.5f, &bs) && bs.wi.z > 0.0f;
+    }
+    CHECK(out == 64, "normal-mapped rough glass from inside at normal incidence: %d of 64 refractions leave", out);
+    const float tilt = 15.0f * IC_PI / 180.0f;
+    ic_vec3 ns = v3(-sinf(tilt), 0.0f, cosf(tilt)), wo = dir_at(83.0f);
+    static const ic_material_type types[3] = {IC_MAT_DIFFUSE, IC_MAT_PLASTIC, IC_MAT_CONDUCTOR};
+    for (int k = 0; k < 3; ++k) {
+        set_material(types[k], 0.2f, v3s(1.0f), v3s(1.0f));
+        make_bsdf_at(&b, wo, up, ns);
+        double albedo = sampled_albedo(&b, wo, NULL);
+        CHECK(v3_dot(wo, ns) < 0.0f && albedo > 0.5, "material %d at a silhouette (wo.ns %g < 0): albedo %g, not black",
+              k, (double)v3_dot(wo, ns), albedo);
+    }
+}
+
 int main(void)
 {
+    test_shading_normal_bends();
     test_fresnel();
     test_furnace();
     test_pdf_integral();

@@ -210,8 +210,36 @@ static void test_materials_and_warnings(void)
     ic_scene_free(s);
 }
 
+/* A focal length is Mitsuba's field of view across the 35 mm frame's diagonal (36 x 24 mm), 50 mm when
+ * no fov is given: on a square 512 x 512 film 28 mm is a vertical 57.30°, the default 34.03° (the
+ * horizontal 2 atan(18 / f) had given 65.5° and 39.3°). */
+static void test_focal_length(void)
+{
+    static const struct {
+        const char *lens;
+        double fov_y;
+    } cases[] = {{"<string name=\"focalLength\" value=\"28mm\"/>", 57.30}, {"", 34.03}};
+    for (int k = 0; k < 2; ++k) {
+        char xml[2048];
+        snprintf(xml, sizeof xml,
+                 "<scene version=\"0.6.0\">\n  <sensor type=\"perspective\">%s\n"
+                 "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"512\"/><integer name=\"height\" "
+                 "value=\"512\"/></film>\n  </sensor>\n"
+                 "  <shape type=\"obj\"><string name=\"filename\" value=\"%s/scenes/cornell-box/CornellBox-Original.obj\"/>"
+                 "</shape>\n</scene>\n",
+                 cases[k].lens, IC_SOURCE_DIR);
+        test_write_file(IC_TEST_TMP "/focal_mts.xml", xml);
+        ic_error err = {0};
+        ic_scene *s = load(IC_TEST_TMP "/focal_mts.xml", &err);
+        CHECK(s && fabs(s->camera.fov_y_deg - cases[k].fov_y) < 0.01, "%s: vertical fov %g, want %g (%s)",
+              k ? "no focal length" : "28 mm", s ? (double)s->camera.fov_y_deg : -1.0, cases[k].fov_y, err.message);
+        ic_scene_free(s);
+    }
+}
+
 int main(void)
 {
+    test_focal_length();
     test_cornell();
     test_analytic();
     test_materials_and_warnings();

@@ -371,8 +371,34 @@ static void test_scene_size_limit(void)
     ic_scene_free(s);
 }
 
+/* A camera or a light that the ray tracer cannot start rays from (Embree asserted and the process
+ * aborted) is refused whatever the format; a missing mesh is "not found", not "outside the folder". */
+static void test_cameras_lights_and_paths(void)
+{
+    expect_error(SCENES "errors_camera_far.gltf", NULL, IC_ERR_INVALID_ARG, "errors_camera_far.gltf",
+                 "the camera is unusable", "beyond 1e18");
+    const char *rad = write_tmp("errors_lamp.rad", "void light l 0 0 3 1 1 1\n"
+                                                   "l polygon p 0 0 12 -1 0 -1 1 0 -1 1 0 1 -1 0 1\n", -1);
+    char rad_path[1024];
+    snprintf(rad_path, sizeof rad_path, "%s", rad);
+    ic_scene_load_options lo = {0};
+    lo.view = write_tmp("errors_far.vf", "rview -vp 0 -1e30 0 -vd 0 1 0\n", -1);
+    expect_error(rad_path, &lo, IC_ERR_INVALID_ARG, "errors_lamp.rad", "the camera is unusable", NULL);
+    lo.view = write_tmp("errors_clip.vf", "rview -vp 0 -1 0 -vd 0 1 0 -vo 1e30\n", -1);
+    expect_error(rad_path, &lo, IC_ERR_INVALID_ARG, "errors_lamp.rad", "clipping distance", NULL);
+    expect_error(write_tmp("errors_nan_light.xml",
+                           "<scene version=\"0.6.0\">\n  <shape type=\"rectangle\"/>\n  <emitter type=\"point\">"
+                           "<point name=\"position\" x=\"nan\" y=\"0\" z=\"0\"/><rgb name=\"intensity\" "
+                           "value=\"1\"/></emitter>\n</scene>\n",
+                           -1),
+                 NULL, IC_ERR_PARSE, "errors_nan_light.xml:3", "not a finite number", "attribute x");
+    expect_error(write_tmp("errors_no_mesh.rad", "void plastic w 0 0 5 1 1 1 0 0\nw mesh m 1 nofile.obj 0 0\n", -1), NULL,
+                 IC_ERR_IO, "errors_no_mesh.rad:2", "'nofile.obj' not found", NULL);
+}
+
 int main(void)
 {
+    test_cameras_lights_and_paths();
     /* A scene file that is not there: the open's own reason, not one left by resolving the path. */
     expect_error(SCENES "no-such-scene.json", NULL, IC_ERR_IO, "no-such-scene.json", strerror(ENOENT),
                  "resolved to");
