@@ -8,6 +8,7 @@
 #include "irrcache/image.h"
 #include "scene/scene.h"
 #include "scene/scene_internal.h" /* ic_scene_texture_load */
+#include "test_files.h"
 #include "test_util.h"
 
 #include <errno.h>
@@ -99,6 +100,27 @@ static void test_cornell_box(void)
         CHECK(s->camera.width == 64 && s->camera.height == 32, "resolution override");
         CHECK_NEAR(s->camera.fov_y_deg, 39.3, 1e-5, "fov_y kept under override");
     }
+    ic_scene_free(s);
+}
+
+/* A mirroring transform (scale -1 along x) swaps the winding to keep the front side; the vertex normals
+ * must turn with it: the cofactor matrix is det times the inverse transpose, and used as it is it turned
+ * every normal of a mirrored mesh around (ng +z, the vertex normal -z). */
+static void test_mirrored_normals(void)
+{
+    test_write_text(IC_TEST_TMP "/mirror_quad.obj", "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvn 0 0 1\n"
+                                                    "f 1//1 2//1 3//1\nf 1//1 3//1 4//1\n");
+    test_write_text(IC_TEST_TMP "/mirror_quad.json", "{\"meshes\": [{\"path\": \"mirror_quad.obj\", \"transform\": "
+                                                     "{\"scale\": [-1, 1, 1]}}], \"environment\": {\"radiance\": 1}}\n");
+    ic_scene_load_options opt = {0};
+    ic_scene *s = load(IC_TEST_TMP "/mirror_quad.json", &opt);
+    if (!s)
+        return;
+    int agree = s->normals != NULL;
+    for (uint32_t t = 0; agree && t < s->triangle_count; ++t)
+        for (int k = 0; k < 3; ++k)
+            agree &= v3_dot(s->normals[s->triangles[3 * t + k]], tri_normal(s, t)) > 0.99f;
+    CHECK(agree && tri_normal(s, 0).z > 0.99f, "a mirrored quad: its vertex normals face its front (+z) side");
     ic_scene_free(s);
 }
 
@@ -644,6 +666,7 @@ int main(void)
 {
     test_cornell_box();
     test_transformed();
+    test_mirrored_normals();
     test_fov_x_and_shared();
     test_degenerate_dropped();
     test_bare_mesh_and_queries();
