@@ -82,6 +82,10 @@ const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id)
 /* Stores one option's value. Returns 0 or 2 (usage error printed). */
 static int store(ic_cli_args *a, const opt_def *o, const char *val)
 {
+    /* strtoll and strtod skip leading white space, so " -1" got past the sign check of --seed and wrapped
+     * to 2^64 - 1: a value starts with what it means */
+    if (val[0] == ' ' || val[0] == '\t' || val[0] == '\n' || val[0] == '\r' || val[0] == '\v' || val[0] == '\f')
+        return ERR("%s '%s': a value may not start with white space", o->name, val);
     char *field = (char *)a + o->offset, *end = NULL;
     errno = 0;
     switch (o->kind) {

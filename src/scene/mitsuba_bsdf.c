@@ -102,8 +102,12 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
             r = ic_mts_float(c, n, "alpha", 0.1f, &m->alpha);
         }
         const char *dist = ic_mts_string(c, n, "distribution");
-        if (r == IC_OK && dist && strcmp(dist, "ggx"))
-            ic_mts_warn_once(c, n, "a microfacet distribution other than GGX", "is rendered as GGX of the same alpha");
+        /* Mitsuba's default distribution is Beckmann: without one given, it is GGX here, said once */
+        if (r == IC_OK && (!dist || strcmp(dist, "ggx")))
+            ic_mts_warn_once(c, n, dist ? "a microfacet distribution other than GGX" : "a rough BSDF without a distribution "
+                             "(Mitsuba's default, Beckmann)", "is rendered as GGX of the same alpha");
+        if (r == IC_OK && (ic_mts_string(c, n, "alphaU") || ic_mts_string(c, n, "alpha_u")))
+            ic_mts_warn_once(c, n, "an anisotropic alphaU/alphaV", "is not supported: the isotropic alpha is used");
         if (r == IC_OK && !(m->alpha >= 0.0f && m->alpha <= 4.0f))
             return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "alpha must be in [0, 4]", NULL);
         m->alpha = fminf(m->alpha, 1.0f);

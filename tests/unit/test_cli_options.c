@@ -106,6 +106,8 @@ static void bad_values(void)
         {"--recursive --integrator ic", "--strategy lazy"},
         {"--min-radius-px 9 --max-radius-px 4 --integrator ic", "--min-radius-px"},
         {"--seed -3", "--seed"},
+        {"--seed ' -1'", "may not start with white space"},
+        {"--width ' 5'", "--width"},
         {"--frobnicate=3", "--frobnicate"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
