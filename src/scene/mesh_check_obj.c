@@ -142,8 +142,11 @@ static ic_result check_vertex_line(char *c, const char *path, long line_no, long
     return IC_OK;
 }
 
-static ic_result check_face_line(char kind, char *c, const char *path, long line_no, long long vertices_so_far,
-                                 obj_far_index *far, ic_error *err)
+/* The three kinds a face word indexes: positions (v), texture coordinates (vt) and normals (vn). */
+static const char *const OBJ_KIND[3] = {"vertex", "texture coordinate (vt)", "normal (vn)"};
+
+static ic_result check_face_line(char kind, char *c, const char *path, long line_no, const long long so_far[3],
+                                 obj_far_index far[3], ic_error *err)
 {
     char *save = NULL;
     int references = 0;
@@ -162,13 +165,19 @@ static ic_result check_face_line(char kind, char *c, const char *path, long line
             return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: '%.40s' is not a vertex reference (v, v/vt, v//vn or "
                                 "v/vt/vn, counted from 1, or from -1 backwards); fix the line or export the mesh again",
                                 path, line_no, w);
-        if (idx[0] < 0 && -idx[0] > vertices_so_far)
-            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex index %lld reaches before the first vertex (%lld "
-                                "read so far); fix the face or export the mesh again", path, line_no, idx[0],
-                                vertices_so_far);
-        if (idx[0] > far->index) {
-            far->index = idx[0];
-            far->line = line_no;
+        /* Texture and normal indices too: assimp dropped every normal or coordinate of the mesh for one past
+         * the end, without a word. */
+        for (int k = 0; k < 3; ++k) {
+            if (!present[k])
+                continue;
+            if (idx[k] < 0 && -idx[k] > so_far[k])
+                return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: %s index %lld reaches before the first one (%lld "
+                                    "read so far); fix the face or export the mesh again", path, line_no, OBJ_KIND[k],
+                                    idx[k], so_far[k]);
+            if (idx[k] > far[k].index) {
+                far[k].index = idx[k];
+                far[k].line = line_no;
+            }
         }
     }
     if (kind == 'l' && references == 1)
@@ -183,8 +192,8 @@ ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elemen
     if (!line)
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
     long line_no = 0;
-    long long vertices = 0, faces = 0;
-    obj_far_index far = {0, 0};
+    long long vertices = 0, faces = 0, counts[3] = {0, 0, 0};
+    obj_far_index far[3] = {{0, 0}, {0, 0}, {0, 0}};
     ic_result r = IC_OK;
     flockfile(fp);
     for (;;) {
@@ -199,10 +208,14 @@ ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elemen
         }
         if (line[0] == 'v' && (line[1] == ' ' || line[1] == '\t'))
             r = check_vertex_line(line + 2, path, at, ++vertices, err);
-        else if (line[0] == 'f' || line[0] == 'l' || line[0] == 'p')
+        else if (line[0] == 'v' && (line[1] == 't' || line[1] == 'n') && (line[2] == ' ' || line[2] == '\t'))
+            ++counts[line[1] == 't' ? 1 : 2];
+        else if (line[0] == 'f' || line[0] == 'l' || line[0] == 'p') {
             /* assimp reads any line that starts with one of these letters as a face, line or point, its
              * first word ("f", or "f3", "fo") skipped */
-            r = check_face_line(line[0], line + strcspn(line, " \t"), path, at, vertices, &far, err);
+            counts[0] = vertices;
+            r = check_face_line(line[0], line + strcspn(line, " \t"), path, at, counts, far, err);
+        }
         if (r == IC_OK && line[0] == 'f')
             ++faces;
         if (r == IC_OK && ((unsigned long long)vertices > max_elements || (unsigned long long)faces > max_elements))
@@ -213,9 +226,11 @@ ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elemen
             break;
     }
     funlockfile(fp);
-    if (r == IC_OK && far.index > vertices)
-        r = ic_error_set(err, IC_ERR_PARSE, "%s:%ld: a face names vertex %lld, but the file has %lld vertices; fix the "
-                         "face or export the mesh again", path, far.line, far.index, vertices);
+    counts[0] = vertices;
+    for (int k = 0; r == IC_OK && k < 3; ++k)
+        if (far[k].index > counts[k])
+            r = ic_error_set(err, IC_ERR_PARSE, "%s:%ld: a face names %s %lld, but the file has %lld; fix the face or "
+                             "export the mesh again", path, far[k].line, OBJ_KIND[k], far[k].index, counts[k]);
     free(line);
     return r;
 }

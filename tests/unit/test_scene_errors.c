@@ -190,10 +190,16 @@ static void test_hostile_meshes(void)
     /* OBJ: a face of the second material naming vertex 4 of 3 (assimp threw "vertex index out of range"
      * holding the first mesh, which leaked), and a negative index reaching before the first vertex. */
     expect_error(write_tmp("hostile_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 3 4\n", -1),
-                 NULL, IC_ERR_PARSE, "hostile_index.obj:7: a face names vertex 4, but the file has 3 vertices",
+                 NULL, IC_ERR_PARSE, "hostile_index.obj:7: a face names vertex 4, but the file has 3",
                  "fix the face", NULL);
     expect_error(write_tmp("hostile_negative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", -1), NULL,
-                 IC_ERR_PARSE, "hostile_negative.obj:4: vertex index -4 reaches before the first vertex", NULL, NULL);
+                 IC_ERR_PARSE, "hostile_negative.obj:4: vertex index -4 reaches before the first one", NULL, NULL);
+    /* texture and normal indices past the end: assimp dropped every normal or coordinate, without a word */
+    expect_error(write_tmp("hostile_vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//3\n", -1), NULL,
+                 IC_ERR_PARSE, "hostile_vn.obj:5: a face names normal (vn) 3, but the file has 1", NULL, NULL);
+    expect_error(write_tmp("hostile_vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/-2\n", -1), NULL,
+                 IC_ERR_PARSE, "hostile_vt.obj:5: texture coordinate (vt) index -2 reaches before the first one", NULL,
+                 NULL);
     expect_error(REGRESS "mesh_obj/assimp_leak.obj", NULL, IC_ERR_PARSE, "assimp_leak.obj:3: vertex 1: '2~' is not "
                  "a number", NULL, NULL);
     /* A line element of one vertex after a first mesh: assimp sized its mesh for no vertex and threw,
