@@ -246,6 +246,20 @@ static int check(const ic_cli_args *a)
     for (int i = 0; i < IC_ARG_COUNT; ++i)
         if (a->given[i] && options[i].scope != IC_SCOPE_ALL && !ic)
             return ERR("%s is an irradiance-cache option; add --integrator ic", options[i].name);
+    /* An option of one construction strategy under another did nothing, without a word. */
+    static const struct {
+        ic_opt_scope scope;
+        ic_strategy strategy;
+        const char *name;
+    } strategy_scopes[] = {{IC_SCOPE_BATCH, IC_STRATEGY_BATCH, "batch"},
+                           {IC_SCOPE_LAZY, IC_STRATEGY_LAZY, "lazy"},
+                           {IC_SCOPE_ADAPTIVE, IC_STRATEGY_ADAPTIVE, "adaptive"}};
+    for (int i = 0; ic && i < IC_ARG_COUNT; ++i)
+        for (int k = 0; k < 3; ++k)
+            if (a->given[i] && options[i].scope == strategy_scopes[k].scope &&
+                a->render.ic.strategy != strategy_scopes[k].strategy && i != IC_ARG_RECURSIVE)
+                return ERR("%s applies to --strategy %s only; drop it or add --strategy %s", options[i].name,
+                           strategy_scopes[k].name, strategy_scopes[k].name);
     int adaptive_on = a->render.adaptive_sampling == IC_CACHE_ON;
     if (adaptive_on && a->render.time_budget > 0)
         return ERR("--adaptive-sampling shares out a fixed --spp; drop --time");

@@ -103,6 +103,8 @@ static void bad_values(void)
         {"--integrator=xyz", "pt|ic"},
         {"--aov indirect,nope --integrator ic", "nope"},
         {"--max-passes 4", "--integrator ic"},
+        {"--integrator ic --strategy lazy --max-passes 4", "applies to --strategy batch only"},
+        {"--integrator ic --weber 0.01", "applies to --strategy adaptive only"},
         {"--recursive --integrator ic", "--strategy lazy"},
         {"--min-radius-px 9 --max-radius-px 4 --integrator ic", "--min-radius-px"},
         {"--seed -3", "--seed"},
