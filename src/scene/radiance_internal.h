@@ -29,6 +29,9 @@ typedef struct ic_rad_modifier {
     ic_material material; /* IC_RAD_MATERIAL: the mapped material */
     int32_t index;        /* its index among the scene's materials once a surface used it, else -1 */
     int line;             /* where it was defined */
+    int is_illum;         /* an illum: `source_radiance` is its own colour, which a source it modifies emits
+                             (the surfaces it modifies show its alternate material) */
+    ic_vec3 source_radiance;
 } ic_rad_modifier;
 
 typedef struct ic_rad_ctx {

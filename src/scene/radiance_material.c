@@ -146,7 +146,10 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
         ic_rad_warn_once(c, c->prim_line, kind,
                          "is rendered as its alternate material (invisible without one): the light it stands for is "
                          "found by sampling what lies behind it");
-        return copy_named(c, c->string_count >= 1 ? c->strings[0] : "void", out);
+        r = copy_named(c, c->string_count >= 1 ? c->strings[0] : "void", out);
+        out->is_illum = 1;
+        out->source_radiance = v3((float)c->reals[0], (float)c->reals[1], (float)c->reals[2]);
+        return r;
     }
     if (!strcmp(t, "mist") || !strcmp(t, "antimatter")) {
         out->kind = IC_RAD_INVISIBLE;

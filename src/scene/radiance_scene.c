@@ -559,17 +559,20 @@ static ic_result source(ic_rad_ctx *c, int *has_sun)
     if (r != IC_OK)
         return r;
     ic_rad_modifier *m = ic_rad_find(c, c->modifier);
-    if (!m || m->kind != IC_RAD_MATERIAL || v3_is_black(m->material.emission))
+    /* an illum's own colour is the source's radiance (its alternate material is for surfaces) */
+    const int illum = m && m->is_illum && !v3_is_black(m->source_radiance);
+    if (!m || (!illum && (m->kind != IC_RAD_MATERIAL || v3_is_black(m->material.emission))))
         return ic_rad_fail(c, c->prim_line, IC_ERR_PARSE,
                            "source '%s' needs a light, glow or illum material defined above (not '%s')", c->id,
                            c->modifier);
+    const ic_vec3 radiance = illum ? m->source_radiance : m->material.emission;
     ic_vec3 d = real3(c, 0);
     double angle = c->reals[3];
     if (!(v3_len2(d) > 0.0f) || !(angle > 0.0 && angle <= 360.0))
         return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
                            "source '%s' needs a non-zero direction and an angle in (0, 360] degrees", c->id);
     double solid_angle = 2.0 * 3.14159265358979323846 * (1.0 - cos(0.5 * angle * 3.14159265358979323846 / 180.0));
-    ic_vec3 power = v3_scale(m->material.emission, (float)solid_angle); /* radiance × solid angle */
+    ic_vec3 power = v3_scale(radiance, (float)solid_angle); /* radiance × solid angle */
     ic_scene *s = c->b->scene;
     if (angle <= 5.0) {
         if (*has_sun)

@@ -162,6 +162,14 @@ static void test_analytic(void)
 {
     double sky = floor_centre("rad_sky", "void glow skyglow\n0\n0\n4 2 2 2 0\nskyglow source sky\n0\n0\n4 0 0 1 360\n", 4);
     CHECK(fabs(sky - 1.0) < 0.03, "floor under a 360-degree glow source: %g, expected rho L = 1", sky);
+    /* An illum as a source's modifier gives its own radiance (its alternate material is for surfaces): with
+     * none it was refused, with one the alternate's 10 was used. */
+    double illum = floor_centre("rad_illum", "void light alt\n0\n0\n3 10 10 10\nvoid illum skyillum\n1 alt\n0\n3 2 2 2\n"
+                                             "skyillum source sky\n0\n0\n4 0 0 1 360\n", 4);
+    double bare = floor_centre("rad_illum0", "void illum skyillum\n0\n0\n3 2 2 2\nskyillum source sky\n0\n0\n4 0 0 1 360\n",
+                               4);
+    CHECK(fabs(illum - 1.0) < 0.03 && fabs(bare - 1.0) < 0.03,
+          "floor under a 360-degree illum source, with and without an alternate: %g, %g, expected rho L = 1", illum, bare);
     /* the sun: 0.5° across, radiance 1e5: irradiance L Ω */
     double omega = 2.0 * PI_D * (1.0 - cos(0.25 * PI_D / 180.0));
     double sun = floor_centre("rad_sun", "void light sunlight\n0\n0\n3 1e5 1e5 1e5\nsunlight source sun\n0\n0\n4 0 0 1 0.5\n", 4);
