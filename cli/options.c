@@ -272,9 +272,18 @@ static int check(const ic_cli_args *a)
     if (p->min_radius > 0 && p->max_radius > 0 && p->min_radius > p->max_radius)
         return ERR("--min-radius %g is larger than --max-radius %g", (double)p->min_radius, (double)p->max_radius);
     const ic_ic_options *o = &a->render.ic;
-    if (o->min_radius_px > 0 && o->max_radius_px > 0 && o->min_radius_px > o->max_radius_px)
-        return ERR("--min-radius-px %g is larger than --max-radius-px %g", (double)o->min_radius_px,
-                   (double)o->max_radius_px);
+    /* Against the other bound's default too: --max-radius-px 1 alone had the library refuse "pixel radius
+     * bounds [20, 6.67]" (px over the accuracy), with exit 1. */
+    float lo = a->given[IC_ARG_MIN_RADIUS_PX] ? o->min_radius_px : IC_DEFAULT_MIN_RADIUS_PX,
+          hi = a->given[IC_ARG_MAX_RADIUS_PX] ? o->max_radius_px : IC_DEFAULT_MAX_RADIUS_PX;
+    if (ic && lo > 0 && hi > 0 && lo > hi)
+        return ERR("--min-radius-px %g%s is larger than --max-radius-px %g%s; give both", (double)lo,
+                   a->given[IC_ARG_MIN_RADIUS_PX] ? "" : " (its default)", (double)hi,
+                   a->given[IC_ARG_MAX_RADIUS_PX] ? "" : " (its default)");
+    if (ic && o->record_shape == IC_SHAPE_ELLIPTICAL && o->error != IC_ERROR_HESSIAN)
+        return ERR("--record-shape elliptical takes its axes from the irradiance Hessian; add --error hessian");
+    if (ic && o->error == IC_ERROR_HESSIAN && o->gather.method == IC_GATHER_PROGRESSIVE)
+        return ERR("--error hessian needs --gather stratified or hemicube (the progressive sampler has no Hessian)");
     return 0;
 }
 
