@@ -479,10 +479,36 @@ static void convert_phong(const struct aiMaterial *am, ic_material *m)
     }
 }
 
-/* KHR_materials_emissive_strength of each glTF material (1 where absent), read from the file's JSON
- * (.gltf text, or the JSON chunk of a .glb): assimp 5.2 does not pass it on. Returns NULL if the
- * file cannot be read; strengths[i] belongs to glTF material i, which is assimp material i. */
-static float *gltf_emissive_strengths(const mesh_source *src, unsigned count)
+/* KHR_materials_emissive_strength of each assimp material of a glTF file (1 where absent), read from the
+ * file's JSON (.gltf text, or the JSON chunk of a .glb): assimp 5.2 does not pass it on. assimp numbers
+ * the materials in the order the meshes first use them and leaves out unused ones, so assimp material i
+ * is not glTF material i (a file whose meshes used material 1 first swapped two lamps' strengths): each
+ * is matched to the glTF material of the same name, or where names do not decide, of the same emissive
+ * and base colour, metallic and roughness factors. A tie between materials of different strengths keeps
+ * the one at the same index, else the first. Returns NULL if the file cannot be read. */
+typedef struct gltf_mat_key {
+    char name[128];
+    float emissive[3], base[3], metallic, roughness, strength;
+} gltf_mat_key;
+
+static void json_floats(const cJSON *arr, float *out, int n)
+{
+    for (int k = 0; k < n && cJSON_IsArray(arr); ++k) {
+        const cJSON *v = cJSON_GetArrayItem(arr, k);
+        if (cJSON_IsNumber(v))
+            out[k] = (float)v->valuedouble;
+    }
+}
+
+static int same_floats(const float *a, const float *b, int n)
+{
+    for (int k = 0; k < n; ++k)
+        if (!(fabsf(a[k] - b[k]) <= 1e-5f * (1.0f + fabsf(b[k]))))
+            return 0;
+    return 1;
+}
+
+static float *gltf_emissive_strengths(const mesh_source *src, const struct aiScene *ai)
 {
     FILE *fp = source_open(src);
     if (!fp)
@@ -490,20 +516,64 @@ static float *gltf_emissive_strengths(const mesh_source *src, unsigned count)
     size_t len = 0;
     char *text = ic_gltf_json(fp, &len);
     fclose(fp);
+    const unsigned count = ai->mNumMaterials;
     float *out = NULL;
     cJSON *root = text ? cJSON_ParseWithLength(text, len) : NULL;
     free(text);
-    if (root && (out = malloc(sizeof *out * (count ? count : 1))) != NULL) {
-        const cJSON *mats = cJSON_GetObjectItemCaseSensitive(root, "materials");
-        for (unsigned i = 0; i < count; ++i) {
-            const cJSON *m = cJSON_IsArray(mats) ? cJSON_GetArrayItem(mats, (int)i) : NULL;
-            const cJSON *ext = m ? cJSON_GetObjectItemCaseSensitive(m, "extensions") : NULL;
+    const cJSON *mats = root ? cJSON_GetObjectItemCaseSensitive(root, "materials") : NULL;
+    int nj = cJSON_IsArray(mats) ? cJSON_GetArraySize(mats) : 0;
+    gltf_mat_key *keys = calloc(nj > 0 ? (size_t)nj : 1, sizeof *keys);
+    if (root && keys && (out = malloc(sizeof *out * (count ? count : 1))) != NULL) {
+        for (int j = 0; j < nj; ++j) {
+            const cJSON *m = cJSON_GetArrayItem(mats, j), *name = cJSON_GetObjectItemCaseSensitive(m, "name");
+            gltf_mat_key *k = &keys[j];
+            if (cJSON_IsString(name))
+                snprintf(k->name, sizeof k->name, "%s", name->valuestring);
+            const cJSON *pbr = cJSON_GetObjectItemCaseSensitive(m, "pbrMetallicRoughness");
+            k->base[0] = k->base[1] = k->base[2] = 1.0f;
+            k->metallic = k->roughness = 1.0f;
+            json_floats(cJSON_GetObjectItemCaseSensitive(pbr, "baseColorFactor"), k->base, 3);
+            const cJSON *mf = cJSON_GetObjectItemCaseSensitive(pbr, "metallicFactor");
+            const cJSON *rf = cJSON_GetObjectItemCaseSensitive(pbr, "roughnessFactor");
+            if (cJSON_IsNumber(mf))
+                k->metallic = (float)mf->valuedouble;
+            if (cJSON_IsNumber(rf))
+                k->roughness = (float)rf->valuedouble;
+            json_floats(cJSON_GetObjectItemCaseSensitive(m, "emissiveFactor"), k->emissive, 3);
+            const cJSON *ext = cJSON_GetObjectItemCaseSensitive(m, "extensions");
             const cJSON *es = ext ? cJSON_GetObjectItemCaseSensitive(ext, "KHR_materials_emissive_strength") : NULL;
             const cJSON *v = es ? cJSON_GetObjectItemCaseSensitive(es, "emissiveStrength") : NULL;
-            out[i] = (cJSON_IsNumber(v) && v->valuedouble >= 0.0 && isfinite(v->valuedouble)) ? (float)v->valuedouble
-                                                                                              : 1.0f;
+            k->strength = cJSON_IsNumber(v) && v->valuedouble >= 0.0 && isfinite(v->valuedouble) ? (float)v->valuedouble
+                                                                                                : 1.0f;
+        }
+        for (unsigned i = 0; i < count; ++i) {
+            const struct aiMaterial *am = ai->mMaterials[i];
+            struct aiString an;
+            const char *name = aiGetMaterialString(am, "?mat.name", 0, 0, &an) == aiReturn_SUCCESS ? an.data : "";
+            ic_vec3 e = color_or(am, "$clr.emissive", v3s(0.0f)), bc = color_or(am, "$clr.base", v3s(1.0f));
+            const float emissive[3] = {e.x, e.y, e.z}, base[3] = {bc.x, bc.y, bc.z};
+            const float metallic = float_or(am, "$mat.metallicFactor", 1.0f), rough = float_or(am, "$mat.roughnessFactor", 1.0f);
+            int best = -1, same_index = 0, differ = 0;
+            for (int pass = 0; pass < 2 && best < 0; ++pass) /* by name, then by the factors alone */
+                for (int j = 0; j < nj; ++j) {
+                    const gltf_mat_key *k = &keys[j];
+                    if (pass == 0 ? !name[0] || strcmp(name, k->name) : !same_floats(emissive, k->emissive, 3) ||
+                                                                            !same_floats(base, k->base, 3) ||
+                                                                            !same_floats(&metallic, &k->metallic, 1) ||
+                                                                            !same_floats(&rough, &k->roughness, 1))
+                        continue;
+                    if (best >= 0 && keys[best].strength != k->strength)
+                        differ = 1;
+                    if (best < 0)
+                        best = j;
+                    same_index |= j == (int)i;
+                }
+            if (best >= 0 && differ && same_index)
+                best = (int)i;
+            out[i] = best >= 0 ? keys[best].strength : (int)i < nj ? keys[i].strength : 1.0f;
         }
     }
+    free(keys);
     cJSON_Delete(root);
     return out;
 }
@@ -1045,7 +1115,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     uint32_t material_base = s->material_count;
     uint32_t nmat = ai->mNumMaterials ? ai->mNumMaterials : 1;
     if (is_gltf)
-        strengths = gltf_emissive_strengths(&src, ai->mNumMaterials);
+        strengths = gltf_emissive_strengths(&src, ai);
     char *path_copy = malloc(strlen(mesh_path) + 1);
     if (path_copy)
         memcpy(path_copy, mesh_path, strlen(mesh_path) + 1);

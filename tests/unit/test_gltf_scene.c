@@ -343,8 +343,26 @@ static void test_embedded_texture(void)
     ic_scene_free(s);
 }
 
+/* Two lamps whose meshes use glTF material 1 (B, strength 50) before material 0 (A, strength 2): assimp
+ * numbers its materials by first use, so reading the strengths by glTF index swapped them. */
+static void test_emissive_strength_order(void)
+{
+    ic_scene *s = load(IC_SOURCE_DIR "/tests/scenes/gltf_strength_order.gltf", NULL, 0);
+    CHECK(s != NULL, "the two-lamp glTF loads");
+    float a = -1.0f, b = -1.0f;
+    for (uint32_t i = 0; s && i < s->material_count; ++i) {
+        if (!strcmp(s->materials[i].name, "A"))
+            a = s->materials[i].emission.x;
+        if (!strcmp(s->materials[i].name, "B"))
+            b = s->materials[i].emission.x;
+    }
+    CHECK(a == 2.0f && b == 50.0f, "each lamp its own strength: A %g (2), B %g (50)", (double)a, (double)b);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_emissive_strength_order();
     test_embedded_texture();
     test_camera();
     test_point_light();
