@@ -252,6 +252,17 @@ static int is_hdr_path(const char *path)
     return !strcmp(ext, ".hdr") || !strcmp(ext, ".exr") || !strcmp(ext, ".pfm");
 }
 
+/* The first value of img that is not finite, or (allow_negative 0) negative: its index in rgb, or -1. */
+static long long first_bad_texel(const ic_image *img, int allow_negative)
+{
+    for (size_t i = 0; i < (size_t)img->width * (size_t)img->height * 3; ++i)
+        if (!isfinite(img->rgb[i]) || (!allow_negative && !(img->rgb[i] >= 0.0f)))
+            return (long long)i;
+    return -1;
+}
+
+static const char *const channel_name[3] = {"red", "green", "blue"};
+
 ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_data, ic_image *img_in,
                                   const char *owner, int32_t *index, ic_error *err)
 {
@@ -260,19 +271,16 @@ ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_
     memset(img_in, 0, sizeof *img_in);
     /* A float texture (PFM, EXR, HDR) can hold what no material may: a NaN or infinite texel, or a
      * negative colour. Refused as an environment map's are, instead of dark walls or negative pixels. */
-    for (size_t i = 0; i < (size_t)img.width * (size_t)img.height * 3; ++i) {
-        float v = img.rgb[i];
-        if (!isfinite(v) || (!is_data && v < 0.0f)) {
-            size_t px = i / 3;
-            static const char *const channel[3] = {"red", "green", "blue"};
-            ic_error_set(err, IC_ERR_INVALID_ARG,
-                         "%s: texture '%s': texel (%zu, %zu) has a %s value of %g; a texture's values must be "
-                         "finite%s, fix the file",
-                         owner, path, px % (size_t)img.width, px / (size_t)img.width, channel[i % 3], (double)v,
-                         is_data ? "" : " and >= 0");
-            ic_image_free(&img);
-            return IC_ERR_INVALID_ARG;
-        }
+    long long bad = first_bad_texel(&img, is_data);
+    if (bad >= 0) {
+        size_t px = (size_t)bad / 3;
+        ic_error_set(err, IC_ERR_INVALID_ARG,
+                     "%s: texture '%s': texel (%zu, %zu) has a %s value of %g; a texture's values must be finite%s, "
+                     "fix the file",
+                     owner, path, px % (size_t)img.width, px / (size_t)img.width, channel_name[bad % 3],
+                     (double)img.rgb[bad], is_data ? "" : " and >= 0");
+        ic_image_free(&img);
+        return IC_ERR_INVALID_ARG;
     }
     ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));
     if (!grown) {
@@ -346,18 +354,15 @@ ic_result ic_scene_check_env_map(const ic_image *m, const char *name, const char
 {
     /* Radiance is never negative: a negative or non-finite texel would give negative pixels and a broken
      * light-sampling distribution, so the map is refused rather than silently clamped. */
-    for (size_t i = 0; i < (size_t)m->width * (size_t)m->height * 3; ++i) {
-        float v = m->rgb[i];
-        if (!(v >= 0.0f) || !isfinite(v)) {
-            size_t px = i / 3;
-            static const char *const channel[3] = {"red", "green", "blue"};
-            return ic_error_set_at(err, IC_ERR_INVALID_ARG, file, line,
-                                   "environment map '%s': texel (%zu, %zu) has a %s value of %g; radiance must be "
-                                   "finite and >= 0, fix the map",
-                                   name, px % (size_t)m->width, px / (size_t)m->width, channel[i % 3], (double)v);
-        }
-    }
-    return IC_OK;
+    long long bad = first_bad_texel(m, 0);
+    if (bad < 0)
+        return IC_OK;
+    size_t px = (size_t)bad / 3;
+    return ic_error_set_at(err, IC_ERR_INVALID_ARG, file, line,
+                           "environment map '%s': texel (%zu, %zu) has a %s value of %g; radiance must be finite "
+                           "and >= 0, fix the map",
+                           name, px % (size_t)m->width, px / (size_t)m->width, channel_name[bad % 3],
+                           (double)m->rgb[bad]);
 }
 
 void ic_scene_warn(ic_scene *s, const char *fmt, ...)
