@@ -215,6 +215,50 @@ static int env_in_rays(const ic_ctx *c, ic_vec3 p, ic_vec3 d)
     }
 }
 
+/* Appends n rays' hit distances and removed light to the replay (a failed allocation is reported by
+ * gather_set). */
+static void record_rays(ic_gather_replay *rp, uint32_t n, const float *dist, const ic_vec3 *removed)
+{
+    if (rp->failed)
+        return;
+    if (rp->count + n > rp->capacity) {
+        uint32_t cap = rp->capacity ? rp->capacity : 1024u;
+        while (cap < rp->count + n)
+            cap *= 2u;
+        float *d = realloc(rp->dist, sizeof *d * cap);
+        if (d)
+            rp->dist = d;
+        ic_vec3 *l = d ? realloc(rp->removed, sizeof *l * cap) : NULL;
+        if (!l) {
+            rp->failed = 1;
+            return;
+        }
+        rp->removed = l;
+        rp->capacity = cap;
+    }
+    memcpy(rp->dist + rp->count, dist, sizeof *dist * n);
+    memcpy(rp->removed + rp->count, removed, sizeof *removed * n);
+    rp->count += n;
+}
+
+/* Returns the recorded rays again, in the order they were traced (the gatherer asks for the same
+ * directions in the same order for the same point); beyond them, misses of no light. */
+static void replay_rays(ic_gather_replay *rp, uint32_t n, float *dist, ic_vec3 *radiance)
+{
+    for (uint32_t i = 0; i < n; ++i, ++rp->next) {
+        const int have = rp->next < rp->count;
+        dist[i] = have ? rp->dist[rp->next] : INFINITY;
+        radiance[i] = have ? rp->removed[rp->next] : v3s(0.0f);
+    }
+}
+
+void ic_ic_gather_worker_release(ic_gather_worker *w)
+{
+    free(w->replay.dist);
+    free(w->replay.removed);
+    memset(&w->replay, 0, sizeof w->replay);
+}
+
 /* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
  * is seeded from the ray itself (origin and direction bits), so it does not depend on which batch or
  * thread traced it. With levels, each ray's light is also split by bounce level into the worker's sums:
@@ -230,9 +274,16 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
     enum { CHUNK = 256 };
     ic_ray rays[CHUNK];
     ic_hit hits[CHUNK];
+    ic_vec3 removed[CHUNK];
     uint64_t nrays = 0;
+    if (w->replay.replaying) {
+        replay_rays(&w->replay, count, hit_dist, radiance);
+        return;
+    }
     for (uint32_t base = 0; base < count; base += CHUNK) {
         uint32_t n = count - base < CHUNK ? count - base : CHUNK;
+        for (uint32_t i = 0; w->replay.recording && i < n; ++i)
+            removed[i] = v3s(0.0f);
         for (uint32_t i = 0; i < n; ++i) {
             rays[i].org = origins[base + i];
             rays[i].dir = dirs[base + i];
@@ -288,10 +339,15 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
                         cum[k] = v3_add(cum[k - 1], by_events[k]);
                 }
             }
-            /* ... unless it comes from a large emitter, which the records carry (level 0). */
+            /* ... unless it comes from a large emitter, which the records carry (level 0), weighted
+             * against the light samples. */
             ic_vec3 emitted = ic_ic_cached_emission(c, &rays[i], &hits[i]);
-            if (!v3_is_black(emitted))
+            if (!v3_is_black(emitted)) {
+                const ic_vec3 whole = emitted;
                 emitted = v3_scale(emitted, cached_ray_weight(w, &rays[i], &hits[i]));
+                if (w->replay.recording)
+                    removed[i] = v3_sub(whole, emitted);
+            }
             radiance[j] = v3_add(radiance[j], emitted);
             if (B) {
                 w->sum[0] = v3_add(w->sum[0], emitted);
@@ -300,6 +356,8 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
                 w->sum[B] = v3_add(w->sum[B], radiance[j]);
             }
         }
+        if (w->replay.recording)
+            record_rays(&w->replay, n, hit_dist + base, removed);
     }
     atomic_fetch_add_explicit(&c->rays, nrays, memory_order_relaxed);
 }
@@ -323,7 +381,31 @@ static ic_result gather_set(ic_gather_worker *w, ic_gatherer *g, const ic_gather
     const int B = w->c->levels;
     for (int k = 0; k <= B; ++k)
         w->sum[k] = v3s(0.0f);
+    /* With the cached emitters' light samples, the rays' hits on them count only their balance-heuristic
+     * share, which is right for the irradiance (the light samples add the rest) but not for the
+     * Hessian: the light samples have none, so a weighted field's Hessian falls short by about the rays'
+     * mean weight (a third at 1,800 rays; test_emitter_mis) and the record comes out too large. The
+     * Hessian is linear in the rays' radiance for given hit distances, so the share the weights removed
+     * is gathered again from the recorded rays (no new tracing) and its Hessian added. The gradients
+     * keep the weighted field: whole hits make them noisier, which cost staircase2 13 % more low-pass
+     * error (BENCHMARKS.md, "The Hessian of the cached emitters' whole light"). */
+    const int whole = w->mis_lights > 0.0f && w->c->o.gather.with_hessian;
+    w->replay.recording = whole;
+    w->replay.count = 0;
     ic_result r = ic_ic_gather_by_method(w->c, g, pt, out);
+    w->replay.recording = 0;
+    if (r == IC_OK && whole && out->has_hessian) {
+        if (w->replay.failed)
+            return IC_ERR_OOM;
+        ic_gather_result rest;
+        w->replay.replaying = 1;
+        w->replay.next = 0;
+        r = ic_ic_gather_by_method(w->c, g, pt, &rest);
+        w->replay.replaying = 0;
+        for (int ch = 0; r == IC_OK && rest.has_hessian && ch < 3; ++ch)
+            for (int i = 0; i < 3; ++i)
+                out->hessian[ch][i] += rest.hessian[ch][i];
+    }
     if (r != IC_OK || !B || !levels)
         return r;
     /* The stratified estimate is π/(MN) times the sum of the rays' radiance, so scaling E by each
@@ -492,6 +574,8 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
     }
     for (int t = 0; j.gatherers && t < threads; ++t)
         ic_gatherer_destroy(j.gatherers[t]);
+    for (int t = 0; j.workers && t < threads; ++t)
+        ic_ic_gather_worker_release(&j.workers[t]);
     free(j.gatherers);
     free(j.workers);
     return r;
@@ -600,6 +684,15 @@ ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_
     return IC_OK;
 }
 
+float ic_ic_hessian_error_target(const ic_cache_params *p)
+{
+    /* Ward's and the error weight's a bound the relative error (0.15 by default); Tabellion–Lamorlette's
+     * a only scales their acceptance (1 by default, κ = 1/a), so it maps to Ward's in proportion: the
+     * defaults ask the same 15 % of E of either (½dᵀHd = a·E would allow 100 % with T–L's). */
+    return p->weight == IC_WEIGHT_TABELLION ? p->accuracy * (IC_DEFAULT_ACCURACY_WARD / IC_DEFAULT_ACCURACY_TL)
+                                            : p->accuracy;
+}
+
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec)
 {
     memset(rec, 0, sizeof *rec);
@@ -643,7 +736,7 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
          * stretch it across the scene). The weights accept |p − p_i|_i < a·R_i, so R_i is the (major)
          * extent over a; the cache's clamps then apply as to the split sphere's R. */
         ic_gather_extent_opts eo = {0};
-        eo.rel_error = c->o.cache.accuracy;
+        eo.rel_error = ic_ic_hessian_error_target(&c->o.cache);
         eo.max_radius = c->scene_diag;
         ic_gather_extent ext;
         if (ic_gather_hessian_extent(gr, &eo, &ext) == IC_OK && ext.radius > 0.0f) {

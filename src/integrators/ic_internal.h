@@ -117,6 +117,15 @@ int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf 
 /* What one gathering thread's trace callback needs: the context and, with c->levels, the sums over
  * the current point's rays of their radiance split by bounce level (cumulative: sum[k] holds light of at
  * most k bounces after the record, sum[levels] all of it). The caller zeroes sum before each point. */
+/* A record's rays kept for a second pass of the gatherer's arithmetic (gather_set): each ray's hit distance and
+ * the light the balance heuristic removed from its hit on a cached emitter, in the order traced. */
+typedef struct ic_gather_replay {
+    int recording, replaying, failed;
+    uint32_t count, capacity, next;
+    float *dist;
+    ic_vec3 *removed;
+} ic_gather_replay;
+
 typedef struct ic_gather_worker {
     ic_ctx *c;
     ic_vec3 sum[IC_LEVELS_MAX + 1];
@@ -124,7 +133,10 @@ typedef struct ic_gather_worker {
      * light samples of the cached emitters (0: their light from the rays alone). */
     const ic_gather_point *pt;
     float mis_rays, mis_lights;
+    ic_gather_replay replay;
 } ic_gather_worker;
+/* Frees a worker's replay buffers (its other fields are not owned). */
+void ic_ic_gather_worker_release(ic_gather_worker *w);
 /* Trace callback of hemisphere gathering (ic_trace_fn; user = ic_gather_worker): see ic.h for what it
  * returns. */
 void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs, uint32_t count, float *hit_dist,
@@ -167,6 +179,9 @@ ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_
 ic_result ic_ic_levels_to_payloads(ic_ctx *c, ic_error *err);
 ic_result ic_ic_levels_from_payloads(ic_ctx *c, ic_error *err);
 /* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
+/* The second-order error a Hessian extent allows, relative to E (Schwarzhaupt et al. 2012), for the cache's
+ * weight and accuracy. */
+float ic_ic_hessian_error_target(const ic_cache_params *p);
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
 /* Gather point (offset origin, normal, key) of a candidate. */
 ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);

@@ -178,6 +178,7 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
     pt->gather += ic_seconds() - t0 - t_insert;
     for (int k = 0; k < ls.level_count; ++k)
         ic_gatherer_destroy(ls.g[k]);
+    ic_ic_gather_worker_release(&ls.worker);
     st->passes = 1;
     st->records_per_pass[0] = ic_cache_count(c->cache);
     st->cut_short = stopped;

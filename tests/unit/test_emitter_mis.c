@@ -8,9 +8,9 @@
  */
 #include "test_gather_scene.h"
 #include "test_render_util.h"
+#include "test_tracer.h"
 #include "test_util.h"
 
-#include "integrators/ic_internal.h"
 #include "irrcache/render.h"
 
 #include <stdio.h>
@@ -68,8 +68,8 @@ static int cache_every_emitter(ic_ctx *c, const ic_scene *s)
 }
 
 /* Gathers KEYS records at `at` (keys differ) with the cached emitters' light samples on or off; out gets
- * the luminance of each. */
-static int gather(ic_ctx *c, const ic_gather_point *at, int mis, int threads, double *out)
+ * the luminance of each, and res (if not NULL) the records. */
+static int gather(ic_ctx *c, const ic_gather_point *at, int mis, int threads, double *out, ic_gather_result *keep)
 {
     ic_gather_point *pts = malloc(sizeof *pts * KEYS);
     ic_gather_result *res = malloc(sizeof *res * KEYS);
@@ -85,6 +85,8 @@ static int gather(ic_ctx *c, const ic_gather_point *at, int mis, int threads, do
     ok = ok && ic_ic_gather_points(c, pts, KEYS, res, NULL, done, &err) == IC_OK;
     for (uint32_t k = 0; ok && k < KEYS; ++k)
         out[k] = done[k] ? v3_lum(res[k].irradiance) : NAN;
+    if (ok && keep)
+        memcpy(keep, res, sizeof *res * KEYS);
     c->emitter_mis = 0;
     free(pts);
     free(res);
@@ -103,23 +105,45 @@ static void mean_var(const double *x, int n, double *mean, double *var)
     *var = v;
 }
 
+/* With the light samples, the rays' hits on the pane must still count whole in the Hessian (only the
+ * irradiance takes the balance heuristic's share): the light samples add no Hessian of their own, so
+ * weighted hits would leave it too small by about the rays' mean weight, and a Hessian-sized record too
+ * large. The rays are the same with and without the light samples (same keys), so the Hessians must agree
+ * to rounding (the weighted rays' Hessian and the removed share's are summed). */
+static void check_hessians(int p, const ic_gather_result *on, const ic_gather_result *off)
+{
+    int hessians = 1;
+    double h_on = 0.0, h_off = 0.0, worst = 0.0;
+    for (int k = 0; k < KEYS; ++k) {
+        hessians &= on[k].has_hessian && off[k].has_hessian;
+        double scale = 0.0;
+        for (int ch = 0; ch < 3; ++ch)
+            for (int i = 0; i < 3; ++i)
+                scale = fmax(scale, fabs(off[k].hessian[ch][i]));
+        for (int ch = 0; ch < 3; ++ch)
+            for (int i = 0; i < 3; ++i)
+                worst = fmax(worst, fabs(on[k].hessian[ch][i] - off[k].hessian[ch][i]) / fmax(scale, 1e-30));
+        h_on += fabs(on[k].hessian[1][0] + on[k].hessian[1][2]) / KEYS;
+        h_off += fabs(off[k].hessian[1][0] + off[k].hessian[1][2]) / KEYS;
+    }
+    printf("point %d: mean |trace of the Hessian| (green) %.5f with light samples, %.5f without; largest "
+           "difference %.2g of a record's largest coefficient\n", p, h_on, h_off, worst);
+    CHECK(hessians, "point %d: every record has a Hessian", p);
+    CHECK(worst < 1e-4, "point %d: the light samples leave the Hessian as the rays alone give it (mean |trace| "
+          "%.5f against %.5f; largest difference %.2g)", p, h_on, h_off, worst);
+}
+
 int main(void)
 {
     write_scene();
     ic_error err = {0};
     ic_scene *scene = NULL;
-    ic_scene_load_options lo = {0};
     ic_accel *accel = NULL;
-    if (ic_scene_load(SCENE, &lo, &scene, &err) != IC_OK || ic_accel_create(scene, &accel, &err) != IC_OK) {
+    ic_tracer tr;
+    if (!test_tracer_load(SCENE, 8, &scene, &accel, &tr, &err)) {
         CHECK(0, "the scene loads: %s", err.message);
         return 1;
     }
-    ic_tracer tr;
-    memset(&tr, 0, sizeof tr);
-    tr.scene = scene;
-    tr.accel = accel;
-    tr.pt.max_depth = 8;
-    tr.pt = ic_pt_params_resolve(tr.pt);
     ic_render_options opt;
     memset(&opt, 0, sizeof opt);
     opt.integrator = IC_INTEGRATOR_IC;
@@ -129,6 +153,7 @@ int main(void)
     opt.has_seed = 1;
     opt.ic.gather.theta_strata = 4; /* 4 × 13 = 52 rays: few, where hitting the pane or not weighs most */
     opt.ic.gather.phi_strata = 13;
+    opt.ic.error = IC_ERROR_HESSIAN; /* the records' Hessians too */
     ic_ctx *c = NULL;
     int ok = ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) == IC_OK;
     CHECK(ok, "a context: %s", err.message);
@@ -139,11 +164,13 @@ int main(void)
                                         {{1e-3f, 1.5f, 3.0f}, {1.0f, 0.0f, 0.0f}, 2}};
     const double pane[4][3] = {{1.5, 1.0, 4.0}, {2.5, 1.0, 4.0}, {2.5, 2.0, 4.0}, {1.5, 2.0, 4.0}};
     static double off[KEYS], on[KEYS], on1[KEYS];
+    static ic_gather_result res[KEYS], res_off[KEYS];
     for (int p = 0; ok && p < POINTS; ++p) {
         const double x[3] = {at[p].position.x, at[p].position.y, at[p].position.z};
         const double n[3] = {at[p].normal.x, at[p].normal.y, at[p].normal.z};
         const double exact = 3.0 * gs_polygon_irradiance(pane, 4, x, n);
-        ok = gather(c, &at[p], 0, 2, off) && gather(c, &at[p], 1, 2, on) && gather(c, &at[p], 1, 1, on1);
+        ok = gather(c, &at[p], 0, 2, off, NULL) && gather(c, &at[p], 1, 2, on, NULL) &&
+             gather(c, &at[p], 1, 1, on1, NULL);
         CHECK(ok, "point %d: gathers", p);
         if (!ok)
             break;
@@ -160,6 +187,19 @@ int main(void)
         CHECK(v_on < 0.25 * v_off, "point %d: the light samples cut a record's variance (%.3g against %.3g)", p,
               v_on, v_off);
         CHECK(memcmp(on, on1, sizeof on) == 0, "point %d: 1 and 2 threads give the same records", p);
+    }
+    ic_ic_ctx_destroy(c);
+    /* The Hessians, at 24 × 75 rays and the light samples that go with them. */
+    c = NULL;
+    opt.ic.gather.theta_strata = 24;
+    opt.ic.gather.phi_strata = 75;
+    ok = ok && ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) == IC_OK && cache_every_emitter(c, scene);
+    CHECK(ok, "a context with finer strata: %s", err.message);
+    for (int p = 0; ok && p < POINTS; ++p) {
+        ok = gather(c, &at[p], 1, 2, on, res) && gather(c, &at[p], 0, 2, off, res_off);
+        CHECK(ok, "point %d: gathers with finer strata", p);
+        if (ok)
+            check_hessians(p, res, res_off);
     }
     ic_ic_ctx_destroy(c);
     ic_accel_destroy(accel);
