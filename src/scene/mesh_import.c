@@ -1,11 +1,14 @@
 /*
  * mesh_import.c — mesh files (OBJ+MTL, glTF 2.0 / .glb, PLY, anything assimp reads) into the scene.
  *
- * assimp triangulates, joins identical vertices and pre-transforms the node hierarchy, so each file
- * arrives as flat meshes in file space; we apply the scene's transform and append to the world-space
- * triangle soup. Normals are not generated: a mesh without them is shaded flat (a zero normal at a
- * vertex means "use the geometric normal", see scene_query.c). Zero-area triangles are dropped and
- * counted: Embree would never hit them and they have no normal.
+ * assimp triangulates and joins identical vertices; we walk its node hierarchy ourselves and append each
+ * placement of a mesh (a mesh in two nodes is placed twice) to the world-space triangle soup under its
+ * node's transform composed with its ancestors' and the scene's. A placement that mirrors (a negative
+ * determinant, e.g. a glTF node scaled by -1 on one axis) has its winding swapped so that the front stays
+ * the mirror image of the file's front; assimp's PreTransformVertices, which did this walk before, kept the
+ * winding and turned such meshes inside out. Normals are not generated: a mesh without them is shaded flat
+ * (a zero normal at a vertex means "use the geometric normal", see scene_query.c). Zero-area triangles are
+ * dropped and counted: Embree would never hit them and they have no normal.
  *
  * Materials map to the renderer's four types (docs/scene-format.md, "Materials from mesh files"):
  * - OBJ/MTL (and other Phong-style formats): illum 4/6/7, or d < 1 with Ni > 1, is glass (ior Ni);
@@ -876,15 +879,135 @@ static void xform_tangent(const float m4[16], const float nm[9], const struct ai
     out[3] = v3_dot(v3_cross(n, t), bt) < 0.0f ? -1.0f : 1.0f;
 }
 
-static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
-                               const float m4[16], const char *xform_where, uint32_t material_base, int use_tangents,
-                               ic_error *err)
+/* One placement of a mesh: the mesh, its node's transform composed with its ancestors' (row-major, as
+ * aiMatrix4x4 holds it) and the key the placements are emitted in. */
+typedef struct mesh_instance {
+    unsigned mesh;
+    unsigned material; /* the mesh's */
+    unsigned vformat;  /* which vertex attributes the mesh has (vertex_format) */
+    size_t order;      /* the placement's rank in the walk */
+    float node[16];
+} mesh_instance;
+
+/* The attributes a mesh has, as one number: normals, tangents, each texture coordinate set (and whether
+ * it has three components) and each colour set; the order of these bits orders the placements. */
+static unsigned vertex_format(const struct aiMesh *mesh)
+{
+    unsigned f = 1;
+    if (mesh->mNormals)
+        f |= 0x2;
+    if (mesh->mTangents && mesh->mBitangents)
+        f |= 0x4;
+    for (unsigned k = 0; k < AI_MAX_NUMBER_OF_TEXTURECOORDS && k < 8 && mesh->mTextureCoords[k]; ++k)
+        f |= (0x100u << k) | (mesh->mNumUVComponents[k] == 3 ? 0x10000u << k : 0);
+    for (unsigned k = 0; k < AI_MAX_NUMBER_OF_COLOR_SETS && k < 8 && mesh->mColors[k]; ++k)
+        f |= 0x1000000u << k;
+    return f;
+}
+
+static void node_matrix(const struct aiMatrix4x4 *a, float m[16])
+{
+    const float r[16] = {a->a1, a->a2, a->a3, a->a4, a->b1, a->b2, a->b3, a->b4,
+                         a->c1, a->c2, a->c3, a->c4, a->d1, a->d2, a->d3, a->d4};
+    memcpy(m, r, sizeof r);
+}
+
+static int is_identity(const float m[16])
+{
+    for (int k = 0; k < 16; ++k)
+        if (m[k] != (k % 5 == 0 ? 1.0f : 0.0f))
+            return 0;
+    return 1;
+}
+
+/* Grouped by material, then by vertex format, in the walk's order within a group: the order in which
+ * assimp's PreTransformVertices merged the meshes, so that the triangles (and with them the BVH and every
+ * render) stay in the order they had. */
+static int by_material(const void *pa, const void *pb)
+{
+    const mesh_instance *a = pa, *b = pb;
+    if (a->material != b->material)
+        return a->material < b->material ? -1 : 1;
+    if (a->vformat != b->vformat)
+        return a->vformat < b->vformat ? -1 : 1;
+    return a->order < b->order ? -1 : a->order > b->order;
+}
+
+/* Every placement of a mesh in the node tree, depth first (a node's meshes, then its children in order),
+ * each with its node's transform composed with its ancestors'; *out is malloc'ed. The walk keeps its own
+ * stack: a file may nest its nodes deeper than the C stack would allow. */
+static ic_result collect_instances(const struct aiScene *ai, const char *mesh_path, mesh_instance **out,
+                                   size_t *count, ic_error *err)
+{
+    typedef struct {
+        const struct aiNode *node;
+        float m[16];
+    } pending;
+    pending *stack = NULL;
+    mesh_instance *inst = NULL;
+    size_t depth = 0, stack_cap = 0, n = 0, cap = 0;
+    if (ai->mRootNode) {
+        if (!grow((void **)&stack, sizeof *stack, stack_cap = 16))
+            goto oom;
+        stack[depth].node = ai->mRootNode;
+        node_matrix(&ai->mRootNode->mTransformation, stack[depth++].m);
+    }
+    while (depth > 0) {
+        pending top = stack[--depth];
+        for (unsigned i = 0; i < top.node->mNumMeshes; ++i) {
+            unsigned mesh = top.node->mMeshes[i];
+            if (mesh >= ai->mNumMeshes)
+                continue;
+            if (n == cap && !grow((void **)&inst, sizeof *inst, cap = cap ? 2 * cap : 16))
+                goto oom;
+            inst[n].mesh = mesh;
+            inst[n].material = ai->mMeshes[mesh]->mMaterialIndex;
+            inst[n].vformat = vertex_format(ai->mMeshes[mesh]);
+            inst[n].order = n;
+            memcpy(inst[n].node, top.m, sizeof top.m);
+            ++n;
+        }
+        if (depth + top.node->mNumChildren > stack_cap) {
+            stack_cap = 2 * (depth + top.node->mNumChildren);
+            if (!grow((void **)&stack, sizeof *stack, stack_cap))
+                goto oom;
+        }
+        /* pushed last child first, so that the first child is walked next */
+        for (unsigned i = top.node->mNumChildren; i-- > 0;) {
+            float local[16];
+            node_matrix(&top.node->mChildren[i]->mTransformation, local);
+            stack[depth].node = top.node->mChildren[i];
+            if (is_identity(local))
+                memcpy(stack[depth].m, top.m, sizeof top.m);
+            else if (is_identity(top.m))
+                memcpy(stack[depth].m, local, sizeof local);
+            else
+                ic_mat4_mul(top.m, local, stack[depth].m);
+            ++depth;
+        }
+    }
+    free(stack);
+    if (n > 1)
+        qsort(inst, n, sizeof *inst, by_material);
+    *out = inst;
+    *count = n;
+    return IC_OK;
+oom:
+    free(stack);
+    free(inst);
+    return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its node hierarchy", mesh_path);
+}
+
+/* Appends each placement of a mesh under its node's transform and then the scene's (xform; NULL: none). */
+static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const mesh_instance *inst, size_t count,
+                               const char *mesh_path, const float *xform, const char *xform_where,
+                               uint32_t material_base, int use_tangents, ic_error *err)
 {
     ic_scene *s = b->scene;
     size_t add_vertices = 0, add_faces = 0;
     int any_normals = 0, any_uvs = 0, any_tangents = 0;
-    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
-        const struct aiMesh *mesh = ai->mMeshes[i];
+    for (size_t k = 0; k < count; ++k) {
+        const struct aiMesh *mesh = ai->mMeshes[inst[k].mesh];
         add_vertices += mesh->mNumVertices;
         add_faces += mesh->mNumFaces;
         any_normals |= mesh->mNormals != NULL;
@@ -910,12 +1033,19 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
         !grow((void **)&s->triangle_material, sizeof *s->triangle_material, s->triangle_count + add_faces))
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its geometry", mesh_path);
 
-    float nm[9];
-    float det = normal_matrix(m4, nm);
-    int flip = det < 0.0f; /* a mirroring transform reverses winding: swap to keep the front side */
-
-    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
-        const struct aiMesh *mesh = ai->mMeshes[i];
+    for (size_t k = 0; k < count; ++k) {
+        const struct aiMesh *mesh = ai->mMeshes[inst[k].mesh];
+        const float *node = inst[k].node;
+        float m4[16], nm[9];
+        if (!xform)
+            memcpy(m4, node, sizeof m4);
+        else if (is_identity(node))
+            memcpy(m4, xform, sizeof m4);
+        else
+            ic_mat4_mul(xform, node, m4);
+        /* a mirroring placement (the node's, the scene's, or both composed) reverses the winding: swap it
+         * to keep the front side */
+        int flip = normal_matrix(m4, nm) < 0.0f;
         uint32_t base = s->vertex_count;
         for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
             struct aiVector3D p = mesh->mVertices[v];
@@ -926,11 +1056,13 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             ic_vec3 q = xform_point(m4, p);
             if (!(fabsf(q.x) <= IC_SCENE_MAX_COORD && fabsf(q.y) <= IC_SCENE_MAX_COORD &&
                   fabsf(q.z) <= IC_SCENE_MAX_COORD)) {
-                if (xform_where)
+                ic_vec3 f = xform_point(node, p); /* where the file itself puts the vertex */
+                if (xform_where && fabsf(f.x) <= IC_SCENE_MAX_COORD && fabsf(f.y) <= IC_SCENE_MAX_COORD &&
+                    fabsf(f.z) <= IC_SCENE_MAX_COORD)
                     return ic_error_set(err, IC_ERR_INVALID_ARG,
                                         "%s: the transform of '%s' takes its vertex %u (%g, %g, %g) to (%g, %g, %g), "
                                         "beyond the largest coordinate %g; give a smaller scale or translation",
-                                        xform_where, mesh_path, v + 1, (double)p.x, (double)p.y, (double)p.z,
+                                        xform_where, mesh_path, v + 1, (double)f.x, (double)f.y, (double)f.z,
                                         (double)q.x, (double)q.y, (double)q.z, (double)IC_SCENE_MAX_COORD);
                 return ic_error_set(err, IC_ERR_INVALID_ARG,
                                     "%s: vertex %u (%g, %g, %g) is beyond the largest coordinate %g; scale the mesh "
@@ -1082,7 +1214,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     }
     source_fs fs = {&src, b, ""};
     const struct aiScene *ai = source_import(
-        &src, &fs, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+        &src, &fs, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
     if (fs.refused[0]) { /* assimp may have failed for it, or carried on without it (an MTL file) */
         r = check_named_file(b, mesh_path, "file", fs.refused, err);
         if (ai)
@@ -1097,11 +1229,21 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
                             mesh_path, aiGetErrorString());
     }
     float *strengths = NULL;
+    mesh_instance *inst = NULL;
+    size_t inst_count = 0;
+    /* the placements before the tangents are computed: their vertex formats then are those by which
+     * PreTransformVertices grouped the meshes (collect_instances) */
+    if ((r = collect_instances(ai, mesh_path, &inst, &inst_count, err)) != IC_OK) {
+        aiReleaseImport(ai);
+        free(src.data);
+        return r;
+    }
     /* tangents only for a file with a normal map: MikkTSpace-like ones where the file gives none */
     int normal_mapped = 0;
     for (unsigned i = 0; i < ai->mNumMaterials; ++i)
         normal_mapped |= aiGetMaterialTextureCount(ai->mMaterials[i], aiTextureType_NORMALS) > 0;
     if (normal_mapped && !(ai = aiApplyPostProcessing(ai, aiProcess_CalcTangentSpace))) {
+        free(inst);
         free(src.data);
         return ic_error_set(err, IC_ERR_PARSE, "%s: cannot compute the tangents of the normal-mapped mesh (%s)",
                             mesh_path, aiGetErrorString());
@@ -1153,16 +1295,15 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         ++s->material_count;
     }
 
-    float identity[16];
-    ic_mat4_identity(identity);
     uint32_t tris_before = s->triangle_count, dropped_before = s->dropped_degenerate;
-    r = append_meshes(b, ai, mesh_path, xform ? xform : identity, xform_where, material_base, normal_mapped, err);
+    r = append_meshes(b, ai, inst, inst_count, mesh_path, xform, xform_where, material_base, normal_mapped, err);
     if (r == IC_OK && s->triangle_count == tris_before)
         r = ic_error_set(err, IC_ERR_PARSE,
                          "%s: no usable triangle (%u of zero area dropped; points and lines are ignored); fix the "
                          "geometry or remove the mesh",
                          mesh_path, s->dropped_degenerate - dropped_before);
 done:
+    free(inst);
     free(strengths);
     aiReleaseImport(ai);
     free(src.data);

@@ -8,7 +8,10 @@
  *   3. a spot light: full intensity inside the inner cone, the specification's falloff between the
  *      cones, none outside; 4. directional lights: the first is the sun, a second a far point light with
  *      the same irradiance at the scene's centre;
- *   5. metallic-roughness: a metal is a rough conductor with F0 = base colour, alpha = roughness².
+ *   5. metallic-roughness: a metal is a rough conductor with F0 = base colour, alpha = roughness²;
+ *   6. mirroring nodes (scale −1 on an axis): the placed triangle's winding and normals are the mirror
+ *      image of the file's, alone and composed with a parent's mirror and the JSON scene's matrix; one
+ *      mesh in several nodes is placed once per node.
  */
 #include "test_util.h"
 
@@ -360,8 +363,118 @@ static void test_emissive_strength_order(void)
     ic_scene_free(s);
 }
 
+/* The triangle (1,0,0) (2,0,1) (1,1,0) with normal (-1,0,1)/√2 (its winding's and its vertices'), as mesh 0 of
+ * mirror.gltf under NODES (the scene's roots ROOTS). */
+static const char *write_mirror_gltf(const char *nodes, const char *roots)
+{
+    FILE *f = fopen(IC_TEST_TMP "/mirror.bin", "wb");
+    if (!f)
+        exit(1);
+    const float r = 0.70710678f;
+    float p[9] = {1, 0, 0, 2, 0, 1, 1, 1, 0}, n[9] = {-r, 0, r, -r, 0, r, -r, 0, r};
+    uint16_t idx[4] = {0, 1, 2, 0};
+    fwrite(p, sizeof p, 1, f);
+    fwrite(n, sizeof n, 1, f);
+    fwrite(idx, sizeof idx, 1, f);
+    fclose(f);
+    f = fopen(IC_TEST_TMP "/mirror.gltf", "w");
+    if (!f)
+        exit(1);
+    fprintf(f,
+            "{\"asset\": {\"version\": \"2.0\"},\n"
+            " \"buffers\": [{\"uri\": \"mirror.bin\", \"byteLength\": 80}],\n"
+            " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36},\n"
+            "                  {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36},\n"
+            "                  {\"buffer\": 0, \"byteOffset\": 72, \"byteLength\": 6}],\n"
+            " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\",\n"
+            "                 \"min\": [1, 0, 0], \"max\": [2, 1, 1]},\n"
+            "                {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+            "                {\"bufferView\": 2, \"componentType\": 5123, \"count\": 3, \"type\": \"SCALAR\"}],\n"
+            " \"materials\": [%s],\n"
+            " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}, \"indices\": 2, "
+            "\"material\": 0}]}],\n"
+            " \"nodes\": [%s],\n"
+            " \"scenes\": [{\"nodes\": [%s]}], \"scene\": 0}\n",
+            grey, nodes, roots);
+    fclose(f);
+    return IC_TEST_TMP "/mirror.gltf";
+}
+
+/* The instance of the triangle whose centroid is c (the mesh's is (4/3, 1/3, 1/3)) has the normal n: its
+ * winding's (ng) and its vertices' (ns), the mirror image of the file's where the placement mirrors. */
+static void check_instance(const ic_scene *s, ic_vec3 c, ic_vec3 n, const char *what)
+{
+    int found = 0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        const uint32_t *v = s->triangles + 3 * t;
+        ic_vec3 m = v3_scale(v3_add(v3_add(s->positions[v[0]], s->positions[v[1]]), s->positions[v[2]]), 1.0f / 3.0f);
+        if (v3_len(v3_sub(m, c)) > 1e-4f)
+            continue;
+        ++found;
+        ic_surface srf;
+        ic_scene_surface(s, t, 1.0f / 3.0f, 1.0f / 3.0f, &srf);
+        CHECK(v3_dot(srf.ng, n) > 0.9999f, "%s: the winding's normal %g %g %g is %g %g %g", what, srf.ng.x, srf.ng.y,
+              srf.ng.z, n.x, n.y, n.z);
+        CHECK(v3_dot(srf.ns, n) > 0.9999f, "%s: the vertices' normal %g %g %g is %g %g %g", what, srf.ns.x, srf.ns.y,
+              srf.ns.z, n.x, n.y, n.z);
+    }
+    CHECK(found == 1, "%s: one triangle at %g %g %g (%d)", what, c.x, c.y, c.z, found);
+}
+
+/* A mirroring node (a negative determinant) turns the mesh's outside around with its vertices: the placed
+ * triangle's winding must be swapped so that its front is the mirror image of the file's front. One mesh
+ * under four nodes: as is, mirrored in x, and under a parent mirrored in x with a child mirrored in z (a
+ * half turn about y: no mirror); then the whole file mirrored in x again by the scene's matrix. */
+static void test_mirrored_nodes(void)
+{
+    const char *path = write_mirror_gltf(
+        "{\"name\": \"plain\", \"mesh\": 0},\n"
+        "{\"name\": \"mirror\", \"mesh\": 0, \"scale\": [-1, 1, 1]},\n"
+        "{\"name\": \"parent\", \"scale\": [-1, 1, 1], \"translation\": [0, 5, 0], \"children\": [3]},\n"
+        "{\"name\": \"turned\", \"mesh\": 0, \"scale\": [1, 1, -1]}",
+        "0, 1, 2");
+    const float r = 0.70710678f;
+    const float third = 1.0f / 3.0f, c = 4.0f / 3.0f;
+    ic_scene *s = load(path, NULL, 0);
+    CHECK(s != NULL, "the mirrored glTF loads");
+    if (s) {
+        CHECK(s->triangle_count == 3, "one mesh in three nodes: three triangles (%u)", s->triangle_count);
+        check_instance(s, v3(c, third, third), v3(-r, 0, r), "the node as is");
+        check_instance(s, v3(-c, third, third), v3(r, 0, r), "the node mirrored in x");
+        check_instance(s, v3(-c, 5 + third, -third), v3(r, 0, -r), "two mirrors, parent and child");
+    }
+    ic_scene_free(s);
+
+    FILE *f = fopen(IC_TEST_TMP "/mirror_scene.json", "w");
+    if (!f)
+        exit(1);
+    fprintf(f, "{\"meshes\": [{\"path\": \"mirror.gltf\", \"matrix\": [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], "
+               "[0, 0, 0, 1]]}],\n"
+               " \"camera\": {\"eye\": [0, 1, 9], \"target\": [0, 1, 0], \"width\": 8, \"height\": 8}}\n");
+    fclose(f);
+    s = load(IC_TEST_TMP "/mirror_scene.json", NULL, 0);
+    CHECK(s != NULL, "the mirrored glTF in a scene with a mirroring matrix loads");
+    if (s) {
+        CHECK(s->triangle_count == 3, "three triangles (%u)", s->triangle_count);
+        check_instance(s, v3(-c, third, third), v3(r, 0, r), "the scene's mirror on the node as is");
+        check_instance(s, v3(c, third, third), v3(-r, 0, r), "the scene's mirror on the mirrored node");
+        check_instance(s, v3(c, 5 + third, -third), v3(-r, 0, -r), "the scene's mirror on the two mirrors");
+    }
+    ic_scene_free(s);
+
+    /* the mesh in no node of the scene: nothing to place, an error naming the file (not an empty scene) */
+    path = write_mirror_gltf("{\"name\": \"empty\"}", "0");
+    ic_scene_load_options lo = {0};
+    ic_error err = {0};
+    s = NULL;
+    CHECK(ic_scene_load(path, &lo, &s, &err) == IC_ERR_PARSE && strstr(err.message, "mirror.gltf: "),
+          "a mesh that no node holds is an error: %s", err.message);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_mirrored_nodes();
     test_emissive_strength_order();
     test_embedded_texture();
     test_camera();
