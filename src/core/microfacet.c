@@ -86,7 +86,9 @@ void ic_coat_albedo_table(float eta, float alpha, float table[IC_COAT_TABLE], fl
     enum { STRATA = 48 };
     alpha = fmaxf(alpha, IC_GGX_ALPHA_MIN);
     for (int j = 0; j < IC_COAT_TABLE; ++j) {
-        float mu = fmaxf((float)j / (IC_COAT_TABLE - 1), 1e-3f);
+        /* nodes uniform in √μ: E(μ) rises from its grazing limit over μ ≈ α (shadowing) while Fresnel falls
+         * from 1, both too steep for uniform steps in μ when α is small */
+        float u = (float)j / (IC_COAT_TABLE - 1), mu = fmaxf(u * u, 1e-3f);
         ic_vec3 wo = v3(sqrtf(1.0f - mu * mu), 0.0f, mu);
         /* E = E_h[F(wo·h)·G2/G1(wo)] with h from the visible normals (its sampling weight) */
         double sum = 0.0;
@@ -112,7 +114,7 @@ void ic_coat_albedo_table(float eta, float alpha, float table[IC_COAT_TABLE], fl
 
 float ic_coat_albedo(const float table[IC_COAT_TABLE], float mu)
 {
-    float x = ic_clampf(mu, 0.0f, 1.0f) * (IC_COAT_TABLE - 1);
+    float x = sqrtf(ic_clampf(mu, 0.0f, 1.0f)) * (IC_COAT_TABLE - 1);
     int i = (int)x;
     if (i >= IC_COAT_TABLE - 1)
         return table[IC_COAT_TABLE - 1];

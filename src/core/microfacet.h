@@ -44,13 +44,14 @@ static inline ic_vec3 ic_fresnel_schlick(float cos_i, ic_vec3 f0)
     return v3_add(f0, v3_scale(v3_sub(v3s(1.0f), f0), m5));
 }
 
-/* Entries of a coat's directional albedo table over cos θ in [0, 1]. */
+/* Entries of a coat's directional albedo table over cos θ in [0, 1] (uniform in √cos θ). */
 #define IC_COAT_TABLE 32
 /* Directional albedo E(μ) = ∫ f_spec(wo, wi) cos θi dwi of a GGX dielectric coat (index eta, roughness
- * α, single scattering) at IC_COAT_TABLE cosines μ_j = j/(IC_COAT_TABLE-1), by stratified visible-normal
- * quadrature (deterministic); *average gets its cosine-weighted mean 2∫E(μ)μ dμ. */
+ * α, single scattering) at IC_COAT_TABLE cosines μ_j = (j/(IC_COAT_TABLE-1))² (at least 10⁻³), dense at
+ * grazing where E changes fastest, by stratified visible-normal quadrature (deterministic); *average gets
+ * its cosine-weighted mean 2∫E(μ)μ dμ. */
 void ic_coat_albedo_table(float eta, float alpha, float table[IC_COAT_TABLE], float *average);
-/* E(μ) from the table, interpolated linearly. */
+/* E(μ) from the table, interpolated linearly in √μ. */
 float ic_coat_albedo(const float table[IC_COAT_TABLE], float mu);
 
 #endif
