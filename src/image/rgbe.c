@@ -11,7 +11,8 @@
  * The reader (ours rather than stb_image's, so that a truncated or corrupt file is an error instead of
  * black rows) accepts flat, old-style and new-style run-length encoded scanlines, the standard
  * "-Y height +X width" orientation, and divides by the header's cumulative EXPOSURE so values are
- * the radiance the file describes. XYZE files and other orientations are refused.
+ * the radiance the file describes. XYZE files and other orientations are refused. Header lines may be of
+ * any length (command histories); a FORMAT= or EXPOSURE= line too long to read whole is refused.
  */
 #include "image_internal.h"
 #include "core/read_file.h"
@@ -82,35 +83,46 @@ ic_result ic_image_write_hdr(const char *path, const ic_image *img, ic_error *er
 /* ---------------------------------------------------------------------------------------------- */
 /* Reading                                                                                        */
 
-/* Reads one header line (without its newline) into line; 0 at end of file or on an over-long line. */
-static int read_line(FILE *fp, char *line, size_t size)
+/* Reads one header line (without its newline), keeping its first size − 1 characters in line and
+ * skipping the rest: headers carry command histories of any length (rpict, pcomb), while the lines read
+ * here are short. *length gets the whole line's length; 0 at the end of the file before a newline. */
+static int read_line(FILE *fp, char *line, size_t size, size_t *length)
 {
-    if (!fgets(line, (int)size, fp))
-        return 0;
-    size_t n = strlen(line);
-    if (n == 0 || line[n - 1] != '\n')
-        return 0;
-    line[n - 1] = '\0';
-    return 1;
+    size_t n = 0;
+    int c;
+    while ((c = getc(fp)) != EOF && c != '\n') {
+        if (n + 1 < size)
+            line[n] = (char)c;
+        ++n;
+    }
+    line[n < size ? n : size - 1] = '\0';
+    *length = n;
+    return c == '\n';
 }
 
 /* Reads the header up to and including the resolution line. */
 static ic_result read_header(const char *path, FILE *fp, int *width, int *height, double *exposure, ic_error *err)
 {
     char line[512];
-    if (!read_line(fp, line, sizeof line) || strncmp(line, "#?", 2) != 0)
+    size_t length;
+    if (!read_line(fp, line, sizeof line, &length) || strncmp(line, "#?", 2) != 0)
         return ic_error_set(err, IC_ERR_PARSE, "%s: not a Radiance picture (no \"#?\" line); re-create the file", path);
     *exposure = 1.0;
-    for (;;) {
-        if (!read_line(fp, line, sizeof line))
+    for (int number = 2;; ++number) {
+        if (!read_line(fp, line, sizeof line, &length))
             return ic_error_set(err, IC_ERR_CORRUPT, "%s: truncated or malformed Radiance header; re-create the file",
                                 path);
-        if (line[0] == '\0')
+        if (length == 0)
             break; /* end of header */
-        if (strncmp(line, "FORMAT=", 7) == 0 && strcmp(line + 7, "32-bit_rle_rgbe") != 0)
+        int format = strncmp(line, "FORMAT=", 7) == 0, exposure_line = strncmp(line, "EXPOSURE=", 9) == 0;
+        if ((format || exposure_line) && length >= sizeof line)
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%d: this %s line has %zu characters, more than the %zu read; "
+                                "shorten it to its value", path, number, format ? "FORMAT=" : "EXPOSURE=", length,
+                                sizeof line - 1);
+        if (format && strcmp(line + 7, "32-bit_rle_rgbe") != 0)
             return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: Radiance format \"%s\" is not supported; convert it to "
                                 "32-bit_rle_rgbe (ra_xyze -r)", path, line + 7);
-        if (strncmp(line, "EXPOSURE=", 9) == 0) {
+        if (exposure_line) {
             double e = strtod(line + 9, NULL);
             if (isfinite(e) && e > 0.0)
                 *exposure *= e; /* cumulative, per the format */
@@ -122,7 +134,8 @@ static ic_result read_header(const char *path, FILE *fp, int *width, int *height
         return ic_error_set(err, IC_ERR_CORRUPT, "%s: the header's EXPOSURE lines multiply to %g, outside 1e-30 to "
                             "1e30; fix or remove them", path, *exposure);
     char y_sign, x_sign, y_axis, x_axis, hs[16], ws[16];
-    if (read_line(fp, line, sizeof line) && sscanf(line, "%cY %15s %cX %15s", &y_sign, hs, &x_sign, ws) == 4) {
+    int got = read_line(fp, line, sizeof line, &length) && length < sizeof line;
+    if (got && sscanf(line, "%cY %15s %cX %15s", &y_sign, hs, &x_sign, ws) == 4) {
         /* The sizes as numbers that fit an int, not %d (which wraps 4294967300 to 4). */
         char *e1 = NULL, *e2 = NULL;
         errno = 0;
@@ -133,7 +146,7 @@ static ic_result read_header(const char *path, FILE *fp, int *width, int *height
         *height = (int)h;
         *width = (int)w;
     } else {
-        if (sscanf(line, "%c%c %*d %c%c %*d", &y_sign, &y_axis, &x_sign, &x_axis) == 4)
+        if (got && sscanf(line, "%c%c %*d %c%c %*d", &y_sign, &y_axis, &x_sign, &x_axis) == 4)
             return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: picture orientation \"%s\" is not supported; re-orient it "
                                 "to \"-Y height +X width\" (pflip, protate)", path, line);
         return ic_error_set(err, IC_ERR_PARSE, "%s: missing or malformed resolution line; re-create the file", path);

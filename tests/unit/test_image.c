@@ -318,6 +318,42 @@ static void test_hdr_variants(void)
           "cut RLE hdr: %s", err.message);
     ic_image_free(&img);
 
+    /* A 5000-character command history line (rpict and pcomb write their whole command lines) before the
+     * lines that matter: read as the file above, EXPOSURE included. Lines over 511 characters were
+     * refused as a malformed header. Then a FORMAT= or EXPOSURE= line too long to read is refused, naming
+     * its line. */
+    enum { LONG = 5000 };
+    static unsigned char big[LONG + 512];
+    const char *history = "#?RADIANCE\npcomb -e 'lo=li(1)' ";
+    size_t h = strlen(history);
+    memcpy(big, history, h);
+    memset(big + h, 'x', LONG - (h - 11));
+    h += LONG - (h - 11);
+    big[h++] = '\n';
+    memcpy(big + h, file + 11, n - 11); /* the RLE file after its "#?RADIANCE" line */
+    write_bytes(scratch("history.hdr"), big, h + n - 11);
+    CHECK(ic_image_read(scratch("history.hdr"), &img, &err) == IC_OK, "hdr with a long header line: %s", err.message);
+    if (img.rgb) {
+        CHECK_NEAR(img.rgb[0], 128.5 / 128.0 / 2.0, 1e-7, "R of row 0 after a long header line");
+        CHECK_NEAR(img.rgb[(8 + 5) * 3], 133.5 / 256.0 / 2.0, 1e-7, "R of row 1, pixel 5 after a long header line");
+    }
+    ic_image_free(&img);
+    static const char *const keys[] = {"EXPOSURE=2", "FORMAT=32-bit_rle_rgbe"};
+    for (int k = 0; k < 2; ++k) {
+        h = (size_t)snprintf((char *)big, sizeof big, "#?RADIANCE\n%s", keys[k]);
+        memset(big + h, ' ', LONG);
+        h += LONG;
+        h += (size_t)snprintf((char *)big + h, sizeof big - h, "\n\n-Y 1 +X 1\n\x80\x80\x80\x81");
+        write_bytes(scratch("long-key.hdr"), big, h);
+        ic_result r = ic_image_read(scratch("long-key.hdr"), &img, &err);
+        char words[64];
+        snprintf(words, sizeof words, "long-key.hdr:2: this %.*s line has", (int)(strchr(keys[k], '=') - keys[k] + 1),
+                 keys[k]);
+        CHECK(r == IC_ERR_PARSE && strstr(err.message, words), "long %s line: %s (%s)", keys[k], ic_result_name(r),
+              err.message);
+        ic_image_free(&img);
+    }
+
     /* Old-style runs: (1,1,1,n) repeats the previous pixel. */
     const char *old_header = "#?RGBE\n\n-Y 1 +X 5\n";
     n = strlen(old_header);
