@@ -2,7 +2,9 @@
 #ifndef IC_CLI_H
 #define IC_CLI_H
 
+#include <errno.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <signal.h>
@@ -37,6 +39,19 @@ static inline const char *ic_cli_option_value(int argc, char **argv, int *i, con
         return NULL;
     }
     return argv[++*i];
+}
+
+/* Flushes standard output and checks it for a write error (a full disk, /dev/full): what was printed
+ * there (help, a table, results) is otherwise lost without a word. Returns 0, or 1 (the exit status of a
+ * failure while working) after the line "WHO: standard output: write error (reason)" on stderr. Inline
+ * for test_diff, as above. */
+static inline int ic_cli_flush_stdout(const char *who)
+{
+    int e = fflush(stdout) != 0 ? errno : 0;
+    if (!e && !ferror(stdout))
+        return 0;
+    fprintf(stderr, "%s: standard output: write error%s%s%s\n", who, e ? " (" : "", e ? strerror(e) : "", e ? ")" : "");
+    return 1;
 }
 
 #endif

@@ -186,7 +186,7 @@ int ic_cli_diff(int argc, char **argv)
             options_done = 1;
         } else if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
             print_help(stdout);
-            return 0;
+            return ic_cli_flush_stdout("irrcache diff");
         } else if (strcmp(arg, "--json") == 0) {
             json = 1;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--heatmap", &missing)) != NULL) {
@@ -274,10 +274,8 @@ int ic_cli_diff(int argc, char **argv)
             status = EXIT_IO;
         else if (!json) {
             print_table(stdout, paths[0], paths[1], &img, &metrics, heatmap, &scale, &blotch);
-            if (fflush(stdout) != 0 || ferror(stdout)) { /* a full disk or /dev/full: the table is lost */
-                fprintf(stderr, "irrcache diff: standard output: write error\n");
+            if (ic_cli_flush_stdout("irrcache diff")) /* a full disk or /dev/full: the table is lost */
                 status = EXIT_IO;
-            }
         }
     }
     ic_image_free(&blot);

@@ -1,6 +1,8 @@
 /* json_out.c — writing JSON files atomically (json_out.h). */
 #include "json_out.h"
 
+#include "cli.h"
+
 #include "core/atomic_file.h"
 
 #include <stdio.h>
@@ -110,9 +112,10 @@ int ic_cli_write_json(const char *cmd, const char *path, cJSON *root, int pretty
     }
     int ok = 1;
     if (!path) {
-        ok = puts(text) >= 0 && fflush(stdout) == 0;
-        if (!ok)
-            fprintf(stderr, "irrcache %s: cannot write JSON to standard output\n", cmd);
+        char who[64];
+        snprintf(who, sizeof who, "irrcache %s", cmd);
+        puts(text);
+        ok = !ic_cli_flush_stdout(who);
     } else {
         ic_atomic_file f;
         ic_error err;

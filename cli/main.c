@@ -86,7 +86,7 @@ int main(int argc, char **argv)
         return ic_cli_points(argc - 1, argv + 1);
     if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
         usage(stdout);
-        return 0;
+        return ic_cli_flush_stdout("irrcache");
     }
     if (!strcmp(cmd, "--version")) {
         /* The library's version, which a shared library may give differently from the headers'. */
@@ -94,7 +94,7 @@ int main(int argc, char **argv)
             printf("irrcache %s (built with headers %s)\n", ic_version(), IRRCACHE_VERSION_STRING);
         else
             printf("irrcache %s\n", ic_version());
-        return 0;
+        return ic_cli_flush_stdout("irrcache");
     }
     fprintf(stderr, "irrcache: unknown command '%s'; use 'render', 'diff' or 'points' (see irrcache --help)\n", cmd);
     return 2;

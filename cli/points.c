@@ -421,9 +421,10 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             }
             scene_path = arg;
         } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
-            if (rank == 0)
-                print_help(stdout);
-            return 0;
+            if (rank != 0)
+                return 0;
+            print_help(stdout);
+            return ic_cli_flush_stdout("irrcache points");
         } else if ((shared = ic_cli_parse_shared_option(argc, argv, &i, &args, "points", shared_ids,
                                                         sizeof shared_ids / sizeof shared_ids[0])) != 0) {
             if (shared < 0)
@@ -607,9 +608,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         status = write_json(out_path, &opt, res, count, &st, df_lux, prefix) ? 0 : EXIT_WORK;
     } else if (!out_path) {
         write_rows(stdout, format, res, count, df_lux, prefix);
-        status = fflush(stdout) == 0 && !ferror(stdout) ? 0 : EXIT_WORK;
-        if (status)
-            fprintf(stderr, "irrcache points: standard output: write error\n");
+        status = ic_cli_flush_stdout("irrcache points") ? EXIT_WORK : 0;
     } else {
         ic_atomic_file f;
         if (ic_atomic_file_open(&f, out_path, &err) != IC_OK) {

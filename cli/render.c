@@ -344,11 +344,13 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     render_args a;
     int rc = parse_quietly_unless(rank == 0, argc, argv, &a);
     if (rc == -1 - IC_ARG_HELP || rc == -1 - IC_ARG_HELP_MARKDOWN) {
-        if (rank == 0 && rc == -1 - IC_ARG_HELP)
+        if (rank != 0)
+            return 0;
+        if (rc == -1 - IC_ARG_HELP)
             ic_cli_print_help(stdout);
-        else if (rank == 0)
+        else
             ic_cli_print_markdown(stdout);
-        return 0;
+        return ic_cli_flush_stdout("irrcache render");
     }
     char message[1400] = "";
     if (rc)

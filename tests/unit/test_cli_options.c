@@ -2,7 +2,8 @@
  * test_cli_options.c — the option table of `irrcache render` and what comes from it: README.md's
  * option tables are exactly `--help-markdown`, --help fits in 100 columns and lists the exit codes,
  * --name=value means the same as --name value, `--` ends the options, and each kind of bad value is a
- * usage error (exit 2) with one line naming the option.
+ * usage error (exit 2) with one line naming the option. What goes to a standard output that cannot be
+ * written (help, version, tables) exits 1 with one line saying so.
  */
 #include "test_files.h"
 #include "test_util.h"
@@ -66,6 +67,42 @@ static void help_layout(void)
     CHECK(strstr(out_text, "exit status: 0") && strstr(out_text, "2 usage error"), "--help lists the exit codes");
     CHECK(strstr(out_text, "--min-radius-px P") && strstr(out_text, "[default: 3 px]"),
           "--help shows a default from irrcache/defaults.h with its unit");
+}
+
+/* Whatever the command prints on standard output is lost when that cannot be written (a full disk; here
+ * /dev/full, where every write fails with ENOSPC): exit 1 and one line saying so, for the help of every
+ * command, the version, and the diff table and points rows, not a silent exit 0. */
+static void stdout_write_error(void)
+{
+    if (access("/dev/full", W_OK) != 0) {
+        printf("skipped: no writable /dev/full\n");
+        return;
+    }
+    static const char *const cases[] = {
+        "--help", "-h", "help", "--version", "render --help", "render -h", "render --help-markdown",
+        "diff --help", "points --help",
+        "diff " IC_SOURCE_DIR "/tests/scenes/checker2x2.pfm " IC_SOURCE_DIR "/tests/scenes/checker2x2.pfm",
+        "points " IC_SOURCE_DIR "/tests/scenes/quad_light.obj --points " TMP "_pts.txt --integrator pt --samples 16",
+        "points " IC_SOURCE_DIR "/tests/scenes/quad_light.obj --points " TMP "_pts.txt --integrator pt --samples 16 "
+        "--format json",
+    };
+    FILE *f = fopen(TMP "_pts.txt", "w");
+    CHECK(f != NULL, "points file");
+    if (f) {
+        fputs("0 0.5 0 0 1 0\n", f);
+        fclose(f);
+    }
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char cmd[2048];
+        snprintf(cmd, sizeof cmd, "%s %s >/dev/full 2>%s.err", CLI, cases[i], TMP);
+        int st = system(cmd);
+        int rc = st == -1 || !WIFEXITED(st) ? -1 : WEXITSTATUS(st);
+        test_read_text(TMP ".err", err_text, sizeof err_text);
+        CHECK(rc == 1 && lines(err_text) == 1 && strstr(err_text, "standard output: write error"),
+              "irrcache %s >/dev/full: exit %d, '%s'", cases[i], rc, err_text);
+    }
+    /* and the same to a file: exit 0, nothing on stderr */
+    CHECK(run("--version") == 0 && !err_text[0] && !strncmp(out_text, "irrcache ", 9), "--version: '%s'", out_text);
 }
 
 static void value_forms(void)
@@ -217,6 +254,7 @@ int main(void)
     stats_json();
     readme_matches_table();
     help_layout();
+    stdout_write_error();
     value_forms();
     bad_values();
     TEST_MAIN_END();
