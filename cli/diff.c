@@ -115,6 +115,20 @@ static int print_json(const ic_image *img, const ic_image_metrics *m, const char
     return ic_cli_write_json("diff", NULL, o, 0);
 }
 
+/* The path of a map (`what`: "heat-map"), given to `option`: a file name in a format the command writes.
+ * Prints the usage error and returns 0 otherwise. */
+static int map_path_ok(const char *option, const char *what, const char *value)
+{
+    if (!value[0])
+        fprintf(stderr, "irrcache diff: %s '': the output path is empty; give a file name such as %s.png\n", option,
+                what);
+    else if (!ic_image_is_writable_format(value))
+        fprintf(stderr, "irrcache diff: %s: unknown %s format; name it .png (or .exr, .pfm, .hdr)\n", value, what);
+    else
+        return 1;
+    return 0;
+}
+
 static void print_db(FILE *out, const char *label, double db)
 {
     if (isinf(db))
@@ -190,18 +204,12 @@ int ic_cli_diff(int argc, char **argv)
         } else if (strcmp(arg, "--json") == 0) {
             json = 1;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--heatmap", &missing)) != NULL) {
-            if (!ic_image_is_writable_format(value)) {
-                fprintf(stderr, "irrcache diff: %s: unknown heat-map format; name it .png (or .exr, .pfm, .hdr)\n",
-                        value);
+            if (!map_path_ok("--heatmap", "heat-map", value))
                 return EXIT_USAGE;
-            }
             heatmap = value;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--blotch-map", &missing)) != NULL) {
-            if (!ic_image_is_writable_format(value)) {
-                fprintf(stderr, "irrcache diff: %s: unknown blotch-map format; name it .png (or .exr, .pfm, .hdr)\n",
-                        value);
+            if (!map_path_ok("--blotch-map", "blotch-map", value))
                 return EXIT_USAGE;
-            }
             blotch.path = value;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--blotch-max-error", &missing)) != NULL) {
             char *end = NULL;

@@ -86,6 +86,10 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
      * to 2^64 - 1: a value starts with what it means */
     if (val[0] == ' ' || val[0] == '\t' || val[0] == '\n' || val[0] == '\r' || val[0] == '\v' || val[0] == '\f')
         return ERR("%s '%s': a value may not start with white space", o->name, val);
+    /* an empty path or name is never meant: -o '' said "unknown image format", --view '' was ignored */
+    if (!val[0] && (o->kind == IC_OPT_OUTPUT || o->kind == IC_OPT_STRING))
+        return ERR("%s '': the %s is empty; give %s", o->name, o->kind == IC_OPT_OUTPUT ? "output path" : "value",
+                   o->kind == IC_OPT_OUTPUT ? "a file name such as out.exr" : o->value_name);
     char *field = (char *)a + o->offset, *end = NULL;
     errno = 0;
     switch (o->kind) {

@@ -143,6 +143,11 @@ int main(void)
         {"unknown strategy", SCENES "plain_quad.obj -o " OUT " --integrator ic --strategy xyz", 2, "xyz"},
         {"cache option without ic", SCENES "plain_quad.obj -o " OUT " --accuracy 0.2", 2, "--integrator ic"},
         {"unknown output format", SCENES "plain_quad.obj -o " IC_TEST_TMP "/x.bmp", 2, "x.bmp"},
+        /* an empty path is said to be one (it was "unknown image format"); so is an empty name or file */
+        {"empty output path", SCENES "plain_quad.obj -o ''", 2, "--output '': the output path is empty"},
+        {"empty output path after =", SCENES "plain_quad.obj --output=", 2, "--output '': the output path is empty"},
+        {"empty --view", SCENES "plain_quad.obj -o " OUT " --view ''", 2, "--view '': the value is empty"},
+        {"empty --stats", SCENES "plain_quad.obj -o " OUT " --stats=", 2, "--stats '': the value is empty"},
         {"unwritable output", SCENES "plain_quad.obj -o " IC_TEST_TMP "/no/such/dir/x.exr", 2, "no/such/dir/x.exr"},
         {"no output", SCENES "plain_quad.obj", 2, "-o"},
     };

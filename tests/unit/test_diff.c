@@ -297,6 +297,13 @@ int main(void)
     const char *bad_blotch_format[] = {off, ref, "--blotch-map", SCRATCH "/blotch.jpg"};
     CHECK(run_diff(4, bad_blotch_format) == 2 && one_line(err_text) && strstr(err_text, "blotch.jpg"),
           "blotch-map format: %s", err_text);
+    /* an empty path is said to be one, not an unknown format */
+    const char *empty_heat[] = {off, ref, "--heatmap", ""}, *empty_blotch[] = {off, ref, "--blotch-map="};
+    CHECK(run_diff(4, empty_heat) == 2 && one_line(err_text) && strstr(err_text, "--heatmap '': the output path is empty"),
+          "empty heat-map path: %s", err_text);
+    CHECK(run_diff(3, empty_blotch) == 2 && one_line(err_text) &&
+              strstr(err_text, "--blotch-map '': the output path is empty"),
+          "empty blotch-map path: %s", err_text);
     const char *bad_blotch_max[] = {off, ref, "--blotch-map", blotch, "--blotch-max-error", "0"};
     CHECK(run_diff(6, bad_blotch_max) == 2 && one_line(err_text) && strstr(err_text, "--blotch-max-error 0"),
           "a blotch scale of 0: %s", err_text);
