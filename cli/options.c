@@ -79,6 +79,43 @@ const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id)
     return names[id];
 }
 
+/* The size suffixes, in order: each multiplies by 2^10 more than the one before. */
+static const char size_suffix[] = "KMGT";
+
+int ic_cli_parse_size(const char *text, uint64_t *out)
+{
+    if (!isdigit((unsigned char)text[0]))
+        return 0;
+    char *end = NULL;
+    errno = 0;
+    unsigned long long u = strtoull(text, &end, 10);
+    if (errno)
+        return 0;
+    if (*end) {
+        const char *s = strchr(size_suffix, toupper((unsigned char)*end));
+        int shift = s && *s ? 10 * (int)(s - size_suffix + 1) : 0;
+        if (!shift || end[1] || u > (~0ull >> shift))
+            return 0;
+        u <<= shift;
+    }
+    *out = (uint64_t)u;
+    return 1;
+}
+
+void ic_cli_size_suffixes(double max, char *buf, size_t size)
+{
+    int n = 1; /* K always: every limit is above 2^10 */
+    while (n < (int)sizeof size_suffix - 1 && ldexp(1.0, 10 * (n + 1)) <= max)
+        ++n;
+    char names[32] = "", powers[64] = "";
+    for (int k = 0; k < n; ++k) {
+        const char *sep = k == 0 ? "" : k == n - 1 ? " or " : ", ";
+        snprintf(names + strlen(names), sizeof names - strlen(names), "%s%c", sep, size_suffix[k]);
+        snprintf(powers + strlen(powers), sizeof powers - strlen(powers), "%s2^%d", sep, 10 * (k + 1));
+    }
+    snprintf(buf, size, "%s (either case): times %s", names, powers);
+}
+
 /* Stores one option's value. Returns 0 or 2 (usage error printed). */
 static int store(ic_cli_args *a, const opt_def *o, const char *val)
 {
@@ -120,19 +157,19 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
         }
         return 0;
     }
-    case IC_OPT_BYTES: {
-        unsigned long long u = strtoull(val, &end, 10);
-        int shift = 0;
-        if (end != val && *end && !end[1])
-            shift = *end == 'K' || *end == 'k' ? 10 : *end == 'M' ? 20 : *end == 'G' ? 30 : *end == 'T' ? 40 : -1;
-        if (shift > 0 && u <= (~0ull >> shift)) {
-            u <<= shift;
-            ++end;
+    case IC_OPT_SIZE:
+    case IC_OPT_SIZE_INT: {
+        uint64_t u = 0;
+        if (!ic_cli_parse_size(val, &u) || (double)u < o->min_value || (double)u > o->max_value) {
+            char suffixes[160];
+            ic_cli_size_suffixes(o->max_value, suffixes, sizeof suffixes);
+            return ERR("%s %s: expected a whole number from %.0f to %.0f; it may end in %s", o->name, val,
+                       o->min_value, o->max_value, suffixes);
         }
-        if (errno || !isdigit((unsigned char)val[0]) || *end || (double)u < o->min_value || (double)u > o->max_value)
-            return ERR("%s %s: expected a size in bytes from %.0f to %.0f (K, M, G, T: times 2^10, 2^20, 2^30, "
-                       "2^40)", o->name, val, o->min_value, o->max_value);
-        *(uint64_t *)field = (uint64_t)u;
+        if (o->kind == IC_OPT_SIZE)
+            *(uint64_t *)field = u;
+        else
+            *(int *)field = (int)u;
         return 0;
     }
     case IC_OPT_FLOAT:
@@ -376,13 +413,25 @@ static void option_left(const opt_def *o, char *buf, size_t size, const char *qu
              takes_value(o->kind) ? " " : "", takes_value(o->kind) ? o->value_name : "", quote, "");
 }
 
+/* An option's help as --help and the README give it: its text, and for a size or count its suffixes. */
+static void help_text(const opt_def *o, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s", o->help);
+    if (o->kind == IC_OPT_SIZE || o->kind == IC_OPT_SIZE_INT) {
+        char suffixes[160];
+        ic_cli_size_suffixes(o->max_value, suffixes, sizeof suffixes);
+        snprintf(buf + strlen(buf), size - strlen(buf), "; %s may end in %s", o->value_name, suffixes);
+    }
+}
+
 void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width)
 {
     const opt_def *o = &options[id];
-    char left[96], text[1024], def[96];
+    char left[96], help[2048], text[2400], def[96];
     option_left(o, left, sizeof left, "");
     default_string(o, def, sizeof def);
-    snprintf(text, sizeof text, "%s%s%s%s%s", scope_prefix(o->scope), o->help, def[0] ? " [default: " : "", def,
+    help_text(o, help, sizeof help);
+    snprintf(text, sizeof text, "%s%s%s%s%s", scope_prefix(o->scope), help, def[0] ? " [default: " : "", def,
              def[0] ? "]" : "");
     int at = fprintf(f, "  %-*s", left_width - 2, left);
     if (2 + (int)strlen(left) >= left_width) { /* no room for a space before the help: it starts below */
@@ -431,9 +480,10 @@ static void markdown_table(FILE *f, int ic)
         const opt_def *o = &options[i];
         if ((o->scope != IC_SCOPE_ALL) != ic || o->kind == IC_OPT_HELP)
             continue;
-        char left[96], def[96];
+        char left[96], def[96], help[2048];
         option_left(o, left, sizeof left, "`");
         default_string(o, def, sizeof def);
+        help_text(o, help, sizeof help);
         fputs("| ", f);
         md_cell(f, left);
         fputs(" | ", f);
@@ -442,7 +492,7 @@ static void markdown_table(FILE *f, int ic)
         const char *prefix = scope_prefix(o->scope);
         if (ic && strcmp(prefix, "ic: "))
             fprintf(f, "%.*s: ", (int)strlen(prefix) - 5, prefix + 3);
-        md_cell(f, o->help);
+        md_cell(f, help);
         fputs(" |\n", f);
     }
 }
@@ -492,9 +542,13 @@ static cJSON *setting(const ic_cli_args *a, int id)
         if (given)
             return ic_cli_json_u64(a->render.seed); /* the parsed value, exact ("007" is no JSON number) */
         break;
-    case IC_OPT_BYTES:
+    case IC_OPT_SIZE:
         if (given)
             return cJSON_CreateNumber((double)*(const uint64_t *)((const char *)a + o->offset)); /* "64M" parsed */
+        break;
+    case IC_OPT_SIZE_INT:
+        if (given)
+            return cJSON_CreateNumber(*(const int *)((const char *)a + o->offset));
         break;
     case IC_OPT_INT:
     case IC_OPT_FLOAT:

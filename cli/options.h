@@ -26,7 +26,9 @@
 typedef enum ic_opt_kind {
     IC_OPT_INT,        /* int */
     IC_OPT_SEED,       /* uint64_t; also sets render.has_seed */
-    IC_OPT_BYTES,      /* uint64_t, a size in bytes; K, M, G or T after the number multiply by 2^10 ... 2^40 */
+    IC_OPT_SIZE,       /* uint64_t, a size or count: a whole number, K, M, G or T after it (either case)
+                          multiplying by 2^10 ... 2^40 (ic_cli_parse_size; --help lists those up to max) */
+    IC_OPT_SIZE_INT,   /* int, the same */
     IC_OPT_FLOAT,      /* float */
     IC_OPT_DOUBLE,     /* double */
     IC_OPT_CHOICE,     /* an enum: the index of the value in "a|b|c" */
@@ -98,21 +100,19 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_ALL, "a glTF scene's camera to render from, by its node's or its own name (glTF files only)") \
     X(VIEW, "--view", NULL, IC_OPT_STRING, load.view, 0, 0, "FILE.vf", NAN, "a fitted camera", "", IC_SCOPE_ALL, \
       "a Radiance view file to render a .rad scene from (rview/rpict options -vt -vp -vd -vu -vh -vv -vs -vl -vo)") \
-    X(MAX_TEXTURE_PIXELS, "--max-texture-pixels", NULL, IC_OPT_INT, load.max_texture_pixels, 1, 1 << 28, "N", \
+    X(MAX_TEXTURE_PIXELS, "--max-texture-pixels", NULL, IC_OPT_SIZE_INT, load.max_texture_pixels, 1, 1 << 28, "N", \
       IC_DEFAULT_MAX_TEXTURE_PIXELS, "67108864 (8192 x 8192)", "px", IC_SCOPE_ALL, "largest texture or " \
       "environment map accepted, checked from the file's header before it is read (at most 2^28)") \
-    X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
+    X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_SIZE_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
       IC_DEFAULT_MAX_MESH_ELEMENTS, "16777216", "", IC_SCOPE_ALL, "largest vertex or face count of one mesh " \
       "file, checked from a PLY header or counted in an OBJ file before it is imported, and on the meshes imported (for a .rad scene: the " \
       "vertices of all its surfaces)") \
-    X(MAX_SCENE_BYTES, "--max-scene-bytes", NULL, IC_OPT_BYTES, load.max_scene_bytes, 1, 1099511627776.0, "N", \
-      IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest scene file (JSON, Mitsuba, Radiance) read, " \
-      "checked before it is read (a suffix K, M, G multiplies by 2^10, 2^20, 2^30; mesh files have " \
-      "--max-mesh-elements)") \
-    X(MAX_IMAGE_PIXELS, "--max-image-pixels", NULL, IC_OPT_BYTES, render.max_image_pixels, 1, 4294967296.0, "N", \
+    X(MAX_SCENE_BYTES, "--max-scene-bytes", NULL, IC_OPT_SIZE, load.max_scene_bytes, 1, 1099511627776.0, "N", \
+      IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest scene file (JSON, Mitsuba, " \
+      "Radiance) read, checked before it is read (mesh files have --max-mesh-elements)") \
+    X(MAX_IMAGE_PIXELS, "--max-image-pixels", NULL, IC_OPT_SIZE, render.max_image_pixels, 1, 4294967296.0, "N", \
       (double)IC_DEFAULT_MAX_IMAGE_PIXELS, "134217728 (16384 x 8192)", "px", IC_SCOPE_ALL, "largest image rendered " \
-      "(width x height), checked before anything is allocated for it; about 80 bytes a pixel (a suffix K, M, G " \
-      "multiplies by 2^10, 2^20, 2^30)") \
+      "(width x height), checked before anything is allocated for it; about 80 bytes a pixel") \
     X(ALLOW_OUTSIDE_PATHS, "--allow-outside-paths", NULL, IC_OPT_FLAG, load.allow_outside_paths, 0, 0, "", NAN, \
       "off", "", IC_SCOPE_ALL, "let a scene read files outside its own folder tree and the shared scenes folder " \
       "(meshes, MTL files, glTF buffers, textures, environment maps; symbolic links resolved)") \
@@ -229,10 +229,9 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(LOAD_CACHE, "--load-cache", NULL, IC_OPT_STRING, render.ic.load_cache, 0, 0, "FILE", NAN, "none", "", \
       IC_SCOPE_IC, "render from the records in FILE instead of building them; refused if made for another " \
       "scene or other gathering settings (another --seed, --spp or view is fine)") \
-    X(MAX_CACHE_BYTES, "--max-cache-bytes", NULL, IC_OPT_BYTES, render.ic.cache.max_file_bytes, 1, \
+    X(MAX_CACHE_BYTES, "--max-cache-bytes", NULL, IC_OPT_SIZE, render.ic.cache.max_file_bytes, 1, \
       1099511627776.0, "N", IC_DEFAULT_MAX_CACHE_FILE_BYTES, "4294967296 (4G)", "bytes", IC_SCOPE_IC, \
-      "largest --load-cache file read, checked before it is read (a suffix K, M, G multiplies by 2^10, 2^20, " \
-      "2^30)") \
+      "largest --load-cache file read, checked before it is read") \
     X(RECORDS_JSON, "--records-json", NULL, IC_OPT_STRING, records_json, 0, 0, "FILE", NAN, "none", "", \
       IC_SCOPE_IC, "write every record (position, radius, a, image position, visibility) as JSON") \
     X(AOV, "--aov", NULL, IC_OPT_LIST, aov, 0, 0, "indirect,glossy,records,density,amap", NAN, "none", "", \
@@ -281,6 +280,13 @@ void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width);
 /* --help and --help-markdown. */
 void ic_cli_print_help(FILE *f);
 void ic_cli_print_markdown(FILE *f);
+/* A size or count as the limits take it (IC_OPT_SIZE): a whole number, optionally followed by K, M, G or T
+ * in either case, which multiply by 2^10, 2^20, 2^30, 2^40 ("64k" = "64K" = 65536). 1 and *out, or 0 if
+ * it is not one or exceeds 2^64 - 1. */
+int ic_cli_parse_size(const char *text, uint64_t *out);
+/* The suffixes a size up to max may end in, for help and messages: "K, M or G (either case): times 2^10,
+ * 2^20 or 2^30" (those whose multiplier is at most max; ic_cli_parse_size takes all four). */
+void ic_cli_size_suffixes(double max, char *buf, size_t size);
 /* The settings of a run for the --stats JSON: every option but the outputs and the help, with its
  * value as given or else its default (a number, a name, true/false for a switch, null for none; a
  * default that depends on the scene is given as its text). */

@@ -45,6 +45,8 @@ static const ic_arg_id shared_ids[] = {IC_ARG_ACCURACY, IC_ARG_RAYS, IC_ARG_MAX_
 
 static void print_help(FILE *out)
 {
+    char suffixes[160];
+    ic_cli_size_suffixes(UINT32_MAX, suffixes, sizeof suffixes);
     fprintf(out,
             "usage: irrcache points SCENE --points FILE|- [options]\n"
             "       irrcache points SCENE --grid X0 Y0 Z0 X1 Y1 Z1 --spacing S [--map FILE.png] [options]\n"
@@ -82,11 +84,12 @@ static void print_help(FILE *out)
             "  --light-samples N  ic: samples per point for the direct light (emitters and sky), rounded\n"
             "                     up to a multiple of 16 (default: %d)\n"
             "  --max-points N     most points read from --points (default: %d); a line is at most %d bytes\n"
+            "                     (N may end in %s)\n"
             "  -h, --help         show this help\n"
             "options as for irrcache render (the sensor is the first scattering event; ic needs --max-depth 2\n"
             "or more):\n",
             IC_DEFAULT_GRID_HEIGHT, IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, DEFAULT_MAX_POINTS,
-            MAX_POINT_LINE);
+            MAX_POINT_LINE, suffixes);
     for (size_t k = 0; k < sizeof shared_ids / sizeof shared_ids[0]; ++k)
         ic_cli_print_option(out, shared_ids[k], 21);
     fprintf(out, "\nexit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n");
@@ -430,8 +433,15 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             if (shared < 0)
                 return EXIT_USAGE;
         } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-points", &missing)) != NULL) {
-            if (!parse_int("--max-points", value, 1, UINT32_MAX, &max_points))
+            uint64_t n = 0;
+            if (!ic_cli_parse_size(value, &n) || n < 1 || n > UINT32_MAX) {
+                char suffixes[160];
+                ic_cli_size_suffixes(UINT32_MAX, suffixes, sizeof suffixes);
+                fprintf(stderr, "irrcache points: --max-points %s: not a whole number in [1, %u]; it may end in %s\n",
+                        value, UINT32_MAX, suffixes);
                 return EXIT_USAGE;
+            }
+            max_points = (long long)n;
         } else if (!strcmp(arg, "--daylight-factor")) {
             daylight_factor = 1;
         } else if (!strcmp(arg, "--grid")) {

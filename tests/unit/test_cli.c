@@ -131,7 +131,7 @@ int main(void)
         {"image over the default limit", SCENES "plain_quad.obj -o " OUT " --width 65536 --height 65536", 1,
          "raise the limit with --max-image-pixels"},
         {"--max-scene-bytes of 0", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 0", 2,
-         "--max-scene-bytes 0: expected a size in bytes"},
+         "--max-scene-bytes 0: expected a whole number from 1 to"},
         {"--max-scene-bytes with an unknown suffix", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 64Q", 2,
          "--max-scene-bytes 64Q"},
         {"--max-cache-bytes without ic", SCENES "plain_quad.obj -o " OUT " --max-cache-bytes 1M", 2,

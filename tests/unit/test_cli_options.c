@@ -37,6 +37,31 @@ static int lines(const char *s)
     return n;
 }
 
+/* `render CORNELL -o ... ARGS` is a usage error: exit 2 and one line that says `says`. */
+static void usage_error(const char *args, const char *says)
+{
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_bad.exr %s", args);
+    int rc = run(cmd);
+    CHECK(rc == 2 && lines(err_text) == 1 && strstr(err_text, says), "%s: exit %d, '%s'", args, rc, err_text);
+}
+
+/* --help's text with its wrapping undone: each line break and the indent after it become one space. */
+static void unwrap(char *s)
+{
+    char *w = s;
+    for (const char *r = s; *r; ++r) {
+        if (*r == '\n') {
+            while (r[1] == ' ')
+                ++r;
+            *w++ = ' ';
+        } else {
+            *w++ = *r;
+        }
+    }
+    *w = 0;
+}
+
 static void readme_matches_table(void)
 {
     static char readme[1 << 18];
@@ -105,6 +130,58 @@ static void stdout_write_error(void)
     CHECK(run("--version") == 0 && !err_text[0] && !strncmp(out_text, "irrcache ", 9), "--version: '%s'", out_text);
 }
 
+/* Every limit that is a size or count takes K, M, G and T in either case (64k and 64m alike: 64M alone
+ * was refused in lower case), the stats echo the number it means, its range holds with a suffix too, and
+ * its help lists the suffixes that stay within its range. */
+static void size_suffixes(void)
+{
+    static const struct { const char *option, *key, *value; double means; } cases[] = {
+        {"--max-scene-bytes", "max_scene_bytes", "64m", 67108864.0},
+        {"--max-scene-bytes", "max_scene_bytes", "1t", 1099511627776.0},
+        {"--max-image-pixels", "max_image_pixels", "4k", 4096.0},
+        {"--max-image-pixels", "max_image_pixels", "4g", 4294967296.0},
+        {"--max-texture-pixels", "max_texture_pixels", "256m", 268435456.0},
+        {"--max-texture-pixels", "max_texture_pixels", "64K", 65536.0},
+        {"--max-mesh-elements", "max_mesh_elements", "1g", 1073741824.0},
+        {"--max-cache-bytes", "max_cache_bytes", "2G", 2147483648.0},
+        {"--max-cache-bytes", "max_cache_bytes", "3", 3.0},
+    };
+    static char js[1 << 15];
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char cmd[1024], key[96];
+        snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_sz.pfm --width 8 --height 8 --spp 1 -q "
+                 "--integrator ic --rays 16 --max-passes 1 %s %s --stats " TMP "_sz.json", cases[i].option,
+                 cases[i].value);
+        CHECK(run(cmd) == 0, "%s %s: %s", cases[i].option, cases[i].value, err_text);
+        test_read_text(TMP "_sz.json", js, sizeof js);
+        snprintf(key, sizeof key, "\"%s\":", cases[i].key);
+        const char *k = strstr(js, key);
+        CHECK(k && strtod(k + strlen(key), NULL) == cases[i].means, "%s %s means %.0f: %.60s", cases[i].option,
+              cases[i].value, cases[i].means, k ? k : "(missing)");
+    }
+    static const struct { const char *args, *says; } refused[] = {
+        {"--max-texture-pixels 1g", "--max-texture-pixels 1g: expected a whole number from 1 to 268435456; it may "
+                                    "end in K or M (either case)"},
+        {"--max-texture-pixels 257m", "--max-texture-pixels 257m"},
+        {"--max-image-pixels 5G", "--max-image-pixels 5G: expected a whole number from 1 to 4294967296; it may end "
+                                  "in K, M or G (either case)"},
+        {"--max-mesh-elements 2g", "--max-mesh-elements 2g"},
+        {"--max-scene-bytes 2t", "K, M, G or T (either case): times 2^10, 2^20, 2^30 or 2^40"},
+        {"--max-scene-bytes 16777216T", "--max-scene-bytes 16777216T"},
+        {"--max-scene-bytes 1.5m", "--max-scene-bytes 1.5m"},
+        {"--max-scene-bytes 64mb", "--max-scene-bytes 64mb"},
+        {"--max-scene-bytes m", "--max-scene-bytes m"},
+    };
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i)
+        usage_error(refused[i].args, refused[i].says);
+    CHECK(run("render --help") == 0, "--help");
+    unwrap(out_text);
+    const char *tex = strstr(out_text, "--max-texture-pixels N"), *bytes = strstr(out_text, "--max-scene-bytes N");
+    CHECK(tex && bytes && strstr(tex, "N may end in K or M (either case)") &&
+              strstr(bytes, "N may end in K, M, G or") && strstr(bytes, "T (either case)"),
+          "the help lists each limit's suffixes");
+}
+
 static void value_forms(void)
 {
     /* The same render with --name value, with --name=value, and with the scene after `--`: same stats. */
@@ -152,13 +229,8 @@ static void bad_values(void)
         {"--width ' 5'", "--width"},
         {"--frobnicate=3", "--frobnicate"},
     };
-    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
-        char cmd[1024];
-        snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_bad.exr %s", cases[i].args);
-        int rc = run(cmd);
-        CHECK(rc == 2 && lines(err_text) == 1 && strstr(err_text, cases[i].names), "%s: exit %d, '%s'",
-              cases[i].args, rc, err_text);
-    }
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i)
+        usage_error(cases[i].args, cases[i].names);
 }
 
 /* The stats JSON goes through cJSON's writer: a scene path with a quote, a backslash and non-ASCII
@@ -255,6 +327,7 @@ int main(void)
     readme_matches_table();
     help_layout();
     stdout_write_error();
+    size_suffixes();
     value_forms();
     bad_values();
     TEST_MAIN_END();

@@ -224,6 +224,13 @@ static void test_bad_files(void)
     CHECK(run(SCENE " --points " DIR "/three.txt --max-points 2", NULL) == 1 &&
               strstr(err_text, "three.txt:3: more than 2 points (--max-points)"),
           "--max-points 2 with three points: exit 1 naming the line: %s", err_text);
+    /* --max-points takes the suffixes of render's limits, either case, its range kept. */
+    CHECK(run(SCENE " --points " DIR "/three.txt --max-points 1k --rays 64 --integrator pt --samples 16", NULL) == 0,
+          "--max-points 1k: %s", err_text);
+    CHECK(run(SCENE " --points " DIR "/three.txt --max-points 4g", NULL) == 2 &&
+              strstr(err_text, "--max-points 4g: not a whole number in [1, 4294967295]") &&
+              strstr(err_text, "K, M or G (either case)") && test_line_count(err_text) == 1,
+          "--max-points 4g (2^32) is over its range: %s", err_text);
     /* The scene-loading limits of render, named by this command. */
     CHECK(run(SCENE " --points " DIR "/three.txt --max-scene-bytes 10", NULL) == 1 &&
               strstr(err_text, "more than the limit of 10 bytes") && strstr(err_text, "--max-scene-bytes"),
