@@ -535,9 +535,14 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     } else if (st.cut_by_time)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
                         "(%d passes) before it converged; give more time for a converged cache\n", st.passes);
+    else if (st.cut_short && opt.ic.strategy == IC_STRATEGY_BATCH)
+        /* The limit counts the passes after pass 0 (the geometry's candidates); the stats' passes count it too. */
+        fprintf(stderr, "irrcache render: warning: cache construction stopped at its pass limit, --max-passes %d "
+                        "(after the geometry pass 0: %d passes in the stats), before it converged; raise "
+                        "--max-passes\n", opt.ic.max_passes > 0 ? opt.ic.max_passes : IC_DEFAULT_MAX_PASSES, st.passes);
     else if (st.cut_short)
-        fprintf(stderr, "irrcache render: warning: cache construction stopped at its pass limit (%d passes) before "
-                        "it converged; with --strategy batch raise --max-passes\n", st.passes);
+        fprintf(stderr, "irrcache render: warning: cache construction stopped at its bound of %d passes before it "
+                        "converged\n", st.passes);
     if (a.stats_path && !write_stats(a.stats_path, &a, w, h, &st, per_rank))
         FAILED("--stats", a.stats_path);
     free(per_rank);

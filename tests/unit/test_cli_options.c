@@ -305,6 +305,19 @@ static void cut_short(void)
     CHECK(strstr(js, "\"cut_short\":\ttrue") && strstr(err_text, "warning") && strstr(err_text, "--max-passes") &&
               lines(err_text) == 1,
           "one pass is cut short and says so: '%s'", err_text);
+    /* The warning names the limit as given, and the passes as the stats count them: pass 0 (the geometry's
+     * candidates) and the one pass after it; records_per_pass has one entry a pass. It said "(2 passes)" as
+     * the limit. */
+    const char *p = strstr(js, "\"passes\":"), *per = strstr(js, "\"records_per_pass\":");
+    const char *open = per ? strchr(per, '[') : NULL, *close = open ? strchr(open, ']') : NULL;
+    int passes = p ? atoi(p + strlen("\"passes\":")) : -1, entries = close ? 1 : -1; /* a number, then one a ',' */
+    for (const char *q = open; close && q < close; ++q)
+        entries += *q == ',';
+    char want[160];
+    snprintf(want, sizeof want, "stopped at its pass limit, --max-passes 1 (after the geometry pass 0: %d passes in "
+             "the stats)", passes);
+    CHECK(passes == 2 && entries == passes && strstr(err_text, want), "stats passes %d (%d entries), warning '%s'",
+          passes, entries, err_text);
     snprintf(cmd, sizeof cmd, "%s --max-passes 100 --min-candidates 1000000", base);
     CHECK(run(cmd) == 0, "render that converges: %s", err_text);
     test_read_text(TMP "_cs.json", js, sizeof js);
