@@ -385,6 +385,9 @@ int ic_cli_parse_shared_option(int argc, char **argv, int *i, ic_cli_args *a, co
     return 1;
 }
 
+/* A space that wrap() prints but does not break a line at: a range ("[1, 65536]") stays on one line. */
+#define GLUE '\x01'
+
 /* Writes text from column `indent` on, wrapped at IC_CLI_HELP_COLUMNS; `at` is the current column. */
 static void wrap(FILE *f, const char *text, int indent, int at)
 {
@@ -398,7 +401,8 @@ static void wrap(FILE *f, const char *text, int indent, int at)
             fputc(' ', f);
             ++at;
         }
-        fwrite(p, 1, word, f);
+        for (size_t k = 0; k < word; ++k)
+            fputc(p[k] == GLUE ? ' ' : p[k], f);
         at += (int)word;
         p += word;
         while (*p == ' ')
@@ -411,6 +415,51 @@ static void option_left(const opt_def *o, char *buf, size_t size, const char *qu
 {
     snprintf(buf, size, "%s%s%s%s%s%s%s%s", quote, o->alias ? o->alias : "", o->alias ? ", " : "", o->name,
              takes_value(o->kind) ? " " : "", takes_value(o->kind) ? o->value_name : "", quote, "");
+}
+
+/* One end of a range as --help writes it: a whole number in full up to 10 digits, beyond that a power of two
+ * as 2^N (the uint64 seed's 2^64 as 2^64 - 1, the largest it takes); other numbers as %g without the
+ * exponent's padding (1e6, 1e-30). */
+static void range_end(double v, int whole, char *buf, size_t size)
+{
+    int e = 0;
+    if (whole && fabs(v) >= 1e10 && frexp(v, &e) == 0.5)
+        snprintf(buf, size, "2^%d%s", e - 1, e - 1 == 64 ? " - 1" : ""); /* uint64's 2^64 - 1 rounds to 2^64 */
+    else if (whole)
+        snprintf(buf, size, "%.0f", v);
+    else {
+        char raw[32], *x;
+        snprintf(raw, sizeof raw, "%g", v);
+        if ((x = strchr(raw, 'e')) != NULL) { /* "1e+06" → "1e6", "1e-06" → "1e-6" */
+            char *d = x + 1, *r = x + 1;
+            if (*r == '+')
+                ++r;
+            else if (*r == '-')
+                *d++ = *r++;
+            while (*r == '0' && r[1])
+                ++r;
+            memmove(d, r, strlen(r) + 1);
+        }
+        snprintf(buf, size, "%s", raw);
+    }
+}
+
+/* A number option's declared range as --help and the README show it: "[1, 65536]", "(0, 1]" where the
+ * lower end is excluded (a number or off); "" for an option that takes no number. `space` follows the
+ * comma and in "2^64 - 1" (GLUE for wrap()). */
+static void range_text(const opt_def *o, char space, char *buf, size_t size)
+{
+    char lo[32], hi[32];
+    int whole = o->kind == IC_OPT_INT || o->kind == IC_OPT_SEED || o->kind == IC_OPT_SIZE ||
+                o->kind == IC_OPT_SIZE_INT || o->kind == IC_OPT_RAYS;
+    buf[0] = 0;
+    if (!whole && o->kind != IC_OPT_FLOAT && o->kind != IC_OPT_DOUBLE && o->kind != IC_OPT_NUMBER_OFF)
+        return;
+    range_end(o->min_value, whole, lo, sizeof lo);
+    range_end(o->max_value, whole, hi, sizeof hi);
+    snprintf(buf, size, "%c%s, %s]", o->kind == IC_OPT_NUMBER_OFF ? '(' : '[', lo, hi);
+    for (char *p = buf; *p; ++p)
+        *p = *p == ' ' ? space : *p;
 }
 
 /* An option's help as --help and the README give it: its text, and for a size or count its suffixes. */
@@ -427,12 +476,13 @@ static void help_text(const opt_def *o, char *buf, size_t size)
 void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width)
 {
     const opt_def *o = &options[id];
-    char left[96], help[2048], text[2400], def[96];
+    char left[96], help[2048], text[2400], def[96], range[80];
     option_left(o, left, sizeof left, "");
     default_string(o, def, sizeof def);
     help_text(o, help, sizeof help);
-    snprintf(text, sizeof text, "%s%s%s%s%s", scope_prefix(o->scope), help, def[0] ? " [default: " : "", def,
-             def[0] ? "]" : "");
+    range_text(o, GLUE, range, sizeof range);
+    snprintf(text, sizeof text, "%s%s%s%s%s%s%s", scope_prefix(o->scope), help, range[0] ? " " : "", range,
+             def[0] ? " [default: " : "", def, def[0] ? "]" : "");
     int at = fprintf(f, "  %-*s", left_width - 2, left);
     if (2 + (int)strlen(left) >= left_width) { /* no room for a space before the help: it starts below */
         fputc('\n', f);
@@ -475,17 +525,20 @@ static void md_cell(FILE *f, const char *text)
 
 static void markdown_table(FILE *f, int ic)
 {
-    fprintf(f, "| option | default | meaning |\n|---|---|---|\n");
+    fprintf(f, "| option | range | default | meaning |\n|---|---|---|---|\n");
     for (int i = 0; i < IC_ARG_COUNT; ++i) {
         const opt_def *o = &options[i];
         if ((o->scope != IC_SCOPE_ALL) != ic || o->kind == IC_OPT_HELP)
             continue;
-        char left[96], def[96], help[2048];
+        char left[96], def[96], help[2048], range[80];
         option_left(o, left, sizeof left, "`");
         default_string(o, def, sizeof def);
         help_text(o, help, sizeof help);
+        range_text(o, ' ', range, sizeof range);
         fputs("| ", f);
         md_cell(f, left);
+        fputs(" | ", f);
+        md_cell(f, range);
         fputs(" | ", f);
         md_cell(f, def);
         fputs(" | ", f);

@@ -3,11 +3,13 @@
  *
  * IC_RENDER_OPTIONS is an X-macro: one row per option, from which come the parser (--name VALUE,
  * --name=VALUE, the alias, `--` ends the options), the range checks, --help (wrapped within 100
- * columns), the README's tables (--help-markdown) and the settings echoed in the --stats JSON. A
+ * columns; a number's range as the checks use it), the README's tables (--help-markdown) and the
+ * settings echoed in the --stats JSON. A
  * numeric default is the constant of irrcache/defaults.h that the library itself falls back to, so
  * the help cannot disagree with what is rendered.
  *
- * Row: X(ID, "--name", "alias" or NULL, kind, member of ic_cli_args, min, max, "VALUE" (for a choice:
+ * Row: X(ID, "--name", "alias" or NULL, kind, member of ic_cli_args, min, max (a number's range, which
+ *        the parser checks and --help shows; 0, 0 for the other kinds), "VALUE" (for a choice:
  *        "a|b|c", in the order of the enum it sets), numeric default or NAN, "default text" ("%g" takes
  *        the numeric default), "unit", scope, "help")
  */
@@ -77,8 +79,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "scene file, else %g", "", IC_SCOPE_ALL, "maximum number of scattering events (direct light is 1)") \
     X(THREADS, "--threads", NULL, IC_OPT_INT, render.threads, 0, 4096, "N", NAN, "0 (all cores)", "", IC_SCOPE_ALL, \
       "worker threads; the image does not depend on it: same seed, same image") \
-    X(SEED, "--seed", NULL, IC_OPT_SEED, render.seed, 0, 1.8e19, "N", IC_DEFAULT_SEED, "scene file, else %g", "", \
-      IC_SCOPE_ALL, "random seed") \
+    X(SEED, "--seed", NULL, IC_OPT_SEED, render.seed, 0, 18446744073709551615.0, "N", IC_DEFAULT_SEED, \
+      "scene file, else %g", "", IC_SCOPE_ALL, "random seed") \
     X(SAMPLER, "--sampler", NULL, IC_OPT_CHOICE, render.sampler, 0, 0, "sobol|random", NAN, "sobol", "", \
       IC_SCOPE_ALL, "where each pixel's sample pairs (position, light, BSDF) come from: Owen-scrambled Sobol' " \
       "points per pixel (less noise at equal samples) or independent random numbers") \
@@ -102,7 +104,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "a Radiance view file to render a .rad scene from (rview/rpict options -vt -vp -vd -vu -vh -vv -vs -vl -vo)") \
     X(MAX_TEXTURE_PIXELS, "--max-texture-pixels", NULL, IC_OPT_SIZE_INT, load.max_texture_pixels, 1, 1 << 28, "N", \
       IC_DEFAULT_MAX_TEXTURE_PIXELS, "67108864 (8192 x 8192)", "px", IC_SCOPE_ALL, "largest texture or " \
-      "environment map accepted, checked from the file's header before it is read (at most 2^28)") \
+      "environment map accepted, checked from the file's header before it is read") \
     X(MAX_MESH_ELEMENTS, "--max-mesh-elements", NULL, IC_OPT_SIZE_INT, load.max_mesh_elements, 1, 1 << 30, "N", \
       IC_DEFAULT_MAX_MESH_ELEMENTS, "16777216", "", IC_SCOPE_ALL, "largest vertex or face count of one mesh " \
       "file, checked from a PLY header or counted in an OBJ file before it is imported, and on the meshes imported (for a .rad scene: the " \

@@ -83,8 +83,8 @@ static void print_help(FILE *out)
             "  --samples N        pt: paths per point, rounded up to a multiple of 16 (default: %d)\n"
             "  --light-samples N  ic: samples per point for the direct light (emitters and sky), rounded\n"
             "                     up to a multiple of 16 (default: %d)\n"
-            "  --max-points N     most points read from --points (default: %d); a line is at most %d bytes\n"
-            "                     (N may end in %s)\n"
+            "  --max-points N     most points read from --points (default: %d); a line is at most\n"
+            "                     %d bytes (N may end in %s)\n"
             "  -h, --help         show this help\n"
             "options as for irrcache render (the sensor is the first scattering event; ic needs --max-depth 2\n"
             "or more):\n",

@@ -182,6 +182,52 @@ static void size_suffixes(void)
           "the help lists each limit's suffixes");
 }
 
+/* A number option's help shows its range, the one the parser checks: each option's range error gives
+ * "from A to B", and its help line (before its default) "[A, B]"; "(A, B]" where A itself is refused (a
+ * number or off). A range is never broken across lines, and the README's tables have it in a column. */
+static void help_ranges(void)
+{
+    static const struct { const char *option, *too_big; } checked[] = {
+        {"--width", "70000"}, {"--spp", "99999999"}, {"--threads", "5000"}, {"--max-depth", "5000"},
+        {"--exposure", "200"}, {"--accuracy", "101"}, {"--hsh-order", "17"}, {"--record-sets", "65"},
+        {"--max-passes", "1001"}, {"--min-candidates", "2000000000"}, {"--final-accuracy-scale", "101"},
+        {"--max-texture-pixels", "1G"}, {"--weber", "2"},
+    };
+    static char help[1 << 17];
+    CHECK(run("render --help") == 0, "--help");
+    unwrap(out_text);
+    snprintf(help, sizeof help, "%s", out_text);
+    for (size_t i = 0; i < sizeof checked / sizeof checked[0]; ++i) {
+        char cmd[1024], lo[32] = "", hi[32] = "", want[96];
+        snprintf(cmd, sizeof cmd, "render " CORNELL " -o " TMP "_r.exr --integrator ic %s %s", checked[i].option,
+                 checked[i].too_big);
+        CHECK(run(cmd) == 2, "%s %s refused", checked[i].option, checked[i].too_big);
+        const char *from = strstr(err_text, " from ");
+        CHECK(from && sscanf(from, " from %31s to %31[^;\n]", lo, hi) == 2, "%s: a range in '%s'", checked[i].option,
+              err_text);
+        snprintf(want, sizeof want, "[%s, %s] [default:", lo, hi);
+        snprintf(cmd, sizeof cmd, " %s ", checked[i].option);
+        const char *line = strstr(help, cmd), *def = line ? strstr(line, "[default:") : NULL,
+                   *range = line ? strstr(line, want) : NULL;
+        CHECK(range && range + strlen(want) - strlen("[default:") == def, "%s's help shows %s: %.300s",
+              checked[i].option, want, line ? line : "(missing)");
+    }
+    static const char *const shown[] = {"random seed [0, 2^64 - 1] [default:", "[1, 2^40] [default: 67108864 (64M)]",
+                                        "--radiance-max-exponent E ", "[0.001, 1e6] [default: 30]",
+                                        "[1e-6, 1] [default: 0.001]", "[1e-30, 1e30] [default: scene diagonal / 8]"};
+    for (size_t i = 0; i < sizeof shown / sizeof shown[0]; ++i)
+        CHECK(strstr(help, shown[i]), "--help shows '%s'", shown[i]);
+    const char *pg = strstr(help, " --pass-growth F|off ");
+    CHECK(pg && strstr(pg, "(0, 1] [default: 0.") && strstr(pg, "(0, 1]") < strstr(pg, "[default:"),
+          "--pass-growth's range excludes 0: %.200s", pg ? pg : "(missing)");
+    CHECK(run("points --help") == 0 && strstr(out_text, "\n                     [0, 4096] [default: 0 (all cores)]"),
+          "a range is wrapped whole (points --help, --threads): %s", out_text);
+    CHECK(run("render --help-markdown") == 0 && strstr(out_text, "| option | range | default | meaning |") &&
+              strstr(out_text, "| `--width N` | [1, 65536] | scene file, else 512 | image width |") &&
+              strstr(out_text, "| `--strategy batch\\|lazy\\|adaptive` |  | batch |"),
+          "the README's tables have a range column, empty for an option without a number");
+}
+
 static void value_forms(void)
 {
     /* The same render with --name value, with --name=value, and with the scene after `--`: same stats. */
@@ -341,6 +387,7 @@ int main(void)
     help_layout();
     stdout_write_error();
     size_suffixes();
+    help_ranges();
     value_forms();
     bad_values();
     TEST_MAIN_END();

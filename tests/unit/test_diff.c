@@ -299,7 +299,8 @@ int main(void)
           "blotch-map format: %s", err_text);
     /* an empty path is said to be one, not an unknown format */
     const char *empty_heat[] = {off, ref, "--heatmap", ""}, *empty_blotch[] = {off, ref, "--blotch-map="};
-    CHECK(run_diff(4, empty_heat) == 2 && one_line(err_text) && strstr(err_text, "--heatmap '': the output path is empty"),
+    CHECK(run_diff(4, empty_heat) == 2 && one_line(err_text) &&
+              strstr(err_text, "--heatmap '': the output path is empty"),
           "empty heat-map path: %s", err_text);
     CHECK(run_diff(3, empty_blotch) == 2 && one_line(err_text) &&
               strstr(err_text, "--blotch-map '': the output path is empty"),
