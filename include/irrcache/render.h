@@ -83,7 +83,8 @@ typedef struct ic_switched_value {
 typedef enum ic_error_metric {
     IC_ERROR_SPLIT_SPHERE = 0, /* Ward's split sphere: R from the harmonic mean of the hit distances */
     IC_ERROR_HESSIAN = 1       /* the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error
-                                  ½dᵀHd reaches accuracy × E at the edge a·R */
+                                  ½dᵀHd reaches ε × E at the edge a·R, ε the accuracy a (0.15·a under the
+                                  Tabellion–Lamorlette weight) */
 } ic_error_metric;
 
 /* The shape of a record's extent under the Hessian metric. */

@@ -568,7 +568,9 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
         r = ic_parallel_for(threads, items, gather_item, &j);
         if (r != IC_OK)
             ic_error_set(err, r, "could not start %d gathering threads", threads);
-        else if ((r = (ic_result)atomic_load(&j.status)) != IC_OK)
+        else if ((r = (ic_result)atomic_load(&j.status)) == IC_ERR_OOM)
+            ic_error_set(err, r, "out of memory keeping a record's rays for its Hessian");
+        else if (r != IC_OK)
             ic_error_set(err, r, "gathering a record failed (%s): a shading point with a zero normal or a "
                          "non-finite position", ic_result_name(r));
     }
@@ -731,7 +733,7 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
                                   : c->scene_diag;
     if (c->o.error == IC_ERROR_HESSIAN && gr->has_hessian) {
         /* Schwarzhaupt et al. 2012: first-order extrapolation errs by ½dᵀHd; the record reaches as far
-         * as that stays below accuracy × E: a round record to the smaller semi-axis, an elliptical one
+         * as that stays below ε × E (ic_ic_hessian_error_target): a round record to the smaller semi-axis, an elliptical one
          * to both (its aspect bounded by IC_MAX_ELLIPSE_ASPECT, so a nearly flat direction does not
          * stretch it across the scene). The weights accept |p − p_i|_i < a·R_i, so R_i is the (major)
          * extent over a; the cache's clamps then apply as to the split sphere's R. */

@@ -114,9 +114,6 @@ typedef struct phase_times {
  * primary hit's distance. Returns 0 if the ray escapes or is absorbed. */
 int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf *b, ic_vec3 *wo, float *t_primary,
                         uint64_t *rays);
-/* What one gathering thread's trace callback needs: the context and, with c->levels, the sums over
- * the current point's rays of their radiance split by bounce level (cumulative: sum[k] holds light of at
- * most k bounces after the record, sum[levels] all of it). The caller zeroes sum before each point. */
 /* A record's rays kept for a second pass of the gatherer's arithmetic (gather_set): each ray's hit distance and
  * the light the balance heuristic removed from its hit on a cached emitter, in the order traced. */
 typedef struct ic_gather_replay {
@@ -126,6 +123,9 @@ typedef struct ic_gather_replay {
     ic_vec3 *removed;
 } ic_gather_replay;
 
+/* What one gathering thread's trace callback needs: the context and, with c->levels, the sums over
+ * the current point's rays of their radiance split by bounce level (cumulative: sum[k] holds light of at
+ * most k bounces after the record, sum[levels] all of it). The caller zeroes sum before each point. */
 typedef struct ic_gather_worker {
     ic_ctx *c;
     ic_vec3 sum[IC_LEVELS_MAX + 1];
@@ -178,10 +178,10 @@ ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_
  * without levels. */
 ic_result ic_ic_levels_to_payloads(ic_ctx *c, ic_error *err);
 ic_result ic_ic_levels_from_payloads(ic_ctx *c, ic_error *err);
-/* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
 /* The second-order error a Hessian extent allows, relative to E (Schwarzhaupt et al. 2012), for the cache's
  * weight and accuracy. */
 float ic_ic_hessian_error_target(const ic_cache_params *p);
+/* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
 /* Gather point (offset origin, normal, key) of a candidate. */
 ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);
