@@ -8,13 +8,16 @@
 #   bash tests/golden/golden.sh IRRCACHE_BINARY --record   rewrite tests/golden/hashes.txt
 #
 # The hashes are those of one machine and compiler (floating point is not the same everywhere), so
-# this is a tool for a refactor, run before and after, and not part of the test suite.
+# this is a tool for a refactor, run before and after, and not part of the test suite. The scenes are
+# named by a path relative to the work folder (a link to the checkout's scenes), so that the stats and
+# EXR headers, which record the scene's path, are the same wherever the checkout lies.
 set -euo pipefail
 bin=$(realpath "$1"); mode=${2:-print}
 root=$(cd "$(dirname "$0")/../.." && pwd)
-scene=$root/scenes/cornell-box/cornell-box.json
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
+ln -s "$root/scenes" scenes
+scene=scenes/cornell-box/cornell-box.json
 r() { # name, args...
   local name=$1; shift
   "$bin" render "$scene" --width 48 --height 48 --threads 2 --quiet -o "$name.exr" --stats "$name.json" "$@"
@@ -31,7 +34,7 @@ r save --integrator ic --spp 4 --rays 256 --save-cache c.irc
 r load --integrator ic --spp 4 --rays 256 --load-cache c.irc --seed 7
 r emitters --integrator ic --spp 4 --rays 256 --large-emitters off --max-depth 3
 # Large emitters the records carry (staircase2's windows; its meshes are in ../shared/scenes).
-"$bin" render "$root/scenes/staircase2.json" --width 64 --height 36 --spp 4 --integrator ic --rays 128 --threads 2 \
+"$bin" render scenes/staircase2.json --width 64 --height 36 --spp 4 --integrator ic --rays 128 --threads 2 \
   --quiet -o staircase.exr --stats staircase.json
 for f in *.json; do
   python3 - "$f" <<'PY'
@@ -62,7 +65,7 @@ for name, fill in ((b"seconds", b"0"), (b"version", b"x")):
 open(p, "wb").write(b)
 PY
 done
-sha256sum $(ls | sort) > "$work/hashes.txt.new"
+sha256sum $(find . -maxdepth 1 -type f -printf "%f\n" | LC_ALL=C sort) > "$work/hashes.txt.new"
 mv "$work/hashes.txt.new" "$work/HASHES"
 case $mode in
   print) cat HASHES ;;
