@@ -1,14 +1,15 @@
 /*
  * mesh_import.c — mesh files (OBJ+MTL, glTF 2.0 / .glb, PLY, anything assimp reads) into the scene.
  *
- * assimp triangulates and joins identical vertices; we walk its node hierarchy ourselves and append each
- * placement of a mesh (a mesh in two nodes is placed twice) to the world-space triangle soup under its
- * node's transform composed with its ancestors' and the scene's. A placement that mirrors (a negative
- * determinant, e.g. a glTF node scaled by -1 on one axis) has its winding swapped so that the front stays
- * the mirror image of the file's front; assimp's PreTransformVertices, which did this walk before, kept the
- * winding and turned such meshes inside out. Normals are not generated: a mesh without them is shaded flat
- * (a zero normal at a vertex means "use the geometric normal", see scene_query.c). Zero-area triangles are
- * dropped and counted: Embree would never hit them and they have no normal.
+ * assimp pre-transforms the node hierarchy (merging the meshes of one material and vertex format, each
+ * placed once per node that holds it), triangulates and joins identical vertices, so each file arrives as
+ * flat meshes in file space; we apply the scene's transform and append to the world-space triangle soup.
+ * PreTransformVertices keeps the winding of a mesh under a mirroring node (a negative determinant, e.g. a
+ * glTF node scaled by -1 on one axis), which would turn it inside out: we swap the winding of those
+ * placements in the merged meshes before the other steps run (collect_instances, flip_mirrored). Normals
+ * are not generated: a mesh without them is shaded flat (a zero normal at a vertex means "use the
+ * geometric normal", see scene_query.c). Zero-area triangles are dropped and counted: Embree would never
+ * hit them and they have no normal.
  *
  * Materials map to the renderer's four types (docs/scene-format.md, "Materials from mesh files"):
  * - OBJ/MTL (and other Phong-style formats): illum 4/6/7, or d < 1 with Ni > 1, is glass (ior Ni);
@@ -46,6 +47,7 @@
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/version.h>
 #include <cjson/cJSON.h>
 #include <zlib.h>
 
@@ -879,21 +881,28 @@ static void xform_tangent(const float m4[16], const float nm[9], const struct ai
     out[3] = v3_dot(v3_cross(n, t), bt) < 0.0f ? -1.0f : 1.0f;
 }
 
-/* One placement of a mesh: the mesh, its node's transform composed with its ancestors' (row-major, as
- * aiMatrix4x4 holds it) and the key the placements are emitted in. */
+/* One placement of a mesh in the file's node tree, and where assimp's PreTransformVertices puts it: that
+ * step merges the placements of one material and vertex format into one mesh, each one's faces and vertices
+ * after the previous one's, with its node's transform baked into its vertices but its winding kept. */
 typedef struct mesh_instance {
-    unsigned mesh;
-    unsigned material; /* the mesh's */
-    unsigned vformat;  /* which vertex attributes the mesh has (vertex_format) */
-    size_t order;      /* the placement's rank in the walk */
-    float node[16];
+    unsigned material;        /* the mesh's */
+    unsigned vformat;         /* which vertex attributes the mesh has (vertex_format) */
+    size_t order;             /* the placement's rank in the walk */
+    int mirrored;             /* its node's transform composed with its ancestors' has a negative determinant */
+    unsigned faces, vertices; /* the mesh's */
+    unsigned first[3];        /* the mesh's first face: its index count, first and last index */
+    unsigned merged;          /* the merged mesh it goes to (UINT_MAX: none) and where in it: */
+    unsigned face_offset, vertex_offset;
 } mesh_instance;
 
-/* The attributes a mesh has, as one number: normals, tangents, each texture coordinate set (and whether
- * it has three components) and each colour set; the order of these bits orders the placements. */
+/* The attributes a mesh has, as one number, as PreTransformVertices tells vertex formats apart: normals,
+ * tangents, each texture coordinate set (and whether it has three components) and each colour set, none
+ * without vertices; the merged meshes are in the order of these numbers within a material. */
 static unsigned vertex_format(const struct aiMesh *mesh)
 {
     unsigned f = 1;
+    if (mesh->mNumVertices == 0)
+        return f;
     if (mesh->mNormals)
         f |= 0x2;
     if (mesh->mTangents && mesh->mBitangents)
@@ -905,24 +914,18 @@ static unsigned vertex_format(const struct aiMesh *mesh)
     return f;
 }
 
-static void node_matrix(const struct aiMatrix4x4 *a, float m[16])
+/* Whether a node's own transform mirrors (a negative determinant). A placement mirrors when an odd number
+ * of the transforms from the root to its node do: the determinant of a product is the product of theirs. */
+static int node_mirrors(const struct aiMatrix4x4 *m)
 {
-    const float r[16] = {a->a1, a->a2, a->a3, a->a4, a->b1, a->b2, a->b3, a->b4,
-                         a->c1, a->c2, a->c3, a->c4, a->d1, a->d2, a->d3, a->d4};
-    memcpy(m, r, sizeof r);
-}
-
-static int is_identity(const float m[16])
-{
-    for (int k = 0; k < 16; ++k)
-        if (m[k] != (k % 5 == 0 ? 1.0f : 0.0f))
-            return 0;
-    return 1;
+    double det = m->a1 * ((double)m->b2 * m->c3 - (double)m->b3 * m->c2) -
+                 m->a2 * ((double)m->b1 * m->c3 - (double)m->b3 * m->c1) +
+                 m->a3 * ((double)m->b1 * m->c2 - (double)m->b2 * m->c1);
+    return det < 0.0;
 }
 
 /* Grouped by material, then by vertex format, in the walk's order within a group: the order in which
- * assimp's PreTransformVertices merged the meshes, so that the triangles (and with them the BVH and every
- * render) stay in the order they had. */
+ * PreTransformVertices merges the placements. */
 static int by_material(const void *pa, const void *pb)
 {
     const mesh_instance *a = pa, *b = pb;
@@ -934,14 +937,15 @@ static int by_material(const void *pa, const void *pb)
 }
 
 /* Every placement of a mesh in the node tree, depth first (a node's meshes, then its children in order),
- * each with its node's transform composed with its ancestors'; *out is malloc'ed. The walk keeps its own
- * stack: a file may nest its nodes deeper than the C stack would allow. */
+ * in the order PreTransformVertices merges them and with where it puts each; *merged: how many meshes it
+ * makes (a group of a material the file has, with faces and vertices, makes one). *out is malloc'ed. The
+ * walk keeps its own stack: a file may nest its nodes deeper than the C stack would allow. */
 static ic_result collect_instances(const struct aiScene *ai, const char *mesh_path, mesh_instance **out,
-                                   size_t *count, ic_error *err)
+                                   size_t *count, unsigned *merged, ic_error *err)
 {
     typedef struct {
         const struct aiNode *node;
-        float m[16];
+        int mirrored;
     } pending;
     pending *stack = NULL;
     mesh_instance *inst = NULL;
@@ -950,22 +954,28 @@ static ic_result collect_instances(const struct aiScene *ai, const char *mesh_pa
         if (!grow((void **)&stack, sizeof *stack, stack_cap = 16))
             goto oom;
         stack[depth].node = ai->mRootNode;
-        node_matrix(&ai->mRootNode->mTransformation, stack[depth++].m);
+        stack[depth++].mirrored = node_mirrors(&ai->mRootNode->mTransformation);
     }
     while (depth > 0) {
         pending top = stack[--depth];
         for (unsigned i = 0; i < top.node->mNumMeshes; ++i) {
-            unsigned mesh = top.node->mMeshes[i];
-            if (mesh >= ai->mNumMeshes)
+            if (top.node->mMeshes[i] >= ai->mNumMeshes)
                 continue;
+            const struct aiMesh *mesh = ai->mMeshes[top.node->mMeshes[i]];
             if (n == cap && !grow((void **)&inst, sizeof *inst, cap = cap ? 2 * cap : 16))
                 goto oom;
-            inst[n].mesh = mesh;
-            inst[n].material = ai->mMeshes[mesh]->mMaterialIndex;
-            inst[n].vformat = vertex_format(ai->mMeshes[mesh]);
-            inst[n].order = n;
-            memcpy(inst[n].node, top.m, sizeof top.m);
-            ++n;
+            mesh_instance *in = &inst[n];
+            memset(in, 0, sizeof *in);
+            in->material = mesh->mMaterialIndex;
+            in->vformat = vertex_format(mesh);
+            in->order = n++;
+            in->mirrored = top.mirrored;
+            in->faces = mesh->mNumFaces;
+            in->vertices = mesh->mNumVertices;
+            if (mesh->mNumFaces > 0 && (in->first[0] = mesh->mFaces[0].mNumIndices) > 0) {
+                in->first[1] = mesh->mFaces[0].mIndices[0];
+                in->first[2] = mesh->mFaces[0].mIndices[in->first[0] - 1];
+            }
         }
         if (depth + top.node->mNumChildren > stack_cap) {
             stack_cap = 2 * (depth + top.node->mNumChildren);
@@ -974,21 +984,28 @@ static ic_result collect_instances(const struct aiScene *ai, const char *mesh_pa
         }
         /* pushed last child first, so that the first child is walked next */
         for (unsigned i = top.node->mNumChildren; i-- > 0;) {
-            float local[16];
-            node_matrix(&top.node->mChildren[i]->mTransformation, local);
             stack[depth].node = top.node->mChildren[i];
-            if (is_identity(local))
-                memcpy(stack[depth].m, top.m, sizeof top.m);
-            else if (is_identity(top.m))
-                memcpy(stack[depth].m, local, sizeof local);
-            else
-                ic_mat4_mul(top.m, local, stack[depth].m);
-            ++depth;
+            stack[depth++].mirrored = top.mirrored ^ node_mirrors(&top.node->mChildren[i]->mTransformation);
         }
     }
     free(stack);
     if (n > 1)
         qsort(inst, n, sizeof *inst, by_material);
+    *merged = 0;
+    for (size_t k = 0, end; k < n; k = end) {
+        unsigned faces = 0, vertices = 0;
+        for (end = k; end < n && inst[end].material == inst[k].material && inst[end].vformat == inst[k].vformat;
+             ++end) {
+            inst[end].face_offset = faces;
+            inst[end].vertex_offset = vertices;
+            faces += inst[end].faces;
+            vertices += inst[end].vertices;
+        }
+        int kept = inst[k].material < ai->mNumMaterials && faces > 0 && vertices > 0;
+        for (size_t j = k; j < end; ++j)
+            inst[j].merged = kept ? *merged : UINT_MAX;
+        *merged += kept;
+    }
     *out = inst;
     *count = n;
     return IC_OK;
@@ -998,16 +1015,49 @@ oom:
     return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its node hierarchy", mesh_path);
 }
 
-/* Appends each placement of a mesh under its node's transform and then the scene's (xform; NULL: none). */
-static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const mesh_instance *inst, size_t count,
-                               const char *mesh_path, const float *xform, const char *xform_where,
-                               uint32_t material_base, int use_tangents, ic_error *err)
+/* After PreTransformVertices (and before Triangulate): swaps the winding of each mirrored placement's faces
+ * in the merged meshes (a polygon's corners after its first are reversed), so that the front of the placed
+ * mesh is the mirror image of the file's front, not its back. A merged mesh laid out otherwise than
+ * collect_instances says (another assimp) is an error rather than a mesh turned inside out. */
+static ic_result flip_mirrored(const struct aiScene *ai, const mesh_instance *inst, size_t count, unsigned merged,
+                               const char *mesh_path, ic_error *err)
+{
+    for (size_t k = 0; k < count; ++k) {
+        const mesh_instance *in = &inst[k];
+        if (!in->mirrored || in->merged == UINT_MAX || in->faces == 0)
+            continue;
+        const struct aiMesh *mesh = ai->mNumMeshes == merged ? ai->mMeshes[in->merged] : NULL;
+        /* the merged mesh's faces are assimp's to change: the step that made them has handed them over */
+        const struct aiFace *f = mesh && mesh->mMaterialIndex == in->material &&
+                                         (size_t)in->face_offset + in->faces <= mesh->mNumFaces
+                                     ? mesh->mFaces + in->face_offset
+                                     : NULL;
+        if (!f || f->mNumIndices != in->first[0] ||
+            (in->first[0] > 0 && (f->mIndices[0] != in->first[1] + in->vertex_offset ||
+                                  f->mIndices[in->first[0] - 1] != in->first[2] + in->vertex_offset)))
+            return ic_error_set(err, IC_ERR_UNSUPPORTED,
+                                "%s: assimp %u.%u merged its meshes otherwise than expected, so its mirroring nodes "
+                                "cannot keep their front side; apply the mirroring to the vertices in the file",
+                                mesh_path, aiGetVersionMajor(), aiGetVersionMinor());
+        for (unsigned j = 0; j < in->faces; ++j, ++f)
+            for (unsigned a = 1, z = f->mNumIndices ? f->mNumIndices - 1 : 0; a < z; ++a, --z) {
+                unsigned t = f->mIndices[a];
+                f->mIndices[a] = f->mIndices[z];
+                f->mIndices[z] = t;
+            }
+    }
+    return IC_OK;
+}
+
+static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
+                               const float m4[16], const char *xform_where, uint32_t material_base, int use_tangents,
+                               ic_error *err)
 {
     ic_scene *s = b->scene;
     size_t add_vertices = 0, add_faces = 0;
     int any_normals = 0, any_uvs = 0, any_tangents = 0;
-    for (size_t k = 0; k < count; ++k) {
-        const struct aiMesh *mesh = ai->mMeshes[inst[k].mesh];
+    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
+        const struct aiMesh *mesh = ai->mMeshes[i];
         add_vertices += mesh->mNumVertices;
         add_faces += mesh->mNumFaces;
         any_normals |= mesh->mNormals != NULL;
@@ -1033,19 +1083,12 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
         !grow((void **)&s->triangle_material, sizeof *s->triangle_material, s->triangle_count + add_faces))
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its geometry", mesh_path);
 
-    for (size_t k = 0; k < count; ++k) {
-        const struct aiMesh *mesh = ai->mMeshes[inst[k].mesh];
-        const float *node = inst[k].node;
-        float m4[16], nm[9];
-        if (!xform)
-            memcpy(m4, node, sizeof m4);
-        else if (is_identity(node))
-            memcpy(m4, xform, sizeof m4);
-        else
-            ic_mat4_mul(xform, node, m4);
-        /* a mirroring placement (the node's, the scene's, or both composed) reverses the winding: swap it
-         * to keep the front side */
-        int flip = normal_matrix(m4, nm) < 0.0f;
+    float nm[9];
+    float det = normal_matrix(m4, nm);
+    int flip = det < 0.0f; /* a mirroring transform reverses winding: swap to keep the front side */
+
+    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
+        const struct aiMesh *mesh = ai->mMeshes[i];
         uint32_t base = s->vertex_count;
         for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
             struct aiVector3D p = mesh->mVertices[v];
@@ -1056,13 +1099,11 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             ic_vec3 q = xform_point(m4, p);
             if (!(fabsf(q.x) <= IC_SCENE_MAX_COORD && fabsf(q.y) <= IC_SCENE_MAX_COORD &&
                   fabsf(q.z) <= IC_SCENE_MAX_COORD)) {
-                ic_vec3 f = xform_point(node, p); /* where the file itself puts the vertex */
-                if (xform_where && fabsf(f.x) <= IC_SCENE_MAX_COORD && fabsf(f.y) <= IC_SCENE_MAX_COORD &&
-                    fabsf(f.z) <= IC_SCENE_MAX_COORD)
+                if (xform_where)
                     return ic_error_set(err, IC_ERR_INVALID_ARG,
                                         "%s: the transform of '%s' takes its vertex %u (%g, %g, %g) to (%g, %g, %g), "
                                         "beyond the largest coordinate %g; give a smaller scale or translation",
-                                        xform_where, mesh_path, v + 1, (double)f.x, (double)f.y, (double)f.z,
+                                        xform_where, mesh_path, v + 1, (double)p.x, (double)p.y, (double)p.z,
                                         (double)q.x, (double)q.y, (double)q.z, (double)IC_SCENE_MAX_COORD);
                 return ic_error_set(err, IC_ERR_INVALID_ARG,
                                     "%s: vertex %u (%g, %g, %g) is beyond the largest coordinate %g; scale the mesh "
@@ -1213,8 +1254,8 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         return r;
     }
     source_fs fs = {&src, b, ""};
-    const struct aiScene *ai = source_import(
-        &src, &fs, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+    /* read only: the steps follow once the mirrored placements are known (below) */
+    const struct aiScene *ai = source_import(&src, &fs, 0);
     if (fs.refused[0]) { /* assimp may have failed for it, or carried on without it (an MTL file) */
         r = check_named_file(b, mesh_path, "file", fs.refused, err);
         if (ai)
@@ -1228,22 +1269,46 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
                                                "or PLY file",
                             mesh_path, aiGetErrorString());
     }
-    float *strengths = NULL;
+    /* assimp's steps in the order one call would run them: PreTransformVertices merges the meshes of one
+     * material and vertex format into one in world space (the node hierarchy baked in), Triangulate, then
+     * JoinIdenticalVertices joins the vertices the merged meshes share; between the first two, the faces of
+     * the placements that mirror get their winding swapped, which PreTransformVertices leaves as it was */
     mesh_instance *inst = NULL;
     size_t inst_count = 0;
-    /* the placements before the tangents are computed: their vertex formats then are those by which
-     * PreTransformVertices grouped the meshes (collect_instances) */
-    if ((r = collect_instances(ai, mesh_path, &inst, &inst_count, err)) != IC_OK) {
+    unsigned merged = 0;
+    if ((r = collect_instances(ai, mesh_path, &inst, &inst_count, &merged, err)) != IC_OK) {
         aiReleaseImport(ai);
         free(src.data);
         return r;
     }
+    /* with nothing to merge PreTransformVertices would throw, and assimp would then release the scene twice */
+    if (ai->mNumMeshes > 0 && merged == 0) {
+        free(inst);
+        aiReleaseImport(ai);
+        free(src.data);
+        return ic_error_set(err, IC_ERR_PARSE,
+                            "%s: cannot import the mesh (no node of the file holds one of its meshes); check that it "
+                            "is a valid OBJ, glTF or PLY file",
+                            mesh_path);
+    }
+    if ((ai = aiApplyPostProcessing(ai, aiProcess_PreTransformVertices)) != NULL &&
+        (r = flip_mirrored(ai, inst, inst_count, merged, mesh_path, err)) != IC_OK) {
+        free(inst);
+        aiReleaseImport(ai);
+        free(src.data);
+        return r;
+    }
+    free(inst);
+    if (!ai || !(ai = aiApplyPostProcessing(ai, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices))) {
+        free(src.data);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for assimp's processing of the mesh", mesh_path);
+    }
+    float *strengths = NULL;
     /* tangents only for a file with a normal map: MikkTSpace-like ones where the file gives none */
     int normal_mapped = 0;
     for (unsigned i = 0; i < ai->mNumMaterials; ++i)
         normal_mapped |= aiGetMaterialTextureCount(ai->mMaterials[i], aiTextureType_NORMALS) > 0;
     if (normal_mapped && !(ai = aiApplyPostProcessing(ai, aiProcess_CalcTangentSpace))) {
-        free(inst);
         free(src.data);
         return ic_error_set(err, IC_ERR_PARSE, "%s: cannot compute the tangents of the normal-mapped mesh (%s)",
                             mesh_path, aiGetErrorString());
@@ -1295,15 +1360,16 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         ++s->material_count;
     }
 
+    float identity[16];
+    ic_mat4_identity(identity);
     uint32_t tris_before = s->triangle_count, dropped_before = s->dropped_degenerate;
-    r = append_meshes(b, ai, inst, inst_count, mesh_path, xform, xform_where, material_base, normal_mapped, err);
+    r = append_meshes(b, ai, mesh_path, xform ? xform : identity, xform_where, material_base, normal_mapped, err);
     if (r == IC_OK && s->triangle_count == tris_before)
         r = ic_error_set(err, IC_ERR_PARSE,
                          "%s: no usable triangle (%u of zero area dropped; points and lines are ignored); fix the "
                          "geometry or remove the mesh",
                          mesh_path, s->dropped_degenerate - dropped_before);
 done:
-    free(inst);
     free(strengths);
     aiReleaseImport(ai);
     free(src.data);

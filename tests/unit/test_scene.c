@@ -2,8 +2,10 @@
  * test_scene.c — loading good scenes: the bundled Cornell box, transforms, material overrides, lights,
  * environment and render settings from JSON, fov_x conversion, "shared:" paths, bare meshes with a
  * fitted camera, dropped degenerate triangles, the surface queries (barycentrics, normals, uvs,
- * bilinear textures, one-sided emission), and gzip-compressed meshes (.obj.gz: same triangles, MTL and
- * textures from the folder of the .gz file; a truncated or corrupt file is a one-line error naming it).
+ * bilinear textures, one-sided emission), gzip-compressed meshes (.obj.gz: same triangles, MTL and
+ * textures from the folder of the .gz file; a truncated or corrupt file is a one-line error naming it),
+ * and a file's parts of one material joined before their vertices are (two OBJ groups sharing an edge:
+ * one vertex and one tangent at each place).
  */
 #include "irrcache/image.h"
 #include "scene/scene.h"
@@ -12,6 +14,7 @@
 #include "test_util.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -177,6 +180,63 @@ static void test_transformed(void)
           "render settings");
     CHECK(s->camera.width == 512 && s->camera.fov_y_deg == 45.0f, "no camera: fitted default");
     ic_scene_free(s);
+}
+
+/* The parts of a mesh file with one material are merged into one mesh before identical vertices are
+ * joined and tangents computed (assimp's PreTransformVertices, JoinIdenticalVertices, CalcTangentSpace):
+ * two OBJ groups (`o`, then `g`) of one material, squares sharing the edge x = 1, are 6 vertices, not
+ * 4 + 4, so that a limit of 7 elements takes them; and with a normal map each of the seam's two vertices
+ * has one tangent, not one per group (the groups' differ by about 20° there: the second square tilts and
+ * its texture coordinates run at another rate). */
+static void test_groups_joined(void)
+{
+    ic_image img = {0};
+    ic_error err = {0};
+    CHECK(ic_image_create(&img, 1, 1) == IC_OK, "normal map image");
+    img.rgb[0] = 0.5f, img.rgb[1] = 0.5f, img.rgb[2] = 1.0f;
+    CHECK(ic_image_write(IC_TEST_TMP "/seam_n.pfm", &img, NULL, &err) == IC_OK, "normal map: %s", err.message);
+    ic_image_free(&img);
+    test_write_text(IC_TEST_TMP "/seam.mtl", "newmtl m\nKd 0.5 0.5 0.5\nnorm seam_n.pfm\n");
+    const char *group[2] = {"o", "g"};
+    for (int k = 0; k < 2; ++k) {
+        char obj[1024];
+        snprintf(obj, sizeof obj,
+                 "mtllib seam.mtl\n"
+                 "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0.5\nv 2 1 0.5\n"
+                 "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 1.5 0.2\nvt 1.5 1.4\n"
+                 "vn 0 0 1\nvn -0.2 0 1\nvn -0.4 0 1\n"
+                 "usemtl m\n"
+                 "%s A\nf 1/1/1 2/2/2 3/3/2\nf 1/1/1 3/3/2 4/4/1\n"
+                 "%s B\nf 2/2/2 5/5/3 6/6/3\nf 2/2/2 6/6/3 3/3/2\n",
+                 group[k], group[k]);
+        test_write_text(IC_TEST_TMP "/seam.obj", obj);
+        ic_scene *s = load(IC_TEST_TMP "/seam.obj", NULL);
+        if (!s)
+            continue;
+        CHECK(s->vertex_count == 6 && s->triangle_count == 4, "`%s` groups: 6 vertices (%u), 4 triangles (%u)",
+              group[k], s->vertex_count, s->triangle_count);
+        /* every two triangle corners at one place have one tangent */
+        int tangents = s->tangents != NULL, split = 0;
+        for (uint32_t a = 0; tangents && a < 3 * s->triangle_count; ++a)
+            for (uint32_t b = a + 1; b < 3 * s->triangle_count; ++b) {
+                uint32_t va = s->triangles[a], vb = s->triangles[b];
+                if (v3_len(v3_sub(s->positions[va], s->positions[vb])) > 0.0f)
+                    continue;
+                float d = 0.0f;
+                for (int c = 0; c < 4; ++c)
+                    d = fmaxf(d, fabsf(s->tangents[4 * va + c] - s->tangents[4 * vb + c]));
+                split += d > 1e-6f;
+            }
+        CHECK(tangents && split == 0, "`%s` groups: one tangent at each place (%d corner pairs differ)", group[k],
+              split);
+        ic_scene_free(s);
+        ic_scene_load_options opt = {0};
+        opt.max_mesh_elements = 7;
+        s = NULL;
+        CHECK(ic_scene_load(IC_TEST_TMP "/seam.obj", &opt, &s, &err) == IC_OK,
+              "`%s` groups under a limit of 7 elements: %s", group[k], err.message);
+        ic_scene_free(s);
+    }
 }
 
 static void test_fov_x_and_shared(void)
@@ -667,6 +727,7 @@ int main(void)
     test_cornell_box();
     test_transformed();
     test_mirrored_normals();
+    test_groups_joined();
     test_fov_x_and_shared();
     test_degenerate_dropped();
     test_bare_mesh_and_queries();
