@@ -130,12 +130,12 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_IC, "interpolation weights: Ward's, Tabellion-Lamorlette's, or error: one minus the estimated " \
       "second-order error over its bound, zero at the record's edge (after Schwarzhaupt et al. 2012; for " \
       "--error hessian)") \
-    X(RAYS, "--rays", NULL, IC_OPT_RAYS, render.ic.gather, 16, 1e7, "N", IC_DEFAULT_RAYS, "%g", "", IC_SCOPE_IC, \
+    X(RAYS, "--rays", NULL, IC_OPT_RAYS, render.ic.gather, 16, IC_MAX_RECORD_RAYS, "N", IC_DEFAULT_RAYS, "%g", "", IC_SCOPE_IC, \
       "hemisphere rays per record (stratified M x N, N about pi M)") \
     X(GATHER, "--gather", NULL, IC_OPT_CHOICE, render.ic.gather.method, 0, 0, "stratified|progressive|hemicube", \
       NAN, "stratified", "", IC_SCOPE_IC, "hemisphere sampler; progressive: Hammersley rounds of 4096 to 65536 " \
       "rays until converged; hemicube: one ray per texel of a five-face hemicube with --rays texels (3N^2, " \
-      "N even) and exact per-texel weights (Castano 2014)") \
+      "N even, at most 512: 786,432 rays) and exact per-texel weights (Castano 2014)") \
     X(ERROR, "--error", NULL, IC_OPT_CHOICE, render.ic.error, 0, 0, "split-sphere|hessian", NAN, "split-sphere", \
       "", IC_SCOPE_IC, "what sets a record's extent: Ward's split sphere (harmonic mean of the hit distances), or " \
       "the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error reaches --accuracy x E " \
@@ -153,8 +153,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(RADIANCE_MAX_EXPONENT, "--radiance-max-exponent", NULL, IC_OPT_FLOAT, render.ic.radiance_max_exponent, 0.001, \
       1e6, "E", IC_DEFAULT_RADIANCE_MAX_EXPONENT, "%g", "", IC_SCOPE_IC, "sharpest Phong lobe radiance records " \
       "serve (the order's limit: docs/radiance-caching.md)") \
-    X(RADIANCE_RAYS, "--radiance-rays", NULL, IC_OPT_INT, render.ic.radiance_rays, 16, 1e7, "N", NAN, \
-      "4 x --rays", "", IC_SCOPE_IC, "hemisphere rays per radiance record") \
+    X(RADIANCE_RAYS, "--radiance-rays", NULL, IC_OPT_INT, render.ic.radiance_rays, 16, IC_MAX_RECORD_RAYS, "N", \
+      NAN, "4 x --rays, at most 1e7", "", IC_SCOPE_IC, "hemisphere rays per radiance record") \
     X(BOUNCES, "--bounces", NULL, IC_OPT_INT, render.ic.bounces, 1, 1000, "N", NAN, "max-depth - 1", "", \
       IC_SCOPE_IC, "bounces in the light a record gathers") \
     X(RECURSIVE, "--recursive", NULL, IC_OPT_FLAG, render.ic.recursive, 0, 0, "", NAN, "off", "", IC_SCOPE_LAZY, \

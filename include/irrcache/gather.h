@@ -73,6 +73,9 @@ typedef enum ic_gather_tgrad {
 } ic_gather_tgrad;
 
 /* Gather options; zero means default for every field. */
+/* The largest hemicube resolution: 3·512² = 786,432 rays. */
+#define IC_GATHER_MAX_HEMICUBE 512u
+
 typedef struct ic_gather_opts {
     ic_gather_method method;       /* sampler used by ic_gather_batch (default stratified) */
     uint64_t seed;                 /* global seed, combined with each point's key (default 0) */
@@ -88,7 +91,8 @@ typedef struct ic_gather_opts {
                                       (default 0.02; negative: never stop early) */
     uint32_t batch_rays;           /* most rays handed to one trace call (default 4096; rounded down to a
                                       multiple of 32 so coherent groups stay whole) */
-    uint32_t hemicube_resolution;  /* hemicube: texels across the top face, even, 2..512 (default 16:
+    uint32_t hemicube_resolution;  /* hemicube: texels across the top face, even, 2..IC_GATHER_MAX_HEMICUBE
+                                      (default 16:
                                       3·16² = 768 rays, the nearest to the stratified 16×50 = 800) */
     int with_hessian;              /* non-zero: stratified and hemicube gathers also fill the Hessian
                                       fields of ic_gather_result (default 0: not computed) */

@@ -94,6 +94,9 @@ typedef enum ic_record_shape {
                                   ELLIPTICAL RECORDS), its aspect at most IC_MAX_ELLIPSE_ASPECT */
 } ic_record_shape;
 
+/* The most hemisphere rays the renderer gives a record (--rays, --radiance-rays and the radiance records'
+ * default of IC_DEFAULT_RADIANCE_RAYS_FACTOR × --rays): below the gatherer's grid limit of 2^24. */
+#define IC_MAX_RECORD_RAYS 10000000
 typedef struct ic_ic_options {
     ic_strategy strategy;
     ic_cache_params cache; /* weights, accuracy [0.15 Ward, 1 T–L], clamps; max_radius [scene diagonal/8] bounds R in
@@ -159,7 +162,7 @@ typedef struct ic_ic_options {
     float radiance_max_exponent; /* sharpest Phong lobe radiance records serve; sharper ones are path traced
                               [IC_DEFAULT_RADIANCE_MAX_EXPONENT] */
     int radiance_rays;     /* hemisphere rays of a radiance record [IC_DEFAULT_RADIANCE_RAYS_FACTOR × those of an
-                              irradiance record] */
+                              irradiance record, at most IC_MAX_RECORD_RAYS] */
 } ic_ic_options;
 
 /* A cache record as the camera sees it (for overlays and reports). */

@@ -65,9 +65,9 @@ static ic_result resolve_opts(const ic_gather_opts *in, ic_gather_opts *o, ic_er
     if ((unsigned)o->method > IC_GATHER_HEMICUBE)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: unknown method %d; use IC_GATHER_STRATIFIED, "
                             "IC_GATHER_PROGRESSIVE or IC_GATHER_HEMICUBE", (int)o->method);
-    if (o->hemicube_resolution % 2 || o->hemicube_resolution > 512)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: hemicube_resolution %u must be even and at most 512",
-                            o->hemicube_resolution);
+    if (o->hemicube_resolution % 2 || o->hemicube_resolution > IC_GATHER_MAX_HEMICUBE)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: hemicube_resolution %u must be even and at most %u",
+                            o->hemicube_resolution, IC_GATHER_MAX_HEMICUBE);
     if ((unsigned)o->tgrad > IC_GATHER_TGRAD_WARD_HECKBERT)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "gather: unknown translational-gradient form %d", (int)o->tgrad);
     if ((uint64_t)o->theta_strata * o->phi_strata > MAX_GRID_RAYS)

@@ -20,6 +20,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* cos θ_o of a lobe table's last entry (θ_o = 90° less 0.006°): see ic_hsh_lobe_table_create. */
+#define LOBE_HORIZON_Z 1e-4f
+
 static const double PI_D = 3.14159265358979323846;
 
 void ic_hsh_opts_default(ic_hsh_opts *o, uint32_t order)
@@ -508,8 +511,12 @@ ic_result ic_hsh_lobe_table_create(const ic_hsh_basis *b, ic_hsh_brdf_fn brdf, v
     for (uint32_t i = 0; i < o.theta_count; ++i) {
         double th = i * t->step;
         ic_vec3 wo = {(float)sin(th), 0.0f, (float)cos(th)};
+        /* The last entry, θ_o = 90°, is taken a hair above the horizon: a BRDF is zero for a view at or
+         * below it (the renderer's are), while its limit from above is not (a microfacet lobe's
+         * f·cosθ_i stays finite as G ∝ cosθ_o cancels 1/cosθ_o); a zero entry pulled the
+         * interpolation to zero from about 88° on. */
         if (i == o.theta_count - 1)
-            wo.z = 0.0f;
+            wo.z = LOBE_HORIZON_Z;
         ic_result r = ic_hsh_lobe_project(b, brdf, user, wo, &o.quad, t->entries + (size_t)i * b->count, NULL, err);
         if (r != IC_OK) {
             ic_hsh_lobe_table_destroy(t);

@@ -35,7 +35,7 @@ static void resolve_options(ic_ctx *c, const ic_ic_options *in, const ic_scene *
     if (o.gather.method == IC_GATHER_HEMICUBE && o.gather.hemicube_resolution == 0 && o.gather.theta_strata) {
         double rays = (double)o.gather.theta_strata * (double)o.gather.phi_strata;
         long n = 2 * lround(sqrt(rays / 3.0) / 2.0);
-        o.gather.hemicube_resolution = (uint32_t)(n < 2 ? 2 : n > 512 ? 512 : n);
+        o.gather.hemicube_resolution = (uint32_t)(n < 2 ? 2 : n > IC_GATHER_MAX_HEMICUBE ? IC_GATHER_MAX_HEMICUBE : n);
     }
     if (o.large_emitters.value == 0.0f)
         o.large_emitters.value = IC_DEFAULT_LARGE_EMITTERS;

@@ -110,6 +110,18 @@ static ic_result microfacet_tables(ic_radiance *r, const ic_scene *s, uint32_t m
     return IC_OK;
 }
 
+ic_gather_opts ic_ic_radiance_gather_opts(const ic_ic_options *o)
+{
+    /* The radiance records' own ray count, as M × N strata with N ≈ πM (the gather uses their product). */
+    ic_gather_opts go = o->gather;
+    double irradiance_rays = go.theta_strata && go.phi_strata ? (double)go.theta_strata * go.phi_strata : IC_DEFAULT_RAYS;
+    double rays = o->radiance_rays > 0 ? o->radiance_rays
+                                       : fmin(IC_DEFAULT_RADIANCE_RAYS_FACTOR * irradiance_rays, IC_MAX_RECORD_RAYS);
+    go.theta_strata = (uint32_t)fmax(1.0, round(sqrt(rays / IC_PI)));
+    go.phi_strata = (uint32_t)fmax(1.0, round(rays / go.theta_strata));
+    return go;
+}
+
 ic_result ic_ic_radiance_create(ic_ctx *c, ic_error *err)
 {
     c->rad = NULL;
@@ -381,12 +393,7 @@ static ic_result gather_insert(ic_ctx *c, const ic_candidate *cand, uint32_t cou
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for %u radiance records", count);
     if (r == IC_OK)
         point_results(j.res, payload, count, floats);
-    /* The radiance records' own ray count, as M × N strata with N ≈ πM (the gather uses their product). */
-    ic_gather_opts go = c->o.gather;
-    double irradiance_rays = go.theta_strata && go.phi_strata ? (double)go.theta_strata * go.phi_strata : IC_DEFAULT_RAYS;
-    double rays = c->o.radiance_rays > 0 ? c->o.radiance_rays : IC_DEFAULT_RADIANCE_RAYS_FACTOR * irradiance_rays;
-    go.theta_strata = (uint32_t)fmax(1.0, round(sqrt(rays / IC_PI)));
-    go.phi_strata = (uint32_t)fmax(1.0, round(rays / go.theta_strata));
+    ic_gather_opts go = ic_ic_radiance_gather_opts(&c->o);
     for (int t = 0; t < threads && r == IC_OK; ++t) {
         j.workers[t].c = c;
         r = ic_gatherer_create(&go, ic_ic_gather_trace, &j.workers[t], &j.gatherers[t], err);

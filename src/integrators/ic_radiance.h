@@ -31,6 +31,9 @@ typedef struct ic_radiance ic_radiance;
 ic_result ic_ic_radiance_create(struct ic_ctx *c, ic_error *err);
 /* Frees it; NULL is a no-op. */
 void ic_ic_radiance_destroy(ic_radiance *r);
+/* The gather options of a radiance record: o's, with M × N strata (N ≈ πM) for o->radiance_rays, by default
+ * IC_DEFAULT_RADIANCE_RAYS_FACTOR × an irradiance record's rays, at most IC_MAX_RECORD_RAYS. */
+ic_gather_opts ic_ic_radiance_gather_opts(const ic_ic_options *o);
 /* 1 if material m's glossy lobe is served by radiance records. */
 int ic_ic_radiance_serves(const struct ic_ctx *c, uint32_t material);
 /* Construction over the image's first-hit points on served materials, after the irradiance records:

@@ -652,6 +652,45 @@ static void test_lobe_table(void)
     ic_hsh_basis_destroy(b);
 }
 
+/* A Lambertian lobe that, like the renderer's BSDFs, is zero for a view at or below the horizon: its
+ * lobe vector is the same at every view above it, so a table must reproduce it up to grazing. A last
+ * entry built exactly at θ_o = 90° read zero and pulled the interpolation to zero above ~88° (and over
+ * the true value at 86–88°). */
+static double brdf_lambert_above(void *user, const double wi[3], const double wo[3])
+{
+    (void)user;
+    return wi[2] > 0.0 && wo[2] > 0.0 ? 1.0 / PI_D : 0.0;
+}
+
+static void test_lobe_table_grazing(void)
+{
+    const uint32_t n = 6;
+    ic_hsh_basis *b = make_basis(n, 0);
+    if (!b)
+        return;
+    ic_hsh_lobe_table *t = NULL;
+    ic_error err;
+    CHECK(ic_hsh_lobe_table_create(b, brdf_lambert_above, NULL, NULL, &t, &err) == IC_OK, "lobe table");
+    if (!t) {
+        ic_hsh_basis_destroy(b);
+        return;
+    }
+    static const double views[] = {80.0, 86.5, 87.0, 88.5, 89.0, 89.9, 90.0};
+    for (size_t i = 0; i < sizeof views / sizeof views[0]; ++i) {
+        const double th = views[i] * PI_D / 180.0;
+        ic_vec3 wo = v3((float)sin(th), 0.0f, (float)fmax(cos(th), 1e-6));
+        float direct[36], table[36];
+        ic_hsh_lobe_project(b, brdf_lambert_above, NULL, wo, NULL, direct, NULL, &err);
+        ic_hsh_lobe_table_eval(t, wo, table);
+        const double e = rel_l2(table, direct, n * n);
+        printf("lobe table, Lambertian above the horizon, view %.1f°: albedo %.5f (direct %.5f), relative L2 "
+               "error %.2e\n", views[i], table[0] * sqrt(2.0 * PI_D), direct[0] * sqrt(2.0 * PI_D), e);
+        CHECK(e < 1e-3, "grazing view %.1f°: the table's lobe is the direct one (relative L2 error %.3g)", views[i], e);
+    }
+    ic_hsh_lobe_table_destroy(t);
+    ic_hsh_basis_destroy(b);
+}
+
 static void test_bad_input(void)
 {
     ic_hsh_basis *b = NULL;
@@ -685,6 +724,7 @@ int main(void)
     test_frames();
     test_white_furnace();
     test_lobe_table();
+    test_lobe_table_grazing();
     test_bad_input();
     TEST_MAIN_END();
 }

@@ -20,6 +20,8 @@
 
 #include "test_render_util.h"
 
+#include "integrators/ic_radiance.h"
+
 #include "irrcache/image.h"
 
 #include <string.h>
@@ -319,8 +321,39 @@ static void test_gradients(void)
     ic_image_free(&ref);
 }
 
+/* A radiance record's rays: 4 × an irradiance record's by default, but never past IC_MAX_RECORD_RAYS, so that
+ * the largest --rays (10^7) does not ask the gatherer for 4·10^7 rays (over its 2^24 grid, refused only after
+ * the irradiance records were built); an explicit --radiance-rays is taken as given. */
+static void test_radiance_rays(void)
+{
+    static const struct {
+        uint32_t theta, phi;
+        int radiance_rays;
+        double want, tolerance;
+    } cases[] = {
+        {0, 0, 0, 4.0 * IC_DEFAULT_RAYS, 0.02},
+        {16, 50, 0, 3200.0, 0.02},
+        {1784, 5605, 0, IC_MAX_RECORD_RAYS, 0.001},
+        {1784, 5605, 5000, 5000.0, 0.02},
+        {16, 50, IC_MAX_RECORD_RAYS, IC_MAX_RECORD_RAYS, 0.001},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        ic_ic_options o;
+        memset(&o, 0, sizeof o);
+        o.gather.theta_strata = cases[k].theta;
+        o.gather.phi_strata = cases[k].phi;
+        o.radiance_rays = cases[k].radiance_rays;
+        const ic_gather_opts go = ic_ic_radiance_gather_opts(&o);
+        const double rays = (double)go.theta_strata * go.phi_strata;
+        CHECK(fabs(rays / cases[k].want - 1.0) < cases[k].tolerance && rays <= (double)(1u << 24),
+              "radiance rays for %u x %u irradiance strata and --radiance-rays %d: %.0f (want about %.0f, at most "
+              "2^24)", cases[k].theta, cases[k].phi, cases[k].radiance_rays, rays, cases[k].want);
+    }
+}
+
 int main(void)
 {
+    test_radiance_rays();
     test_furnace();
     test_furnace_microfacet();
     test_glossy_cornell();
