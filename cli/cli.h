@@ -16,35 +16,15 @@ extern volatile sig_atomic_t ic_cli_rendering;
 
 /* irrcache render SCENE -o OUT [options] */
 int ic_cli_render(int argc, char **argv);
-/* irrcache diff A B [--json] [--heatmap FILE.png] [--blotch-map FILE.png] */
+/* irrcache diff A B [--json] [--heatmap FILE.png] [--blotch-map FILE.png] (options: options.h) */
 int ic_cli_diff(int argc, char **argv);
-/* irrcache points SCENE --points FILE|- [-o FILE] [--format text|csv|json] */
+/* irrcache points SCENE --points FILE|- [-o FILE] [--format text|csv|json] (options: options.h) */
 int ic_cli_points(int argc, char **argv);
-
-/* The value of option `name` given as "--name VALUE" or "--name=VALUE" at argv[*i], advancing *i past
- * it; NULL if argv[*i] is not this option, and then *missing is set if the value is absent. For the
- * hand-parsed sub-commands diff and points (render's options come from the table in options.h); inline
- * because test_diff compiles diff.c on its own. */
-static inline const char *ic_cli_option_value(int argc, char **argv, int *i, const char *name, int *missing)
-{
-    size_t n = strlen(name);
-    if (strncmp(argv[*i], name, n) != 0)
-        return NULL;
-    if (argv[*i][n] == '=')
-        return argv[*i] + n + 1;
-    if (argv[*i][n] != '\0')
-        return NULL;
-    if (*i + 1 >= argc) {
-        *missing = 1;
-        return NULL;
-    }
-    return argv[++*i];
-}
 
 /* Flushes standard output and checks it for a write error (a full disk, /dev/full): what was printed
  * there (help, a table, results) is otherwise lost without a word. Returns 0, or 1 (the exit status of a
  * failure while working) after the line "WHO: standard output: write error (reason)" on stderr. Inline
- * for test_diff, as above. */
+ * because test_diff compiles diff.c on its own. */
 static inline int ic_cli_flush_stdout(const char *who)
 {
     int e = fflush(stdout) != 0 ? errno : 0;

@@ -11,6 +11,7 @@
  */
 #include "cli.h"
 #include "json_out.h"
+#include "options.h"
 
 #include "irrcache/defaults.h"
 #include "irrcache/image.h"
@@ -53,31 +54,12 @@ static void print_help(FILE *out)
           "images: the low-frequency error (a cache's blotches) without the pixel noise.\n"
           "NaN/Inf values count as 0 and are reported. Identical images have PSNR infinity, printed\n"
           "as \"inf\" in the table and as 999 in JSON.\n"
+          "Options take their value as --name VALUE or --name=VALUE; -- ends the options.\n"
           "\n"
-          "options:\n"
-          "  --json             print one JSON object: width, height, rmse, relmse, relmse_lowpass,\n"
-          "                     psnr_hdr, psnr_ldr, ssim, nonfinite; with --heatmap also heatmap,\n"
-          "                     heatmap_max_error (the scale used) and heatmap_scale (\"fixed\" or\n"
-          "                     \"p99\"); with --blotch-map also blotch_map and blotch_max_error\n"
-          "                     (default: a table, which prints the scale on its heat-map line)\n"
-          "  --heatmap FILE     write a false-colour map of the per-pixel relative luma error\n"
-          "                     |a-b|/(|b|+0.01): blue = 0 ... red = --max-error and above (.png, .exr,\n"
-          "                     .pfm or .hdr; magenta = NaN/Inf) (default: none)\n"
-          "  --max-error E      relative error shown as full red in the heat map: a fixed scale, so the\n"
-          "                     heat maps of two images against one reference compare (a pixel with\n"
-          "                     the same error has the same colour); 'auto' (or 0): the 99th percentile\n"
-          "                     of this image's errors, which does not compare (default: %g)\n"
-          "  --blotch-map FILE  write a map of the low-pass error that relMSE lp measures, signed:\n"
-          "                     both images blurred (sigma = 2 pixels), then (a-b)/(|b|+0.01) of their\n"
-          "                     luma, red where A is brighter, blue where darker, black where they\n"
-          "                     agree; pixel noise is blurred away, blotches and bias stay (default: none)\n"
-          "  --blotch-max-error E  the blotch map's full colour, a fixed scale (default: %g)\n"
-          "  -h, --help         show this help\n"
-          "\n"
-          "exit status: 0 success, 1 unreadable/unwritable image or size mismatch, 2 usage error\n",
-          (double)IC_DEFAULT_HEATMAP_MAX_ERROR, (double)IC_DEFAULT_BLOTCH_MAX_ERROR);
+          "options:\n");
+    ic_cli_print_command_options(out, IC_CLI_DIFF, 24);
+    fprintf(out, "\nexit status: 0 success, 1 unreadable/unwritable image or size mismatch, 2 usage error\n");
 }
-
 
 /* A metric as JSON: JSON has no infinity (identical images: PSNR_INFINITE). */
 static void add_metric(cJSON *o, const char *key, double v)
@@ -115,17 +97,13 @@ static int print_json(const ic_image *img, const ic_image_metrics *m, const char
     return ic_cli_write_json("diff", NULL, o, 0);
 }
 
-/* The path of a map (`what`: "heat-map"), given to `option`: a file name in a format the command writes.
- * Prints the usage error and returns 0 otherwise. */
-static int map_path_ok(const char *option, const char *what, const char *value)
+/* The path of a map (`what`: "heat-map"), if given (an empty one the parser refused): a file name in a
+ * format the command writes. Prints the usage error and returns 0 otherwise. */
+static int map_path_ok(const char *what, const char *value)
 {
-    if (!value[0])
-        fprintf(stderr, "irrcache diff: %s '': the output path is empty; give a file name such as %s.png\n", option,
-                what);
-    else if (!ic_image_is_writable_format(value))
-        fprintf(stderr, "irrcache diff: %s: unknown %s format; name it .png (or .exr, .pfm, .hdr)\n", value, what);
-    else
+    if (!value || ic_image_is_writable_format(value))
         return 1;
+    fprintf(stderr, "irrcache diff: %s: unknown %s format; name it .png (or .exr, .pfm, .hdr)\n", value, what);
     return 0;
 }
 
@@ -181,14 +159,13 @@ static int same_file(const char *a, const char *b)
 int ic_cli_diff(int argc, char **argv)
 {
     const char *paths[2] = {NULL, NULL};
-    int npaths = 0, json = 0, options_done = 0;
-    const char *heatmap = NULL;
-    heat_scale scale = {IC_DEFAULT_HEATMAP_MAX_ERROR, 0};
-    blotch_opts blotch = {NULL, IC_DEFAULT_BLOTCH_MAX_ERROR};
+    int npaths = 0, options_done = 0;
+    ic_diff_args opt; /* by its table (options.h) */
+    ic_cli_command_defaults(IC_CLI_DIFF, &opt);
 
     for (int i = 1; i < argc; ++i) {
-        const char *arg = argv[i], *value;
-        int missing = 0;
+        const char *arg = argv[i];
+        int rc;
         if (options_done || arg[0] != '-' || arg[1] == '\0') {
             if (npaths == 2) {
                 fprintf(stderr, "irrcache diff: %s: unexpected extra argument; give exactly two images (A and the "
@@ -198,46 +175,22 @@ int ic_cli_diff(int argc, char **argv)
             paths[npaths++] = arg;
         } else if (strcmp(arg, "--") == 0) {
             options_done = 1;
-        } else if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
-            print_help(stdout);
+        } else if ((rc = ic_cli_parse_command_option(IC_CLI_DIFF, argc, argv, &i, &opt)) < 0) {
+            if (rc == -1 - IC_DIFF_ARG_HELP_MARKDOWN)
+                ic_cli_print_command_markdown(stdout, IC_CLI_DIFF);
+            else
+                print_help(stdout);
             return ic_cli_flush_stdout("irrcache diff");
-        } else if (strcmp(arg, "--json") == 0) {
-            json = 1;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--heatmap", &missing)) != NULL) {
-            if (!map_path_ok("--heatmap", "heat-map", value))
-                return EXIT_USAGE;
-            heatmap = value;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--blotch-map", &missing)) != NULL) {
-            if (!map_path_ok("--blotch-map", "blotch-map", value))
-                return EXIT_USAGE;
-            blotch.path = value;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--blotch-max-error", &missing)) != NULL) {
-            char *end = NULL;
-            double e = strtod(value, &end);
-            if (end == value || *end != '\0' || !((float)e > 0.0f) || !isfinite(e) || e > 3e38) {
-                fprintf(stderr, "irrcache diff: --blotch-max-error %s: not a number > 0; give a relative error such "
-                        "as 0.05\n", value);
-                return EXIT_USAGE;
-            }
-            blotch.max_error = (float)e;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-error", &missing)) != NULL) {
-            char *end = NULL;
-            double e = strcmp(value, "auto") == 0 ? 0.0 : strtod(value, &end);
-            if (end && (end == value || *end != '\0' || !(e >= 0.0) || !isfinite(e) || e > 3e38)) {
-                fprintf(stderr, "irrcache diff: --max-error %s: not a number >= 0 or 'auto'; give a relative error "
-                        "such as 0.5 (auto or 0 = this image's 99th percentile)\n", value);
-                return EXIT_USAGE;
-            }
-            scale.max_error = (float)e;
-            scale.automatic = e == 0.0;
-        } else if (missing) {
-            fprintf(stderr, "irrcache diff: %s: missing value; see irrcache diff --help\n", arg);
-            return EXIT_USAGE;
-        } else {
-            fprintf(stderr, "irrcache diff: %s: unknown option; see irrcache diff --help\n", arg);
+        } else if (rc) {
             return EXIT_USAGE;
         }
     }
+    if (!map_path_ok("heat-map", opt.heatmap) || !map_path_ok("blotch-map", opt.blotch_map))
+        return EXIT_USAGE;
+    const char *heatmap = opt.heatmap;
+    int json = opt.json;
+    heat_scale scale = {opt.max_error, opt.max_error == 0.0f}; /* 0: --max-error auto */
+    blotch_opts blotch = {opt.blotch_map, opt.blotch_max_error};
     if (npaths != 2) {
         fprintf(stderr, "irrcache diff: expected two images (A and the reference B), got %d; see irrcache diff "
                 "--help\n", npaths);

@@ -1,6 +1,6 @@
 /*
- * options.c — parsing, checking and describing the options of `irrcache render` from the one table in
- * options.h.
+ * options.c — parsing, checking and describing the options of `irrcache render`, and the own options of
+ * `irrcache points` and `irrcache diff`, from their tables in options.h.
  */
 #include "cli.h"
 #include "options.h"
@@ -27,12 +27,36 @@ typedef struct opt_def {
     const char *help;
 } opt_def;
 
+/* A row of a table whose options are members of IC_OPT_ARGS. */
 #define IC_OPT_ROW(id, name, alias, kind, member, lo, hi, value, def, def_text, unit, scope, help) \
-    {name, alias, kind, offsetof(ic_cli_args, member), lo, hi, value, def, def_text, unit, scope, help},
+    {name, alias, kind, offsetof(IC_OPT_ARGS, member), lo, hi, value, def, def_text, unit, scope, help},
+#define IC_OPT_ARGS ic_cli_args
 static const opt_def options[IC_ARG_COUNT] = {IC_RENDER_OPTIONS(IC_OPT_ROW)};
+#undef IC_OPT_ARGS
+#define IC_OPT_ARGS ic_points_args
+static const opt_def points_options[IC_POINTS_ARG_COUNT] = {IC_POINTS_OPTIONS(IC_OPT_ROW)};
+#undef IC_OPT_ARGS
+#define IC_OPT_ARGS ic_diff_args
+static const opt_def diff_options[IC_DIFF_ARG_COUNT] = {IC_DIFF_OPTIONS(IC_OPT_ROW)};
+#undef IC_OPT_ARGS
 #undef IC_OPT_ROW
 
-/* The command named in messages: render, or points while ic_cli_parse_load_option parses for it. */
+/* A command's table: its rows, and where its args struct keeps the values as given. */
+typedef struct opt_table {
+    const char *command;
+    const opt_def *defs;
+    int count;
+    size_t size, given; /* sizeof the args struct, offsetof its given[] */
+} opt_table;
+
+static const opt_table tables[] = {
+    [IC_CLI_RENDER] = {"render", options, IC_ARG_COUNT, sizeof(ic_cli_args), offsetof(ic_cli_args, given)},
+    [IC_CLI_POINTS] = {"points", points_options, IC_POINTS_ARG_COUNT, sizeof(ic_points_args),
+                       offsetof(ic_points_args, given)},
+    [IC_CLI_DIFF] = {"diff", diff_options, IC_DIFF_ARG_COUNT, sizeof(ic_diff_args), offsetof(ic_diff_args, given)},
+};
+
+/* The command named in messages: render, or another while its options (or render's it shares) are parsed. */
 static const char *err_command = "render";
 #define ERR(...) (fprintf(stderr, "irrcache %s: ", err_command), fprintf(stderr, __VA_ARGS__), fputc('\n', stderr), 2)
 
@@ -116,18 +140,49 @@ void ic_cli_size_suffixes(double max, char *buf, size_t size)
     snprintf(buf, size, "%s (either case): times %s", names, powers);
 }
 
-/* Stores one option's value. Returns 0 or 2 (usage error printed). */
-static int store(ic_cli_args *a, const opt_def *o, const char *val)
+/* One end of a range as --help writes it: a whole number in full up to 10 digits, beyond that a power of two
+ * as 2^N (the uint64 seed's 2^64 as 2^64 - 1, the largest it takes); other numbers as %g without the
+ * exponent's padding (1e6, 1e-30). */
+static void range_end(double v, int whole, char *buf, size_t size)
 {
+    int e = 0;
+    if (whole && fabs(v) >= 1e10 && frexp(v, &e) == 0.5)
+        snprintf(buf, size, "2^%d%s", e - 1, e - 1 == 64 ? " - 1" : ""); /* uint64's 2^64 - 1 rounds to 2^64 */
+    else if (whole)
+        snprintf(buf, size, "%.0f", v);
+    else {
+        char raw[32], *x;
+        snprintf(raw, sizeof raw, "%g", v);
+        if ((x = strchr(raw, 'e')) != NULL) { /* "1e+06" → "1e6", "1e-06" → "1e-6" */
+            char *d = x + 1, *r = x + 1;
+            if (*r == '+')
+                ++r;
+            else if (*r == '-')
+                *d++ = *r++;
+            while (*r == '0' && r[1])
+                ++r;
+            memmove(d, r, strlen(r) + 1);
+        }
+        snprintf(buf, size, "%s", raw);
+    }
+}
+
+/* Stores one option's value into args (ic_cli_args for render's kinds SEED and OUTPUT). Returns 0 or 2
+ * (usage error printed). */
+static int store(void *args, const opt_def *o, const char *val)
+{
+    ic_cli_args *a = args;
     /* strtoll and strtod skip leading white space, so " -1" got past the sign check of --seed and wrapped
      * to 2^64 - 1: a value starts with what it means */
     if (val[0] == ' ' || val[0] == '\t' || val[0] == '\n' || val[0] == '\r' || val[0] == '\v' || val[0] == '\f')
         return ERR("%s '%s': a value may not start with white space", o->name, val);
     /* an empty path or name is never meant: -o '' said "unknown image format", --view '' was ignored */
-    if (!val[0] && (o->kind == IC_OPT_OUTPUT || o->kind == IC_OPT_STRING))
-        return ERR("%s '': the %s is empty; give %s", o->name, o->kind == IC_OPT_OUTPUT ? "output path" : "value",
-                   o->kind == IC_OPT_OUTPUT ? "a file name such as out.exr" : o->value_name);
-    char *field = (char *)a + o->offset, *end = NULL;
+    if (!val[0] && o->kind == IC_OPT_STRING)
+        return ERR("%s '': the value is empty; give %s", o->name, o->value_name);
+    if (!val[0] && (o->kind == IC_OPT_OUTPUT || o->kind == IC_OPT_OUT_FILE))
+        return ERR("%s '': the output path is empty; give a file name such as %s", o->name,
+                   o->kind == IC_OPT_OUTPUT ? "out.exr" : o->value_name);
+    char *field = (char *)args + o->offset, *end = NULL;
     errno = 0;
     switch (o->kind) {
     case IC_OPT_INT:
@@ -173,16 +228,32 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
         return 0;
     }
     case IC_OPT_FLOAT:
-    case IC_OPT_DOUBLE: {
-        double v = strtod(val, &end);
-        if (errno || !*val || *end || !isfinite(v) || v < o->min_value || v > o->max_value)
-            return ERR("%s %s: expected a number from %g to %g", o->name, val, o->min_value, o->max_value);
-        if (o->kind == IC_OPT_FLOAT)
+    case IC_OPT_DOUBLE:
+    case IC_OPT_FLOAT_ABOVE:
+    case IC_OPT_DOUBLE_ABOVE: {
+        int is_float = o->kind == IC_OPT_FLOAT || o->kind == IC_OPT_FLOAT_ABOVE,
+            above = o->kind == IC_OPT_FLOAT_ABOVE || o->kind == IC_OPT_DOUBLE_ABOVE;
+        const char *word = strchr(o->value_name, '|'); /* "E|auto": auto is min */
+        double v = word && !strcmp(val, word + 1) ? o->min_value : strtod(val, &end);
+        double as_stored = is_float ? (double)(float)v : v;
+        if (errno || !*val || (end && *end) || !isfinite(v) || v > o->max_value ||
+            (above ? !(as_stored > o->min_value) : v < o->min_value)) {
+            char lo[32], hi[32];
+            range_end(o->min_value, 0, lo, sizeof lo);
+            range_end(o->max_value, 0, hi, sizeof hi);
+            if (above)
+                return ERR("%s %s: expected a number in (%s, %s]", o->name, val, lo, hi);
+            return ERR("%s %s: expected a number from %s to %s%s%s", o->name, val, lo, hi, word ? ", or " : "",
+                       word ? word + 1 : "");
+        }
+        if (is_float)
             *(float *)field = (float)v;
         else
             *(double *)field = v;
         return 0;
     }
+    case IC_OPT_NUMBERS: /* store_numbers */
+        return 0;
     case IC_OPT_NUMBER_OFF: {
         ic_switched_value *sv = (ic_switched_value *)field;
         if (!strcmp(val, "off")) {
@@ -218,6 +289,7 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
         *(const char **)field = val;
         return 0;
     case IC_OPT_STRING:
+    case IC_OPT_OUT_FILE:
         *(const char **)field = val;
         return 0;
     case IC_OPT_OUTPUT:
@@ -235,6 +307,41 @@ static int store(ic_cli_args *a, const opt_def *o, const char *val)
     case IC_OPT_HELP:
         return 0;
     }
+    return 0;
+}
+
+/* The words of a NUMBERS option's VALUE: how many numbers it takes. */
+static int word_count(const char *text)
+{
+    int n = 0;
+    for (const char *p = text; *p; ++p)
+        n += *p != ' ' && (p == text || p[-1] == ' ');
+    return n;
+}
+
+/* A NUMBERS option at argv[*i] (its '=' at eq, or NULL): its numbers from the arguments after it into
+ * args; *i moves past them. Returns 0 or 2 (usage error printed). */
+static int store_numbers(void *args, const opt_def *o, int argc, char **argv, int *i, const char *eq)
+{
+    static const char *const counts[] = {"no", "one", "two", "three", "four", "five", "six", "seven", "eight"};
+    int n = word_count(o->value_name);
+    if (eq)
+        return ERR("%s takes %s numbers as separate arguments: %s %s", o->name, counts[n], o->name, o->value_name);
+    double *field = (double *)((char *)args + o->offset);
+    for (int k = 0; k < n; ++k) {
+        const char *s = *i + 1 + k < argc ? argv[*i + 1 + k] : NULL;
+        char *end = NULL;
+        double v = s ? strtod(s, &end) : 0.0;
+        if (!s || end == s || *end || !isfinite(v) || v < o->min_value || v > o->max_value) {
+            char lo[32], hi[32];
+            range_end(o->min_value, 0, lo, sizeof lo);
+            range_end(o->max_value, 0, hi, sizeof hi);
+            return ERR("%s needs %s numbers %s, each from %s to %s; number %d is %s", o->name, counts[n],
+                       o->value_name, lo, hi, k + 1, s ? s : "missing");
+        }
+        field[k] = v;
+    }
+    *i += n;
     return 0;
 }
 
@@ -262,10 +369,10 @@ static const char *take_value(int argc, char **argv, int *i, const opt_def *o, c
     return "";
 }
 
-static int find_option(const char *arg, size_t len)
+static int find_option(const opt_table *t, const char *arg, size_t len)
 {
-    for (int i = 0; i < IC_ARG_COUNT; ++i) {
-        const opt_def *o = &options[i];
+    for (int i = 0; i < t->count; ++i) {
+        const opt_def *o = &t->defs[i];
         if ((strlen(o->name) == len && !strncmp(arg, o->name, len)) ||
             (o->alias && strlen(o->alias) == len && !strncmp(arg, o->alias, len)))
             return i;
@@ -328,6 +435,37 @@ static int check(const ic_cli_args *a)
     return 0;
 }
 
+/* Where argv[*i]'s name ends: at its '=' (*eq, for a --long option) or its end. */
+static size_t name_length(const char *arg, const char **eq)
+{
+    *eq = arg[0] == '-' && arg[1] == '-' ? strchr(arg, '=') : NULL;
+    return *eq ? (size_t)(*eq - arg) : strlen(arg);
+}
+
+/* argv[*i], row id of table t (its '=' at eq, or NULL), into args; *i moves past its value(s). Returns 0, 2
+ * after the one-line usage error, or −1 − id for a help option. */
+static int parse_option(const opt_table *t, int id, const char *eq, int argc, char **argv, int *i, void *args)
+{
+    const opt_def *o = &t->defs[id];
+    const char **given = (const char **)((char *)args + t->given);
+    if (o->kind == IC_OPT_NUMBERS) {
+        const char *first = *i + 1 < argc ? argv[*i + 1] : NULL;
+        int rc = store_numbers(args, o, argc, argv, i, eq);
+        if (!rc)
+            given[id] = first;
+        return rc;
+    }
+    const char *val = take_value(argc, argv, i, o, eq);
+    if (!val)
+        return 2;
+    if (o->kind == IC_OPT_HELP)
+        return -1 - id;
+    int rc = store(args, o, val);
+    if (!rc)
+        given[id] = val;
+    return rc;
+}
+
 int ic_cli_parse(int argc, char **argv, ic_cli_args *a)
 {
     memset(a, 0, sizeof *a);
@@ -344,21 +482,14 @@ int ic_cli_parse(int argc, char **argv, ic_cli_args *a)
             only_positional = 1;
             continue;
         }
-        const char *eq = arg[1] == '-' ? strchr(arg, '=') : NULL;
-        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
-        int id = find_option(arg, len);
+        const char *eq;
+        size_t len = name_length(arg, &eq);
+        int id = find_option(&tables[IC_CLI_RENDER], arg, len);
         if (id < 0)
-            return ERR("unknown option '%.*s'; see irrcache render --help", (int)len, arg);
-        const opt_def *o = &options[id];
-        const char *val = take_value(argc, argv, &i, o, eq);
-        if (!val)
-            return 2;
-        if (o->kind == IC_OPT_HELP)
-            return -1 - id;
-        int rc = store(a, o, val);
+            return ERR("%.*s: unknown option; see irrcache render --help", (int)len, arg);
+        int rc = parse_option(&tables[IC_CLI_RENDER], id, eq, argc, argv, &i, a);
         if (rc)
             return rc;
-        a->given[id] = val;
     }
     return check(a);
 }
@@ -366,23 +497,70 @@ int ic_cli_parse(int argc, char **argv, ic_cli_args *a)
 int ic_cli_parse_shared_option(int argc, char **argv, int *i, ic_cli_args *a, const char *command,
                                const ic_arg_id *ids, size_t count)
 {
-    const char *arg = argv[*i];
-    const char *eq = arg[0] == '-' && arg[1] == '-' ? strchr(arg, '=') : NULL;
-    size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
-    int id = find_option(arg, len), shared = 0;
+    const char *eq;
+    size_t len = name_length(argv[*i], &eq);
+    int id = find_option(&tables[IC_CLI_RENDER], argv[*i], len), shared = 0;
     for (size_t k = 0; k < count; ++k)
         shared |= id == (int)ids[k];
     if (!shared)
         return 0;
     err_command = command;
-    const opt_def *o = &options[id];
-    const char *val = take_value(argc, argv, i, o, eq);
-    int rc = val ? store(a, o, val) : 2;
+    int rc = parse_option(&tables[IC_CLI_RENDER], id, eq, argc, argv, i, a);
     err_command = "render";
-    if (rc)
-        return -1;
-    a->given[id] = val;
-    return 1;
+    return rc ? -1 : 1;
+}
+
+void ic_cli_command_defaults(ic_cli_command cmd, void *args)
+{
+    const opt_table *t = &tables[cmd];
+    memset(args, 0, t->size);
+    for (int i = 0; i < t->count; ++i) {
+        const opt_def *o = &t->defs[i];
+        char *field = (char *)args + o->offset;
+        switch (o->kind) {
+        case IC_OPT_INT:
+        case IC_OPT_SIZE_INT:
+            if (!isnan(o->def))
+                *(int *)field = (int)o->def;
+            break;
+        case IC_OPT_SIZE:
+            if (!isnan(o->def))
+                *(uint64_t *)field = (uint64_t)o->def;
+            break;
+        case IC_OPT_FLOAT:
+        case IC_OPT_FLOAT_ABOVE:
+            if (!isnan(o->def))
+                *(float *)field = (float)o->def;
+            break;
+        case IC_OPT_DOUBLE:
+        case IC_OPT_DOUBLE_ABOVE:
+            if (!isnan(o->def))
+                *(double *)field = o->def;
+            break;
+        case IC_OPT_CHOICE: {
+            int k = choice_index(o->value_name, '|', o->default_text, strlen(o->default_text));
+            *(int *)field = k < 0 ? 0 : k;
+            break;
+        }
+        default:
+            break;
+        }
+    }
+}
+
+int ic_cli_parse_command_option(ic_cli_command cmd, int argc, char **argv, int *i, void *args)
+{
+    const opt_table *t = &tables[cmd];
+    const char *eq;
+    size_t len = name_length(argv[*i], &eq);
+    err_command = t->command;
+    int id = find_option(t, argv[*i], len), rc;
+    if (id < 0)
+        rc = ERR("%.*s: unknown option; see irrcache %s --help", (int)len, argv[*i], t->command);
+    else
+        rc = parse_option(t, id, eq, argc, argv, i, args);
+    err_command = "render";
+    return rc;
 }
 
 /* A space that wrap() prints but does not break a line at: a range ("[1, 65536]") stays on one line. */
@@ -417,33 +595,6 @@ static void option_left(const opt_def *o, char *buf, size_t size, const char *qu
              takes_value(o->kind) ? " " : "", takes_value(o->kind) ? o->value_name : "", quote, "");
 }
 
-/* One end of a range as --help writes it: a whole number in full up to 10 digits, beyond that a power of two
- * as 2^N (the uint64 seed's 2^64 as 2^64 - 1, the largest it takes); other numbers as %g without the
- * exponent's padding (1e6, 1e-30). */
-static void range_end(double v, int whole, char *buf, size_t size)
-{
-    int e = 0;
-    if (whole && fabs(v) >= 1e10 && frexp(v, &e) == 0.5)
-        snprintf(buf, size, "2^%d%s", e - 1, e - 1 == 64 ? " - 1" : ""); /* uint64's 2^64 - 1 rounds to 2^64 */
-    else if (whole)
-        snprintf(buf, size, "%.0f", v);
-    else {
-        char raw[32], *x;
-        snprintf(raw, sizeof raw, "%g", v);
-        if ((x = strchr(raw, 'e')) != NULL) { /* "1e+06" → "1e6", "1e-06" → "1e-6" */
-            char *d = x + 1, *r = x + 1;
-            if (*r == '+')
-                ++r;
-            else if (*r == '-')
-                *d++ = *r++;
-            while (*r == '0' && r[1])
-                ++r;
-            memmove(d, r, strlen(r) + 1);
-        }
-        snprintf(buf, size, "%s", raw);
-    }
-}
-
 /* A number option's declared range as --help and the README show it: "[1, 65536]", "(0, 1]" where the
  * lower end is excluded (a number or off); "" for an option that takes no number. `space` follows the
  * comma and in "2^64 - 1" (GLUE for wrap()). */
@@ -452,12 +603,13 @@ static void range_text(const opt_def *o, char space, char *buf, size_t size)
     char lo[32], hi[32];
     int whole = o->kind == IC_OPT_INT || o->kind == IC_OPT_SEED || o->kind == IC_OPT_SIZE ||
                 o->kind == IC_OPT_SIZE_INT || o->kind == IC_OPT_RAYS;
+    int open = o->kind == IC_OPT_NUMBER_OFF || o->kind == IC_OPT_FLOAT_ABOVE || o->kind == IC_OPT_DOUBLE_ABOVE;
     buf[0] = 0;
-    if (!whole && o->kind != IC_OPT_FLOAT && o->kind != IC_OPT_DOUBLE && o->kind != IC_OPT_NUMBER_OFF)
+    if (!whole && !open && o->kind != IC_OPT_FLOAT && o->kind != IC_OPT_DOUBLE && o->kind != IC_OPT_NUMBERS)
         return;
     range_end(o->min_value, whole, lo, sizeof lo);
     range_end(o->max_value, whole, hi, sizeof hi);
-    snprintf(buf, size, "%c%s, %s]", o->kind == IC_OPT_NUMBER_OFF ? '(' : '[', lo, hi);
+    snprintf(buf, size, "%c%s, %s]", open ? '(' : '[', lo, hi);
     for (char *p = buf; *p; ++p)
         *p = *p == ' ' ? space : *p;
 }
@@ -473,9 +625,8 @@ static void help_text(const opt_def *o, char *buf, size_t size)
     }
 }
 
-void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width)
+static void print_row(FILE *f, const opt_def *o, int left_width)
 {
-    const opt_def *o = &options[id];
     char left[96], help[2048], text[2400], def[96], range[80];
     option_left(o, left, sizeof left, "");
     default_string(o, def, sizeof def);
@@ -492,6 +643,17 @@ void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width)
     wrap(f, text, left_width, at);
 }
 
+void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width)
+{
+    print_row(f, &options[id], left_width);
+}
+
+void ic_cli_print_command_options(FILE *f, ic_cli_command cmd, int left_width)
+{
+    for (int i = 0; i < tables[cmd].count; ++i)
+        print_row(f, &tables[cmd].defs[i], left_width);
+}
+
 void ic_cli_print_help(FILE *f)
 {
     fprintf(f, "usage: irrcache render SCENE -o OUT [options]\n\n"
@@ -499,8 +661,7 @@ void ic_cli_print_help(FILE *f)
                "each also gzip-compressed: .obj.gz).\n"
                "Options take their value as --name VALUE or --name=VALUE; -- ends the options.\n\n"
                "options:\n");
-    for (int i = 0; i < IC_ARG_COUNT; ++i)
-        ic_cli_print_option(f, (ic_arg_id)i, 30);
+    ic_cli_print_command_options(f, IC_CLI_RENDER, 30);
     fprintf(f, "\nexit status: 0 success, 1 failure while working (I/O, malformed scene), 2 usage error, 3 the render\n"
                "finished but an output could not be written (each such output named; the others written), 130 or 143\n"
                "interrupted by SIGINT or SIGTERM: the render stops at its next tile and every output holds the\n"
@@ -523,11 +684,12 @@ static void md_cell(FILE *f, const char *text)
     }
 }
 
-static void markdown_table(FILE *f, int ic)
+/* The rows of table t (of render's: the irradiance-cache options, or the others) but its help options. */
+static void markdown_table(FILE *f, const opt_table *t, int ic)
 {
     fprintf(f, "| option | range | default | meaning |\n|---|---|---|---|\n");
-    for (int i = 0; i < IC_ARG_COUNT; ++i) {
-        const opt_def *o = &options[i];
+    for (int i = 0; i < t->count; ++i) {
+        const opt_def *o = &t->defs[i];
         if ((o->scope != IC_SCOPE_ALL) != ic || o->kind == IC_OPT_HELP)
             continue;
         char left[96], def[96], help[2048], range[80];
@@ -553,9 +715,19 @@ static void markdown_table(FILE *f, int ic)
 void ic_cli_print_markdown(FILE *f)
 {
     fprintf(f, "Common options:\n\n");
-    markdown_table(f, 0);
+    markdown_table(f, &tables[IC_CLI_RENDER], 0);
     fprintf(f, "\nIrradiance caching (`--integrator ic`):\n\n");
-    markdown_table(f, 1);
+    markdown_table(f, &tables[IC_CLI_RENDER], 1);
+}
+
+void ic_cli_print_command_markdown(FILE *f, ic_cli_command cmd)
+{
+    markdown_table(f, &tables[cmd], 0);
+}
+
+void ic_cli_option_markdown(ic_arg_id id, char *buf, size_t size)
+{
+    option_left(&options[id], buf, size, "`");
 }
 
 /* "--max-radius-px" → "max_radius_px". */
@@ -606,6 +778,8 @@ static cJSON *setting(const ic_cli_args *a, int id)
     case IC_OPT_INT:
     case IC_OPT_FLOAT:
     case IC_OPT_DOUBLE:
+    case IC_OPT_FLOAT_ABOVE:
+    case IC_OPT_DOUBLE_ABOVE:
     case IC_OPT_RAYS:
         if (given)
             return cJSON_CreateNumber(strtod(given, NULL));
@@ -615,8 +789,10 @@ static cJSON *setting(const ic_cli_args *a, int id)
             return strcmp(given, "off") ? cJSON_CreateNumber(strtod(given, NULL)) : cJSON_CreateString("off");
         break;
     case IC_OPT_STRING:
+    case IC_OPT_OUT_FILE:
     case IC_OPT_LIST:
         return given ? cJSON_CreateString(given) : cJSON_CreateNull();
+    case IC_OPT_NUMBERS: /* not in render's table */
     case IC_OPT_OUTPUT:
     case IC_OPT_HELP:
         return NULL;

@@ -1,21 +1,26 @@
 /*
- * options.h — every option of `irrcache render`, declared once.
+ * options.h — every option of the irrcache commands, declared once.
  *
  * IC_RENDER_OPTIONS is an X-macro: one row per option, from which come the parser (--name VALUE,
  * --name=VALUE, the alias, `--` ends the options), the range checks, --help (wrapped within 100
  * columns; a number's range as the checks use it), the README's tables (--help-markdown) and the
  * settings echoed in the --stats JSON. A
  * numeric default is the constant of irrcache/defaults.h that the library itself falls back to, so
- * the help cannot disagree with what is rendered.
+ * the help cannot disagree with what is rendered. IC_POINTS_OPTIONS and IC_DIFF_OPTIONS are the
+ * options of `irrcache points` and `irrcache diff` that render does not take, in rows of the same
+ * form, from which come those commands' parsers, checks, defaults, --help and README tables alike
+ * (the options points shares with render are render's rows: ic_cli_parse_shared_option).
  *
- * Row: X(ID, "--name", "alias" or NULL, kind, member of ic_cli_args, min, max (a number's range, which
- *        the parser checks and --help shows; 0, 0 for the other kinds), "VALUE" (for a choice:
- *        "a|b|c", in the order of the enum it sets), numeric default or NAN, "default text" ("%g" takes
- *        the numeric default), "unit", scope, "help")
+ * Row: X(ID, "--name", "alias" or NULL, kind, member of the command's args struct, min, max (a number's
+ *        range, which the parser checks and --help shows; 0, 0 for the other kinds), "VALUE" (for a
+ *        choice: "a|b|c", in the order of the enum it sets; for a number "E|word": the word is taken for
+ *        min, as in --max-error E|auto), numeric default or NAN, "default text" ("%g" takes the numeric
+ *        default), "unit", scope, "help")
  */
 #ifndef IC_CLI_OPTIONS_H
 #define IC_CLI_OPTIONS_H
 
+#include "irrcache/points.h"
 #include "irrcache/render.h"
 
 #include <math.h>
@@ -27,19 +32,24 @@
 
 typedef enum ic_opt_kind {
     IC_OPT_INT,        /* int */
-    IC_OPT_SEED,       /* uint64_t; also sets render.has_seed */
+    IC_OPT_SEED,       /* uint64_t; also sets render.has_seed (render only) */
     IC_OPT_SIZE,       /* uint64_t, a size or count: a whole number, K, M, G or T after it (either case)
                           multiplying by 2^10 ... 2^40 (ic_cli_parse_size; --help lists those up to max) */
     IC_OPT_SIZE_INT,   /* int, the same */
     IC_OPT_FLOAT,      /* float */
     IC_OPT_DOUBLE,     /* double */
+    IC_OPT_FLOAT_ABOVE,  /* float in (min, max]: min itself refused (as stored: 1e-50 is 0 as a float) */
+    IC_OPT_DOUBLE_ABOVE, /* double in (min, max] */
+    IC_OPT_NUMBERS,    /* double[n]: n numbers in [min, max], one argument each after the option, n the
+                          words of VALUE ("X0 Y0 Z0 X1 Y1 Z1") */
     IC_OPT_CHOICE,     /* an enum: the index of the value in "a|b|c" */
     IC_OPT_ON_OFF,     /* ic_cache_switch from on|off */
     IC_OPT_FLAG,       /* int set to 1 */
     IC_OPT_FLAG_OFF,   /* ic_cache_switch set to IC_CACHE_OFF */
     IC_OPT_FLAG_ON,    /* ic_cache_switch set to IC_CACHE_ON */
     IC_OPT_STRING,     /* const char * */
-    IC_OPT_OUTPUT,     /* appended to outputs[] */
+    IC_OPT_OUT_FILE,   /* const char *, a file the command writes (an empty path is refused as one) */
+    IC_OPT_OUTPUT,     /* appended to outputs[] (render only) */
     IC_OPT_RAYS,       /* a ray count, stored as M×N strata (ic_gather_opts) */
     IC_OPT_NUMBER_OFF, /* ic_switched_value: a number in (min, max], or off */
     IC_OPT_LIST,       /* comma-separated names of those in VALUE "a,b,c" */
@@ -50,6 +60,12 @@ typedef enum ic_opt_kind {
 typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_LAZY, IC_SCOPE_ADAPTIVE } ic_opt_scope;
 
 /* clang-format off */
+/* The last rows of every command's table: --help, and --help-markdown, which prints `tables`. */
+#define IC_HELP_OPTIONS(X, tables) \
+    X(HELP, "--help", "-h", IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, "show this help and exit") \
+    X(HELP_MARKDOWN, "--help-markdown", NULL, IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, \
+      "print " tables " (Markdown) and exit")
+
 #define IC_RENDER_OPTIONS(X) \
     X(OUTPUT, "--output", "-o", IC_OPT_OUTPUT, outputs, 0, 0, "PATH", NAN, "(required)", "", IC_SCOPE_ALL, \
       "output image; the format follows the extension: .exr (linear float), .png (tone-mapped sRGB), " \
@@ -243,9 +259,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "output is an .exr, these three are its layers instead (channels indirect.R ...) -, <stem>.records.png " \
       "(dots and radii; radiance records yellow in blue rings), <stem>.amap.png (a of the heaviest record, " \
       "blue = --accuracy to red = accuracy/32)") \
-    X(HELP, "--help", "-h", IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, "show this help and exit") \
-    X(HELP_MARKDOWN, "--help-markdown", NULL, IC_OPT_HELP, none, 0, 0, "", NAN, "", "", IC_SCOPE_ALL, \
-      "print the option tables of README.md (Markdown) and exit")
+    IC_HELP_OPTIONS(X, "the option tables of README.md")
 /* clang-format on */
 
 #define IC_OPT_ID(id, ...) IC_ARG_##id,
@@ -296,5 +310,118 @@ void ic_cli_size_suffixes(double max, char *buf, size_t size);
 struct cJSON *ic_cli_settings_json(const ic_cli_args *a);
 /* The name a choice option was given (or its default, the first), for messages and the stats. */
 const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id);
+
+/* The longest line of a points file (points.c reads no further: /dev/zero ends there). */
+#define IC_CLI_MAX_POINT_LINE 4096
+#define IC_CLI_STR_(x) #x
+#define IC_CLI_STR(x) IC_CLI_STR_(x)
+
+/* clang-format off */
+/* `irrcache points`: its own options (members of ic_points_args). */
+#define IC_POINTS_OPTIONS(X) \
+    X(POINTS, "--points", NULL, IC_OPT_STRING, points, 0, 0, "FILE", NAN, "none", "", IC_SCOPE_ALL, \
+      "the points, one 'x y z nx ny nz' a line ('-': standard input); required unless --grid") \
+    X(OUTPUT, "--output", "-o", IC_OPT_OUT_FILE, output, 0, 0, "FILE", NAN, "standard output", "", IC_SCOPE_ALL, \
+      "write the results there, atomically") \
+    X(FORMAT, "--format", NULL, IC_OPT_CHOICE, format, 0, 0, "text|csv|json", NAN, "text", "", IC_SCOPE_ALL, \
+      "text (space-separated), csv (with a header line) or json") \
+    X(GRID, "--grid", NULL, IC_OPT_NUMBERS, grid, -1e18, 1e18, "X0 Y0 Z0 X1 Y1 Z1", NAN, "none", "", IC_SCOPE_ALL, \
+      "instead of --points: a work-plane grid over the floor x0..x1, z0..z1 of that box (the room's floor " \
+      "corner and the opposite top corner, +y up), one upward sensor at the centre of each whole cell, " \
+      "centred; each output row then starts with its point 'x y z nx ny nz'; the range is each number's") \
+    X(SPACING, "--spacing", NULL, IC_OPT_DOUBLE_ABOVE, spacing, 0, 1e18, "S", NAN, "(required with --grid)", "", \
+      IC_SCOPE_ALL, "the grid's cell size") \
+    X(HEIGHT, "--height", NULL, IC_OPT_DOUBLE, height, 0, 1e18, "H", IC_DEFAULT_GRID_HEIGHT, "%g", "", \
+      IC_SCOPE_ALL, "the grid's height above y0") \
+    X(MAP, "--map", NULL, IC_OPT_OUT_FILE, map, 0, 0, "FILE.png", NAN, "none", "", IC_SCOPE_ALL, \
+      "with --grid: a false-colour map of the grid (lux, or the daylight factor), seen from above with +x " \
+      "to the right and -z up, and a legend") \
+    X(MAP_MAX, "--map-max", NULL, IC_OPT_DOUBLE_ABOVE, map_max, 0, 1e18, "V", NAN, "the largest value", "", \
+      IC_SCOPE_ALL, "the top of the map's scale") \
+    X(DAYLIGHT_FACTOR, "--daylight-factor", NULL, IC_OPT_FLAG, daylight_factor, 0, 0, "", NAN, "off", "", \
+      IC_SCOPE_ALL, "two more columns: the daylight factor (%), 100 x lux / (the unobstructed horizontal " \
+      "illuminance of the scene's sky, 179 x 7 pi/9 x L_z), and its sigma; the scene must be lit by a " \
+      "cie-overcast sky alone") \
+    X(INTEGRATOR, "--integrator", NULL, IC_OPT_CHOICE, integrator, 0, 0, "pt|ic", NAN, "ic", "", IC_SCOPE_ALL, \
+      "ic: irradiance cache, records gathered at the sensors and shared by neighbours, direct light sampled " \
+      "at every point; pt: path-traced reference") \
+    X(SAMPLES, "--samples", NULL, IC_OPT_INT, samples, 1, IC_MAX_POINT_SAMPLES, "N", IC_DEFAULT_POINT_SAMPLES, \
+      "%g", "", IC_SCOPE_ALL, "pt: paths per point, rounded up to a multiple of " IC_CLI_STR(IC_POINT_REPLICATES)) \
+    X(LIGHT_SAMPLES, "--light-samples", NULL, IC_OPT_INT, light_samples, 1, IC_MAX_POINT_SAMPLES, "N", \
+      IC_DEFAULT_POINT_LIGHT_SAMPLES, "%g", "", IC_SCOPE_ALL, "ic: samples per point for the direct light " \
+      "(emitters and sky), rounded up to a multiple of " IC_CLI_STR(IC_POINT_REPLICATES)) \
+    X(MAX_POINTS, "--max-points", NULL, IC_OPT_SIZE, max_points, 1, 4294967295.0, "N", 16777216, "%.0f", "", \
+      IC_SCOPE_ALL, "most points read from --points; a line is at most " IC_CLI_STR(IC_CLI_MAX_POINT_LINE) \
+      " bytes") \
+    IC_HELP_OPTIONS(X, "the option table of README.md's section on points")
+
+/* `irrcache diff`: its options (members of ic_diff_args). */
+#define IC_DIFF_OPTIONS(X) \
+    X(JSON, "--json", NULL, IC_OPT_FLAG, json, 0, 0, "", NAN, "a table", "", IC_SCOPE_ALL, \
+      "print one JSON object: width, height, rmse, relmse, relmse_lowpass, psnr_hdr, psnr_ldr, ssim, " \
+      "nonfinite; with --heatmap also heatmap, heatmap_max_error (the scale used) and heatmap_scale " \
+      "(\"fixed\" or \"p99\"); with --blotch-map also blotch_map and blotch_max_error (the table prints the " \
+      "scale on its heat-map line)") \
+    X(HEATMAP, "--heatmap", NULL, IC_OPT_OUT_FILE, heatmap, 0, 0, "FILE", NAN, "none", "", IC_SCOPE_ALL, \
+      "write a false-colour map of the per-pixel relative luma error |a-b|/(|b|+0.01): blue = 0 ... red = " \
+      "--max-error and above (.png, .exr, .pfm or .hdr; magenta = NaN/Inf)") \
+    X(MAX_ERROR, "--max-error", NULL, IC_OPT_FLOAT, max_error, 0, 3e38, "E|auto", IC_DEFAULT_HEATMAP_MAX_ERROR, "%g", \
+      "", IC_SCOPE_ALL, "relative error shown as full red in the heat map: a fixed scale, so the heat maps of " \
+      "two images against one reference compare (a pixel with the same error has the same colour); auto " \
+      "(or 0): the 99th percentile of this image's errors, which does not compare") \
+    X(BLOTCH_MAP, "--blotch-map", NULL, IC_OPT_OUT_FILE, blotch_map, 0, 0, "FILE", NAN, "none", "", IC_SCOPE_ALL, \
+      "write a map of the low-pass error that relMSE lp measures, signed: both images blurred (sigma = 2 " \
+      "pixels), then (a-b)/(|b|+0.01) of their luma, red where A is brighter, blue where darker, black where " \
+      "they agree; pixel noise is blurred away, blotches and bias stay (.png, .exr, .pfm or .hdr)") \
+    X(BLOTCH_MAX_ERROR, "--blotch-max-error", NULL, IC_OPT_FLOAT_ABOVE, blotch_max_error, 0, 3e38, "E", \
+      IC_DEFAULT_BLOTCH_MAX_ERROR, "%g", "", IC_SCOPE_ALL, "the blotch map's full colour, a fixed scale") \
+    IC_HELP_OPTIONS(X, "the option table of README.md's section on diff")
+/* clang-format on */
+
+#define IC_OPT_ID(id, ...) IC_POINTS_ARG_##id,
+typedef enum ic_points_arg_id { IC_POINTS_OPTIONS(IC_OPT_ID) IC_POINTS_ARG_COUNT } ic_points_arg_id;
+#undef IC_OPT_ID
+#define IC_OPT_ID(id, ...) IC_DIFF_ARG_##id,
+typedef enum ic_diff_arg_id { IC_DIFF_OPTIONS(IC_OPT_ID) IC_DIFF_ARG_COUNT } ic_diff_arg_id;
+#undef IC_OPT_ID
+
+/* What points' own options say (ic_cli_command_defaults: each declared default). */
+typedef struct ic_points_args {
+    const char *points, *output, *map;
+    int format;            /* 0 text, 1 csv, 2 json */
+    int integrator;        /* ic_integrator */
+    int samples, light_samples, daylight_factor;
+    uint64_t max_points;
+    double grid[6];        /* x0 y0 z0 x1 y1 z1 */
+    double spacing, height, map_max;
+    int none;
+    const char *given[IC_POINTS_ARG_COUNT]; /* the value as written (--grid: its first), NULL if not given */
+} ic_points_args;
+
+typedef struct ic_diff_args {
+    const char *heatmap, *blotch_map;
+    int json;
+    float max_error;       /* 0: --max-error auto */
+    float blotch_max_error;
+    int none;
+    const char *given[IC_DIFF_ARG_COUNT];
+} ic_diff_args;
+
+/* The commands with an option table: their args are ic_cli_args, ic_points_args, ic_diff_args. */
+typedef enum ic_cli_command { IC_CLI_RENDER, IC_CLI_POINTS, IC_CLI_DIFF } ic_cli_command;
+
+/* Clears args and sets each option's declared default (a number; a choice's default text). For the
+ * tables of points and diff: render's defaults come from the scene and the library. */
+void ic_cli_command_defaults(ic_cli_command cmd, void *args);
+/* Parses argv[*i], an option of cmd's own table, into args; *i moves past its value(s). Returns 0, 2
+ * after a one-line usage error "irrcache COMMAND: ..." (an unknown option too), or −1 − ID of a help
+ * option. */
+int ic_cli_parse_command_option(ic_cli_command cmd, int argc, char **argv, int *i, void *args);
+/* Every row of cmd's table as --help gives it (ic_cli_print_option's layout). */
+void ic_cli_print_command_options(FILE *f, ic_cli_command cmd, int left_width);
+/* cmd's table (its help options left out) as README.md has it: | option | range | default | meaning |. */
+void ic_cli_print_command_markdown(FILE *f, ic_cli_command cmd);
+/* Render's option id as the README's tables write it: "`--rays N`". */
+void ic_cli_option_markdown(ic_arg_id id, char *buf, size_t size);
 
 #endif

@@ -32,12 +32,12 @@
 #define EXIT_WORK 1
 #define EXIT_USAGE 2
 
+/* --format's values, in the order of its declaration (options.h). */
 typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON } out_format;
 
 /* The points file's limits: lines (a sensor's six numbers and a comment fit many times over) and, as
  * --max-points, their count, so that neither /dev/zero nor a runaway generator grows memory unbounded. */
-#define MAX_POINT_LINE 4096
-#define DEFAULT_MAX_POINTS (1 << 24)
+#define MAX_POINT_LINE IC_CLI_MAX_POINT_LINE
 
 /* The options points takes from render's table: their names, values, checks and help are render's. */
 static const ic_arg_id shared_ids[] = {IC_ARG_ACCURACY, IC_ARG_RAYS, IC_ARG_MAX_DEPTH, IC_ARG_SEED, IC_ARG_THREADS,
@@ -45,8 +45,6 @@ static const ic_arg_id shared_ids[] = {IC_ARG_ACCURACY, IC_ARG_RAYS, IC_ARG_MAX_
 
 static void print_help(FILE *out)
 {
-    char suffixes[160];
-    ic_cli_size_suffixes(UINT32_MAX, suffixes, sizeof suffixes);
     fprintf(out,
             "usage: irrcache points SCENE --points FILE|- [options]\n"
             "       irrcache points SCENE --grid X0 Y0 Z0 X1 Y1 Z1 --spacing S [--map FILE.png] [options]\n"
@@ -60,70 +58,28 @@ static void print_help(FILE *out)
             "  sigma        one-sigma Monte Carlo error of the illuminance (lux), from 16 independent\n"
             "               replicates per point; for the cache it leaves out the interpolation's bias,\n"
             "               which --accuracy bounds\n"
+            "Options take their value as --name VALUE or --name=VALUE (--grid: six arguments).\n"
             "\n"
-            "options:\n"
-            "  --points FILE      the points ('-': standard input) (required unless --grid)\n"
-            "  -o, --output FILE  write the results there, atomically (default: standard output)\n"
-            "  --format F         text (space-separated), csv (with a header line) or json (default: text)\n"
-            "  --grid X0 Y0 Z0 X1 Y1 Z1\n"
-            "                     instead of --points: a work-plane grid over the floor x0..x1, z0..z1 of that\n"
-            "                     box (+y up), one upward sensor at the centre of each whole cell, centred;\n"
-            "                     each output row then starts with its point 'x y z nx ny nz'\n"
-            "  --spacing S        the grid's cell size (required with --grid)\n"
-            "  --height H         the grid's height above y0 (default: %g)\n"
-            "  --map FILE.png     with --grid: a false-colour map of the grid (lux, or the daylight factor),\n"
-            "                     seen from above with +x to the right and -z up, and a legend\n"
-            "  --map-max V        the top of the map's scale (default: the largest value)\n"
-            "  --daylight-factor  two more columns: the daylight factor (%%), 100 x lux / (the unobstructed\n"
-            "                     horizontal illuminance of the scene's sky, 179 x 7 pi/9 x L_z), and its sigma;\n"
-            "                     the scene must be lit by a cie-overcast sky alone\n"
-            "  --integrator I     ic: irradiance cache, records gathered at the sensors and shared by\n"
-            "                     neighbours, direct light sampled at every point; pt: path-traced\n"
-            "                     reference (default: ic)\n"
-            "  --samples N        pt: paths per point, rounded up to a multiple of 16 (default: %d)\n"
-            "  --light-samples N  ic: samples per point for the direct light (emitters and sky), rounded\n"
-            "                     up to a multiple of 16 (default: %d)\n"
-            "  --max-points N     most points read from --points (default: %d); a line is at most\n"
-            "                     %d bytes (N may end in %s)\n"
-            "  -h, --help         show this help\n"
-            "options as for irrcache render (the sensor is the first scattering event; ic needs --max-depth 2\n"
-            "or more):\n",
-            IC_DEFAULT_GRID_HEIGHT, IC_DEFAULT_POINT_SAMPLES, IC_DEFAULT_POINT_LIGHT_SAMPLES, DEFAULT_MAX_POINTS,
-            MAX_POINT_LINE, suffixes);
+            "options:\n");
+    ic_cli_print_command_options(out, IC_CLI_POINTS, 21);
+    fprintf(out, "options as for irrcache render (the sensor is the first scattering event; ic needs --max-depth 2\n"
+                 "or more):\n");
     for (size_t k = 0; k < sizeof shared_ids / sizeof shared_ids[0]; ++k)
         ic_cli_print_option(out, shared_ids[k], 21);
     fprintf(out, "\nexit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n");
 }
 
-
-/* A whole-string integer in [lo, hi]; prints the usage error and returns 0 otherwise. */
-static int parse_int(const char *opt, const char *s, long long lo, long long hi, long long *out)
+/* The README's table of points' options, and a line naming those it takes from render. */
+static void print_markdown(FILE *out)
 {
-    char *end = NULL;
-    errno = 0;
-    long long v = strtoll(s, &end, 10);
-    if (end == s || *end != '\0' || errno || v < lo || v > hi) {
-        fprintf(stderr, "irrcache points: %s %s: not an integer in [%lld, %lld]; give one such as %lld\n", opt, s, lo,
-                hi, lo > 1 ? lo : 1);
-        return 0;
+    ic_cli_print_command_markdown(out, IC_CLI_POINTS);
+    fprintf(out, "\nAs for `render` (the same values and checks; its table's help lines in `points --help`):");
+    for (size_t k = 0; k < sizeof shared_ids / sizeof shared_ids[0]; ++k) {
+        char name[96];
+        ic_cli_option_markdown(shared_ids[k], name, sizeof name);
+        fprintf(out, "%s %s", k ? "," : "", name);
     }
-    *out = v;
-    return 1;
-}
-
-/* A whole-string finite number above lo (lo < 0: at least 0); prints the usage error and returns 0 otherwise. */
-static int parse_real(const char *opt, const char *s, double lo, double *out)
-{
-    char *end = NULL;
-    double v = strtod(s, &end);
-    int ok = end != s && *end == '\0' && isfinite(v) && fabs(v) <= 1e18 && (lo < 0.0 ? v >= 0.0 : v > lo);
-    if (!ok) {
-        fprintf(stderr, "irrcache points: %s %s: not a number %s; give one such as 0.5\n", opt, s,
-                lo < 0.0 ? ">= 0" : "> 0");
-        return 0;
-    }
-    *out = v;
-    return 1;
+    fprintf(out, ".\n");
 }
 
 /* The points of one line: 1 if it holds a point, 0 if blank or a comment, -1 if malformed (message in why). */
@@ -400,114 +356,55 @@ static int points_command(int argc, char **argv, ic_comm *comm)
 {
     int rank = ic_cli_cluster_rank(comm), ranks = ic_cli_cluster_size(comm);
     int muted = ic_cli_cluster_mute(rank != 0);
-    const char *scene_path = NULL, *points_path = NULL, *out_path = NULL;
-    out_format format = FORMAT_TEXT;
-    int daylight_factor = 0, has_grid = 0, has_spacing = 0, has_height = 0, has_map_max = 0;
-    ic_points_grid_spec grid = {0};
-    grid.height = IC_DEFAULT_GRID_HEIGHT;
-    const char *map_path = NULL;
-    double map_max = 0.0;
-    ic_points_options opt;
-    memset(&opt, 0, sizeof opt);
-    opt.integrator = IC_INTEGRATOR_IC;
+    const char *scene_path = NULL;
+    ic_points_args own; /* points' own options, by its table (options.h) */
+    ic_cli_command_defaults(IC_CLI_POINTS, &own);
     ic_cli_args args; /* the options shared with render (load limits, depth, seed, threads, cache), by its table */
     memset(&args, 0, sizeof args);
-    long long max_points = DEFAULT_MAX_POINTS;
     for (int i = 1; i < argc; ++i) {
-        const char *arg = argv[i], *value;
-        int missing = 0, shared = 0;
-        long long v = 0;
+        const char *arg = argv[i];
+        int shared = 0, rc;
         if (arg[0] != '-' || arg[1] == '\0') {
             if (scene_path) {
                 fprintf(stderr, "irrcache points: %s: unexpected extra argument; give one scene\n", arg);
                 return EXIT_USAGE;
             }
             scene_path = arg;
-        } else if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
-            if (rank != 0)
-                return 0;
-            print_help(stdout);
-            return ic_cli_flush_stdout("irrcache points");
         } else if ((shared = ic_cli_parse_shared_option(argc, argv, &i, &args, "points", shared_ids,
                                                         sizeof shared_ids / sizeof shared_ids[0])) != 0) {
             if (shared < 0)
                 return EXIT_USAGE;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--max-points", &missing)) != NULL) {
-            uint64_t n = 0;
-            if (!ic_cli_parse_size(value, &n) || n < 1 || n > UINT32_MAX) {
-                char suffixes[160];
-                ic_cli_size_suffixes(UINT32_MAX, suffixes, sizeof suffixes);
-                fprintf(stderr, "irrcache points: --max-points %s: not a whole number in [1, %u]; it may end in %s\n",
-                        value, UINT32_MAX, suffixes);
-                return EXIT_USAGE;
-            }
-            max_points = (long long)n;
-        } else if (!strcmp(arg, "--daylight-factor")) {
-            daylight_factor = 1;
-        } else if (!strcmp(arg, "--grid")) {
-            if (!ic_cli_grid_box(argc, argv, &i, &grid))
-                return EXIT_USAGE;
-            has_grid = 1;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--spacing", &missing)) != NULL) {
-            if (!parse_real("--spacing", value, 0.0, &grid.spacing))
-                return EXIT_USAGE;
-            has_spacing = 1;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--height", &missing)) != NULL) {
-            if (!parse_real("--height", value, -1.0, &grid.height))
-                return EXIT_USAGE;
-            has_height = 1;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--map-max", &missing)) != NULL) {
-            if (!parse_real("--map-max", value, 0.0, &map_max))
-                return EXIT_USAGE;
-            has_map_max = 1;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--map", &missing)) != NULL) {
-            size_t len = strlen(value);
-            if (len < 4 || strcasecmp(value + len - 4, ".png") != 0) {
-                fprintf(stderr, "irrcache points: --map %s: the map is a PNG; give a path ending in .png\n", value);
-                return EXIT_USAGE;
-            }
-            map_path = value;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--points", &missing)) != NULL) {
-            points_path = value;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "-o", &missing)) != NULL ||
-                   (value = ic_cli_option_value(argc, argv, &i, "--output", &missing)) != NULL) {
-            out_path = value;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--format", &missing)) != NULL) {
-            if (!strcmp(value, "text"))
-                format = FORMAT_TEXT;
-            else if (!strcmp(value, "csv"))
-                format = FORMAT_CSV;
-            else if (!strcmp(value, "json"))
-                format = FORMAT_JSON;
-            else {
-                fprintf(stderr, "irrcache points: --format %s: unknown; use text, csv or json\n", value);
-                return EXIT_USAGE;
-            }
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--integrator", &missing)) != NULL) {
-            if (!strcmp(value, "ic"))
-                opt.integrator = IC_INTEGRATOR_IC;
-            else if (!strcmp(value, "pt"))
-                opt.integrator = IC_INTEGRATOR_PT;
-            else {
-                fprintf(stderr, "irrcache points: --integrator %s: unknown; use ic or pt\n", value);
-                return EXIT_USAGE;
-            }
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--samples", &missing)) != NULL) {
-            if (!parse_int("--samples", value, 1, IC_MAX_POINT_SAMPLES, &v))
-                return EXIT_USAGE;
-            opt.samples = (int)v;
-        } else if ((value = ic_cli_option_value(argc, argv, &i, "--light-samples", &missing)) != NULL) {
-            if (!parse_int("--light-samples", value, 1, IC_MAX_POINT_SAMPLES, &v))
-                return EXIT_USAGE;
-            opt.light_samples = (int)v;
-        } else if (missing) {
-            fprintf(stderr, "irrcache points: %s: missing value; see irrcache points --help\n", arg);
-            return EXIT_USAGE;
-        } else {
-            fprintf(stderr, "irrcache points: %s: unknown option; see irrcache points --help\n", arg);
+        } else if ((rc = ic_cli_parse_command_option(IC_CLI_POINTS, argc, argv, &i, &own)) < 0) {
+            if (rank != 0)
+                return 0;
+            if (rc == -1 - IC_POINTS_ARG_HELP_MARKDOWN)
+                print_markdown(stdout);
+            else
+                print_help(stdout);
+            return ic_cli_flush_stdout("irrcache points");
+        } else if (rc) {
             return EXIT_USAGE;
         }
     }
+    const char *points_path = own.points, *out_path = own.output, *map_path = own.map;
+    out_format format = (out_format)own.format;
+    int has_grid = own.given[IC_POINTS_ARG_GRID] != NULL, has_spacing = own.given[IC_POINTS_ARG_SPACING] != NULL,
+        has_height = own.given[IC_POINTS_ARG_HEIGHT] != NULL, has_map_max = own.given[IC_POINTS_ARG_MAP_MAX] != NULL;
+    size_t map_len = map_path ? strlen(map_path) : 0;
+    if (map_path && (map_len < 4 || strcasecmp(map_path + map_len - 4, ".png") != 0)) {
+        fprintf(stderr, "irrcache points: --map %s: the map is a PNG; give a path ending in .png\n", map_path);
+        return EXIT_USAGE;
+    }
+    ic_points_grid_spec grid = {0};
+    grid.lo = (ic_vec3){(float)own.grid[0], (float)own.grid[1], (float)own.grid[2]};
+    grid.hi = (ic_vec3){(float)own.grid[3], (float)own.grid[4], (float)own.grid[5]};
+    grid.spacing = own.spacing;
+    grid.height = own.height;
+    ic_points_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.integrator = (ic_integrator)own.integrator;
+    opt.samples = own.samples;
+    opt.light_samples = own.light_samples;
     if (args.given[IC_ARG_MAX_DEPTH])
         opt.max_depth = args.render.max_depth;
     if (args.given[IC_ARG_THREADS])
@@ -552,7 +449,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             rc = gr == IC_ERR_OOM ? EXIT_WORK : EXIT_USAGE;
         }
         count = cols * rows;
-    } else if (rank == 0 && !read_points(points_path, (uint32_t)max_points, &pts, &count)) {
+    } else if (rank == 0 && !read_points(points_path, (uint32_t)own.max_points, &pts, &count)) {
         rc = EXIT_WORK;
     }
     /* What would fail only at the end, after all the work, is checked now (rank 0 writes). */
@@ -586,7 +483,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         snprintf(message, sizeof message, "irrcache points: rank %d of %d: %s", rank, ranks, err.message);
     else if (!scene)
         snprintf(message, sizeof message, "irrcache points: %s", err.message);
-    else if (daylight_factor && ic_points_daylight_reference(scene, &df_lux, &err) != IC_OK)
+    else if (own.daylight_factor && ic_points_daylight_reference(scene, &df_lux, &err) != IC_OK)
         snprintf(message, sizeof message, "irrcache points: --daylight-factor: %s", err.message);
     if ((rc = agree(comm, message[0] ? EXIT_WORK : 0, message)) != 0) {
         ic_scene_free(scene);
@@ -612,7 +509,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         }
     } else if (rank != 0) {
         status = 0; /* rank 0 writes the results */
-    } else if (map_path && !ic_cli_grid_map(map_path, res, cols, rows, df_lux, map_max)) {
+    } else if (map_path && !ic_cli_grid_map(map_path, res, cols, rows, df_lux, own.map_max)) {
         /* the map first: when it cannot be written, no results file is left either */
     } else if (format == FORMAT_JSON) {
         status = write_json(out_path, &opt, res, count, &st, df_lux, prefix) ? 0 : EXIT_WORK;

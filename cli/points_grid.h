@@ -1,12 +1,8 @@
-/* points_grid.h — the work-plane grid and its false-colour map for `irrcache points --grid` (points_grid.c). */
+/* points_grid.h — the false-colour map of the work-plane grid of `irrcache points --grid` (points_grid.c). */
 #ifndef IC_CLI_POINTS_GRID_H
 #define IC_CLI_POINTS_GRID_H
 
 #include "irrcache/points.h"
-
-/* Reads the six numbers x0 y0 z0 x1 y1 z1 after argv[*i] ("--grid") into spec->lo/hi, advancing *i past
- * them; prints the usage error and returns 0 if they are not six finite numbers. */
-int ic_cli_grid_box(int argc, char **argv, int *i, ic_points_grid_spec *spec);
 
 /* Writes the false-colour PNG of a cols × rows grid's results (row 0, the smallest z, at the top: a plan
  * seen from above with +x to the right): illuminance in lux, or with df_lux > 0 the daylight factor in %,

@@ -1,6 +1,7 @@
 /*
- * test_cli_options.c — the option table of `irrcache render` and what comes from it: README.md's
- * option tables are exactly `--help-markdown`, --help fits in 100 columns and lists the exit codes,
+ * test_cli_options.c — the option tables of `irrcache render`, `points` and `diff` and what comes from them:
+ * README.md's option tables are exactly each command's `--help-markdown`, each number option's help shows
+ * the range its parser checks, --help fits in 100 columns and lists the exit codes,
  * --name=value means the same as --name value, `--` ends the options, and each kind of bad value is a
  * usage error (exit 2) with one line naming the option. What goes to a standard output that cannot be
  * written (help, version, tables) exits 1 with one line saying so.
@@ -62,22 +63,33 @@ static void unwrap(char *s)
     *w = 0;
 }
 
+/* README.md's tables between "<!-- MARKER:begin" and "<!-- MARKER:end -->" are `irrcache COMMAND
+ * --help-markdown`: render's, points' and diff's. */
 static void readme_matches_table(void)
 {
+    static const char *const tables[][2] = {
+        {"options", "render"}, {"points-options", "points"}, {"diff-options", "diff"}};
     static char readme[1 << 18];
     CHECK(test_read_text(IC_SOURCE_DIR "/README.md", readme, sizeof readme) > 0, "README.md readable");
-    const char *b = strstr(readme, "<!-- options:begin"), *e = strstr(readme, "<!-- options:end -->");
-    CHECK(b && e && b < e, "README.md has the options markers");
-    if (!b || !e || b > e)
-        return;
-    b = strchr(b, '\n') + 1;
-    CHECK(run("render --help-markdown") == 0, "--help-markdown exits 0");
-    size_t n = strlen(out_text);
-    int same = (size_t)(e - b) == n && !strncmp(b, out_text, n);
-    CHECK(same, "README.md's option tables are `irrcache render --help-markdown` "
-                "(run bash scripts/update-readme-options.sh)");
-    CHECK(strstr(out_text, "--accuracy A`") && strstr(out_text, "`--strategy batch\\|lazy\\|adaptive`"),
-          "the tables list the cache options, with '|' escaped");
+    for (size_t k = 0; k < sizeof tables / sizeof tables[0]; ++k) {
+        char begin[64], end[64], cmd[64];
+        snprintf(begin, sizeof begin, "<!-- %s:begin", tables[k][0]);
+        snprintf(end, sizeof end, "<!-- %s:end -->", tables[k][0]);
+        const char *b = strstr(readme, begin), *e = strstr(readme, end);
+        CHECK(b && e && b < e, "README.md has the %s markers", tables[k][0]);
+        if (!b || !e || b > e)
+            continue;
+        b = strchr(b, '\n') + 1;
+        snprintf(cmd, sizeof cmd, "%s --help-markdown", tables[k][1]);
+        CHECK(run(cmd) == 0, "%s exits 0", cmd);
+        size_t n = strlen(out_text);
+        int same = (size_t)(e - b) == n && !strncmp(b, out_text, n);
+        CHECK(same, "README.md's %s tables are `irrcache %s` (run bash scripts/update-readme-options.sh)",
+              tables[k][0], cmd);
+        if (k == 0)
+            CHECK(strstr(out_text, "--accuracy A`") && strstr(out_text, "`--strategy batch\\|lazy\\|adaptive`"),
+                  "the tables list the cache options, with '|' escaped");
+    }
 }
 
 static void help_layout(void)
@@ -105,7 +117,7 @@ static void stdout_write_error(void)
     }
     static const char *const cases[] = {
         "--help", "-h", "help", "--version", "render --help", "render -h", "render --help-markdown",
-        "diff --help", "points --help",
+        "diff --help", "points --help", "diff --help-markdown", "points --help-markdown",
         "diff " IC_SOURCE_DIR "/tests/scenes/checker2x2.pfm " IC_SOURCE_DIR "/tests/scenes/checker2x2.pfm",
         "points " IC_SOURCE_DIR "/tests/scenes/quad_light.obj --points " TMP "_pts.txt --integrator pt --samples 16",
         "points " IC_SOURCE_DIR "/tests/scenes/quad_light.obj --points " TMP "_pts.txt --integrator pt --samples 16 "
@@ -226,6 +238,58 @@ static void help_ranges(void)
               strstr(out_text, "| `--width N` | [1, 65536] | scene file, else 512 | image width |") &&
               strstr(out_text, "| `--strategy batch\\|lazy\\|adaptive` |  | batch |"),
           "the README's tables have a range column, empty for an option without a number");
+}
+
+/* The same for `points` and `diff`, whose own options have their tables too (options.h): each number
+ * option's help shows the range its parser's error gives, "from A to B" as "[A, B]", "in (A, B]" as
+ * itself; every number option of their tables is here. */
+static void command_help_ranges(void)
+{
+    static const struct { const char *command, *option, *bad; } checked[] = {
+        {"points", "--samples", "99999999"}, {"points", "--light-samples", "0"}, {"points", "--max-points", "4g"},
+        {"points", "--spacing", "0"}, {"points", "--height", "-1"}, {"points", "--map-max", "0"},
+        {"points", "--grid", "0 0 0 1 1 2e18"}, {"diff", "--max-error", "4e38"}, {"diff", "--blotch-max-error", "0"},
+    };
+    static char help[2][sizeof out_text], line[4096];
+    CHECK(run("points --help") == 0, "points --help");
+    memcpy(help[0], out_text, sizeof out_text);
+    CHECK(run("diff --help") == 0, "diff --help");
+    memcpy(help[1], out_text, sizeof out_text);
+    for (size_t i = 0; i < sizeof checked / sizeof checked[0]; ++i) {
+        int is_points = !strcmp(checked[i].command, "points");
+        char cmd[1024], lo[32] = "", hi[32] = "", want[96] = "";
+        snprintf(cmd, sizeof cmd, "%s %s %s %s", checked[i].command,
+                 is_points ? CORNELL " --points " TMP "_none.txt" : CORNELL " " CORNELL, checked[i].option,
+                 checked[i].bad);
+        CHECK(run(cmd) == 2 && lines(err_text) == 1, "%s %s %s refused: %s", checked[i].command, checked[i].option,
+              checked[i].bad, err_text);
+        const char *from = strstr(err_text, " from "), *in = strstr(err_text, " in (");
+        if (from && sscanf(from, " from %31s to %31[^;,\n]", lo, hi) == 2)
+            snprintf(want, sizeof want, "[%s, %s] [default:", lo, hi);
+        else if (in && sscanf(in, " in (%31[^]]", lo) == 1)
+            snprintf(want, sizeof want, "(%s] [default:", lo);
+        CHECK(want[0], "%s %s: a range in '%s'", checked[i].command, checked[i].option, err_text);
+        /* the option's entry: from its name at the start of a line to the next option's, unwrapped */
+        snprintf(cmd, sizeof cmd, "\n  %s ", checked[i].option);
+        const char *start = strstr(help[!is_points], cmd), *next = start ? strstr(start + 1, "\n  -") : NULL;
+        size_t n = !start ? 0 : next ? (size_t)(next - start) : strlen(start);
+        snprintf(line, sizeof line, "%.*s", (int)(n < sizeof line ? n : sizeof line - 1), start ? start : "");
+        unwrap(line);
+        const char *def = strstr(line, "[default:"), *range = strstr(line, want);
+        CHECK(want[0] && range && range + strlen(want) - strlen("[default:") == def, "%s --help shows %s for %s: %s",
+              checked[i].command, want, checked[i].option, start ? line : "(missing)");
+    }
+    for (int k = 0; k < 2; ++k) {
+        int longest = 0, at = 0;
+        for (const char *p = help[k]; *p; ++p) {
+            at = *p == '\n' ? 0 : at + 1;
+            longest = at > longest ? at : longest;
+        }
+        CHECK(longest <= 100, "%s --help lines within 100 columns (longest %d)", k ? "diff" : "points", longest);
+    }
+    CHECK(strstr(help[1], "--max-error E|auto ") && run("diff " CORNELL " " CORNELL " --max-error lots") == 2 &&
+              strstr(err_text, "from 0 to 3e38, or auto"),
+          "--max-error takes auto: %s", err_text);
 }
 
 static void value_forms(void)
@@ -388,6 +452,7 @@ int main(void)
     stdout_write_error();
     size_suffixes();
     help_ranges();
+    command_help_ranges();
     value_forms();
     bad_values();
     TEST_MAIN_END();

@@ -154,6 +154,14 @@ static void test_grid_map(void)
     CHECK(run(SCENE " --grid 0 0 0 1 1 1", NULL) == 2 && strstr(err_text, "--spacing"), "--grid needs --spacing: %s",
           err_text);
     CHECK(run(SCENE " --grid 0 0 0 1 1", NULL) == 2 && strstr(err_text, "six numbers"), "five numbers: %s", err_text);
+    CHECK(run(SCENE " --grid 0 0 0 1 1 2e18 --spacing 0.5", NULL) == 2 && strstr(err_text, "number 6 is 2e18") &&
+              test_line_count(err_text) == 1,
+          "a corner beyond 1e18: %s", err_text);
+    CHECK(run(SCENE " --grid=0 --spacing 0.5", NULL) == 2 && strstr(err_text, "separate arguments"),
+          "--grid=: %s", err_text);
+    CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing=0", NULL) == 2 && strstr(err_text, "--spacing 0: expected a number "
+                                                                              "in (0, 1e18]"),
+          "--spacing=0 (the lower end excluded): %s", err_text);
     CHECK(run(SCENE " --points " DIR "/pts.txt --map " DIR "/x.png", NULL) == 2 && strstr(err_text, "--grid"),
           "--map without a grid: %s", err_text);
     CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 0.5 --map " DIR "/x.jpg", NULL) == 2 && strstr(err_text, ".png"),
@@ -228,7 +236,7 @@ static void test_bad_files(void)
     CHECK(run(SCENE " --points " DIR "/three.txt --max-points 1k --rays 64 --integrator pt --samples 16", NULL) == 0,
           "--max-points 1k: %s", err_text);
     CHECK(run(SCENE " --points " DIR "/three.txt --max-points 4g", NULL) == 2 &&
-              strstr(err_text, "--max-points 4g: not a whole number in [1, 4294967295]") &&
+              strstr(err_text, "--max-points 4g: expected a whole number from 1 to 4294967295") &&
               strstr(err_text, "K, M or G (either case)") && test_line_count(err_text) == 1,
           "--max-points 4g (2^32) is over its range: %s", err_text);
     /* The scene-loading limits of render, named by this command. */

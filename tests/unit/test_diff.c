@@ -3,11 +3,13 @@
  * and the heat map, whose default scale is fixed (two images' maps against one reference compare), and the
  * blotch map.
  *
- * cli/diff.c and json_out.c are compiled into this test (they depend on the image library and cJSON only), so the command is
- * tested without building the whole renderer; stdout and stderr are captured through files.
+ * cli/diff.c, json_out.c and options.c (the option tables) are compiled into this test (they depend on the
+ * image library and cJSON only), so the command is tested without building the whole renderer; stdout and
+ * stderr are captured through files.
  */
 #include "../../cli/diff.c"
 #include "../../cli/json_out.c"
+#include "../../cli/options.c"
 
 #include "test_util.h"
 
