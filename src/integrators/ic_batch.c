@@ -281,6 +281,13 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, uint32_
     return IC_OK;
 }
 
+ic_pass_end ic_ic_batch_pass_end(int truncated, int converged, int (*out_of_time)(ic_ctx *), ic_ctx *c)
+{
+    if (converged && !truncated)
+        return IC_PASS_CONVERGED;
+    return truncated || out_of_time(c) ? IC_PASS_STOPPED : IC_PASS_CONTINUE;
+}
+
 /* Adds this process's communication since the last call to pass `pass` of the statistics. */
 static void count_traffic(ic_ctx *c, ic_render_stats *st, int pass)
 {
@@ -384,6 +391,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     for (int pass = 1; pass <= c->o.max_passes && !ic_ic_cancelled(c); ++pass) {
         ic_ic_report(opt, "cache passes", (double)pass / (double)(c->o.max_passes + 1));
         uint32_t found = 0, before = ic_cache_count(c->cache);
+        const uint64_t ungathered_before = c->ungathered;
         if (pass <= c->o.screen_passes) {
             r = timed_lookup_all(c, lum, covered, 1, &sweeps);
             if (r != IC_OK) {
@@ -434,12 +442,14 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
          * rays read, do not count: at 40×30 they outnumber the image's). */
         const int slowed = c->o.pass_growth.mode != IC_CACHE_OFF &&
                            (double)added < (double)c->o.pass_growth.value * (double)(before - hit_records);
-        if ((int)found < c->o.min_candidates ||
-            (pass >= c->o.screen_passes && (uncovered < c->o.uncovered || slowed))) {
+        const int converged = (int)found < c->o.min_candidates ||
+                              (pass >= c->o.screen_passes && (uncovered < c->o.uncovered || slowed));
+        const ic_pass_end end = ic_ic_batch_pass_end(c->ungathered != ungathered_before, converged, ic_ic_out_of_time, c);
+        if (end == IC_PASS_CONVERGED) {
             st->cut_short = 0;
             break;
         }
-        if (ic_ic_out_of_time(c)) {
+        if (end == IC_PASS_STOPPED) {
             st->cut_by_time = !ic_ic_cancelled(c);
             break;
         }

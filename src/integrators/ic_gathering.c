@@ -792,6 +792,7 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
         goto done;
     /* The gathered ones, in candidate order (all of them unless the render was interrupted). */
     uint32_t kept = ic_ic_keep_gathered(c, gathered, count, res, levels);
+    c->ungathered += count - kept;
     for (uint32_t i = 0, k = 0; i < count; ++i) {
         if (!gathered[i])
             continue;

@@ -87,6 +87,8 @@ typedef struct ic_ctx {
                                   (tri_light_count) that picks the cached ones by power, for light
                                   samples of them (ic_ctx.emitter_mis; ic_ic_cached_selection) */
     float *cached_cdf;         /* its cdf (tri_light_count + 1) */
+    uint64_t ungathered;       /* candidates ic_ic_gather_and_insert left ungathered (an interrupt or the
+                                  time budget stopped their gathering), over the whole construction */
     int emitter_mis;           /* 1 (set by ic_ic_ctx_create): the records gathered take the cached
                                   emitters' light from their rays and from light samples of them,
                                   MIS-weighted (ic_light_samples.c); 0: from
@@ -231,6 +233,14 @@ static inline int ic_ic_out_of_time(ic_ctx *c)
         return 0;
     return ic_comm_is_shared(c->comm) ? ic_ic_out_of_time_shared(c) : ic_seconds() > c->deadline;
 }
+/* How a batch construction pass ends (ic_ic_batch_pass_end): another pass, converged, or stopped by the time
+ * budget or an interrupt. */
+typedef enum ic_pass_end { IC_PASS_CONTINUE, IC_PASS_CONVERGED, IC_PASS_STOPPED } ic_pass_end;
+/* The end of a pass that found `found` candidates and gathered them all unless `truncated`; `converged` is
+ * the pass's convergence test. A truncated pass is never converged: it added fewer records because its
+ * gathering stopped, not because the cache needs fewer. `out_of_time` is asked only when the pass did not
+ * converge (it may be a collective call; ic_ic_out_of_time). */
+ic_pass_end ic_ic_batch_pass_end(int truncated, int converged, int (*out_of_time)(ic_ctx *), ic_ctx *c);
 /* Progress report, if the caller asked for it. */
 void ic_ic_report(const ic_render_options *opt, const char *phase, double fraction);
 /* How direct light at a surface counts its glossy lobe's share of each light sample: at full weight
