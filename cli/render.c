@@ -135,6 +135,7 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
     if (st->cancelled) { /* SIGINT or SIGTERM: the image is partial */
         cJSON_AddBoolToObject(o, "interrupted", 1);
         cJSON_AddNumberToObject(o, "completed", st->completed);
+        cJSON_AddNumberToObject(o, "spp_min", st->spp_min); /* the fewest samples a pixel holds */
     }
     /* How the ranks shared the work (MPI): only when there were several, so a single process's figures
      * read as they always did. */
@@ -523,15 +524,21 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     ic_cli_exr_meta_free(&meta);
     free_results(&img, &aovs, scene);
     if (st.cancelled) {
-        const int sig = (int)ic_cli_stop_signal;
-        if (st.completed > 0.0)
+        const char *sig = ic_cli_stop_signal == SIGTERM ? "SIGTERM" : "SIGINT";
+        const int budget = opt.time_budget > 0.0;
+        if (st.completed > 0.0 && budget && st.spp_min == st.spp_max)
+            fprintf(stderr, "irrcache render: interrupted by %s between passes of the --time budget: the outputs "
+                            "hold the image so far, %d samples per pixel\n", sig, st.spp_max);
+        else if (st.completed > 0.0 && st.spp_min > 0 && st.spp_min < st.spp_max) /* a later pass cut short */
+            fprintf(stderr, "irrcache render: interrupted by %s: the outputs hold the image so far (the tiles its last "
+                            "pass finished at %s%d samples per pixel, the others at the %d of the passes before)\n",
+                    sig, budget ? "" : "up to ", st.spp_max, st.spp_min);
+        else if (st.completed > 0.0)
             fprintf(stderr, "irrcache render: interrupted by %s: the outputs hold the image so far (%.0f %% of the "
-                            "final render; the other tiles are black)\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
-                    100.0 * st.completed);
+                            "final render; the other tiles are black)\n", sig, 100.0 * st.completed);
         else
             fprintf(stderr, "irrcache render: interrupted by %s during cache construction: the outputs hold a "
-                            "preview of one sample per pixel from the %u records made so far\n",
-                    sig == SIGTERM ? "SIGTERM" : "SIGINT", st.records);
+                            "preview of one sample per pixel from the %u records made so far\n", sig, st.records);
     } else if (st.cut_by_time)
         fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
                         "(%d passes) before it converged; give more time for a converged cache\n", st.passes);

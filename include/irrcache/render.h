@@ -254,11 +254,11 @@ typedef struct ic_render_options {
                               the call; its traffic counters are updated */
     const volatile sig_atomic_t *cancel; /* optional flag (a signal handler's): once non-zero, cache construction
                               stops within its current pass (no new gather begins; the records gathered
-                              are kept) and the final render at its next tile (with a time budget, its next
-                              pass); a render stopped before its final render began renders one sample per
-                              pixel from the records it has. The render then returns IC_OK with
-                              stats.cancelled set and the image it has: unrendered tiles are black. Ignored
-                              with a shared comm */
+                              are kept) and the final render at its next tile (with a time budget too: a
+                              tile its last pass did not reach keeps the earlier passes' samples); a render
+                              stopped before its final render began renders one sample per pixel from the
+                              records it has. The render then returns IC_OK with stats.cancelled set and the
+                              image it has: tiles with no samples are black. Ignored with a shared comm */
     ic_render_progress_fn progress_detail; /* progress's reports with the whole render's elapsed time and
                               estimated time left (may be NULL); called from one thread at a time */
     double checkpoint_seconds; /* > 0 with checkpoint: every this many seconds of the final render's wall time
@@ -281,11 +281,13 @@ typedef struct ic_render_stats {
     double rays_per_second;
     int spp;               /* samples per pixel taken (adaptive sampling: the mean) */
     int spp_max;           /* the most samples one pixel took (adaptive sampling; else spp) */
+    int spp_min;           /* the fewest (adaptive sampling, or an interrupt; else spp) */
     int threads;           /* threads used */
     uint64_t seed;         /* the seed the render used (the option's, else the scene file's, else the default) */
     int cancelled;         /* 1: opt.cancel stopped the render early; the image is partial */
-    double completed;      /* share of the final render's tiles rendered (1 for a complete image; a
-                              one-sample preview after an interrupted construction counts 0) */
+    double completed;      /* share of the final render's samples taken (with a time budget, of those of
+                              the passes it began): 1 for a complete image; a one-sample preview after an
+                              interrupted construction counts 0 */
     uint32_t records;      /* cache records (integrator IC) */
     int passes;            /* construction passes (integrator IC) */
     uint32_t refinements;  /* adaptive: times a record's a_i was lowered */

@@ -211,6 +211,8 @@ typedef struct loop_ctx {
     double *accum;         /* width*height*3 running sums */
     double *sumsq;         /* adaptive pilot pass: per-pixel sums of squared luminance, else NULL */
     uint32_t *extra;       /* adaptive second pass: samples of each pixel from s_begin, else NULL */
+    int *tile_n;           /* not adaptive: per tile (of the whole image), the samples each of its pixels holds;
+                              a tile skipped when interrupted keeps its earlier passes' */
     int tiles_x, tiles_y;
     int rank, ranks;       /* this process renders tiles rank, rank + ranks, … (or owned[]) */
     int own_tiles;         /* how many that is */
@@ -323,6 +325,8 @@ static void render_tile(void *p, int64_t item, int thread)
     }
     c->rays[thread * RAY_PAD] += rays;
     c->samples[thread * RAY_PAD] += samples;
+    if (c->tile_n)
+        c->tile_n[tile] = c->s_end;
     if (c->tile_seconds)
         c->tile_seconds[tile] = ic_seconds() - tile_start;
     uint64_t done = atomic_fetch_add(&c->samples_done, samples) + samples;
@@ -434,6 +438,7 @@ static void loop_free(loop_ctx *c)
     free(c->owned);
     free(c->owner);
     free(c->tile_seconds);
+    free(c->tile_n);
 }
 
 /* Allocates the loop's buffers (accumulators and per-thread ray counters). */
@@ -614,9 +619,9 @@ static ic_result exchange_tiles(loop_ctx *c, void *plane, size_t pixel_bytes, co
     return r;
 }
 
-/* The image from the running sums: each pixel's mean over its n samples (n0 + extra[i], or n0 for all with
- * extra NULL), computed by the rank that rendered it, in float, then exchanged: a rank receives (N − 1)/N of
- * the image as 12 bytes a pixel. */
+/* The image from the running sums: each pixel's mean over its n samples (its tile's tile_n, or n0 + extra[i],
+ * or n0 for all with both NULL; black with none), computed by the rank that rendered it, in float, then
+ * exchanged: a rank receives (N − 1)/N of the image as 12 bytes a pixel. */
 static ic_result finish_image(loop_ctx *c, int n0, const uint32_t *extra, ic_image *out, ic_error *err)
 {
     const ic_camera *cam = c->loop->camera;
@@ -632,9 +637,9 @@ static ic_result finish_image(loop_ctx *c, int n0, const uint32_t *extra, ic_ima
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
                 size_t i = (size_t)y * cam->width + x;
-                uint32_t n = (uint32_t)n0 + (extra ? extra[i] : 0);
+                uint32_t n = c->tile_n ? (uint32_t)c->tile_n[t] : (uint32_t)n0 + (extra ? extra[i] : 0);
                 for (int k = 0; k < 3; ++k)
-                    out->rgb[3 * i + k] = (float)(c->accum[3 * i + k] / n);
+                    out->rgb[3 * i + k] = n ? (float)(c->accum[3 * i + k] / n) : 0.0f;
             }
     }
     if ((r = exchange_tiles(c, out->rgb, 3 * sizeof *out->rgb, NULL, "exchanging the image", err)) != IC_OK)
@@ -813,15 +818,17 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         r = finish_image(&c, n0, extra, out, err);
     if (r == IC_OK) {
         uint64_t taken = 0;
-        uint32_t most = 0;
+        uint32_t most = 0, fewest = UINT32_MAX;
         for (size_t i = 0; i < npix; ++i) {
             uint32_t n = (uint32_t)n0 + extra[i];
             taken += n;
             most = n > most ? n : most;
+            fewest = n < fewest ? n : fewest;
         }
         count_work(&c, threads, res);
         res->spp_done = (int)llround((double)taken / (double)npix);
         res->spp_max = (int)most;
+        res->spp_min = (int)fewest;
         int skipped = atomic_load(&c.tiles_skipped);
         res->cancelled = skipped > 0;
         res->completed = c.own_tiles ? 1.0 - (double)skipped / (2.0 * c.own_tiles) : 1.0;
@@ -862,10 +869,15 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     ic_result r = loop_init(&c, loop, fn, user, threads, err);
     if (r != IC_OK)
         return r;
+    c.tile_n = calloc((size_t)c.tiles_x * c.tiles_y, sizeof *c.tile_n);
+    if (!c.tile_n) {
+        loop_free(&c);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for a %dx%d image", cam->width, cam->height);
+    }
     c.start = ic_seconds();
-    /* One pass skips its tiles not yet started once interrupted; budgeted passes stop between passes, so
-     * that every pixel has the same samples. */
-    c.skip_on_cancel = can_cancel && !preview && !(loop->time_budget > 0.0);
+    /* Once interrupted, a pass skips its tiles not yet started, and no pass follows: a skipped tile keeps
+     * what the earlier passes (under a time budget) gave it, black without one. */
+    c.skip_on_cancel = can_cancel && !preview;
     int stopped = 0;
     /* Without a budget: one pass of all samples. With a budget: passes of growing size, stopping
      * before a pass that would overrun the budget (estimated from the previous pass). */
@@ -909,12 +921,25 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     if (r == IC_OK)
         r = finish_image(&c, done, NULL, out, err);
     if (r == IC_OK) {
+        /* The samples this process's pixels hold: `done` in each unless a pass was cut short. */
+        uint64_t taken = 0;
+        int most = 0, fewest = done;
+        for (int64_t i = 0; i < c.own_tiles; ++i) {
+            int64_t t = own_tile(&c, i);
+            int x0, y0, x1, y1, n = c.tile_n[t];
+            tile_rect(&c, t, &x0, &y0, &x1, &y1);
+            taken += (uint64_t)n * (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0);
+            most = n > most ? n : most;
+            fewest = n < fewest ? n : fewest;
+        }
         count_work(&c, threads, res);
-        res->spp_done = done;
-        res->spp_max = done;
+        res->spp_done = c.own_pixels ? (int)llround((double)taken / (double)c.own_pixels) : done;
+        res->spp_max = c.own_tiles ? most : done;
+        res->spp_min = fewest;
         int skipped = atomic_load(&c.tiles_skipped);
         res->cancelled = preview || stopped || skipped > 0;
-        res->completed = preview ? 0.0 : c.own_tiles ? 1.0 - (double)skipped / c.own_tiles : 1.0;
+        /* Of the samples the passes begun would have taken. */
+        res->completed = preview ? 0.0 : c.own_pixels ? (double)taken / ((double)done * (double)c.own_pixels) : 1.0;
     }
     res->seconds = ic_seconds() - c.start;
     res->busy_seconds = c.busy;

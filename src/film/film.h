@@ -37,7 +37,8 @@ typedef struct ic_image_loop {
     ic_progress_fn progress;
     void *progress_user;
     ic_comm *comm;         /* the processes sharing the image; NULL: one */
-    const volatile sig_atomic_t *cancel; /* ic_render_options.cancel (ignored with a shared comm) */
+    const volatile sig_atomic_t *cancel; /* ic_render_options.cancel (ignored with a shared comm): the pass
+                              skips its tiles not begun, and no pass follows */
     /* Checkpoints (ignored with a shared comm): every checkpoint_seconds of the loop's wall time, the
      * threads finish the tiles they hold, checkpoint gets the image so far on the calling thread, and the
      * rest of the pass goes on. Tiles are independent, so the image is the same with or without them. */
@@ -48,13 +49,15 @@ typedef struct ic_image_loop {
 
 typedef struct ic_image_loop_result {
     int spp_done;          /* samples per pixel actually taken (adaptive: the mean) */
-    int spp_max;           /* adaptive: the most samples a pixel took */
+    int spp_max;           /* the most samples a pixel took (adaptive, or a budgeted pass cut short) */
+    int spp_min;           /* the fewest (0 where a tile was skipped in the first pass) */
     uint64_t rays;         /* rays traced by the sample function (this process's) */
     uint64_t samples;      /* pixel samples this process took */
     double seconds;
     double busy_seconds;   /* of those, rendering this process's tiles (not waiting for other ranks) */
     int cancelled;         /* 1: loop.cancel cut the image short */
-    double completed;      /* share of the tiles rendered (0 for the one-sample preview) */
+    double completed;      /* share of the samples of the passes begun that were taken (1 uninterrupted, 0 for
+                              the one-sample preview) */
 } ic_image_loop_result;
 
 /* Primary ray through film position (fx, fy) in pixels (0,0 = top-left corner), of the camera's

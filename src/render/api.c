@@ -229,6 +229,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         st->rays += lr.rays;
         st->spp = lr.spp_done;
         st->spp_max = lr.spp_max;
+        st->spp_min = lr.spp_min;
         st->cancelled = lr.cancelled;
         st->completed = lr.completed;
         st->rank_pixel_samples = lr.samples;

@@ -9,7 +9,7 @@
  *
  * Long renders (issue "An installable library", item 5): SIGINT or SIGTERM during the final render or
  * inside a cache construction pass (batch, adaptive, lazy) ends the command soon with complete, partial
- * outputs and 128 + the signal; --checkpoint writes complete, readable images while the render runs and
+ * outputs and 128 + the signal (under --time too, within the pass that runs); --checkpoint writes complete, readable images while the render runs and
  * leaves the final image as it would be without.
  */
 #include "core/atomic_file.h"
@@ -259,6 +259,55 @@ static void test_interrupted_render(void)
     CHECK(test_count_temporaries(DIR_) == 0, "no temporary file left");
 }
 
+/* SIGTERM during a render under --time: its passes double, so the one running lasts about as long as all
+ * before it (seconds here); the render stops at its next tile, not at the pass's end or the budget's, and
+ * writes the image so far, every pixel the mean of the samples it holds (a tile the last pass did not reach
+ * keeps the earlier passes'), and says so. The bound, 1.5 s, is below what finishing the pass would take
+ * (seconds; 2 s here when the cancel flag was read between passes only, and the message claimed black
+ * tiles) yet far above a tile's time (0.1 s). */
+static void test_interrupted_budget(void)
+{
+    const char *args[] = {"--width", "128", "--height", "128", "--time", "60", "--threads", "2", NULL};
+    double after = 0.0;
+    int rc = interrupt_render_timed(SIGTERM, 6.0, args, &after);
+    char err_text[2048], json[8192], v[256] = "";
+    test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
+    test_read_text(DIR_ "/int.json", json, sizeof json);
+    ic_error err;
+    CHECK(ic_image_exr_attribute(DIR_ "/int.exr", "irrcache:partial", v, sizeof v, &err) == IC_OK &&
+              strstr(v, "interrupted"), "--time: marked partial: %s", v);
+    printf("--time 60, SIGTERM after 6 s: exit %d, %.2f s after the signal\n", rc, after);
+    CHECK(rc == 143 && after < 1.5, "--time: SIGTERM ends the render within 1.5 s (exit %d after %.1f s): %s", rc,
+          after, err_text);
+    CHECK(strstr(err_text, "interrupted by SIGTERM") && strstr(err_text, "samples per pixel") &&
+              !strstr(err_text, "black"),
+          "--time: says how many samples the pixels hold (none is black): %s", err_text);
+    /* Black pixels: those whose samples all miss the box; a complete render of 16 samples has at least as
+     * many as one of more samples. */
+    int black[2] = {0, 0}, finite = 1, read = 1;
+    ic_image img;
+    for (int k = 0; k < 2 && read; ++k) {
+        if (k == 1) {
+            const char *full[] = {"--width", "128", "--height", "128", "--spp", "16", NULL};
+            double waited;
+            CHECK(wait_bounded(start_render(full), 300.0, &waited) == 0, "a complete render of 16 samples");
+        }
+        read = ic_image_read(DIR_ "/int.exr", &img, &err) == IC_OK && img.width == 128 && img.height == 128;
+        for (int i = 0; read && i < 128 * 128; ++i) {
+            const float *p = &img.rgb[3 * i];
+            finite &= isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+            black[k] += p[0] + p[1] + p[2] == 0.0f;
+        }
+        if (read)
+            ic_image_free(&img);
+    }
+    CHECK(read && finite && black[0] <= black[1],
+          "--time: the partial image is whole, no tile left black (%d black pixels; %d in a complete render): %s",
+          black[0], black[1], read ? "" : err.message);
+    CHECK(strstr(json, "\"interrupted\"") != NULL, "--time: the stats say interrupted");
+    CHECK(test_count_temporaries(DIR_) == 0, "--time: no temporary file left");
+}
+
 /* SIGINT inside the first construction pass of each strategy (the pass alone takes minutes here: 20,000
  * rays per record): the command stops within a few gathers and writes a complete preview from the
  * records made so far. The bound is a hang detector, not a timing. */
@@ -416,6 +465,7 @@ int main(void)
     CHECK(test_count_temporaries(DIR_) == 0, "SIGXFSZ: the command left no temporary file");
     CHECK(!exists(DIR_ "/big.pfm"), "SIGXFSZ: no output");
     test_interrupted_render();
+    test_interrupted_budget();
     test_interrupted_construction();
     test_checkpoints();
     TEST_MAIN_END();

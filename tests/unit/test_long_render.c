@@ -9,8 +9,11 @@
  *   - progress reports with the whole render's elapsed time and time left: unknown (< 0) while the cache
  *     is built without a budget, known during the final render, and within the budget with one;
  *   - an interrupt during cache construction: every strategy stops before its next gather and renders a
- *     complete one-sample preview from the records it has (none, when the flag is set at its start).
+ *     complete one-sample preview from the records it has (none, when the flag is set at its start);
+ *   - an interrupt during a pass under a time budget (the film itself, ic_render_image): the pass skips its
+ *     tiles not begun, each of which keeps its earlier passes' samples and is their mean.
  */
+#include "film/film.h"
 #include "irrcache/render.h"
 #include "test_render_util.h"
 #include "test_util.h"
@@ -218,8 +221,60 @@ static void check_interrupted_construction(void)
     }
 }
 
+/* Every sample 1, and the cancel flag set by sample number `at` (one thread: a fixed point of the render). */
+typedef struct counting {
+    volatile sig_atomic_t flag;
+    uint64_t calls, at;
+} counting;
+
+static ic_vec3 one_and_count(void *ctx, const ic_ray *ray, uint32_t pixel, ic_rng *rng, int thread, uint64_t *rays)
+{
+    (void)ray, (void)pixel, (void)rng, (void)thread, (void)rays;
+    counting *k = ctx;
+    if (++k->calls == k->at)
+        k->flag = 1;
+    return v3s(1.0f);
+}
+
+/* An interrupt in the last of the passes 1, 2, 4, ..., 32 under a budget that never runs out (64 x 64: 16
+ * tiles of 16 x 16), during its fifth tile: the render stops within that pass, its tiles not begun keep
+ * their 31 samples, and every pixel is the mean of what it holds, exactly 1. */
+static void check_interrupted_budget(void)
+{
+    ic_camera cam = {0};
+    cam.target = v3(0.0f, 1.0f, 0.0f);
+    cam.up = v3(0.0f, 0.0f, 1.0f);
+    cam.width = cam.height = 64;
+    cam.fov_y_deg = 40.0f;
+    const uint64_t before = 31u * 64u * 64u, tile = 32u * 16u * 16u;
+    counting k = {0, 0, before + 5u * tile - 7u};
+    ic_image_loop loop = {0};
+    loop.camera = &cam;
+    loop.spp = 63;
+    loop.time_budget = 1e6;
+    loop.threads = 1;
+    loop.seed = 1;
+    loop.cancel = &k.flag;
+    ic_image img = {0};
+    ic_image_loop_result res;
+    ic_error err;
+    CHECK(ic_render_image(&loop, one_and_count, &k, &img, &res, &err) == IC_OK, "budgeted render: %s", err.message);
+    int exact = 1;
+    for (int i = 0; img.rgb && i < 64 * 64 * 3; ++i)
+        exact &= img.rgb[i] == 1.0f;
+    CHECK(img.rgb && exact, "interrupted under a budget: every pixel is the mean of its own samples, 1");
+    uint64_t taken = before + 5u * tile;
+    CHECK(res.cancelled && k.calls == taken && res.spp_min == 31 && res.spp_max == 63,
+          "the pass stopped after the tile the flag was set in (%llu samples, want %llu; %d to %d a pixel)",
+          (unsigned long long)k.calls, (unsigned long long)taken, res.spp_min, res.spp_max);
+    CHECK(fabs(res.completed - (double)taken / (63.0 * 64 * 64)) < 1e-12 && res.completed < 1.0,
+          "completed %g: the share of the passes' samples taken", res.completed);
+    ic_image_free(&img);
+}
+
 int main(void)
 {
+    check_interrupted_budget();
     ic_render_options pt = {0};
     pt.spp = 16;
     check_unchanged("path tracing, one pass", pt, 1);
