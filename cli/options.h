@@ -128,9 +128,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(MAX_SCENE_BYTES, "--max-scene-bytes", NULL, IC_OPT_SIZE, load.max_scene_bytes, 1, 1099511627776.0, "N", \
       IC_DEFAULT_MAX_SCENE_FILE_BYTES, "67108864 (64M)", "bytes", IC_SCOPE_ALL, "largest scene file (JSON, Mitsuba, " \
       "Radiance) read, checked before it is read (mesh files have --max-mesh-elements)") \
-    X(MAX_IMAGE_PIXELS, "--max-image-pixels", NULL, IC_OPT_SIZE, render.max_image_pixels, 1, 4294967296.0, "N", \
-      (double)IC_DEFAULT_MAX_IMAGE_PIXELS, "134217728 (16384 x 8192)", "px", IC_SCOPE_ALL, "largest image rendered " \
-      "(width x height), checked before anything is allocated for it; about 80 bytes a pixel") \
+    X(MAX_IMAGE_PIXELS, "--max-image-pixels", NULL, IC_OPT_SIZE, render.max_image_pixels, 1, \
+      (double)IC_IMAGE_MAX_PIXELS, "N", (double)IC_DEFAULT_MAX_IMAGE_PIXELS, "134217728 (16384 x 8192)", "px", \
+      IC_SCOPE_ALL, "largest image rendered (width x height), checked before anything is allocated for it; about " \
+      "80 bytes a pixel; at most 268435456 (16384 x 16384), the largest image the library holds") \
     X(ALLOW_OUTSIDE_PATHS, "--allow-outside-paths", NULL, IC_OPT_FLAG, load.allow_outside_paths, 0, 0, "", NAN, \
       "off", "", IC_SCOPE_ALL, "let a scene read files outside its own folder tree and the shared scenes folder " \
       "(meshes, MTL files, glTF buffers, textures, environment maps; symbolic links resolved)") \

@@ -50,7 +50,14 @@ typedef struct ic_image_write_options {
     uint32_t layer_count;
 } ic_image_write_options;
 
-/* Allocates a zero-filled w×h image. */
+/* Largest image accepted anywhere (created, read, or rendered: ic_render_options.max_image_pixels can raise
+ * its limit up to this one); keeps width*height*3*sizeof(float) far from overflow and stops a corrupt
+ * header from asking for gigabytes. */
+#define IC_IMAGE_MAX_SIDE 65536
+#define IC_IMAGE_MAX_PIXELS ((size_t)1 << 28) /* 16384 x 16384 */
+
+/* Allocates a zero-filled w×h image: IC_ERR_INVALID_ARG for a size of 0 or beyond IC_IMAGE_MAX_SIDE or
+ * IC_IMAGE_MAX_PIXELS, IC_ERR_OOM when the memory is not there. */
 ic_result ic_image_create(ic_image *img, int width, int height);
 /* Releases pixels and zeroes the struct. */
 void ic_image_free(ic_image *img);

@@ -626,6 +626,9 @@ static ic_result finish_image(loop_ctx *c, int n0, const uint32_t *extra, ic_ima
 {
     const ic_camera *cam = c->loop->camera;
     ic_result r = ic_image_create(out, cam->width, cam->height);
+    if (r == IC_ERR_INVALID_ARG)
+        return ic_error_set(err, r, "a %dx%d image is too large (at most %d a side and %zu pixels); render it "
+                            "smaller", cam->width, cam->height, IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_PIXELS);
     if (r != IC_OK)
         return ic_error_set(err, r, "out of memory for a %dx%d image", cam->width, cam->height);
     const int64_t tiles = (int64_t)c->tiles_x * c->tiles_y;

@@ -10,11 +10,6 @@
 
 #include "irrcache/image.h"
 
-/* Largest image accepted anywhere; keeps width*height*3*sizeof(float) far from overflow and stops a
- * corrupt header from asking for gigabytes. */
-#define IC_IMAGE_MAX_SIDE 65536
-#define IC_IMAGE_MAX_PIXELS ((size_t)1 << 28)
-
 /* The caller's limit on the pixels of an image read (ic_image_read_max): max_pixels 0 is none. */
 typedef struct ic_image_limit {
     size_t max_pixels;

@@ -116,7 +116,17 @@ static ic_result resolve_options(const ic_scene *scene, ic_render_options *opt, 
     if (opt->sampler != IC_SAMPLER_SOBOL && opt->sampler != IC_SAMPLER_RANDOM)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "unknown sampler %d; use sobol or random", (int)opt->sampler);
     uint64_t pixels = (uint64_t)scene->camera.width * (uint64_t)scene->camera.height;
+    if (opt->max_image_pixels > IC_IMAGE_MAX_PIXELS)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "--max-image-pixels (max_image_pixels of ic_render_options) "
+                            "%llu is above %llu (16384 x 16384), the largest image the library holds; give at "
+                            "most that", (unsigned long long)opt->max_image_pixels,
+                            (unsigned long long)IC_IMAGE_MAX_PIXELS);
     uint64_t max_pixels = opt->max_image_pixels ? opt->max_image_pixels : IC_DEFAULT_MAX_IMAGE_PIXELS;
+    if (pixels > IC_IMAGE_MAX_PIXELS)
+        return ic_error_set(err, IC_ERR_UNSUPPORTED, "an image of %d x %d = %llu pixels, more than %llu (16384 x "
+                            "16384), the largest image the library holds; render it smaller",
+                            scene->camera.width, scene->camera.height, (unsigned long long)pixels,
+                            (unsigned long long)IC_IMAGE_MAX_PIXELS);
     if (pixels > max_pixels)
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "an image of %d x %d = %llu pixels, more than the limit of %llu; "
                             "render it smaller, or raise the limit with --max-image-pixels (max_image_pixels of "

@@ -128,8 +128,11 @@ int main(void)
          " --max-scene-bytes 100", 1, "raise the limit with --max-scene-bytes"},
         {"image over --max-image-pixels", SCENES "plain_quad.obj -o " OUT " --width 64 --height 65 --max-image-pixels 4K",
          1, "an image of 64 x 65 = 4160 pixels, more than the limit of 4096"},
-        {"image over the default limit", SCENES "plain_quad.obj -o " OUT " --width 65536 --height 65536", 1,
+        {"image over the default limit", SCENES "plain_quad.obj -o " OUT " --width 16384 --height 16384", 1,
          "raise the limit with --max-image-pixels"},
+        /* beyond what the library's images hold: refused before the render, not out of memory after it */
+        {"image over the library's largest", SCENES "plain_quad.obj -o " OUT " --width 16384 --height 16385 "
+         "--max-image-pixels 256M", 1, "more than 268435456 (16384 x 16384), the largest image the library holds"},
         {"--max-scene-bytes of 0", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 0", 2,
          "--max-scene-bytes 0: expected a whole number from 1 to"},
         {"--max-scene-bytes with an unknown suffix", SCENES "plain_quad.obj -o " OUT " --max-scene-bytes 64Q", 2,

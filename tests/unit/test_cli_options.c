@@ -151,7 +151,7 @@ static void size_suffixes(void)
         {"--max-scene-bytes", "max_scene_bytes", "64m", 67108864.0},
         {"--max-scene-bytes", "max_scene_bytes", "1t", 1099511627776.0},
         {"--max-image-pixels", "max_image_pixels", "4k", 4096.0},
-        {"--max-image-pixels", "max_image_pixels", "4g", 4294967296.0},
+        {"--max-image-pixels", "max_image_pixels", "256m", 268435456.0},
         {"--max-texture-pixels", "max_texture_pixels", "256m", 268435456.0},
         {"--max-texture-pixels", "max_texture_pixels", "64K", 65536.0},
         {"--max-mesh-elements", "max_mesh_elements", "1g", 1073741824.0},
@@ -175,8 +175,9 @@ static void size_suffixes(void)
         {"--max-texture-pixels 1g", "--max-texture-pixels 1g: expected a whole number from 1 to 268435456; it may "
                                     "end in K or M (either case)"},
         {"--max-texture-pixels 257m", "--max-texture-pixels 257m"},
-        {"--max-image-pixels 5G", "--max-image-pixels 5G: expected a whole number from 1 to 4294967296; it may end "
-                                  "in K, M or G (either case)"},
+        /* no more than the library's images hold (IC_IMAGE_MAX_PIXELS): it would render, then fail */
+        {"--max-image-pixels 257m", "--max-image-pixels 257m: expected a whole number from 1 to 268435456; it may "
+                                    "end in K or M (either case)"},
         {"--max-mesh-elements 2g", "--max-mesh-elements 2g"},
         {"--max-scene-bytes 2t", "K, M, G or T (either case): times 2^10, 2^20, 2^30 or 2^40"},
         {"--max-scene-bytes 16777216T", "--max-scene-bytes 16777216T"},

@@ -272,9 +272,33 @@ static void check_interrupted_budget(void)
     ic_image_free(&img);
 }
 
+/* An image the library cannot hold (wider than IC_IMAGE_MAX_SIDE; ic_render refuses it first, the film
+ * itself only after rendering): "too large", not out of memory. */
+static void check_too_large(void)
+{
+    ic_camera cam = {0};
+    cam.target = v3(0.0f, 1.0f, 0.0f);
+    cam.up = v3(0.0f, 0.0f, 1.0f);
+    cam.width = IC_IMAGE_MAX_SIDE + 1;
+    cam.height = 1;
+    cam.fov_y_deg = 40.0f;
+    counting k = {0, 0, 0};
+    ic_image_loop loop = {0};
+    loop.camera = &cam;
+    loop.spp = 1;
+    loop.threads = 1;
+    ic_image img = {0};
+    ic_image_loop_result res;
+    ic_error err = {0};
+    CHECK(ic_render_image(&loop, one_and_count, &k, &img, &res, &err) == IC_ERR_INVALID_ARG &&
+              strstr(err.message, "too large") && !img.rgb,
+          "an image wider than the library holds is too large: %s", err.message);
+}
+
 int main(void)
 {
     check_interrupted_budget();
+    check_too_large();
     ic_render_options pt = {0};
     pt.spp = 16;
     check_unchanged("path tracing, one pass", pt, 1);

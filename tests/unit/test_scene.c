@@ -305,6 +305,12 @@ static void test_render_caps(void)
     opt.ic.light_samples = IC_MAX_LIGHT_SAMPLES + 1;
     CHECK(ic_render(s, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "--light-samples 65537"),
           "light samples above IC_MAX_LIGHT_SAMPLES: %s", err.message);
+    /* A pixel limit beyond the largest image the library holds: refused before the render (it rendered the
+     * whole image, then failed to make it, blaming memory). */
+    opt.ic.light_samples = 0;
+    opt.max_image_pixels = (uint64_t)IC_IMAGE_MAX_PIXELS + 1;
+    CHECK(ic_render(s, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "268435457 is above"),
+          "max_image_pixels above IC_IMAGE_MAX_PIXELS: %s", err.message);
     ic_image_free(&img);
     ic_scene_free(s);
 }
