@@ -105,7 +105,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "on: --spp becomes a mean; a pilot pass of spp/4 samples in every pixel, then the rest shared out by " \
       "each pixel's relative noise (needs --spp >= 8 and no --time)") \
     X(EXPOSURE, "--exposure", NULL, IC_OPT_DOUBLE, exposure, -100, 100, "STOPS", NAN, "scene file, else 0", "stops", \
-      IC_SCOPE_ALL, "exposure applied to .png outputs") \
+      IC_SCOPE_ALL, "exposure applied to .png outputs (not to --aov records and amap, whose colours are codes)") \
     X(HALF, "--half", NULL, IC_OPT_FLAG, exr_half, 0, 0, "", NAN, "off", "", IC_SCOPE_ALL, \
       "write .exr outputs (and EXR AOVs) as 16-bit half floats: half the size, about 3 significant digits") \
     X(STATS, "--stats", NULL, IC_OPT_STRING, stats_path, 0, 0, "FILE.json", NAN, "none", "", IC_SCOPE_ALL, \
@@ -258,8 +258,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_IC, "extra images next to the first output: <stem>.indirect.exr, <stem>.glossy.exr (the glossy " \
       "lobe's indirect light from radiance records), <stem>.density.exr (records per pixel) - when the first " \
       "output is an .exr, these three are its layers instead (channels indirect.R ...) -, <stem>.records.png " \
-      "(dots and radii; radiance records yellow in blue rings), <stem>.amap.png (a of the heaviest record, " \
-      "blue = --accuracy to red = accuracy/32)") \
+      "(dots and radii over the image darkened; radiance records yellow in blue rings), <stem>.amap.png (a of " \
+      "the heaviest record, blue = --accuracy to red = accuracy/32); these two without --exposure") \
     IC_HELP_OPTIONS(X, "the option tables of README.md")
 /* clang-format on */
 

@@ -167,15 +167,18 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
 }
 
 /* AOVs go next to the first output: <stem>.<aov>.<ext>, with .exr for linear data and .png for the
- * overlay; when the first output is itself an EXR, the linear ones are its layers instead. */
+ * overlay; when the first output is itself an EXR, the linear ones are its layers instead. The images
+ * that are codes, not radiance (the records' marks and the a_i map: colours whose meaning their legend
+ * gives; the density: a count), are written without the image's exposure. */
 typedef struct aov_file {
     const char *name, *suffix, *option;
+    int code;
 } aov_file;
-static const aov_file aov_files[] = {{"indirect", ".indirect.exr", "--aov indirect"},
-                                     {"glossy", ".glossy.exr", "--aov glossy"},
-                                     {"records", ".records.png", "--aov records"},
-                                     {"density", ".density.exr", "--aov density"},
-                                     {"amap", ".amap.png", "--aov amap"}};
+static const aov_file aov_files[] = {{"indirect", ".indirect.exr", "--aov indirect", 0},
+                                     {"glossy", ".glossy.exr", "--aov glossy", 0},
+                                     {"records", ".records.png", "--aov records", 1},
+                                     {"density", ".density.exr", "--aov density", 1},
+                                     {"amap", ".amap.png", "--aov amap", 1}};
 #define AOV_COUNT (int)(sizeof aov_files / sizeof aov_files[0])
 
 /* 1 if path names an OpenEXR file (.exr in any case, as the writer takes it). */
@@ -212,8 +215,11 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
             continue;
         char path[4200];
         aov_path(first, k, path, sizeof path);
+        ic_image_write_options wo_k = *wo;
+        if (aov_files[k].code)
+            wo_k.exposure = 0.0f;
         ic_error err;
-        if (ic_image_write(path, imgs[k], wo, &err) != IC_OK) {
+        if (ic_image_write(path, imgs[k], &wo_k, &err) != IC_OK) {
             fprintf(stderr, "irrcache render: %s %s\n", aov_files[k].option, err.message);
             ++failed;
         }

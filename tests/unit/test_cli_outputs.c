@@ -214,6 +214,31 @@ int main(void)
         CHECK(ic_image_exr_attribute(files[f], "irrcache:nothing", v, sizeof v, &e) == IC_ERR_INVALID_ARG,
               "%s: a missing attribute is reported", files[f]);
     }
+    /* The colour-coded AOVs ignore --exposure: the a_i map's colours are its legend's, the records' marks
+     * theirs, at any exposure; the image itself does change. */
+    {
+        static char bytes[2][3][1 << 16];
+        size_t n[2][3];
+        const char *names[3] = {DIR_ "/meta/e.png", DIR_ "/meta/e.amap.png", DIR_ "/meta/e.records.png"};
+        for (int e = 0; e < 2; ++e) {
+            rc = run(e ? "render " CORNELL " --integrator ic --rays 32 --width 24 --height 24 --spp 1 -q -o "
+                         DIR_ "/meta/e.png --aov amap,records --exposure 3"
+                       : "render " CORNELL " --integrator ic --rays 32 --width 24 --height 24 --spp 1 -q -o "
+                         DIR_ "/meta/e.png --aov amap,records --exposure 0");
+            CHECK(rc == 0, "render with --aov amap,records at exposure %d (got %d: %s)", 3 * e, rc, err_text);
+            for (int k = 0; k < 3; ++k) {
+                FILE *f = fopen(names[k], "rb");
+                n[e][k] = f ? fread(bytes[e][k], 1, sizeof bytes[e][k], f) : 0;
+                if (f)
+                    fclose(f);
+            }
+        }
+        CHECK(n[0][0] > 0 && (n[0][0] != n[1][0] || memcmp(bytes[0][0], bytes[1][0], n[0][0])),
+              "--exposure 3 changes the image");
+        for (int k = 1; k < 3; ++k)
+            CHECK(n[0][k] > 0 && n[0][k] == n[1][k] && !memcmp(bytes[0][k], bytes[1][k], n[0][k]),
+                  "%s: the same bytes at --exposure 0 and 3", names[k]);
+    }
     /* --half: the same image in half the bytes, within half's precision. */
     rc = run("render " CORNELL " --width 16 --height 16 --spp 2 --seed 3 -q -o " DIR_ "/meta/f.exr");
     CHECK(rc == 0, "float EXR (got %d: %s)", rc, err_text);
