@@ -107,7 +107,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(EXPOSURE, "--exposure", NULL, IC_OPT_DOUBLE, exposure, -100, 100, "STOPS", NAN, "scene file, else 0", "stops", \
       IC_SCOPE_ALL, "exposure applied to .png outputs (not to --aov records and amap, whose colours are codes)") \
     X(HALF, "--half", NULL, IC_OPT_FLAG, exr_half, 0, 0, "", NAN, "off", "", IC_SCOPE_ALL, \
-      "write .exr outputs (and EXR AOVs) as 16-bit half floats: half the size, about 3 significant digits") \
+      "write .exr outputs (and EXR AOVs) as 16-bit half floats: half the size, about 3 significant digits, " \
+      "values up to 65504 (larger ones are clamped to it; Inf and NaN kept)") \
     X(STATS, "--stats", NULL, IC_OPT_STRING, stats_path, 0, 0, "FILE.json", NAN, "none", "", IC_SCOPE_ALL, \
       "write run statistics: the settings, seconds, rays, rays per second, spp, per-phase times and, for " \
       "ic, records, passes and the records' extents a*R (record_extent: min, mean, max)") \

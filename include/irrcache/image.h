@@ -40,7 +40,8 @@ typedef struct ic_image_meta {
 
 typedef struct ic_image_write_options {
     float exposure;        /* stops applied before tone mapping LDR outputs (default 0) */
-    int exr_half;          /* 1: EXR as 16-bit half, 0 (default): 32-bit float */
+    int exr_half;          /* 1: EXR as 16-bit half (finite values clamped to ±65504, the largest finite half;
+                              Inf and NaN kept), 0 (default): 32-bit float */
     const ic_image_meta *meta; /* EXR: text attributes written to the header (other formats ignore them);
                               every EXR also gets the chromaticities of its linear Rec. 709 / sRGB primaries
                               and D65 white */

@@ -331,6 +331,12 @@ static const ic_image *channel_source(const char *name, const ic_image *img, con
     return NULL;
 }
 
+/* The largest finite half (2^15 · (2 − 2^-10)): half outputs clamp finite values to ±this, which
+ * OpenEXRCore's conversion would turn into ±Inf; Inf and NaN stay as they are. */
+#define HALF_MAX 65504.0f
+
+static float half_range(float v) { return isfinite(v) ? fminf(fmaxf(v, -HALF_MAX), HALF_MAX) : v; }
+
 static exr_result_t write_part(const char *file, const ic_image *img, const ic_image_write_options *opt,
                                exr_compression_t compression, int *ambiguous, int *open_errno)
 {
@@ -371,6 +377,12 @@ static exr_result_t write_part(const char *file, const ic_image *img, const ic_i
     exr_encode_pipeline_t encoder = EXR_ENCODE_PIPELINE_INITIALIZER;
     int initialized = 0;
     const size_t line_floats = (size_t)img->width * 3;
+    /* Half: each chunk's channels, clamped to half's range, one slab a channel. */
+    const size_t slab = (size_t)(lines_per_chunk > 0 ? lines_per_chunk : 1) * (size_t)img->width;
+    float *clamped = NULL;
+    if (rv == EXR_ERR_SUCCESS && is_half &&
+        !(clamped = malloc(sizeof *clamped * slab * 3 * (1 + (size_t)opt->layer_count))))
+        rv = EXR_ERR_OUT_OF_MEMORY;
     for (int y = 0; y < img->height && rv == EXR_ERR_SUCCESS; y += lines_per_chunk) {
         exr_chunk_info_t chunk;
         rv = exr_write_scanline_chunk_info(ctxt, part, y, &chunk);
@@ -385,10 +397,19 @@ static exr_result_t write_part(const char *file, const ic_image *img, const ic_i
             exr_coding_channel_info_t *ch = &encoder.channels[c];
             int slot;
             const ic_image *src = channel_source(ch->channel_name, img, opt, &slot);
-            ch->encode_from_ptr =
-                (const uint8_t *)((src ? src->rgb : rgb) + (size_t)y * line_floats + (size_t)(slot < 0 ? 0 : slot));
+            const float *from = (src ? src->rgb : rgb) + (size_t)y * line_floats + (size_t)(slot < 0 ? 0 : slot);
+            ch->encode_from_ptr = (const uint8_t *)from;
             ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
             ch->user_line_stride = (int32_t)(line_floats * sizeof(float));
+            if (clamped) {
+                float *to = clamped + (size_t)c * slab;
+                for (int row = 0; row < chunk.height; ++row)
+                    for (int x = 0; x < img->width; ++x)
+                        to[(size_t)row * img->width + x] = half_range(from[(size_t)row * line_floats + 3 * (size_t)x]);
+                ch->encode_from_ptr = (const uint8_t *)to;
+                ch->user_pixel_stride = (int32_t)sizeof(float);
+                ch->user_line_stride = (int32_t)((size_t)img->width * sizeof(float));
+            }
             ch->user_data_type = EXR_PIXEL_FLOAT;
             ch->user_bytes_per_element = (int16_t)sizeof(float);
         }
@@ -406,6 +427,7 @@ static exr_result_t write_part(const char *file, const ic_image *img, const ic_i
     }
     if (initialized)
         exr_encoding_destroy(ctxt, &encoder);
+    free(clamped);
     exr_result_t finish = exr_finish(&ctxt);
     return rv != EXR_ERR_SUCCESS ? rv : finish;
 }

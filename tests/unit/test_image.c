@@ -159,6 +159,35 @@ static void test_round_trips(void)
     ic_image_free(&back);
     ic_image_free(&hsrc);
 
+    /* EXR half beyond half's range: a finite value is clamped to ±65504, the largest finite half (the
+     * conversion alone made it ±Inf, which diff then scored as 0), in the image and in its layers, over
+     * two chunks; Inf and NaN stay. */
+    ic_image big = {0}, layer = {0};
+    CHECK(ic_image_create(&big, 3, 20) == IC_OK && ic_image_create(&layer, 3, 20) == IC_OK, "big images");
+    const float in[8] = {1e5f, 70000.0f, 65519.0f, -1e6f, 65504.0f, 1.5f, INFINITY, NAN};
+    const float want[8] = {65504.0f, 65504.0f, 65504.0f, -65504.0f, 65504.0f, 1.5f, INFINITY, NAN};
+    for (int i = 0; big.rgb && layer.rgb && i < 3 * 20 * 3; ++i)
+        big.rgb[i] = layer.rgb[i] = in[i % 8];
+    ic_image_layer layers[1] = {{"extra", &layer}};
+    ic_image_write_options half_layers = {.exr_half = 1, .layers = layers, .layer_count = 1};
+    CHECK(ic_image_write(scratch("big_half.exr"), &big, &half_layers, &err) == IC_OK, "write big half: %s",
+          err.message);
+    ic_image lback = {0};
+    CHECK(ic_image_read(scratch("big_half.exr"), &back, &err) == IC_OK &&
+              ic_image_read_layer(scratch("big_half.exr"), "extra", &lback, &err) == IC_OK,
+          "read big half: %s", err.message);
+    int clamped = back.rgb && lback.rgb;
+    for (int i = 0; clamped && i < 3 * 20 * 3; ++i) {
+        float w = want[i % 8];
+        clamped &= isnan(w) ? isnan(back.rgb[i]) && isnan(lback.rgb[i]) : back.rgb[i] == w && lback.rgb[i] == w;
+    }
+    CHECK(clamped, "EXR half: finite values beyond 65504 are clamped to it, Inf and NaN kept (1e5 -> %g)",
+          back.rgb ? back.rgb[0] : 0.0f);
+    ic_image_free(&back);
+    ic_image_free(&lback);
+    ic_image_free(&big);
+    ic_image_free(&layer);
+
     /* EXR over several chunks (ZIP groups 16 lines) and one-pixel images. */
     ic_image tall = pattern(3, 100, 4.0f), one = pattern(1, 1, 1.0f);
     one.rgb[0] = 0.25f;
