@@ -561,10 +561,14 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     free(per_rank);
 #undef FAILED
     int ok = n_failed == 0;
+    /* The outputs tried: each -o, the AOV files as one, the record list, the cache (not written on
+     * purpose when interrupted) and the stats. */
+    const int n_outputs = a.output_count + (opt.aovs && a.aov) + (a.records_json != NULL) +
+                          (a.render.ic.save_cache != NULL && !st.cancelled) + (a.stats_path != NULL);
     if (!ok)
-        fprintf(stderr, "irrcache render: the render finished but %d output%s could not be written (%s); the other "
-                        "outputs were written: free disk space or fix the paths and run again\n",
-                n_failed, n_failed == 1 ? "" : "s", failed);
+        fprintf(stderr, "irrcache render: the render finished but %d output%s could not be written (%s)%s: free "
+                        "disk space or fix the paths and run again\n", n_failed, n_failed == 1 ? "" : "s", failed,
+                n_failed < n_outputs ? "; the other outputs were written" : "");
     if (ok && !a.quiet) {
         fprintf(stderr, "irrcache: %dx%d, %d spp", w, h, st.spp);
         if (ranks > 1)

@@ -150,7 +150,12 @@ int main(void)
           "the message names the failed output: %s", err_text);
     CHECK(!strstr(err_text, "small.png") && !strstr(err_text, "stats.json"), "only the failed one is named: %s",
           err_text);
+    CHECK(strstr(err_text, "the other outputs were written"), "it says the others were written: %s", err_text);
     CHECK(!exists(DIR_ "/end/big.pfm"), "the failed output is not there");
+    /* The only output failing: no others to speak of. */
+    rc = run_limited(CLI " render " CORNELL " -o " DIR_ "/end/big.pfm --width 48 --height 48 --spp 1 -q", 16384);
+    CHECK(rc == 3 && strstr(err_text, "could not be written") && !strstr(err_text, "other outputs"),
+          "the only output failed: no word of other outputs (exit %d: %s)", rc, err_text);
     CHECK(exists(DIR_ "/end/small.png"), "the PNG given after it is written");
     CHECK(exists(DIR_ "/end/stats.json"), "the stats are written");
     CHECK(test_count_temporaries(DIR_ "/end") == 0, "no temporary file left");

@@ -282,6 +282,9 @@ int main(void)
           "help: %s", out_text);
     CHECK(strstr(out_text, "exit status: 0 success, 1 ") && strstr(out_text, "2 usage error"),
           "help lists the exit codes: %s", out_text);
+    /* PSNR HDR's peak as metrics.c takes it: 1 for an all-black reference, not its largest value 0. */
+    CHECK(strstr(out_text, "or 1 where that is 0 or less: an all-black reference"),
+          "help gives PSNR HDR's peak for an all-black reference: %s", out_text);
 
     /* Usage errors: exit 2, one line on stderr naming the culprit, nothing on stdout. */
     const char *unknown[] = {off, ref, "--bogus"};
