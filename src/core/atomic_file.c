@@ -3,6 +3,7 @@
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -112,8 +113,29 @@ void ic_atomic_temp_name(const char *path, char *out, size_t out_size)
     temp_register(out);
 }
 
+/* The temporary's data on disk before it takes the final name, so that a crash soon after the rename
+ * leaves the old file or the whole new one, not an empty or truncated one (on ext4 and XFS the rename can
+ * reach the disk before the data). A file system without fsync (EINVAL, EROFS) is passed over. */
+static int sync_file(const char *tmp)
+{
+    int fd = open(tmp, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return -1;
+    int r = fsync(fd);
+    int e = errno;
+    close(fd);
+    errno = e;
+    return r == 0 || e == EINVAL || e == EROFS ? 0 : -1;
+}
+
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
 {
+    if (sync_file(tmp) != 0) {
+        int e = errno;
+        remove(tmp);
+        ic_atomic_temp_release(tmp);
+        return ic_error_set(err, IC_ERR_IO, "%s: write failed (%s); nothing was written", path, strerror(e));
+    }
     if (rename(tmp, path) != 0) {
         int e = errno;
         remove(tmp);

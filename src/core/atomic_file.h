@@ -33,7 +33,8 @@ void ic_atomic_file_abort(ic_atomic_file *f);
  * First removes the temporaries of path that dead processes left (<path>.tmp.<pid>.<n> whose pid no
  * process has: a SIGKILL during a write); ic_atomic_file_open does the same. */
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size);
-/* Renames tmp to path, removing tmp on failure; either way tmp is released. */
+/* Syncs tmp's data to disk (fsync), then renames tmp to path, removing tmp on failure; either way tmp is
+ * released. */
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err);
 /* Forgets a temporary name the caller removed itself. */
 void ic_atomic_temp_release(const char *tmp);

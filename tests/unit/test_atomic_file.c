@@ -3,8 +3,12 @@
  * removed by the next write of the same output, once its process is gone (issue "Hardening", Signals):
  * through the library's atomic file, through ic_atomic_temp_name (the EXR writer's path), and through the
  * command. A temporary of a live process, of another output, or a name not of the form is left alone.
+ *
+ * Every atomic write syncs its temporary (fsync, wrapped here: -Wl,--wrap=fsync) before the rename, so a
+ * crash after it cannot leave an empty file under the final name: the atomic file and the EXR writer.
  */
 #include "core/atomic_file.h"
+#include "irrcache/image.h"
 #include "test_util.h"
 
 #include <errno.h>
@@ -72,6 +76,30 @@ static void check_cleaned(const char *what, char stale[2][512], char keep[4][512
     }
 }
 
+/* fsync, counted, with the name of the last file it synced and whether the final name existed then. */
+int __real_fsync(int fd);
+int __wrap_fsync(int fd);
+static int fsync_calls;
+static char fsync_path[4096];
+
+int __wrap_fsync(int fd)
+{
+    char link[64];
+    snprintf(link, sizeof link, "/proc/self/fd/%d", fd);
+    ssize_t n = readlink(link, fsync_path, sizeof fsync_path - 1);
+    fsync_path[n > 0 ? n : 0] = 0;
+    ++fsync_calls;
+    return __real_fsync(fd);
+}
+
+/* One write through `what`: fsync ran once, on a temporary of `out` (before the rename). */
+static void check_synced(const char *what, const char *out, int calls_before)
+{
+    CHECK(fsync_calls == calls_before + 1 && strstr(fsync_path, out) && strstr(fsync_path, ".tmp."),
+          "%s: the temporary is synced before the rename (%d fsync, last %s)", what, fsync_calls - calls_before,
+          fsync_path);
+}
+
 int main(void)
 {
     CHECK(system("rm -rf '" T "' && mkdir -p '" T "'") == 0, "make %s", T);
@@ -85,8 +113,10 @@ int main(void)
     memset(&err, 0, sizeof err);
     CHECK(ic_atomic_file_open(&f, T "/out.pfm", &err) == IC_OK, "open: %s", err.message);
     fputs("data", f.fp);
+    int calls = fsync_calls;
     CHECK(ic_atomic_file_commit(&f, &err) == IC_OK, "commit: %s", err.message);
     CHECK(exists(T "/out.pfm"), "the output is written");
+    check_synced("atomic file", "/out.pfm", calls);
     check_cleaned("atomic file", stale, keep);
 
     /* a temporary name for a writer that needs a path (the EXR writer) */
@@ -95,6 +125,15 @@ int main(void)
     ic_atomic_temp_name(T "/out.exr", tmp, sizeof tmp);
     ic_atomic_temp_release(tmp);
     check_cleaned("temporary name", stale, keep);
+
+    /* the EXR writer (OpenEXR writes and closes the temporary by name) */
+    ic_image img;
+    CHECK(ic_image_create(&img, 4, 4) == IC_OK, "image");
+    calls = fsync_calls;
+    CHECK(ic_image_write(T "/synced.exr", &img, NULL, &err) == IC_OK && exists(T "/synced.exr"), "EXR: %s",
+          err.message);
+    check_synced("EXR", "/synced.exr", calls);
+    ic_image_free(&img);
 
     /* the command: a rerun after a SIGKILL during its write */
     leave(T "/render.png", dead, stale, keep);
