@@ -227,7 +227,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_BATCH, "before the first pass, records where probe rays from the shading points land (1/4 of " \
       "the rays each), read only by the hemisphere rays of the image's records, which then path-trace fewer " \
       "bounces (no effect with --path-traced-gather or --bounces 1)") \
-    X(MAX_PASSES, "--max-passes", NULL, IC_OPT_INT, render.ic.max_passes, 1, 1000, "N", IC_DEFAULT_MAX_PASSES, "%g", \
+    X(MAX_PASSES, "--max-passes", NULL, IC_OPT_INT, render.ic.max_passes, 1, IC_MAX_MAX_PASSES, "N", IC_DEFAULT_MAX_PASSES, "%g", \
       "", IC_SCOPE_BATCH, "most construction passes after pass 0 (the geometry's candidates): a safety bound (a " \
       "warning says when it stops construction); the stats' passes count pass 0 too, at most N + 1") \
     X(MIN_CANDIDATES, "--min-candidates", NULL, IC_OPT_INT, render.ic.min_candidates, 1, 1e9, "N", \

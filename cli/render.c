@@ -71,7 +71,7 @@ static void on_progress(void *user, const ic_render_progress *r)
 #define EXIT_OUTPUT_FAILED 3
 
 /* What each rank reports of its share (ic_render_stats' rank_ fields and its wall time), gathered to rank 0. */
-#define RANK_FIGURES (6 + 2 * 32)
+#define RANK_FIGURES (6 + 2 * IC_STATS_PASSES)
 static void rank_figures(const ic_render_stats *st, double f[RANK_FIGURES])
 {
     f[0] = (double)st->rank_records_gathered;
@@ -80,9 +80,9 @@ static void rank_figures(const ic_render_stats *st, double f[RANK_FIGURES])
     f[3] = (double)st->rank_comm_bytes;
     f[4] = st->seconds;
     f[5] = st->rank_render_seconds;
-    for (int p = 0; p < 32; ++p) {
+    for (int p = 0; p < IC_STATS_PASSES; ++p) {
         f[6 + p] = st->rank_comm_seconds_per_pass[p];
-        f[6 + 32 + p] = (double)st->rank_comm_bytes_per_pass[p];
+        f[6 + IC_STATS_PASSES + p] = (double)st->rank_comm_bytes_per_pass[p];
     }
 }
 
@@ -107,8 +107,10 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
         cJSON_AddNumberToObject(o, "passes", st->passes);
         cJSON_AddItemToObject(o, "gather_rays", ic_cli_json_u64(st->gather_rays));
         cJSON *per = cJSON_AddArrayToObject(o, "records_per_pass");
-        for (int i = 0; i < st->passes && i < 32; ++i)
+        for (int i = 0; i < st->passes && i < IC_STATS_PASSES; ++i)
             cJSON_AddItemToArray(per, cJSON_CreateNumber(st->records_per_pass[i]));
+        if (st->passes > IC_STATS_PASSES) /* a library caller's larger bound: say what has no entry */
+            cJSON_AddNumberToObject(o, "passes_without_entry", st->passes - IC_STATS_PASSES);
         if (a->render.ic.strategy == IC_STRATEGY_ADAPTIVE)
             cJSON_AddNumberToObject(o, "refinements", st->refinements);
         cJSON *ext = cJSON_AddObjectToObject(o, "record_extent");
@@ -155,9 +157,9 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
             !a->render.ic.load_cache) {
             cJSON *sec = cJSON_AddArrayToObject(rk, "comm_seconds_per_pass");
             cJSON *bytes = cJSON_AddArrayToObject(rk, "comm_bytes_per_pass");
-            for (int p = 0; p < st->passes && p < 32; ++p) {
+            for (int p = 0; p < st->passes && p < IC_STATS_PASSES; ++p) {
                 cJSON_AddItemToArray(sec, cJSON_CreateNumber(f[6 + p]));
-                cJSON_AddItemToArray(bytes, ic_cli_json_u64((uint64_t)f[6 + 32 + p]));
+                cJSON_AddItemToArray(bytes, ic_cli_json_u64((uint64_t)f[6 + IC_STATS_PASSES + p]));
             }
         }
         cJSON_AddItemToArray(per_rank, rk);

@@ -60,7 +60,13 @@
 #define IC_DEFAULT_RECORD_SETS 1         /* hemisphere sets a record may gather */
 #define IC_DEFAULT_RECORD_NOISE 0.05f    /* relative σ the sets aim at */
 #define IC_CONSTRUCTION_TIME_SHARE 0.5 /* with a time budget: construction stops after this share of it */
-#define IC_DEFAULT_MAX_PASSES 30         /* batch construction: a safety bound (stats keep 32 passes) */
+#define IC_DEFAULT_MAX_PASSES 30         /* batch construction: a safety bound */
+#define IC_MAX_MAX_PASSES 1000           /* the largest max_passes the command takes (--max-passes) */
+/* Construction passes the per-pass statistics hold (ic_render_stats.records_per_pass and the rank_comm
+ * arrays): batch's most from the command, pass 0 and IC_MAX_MAX_PASSES after it; adaptive's bound
+ * (IC_DEFAULT_ADAPTIVE_MAX_PASSES) is far within. Passes beyond it (a library caller's larger bound)
+ * are counted in `passes` but have no entry. */
+#define IC_STATS_PASSES (IC_MAX_MAX_PASSES + 1)
 #define IC_DEFAULT_UNCOVERED 0.001f      /* batch: converged below this share of uncovered look-up points */
 #define IC_DEFAULT_MIN_CANDIDATES 16
 #define IC_DEFAULT_PASS_GROWTH 0.02f     /* batch: converged when a pass adds fewer than this share of the image's records */

@@ -299,7 +299,7 @@ typedef struct ic_render_stats {
     uint32_t hit_records;  /* records of the hit stage among `records` (ic_ic_options.hit_records), which only
                               hemisphere rays read; record_extent leaves them out */
     uint32_t radiance_record_bytes; /* bytes one radiance record holds: the record and its coefficients */
-    uint32_t records_per_pass[32];
+    uint32_t records_per_pass[IC_STATS_PASSES]; /* new records of each pass (the first IC_STATS_PASSES) */
     char save_error[1024]; /* ic_ic_options.save_cache could not be written: why (the render went on and
                               its image is good); empty when it was written or not asked for */
     double uncovered_share; /* batch: share of the last pass's eye-path look-up points no record covered */
@@ -316,8 +316,8 @@ typedef struct ic_render_stats {
     double rank_render_seconds;     /* seconds it spent rendering them (waiting for other ranks excluded) */
     double rank_comm_seconds;       /* seconds this process spent in opt.comm's operations */
     uint64_t rank_comm_bytes;       /* bytes it received through them */
-    double rank_comm_seconds_per_pass[32]; /* batch: of those, each construction pass's (records_per_pass's */
-    uint64_t rank_comm_bytes_per_pass[32]; /* passes; the last also holds the final coverage sweep) */
+    double rank_comm_seconds_per_pass[IC_STATS_PASSES]; /* batch: of those, each construction pass's (records_per_pass's */
+    uint64_t rank_comm_bytes_per_pass[IC_STATS_PASSES]; /* passes; the last also holds the final coverage sweep) */
     int phase_count;
     struct {
         const char *name;  /* "accel", "render", … */

@@ -547,7 +547,7 @@ typedef struct adaptive_result {
     int passes;
     int converged;             /* 0 if max_passes or the time budget stopped it */
     int out_of_time;           /* 1 if the time budget stopped it */
-    uint32_t records_per_pass[32];
+    uint32_t records_per_pass[IC_STATS_PASSES];
 } adaptive_result;
 
 static ic_result converge(adaptive *A, const ic_render_options *opt, phase_times *pt, adaptive_result *res,
@@ -598,7 +598,7 @@ static ic_result converge(adaptive *A, const ic_render_options *opt, phase_times
         /* Shrunk records leave stale, over-large octree references; re-fit them (deterministic). */
         if (changed && (r = ic_cache_rebuild_index(c->cache, err)) != IC_OK)
             return r;
-        if (res->passes < 32)
+        if (res->passes < IC_STATS_PASSES)
             res->records_per_pass[res->passes] = A->nrec - before;
         ++res->passes;
         if (past_deadline) { /* points are left uncovered: cut by time, whatever the queue holds */

@@ -291,7 +291,7 @@ ic_pass_end ic_ic_batch_pass_end(int truncated, int converged, int (*out_of_time
 /* Adds this process's communication since the last call to pass `pass` of the statistics. */
 static void count_traffic(ic_ctx *c, ic_render_stats *st, int pass)
 {
-    if (!c->comm || pass < 0 || pass >= 32)
+    if (!c->comm || pass < 0 || pass >= IC_STATS_PASSES)
         return;
     st->rank_comm_seconds_per_pass[pass] += c->comm->seconds - c->comm_seconds_counted;
     st->rank_comm_bytes_per_pass[pass] += c->comm->bytes - c->comm_bytes_counted;
@@ -415,7 +415,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
                 goto done;
         }
         if (ic_ic_cancelled(c)) { /* interrupted inside the screen stage: the pass ends here */
-            if (pass < 32)
+            if (pass < IC_STATS_PASSES)
                 st->records_per_pass[pass] = ic_cache_count(c->cache) - before;
             st->passes = pass + 1;
             break;
@@ -431,7 +431,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
             goto done;
         found += wn;
         const uint32_t added = ic_cache_count(c->cache) - before;
-        if (pass < 32)
+        if (pass < IC_STATS_PASSES)
             st->records_per_pass[pass] = added;
         count_traffic(c, st, pass);
         st->passes = pass + 1;

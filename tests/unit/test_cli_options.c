@@ -403,6 +403,18 @@ static void radius_floor_zero(void)
           "--max-radius-px 0 (no image at all) refused: %s", err_text);
 }
 
+/* The stats' passes (into *passes, -1 if missing) and the entries of their records_per_pass (-1 if missing). */
+static int per_pass_entries(const char *js, int *passes)
+{
+    const char *p = strstr(js, "\"passes\":"), *per = strstr(js, "\"records_per_pass\":");
+    const char *open = per ? strchr(per, '[') : NULL, *close = open ? strchr(open, ']') : NULL;
+    *passes = p ? atoi(p + strlen("\"passes\":")) : -1;
+    int entries = close ? 1 : -1; /* a number, then one a ',' */
+    for (const char *q = open; close && q < close; ++q)
+        entries += *q == ',';
+    return entries;
+}
+
 /* Construction that a limit cuts short says so: a warning line and "cut_short" in the stats. */
 static void cut_short(void)
 {
@@ -419,16 +431,21 @@ static void cut_short(void)
     /* The warning names the limit as given, and the passes as the stats count them: pass 0 (the geometry's
      * candidates) and the one pass after it; records_per_pass has one entry a pass. It said "(2 passes)" as
      * the limit. */
-    const char *p = strstr(js, "\"passes\":"), *per = strstr(js, "\"records_per_pass\":");
-    const char *open = per ? strchr(per, '[') : NULL, *close = open ? strchr(open, ']') : NULL;
-    int passes = p ? atoi(p + strlen("\"passes\":")) : -1, entries = close ? 1 : -1; /* a number, then one a ',' */
-    for (const char *q = open; close && q < close; ++q)
-        entries += *q == ',';
+    int passes, entries = per_pass_entries(js, &passes);
     char want[160];
     snprintf(want, sizeof want, "stopped at its pass limit, --max-passes 1 (after the geometry pass 0: %d passes in "
              "the stats)", passes);
     CHECK(passes == 2 && entries == passes && strstr(err_text, want), "stats passes %d (%d entries), warning '%s'",
           passes, entries, err_text);
+    /* More than 32 passes (the stats kept 32, the rest vanished): every pass has its entry. Here construction
+     * never converges (a candidate a pass is enough, no growth test), so it runs to the bound: 41 passes. */
+    CHECK(run("render " CORNELL " -o " TMP "_cs.pfm --width 32 --height 32 --spp 1 -q --integrator ic --rays 16 "
+              "--accuracy 0.05 --max-passes 40 --min-candidates 1 --pass-growth off --stats " TMP "_cs.json") == 0,
+          "render with --max-passes 40: %s", err_text);
+    test_read_text(TMP "_cs.json", js, sizeof js);
+    entries = per_pass_entries(js, &passes);
+    CHECK(passes == 41 && entries == passes && !strstr(js, "passes_without_entry"),
+          "41 passes, each with its records_per_pass entry (%d passes, %d entries)", passes, entries);
     snprintf(cmd, sizeof cmd, "%s --max-passes 100 --min-candidates 1000000", base);
     CHECK(run(cmd) == 0, "render that converges: %s", err_text);
     test_read_text(TMP "_cs.json", js, sizeof js);
