@@ -73,6 +73,11 @@ static void filter_one(void *p, int64_t own_item, int thread)
     float *kern = j->kern[thread];
     ic_vec3 *val = j->val[thread];
     uint32_t total = ic_cache_radius_query(j->cache, ri->position, h, idx, NEIGHBOURS_MAX);
+    /* More than the buffer holds (dense records, hit records among them): the query wrote the first ones
+     * in the octree's order, which leaves out a side of the neighbourhood; the nearest ones instead (those
+     * beyond h are skipped below). */
+    if (total > NEIGHBOURS_MAX)
+        total = ic_cache_knn(j->cache, ri->position, NEIGHBOURS_MAX, idx, NULL);
     uint32_t found = total < NEIGHBOURS_MAX ? total : NEIGHBOURS_MAX, n = 0;
     double var = 0.0, ksum = 0.0;
     for (uint32_t q = 0; q < found; ++q) {

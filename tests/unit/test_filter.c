@@ -13,7 +13,8 @@
  *   4b. a curved field (a real variation the gradients do not carry) with little noise: the records move
  *      by hardly more than their noise (the shrinkage sees the spread is not noise), where a plain mean
  *      over the neighbourhood would bias them by many σ;
- *   5. 1 and 2 threads give identical records.
+ *   5. 1 and 2 threads give identical records;
+ *   6. more neighbours than the filter's buffer: the nearest ones, whatever the insertion order.
  */
 #include "test_util.h"
 
@@ -230,8 +231,72 @@ static void test_threads(void)
     ic_cache_destroy(b);
 }
 
+/* 6. More neighbours than the filter's buffer (600 noisy records within one record's reach): it takes the
+ * nearest ones, so the result does not depend on the order the records were inserted in (the octree's order
+ * decided which 256 it saw before). */
+static ic_cache *dense_cache(int reversed)
+{
+    enum { N = 600 };
+    static ic_record recs[N];
+    ic_rng rng = ic_rng_make(21, 1, 2, 3);
+    for (int i = 0; i < N; ++i) {
+        ic_record *r = &recs[i];
+        memset(r, 0, sizeof *r);
+        r->position = v3(0.5f * ic_rng_float(&rng), 0.5f * ic_rng_float(&rng), 0.0f);
+        r->normal = v3(0.0f, 0.0f, 1.0f);
+        r->irradiance = v3s(fmaxf(1.0f + 0.2f * (float)gauss(&rng), 0.0f));
+        r->sigma = v3s(0.2f);
+        r->harmonic_mean_dist = 0.5f;
+    }
+    ic_cache_params p = {0};
+    p.accuracy = 0.3f;
+    p.min_radius = 0.5f;
+    p.max_radius = 0.5f;
+    p.neighbor_clamp = IC_CACHE_OFF;
+    p.validity_clamp = IC_CACHE_OFF;
+    ic_cache *c = NULL;
+    ic_error err;
+    if (ic_cache_create(&p, &c, &err) != IC_OK)
+        return NULL;
+    for (int i = 0; i < N; ++i)
+        if (ic_cache_insert(c, &recs[reversed ? N - 1 - i : i], NULL, &err) != IC_OK) {
+            ic_cache_destroy(c);
+            return NULL;
+        }
+    return c;
+}
+
+static void test_dense(void)
+{
+    ic_cache *a = dense_cache(0), *b = dense_cache(1);
+    ic_error err;
+    CHECK(a && b, "dense: caches built");
+    if (!a || !b)
+        return;
+    CHECK(ic_ic_filter_cache(a, 2, NULL, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK &&
+              ic_ic_filter_cache(b, 2, NULL, IC_DEFAULT_RECORD_FILTER, &err) == IC_OK,
+          "dense: filter runs");
+    const uint32_t n = ic_cache_count(a);
+    uint32_t differ = 0, moved = 0;
+    for (uint32_t i = 0; i < n && n == ic_cache_count(b); ++i) {
+        ic_record x, y;
+        ic_cache_get_record(a, i, &x);
+        ic_cache_get_record(b, n - 1 - i, &y);
+        differ += memcmp(&x.irradiance, &y.irradiance, sizeof x.irradiance) != 0;
+        moved += fabsf(x.irradiance.x - 1.0f) < 0.05f;
+    }
+    printf("dense: %u of %u records filtered differently when inserted in reverse; %u within 0.05 of the truth\n",
+           differ, n, moved);
+    CHECK(n == 600 && differ == 0, "dense: the filtered records do not depend on the insertion order (%u of %u "
+          "differ)", differ, n);
+    CHECK(moved > n / 2, "dense: the filter still pulls the records to the truth (%u of %u within 0.05)", moved, n);
+    ic_cache_destroy(a);
+    ic_cache_destroy(b);
+}
+
 int main(void)
 {
+    test_dense();
     test_noise("flat", flat, v3s(0.0f));
     test_noise("ramp", ramp, v3(0.5f, 0.0f, 0.0f));
     test_skewed();
