@@ -111,6 +111,8 @@ static int write_stats(const char *path, const render_args *a, int w, int h, con
             cJSON_AddItemToArray(per, cJSON_CreateNumber(st->records_per_pass[i]));
         if (st->passes > IC_STATS_PASSES) /* a library caller's larger bound: say what has no entry */
             cJSON_AddNumberToObject(o, "passes_without_entry", st->passes - IC_STATS_PASSES);
+        if (a->render.ic.strategy == IC_STRATEGY_BATCH)
+            cJSON_AddNumberToObject(o, "coverage_records", st->coverage_records);
         if (a->render.ic.strategy == IC_STRATEGY_ADAPTIVE)
             cJSON_AddNumberToObject(o, "refinements", st->refinements);
         cJSON *ext = cJSON_AddObjectToObject(o, "record_extent");

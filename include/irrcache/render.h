@@ -144,7 +144,8 @@ typedef struct ic_ic_options {
     float dither_threshold;/* batch: need at which dithering goes from 32- to 16-pixel spacing [0.5] */
     float normal_weight;   /* batch: k of k·normDiff + posDiff (Frolov et al. 2012 §3.1.1) [4] */
     int world_stride;      /* batch: world stage traces one eye path per stride×stride pixels [2] */
-    float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene diagonal [0.05] */
+    float cluster_size;    /* batch: largest cluster box diagonal, in units of the scene's working length
+                              (the scene diagonal, at most 2.5 times what the camera sees; docs) [0.05] */
     const char *load_cache;/* read the records from this cache file instead of building them (must match
                               the scene, the gathering settings and the cache parameters) */
     const char *save_cache;/* write the records to this cache file after construction (atomically) */
@@ -300,6 +301,8 @@ typedef struct ic_render_stats {
                               hemisphere rays read; record_extent leaves them out */
     uint32_t radiance_record_bytes; /* bytes one radiance record holds: the record and its coefficients */
     uint32_t records_per_pass[IC_STATS_PASSES]; /* new records of each pass (the first IC_STATS_PASSES) */
+    uint32_t coverage_records; /* batch: records the closing coverage sweep added after the passes (not in
+                              records_per_pass) */
     char save_error[1024]; /* ic_ic_options.save_cache could not be written: why (the render went on and
                               its image is good); empty when it was written or not asked for */
     double uncovered_share; /* batch: share of the last pass's eye-path look-up points no record covered */

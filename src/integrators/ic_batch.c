@@ -94,7 +94,7 @@ static void world_path(void *p, int64_t own_item, int thread)
                  * be). Without it, records seen in a glossy floor had no size floor and construction
                  * never converged there. */
                 out[n].footprint = ic_camera_footprint(cam, (float)x + 0.5f, (float)y + 0.5f, t_path);
-                out[n].key = ((uint64_t)pixel << 8) | (uint64_t)(0x80 | (j->pass & 0x1f) << 2 | (smooth_hits & 3));
+                out[n].key = ic_ic_world_key(pixel, j->pass, smooth_hits);
                 ++n;
             }
             ++smooth_hits;
@@ -407,7 +407,7 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
             for (size_t i = (size_t)y0 * c->g.width; i < (size_t)y1 * c->g.width; ++i)
                 if (c->g.valid[i] && !covered[i])
                     need[i] = fmaxf(need[i], c->o.dither_threshold);
-            if ((r = dithered_candidates(c, need, pix, cand, (uint64_t)pass, &n, &need_seconds, err)) != IC_OK)
+            if ((r = dithered_candidates(c, need, pix, cand, ic_ic_screen_key_tag(pass), &n, &need_seconds, err)) != IC_OK)
                 goto done;
             found += n;
             r = ic_ic_gather_and_insert(c, cand, n, pt, err);
@@ -455,7 +455,9 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
         }
     }
     uint32_t added;
+    const uint32_t before_sweep = ic_cache_count(c->cache);
     r = coverage_sweep(c, lum, covered, pix, cand, pt, &added, &sweeps, err);
+    st->coverage_records = ic_cache_count(c->cache) - before_sweep;
     count_traffic(c, st, st->passes - 1);
     /* The parts of construction that the processes share out (the rest of it, clustering,
      * every process does alike): reported apart so that a scaling model can tell them apart. */

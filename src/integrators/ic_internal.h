@@ -233,6 +233,20 @@ static inline int ic_ic_out_of_time(ic_ctx *c)
         return 0;
     return ic_comm_is_shared(c->comm) ? ic_ic_out_of_time_shared(c) : ic_seconds() > c->deadline;
 }
+/* Batch construction's candidate keys (pixel << 8 | an 8-bit tag; ic_ic_candidate_at_pixel): the screen
+ * stage's tag is its pass (below 0x40), the closing sweep's 0x40 | its round, the world stage's
+ * 0x80 | pass << 2 | the path's smooth hit. Passes beyond what a tag holds (32 for the world stage, 64 for the
+ * screen stage) add their high bits above the pixel's (bit 48 up), so that no two passes share keys, and
+ * hence random streams; the keys of the first passes are as they were. */
+static inline uint64_t ic_ic_screen_key_tag(int pass)
+{
+    return ((uint64_t)pass & 0x3f) | ((uint64_t)pass >> 6) << 48;
+}
+static inline uint64_t ic_ic_world_key(uint32_t pixel, int pass, int smooth_hit)
+{
+    return ((uint64_t)pixel << 8) | (uint64_t)(0x80 | ((uint64_t)pass & 0x1f) << 2 | ((uint64_t)smooth_hit & 3)) |
+           ((uint64_t)pass >> 5) << 48;
+}
 /* How a batch construction pass ends (ic_ic_batch_pass_end): another pass, converged, or stopped by the time
  * budget or an interrupt. */
 typedef enum ic_pass_end { IC_PASS_CONTINUE, IC_PASS_CONVERGED, IC_PASS_STOPPED } ic_pass_end;

@@ -119,6 +119,14 @@ static void test_cornell(void)
          * records and their coverage (below) are checked without them; 1 and 2 threads the same image. */
         CHECK(hit_records ? st.hit_records > 100 : st.hit_records == 0, "%s: %u hit records", cases[k].name,
               st.hit_records);
+        if (cases[k].strategy == IC_STRATEGY_BATCH) { /* every image record is in a pass or the closing sweep */
+            uint32_t in_passes = 0;
+            for (int p = 0; p < st.passes && p < IC_STATS_PASSES; ++p)
+                in_passes += st.records_per_pass[p];
+            CHECK(in_passes + st.coverage_records == own && st.coverage_records > 0,
+                  "%s: %u records in passes and %u from the coverage sweep make the %u image records",
+                  cases[k].name, in_passes, st.coverage_records, own);
+        }
         if (k == 0) {
             ic_image one = {0};
             ic_render_options o1 = o;
