@@ -151,7 +151,7 @@ static int pilot(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride, 
                 cos_l = fabsf(cos_l);
             if (cos_p <= 0.0f || cos_l <= 0.0f)
                 continue;
-            ic_ray r = {ic_offset_ray_origin(p, n, d), d, 0.0f, dist * (1.0f - 1e-3f)};
+            ic_ray r = ic_shadow_ray_to(p, n, d, dist, 1e-3f, c->tr->scene->ray_offset_floor);
             if (ic_accel_occluded1(c->tr->accel, &r))
                 continue;
             double f = le * cos_p * cos_l / ((double)dist * dist) * l->area / q;

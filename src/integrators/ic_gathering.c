@@ -756,10 +756,10 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
     rec->pixel_footprint = cand->footprint;
 }
 
-ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand)
+ic_gather_point ic_ic_gather_point_of(const ic_ctx *c, const ic_candidate *cand)
 {
     ic_gather_point gp;
-    gp.position = ic_offset_ray_origin(cand->p, cand->n, cand->n);
+    gp.position = ic_offset_ray_origin_floor(cand->p, cand->n, cand->n, c->tr->scene->ray_offset_floor);
     gp.normal = cand->n;
     gp.key = cand->key;
     return gp;
@@ -783,7 +783,7 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
         goto done;
     }
     for (uint32_t i = 0; i < count; ++i)
-        pts[i] = ic_ic_gather_point_of(&cand[i]);
+        pts[i] = ic_ic_gather_point_of(c, &cand[i]);
     double t0 = ic_seconds();
     r = ic_ic_gather_points(c, pts, count, res, levels, gathered, err);
     double t1 = ic_seconds();

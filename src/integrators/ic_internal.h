@@ -186,7 +186,7 @@ float ic_ic_hessian_error_target(const ic_cache_params *p);
 /* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
 /* Gather point (offset origin, normal, key) of a candidate. */
-ic_gather_point ic_ic_gather_point_of(const ic_candidate *cand);
+ic_gather_point ic_ic_gather_point_of(const struct ic_ctx *c, const ic_candidate *cand);
 /* Gathers count candidates in parallel and inserts them as one batch (those gathered, when the render
  * is cancelled during the gathers). */
 ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err);
@@ -418,7 +418,7 @@ void ic_ic_adaptive_probe_free(ic_adaptive_probe *p);
 /* ---- sensor points (ic_points.c; the driver is src/render/points.c) */
 /* A sensor as a surface: a white Lambertian receiver (ρ = 1) at p facing the unit normal n, whose
  * reflected radiance is E/π. */
-void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b);
+void ic_ic_sensor(const ic_scene *scene, ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b);
 /* A context for sensor points: opt resolved as for a render, lazy, every emitter light-sampled, no record
  * filter, no cache files, and no shading points of the camera. */
 ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, ic_error *err);

@@ -94,7 +94,7 @@ static ic_vec3 level_irradiance(lazy_state *ls, int level, const ic_surface *s, 
     cd.n = n;
     cd.footprint = footprint;
     cd.key = ic_hash4(c->seed, (uint64_t)level, ic_cache_count(c->cache), 0x726563ULL);
-    ic_gather_point gp = ic_ic_gather_point_of(&cd);
+    ic_gather_point gp = ic_ic_gather_point_of(c, &cd);
     ic_gather_result gr;
     ic_result r = ic_ic_gather_by_method(c, ls->g[level], &gp, &gr);
     if (r != IC_OK) {
@@ -147,7 +147,7 @@ ic_result ic_ic_build_lazy(ic_ctx *c, const ic_render_options *opt, ic_render_st
             if (ic_cache_query(c->cache, &q, &e))
                 continue;
             ic_candidate cd = ic_ic_candidate_at_pixel(c, (uint32_t)i, (uint64_t)round);
-            ic_gather_point gp = ic_ic_gather_point_of(&cd);
+            ic_gather_point gp = ic_ic_gather_point_of(c, &cd);
             ic_gather_result gr;
             ic_vec3 levels[IC_LEVELS_MAX + 1];
             r = c->o.recursive ? ic_ic_gather_by_method(c, ls.g[0], &gp, &gr)

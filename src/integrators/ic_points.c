@@ -29,9 +29,10 @@
  * sensor's own gather (they have 1/64 of its rays). */
 #define SENSOR_BOUNCE (IC_BOUNCE_RADIANCE - 1u)
 
-void ic_ic_sensor(ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b)
+void ic_ic_sensor(const ic_scene *scene, ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b)
 {
     memset(s, 0, sizeof *s);
+    s->offset_floor = scene->ray_offset_floor;
     s->p = p;
     s->ng = n;
     s->ns = s->ns_smooth = n;

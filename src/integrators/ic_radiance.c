@@ -271,7 +271,7 @@ static void rad_item(void *p, int64_t item, int thread)
         return;
     }
     const ic_candidate *cd = &j->cand[item];
-    ic_gather_point gp = ic_ic_gather_point_of(cd);
+    ic_gather_point gp = ic_ic_gather_point_of(j->c, cd);
     ic_frame f = ic_frame_from_normal(cd->n);
     ic_hsh_frame hf = {f.t, f.b, f.n};
     memset(j->workers[thread].sum, 0, sizeof j->workers[thread].sum);

@@ -109,7 +109,7 @@ ic_vec3 ic_direct_light_glossy(const ic_tracer *tr, const ic_surface *s, const i
 static inline ic_ray ic_spawn_ray(const ic_surface *s, ic_vec3 dir)
 {
     ic_ray r;
-    r.org = ic_offset_ray_origin(s->p, s->ng, dir);
+    r.org = ic_offset_ray_origin_floor(s->p, s->ng, dir, s->offset_floor > 0.0f ? s->offset_floor : IC_RAY_OFFSET_FLOOR);
     r.dir = dir;
     r.tnear = 0.0f;
     r.tfar = INFINITY;
@@ -119,9 +119,8 @@ static inline ic_ray ic_spawn_ray(const ic_surface *s, ic_vec3 dir)
 /* The shadow ray from surface s towards a light sample, stopping just short of the light. */
 static inline ic_ray ic_shadow_ray(const ic_surface *s, const ic_light_sample *ls)
 {
-    ic_ray r = ic_spawn_ray(s, ls->wi);
-    r.tfar = isinf(ls->dist) ? INFINITY : ls->dist * (1.0f - 1e-4f);
-    return r;
+    return ic_shadow_ray_to(s->p, s->ng, ls->wi, ls->dist, 1e-4f,
+                            s->offset_floor > 0.0f ? s->offset_floor : IC_RAY_OFFSET_FLOOR);
 }
 
 /* Russian roulette on path throughput after `depth` bounces: returns 0 if the path ends, else scales

@@ -138,7 +138,7 @@ static void estimate_point(const points_job *job, uint32_t i, uint64_t purpose, 
 {
     ic_surface s;
     ic_bsdf b;
-    ic_ic_sensor(job->p[i], job->n[i], &s, &b);
+    ic_ic_sensor(job->tr->scene, job->p[i], job->n[i], &s, &b);
     const int replicates = IC_POINT_REPLICATES;
     int per = (job->samples + replicates - 1) / replicates;
     if (per < 1)

@@ -506,6 +506,11 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
         }
         s->bounds_min = lo;
         s->bounds_max = hi;
+        const float extent = fmaxf(fmaxf(fmaxf(fabsf(lo.x), fabsf(hi.x)), fmaxf(fabsf(lo.y), fabsf(hi.y))),
+                                   fmaxf(fabsf(lo.z), fabsf(hi.z)));
+        s->ray_offset_floor = IC_RAY_OFFSET_FLOOR * (extent > 0.0f && extent < 1.0f ? extent : 1.0f);
+    } else {
+        s->ray_offset_floor = IC_RAY_OFFSET_FLOOR;
     }
     return ic_scene_build_lights(s, err);
 }

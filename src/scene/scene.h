@@ -232,6 +232,9 @@ struct ic_scene {
     uint32_t *triangle_material; /* triangle_count material indices */
     uint32_t triangle_count;
     ic_vec3 bounds_min, bounds_max;
+    float ray_offset_floor; /* smallest move of a ray's origin off a surface (ic_offset_ray_origin_floor):
+                              IC_RAY_OFFSET_FLOOR, times the largest coordinate of the geometry when that is
+                              below 1, so that a small scene renders as its scaled-up copy does */
     /* appearance */
     ic_material *materials;
     uint32_t material_count;
@@ -267,6 +270,10 @@ struct ic_scene {
 
 /* Surface attributes at barycentrics (u, v) of triangle tri (b0 = 1-u-v on vertex 0, u on v1, v on v2,
  * as Embree reports them). */
+/* The smallest move of a ray's origin off a surface in a scene of unit size or more (geom/accel.h:
+ * ic_offset_ray_origin_floor). */
+#define IC_RAY_OFFSET_FLOOR (1.0f / 65536.0f)
+
 typedef struct ic_surface {
     ic_vec3 p;             /* position */
     ic_vec3 ng;            /* unit geometric normal (winding order) */
@@ -275,6 +282,7 @@ typedef struct ic_surface {
     float uv[2];           /* texture coordinates (0 if none) */
     uint32_t material;
     uint32_t triangle;
+    float offset_floor;    /* the scene's ray_offset_floor (0: IC_RAY_OFFSET_FLOOR), for rays leaving here */
 } ic_surface;
 
 /* Fills s for triangle tri at barycentrics (u, v); a normal-mapped material's ns is the mapped normal. */

@@ -94,6 +94,7 @@ void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_
 {
     const uint32_t *idx = scene->triangles + 3 * (size_t)tri;
     float w = 1.0f - u - v;
+    s->offset_floor = scene->ray_offset_floor;
     ic_vec3 p0 = scene->positions[idx[0]], p1 = scene->positions[idx[1]], p2 = scene->positions[idx[2]];
     s->p = v3_add(v3_add(v3_scale(p0, w), v3_scale(p1, u)), v3_scale(p2, v));
     s->ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
