@@ -44,11 +44,7 @@ typedef struct entry {
     uint32_t record;
 } entry;
 
-/* A node's cube (the descent's arithmetic) and its cell (the points that descend into it). */
-typedef struct cell {
-    float cx, cy, cz, h;
-    float lo[3], hi[3];
-} cell;
+typedef ic_octree_cell cell; /* octree.h */
 
 /* The largest subtrees of at most 1/TASK_SHARE of the tree's nodes are the tasks. By size rather
  * than by depth, as octrees of scenes are lopsided (Sponza's at 640×360, at depth 3: 16 subtrees, four
@@ -107,35 +103,6 @@ typedef struct builder {
     size_t input_len, input_cap;
 } builder;
 
-/* Squared distance from (x, y, z) to the box [lo, hi], with the weight test's operation order. */
-static float cell_dist2(const cell *cl, float x, float y, float z)
-{
-    float p[3] = {x, y, z}, e[3];
-    for (int a = 0; a < 3; ++a) {
-        float below = cl->lo[a] - p[a], above = p[a] - cl->hi[a];
-        e[a] = below > 0.0f ? below : (above > 0.0f ? above : 0.0f);
-    }
-    return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-}
-
-static cell child_cell(const cell *parent, unsigned octant)
-{
-    cell c = *parent;
-    c.h = parent->h * 0.5f;
-    float centre[3] = {parent->cx, parent->cy, parent->cz};
-    float *mid[3] = {&c.cx, &c.cy, &c.cz};
-    for (int a = 0; a < 3; ++a) {
-        int upper = (octant >> a) & 1;
-        /* Exactly the descent's update (octree.h: ic_octree_path). */
-        *mid[a] = upper ? centre[a] + c.h : centre[a] - c.h;
-        /* The descent goes up iff p ≥ centre: intersect the constraint into the cell. */
-        if (upper)
-            c.lo[a] = centre[a] > c.lo[a] ? centre[a] : c.lo[a];
-        else
-            c.hi[a] = centre[a] < c.hi[a] ? centre[a] : c.hi[a];
-    }
-    return c;
-}
 
 
 static ic_result reserve_active(builder *b, size_t n)
@@ -229,7 +196,7 @@ static size_t filter(builder *b, const cell *cl, size_t begin, size_t end, size_
 {
     for (size_t k = begin; k < end; ++k) {
         entry e = b->active[k];
-        if (cell_dist2(cl, e.x, e.y, e.z) <= e.r2)
+        if (ic_octree_cell_dist2(cl, e.x, e.y, e.z) <= e.r2)
             b->active[top++] = e;
     }
     return top;
@@ -284,7 +251,7 @@ static ic_result build_node(builder *b, uint32_t tn, uint32_t fpos, const cell *
         const ic_float4 *s = &c->sphere[i];
         float r = ic_octree_item_radius(&items, i);
         entry e = {s->x, s->y, s->z, r * r, i};
-        if (cell_dist2(cl, e.x, e.y, e.z) <= e.r2)
+        if (ic_octree_cell_dist2(cl, e.x, e.y, e.z) <= e.r2)
             b->active[end++] = e;
     }
     if (!node.child)
@@ -299,7 +266,7 @@ static ic_result build_node(builder *b, uint32_t tn, uint32_t fpos, const cell *
     p->node_count += 8;
     p->node[fpos] = first;
     for (unsigned o = 0; o < 8; ++o) {
-        cell cc = child_cell(cl, o);
+        cell cc = ic_octree_child_cell(cl, o);
         ic_result rc = build_node(b, node.child + o, first + o, &cc, parent_end, end);
         if (rc != IC_OK)
             return rc;
@@ -464,8 +431,7 @@ ic_result ic_frozen_build(ic_cache *c)
     f->cz = t->cz;
     f->half = t->half;
     part root = {0};
-    root.cl = (cell){t->cx, t->cy, t->cz, t->half, {t->cx - t->half, t->cy - t->half, t->cz - t->half},
-                     {t->cx + t->half, t->cy + t->half, t->cz + t->half}};
+    root.cl = ic_octree_root_cell(t->cx, t->cy, t->cz, t->half);
     /* The root test is p ≤ centre + h (closed); p < the next float up says the same. */
     for (int a = 0; a < 3; ++a) {
         root.cl.hi[a] = nextafterf(root.cl.hi[a], INFINITY);

@@ -38,7 +38,7 @@ static inline const ic_frozen_leaf *hint_leaf(const ic_frozen *f, const ic_cache
  * side by side: the comparisons of the octree's descent (octree.h: ic_octree_path), and c ± h as
  * c + (±h), which IEEE arithmetic rounds alike, so the same leaf; and no branch on an axis's side,
  * which no predictor guesses. With lo and hi (else NULL) it also stores the leaf's cell there, found
- * as the builder finds it (cache_frozen.c: child_cell, the same operations): a point inside it
+ * as the builder finds it (octree.h: ic_octree_child_cell, the same operations): a point inside it
  * descends to the same leaf. */
 static IC_ALWAYS_INLINE const ic_frozen_leaf *descend_sse2(const ic_frozen *f, __m128 pv, __m128 *lo, __m128 *hi)
 {

@@ -18,20 +18,19 @@
 
 #define STACK_SIZE (8 * (IC_OCTREE_MAX_DEPTH + 2))
 
-typedef struct cube {
-    float cx, cy, cz, h;
-} cube;
+/* A node's cube and cell (octree.h): overlap is tested against the cell, the exact set of points
+ * the look-up descent sends into the node, never a cube rebuilt from its rounded centre. */
+typedef ic_octree_cell cube;
 
 static float item_radius(const ic_octree_items *it, uint32_t i) { return ic_octree_item_radius(it, i); }
 
-static cube child_cube(cube c, unsigned octant)
+static cube child_cube(cube c, unsigned octant) { return ic_octree_child_cell(&c, octant); }
+
+/* The 8 children's cubes, computed once for a node whose items are handed down. */
+static void child_cubes(cube c, cube kids[8])
 {
-    cube r;
-    r.h = c.h * 0.5f;
-    r.cx = (octant & 1) ? c.cx + r.h : c.cx - r.h;
-    r.cy = (octant & 2) ? c.cy + r.h : c.cy - r.h;
-    r.cz = (octant & 4) ? c.cz + r.h : c.cz - r.h;
-    return r;
+    for (unsigned o = 0; o < 8; ++o)
+        kids[o] = ic_octree_child_cell(&c, o);
 }
 
 static unsigned point_octant(cube c, float x, float y, float z)
@@ -39,25 +38,51 @@ static unsigned point_octant(cube c, float x, float y, float z)
     return (unsigned)(x >= c.cx) | (unsigned)(y >= c.cy) << 1 | (unsigned)(z >= c.cz) << 2;
 }
 
-/* max without fmaxf's NaN rules, which keep gcc from inlining it. */
-static inline float maxf(float a, float b) { return a > b ? a : b; }
+/* Squared distance from p to the closed cell (0 inside). */
+static float cube_dist2(cube c, float x, float y, float z) { return ic_octree_cell_dist2(&c, x, y, z); }
 
-/* Squared distance from p to the closed cube (0 inside). */
-static float cube_dist2(cube c, float x, float y, float z)
+/* Squared distances from (x, y, z) to the cells of c's 8 children, bit for bit what
+ * ic_octree_cell_dist2 gives for each child (the same per-axis terms, summed in the same order), at
+ * the cost of one cell. */
+static void child_dist2(const cube *c, float x, float y, float z, float d2[8])
 {
-    float ex = maxf(fabsf(x - c.cx) - c.h, 0.0f);
-    float ey = maxf(fabsf(y - c.cy) - c.h, 0.0f);
-    float ez = maxf(fabsf(z - c.cz) - c.h, 0.0f);
-    return ex * ex + ey * ey + ez * ez;
+    float p[3] = {x, y, z}, centre[3] = {c->cx, c->cy, c->cz}, sq[3][2];
+    for (int a = 0; a < 3; ++a) {
+        float lo[2] = {c->lo[a], centre[a] > c->lo[a] ? centre[a] : c->lo[a]};
+        float hi[2] = {centre[a] < c->hi[a] ? centre[a] : c->hi[a], c->hi[a]};
+        for (int u = 0; u < 2; ++u) {
+            float below = lo[u] - p[a], above = p[a] - hi[u];
+            float e = below > 0.0f ? below : (above > 0.0f ? above : 0.0f);
+            sq[a][u] = e * e;
+        }
+    }
+    for (unsigned o = 0; o < 8; ++o)
+        d2[o] = sq[0][o & 1] + sq[1][(o >> 1) & 1] + sq[2][(o >> 2) & 1];
 }
 
-/* Does item i belong in the child cube? Points by octant, spheres by closed overlap. */
-static int item_in_child(const ic_octree_items *it, uint32_t i, float r, cube parent, unsigned octant)
+/* Does item i belong in child `octant` (cube kids[octant]) of `parent`? Points by octant, spheres by
+ * closed overlap. */
+static int item_in_child(const ic_octree_items *it, uint32_t i, float r, const cube *parent, const cube kids[8],
+                         unsigned octant)
 {
     const ic_float4 *s = &it->sphere[i];
     if (r <= 0.0f)
-        return point_octant(parent, s->x, s->y, s->z) == octant;
-    return cube_dist2(child_cube(parent, octant), s->x, s->y, s->z) <= r * r;
+        return point_octant(*parent, s->x, s->y, s->z) == octant;
+    return cube_dist2(kids[octant], s->x, s->y, s->z) <= r * r;
+}
+
+/* The children of c item i belongs in (item_in_child's answers), one bit an octant. */
+static unsigned child_mask(const ic_octree_items *it, uint32_t i, float r, const cube *c)
+{
+    const ic_float4 *s = &it->sphere[i];
+    if (r <= 0.0f)
+        return 1u << point_octant(*c, s->x, s->y, s->z);
+    float d2[8];
+    child_dist2(c, s->x, s->y, s->z, d2);
+    unsigned m = 0;
+    for (unsigned o = 0; o < 8; ++o)
+        m |= (unsigned)(d2[o] <= r * r) << o;
+    return m;
 }
 
 static ic_octree_ref make_ref(const ic_octree_items *it, uint32_t i, float r)
@@ -133,6 +158,8 @@ static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t n
     if (leaf.child || leaf.count <= t->leaf_capacity || depth >= t->max_depth)
         return IC_OK;
     float hc = 0.5f * c.h;
+    cube kids[8];
+    child_cubes(c, kids);
     uint32_t counts[8] = {0}, down = 0;
     for (uint32_t k = 0; k < leaf.count; ++k) {
         uint32_t i = t->refs[leaf.begin + k].index;
@@ -140,8 +167,9 @@ static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t n
         if (stays_at(r, hc))
             continue;
         ++down;
+        unsigned m = child_mask(it, i, r, &c);
         for (unsigned o = 0; o < 8; ++o)
-            counts[o] += (uint32_t)item_in_child(it, i, r, c, o);
+            counts[o] += (m >> o) & 1;
     }
     /* Nothing would move down: the leaf is full of spheres as large as its children. */
     if (down == 0)
@@ -173,8 +201,9 @@ static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t n
             t->refs[leaf.begin + kept++] = make_ref(it, i, r); /* compacted in place, order kept */
             continue;
         }
+        unsigned m = child_mask(it, i, r, &c);
         for (unsigned o = 0; o < 8; ++o)
-            if (item_in_child(it, i, r, c, o)) {
+            if ((m >> o) & 1) {
                 ic_octree_node *ch = &t->nodes[first + o];
                 t->refs[ch->begin + ch->count++] = make_ref(it, i, r);
             }
@@ -182,7 +211,7 @@ static ic_result maybe_split(ic_octree *t, const ic_octree_items *it, uint32_t n
     t->nodes[node].child = first;
     t->nodes[node].count = kept;
     for (unsigned o = 0; o < 8; ++o) {
-        rc = maybe_split(t, it, first + o, child_cube(c, o), depth + 1);
+        rc = maybe_split(t, it, first + o, kids[o], depth + 1);
         if (rc != IC_OK)
             return rc;
     }
@@ -230,15 +259,11 @@ static cube fit_root(const ic_octree_items *it, uint32_t count)
             hi[a] = fmaxf(hi[a], p[a] + r);
         }
     }
-    cube c;
-    c.cx = 0.5f * (lo[0] + hi[0]);
-    c.cy = 0.5f * (lo[1] + hi[1]);
-    c.cz = 0.5f * (lo[2] + hi[2]);
+    float cx = 0.5f * (lo[0] + hi[0]), cy = 0.5f * (lo[1] + hi[1]), cz = 0.5f * (lo[2] + hi[2]);
     float ext = fmaxf(hi[0] - lo[0], fmaxf(hi[1] - lo[1], hi[2] - lo[2]));
-    float mag = fmaxf(fabsf(c.cx), fmaxf(fabsf(c.cy), fabsf(c.cz)));
+    float mag = fmaxf(fabsf(cx), fmaxf(fabsf(cy), fabsf(cz)));
     /* Never a degenerate cube: at least a relative 1e-4 of the coordinates' magnitude. */
-    c.h = fmaxf(ext, 1e-4f * (1.0f + mag));
-    return c;
+    return ic_octree_root_cell(cx, cy, cz, fmaxf(ext, 1e-4f * (1.0f + mag)));
 }
 
 static ic_result insert_item(ic_octree *t, const ic_octree_items *it, uint32_t index)
@@ -250,7 +275,7 @@ static ic_result insert_item(ic_octree *t, const ic_octree_items *it, uint32_t i
     int top = 0;
     float r = item_radius(it, index);
     const ic_float4 *s = &it->sphere[index];
-    stack[top++] = (struct entry){{t->cx, t->cy, t->cz, t->half}, 0, 0};
+    stack[top++] = (struct entry){ic_octree_root_cell(t->cx, t->cy, t->cz, t->half), 0, 0};
     while (top > 0) {
         struct entry e = stack[--top];
         uint32_t child = t->nodes[e.node].child;
@@ -260,11 +285,11 @@ static ic_result insert_item(ic_octree *t, const ic_octree_items *it, uint32_t i
                 stack[top++] = (struct entry){child_cube(e.c, o), child + o, e.depth + 1};
                 continue;
             }
-            for (unsigned o = 0; o < 8; ++o) {
-                cube cc = child_cube(e.c, o);
-                if (cube_dist2(cc, s->x, s->y, s->z) <= r * r)
-                    stack[top++] = (struct entry){cc, child + o, e.depth + 1};
-            }
+            float d2[8];
+            child_dist2(&e.c, s->x, s->y, s->z, d2);
+            for (unsigned o = 0; o < 8; ++o)
+                if (d2[o] <= r * r)
+                    stack[top++] = (struct entry){child_cube(e.c, o), child + o, e.depth + 1};
             continue;
         }
         ic_result rc = leaf_append(t, e.node, make_ref(it, index, r));
@@ -395,6 +420,8 @@ static ic_result build_node(builder *b, part *p, uint32_t slot, cube c, uint32_t
     const uint32_t first = p->node_count;
     p->node_count += 8;
     node->child = first;
+    cube kids[8];
+    child_cubes(c, kids);
     size_t at[9];
     for (unsigned o = 0; o < 8; ++o) {
         at[o] = p->list_len;
@@ -402,13 +429,13 @@ static ic_result build_node(builder *b, part *p, uint32_t slot, cube c, uint32_t
         for (size_t k = begin; k < end; ++k) {
             uint32_t i = p->list[k];
             float r = b->radius[i];
-            if (!stays_at(r, hc) && item_in_child(b->it, i, r, c, o))
+            if (!stays_at(r, hc) && item_in_child(b->it, i, r, &c, kids, o))
                 p->list[p->list_len++] = i;
         }
     }
     at[8] = p->list_len;
     for (unsigned o = 0; o < 8; ++o) {
-        ic_result rc = build_node(b, p, first + o, child_cube(c, o), depth + 1, at[o], at[o + 1]);
+        ic_result rc = build_node(b, p, first + o, kids[o], depth + 1, at[o], at[o + 1]);
         if (rc != IC_OK)
             return rc;
     }
@@ -584,7 +611,7 @@ uint32_t ic_octree_knn(const ic_octree *t, const ic_octree_items *items, ic_vec3
         return 0;
     uint32_t found = 0;
     int top = 0;
-    cube root = {t->cx, t->cy, t->cz, t->half};
+    cube root = ic_octree_root_cell(t->cx, t->cy, t->cz, t->half);
     stack[top++] = (struct entry){root, 0, cube_dist2(root, p.x, p.y, p.z)};
     while (top > 0) {
         struct entry e = stack[--top];
@@ -610,22 +637,23 @@ uint32_t ic_octree_knn(const ic_octree *t, const ic_octree_items *items, ic_vec3
             }
             continue;
         }
-        /* Push children farthest first so the nearest is explored first. */
-        struct entry ch[8];
-        for (unsigned o = 0; o < 8; ++o) {
-            ch[o].c = child_cube(e.c, o);
-            ch[o].node = n->child + o;
-            ch[o].mind2 = cube_dist2(ch[o].c, p.x, p.y, p.z);
-        }
+        /* Push children farthest first so the nearest is explored first (octants sorted, not the
+         * entries: they carry cells); an empty leaf is not pushed. */
+        float d2c[8];
+        child_dist2(&e.c, p.x, p.y, p.z, d2c);
+        unsigned char ord[8] = {0, 1, 2, 3, 4, 5, 6, 7};
         for (unsigned a = 1; a < 8; ++a)
-            for (unsigned b = a; b > 0 && ch[b].mind2 > ch[b - 1].mind2; --b) {
-                struct entry tmp = ch[b];
-                ch[b] = ch[b - 1];
-                ch[b - 1] = tmp;
+            for (unsigned b = a; b > 0 && d2c[ord[b]] > d2c[ord[b - 1]]; --b) {
+                unsigned char tmp = ord[b];
+                ord[b] = ord[b - 1];
+                ord[b - 1] = tmp;
             }
-        for (unsigned o = 0; o < 8; ++o)
-            if (t->nodes[ch[o].node].child || t->nodes[ch[o].node].count)
-                stack[top++] = ch[o];
+        for (unsigned j = 0; j < 8; ++j) {
+            unsigned o = ord[j];
+            const ic_octree_node *ch = &t->nodes[n->child + o];
+            if ((ch->child || ch->count) && !(found == k && d2c[o] > d2[k - 1] * 1.00001f))
+                stack[top++] = (struct entry){child_cube(e.c, o), n->child + o, d2c[o]};
+        }
     }
     return found;
 }
@@ -643,7 +671,7 @@ uint32_t ic_octree_radius(const ic_octree *t, const ic_octree_items *items, ic_v
     float r2 = radius * radius, prune = r2 * 1.00001f;
     uint32_t total = 0;
     int top = 0;
-    stack[top++] = (struct entry){{t->cx, t->cy, t->cz, t->half}, 0};
+    stack[top++] = (struct entry){ic_octree_root_cell(t->cx, t->cy, t->cz, t->half), 0};
     while (top > 0) {
         struct entry e = stack[--top];
         const ic_octree_node *n = &t->nodes[e.node];
@@ -658,11 +686,11 @@ uint32_t ic_octree_radius(const ic_octree *t, const ic_octree_items *items, ic_v
             }
             continue;
         }
-        for (unsigned o = 0; o < 8; ++o) {
-            cube cc = child_cube(e.c, o);
-            if (cube_dist2(cc, p.x, p.y, p.z) <= prune)
-                stack[top++] = (struct entry){cc, n->child + o};
-        }
+        float d2[8];
+        child_dist2(&e.c, p.x, p.y, p.z, d2);
+        for (unsigned o = 0; o < 8; ++o)
+            if (d2[o] <= prune)
+                stack[top++] = (struct entry){child_cube(e.c, o), n->child + o};
     }
     return total;
 }

@@ -123,7 +123,7 @@ static inline uint32_t ic_octree_path(const ic_octree *t, float px, float py, fl
     const ic_octree_node *nodes = t->nodes;
     path[len++] = 0;
     while (nodes[node].child) {
-        /* The same child-cube arithmetic as insertion (octree.c: child_cube), so a point always
+        /* The same centre arithmetic as insertion (ic_octree_child_cell), so a point always
          * follows the cells its references were distributed to. */
         h *= 0.5f;
         unsigned ox = px >= cx, oy = py >= cy, oz = pz >= cz;
@@ -134,6 +134,53 @@ static inline uint32_t ic_octree_path(const ic_octree *t, float px, float py, fl
         path[len++] = node;
     }
     return len;
+}
+
+/* A node's cube (the descent's arithmetic: centre and half side) and its cell, the closed box
+ * [lo, hi] of the points the descent sends into it: the root's [c − h, c + h], narrowed at every level
+ * by the parent's centre, exactly the threshold the descent compares with. A child's centre c ± h/2
+ * is rounded, so c ± h rebuilt from it can miss the true cell by half an ulp of the coordinate —
+ * more than a small sphere's radius margin covers far from the origin; the cell never does. */
+typedef struct ic_octree_cell {
+    float cx, cy, cz, h;
+    float lo[3], hi[3];
+} ic_octree_cell;
+
+static inline ic_octree_cell ic_octree_root_cell(float cx, float cy, float cz, float h)
+{
+    ic_octree_cell c = {cx, cy, cz, h, {cx - h, cy - h, cz - h}, {cx + h, cy + h, cz + h}};
+    return c;
+}
+
+static inline ic_octree_cell ic_octree_child_cell(const ic_octree_cell *parent, unsigned octant)
+{
+    ic_octree_cell c = *parent;
+    c.h = parent->h * 0.5f;
+    float centre[3] = {parent->cx, parent->cy, parent->cz};
+    float *mid[3] = {&c.cx, &c.cy, &c.cz};
+    for (int a = 0; a < 3; ++a) {
+        int upper = (octant >> a) & 1;
+        /* Exactly the descent's update (ic_octree_path). */
+        *mid[a] = upper ? centre[a] + c.h : centre[a] - c.h;
+        /* The descent goes up iff p ≥ centre: intersect the constraint into the cell. */
+        if (upper)
+            c.lo[a] = centre[a] > c.lo[a] ? centre[a] : c.lo[a];
+        else
+            c.hi[a] = centre[a] < c.hi[a] ? centre[a] : c.hi[a];
+    }
+    return c;
+}
+
+/* Squared distance from (x, y, z) to the cell (0 inside), with the weight test's operation order:
+ * for p in the cell the rounded result is at most the rounded |p − (x, y, z)|² (ic_dist2). */
+static inline float ic_octree_cell_dist2(const ic_octree_cell *cl, float x, float y, float z)
+{
+    float p[3] = {x, y, z}, e[3];
+    for (int a = 0; a < 3; ++a) {
+        float below = cl->lo[a] - p[a], above = p[a] - cl->hi[a];
+        e[a] = below > 0.0f ? below : (above > 0.0f ? above : 0.0f);
+    }
+    return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
 }
 
 /* Squared distance in float, computed one way everywhere (queries and brute-force checks agree). */

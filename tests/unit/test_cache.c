@@ -21,6 +21,7 @@
  *     separates records with different gradients;
  *   - batch insertion gives the same cache on 1 and 2 threads;
  *   - k-nearest and radius queries equal brute force;
+ *   - far from the origin with radii of a few ulps, octree and frozen look-ups equal a linear scan;
  *   - the cache file round-trips bit-exactly and refuses truncated, corrupted and mismatched files.
  */
 #include "irrcache/cache.h"
@@ -2040,6 +2041,72 @@ static void test_crowded_lookups(void)
     free(recs);
 }
 
+/* Records far from the origin with radii of a few ulps of their coordinates or less: a sphere that
+ * reaches across a split plane has a reference on the other side, so the octree (grown by insertion
+ * and built at once) and the frozen layout find exactly the contributors a linear scan finds at
+ * points on the rims of the records' influence, where the split planes cut them. */
+static uint32_t far_mismatches(const ic_cache *c, const ic_record *recs, uint32_t n, uint32_t queries)
+{
+    ic_cache_contribution *a = malloc(MAX_CONTRIB * sizeof *a), *b = malloc(MAX_CONTRIB * sizeof *b);
+    uint32_t bad = 0;
+    for (uint32_t k = 0; k < queries; ++k) {
+        ic_rng r = ic_rng_make(31, k, 0, 0);
+        const ic_record *rec = &recs[ic_rng_below(&r, n)];
+        float phi = 2.0f * IC_PI * ic_rng_float(&r), d = IC_DEFAULT_ACCURACY_WARD * rec->harmonic_mean_dist *
+                                                           (0.99f + 0.02f * ic_rng_float(&r));
+        ic_cache_lookup q = ic_cache_lookup_at(
+            v3(rec->position.x + d * cosf(phi), rec->position.y + d * sinf(phi), rec->position.z), v3(0, 0, 1),
+            IC_ACCEPT_CONSTRUCTION);
+        q.contribution_capacity = MAX_CONTRIB;
+        ic_cache_estimate ea, eb;
+        q.contributions = a;
+        ic_cache_query(c, &q, &ea);
+        q.contributions = b;
+        ic_cache_query_linear(c, &q, &eb);
+        int differ = ea.contributor_count != eb.contributor_count;
+        for (uint32_t j = 0; !differ && j < ea.contributions_written; ++j) {
+            uint32_t found = 0;
+            for (uint32_t m = 0; m < eb.contributions_written; ++m)
+                found |= a[j].record == b[m].record;
+            differ = !found;
+        }
+        bad += (uint32_t)differ;
+    }
+    free(a);
+    free(b);
+    return bad;
+}
+
+static void test_far_from_origin(void)
+{
+    const uint32_t n = 1500, queries = IC_TEST_WORK(20000);
+    const float offset = 1e4f, scales[2] = {0.005f, 0.05f}; /* ulp(1e4) ≈ 0.001 */
+    ic_record *recs = malloc(n * sizeof *recs);
+    for (int s = 0; s < 2; ++s) {
+        for (uint32_t i = 0; i < n; ++i) {
+            ic_rng r = ic_rng_make(29, i, (uint64_t)s, 0);
+            recs[i] = plane_record(v3(offset + 4.0f * ic_rng_float(&r), offset + 4.0f * ic_rng_float(&r), offset),
+                                   scales[s] * (0.2f + ic_rng_float(&r)));
+        }
+        ic_cache_params p = no_clamps(IC_WEIGHT_WARD, IC_DEFAULT_ACCURACY_WARD);
+        ic_cache *c = build_cache(&p, recs, n);
+        ic_error err;
+        for (int built = 0; built < 2; ++built) {
+            if (built)
+                CHECK(ic_cache_rebuild_index(c, &err) == IC_OK, "rebuild: %s", err.message);
+            ic_cache_thaw(c);
+            uint32_t octree_bad = far_mismatches(c, recs, n, queries);
+            CHECK(ic_cache_freeze(c, &err) == IC_OK, "freeze: %s", err.message);
+            uint32_t frozen_bad = far_mismatches(c, recs, n, queries);
+            CHECK(octree_bad == 0 && frozen_bad == 0,
+                  "R ~ %g at %g, tree %s: %u octree and %u frozen look-ups of %u differ from the linear scan",
+                  (double)scales[s], (double)offset, built ? "built" : "inserted", octree_bad, frozen_bad, queries);
+        }
+        ic_cache_destroy(c);
+    }
+    free(recs);
+}
+
 /* The index statistics agree with the tree's shape: an empty cache has none; 8 children per split;
  * every record stored somewhere; a frozen list never longer than its leaf's path; thawed, no lists. */
 static void test_index_stats(void)
@@ -2119,6 +2186,7 @@ int main(void)
     RUN(test_fallback_level);
     RUN(test_crowded_lookups);
     RUN(test_index_stats);
+    RUN(test_far_from_origin);
     RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }
