@@ -272,7 +272,10 @@ typedef struct ic_cache_index_stats {
 /* Fills *out (all zero for an empty cache). */
 void ic_cache_get_index_stats(const ic_cache *cache, ic_cache_index_stats *out);
 
-/* Inserts one record (clamps as documented above); its index goes to *out_index (may be NULL). */
+/* Inserts one record (clamps as documented above); its index goes to *out_index (may be NULL).
+ * IC_ERR_INVALID_ARG for a record that a cache file could not hold: non-finite fields, R ≤ 0, or a
+ * sphere |p_i| + R_i + a_i·R_i·max(1, final_accuracy_scale) (after clamp step 1) reaching 1e30 on an
+ * axis. */
 ic_result ic_cache_insert(ic_cache *cache, const ic_record *record, uint32_t *out_index, ic_error *err);
 /* Inserts count records as one batch; they get indices first…first+count−1 in array order.
  * All-or-nothing: an invalid record leaves the cache unchanged. */

@@ -220,6 +220,12 @@ ic_result ic_cache_reserve(ic_cache *c, uint32_t n)
 
 static int vec_finite(ic_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
 
+/* a_i of a record being inserted: its own, or params.accuracy for 0. */
+static float insert_accuracy(const ic_cache *c, const ic_record *r)
+{
+    return r->accuracy > 0.0f ? r->accuracy : c->params.accuracy;
+}
+
 /* Checks record k of a batch; writes its step-1 radius to *radius and its ellipse ratio after step 1
  * to *rho (1: round). */
 static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k, float *radius, float *rho,
@@ -247,6 +253,14 @@ static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k,
     if (!(*radius > 0.0f && isfinite(*radius)))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch has an infinite radius; "
                             "cap ray misses in the gatherer or set max_radius", k);
+    /* The octree's radius, as ic_octree_item_radius computes it once stored. */
+    ic_float4 s = {r->position.x, r->position.y, r->position.z, *radius};
+    float reach = *radius * insert_accuracy(c, r) * c->tree_scale * IC_OCTREE_RADIUS_MARGIN;
+    if (!ic_cache_sphere_in_range(&s, reach))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch at (%g, %g, %g) with radius %g "
+                            "reaches beyond %g, the largest coordinate a cache holds; move the scene nearer the "
+                            "origin or set max_radius", k, (double)s.x, (double)s.y, (double)s.z, (double)*radius,
+                            IC_CACHE_MAX_COORD);
     *rho = 1.0f;
     if (r->ellipse_ratio > 0.0f && r->ellipse_ratio < 1.0f) {
         /* Step 1 bounds both semi-axes alike (cache.h: ELLIPTICAL RECORDS). */
@@ -264,7 +278,7 @@ static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k,
 static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radius, float rho)
 {
     ic_vec3 n = v3_norm(r->normal);
-    float a = r->accuracy > 0.0f ? r->accuracy : c->params.accuracy;
+    float a = insert_accuracy(c, r);
     c->sphere[i] = (ic_float4){r->position.x, r->position.y, r->position.z, radius};
     c->normal[i] = (ic_float4){n.x, n.y, n.z, a};
     ic_vec3 u = rho < 1.0f ? v3_norm(v3_sub(r->ellipse_axis, v3_scale(n, v3_dot(r->ellipse_axis, n)))) : v3(0, 0, 0);
@@ -366,6 +380,9 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
         rc = ic_octree_compact(&c->points);
     if (rc != IC_OK) {
         roll_back(c, first);
+        if (rc == IC_ERR_INVALID_ARG) /* the octree's bounds overflow float (check_record prevents it) */
+            return ic_error_set(err, rc, "cache: inserting %u records failed: the octree's bounds overflow; "
+                                "they were dropped", n);
         if (rc != IC_ERR_OOM) /* the clamps' exchanges between processes (c->comm) */
             return ic_error_set(err, rc, "cache: inserting %u records failed (%s) while the processes shared their "
                                 "clamps; they were dropped", n, ic_result_name(rc));
@@ -395,7 +412,8 @@ ic_result ic_cache_rebuild_index(ic_cache *c, ic_error *err)
     if (rc == IC_OK)
         rc = ic_octree_compact(&c->tree);
     if (rc != IC_OK)
-        return ic_error_set(err, rc, "cache: out of memory rebuilding the octree");
+        return ic_error_set(err, rc, rc == IC_ERR_OOM ? "cache: out of memory rebuilding the octree"
+                                                      : "cache: the octree's bounds overflow (records too far out)");
     return c->params.freeze == IC_CACHE_ON ? ic_cache_freeze(c, err) : IC_OK;
 }
 

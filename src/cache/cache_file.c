@@ -41,11 +41,6 @@
 #define RECORD_BYTES 172u
 #define RECORD_BYTES_V2 156u /* versions 1 and 2: no squeeze */
 #define REBUILD_HINT "delete it and build the cache again"
-/* Largest coordinate of a record's sphere (centre ± its octree radius) a file may hold: far beyond any
- * scene, and far enough below FLT_MAX (3.4e38) that the octree's bounds, their sums and its cell
- * coordinates stay finite (a NaN cell coordinate converted to an integer is undefined behaviour, C11
- * 6.3.1.4). */
-#define MAX_COORD 1e30
 
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
 {
@@ -473,13 +468,11 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
         /* A checksum proves only that the file is as written: the values must also fit the octree. */
         ic_octree_items sph = ic_cache_tree_items(c);
         const ic_float4 *s = &c->sphere[i];
-        double r = (double)s->w + (double)ic_octree_item_radius(&sph, i);
-        if (!(fabs((double)s->x) + r < MAX_COORD && fabs((double)s->y) + r < MAX_COORD &&
-              fabs((double)s->z) + r < MAX_COORD))
+        if (!ic_cache_sphere_in_range(s, ic_octree_item_radius(&sph, i)))
             rc = ic_error_set(err, IC_ERR_CORRUPT,
                               "%s: record %u at (%g, %g, %g) with radius %g lies beyond %g, the largest coordinate "
                               "a cache holds; the file is corrupt: " REBUILD_HINT, path, i, (double)s->x,
-                              (double)s->y, (double)s->z, (double)s->w, MAX_COORD);
+                              (double)s->y, (double)s->z, (double)s->w, IC_CACHE_MAX_COORD);
     }
     if (rc == IC_OK) {
         c->count = (uint32_t)count;

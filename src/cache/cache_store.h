@@ -133,6 +133,18 @@ static inline ic_octree_items ic_cache_tree_items(const ic_cache *c)
     ic_octree_items it = {c->sphere, c->normal, c->tree_scale};
     return it;
 }
+/* Largest coordinate of a record's sphere (centre ± R_i plus its octree radius a_i·R_i·tree_scale with
+ * the margin) a cache holds: far beyond any scene, and far enough below FLT_MAX (3.4e38) that the
+ * octree's bounds, their sums and its cell coordinates stay finite (a NaN cell coordinate converted to
+ * an integer is undefined behaviour, C11 6.3.1.4). Insertion and loading apply the same test, so what
+ * inserts saves and loads. */
+#define IC_CACHE_MAX_COORD 1e30
+static inline int ic_cache_sphere_in_range(const ic_float4 *s, float tree_radius)
+{
+    double r = (double)s->w + (double)tree_radius;
+    return fabs((double)s->x) + r < IC_CACHE_MAX_COORD && fabs((double)s->y) + r < IC_CACHE_MAX_COORD &&
+           fabs((double)s->z) + r < IC_CACHE_MAX_COORD;
+}
 static inline ic_octree_items ic_cache_point_items(const ic_cache *c)
 {
     ic_octree_items it = {c->sphere, c->normal, 0.0f};

@@ -490,6 +490,13 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
         return IC_OK;
     }
     cube root = fit_root(items, count);
+    /* A safety net (the cache refuses such records, IC_CACHE_MAX_COORD): bounds beyond float would make
+     * every child test NaN, an overlap, and the tree would grow without end. */
+    int finite = isfinite(root.h);
+    for (int a = 0; a < 3; ++a)
+        finite = finite && isfinite(root.lo[a]) && isfinite(root.hi[a]);
+    if (!finite)
+        return IC_ERR_INVALID_ARG;
     /* Items in Morton order (ties by index: deterministic), so nodes and reference segments that are
      * close in space end up close in memory — a look-up's descent then misses the processor caches
      * less — and every node's references keep that order. */

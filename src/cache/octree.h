@@ -101,7 +101,8 @@ void ic_octree_free(ic_octree *t);
 ic_result ic_octree_insert(ic_octree *t, const ic_octree_items *items, uint32_t index);
 /* Empties the tree and builds it top-down from items 0…count−1 under a root fitted to all of them:
  * the tree insertion would grow, except that a sphere as large as a child stays in the node it was
- * handed to (insertion into a node split earlier sends it down one level). */
+ * handed to (insertion into a node split earlier sends it down one level). IC_ERR_INVALID_ARG, the tree
+ * unchanged, where the root's bounds are not finite floats. */
 ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t count);
 /* Removes the references to items first… from every node, in place (allocates nothing, so it cannot
  * fail): what a failed insertion leaves when the tree cannot be built again. */

@@ -22,7 +22,8 @@
  *   - batch insertion gives the same cache on 1 and 2 threads;
  *   - k-nearest and radius queries equal brute force;
  *   - far from the origin with radii of a few ulps, octree and frozen look-ups equal a linear scan;
- *   - the cache file round-trips bit-exactly and refuses truncated, corrupted and mismatched files.
+ *   - the cache file round-trips bit-exactly and refuses truncated, corrupted and mismatched files;
+ *   - insertion refuses records beyond the range a file holds (1e30), what inserts loads.
  */
 #include "irrcache/cache.h"
 
@@ -2107,6 +2108,51 @@ static void test_far_from_origin(void)
     free(recs);
 }
 
+/* Insertion refuses what loading refuses: a record whose sphere (centre ± R_i plus a_i·R_i·tree_scale
+ * with the margin) reaches 1e30 on an axis. Below that a record inserts, saves and loads; and an octree
+ * asked to build over bounds beyond float refuses instead of growing without end. */
+static void test_coordinate_range(void)
+{
+    ic_error err;
+    ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.15f);
+    ic_cache *c = NULL;
+    CHECK(ic_cache_create(&p, &c, &err) == IC_OK, "create: %s", err.message);
+    ic_record near = plane_record(v3(1.0f, 2.0f, 3.0f), 1.0f);
+    CHECK(ic_cache_insert(c, &near, NULL, &err) == IC_OK, "a record near the origin: %s", err.message);
+    ic_record far[3] = {plane_record(v3(1e31f, 0, 0), 1.0f), plane_record(v3(0, -9e29f, 0), 1e29f),
+                        plane_record(v3(0, 0, 3e38f), 1.0f)};
+    int refused = 1;
+    for (int k = 0; k < 3; ++k) {
+        ic_result rc = ic_cache_insert(c, &far[k], NULL, &err);
+        CHECK(rc == IC_ERR_INVALID_ARG && ic_cache_count(c) == 1 && strstr(err.message, "record 0"),
+              "record %d beyond 1e30 inserted (%s): %s", k, ic_result_name(rc), rc ? err.message : "");
+        refused = refused && rc == IC_ERR_INVALID_ARG;
+        if (!refused)
+            break; /* the others would exhaust memory (octree bounds beyond float) */
+    }
+    /* Just inside: |y| + R + a·R·margin = 9e29 + 1e28 + 1.5e27 < 1e30. */
+    ic_record inside = plane_record(v3(0, -9e29f, 0), 1e28f);
+    CHECK(ic_cache_insert(c, &inside, NULL, &err) == IC_OK, "a record inside the range: %s", err.message);
+    const char *path = IC_TEST_TMP "/test_cache_range.icc";
+    CHECK(ic_cache_save(c, path, 5, &err) == IC_OK, "save: %s", err.message);
+    ic_cache *l = NULL;
+    CHECK(ic_cache_load(path, &p, 5, &l, &err) == IC_OK && ic_cache_count(l) == ic_cache_count(c),
+          "what inserted does not load: %s", err.message);
+    ic_cache_destroy(l);
+    ic_cache_destroy(c);
+    remove(path);
+
+    /* The octree's own check, on a shallow tree (bounded memory even without it). */
+    ic_float4 sphere[2] = {{-3e38f, 0, 0, 1.0f}, {3e38f, 0, 0, 1.0f}}, normal[2] = {{0, 0, 1, 1.0f}, {0, 0, 1, 1.0f}};
+    ic_octree_items items = {sphere, normal, 1.0f};
+    ic_octree t;
+    ic_octree_init(&t, 1, 4);
+    t.threads = 1;
+    CHECK(ic_octree_build(&t, &items, 2) == IC_ERR_INVALID_ARG && !t.has_root,
+          "an octree over bounds beyond float built");
+    ic_octree_free(&t);
+}
+
 /* The index statistics agree with the tree's shape: an empty cache has none; 8 children per split;
  * every record stored somewhere; a frozen list never longer than its leaf's path; thawed, no lists. */
 static void test_index_stats(void)
@@ -2187,6 +2233,7 @@ int main(void)
     RUN(test_crowded_lookups);
     RUN(test_index_stats);
     RUN(test_far_from_origin);
+    RUN(test_coordinate_range);
     RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }
