@@ -52,8 +52,10 @@
  *   |d|_i² = |d|² + (1/ρ² − 1)(d·u)² (u the unit minor axis), so the extent a_i·R_i is the major
  *   semi-axis and a_i·ρ·R_i the minor; with ρ = 0 or 1 the record is round and |d|_i = |d|. The octree
  *   and every clamp use the sphere of the major semi-axis; clamp step 1 bounds both semi-axes alike
- *   (so ρ may grow), steps 2–4 shrink R_i and keep ρ. Frozen look-ups of a cache holding an elliptical
- *   record (or using IC_WEIGHT_ERROR) take the portable code path: round caches keep their SIMD speed.
+ *   (so ρ may grow), steps 2–4 shrink R_i and keep ρ. A ratio below IC_CACHE_MIN_ELLIPSE_RATIO (1e-6)
+ *   after step 1 is raised to it: 1/ρ² must stay a float, and the record is a needle either way.
+ *   Frozen look-ups of a cache holding an elliptical record (or using IC_WEIGHT_ERROR) take the
+ *   portable code path: round caches keep their SIMD speed.
  *
  * RADII
  *   R_i (record.radius) is the clamped harmonic-mean distance used in the weights. The influence
@@ -167,6 +169,9 @@ enum {
                                          octree and files; a frozen cache's lists leave it out) */
 };
 
+/* Smallest minor-over-major ratio of an elliptical record (ELLIPTICAL RECORDS). */
+#define IC_CACHE_MIN_ELLIPSE_RATIO 1e-6f
+
 /* One irradiance record (public, copied in and out; the cache stores it split hot/cold). */
 typedef struct ic_record {
     ic_vec3 position;                 /* p_i, world space */
@@ -183,7 +188,8 @@ typedef struct ic_record {
     uint32_t change_count;            /* times a_i or R_i changed after insertion */
     ic_vec3 ellipse_axis;             /* elliptical extent: the minor semi-axis's direction (in the tangent
                                          plane; projected and normalised on insertion); see ELLIPTICAL RECORDS */
-    float ellipse_ratio;              /* minor over major semi-axis in (0, 1]; 0 (or 1) = round */
+    float ellipse_ratio;              /* minor over major semi-axis in (0, 1]; 0 (or 1) = round; at least
+                                         IC_CACHE_MIN_ELLIPSE_RATIO once stored */
     uint8_t bounce;                   /* bounce level the record serves (0 = first indirect bounce) */
     uint8_t flags;                    /* IC_RECORD_* */
 } ic_record;

@@ -270,7 +270,9 @@ static ic_result check_record(const ic_cache *c, const ic_record *r, uint32_t k,
             return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: record %u of the batch is elliptical but its "
                                 "ellipse axis is zero or along the normal", k);
         float minor = ic_cache_clamp_radius(&c->params, r, r->harmonic_mean_dist * r->ellipse_ratio);
-        *rho = fminf(minor / *radius, 1.0f);
+        /* Floored so that 1/ρ² (ic_squeeze_of) stays finite: else k = inf, 0·inf = NaN in the weight,
+         * and the record would never contribute nor load from its file. */
+        *rho = fmaxf(fminf(minor / *radius, 1.0f), IC_CACHE_MIN_ELLIPSE_RATIO);
     }
     return IC_OK;
 }

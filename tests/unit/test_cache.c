@@ -23,7 +23,8 @@
  *   - k-nearest and radius queries equal brute force;
  *   - far from the origin with radii of a few ulps, octree and frozen look-ups equal a linear scan;
  *   - the cache file round-trips bit-exactly and refuses truncated, corrupted and mismatched files;
- *   - insertion refuses records beyond the range a file holds (1e30), what inserts loads.
+ *   - insertion refuses records beyond the range a file holds (1e30), what inserts loads; a needle-thin
+ *     ellipse is stored with the floor ratio, contributes and loads.
  */
 #include "irrcache/cache.h"
 
@@ -2153,6 +2154,45 @@ static void test_coordinate_range(void)
     ic_octree_free(&t);
 }
 
+/* A needle-thin ellipse (ρ far below 1e-19.5, where 1/ρ² overflows float) is stored with the floor
+ * ratio: it still contributes along its major axis and not off it, and its file loads. */
+static void test_needle_ellipse(void)
+{
+    ic_error err;
+    const float ratios[3] = {1e-20f, 1e-38f, 1e-44f}; /* the last a subnormal float */
+    for (int k = 0; k < 3; ++k) {
+        ic_cache_params p = no_clamps(IC_WEIGHT_WARD, 0.5f);
+        ic_cache *c = NULL;
+        CHECK(ic_cache_create(&p, &c, &err) == IC_OK, "create: %s", err.message);
+        ic_record r = plane_record(v3(0, 0, 0), 1.0f);
+        r.ellipse_axis = v3(1, 0, 0);
+        r.ellipse_ratio = ratios[k];
+        CHECK(ic_cache_insert(c, &r, NULL, &err) == IC_OK, "insert: %s", err.message);
+        ic_record got;
+        ic_cache_get_record(c, 0, &got);
+        CHECK(got.ellipse_ratio == IC_CACHE_MIN_ELLIPSE_RATIO, "ratio %g stored as %g", (double)ratios[k],
+              (double)got.ellipse_ratio);
+        /* Along the major axis (y) the extent is a·R = 0.5; across it a·ρ·R = 5e-7. */
+        const ic_vec3 at[3] = {v3(0, 0, 0), v3(0, 0.4f, 0), v3(1e-3f, 0, 0)};
+        const uint32_t want[3] = {1, 1, 0};
+        for (int j = 0; j < 3; ++j) {
+            ic_cache_lookup q = ic_cache_lookup_at(at[j], v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION);
+            ic_cache_estimate e;
+            ic_cache_query_linear(c, &q, &e);
+            CHECK(e.contributor_count == want[j], "ratio %g: %u contributors at (%g, %g), want %u",
+                  (double)ratios[k], e.contributor_count, (double)at[j].x, (double)at[j].y, want[j]);
+        }
+        const char *path = IC_TEST_TMP "/test_cache_needle.icc";
+        CHECK(ic_cache_save(c, path, 3, &err) == IC_OK, "save: %s", err.message);
+        ic_cache *l = NULL;
+        CHECK(ic_cache_load(path, &p, 3, &l, &err) == IC_OK, "ratio %g: the saved cache does not load: %s",
+              (double)ratios[k], err.message);
+        ic_cache_destroy(l);
+        ic_cache_destroy(c);
+        remove(path);
+    }
+}
+
 /* The index statistics agree with the tree's shape: an empty cache has none; 8 children per split;
  * every record stored somewhere; a frozen list never longer than its leaf's path; thawed, no lists. */
 static void test_index_stats(void)
@@ -2234,6 +2274,7 @@ int main(void)
     RUN(test_index_stats);
     RUN(test_far_from_origin);
     RUN(test_coordinate_range);
+    RUN(test_needle_ellipse);
     RUN(test_lookup_vs_brute_force);
     TEST_MAIN_END();
 }
