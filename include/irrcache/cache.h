@@ -284,7 +284,10 @@ void ic_cache_get_index_stats(const ic_cache *cache, ic_cache_index_stats *out);
  * axis. */
 ic_result ic_cache_insert(ic_cache *cache, const ic_record *record, uint32_t *out_index, ic_error *err);
 /* Inserts count records as one batch; they get indices first…first+count−1 in array order.
- * All-or-nothing: an invalid record leaves the cache unchanged. */
+ * All-or-nothing: an invalid record leaves the records unchanged; an insertion that fails later (out
+ * of memory, a failed exchange between processes) drops the new records and restores the radii and
+ * change counts of the existing ones that clamp steps 3–4 lowered (unless the octree cannot be built
+ * again either: the message says so). Every call, failed or not, drops the frozen layout. */
 ic_result ic_cache_insert_batch(ic_cache *cache, const ic_record *records, uint32_t count, uint32_t *out_first,
                                 ic_error *err);
 

@@ -127,6 +127,7 @@ void ic_cache_destroy(ic_cache *c)
     free(c->cold);
     free(c->scratch);
     free(c->changed);
+    free(c->undo);
     ic_cache_payload_free(c);
     free(c);
 }
@@ -301,9 +302,12 @@ static void store_record(ic_cache *c, uint32_t i, const ic_record *r, float radi
     cd->flags = r->flags;
 }
 
-/* Undo a failed insertion (out of memory half-way): drop the new records and rebuild both trees; a
- * build that fails too leaves its tree as it was, so the references to the dropped records go first. */
-static void roll_back(ic_cache *c, uint32_t first)
+/* Undo a failed insertion (out of memory half-way): drop the new records, restore the existing ones
+ * that steps 3–4 lowered and rebuild both trees; a build that fails too leaves its tree as it was, so
+ * the references to the dropped records go first. The tree's references must cover the radii: if it
+ * was built from the lowered ones (tree_lowered) and cannot be built again, the lowerings are redone.
+ * Returns 0 in that case, else 1. */
+static int roll_back(ic_cache *c, uint32_t first, int tree_lowered)
 {
     for (uint32_t i = first; i < c->count; ++i)
         c->ellipse_count -= c->squeeze[i].w < 1.0f;
@@ -311,9 +315,14 @@ static void roll_back(ic_cache *c, uint32_t first)
     ic_cache_payload_truncate(c, first);
     ic_octree_drop_from(&c->points, first);
     ic_octree_drop_from(&c->tree, first);
+    ic_cache_undo_clamps(c, 1);
     ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
     ic_octree_build(&c->points, &pts, first);
-    ic_octree_build(&c->tree, &sph, first);
+    if (ic_octree_build(&c->tree, &sph, first) != IC_OK && tree_lowered) {
+        ic_cache_undo_clamps(c, 0);
+        return 0;
+    }
+    return 1;
 }
 
 /* Shared by the single and the batch entry points: a single insertion is a batch of one. */
@@ -349,6 +358,7 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
     ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);
     ic_result rc = IC_OK;
     c->changed_len = 0;
+    c->undo_len = 0;
     /* A large batch (deterministic rule) rebuilds both trees, on the threads, instead of inserting
      * into them one record at a time: the clamps ask the trees for sets of records (nearest, within
      * reach), which do not depend on the tree's shape. */
@@ -374,21 +384,27 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
         rc = ic_cache_neighbor_clamp(c, first);
     /* After a large batch the sphere octree is built again to fit the final radii; small ones only
      * compact dead reference segments. */
-    if (rc == IC_OK && large)
+    int tree_lowered = 0; /* the tree's references were made from the radii steps 3–4 left */
+    if (rc == IC_OK && large) {
         rc = ic_octree_build(&c->tree, &sph, c->count);
+        tree_lowered = rc == IC_OK;
+    }
     if (rc == IC_OK)
         rc = ic_octree_compact(&c->tree);
     if (rc == IC_OK)
         rc = ic_octree_compact(&c->points);
     if (rc != IC_OK) {
-        roll_back(c, first);
+        const char *kept = roll_back(c, first, tree_lowered)
+                               ? ""
+                               : " (the existing records keep the radii the clamps lowered: the octree could not "
+                                 "be built again)";
         if (rc == IC_ERR_INVALID_ARG) /* the octree's bounds overflow float (check_record prevents it) */
             return ic_error_set(err, rc, "cache: inserting %u records failed: the octree's bounds overflow; "
-                                "they were dropped", n);
+                                "they were dropped%s", n, kept);
         if (rc != IC_ERR_OOM) /* the clamps' exchanges between processes (c->comm) */
             return ic_error_set(err, rc, "cache: inserting %u records failed (%s) while the processes shared their "
-                                "clamps; they were dropped", n, ic_result_name(rc));
-        return ic_error_set(err, rc, "cache: out of memory inserting %u records; they were dropped", n);
+                                "clamps; they were dropped%s", n, ic_result_name(rc), kept);
+        return ic_error_set(err, rc, "cache: out of memory inserting %u records; they were dropped%s", n, kept);
     }
     return IC_OK;
 }

@@ -240,6 +240,36 @@ static ic_result note_changed(ic_cache *c, uint32_t r)
     return IC_OK;
 }
 
+/* Lowers R_r to `radius` for steps 3–4. An existing record (r < first) is logged first (c->undo), so
+ * a rolled-back insertion can restore it, and counts the change; if the log cannot grow, nothing
+ * changes and the step fails. */
+static ic_result lower_radius(ic_cache *c, uint32_t r, float radius, uint32_t first)
+{
+    if (r < first) {
+        if (c->undo_len == c->undo_cap) {
+            size_t cap = c->undo_cap;
+            void *v = c->undo;
+            if (ic_grow(&v, &cap, (size_t)c->undo_len + 1, sizeof *c->undo) != IC_OK || cap > UINT32_MAX)
+                return IC_ERR_OOM;
+            c->undo = v;
+            c->undo_cap = (uint32_t)cap;
+        }
+        c->undo[c->undo_len++] = (struct ic_clamp_undo){r, c->cold[r].change_count, c->sphere[r].w, radius};
+        ++c->cold[r].change_count;
+    }
+    c->sphere[r].w = radius;
+    return IC_OK;
+}
+
+void ic_cache_undo_clamps(ic_cache *c, int undo)
+{
+    for (uint32_t k = 0; k < c->undo_len; ++k) {
+        const struct ic_clamp_undo *u = &c->undo[undo ? c->undo_len - 1 - k : k];
+        c->sphere[u->record].w = undo ? u->radius : u->lowered;
+        c->cold[u->record].change_count = undo ? u->change_count : u->change_count + 1;
+    }
+}
+
 typedef struct target {
     uint32_t record;
     float radius;
@@ -291,11 +321,9 @@ ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first)
     for (size_t k = 0; k < len && rc == IC_OK; ++k) {
         uint32_t r = list[k].record;
         if (list[k].radius < c->sphere[r].w) {
-            c->sphere[r].w = list[k].radius;
-            if (r < first) {
-                ++c->cold[r].change_count;
+            rc = lower_radius(c, r, list[k].radius, first);
+            if (rc == IC_OK && r < first)
                 rc = note_changed(c, r);
-            }
         }
     }
     free(list);
@@ -545,20 +573,15 @@ ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first)
             float bound = c->sphere[j].w + distance(c, i, j);
             Ri = bound < Ri ? bound : Ri;
         }
-        if (Ri < c->sphere[i].w) {
-            c->sphere[i].w = Ri;
-            if (i < first)
-                ++c->cold[i].change_count;
-        }
+        if (Ri < c->sphere[i].w)
+            rc = lower_radius(c, i, Ri, first);
         /* Push: R_j := min(R_j, R_i + d_ij), queueing every record that changed. */
         for (uint32_t k = 0; k < n && rc == IC_OK; ++k) {
             uint32_t j = c->scratch[k];
             float bound = Ri + distance(c, i, j);
             if (bound < c->sphere[j].w) {
-                c->sphere[j].w = bound;
-                if (j < first)
-                    ++c->cold[j].change_count;
-                if (!heap_push(&h, (heap_entry){bound, j}))
+                rc = lower_radius(c, j, bound, first);
+                if (rc == IC_OK && !heap_push(&h, (heap_entry){bound, j}))
                     rc = IC_ERR_OOM;
             }
         }

@@ -119,6 +119,13 @@ struct ic_cache {
     uint32_t scratch_cap;
     uint32_t *changed;           /* existing records lowered by step 3: they seed step 4 too */
     uint32_t changed_len, changed_cap;
+    /* Every lowering of an existing record's R_i by steps 3–4 of the current insertion, in order, so a
+     * rolled-back insertion can undo it (ic_cache_undo_clamps). */
+    struct ic_clamp_undo {
+        uint32_t record, change_count; /* before the lowering */
+        float radius, lowered;         /* R_i before and after */
+    } *undo;
+    uint32_t undo_len, undo_cap;
     /* Record payloads (cache_payload.c): per record the offset of its floats in `payload` and their
      * count (0: none); payload_records entries exist, records beyond them have none. */
     uint64_t *payload_at;
@@ -271,6 +278,9 @@ ic_result ic_cache_validity_clamp(ic_cache *c, uint32_t first);
 ic_result ic_cache_gradient_difference(ic_cache *c, uint32_t first);
 /* Step 4: neighbor clamping to a fixed point, seeded by records first…count−1 (needs both trees). */
 ic_result ic_cache_neighbor_clamp(ic_cache *c, uint32_t first);
+/* Undoes (undo = 1) the current insertion's lowerings of existing records' R_i and change counts,
+ * last first, or redoes them (undo = 0) in order: what a rolled-back insertion does. */
+void ic_cache_undo_clamps(ic_cache *c, int undo);
 
 /* Grows the record arrays to hold at least n records. */
 ic_result ic_cache_reserve(ic_cache *c, uint32_t n);

@@ -1,7 +1,8 @@
 /*
  * test_cache_oom.c — an insertion that runs out of memory half-way leaves a consistent cache: the new
  * records dropped, no reference to them left in either octree (even when rebuilding the trees fails
- * too), look-ups answering from the records that stayed, and the next insertion working.
+ * too), the existing records' radii and change counts that the clamps lowered restored, look-ups
+ * answering from the records that stayed, and the next insertion working.
  *
  * The executable is linked with --wrap=malloc,realloc (tests/CMakeLists.txt): from the fail_from-th
  * call on, every allocation fails. Each batch is tried with its failure moved one allocation later
@@ -69,7 +70,9 @@ static void check_batches(uint32_t n, uint32_t m, uint32_t min_failures)
     ic_record *recs = malloc((n + m) * sizeof *recs);
     for (uint32_t i = 0; i < n + m; ++i)
         recs[i] = make_record();
-    uint32_t failures = 0, inconsistent = 0, wrong_answers = 0, later_failed = 0;
+    uint32_t failures = 0, inconsistent = 0, wrong_answers = 0, later_failed = 0, not_restored = 0, lowered = 0;
+    float *radius = malloc(n * sizeof *radius);
+    uint32_t *changes = malloc(n * sizeof *changes);
     for (long f = 0; f < 100000; ++f) {
         ic_cache_params p = {0};
         p.threads = 1; /* starting threads allocates: keep the allocation sequence fixed */
@@ -77,16 +80,27 @@ static void check_batches(uint32_t n, uint32_t m, uint32_t min_failures)
         ic_error err;
         CHECK(ic_cache_create(&p, &c, &err) == IC_OK && ic_cache_insert_batch(c, recs, n, NULL, &err) == IC_OK,
               "setting up: %s", err.message);
+        for (uint32_t i = 0; i < n; ++i) {
+            radius[i] = c->sphere[i].w;
+            changes[i] = c->cold[i].change_count;
+        }
         allocations = 0;
         fail_from = f;
         ic_result rc = ic_cache_insert_batch(c, recs + n, m, NULL, &err);
         fail_from = -1;
         if (rc == IC_OK) {
+            /* The clamps do lower existing records: what a failure must undo. */
+            for (uint32_t i = 0; i < n; ++i)
+                lowered += c->sphere[i].w < radius[i] && c->cold[i].change_count > changes[i];
             ic_cache_destroy(c);
             break;
         }
         ++failures;
         inconsistent += ic_cache_count(c) != n || stale_refs(&c->tree, n) || stale_refs(&c->points, n);
+        /* The existing records as they were (R_i, change count), unless the message says otherwise. */
+        if (!strstr(err.message, "keep the radii"))
+            for (uint32_t i = 0; i < n; ++i)
+                not_restored += c->sphere[i].w != radius[i] || c->cold[i].change_count != changes[i];
         /* Look-ups where the dropped records were find only records that stayed. */
         for (uint32_t i = n; i < n + m; i += 7) {
             ic_cache_contribution con[64];
@@ -107,6 +121,11 @@ static void check_batches(uint32_t n, uint32_t m, uint32_t min_failures)
           m, n, inconsistent, failures);
     CHECK(wrong_answers == 0, "batch of %u after %u: %u look-ups found dropped records", m, n, wrong_answers);
     CHECK(later_failed == 0, "batch of %u after %u: %u insertions after a failure went wrong", m, n, later_failed);
+    CHECK(lowered > 0, "batch of %u after %u: the clamps lowered no existing record", m, n);
+    CHECK(not_restored == 0, "batch of %u after %u: %u existing records left lowered by failed insertions", m, n,
+          not_restored);
+    free(radius);
+    free(changes);
     free(recs);
 }
 
