@@ -249,9 +249,11 @@ static ic_result lower_radius(ic_cache *c, uint32_t r, float radius, uint32_t fi
         if (c->undo_len == c->undo_cap) {
             size_t cap = c->undo_cap;
             void *v = c->undo;
-            if (ic_grow(&v, &cap, (size_t)c->undo_len + 1, sizeof *c->undo) != IC_OK || cap > UINT32_MAX)
+            if (ic_grow(&v, &cap, (size_t)c->undo_len + 1, sizeof *c->undo) != IC_OK)
                 return IC_ERR_OOM;
-            c->undo = v;
+            c->undo = v; /* kept even when too large below: the block may have moved */
+            if (cap > UINT32_MAX)
+                return IC_ERR_OOM;
             c->undo_cap = (uint32_t)cap;
         }
         c->undo[c->undo_len++] = (struct ic_clamp_undo){r, c->cold[r].change_count, c->sphere[r].w, radius};

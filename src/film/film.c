@@ -770,12 +770,17 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     if (c.ranks > 1)
         c.tile_seconds = calloc((size_t)c.tiles_x * c.tiles_y, sizeof *c.tile_seconds);
     c.samples_planned = (double)loop->spp * (double)c.own_pixels; /* the pilot's and the rest's */
+    /* Which tiles the pilot rendered (n0) or an interrupt skipped (0), so that the counts below are what
+     * the pixels hold; the second pass counts per pixel (extra) instead. */
+    c.tile_n = calloc((size_t)c.tiles_x * c.tiles_y, sizeof *c.tile_n);
     c.start = ic_seconds();
-    if (!c.sumsq || !extra || (c.ranks > 1 && !c.tile_seconds))
+    if (!c.sumsq || !extra || !c.tile_n || (c.ranks > 1 && !c.tile_seconds))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
                          cam->height);
     if (r == IC_OK)
         r = loop_pass(&c, threads, 0, n0, err);
+    int *pilot_n = c.tile_n; /* finish_image divides by n0 + extra, per pixel */
+    c.tile_n = NULL;
     /* Every rank shares out the rest from the whole pilot's relative variances (each rank computes those of
      * its own tiles and the ranks exchange them, 8 bytes a pixel), so all make the same allocation. */
     double *v = r == IC_OK ? malloc(npix * sizeof *v) : NULL;
@@ -823,7 +828,10 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         uint64_t taken = 0;
         uint32_t most = 0, fewest = UINT32_MAX;
         for (size_t i = 0; i < npix; ++i) {
-            uint32_t n = (uint32_t)n0 + extra[i];
+            const int tile = (int)((i % (size_t)cam->width) / TILE) +
+                             (int)((i / (size_t)cam->width) / TILE) * c.tiles_x;
+            /* An interrupted pilot left its skipped tiles black: they hold no samples (their extra is 0). */
+            uint32_t n = (c.skip_on_cancel && pilot_n[tile] == 0 ? 0u : (uint32_t)n0) + extra[i];
             taken += n;
             most = n > most ? n : most;
             fewest = n < fewest ? n : fewest;
@@ -834,10 +842,12 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
         res->spp_min = (int)fewest;
         int skipped = atomic_load(&c.tiles_skipped);
         res->cancelled = skipped > 0;
-        res->completed = c.own_tiles ? 1.0 - (double)skipped / (2.0 * c.own_tiles) : 1.0;
+        /* The share of the planned samples taken (one process: every tile is its own when it can skip). */
+        res->completed = skipped > 0 && c.samples_planned > 0.0 ? fmin(1.0, (double)taken / c.samples_planned) : 1.0;
     }
     res->seconds = ic_seconds() - c.start;
     res->busy_seconds = c.busy;
+    free(pilot_n);
     free(c.sumsq);
     free(extra);
     loop_free(&c);

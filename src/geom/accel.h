@@ -48,7 +48,8 @@ void ic_accel_occluded_n(const ic_accel *accel, const ic_ray *rays, uint8_t *occ
 /* Origin moved off a surface at p with geometric normal ng towards the side of direction dir: by 256 ulps of
  * each coordinate (Wächter & Binder), and by at least `floor` near the origin of coordinates, where ulps
  * vanish but the intersection's error does not (it follows the triangles' own coordinates). Below
- * |p_i| = 2^11·floor, where 256 ulps equal about the floor, the floor is taken. With the scene's floor
+ * |p_i| = 2^11·floor the floor is taken (Wächter & Binder's 1/32 and 1/65536 for a floor of 2^-16; 256 ulps
+ * there are a sixteenth of the floor, so the move jumps at that threshold, as in their method). With the scene's floor
  * (ic_scene.ray_offset_floor), a scene smaller than one unit moves its origins in proportion to its size:
  * with the fixed floor of 1/65536, a Cornell box 2 cm across lost 11 % of its light, its floor point's shadow
  * rays ending on the lamp and the lamp's neighbourhood gaining 15 µm offsets in a 100 µm gap. */

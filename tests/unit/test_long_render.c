@@ -272,6 +272,43 @@ static void check_interrupted_budget(void)
     ic_image_free(&img);
 }
 
+/* Adaptive sampling interrupted in its pilot pass (64 x 64 at 16 spp: a pilot of 4 samples a pixel, 16 tiles),
+ * during its fifth tile: the tiles after it hold no samples and are black, and the statistics say so (the
+ * fewest samples a pixel holds is 0, the share taken is 5 of 16 tiles' pilots over the planned 16 a pixel). */
+static void check_interrupted_pilot(void)
+{
+    ic_camera cam = {0};
+    cam.target = v3(0.0f, 1.0f, 0.0f);
+    cam.up = v3(0.0f, 0.0f, 1.0f);
+    cam.width = cam.height = 64;
+    cam.fov_y_deg = 40.0f;
+    const uint64_t tile = 4u * 16u * 16u;
+    counting k = {0, 0, 5u * tile - 7u};
+    ic_image_loop loop = {0};
+    loop.camera = &cam;
+    loop.spp = 16;
+    loop.adaptive = 1;
+    loop.threads = 1;
+    loop.seed = 1;
+    loop.cancel = &k.flag;
+    ic_image img = {0};
+    ic_image_loop_result res;
+    ic_error err;
+    CHECK(ic_render_image(&loop, one_and_count, &k, &img, &res, &err) == IC_OK, "adaptive render: %s", err.message);
+    int lit = 0, black = 0;
+    for (int i = 0; img.rgb && i < 64 * 64; ++i) {
+        lit += img.rgb[3 * i] == 1.0f;
+        black += img.rgb[3 * i] == 0.0f;
+    }
+    CHECK(lit == 5 * 256 && black == 11 * 256, "interrupted pilot: 5 tiles at 1 (%d pixels) and 11 black (%d)", lit,
+          black);
+    const double taken = 5.0 * (double)tile;
+    CHECK(res.cancelled && res.spp_min == 0 && res.spp_max == 4 && fabs(res.completed - taken / (16.0 * 64 * 64)) < 1e-12,
+          "interrupted pilot: %d to %d samples a pixel, completed %g (want 0 to 4, %g)", res.spp_min, res.spp_max,
+          res.completed, taken / (16.0 * 64 * 64));
+    ic_image_free(&img);
+}
+
 /* An image the library cannot hold (wider than IC_IMAGE_MAX_SIDE; ic_render refuses it first, the film
  * itself only after rendering): "too large", not out of memory. */
 static void check_too_large(void)
@@ -298,6 +335,7 @@ static void check_too_large(void)
 int main(void)
 {
     check_interrupted_budget();
+    check_interrupted_pilot();
     check_too_large();
     ic_render_options pt = {0};
     pt.spp = 16;
