@@ -236,25 +236,38 @@ static ic_vec3 one_and_count(void *ctx, const ic_ray *ray, uint32_t pixel, ic_rn
     return v3s(1.0f);
 }
 
-/* An interrupt in the last of the passes 1, 2, 4, ..., 32 under a budget that never runs out (64 x 64: 16
- * tiles of 16 x 16), during its fifth tile: the render stops within that pass, its tiles not begun keep
- * their 31 samples, and every pixel is the mean of what it holds, exactly 1. */
-static void check_interrupted_budget(void)
+/* A 64 x 64 camera (16 tiles of 16 x 16), and a one-thread loop over it whose samples are one_and_count's. */
+static ic_camera square_camera(void)
 {
     ic_camera cam = {0};
     cam.target = v3(0.0f, 1.0f, 0.0f);
     cam.up = v3(0.0f, 0.0f, 1.0f);
     cam.width = cam.height = 64;
     cam.fov_y_deg = 40.0f;
-    const uint64_t before = 31u * 64u * 64u, tile = 32u * 16u * 16u;
-    counting k = {0, 0, before + 5u * tile - 7u};
+    return cam;
+}
+
+static ic_image_loop counting_loop(const ic_camera *cam, counting *k, int spp)
+{
     ic_image_loop loop = {0};
-    loop.camera = &cam;
-    loop.spp = 63;
-    loop.time_budget = 1e6;
+    loop.camera = cam;
+    loop.spp = spp;
     loop.threads = 1;
     loop.seed = 1;
-    loop.cancel = &k.flag;
+    loop.cancel = &k->flag;
+    return loop;
+}
+
+/* An interrupt in the last of the passes 1, 2, 4, ..., 32 under a budget that never runs out (64 x 64: 16
+ * tiles of 16 x 16), during its fifth tile: the render stops within that pass, its tiles not begun keep
+ * their 31 samples, and every pixel is the mean of what it holds, exactly 1. */
+static void check_interrupted_budget(void)
+{
+    const ic_camera cam = square_camera();
+    const uint64_t before = 31u * 64u * 64u, tile = 32u * 16u * 16u;
+    counting k = {0, 0, before + 5u * tile - 7u};
+    ic_image_loop loop = counting_loop(&cam, &k, 63);
+    loop.time_budget = 1e6;
     ic_image img = {0};
     ic_image_loop_result res;
     ic_error err;
@@ -277,20 +290,11 @@ static void check_interrupted_budget(void)
  * fewest samples a pixel holds is 0, the share taken is 5 of 16 tiles' pilots over the planned 16 a pixel). */
 static void check_interrupted_pilot(void)
 {
-    ic_camera cam = {0};
-    cam.target = v3(0.0f, 1.0f, 0.0f);
-    cam.up = v3(0.0f, 0.0f, 1.0f);
-    cam.width = cam.height = 64;
-    cam.fov_y_deg = 40.0f;
+    const ic_camera cam = square_camera();
     const uint64_t tile = 4u * 16u * 16u;
     counting k = {0, 0, 5u * tile - 7u};
-    ic_image_loop loop = {0};
-    loop.camera = &cam;
-    loop.spp = 16;
+    ic_image_loop loop = counting_loop(&cam, &k, 16);
     loop.adaptive = 1;
-    loop.threads = 1;
-    loop.seed = 1;
-    loop.cancel = &k.flag;
     ic_image img = {0};
     ic_image_loop_result res;
     ic_error err;
