@@ -74,6 +74,12 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
         }
         if (!inner)
             return ic_mts_fail(c, n, IC_ERR_PARSE, "this BSDF wraps no BSDF", NULL);
+        int inner_count = 0;
+        for (xmlNode *k = n->children; k; k = k->next)
+            inner_count += ic_mts_is_element(k, "bsdf") || ic_mts_is_element(k, "ref");
+        if (!strcmp(type, "twosided") && inner_count > 1)
+            ic_mts_warn_once(c, n, "<bsdf type=\"twosided\"> with a back BSDF",
+                             "is not supported: the front one is used on both sides");
         ic_result r = ic_mts_bsdf(c, inner, m, depth + 1);
         return r == IC_OK && !strcmp(type, "normalmap") ? normal_map(c, n, m) : r;
     }
@@ -143,7 +149,7 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
             r = ic_mts_color(c, n, "eta", m->eta, &m->eta, NULL);
         if (r == IC_OK)
             r = ic_mts_color(c, n, "k", m->k, &m->k, NULL);
-        if (r == IC_OK && strcmp(name, "none"))
+        if (r == IC_OK) /* a tinted mirror is "none" with a reflectance, in Mitsuba 0.6 and 3 alike */
             r = ic_mts_color(c, n, "specularReflectance", v3s(1.0f), &m->ks, NULL);
         if (r == IC_OK)
             r = ic_mts_ior(c, n, "extEta", 1.000277f, &ext);
@@ -156,7 +162,20 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
         r = ic_mts_ior(c, n, "intIOR", 1.5046f, &in);
         if (r == IC_OK)
             r = ic_mts_ior(c, n, "extIOR", 1.000277f, &ext);
+        if (r == IC_OK && in < ext)
+            ic_mts_warn_once(c, n, "a dielectric with intIOR below extIOR (a bubble)",
+                             "is not supported: its inside is given the outside's index, so it is invisible");
         m->ior = fmaxf(in / ext, 1.0f);
+        static const char *const tints[] = {"specularTransmittance", "specularReflectance"};
+        static const char *const tags[] = {"rgb", "spectrum", "srgb", "float", "texture", "ref"};
+        for (int t = 0; t < 2; ++t)
+            for (int g = 0; g < 6; ++g)
+                if (ic_mts_child(c, n, tags[g], tints[t])) {
+                    char kind[96];
+                    snprintf(kind, sizeof kind, "%s on a dielectric", tints[t]);
+                    ic_mts_warn_once(c, n, kind, "is not supported: the glass is clear");
+                    break;
+                }
     } else {
         char kind[80];
         snprintf(kind, sizeof kind, "<bsdf type=\"%.40s\">", type);

@@ -254,8 +254,15 @@ static ic_result parse_shape(ic_mts_ctx *c, const xmlNode *n)
     uint32_t first_tri = s->triangle_count, first_mat = s->material_count;
     c->b->import_where = where;
     r = ic_mesh_import(c->b, full, m, where, c->err);
-    if (r != IC_OK || !has_bsdf) /* without a BSDF the file's own materials stay (an extension of Mitsuba's) */
+    if (r != IC_OK)
         return r;
+    if (!has_bsdf) {
+        /* Without a BSDF the file's own materials stay (an extension of Mitsuba's), lit by the shape's area
+         * emitter if it has one (light shapes often have no BSDF: their light was dropped). */
+        for (uint32_t m2 = first_mat; !v3_is_black(mat.emission) && m2 < s->material_count; ++m2)
+            s->materials[m2].emission = mat.emission;
+        return IC_OK;
+    }
     if ((r = ic_scene_add_material(c->b, &mat, c->path, &index, c->err)) != IC_OK)
         return r;
     for (uint32_t m2 = first_mat; m2 < index; ++m2) {

@@ -210,6 +210,50 @@ static void test_materials_and_warnings(void)
     ic_scene_free(s);
 }
 
+/* What Mitsuba files say and irrcache had dropped without a word: an area emitter on a mesh file with no BSDF
+ * lights the mesh (its light was lost); a "none" conductor takes its specularReflectance (a tinted
+ * mirror rendered white); unsupported dielectric tints, bubbles (inside index below the outside's) and a
+ * twosided BSDF's back side are warned about, naming the file's line. */
+static void test_dropped_without_a_word(void)
+{
+    test_write_file(IC_TEST_TMP "/mts_quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+    const char *xml =
+        "<scene version=\"0.6.0\">\n"
+        "  <shape type=\"obj\"><string name=\"filename\" value=\"mts_quad.obj\"/>"
+        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"4, 5, 6\"/></emitter></shape>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/>"
+        "<rgb name=\"specularReflectance\" value=\"0.5\"/></bsdf></shape>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"dielectric\"><float name=\"intIOR\" value=\"1.0\"/>"
+        "<float name=\"extIOR\" value=\"1.333\"/></bsdf></shape>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"thindielectric\"><rgb name=\"specularTransmittance\" "
+        "value=\"0.2, 0.5, 1\"/></bsdf></shape>\n"
+        "  <shape type=\"rectangle\"><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/><bsdf type=\"plastic\"/>"
+        "</bsdf></shape>\n"
+        "</scene>\n";
+    test_write_file(IC_TEST_TMP "/mts_dropped.xml", xml);
+    ic_error err = {0};
+    ic_scene *s = load(IC_TEST_TMP "/mts_dropped.xml", &err);
+    CHECK(s != NULL, "mts_dropped.xml loads: %s", err.message);
+    if (!s)
+        return;
+    int lit = 0, tinted = 0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        const ic_material *m = &s->materials[s->triangle_material[t]];
+        lit += m->emission.x == 4.0f && m->emission.y == 5.0f && m->emission.z == 6.0f;
+        tinted += m->type == IC_MAT_CONDUCTOR && m->ks.x == 0.5f && m->ks.y == 0.5f;
+    }
+    CHECK(lit == 2, "the mesh file's two triangles carry the shape's area emitter (%d)", lit);
+    CHECK(tinted == 2, "the 'none' conductor reflects its specularReflectance, 0.5 (%d triangles)", tinted);
+    CHECK(s->tri_light_count == 2, "the mesh lights the scene (%u emitting triangles)", s->tri_light_count);
+    const char *w = ic_scene_warnings(s);
+    CHECK(w && strstr(w, "mts_dropped.xml:4:") && strstr(w, "bubble"), "a bubble is warned about: %s", w ? w : "");
+    CHECK(w && strstr(w, "mts_dropped.xml:5:") && strstr(w, "specularTransmittance"),
+          "a tinted dielectric is warned about: %s", w ? w : "");
+    CHECK(w && strstr(w, "mts_dropped.xml:6:") && strstr(w, "back BSDF"), "a twosided back side is warned about: %s",
+          w ? w : "");
+    ic_scene_free(s);
+}
+
 /* A focal length is Mitsuba's field of view across the 35 mm frame's diagonal (36 x 24 mm), 50 mm when
  * no fov is given: on a square 512 x 512 film 28 mm is a vertical 57.30°, the default 34.03° (the
  * horizontal 2 atan(18 / f) had given 65.5° and 39.3°). */
@@ -243,5 +287,6 @@ int main(void)
     test_cornell();
     test_analytic();
     test_materials_and_warnings();
+    test_dropped_without_a_word();
     TEST_MAIN_END();
 }
