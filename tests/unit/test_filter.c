@@ -43,7 +43,8 @@ static double gauss(ic_rng *r)
  * channel, σ stored as the record's own noise estimate, radius fixed at 0.5 (a·R = 0.15). */
 static int skewed_noise; /* make_cache: noise +9σ/3 with probability 0.1, −σ/3 otherwise (mean 0, std σ) */
 
-static ic_cache *make_cache(truth_fn truth, float sigma, ic_vec3 gradient, uint64_t seed)
+/* The caches the filter is tested on: a = 0.3, every radius 0.5, no clamping (records keep their values). */
+static ic_cache *empty_cache(void)
 {
     ic_cache_params p = {0};
     p.accuracy = 0.3f;
@@ -53,7 +54,14 @@ static ic_cache *make_cache(truth_fn truth, float sigma, ic_vec3 gradient, uint6
     p.validity_clamp = IC_CACHE_OFF;
     ic_cache *c = NULL;
     ic_error err;
-    if (ic_cache_create(&p, &c, &err) != IC_OK)
+    return ic_cache_create(&p, &c, &err) == IC_OK ? c : NULL;
+}
+
+static ic_cache *make_cache(truth_fn truth, float sigma, ic_vec3 gradient, uint64_t seed)
+{
+    ic_cache *c = empty_cache();
+    ic_error err;
+    if (!c)
         return NULL;
     ic_rng rng = ic_rng_make(seed, 1, 2, 3);
     for (int i = 0; i < GRID; ++i)
@@ -248,15 +256,9 @@ static ic_cache *dense_cache(int reversed)
         r->sigma = v3s(0.2f);
         r->harmonic_mean_dist = 0.5f;
     }
-    ic_cache_params p = {0};
-    p.accuracy = 0.3f;
-    p.min_radius = 0.5f;
-    p.max_radius = 0.5f;
-    p.neighbor_clamp = IC_CACHE_OFF;
-    p.validity_clamp = IC_CACHE_OFF;
-    ic_cache *c = NULL;
+    ic_cache *c = empty_cache();
     ic_error err;
-    if (ic_cache_create(&p, &c, &err) != IC_OK)
+    if (!c)
         return NULL;
     for (int i = 0; i < N; ++i)
         if (ic_cache_insert(c, &recs[reversed ? N - 1 - i : i], NULL, &err) != IC_OK) {
