@@ -5,6 +5,7 @@
  */
 #include "ic_internal.h"
 
+#include "core/grow.h"
 #include "core/threads.h"
 
 #include <stdatomic.h>
@@ -221,21 +222,17 @@ static void record_rays(ic_gather_replay *rp, uint32_t n, const float *dist, con
 {
     if (rp->failed)
         return;
-    if (rp->count + n > rp->capacity) {
-        uint32_t cap = rp->capacity ? rp->capacity : 1024u;
-        while (cap < rp->count + n)
-            cap *= 2u;
-        float *d = realloc(rp->dist, sizeof *d * cap);
-        if (d)
-            rp->dist = d;
-        ic_vec3 *l = d ? realloc(rp->removed, sizeof *l * cap) : NULL;
-        if (!l) {
-            rp->failed = 1;
-            return;
-        }
-        rp->removed = l;
-        rp->capacity = cap;
+    const size_t need = (size_t)rp->count + n;
+    void *d = rp->dist, *l = rp->removed;
+    size_t cap_d = rp->capacity, cap_l = rp->capacity;
+    const int grown = ic_grow(&d, &cap_d, need, sizeof *rp->dist) == IC_OK;
+    rp->dist = d;
+    if (!grown || ic_grow(&l, &cap_l, need, sizeof *rp->removed) != IC_OK) {
+        rp->failed = 1;
+        return;
     }
+    rp->removed = l;
+    rp->capacity = cap_l < cap_d ? cap_l : cap_d;
     memcpy(rp->dist + rp->count, dist, sizeof *dist * n);
     memcpy(rp->removed + rp->count, removed, sizeof *removed * n);
     rp->count += n;

@@ -120,7 +120,8 @@ int ic_ic_shading_point(const ic_tracer *tr, ic_ray ray, ic_surface *s, ic_bsdf 
  * the light the balance heuristic removed from its hit on a cached emitter, in the order traced. */
 typedef struct ic_gather_replay {
     int recording, replaying, failed;
-    uint32_t count, capacity, next;
+    uint32_t count, next;
+    size_t capacity;
     float *dist;
     ic_vec3 *removed;
 } ic_gather_replay;
