@@ -124,12 +124,20 @@ ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, u
     uint64_t first;
     ic_comm_block(count, ranks, rank, &first, own);
     char *mine = malloc(in_bytes * (*own ? *own : 1));
+    /* Each rank's results travel in one all-gather: its block holds, array after array, its items' first
+     * sent[a] bytes (one exchange, so one latency, however many arrays). */
+    size_t sent[IC_COMM_SHARE_MAX_ARRAYS], stride = 0;
+    for (int a = 0; a < arrays; ++a) {
+        sent[a] = sent_bytes && sent_bytes[a] < out_bytes[a] ? sent_bytes[a] : out_bytes[a];
+        stride += sent[a];
+    }
     char *all[IC_COMM_SHARE_MAX_ARRAYS] = {0};
     void *block[IC_COMM_SHARE_MAX_ARRAYS] = {0};
-    ic_result r = mine ? IC_OK : IC_ERR_OOM;
+    char *packed = malloc(count * stride);
+    ic_result r = mine && packed ? IC_OK : IC_ERR_OOM;
     for (int a = 0; a < arrays && r == IC_OK; ++a) {
-        all[a] = calloc(count, out_bytes[a]);
-        block[a] = all[a] ? all[a] + first * out_bytes[a] : NULL;
+        all[a] = calloc(*own ? *own : 1, out_bytes[a]);
+        block[a] = all[a];
         r = all[a] ? IC_OK : IC_ERR_OOM;
     }
     if (r != IC_OK)
@@ -138,29 +146,27 @@ ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, u
         memcpy(mine + k * in_bytes, (const char *)in + ((uint64_t)rank + k * (uint64_t)ranks) * in_bytes, in_bytes);
     if (r == IC_OK)
         r = gather(user, mine, *own, block, err);
+    char *at = packed + first * stride;
+    for (int a = 0; a < arrays && r == IC_OK; ++a)
+        for (uint64_t k = 0; k < *own; ++k, at += sent[a])
+            memcpy(at, all[a] + k * out_bytes[a], sent[a]);
     char exchanging[96];
     snprintf(exchanging, sizeof exchanging, "exchanging %s", what);
-    size_t sent[IC_COMM_SHARE_MAX_ARRAYS];
-    for (int a = 0; a < arrays && r == IC_OK; ++a) {
-        /* Only each item's first sent[a] bytes travel: this rank's block packed to that stride in place. */
-        sent[a] = sent_bytes && sent_bytes[a] < out_bytes[a] ? sent_bytes[a] : out_bytes[a];
-        for (uint64_t k = 0; sent[a] < out_bytes[a] && k < *own; ++k)
-            memmove(all[a] + (first + k) * sent[a], all[a] + (first + k) * out_bytes[a], sent[a]);
-        r = ic_comm_allgather_blocks(comm, all[a], count, sent[a], exchanging, err);
-    }
+    if (r == IC_OK)
+        r = ic_comm_allgather_blocks(comm, packed, count, stride, exchanging, err);
     for (int q = 0; r == IC_OK && q < ranks; ++q) {
         uint64_t q_first, q_own;
         ic_comm_block(count, ranks, q, &q_first, &q_own);
-        for (uint64_t k = 0; k < q_own; ++k) {
-            uint64_t i = (uint64_t)q + k * (uint64_t)ranks;
-            for (int a = 0; a < arrays; ++a) {
-                char *to = (char *)out[a] + i * out_bytes[a];
-                memcpy(to, all[a] + (q_first + k) * sent[a], sent[a]);
+        const char *from = packed + q_first * stride;
+        for (int a = 0; a < arrays; ++a)
+            for (uint64_t k = 0; k < q_own; ++k, from += sent[a]) {
+                char *to = (char *)out[a] + ((uint64_t)q + k * (uint64_t)ranks) * out_bytes[a];
+                memcpy(to, from, sent[a]);
                 memset(to + sent[a], 0, out_bytes[a] - sent[a]);
             }
-        }
     }
     free(mine);
+    free(packed);
     for (int a = 0; a < arrays; ++a)
         free(all[a]);
     return r;
