@@ -29,8 +29,8 @@ typedef struct mpi_comm {
     FILE *trace;              /* IRRCACHE_MPI_TRACE: rank 0's exchanges, one line each, or NULL */
 } mpi_comm;
 
-/* A line of IRRCACHE_MPI_TRACE: the operation, the bytes it moved in all (every rank's blocks) and the
- * rounds of messages it took one after another (what a link's latency multiplies). */
+/* A line of IRRCACHE_MPI_TRACE: the operation, the bytes rank 0 received in it and the rounds of messages it
+ * took one after another (what a link's latency multiplies; 0 for a message, which overlaps the work). */
 static void trace(const mpi_comm *m, const char *op, uint64_t bytes, int rounds)
 {
     if (m->trace)
@@ -82,8 +82,12 @@ static ic_result allgather_large(const mpi_comm *m, const void *send, void *recv
     return IC_OK;
 }
 
+/* Padded all-gathers up to this many bytes always take allgather_small; up to small_limit, those padded by
+ * at most a quarter (a pass's records, shared out in blocks that differ by one). */
+#define SMALL_ALWAYS (64 * 1024)
+
 /* A small all-gather (the largest block times the ranks at most small_limit bytes: counts, candidates'
- * tallies, a pass's few records) in ceil(log2 N) rounds of messages, whichever algorithm the MPI library
+ * tallies, a pass's records) in ceil(log2 N) rounds of messages, whichever algorithm the MPI library
  * would choose for MPI_Allgatherv (a ring takes N − 1): Bruck et al.'s concatenation (IEEE TPDS 1997),
  * each block padded to the largest. In round k a rank holding the blocks of ranks rank … rank + 2^k − 1 (mod N) sends them to
  * rank − 2^k and receives the next ones from rank + 2^k; the padding is dropped on arrival, since every
@@ -120,14 +124,15 @@ static ic_result mpi_allgather(void *user, const void *send, void *recv, const u
         block = counts[r] > block ? counts[r] : block;
     }
     if (!int_counts(counts, m->comm.size, m->counts, m->displs, m->allgather_limit)) {
-        trace(m, "allgather-large", total, 0);
+        trace(m, "allgather-large", total - counts[m->comm.rank], m->comm.size - 1);
         return allgather_large(m, send, recv, counts);
     }
-    if (m->comm.size > 2 && block * (uint64_t)m->comm.size <= m->small_limit) {
-        trace(m, "allgather-small", total, log2_rounds(m->comm.size));
+    uint64_t padded = block * (uint64_t)m->comm.size;
+    if (m->comm.size > 2 && (padded <= SMALL_ALWAYS || (padded <= m->small_limit && 4 * padded <= 5 * total))) {
+        trace(m, "allgather-small", padded - block, log2_rounds(m->comm.size));
         return allgather_small(m, send, recv, counts, block);
     }
-    trace(m, "allgather", total, m->comm.size - 1);
+    trace(m, "allgather", total - counts[m->comm.rank], m->comm.size - 1);
     const void *s = send == (const char *)recv + m->displs[m->comm.rank] ? MPI_IN_PLACE : send;
     int rc = MPI_Allgatherv(s, m->counts[m->comm.rank], MPI_BYTE, recv, m->counts, m->displs, MPI_BYTE,
                             MPI_COMM_WORLD);
@@ -146,17 +151,76 @@ static ic_result mpi_alltoall(void *user, const void *send, const uint64_t *send
         return IC_ERR_UNSUPPORTED;
     uint64_t total = 0;
     for (int r = 0; r < m->comm.size; ++r)
-        total += recv_counts[r];
+        total += r == m->comm.rank ? 0 : recv_counts[r];
     trace(m, "alltoall", total, m->comm.size - 1);
     int rc = MPI_Alltoallv(send, m->scounts, m->sdispls, MPI_BYTE, recv, m->counts, m->displs, MPI_BYTE,
                            MPI_COMM_WORLD);
     return rc == MPI_SUCCESS ? IC_OK : IC_ERR_IO;
 }
 
+/* The library's messages between two ranks (irrcache/comm.h): tag MESSAGE_TAG, apart from
+ * allgather_small's tag 0 (and from the collectives, which MPI keeps apart from every message). */
+#define MESSAGE_TAG 1
+
+static ic_result mpi_post(void *user, int to, const void *buf, uint64_t bytes, void **request)
+{
+    (void)user;
+    MPI_Request *req = malloc(sizeof *req);
+    if (!req)
+        return IC_ERR_OOM;
+    if (bytes > INT32_MAX) {
+        free(req);
+        return IC_ERR_UNSUPPORTED;
+    }
+    if (MPI_Isend(buf, (int)bytes, MPI_BYTE, to, MESSAGE_TAG, MPI_COMM_WORLD, req) != MPI_SUCCESS) {
+        free(req);
+        return IC_ERR_IO;
+    }
+    *request = req;
+    return IC_OK;
+}
+
+static ic_result mpi_sent(void *user, void *request, int wait, int *done)
+{
+    (void)user;
+    MPI_Request *req = request;
+    int rc = wait ? MPI_Wait(req, MPI_STATUS_IGNORE) : MPI_Test(req, done, MPI_STATUS_IGNORE);
+    if (wait)
+        *done = 1;
+    if (rc != MPI_SUCCESS)
+        return IC_ERR_IO;
+    if (*done)
+        free(req);
+    return IC_OK;
+}
+
+static ic_result mpi_take(void *user, void *buf, uint64_t room, int wait, int *from, uint64_t *bytes)
+{
+    const mpi_comm *m = user;
+    MPI_Status st;
+    int arrived = 1, n = 0;
+    int rc = wait ? MPI_Probe(MPI_ANY_SOURCE, MESSAGE_TAG, MPI_COMM_WORLD, &st)
+                  : MPI_Iprobe(MPI_ANY_SOURCE, MESSAGE_TAG, MPI_COMM_WORLD, &arrived, &st);
+    *bytes = 0;
+    if (rc != MPI_SUCCESS)
+        return IC_ERR_IO;
+    if (!arrived)
+        return IC_OK;
+    MPI_Get_count(&st, MPI_BYTE, &n);
+    if (n < 0 || (uint64_t)n > room)
+        return IC_ERR_IO;
+    if (MPI_Recv(buf, n, MPI_BYTE, st.MPI_SOURCE, MESSAGE_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE) != MPI_SUCCESS)
+        return IC_ERR_IO;
+    *from = st.MPI_SOURCE;
+    *bytes = (uint64_t)n;
+    trace(m, "message", (uint64_t)n, 0);
+    return IC_OK;
+}
+
 static ic_result mpi_sum(void *user, double *values, uint64_t count)
 {
     const mpi_comm *m = user;
-    trace(m, "sum", count * sizeof *values, 2 * log2_rounds(m->comm.size));
+    trace(m, "sum", count * sizeof *values * (uint64_t)log2_rounds(m->comm.size), log2_rounds(m->comm.size));
     /* In chunks that fit an int count. */
     for (uint64_t done = 0; done < count;) {
         int n = count - done > (uint64_t)(1 << 28) ? 1 << 28 : (int)(count - done);
@@ -169,7 +233,8 @@ static ic_result mpi_sum(void *user, double *values, uint64_t count)
 
 static ic_result mpi_broadcast(void *user, void *buf, uint64_t bytes, int root)
 {
-    trace(user, "broadcast", bytes, log2_rounds(((const mpi_comm *)user)->comm.size));
+    trace(user, "broadcast", ((const mpi_comm *)user)->comm.rank == root ? 0 : bytes,
+          log2_rounds(((const mpi_comm *)user)->comm.size));
     for (uint64_t done = 0; done < bytes;) {
         int n = bytes - done > (uint64_t)(1 << 30) ? 1 << 30 : (int)(bytes - done);
         if (MPI_Bcast((char *)buf + done, n, MPI_BYTE, root, MPI_COMM_WORLD) != MPI_SUCCESS)
@@ -210,7 +275,7 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
         m->displs = calloc((size_t)size, sizeof *m->displs);
         m->scounts = calloc((size_t)size, sizeof *m->scounts);
         m->sdispls = calloc((size_t)size, sizeof *m->sdispls);
-        m->small_limit = 64 * 1024;
+        m->small_limit = 512 * 1024;
         m->scratch = malloc(m->small_limit);
     }
     if (!m || !m->counts || !m->displs || !m->scounts || !m->sdispls || !m->scratch) {
@@ -235,6 +300,9 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
     m->comm.sum = mpi_sum;
     m->comm.broadcast = mpi_broadcast;
     m->comm.alltoall = mpi_alltoall;
+    m->comm.post = mpi_post;
+    m->comm.sent = mpi_sent;
+    m->comm.take = mpi_take;
     return &m->comm;
 }
 

@@ -43,6 +43,21 @@ typedef struct ic_comm {
      * without the saving in bytes that data meant for one rank allows). */
     ic_result (*alltoall)(void *user, const void *send, const uint64_t *send_counts, void *recv,
                           const uint64_t *recv_counts);
+    /* Messages between two ranks (optional: the three together, or none), with which the final render sends
+     * each finished tile while it renders the next instead of exchanging the whole image at its end; NULL:
+     * the library exchanges it at the end with allgather. These are not collective: they are called from
+     * the same thread as the others, whenever that thread is between two pieces of work. Messages from one
+     * rank to another arrive in the order they were sent, and apart from the collectives' data.
+     * post: starts sending `bytes` bytes at buf to rank `to` and returns at once; *request names the send,
+     * whose buffer the library leaves untouched until sent says that it is done. */
+    ic_result (*post)(void *user, int to, const void *buf, uint64_t bytes, void **request);
+    /* sent: *done = 1 when the send `request` is done (the request is then released), 0 while it is not;
+     * with wait non-zero, returns only once it is done. */
+    ic_result (*sent)(void *user, void *request, int wait, int *done);
+    /* take: a message that has arrived from any rank, into buf (room for `room` bytes): *bytes its length
+     * and *from its sender, or *bytes = 0 when none has arrived; with wait non-zero, returns only once one
+     * has. A message longer than room is an error. */
+    ic_result (*take)(void *user, void *buf, uint64_t room, int wait, int *from, uint64_t *bytes);
     /* Kept by the library: seconds spent in the operations above and bytes they received, over the
      * comm's lifetime (zero them to start counting). */
     double seconds;

@@ -257,3 +257,29 @@ ic_result ic_comm_broadcast(ic_comm *comm, void *buf, uint64_t bytes, int root, 
         comm->bytes += bytes;
     return r == IC_OK ? IC_OK : failed(err, r, "a broadcast");
 }
+
+ic_result ic_comm_post(ic_comm *comm, int to, const void *buf, uint64_t bytes, void **request, ic_error *err)
+{
+    double t0 = now();
+    ic_result r = comm->post(comm->user, to, buf, bytes, request);
+    comm->seconds += now() - t0;
+    return r == IC_OK ? IC_OK : failed(err, r, "sending a finished tile");
+}
+
+ic_result ic_comm_sent(ic_comm *comm, void *request, int wait, int *done, ic_error *err)
+{
+    double t0 = now();
+    ic_result r = comm->sent(comm->user, request, wait, done);
+    comm->seconds += now() - t0;
+    return r == IC_OK ? IC_OK : failed(err, r, "sending a finished tile");
+}
+
+ic_result ic_comm_take(ic_comm *comm, void *buf, uint64_t room, int wait, int *from, uint64_t *bytes, ic_error *err)
+{
+    double t0 = now();
+    *bytes = 0;
+    ic_result r = comm->take(comm->user, buf, room, wait, from, bytes);
+    comm->seconds += now() - t0;
+    comm->bytes += *bytes;
+    return r == IC_OK ? IC_OK : failed(err, r, "receiving a finished tile");
+}

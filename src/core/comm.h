@@ -52,6 +52,16 @@ ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, u
  * each keeps its own blocks. For one process the one block is copied. `what` names the data in messages. */
 ic_result ic_comm_alltoall(ic_comm *comm, const void *send, const uint64_t *matrix, void *recv, const char *what,
                            ic_error *err);
+/* 1 when the comm joins several processes and can send them messages (irrcache/comm.h's post, sent, take). */
+static inline int ic_comm_has_messages(const ic_comm *comm)
+{
+    return ic_comm_is_shared(comm) && comm->post && comm->sent && comm->take;
+}
+/* The comm's post, sent and take, timed and counted (take's bytes), with an error message on failure;
+ * only where ic_comm_has_messages. */
+ic_result ic_comm_post(ic_comm *comm, int to, const void *buf, uint64_t bytes, void **request, ic_error *err);
+ic_result ic_comm_sent(ic_comm *comm, void *request, int wait, int *done, ic_error *err);
+ic_result ic_comm_take(ic_comm *comm, void *buf, uint64_t room, int wait, int *from, uint64_t *bytes, ic_error *err);
 /* Sums count doubles over the ranks, in place (a no-op for one process). */
 ic_result ic_comm_sum(ic_comm *comm, double *values, uint64_t count, ic_error *err);
 /* Copies root's bytes to every rank (a no-op for one process). */

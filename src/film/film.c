@@ -2,6 +2,7 @@
 #include "film.h"
 
 #include "core/threads.h"
+#include "film/stream.h"
 
 #include <limits.h>
 #include <math.h>
@@ -236,6 +237,8 @@ typedef struct loop_ctx {
     atomic_int pause;      /* 1: a checkpoint is due; tiles not begun wait for the next round */
     double next_checkpoint;/* ic_seconds() at which the next one falls due */
     double busy;           /* seconds in loop_pass */
+    ic_stream *stream;     /* several ranks with messages: this pass's finished tiles go to the others as
+                              they finish (stream.h), else NULL */
 } loop_ctx;
 
 enum { TILE_WAITING = 0, TILE_RENDERED = 1, TILE_SKIPPED = 2 };
@@ -329,6 +332,11 @@ static void render_tile(void *p, int64_t item, int thread)
         c->tile_n[tile] = c->s_end;
     if (c->tile_seconds)
         c->tile_seconds[tile] = ic_seconds() - tile_start;
+    if (c->stream) {
+        ic_stream_finished(c->stream, item, tile);
+        if (thread == 0) /* the caller's thread, the one that may call the comm */
+            ic_stream_service(c->stream);
+    }
     uint64_t done = atomic_fetch_add(&c->samples_done, samples) + samples;
     if (c->tile_state) {
         c->tile_state[item] = TILE_RENDERED;
@@ -619,10 +627,7 @@ static ic_result exchange_tiles(loop_ctx *c, void *plane, size_t pixel_bytes, co
     return r;
 }
 
-/* The image from the running sums: each pixel's mean over its n samples (its tile's tile_n, or n0 + extra[i],
- * or n0 for all with both NULL; black with none), computed by the rank that rendered it, in float, then
- * exchanged: a rank receives (N − 1)/N of the image as 12 bytes a pixel. */
-static ic_result finish_image(loop_ctx *c, int n0, const uint32_t *extra, ic_image *out, ic_error *err)
+static ic_result create_image(const loop_ctx *c, ic_image *out, ic_error *err)
 {
     const ic_camera *cam = c->loop->camera;
     ic_result r = ic_image_create(out, cam->width, cam->height);
@@ -631,22 +636,109 @@ static ic_result finish_image(loop_ctx *c, int n0, const uint32_t *extra, ic_ima
                             "smaller", cam->width, cam->height, IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_PIXELS);
     if (r != IC_OK)
         return ic_error_set(err, r, "out of memory for a %dx%d image", cam->width, cam->height);
+    return IC_OK;
+}
+
+/* Tile t of the image from the running sums: each pixel's mean over its n samples (its tile's tile_n, or
+ * n0 + extra[i], or n0 for all with both NULL; black with none), in float. */
+static void fill_tile(const loop_ctx *c, int64_t t, int n0, const uint32_t *extra, ic_image *out)
+{
+    const int width = c->loop->camera->width;
+    int x0, y0, x1, y1;
+    tile_rect(c, t, &x0, &y0, &x1, &y1);
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            size_t i = (size_t)y * width + x;
+            uint32_t n = c->tile_n ? (uint32_t)c->tile_n[t] : (uint32_t)n0 + (extra ? extra[i] : 0);
+            for (int k = 0; k < 3; ++k)
+                out->rgb[3 * i + k] = n ? (float)(c->accum[3 * i + k] / n) : 0.0f;
+        }
+}
+
+/* The image from the running sums, each tile computed by the rank that rendered it and then exchanged:
+ * a rank receives (N − 1)/N of the image as 12 bytes a pixel. */
+static ic_result finish_image(loop_ctx *c, int n0, const uint32_t *extra, ic_image *out, ic_error *err)
+{
+    ic_result r = create_image(c, out, err);
+    if (r != IC_OK)
+        return r;
     const int64_t tiles = (int64_t)c->tiles_x * c->tiles_y;
-    for (int64_t t = 0; t < tiles; ++t) {
-        if (tile_owner(c, t) != c->rank)
-            continue;
-        int x0, y0, x1, y1;
-        tile_rect(c, t, &x0, &y0, &x1, &y1);
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                size_t i = (size_t)y * cam->width + x;
-                uint32_t n = c->tile_n ? (uint32_t)c->tile_n[t] : (uint32_t)n0 + (extra ? extra[i] : 0);
-                for (int k = 0; k < 3; ++k)
-                    out->rgb[3 * i + k] = n ? (float)(c->accum[3 * i + k] / n) : 0.0f;
-            }
-    }
+    for (int64_t t = 0; t < tiles; ++t)
+        if (tile_owner(c, t) == c->rank)
+            fill_tile(c, t, n0, extra, out);
     if ((r = exchange_tiles(c, out->rgb, 3 * sizeof *out->rgb, NULL, "exchanging the image", err)) != IC_OK)
         ic_image_free(out);
+    return r;
+}
+
+/* ---- planes streamed during their last pass (several ranks whose comm has messages; stream.h): a tile
+ * finished is computed and sent while the next renders, so a rank's share of the exchange overlaps its
+ * work instead of following it. The values are the ones the exchange at the end would move. */
+typedef struct streamed_plane {
+    loop_ctx *c;
+    unsigned char *plane;  /* image-wide, pixel_bytes a pixel */
+    size_t pixel_bytes;
+    /* Computes tile t's values in the plane from the running sums (on the thread that calls the comm,
+     * once the tile's worker finished it). */
+    void (*compute)(struct streamed_plane *p, int64_t t);
+    int n0;                /* the image: the pilot's samples (adaptive) */
+    const uint32_t *extra; /* the image: the second pass's samples per pixel, or NULL */
+    ic_image *image;       /* the image, whose rgb is the plane */
+} streamed_plane;
+
+static size_t pack_streamed(void *user, int64_t t, unsigned char *to)
+{
+    streamed_plane *p = user;
+    p->compute(p, t);
+    return copy_tile(p->c, t, p->plane, to, p->pixel_bytes, 1);
+}
+
+static size_t unpack_streamed(void *user, int64_t t, const unsigned char *from)
+{
+    streamed_plane *p = user;
+    return copy_tile(p->c, t, p->plane, (unsigned char *)from, p->pixel_bytes, 0);
+}
+
+static void compute_image_tile(streamed_plane *p, int64_t t) { fill_tile(p->c, t, p->n0, p->extra, p->image); }
+
+/* Tile t's pilot relative variances (adaptive sampling), from its sums of n0 samples. */
+static void compute_variance_tile(streamed_plane *p, int64_t t)
+{
+    const loop_ctx *c = p->c;
+    const int width = c->loop->camera->width;
+    double *v = (double *)p->plane;
+    int x0, y0, x1, y1;
+    tile_rect(c, t, &x0, &y0, &x1, &y1);
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            size_t px = (size_t)y * width + x;
+            v[px] = relative_variance(c->accum, c->sumsq, p->n0, px);
+        }
+}
+
+/* 1 when this render's planes can be streamed. */
+static int can_stream(const loop_ctx *c) { return c->ranks > 1 && ic_comm_has_messages(c->loop->comm); }
+
+/* A pass whose finished tiles stream plane p to every rank (so that, when it returns, every rank holds the
+ * whole plane), or a plain pass with p NULL. */
+static ic_result streamed_pass(loop_ctx *c, int threads, int s_begin, int s_end, streamed_plane *p, ic_error *err)
+{
+    if (!p)
+        return loop_pass(c, threads, s_begin, s_end, err);
+    const int64_t tiles = (int64_t)c->tiles_x * c->tiles_y;
+    ic_result r = ic_stream_begin(&c->stream, c->loop->comm, c->own_tiles, tiles - c->own_tiles, tiles,
+                                  (size_t)TILE * TILE * p->pixel_bytes, pack_streamed, unpack_streamed, p, err);
+    if (r != IC_OK)
+        return r;
+    r = loop_pass(c, threads, s_begin, s_end, err);
+    ic_error stream_err;
+    ic_result rs = ic_stream_end(c->stream, &stream_err);
+    c->stream = NULL;
+    if (r == IC_OK && rs != IC_OK) {
+        if (err)
+            *err = stream_err;
+        r = rs;
+    }
     return r;
 }
 
@@ -777,26 +869,22 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
     if (!c.sumsq || !extra || !c.tile_n || (c.ranks > 1 && !c.tile_seconds))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
                          cam->height);
-    if (r == IC_OK)
-        r = loop_pass(&c, threads, 0, n0, err);
-    int *pilot_n = c.tile_n; /* finish_image divides by n0 + extra, per pixel */
-    c.tile_n = NULL;
     /* Every rank shares out the rest from the whole pilot's relative variances (each rank computes those of
-     * its own tiles and the ranks exchange them, 8 bytes a pixel), so all make the same allocation. */
+     * its own tiles and the ranks exchange them, 8 bytes a pixel, streamed during the pilot where the comm
+     * can), so all make the same allocation. */
     double *v = r == IC_OK ? malloc(npix * sizeof *v) : NULL;
     if (r == IC_OK && !v)
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
                          cam->height);
-    for (int64_t i = 0; r == IC_OK && i < c.own_tiles; ++i) {
-        int x0, y0, x1, y1;
-        tile_rect(&c, own_tile(&c, i), &x0, &y0, &x1, &y1);
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                size_t px = (size_t)y * cam->width + x;
-                v[px] = relative_variance(c.accum, c.sumsq, n0, px);
-            }
-    }
+    streamed_plane variances = {&c, (unsigned char *)v, sizeof *v, compute_variance_tile, n0, NULL, NULL};
+    const int streaming = can_stream(&c);
     if (r == IC_OK)
+        r = streamed_pass(&c, threads, 0, n0, streaming ? &variances : NULL, err);
+    int *pilot_n = c.tile_n; /* finish_image divides by n0 + extra, per pixel */
+    c.tile_n = NULL;
+    for (int64_t i = 0; r == IC_OK && !streaming && i < c.own_tiles; ++i)
+        compute_variance_tile(&variances, own_tile(&c, i));
+    if (r == IC_OK && !streaming)
         r = exchange_tiles(&c, v, sizeof *v, NULL, "exchanging the pilot's variances", err);
     if (r == IC_OK && !allocate_samples(v, n0, loop->spp, cam->width, cam->height, extra))
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for adaptive sampling of a %dx%d image", cam->width,
@@ -819,10 +907,16 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
                     planned += extra[(size_t)y * cam->width + x];
         }
         c.samples_planned = planned;
+        /* The image, streamed during the second pass where the comm can. */
+        streamed_plane image = {&c, NULL, 3 * sizeof(float), compute_image_tile, n0, extra, out};
+        if (r == IC_OK && streaming && (r = create_image(&c, out, err)) == IC_OK)
+            image.plane = (unsigned char *)out->rgb;
         if (r == IC_OK)
-            r = loop_pass(&c, threads, n0, n0, err);
+            r = streamed_pass(&c, threads, n0, n0, streaming ? &image : NULL, err);
+        if (r != IC_OK && streaming)
+            ic_image_free(out);
     }
-    if (r == IC_OK)
+    if (r == IC_OK && !streaming)
         r = finish_image(&c, n0, extra, out, err);
     if (r == IC_OK) {
         uint64_t taken = 0;
@@ -898,7 +992,14 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     int done = 0, pass_spp = loop->time_budget > 0.0 ? 1 : spp_max;
     c.samples_planned = loop->time_budget > 0.0 ? 0.0 : (double)spp_max * (double)c.own_pixels;
     double per_sample = 0.0;
-    while (done < spp_max) {
+    /* Without a budget the one pass is the last: the image is streamed during it where the comm can. */
+    streamed_plane image = {&c, NULL, 3 * sizeof(float), compute_image_tile, 0, NULL, out};
+    const int streaming = can_stream(&c) && !(loop->time_budget > 0.0) && !preview;
+    if (streaming)
+        r = create_image(&c, out, err);
+    if (r == IC_OK && streaming)
+        image.plane = (unsigned char *)out->rgb;
+    while (r == IC_OK && done < spp_max) {
         if (can_cancel && !preview && done > 0 && *loop->cancel) {
             stopped = 1;
             break;
@@ -920,7 +1021,7 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
                 break;
         }
         double t0 = ic_seconds();
-        if ((r = loop_pass(&c, threads, done, done + pass_spp, err)) != IC_OK)
+        if ((r = streamed_pass(&c, threads, done, done + pass_spp, streaming ? &image : NULL, err)) != IC_OK)
             break;
         per_sample = (ic_seconds() - t0) / pass_spp;
         done += pass_spp;
@@ -931,8 +1032,10 @@ ic_result ic_render_image(const ic_image_loop *loop, ic_sample_fn fn, void *user
     }
     if (r == IC_OK && done == 0)
         r = ic_error_set(err, IC_ERR_INVALID_ARG, "time budget too small for one sample per pixel; raise --time");
-    if (r == IC_OK)
+    if (r == IC_OK && !streaming)
         r = finish_image(&c, done, NULL, out, err);
+    else if (r != IC_OK && streaming)
+        ic_image_free(out);
     if (r == IC_OK) {
         /* The samples this process's pixels hold: `done` in each unless a pass was cut short. */
         uint64_t taken = 0;

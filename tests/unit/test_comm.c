@@ -27,10 +27,22 @@
 #define SIZE 32
 
 /* ---- the in-memory transport: every rank publishes what it has, waits for all, reads the others' */
+typedef struct message {
+    struct message *next;
+    int from;
+    uint64_t bytes;
+    unsigned char data[];
+} message;
+
 typedef struct transport {
     int size;
     pthread_barrier_t barrier;
     const void *published[MAX_RANKS];
+    /* Messages (post, sent, take): each rank's mailbox, in the order they arrived. */
+    pthread_mutex_t lock;
+    pthread_cond_t arrived;
+    message *first[MAX_RANKS], *last[MAX_RANKS];
+    int messages;
 } transport;
 
 typedef struct rank_link {
@@ -111,6 +123,64 @@ static ic_result fake_alltoall(void *user, const void *send, const uint64_t *sen
     return IC_OK;
 }
 
+/* Messages: a post copies the bytes into the receiver's mailbox at once, so every send is done when
+ * posted; take pops the oldest. */
+static ic_result fake_post(void *user, int to, const void *buf, uint64_t bytes, void **request)
+{
+    rank_link *l = user;
+    transport *t = l->t;
+    message *m = malloc(sizeof *m + bytes);
+    if (!m)
+        return IC_ERR_OOM;
+    m->next = NULL;
+    m->from = l->rank;
+    m->bytes = bytes;
+    memcpy(m->data, buf, bytes);
+    pthread_mutex_lock(&t->lock);
+    if (t->last[to])
+        t->last[to]->next = m;
+    else
+        t->first[to] = m;
+    t->last[to] = m;
+    ++t->messages;
+    pthread_cond_broadcast(&t->arrived);
+    pthread_mutex_unlock(&t->lock);
+    *request = l;
+    return IC_OK;
+}
+
+static ic_result fake_sent(void *user, void *request, int wait, int *done)
+{
+    (void)user;
+    (void)wait;
+    *done = request != NULL;
+    return IC_OK;
+}
+
+static ic_result fake_take(void *user, void *buf, uint64_t room, int wait, int *from, uint64_t *bytes)
+{
+    rank_link *l = user;
+    transport *t = l->t;
+    pthread_mutex_lock(&t->lock);
+    while (wait && !t->first[l->rank])
+        pthread_cond_wait(&t->arrived, &t->lock);
+    message *m = t->first[l->rank];
+    if (m && (t->first[l->rank] = m->next) == NULL)
+        t->last[l->rank] = NULL;
+    pthread_mutex_unlock(&t->lock);
+    *bytes = 0;
+    if (!m)
+        return IC_OK;
+    ic_result r = m->bytes <= room ? IC_OK : IC_ERR_IO;
+    if (r == IC_OK) {
+        memcpy(buf, m->data, m->bytes);
+        *bytes = m->bytes;
+        *from = m->from;
+    }
+    free(m);
+    return r;
+}
+
 /* ---- one job: `size` ranks, each a thread running ic_render or ic_points_compute */
 typedef struct rank_job {
     rank_link link;
@@ -160,14 +230,19 @@ static int run_job(rank_job *jobs, int size)
     memset(&t, 0, sizeof t);
     t.size = size;
     pthread_barrier_init(&t.barrier, NULL, (unsigned)size);
+    pthread_mutex_init(&t.lock, NULL);
+    pthread_cond_init(&t.arrived, NULL);
     pthread_t th[MAX_RANKS];
     for (int r = 0; r < size; ++r) {
         jobs[r].link.t = &t;
         jobs[r].link.rank = r;
-        /* Two ranks without an all-to-all (the library emulates it with the all-gather), more with one. */
+        /* Two ranks with the required operations alone (the library emulates the all-to-all with the
+         * all-gather and exchanges finished tiles at the end), more with all-to-all and messages too. */
+        int full = size > 2;
         jobs[r].comm = (ic_comm){.rank = r, .size = size, .user = &jobs[r].link, .allgather = fake_allgather,
                                  .sum = fake_sum, .broadcast = fake_broadcast,
-                                 .alltoall = size > 2 ? fake_alltoall : NULL};
+                                 .alltoall = full ? fake_alltoall : NULL, .post = full ? fake_post : NULL,
+                                 .sent = full ? fake_sent : NULL, .take = full ? fake_take : NULL};
         pthread_create(&th[r], NULL, run_rank, &jobs[r]);
     }
     int ok = 1;
@@ -179,6 +254,12 @@ static int run_job(rank_job *jobs, int size)
         }
     }
     pthread_barrier_destroy(&t.barrier);
+    for (int r = 0; r < size; ++r)
+        CHECK(!t.first[r], "a message to rank %d of %d was never taken", r, size);
+    if (size > 2 && jobs[0].opt.spp > 0 && !jobs[0].points && !jobs[0].records && !(jobs[0].opt.time_budget > 0.0))
+        CHECK(t.messages > 0, "%d ranks sent no finished tiles as messages", size);
+    pthread_mutex_destroy(&t.lock);
+    pthread_cond_destroy(&t.arrived);
     return ok;
 }
 
@@ -362,6 +443,8 @@ static void check_world(const char *what, const ic_candidate *all, uint32_t coun
     memset(&t, 0, sizeof t);
     t.size = size;
     pthread_barrier_init(&t.barrier, NULL, (unsigned)size);
+    pthread_mutex_init(&t.lock, NULL);
+    pthread_cond_init(&t.arrived, NULL);
     world_rank w[MAX_RANKS];
     pthread_t th[MAX_RANKS];
     memset(w, 0, sizeof w);
