@@ -259,7 +259,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_IC, "extra images next to the first output: <stem>.indirect.exr, <stem>.glossy.exr (the glossy " \
       "lobe's indirect light from radiance records), <stem>.density.exr (records per pixel) - when the first " \
       "output is an .exr, these three are its layers instead (channels indirect.R ...) -, <stem>.records.png " \
-      "(dots and radii over the image darkened; radiance records yellow in blue rings), <stem>.amap.png (a of " \
+      "(dots and radii over the image scaled so that the median luminance of its lit pixels is 0.18, mid-grey, " \
+      "however dim or bright the scene; radiance records yellow in blue rings), <stem>.amap.png (a of " \
       "the heaviest record, blue = --accuracy to red = accuracy/32); these two without --exposure") \
     IC_HELP_OPTIONS(X, "the option tables of README.md")
 /* clang-format on */

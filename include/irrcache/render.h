@@ -197,7 +197,8 @@ typedef struct ic_render_aovs {
     ic_image glossy;       /* the glossy lobe's indirect light from the radiance records at the first shading
                               point (black where none serves it: path-traced lobes, no radiance caching) */
     ic_image records;      /* the image with record positions (dots) and influence radii (circles): irradiance
-                              records red in green rings, radiance records yellow in blue rings */
+                              records red in green rings, radiance records yellow in blue rings; the image
+                              under them scaled so that its lit pixels' median luminance is 0.18 */
     ic_image density;      /* number of records contributing at each pixel centre (grey level) */
     ic_image amap;         /* a_i of the heaviest record at each pixel centre on a colour ramp: blue = --accuracy,
                               red = accuracy/32 or less (log scale; Křivánek et al. 2006 figs. 7–9) */

@@ -4,8 +4,13 @@
  */
 #include "ic_internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Median luminance of the image under the records' marks (linear; 0.18, the photographic mid-grey, is
+ * 46 % of white in the PNG's sRGB, dark enough for the marks' saturated colours to stand out). */
+#define IC_RECORDS_BACKGROUND_GREY 0.18f
 
 static void put(ic_image *img, int x, int y, ic_vec3 c)
 {
@@ -77,17 +82,44 @@ static void draw_ellipse(const ic_ctx *c, ic_image *out, const ic_record *rec, c
     }
 }
 
+/* The factor that brings the median luminance of img's lit pixels (finite, above zero) to
+ * IC_RECORDS_BACKGROUND_GREY; 1 where none is lit, 0 (and IC_ERR_OOM) when out of memory. The median, not
+ * the mean, so that a lamp or a sunlit patch in view does not darken the rest. */
+static ic_result background_scale(const ic_image *img, float *scale)
+{
+    size_t pixels = (size_t)img->width * img->height, lit = 0;
+    float *lum = malloc(sizeof *lum * (pixels ? pixels : 1));
+    *scale = 0.0f;
+    if (!lum)
+        return IC_ERR_OOM;
+    for (size_t i = 0; i < pixels; ++i) {
+        float y = v3_lum(v3(img->rgb[3 * i], img->rgb[3 * i + 1], img->rgb[3 * i + 2]));
+        if (isfinite(y) && y > 0.0f)
+            lum[lit++] = y;
+    }
+    *scale = 1.0f;
+    if (lit > 0) {
+        qsort(lum, lit, sizeof *lum, ic_ic_cmp_float);
+        *scale = IC_RECORDS_BACKGROUND_GREY / lum[lit / 2];
+    }
+    free(lum);
+    return IC_OK;
+}
+
 /* Records the camera sees are drawn as a dot with a circle of their influence radius a_i·R_i (an
- * elliptical record: its ellipse, projected), over a darkened copy of the image: irradiance records red
- * in green rings (elliptical ones in cyan), radiance records yellow in blue. */
+ * elliptical record: its ellipse, projected), over a copy of the image scaled to a fixed median grey
+ * (background_scale), so that the image under the marks reads alike on dim and bright scenes, whatever
+ * the exposure: irradiance records red in green rings (elliptical ones in cyan), radiance records yellow
+ * in blue. */
 ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image *out)
 {
-    ic_result r = ic_image_create(out, beauty->width, beauty->height);
-    if (r != IC_OK)
+    float scale;
+    ic_result r = background_scale(beauty, &scale);
+    if (r != IC_OK || (r = ic_image_create(out, beauty->width, beauty->height)) != IC_OK)
         return r;
     size_t n = (size_t)beauty->width * beauty->height * 3;
     for (size_t i = 0; i < n; ++i)
-        out->rgb[i] = 0.5f * beauty->rgb[i];
+        out->rgb[i] = scale * beauty->rgb[i];
     uint32_t count = ic_cache_count(c->cache);
     for (uint32_t i = 0; i < count; ++i) {
         ic_record rec;

@@ -17,7 +17,9 @@
  *      the error is lower with.
  *   6. batch construction stops on its own criterion (the share of eye-path look-up points without a
  *      record below --uncovered), says so in the stats, and reports a pass limit that cuts it short; a
- *      time budget stops batch and adaptive construction early and is reported (cut_by_time).
+ *      time budget stops batch and adaptive construction early and is reported (cut_by_time);
+ *   7. the records AOV's background has the same median luminance, 0.18, whether the scene's light is
+ *      10⁻³ or 10³.
  * Test 1 also compares the samplers and adaptive against uniform sampling, for both integrators.
  * The reference images are rendered here with the path tracer at high sample counts.
  */
@@ -703,6 +705,93 @@ static void test_panel(void)
     }
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* The median luminance of img's pixels whose luminance is finite and above zero (0 if none). */
+static double median_lit_luminance(const ic_image *img)
+{
+    size_t n = (size_t)img->width * img->height, lit = 0;
+    float *lum = malloc(sizeof *lum * (n ? n : 1));
+    for (size_t i = 0; lum && i < n; ++i) {
+        const float *p = &img->rgb[3 * i];
+        float y = 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
+        if (isfinite(y) && y > 0.0f)
+            lum[lit++] = y;
+    }
+    double median = 0.0;
+    if (lit > 0) {
+        qsort(lum, lit, sizeof *lum, cmp_float);
+        median = lum[lit / 2];
+    }
+    free(lum);
+    return median;
+}
+
+/* The records AOV's background reads alike however bright the scene: one grey room lit by a white ceiling
+ * panel of radiance 10⁻³ and of 10³ (the beauty images' medians a million times apart). Where no mark is
+ * drawn (the marks' colours are not grey; the room is), the records image is the beauty image times one
+ * factor, which brings the beauty's median lit luminance to the documented 0.18 at both scales. */
+static void test_records_background(void)
+{
+    const char *room = "mtllib dimroom.mtl\nusemtl wall\n"
+                       "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 3 0\nv 4 3 0\nv 4 3 4\nv 0 3 4\n"
+                       "f 1 4 3 2\nf 5 6 7 8\nf 1 5 8 4\nf 2 3 7 6\nf 1 2 6 5\nf 4 8 7 3\n"
+                       "usemtl lamp\nv 1.4 2.99 1.4\nv 2.6 2.99 1.4\nv 2.6 2.99 2.6\nv 1.4 2.99 2.6\nf 9 10 11 12\n";
+    test_write_file(IC_TEST_TMP "/dimroom.obj", room);
+    test_write_file(IC_TEST_TMP "/dimroom.json",
+                    "{\n  \"camera\": {\"eye\": [3.6, 2.0, 0.4], \"target\": [1.0, 0.8, 3.0], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 70, \"width\": 48, \"height\": 36},\n"
+                    "  \"meshes\": [{\"path\": \"dimroom.obj\"}]\n}\n");
+    static const double scales[2] = {1e-3, 1e3};
+    double beauty_median[2] = {0, 0};
+    for (int k = 0; k < 2; ++k) {
+        char mtl[256];
+        snprintf(mtl, sizeof mtl, "newmtl wall\nKd 0.6 0.6 0.6\nnewmtl lamp\nKd 0 0 0\nKe %g %g %g\n", scales[k],
+                 scales[k], scales[k]);
+        test_write_file(IC_TEST_TMP "/dimroom.mtl", mtl);
+        ic_render_options o = ic_options();
+        o.spp = 1;
+        o.ic.cache.max_radius = -1.0f; /* few records, so that most pixels are unmarked */
+        o.ic.min_radius_px = 12.0f;
+        ic_render_aovs aovs = {0};
+        aovs.want_records = 1;
+        o.aovs = &aovs;
+        ic_image img = {0};
+        ic_render_stats st;
+        int ok = test_render(IC_TEST_TMP "/dimroom.json", 48, 36, &o, &img, &st) && aovs.records.rgb;
+        CHECK(ok, "lamp %g: renders with the records AOV", scales[k]);
+        /* The factor from beauty to records image over the unmarked lit pixels: one value. */
+        double lo = INFINITY, hi = 0.0;
+        int unmarked = 0;
+        for (int i = 0; ok && i < img.width * img.height; ++i) {
+            const float *b = &img.rgb[3 * i], *r = &aovs.records.rgb[3 * i];
+            if (b[0] > 0.0f && b[0] == b[1] && b[1] == b[2] && r[0] == r[1] && r[1] == r[2]) {
+                lo = fmin(lo, r[0] / b[0]);
+                hi = fmax(hi, r[0] / b[0]);
+                ++unmarked;
+            }
+        }
+        beauty_median[k] = ok ? median_lit_luminance(&img) : 0.0;
+        double background = lo * beauty_median[k];
+        printf("records background, lamp %g: beauty median %.3g, %d unmarked pixels, factor %.4g..%.4g, background "
+               "median %.4f\n", scales[k], beauty_median[k], unmarked, lo, hi, background);
+        CHECK(unmarked >= 100 && hi <= lo * (1.0 + 1e-5),
+              "lamp %g: %d unmarked pixels, the records image the beauty times one factor (%g to %g)", scales[k],
+              unmarked, lo, hi);
+        CHECK(fabs(background - 0.18) < 1e-3 * 0.18,
+              "lamp %g: the background's median lit luminance %g is 0.18 (beauty's %g)", scales[k], background,
+              beauty_median[k]);
+        ic_image_free(&img);
+        ic_image_free(&aovs.records);
+    }
+    CHECK(beauty_median[0] > 0.0 && beauty_median[1] > 1e5 * beauty_median[0],
+          "the beauty images differ by the lamp's scale: medians %g and %g", beauty_median[0], beauty_median[1]);
+}
+
 int main(void)
 {
     test_cornell();
@@ -711,6 +800,7 @@ int main(void)
     test_step();
     test_window();
     test_panel();
+    test_records_background();
     test_convergence();
     TEST_MAIN_END();
 }
