@@ -1308,10 +1308,15 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     int normal_mapped = 0;
     for (unsigned i = 0; i < ai->mNumMaterials; ++i)
         normal_mapped |= aiGetMaterialTextureCount(ai->mMaterials[i], aiTextureType_NORMALS) > 0;
+    /* A failed step has released the scene and leaves aiGetErrorString() as it was: the last failed import's
+     * text, another file's or none, so it is not quoted. The tangent step fails only when memory runs out:
+     * missing normals or texture coordinates, or degenerate ones, it answers with no or default tangents. */
     if (normal_mapped && !(ai = aiApplyPostProcessing(ai, aiProcess_CalcTangentSpace))) {
         free(src.data);
-        return ic_error_set(err, IC_ERR_PARSE, "%s: cannot compute the tangents of the normal-mapped mesh (%s)",
-                            mesh_path, aiGetErrorString());
+        return ic_error_set(err, IC_ERR_OOM,
+                            "%s: out of memory computing the tangents of the normal-mapped mesh (assimp's "
+                            "CalcTangentSpace step failed); free memory, or remove the normal maps from its materials",
+                            mesh_path);
     }
     if ((ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || ai->mNumMeshes == 0) {
         r = ic_error_set(err, IC_ERR_PARSE, "%s: the file holds no triangle mesh; export the geometry as triangles",

@@ -8,6 +8,10 @@
 
 #include <errno.h>
 #include <string.h>
+#ifdef IC_TEST_WRAP_ASSIMP
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#endif
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -78,6 +82,60 @@ static const char *write_tmp(const char *name, const char *text, long len)
 }
 
 #define REGRESS IC_SOURCE_DIR "/tests/fuzz/regress/"
+
+#ifdef IC_TEST_WRAP_ASSIMP
+/* The library's calls of aiApplyPostProcessing come here (linked with --wrap, tests/CMakeLists.txt). With
+ * fail_tangents set, the tangent step fails the way assimp's steps fail when one throws (the tangent step
+ * throws only when memory runs out, so no file provokes it): the scene released, NULL returned, and
+ * aiGetErrorString() left as the last failed import left it. */
+const struct aiScene *__real_aiApplyPostProcessing(const struct aiScene *scene, unsigned int flags);
+static int fail_tangents, tangent_steps;
+
+const struct aiScene *__wrap_aiApplyPostProcessing(const struct aiScene *scene, unsigned int flags)
+{
+    if (flags & aiProcess_CalcTangentSpace) {
+        ++tangent_steps;
+        if (fail_tangents) {
+            aiReleaseImport(scene);
+            return NULL;
+        }
+    }
+    return __real_aiApplyPostProcessing(scene, flags);
+}
+
+/* A failed tangent step is reported with the file and the step, not with the text of an earlier failed
+ * import (here one of bytes assimp cannot read) that aiGetErrorString() still holds. */
+static void test_tangent_step_fails(void)
+{
+    CHECK(aiImportFileFromMemory("not a mesh", 10, 0, "xyz") == NULL && aiGetErrorString()[0],
+          "an import that fails leaves its text in aiGetErrorString()");
+    char stale[256];
+    snprintf(stale, sizeof stale, "%s", aiGetErrorString());
+    char pfm[24] = "PF\n1 1\n-1.0\n"; /* a flat normal map: one texel (0.5, 0.5, 1), little-endian */
+    memcpy(pfm + 12, (const float[3]){0.5f, 0.5f, 1.0f}, 12);
+    write_tmp("tangents_n.pfm", pfm, sizeof pfm);
+    write_tmp("tangents.mtl", "newmtl m\nKd 0.5 0.5 0.5\nnorm tangents_n.pfm\n", -1);
+    const char *obj = write_tmp("tangents.obj",
+                                "mtllib tangents.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+                                "vn 0 0 1\nusemtl m\nf 1/1/1 2/2/1 3/3/1\n",
+                                -1);
+    ic_scene *s = NULL;
+    ic_error err = {0};
+    CHECK(ic_scene_load(obj, NULL, &s, &err) == IC_OK && tangent_steps == 1,
+          "the normal-mapped mesh loads through the tangent step (%d): %s", tangent_steps, err.message);
+    ic_scene_free(s);
+    fail_tangents = 1;
+    expect_error(obj, NULL, IC_ERR_OOM, "tangents.obj: out of memory computing the tangents",
+                 "CalcTangentSpace step failed", "remove the normal maps");
+    fail_tangents = 0;
+    CHECK(tangent_steps == 2, "the failing load ran the tangent step (%d)", tangent_steps);
+    memset(&err, 0, sizeof err);
+    fail_tangents = 1;
+    CHECK(ic_scene_load(obj, NULL, &s, &err) != IC_OK && !strstr(err.message, stale),
+          "no stale assimp text ('%s'): %s", stale, err.message);
+    fail_tangents = 0;
+}
+#endif
 
 /* Mesh files that crashed, hung or leaked inside assimp 5.2.5 (found by the fuzz targets): refused by the
  * loader's structure checks before assimp sees them, with the file, the line or element and what to do. */
@@ -405,6 +463,9 @@ static void test_cameras_lights_and_paths(void)
 int main(void)
 {
     test_cameras_lights_and_paths();
+#ifdef IC_TEST_WRAP_ASSIMP
+    test_tangent_step_fails();
+#endif
     /* A scene file that is not there: the open's own reason, not one left by resolving the path. */
     expect_error(SCENES "no-such-scene.json", NULL, IC_ERR_IO, "no-such-scene.json", strerror(ENOENT),
                  "resolved to");
