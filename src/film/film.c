@@ -33,6 +33,8 @@ static inline __attribute__((always_inline)) camera_basis basis_of(const ic_came
     b.forward = v3_norm(v3_sub(c->target, c->eye));
     b.right = v3_norm(v3_cross(b.forward, c->up));
     b.up = v3_cross(b.right, b.forward);
+    if (c->is_mirrored) /* after up: the mirror turns the image's horizontal axis alone */
+        b.right = v3_neg(b.right);
     b.tan_half_y = tanf(0.5f * c->fov_y_deg * IC_PI / 180.0f);
     b.aspect = (float)c->width / (float)c->height;
     return b;

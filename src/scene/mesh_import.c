@@ -826,7 +826,7 @@ static int grow_vertices(ic_scene *s, uint32_t add, int want_normals, int want_u
 static float normal_matrix(const float m[16], float n[9])
 {
     float a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
-    float det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+    float det = ic_mat4_det3(m);
     /* cofactor matrix = det · inverse transpose; its scale does not matter as normals are renormalized, but
      * its sign does: a mirroring transform (det < 0) turned every normal and the tangents' handedness
      * around, so the cofactors are taken times the sign of det */

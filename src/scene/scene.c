@@ -194,6 +194,11 @@ void ic_mat4_identity(float m[16])
         m[i] = (i % 5 == 0) ? 1.0f : 0.0f;
 }
 
+float ic_mat4_det3(const float m[16])
+{
+    return m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) + m[2] * (m[4] * m[9] - m[5] * m[8]);
+}
+
 void ic_mat4_mul(const float a[16], const float b[16], float out[16])
 {
     float r[16];

@@ -204,6 +204,8 @@ typedef struct ic_camera {
                               height (Radiance -vs, -vl); 0: centred on the view direction */
     float clip_near;       /* rays start this far out (Radiance -vo: measured along the view axis for
                               perspective, parallel and cylindrical, along the ray for the fisheyes); 0: none */
+    int is_mirrored;       /* 1: the image is mirrored left to right (its right is forward × up's opposite), as
+                              a mirroring camera-to-world transform makes it (Mitsuba's <scale x="-1"/>) */
 } ic_camera;
 
 /* The image-plane extent of a view size under projection p (Radiance's |hvec| or |vvec|; scene.c): what

@@ -172,5 +172,7 @@ void ic_path_extension(const char *path, char *ext, size_t size);
 /* Row-major 4x4 matrix helpers for transforms. */
 void ic_mat4_identity(float m[16]);
 void ic_mat4_mul(const float a[16], const float b[16], float out[16]);
+/* The determinant of the upper-left 3x3 (negative: the transform mirrors). */
+float ic_mat4_det3(const float m[16]);
 
 #endif

@@ -1,14 +1,15 @@
 /*
  * test_camera.c — the camera's projections (Radiance's view types, Larson & Shakespeare 1998) against their
  * formulas, on a camera at the origin looking along +y with +z up (+x is then right):
- *   1. perspective: the centre looks ahead, corners at the tangents of the half angles, shift and lift move
- *      the image plane by fractions of its size, the fore clip moves the origin along the axis;
+ *   1. perspective: the centre looks ahead, corners at the tangents of the half angles (left and right
+ *      exchanged in a mirrored camera), shift and lift move the image plane by fractions of its size, the
+ *      fore clip moves the origin along the axis;
  *   2. parallel: origins on the size_x × size_y rectangle, all directions ahead;
  *   3. hemispherical, angular, stereographic fisheyes: the angle from the axis at known radii (sin θ, θ,
  *      tan θ/2 proportional to the radius), no ray outside the hemispherical one's circle and beyond θ = 180°
  *      in the angular one;
  *   4. cylindrical panorama: azimuth linear across, perspective up;
- *   5. ic_camera_project inverts ic_camera_ray for every projection (random film positions);
+ *   5. ic_camera_project inverts ic_camera_ray for every projection, mirrored or not (random film positions);
  *   6. footprints: the perspective one is t times the pixel angle; a fisheye's at its centre is t times the
  *      angle across one pixel there (from the formula), a parallel view's the pixel width.
  */
@@ -68,6 +69,10 @@ static void test_perspective(void)
     CHECK_DIR(dir_at(&c, 20.0f, 10.0f), v3(0.0f, 1.0f, 0.0f), "perspective centre");
     CHECK_DIR(dir_at(&c, 0.0f, 0.0f), v3((float)-tx, 1.0f, (float)ty), "perspective top-left corner");
     CHECK_DIR(dir_at(&c, 40.0f, 10.0f), v3((float)tx, 1.0f, 0.0f), "perspective right edge");
+    ic_camera mirrored = c;
+    mirrored.is_mirrored = 1;
+    CHECK_DIR(dir_at(&mirrored, 0.0f, 0.0f), v3((float)tx, 1.0f, (float)ty), "mirrored: the top-left corner looks right");
+    CHECK_DIR(dir_at(&mirrored, 20.0f, 10.0f), v3(0.0f, 1.0f, 0.0f), "mirrored: the centre still looks ahead");
     c.shift = 0.25f;
     c.lift = -0.5f;
     /* the plane moves right by a quarter of its width (2 tx) and down by half its height (2 ty) */
@@ -161,9 +166,12 @@ static void test_inverse(void)
                         make(IC_PROJECTION_HEMISPHERICAL, 48, 32, 180.0f, 120.0f),
                         make(IC_PROJECTION_ANGULAR, 48, 32, 360.0f, 240.0f),
                         make(IC_PROJECTION_CYLINDRICAL, 48, 32, 300.0f, 100.0f),
-                        make(IC_PROJECTION_STEREOGRAPHIC, 48, 32, 200.0f, 150.0f)};
+                        make(IC_PROJECTION_STEREOGRAPHIC, 48, 32, 200.0f, 150.0f),
+                        make(IC_PROJECTION_PERSPECTIVE, 48, 32, 0.0f, 50.0f),
+                        make(IC_PROJECTION_ANGULAR, 48, 32, 360.0f, 240.0f)};
     for (size_t k = 0; k < sizeof cams / sizeof cams[0]; ++k) {
         ic_camera *c = &cams[k];
+        c->is_mirrored = k >= 6; /* the last two mirrored */
         c->eye = v3(1.0f, 2.0f, 3.0f);
         c->target = v3(2.0f, 2.5f, 3.2f);
         c->shift = 0.1f;
