@@ -114,9 +114,9 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
                              "(Mitsuba's default, Beckmann)", "is rendered as GGX of the same alpha");
         if (r == IC_OK && (ic_mts_string(c, n, "alphaU") || ic_mts_string(c, n, "alpha_u")))
             ic_mts_warn_once(c, n, "an anisotropic alphaU/alphaV", "is not supported: the isotropic alpha is used");
+        /* α above 1 is kept as Mitsuba keeps it: GGX stays a normalised distribution of normals there */
         if (r == IC_OK && !(m->alpha >= 0.0f && m->alpha <= 4.0f))
             return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "alpha must be in [0, 4]", NULL);
-        m->alpha = fminf(m->alpha, 1.0f);
     }
     if (!strcmp(type, "diffuse")) {
         m->type = IC_MAT_DIFFUSE;
@@ -135,10 +135,14 @@ ic_result ic_mts_bsdf(ic_mts_ctx *c, const xmlNode *n, ic_material *m, int depth
         m->type = IC_MAT_CONDUCTOR;
         char name_buf[64];
         const char *name = ic_mts_string(c, n, "material");
-        snprintf(name_buf, sizeof name_buf, "%s", name ? name : "Cu");
+        /* without a material, Mitsuba 0.6 makes copper, Mitsuba 2 and 3 "none" */
+        snprintf(name_buf, sizeof name_buf, "%s", name ? name : ic_mts_version_major(n) >= 2 ? "none" : "Cu");
         name = name_buf;
         if (!strcmp(name, "none")) {
-            m->ks = v3s(1.0f); /* a perfect reflector: F = 1 through Schlick with F0 = 1 */
+            /* Mitsuba's "none": η = 0, k = 1, whose Fresnel factor is 1 at every angle (a perfect mirror times
+             * specularReflectance), and the defaults of an eta or k given alone */
+            m->eta = v3s(0.0f);
+            m->k = v3s(1.0f);
         } else if (!conductor_preset(name, &m->eta, &m->k)) {
             char kind[96];
             snprintf(kind, sizeof kind, "conductor material '%.40s'", name);

@@ -10,7 +10,8 @@
  *
  * Every other element is named in one warning per kind (element, type and file:line) and skipped or
  * approximated as the warning says; nothing is dropped silently. Roughness distributions other than GGX
- * are rendered as GGX of the same α. Directions: Mitsuba's sensor looks down its +Z with +Y up.
+ * are rendered as GGX of the same α. Directions: Mitsuba's sensor looks down its +Z with +Y up, its +X
+ * the image's left. Where Mitsuba 2 and 3 changed a default, the file's <scene version> decides.
  */
 #include "scene/mitsuba_internal.h"
 #include "scene/tessellate.h"
@@ -90,6 +91,10 @@ static ic_result parse_sensor(ic_mts_ctx *c, const xmlNode *n)
     cam->eye = ic_xform_point(m, v3s(0.0f));
     cam->target = v3_add(cam->eye, ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f)));
     cam->up = ic_xform_dir(m, v3(0.0f, 1.0f, 0.0f));
+    /* Mitsuba turns the camera's rays by toWorld, and the camera's +x is the image's left (forward × up
+     * its right): a mirroring toWorld (<scale x="-1"/> flips a scene's image) mirrors the image, which
+     * eye, target and up alone cannot say */
+    cam->is_mirrored = ic_mat4_det3(m) < 0.0f;
     if (spp >= 1.0f && spp <= (float)IC_MAX_SPP)
         c->b->scene->settings.spp = (int)spp;
     return IC_OK;
@@ -131,7 +136,8 @@ static ic_result shape_material(ic_mts_ctx *c, const xmlNode *n, ic_material *m,
     return r;
 }
 
-/* Triangles of a primitive shape in its local frame: rectangle, disk, cube, sphere (tessellate.h). */
+/* Triangles of a primitive shape (tessellate.h): a rectangle, disk or cube in its local frame, placed by m;
+ * a sphere where m puts Mitsuba's. */
 static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, uint32_t material, const float m[16],
                            int flip, const char *where)
 {
@@ -143,6 +149,8 @@ static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, ui
         return ic_mts_fail(c, n, IC_ERR_OOM, "out of memory for a shape", NULL);
     }
     const ic_vec3 *normals = NULL;
+    float identity[16];
+    const float *to_world = m; /* what the local triangles go through */
     if (!strcmp(type, "rectangle")) {
         static const float q[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
         for (int i = 0; i < 4; ++i)
@@ -170,7 +178,7 @@ static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, ui
             nv += 4;
             nt += 2;
         }
-    } else { /* sphere: a latitude-longitude mesh with smooth normals */
+    } else { /* sphere: a latitude-longitude mesh with smooth normals, made in world space */
         ic_vec3 centre = v3s(0.0f);
         float radius = 1.0f;
         xmlNode *ck = ic_mts_child(c, n, "point", "center");
@@ -182,12 +190,21 @@ static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, ui
             free(tri);
             return r;
         }
-        ic_tess_sphere(centre, radius, p, nn, tri, &nv, &nt);
+        /* Mitsuba makes a true sphere whatever toWorld is: its radius times the length toWorld gives the x
+         * axis, its centre toWorld(center) in Mitsuba 2 and 3 (to_world · translate(center) · scale(radius))
+         * but toWorld(center / that length) in 0.6 (toWorld · scale(1 / length) · translate(center): the
+         * scale does not move the centre); a non-uniform scale does not make an ellipsoid */
+        float scale = sqrtf(m[0] * m[0] + m[4] * m[4] + m[8] * m[8]);
+        if (ic_mts_version_major(n) < 2 && scale > 0.0f)
+            centre = v3_scale(centre, 1.0f / scale);
+        ic_tess_sphere(ic_xform_point(m, centre), radius * scale, p, nn, tri, &nv, &nt);
         normals = nn;
+        ic_mat4_identity(identity);
+        to_world = identity;
     }
     if (flip)
         ic_tess_flip(normals ? nn : NULL, nv, tri, nt);
-    ic_result r = ic_scene_append_triangles(c->b, p, normals, nv, tri, nt, material, m, where, c->err);
+    ic_result r = ic_scene_append_triangles(c->b, p, normals, nv, tri, nt, material, to_world, where, c->err);
     free(p);
     free(tri);
     return r;

@@ -18,6 +18,16 @@ const char *ic_mts_file(const ic_mts_ctx *c, const xmlNode *n)
     return n && n->doc && n->doc->URL ? (const char *)n->doc->URL : c->path;
 }
 
+int ic_mts_version_major(const xmlNode *n)
+{
+    const xmlNode *root = n && n->doc ? xmlDocGetRootElement(n->doc) : NULL;
+    xmlChar *version = root ? xmlGetProp(root, (const xmlChar *)"version") : NULL;
+    int major = version ? atoi((const char *)version) : 0;
+    if (version)
+        xmlFree(version);
+    return major > 0 ? major : 0;
+}
+
 int ic_mts_is_element(const xmlNode *n, const char *name)
 {
     return n && n->type == XML_ELEMENT_NODE && (!name || !strcmp((const char *)n->name, name));
