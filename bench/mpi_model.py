@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """bench/mpi_model.py: what the runs of bench/mpi.sh measured, and a model of a render shared by N ranks.
 
-    python3 bench/mpi_model.py RUNS_DIR [--target STATS.json] [--measured STATS_N.json] [--candidates-serial F] [--record-cv CV]
-                               [--tile-cv CV] [--ranks 4 16 64] [--links 1 10]
+    python3 bench/mpi_model.py RUNS_DIR [--target STATS.json] [--measured STATS_N.json [--trace TRACE_N]]
+                               [--candidates-serial F] [--record-cv CV] [--tile-cv CV] [--ranks 4 16 64] [--links 1 10]
 
 Part 1 (measured, RUNS_DIR): the median seconds of each phase for 1 rank x 2 threads and 2 ranks x 1
 thread (runs alternated by bench/mpi.sh), their ratio, and rank 0's communication per construction pass
@@ -49,6 +49,14 @@ maps read), taken as that share of the "shading points" phase. With N ranks of t
     are near independent draws. The second adaptive pass (three quarters of the samples) is shared out by
     measured cost (longest first to the least loaded rank): its slowest rank is over the mean by at most
     one tile (--interleaved-final models it interleaved like the pilot).
+
+With --trace (IRRCACHE_MPI_TRACE=FILE of the --measured run: every exchange rank 0 took part in, with the
+bytes it received and the rounds of messages it took), the communication at that rank count is the
+trace's instead of the estimate above: sum over exchanges of bytes / rate + rounds x ALPHA (a ring
+all-gather or an all-to-all N - 1 rounds, Bruck's all-gather and the sums ceil(log2 N)), the bytes scaled
+to the rank that received most (its stats), plus the finished tiles streamed during the final render
+(the pilot's variances, then the image) where their transfer outlasts the pass that streams them (the
+pilot a quarter of the final render's time, the second pass three quarters) and the last tile of each.
 
 Efficiency E(N) = T_1 / (N T_N). Python 3 standard library only.
 """
@@ -97,6 +105,31 @@ def median_phases(runs):
     return out
 
 
+def read_trace(path):
+    """An IRRCACHE_MPI_TRACE file: lines OPERATION BYTES_RECEIVED ROUNDS. Messages (finished tiles streamed
+    while the film renders) are counted apart; those before the sum that follows the adaptive pilot (the
+    pilot's tile times) are the pilot's variances."""
+    out = {"exchanges": 0, "rounds": 0, "bytes": 0, "streamed": 0, "streamed_pilot": 0}
+    seen_message, pilot_over = False, False
+    with open(path) as f:
+        for line in f:
+            op, nbytes, rounds = line.split()
+            if op == "message":
+                out["streamed"] += int(nbytes)
+                if not pilot_over:
+                    out["streamed_pilot"] += int(nbytes)
+                seen_message = True
+                continue
+            if seen_message and op == "sum":
+                pilot_over = True
+            out["exchanges"] += 1
+            out["rounds"] += int(rounds)
+            out["bytes"] += int(nbytes)
+    if not pilot_over:  # no adaptive pilot: every message was the image's
+        out["streamed_pilot"] = 0
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("runs")
@@ -130,6 +163,11 @@ def main():
     ap.add_argument("--interleaved-final", action="store_true",
                     help="model the final render's tiles all interleaved (before the second adaptive pass was "
                          "shared out by cost)")
+    ap.add_argument("--trace", metavar="TRACE", help="IRRCACHE_MPI_TRACE of the real run given by --measured (its "
+                    "rank count): rank 0's exchanges. The communication term at that rank count becomes the "
+                    "trace's: every exchange's bytes at the link's rate plus its rounds of messages at the "
+                    "link's latency, and the finished tiles streamed during the final render charged only "
+                    "for what their pass's rendering does not cover")
     a = ap.parse_args()
 
     one = [load(p) for p in sorted(glob.glob(os.path.join(a.runs, "1x2-*.json")))]
@@ -197,10 +235,21 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     tiles = math.ceil(t["width"] / 16) * math.ceil(t["height"] / 16)
     passes = [p for p in t["records_per_pass"] if p > 0]
-    measured = {}
+    measured, scale = {}, {}
     for m in a.measured:
         d = load(m)
         measured[d["ranks"]] = max(r["comm_bytes"] for r in d["per_rank"])
+        scale[d["ranks"]] = measured[d["ranks"]] / max(d["per_rank"][0]["comm_bytes"], 1)
+    traced = None
+    if a.trace:
+        if len(a.measured) != 1:
+            raise SystemExit("--trace needs the stats of the same run in one --measured")
+        traced = read_trace(a.trace)
+        traced["ranks"] = load(a.measured[0])["ranks"]
+        print("\ntrace (rank 0, %d ranks): %d exchanges, %d rounds, %.1f MB in them; %.1f MB of finished tiles "
+              "streamed (%.1f MB during the pilot)" % (traced["ranks"], traced["exchanges"], traced["rounds"],
+                                                        traced["bytes"] / 1e6, traced["streamed"] / 1e6,
+                                                        traced["streamed_pilot"] / 1e6))
     for n in sorted(set(a.ranks) | set(measured)):
         z = math.sqrt(2 * math.log(n)) if a.sqrt2ln else expected_max_normal(n)
         # Gathering: pass by pass, weighted by the pass's records.
@@ -221,12 +270,25 @@ def main():
         if n in measured:
             volume = measured[n]
         for gbps in a.links:
+            rate = gbps * 1e9 / 8
             latency = a.collectives * t["passes"] * (n - 1) * ALPHA[gbps]
-            comm = volume * 8 / (gbps * 1e9) + latency
+            comm = volume / rate + latency
+            if traced and n == traced["ranks"]:
+                # The trace's exchanges, scaled to the rank that received most; each pass's streamed tiles
+                # are hidden behind that pass's rendering on this rank (the pilot a quarter of the final
+                # render, the second pass the rest) except what does not fit, and the last tile's messages.
+                k = scale[n]
+                final = shared["final render"] / n * imb_f
+                tile = (16 * 16 * 12 + 8) * (n - 1)
+                hidden = (max(0.0, k * traced["streamed_pilot"] / rate - 0.25 * final) +
+                          max(0.0, k * (traced["streamed"] - traced["streamed_pilot"]) / rate - 0.75 * final) +
+                          2 * tile / rate)
+                volume = k * (traced["bytes"] + traced["streamed"])
+                comm = k * traced["bytes"] / rate + traced["rounds"] * ALPHA[gbps] + hidden
             tn = (serial + (band if n > 1 else 0.0) + (shared["gathering"] + shared["candidates"] + shared["points, filter, validity"]) / n * imb_g
                   + shared["final render"] / n * imb_f + comm)
             print("| %d%s | %d Gb/s | %.2f, %.2f | %.1f | %.2f | %.1f | %.1f | %.2f |"
-                  % (n, " (bytes measured)" if n in measured else "", gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
+                  % (n, " (traced)" if traced and n == traced["ranks"] else " (bytes measured)" if n in measured else "", gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
         if n == max(set(a.ranks) | set(measured)):
             ideal = serial + sum(shared.values()) / n
             print("\nwithout imbalance and communication, %d ranks: T_N = %.1f s, efficiency %.2f (Amdahl: %.1f s "

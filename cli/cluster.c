@@ -24,8 +24,8 @@ typedef struct mpi_comm {
                                  from IRRCACHE_MPI_ALLGATHER_LIMIT, which tests/mpi sets to run that path
                                  on small images */
     int chunk;                /* bytes per call on that path */
-    uint64_t small_limit;     /* padded bytes up to which an all-gather takes allgather_small */
-    unsigned char *scratch;   /* allgather_small's rotated blocks (small_limit bytes) */
+    uint64_t small_limit;     /* bytes in all up to which an all-gather takes allgather_small */
+    unsigned char *scratch;   /* allgather_small's blocks in its order (small_limit bytes) */
     FILE *trace;              /* IRRCACHE_MPI_TRACE: rank 0's exchanges, one line each, or NULL */
 } mpi_comm;
 
@@ -82,33 +82,36 @@ static ic_result allgather_large(const mpi_comm *m, const void *send, void *recv
     return IC_OK;
 }
 
-/* Padded all-gathers up to this many bytes always take allgather_small; up to small_limit, those padded by
- * at most a quarter (a pass's records, shared out in blocks that differ by one). */
-#define SMALL_ALWAYS (64 * 1024)
-
-/* A small all-gather (the largest block times the ranks at most small_limit bytes: counts, candidates'
- * tallies, a pass's records) in ceil(log2 N) rounds of messages, whichever algorithm the MPI library
- * would choose for MPI_Allgatherv (a ring takes N − 1): Bruck et al.'s concatenation (IEEE TPDS 1997),
- * each block padded to the largest. In round k a rank holding the blocks of ranks rank … rank + 2^k − 1 (mod N) sends them to
- * rank − 2^k and receives the next ones from rank + 2^k; the padding is dropped on arrival, since every
- * rank knows every count. On a slow link a round costs the link's latency, so a pass's dozen small
- * exchanges at 16 ranks take 4 rounds each instead of 15. */
-static ic_result allgather_small(mpi_comm *m, const void *send, void *recv, const uint64_t *counts, uint64_t block)
+/* An all-gather of at most small_limit bytes in all (counts, candidates' tallies, a pass's records) in
+ * ceil(log2 N) rounds of messages, whichever algorithm the MPI library would choose for MPI_Allgatherv (a
+ * ring takes N − 1): Bruck et al.'s concatenation (IEEE TPDS 1997), with blocks of any size. A rank keeps
+ * the blocks of ranks rank, rank + 1, … (mod N) one after another; in each round, holding `have` of them,
+ * it sends the first min(have, N − have) to rank − have and receives as many from rank + have, whose first
+ * blocks are the ones it lacks next. Every rank knows every count, so each round's sizes are known to
+ * both sides, and a rank receives the same bytes as in a ring. On a slow link a round costs the link's
+ * latency: at 16 ranks an exchange takes 4 rounds instead of 15. */
+static ic_result allgather_small(mpi_comm *m, const void *send, void *recv, const uint64_t *counts)
 {
     const int n = m->comm.size, rank = m->comm.rank;
-    unsigned char *held = m->scratch; /* held[j]: the block of rank (rank + j) mod n */
+    unsigned char *held = m->scratch; /* the blocks of ranks rank, rank + 1, … (mod n), in that order */
     memcpy(held, send, counts[rank]);
-    for (int have = 1, step = 1; have < n; step *= 2) {
+    uint64_t held_bytes = counts[rank];
+    for (int have = 1; have < n;) {
         int take = have < n - have ? have : n - have;
-        if (MPI_Sendrecv(held, take * (int)block, MPI_BYTE, (rank - step + n) % n, 0, held + (size_t)have * block,
-                         take * (int)block, MPI_BYTE, (rank + step) % n, 0, MPI_COMM_WORLD,
-                         MPI_STATUS_IGNORE) != MPI_SUCCESS)
+        uint64_t out = 0, in = 0;
+        for (int j = 0; j < take; ++j) {
+            out += counts[(rank + j) % n];
+            in += counts[(rank + have + j) % n];
+        }
+        if (MPI_Sendrecv(held, (int)out, MPI_BYTE, (rank - have + n) % n, 0, held + held_bytes, (int)in, MPI_BYTE,
+                         (rank + have) % n, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE) != MPI_SUCCESS)
             return IC_ERR_IO;
+        held_bytes += in;
         have += take;
     }
-    for (int j = 0; j < n; ++j) {
+    for (int j = 0, at = 0; j < n; at += (int)counts[(rank + j) % n], ++j) {
         int q = (rank + j) % n;
-        memmove((char *)recv + m->displs[q], held + (size_t)j * block, counts[q]);
+        memmove((char *)recv + m->displs[q], held + at, counts[q]);
     }
     return IC_OK;
 }
@@ -118,19 +121,16 @@ static ic_result allgather_small(mpi_comm *m, const void *send, void *recv, cons
 static ic_result mpi_allgather(void *user, const void *send, void *recv, const uint64_t *counts)
 {
     mpi_comm *m = user;
-    uint64_t total = 0, block = 0;
-    for (int r = 0; r < m->comm.size; ++r) {
+    uint64_t total = 0;
+    for (int r = 0; r < m->comm.size; ++r)
         total += counts[r];
-        block = counts[r] > block ? counts[r] : block;
-    }
     if (!int_counts(counts, m->comm.size, m->counts, m->displs, m->allgather_limit)) {
         trace(m, "allgather-large", total - counts[m->comm.rank], m->comm.size - 1);
         return allgather_large(m, send, recv, counts);
     }
-    uint64_t padded = block * (uint64_t)m->comm.size;
-    if (m->comm.size > 2 && (padded <= SMALL_ALWAYS || (padded <= m->small_limit && 4 * padded <= 5 * total))) {
-        trace(m, "allgather-small", padded - block, log2_rounds(m->comm.size));
-        return allgather_small(m, send, recv, counts, block);
+    if (m->comm.size > 2 && total <= m->small_limit) {
+        trace(m, "allgather-small", total - counts[m->comm.rank], log2_rounds(m->comm.size));
+        return allgather_small(m, send, recv, counts);
     }
     trace(m, "allgather", total - counts[m->comm.rank], m->comm.size - 1);
     const void *s = send == (const char *)recv + m->displs[m->comm.rank] ? MPI_IN_PLACE : send;
@@ -275,7 +275,7 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
         m->displs = calloc((size_t)size, sizeof *m->displs);
         m->scounts = calloc((size_t)size, sizeof *m->scounts);
         m->sdispls = calloc((size_t)size, sizeof *m->sdispls);
-        m->small_limit = 512 * 1024;
+        m->small_limit = 1 << 20;
         m->scratch = malloc(m->small_limit);
     }
     if (!m || !m->counts || !m->displs || !m->scounts || !m->sdispls || !m->scratch) {
