@@ -123,13 +123,17 @@ static void take_arrived(ic_stream *s, int wait)
     }
 }
 
-/* Releases the sends that are done, oldest first (with wait: all of them). */
+/* Releases the sends that are done, oldest first (with wait: all of them). Even after a failure: a send's
+ * buffer must outlive it, and the ranks it goes to still take it (they wait for every piece posted). */
 static void release_sent(ic_stream *s, int wait)
 {
-    while (s->failure == IC_OK && s->released < s->posted) {
+    while (s->released < s->posted) {
         int done = 0;
-        fail(s, ic_comm_sent(s->comm, s->requests[s->released], wait, &done, &s->error));
-        if (s->failure != IC_OK || !done)
+        ic_error later;
+        ic_result r = ic_comm_sent(s->comm, s->requests[s->released], wait, &done,
+                                   s->failure == IC_OK ? &s->error : &later);
+        fail(s, r);
+        if (r != IC_OK || !done)
             return;
         ++s->released;
     }
@@ -150,9 +154,22 @@ ic_result ic_stream_end(ic_stream *s, ic_error *err)
                              (long long)(s->own - s->sent_upto), (long long)s->own));
     take_arrived(s, 1);
     release_sent(s, 1);
+    /* No rank posts the next stream's pieces before every rank has taken this one's: messages keep their
+     * order between two ranks, not across senders, so a rank still waiting for this stream's last piece
+     * could take another rank's first piece of the next (an AOV's film follows the image's with no
+     * collective between them). A rank that failed returns at once: the others may wait for its pieces,
+     * and its caller ends the job, as after any failed collective. */
+    if (s->failure == IC_OK) {
+        double none = 0.0;
+        fail(s, ic_comm_sum(s->comm, &none, 1, &s->error));
+    }
     ic_result r = s->failure;
     if (r != IC_OK && err)
         *err = s->error;
+    if (s->released < s->posted) { /* the transport failed with sends in flight: their buffers stay theirs */
+        s->outbox = NULL;
+        s->requests = NULL;
+    }
     stream_free(s);
     return r;
 }

@@ -34,7 +34,8 @@ void ic_stream_finished(ic_stream *s, int64_t slot, int64_t piece);
  * releases the sends that are done; never waits. A failure is kept for ic_stream_end. */
 void ic_stream_service(ic_stream *s);
 /* The comm's thread, after the work: sends what is left, waits for the pieces still to come and for
- * every send, and frees the stream. Returns the first failure, if any (with its message in err). */
+ * every send, then for every rank to be as far (a sum: the next stream's messages cannot be taken for this
+ * one's), and frees the stream. Collective. Returns the first failure, if any (with its message in err). */
 ic_result ic_stream_end(ic_stream *s, ic_error *err);
 
 #endif

@@ -20,6 +20,7 @@
 
 #include <pthread.h>
 #include <string.h>
+#include <time.h>
 
 #define SCENE IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json"
 #define CACHE_FILE IC_TEST_TMP "/test_comm.cache"
@@ -43,6 +44,10 @@ typedef struct transport {
     pthread_cond_t arrived;
     message *first[MAX_RANKS], *last[MAX_RANKS];
     int messages;
+    /* A slow link (slow_seconds > 0): the messages from rank slow_from to rank slow_to arrive after the
+     * others (fake_take). */
+    int slow_from, slow_to;
+    double slow_seconds;
 } transport;
 
 typedef struct rank_link {
@@ -157,6 +162,42 @@ static ic_result fake_sent(void *user, void *request, int wait, int *done)
     return IC_OK;
 }
 
+/* The message a take hands over: the oldest, except over a slow link, whose messages are not there for a
+ * take that does not wait, and are handed to one that waits only once no other has arrived for
+ * slow_seconds. MPI keeps the messages between two ranks in order but promises nothing across senders, so
+ * this is a transport the library must work with: a message sent earlier by one rank may arrive after one
+ * sent later by another. */
+static message *next_message(transport *t, int to, int wait)
+{
+    message *prev = NULL, *m = t->first[to];
+    const int slow = t->slow_seconds > 0.0 && to == t->slow_to;
+    for (; slow && m && m->from == t->slow_from; prev = m, m = m->next) {
+    }
+    if (!m && slow && wait && t->first[to]) {
+        struct timespec until;
+        clock_gettime(CLOCK_REALTIME, &until);
+        double s = (double)until.tv_nsec * 1e-9 + t->slow_seconds;
+        until.tv_sec += (time_t)s;
+        until.tv_nsec = (long)((s - (double)(time_t)s) * 1e9);
+        int arrived = t->messages;
+        while (t->messages == arrived && pthread_cond_timedwait(&t->arrived, &t->lock, &until) == 0) {
+        }
+        if (t->messages != arrived)
+            return next_message(t, to, wait); /* another came: look again */
+        prev = NULL;
+        m = t->first[to];
+    }
+    if (!m)
+        return NULL;
+    if (prev)
+        prev->next = m->next;
+    else
+        t->first[to] = m->next;
+    if (t->last[to] == m)
+        t->last[to] = prev;
+    return m;
+}
+
 static ic_result fake_take(void *user, void *buf, uint64_t room, int wait, int *from, uint64_t *bytes)
 {
     rank_link *l = user;
@@ -164,9 +205,7 @@ static ic_result fake_take(void *user, void *buf, uint64_t room, int wait, int *
     pthread_mutex_lock(&t->lock);
     while (wait && !t->first[l->rank])
         pthread_cond_wait(&t->arrived, &t->lock);
-    message *m = t->first[l->rank];
-    if (m && (t->first[l->rank] = m->next) == NULL)
-        t->last[l->rank] = NULL;
+    message *m = next_message(t, l->rank, wait);
     pthread_mutex_unlock(&t->lock);
     *bytes = 0;
     if (!m)
@@ -223,12 +262,16 @@ static void *run_rank(void *p)
     return NULL;
 }
 
-/* Runs the job on `size` ranks; jobs[r] must hold its options (and, for points, its buffers). */
-static int run_job(rank_job *jobs, int size)
+/* Runs the job on `size` ranks over a transport whose messages from rank slow_from to rank slow_to arrive
+ * last (slow_seconds > 0; next_message); jobs[r] must hold its options (and, for points, its buffers). */
+static int run_job_slow(rank_job *jobs, int size, int slow_from, int slow_to, double slow_seconds)
 {
     transport t;
     memset(&t, 0, sizeof t);
     t.size = size;
+    t.slow_from = slow_from;
+    t.slow_to = slow_to;
+    t.slow_seconds = slow_seconds;
     pthread_barrier_init(&t.barrier, NULL, (unsigned)size);
     pthread_mutex_init(&t.lock, NULL);
     pthread_cond_init(&t.arrived, NULL);
@@ -262,6 +305,8 @@ static int run_job(rank_job *jobs, int size)
     pthread_cond_destroy(&t.arrived);
     return ok;
 }
+
+static int run_job(rank_job *jobs, int size) { return run_job_slow(jobs, size, 0, 0, 0.0); }
 
 static int same_image(const ic_image *a, const ic_image *b)
 {
@@ -317,6 +362,45 @@ static void check_render(const char *what, const ic_scene *scene, ic_render_opti
             ic_image_free(&jobs[r].img);
     }
     ic_image_free(&ref);
+}
+
+/* The indirect AOV is a second film right after the image, with no collective operation between them, so
+ * both stream their finished tiles. Over a slow link from rank 2 to rank 1, rank 1 still waits for rank 2's
+ * last tile of the image when rank 0 (which has all of the image) already sends the AOV's first: each
+ * stream must take only its own tiles, so the image and the AOV are still one process's. */
+static void check_streams_in_a_row(const ic_scene *scene, ic_render_options opt)
+{
+    ic_render_aovs ref_aovs = {0};
+    ref_aovs.want_indirect = 1;
+    opt.aovs = &ref_aovs;
+    opt.threads = 2;
+    ic_image ref = {0};
+    ic_render_stats ref_st;
+    ic_error err = {0};
+    CHECK(ic_render(scene, &opt, &ref, &ref_st, &err) == IC_OK, "image and AOV, one process: %s", err.message);
+    enum { RANKS = 3 };
+    rank_job jobs[RANKS];
+    ic_render_aovs aovs[RANKS];
+    memset(jobs, 0, sizeof jobs);
+    memset(aovs, 0, sizeof aovs);
+    for (int r = 0; r < RANKS; ++r) {
+        aovs[r].want_indirect = 1;
+        jobs[r].scene = scene;
+        jobs[r].opt = opt;
+        jobs[r].opt.aovs = &aovs[r];
+        jobs[r].opt.threads = 1;
+    }
+    CHECK(run_job_slow(jobs, RANKS, 2, 1, 0.3), "image and AOV, %d ranks over a slow link: failed", RANKS);
+    for (int r = 0; r < RANKS; ++r) {
+        CHECK(same_image(&jobs[r].img, &ref), "image and AOV over a slow link: rank %d's image differs from one "
+              "process's", r);
+        CHECK(aovs[r].indirect.rgb && same_image(&aovs[r].indirect, &ref_aovs.indirect),
+              "image and AOV over a slow link: rank %d's indirect AOV differs from one process's", r);
+        ic_image_free(&jobs[r].img);
+        ic_image_free(&aovs[r].indirect);
+    }
+    ic_image_free(&ref);
+    ic_image_free(&ref_aovs.indirect);
 }
 
 static void check_points(const ic_scene *scene, ic_integrator integrator)
@@ -564,6 +648,7 @@ int main(void)
     pt.integrator = IC_INTEGRATOR_PT;
     pt.spp = 4;
     check_render("path tracer", scene, pt, 1);
+    check_streams_in_a_row(scene, ic);
 
     /* A time budget: passes sized by rank 0's clock, so every rank holds the same image (which depends on
      * the clock, so not one process's). */
