@@ -915,7 +915,7 @@ static ic_result render_adaptive(const ic_image_loop *loop, ic_sample_fn fn, voi
             image.plane = (unsigned char *)out->rgb;
         if (r == IC_OK)
             r = streamed_pass(&c, threads, n0, n0, streaming ? &image : NULL, err);
-        if (r != IC_OK && streaming)
+        if (r != IC_OK && image.plane) /* only the image made here: the caller's may hold anything */
             ic_image_free(out);
     }
     if (r == IC_OK && !streaming)

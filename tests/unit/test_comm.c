@@ -53,6 +53,8 @@ typedef struct transport {
 typedef struct rank_link {
     transport *t;
     int rank;
+    int sums;           /* sums this rank took part in */
+    int fail_sum_from;  /* > 0: that sum and every later one fail on this rank, after the exchange */
 } rank_link;
 
 static ic_result fake_allgather(void *user, const void *send, void *recv, const uint64_t *counts)
@@ -87,7 +89,8 @@ static ic_result fake_sum(void *user, double *values, uint64_t count)
     pthread_barrier_wait(&t->barrier);
     memcpy(values, total, sizeof *total * count);
     free(total);
-    return IC_OK;
+    ++l->sums;
+    return l->fail_sum_from > 0 && l->sums >= l->fail_sum_from ? IC_ERR_IO : IC_OK;
 }
 
 static ic_result fake_broadcast(void *user, void *buf, uint64_t bytes, int root)
@@ -299,7 +302,7 @@ static int run_job_slow(rank_job *jobs, int size, int slow_from, int slow_to, do
     pthread_barrier_destroy(&t.barrier);
     for (int r = 0; r < size; ++r)
         CHECK(!t.first[r], "a message to rank %d of %d was never taken", r, size);
-    if (size > 2 && jobs[0].opt.spp > 0 && !jobs[0].points && !jobs[0].records && !(jobs[0].opt.time_budget > 0.0))
+    if (ok && size > 2 && jobs[0].opt.spp > 0 && !jobs[0].points && !jobs[0].records && !(jobs[0].opt.time_budget > 0.0))
         CHECK(t.messages > 0, "%d ranks sent no finished tiles as messages", size);
     pthread_mutex_destroy(&t.lock);
     pthread_cond_destroy(&t.arrived);
@@ -401,6 +404,44 @@ static void check_streams_in_a_row(const ic_scene *scene, ic_render_options opt)
     }
     ic_image_free(&ref);
     ic_image_free(&ref_aovs.indirect);
+}
+
+/* A sum that fails on every rank (fault injection: the n-th and every later one, for each n until the
+ * render no longer meets one) fails the render on every rank, and the image, "allocated here", is never
+ * freed unless the film made it: the caller's ic_image may hold anything (here a pointer that free
+ * aborts on). Adaptive sampling at 3 ranks: sums end the pilot's stream and share out the second pass. */
+static void check_failed_sums(const ic_scene *scene)
+{
+    ic_render_options opt = {0};
+    opt.integrator = IC_INTEGRATOR_PT;
+    opt.spp = 8;
+    opt.adaptive_sampling = IC_CACHE_ON;
+    opt.threads = 1;
+    enum { RANKS = 3 };
+    float not_allocated[3];
+    int failed_at = 0;
+    for (int n = 1; n < 40; ++n) {
+        rank_job jobs[RANKS];
+        memset(jobs, 0, sizeof jobs);
+        for (int r = 0; r < RANKS; ++r) {
+            jobs[r].scene = scene;
+            jobs[r].opt = opt;
+            jobs[r].link.fail_sum_from = n;
+            jobs[r].img.rgb = not_allocated;
+        }
+        int ok = run_job(jobs, RANKS);
+        for (int r = 0; r < RANKS; ++r) {
+            CHECK((jobs[r].r == IC_OK) == ok, "sums failing from the %d-th: rank %d %s, another not", n, r,
+                  ok ? "failed" : "went on");
+            /* Failed, the image is the caller's pointer, none, or (a sum after the film failed) the film's. */
+            if (jobs[r].img.rgb != not_allocated)
+                ic_image_free(&jobs[r].img);
+        }
+        if (ok)
+            break;
+        failed_at = n;
+    }
+    CHECK(failed_at >= 2, "the render met %d sums: nothing tested", failed_at);
 }
 
 static void check_points(const ic_scene *scene, ic_integrator integrator)
@@ -539,7 +580,7 @@ static void check_world(const char *what, const ic_candidate *all, uint32_t coun
                 w[r].own[w[r].own_count++] = all[i];
         w[r].visited = r + 1.0;
         w[r].max_box = max_box;
-        w[r].link = (rank_link){&t, r};
+        w[r].link = (rank_link){.t = &t, .rank = r};
         w[r].comm = (ic_comm){.rank = r, .size = size, .user = &w[r].link, .allgather = fake_allgather,
                               .sum = fake_sum, .broadcast = fake_broadcast, .alltoall = alltoall ? fake_alltoall : NULL};
         pthread_create(&th[r], NULL, run_world_rank, &w[r]);
@@ -649,6 +690,7 @@ int main(void)
     pt.spp = 4;
     check_render("path tracer", scene, pt, 1);
     check_streams_in_a_row(scene, ic);
+    check_failed_sums(scene);
 
     /* A time budget: passes sized by rank 0's clock, so every rank holds the same image (which depends on
      * the clock, so not one process's). */
