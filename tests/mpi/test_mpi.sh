@@ -3,8 +3,9 @@
 #   1. the Cornell box with the cache (batch; its image, cache file, record counts per pass) and with the
 #      path tracer, at 1, 2, 3 and 5 ranks of 1 or 2 threads each, against the same build run without
 #      mpirun (one process); the adaptive strategy, a loaded cache and radiance caching at 3 ranks, a 12x300
-#      image (bands of shading points and look-ups that leave rows out) at 3 and 5; `irrcache points` (cache
-#      and path tracer) at 2, 3 and 5 ranks;
+#      image (bands of shading points and look-ups that leave rows out) at 3 and 5; an image and its AOVs
+#      (films in a row) at 3, 7 and 9 ranks, more than its tiles; an image smaller than a tile at 3;
+#      `irrcache points` (cache and path tracer) at 2, 3 and 5 ranks;
 #      the path tracer at 3 ranks through the chunked all-gather of exchanges over 2 GiB (threshold lowered);
 #   2. lazy construction under 2 ranks is refused with a message naming the strategy;
 #   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
@@ -91,6 +92,31 @@ for np in 3 5; do
   same "12x300 image, $np ranks" tall-$np.pfm tall.pfm
   same "12x300 cache file, $np ranks" tall-$np.cache tall.cache
 done
+
+# Films in a row, each streaming its finished tiles: the image, then its indirect and glossy AOVs (no
+# collective between them). A 33x17 image has 6 tiles, the last column a pixel wide, so 7 and 9 ranks
+# leave ranks without a tile; a 7x5 image is smaller than one tile. The AOVs' EXR headers say how long the
+# render took: compared without that field.
+exr_same() { # exr_same WHAT FILE REFERENCE
+  python3 - "$2" "$3" <<'PY' && return 0
+import re, sys
+def body(p):
+    return re.sub(rb'(irrcache:seconds\x00string\x00....)[0-9.]+', rb'\1', open(p, 'rb').read(), flags=re.S)
+sys.exit(body(sys.argv[1]) != body(sys.argv[2]))
+PY
+  echo "FAIL: $1: $2 differs from $3"; fail=1
+}
+"$bin" render "$scene" --width 33 --height 17 --quiet "${ic[@]}" --threads 1 --aov indirect,glossy -o row.pfm
+"$bin" render "$scene" --width 7 --height 5 --quiet "${pt[@]}" --threads 1 -o tiny.pfm
+for np in 3 7 9; do
+  mpirun --oversubscribe -np $np "$bin" render "$scene" --width 33 --height 17 --quiet "${ic[@]}" --threads 1 \
+    --aov indirect,glossy -o row-$np.pfm
+  same "33x17 image before its AOVs, $np ranks" row-$np.pfm row.pfm
+  exr_same "33x17 indirect AOV, $np ranks" row-$np.indirect.exr row.indirect.exr
+  exr_same "33x17 glossy AOV, $np ranks" row-$np.glossy.exr row.glossy.exr
+done
+mpirun --oversubscribe -np 3 "$bin" render "$scene" --width 7 --height 5 --quiet "${pt[@]}" --threads 2 -o tiny-3.pfm
+same "7x5 image (one tile), 3 ranks" tiny-3.pfm tiny.pfm
 
 # Radiance caching on the glossy floor: its records are split among the ranks like irradiance records.
 glossy=$src/scenes/cornell-box-glossy/cornell-box-glossy-20.json
