@@ -36,10 +36,14 @@ maps read), taken as that share of the "shading points" phase. With N ranks of t
     the tiles whose second pass leaves the rank that rendered their pilot (--tiles-moved of them);
     --film-doubles: the pilot's sums (4 doubles) and the image (3 doubles) as exchanged before; --sum-image:
     those added over the ranks as before that, 2 (N-1)/N of each, a ring all-reduce;
-  - latency: every collective as N - 1 ring steps of ALPHA (50 us at 1 Gb/s, 20 us at 10 Gb/s), about
-    17 collectives per pass (12, 2 for the neighbour lists of neighbour clamping, and since the world
-    stage's candidates are clustered on their Morton range's rank 6 instead of 3 for them: counts per
-    bucket, the all-to-all, the ranges' ends, their first runs, and the kept candidates' counts and data);
+  - latency: rounds of messages of ALPHA each (50 us at 1 Gb/s, 20 us at 10 Gb/s), about 23 exchanges per
+    pass (296 in the 13 passes of Sponza at 1280x720 and 16 ranks, IRRCACHE_MPI_TRACE, the hit stage's and
+    the coverage sweeps' included): an all-gather up to 1 MiB in all takes Bruck's ceil(log2 N) rounds, the
+    all-to-all (one a pass) and the 3 larger all-gathers of a render N - 1 (--ring: every exchange N - 1,
+    the command's transport before Bruck's all-gather);
+  - the film's variances and image stream during the pass that makes them (the pilot a quarter of the
+    final render's time, the second pass the rest): only what outlasts that pass is charged (--film-doubles,
+    --sum-image: exchanged after the passes, as before);
   - imbalance: a rank's share of a pass is m = n_p / N records (rounded up), and its cost the sum of m
     record costs of relative spread --record-cv (default: measured, see BENCHMARKS.md); the slowest of N
     ranks takes about 1 + cv z_N / sqrt(m) times the mean, z_N the expected maximum of N standard normal
@@ -70,7 +74,8 @@ import statistics
 
 RESULT_BYTES = 116  # the bytes of ic_gather_result that travel: all but its 64 bytes of Hessian (180 in all)
 LEVEL_BYTES = 12    # one RGB level (ic_vec3)
-COLLECTIVES_PER_PASS = 17
+COLLECTIVES_PER_PASS = 23
+LARGE_EXCHANGES = 3  # all-gathers above 1 MiB in a render (Sponza 1280x720: two of the world stage, the filtered records)
 ALPHA = {1: 50e-6, 10: 20e-6}
 
 
@@ -153,8 +158,9 @@ def main():
                     help="model the film's exchanges as before: the pilot's sums and the image all-gathered as doubles")
     ap.add_argument("--sum-image", action="store_true", help="model the image added over the ranks (all-reduce)")
     ap.add_argument("--collectives", type=int, default=COLLECTIVES_PER_PASS,
-                    help="collectives per construction pass (%d; 12 before the neighbour lists were shared)"
-                         % COLLECTIVES_PER_PASS)
+                    help="exchanges per construction pass (%d, from a trace; 17 counted by hand before the hit "
+                         "stage's and coverage sweeps' passes were seen)" % COLLECTIVES_PER_PASS)
+    ap.add_argument("--ring", action="store_true", help="every exchange as N - 1 rounds (before Bruck's all-gather)")
     ap.add_argument("--tile-cv", type=float, default=1.0, help="relative spread of one tile's final-render cost")
     ap.add_argument("--measured", action="append", default=[], metavar="STATS.json",
                     help="the stats of a real N-rank run of the target (mpirun --oversubscribe on one machine "
@@ -262,33 +268,40 @@ def main():
             # the mean tile) over a mean load of tiles / N tiles.
             imb_f = 0.25 * imb_f + 0.75 * (1 + (1 + 3 * a.tile_cv) / (tiles / n))
         share = (n - 1) / n
-        film = px * (8 + 12 + 24 * a.tiles_moved)
+        film, streamed = px * 24 * a.tiles_moved, px * (8 + 12)
         if a.film_doubles or a.sum_image:
-            film = px * (4 + 3) * 8 * (2 if a.sum_image else 1)
+            film, streamed = px * (4 + 3) * 8 * (2 if a.sum_image else 1), 0
         volume = (records * record_bytes * share + other_bytes_2 * px_ratio * share / 0.5 + film * share +
                   (px * 1 + records * 88) * share)
         if n in measured:
-            volume = measured[n]
+            volume = measured[n] - streamed * share
+        exchanges = a.collectives * t["passes"]
+        rounds = (exchanges * (n - 1) if a.ring else
+                  (exchanges - t["passes"] - LARGE_EXCHANGES) * math.ceil(math.log2(n)) +
+                  (t["passes"] + LARGE_EXCHANGES) * (n - 1))
         for gbps in a.links:
             rate = gbps * 1e9 / 8
-            latency = a.collectives * t["passes"] * (n - 1) * ALPHA[gbps]
-            comm = volume / rate + latency
+            latency = rounds * ALPHA[gbps]
+            final = shared["final render"] / n * imb_f
+            unhidden = (max(0.0, 8 * px * share / rate - 0.25 * final) + max(0.0, 12 * px * share / rate - 0.75 * final)
+                        if streamed else 0.0)
+            comm = volume / rate + latency + unhidden
+            volume_shown = volume + streamed * share
             if traced and n == traced["ranks"]:
                 # The trace's exchanges, scaled to the rank that received most; each pass's streamed tiles
                 # are hidden behind that pass's rendering on this rank (the pilot a quarter of the final
                 # render, the second pass the rest) except what does not fit, and the last tile's messages.
                 k = scale[n]
-                final = shared["final render"] / n * imb_f
                 tile = (16 * 16 * 12 + 8) * (n - 1)
                 hidden = (max(0.0, k * traced["streamed_pilot"] / rate - 0.25 * final) +
                           max(0.0, k * (traced["streamed"] - traced["streamed_pilot"]) / rate - 0.75 * final) +
                           2 * tile / rate)
-                volume = k * (traced["bytes"] + traced["streamed"])
+                volume_shown = k * (traced["bytes"] + traced["streamed"])
                 comm = k * traced["bytes"] / rate + traced["rounds"] * ALPHA[gbps] + hidden
             tn = (serial + (band if n > 1 else 0.0) + (shared["gathering"] + shared["candidates"] + shared["points, filter, validity"]) / n * imb_g
                   + shared["final render"] / n * imb_f + comm)
             print("| %d%s | %d Gb/s | %.2f, %.2f | %.1f | %.2f | %.1f | %.1f | %.2f |"
-                  % (n, " (traced)" if traced and n == traced["ranks"] else " (bytes measured)" if n in measured else "", gbps, imb_g, imb_f, volume / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
+                  % (n, " (traced)" if traced and n == traced["ranks"] else " (bytes measured)" if n in measured else "", gbps, imb_g, imb_f, volume_shown / 1e6, comm, tn, total_1 / tn, total_1 / (n * tn)))
         if n == max(set(a.ranks) | set(measured)):
             ideal = serial + sum(shared.values()) / n
             print("\nwithout imbalance and communication, %d ranks: T_N = %.1f s, efficiency %.2f (Amdahl: %.1f s "

@@ -1,7 +1,7 @@
 /*
  * test_allgather.c — the command's MPI all-gather (cli/cluster.c) under mpirun at any rank count: every
- * rank gets every rank's bytes, in rank order, whichever path it takes (Bruck et al.'s rounds over padded
- * blocks, MPI_Allgatherv, or the large exchange's broadcasts), with unequal counts, zeros among them, every
+ * rank gets every rank's bytes, in rank order, whichever path it takes (Bruck et al.'s rounds over blocks
+ * of any size, MPI_Allgatherv, or the large exchange's broadcasts), with unequal counts, zeros among them, every
  * rank's block empty, in place and from a separate buffer. Each byte is a function of its rank, its index
  * and the trial, so a block landing in another's place, shifted or cut short is caught. Built where MPI is
  * found; tests/mpi/test_allgather.sh runs it at 2 to 9 ranks.
@@ -33,20 +33,18 @@ int main(int argc, char **argv)
     int bad = 0, small = 0, plain = 0;
     uint32_t state = 7;
     for (int trial = 0; trial < 400 && counts; ++trial) {
-        /* Tiny blocks; a few kB with many zeros; blocks differing by one (a pass's records: the padded
-         * path up to small_limit); up to 200 kB in all, most too unequal for padding (MPI_Allgatherv);
-         * all empty. */
+        /* Tiny blocks; a few kB with many zeros; blocks differing by one (a pass's records); up to 2 MB in
+         * all, most very unequal (Bruck's rounds up to small_limit, MPI_Allgatherv above); all empty. */
         const int kind = trial % 5;
-        uint64_t total = 0, block = 0, at = 0;
+        uint64_t total = 0, at = 0;
         for (int r = 0; r < n; ++r) {
             uint32_t x = next(&state);
             counts[r] = kind == 0   ? x % 7
                         : kind == 1 ? (x % 3 == 0 ? 0 : x % 5000)
                         : kind == 2 ? 400000 / (uint64_t)n + x % 2
-                        : kind == 3 ? x % 200000 / (uint64_t)n
+                        : kind == 3 ? x % 2000000 / (uint64_t)n * (uint64_t)(r % 3)
                                     : 0;
             total += counts[r];
-            block = counts[r] > block ? counts[r] : block;
             at += r < me ? counts[r] : 0;
         }
         unsigned char *recv = calloc(total + 1, 1), *send = malloc(counts[me] + 1);
@@ -59,10 +57,9 @@ int main(int argc, char **argv)
         const int in_place = trial & 1;
         if (in_place)
             memcpy(recv + at, send, counts[me]);
-        uint64_t padded = block * (uint64_t)n;
-        const int padded_path = padded <= SMALL_ALWAYS || (padded <= m->small_limit && 4 * padded <= 5 * total);
-        small += n > 2 && padded_path;
-        plain += n > 2 && !padded_path;
+        const int bruck = total <= m->small_limit;
+        small += n > 2 && bruck;
+        plain += n > 2 && !bruck;
         if (mpi_allgather(m, in_place ? recv + at : send, recv, counts) != IC_OK)
             ++bad;
         uint64_t o = 0;
@@ -80,7 +77,7 @@ int main(int argc, char **argv)
     }
     /* Both paths were taken (at 3 ranks and more), or the test tested less than it says. */
     if (n > 2 && (small == 0 || plain == 0)) {
-        fprintf(stderr, "test_allgather: %d ranks: %d padded and %d plain all-gathers; expected both\n", n, small,
+        fprintf(stderr, "test_allgather: %d ranks: %d Bruck and %d MPI_Allgatherv all-gathers; expected both\n", n, small,
                 plain);
         ++bad;
     }
