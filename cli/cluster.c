@@ -267,6 +267,12 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
         *failed = 1;
         return NULL;
     }
+    if (provided < MPI_THREAD_FUNNELED) {
+        fprintf(stderr, "irrcache: this MPI library cannot be called from one thread of a threaded program "
+                        "(MPI_THREAD_FUNNELED); use an MPI built with thread support, or run the plain build\n");
+        MPI_Abort(MPI_COMM_WORLD, 1);
+        return NULL;
+    }
     mpi_comm *m = calloc(1, sizeof *m);
     int size = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &size);

@@ -329,7 +329,8 @@ typedef struct ic_render_stats {
     } phases[IC_MAX_PHASES];
 } ic_render_stats;
 
-/* Renders scene with opt into out (allocated here). stats may be NULL. */
+/* Renders scene with opt into out (allocated here; on failure nothing is left allocated in it). stats may
+ * be NULL. */
 ic_result ic_render(const ic_scene *scene, const ic_render_options *opt, ic_image *out, ic_render_stats *stats,
                     ic_error *err);
 

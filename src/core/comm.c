@@ -133,7 +133,7 @@ ic_result ic_comm_share_gather(ic_comm *comm, const void *in, size_t in_bytes, u
     }
     char *all[IC_COMM_SHARE_MAX_ARRAYS] = {0};
     void *block[IC_COMM_SHARE_MAX_ARRAYS] = {0};
-    char *packed = malloc(count * stride);
+    char *packed = malloc(count * stride > 0 ? count * stride : 1);
     ic_result r = mine && packed ? IC_OK : IC_ERR_OOM;
     for (int a = 0; a < arrays && r == IC_OK; ++a) {
         all[a] = calloc(*own ? *own : 1, out_bytes[a]);

@@ -198,6 +198,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     tr.pt = ic_pt_params_resolve(tr.pt);
 
     ic_integrator_obj it = {NULL, NULL};
+    int image_made = 0;
     r = integrators[opt.integrator](&tr, &opt, &it, err);
     if (r == IC_OK)
         r = it.ops->prepare(it.self, st, err);
@@ -230,6 +231,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         clock.stage = STAGE_IMAGE;
         clock.image_start = ic_seconds();
         r = ic_render_image(&loop, it.ops->sample, it.self, out, &lr, err);
+        image_made = r == IC_OK;
         clock.image_seconds = ic_seconds() - clock.image_start;
         clock.stage = STAGE_AOVS;
         loop.checkpoint = NULL; /* the AOVs are written with the final image */
@@ -261,5 +263,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     }
     st->seconds = ic_seconds() - t0;
     st->rays_per_second = st->seconds > 0.0 ? (double)st->rays / st->seconds : 0.0;
+    if (r != IC_OK && image_made) /* a failure after the film (the AOVs, the rays' sum): no image */
+        ic_image_free(out);
     return r;
 }
