@@ -9,7 +9,8 @@
  *      tan θ/2 proportional to the radius), no ray outside the hemispherical one's circle and beyond θ = 180°
  *      in the angular one;
  *   4. cylindrical panorama: azimuth linear across, perspective up;
- *   5. ic_camera_project inverts ic_camera_ray for every projection, mirrored or not (random film positions);
+ *   5. ic_camera_project inverts ic_camera_ray for every projection, mirrored or not (random film positions),
+ *      and a mirrored camera's rays and projections are the plain one's mirrored left to right;
  *   6. footprints: the perspective one is t times the pixel angle; a fisheye's at its centre is t times the
  *      angle across one pixel there (from the formula), a parallel view's the pixel width.
  */
@@ -166,12 +167,11 @@ static void test_inverse(void)
                         make(IC_PROJECTION_HEMISPHERICAL, 48, 32, 180.0f, 120.0f),
                         make(IC_PROJECTION_ANGULAR, 48, 32, 360.0f, 240.0f),
                         make(IC_PROJECTION_CYLINDRICAL, 48, 32, 300.0f, 100.0f),
-                        make(IC_PROJECTION_STEREOGRAPHIC, 48, 32, 200.0f, 150.0f),
-                        make(IC_PROJECTION_PERSPECTIVE, 48, 32, 0.0f, 50.0f),
-                        make(IC_PROJECTION_ANGULAR, 48, 32, 360.0f, 240.0f)};
-    for (size_t k = 0; k < sizeof cams / sizeof cams[0]; ++k) {
-        ic_camera *c = &cams[k];
-        c->is_mirrored = k >= 6; /* the last two mirrored */
+                        make(IC_PROJECTION_STEREOGRAPHIC, 48, 32, 200.0f, 150.0f)};
+    enum { N = sizeof cams / sizeof cams[0] };
+    for (size_t k = 0; k < 2 * N; ++k) { /* each projection plain, then mirrored */
+        ic_camera *c = &cams[k % N];
+        c->is_mirrored = k >= N;
         c->eye = v3(1.0f, 2.0f, 3.0f);
         c->target = v3(2.0f, 2.5f, 3.2f);
         c->shift = 0.1f;
@@ -192,8 +192,53 @@ static void test_inverse(void)
             double e = fmax(fabs(gx - fx), fabs(gy - fy));
             worst = fmax(worst, e);
         }
-        CHECK(tried > 200 && bad == 0 && worst < 2e-3, "projection %d: project inverts the ray (%d rays, %d unprojected, "
-              "worst %g px)", (int)c->projection, tried, bad, worst);
+        CHECK(tried > 200 && bad == 0 && worst < 2e-3, "projection %d%s: project inverts the ray (%d rays, %d unprojected, "
+              "worst %g px)", (int)c->projection, c->is_mirrored ? " mirrored" : "", tried, bad, worst);
+    }
+}
+
+/* A mirrored camera is the plain one seen in a mirror, for every projection: its ray through (x, y) is
+ * the plain camera's through (width - x, y) once the horizontal shift is turned too, and a point projects
+ * to (width - x, y) where the plain camera projects it to (x, y). */
+static void test_mirrored(void)
+{
+    const ic_camera cams[] = {make(IC_PROJECTION_PERSPECTIVE, 48, 32, 0.0f, 50.0f),
+                              make(IC_PROJECTION_PARALLEL, 48, 32, 3.0f, 2.0f),
+                              make(IC_PROJECTION_HEMISPHERICAL, 48, 32, 180.0f, 120.0f),
+                              make(IC_PROJECTION_ANGULAR, 48, 32, 360.0f, 240.0f),
+                              make(IC_PROJECTION_CYLINDRICAL, 48, 32, 300.0f, 100.0f),
+                              make(IC_PROJECTION_STEREOGRAPHIC, 48, 32, 200.0f, 150.0f)};
+    for (size_t k = 0; k < sizeof cams / sizeof cams[0]; ++k) {
+        ic_camera plain = cams[k], mirrored = cams[k];
+        plain.eye = mirrored.eye = v3(1.0f, 2.0f, 3.0f);
+        plain.target = mirrored.target = v3(2.0f, 2.5f, 3.2f);
+        plain.lift = mirrored.lift = -0.2f;
+        mirrored.shift = 0.1f;
+        plain.shift = -0.1f;
+        mirrored.is_mirrored = 1;
+        ic_rng rng = ic_rng_make(11, k, 0, 0);
+        int rays = 0, differ = 0;
+        double worst = 0.0;
+        for (int i = 0; i < 300; ++i) {
+            float fx = 48.0f * ic_rng_float(&rng), fy = 32.0f * ic_rng_float(&rng);
+            ic_ray a, b;
+            int ha = ic_camera_ray(&mirrored, fx, fy, &a), hb = ic_camera_ray(&plain, 48.0f - fx, fy, &b);
+            differ += ha != hb;
+            if (!ha || !hb)
+                continue;
+            ++rays;
+            worst = fmax(worst, v3_len(v3_sub(a.dir, b.dir)) + v3_len(v3_sub(a.org, b.org)));
+            ic_vec3 q = v3_add(b.org, v3_scale(b.dir, 2.5f));
+            float mx, my, px, py, dm, dp;
+            if (!ic_camera_project(&mirrored, q, &mx, &my, &dm) || !ic_camera_project(&plain, q, &px, &py, &dp)) {
+                ++differ;
+                continue;
+            }
+            worst = fmax(worst, fabs(mx - (48.0f - px)) / 48.0 + fabs(my - py) / 32.0 + fabs(dm - dp));
+        }
+        CHECK(rays > 150 && differ == 0 && worst < 1e-4,
+              "projection %d: the mirrored camera is the plain one mirrored (%d rays, %d that one has and the other "
+              "not, worst %g)", (int)cams[k].projection, rays, differ, worst);
     }
 }
 
@@ -204,5 +249,6 @@ int main(void)
     test_fisheyes();
     test_cylinder();
     test_inverse();
+    test_mirrored();
     TEST_MAIN_END();
 }
