@@ -40,6 +40,8 @@ const char *ic_mts_file(const ic_mts_ctx *c, const xmlNode *n);
 /* The major version (0, 2, 3) that the <scene version="..."> of n's file declares; 0, Mitsuba 0.6's
  * reading, without one. Mitsuba 2 and 3 changed defaults: a conductor's material, a sphere's centre. */
 int ic_mts_version_major(const xmlNode *n);
+/* An error naming root's file:line if its version attribute is there but not MAJOR[.MINOR[.PATCH]]. */
+ic_result ic_mts_check_version(ic_mts_ctx *c, const xmlNode *root);
 /* 1 if n is an element named name (any element if name is NULL). */
 int ic_mts_is_element(const xmlNode *n, const char *name);
 /* An attribute with every $name of a <default> replaced; NULL if absent. The text lives in one of four

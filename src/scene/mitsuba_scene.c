@@ -193,11 +193,23 @@ static ic_result primitive(ic_mts_ctx *c, const xmlNode *n, const char *type, ui
         /* Mitsuba makes a true sphere whatever toWorld is: its radius times the length toWorld gives the x
          * axis, its centre toWorld(center) in Mitsuba 2 and 3 (to_world · translate(center) · scale(radius))
          * but toWorld(center / that length) in 0.6 (toWorld · scale(1 / length) · translate(center): the
-         * scale does not move the centre); a non-uniform scale does not make an ellipsoid */
+         * scale does not move the centre); a non-uniform scale does not make an ellipsoid. Mitsuba 2 and 3
+         * take the radius's sign from the polar decomposition of that product, whose scale part carries the
+         * sign of its determinant, and turn a negative one into flipped normals: a mirroring to_world or a
+         * negative radius turns the sphere inside out. Mitsuba 0.6 refuses a radius of 0 or below. */
         float scale = sqrtf(m[0] * m[0] + m[4] * m[4] + m[8] * m[8]);
-        if (ic_mts_version_major(n) < 2 && scale > 0.0f)
+        int major = ic_mts_version_major(n);
+        if (major < 2 && !(radius * scale > 0.0f)) {
+            free(p);
+            free(tri);
+            return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "a sphere's radius (times toWorld's scale) must be above 0, "
+                               "as Mitsuba 0.6 requires", NULL);
+        }
+        if (major < 2)
             centre = v3_scale(centre, 1.0f / scale);
-        ic_tess_sphere(ic_xform_point(m, centre), radius * scale, p, nn, tri, &nv, &nt);
+        else if (ic_mat4_det3(m) * radius < 0.0f)
+            flip = !flip;
+        ic_tess_sphere(ic_xform_point(m, centre), fabsf(radius) * scale, p, nn, tri, &nv, &nt);
         normals = nn;
         ic_mat4_identity(identity);
         to_world = identity;
@@ -508,6 +520,8 @@ static ic_result parse_include(ic_mts_ctx *c, const xmlNode *n)
     if (!ic_mts_is_element(root, "scene"))
         return ic_mts_fail(c, root, IC_ERR_PARSE, "the root element of an included file must be <scene>", NULL);
     c->roots[c->root_count++] = root;
+    if ((r = ic_mts_check_version(c, root)) != IC_OK)
+        return r;
     ++c->include_depth;
     r = parse_scene(c, root);
     --c->include_depth;
@@ -567,7 +581,7 @@ ic_result ic_scene_load_mitsuba(ic_scene_builder *b, const char *path, const ic_
     c->root_count = 1;
     if (!ic_mts_is_element(c->roots[0], "scene"))
         r = ic_mts_fail(c, c->roots[0], IC_ERR_PARSE, "the root element must be <scene> (a Mitsuba scene file)", NULL);
-    else
+    else if ((r = ic_mts_check_version(c, c->roots[0])) == IC_OK)
         r = parse_scene(c, c->roots[0]);
     int has_camera = c->has_sensor && c->b->scene->camera.width > 0;
     if (!c->has_sensor)

@@ -18,14 +18,51 @@ const char *ic_mts_file(const ic_mts_ctx *c, const xmlNode *n)
     return n && n->doc && n->doc->URL ? (const char *)n->doc->URL : c->path;
 }
 
+/* The major number of a version "MAJOR[.MINOR[.PATCH]]" (digits, blanks around it allowed); -1 if the text
+ * is not one. */
+static int parse_version(const char *v)
+{
+    int major = -1, parts = 0;
+    while (*v == ' ' || *v == '\t')
+        ++v;
+    for (;;) {
+        if (!isdigit((unsigned char)*v))
+            return -1;
+        char *end;
+        long x = strtol(v, &end, 10);
+        if (x > 9999)
+            return -1;
+        if (parts++ == 0)
+            major = (int)x;
+        v = end;
+        if (*v != '.' || parts == 3)
+            break;
+        ++v;
+    }
+    while (*v == ' ' || *v == '\t')
+        ++v;
+    return *v ? -1 : major;
+}
+
 int ic_mts_version_major(const xmlNode *n)
 {
     const xmlNode *root = n && n->doc ? xmlDocGetRootElement(n->doc) : NULL;
     xmlChar *version = root ? xmlGetProp(root, (const xmlChar *)"version") : NULL;
-    int major = version ? atoi((const char *)version) : 0;
+    int major = version ? parse_version((const char *)version) : 0;
     if (version)
         xmlFree(version);
     return major > 0 ? major : 0;
+}
+
+ic_result ic_mts_check_version(ic_mts_ctx *c, const xmlNode *root)
+{
+    const char *version = ic_mts_attr(c, root, "version");
+    if (!version || parse_version(version) >= 0)
+        return IC_OK;
+    char detail[96];
+    snprintf(detail, sizeof detail, "'%.40s'%s", version, strlen(version) > 40 ? "..." : "");
+    return ic_mts_fail(c, root, IC_ERR_PARSE, "<scene version> is not a version number such as 0.6.0 or 3.0.0 (leave "
+                       "it out for Mitsuba 0.6's defaults): ", detail);
 }
 
 int ic_mts_is_element(const xmlNode *n, const char *name)
@@ -250,6 +287,13 @@ ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec
     } else if (ic_mts_is_element(k, "texture")) {
         int loaded = 0;
         ic_result r = texture ? ic_mts_texture(c, k, 0, texture, &loaded) : IC_OK;
+        if (!loaded && !texture) { /* a texture where only a colour is read: a bitmap is not "other" */
+            char kind[96];
+            snprintf(kind, sizeof kind, "a <texture> as %.40s", name);
+            ic_mts_warn_once(c, k, kind, "is not supported (a colour is read there): a grey 0.5 is used");
+            *out = v3s(0.5f);
+            return IC_OK;
+        }
         if (!loaded) {
             ic_mts_warn_once(c, k, "<texture> other than a bitmap", "is not supported: a grey 0.5 is used");
             *out = v3s(0.5f);

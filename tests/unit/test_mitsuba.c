@@ -10,7 +10,10 @@
  *      file:line;
  *   5. what depends on the file's <scene version>: a conductor without a material (copper in 0.6, a perfect
  *      mirror in 2 and 3) and a sphere's centre under toWorld (scaled in 3, not in 0.6), against Mitsuba's
- *      formulas; a mirroring sensor transform mirrors the image; roughness above 1 is kept.
+ *      formulas, and which way it faces under a mirror or a negative radius (in, in 2 and 3; 0.6 refuses a
+ *      radius of 0 or below); a mirroring sensor transform mirrors the image, before the lookat or after it;
+ *      roughness above 1 is kept; the major number decides, no version is 0.6's reading, and a malformed
+ *      version is an error naming file:line (in an included file too).
  */
 #include "test_util.h"
 #include "test_render_util.h"
@@ -374,8 +377,8 @@ static void test_sphere_to_world(void)
         {"0.6.0", "<rotate z=\"1\" angle=\"90\"/><scale value=\"3\"/>", {0.0f, 1.0f, 0.0f}, 1.5f},
         /* a non-uniform scale: still a sphere, of the x axis's scale */
         {"3.0.0", "<scale x=\"4\" y=\"1\" z=\"2\"/>", {4.0f, 0.0f, 0.0f}, 2.0f},
-        /* a mirror: the normals still point out */
-        {"3.0.0", "<scale x=\"-2\" y=\"2\" z=\"2\"/>", {-2.0f, 0.0f, 0.0f}, 1.0f},
+        /* a mirror in 0.6: the normals still point out (Mitsuba 3 turns them in: test_sphere_facing) */
+        {"0.6.0", "<scale x=\"-2\" y=\"2\" z=\"2\"/>", {-1.0f, 0.0f, 0.0f}, 1.0f},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         char xml[1024];
@@ -434,6 +437,201 @@ static void test_mirrored_sensor(void)
           "the mirrored sensor's rays are the plain one's mirrored left to right (worst difference %g)", worst);
 }
 
+/* Which way a tessellated sphere about centre faces: +1 if every vertex normal and every triangle's winding
+ * points out of it, -1 if all point in, 0 if mixed (or no sphere). */
+static int sphere_facing(const ic_scene *s, ic_vec3 centre)
+{
+    int out = 0, in = 0;
+    for (uint32_t v = 0; s && s->normals && v < s->vertex_count; ++v) {
+        float d = v3_dot(s->normals[v], v3_sub(s->positions[v], centre));
+        out += d > 0.0f;
+        in += d < 0.0f;
+    }
+    for (uint32_t t = 0; s && t < s->triangle_count; ++t) {
+        ic_vec3 a = s->positions[s->triangles[3 * t]], b = s->positions[s->triangles[3 * t + 1]],
+                c = s->positions[s->triangles[3 * t + 2]];
+        ic_vec3 ng = v3_cross(v3_sub(b, a), v3_sub(c, a)), mid = v3_scale(v3_add(a, v3_add(b, c)), 1.0f / 3.0f);
+        float d = v3_dot(ng, v3_sub(mid, centre));
+        if (v3_len2(ng) < 1e-12f * v3_len2(v3_sub(mid, centre)) * v3_len2(v3_sub(mid, centre)))
+            continue; /* a sliver at a pole: no side to face */
+        out += d > 0.0f;
+        in += d < 0.0f;
+    }
+    return out && !in ? 1 : in && !out ? -1 : 0;
+}
+
+/* What faces out of a sphere as each version has it. Mitsuba 2 and 3 take the sphere's radius and centre
+ * from the polar decomposition of to_world · translate(center) · scale(radius), whose scale part carries
+ * the sign of its determinant (drjit's transform_decompose), and turn a negative one into flipped normals:
+ * a mirroring to_world or a negative radius turns the sphere inside out, and flip_normals turns it back.
+ * Mitsuba 0.6 measures the radius as a length, so a mirror leaves the normals out, and refuses a radius of
+ * zero or below. */
+static void test_sphere_facing(void)
+{
+    static const struct {
+        const char *version, *extra, *transform;
+        int facing;
+    } cases[] = {
+        {"3.0.0", "", "<scale x=\"-2\" y=\"2\" z=\"2\"/>", -1},
+        {"2.1.0", "", "<scale z=\"-1\"/><rotate y=\"1\" angle=\"30\"/>", -1},
+        {"3.0.0", "<boolean name=\"flip_normals\" value=\"true\"/>", "<scale x=\"-1\"/>", 1},
+        {"3.0.0", "", "<scale x=\"-1\" y=\"-1\"/>", 1}, /* a half turn, not a mirror */
+        {"0.6.0", "", "<scale x=\"-2\" y=\"2\" z=\"2\"/>", 1},
+        {"3.0.0", "<float name=\"radius\" value=\"-0.5\"/>", "<scale value=\"2\"/>", -1},
+        {"3.0.0", "<float name=\"radius\" value=\"-0.5\"/>", "<scale x=\"-2\" y=\"2\" z=\"2\"/>", 1},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        char xml[1024];
+        snprintf(xml, sizeof xml, "  <shape type=\"sphere\">%s<transform name=\"toWorld\">%s</transform></shape>\n",
+                 cases[k].extra, cases[k].transform);
+        ic_scene *s = load_xml("mts_sphere_facing.xml", cases[k].version, xml);
+        int facing = sphere_facing(s, v3s(0.0f));
+        CHECK(facing == cases[k].facing, "version %s, %s %s: the sphere faces %s (got %d)", cases[k].version,
+              cases[k].extra, cases[k].transform, cases[k].facing > 0 ? "out" : "in", facing);
+        ic_scene_free(s);
+    }
+    /* 0.6: a radius of zero or below is an error naming the shape's file:line */
+    static const char *const radii[] = {"-0.5", "0"};
+    for (int k = 0; k < 2; ++k) {
+        char xml[512];
+        snprintf(xml, sizeof xml, "<scene version=\"0.6.0\">\n<shape type=\"sphere\">\n"
+                 "<float name=\"radius\" value=\"%s\"/></shape>\n</scene>\n", radii[k]);
+        test_write_file(IC_TEST_TMP "/mts_sphere_radius.xml", xml);
+        ic_scene_load_options lo = {0};
+        ic_error err = {0};
+        ic_scene *s = NULL;
+        ic_result r = ic_scene_load(IC_TEST_TMP "/mts_sphere_radius.xml", &lo, &s, &err);
+        CHECK(r != IC_OK && strstr(err.message, "mts_sphere_radius.xml:2") && strstr(err.message, "radius"),
+              "version 0.6, radius %s: an error naming file:line (%s)", radii[k], err.message);
+        ic_scene_free(s);
+    }
+}
+
+/* A <scale x="-1"/> after the lookat mirrors the world about x = 0 (later transforms apply after the
+ * earlier ones): the camera's eye, its view and its image are the plain camera's mirrored, so its ray
+ * through (x, y) is the plain one's through (x, y) with x negated. */
+static void test_sensor_world_mirror(void)
+{
+    ic_camera cams[2];
+    for (int k = 0; k < 2; ++k) {
+        char xml[1024];
+        snprintf(xml, sizeof xml,
+                 "  <sensor type=\"perspective\"><float name=\"fov\" value=\"50\"/>\n"
+                 "    <transform name=\"toWorld\"><lookat origin=\"1, 2, 5\" target=\"0, 1, 0\" up=\"0, 1, 0\"/>%s"
+                 "</transform>\n"
+                 "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"40\"/><integer name=\"height\" value=\"30\"/>"
+                 "</film>\n  </sensor>\n"
+                 "  <shape type=\"cube\"/>\n",
+                 k ? "<scale x=\"-1\"/>" : "");
+        ic_scene *s = load_xml("mts_world_mirror.xml", "0.6.0", xml);
+        cams[k] = s ? s->camera : (ic_camera){0};
+        ic_scene_free(s);
+    }
+    double worst = cams[1].is_mirrored ? 0.0 : 1e9;
+    static const float film[][2] = {{0.5f, 0.5f}, {3.0f, 20.0f}, {20.0f, 15.0f}, {39.5f, 29.5f}, {12.25f, 7.75f}};
+    for (int i = 0; i < 5; ++i) {
+        ic_ray plain, mirrored;
+        if (!ic_camera_ray(&cams[0], film[i][0], film[i][1], &plain) ||
+            !ic_camera_ray(&cams[1], film[i][0], film[i][1], &mirrored)) {
+            worst = 1e9;
+            continue;
+        }
+        plain.org.x = -plain.org.x;
+        plain.dir.x = -plain.dir.x;
+        worst = fmax(worst, v3_len(v3_sub(plain.dir, mirrored.dir)) + v3_len(v3_sub(plain.org, mirrored.org)));
+    }
+    CHECK(cams[0].width == 40 && cams[1].width == 40 && worst < 1e-5,
+          "a world mirror after the lookat: the rays are the plain sensor's mirrored about x = 0 (worst %g)", worst);
+}
+
+/* The version decides the defaults by its major number, whatever follows (0.5.0 and 0.6.0 alike, 2.1.0
+ * and 3.5.2 alike; none given: 0.6's), and a version that is not one is an error naming the file and line
+ * of the <scene>, as Mitsuba refuses it, rather than a silent 0.6 reading. */
+static void test_version(void)
+{
+    static const struct {
+        const char *version, *name;
+    } cases[] = {{"0.5.0", "Cu"}, {"2.1.0", "none"}, {"3.5.2", "none"}, {" 3.0.0 ", "none"}, {NULL, "Cu"}};
+    for (size_t v = 0; v < sizeof cases / sizeof cases[0]; ++v) {
+        char xml[1024];
+        snprintf(xml, sizeof xml,
+                 "<scene%s%s%s>\n"
+                 "  <shape type=\"rectangle\" id=\"bare\"><bsdf type=\"conductor\"/></shape>\n"
+                 "  <shape type=\"rectangle\" id=\"named\"><bsdf type=\"conductor\"><string name=\"material\" "
+                 "value=\"%s\"/></bsdf></shape>\n</scene>\n",
+                 cases[v].version ? " version=\"" : "", cases[v].version ? cases[v].version : "",
+                 cases[v].version ? "\"" : "", cases[v].name);
+        test_write_file(IC_TEST_TMP "/mts_version.xml", xml);
+        ic_error err = {0};
+        ic_scene *s = load(IC_TEST_TMP "/mts_version.xml", &err);
+        CHECK(s && same_conductor(material_of(s, "bare"), material_of(s, "named")),
+              "version '%s': a conductor without a material is '%s' (%s)", cases[v].version ? cases[v].version : "(none)",
+              cases[v].name, s ? "" : err.message);
+        ic_scene_free(s);
+    }
+    static const char *const bad[] = {"abc", "", "3.x", "-2.0.0", "3..0", "2.0.0.1"};
+    for (size_t v = 0; v < sizeof bad / sizeof bad[0]; ++v) {
+        char xml[512];
+        snprintf(xml, sizeof xml, "<?xml version=\"1.0\"?>\n<scene version=\"%s\">\n<shape type=\"cube\"/>\n</scene>\n",
+                 bad[v]);
+        test_write_file(IC_TEST_TMP "/mts_version_bad.xml", xml);
+        ic_scene_load_options lo = {0};
+        ic_error err = {0};
+        ic_scene *s = NULL;
+        ic_result r = ic_scene_load(IC_TEST_TMP "/mts_version_bad.xml", &lo, &s, &err);
+        CHECK(r == IC_ERR_PARSE && strstr(err.message, "mts_version_bad.xml:2") && strstr(err.message, "version"),
+              "version '%s': an error naming file:line (%s)", bad[v], err.message);
+        ic_scene_free(s);
+    }
+    /* an included file is read by its own version, and a bad one there names that file */
+    test_write_file(IC_TEST_TMP "/mts_version_inc3.xml", "<scene version=\"3.0.0\">\n  <shape type=\"rectangle\" "
+                    "id=\"inc\"><bsdf type=\"conductor\"/></shape>\n</scene>\n");
+    test_write_file(IC_TEST_TMP "/mts_version_incbad.xml", "<scene version=\"three\">\n</scene>\n");
+    ic_scene *s = load_xml("mts_version_main.xml", "0.6.0",
+                           "  <include filename=\"mts_version_inc3.xml\"/>\n"
+                           "  <shape type=\"rectangle\" id=\"main\"><bsdf type=\"conductor\"/></shape>\n"
+                           "  <shape type=\"rectangle\" id=\"cu\"><bsdf type=\"conductor\"><string name=\"material\" "
+                           "value=\"Cu\"/></bsdf></shape>\n"
+                           "  <shape type=\"rectangle\" id=\"none\"><bsdf type=\"conductor\"><string name=\"material\" "
+                           "value=\"none\"/></bsdf></shape>\n");
+    CHECK(same_conductor(material_of(s, "inc"), material_of(s, "none")) &&
+              same_conductor(material_of(s, "main"), material_of(s, "cu")),
+          "a 3.0.0 file included from a 0.6.0 one: each conductor by its own file's version");
+    ic_scene_free(s);
+    test_write_file(IC_TEST_TMP "/mts_version_main.xml", "<scene version=\"0.6.0\">\n"
+                    "  <include filename=\"mts_version_incbad.xml\"/>\n</scene>\n");
+    ic_scene_load_options lo = {0};
+    ic_error err = {0};
+    s = NULL;
+    ic_result r = ic_scene_load(IC_TEST_TMP "/mts_version_main.xml", &lo, &s, &err);
+    CHECK(r == IC_ERR_PARSE && strstr(err.message, "mts_version_incbad.xml:1"),
+          "a bad version in an included file names that file:line (%s)", err.message);
+    ic_scene_free(s);
+}
+
+/* A "none" conductor's specularReflectance as a bitmap: irrcache reads a colour there, so it is a grey 0.5
+ * mirror (Mitsuba: the texture times a Fresnel factor of 1), warned naming the parameter, not called a
+ * texture "other than a bitmap". */
+static void test_conductor_texture(void)
+{
+    ic_scene *s = load_xml("mts_conductor_tex.xml", "3.0.0",
+                           "  <shape type=\"rectangle\" id=\"tinted\"><bsdf type=\"conductor\">"
+                           "<texture type=\"bitmap\" name=\"specular_reflectance\"><string name=\"filename\" "
+                           "value=\"tint.png\"/></texture></bsdf></shape>\n");
+    const ic_material *m = material_of(s, "tinted");
+    const char *w = s ? ic_scene_warnings(s) : NULL;
+    int flat = m != NULL;
+    for (float c = 0.05f; m && c <= 1.0f; c += 0.19f) {
+        ic_vec3 f = v3_mul(m->ks, ic_fresnel_conductor(c, m->eta, m->k));
+        flat &= fabsf(f.x - 0.5f) < 1e-5f && fabsf(f.y - 0.5f) < 1e-5f && fabsf(f.z - 0.5f) < 1e-5f;
+    }
+    CHECK(flat, "a none conductor with a textured reflectance: 0.5 at every angle");
+    CHECK(w && strstr(w, "mts_conductor_tex.xml:2:") && strstr(w, "pecular") && /* either spelling */
+              !strstr(w, "other than a bitmap"),
+          "the texture is warned about by its parameter: %s", w ? w : "");
+    ic_scene_free(s);
+}
+
 /* A roughness above 1 is kept (Mitsuba keeps it, and GGX is a normalised distribution there: see
  * test_microfacet); above 4 it is an error naming the file and line. */
 static void test_rough_alpha(void)
@@ -464,6 +662,10 @@ int main(void)
     test_conductor_default();
     test_sphere_to_world();
     test_mirrored_sensor();
+    test_sensor_world_mirror();
+    test_sphere_facing();
+    test_version();
+    test_conductor_texture();
     test_rough_alpha();
     test_focal_length();
     test_cornell();
