@@ -84,12 +84,13 @@ static void draw_ellipse(const ic_ctx *c, ic_image *out, const ic_record *rec, c
 
 /* The factor that brings the median luminance of img's lit pixels (finite, above zero) to
  * IC_RECORDS_BACKGROUND_GREY; 1 where none is lit, 0 (and IC_ERR_OOM) when out of memory. The median, not
- * the mean, so that a lamp or a sunlit patch in view does not darken the rest. */
-static ic_result background_scale(const ic_image *img, float *scale)
+ * the mean, so that a lamp or a sunlit patch in view does not darken the rest. A double: below a median of
+ * about 5e-40 (a denormal float) the factor is beyond a float's range, where it made black pixels NaN. */
+static ic_result background_scale(const ic_image *img, double *scale)
 {
     size_t pixels = (size_t)img->width * img->height, lit = 0;
     float *lum = malloc(sizeof *lum * (pixels ? pixels : 1));
-    *scale = 0.0f;
+    *scale = 0.0;
     if (!lum)
         return IC_ERR_OOM;
     for (size_t i = 0; i < pixels; ++i) {
@@ -97,10 +98,10 @@ static ic_result background_scale(const ic_image *img, float *scale)
         if (isfinite(y) && y > 0.0f)
             lum[lit++] = y;
     }
-    *scale = 1.0f;
+    *scale = 1.0;
     if (lit > 0) {
         qsort(lum, lit, sizeof *lum, ic_ic_cmp_float);
-        *scale = IC_RECORDS_BACKGROUND_GREY / lum[lit / 2];
+        *scale = IC_RECORDS_BACKGROUND_GREY / (double)lum[lit / 2];
     }
     free(lum);
     return IC_OK;
@@ -113,13 +114,13 @@ static ic_result background_scale(const ic_image *img, float *scale)
  * in blue. */
 ic_result ic_ic_records_image(const ic_ctx *c, const ic_image *beauty, ic_image *out)
 {
-    float scale;
+    double scale;
     ic_result r = background_scale(beauty, &scale);
     if (r != IC_OK || (r = ic_image_create(out, beauty->width, beauty->height)) != IC_OK)
         return r;
     size_t n = (size_t)beauty->width * beauty->height * 3;
     for (size_t i = 0; i < n; ++i)
-        out->rgb[i] = scale * beauty->rgb[i];
+        out->rgb[i] = (float)(scale * beauty->rgb[i]);
     uint32_t count = ic_cache_count(c->cache);
     for (uint32_t i = 0; i < count; ++i) {
         ic_record rec;
