@@ -492,7 +492,7 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
                                 b->mesh_paths[b->material_mesh[m]], mat->name);
         const ic_material *same = NULL; /* the tables depend on the index alone: computed once per index */
         for (uint32_t k = 0; k < m && !same; ++k)
-            if (s->materials[k].coat_albedo_rough && (s->materials[k].ior > 1.0f ? s->materials[k].ior : 1.5f) == ior)
+            if (s->materials[k].coat_albedo_rough && (s->materials[k].ior > 0.0f ? s->materials[k].ior : 1.5f) == ior)
                 same = &s->materials[k];
         if (same)
             memcpy(mat->coat_albedo_rough, same->coat_albedo_rough,

@@ -20,7 +20,9 @@
 
 #include "test_render_util.h"
 
+#include "core/microfacet.h"
 #include "irrcache/image.h"
+#include "scene/scene.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -166,6 +168,49 @@ static void test_constant_roughness(void)
         CHECK(a > 0.0 && fabs(a - b) <= tol * b, "%s: a constant roughness texture renders %g, the factor %g",
               t == 0 ? "conductor" : "plastic", a, b);
     }
+}
+
+/* Two rough plastics with textured roughness, coat indices 1 (a coat that reflects nothing) and 1.5: each
+ * gets the coat tables of its own index, the second not the first's (they are shared between materials of
+ * one index only). */
+static void test_coat_tables_per_index(void)
+{
+    test_write_file(IC_TEST_TMP "/tx_two.mtl", "newmtl one\nKd 0.5 0.5 0.5\nnewmtl glass\nKd 0.5 0.5 0.5\n");
+    test_write_file(IC_TEST_TMP "/tx_two.obj",
+                    "mtllib tx_two.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                    "vn 0 1 0\nusemtl one\nf 1/1/1 3/3/1 2/2/1\nusemtl glass\nf 1/1/1 4/4/1 3/3/1\n");
+    write_texture(IC_TEST_TMP "/tx_rough.pfm", 4, 4, tex_rough_half);
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"camera\": {\"eye\": [0, 1, 0], \"target\": [0, 0, 0], \"up\": [0, 0, -1], \"width\": 8, "
+             "\"height\": 8},\n \"meshes\": [{\"path\": \"tx_two.obj\"}],\n \"materials\": {"
+             "\"one\": {\"type\": \"plastic\", \"ior\": 1.0, \"alpha\": 0.5, \"roughness_texture\": \"tx_rough.pfm\"}, "
+             "\"glass\": {\"type\": \"plastic\", \"ior\": 1.5, \"alpha\": 0.5, \"roughness_texture\": \"tx_rough.pfm\"}},\n"
+             " %s}\n", SKY);
+    test_write_file(IC_TEST_TMP "/tx_two.json", text);
+    ic_scene *scene = NULL;
+    ic_error err = {0};
+    CHECK(test_load_scene(IC_TEST_TMP "/tx_two.json", NULL, 0, 0, 0, &scene, &err) == IC_OK, "two plastics: %s",
+          err.message);
+    if (!scene)
+        return;
+    int checked = 0;
+    for (uint32_t m = 0; m < scene->material_count; ++m) {
+        const ic_material *mat = &scene->materials[m];
+        if (mat->type != IC_MAT_PLASTIC || !mat->coat_albedo_rough)
+            continue;
+        ++checked;
+        float want[IC_COAT_TABLE], avg, got_avg, r = 16.0f / (IC_COAT_ROUGH_STEPS - 1); /* one of the steps */
+        ic_coat_albedo_table(mat->ior, r * r, want, &avg);
+        const float *got = ic_scene_coat_table(mat, r * r, &got_avg);
+        int same = got_avg == avg;
+        for (int k = 0; k < IC_COAT_TABLE; ++k)
+            same &= got[k] == want[k];
+        CHECK(same, "the plastic of index %g has another index's coat table (mean %g, its own %g)", (double)mat->ior,
+              (double)got_avg, (double)avg);
+    }
+    CHECK(checked == 2, "%d textured plastics found, 2 expected", checked);
+    ic_scene_free(scene);
 }
 
 static void test_metallic_halves(void)
@@ -467,6 +512,7 @@ static void test_bad_textures(void)
 int main(void)
 {
     test_constant_roughness();
+    test_coat_tables_per_index();
     test_metallic_halves();
     test_normal_map_tilt();
     test_bumpy();
