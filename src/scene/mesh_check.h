@@ -18,13 +18,13 @@
 #include <stdio.h>
 
 /* PLY (mesh_check_ply.c): the header's grammar, every element count against max_elements, then the whole
- * body, ascii or binary: the values each property needs, present and numbers, vertex coordinates finite,
- * face index lists of sane length naming existing vertices. */
+ * body, ascii or binary: the values each property needs, present and numbers, vertex coordinates, normals and
+ * texture coordinates finite, face index lists of sane length naming existing vertices. */
 ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err);
 
-/* OBJ (mesh_check_obj.c): vertex coordinates finite, every index of a face, line or point naming an
- * existing vertex, and the vertices and the faces each at most max_elements (counted before assimp reads
- * the file). */
+/* OBJ (mesh_check_obj.c): vertex coordinates, texture coordinates and normals finite, every index of a face,
+ * line or point naming an existing vertex, and the vertices and the faces each at most max_elements (counted
+ * before assimp reads the file). */
 ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err);
 /* An MTL file's Kd, Ks and Ke colours: negative or non-finite values are an error naming the MTL file, its
  * line and the material (mesh_check_obj.c). A file that cannot be opened is IC_OK (assimp warns). */

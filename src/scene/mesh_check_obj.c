@@ -8,6 +8,9 @@
  * - a vertex line holds 3 (x y z), 4 (x y z w) or 6 (x y z r g b) numbers, all finite: assimp skips a
  *   line of another count without a word, and keeps NaN and infinity but renumbers vertices, so the
  *   first bad one is reported here with its line and its number as the file counts them;
+ * - a texture coordinate (vt) or normal (vn) line holds numbers, all finite: assimp keeps a NaN normal (NaN
+ *   shading samples, which the film drops: black pixels), and a NaN texture coordinate looks a texture up
+ *   nowhere (the import used to read it as 0 without a word);
  * - every vertex index of a face, line or point names a vertex (1 to N, or -1 to -n for the n read so
  *   far): for an index past the end assimp throws "vertex index out of range" while it holds the meshes
  *   it has built, which leak (found by the mesh_obj fuzz target: a `mtllib` line without its line end
@@ -117,7 +120,14 @@ typedef struct obj_far_index {
     long line;
 } obj_far_index;
 
-static ic_result check_vertex_line(char *c, const char *path, long line_no, long long vertex_no, ic_error *err)
+/* The three kinds a face word indexes: positions (v), texture coordinates (vt) and normals (vn). */
+static const char *const OBJ_KIND[3] = {"vertex", "texture coordinate (vt)", "normal (vn)"};
+
+/* A v (kind 0), vt (1) or vn (2) line: every word a number, the components that give a position, a texture
+ * coordinate or a normal finite (a vertex's w or colour aside). `number` is the element's as the file counts
+ * its kind. */
+static ic_result check_vector_line(int kind, char *c, const char *path, long line_no, long long number,
+                                   ic_error *err)
 {
     int count = 0, bad = 0;
     char *save = NULL;
@@ -126,24 +136,21 @@ static ic_result check_vertex_line(char *c, const char *path, long line_no, long
             break; /* a comment ends the line */
         double v;
         if (!obj_number(w, &v))
-            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex %lld: '%.40s' is not a number; fix the line or "
-                                "export the mesh again", path, line_no, vertex_no, w);
-        if (count < 3 && !isfinite((float)v))
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: %s %lld: '%.40s' is not a number; fix the line or "
+                                "export the mesh again", path, line_no, OBJ_KIND[kind], number, w);
+        if ((kind > 0 || count < 3) && !isfinite((float)v))
             bad = 1;
         ++count;
     }
-    if (count != 3 && count != 4 && count != 6)
+    if (kind == 0 && count != 3 && count != 4 && count != 6)
         return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex %lld has %d numbers; a vertex line holds 3 (x y z), 4 "
                             "(x y z w) or 6 (x y z r g b): fix the line or export the mesh again", path, line_no,
-                            vertex_no, count);
+                            number, count);
     if (bad)
-        return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: vertex %lld has a non-finite coordinate; fix or remove it",
-                            path, line_no, vertex_no);
+        return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: %s %lld has a non-finite %s; fix or remove it", path, line_no,
+                            OBJ_KIND[kind], number, kind == 0 ? "coordinate" : "component");
     return IC_OK;
 }
-
-/* The three kinds a face word indexes: positions (v), texture coordinates (vt) and normals (vn). */
-static const char *const OBJ_KIND[3] = {"vertex", "texture coordinate (vt)", "normal (vn)"};
 
 static ic_result check_face_line(char kind, char *c, const char *path, long line_no, const long long so_far[3],
                                  obj_far_index far[3], ic_error *err)
@@ -207,9 +214,11 @@ ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elemen
             break;
         }
         if (line[0] == 'v' && (line[1] == ' ' || line[1] == '\t'))
-            r = check_vertex_line(line + 2, path, at, ++vertices, err);
-        else if (line[0] == 'v' && (line[1] == 't' || line[1] == 'n') && (line[2] == ' ' || line[2] == '\t'))
-            ++counts[line[1] == 't' ? 1 : 2];
+            r = check_vector_line(0, line + 2, path, at, ++vertices, err);
+        else if (line[0] == 'v' && (line[1] == 't' || line[1] == 'n') && (line[2] == ' ' || line[2] == '\t')) {
+            int kind = line[1] == 't' ? 1 : 2;
+            r = check_vector_line(kind, line + 3, path, at, ++counts[kind], err);
+        }
         else if (line[0] == 'f' || line[0] == 'l' || line[0] == 'p') {
             /* assimp reads any line that starts with one of these letters as a face, line or point, its
              * first word ("f", or "f3", "fo") skipped */

@@ -21,7 +21,9 @@
  *   \n after end_header's line end, even as the first byte of binary data, and the check skips it too;
  * - an element it does not know by name must come after the ones with instances (ply_known_element).
  * And, as before, every element count against the caller's limit (before the body is read), and every
- * vertex's x, y, z finite even where no face uses it (assimp drops such a vertex silently).
+ * vertex's x, y, z finite even where no face uses it (assimp drops such a vertex silently), and its normal
+ * and texture coordinates finite (a NaN normal gives NaN shading samples, which the film drops: black
+ * pixels; a NaN texture coordinate looks a texture up nowhere).
  */
 #include "scene/mesh_check.h"
 
@@ -47,7 +49,8 @@ typedef struct ply_prop {
     char name[64];
     int size, is_float, is_signed;   /* the value, or each item of a list */
     int count_size, count_signed;    /* a list's count (count_size 0: a scalar property) */
-    int coord;                       /* 0, 1, 2: x, y, z of the vertex element; -1: another property */
+    const char *attribute;           /* what assimp reads it as, which must be finite: "coordinate" (x, y, z of
+                                      * the vertex element), "normal", "texture coordinate"; NULL: another */
     int is_index;                    /* a vertex index list (vertex_indices of face or tristrips) */
 } ply_prop;
 
@@ -121,6 +124,29 @@ static int ply_known_element(const char *name)
         if (!strcmp(name, known[i]))
             return 1;
     return 0;
+}
+
+/* What assimp 5.2 reads property `name` of element `element` as, for the values that must be finite: a
+ * vertex's position (x, y, z), normal (nx, ny, nz) or texture coordinate (u, v, or s, t as Blender writes
+ * them, tx, ty, texture_u, texture_v), and a face's texture coordinates (its list "texcoord"). NULL for
+ * any other property. */
+static const char *ply_attribute(const char *element, const char *name, int is_list)
+{
+    static const char *const normal[] = {"nx", "ny", "nz"};
+    static const char *const uv[] = {"u", "v", "s", "t", "tx", "ty", "texture_u", "texture_v"};
+    if (!strcmp(element, "face"))
+        return is_list && !strcmp(name, "texcoord") ? "texture coordinate" : NULL;
+    if (strcmp(element, "vertex") || is_list)
+        return NULL;
+    if (name[0] >= 'x' && name[0] <= 'z' && !name[1])
+        return "coordinate";
+    for (size_t i = 0; i < sizeof normal / sizeof normal[0]; ++i)
+        if (!strcmp(name, normal[i]))
+            return "normal";
+    for (size_t i = 0; i < sizeof uv / sizeof uv[0]; ++i)
+        if (!strcmp(name, uv[i]))
+            return "texture coordinate";
+    return NULL;
 }
 
 /* Reads one header line into line (without its line end). Returns 1, 0 at the end of the file, or -1 with
@@ -295,8 +321,7 @@ static int read_header(ply_file *f)
                          "integer type (int or uint)", e->name);
                 return header_error(f, IC_ERR_PARSE, msg);
             }
-            p->coord = !strcmp(e->name, "vertex") && !is_list && p->name[0] >= 'x' && p->name[0] <= 'z' &&
-                               !p->name[1] ? p->name[0] - 'x' : -1;
+            p->attribute = ply_attribute(e->name, p->name, is_list);
         } else {
             snprintf(msg, sizeof msg, "'%s' is not a PLY header line (format, comment, obj_info, element, "
                      "property or end_header); fix the header or export the mesh again", shown);
@@ -324,18 +349,20 @@ static ic_result truncated(ply_file *f, const ply_element *e, unsigned long long
                         e->count, f->format == 0 ? "ascii" : "binary");
 }
 
-/* Checks one value of property p of instance i of e: a coordinate finite, a list's count in range, a
- * vertex index naming a vertex. `item` is -1 for a scalar or a list's count, else the item's position. */
+/* Checks one value of property p of instance i of e: a coordinate, normal or texture coordinate finite, a
+ * list's count in range, a vertex index naming a vertex. `item` is -1 for a scalar or a list's count, else the
+ * item's position. */
 static ic_result check_value(ply_file *f, const ply_element *e, const ply_prop *p, unsigned long long i, long item,
                              double v)
 {
     char at[4200];
     where(f, at, sizeof at);
-    if (p->coord >= 0 && (!isfinite(v) || !isfinite((float)v)))
-        return f->format == 0 ? ic_error_set(f->err, IC_ERR_PARSE, "%s: vertex %llu has a non-finite coordinate (%g); "
-                                             "fix or remove it", at, i + 1, v)
-                              : ic_error_set(f->err, IC_ERR_PARSE, "%s: vertex %llu (of %llu, binary) has a non-finite "
-                                             "coordinate (%g); fix or remove it", at, i + 1, e->count, v);
+    if (p->attribute && (item >= 0 || !p->count_size) && (!isfinite(v) || !isfinite((float)v)))
+        return f->format == 0 ? ic_error_set(f->err, IC_ERR_PARSE, "%s: %s %llu has a non-finite %s (%g); fix or "
+                                             "remove it", at, e->name, i + 1, p->attribute, v)
+                              : ic_error_set(f->err, IC_ERR_PARSE, "%s: %s %llu (of %llu, binary) has a non-finite "
+                                             "%s (%g); fix or remove it", at, e->name, i + 1, e->count, p->attribute,
+                                             v);
     if (p->count_size && item < 0) {
         long max = p->is_index ? PLY_MAX_FACE_VERTICES : PLY_MAX_LIST;
         if (v < (p->is_index ? 1 : 0) || v > max)

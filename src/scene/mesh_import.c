@@ -1049,6 +1049,11 @@ static ic_result flip_mirrored(const struct aiScene *ai, const mesh_instance *in
     return IC_OK;
 }
 
+static int finite3(struct aiVector3D a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+
 static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
                                const float m4[16], const char *xform_where, uint32_t material_base, int use_tangents,
                                ic_error *err)
@@ -1090,12 +1095,20 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
     for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
         const struct aiMesh *mesh = ai->mMeshes[i];
         uint32_t base = s->vertex_count;
+        const struct aiVector3D *uv = mesh->mTextureCoords[0];
         for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
             struct aiVector3D p = mesh->mVertices[v];
-            if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z))
+            /* a NaN normal would give NaN shading samples (black pixels once the film drops them), a NaN texture
+             * coordinate a texture look-up nowhere: refused like a NaN position (the glTF file's accessors reach
+             * here unchecked; an OBJ's or PLY's values were checked with their lines, mesh_check.h) */
+            const char *bad = !finite3(p) ? "coordinate"
+                              : mesh->mNormals && !finite3(mesh->mNormals[v]) ? "normal"
+                              : uv && !(isfinite(uv[v].x) && isfinite(uv[v].y)) ? "texture coordinate"
+                                                                                 : NULL;
+            if (bad)
                 return ic_error_set(err, IC_ERR_PARSE,
-                                    "%s: vertex %u of mesh '%s' has a non-finite coordinate; fix or remove it",
-                                    mesh_path, v + 1, mesh->mName.data);
+                                    "%s: vertex %u of mesh '%s' has a non-finite %s; fix or remove it", mesh_path,
+                                    v + 1, mesh->mName.data, bad);
             ic_vec3 q = xform_point(m4, p);
             if (!(fabsf(q.x) <= IC_SCENE_MAX_COORD && fabsf(q.y) <= IC_SCENE_MAX_COORD &&
                   fabsf(q.z) <= IC_SCENE_MAX_COORD)) {
@@ -1117,9 +1130,8 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             if (s->tangents && use_tangents)
                 xform_tangent(m4, nm, mesh, v, s->tangents + 4 * ((size_t)base + v));
             if (s->uvs) {
-                const struct aiVector3D *uv = mesh->mTextureCoords[0];
-                s->uvs[2 * (base + v) + 0] = uv && isfinite(uv[v].x) ? uv[v].x : 0.0f;
-                s->uvs[2 * (base + v) + 1] = uv && isfinite(uv[v].y) ? uv[v].y : 0.0f;
+                s->uvs[2 * (base + v) + 0] = uv ? uv[v].x : 0.0f;
+                s->uvs[2 * (base + v) + 1] = uv ? uv[v].y : 0.0f;
             }
         }
         s->vertex_count += mesh->mNumVertices;

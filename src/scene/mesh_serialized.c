@@ -14,12 +14,14 @@
  *
  * What is read: positions, vertex normals (unless face normals are asked for), triangles. Texture
  * coordinates and colours are skipped. Every count and index is checked against the bytes there are and
- * against the scene's element limit before anything is allocated for it.
+ * against the scene's element limit before anything is allocated for it; every position and every normal
+ * read must be finite.
  */
 #include "scene/scene_internal.h"
 
 #include "core/read_file.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -153,11 +155,13 @@ static ic_result append_shape(ic_scene_builder *b, const unsigned char *d, size_
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for the serialized mesh '%s'", where, path);
     }
     ic_result r = IC_OK;
-    for (int block = 0; block < 2; ++block) { /* positions, then normals */
+    /* Face normals asked for: the geometric normal (no vertex normals). */
+    int use_normals = (flags & SER_NORMALS) && !(flags & SER_FACE_NORMALS);
+    for (int block = 0; block < 2 && r == IC_OK; ++block) { /* positions, then normals */
         if (block == 1 && !(flags & SER_NORMALS))
             break;
         ic_vec3 *dst = block ? n : p;
-        for (uint64_t i = 0; i < nv; ++i, at += 3 * (size_t)real) {
+        for (uint64_t i = 0; i < nv && r == IC_OK; ++i, at += 3 * (size_t)real) {
             float f[3];
             for (int k = 0; k < 3; ++k) {
                 uint64_t bits = get_le(d + at + (size_t)k * real, real);
@@ -171,6 +175,11 @@ static ic_result append_shape(ic_scene_builder *b, const unsigned char *d, size_
                 }
             }
             dst[i] = v3(f[0], f[1], f[2]);
+            /* a NaN normal would give NaN shading samples (black pixels once the film drops them) */
+            if ((block == 0 || use_normals) && !(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2])))
+                r = ic_error_set(err, IC_ERR_PARSE, "%s: the serialized mesh '%s' has a non-finite %s at vertex %llu; "
+                                 "fix or remove it", where, path, block ? "normal" : "coordinate",
+                                 (unsigned long long)i + 1);
         }
     }
     at += nv * (uint64_t)real * ((flags & SER_TEXCOORDS ? 2 : 0) + (flags & SER_COLOURS ? 3 : 0));
@@ -182,8 +191,6 @@ static ic_result append_shape(ic_scene_builder *b, const unsigned char *d, size_
                              (unsigned long long)v, (unsigned long long)nv);
         tri[t] = (uint32_t)v;
     }
-    /* Face normals asked for: the geometric normal (no vertex normals). */
-    int use_normals = (flags & SER_NORMALS) && !(flags & SER_FACE_NORMALS);
     if (r == IC_OK)
         r = ic_scene_append_triangles(b, p, use_normals ? n : NULL, (uint32_t)nv, tri, (uint32_t)nt, material, xform,
                                       where, err);

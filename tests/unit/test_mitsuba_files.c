@@ -68,8 +68,9 @@ static const float box_v[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0
 static const uint32_t box_t[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
                                       {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
 
-/* One shape: header, then its zlib stream. version 4 writes a name; box: doubles, normals, uv, colours. */
-static void put_shape(buf *file, unsigned version, int box, uint32_t bad_index)
+/* One shape: header, then its zlib stream. version 4 writes a name; box: doubles, normals, uv, colours.
+ * bad_index: a vertex index for the box's second triangle; nan_normal: vertex 3's normal x is NaN. */
+static void put_shape(buf *file, unsigned version, int box, uint32_t bad_index, int nan_normal)
 {
     buf raw = {0};
     uint32_t flags = box ? 0x2000 | 0x0001 | 0x0002 | 0x0008 : 0x1000;
@@ -89,7 +90,7 @@ static void put_shape(buf *file, unsigned version, int box, uint32_t bad_index)
     if (box) {
         for (uint64_t i = 0; i < nv; ++i) /* normals: outward-ish, unit */
             for (int k = 0; k < 3; ++k)
-                put_f64(&raw, (box_v[i][k] - 0.5) / (0.5 * sqrt(3.0)));
+                put_f64(&raw, nan_normal && i == 2 && k == 0 ? NAN : (box_v[i][k] - 0.5) / (0.5 * sqrt(3.0)));
         for (uint64_t i = 0; i < nv; ++i)
             for (int k = 0; k < 2; ++k)
                 put_f64(&raw, 0.25 * (double)k);
@@ -112,14 +113,14 @@ static void put_shape(buf *file, unsigned version, int box, uint32_t bad_index)
 
 /* A file of the quad then the box, with the table of offsets; its bytes to path (truncated to `keep` if
  * non-zero). */
-static void write_serialized(const char *path, unsigned version, uint32_t bad_index, size_t keep)
+static void write_serialized(const char *path, unsigned version, uint32_t bad_index, int nan_normal, size_t keep)
 {
     buf f = {0};
     uint64_t off[2];
     off[0] = f.n;
-    put_shape(&f, version, 0, 0);
+    put_shape(&f, version, 0, 0, 0);
     off[1] = f.n;
-    put_shape(&f, version, 1, bad_index);
+    put_shape(&f, version, 1, bad_index, nan_normal);
     for (int k = 0; k < 2; ++k) {
         if (version >= 4)
             put_u64(&f, off[k]);
@@ -218,7 +219,7 @@ int main(void)
 {
     test_include();
     const char *path = IC_TEST_TMP "/ser_v4.serialized";
-    write_serialized(path, 4, 0, 0);
+    write_serialized(path, 4, 0, 0, 0);
     ic_error err = {0};
     ic_scene *s = NULL;
     for (int shape = 0; shape < 2; ++shape) {
@@ -227,7 +228,7 @@ int main(void)
             check_shape(s, shape, shape ? "version 4, the box" : "version 4, the quad");
         ic_scene_free(s);
     }
-    write_serialized(IC_TEST_TMP "/ser_v3.serialized", 3, 0, 0);
+    write_serialized(IC_TEST_TMP "/ser_v3.serialized", 3, 0, 0, 0);
     CHECK(load_shape(IC_TEST_TMP "/ser_v3.serialized", 1, &s, &err) == IC_OK, "version 3 loads: %s", err.message);
     if (s)
         check_shape(s, 1, "version 3, the box");
@@ -238,11 +239,13 @@ int main(void)
         const char *file;
         int shape;
         const char *says;
-    } bad[5] = {{path, 2, "holds 2 shapes"},
+    } bad[6] = {{path, 2, "holds 2 shapes"},
                 {IC_TEST_TMP "/ser_trunc.serialized", 1, "no table of shapes"},
                 {IC_TEST_TMP "/ser_cut.serialized", 0, "corrupt or truncated"},
                 {IC_TEST_TMP "/ser_index.serialized", 1, "vertex 99 of 8"},
-                {IC_TEST_TMP "/ser.xml", 0, "not a Mitsuba serialized mesh"}};
+                {IC_TEST_TMP "/ser.xml", 0, "not a Mitsuba serialized mesh"},
+                /* a NaN normal would make NaN shading samples: refused as a NaN position is */
+                {IC_TEST_TMP "/ser_nan_normal.serialized", 1, "has a non-finite normal at vertex 3; fix or remove it"}};
     FILE *fp = fopen(path, "rb");
     long full = 0;
     if (fp) {
@@ -250,10 +253,11 @@ int main(void)
         full = ftell(fp);
         fclose(fp);
     }
-    write_serialized(bad[1].file, 4, 0, (size_t)full - 40); /* the box's stream cut short, table gone */
-    write_serialized(bad[2].file, 4, 0, 20); /* the quad's own stream cut short */
-    write_serialized(bad[3].file, 4, 99, 0);
-    for (int k = 0; k < 5; ++k) {
+    write_serialized(bad[1].file, 4, 0, 0, (size_t)full - 40); /* the box's stream cut short, table gone */
+    write_serialized(bad[2].file, 4, 0, 0, 20); /* the quad's own stream cut short */
+    write_serialized(bad[3].file, 4, 99, 0, 0);
+    write_serialized(bad[5].file, 4, 0, 1, 0);
+    for (int k = 0; k < 6; ++k) {
         ic_result r = load_shape(bad[k].file, bad[k].shape, &s, &err);
         CHECK(r != IC_OK && strstr(err.message, "ser.xml:2") && strstr(err.message, bad[k].says) &&
                   !strchr(err.message, '\n'),

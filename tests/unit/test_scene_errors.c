@@ -414,6 +414,91 @@ static void test_hostile_meshes(void)
     ic_scene_free(ok);
 }
 
+/* Loads path and checks that it loads. */
+static void expect_load(const char *path, const char *what)
+{
+    ic_scene *s = NULL;
+    ic_error e;
+    memset(&e, 0, sizeof e);
+    CHECK(ic_scene_load(path, NULL, &s, &e) == IC_OK, "%s loads (%s)", what, e.message);
+    ic_scene_free(s);
+}
+
+/* Non-finite texture coordinates and normals are refused as non-finite positions are, in every mesh format
+ * that carries them: a NaN normal makes NaN shading samples (black pixels once the film drops them), a NaN
+ * texture coordinate a look-up nowhere. The message names the file and the line (OBJ, ascii PLY) or the
+ * vertex (binary PLY, glTF, serialized), like the position's. */
+static void test_non_finite_attributes(void)
+{
+    /* OBJ: the line and the element's number as the file counts its kind */
+    expect_error(SCENES "nan_uv.obj", NULL, IC_ERR_PARSE, "nan_uv.obj:8:", "texture coordinate (vt) 3 has a non-finite",
+                 "fix or remove it");
+    expect_error(SCENES "nan_normal.obj", NULL, IC_ERR_PARSE, "nan_normal.obj:7:", "normal (vn) 2 has a non-finite",
+                 "fix or remove it");
+    expect_error(write_tmp("attr_big_vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 1e39\nf 1/1 2/1 3/1\n", -1), NULL,
+                 IC_ERR_PARSE, "attr_big_vt.obj:4:", "texture coordinate (vt) 1 has a non-finite", NULL);
+    expect_error(write_tmp("attr_word_vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 one\nf 1//1 2//1 3//1\n", -1), NULL,
+                 IC_ERR_PARSE, "attr_word_vn.obj:4:", "normal (vn) 1: 'one' is not a number", NULL);
+    expect_load(write_tmp("attr_ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0 0\nvt 0 1 # w omitted\n"
+                                         "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n", -1),
+                "an OBJ with finite texture coordinates and normals");
+
+    /* PLY, ascii: vertex properties x y z nx ny nz u v (header lines 1-14, vertices on lines 15-17) */
+    static const char header[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                                 "property float u\nproperty float v\nelement face 1\n"
+                                 "property list uchar int vertex_indices\nend_header\n";
+    char text[1024];
+    snprintf(text, sizeof text, "%s0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n0 1 0 0 0 1 0 1\n3 0 1 2\n", header);
+    expect_load(write_tmp("attr_ok.ply", text, -1), "a PLY with finite normals and texture coordinates");
+    snprintf(text, sizeof text, "%s0 0 0 0 0 1 0 0\n1 0 0 nan 0 1 1 0\n0 1 0 0 0 1 0 1\n3 0 1 2\n", header);
+    expect_error(write_tmp("attr_nan_normal.ply", text, -1), NULL, IC_ERR_PARSE, "attr_nan_normal.ply:16:",
+                 "vertex 2 has a non-finite normal (nan)", "fix or remove it");
+    snprintf(text, sizeof text, "%s0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n0 1 0 0 0 1 0 -inf\n3 0 1 2\n", header);
+    expect_error(write_tmp("attr_inf_uv.ply", text, -1), NULL, IC_ERR_PARSE, "attr_inf_uv.ply:17:",
+                 "vertex 3 has a non-finite texture coordinate (-inf)", "fix or remove it");
+    /* Blender's s, t; a face's texcoord list */
+    expect_error(write_tmp("attr_nan_st.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                           "property float y\nproperty float z\nproperty float s\nproperty float t\nelement face 1\n"
+                           "property list uchar int vertex_indices\nend_header\n0 0 0 0 0\n1 0 0 nan 0\n0 1 0 0 1\n"
+                           "3 0 1 2\n", -1),
+                 NULL, IC_ERR_PARSE, "attr_nan_st.ply:13:", "vertex 2 has a non-finite texture coordinate", NULL);
+    expect_error(write_tmp("attr_nan_texcoord.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                           "property float y\nproperty float z\nelement face 1\n"
+                           "property list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n"
+                           "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 6 0 0 1 0 0 nan\n", -1),
+                 NULL, IC_ERR_PARSE, "attr_nan_texcoord.ply:14:", "face 1 has a non-finite texture coordinate (nan)",
+                 NULL);
+    /* PLY, binary little-endian: x y z nx ny nz, vertex 2's nz infinite */
+    {
+        static const char bin_header[] = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                         "property float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+                                         "property float nz\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                         "end_header\n";
+        const float inf = INFINITY;
+        float v[3][6] = {{0, 0, 0, 0, 0, 1}, {1, 0, 0, 0, 0, inf}, {0, 1, 0, 0, 0, 1}};
+        unsigned char bin[sizeof bin_header + sizeof v + 13];
+        size_t n = sizeof bin_header - 1;
+        memcpy(bin, bin_header, n);
+        memcpy(bin + n, v, sizeof v); /* a little-endian host, as the file */
+        n += sizeof v;
+        bin[n++] = 3;
+        int32_t idx[3] = {0, 1, 2};
+        memcpy(bin + n, idx, sizeof idx);
+        n += sizeof idx;
+        expect_error(write_tmp("attr_inf_normal_bin.ply", (const char *)bin, (long)n), NULL, IC_ERR_PARSE,
+                     "attr_inf_normal_bin.ply: vertex 2 (of 3, binary) has a non-finite normal (inf)",
+                     "fix or remove it", NULL);
+    }
+
+    /* glTF: the vertex and the mesh, as for a position */
+    expect_load(SCENES "attrs_ok.gltf", "a glTF with finite normals and texture coordinates");
+    expect_error(SCENES "nan_normal.gltf", NULL, IC_ERR_PARSE, "nan_normal.gltf: vertex 2 of mesh 'tri'",
+                 "has a non-finite normal", "fix or remove it");
+    expect_error(SCENES "nan_uv.gltf", NULL, IC_ERR_PARSE, "nan_uv.gltf: vertex 3 of mesh 'tri'",
+                 "has a non-finite texture coordinate", "fix or remove it");
+}
+
 /* The scene file's size limit is the caller's (--max-scene-bytes): one byte over it is refused, naming both
  * sizes and the option, before the file is read; at the limit it loads. */
 static void test_scene_size_limit(void)
@@ -679,5 +764,6 @@ int main(void)
     test_glb_lengths();
     test_hostile_meshes();
     test_scene_size_limit();
+    test_non_finite_attributes();
     TEST_MAIN_END();
 }
