@@ -62,9 +62,12 @@ static int obj_line(FILE *fp, char *buf, long *line_no)
     return any ? 1 : 0;
 }
 
-/* A vertex component: [+-] digits, an optional fraction and exponent, or nan / inf. (assimp counts a word
- * starting with '.' as no component.) */
-static int obj_number(const char *w, double *v)
+/* A component of a v, vt or vn line: [+-] digits with an optional fraction, or [+-] a fraction alone (".5"),
+ * then an optional exponent; or nan / inf. assimp reads each of these, but counts the components of a v or vt
+ * line by their first character, a digit or a sign, so an unsigned ".5" there counts for none (and the line
+ * is skipped or read wrong): it is a number only where `bare_fraction` (a vn line, whose three words assimp
+ * reads without counting them). */
+static int obj_number(const char *w, int bare_fraction, double *v)
 {
     const char *c = w;
     if (*c == '+' || *c == '-')
@@ -73,7 +76,7 @@ static int obj_number(const char *w, double *v)
         *v = strtod(w, NULL);
         return 1;
     }
-    if (!isdigit((unsigned char)*c))
+    if (!isdigit((unsigned char)*c) && !(*c == '.' && isdigit((unsigned char)c[1]) && (c > w || bare_fraction)))
         return 0;
     while (isdigit((unsigned char)*c))
         ++c;
@@ -135,9 +138,10 @@ static ic_result check_vector_line(int kind, char *c, const char *path, long lin
         if (w[0] == '#')
             break; /* a comment ends the line */
         double v;
-        if (!obj_number(w, &v))
-            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: %s %lld: '%.40s' is not a number; fix the line or "
-                                "export the mesh again", path, line_no, OBJ_KIND[kind], number, w);
+        if (!obj_number(w, kind == 2, &v))
+            return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: %s %lld: '%.40s' is not a number%s; fix the line or "
+                                "export the mesh again", path, line_no, OBJ_KIND[kind], number, w,
+                                w[0] == '.' ? " the importer reads here (write a 0 before the point)" : "");
         if ((kind > 0 || count < 3) && !isfinite((float)v))
             bad = 1;
         ++count;

@@ -1054,6 +1054,34 @@ static int finite3(struct aiVector3D a)
     return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
 }
 
+/* Every vertex's position, normal and first texture coordinates finite, on the meshes as the file gives them:
+ * a NaN normal would give NaN shading samples (black pixels once the film drops them), a NaN texture
+ * coordinate a texture look-up nowhere. Checked before assimp's steps, so that the message names the file's
+ * mesh (a glTF primitive: "name-1" for a mesh's second one) and its vertex as the file numbers them (from 1):
+ * PreTransformVertices merges the meshes of one material into one, JoinIdenticalVertices drops the vertices
+ * no face uses and renumbers the others, and PreTransformVertices also gives NaN normals to the placements
+ * of a node with a singular transform (a scale of 0, which hides a mesh), which are not the file's fault.
+ * (An OBJ's or PLY's values were checked with their lines, mesh_check.h; the glTF file's accessors reach
+ * here unchecked.) */
+static ic_result check_finite_vertices(const struct aiScene *ai, const char *mesh_path, ic_error *err)
+{
+    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
+        const struct aiMesh *mesh = ai->mMeshes[i];
+        const struct aiVector3D *uv = mesh->mTextureCoords[0];
+        for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+            const char *bad = !finite3(mesh->mVertices[v]) ? "coordinate"
+                              : mesh->mNormals && !finite3(mesh->mNormals[v]) ? "normal"
+                              : uv && !(isfinite(uv[v].x) && isfinite(uv[v].y)) ? "texture coordinate"
+                                                                                 : NULL;
+            if (bad)
+                return ic_error_set(err, IC_ERR_PARSE,
+                                    "%s: vertex %u of mesh '%s' has a non-finite %s; fix or remove it", mesh_path,
+                                    v + 1, mesh->mName.data, bad);
+        }
+    }
+    return IC_OK;
+}
+
 static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
                                const float m4[16], const char *xform_where, uint32_t material_base, int use_tangents,
                                ic_error *err)
@@ -1098,17 +1126,8 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
         const struct aiVector3D *uv = mesh->mTextureCoords[0];
         for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
             struct aiVector3D p = mesh->mVertices[v];
-            /* a NaN normal would give NaN shading samples (black pixels once the film drops them), a NaN texture
-             * coordinate a texture look-up nowhere: refused like a NaN position (the glTF file's accessors reach
-             * here unchecked; an OBJ's or PLY's values were checked with their lines, mesh_check.h) */
-            const char *bad = !finite3(p) ? "coordinate"
-                              : mesh->mNormals && !finite3(mesh->mNormals[v]) ? "normal"
-                              : uv && !(isfinite(uv[v].x) && isfinite(uv[v].y)) ? "texture coordinate"
-                                                                                 : NULL;
-            if (bad)
-                return ic_error_set(err, IC_ERR_PARSE,
-                                    "%s: vertex %u of mesh '%s' has a non-finite %s; fix or remove it", mesh_path,
-                                    v + 1, mesh->mName.data, bad);
+            /* the file's values were checked (check_finite_vertices); a node's transform that overflows is not
+             * caught there but by the test below, as NaN fails it */
             ic_vec3 q = xform_point(m4, p);
             if (!(fabsf(q.x) <= IC_SCENE_MAX_COORD && fabsf(q.y) <= IC_SCENE_MAX_COORD &&
                   fabsf(q.z) <= IC_SCENE_MAX_COORD)) {
@@ -1130,8 +1149,8 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             if (s->tangents && use_tangents)
                 xform_tangent(m4, nm, mesh, v, s->tangents + 4 * ((size_t)base + v));
             if (s->uvs) {
-                s->uvs[2 * (base + v) + 0] = uv ? uv[v].x : 0.0f;
-                s->uvs[2 * (base + v) + 1] = uv ? uv[v].y : 0.0f;
+                s->uvs[2 * (base + v) + 0] = uv && isfinite(uv[v].x) ? uv[v].x : 0.0f;
+                s->uvs[2 * (base + v) + 1] = uv && isfinite(uv[v].y) ? uv[v].y : 0.0f;
             }
         }
         s->vertex_count += mesh->mNumVertices;
@@ -1288,7 +1307,8 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     mesh_instance *inst = NULL;
     size_t inst_count = 0;
     unsigned merged = 0;
-    if ((r = collect_instances(ai, mesh_path, &inst, &inst_count, &merged, err)) != IC_OK) {
+    if ((r = check_finite_vertices(ai, mesh_path, err)) != IC_OK ||
+        (r = collect_instances(ai, mesh_path, &inst, &inst_count, &merged, err)) != IC_OK) {
         aiReleaseImport(ai);
         free(src.data);
         return r;

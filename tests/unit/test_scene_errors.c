@@ -497,6 +497,57 @@ static void test_non_finite_attributes(void)
                  "has a non-finite normal", "fix or remove it");
     expect_error(SCENES "nan_uv.gltf", NULL, IC_ERR_PARSE, "nan_uv.gltf: vertex 3 of mesh 'tri'",
                  "has a non-finite texture coordinate", "fix or remove it");
+    /* the file's mesh and vertex, not those of assimp's steps (which merge the meshes of one material into one
+     * and renumber the vertices without the ones no face uses) */
+    expect_error(SCENES "nan_normal_second_mesh.gltf", NULL, IC_ERR_PARSE,
+                 "nan_normal_second_mesh.gltf: vertex 1 of mesh 'second' has a non-finite normal", NULL, NULL);
+    expect_error(SCENES "nan_normal_after_unused.gltf", NULL, IC_ERR_PARSE,
+                 "nan_normal_after_unused.gltf: vertex 4 of mesh 'tri' has a non-finite normal", NULL, NULL);
+}
+
+/* Valid files the non-finite checks must let through. */
+static void test_finite_attribute_variants(void)
+{
+    ic_scene *s = NULL;
+    ic_error e;
+    /* A glTF node of scale 0 hides its mesh (exporters write it so): its normals' transform is singular, and
+     * the placement's triangles, all at one point, are dropped; the other placement keeps the file's normal. */
+    memset(&e, 0, sizeof e);
+    CHECK(ic_scene_load(SCENES "hidden_node.gltf", NULL, &s, &e) == IC_OK && s, "a glTF with a node of scale 0 loads "
+          "(%s)", e.message);
+    if (s) {
+        CHECK(s->triangle_count == 1, "the hidden placement's triangle is dropped (%u triangles)", s->triangle_count);
+        for (uint32_t i = 0; s->normals && s->triangle_count == 1 && i < 3; ++i) {
+            ic_vec3 n = s->normals[s->triangles[i]];
+            CHECK(n.x == 0.0f && n.y == 0.0f && n.z == 1.0f, "the visible triangle's normal is the file's (0, 0, 1): "
+                  "(%g, %g, %g)", (double)n.x, (double)n.y, (double)n.z);
+        }
+        CHECK(s->normals != NULL, "the glTF's normals are kept");
+        ic_scene_free(s);
+        s = NULL;
+    }
+    /* OBJ numbers with no digit before the point: assimp reads a signed one ("-.5") in v, vt and vn lines and
+     * an unsigned one (".8") in vn lines, whose three words it does not count; (-0.6, 0, 0.8) is of length 1 */
+    memset(&e, 0, sizeof e);
+    CHECK(ic_scene_load(write_tmp("attr_fraction.obj", "v -.5 0 0\nv 1 0 0\nv 0 1 0\nvt -.5 -.25\nvn -.6 0 .8\n"
+                                                       "f 1/1/1 2/1/1 3/1/1\n", -1),
+                        NULL, &s, &e) == IC_OK && s,
+          "an OBJ with numbers such as -.5 and .8 loads (%s)", e.message);
+    if (s) {
+        CHECK(s->bounds_min.x == -0.5f, "v -.5 0 0 is at x = -0.5 (bounds from %g)", (double)s->bounds_min.x);
+        for (uint32_t i = 0; s->normals && i < s->vertex_count; ++i)
+            CHECK(fabsf(s->normals[i].x + 0.6f) < 1e-6f && s->normals[i].y == 0.0f &&
+                      fabsf(s->normals[i].z - 0.8f) < 1e-6f,
+                  "vn -.6 0 .8 is read as (-0.6, 0, 0.8): (%g, %g, %g)", (double)s->normals[i].x,
+                  (double)s->normals[i].y, (double)s->normals[i].z);
+        CHECK(s->normals != NULL, "the OBJ's normals are kept");
+        ic_scene_free(s);
+    }
+    /* an unsigned ".5" in a vt line is counted as no component by assimp (which then reads the line wrong or
+     * not at all): refused with the line, saying how to write it */
+    expect_error(write_tmp("attr_bare_vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 .5\nf 1/1 2/1 3/1\n", -1), NULL,
+                 IC_ERR_PARSE, "attr_bare_vt.obj:4:", "texture coordinate (vt) 1: '.5' is not a number",
+                 "write a 0 before the point");
 }
 
 /* The scene file's size limit is the caller's (--max-scene-bytes): one byte over it is refused, naming both
@@ -765,5 +816,6 @@ int main(void)
     test_hostile_meshes();
     test_scene_size_limit();
     test_non_finite_attributes();
+    test_finite_attribute_variants();
     TEST_MAIN_END();
 }
