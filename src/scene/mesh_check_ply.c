@@ -19,7 +19,12 @@
  * - lines end with \n or \r\n: assimp also ends a line at a lone \r, so "pro\rperty float y" declared a
  *   property for us and none for it, and the binary records it read were shorter (SEGV); it also skips one
  *   \n after end_header's line end, even as the first byte of binary data, and the check skips it too;
- * - an element it does not know by name must come after the ones with instances (ply_known_element).
+ * - an element it does not know by name must come after the ones with instances (ply_known_element);
+ * - a face's texcoord list of 6 to 8 values (assimp reads no other length) is read as a u v pair per vertex
+ *   of the face, through the face's vertex indices unchecked: a face with fewer vertices than the pairs had
+ *   its index array read past its end, and a face element with a texcoord list but no vertex index list
+ *   gave faces without indices (a NULL read, or an assertion in triangulation), so a face needs as many
+ *   vertices as the list has pairs (face_texcoords).
  * And, as before, every element count against the caller's limit (before the body is read), and every
  * vertex's x, y, z finite even where no face uses it (assimp drops such a vertex silently), and its normal
  * and texture coordinates finite (a NaN normal gives NaN shading samples, which the film drops: black
@@ -71,6 +76,7 @@ typedef struct ply_file {
     ply_element el[PLY_MAX_ELEMENTS];
     int el_count;
     unsigned long long vertices;     /* the vertex element's count: the range of face indices */
+    double indices, texcoords;       /* the instance's vertex index and face texcoord list lengths (-1: none) */
     char *text;                      /* an ascii instance line (PLY_MAX_ASCII_LINE bytes) */
 } ply_file;
 
@@ -364,6 +370,10 @@ static ic_result check_value(ply_file *f, const ply_element *e, const ply_prop *
                                              "%s (%g); fix or remove it", at, e->name, i + 1, e->count, p->attribute,
                                              v);
     if (p->count_size && item < 0) {
+        if (p->is_index)
+            f->indices = v;
+        else if (p->attribute) /* a list property with an attribute: the face's texcoord list */
+            f->texcoords = v;
         long max = p->is_index ? PLY_MAX_FACE_VERTICES : PLY_MAX_LIST;
         if (v < (p->is_index ? 1 : 0) || v > max)
             return ic_error_set(f->err, IC_ERR_PARSE, "%s: %s %llu has a list '%s' of %.0f items, outside 0 to %ld "
@@ -379,6 +389,21 @@ static ic_result check_value(ply_file *f, const ply_element *e, const ply_prop *
     return IC_OK;
 }
 
+/* After instance i of e: a face texcoord list that assimp reads (6 to 8 values, a u v pair per vertex) needs
+ * a vertex of the face for each pair, which it looks up by the face's vertex indices. */
+static ic_result face_texcoords(ply_file *f, const ply_element *e, unsigned long long i)
+{
+    double pairs = ceil(f->texcoords / 2);
+    if (!(f->texcoords >= 6 && f->texcoords <= 8) || f->indices >= pairs)
+        return IC_OK;
+    char at[4200];
+    where(f, at, sizeof at);
+    return ic_error_set(f->err, IC_ERR_PARSE, "%s: %s %llu%s has a list 'texcoord' of %.0f values (a u v pair for "
+                        "each of %.0f vertices) but %.0f vertices; give each vertex its pair, or export the mesh "
+                        "again", at, e->name, i + 1, f->format == 0 ? "" : " (binary)", f->texcoords, pairs,
+                        f->indices < 0 ? 0.0 : f->indices);
+}
+
 /* One binary value of `size` bytes; 0 at the end of the file. */
 static int binary_value(ply_file *f, int size, int is_float, int is_signed, double *v)
 {
@@ -391,6 +416,7 @@ static int binary_value(ply_file *f, int size, int is_float, int is_signed, doub
 
 static ic_result binary_instance(ply_file *f, const ply_element *e, unsigned long long i)
 {
+    f->indices = f->texcoords = -1;
     for (int k = 0; k < e->prop_count; ++k) {
         const ply_prop *p = &e->props[k];
         double v;
@@ -414,7 +440,7 @@ static ic_result binary_instance(ply_file *f, const ply_element *e, unsigned lon
                 return r;
         }
     }
-    return IC_OK;
+    return face_texcoords(f, e, i);
 }
 
 /* 1 if word is a decimal number as assimp reads one: digits, signed for a signed or float type, and for a
@@ -528,6 +554,7 @@ static ic_result ascii_instance(ply_file *f, const ply_element *e, unsigned long
         return truncated(f, e, i);
     char *c = f->text;
     ic_result r;
+    f->indices = f->texcoords = -1;
     for (int k = 0; k < e->prop_count; ++k) {
         const ply_prop *p = &e->props[k];
         double v;
@@ -552,7 +579,7 @@ static ic_result ascii_instance(ply_file *f, const ply_element *e, unsigned long
         return ic_error_set(f->err, IC_ERR_PARSE, "%s:%ld: %s %llu has more values than its properties (from "
                             "'%.20s'); one instance per line: fix the line or export the mesh again", f->path, f->line,
                             e->name, i + 1, c);
-    return IC_OK;
+    return face_texcoords(f, e, i);
 }
 
 ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err)
@@ -591,6 +618,15 @@ ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elemen
                              "header", path, e->name, e->count);
         if (!strcmp(e->name, "vertex"))
             f->vertices = e->count;
+        int texcoord_list = 0, index_list = 0;
+        for (int k = 0; k < e->prop_count; ++k) {
+            texcoord_list |= e->props[k].count_size && e->props[k].attribute;
+            index_list |= e->props[k].is_index;
+        }
+        if (r == IC_OK && e->count > 0 && texcoord_list && !index_list)
+            r = ic_error_set(err, IC_ERR_PARSE, "%s: PLY element '%s' has a list 'texcoord' but no vertex index list "
+                             "(vertex_indices), and the importer makes faces without vertices of it; add the vertex "
+                             "indices or remove the list", path, e->name);
         if (r == IC_OK && !ply_known_element(e->name) && (e->count > 0 || isdigit((unsigned char)e->name[0]))) {
             int later = 0;
             for (int k = i + 1; k < f->el_count; ++k)

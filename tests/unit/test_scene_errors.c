@@ -505,6 +505,79 @@ static void test_non_finite_attributes(void)
                  "nan_normal_after_unused.gltf: vertex 4 of mesh 'tri' has a non-finite normal", NULL, NULL);
 }
 
+/* Appends v in big-endian order, `size` bytes of it (a float's or an integer's bits). */
+static size_t put_be(unsigned char *out, size_t at, uint64_t v, int size)
+{
+    for (int k = 0; k < size; ++k)
+        out[at + (size_t)k] = (unsigned char)(v >> (8 * (size - 1 - k)));
+    return at + (size_t)size;
+}
+
+/* A PLY face's texcoord list of 6 to 8 values is read by assimp as a u v pair per vertex of the face, through
+ * its vertex indices: a face with fewer vertices than pairs had its index array read past its end (valgrind:
+ * invalid read in libassimp), and a face element with the list but no vertex indices crashed (NULL read, or
+ * an assertion in triangulation: found by the mesh_ply fuzz target). Each is refused with the face's place;
+ * a list of as many pairs as vertices, or of a length assimp does not read, loads. */
+static void test_ply_face_texcoords(void)
+{
+    static const char header[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                 "property list uint double texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n";
+    char text[1024];
+    snprintf(text, sizeof text, "%s3 0 1 2 8 0 0 1 0 0 1 1 1\n", header); /* face on line 15 */
+    expect_error(write_tmp("tc_pairs.ply", text, -1), NULL, IC_ERR_PARSE, "tc_pairs.ply:15: face 1 has a list "
+                 "'texcoord' of 8 values", "but 3 vertices", NULL);
+    snprintf(text, sizeof text, "%s3 0 1 2 7 0 0 1 0 0 1 1\n", header);
+    expect_error(write_tmp("tc_pairs7.ply", text, -1), NULL, IC_ERR_PARSE, "tc_pairs7.ply:15: face 1", "of 7 values",
+                 "but 3 vertices");
+    snprintf(text, sizeof text, "%s4 0 1 3 2 8 0 0 1 0 1 1 0 1\n", header);
+    expect_load(write_tmp("tc_quad.ply", text, -1), "a quad with a u v pair per vertex");
+    snprintf(text, sizeof text, "%s3 0 1 2 4 0 0 1 0\n", header);
+    expect_load(write_tmp("tc_other_length.ply", text, -1), "a texcoord list of a length the importer ignores");
+    expect_load(write_tmp("tc_first.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                          "property float y\nproperty float z\nelement face 1\nproperty list uint double texcoord\n"
+                          "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n"
+                          "8 0 0 1 0 1 1 0 1 4 0 1 3 2\n", -1),
+                "a texcoord list declared before the vertex indices");
+    expect_error(write_tmp("tc_no_indices.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                           "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_ind\n"
+                           "property list uint double texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                           "3 0 1 2 6 0 0 1 0 0 1\n", -1),
+                 NULL, IC_ERR_PARSE, "tc_no_indices.ply: PLY element 'face' has a list 'texcoord' but no vertex index "
+                 "list", NULL, NULL);
+    /* binary big-endian: double x y z, a triangle (uchar count, uint indices) with 8 double texcoords */
+    {
+        static const char bin_header[] = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\n"
+                                         "property double y\nproperty double z\nelement face 1\n"
+                                         "property list uchar uint vertex_indices\n"
+                                         "property list ushort double texcoord\nend_header\n";
+        unsigned char bin[sizeof bin_header - 1 + 9 * 8 + 1 + 3 * 4 + 2 + 8 * 8];
+        size_t n = sizeof bin_header - 1;
+        memcpy(bin, bin_header, n);
+        const double xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, uv[8] = {0, 0, 1, 0, 0, 1, 1, 1};
+        uint64_t bits;
+        for (int k = 0; k < 9; ++k) {
+            memcpy(&bits, &xyz[k], sizeof bits);
+            n = put_be(bin, n, bits, 8);
+        }
+        n = put_be(bin, n, 3, 1);
+        for (uint32_t k = 0; k < 3; ++k)
+            n = put_be(bin, n, k, 4);
+        n = put_be(bin, n, 8, 2);
+        for (int k = 0; k < 8; ++k) {
+            memcpy(&bits, &uv[k], sizeof bits);
+            n = put_be(bin, n, bits, 8);
+        }
+        CHECK(n == sizeof bin, "the binary PLY is %zu bytes", n);
+        expect_error(write_tmp("tc_pairs_be.ply", (const char *)bin, (long)n), NULL, IC_ERR_PARSE,
+                     "tc_pairs_be.ply: face 1 (binary) has a list 'texcoord' of 8 values", "but 3 vertices", NULL);
+        /* the same file with 6 values loads */
+        bin[n - 8 * 8 - 1] = 6;
+        expect_load(write_tmp("tc_pairs6_be.ply", (const char *)bin, (long)(n - 2 * 8)),
+                    "a binary big-endian triangle with 6 texcoords");
+    }
+}
+
 /* Valid files the non-finite checks must let through. */
 static void test_finite_attribute_variants(void)
 {
@@ -817,5 +890,6 @@ int main(void)
     test_scene_size_limit();
     test_non_finite_attributes();
     test_finite_attribute_variants();
+    test_ply_face_texcoords();
     TEST_MAIN_END();
 }
