@@ -13,7 +13,8 @@ Sponza at 1280x720). Each phase is either shared (gathering, the final render, t
 "eye paths and look-ups": the world stage's eye paths and the look-up sweeps, "need maps", "clustering", the shading points, the
 record filter, and insertion's validity-radius clamp and neighbour search, --insertion-shared of insertion) or done by every
 rank (the accelerator, the rest of insertion, "candidates": clustering (and dithering before each rank dithered its own rows), and the need maps in
-stats written before "need maps" was reported apart, and whatever ic_render spends outside its phases). Stats written before "eye paths and
+stats written before "need maps" was reported apart, and whatever ic_render spends outside its phases; with --with-load
+also the scene load, which the stats' "seconds" leave out). Stats written before "eye paths and
 look-ups" was reported apart count it in "candidates"; --candidates-serial then says which share of that
 every rank does; every rank also computes the shading points of 128 rows around its own (the band its need
 maps read), taken as that share of the "shading points" phase. With N ranks of the same threads:
@@ -169,6 +170,9 @@ def main():
     ap.add_argument("--interleaved-final", action="store_true",
                     help="model the final render's tiles all interleaved (before the second adaptive pass was "
                          "shared out by cost)")
+    ap.add_argument("--with-load", action="store_true",
+                    help="count the scene load (the \"load\" phase, outside the stats' seconds) in T_1 and in the work "
+                         "every rank does alike (every rank loads the scene)")
     ap.add_argument("--trace", metavar="TRACE", help="IRRCACHE_MPI_TRACE of the real run given by --measured (its "
                     "rank count): rank 0's exchanges. The communication term at that rank count becomes the "
                     "trace's: every exchange's bytes at the link's rate plus its rounds of messages at the "
@@ -222,7 +226,9 @@ def main():
               "candidates": shared_cand + phase(t, "need maps") + phase(t, "clustering"),
               "points, filter, validity": phase(t, "shading points") + phase(t, "record filter") +
                                           a.insertion_shared * phase(t, "insertion")}
-    total_1 = t["seconds"]
+    # The stats' "seconds" are ic_render's: the scene load (phase "load", timed by the command) is outside them
+    # and, unless --with-load, outside T_1 and T_N alike.
+    total_1 = t["seconds"] + (phase(t, "load") if a.with_load else 0.0)
     serial = total_1 - sum(shared.values())
     # Every rank also computes the shading points of the band around its rows (IC_SCREEN_HALO, 64 rows on
     # either side) that its need maps read.
