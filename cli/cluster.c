@@ -24,8 +24,7 @@ typedef struct mpi_comm {
                                  from IRRCACHE_MPI_ALLGATHER_LIMIT, which tests/mpi sets to run that path
                                  on small images */
     int chunk;                /* bytes per call on that path */
-    uint64_t small_limit;     /* bytes in all up to which an all-gather takes allgather_small */
-    unsigned char *scratch;   /* allgather_small's blocks in its order (small_limit bytes) */
+    unsigned char *scratch;   /* allgather_small's blocks in its order (SMALL_LIMIT bytes) */
     FILE *trace;              /* IRRCACHE_MPI_TRACE: rank 0's exchanges, one line each, or NULL */
 } mpi_comm;
 
@@ -82,7 +81,10 @@ static ic_result allgather_large(const mpi_comm *m, const void *send, void *recv
     return IC_OK;
 }
 
-/* An all-gather of at most small_limit bytes in all (counts, candidates' tallies, a pass's records) in
+/* Bytes in all up to which an all-gather takes allgather_small. */
+#define SMALL_LIMIT (1 << 20)
+
+/* An all-gather of at most SMALL_LIMIT bytes in all (counts, candidates' tallies, a pass's records) in
  * ceil(log2 N) rounds of messages, whichever algorithm the MPI library would choose for MPI_Allgatherv (a
  * ring takes N − 1): Bruck et al.'s concatenation (IEEE TPDS 1997), with blocks of any size. A rank keeps
  * the blocks of ranks rank, rank + 1, … (mod N) one after another; in each round, holding `have` of them,
@@ -128,7 +130,7 @@ static ic_result mpi_allgather(void *user, const void *send, void *recv, const u
         trace(m, "allgather-large", total - counts[m->comm.rank], m->comm.size - 1);
         return allgather_large(m, send, recv, counts);
     }
-    if (m->comm.size > 2 && total <= m->small_limit) {
+    if (m->comm.size > 2 && total <= SMALL_LIMIT) {
         trace(m, "allgather-small", total - counts[m->comm.rank], log2_rounds(m->comm.size));
         return allgather_small(m, send, recv, counts);
     }
@@ -233,8 +235,8 @@ static ic_result mpi_sum(void *user, double *values, uint64_t count)
 
 static ic_result mpi_broadcast(void *user, void *buf, uint64_t bytes, int root)
 {
-    trace(user, "broadcast", ((const mpi_comm *)user)->comm.rank == root ? 0 : bytes,
-          log2_rounds(((const mpi_comm *)user)->comm.size));
+    const mpi_comm *m = user;
+    trace(m, "broadcast", m->comm.rank == root ? 0 : bytes, log2_rounds(m->comm.size));
     for (uint64_t done = 0; done < bytes;) {
         int n = bytes - done > (uint64_t)(1 << 30) ? 1 << 30 : (int)(bytes - done);
         if (MPI_Bcast((char *)buf + done, n, MPI_BYTE, root, MPI_COMM_WORLD) != MPI_SUCCESS)
@@ -281,8 +283,7 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
         m->displs = calloc((size_t)size, sizeof *m->displs);
         m->scounts = calloc((size_t)size, sizeof *m->scounts);
         m->sdispls = calloc((size_t)size, sizeof *m->sdispls);
-        m->small_limit = 1 << 20;
-        m->scratch = malloc(m->small_limit);
+        m->scratch = malloc(SMALL_LIMIT);
     }
     if (!m || !m->counts || !m->displs || !m->scounts || !m->sdispls || !m->scratch) {
         fprintf(stderr, "irrcache: out of memory starting %d MPI ranks\n", size);

@@ -34,7 +34,7 @@ int main(int argc, char **argv)
     uint32_t state = 7;
     for (int trial = 0; trial < 400 && counts; ++trial) {
         /* Tiny blocks; a few kB with many zeros; blocks differing by one (a pass's records); up to 2 MB in
-         * all, most very unequal (Bruck's rounds up to small_limit, MPI_Allgatherv above); all empty. */
+         * all, most very unequal (Bruck's rounds up to SMALL_LIMIT, MPI_Allgatherv above); all empty. */
         const int kind = trial % 5;
         uint64_t total = 0, at = 0;
         for (int r = 0; r < n; ++r) {
@@ -57,7 +57,7 @@ int main(int argc, char **argv)
         const int in_place = trial & 1;
         if (in_place)
             memcpy(recv + at, send, counts[me]);
-        const int bruck = total <= m->small_limit;
+        const int bruck = total <= SMALL_LIMIT;
         small += n > 2 && bruck;
         plain += n > 2 && !bruck;
         if (mpi_allgather(m, in_place ? recv + at : send, recv, counts) != IC_OK)
