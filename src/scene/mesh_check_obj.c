@@ -66,35 +66,44 @@ static int obj_line(FILE *fp, char *buf, long *line_no)
  * then an optional exponent; or nan / inf. assimp reads each of these, but counts the components of a v or vt
  * line by their first character, a digit or a sign, so an unsigned ".5" there counts for none (and the line
  * is skipped or read wrong): it is a number only where `bare_fraction` (a vn line, whose three words assimp
- * reads without counting them). */
-static int obj_number(const char *w, int bare_fraction, double *v)
+ * reads without counting them). *finite gets whether the value is finite as a float: decided from the digits
+ * where the value is certainly below 10^38 (FLT_MAX is 3.4e38), else by converting it. */
+static int obj_number(const char *w, int bare_fraction, int *finite)
 {
     const char *c = w;
     if (*c == '+' || *c == '-')
         ++c;
     if (!strcasecmp(c, "nan") || !strcasecmp(c, "inf")) {
-        *v = strtod(w, NULL);
+        *finite = 0;
         return 1;
     }
     if (!isdigit((unsigned char)*c) && !(*c == '.' && isdigit((unsigned char)c[1]) && (c > w || bare_fraction)))
         return 0;
-    while (isdigit((unsigned char)*c))
+    while (*c == '0')
         ++c;
+    long magnitude = 0; /* the value is below 10^(magnitude + exponent) */
+    for (; isdigit((unsigned char)*c); ++c)
+        ++magnitude;
     if (*c == '.')
         for (++c; isdigit((unsigned char)*c);)
             ++c;
+    long exponent = 0;
     if (*c == 'e' || *c == 'E') {
         ++c;
+        int negative = *c == '-';
         if (*c == '+' || *c == '-')
             ++c;
         if (!isdigit((unsigned char)*c))
             return 0;
-        while (isdigit((unsigned char)*c))
-            ++c;
+        for (; isdigit((unsigned char)*c); ++c)
+            if (exponent < 100000)
+                exponent = 10 * exponent + (*c - '0');
+        if (negative)
+            exponent = -exponent;
     }
     if (*c)
         return 0;
-    *v = strtod(w, NULL);
+    *finite = magnitude + exponent <= 38 || isfinite((float)strtod(w, NULL));
     return 1;
 }
 
@@ -137,12 +146,12 @@ static ic_result check_vector_line(int kind, char *c, const char *path, long lin
     for (char *w = strtok_r(c, " \t", &save); w; w = strtok_r(NULL, " \t", &save)) {
         if (w[0] == '#')
             break; /* a comment ends the line */
-        double v;
-        if (!obj_number(w, kind == 2, &v))
+        int finite;
+        if (!obj_number(w, kind == 2, &finite))
             return ic_error_set(err, IC_ERR_PARSE, "%s:%ld: %s %lld: '%.40s' is not a number%s; fix the line or "
                                 "export the mesh again", path, line_no, OBJ_KIND[kind], number, w,
                                 w[0] == '.' ? " the importer reads here (write a 0 before the point)" : "");
-        if ((kind > 0 || count < 3) && !isfinite((float)v))
+        if ((kind > 0 || count < 3) && !finite)
             bad = 1;
         ++count;
     }

@@ -442,6 +442,19 @@ static void test_non_finite_attributes(void)
     expect_load(write_tmp("attr_ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0 0\nvt 0 1 # w omitted\n"
                                          "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n", -1),
                 "an OBJ with finite texture coordinates and normals");
+    /* Finite as a float up to FLT_MAX (3.40282347e38), whatever the spelling: the check decides most numbers
+     * from their digits and converts those that may be 10^38 or more; 3.4028236e38 rounds to infinity. */
+    expect_load(write_tmp("attr_near_max.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 340282340000000000000000000000000000000\n"
+                                               "vt 0 99999999999999999999999999999999999999\nvt 0 0.000001e44\n"
+                                               "vt 0 3.4028234e38\nvt 0 -00000000000000000000001e37\nvt 0 1e-999999999999\n"
+                                               "f 1/1 2/2 3/3\n", -1),
+                "an OBJ whose texture coordinates come close to FLT_MAX");
+    expect_error(write_tmp("attr_past_max.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 0 340282360000000000000000000000000000000\n"
+                                                "f 1/1 2/1 3/1\n", -1),
+                 NULL, IC_ERR_PARSE, "attr_past_max.obj:5:", "texture coordinate (vt) 2 has a non-finite", NULL);
+    expect_error(write_tmp("attr_big_exp.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0.0000000000001e999999999999\n"
+                                               "f 1/1 2/1 3/1\n", -1),
+                 NULL, IC_ERR_PARSE, "attr_big_exp.obj:4:", "texture coordinate (vt) 1 has a non-finite", NULL);
 
     /* PLY, ascii: vertex properties x y z nx ny nz u v (header lines 1-14, vertices on lines 15-17) */
     static const char header[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
