@@ -216,7 +216,7 @@ static int from_scene(const char *scene_path, int width, int height, const char 
         ic_ctx *c;
         ic_render_stats st;
         memset(&st, 0, sizeof st);
-        phase_times pt = {0, 0};
+        phase_times pt = {0};
         double t0 = ic_seconds();
         if (ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) != IC_OK || ic_ic_build(c, &opt, &st, &pt, &err) != IC_OK ||
             ic_cache_rebuild_index(c->cache, &err) != IC_OK)

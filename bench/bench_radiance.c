@@ -139,7 +139,7 @@ int main(int argc, char **argv)
         ic_ctx *c;
         ic_render_stats st;
         memset(&st, 0, sizeof st);
-        phase_times pt = {0, 0};
+        phase_times pt = {0};
         uint32_t made = 0, refined = 0;
         double t0 = ic_seconds();
         if (ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) != IC_OK || ic_ic_radiance_create(c, &err) != IC_OK ||

@@ -244,9 +244,11 @@ static ic_result dithered_candidates(ic_ctx *c, const float *need, uint32_t *pix
 }
 
 /* Adds records at pixel centres that no record covers (construction acceptance), clustered so that
- * one record serves a whole uncovered patch; repeats until every shading point is covered. */
-static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, uint32_t *pix, ic_candidate *cand,
-                                phase_times *pt, uint32_t *added, double *sweep_seconds, ic_error *err)
+ * one record serves a whole uncovered patch; repeats until every shading point is covered. Each process
+ * makes the candidates of its own rows, and the clustering is shared out along the Morton order as the
+ * world stage's is (ic_world_select_shared); its seconds, exchanges excluded, are added to *cluster_seconds. */
+static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, phase_times *pt, uint32_t *added,
+                                double *sweep_seconds, double *cluster_seconds, ic_error *err)
 {
     *added = 0;
     int y0, y1;
@@ -257,24 +259,30 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, uint32_
         ic_result r = timed_lookup_all(c, lum, covered, 0, sweep_seconds);
         if (r != IC_OK)
             return ic_error_set(err, r, "could not start threads");
-        uint32_t own = 0, n = 0;
+        uint32_t own = 0;
+        for (size_t i = first; i < end; ++i)
+            own += c->g.valid[i] && !covered[i];
+        /* zeroed: the candidates' padding travels in the exchanges */
+        ic_candidate *mine = calloc(own ? own : 1, sizeof *mine), *cand = NULL;
+        if (!mine)
+            return ic_error_set(err, IC_ERR_OOM, "out of memory for %u uncovered pixels", own);
+        own = 0;
         for (size_t i = first; i < end; ++i)
             if (c->g.valid[i] && !covered[i])
-                pix[own++] = (uint32_t)i;
-        r = pixel_candidates(c, pix, own, cand, 0x40 | (uint64_t)round, &n, err);
-        if (r != IC_OK)
-            return r;
-        if (n == 0)
-            return IC_OK;
+                mine[own++] = ic_ic_candidate_at_pixel(c, (uint32_t)i, 0x40 | (uint64_t)round);
         /* Small clusters: each selected record covers at least its own pixel, so this terminates. */
         const ic_scene *sc = c->tr->scene;
-        uint32_t kept = 0;
-        if (ic_world_select(cand, n, sc->bounds_min, sc->bounds_max, 0.25f * c->o.cluster_size * c->work_extent, 3,
-                            30.0f, &kept) != IC_OK)
-            return ic_error_set(err, IC_ERR_OOM, "out of memory sorting %u uncovered pixels", n);
-        n = kept;
-        r = ic_ic_gather_and_insert(c, cand, n, pt, err);
-        if (r != IC_OK)
+        uint32_t n = 0;
+        uint64_t total = 0;
+        double visited = 0.0, t0 = ic_seconds(), comm0 = c->comm ? c->comm->seconds : 0.0;
+        r = ic_world_select_shared(c->comm, mine, own, sc->bounds_min, sc->bounds_max,
+                                   0.25f * c->o.cluster_size * c->work_extent, 3, 30.0f, &cand, &n, &total, &visited,
+                                   err);
+        *cluster_seconds += ic_seconds() - t0 - (c->comm ? c->comm->seconds - comm0 : 0.0);
+        if (r == IC_OK && total > 0)
+            r = ic_ic_gather_and_insert(c, cand, n, pt, err);
+        free(cand);
+        if (r != IC_OK || total == 0)
             return r;
         *added += n;
     }
@@ -456,12 +464,12 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
     }
     uint32_t added;
     const uint32_t before_sweep = ic_cache_count(c->cache);
-    r = coverage_sweep(c, lum, covered, pix, cand, pt, &added, &sweeps, err);
+    r = coverage_sweep(c, lum, covered, pt, &added, &sweeps, &cluster_seconds, err);
     st->coverage_records = ic_cache_count(c->cache) - before_sweep;
     count_traffic(c, st, st->passes - 1);
     /* The parts of construction that the processes share out (the rest of it, clustering,
      * every process does alike): reported apart so that a scaling model can tell them apart. */
-    ic_stats_add_phase(st, "eye paths and look-ups", sweeps);
+    ic_stats_add_phase(st, "eye paths and look-ups", sweeps + pt->probes);
     ic_stats_add_phase(st, "need maps", need_seconds);
     ic_stats_add_phase(st, "clustering", cluster_seconds);
 done:

@@ -140,10 +140,11 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
     if (r == IC_OK && ic_ic_view_extent(c, &view) != IC_OK)
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for the view's extent");
     c->work_extent = view > 0.0f ? fminf(c->scene_diag, 2.5f * view) : c->scene_diag;
+    /* The large emitters' hemisphere shares are measured at the shading points, shared out like them. */
+    if (r == IC_OK)
+        r = ic_ic_select_large_emitters(c, tr->scene, err);
     if (gbuffer_seconds)
         *gbuffer_seconds = ic_seconds() - t0;
-    if (r == IC_OK && !ic_ic_select_large_emitters(c, tr->scene))
-        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
     if (r != IC_OK) {
         ic_ic_ctx_destroy(c);
         return r;

@@ -6,7 +6,9 @@
  */
 #include "ic_internal.h"
 
+#include "core/comm.h"
 #include "core/sampling.h"
+#include "core/threads.h"
 #include "irrcache/defaults.h"
 #include "irrcache/image.h"
 
@@ -243,8 +245,40 @@ static double record_rays(const ic_gather_opts *g)
  * (none unless cached_allowed: large_emitters off still pilots, for the flag), and sets *large_sampled
  * where a piloted material stays light-sampled though its light samples are noisier per sample than
  * the hemisphere rays (cv²_light > cv²_gather; ic_ctx.large_sampled). Returns 0 when out of memory. */
-static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, int cached_allowed,
-                            uint8_t *cached_mat, int *large_sampled)
+/* The hemisphere shares of the emitting materials at the sampled shading points (choose_materials): point j
+ * is pixel pix[j]; its row of ne shares (slot[m] for material m) is share[j · ne …]. */
+typedef struct share_job {
+    const ic_ctx *c;
+    const ic_scene *s;
+    const uint32_t *pix, *slot;
+    uint32_t ne;
+    uint64_t first; /* this process's first point */
+    double *share;
+} share_job;
+
+static void share_point(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    const share_job *j = ctx;
+    const ic_scene *s = j->s;
+    const uint64_t point = j->first + (uint64_t)item;
+    double *row = &j->share[point * j->ne];
+    ic_vec3 p, n;
+    ic_ic_gbuffer_point(j->c, j->pix[point], &p, &n, NULL);
+    for (uint32_t li = 0; li < s->tri_light_count; ++li) {
+        const ic_tri_light *l = &s->tri_lights[li];
+        uint32_t t = l->triangle;
+        /* Only the emitting side counts. */
+        if (!l->two_sided && v3_dot(l->normal, v3_sub(p, l->centroid)) <= 0.0f)
+            continue;
+        row[j->slot[s->triangle_material[t]]] +=
+            hemisphere_share(p, n, s->positions[s->triangles[3 * t]], s->positions[s->triangles[3 * t + 1]],
+                             s->positions[s->triangles[3 * t + 2]]);
+    }
+}
+
+static ic_result choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, int cached_allowed,
+                                  uint8_t *cached_mat, int *large_sampled, ic_error *err)
 {
     size_t npix = (size_t)c->g.width * c->g.height;
     /* At most ~1024 shading points, evenly through the image, and fewer where there are so many
@@ -258,52 +292,54 @@ static int choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, in
      * default samples per pixel) over the pixels the eye averages, and a record's hemisphere rays. */
     const double light_per_pixel = (double)IC_DEFAULT_SPP_IC * c->o.light_samples * BLUR_PIXELS,
                  rays_per_record = record_rays(&c->o.gather);
-    /* Shares per emitting material (slot[m]: its row, UINT32_MAX for the others) and sampled point. */
+    /* Shares per sampled point and emitting material (slot[m]: its column, UINT32_MAX for the others). */
     uint32_t nm = s->material_count, ne = 0;
-    uint32_t *slot = malloc(sizeof *slot * (nm ? nm : 1));
+    uint32_t *slot = malloc(sizeof *slot * (nm ? nm : 1)), *pix = malloc(sizeof *pix * cap);
     double *row = malloc(sizeof *row * cap), *share = NULL;
     if (slot) {
         for (uint32_t m = 0; m < nm; ++m)
             slot[m] = v3_is_black(s->materials[m].emission) ? UINT32_MAX : ne++;
         share = calloc((size_t)(ne ? ne : 1) * cap, sizeof *share);
     }
-    int ok = slot && share && row;
-    for (size_t i = 0, k = 0; ok && i < npix; ++i) {
-        if (!c->g.valid[i] || k++ % stride)
-            continue;
-        ic_vec3 p, n;
-        ic_ic_gbuffer_point(c, (uint32_t)i, &p, &n, NULL);
-        for (uint32_t li = 0; li < s->tri_light_count; ++li) {
-            const ic_tri_light *l = &s->tri_lights[li];
-            uint32_t t = l->triangle;
-            /* Only the emitting side counts. */
-            if (!l->two_sided && v3_dot(l->normal, v3_sub(p, l->centroid)) <= 0.0f)
-                continue;
-            share[(size_t)slot[s->triangle_material[t]] * cap + points] +=
-                hemisphere_share(p, n, s->positions[s->triangles[3 * t]], s->positions[s->triangles[3 * t + 1]],
-                                 s->positions[s->triangles[3 * t + 2]]);
-        }
-        ++points;
+    ic_result r = slot && share && row && pix ? IC_OK : ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
+    for (size_t i = 0, k = 0; r == IC_OK && i < npix; ++i)
+        if (c->g.valid[i] && !(k++ % stride))
+            pix[points++] = (uint32_t)i;
+    /* Several processes: a block of the points each, on its threads, then exchanged. */
+    if (r == IC_OK) {
+        share_job j = {c, s, pix, slot, ne, 0, share};
+        uint64_t own;
+        ic_comm_block(points, ic_comm_size(c->comm), ic_comm_rank(c->comm), &j.first, &own);
+        if ((r = ic_parallel_for(c->threads, (int64_t)own, share_point, &j)) != IC_OK)
+            ic_error_set(err, r, "could not start threads");
+        else
+            r = ic_comm_allgather_blocks(c->comm, share, points, sizeof *share * ne,
+                                         "exchanging the emitters' hemisphere shares", err);
     }
-    for (uint32_t m = 0; ok && m < nm; ++m) {
+    for (uint32_t m = 0; r == IC_OK && m < nm; ++m) {
         if (slot[m] == UINT32_MAX)
             continue;
-        memcpy(row, &share[(size_t)slot[m] * cap], sizeof *row * points);
+        for (size_t q = 0; q < points; ++q)
+            row[q] = share[q * ne + slot[m]];
         qsort(row, points, sizeof *row, cmp_double);
         if (row[points / 2] < c->o.large_emitters.value)
             continue;
         double cv2_light = INFINITY, cv2_gather = INFINITY;
-        ok = pilot(c, s, m, pilot_stride, &cv2_light, &cv2_gather);
-        cached_mat[m] = cached_allowed && ok && cv2_light / light_per_pixel > cv2_gather / rays_per_record;
+        if (!pilot(c, s, m, pilot_stride, &cv2_light, &cv2_gather)) {
+            r = ic_error_set(err, IC_ERR_OOM, "out of memory for the large emitters' pilot");
+            break;
+        }
+        cached_mat[m] = cached_allowed && cv2_light / light_per_pixel > cv2_gather / rays_per_record;
         /* Light-sampled, and its plain light samples noisier than cosine rays would be: the served hits
          * pair each light sample with a cosine ray (ic_ctx.large_sampled). */
-        if (ok && !cached_mat[m] && cv2_light > cv2_gather)
+        if (!cached_mat[m] && cv2_light > cv2_gather)
             *large_sampled = 1;
     }
     free(slot);
+    free(pix);
     free(share);
     free(row);
-    return ok;
+    return r;
 }
 
 /* A cdf (tri_light_count + 1 entries) over the emitting triangles that are cached (want 1) or not
@@ -350,21 +386,23 @@ static int narrow_light_selection(ic_ctx *c, const ic_scene *s, const uint8_t *c
     return 1;
 }
 
-int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
+ic_result ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s, ic_error *err)
 {
     if (s->tri_light_count == 0 || !(s->tri_light_power > 0.0f))
-        return 1;
+        return IC_OK;
     size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
     for (size_t i = 0; i < npix; ++i)
         valid += c->g.valid[i];
     if (valid == 0)
-        return 1;
+        return IC_OK;
     uint8_t *cached_mat = calloc(s->material_count ? s->material_count : 1, 1);
     const int cached_allowed = c->o.large_emitters.mode != IC_CACHE_OFF;
     int large_sampled = 0;
-    if (!cached_mat || !choose_materials(c, s, valid, cached_allowed, cached_mat, &large_sampled)) {
+    ic_result r = cached_mat ? choose_materials(c, s, valid, cached_allowed, cached_mat, &large_sampled, err)
+                             : ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
+    if (r != IC_OK) {
         free(cached_mat);
-        return 0;
+        return r;
     }
     c->large_sampled = large_sampled;
     uint32_t cached = 0;
@@ -375,9 +413,10 @@ int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s)
         else
             kept += s->tri_lights[i].power;
     }
-    int ok = cached == 0 || narrow_light_selection(c, s, cached_mat, kept);
-    if (ok)
+    if (cached && !narrow_light_selection(c, s, cached_mat, kept))
+        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the light tables");
+    else
         c->cached_emitters = cached;
     free(cached_mat);
-    return ok;
+    return r;
 }

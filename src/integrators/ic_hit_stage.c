@@ -8,7 +8,9 @@
  */
 #include "ic_internal.h"
 
+#include "core/comm.h"
 #include "core/sampling.h"
+#include "core/threads.h"
 #include "integrators/ic_world.h"
 
 #include <math.h>
@@ -31,6 +33,93 @@ uint32_t ic_ic_hit_probe_point(uint32_t k, uint32_t count)
     return (uint32_t)((uint64_t)k * count / ic_ic_hit_probes(count));
 }
 
+/* One pass of probe rays: probe k of the process's block traces from its point and leaves in slot[k] the
+ * diffuse hit that no record of kind `bounce` accepts (state[k] 2, its hit distance in the footprint) or
+ * none (state[k] 1: a diffuse hit that a record accepts; 0: no diffuse hit). */
+typedef struct probe_job {
+    ic_ctx *c;
+    const ic_vec3 *p, *n;
+    uint32_t count, first;
+    uint64_t key_tag;
+    uint8_t bounce;
+    int pass;
+    ic_candidate *slot;
+    uint8_t *state;
+} probe_job;
+
+static void probe_one(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    const probe_job *j = ctx;
+    ic_ctx *c = j->c;
+    const ic_scene *scene = c->tr->scene;
+    const uint32_t k = j->first + (uint32_t)item, i = ic_ic_hit_probe_point(k, j->count);
+    j->state[item] = 0;
+    ic_frame f = ic_frame_from_normal(j->n[i]);
+    ic_rng rng = ic_rng_make(c->seed ^ j->key_tag, i, (uint64_t)j->pass, k);
+    float u1, u2;
+    ic_rng_2d(&rng, &u1, &u2);
+    ic_ray ray = {j->p[i], ic_frame_to_world(&f, ic_warp_cosine_hemisphere(u1, u2)), 0.0f, INFINITY};
+    ic_hit hit;
+    ic_accel_intersect1(c->tr->accel, &ray, &hit);
+    if (hit.triangle == IC_NO_HIT)
+        return;
+    ic_surface s;
+    ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
+    ic_bsdf b;
+    ic_bsdf_init(&b, scene, &s, v3_neg(ray.dir));
+    if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
+        return; /* only diffuse hits look the cache up */
+    j->state[item] = 1;
+    ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
+    q.bounce = j->bounce;
+    ic_cache_estimate e;
+    if (ic_cache_query(c->cache, &q, &e))
+        return;
+    j->state[item] = 2;
+    ic_candidate *cd = &j->slot[item];
+    cd->p = s.p;
+    cd->n = b.cache_n;
+    cd->footprint = hit.t;
+    cd->key = ic_hash4(j->key_tag ^ 0x686974ULL, i, (uint64_t)j->pass, k);
+}
+
+/* The uncovered diffuse hits of a pass's probes, in probe order, into cand (room for every probe), their hit
+ * distances into dist; *m gets their number and *visited the probes' diffuse hits. Several processes trace
+ * a block of the probes each (ic_comm_block) on their threads and exchange what they found, so every
+ * process gets the candidates one process would find. The tracing's seconds are added to *seconds. */
+static ic_result probe_pass(ic_ctx *c, probe_job *j, uint32_t probes, ic_candidate *cand, float *dist, uint32_t *m,
+                            double *visited, double *seconds, ic_error *err)
+{
+    uint64_t first, own;
+    ic_comm_block(probes, ic_comm_size(c->comm), ic_comm_rank(c->comm), &first, &own);
+    j->first = (uint32_t)first;
+    double t0 = ic_seconds();
+    ic_result r = ic_parallel_for(c->threads, (int64_t)own, probe_one, j);
+    if (r != IC_OK)
+        return ic_error_set(err, r, "could not start threads");
+    uint32_t n = 0;
+    double seen = 0.0;
+    for (uint32_t k = 0; k < (uint32_t)own; ++k) {
+        seen += j->state[k] != 0;
+        if (j->state[k] == 2)
+            cand[n++] = j->slot[k];
+    }
+    *seconds += ic_seconds() - t0;
+    atomic_fetch_add_explicit(&c->rays, own, memory_order_relaxed);
+    uint64_t total = n;
+    if ((r = ic_comm_allgather_counted(c->comm, cand, n, sizeof *cand, &total, err)) != IC_OK ||
+        (r = ic_comm_sum(c->comm, &seen, 1, err)) != IC_OK)
+        return r;
+    for (uint64_t k = 0; k < total; ++k) {
+        dist[k] = cand[k].footprint;
+        cand[k].footprint = 0.0f;
+    }
+    *m = (uint32_t)total;
+    *visited = seen;
+    return IC_OK;
+}
+
 /* A record's rays then read the irradiance at their hits from these records (ic_ic_gather_trace's
  * look-ups) instead of tracing a path each. Each pass traces HIT_PROBES cosine-distributed rays from
  * every point (at most HIT_PROBES_MAX in all, spread evenly over the points); the diffuse hits that no
@@ -45,49 +134,27 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         return IC_OK;
     const ic_scene *scene = c->tr->scene;
     const uint32_t probes = ic_ic_hit_probes(count);
-    size_t cap = probes;
-    ic_candidate *cand = malloc(sizeof *cand * cap);
+    size_t cap = probes ? probes : 1;
+    /* zeroed: the candidates' padding travels in the exchange */
+    ic_candidate *cand = calloc(cap, sizeof *cand), *slot = calloc(cap, sizeof *slot);
     float *dist = malloc(sizeof *dist * cap);
-    if (!cand || !dist) {
+    uint8_t *state = malloc(cap);
+    if (!cand || !slot || !dist || !state) {
         free(cand);
+        free(slot);
         free(dist);
+        free(state);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for probe rays from %u points", count);
     }
+    probe_job j = {c, p, n, count, 0, key_tag, bounce, 0, slot, state};
     ic_result r = IC_OK;
     for (int pass = 0; pass < HIT_MAX_PASSES && r == IC_OK && !ic_ic_out_of_time(c) && !ic_ic_cancelled(c); ++pass) {
-        uint32_t m = 0, visited = 0;
-        for (uint32_t k = 0; k < probes; ++k) {
-            uint32_t i = ic_ic_hit_probe_point(k, count);
-            ic_frame f = ic_frame_from_normal(n[i]);
-            ic_rng rng = ic_rng_make(c->seed ^ key_tag, i, (uint64_t)pass, k);
-            float u1, u2;
-            ic_rng_2d(&rng, &u1, &u2);
-            ic_ray ray = {p[i], ic_frame_to_world(&f, ic_warp_cosine_hemisphere(u1, u2)), 0.0f, INFINITY};
-            ic_hit hit;
-            ic_accel_intersect1(c->tr->accel, &ray, &hit);
-            if (hit.triangle == IC_NO_HIT)
-                continue;
-            ic_surface s;
-            ic_scene_surface(scene, hit.triangle, hit.u, hit.v, &s);
-            ic_bsdf b;
-            ic_bsdf_init(&b, scene, &s, v3_neg(ray.dir));
-            if (!ic_bsdf_has_smooth(&b) || ic_bsdf_has_glossy(&b))
-                continue; /* only diffuse hits look the cache up */
-            ++visited;
-            ic_cache_lookup q = ic_cache_lookup_at(s.p, b.cache_n, IC_ACCEPT_CONSTRUCTION);
-            q.bounce = bounce;
-            ic_cache_estimate e;
-            if (ic_cache_query(c->cache, &q, &e))
-                continue;
-            dist[m] = hit.t;
-            ic_candidate *cd = &cand[m++];
-            cd->p = s.p;
-            cd->n = b.cache_n;
-            cd->footprint = 0.0f;
-            cd->key = ic_hash4(key_tag ^ 0x686974ULL, i, (uint64_t)pass, k);
-        }
-        atomic_fetch_add_explicit(&c->rays, probes, memory_order_relaxed);
-        if (m < (uint32_t)c->o.min_candidates || (double)m <= c->o.uncovered * (double)visited)
+        uint32_t m = 0;
+        double visited = 0.0;
+        j.pass = pass;
+        if ((r = probe_pass(c, &j, probes, cand, dist, &m, &visited, &times->probes, err)) != IC_OK)
+            break;
+        if (m < (uint32_t)c->o.min_candidates || (double)m <= c->o.uncovered * visited)
             break;
         /* Clusters about a record's size: the accuracy times the median distance of the uncovered hits (a
          * record's R is about the distance its hemisphere rays travel). The scene's diagonal, which sizes
@@ -118,7 +185,9 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         c->o.no_gradients = keep_no_gradients;
     }
     free(cand);
+    free(slot);
     free(dist);
+    free(state);
     return r;
 }
 

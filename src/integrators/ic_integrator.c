@@ -165,7 +165,7 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
 {
     ic_state *s = self;
     double t_gbuffer = 0.0, t_candidates = 0.0;
-    phase_times pt = {0, 0};
+    phase_times pt = {0};
     ic_result r = ic_ic_ctx_create(s->tr, s->opt, &s->c, &t_gbuffer, err);
     if (r == IC_OK)
         r = ic_ic_radiance_create(s->c, err); /* lobe tables, before a cache file is checked against them */

@@ -108,6 +108,7 @@ typedef struct ic_ctx {
 
 typedef struct phase_times {
     double gather, insert;
+    double probes; /* the hit stage's probe rays, exchanges excluded (shared out among processes) */
 } phase_times;
 
 /* The shading point of a camera ray: the first surface with a smooth lobe after ideal specular
@@ -329,8 +330,8 @@ ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *
  * from before the levels were saved with it). */
 int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib, uint32_t count, int first,
                           int levels, ic_vec3 *E);
-/* Chooses the large emitters the records carry (ic_emitters.c); returns 0 when out of memory. */
-int ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s);
+/* Chooses the large emitters the records carry (ic_emitters.c): a collective call under several processes. */
+ic_result ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s, ic_error *err);
 /* Hash of everything a record's value depends on besides the cache parameters (the cache file's
  * identity check). */
 uint64_t ic_ic_records_hash(const ic_ctx *c);

@@ -177,7 +177,7 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
     ic_result r = gathered && cand && (!bounded || (grid.key && grid.head && grid.next))
                       ? IC_OK
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
-    phase_times times = {0.0, 0.0};
+    phase_times times = {0};
     if (r == IC_OK)
         r = ic_ic_hit_stage(c, p, n, count, POINT_KEY_TAG, 0, HIT_STRATA_DIV, 1, &times, err);
     const uint32_t first_sensor_record = r == IC_OK ? ic_cache_count(c->cache) : 0;

@@ -28,7 +28,7 @@ ic_result ic_ic_adaptive_probe_run(const ic_scene *scene, const ic_render_option
     if (r == IC_OK) {
         ic_render_stats st;
         memset(&st, 0, sizeof st);
-        phase_times pt = {0, 0};
+        phase_times pt = {0};
         r = ic_ic_build_adaptive_probed(c, &o, &st, &pt, out, err);
         if (r == IC_OK) {
             out->cache = c->cache; /* handed over: the context must not free it */

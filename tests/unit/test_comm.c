@@ -353,6 +353,9 @@ static void check_render(const char *what, const ic_scene *scene, ic_render_opti
               (unsigned long long)samples, (unsigned long long)want);
         if (check_equal) {
             CHECK(same_image(&jobs[0].img, &ref), "%s, %d ranks: the image differs from one process's", what, size);
+            CHECK(jobs[0].st.cached_emitters == ref_st.cached_emitters,
+                  "%s, %d ranks: %u emitting triangles carried by the records, one process %u", what, size,
+                  jobs[0].st.cached_emitters, ref_st.cached_emitters);
             CHECK(jobs[0].st.records == ref_st.records && jobs[0].st.passes == ref_st.passes &&
                       !memcmp(jobs[0].st.records_per_pass, ref_st.records_per_pass, sizeof ref_st.records_per_pass),
                   "%s, %d ranks: %u records in %d passes, one process %u in %d", what, size, jobs[0].st.records,
@@ -680,6 +683,26 @@ int main(void)
         tall_ic.ic.save_cache = NULL;
         check_render("cache, batch, a 12x300 image", tall, tall_ic, 1);
         ic_scene_free(tall);
+    }
+
+    /* A large emitter that the records carry: the emitters' hemisphere shares are measured on a block of
+     * the shading points per rank, and every rank must make one process's choice. */
+    test_write_window_scene(IC_TEST_TMP);
+    ic_scene *window = NULL;
+    CHECK(ic_scene_load(IC_TEST_TMP "/window.json", NULL, &window, &err) == IC_OK, "%s", err.message);
+    if (window) {
+        /* the default hemisphere rays: with fewer, light sampling would be the better estimator */
+        ic_render_options window_ic = ic;
+        window_ic.ic.save_cache = NULL;
+        window_ic.spp = 2;
+        window_ic.ic.gather.theta_strata = window_ic.ic.gather.phi_strata = 0;
+        ic_image img = {0};
+        ic_render_stats st;
+        CHECK(ic_render(window, &window_ic, &img, &st, &err) == IC_OK && st.cached_emitters > 0,
+              "the window's emitter is not carried by the records (%u triangles; %s)", st.cached_emitters, err.message);
+        ic_image_free(&img);
+        check_render("cache, batch, a window's light carried by the records", window, window_ic, 1);
+        ic_scene_free(window);
     }
 
     ic_render_options adaptive = ic;

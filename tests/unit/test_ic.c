@@ -449,22 +449,7 @@ static void test_step(void)
  * and with it the error is lower at equal samples. */
 static void test_window(void)
 {
-    test_write_file(IC_TEST_TMP "/window.mtl", "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl sky\nKd 0 0 0\nKe 3 3 3\n");
-    test_write_file(IC_TEST_TMP "/window.obj",
-                    "mtllib window.mtl\nusemtl wall\n"
-                    /* floor, ceiling, the walls x = 0, x = 4 and z = 0 */
-                    "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 3 0\nv 4 3 0\nv 4 3 4\nv 0 3 4\n"
-                    "f 1 4 3 2\nf 5 6 7 8\nf 1 5 8 4\nf 2 3 7 6\nf 1 2 6 5\n"
-                    /* the wall z = 4 around a window x in [1.5, 2.5], y in [1, 2] */
-                    "v 1.5 0 4\nv 1.5 3 4\nv 2.5 0 4\nv 2.5 3 4\nv 1.5 1 4\nv 2.5 1 4\nv 1.5 2 4\nv 2.5 2 4\n"
-                    "f 4 8 10 9\nf 11 12 7 3\nf 9 13 14 11\nf 15 10 12 16\n"
-                    "usemtl sky\n"
-                    /* outside, facing the room (−z) */
-                    "v -20 -20 5\nv -20 24 5\nv 24 24 5\nv 24 -20 5\nf 17 18 19 20\n");
-    test_write_file(IC_TEST_TMP "/window.json",
-                    "{\n  \"camera\": {\"eye\": [3.6, 2.6, 0.3], \"target\": [1.8, 0.6, 3.2], \"up\": [0, 1, 0],\n"
-                    "             \"fov_y\": 70, \"width\": 64, \"height\": 48},\n"
-                    "  \"meshes\": [{\"path\": \"window.obj\"}]\n}\n");
+    test_write_window_scene(IC_TEST_TMP);
     const char *scene = IC_TEST_TMP "/window.json";
     const int W = 64, H = 48;
     ic_render_options pt = {0};

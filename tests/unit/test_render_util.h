@@ -26,6 +26,33 @@ static inline void test_write_file(const char *path, const char *text)
     fclose(f);
 }
 
+/* Writes dir/window.json (with window.obj and window.mtl): a 4 × 3 × 4 m room, 64 × 48 pixels, lit only through
+ * a 1 × 1 m window by an emitting quad of 44 × 44 m outside it, a large emitter mostly hidden behind the
+ * opening, which the records carry by default (ic_ic_options.large_emitters). */
+static inline void test_write_window_scene(const char *dir)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/window.mtl", dir);
+    test_write_file(path, "newmtl wall\nKd 0.7 0.7 0.7\nnewmtl sky\nKd 0 0 0\nKe 3 3 3\n");
+    snprintf(path, sizeof path, "%s/window.obj", dir);
+    test_write_file(path,
+                    "mtllib window.mtl\nusemtl wall\n"
+                    /* floor, ceiling, the walls x = 0, x = 4 and z = 0 */
+                    "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 3 0\nv 4 3 0\nv 4 3 4\nv 0 3 4\n"
+                    "f 1 4 3 2\nf 5 6 7 8\nf 1 5 8 4\nf 2 3 7 6\nf 1 2 6 5\n"
+                    /* the wall z = 4 around a window x in [1.5, 2.5], y in [1, 2] */
+                    "v 1.5 0 4\nv 1.5 3 4\nv 2.5 0 4\nv 2.5 3 4\nv 1.5 1 4\nv 2.5 1 4\nv 1.5 2 4\nv 2.5 2 4\n"
+                    "f 4 8 10 9\nf 11 12 7 3\nf 9 13 14 11\nf 15 10 12 16\n"
+                    "usemtl sky\n"
+                    /* outside, facing the room (−z) */
+                    "v -20 -20 5\nv -20 24 5\nv 24 24 5\nv 24 -20 5\nf 17 18 19 20\n");
+    snprintf(path, sizeof path, "%s/window.json", dir);
+    test_write_file(path,
+                    "{\n  \"camera\": {\"eye\": [3.6, 2.6, 0.3], \"target\": [1.8, 0.6, 3.2], \"up\": [0, 1, 0],\n"
+                    "             \"fov_y\": 70, \"width\": 64, \"height\": 48},\n"
+                    "  \"meshes\": [{\"path\": \"window.obj\"}]\n}\n");
+}
+
 /* Loads the scene file at path into *out (NULL on failure, err set) at width × height pixels (0: the file's),
  * with the view file view (NULL: none), reading files outside its folder when allow_outside_paths is 1. */
 static inline ic_result test_load_scene(const char *path, const char *view, int width, int height,
