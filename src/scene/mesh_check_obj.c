@@ -29,37 +29,79 @@
 #include <string.h>
 #include <strings.h>
 
-enum { OBJ_MAX_LINE = 1 << 16 };
+enum { OBJ_MAX_LINE = 1 << 16, OBJ_CHUNK = 1 << 16 };
+
+/* The file read a chunk at a time, its lines scanned in memory. */
+typedef struct obj_reader {
+    FILE *fp;
+    unsigned char *chunk;
+    size_t len, pos;
+} obj_reader;
+
+/* 1 if a byte is left to read (reading the next chunk when the last is used up). */
+static int reader_more(obj_reader *r)
+{
+    if (r->pos < r->len)
+        return 1;
+    r->len = fread(r->chunk, 1, OBJ_CHUNK, r->fp);
+    r->pos = 0;
+    return r->len > 0;
+}
+
+/* The bytes that end a line for assimp. */
+static const unsigned char OBJ_LINE_END[256] = {['\n'] = 1, ['\r'] = 1, ['\f'] = 1, [0] = 1};
 
 /* Reads the next line as assimp sees it into buf (continuations joined); *line_no advances by the line
  * ends consumed. Returns 0 at the end of the file, -1 if the line is longer than the buffer. */
-static int obj_line(FILE *fp, char *buf, long *line_no)
+static int obj_line(obj_reader *rd, char *buf, long *line_no)
 {
-    int n = 0, c, any = 0;
-    for (;;) {
-        c = getc_unlocked(fp);
-        if (c == EOF)
-            break;
+    size_t n = 0;
+    int any = 0;
+    while (reader_more(rd)) {
         any = 1;
-        if (c == '\n' || c == '\r' || c == '\f' || c == '\0') {
-            if (c == '\r') {
-                int d = getc_unlocked(fp);
-                if (d != '\n' && d != EOF)
-                    ungetc(d, fp);
-            }
-            ++*line_no;
-            if (n > 0 && buf[n - 1] == '\\') { /* continued on the next line */
-                --n;
-                continue;
-            }
-            break;
-        }
-        if (n == OBJ_MAX_LINE - 1)
+        /* the bytes up to the line's end or the chunk's, copied at once */
+        const unsigned char *from = rd->chunk + rd->pos, *end = rd->chunk + rd->len, *q = from;
+        while (q < end && !OBJ_LINE_END[*q])
+            ++q;
+        size_t run = (size_t)(q - from);
+        if (run > OBJ_MAX_LINE - 1 - n)
             return -1;
-        buf[n++] = (char)c;
+        memcpy(buf + n, from, run);
+        n += run;
+        rd->pos += run;
+        if (q == end)
+            continue;
+        if (rd->chunk[rd->pos++] == '\r' && reader_more(rd) && rd->chunk[rd->pos] == '\n')
+            ++rd->pos;
+        ++*line_no;
+        if (n > 0 && buf[n - 1] == '\\') { /* continued on the next line */
+            --n;
+            continue;
+        }
+        break;
     }
     buf[n] = '\0';
-    return any ? 1 : 0;
+    return any;
+}
+
+/* The next word of *at, split at spaces and tabs as strtok_r(…, " \t") splits, ended in place; NULL when
+ * none is left. */
+static char *next_word(char **at)
+{
+    char *p = *at;
+    while (*p == ' ' || *p == '\t')
+        ++p;
+    if (!*p) {
+        *at = p;
+        return NULL;
+    }
+    char *w = p;
+    while (*p && *p != ' ' && *p != '\t')
+        ++p;
+    if (*p)
+        *p++ = '\0';
+    *at = p;
+    return w;
 }
 
 /* A component of a v, vt or vn line: [+-] digits with an optional fraction, or [+-] a fraction alone (".5"),
@@ -142,8 +184,7 @@ static ic_result check_vector_line(int kind, char *c, const char *path, long lin
                                    ic_error *err)
 {
     int count = 0, bad = 0;
-    char *save = NULL;
-    for (char *w = strtok_r(c, " \t", &save); w; w = strtok_r(NULL, " \t", &save)) {
+    for (char *w = next_word(&c); w; w = next_word(&c)) {
         if (w[0] == '#')
             break; /* a comment ends the line */
         int finite;
@@ -168,14 +209,15 @@ static ic_result check_vector_line(int kind, char *c, const char *path, long lin
 static ic_result check_face_line(char kind, char *c, const char *path, long line_no, const long long so_far[3],
                                  obj_far_index far[3], ic_error *err)
 {
-    char *save = NULL;
     int references = 0;
-    for (char *w = strtok_r(c, " \t", &save); w; w = strtok_r(NULL, " \t", &save), ++references) {
+    for (char *w = next_word(&c); w; w = next_word(&c), ++references) {
         /* v, v/vt, v//vn or v/vt/vn */
         long long idx[3] = {0, 0, 0};
         int present[3] = {0, 0, 0}, parts = 0, ok = 1;
         for (const char *p = w; ok; ++parts) {
-            size_t len = strcspn(p, "/");
+            size_t len = 0;
+            while (p[len] && p[len] != '/')
+                ++len;
             ok = parts < 3 && obj_index(p, len, &idx[parts], &present[parts]);
             if (!p[len])
                 break;
@@ -209,16 +251,19 @@ static ic_result check_face_line(char kind, char *c, const char *path, long line
 ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err)
 {
     char *line = malloc(OBJ_MAX_LINE);
-    if (!line)
+    obj_reader rd = {fp, malloc(OBJ_CHUNK), 0, 0};
+    if (!line || !rd.chunk) {
+        free(line);
+        free(rd.chunk);
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
+    }
     long line_no = 0;
     long long vertices = 0, faces = 0, counts[3] = {0, 0, 0};
     obj_far_index far[3] = {{0, 0}, {0, 0}, {0, 0}};
     ic_result r = IC_OK;
-    flockfile(fp);
     for (;;) {
         long at = line_no + 1; /* the line this one starts on */
-        int got = obj_line(fp, line, &line_no);
+        int got = obj_line(&rd, line, &line_no);
         if (got == 0)
             break;
         if (got < 0) {
@@ -247,13 +292,13 @@ ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elemen
         if (r != IC_OK)
             break;
     }
-    funlockfile(fp);
     counts[0] = vertices;
     for (int k = 0; r == IC_OK && k < 3; ++k)
         if (far[k].index > counts[k])
             r = ic_error_set(err, IC_ERR_PARSE, "%s:%ld: a face names %s %lld, but the file has %lld; fix the face or "
                              "export the mesh again", path, far[k].line, OBJ_KIND[k], far[k].index, counts[k]);
     free(line);
+    free(rd.chunk);
     return r;
 }
 

@@ -592,6 +592,52 @@ static void test_ply_face_texcoords(void)
 }
 
 /* Valid files the non-finite checks must let through. */
+/* The OBJ check reads the file in chunks of 64 KiB: line ends of every kind (\n, \r\n, \r, \f, NUL and a
+ * backslash joining two lines), one \r\n split between two chunks and lines that straddle chunks still count
+ * lines as assimp does, so the non-finite vertex after them is reported on its own line. */
+static void test_obj_lines_across_chunks(void)
+{
+    enum { SIZE = 3 * 65536 };
+    char *text = malloc(SIZE + 64);
+    CHECK(text != NULL, "out of memory");
+    if (!text)
+        return;
+    static const char *const ends[] = {"\n", "\r\n", "\r", "\f"};
+    size_t n = 0;
+    long line = 1, vertex = 0;
+    for (int k = 0; n < SIZE - 64; ++k) {
+        /* a vertex line whose \r\n straddles the first chunk boundary */
+        const char *end = n + 40 > 65536 && n < 65536 ? "" : ends[k % 4];
+        n += (size_t)sprintf(text + n, "v %d.25 %d 0%s", k, k % 7, end);
+        ++vertex;
+        if (!*end) { /* pad to the boundary, then \r | \n across it */
+            while (n < 65535)
+                text[n++] = ' ';
+            text[n++] = '\r';
+            text[n++] = '\n';
+        }
+        line += 1;
+        if (k % 97 == 0) { /* a line joined to the next by a backslash: one vertex, two line ends */
+            n += (size_t)sprintf(text + n, "v 1 \\\n2 3\n");
+            ++vertex;
+            line += 2;
+        }
+        if (k % 89 == 0) { /* a NUL ends a line too */
+            text[n++] = '#';
+            text[n++] = '\0';
+            line += 1;
+        }
+    }
+    n += (size_t)sprintf(text + n, "v 0 nan 0\n");
+    ++vertex;
+    char want[64];
+    snprintf(want, sizeof want, "lines_across_chunks.obj:%ld:", line);
+    char what[64];
+    snprintf(what, sizeof what, "vertex %ld has a non-finite coordinate", vertex);
+    expect_error(write_tmp("lines_across_chunks.obj", text, (long)n), NULL, IC_ERR_PARSE, want, what, NULL);
+    free(text);
+}
+
 static void test_finite_attribute_variants(void)
 {
     ic_scene *s = NULL;
@@ -903,6 +949,7 @@ int main(void)
     test_scene_size_limit();
     test_non_finite_attributes();
     test_finite_attribute_variants();
+    test_obj_lines_across_chunks();
     test_ply_face_texcoords();
     TEST_MAIN_END();
 }
