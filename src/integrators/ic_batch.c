@@ -206,6 +206,22 @@ static ic_result own_need(ic_ctx *c, const float *lum, float *need, double *seco
     return r == IC_OK ? IC_OK : ic_error_set(err, r, "out of memory for the discontinuity map");
 }
 
+/* Candidates at pixels (pixel_candidates): under several processes most lie in other processes' rows, whose
+ * shading points are traced again (ic_ic_gbuffer_point), so on the threads. */
+typedef struct pixel_job {
+    const ic_ctx *c;
+    const uint32_t *pix;
+    ic_candidate *cand;
+    uint64_t tag;
+} pixel_job;
+
+static void pixel_candidate(void *p, int64_t item, int thread)
+{
+    (void)thread;
+    const pixel_job *j = p;
+    j->cand[item] = ic_ic_candidate_at_pixel(j->c, j->pix[item], j->tag);
+}
+
 /* pix[0, n) (room for one a pixel), this process's chosen pixels in raster order, become every process's
  * in raster order (the blocks of rows are in rank order), and candidates at them into cand; *count gets
  * their number. */
@@ -216,10 +232,15 @@ static ic_result pixel_candidates(ic_ctx *c, uint32_t *pix, uint32_t n, ic_candi
     ic_result r = ic_comm_allgather_counted(c->comm, pix, n, sizeof *pix, &total, err);
     if (r != IC_OK)
         return r;
-    for (uint64_t i = 0; i < total; ++i)
-        cand[i] = ic_ic_candidate_at_pixel(c, pix[i], tag);
     *count = (uint32_t)total;
-    return IC_OK;
+    if (!ic_comm_is_shared(c->comm)) { /* every point is in the G-buffer: no threads needed */
+        for (uint64_t i = 0; i < total; ++i)
+            cand[i] = ic_ic_candidate_at_pixel(c, pix[i], tag);
+        return IC_OK;
+    }
+    pixel_job j = {c, pix, cand, tag};
+    r = ic_parallel_for(c->threads, (int64_t)total, pixel_candidate, &j);
+    return r == IC_OK ? IC_OK : ic_error_set(err, r, "could not start threads");
 }
 
 /* Candidates from dithering a need map (this process's rows, then exchanged); pixels that already made a
