@@ -68,6 +68,12 @@ ic_result ic_image_read(const char *path, ic_image *out, ic_error *err);
  * anything is allocated for it (0: no limit but the library's own); the message ends with `raise`, what
  * to do ("raise --max-texture-pixels"; NULL: "use a smaller image"). */
 ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err);
+/* ic_image_read_max for a texture: an 8-bit PNG or JPEG comes back as its sRGB bytes, 3 a pixel, rows top
+ * first, in *srgb8 (release with free()), out then holding its width and height and no pixels; any other image
+ * as ic_image_read_max reads it, *srgb8 NULL. Those bytes are what ic_image_read_max would have made linear
+ * with ic_srgb8_to_linear. */
+ic_result ic_image_read_texture(const char *path, size_t max_pixels, const char *raise, ic_image *out, uint8_t **srgb8,
+                                ic_error *err);
 /* Decodes a PNG or JPEG image held in memory (an image embedded in another file; name labels it in
  * messages), with the pixel limit of ic_image_read_max. */
 ic_result ic_image_decode_memory(const void *data, size_t size, const char *name, size_t max_pixels, const char *raise,

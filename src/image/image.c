@@ -10,13 +10,19 @@
 #include <string.h>
 
 
+/* 1 for a size an image may have (IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_PIXELS). */
+static int size_allowed(int width, int height)
+{
+    return width > 0 && height > 0 && width <= IC_IMAGE_MAX_SIDE && height <= IC_IMAGE_MAX_SIDE &&
+           (size_t)width * (size_t)height <= IC_IMAGE_MAX_PIXELS;
+}
+
 ic_result ic_image_create(ic_image *img, int width, int height)
 {
     if (!img)
         return IC_ERR_INVALID_ARG;
     memset(img, 0, sizeof *img);
-    if (width <= 0 || height <= 0 || width > IC_IMAGE_MAX_SIDE || height > IC_IMAGE_MAX_SIDE ||
-        (size_t)width * (size_t)height > IC_IMAGE_MAX_PIXELS)
+    if (!size_allowed(width, height))
         return IC_ERR_INVALID_ARG;
     img->rgb = calloc((size_t)width * (size_t)height * 3, sizeof(float));
     if (!img->rgb)
@@ -24,6 +30,15 @@ ic_result ic_image_create(ic_image *img, int width, int height)
     img->width = width;
     img->height = height;
     return IC_OK;
+}
+
+void ic_image_release(ic_image *img, const ic_image_limit *lim)
+{
+    ic_image_free(img);
+    if (lim && lim->srgb8) {
+        free(*lim->srgb8);
+        *lim->srgb8 = NULL;
+    }
 }
 
 void ic_image_free(ic_image *img)
@@ -50,7 +65,19 @@ ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, i
     ic_result r = ic_image_check_size(path, width, height, lim, err);
     if (r != IC_OK)
         return r;
-    r = ic_image_create(img, width, height);
+    if (lim && lim->srgb8) {
+        memset(img, 0, sizeof *img);
+        if (!size_allowed(width, height))
+            r = IC_ERR_INVALID_ARG;
+        else if (!(*lim->srgb8 = malloc((size_t)width * (size_t)height * 3)))
+            r = IC_ERR_OOM;
+        else {
+            img->width = width;
+            img->height = height;
+        }
+    } else {
+        r = ic_image_create(img, width, height);
+    }
     if (r == IC_ERR_INVALID_ARG)
         return ic_error_set(err, IC_ERR_PARSE, "%s: image size %dx%d is invalid or larger than %dx%d or %zu pixels; "
                             "check the file", path, width, height, IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_SIDE,

@@ -14,14 +14,18 @@
 typedef struct ic_image_limit {
     size_t max_pixels;
     const char *raise;     /* what to do when it is exceeded, or NULL */
+    uint8_t **srgb8;       /* non-NULL: an 8-bit PNG or JPEG comes back as its bytes here (3 a pixel, rows top
+                              first; free()), the image then holding its size and no pixels (ic_image_read_texture) */
 } ic_image_limit;
 
 /* IC_OK if width x height is within lim (may be NULL); else reports it against path, naming the limit. */
 ic_result ic_image_check_size(const char *path, int width, int height, const ic_image_limit *lim, ic_error *err);
 /* ic_image_create for a reader: reports a bad size, one over lim (may be NULL) or a failed allocation
- * against path. */
+ * against path. With lim->srgb8, *lim->srgb8 gets room for the 8-bit bytes instead (img: the size, no pixels). */
 ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, int height, const ic_image_limit *lim,
                                    ic_error *err);
+/* Frees what a reader made of an image it then refused: the pixels, and the bytes of lim->srgb8. */
+void ic_image_release(ic_image *img, const ic_image_limit *lim);
 
 /* OpenEXR (Core C API): first part, scanline, R/G/B (A ignored) or Y, half or float. */
 ic_result ic_image_read_exr(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err);

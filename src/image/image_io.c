@@ -49,13 +49,14 @@ ic_result ic_image_read_layer(const char *path, const char *layer, ic_image *out
     extension_of(path, ext);
     if (strcmp(ext, ".exr") != 0)
         return ic_error_set(err, IC_ERR_UNSUPPORTED, "%s: only OpenEXR files have layers", path);
-    const ic_image_limit limit = {0, NULL};
+    const ic_image_limit limit = {0, NULL, NULL};
     return ic_image_read_exr_layer(path, layer, &limit, out, err);
 }
 
-ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err)
+/* ic_image_read_max's reading with its limit (lim->srgb8: an 8-bit PNG or JPEG as bytes). */
+static ic_result read_limited(const char *path, const ic_image_limit *lim, ic_image *out, ic_error *err)
 {
-    const ic_image_limit limit = {max_pixels, raise}, *lim = &limit;
+    const ic_image_limit floats = {lim->max_pixels, lim->raise, NULL}; /* the float formats' */
     if (!out)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_image_read: no output image given");
     memset(out, 0, sizeof *out);
@@ -77,12 +78,12 @@ ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *rai
         return ic_error_set(err, IC_ERR_PARSE, "%s: file is empty; re-create the image", path);
 
     if (n == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01)
-        return ic_image_read_exr(path, lim, out, err);
+        return ic_image_read_exr(path, &floats, out, err);
     if (n >= 3 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f') &&
         (magic[2] == '\n' || magic[2] == '\r' || magic[2] == ' ' || magic[2] == '\t'))
-        return ic_image_read_pfm(path, lim, out, err);
+        return ic_image_read_pfm(path, &floats, out, err);
     if (n >= 2 && magic[0] == '#' && magic[1] == '?')
-        return ic_image_read_hdr(path, lim, out, err);
+        return ic_image_read_hdr(path, &floats, out, err);
     if ((n == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') || /* PNG */
         (n >= 3 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff))               /* JPEG */
         return ic_image_read_ldr(path, lim, out, err);
@@ -92,10 +93,26 @@ ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *rai
                         path);
 }
 
+ic_result ic_image_read_max(const char *path, size_t max_pixels, const char *raise, ic_image *out, ic_error *err)
+{
+    const ic_image_limit limit = {max_pixels, raise, NULL};
+    return read_limited(path, &limit, out, err);
+}
+
+ic_result ic_image_read_texture(const char *path, size_t max_pixels, const char *raise, ic_image *out, uint8_t **srgb8,
+                                ic_error *err)
+{
+    if (!srgb8)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_image_read_texture: nowhere to put the bytes");
+    *srgb8 = NULL;
+    const ic_image_limit limit = {max_pixels, raise, srgb8};
+    return read_limited(path, &limit, out, err);
+}
+
 ic_result ic_image_decode_memory(const void *data, size_t size, const char *name, size_t max_pixels, const char *raise,
                                  ic_image *out, ic_error *err)
 {
-    const ic_image_limit limit = {max_pixels, raise};
+    const ic_image_limit limit = {max_pixels, raise, NULL};
     if (!out)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_image_decode_memory: no output image given");
     memset(out, 0, sizeof *out);

@@ -127,9 +127,17 @@ static ic_result decode(decode_job *d, const unsigned char *bytes, size_t n)
     for (int v = 0; v < 256; ++v)
         to_linear[v] = ic_srgb8_to_linear((uint8_t)v);
     const size_t width = (size_t)d->out->width;
+    uint8_t *bytes_out = d->lim && d->lim->srgb8 ? *d->lim->srgb8 : NULL;
     while (cinfo->output_scanline < cinfo->output_height) {
-        float *dst = d->out->rgb + (size_t)cinfo->output_scanline * width * 3;
+        const size_t at = (size_t)cinfo->output_scanline * width * 3;
         jpeg_read_scanlines(cinfo, row, 1);
+        if (bytes_out) {
+            for (size_t x = 0; x < width; ++x)
+                for (size_t c = 0; c < 3; ++c)
+                    bytes_out[at + 3 * x + c] = row[0][channels == 3 ? 3 * x + c : x];
+            continue;
+        }
+        float *dst = d->out->rgb + at;
         for (size_t x = 0; x < width; ++x)
             for (size_t c = 0; c < 3; ++c)
                 dst[3 * x + c] = to_linear[row[0][channels == 3 ? 3 * x + c : x]];
@@ -161,6 +169,6 @@ ic_result ic_image_decode_jpeg(const unsigned char *bytes, size_t n, const char 
     ic_result r = decode(&d, bytes, n);
     jpeg_destroy_decompress(&d.cinfo); /* also after a failed jpeg_create_decompress: mem is NULL then */
     if (r != IC_OK)
-        ic_image_free(out);
+        ic_image_release(out, lim);
     return r;
 }

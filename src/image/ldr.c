@@ -279,13 +279,19 @@ ic_result ic_image_decode_ldr(const unsigned char *bytes, size_t n, const char *
     int width = 0, height = 0, channels = 0, len = (int)n;
     if (!stbi_info_from_memory(bytes, len, &width, &height, &channels))
         return decode_failed(name, err);
-    /* Validate the size before stb allocates for it. */
-    ic_result r = ic_image_create_for_file(name, out, width, height, lim, err);
+    /* Validate the size before stb allocates for it; a 16-bit PNG is never bytes. */
+    const int is_16_bit = stbi_is_16_bit_from_memory(bytes, len);
+    ic_image_limit floats = {0, NULL, NULL};
+    if (lim) {
+        floats = *lim;
+        floats.srgb8 = is_16_bit ? NULL : lim->srgb8;
+    }
+    ic_result r = ic_image_create_for_file(name, out, width, height, &floats, err);
     if (r != IC_OK)
         return r;
     const size_t count = (size_t)width * (size_t)height * 3;
 
-    if (stbi_is_16_bit_from_memory(bytes, len)) {
+    if (is_16_bit) {
         unsigned short *pixels = stbi_load_16_from_memory(bytes, len, &width, &height, &channels, 3);
         if (!pixels) {
             ic_image_free(out);
@@ -297,14 +303,18 @@ ic_result ic_image_decode_ldr(const unsigned char *bytes, size_t n, const char *
     } else {
         unsigned char *pixels = stbi_load_from_memory(bytes, len, &width, &height, &channels, 3);
         if (!pixels) {
-            ic_image_free(out);
+            ic_image_release(out, &floats);
             return decode_failed(name, err);
         }
-        float to_linear[256];
-        for (int v = 0; v < 256; ++v)
-            to_linear[v] = ic_srgb8_to_linear((uint8_t)v);
-        for (size_t i = 0; i < count; ++i)
-            out->rgb[i] = to_linear[pixels[i]];
+        if (floats.srgb8) {
+            memcpy(*floats.srgb8, pixels, count);
+        } else {
+            float to_linear[256];
+            for (int v = 0; v < 256; ++v)
+                to_linear[v] = ic_srgb8_to_linear((uint8_t)v);
+            for (size_t i = 0; i < count; ++i)
+                out->rgb[i] = to_linear[pixels[i]];
+        }
         stbi_image_free(pixels);
     }
     return IC_OK;

@@ -268,6 +268,32 @@ static long long first_bad_texel(const ic_image *img, int allow_negative)
 
 static const char *const channel_name[3] = {"red", "green", "blue"};
 
+/* A new texture slot at the end of the scene's textures, for path at width × height, without texels yet;
+ * NULL when out of memory. */
+static ic_texture *new_texture(ic_scene *scene, const char *path, int is_data, int width, int height)
+{
+    ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));
+    if (!grown)
+        return NULL;
+    scene->textures = grown;
+    ic_texture *t = &scene->textures[scene->texture_count];
+    memset(t, 0, sizeof *t);
+    snprintf(t->path, sizeof t->path, "%.1023s", path);
+    t->width = width;
+    t->height = height;
+    t->is_data = is_data;
+    return t;
+}
+
+/* The texture's texels as 8-bit sRGB bytes (owned by it from now on) and the values they stand for: the
+ * decoder's sRGB curve, or v/255 for a data texture (no curve applies to roughness or a normal map). */
+static void set_srgb8(ic_texture *t, uint8_t *bytes)
+{
+    t->srgb8 = bytes;
+    for (int v = 0; v < 256; ++v)
+        t->linear[v] = t->is_data ? (float)v / 255.0f : ic_srgb8_to_linear((uint8_t)v);
+}
+
 ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_data, ic_image *img_in,
                                   const char *owner, int32_t *index, ic_error *err)
 {
@@ -287,25 +313,16 @@ ic_result ic_scene_texture_add_as(ic_scene_builder *b, const char *path, int is_
         ic_image_free(&img);
         return IC_ERR_INVALID_ARG;
     }
-    ic_texture *grown = realloc(scene->textures, sizeof *grown * (scene->texture_count + 1));
-    if (!grown) {
+    ic_texture *t = new_texture(scene, path, is_data, img.width, img.height);
+    if (!t) {
         ic_image_free(&img);
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory loading texture '%s'", owner, path);
     }
-    scene->textures = grown;
-    ic_texture *t = &scene->textures[scene->texture_count];
-    memset(t, 0, sizeof *t);
-    snprintf(t->path, sizeof t->path, "%.1023s", path);
-    t->width = img.width;
-    t->height = img.height;
-    t->is_data = is_data;
     size_t n = (size_t)img.width * (size_t)img.height * 3;
-    t->srgb8 = srgb8_texels(img.rgb, n, t->linear);
-    if (t->srgb8) {
+    uint8_t *bytes = srgb8_texels(img.rgb, n, t->linear);
+    if (bytes) {
         ic_image_free(&img);
-        if (is_data) /* the bytes are values v/255: the decoder's sRGB curve does not apply */
-            for (int v = 0; v < 256; ++v)
-                t->linear[v] = (float)v / 255.0f;
+        set_srgb8(t, bytes);
     } else {
         t->rgb = img.rgb; /* ownership moves to the scene; released with ic_image_free in ic_scene_free */
         if (is_data && !is_hdr_path(path)) /* a 16-bit file: undo the decoder's sRGB curve */
@@ -333,11 +350,21 @@ ic_result ic_scene_texture_load_as(ic_scene_builder *b, const char *path, int is
     }
     ic_image img;
     ic_error ierr;
-    ic_result r = ic_image_read_max(path, ic_scene_max_texture_pixels(b->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &img,
-                                    &ierr);
+    uint8_t *bytes = NULL; /* an 8-bit file's texels, kept as they are */
+    ic_result r = ic_image_read_texture(path, ic_scene_max_texture_pixels(b->opt), IC_SCENE_RAISE_TEXTURE_LIMIT, &img,
+                                        &bytes, &ierr);
     if (r != IC_OK)
         return ic_error_set(err, r, "%s: %s", owner, ierr.message);
-    return ic_scene_texture_add_as(b, path, is_data, &img, owner, index, err);
+    if (!bytes)
+        return ic_scene_texture_add_as(b, path, is_data, &img, owner, index, err);
+    ic_texture *t = new_texture(scene, path, is_data, img.width, img.height);
+    if (!t) {
+        free(bytes);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory loading texture '%s'", owner, path);
+    }
+    set_srgb8(t, bytes);
+    *index = (int32_t)scene->texture_count++;
+    return IC_OK;
 }
 
 ic_result ic_scene_texture_load(ic_scene_builder *b, const char *path, const char *owner, int32_t *index,

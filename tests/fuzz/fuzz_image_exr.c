@@ -3,5 +3,5 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    return fuzz_image_read("img.exr", ic_image_read_exr, data, size);
+    return fuzz_image_read("img.exr", ic_image_read_exr, 0, data, size);
 }

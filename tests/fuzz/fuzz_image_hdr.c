@@ -3,5 +3,5 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    return fuzz_image_read("img.hdr", ic_image_read_hdr, data, size);
+    return fuzz_image_read("img.hdr", ic_image_read_hdr, 0, data, size);
 }

@@ -3,5 +3,5 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    return fuzz_image_read("img.pfm", ic_image_read_pfm, data, size);
+    return fuzz_image_read("img.pfm", ic_image_read_pfm, 0, data, size);
 }

@@ -3,5 +3,5 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    return fuzz_image_read("img.png", ic_image_read_ldr, data, size);
+    return fuzz_image_read("img.png", ic_image_read_ldr, 1, data, size);
 }

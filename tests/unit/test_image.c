@@ -1131,6 +1131,63 @@ static void test_damaged_files(void)
     }
 }
 
+/* ic_image_read_texture: an 8-bit PNG or JPEG (colour or greyscale) comes back as the bytes whose sRGB values
+ * ic_image_read_max gives, every other file as ic_image_read_max reads it; a damaged one is refused alike. */
+static void expect_texture_bytes(const char *path, int want_bytes)
+{
+    ic_image floats, shape;
+    ic_error err;
+    uint8_t *bytes = (uint8_t *)"";
+    CHECK(ic_image_read_max(path, 0, NULL, &floats, &err) == IC_OK, "%s: %s", path, err.message);
+    CHECK(ic_image_read_texture(path, 0, NULL, &shape, &bytes, &err) == IC_OK, "%s as a texture: %s", path,
+          err.message);
+    CHECK((bytes != NULL) == want_bytes && shape.width == floats.width && shape.height == floats.height,
+          "%s: bytes %d (want %d), %dx%d against %dx%d", path, bytes != NULL, want_bytes, shape.width, shape.height,
+          floats.width, floats.height);
+    size_t n = (size_t)floats.width * (size_t)floats.height * 3, differ = 0;
+    for (size_t k = 0; k < n; ++k)
+        differ += bytes ? ic_srgb8_to_linear(bytes[k]) != floats.rgb[k] : shape.rgb[k] != floats.rgb[k];
+    CHECK(differ == 0 && (!bytes || !shape.rgb), "%s: %zu of %zu values differ", path, differ, n);
+    free(bytes);
+    ic_image_free(&shape);
+    ic_image_free(&floats);
+}
+
+static void test_texture_bytes(void)
+{
+    ic_image img = pattern(13, 7, 1.0f);
+    ic_error err;
+    CHECK(ic_image_write_png(scratch("texture.png"), &img, 0.0f, &err) == IC_OK, "%s", err.message);
+    CHECK(ic_image_write_pfm(scratch("texture.pfm"), &img, &err) == IC_OK, "%s", err.message);
+    ic_image_free(&img);
+    expect_texture_bytes(scratch("texture.png"), 1);
+    expect_texture_bytes(scratch("texture.pfm"), 0);
+    static const char *const jpegs[] = {"rgb_8x8.jpg", "grey_4x4.jpg", "progressive_37x23.jpg", "grey_4x4.png"};
+    for (size_t k = 0; k < sizeof jpegs / sizeof jpegs[0]; ++k) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/tests/fuzz/corpus/image_png/%s", IC_SOURCE_DIR, jpegs[k]);
+        expect_texture_bytes(path, 1);
+    }
+    uint8_t *bytes = NULL;
+    ic_image out;
+    CHECK(ic_image_read_texture(scratch("texture.png"), 0, NULL, &out, NULL, &err) == IC_ERR_INVALID_ARG,
+          "no place for the bytes: refused");
+    /* a JPEG cut short, and an image over the pixel limit: refused with nothing left allocated (ASan) */
+    char path[1024];
+    snprintf(path, sizeof path, "%s/tests/fuzz/corpus/image_png/rgb_8x8.jpg", IC_SOURCE_DIR);
+    FILE *fp = fopen(path, "rb");
+    unsigned char head[200];
+    size_t got = fp ? fread(head, 1, sizeof head, fp) : 0;
+    if (fp)
+        fclose(fp);
+    write_bytes(scratch("cut.jpg"), head, got);
+    CHECK(ic_image_read_texture(scratch("cut.jpg"), 0, NULL, &out, &bytes, &err) == IC_ERR_PARSE && !bytes,
+          "a cut JPEG: refused, no bytes (%s)", err.message);
+    CHECK(ic_image_read_texture(path, 10, "raise it", &out, &bytes, &err) == IC_ERR_UNSUPPORTED && !bytes &&
+              strstr(err.message, "raise it"),
+          "a JPEG over the pixel limit: refused, no bytes (%s)", err.message);
+}
+
 int main(void)
 {
     if (mkdir(IC_TEST_TMP, 0755) != 0 && errno != EEXIST)
@@ -1155,5 +1212,6 @@ int main(void)
     test_png_empty_idat();
     test_png_chunk_overrun();
     test_damaged_files();
+    test_texture_bytes();
     TEST_MAIN_END();
 }
