@@ -280,6 +280,8 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, phase_t
         ic_result r = timed_lookup_all(c, lum, covered, 0, sweep_seconds);
         if (r != IC_OK)
             return ic_error_set(err, r, "could not start threads");
+        /* This process's rows: their candidates and clustering are its share of the work. */
+        double t0 = ic_seconds(), comm0 = c->comm ? c->comm->seconds : 0.0;
         uint32_t own = 0;
         for (size_t i = first; i < end; ++i)
             own += c->g.valid[i] && !covered[i];
@@ -295,7 +297,7 @@ static ic_result coverage_sweep(ic_ctx *c, float *lum, uint8_t *covered, phase_t
         const ic_scene *sc = c->tr->scene;
         uint32_t n = 0;
         uint64_t total = 0;
-        double visited = 0.0, t0 = ic_seconds(), comm0 = c->comm ? c->comm->seconds : 0.0;
+        double visited = 0.0;
         r = ic_world_select_shared(c->comm, mine, own, sc->bounds_min, sc->bounds_max,
                                    0.25f * c->o.cluster_size * c->work_extent, 3, 30.0f, &cand, &n, &total, &visited,
                                    err);
@@ -433,9 +435,11 @@ ic_result ic_ic_build_batch(ic_ctx *c, const ic_render_options *opt, ic_render_s
              * world stage, which clusters uncovered hits) fill what remains. */
             int y0, y1;
             own_rows(c, &y0, &y1);
+            const double t_floor = ic_seconds();
             for (size_t i = (size_t)y0 * c->g.width; i < (size_t)y1 * c->g.width; ++i)
                 if (c->g.valid[i] && !covered[i])
                     need[i] = fmaxf(need[i], c->o.dither_threshold);
+            need_seconds += ic_seconds() - t_floor;
             if ((r = dithered_candidates(c, need, pix, cand, ic_ic_screen_key_tag(pass), &n, &need_seconds, err)) != IC_OK)
                 goto done;
             found += n;
