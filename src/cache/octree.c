@@ -10,6 +10,7 @@
 
 #include "core/grow.h"
 #include "core/morton.h"
+#include "core/select.h"
 #include "core/threads.h"
 
 #include <math.h>
@@ -302,18 +303,6 @@ static ic_result insert_item(ic_octree *t, const ic_octree_items *it, uint32_t i
 }
 
 
-typedef struct keyed {
-    uint32_t key, index;
-} keyed;
-
-static int cmp_keyed(const void *a, const void *b)
-{
-    const keyed *x = a, *y = b;
-    if (x->key != y->key)
-        return x->key < y->key ? -1 : 1;
-    return (x->index > y->index) - (x->index < y->index);
-}
-
 /* Building top-down. A node of the build takes the items that reach it (in Morton order); it stays a
  * leaf holding them all when they fit, the depth limit is reached or none is smaller than a child, as
  * insertion's split rule says (maybe_split); otherwise it keeps the spheres as large as a child and
@@ -500,11 +489,11 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
     /* Items in Morton order (ties by index: deterministic), so nodes and reference segments that are
      * close in space end up close in memory — a look-up's descent then misses the processor caches
      * less — and every node's references keep that order. */
-    keyed *order = malloc((size_t)count * sizeof *order);
+    ic_key_index *order = malloc((size_t)count * sizeof *order), *spare = malloc((size_t)count * sizeof *spare);
     float *radius = malloc((size_t)count * sizeof *radius);
     builder b = {t, items, radius, NULL, 0, 0};
     part top = {0};
-    ic_result rc = order && radius && part_reserve(&top, 1, 0, count) ? IC_OK : IC_ERR_OOM;
+    ic_result rc = order && spare && radius && part_reserve(&top, 1, 0, count) ? IC_OK : IC_ERR_OOM;
     if (rc == IC_OK) {
         float scale = 1023.0f / (2.0f * root.h);
         for (uint32_t i = 0; i < count; ++i) {
@@ -514,12 +503,13 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
             uint32_t q[3];
             for (int a = 0; a < 3; ++a)
                 q[a] = u[a] <= 0.0f ? 0u : (u[a] >= 1023.0f ? 1023u : (uint32_t)u[a]);
-            order[i] = (keyed){ic_morton3_cells(q[0], q[1], q[2]), i};
+            order[i] = (ic_key_index){ic_morton3_cells(q[0], q[1], q[2]), i};
             radius[i] = item_radius(items, i);
         }
-        qsort(order, count, sizeof *order, cmp_keyed);
+        /* stable, and the items are in index order: ties stay in index order */
+        const ic_key_index *sorted = ic_sort_key_index(order, spare, count);
         for (uint32_t k = 0; k < count; ++k)
-            top.list[k] = order[k].index;
+            top.list[k] = sorted[k].index;
         top.list_len = count;
         top.node_count = 1;
         b.tasks = malloc(8 * sizeof *b.tasks);
@@ -538,6 +528,7 @@ ic_result ic_octree_build(ic_octree *t, const ic_octree_items *items, uint32_t c
     }
     free(b.tasks);
     free(order);
+    free(spare);
     free(radius);
     if (rc != IC_OK) {
         part_free(&top);

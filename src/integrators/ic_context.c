@@ -137,8 +137,8 @@ ic_result ic_ic_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic
      * fallback rays as white specks. At most 2.5 times what the camera sees (which leaves every bench scene
      * but the sky-room as it was: their views are 0.4–1 of their diagonals). */
     float view = 0.0f;
-    if (r == IC_OK && ic_ic_view_extent(c, &view) != IC_OK)
-        r = ic_error_set(err, IC_ERR_OOM, "out of memory for the view's extent");
+    if (r == IC_OK)
+        r = ic_ic_view_extent(c, &view, err);
     c->work_extent = view > 0.0f ? fminf(c->scene_diag, 2.5f * view) : c->scene_diag;
     /* The large emitters' hemisphere shares are measured at the shading points, shared out like them. */
     if (r == IC_OK)

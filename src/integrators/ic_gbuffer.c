@@ -4,6 +4,8 @@
  */
 #include "ic_internal.h"
 
+#include "core/select.h"
+
 #include "core/threads.h"
 #include "film/film.h"
 
@@ -149,39 +151,59 @@ ic_result ic_ic_gbuffer_build(ic_ctx *c, int full, ic_error *err)
 
 #define VIEW_SAMPLES 65536u
 
-ic_result ic_ic_view_extent(const ic_ctx *c, float *extent)
+ic_result ic_ic_view_extent(const ic_ctx *c, float *extent, ic_error *err)
 {
     *extent = 0.0f;
-    size_t npix = (size_t)c->g.width * c->g.height, valid = 0;
+    const size_t width = (size_t)c->g.width, npix = width * (size_t)c->g.height;
+    size_t valid = 0;
     for (size_t i = 0; i < npix; ++i)
         valid += c->g.valid[i];
     if (valid == 0)
         return IC_OK;
-    size_t stride = valid / VIEW_SAMPLES + 1, m = 0;
-    ic_vec3 *pts = malloc(sizeof *pts * (valid / stride + 1));
-    float *v = malloc(sizeof *v * (valid / stride + 1));
-    if (!pts || !v) {
+    /* The samples: every stride-th valid pixel in raster order. Several processes each take those of their
+     * own rows (their points are in their G-buffers) and exchange them; rows are in rank order, so every
+     * process gets the samples in raster order. */
+    const size_t stride = valid / VIEW_SAMPLES + 1, cap = valid / stride + 1;
+    const int ranks = ic_comm_size(c->comm), rank = ic_comm_rank(c->comm);
+    ic_vec3 *pts = malloc(sizeof *pts * cap);
+    float *v = malloc(sizeof *v * cap);
+    uint64_t *bytes = malloc(sizeof *bytes * (size_t)ranks);
+    if (!pts || !v || !bytes) {
         free(pts);
         free(v);
-        return IC_ERR_OOM;
+        free(bytes);
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the view's extent");
     }
-    for (size_t i = 0, k = 0; i < npix; ++i) {
-        ic_vec3 nn;
-        if (c->g.valid[i] && k++ % stride == 0)
-            ic_ic_gbuffer_point(c, (uint32_t)i, &pts[m++], &nn, NULL);
+    size_t m = 0, k = 0;
+    for (int q = 0; q < ranks; ++q) {
+        uint64_t first, rows;
+        ic_comm_block((uint64_t)c->g.height, ranks, q, &first, &rows);
+        const size_t before = m;
+        for (size_t i = (size_t)first * width; i < (size_t)(first + rows) * width; ++i) {
+            if (!c->g.valid[i] || k++ % stride)
+                continue;
+            if (q == rank) {
+                ic_vec3 nn;
+                ic_ic_gbuffer_point(c, (uint32_t)i, &pts[m], &nn, NULL);
+            }
+            ++m;
+        }
+        bytes[q] = (m - before) * sizeof *pts;
     }
+    ic_result r = ic_comm_allgather_sized(c->comm, pts, bytes, "exchanging the view's sample points", err);
     float d2 = 0.0f;
-    for (int axis = 0; axis < 3; ++axis) {
-        for (size_t k = 0; k < m; ++k)
-            v[k] = v3_get(pts[k], axis);
-        qsort(v, m, sizeof *v, ic_ic_cmp_float);
-        float span = v[(m - 1) * 95 / 100] - v[(m - 1) * 5 / 100];
+    for (int axis = 0; axis < 3 && r == IC_OK; ++axis) {
+        for (size_t j = 0; j < m; ++j)
+            v[j] = v3_get(pts[j], axis);
+        const float high = ic_kth_smallest(v, m, (m - 1) * 95 / 100), low = ic_kth_smallest(v, m, (m - 1) * 5 / 100);
+        float span = high - low;
         d2 += span * span;
     }
     free(pts);
     free(v);
+    free(bytes);
     *extent = sqrtf(d2);
-    return IC_OK;
+    return r;
 }
 
 void ic_ic_gbuffer_free(ic_ctx *c)

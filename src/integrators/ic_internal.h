@@ -316,9 +316,9 @@ void ic_ic_gbuffer_free(ic_ctx *c);
 int ic_ic_gbuffer_point(const ic_ctx *c, uint32_t pixel, ic_vec3 *p, ic_vec3 *n, float *footprint);
 /* The diagonal of the box between the 5th and 95th percentiles of the shading points' coordinates on each
  * axis (at most VIEW_SAMPLES points, evenly through the image): the size of what the camera sees, which a
- * far wall seen through a window barely moves; 0 without shading points. IC_ERR_OOM when out of memory
- * (not 0: under several processes every one must size its clusters alike). */
-ic_result ic_ic_view_extent(const ic_ctx *c, float *extent);
+ * far wall seen through a window barely moves; 0 without shading points. A collective call under several
+ * processes; an error when out of memory (not 0: every process must size its clusters alike). */
+ic_result ic_ic_view_extent(const ic_ctx *c, float *extent, ic_error *err);
 /* What a hemisphere ray adds for its hit besides the light reflected there: the emission of a large
  * emitter the records carry (zero for any other surface). */
 /* One gather at pt with g by the method of c's options (stratified, progressive or hemicube). */
