@@ -2,12 +2,17 @@
  * test_scene_errors.c — every class of bad scene input gives the right ic_result and a one-line message
  * that names the file, the line (JSON and OBJ) and what to do; *out stays NULL and nothing leaks.
  */
+#include "core/rng.h"
 #include "irrcache/image.h"
+#include "scene/mesh_check.h"
 #include "scene/scene.h"
 #include "test_util.h"
 
+#include <ctype.h>
 #include <errno.h>
+#include <float.h>
 #include <string.h>
+#include <strings.h>
 #ifdef IC_TEST_WRAP_ASSIMP
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
@@ -591,6 +596,148 @@ static void test_ply_face_texcoords(void)
     }
 }
 
+/* The OBJ number grammar (mesh_check_obj.c), written out on its own: [+-] digits [. digits*], or [+-] . digits
+ * (unsigned only where bare_fraction), then [eE [+-] digits]; or [+-] nan / inf in any case. */
+static int obj_grammar(const char *w, int bare_fraction)
+{
+    const char *c = w + (*w == '+' || *w == '-');
+    if (!strcasecmp(c, "nan") || !strcasecmp(c, "inf"))
+        return 1;
+    size_t digits = strspn(c, "0123456789");
+    if (!digits && !(c[0] == '.' && isdigit((unsigned char)c[1]) && (c > w || bare_fraction)))
+        return 0;
+    c += digits;
+    if (*c == '.')
+        c += 1 + strspn(c + 1, "0123456789");
+    if (*c == 'e' || *c == 'E') {
+        c += 1 + (c[1] == '+' || c[1] == '-');
+        if (!isdigit((unsigned char)*c))
+            return 0;
+        c += strspn(c, "0123456789");
+    }
+    return *c == '\0';
+}
+
+/* Appends n random decimal digits (the first not 0 when nonzero_first) to w at *at. */
+static void put_digits(ic_rng *rng, char *w, size_t *at, uint32_t n, int nonzero_first)
+{
+    for (uint32_t i = 0; i < n; ++i)
+        w[(*at)++] = (char)('0' + (i == 0 && nonzero_first ? 1 + ic_rng_below(rng, 9) : ic_rng_below(rng, 10)));
+}
+
+/* A random word in or near the OBJ number grammar, its magnitude mostly near 10^38 and FLT_MAX (3.40282347e38)
+ * whatever the spelling: leading zeros, the point anywhere in the digits, zeros after the point, the exponent
+ * making up the difference (with leading zeros of its own, or out of any range), nan and inf spellings. */
+static void random_obj_word(ic_rng *rng, char *w)
+{
+    static const char *const signs[3] = {"", "+", "-"};
+    static const char *const words[] = {"nan", "NaN", "inf", "Inf", "INF", "infinity", "nan(1)", "0x1p128", "1e",
+                                        "1e+", "-.", ".", "+.e5", "1.5.2", "1e5e5", "- 1", "e38", "1d38"};
+    static const char *const near_max[] = {"34028234663852885981170418348451692544",
+                                           "340282356779733661637539395458142568448",
+                                           "3402823567797336616375393954581425684479999",
+                                           "3402823567797336616375393954581425684480000001", "99999999999999999999"};
+    size_t at = 0;
+    const char *sign = signs[ic_rng_below(rng, 3)];
+    memcpy(w, sign, strlen(sign));
+    at += strlen(sign);
+    if (ic_rng_below(rng, 16) == 0) {
+        strcpy(w + at, words[ic_rng_below(rng, sizeof words / sizeof words[0])]);
+        return;
+    }
+    /* the significant digits: random, or FLT_MAX's neighbourhood */
+    char sig[64];
+    size_t len;
+    if (ic_rng_below(rng, 3) == 0) {
+        const char *m = near_max[ic_rng_below(rng, sizeof near_max / sizeof near_max[0])];
+        len = strlen(m);
+        memcpy(sig, m, len);
+    } else {
+        len = 0;
+        put_digits(rng, sig, &len, ic_rng_below(rng, 50), 1);
+    }
+    if (ic_rng_below(rng, 3) == 0) /* leading zeros */
+        for (uint32_t z = ic_rng_below(rng, 45); z > 0; --z)
+            w[at++] = '0';
+    size_t before_point = ic_rng_below(rng, (uint32_t)len + 1);
+    memcpy(w + at, sig, before_point);
+    at += before_point;
+    long shift = (long)before_point;
+    if (before_point < len || ic_rng_below(rng, 4) == 0) {
+        w[at++] = '.';
+        if (ic_rng_below(rng, 3) == 0) /* zeros after the point */
+            for (uint32_t z = ic_rng_below(rng, 45); z > 0; --z, --shift)
+                w[at++] = '0';
+        memcpy(w + at, sig + before_point, len - before_point);
+        at += len - before_point;
+    }
+    if (ic_rng_below(rng, 5) != 0) {
+        w[at++] = ic_rng_below(rng, 2) ? 'e' : 'E';
+        /* the exponent that puts the value near 10^38 (the digits' magnitude is 10^shift), give or take a few */
+        long e = 38 - shift + (long)ic_rng_below(rng, 9) - 4;
+        uint32_t kind = ic_rng_below(rng, 8);
+        if (kind == 0)
+            e = (long)ic_rng_below(rng, 2000) - 1000;
+        char digits[48];
+        if (kind == 1) { /* out of any range */
+            size_t n = 0;
+            put_digits(rng, digits, &n, 1 + ic_rng_below(rng, 30), 1);
+            digits[n] = '\0';
+            w[at++] = ic_rng_below(rng, 2) ? '-' : '+';
+        } else {
+            if (e < 0 || ic_rng_below(rng, 3) == 0)
+                w[at++] = e < 0 ? '-' : '+';
+            snprintf(digits, sizeof digits, "%.*s%ld", kind == 2 ? (int)ic_rng_below(rng, 12) : 0,
+                     "000000000000", e < 0 ? -e : e);
+        }
+        strcpy(w + at, digits);
+        at += strlen(digits);
+    }
+    w[at] = '\0';
+}
+
+/* The OBJ check's numbers (a digit count decides most of them finite as floats, and only those that may
+ * reach 10^38 are converted) against their definition: a word of the grammar is finite iff
+ * isfinite((float)strtod(word)), and any other word is not a number; 200,000 random words in vt and vn
+ * lines, most of them near FLT_MAX in every spelling. */
+static void test_obj_numbers_against_strtod(void)
+{
+    ic_rng rng = ic_rng_make(17, 0, 0, 0);
+    char word[512], text[600];
+    int wrong = 0, finite_seen = 0, infinite_seen = 0, refused_seen = 0;
+    for (int i = 0; i < 200000 && wrong < 10; ++i) {
+        random_obj_word(&rng, word);
+        if (!word[0])
+            continue; /* no word at all */
+        const int bare_fraction = i & 1; /* vn lines take an unsigned ".5", vt lines do not */
+        const int is_number = obj_grammar(word, bare_fraction);
+        const int finite = is_number && isfinite((float)strtod(word, NULL));
+        int n = snprintf(text, sizeof text, bare_fraction ? "vn 0 0 %s\n" : "vt 0 %s\n", word);
+        FILE *fp = fmemopen(text, (size_t)n, "r");
+        ic_error err;
+        memset(&err, 0, sizeof err);
+        ic_result r = fp ? ic_obj_check(fp, "random.obj", 1000, &err) : IC_ERR_IO;
+        if (fp)
+            fclose(fp);
+        const int got = r == IC_OK ? 1 : r == IC_ERR_PARSE && strstr(err.message, "non-finite") ? 0
+                        : r == IC_ERR_PARSE && strstr(err.message, "is not a number") ? -1
+                                                                                        : -2;
+        const int want = !is_number ? -1 : finite;
+        finite_seen += want == 1;
+        infinite_seen += want == 0;
+        refused_seen += want == -1;
+        if (got != want) {
+            ++wrong;
+            CHECK(0, "OBJ number '%s' in a %s line: the check says %s, strtod and the grammar %s (%s)", word,
+                  bare_fraction ? "vn" : "vt", got == 1 ? "finite" : got == 0 ? "not finite" : "not a number",
+                  want == 1 ? "finite" : want == 0 ? "not finite" : "not a number", err.message);
+        }
+    }
+    CHECK(finite_seen > 10000 && infinite_seen > 10000 && refused_seen > 1000,
+          "random OBJ numbers: %d finite, %d not, %d refused (too few of one kind: nothing tested)", finite_seen,
+          infinite_seen, refused_seen);
+}
+
 /* Valid files the non-finite checks must let through. */
 /* The OBJ check reads the file in chunks of 64 KiB: line ends of every kind (\n, \r\n, \r, \f, NUL and a
  * backslash joining two lines), one \r\n split between two chunks and lines that straddle chunks still count
@@ -730,6 +877,7 @@ static void test_cameras_lights_and_paths(void)
 
 int main(void)
 {
+    test_obj_numbers_against_strtod();
     test_cameras_lights_and_paths();
 #ifdef IC_TEST_WRAP_ASSIMP
     test_tangent_step_fails();
