@@ -192,7 +192,8 @@ static ic_result setup_points(adaptive *A, ic_error *err)
         ic_error_set(err, r, "could not start threads");
         goto done;
     }
-    for (int t = 0; t < c->threads; ++t)
+    /* Every process sets up every point alike: the job's rays count them once, as one process does. */
+    for (int t = 0; t < c->threads && ic_comm_rank(c->comm) == 0; ++t)
         atomic_fetch_add(&c->rays, rays[t * RAY_PAD]);
     if (ic_kdtree_build(&A->tree, pos, n) != IC_OK)
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for the shading-point k-d tree");

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # test_mpi.sh IRRCACHE HAS_MPI — `mpirun -np N irrcache render` gives the bytes a single process gives:
-#   1. the Cornell box with the cache (batch; its image, cache file, record counts per pass) and with the
-#      path tracer, at 1, 2, 3 and 5 ranks of 1 or 2 threads each, against the same build run without
-#      mpirun (one process); the adaptive strategy, a loaded cache and radiance caching at 3 ranks, a 12x300
-#      image (bands of shading points and look-ups that leave rows out) at 3 and 5; an image and its AOVs
-#      (films in a row) at 3, 7 and 9 ranks, more than its tiles; an image smaller than a tile at 3;
-#      `irrcache points` (cache and path tracer) at 2, 3 and 5 ranks;
+#   1. the Cornell box with the cache (batch; its image, cache file, record counts per pass, the job's rays)
+#      and with the path tracer, at 1, 2, 3 and 5 ranks of 1 or 2 threads each, against the same build run
+#      without mpirun (one process); the adaptive strategy (image, counts and rays), a loaded cache and
+#      radiance caching at 3 ranks, a 12x300 image (bands of shading points and look-ups that leave rows
+#      out) at 3 and 5; an image and its AOVs (films in a row) at 3, 7 and 9 ranks, more than its tiles; an
+#      image smaller than a tile at 3; `irrcache points` (cache and path tracer) at 2, 3 and 5 ranks;
 #      the path tracer at 3 ranks through the chunked all-gather of exchanges over 2 GiB (threshold lowered);
 #   2. lazy construction under 2 ranks is refused with a message naming the strategy;
 #   3. one rank whose scene does not load (mpirun's MPMD form: two ranks get the scene, the third a
@@ -33,8 +33,8 @@ ic=(--integrator ic --spp 8 --rays 256)
 pt=(--integrator pt --spp 4)
 fail=0
 
-# The counts that must not depend on the ranks: records, passes, records per pass.
-counts() { python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); print(d.get("records"), d.get("passes"), d.get("records_per_pass"), d["spp"], d.get("spp_max"))' "$1"; }
+# The counts that must not depend on the ranks: records, passes, records per pass, the job's rays.
+counts() { python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); print(d.get("records"), d.get("passes"), d.get("records_per_pass"), d["spp"], d.get("spp_max"), d["rays"], d.get("gather_rays"))' "$1"; }
 same() { # same WHAT FILE REFERENCE
   if cmp -s "$2" "$3"; then return 0; fi
   echo "FAIL: $1: $2 differs from $3"; fail=1
@@ -42,7 +42,7 @@ same() { # same WHAT FILE REFERENCE
 
 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 2 -o ic.pfm --stats ic.json --save-cache ic.cache
 "$bin" render "$scene" "${common[@]}" "${pt[@]}" --threads 2 -o pt.pfm
-"$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy adaptive --threads 2 -o ad.pfm
+"$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy adaptive --threads 2 -o ad.pfm --stats ad.json
 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 2 --load-cache ic.cache -o load.pfm
 for np in 1 2 3 5; do
   for t in 1 2; do
@@ -74,8 +74,13 @@ done
 IRRCACHE_MPI_ALLGATHER_LIMIT=1000 mpirun --oversubscribe -x IRRCACHE_MPI_ALLGATHER_LIMIT -np 3 "$bin" render "$scene" \
   "${common[@]}" "${pt[@]}" --threads 1 -o pt-large.pfm
 same "path-traced image through the large all-gather, 3 ranks" pt-large.pfm pt.pfm
-mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy adaptive --threads 1 -o ad-3.pfm
+mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --strategy adaptive --threads 1 -o ad-3.pfm \
+  --stats ad-3.json
 same "adaptive image, 3 ranks" ad-3.pfm ad.pfm
+if [ "$(counts ad-3.json)" != "$(counts ad.json)" ]; then
+  echo "FAIL: adaptive counts at 3 ranks: $(counts ad-3.json), one process: $(counts ad.json)"
+  fail=1
+fi
 mpirun --oversubscribe -np 3 "$bin" render "$scene" "${common[@]}" "${ic[@]}" --threads 1 --load-cache ic.cache -o load-3.pfm
 same "image from a loaded cache, 3 ranks" load-3.pfm load.pfm
 # The hit stage (records where hemisphere rays land) gathers its records shared among the ranks too.

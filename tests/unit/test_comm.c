@@ -1,5 +1,6 @@
 /*
- * test_comm.c — a render shared by several processes (irrcache/comm.h) gives the bits one process gives.
+ * test_comm.c — a render shared by several processes (irrcache/comm.h) gives the bits one process gives, and
+ * counts the rays one process counts.
  * The "processes" are threads of this program, each calling ic_render with its own ic_comm over an
  * in-memory transport (a barrier and shared pointers), so the library's side runs in every build,
  * the sanitizer build included, with no MPI: the cache (batch and adaptive; elliptical Hessian records),
@@ -235,6 +236,7 @@ typedef struct rank_job {
     uint32_t point_count;
     ic_points_options popt;
     ic_point_result *results;
+    ic_points_stats pst;
     const ic_record *records;      /* cache insertions instead of a render: batches of batch_size */
     uint32_t record_count, batch_size;
     ic_cache *cache;
@@ -257,7 +259,7 @@ static void *run_rank(void *p)
         }
     } else if (j->points) {
         j->popt.comm = &j->comm;
-        j->r = ic_points_compute(j->scene, j->points, j->point_count, &j->popt, j->results, NULL, &j->err);
+        j->r = ic_points_compute(j->scene, j->points, j->point_count, &j->popt, j->results, &j->pst, &j->err);
     } else {
         j->opt.comm = &j->comm;
         j->r = ic_render(j->scene, &j->opt, &j->img, &j->st, &j->err);
@@ -353,6 +355,12 @@ static void check_render(const char *what, const ic_scene *scene, ic_render_opti
               (unsigned long long)samples, (unsigned long long)want);
         if (check_equal) {
             CHECK(same_image(&jobs[0].img, &ref), "%s, %d ranks: the image differs from one process's", what, size);
+            /* The job's rays: each counted once, by the process that traced it or, where every process
+             * traces it alike, by one of them (the hit stage's probes were counted on every rank). */
+            CHECK(jobs[0].st.rays == ref_st.rays && jobs[0].st.gather_rays == ref_st.gather_rays,
+                  "%s, %d ranks: %llu rays (%llu gathering), one process %llu (%llu)", what, size,
+                  (unsigned long long)jobs[0].st.rays, (unsigned long long)jobs[0].st.gather_rays,
+                  (unsigned long long)ref_st.rays, (unsigned long long)ref_st.gather_rays);
             CHECK(jobs[0].st.cached_emitters == ref_st.cached_emitters,
                   "%s, %d ranks: %u emitting triangles carried by the records, one process %u", what, size,
                   jobs[0].st.cached_emitters, ref_st.cached_emitters);
@@ -368,6 +376,20 @@ static void check_render(const char *what, const ic_scene *scene, ic_render_opti
             ic_image_free(&jobs[r].img);
     }
     ic_image_free(&ref);
+}
+
+/* check_render on the Cornell box at width x height. */
+static void check_render_at(const char *what, int width, int height, ic_render_options opt)
+{
+    ic_scene_load_options lo = {0};
+    lo.width = width;
+    lo.height = height;
+    ic_scene *scene = NULL;
+    ic_error err = {0};
+    CHECK(ic_scene_load(SCENE, &lo, &scene, &err) == IC_OK, "%s: %s", what, err.message);
+    if (scene)
+        check_render(what, scene, opt, 1);
+    ic_scene_free(scene);
 }
 
 /* The indirect AOV is a second film right after the image, with no collective operation between them, so
@@ -464,7 +486,8 @@ static void check_points(const ic_scene *scene, ic_integrator integrator)
     po.threads = 2;
     ic_point_result ref[N];
     ic_error err = {0};
-    CHECK(ic_points_compute(scene, pts, N, &po, ref, NULL, &err) == IC_OK, "points, one process: %s", err.message);
+    ic_points_stats ref_st;
+    CHECK(ic_points_compute(scene, pts, N, &po, ref, &ref_st, &err) == IC_OK, "points, one process: %s", err.message);
     static ic_point_result res[MAX_RANKS][N];
     rank_job jobs[MAX_RANKS];
     memset(jobs, 0, sizeof jobs);
@@ -478,9 +501,17 @@ static void check_points(const ic_scene *scene, ic_integrator integrator)
         jobs[r].results = res[r];
     }
     CHECK(run_job(jobs, 3), "points: 3 ranks failed");
-    for (int r = 0; r < 3; ++r)
+    for (int r = 0; r < 3; ++r) {
         CHECK(!memcmp(res[r], ref, sizeof ref), "points (%s), rank %d of 3: results differ from one process's",
               integrator == IC_INTEGRATOR_IC ? "cache" : "path tracer", r);
+        /* the hit stage's probe rays on a block each: counted once in the job's rays */
+        CHECK(jobs[r].pst.rays == ref_st.rays && jobs[r].pst.records == ref_st.records &&
+                  jobs[r].pst.hit_records == ref_st.hit_records,
+              "points (%s), rank %d of 3: %llu rays, %u records, %u hit records; one process %llu, %u, %u",
+              integrator == IC_INTEGRATOR_IC ? "cache" : "path tracer", r, (unsigned long long)jobs[r].pst.rays,
+              jobs[r].pst.records, jobs[r].pst.hit_records, (unsigned long long)ref_st.rays, ref_st.records,
+              ref_st.hit_records);
+    }
 }
 
 /* Insertions into copies of one cache shared by 3 ranks (ic_cache_set_comm: each clamps a block of every
@@ -673,17 +704,10 @@ int main(void)
     /* A tall image: each rank's band of shading points (its rows and IC_SCREEN_HALO on either side) leaves
      * rows out, whose points come from ic_ic_gbuffer_point (the candidates, the hit stage's probes, the
      * large-emitter pilot, the view extent, the final render's light blocks). */
-    ic_scene_load_options tall_lo = lo;
-    tall_lo.width = 12;
-    tall_lo.height = 300;
-    ic_scene *tall = NULL;
-    CHECK(ic_scene_load(SCENE, &tall_lo, &tall, &err) == IC_OK, "%s", err.message);
-    if (tall) {
-        ic_render_options tall_ic = ic;
-        tall_ic.ic.save_cache = NULL;
-        check_render("cache, batch, a 12x300 image", tall, tall_ic, 1);
-        ic_scene_free(tall);
-    }
+    check_render_at("cache, batch, a 12x300 image", 12, 300, ic);
+    /* More ranks than rows (9x2): ranks with no rows of their own make no coverage candidates and hold none of
+     * the need maps, and each traces a few dozen of the hit stage's 288 probes. */
+    check_render_at("cache, batch, a 9x2 image", 9, 2, ic);
 
     /* A large emitter that the records carry: the emitters' hemisphere shares are measured on a block of
      * the shading points per rank, and every rank must make one process's choice. */
