@@ -191,6 +191,38 @@ static double record_rays(const ic_gather_opts *g)
     return (double)m * (double)n;
 }
 
+/* The hemisphere shares of the emitting materials at the sampled shading points (choose_materials): point j
+ * is pixel pix[j]; its row of ne shares (slot[m] for material m) is share[j · ne …]. */
+typedef struct share_job {
+    const ic_ctx *c;
+    const ic_scene *s;
+    const uint32_t *pix, *slot;
+    uint32_t ne;
+    uint64_t first; /* this process's first point */
+    double *share;
+} share_job;
+
+static void share_point(void *ctx, int64_t item, int thread)
+{
+    (void)thread;
+    const share_job *j = ctx;
+    const ic_scene *s = j->s;
+    const uint64_t point = j->first + (uint64_t)item;
+    double *row = &j->share[point * j->ne];
+    ic_vec3 p, n;
+    ic_ic_gbuffer_point(j->c, j->pix[point], &p, &n, NULL);
+    for (uint32_t li = 0; li < s->tri_light_count; ++li) {
+        const ic_tri_light *l = &s->tri_lights[li];
+        uint32_t t = l->triangle;
+        /* Only the emitting side counts. */
+        if (!l->two_sided && v3_dot(l->normal, v3_sub(p, l->centroid)) <= 0.0f)
+            continue;
+        row[j->slot[s->triangle_material[t]]] +=
+            hemisphere_share(p, n, s->positions[s->triangles[3 * t]], s->positions[s->triangles[3 * t + 1]],
+                             s->positions[s->triangles[3 * t + 2]]);
+    }
+}
+
 /* Large emitters. The records carry indirect light (Ward et al. 1988; Frolov et al. 2012 §3.2: the
  * final render path-traces direct light and reads the cache for the smooth rest), and here the
  * environment's too; this extends that to an emitting material whose direct light the records
@@ -244,39 +276,9 @@ static double record_rays(const ic_gather_opts *g)
  * Marks in cached_mat[m] (zeroed, material_count entries) each emitting material the records carry
  * (none unless cached_allowed: large_emitters off still pilots, for the flag), and sets *large_sampled
  * where a piloted material stays light-sampled though its light samples are noisier per sample than
- * the hemisphere rays (cv²_light > cv²_gather; ic_ctx.large_sampled). Returns 0 when out of memory. */
-/* The hemisphere shares of the emitting materials at the sampled shading points (choose_materials): point j
- * is pixel pix[j]; its row of ne shares (slot[m] for material m) is share[j · ne …]. */
-typedef struct share_job {
-    const ic_ctx *c;
-    const ic_scene *s;
-    const uint32_t *pix, *slot;
-    uint32_t ne;
-    uint64_t first; /* this process's first point */
-    double *share;
-} share_job;
-
-static void share_point(void *ctx, int64_t item, int thread)
-{
-    (void)thread;
-    const share_job *j = ctx;
-    const ic_scene *s = j->s;
-    const uint64_t point = j->first + (uint64_t)item;
-    double *row = &j->share[point * j->ne];
-    ic_vec3 p, n;
-    ic_ic_gbuffer_point(j->c, j->pix[point], &p, &n, NULL);
-    for (uint32_t li = 0; li < s->tri_light_count; ++li) {
-        const ic_tri_light *l = &s->tri_lights[li];
-        uint32_t t = l->triangle;
-        /* Only the emitting side counts. */
-        if (!l->two_sided && v3_dot(l->normal, v3_sub(p, l->centroid)) <= 0.0f)
-            continue;
-        row[j->slot[s->triangle_material[t]]] +=
-            hemisphere_share(p, n, s->positions[s->triangles[3 * t]], s->positions[s->triangles[3 * t + 1]],
-                             s->positions[s->triangles[3 * t + 2]]);
-    }
-}
-
+ * the hemisphere rays (cv²_light > cv²_gather; ic_ctx.large_sampled). A collective call under several
+ * processes (the shares are measured on a block of the points each, then exchanged); IC_ERR_OOM when out of
+ * memory, or the exchange's error. */
 static ic_result choose_materials(const ic_ctx *c, const ic_scene *s, size_t valid, int cached_allowed,
                                   uint8_t *cached_mat, int *large_sampled, ic_error *err)
 {
