@@ -469,7 +469,9 @@ static void check_failed_sums(const ic_scene *scene)
     CHECK(failed_at >= 2, "the render met %d sums: nothing tested", failed_at);
 }
 
-static void check_points(const ic_scene *scene, ic_integrator integrator)
+/* The first `count` (at most 40) of a grid of sensor points over the Cornell box's floor on `ranks` ranks: the
+ * results, rays, records and hit records of one process. */
+static void check_points(const ic_scene *scene, ic_integrator integrator, uint32_t count, int ranks)
 {
     enum { N = 40 };
     ic_sensor_point pts[N];
@@ -487,28 +489,30 @@ static void check_points(const ic_scene *scene, ic_integrator integrator)
     ic_point_result ref[N];
     ic_error err = {0};
     ic_points_stats ref_st;
-    CHECK(ic_points_compute(scene, pts, N, &po, ref, &ref_st, &err) == IC_OK, "points, one process: %s", err.message);
+    CHECK(ic_points_compute(scene, pts, count, &po, ref, &ref_st, &err) == IC_OK, "points, one process: %s",
+          err.message);
     static ic_point_result res[MAX_RANKS][N];
     rank_job jobs[MAX_RANKS];
     memset(jobs, 0, sizeof jobs);
     memset(res, 0, sizeof res);
-    for (int r = 0; r < 3; ++r) {
+    for (int r = 0; r < ranks; ++r) {
         jobs[r].scene = scene;
         jobs[r].points = pts;
-        jobs[r].point_count = N;
+        jobs[r].point_count = count;
         jobs[r].popt = po;
         jobs[r].popt.threads = 1;
         jobs[r].results = res[r];
     }
-    CHECK(run_job(jobs, 3), "points: 3 ranks failed");
-    for (int r = 0; r < 3; ++r) {
-        CHECK(!memcmp(res[r], ref, sizeof ref), "points (%s), rank %d of 3: results differ from one process's",
-              integrator == IC_INTEGRATOR_IC ? "cache" : "path tracer", r);
+    const char *what = integrator == IC_INTEGRATOR_IC ? "cache" : "path tracer";
+    CHECK(run_job(jobs, ranks), "points (%s), %u of them: %d ranks failed", what, count, ranks);
+    for (int r = 0; r < ranks; ++r) {
+        CHECK(!memcmp(res[r], ref, sizeof *ref * count), "points (%s), %u of them, rank %d of %d: results differ "
+              "from one process's", what, count, r, ranks);
         /* the hit stage's probe rays on a block each: counted once in the job's rays */
         CHECK(jobs[r].pst.rays == ref_st.rays && jobs[r].pst.records == ref_st.records &&
                   jobs[r].pst.hit_records == ref_st.hit_records,
-              "points (%s), rank %d of 3: %llu rays, %u records, %u hit records; one process %llu, %u, %u",
-              integrator == IC_INTEGRATOR_IC ? "cache" : "path tracer", r, (unsigned long long)jobs[r].pst.rays,
+              "points (%s), %u of them, rank %d of %d: %llu rays, %u records, %u hit records; one process %llu, %u, %u",
+              what, count, r, ranks, (unsigned long long)jobs[r].pst.rays,
               jobs[r].pst.records, jobs[r].pst.hit_records, (unsigned long long)ref_st.rays, ref_st.records,
               ref_st.hit_records);
     }
@@ -773,8 +777,11 @@ int main(void)
     CHECK(!run_job(jobs, 2) && jobs[0].r == IC_ERR_UNSUPPORTED && strstr(jobs[0].err.message, "lazy"),
           "lazy under 2 ranks: not refused with a message naming it (%s)", jobs[0].err.message);
 
-    check_points(scene, IC_INTEGRATOR_IC);
-    check_points(scene, IC_INTEGRATOR_PT);
+    check_points(scene, IC_INTEGRATOR_IC, 40, 3);
+    check_points(scene, IC_INTEGRATOR_PT, 40, 3);
+    /* More ranks than sensors: ranks without a sensor of their own, 32 hit-stage probes over 5 ranks, and one
+     * shading point for the large emitters' shares, on rank 0 alone. */
+    check_points(scene, IC_INTEGRATOR_IC, 2, 5);
     check_cache_insertions();
     ic_scene_free(scene);
     remove(CACHE_FILE);
