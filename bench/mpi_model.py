@@ -22,7 +22,7 @@ maps read), taken as that share of the "shading points" phase. With N ranks of t
     T_N = serial + shared / N x imbalance(N) + communication(N)
 
   - records: every pass's records are all-gathered; each rank receives (N-1)/N of
-    n_p x RECORD_BYTES (the gather result less its Hessian, 116 bytes, and the bounce levels, 12 bytes x
+    n_p x RECORD_BYTES (the gather result less its Hessian and counts, 104 bytes, and the bounce levels, 12 bytes x
     (levels + 1));
   - candidates and look-up sweeps: the bytes the 2-rank runs measured beyond the records, scaled by the
     pixel count and by (N-1)/N against 1/2 (as all-gathers: since the world stage's candidates go to their
@@ -73,7 +73,7 @@ import math
 import os
 import statistics
 
-RESULT_BYTES = 116  # the bytes of ic_gather_result that travel: all but its 64 bytes of Hessian (180 in all)
+RESULT_BYTES = 104  # the bytes of ic_gather_result that travel: all but its ray and hit counts, convergence flag and 64 bytes of Hessian (180 in all)
 LEVEL_BYTES = 12    # one RGB level (ic_vec3)
 COLLECTIVES_PER_PASS = 23
 LARGE_EXCHANGES = 3  # all-gathers above 1 MiB in a render (Sponza 1280x720: two of the world stage, the filtered records)

@@ -345,7 +345,8 @@ static void count_traffic(ic_ctx *c, ic_render_stats *st, int pass)
 static ic_result image_hit_stage(ic_ctx *c, size_t npix, phase_times *pt, ic_error *err)
 {
     /* The valid pixels in raster order are the points; the stage reads only its probes' (filled from
-     * ic_ic_gbuffer_point: under several processes a pixel's row may be another's). */
+     * ic_ic_gbuffer_point: under several processes a pixel's row may be another's, and each process
+     * needs only its own block of the probes' points). */
     uint32_t m = 0;
     for (size_t i = 0; i < npix; ++i)
         m += c->g.valid[i];
@@ -356,10 +357,15 @@ static ic_result image_hit_stage(ic_ctx *c, size_t npix, phase_times *pt, ic_err
         return ic_error_set(err, IC_ERR_OOM, "out of memory for the hit stage's %u points", m);
     }
     const uint32_t probes = ic_ic_hit_probes(m);
+    /* Under several processes each traces a block of the probes (ic_hit_stage.c): only their points. */
+    uint64_t k0, own;
+    ic_comm_block(probes, ic_comm_size(c->comm), ic_comm_rank(c->comm), &k0, &own);
+    const uint32_t lo = own ? ic_ic_hit_probe_point((uint32_t)k0, m) : 1,
+                   hi = own ? ic_ic_hit_probe_point((uint32_t)(k0 + own - 1), m) : 0;
     for (uint32_t i = 0, k = 0, at = 0; k < probes && i < npix; ++i) {
         if (!c->g.valid[i])
             continue;
-        if (ic_ic_hit_probe_point(k, m) == at)
+        if (ic_ic_hit_probe_point(k, m) == at && at >= lo && at <= hi)
             ic_ic_gbuffer_point(c, i, &p[at], &n[at], NULL);
         while (k < probes && ic_ic_hit_probe_point(k, m) <= at)
             ++k;

@@ -592,7 +592,15 @@ typedef struct gather_points_job {
 static ic_result gather_block(void *user, const void *pts, uint64_t n, void *const *out, ic_error *err)
 {
     gather_points_job *u = user;
-    return gather_here(u->c, pts, (uint32_t)n, out[0], u->has_levels ? out[1] : NULL, u->gathered, err);
+    ic_result r = gather_here(u->c, pts, (uint32_t)n, out[0], u->has_levels ? out[1] : NULL, u->gathered, err);
+    /* The counts a result ends its first order with are read by no one after the gather (its records take
+     * the values, the statistics count rays as they are traced): zero, so that they need not travel. */
+    ic_gather_result *res = out[0];
+    for (uint64_t k = 0; k < n; ++k) {
+        res[k].ray_count = res[k].hit_count = 0;
+        res[k].is_converged = 0;
+    }
+    return r;
 }
 
 /* Several processes (c->comm): point i is gathered by rank i mod N (ic_comm_share_gather: neighbouring
@@ -615,12 +623,13 @@ ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t co
     size_t stride = (size_t)c->levels + 1;
     void *const outs[2] = {out, levels};
     const size_t sizes[2] = {sizeof *out, sizeof *levels * stride};
-    /* Without a Hessian the gatherers leave a result's second-order fields (its last 64 bytes) zero: they
-     * stay home (a quarter of the bytes a record sends without its levels). */
+    /* Without a Hessian the gatherers leave a result's second-order fields (its last 64 bytes) zero, and
+     * gather_block its ray and hit counts and convergence flag: they stay home (76 of the 180 bytes). */
     _Static_assert(offsetof(ic_gather_result, has_hessian) + sizeof(int) + 2 * sizeof(ic_vec3) + 9 * sizeof(float) ==
                        sizeof(ic_gather_result), "the second-order fields end the result");
-    const size_t sent[2] = {c->o.gather.with_hessian ? sizeof *out : offsetof(ic_gather_result, has_hessian),
-                            sizes[1]};
+    _Static_assert(offsetof(ic_gather_result, ray_count) + 2 * sizeof(uint32_t) + sizeof(int) ==
+                       offsetof(ic_gather_result, has_hessian), "the counts come just before them");
+    const size_t sent[2] = {c->o.gather.with_hessian ? sizeof *out : offsetof(ic_gather_result, ray_count), sizes[1]};
     uint64_t own;
     ic_result r = ic_comm_share_gather(c->comm, pts, sizeof *pts, count, levels ? 2 : 1, outs, sizes, sent,
                                        gather_block, &u, "gather results", &own, err);

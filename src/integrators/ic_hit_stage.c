@@ -15,6 +15,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Probe rays per point and pass, and the most passes. */
 #define HIT_PROBES 16
@@ -84,6 +85,43 @@ static void probe_one(void *ctx, int64_t item, int thread)
     cd->key = ic_hash4(j->key_tag ^ 0x686974ULL, i, (uint64_t)j->pass, k);
 }
 
+/* Several processes: every one's count of candidates and of diffuse hits in one exchange, then the
+ * candidates (this one's n at the start of cand) in process order; *total and *seen get the sums. */
+static ic_result exchange_probes(ic_comm *comm, ic_candidate *cand, uint32_t n, uint64_t *total, double *seen,
+                                 ic_error *err)
+{
+    typedef struct tally {
+        uint64_t count;
+        double seen;
+    } tally;
+    const int ranks = comm->size;
+    tally *t = malloc(sizeof *t * (size_t)ranks);
+    uint64_t *bytes = malloc(sizeof *bytes * (size_t)ranks);
+    ic_result r = t && bytes ? IC_OK : ic_error_set(err, IC_ERR_OOM, "out of memory for %d processes' probes", ranks);
+    if (r == IC_OK) {
+        t[comm->rank] = (tally){n, *seen};
+        for (int q = 0; q < ranks; ++q)
+            bytes[q] = sizeof *t;
+        r = ic_comm_allgather_sized(comm, t, bytes, "exchanging the probes' counts", err);
+    }
+    uint64_t before = 0;
+    *total = 0;
+    *seen = 0.0;
+    for (int q = 0; r == IC_OK && q < ranks; ++q) {
+        before += q < comm->rank ? t[q].count : 0;
+        *total += t[q].count;
+        *seen += t[q].seen; /* whole numbers: exact in any order */
+        bytes[q] = t[q].count * sizeof *cand;
+    }
+    if (r == IC_OK) {
+        memmove(cand + before, cand, sizeof *cand * n);
+        r = ic_comm_allgather_sized(comm, cand, bytes, "exchanging the probes' candidates", err);
+    }
+    free(t);
+    free(bytes);
+    return r;
+}
+
 /* The uncovered diffuse hits of a pass's probes, in probe order, into cand (room for every probe), their hit
  * distances into dist; *m gets their number and *visited the probes' diffuse hits. Several processes trace
  * a block of the probes each (ic_comm_block) on their threads and exchange what they found, so every
@@ -108,8 +146,7 @@ static ic_result probe_pass(ic_ctx *c, probe_job *j, uint32_t probes, ic_candida
     *seconds += ic_seconds() - t0;
     atomic_fetch_add_explicit(&c->rays, own, memory_order_relaxed);
     uint64_t total = n;
-    if ((r = ic_comm_allgather_counted(c->comm, cand, n, sizeof *cand, &total, err)) != IC_OK ||
-        (r = ic_comm_sum(c->comm, &seen, 1, err)) != IC_OK)
+    if (ic_comm_is_shared(c->comm) && (r = exchange_probes(c->comm, cand, n, &total, &seen, err)) != IC_OK)
         return r;
     for (uint64_t k = 0; k < total; ++k) {
         dist[k] = cand[k].footprint;

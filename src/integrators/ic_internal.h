@@ -197,7 +197,8 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
  * strata over strata_div each way, inserted as records of that kind (without gradients unless
  * `gradients`). key_tag separates its random numbers
  * and keys from other stages'. A no-op unless c->hit_lookups. It reads only the points
- * ic_ic_hit_probe_point(k, count) for k < ic_ic_hit_probes(count). */
+ * ic_ic_hit_probe_point(k, count) for k < ic_ic_hit_probes(count), and under several processes only those
+ * of this process's block of the k (ic_comm_block). */
 uint32_t ic_ic_hit_probes(uint32_t count);
 uint32_t ic_ic_hit_probe_point(uint32_t k, uint32_t count);
 /* The bounce field of an image's hit-stage records: read only by hemisphere rays' look-ups. */
