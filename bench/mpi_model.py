@@ -147,10 +147,11 @@ def main():
                     help="share of the candidates phase every rank does alike (clustering)")
     ap.add_argument("--record-cv", type=float, default=0.22,
                     help="relative spread of one record's gathering cost (0.22 measured on Sponza, BENCHMARKS.md)")
-    ap.add_argument("--insertion-shared", type=float, default=0.48,
+    ap.add_argument("--insertion-shared", type=float, default=0.52,
                     help="share of insertion that the ranks divide (the validity clamp and neighbour clamping's "
-                         "neighbour search: 0.48-0.49 on Sponza 1280x720; the validity clamp alone 0.32-0.35, and "
-                         "0.28 before the octrees and the frozen layout were built on the threads; BENCHMARKS.md)")
+                         "neighbour search: 0.52 on Sponza 1280x720 since the octree build's radix sort, 0.48-0.49 "
+                         "before it; the validity clamp alone 0.32-0.38, and 0.28 before the octrees and the frozen "
+                         "layout were built on the threads; BENCHMARKS.md)")
     ap.add_argument("--sqrt2ln", action="store_true", help="the slowest rank's excess from the bound sqrt(2 ln N)")
     ap.add_argument("--tiles-moved", type=float, default=0.014,
                     help="share of the tiles whose adaptive second pass leaves the rank of their pilot (0.014 for "
