@@ -399,11 +399,13 @@ static size_t pack_index(uint8_t *out, uint32_t prev, uint32_t v)
     return k;
 }
 
-/* The entry after prev packed at in[*at, end); 0 if the bytes end inside it or it is out of range. */
+/* The entry after prev packed at in[*at, end); 0 if the bytes end inside it, it takes more than the five
+ * groups any entry needs (a difference of 33 bits at most, so that prev + d cannot overflow) or it is out of
+ * range. */
 static int unpack_index(const uint8_t *in, size_t end, size_t *at, uint32_t prev, uint32_t *v)
 {
     uint64_t z = 0;
-    for (int shift = 0; shift < 64 && *at < end; shift += 7) {
+    for (int shift = 0; shift < 35 && *at < end; shift += 7) {
         uint8_t b = in[(*at)++];
         z |= (uint64_t)(b & 0x7fu) << shift;
         if (!(b & 0x80u)) {

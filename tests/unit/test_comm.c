@@ -56,7 +56,20 @@ typedef struct rank_link {
     int rank;
     int sums;           /* sums this rank took part in */
     int fail_sum_from;  /* > 0: that sum and every later one fail on this rank, after the exchange */
+    int allgathers;     /* all-gathers this rank took part in */
+    int damage_allgather; /* > 0: that all-gather delivers the next rank's block damaged (damage_block) */
 } rank_link;
+
+/* A block as a faulty transport might deliver it: its first ten bytes replaced by a 7-bit-group number that
+ * runs to 64 bits (0xfe, eight 0xff, 0x01: 2^64 - 2, a zigzag difference of 2^63 - 1). */
+static void damage_block(unsigned char *block, uint64_t bytes)
+{
+    if (bytes < 10)
+        return;
+    block[0] = 0xfe;
+    memset(block + 1, 0xff, 8);
+    block[9] = 0x01;
+}
 
 static ic_result fake_allgather(void *user, const void *send, void *recv, const uint64_t *counts)
 {
@@ -70,8 +83,11 @@ static ic_result fake_allgather(void *user, const void *send, void *recv, const 
     uint64_t at = 0;
     for (int r = 0; r < t->size; ++r) {
         memcpy((char *)recv + at, t->published[r], counts[r]);
+        if (l->allgathers + 1 == l->damage_allgather && r == (l->rank + 1) % t->size)
+            damage_block((unsigned char *)recv + at, counts[r]);
         at += counts[r];
     }
+    ++l->allgathers;
     pthread_barrier_wait(&t->barrier);
     free(own);
     return IC_OK;
@@ -518,6 +534,20 @@ static void check_points(const ic_scene *scene, ic_integrator integrator, uint32
     }
 }
 
+/* n records on a 4 x 4 floor, at random places with random harmonic mean distances (seed): close enough
+ * for the clamps to lower many radii. */
+static void scattered_records(ic_record *recs, int n, uint64_t seed)
+{
+    ic_rng rng = ic_rng_make(seed, 0, 0, 0);
+    for (int i = 0; i < n; ++i) {
+        memset(&recs[i], 0, sizeof recs[i]);
+        recs[i].position = (ic_vec3){4.0f * ic_rng_float(&rng), 0.0f, 4.0f * ic_rng_float(&rng)};
+        recs[i].normal = (ic_vec3){0.0f, 1.0f, 0.0f};
+        recs[i].irradiance = (ic_vec3){1.0f, 1.0f, 1.0f};
+        recs[i].harmonic_mean_dist = 0.05f + 2.0f * ic_rng_float(&rng);
+    }
+}
+
 /* Insertions into copies of one cache shared by 3 ranks (ic_cache_set_comm: each clamps a block of every
  * batch's validity radii): every copy's records, radii included, equal one process's. Batches of 300 give
  * every rank a block above the clamp's threaded size, of 7 below it, of 1 some ranks with none. */
@@ -525,14 +555,7 @@ static void check_cache_insertions(void)
 {
     enum { N = 900 };
     static ic_record recs[N];
-    ic_rng rng = ic_rng_make(3, 0, 0, 0);
-    for (int i = 0; i < N; ++i) {
-        memset(&recs[i], 0, sizeof recs[i]);
-        recs[i].position = (ic_vec3){4.0f * ic_rng_float(&rng), 0.0f, 4.0f * ic_rng_float(&rng)};
-        recs[i].normal = (ic_vec3){0.0f, 1.0f, 0.0f};
-        recs[i].irradiance = (ic_vec3){1.0f, 1.0f, 1.0f};
-        recs[i].harmonic_mean_dist = 0.05f + 2.0f * ic_rng_float(&rng);
-    }
+    scattered_records(recs, N, 3);
     static const uint32_t batches[] = {300, 7, 1};
     for (size_t b = 0; b < sizeof batches / sizeof batches[0]; ++b) {
         uint32_t count = batches[b] == 1 ? 40 : N;
@@ -565,6 +588,32 @@ static void check_cache_insertions(void)
         ic_cache_destroy(one[0].cache);
         for (int r = 0; r < 3; ++r)
             ic_cache_destroy(jobs[r].cache);
+    }
+}
+
+/* A batch inserted by 3 ranks whose third all-gather (the neighbour lists: after the validity radii and the
+ * lists' lengths) delivers each rank the next rank's block damaged: a difference that runs to 64 bits, which
+ * no list entry needs (33 bits at most). Every rank refuses the block (IC_ERR_IO) instead of adding it to a
+ * record's index, where it overflowed a signed 64-bit sum (undefined behaviour, caught by the sanitizer
+ * build). */
+static void check_damaged_lists(void)
+{
+    enum { N = 300 };
+    static ic_record recs[N];
+    scattered_records(recs, N, 5);
+    rank_job jobs[3];
+    memset(jobs, 0, sizeof jobs);
+    for (int r = 0; r < 3; ++r) {
+        jobs[r].records = recs;
+        jobs[r].record_count = jobs[r].batch_size = N;
+        jobs[r].link.damage_allgather = 3;
+    }
+    CHECK(!run_job(jobs, 3), "3 ranks accepted damaged neighbour lists");
+    for (int r = 0; r < 3; ++r) {
+        CHECK(jobs[r].r == IC_ERR_IO && strstr(jobs[r].err.message, "shared their clamps"),
+              "rank %d of 3, given a damaged block of neighbour lists: %s (%s)", r, ic_result_name(jobs[r].r),
+              jobs[r].err.message);
+        ic_cache_destroy(jobs[r].cache);
     }
 }
 
@@ -783,6 +832,7 @@ int main(void)
      * shading point for the large emitters' shares, on rank 0 alone. */
     check_points(scene, IC_INTEGRATOR_IC, 2, 5);
     check_cache_insertions();
+    check_damaged_lists();
     ic_scene_free(scene);
     remove(CACHE_FILE);
     TEST_MAIN_END();
