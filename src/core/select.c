@@ -1,10 +1,28 @@
 /* select.c — order statistics and the radix sort of keyed indices (select.h). */
 #include "core/select.h"
 
+#include <stdlib.h>
+
+static int cmp_float(const void *a, const void *b)
+{
+    const float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
 float ic_kth_smallest(float *v, size_t n, size_t k)
 {
     size_t lo = 0, hi = n; /* the k-th is in v[lo, hi) */
+    /* The middle element as the pivot is linear on the whole for most orders, but an organ pipe (values
+     * rising, then falling) makes it the largest of its range round after round, each round taking off a
+     * few values: quadratic (2.5 s for the view extent's 57,600 points against 4 ms in a random order).
+     * Once the rounds have read 8n values the rest is sorted: O(n log n) at worst. */
+    size_t budget = 8 * n;
     for (;;) {
+        if (hi - lo > budget) {
+            qsort(v + lo, hi - lo, sizeof *v, cmp_float);
+            return v[k];
+        }
+        budget -= hi - lo;
         /* a three-way partition about the middle element: v[lo, lt) < pivot, v[lt, i) = pivot, v[gt, hi) > pivot */
         const float pivot = v[lo + (hi - lo) / 2];
         size_t lt = lo, i = lo, gt = hi;

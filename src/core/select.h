@@ -9,7 +9,8 @@
 #include <stdint.h>
 
 /* The k-th smallest of v[0, n) (k < n), v reordered: the value a sort would put at k, whichever pivots are
- * taken (two zeros of either sign compare equal, so either may come back). Expected time linear in n. */
+ * taken (two zeros of either sign compare equal, so either may come back). Expected time linear in n, and
+ * O(n log n) whatever the order (what is left is sorted once the partitions have read 8n values). */
 float ic_kth_smallest(float *v, size_t n, size_t k);
 
 /* A 32-bit key and the index it belongs to. */
