@@ -43,10 +43,11 @@ static int level_alloc(level *l, int w, int h, int geometry)
     return l->valid && l->val;
 }
 
-/* Level l+1 averages the valid pixels of each 2×2 block of level l (the channels level b has). */
-static void downsample(const level *a, level *b)
+/* Rows [y_lo, y_hi] of level l+1 average the valid pixels of each 2×2 block of level l (the channels level b
+ * has); the other rows stay empty. */
+static void downsample(const level *a, level *b, int y_lo, int y_hi)
 {
-    for (int y = 0; y < b->h; ++y) {
+    for (int y = y_lo; y <= y_hi; ++y) {
         for (int x = 0; x < b->w; ++x) {
             ic_vec3 p = v3s(0), n = v3s(0);
             float fp = 0, val = 0;
@@ -191,9 +192,23 @@ static ic_result need_map(const ic_gbuffer *g, const float *values, disc_fn disc
             r = IC_ERR_OOM;
             goto done;
         }
-        downsample(&lv[nlev - 1], &lv[nlev]);
         ++nlev;
     }
+    /* The rows of each level that rows [y0, y1) read: its discontinuities' rows and their 4-neighbours, and
+     * the rows the next level is made of; only those are made (under several processes a process's rows are a
+     * small part of the image). */
+    int lo[IC_SCREEN_LEVELS], hi[IC_SCREEN_LEVELS];
+    for (int l = nlev - 1; l >= 1; --l) {
+        lo[l] = (y0 >> l) - 1 > 0 ? (y0 >> l) - 1 : 0;
+        hi[l] = ((y1 - 1) >> l) + 1 < lv[l].h - 1 ? ((y1 - 1) >> l) + 1 : lv[l].h - 1;
+        if (l + 1 < nlev) {
+            lo[l] = 2 * lo[l + 1] < lo[l] ? 2 * lo[l + 1] : lo[l];
+            hi[l] = 2 * hi[l + 1] + 1 > hi[l] ? (2 * hi[l + 1] + 1 < lv[l].h - 1 ? 2 * hi[l + 1] + 1 : lv[l].h - 1)
+                                              : hi[l];
+        }
+    }
+    for (int l = 1; l < nlev; ++l)
+        downsample(&lv[l - 1], &lv[l], lo[l], hi[l]);
     /* Each level's discontinuities once per texel, then the blend reads them. */
     for (int l = 0; l < nlev && r == IC_OK; ++l) {
         d[l] = malloc(sizeof *d[l] * (size_t)lv[l].w * (size_t)lv[l].h);
