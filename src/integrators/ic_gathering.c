@@ -822,6 +822,7 @@ done:
 ic_candidate ic_ic_candidate_at_pixel(const ic_ctx *c, uint32_t pixel, uint64_t tag)
 {
     ic_candidate cd;
+    memset(&cd, 0, sizeof cd); /* its padding too: candidates travel between processes whole */
     ic_ic_gbuffer_point(c, pixel, &cd.p, &cd.n, &cd.footprint);
     cd.key = ((uint64_t)pixel << 8) | tag;
     return cd;
