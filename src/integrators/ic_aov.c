@@ -4,6 +4,8 @@
  */
 #include "ic_internal.h"
 
+#include "core/select.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -100,8 +102,7 @@ static ic_result background_scale(const ic_image *img, double *scale)
     }
     *scale = 1.0;
     if (lit > 0) {
-        qsort(lum, lit, sizeof *lum, ic_ic_cmp_float);
-        *scale = IC_RECORDS_BACKGROUND_GREY / (double)lum[lit / 2];
+        *scale = IC_RECORDS_BACKGROUND_GREY / (double)ic_kth_smallest(lum, lit, lit / 2);
     }
     free(lum);
     return IC_OK;

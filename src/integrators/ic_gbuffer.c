@@ -5,7 +5,6 @@
 #include "ic_internal.h"
 
 #include "core/select.h"
-
 #include "core/threads.h"
 #include "film/film.h"
 

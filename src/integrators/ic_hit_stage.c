@@ -10,6 +10,7 @@
 
 #include "core/comm.h"
 #include "core/sampling.h"
+#include "core/select.h"
 #include "core/threads.h"
 #include "integrators/ic_world.h"
 
@@ -196,8 +197,7 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         /* Clusters about a record's size: the accuracy times the median distance of the uncovered hits (a
          * record's R is about the distance its hemisphere rays travel). The scene's diagonal, which sizes
          * the image's world stage, says nothing here: a ground plane around a house makes it huge. */
-        qsort(dist, m, sizeof *dist, ic_ic_cmp_float);
-        float box = c->o.cache.accuracy * dist[m / 2];
+        float box = c->o.cache.accuracy * ic_kth_smallest(dist, m, m / 2);
         uint32_t kept = 0;
         if (ic_world_select(cand, m, scene->bounds_min, scene->bounds_max, box, 3, 30.0f, &kept) != IC_OK) {
             r = ic_error_set(err, IC_ERR_OOM, "out of memory sorting %u hit-stage candidates", m);

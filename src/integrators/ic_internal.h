@@ -297,12 +297,6 @@ ic_vec3 ic_ic_direct_light_lobes(const ic_ctx *c, const ic_surface *s, const ic_
 ic_vec3 ic_ic_env_light(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, ic_rng *rng,
                         uint64_t *rays);
 
-/* qsort order of floats (ascending). */
-static inline int ic_ic_cmp_float(const void *a, const void *b)
-{
-    float x = *(const float *)a, y = *(const float *)b;
-    return (x > y) - (x < y);
-}
 
 /* Shading points of the pixel centres into c->g (and c->has_record); gbuffer_free frees them. One process,
  * or full (several processes that read every pixel's point: the adaptive strategy, the AOVs), holds every
