@@ -1054,9 +1054,12 @@ static int finite3(struct aiVector3D a)
     return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
 }
 
-/* Every vertex's position, normal and first texture coordinates finite, on the meshes as the file gives them:
- * a NaN normal would give NaN shading samples (black pixels once the film drops them), a NaN texture
- * coordinate a texture look-up nowhere. Checked before assimp's steps, so that the message names the file's
+/* Every vertex's position, normal, first texture coordinates, tangent and bitangent finite, on the meshes as
+ * the file gives them: a NaN normal would give NaN shading samples (black pixels once the film drops them), a
+ * NaN texture coordinate a texture look-up nowhere, and a NaN tangent would be taken for none (xform_tangent)
+ * and replaced by the triangle's own without a word. (A glTF TANGENT's w reaches here as the bitangent assimp
+ * makes of it, the normal × the tangent times w. assimp's CalcTangentSpace runs later and only where the file
+ * gives none; its NaN ones, for degenerate texture coordinates, are rightly taken for none.) Checked before assimp's steps, so that the message names the file's
  * mesh (a glTF primitive: "name-1" for a mesh's second one) and its vertex as the file numbers them (from 1):
  * PreTransformVertices merges the meshes of one material into one, JoinIdenticalVertices drops the vertices
  * no face uses and renumbers the others, and PreTransformVertices also gives NaN normals to the placements
@@ -1072,7 +1075,10 @@ static ic_result check_finite_vertices(const struct aiScene *ai, const char *mes
             const char *bad = !finite3(mesh->mVertices[v]) ? "coordinate"
                               : mesh->mNormals && !finite3(mesh->mNormals[v]) ? "normal"
                               : uv && !(isfinite(uv[v].x) && isfinite(uv[v].y)) ? "texture coordinate"
-                                                                                 : NULL;
+                              : mesh->mTangents && !finite3(mesh->mTangents[v]) ? "tangent"
+                              : mesh->mBitangents && !finite3(mesh->mBitangents[v])
+                                  ? "bitangent (made of the normal, the tangent and its w)"
+                                  : NULL;
             if (bad)
                 return ic_error_set(err, IC_ERR_PARSE,
                                     "%s: vertex %u of mesh '%s' has a non-finite %s; fix or remove it", mesh_path,

@@ -429,6 +429,80 @@ static void expect_load(const char *path, const char *what)
     ic_scene_free(s);
 }
 
+/* A normal-mapped glTF triangle (z = 0, normal +z, a flat map) whose vertices have the TANGENTs t (x y z w),
+ * its buffer in the file name.bin beside it; returns the glTF's path. */
+static const char *write_tangent_gltf(const char *name, const float t[3][4])
+{
+    static const float pos_nrm_uv[24] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+    static const uint16_t idx[3] = {0, 1, 2};
+    unsigned char bin[150];
+    memcpy(bin, pos_nrm_uv, sizeof pos_nrm_uv);  /* positions, normals, texture coordinates: bytes 0-95 */
+    memcpy(bin + 96, t, 48);                     /* tangents: bytes 96-143 (a little-endian host, as the file) */
+    memcpy(bin + 144, idx, sizeof idx);
+    char file[128], text[2048];
+    snprintf(file, sizeof file, "%s.bin", name);
+    write_tmp(file, (const char *)bin, (long)sizeof bin);
+    char pfm[24] = "PF\n1 1\n-1.0\n"; /* one texel (0.5, 0.5, 1): the normal unchanged */
+    memcpy(pfm + 12, (const float[3]){0.5f, 0.5f, 1.0f}, 12);
+    write_tmp("tangent_flat_n.pfm", pfm, sizeof pfm);
+    snprintf(text, sizeof text,
+             "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 150, \"uri\": \"%s\"}],\n"
+             " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, "
+             "\"byteLength\": 36},\n  {\"buffer\": 0, \"byteOffset\": 72, \"byteLength\": 24}, {\"buffer\": 0, \"byteOffset\": 96, "
+             "\"byteLength\": 48},\n  {\"buffer\": 0, \"byteOffset\": 144, \"byteLength\": 6}],\n"
+             " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0, 0, 0], "
+             "\"max\": [1, 1, 0]},\n  {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+             "  {\"bufferView\": 2, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC2\"},\n"
+             "  {\"bufferView\": 3, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC4\"},\n"
+             "  {\"bufferView\": 4, \"componentType\": 5123, \"count\": 3, \"type\": \"SCALAR\"}],\n"
+             " \"images\": [{\"uri\": \"tangent_flat_n.pfm\"}], \"textures\": [{\"source\": 0}],\n"
+             " \"materials\": [{\"name\": \"m\", \"normalTexture\": {\"index\": 0}}],\n"
+             " \"meshes\": [{\"name\": \"tri\", \"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1, "
+             "\"TEXCOORD_0\": 2, \"TANGENT\": 3}, \"indices\": 4, \"material\": 0}]}],\n"
+             " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}\n",
+             file);
+    snprintf(file, sizeof file, "%s.gltf", name);
+    return write_tmp(file, text, -1);
+}
+
+/* A glTF's tangents (TANGENT: x y z and the bitangent's sign w) are refused when not finite, as its normals
+ * are, not taken for none and replaced by the triangle's own; finite ones reach the scene as the unit
+ * tangent and the sign of w. */
+static void test_non_finite_tangents(void)
+{
+    const float nan = NAN, inf = INFINITY;
+    const float ok[3][4] = {{2, 0, 0, 1}, {1, 0, 0, -1}, {0, 1, 0, 1}};
+    ic_scene *s = NULL;
+    ic_error e;
+    memset(&e, 0, sizeof e);
+    CHECK(ic_scene_load(write_tangent_gltf("tangents_ok", ok), NULL, &s, &e) == IC_OK && s,
+          "a normal-mapped glTF with finite tangents loads (%s)", e.message);
+    if (s) {
+        CHECK(s->tangents != NULL && s->vertex_count == 3, "its tangents are kept (%u vertices)", s->vertex_count);
+        for (uint32_t i = 0; s->tangents && i < s->vertex_count; ++i) {
+            /* the file's vertex at this position: (0 0 0), (1 0 0), (0 1 0) */
+            int k = s->positions[i].x == 1.0f ? 1 : s->positions[i].y == 1.0f ? 2 : 0;
+            const float *t = s->tangents + 4 * i;
+            float len = sqrtf(ok[k][0] * ok[k][0] + ok[k][1] * ok[k][1] + ok[k][2] * ok[k][2]);
+            CHECK(fabsf(t[0] - ok[k][0] / len) < 1e-6f && fabsf(t[1] - ok[k][1] / len) < 1e-6f &&
+                      fabsf(t[2] - ok[k][2] / len) < 1e-6f && t[3] == ok[k][3],
+                  "vertex %d's tangent is the file's, of unit length, with its sign: (%g %g %g %g)", k + 1,
+                  (double)t[0], (double)t[1], (double)t[2], (double)t[3]);
+        }
+        ic_scene_free(s);
+    }
+    const float nan_x[3][4] = {{1, 0, 0, 1}, {nan, 0, 0, 1}, {1, 0, 0, 1}};
+    expect_error(write_tangent_gltf("nan_tangent", nan_x), NULL, IC_ERR_PARSE,
+                 "nan_tangent.gltf: vertex 2 of mesh 'tri' has a non-finite tangent", "fix or remove it", NULL);
+    const float inf_y[3][4] = {{0, inf, 0, 1}, {1, 0, 0, 1}, {1, 0, 0, 1}};
+    expect_error(write_tangent_gltf("inf_tangent", inf_y), NULL, IC_ERR_PARSE,
+                 "inf_tangent.gltf: vertex 1 of mesh 'tri' has a non-finite tangent", "fix or remove it", NULL);
+    /* w: assimp makes the bitangent of it (the normal × the tangent times w) */
+    const float nan_w[3][4] = {{1, 0, 0, 1}, {1, 0, 0, 1}, {1, 0, 0, nan}};
+    expect_error(write_tangent_gltf("nan_tangent_w", nan_w), NULL, IC_ERR_PARSE,
+                 "nan_tangent_w.gltf: vertex 3 of mesh 'tri' has a non-finite bitangent", "its w", "fix or remove it");
+}
+
 /* Non-finite texture coordinates and normals are refused as non-finite positions are, in every mesh format
  * that carries them: a NaN normal makes NaN shading samples (black pixels once the film drops them), a NaN
  * texture coordinate a look-up nowhere. The message names the file and the line (OBJ, ascii PLY) or the
@@ -1096,6 +1170,7 @@ int main(void)
     test_hostile_meshes();
     test_scene_size_limit();
     test_non_finite_attributes();
+    test_non_finite_tangents();
     test_finite_attribute_variants();
     test_obj_lines_across_chunks();
     test_ply_face_texcoords();
