@@ -21,6 +21,7 @@
 #include "core/read_file.h"
 #include "irrcache/defaults.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -365,6 +366,13 @@ static ic_result surface(ic_rad_ctx *c, geometry *g, uint32_t mat)
     } else if (!strcmp(t, "ring")) {
         r = need(c, 8, "x y z nx ny nz inner-radius outer-radius");
         ic_vec3 axis = r == IC_OK ? real3(c, 3) : v3s(0.0f);
+        /* a normal whose squared length leaves a float's normal range, such as (0, 0, 1e20) or (0, 0, 1e-23),
+         * with its largest component divided out first (in double, as the file gives it): v3_norm made a zero
+         * vector of the one, which the tessellation turned into zero area (the ring dropped without a word),
+         * and normalized the other from a denormal length (or refused it as zero, shorter still) */
+        double big = r == IC_OK ? fmax(fabs(c->reals[3]), fmax(fabs(c->reals[4]), fabs(c->reals[5]))) : 0.0;
+        if (big > 0.0 && !(v3_len2(axis) >= FLT_MIN && v3_len2(axis) <= FLT_MAX))
+            axis = v3((float)(c->reals[3] / big), (float)(c->reals[4] / big), (float)(c->reals[5] / big));
         float r0 = r == IC_OK ? (float)c->reals[6] : 0.0f, r1 = r == IC_OK ? (float)c->reals[7] : 0.0f;
         if (r == IC_OK && (!(v3_len2(axis) > 0.0f) || !(r0 >= 0.0f && r1 > r0)))
             r = ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,

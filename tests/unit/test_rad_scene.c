@@ -198,6 +198,39 @@ static const ic_material *material_named(const ic_scene *s, const char *name)
     return NULL;
 }
 
+/* A ring's normal is a direction whatever its length: (1, 2, 3) given 1e20, 1e-23 or 1e39 times over (squares
+ * beyond a float's range, or the normal itself) makes the ring that (1, 2, 3) makes, vertex for vertex within
+ * float rounding (the long ones had made a ring of zero area, dropped without a word, or refused it as beyond
+ * the largest coordinate; the short one's direction, from a denormal squared length, was 1e-3 off). */
+static void test_ring_normal_length(void)
+{
+    static const double scale[4] = {1.0, 1e20, 1e-23, 1e39};
+    ic_scene *s[4] = {NULL};
+    for (int k = 0; k < 4; ++k) {
+        char rad[256], path[256];
+        snprintf(rad, sizeof rad, "void plastic m 0 0 5 .5 .5 .5 0 0\nm ring r 0 0 8  1 2 3  %.17g %.17g %.17g  0.5 2\n",
+                 1.0 * scale[k], 2.0 * scale[k], 3.0 * scale[k]);
+        snprintf(path, sizeof path, IC_TEST_TMP "/rad_ring_normal%d.rad", k);
+        test_write_file(path, rad);
+        ic_error err = {0};
+        CHECK(ic_scene_load(path, NULL, &s[k], &err) == IC_OK, "a ring whose normal is %g times (1, 2, 3) loads: %s",
+              scale[k], err.message);
+    }
+    for (int k = 1; k < 4 && s[0]; ++k) {
+        if (!s[k])
+            continue;
+        float worst = 0.0f;
+        for (uint32_t i = 0; i < s[0]->vertex_count && i < s[k]->vertex_count; ++i)
+            worst = fmaxf(worst, v3_len(v3_sub(s[0]->positions[i], s[k]->positions[i])));
+        CHECK(s[k]->triangle_count == s[0]->triangle_count && s[0]->triangle_count == 128 &&
+                  s[k]->vertex_count == s[0]->vertex_count && worst < 1e-5f,
+              "the normal %g times (1, 2, 3): %u triangles (128), the vertices of the unit one's (off by %g)", scale[k],
+              s[k]->triangle_count, (double)worst);
+    }
+    for (int k = 0; k < 4; ++k)
+        ic_scene_free(s[k]);
+}
+
 static void test_geometry_and_materials(void)
 {
     char rad[8192];
@@ -370,6 +403,7 @@ static void test_errors(void)
 
 int main(void)
 {
+    test_ring_normal_length();
     test_cornell();
     test_analytic();
     test_geometry_and_materials();
