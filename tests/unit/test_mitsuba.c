@@ -657,8 +657,64 @@ static void test_rough_alpha(void)
     ic_scene_free(s);
 }
 
+/* The scene of one rectangle whose to_world is `xform`, written as name.xml; NULL (err set) if it does not load. */
+static ic_scene *rectangle_under(const char *name, const char *xform, ic_error *err)
+{
+    char xml[1024], path[256];
+    snprintf(xml, sizeof xml,
+             "<scene version=\"3.0.0\">\n  <shape type=\"rectangle\">\n    <transform name=\"to_world\">%s</transform>\n"
+             "  </shape>\n</scene>\n",
+             xform);
+    snprintf(path, sizeof path, IC_TEST_TMP "/%s.xml", name);
+    test_write_file(path, xml);
+    ic_scene *s = NULL;
+    memset(err, 0, sizeof *err);
+    return ic_scene_load(path, NULL, &s, err) == IC_OK ? s : NULL;
+}
+
+/* A direction in a transform (a lookat's view and up, a rotation's axis) is one whatever its length: given
+ * 1e20 or 1e-23 times over, whose squares leave a float's range, it places a rectangle where the unit one
+ * does (the far target and the short view were refused as an 'up' parallel to the view, the long axis made
+ * a rotation a scale by the angle's cosine, the short one no rotation at all). A lookat whose origin is its target
+ * is refused as that, naming the line and what to do. */
+static void test_transform_direction_lengths(void)
+{
+    static const char *pairs[][2] = {
+        {"<lookat origin=\"1, 2, 3\" target=\"1, 2, 4\" up=\"0, 1, 0\"/>",
+         "<lookat origin=\"1, 2, 3\" target=\"1, 2, 1e20\" up=\"0, 1e20, 0\"/>"},
+        {"<lookat origin=\"0, 0, 0\" target=\"1, 1, 0\" up=\"0, 0, 1\"/>",
+         "<lookat origin=\"0, 0, 0\" target=\"1e-23, 1e-23, 0\" up=\"0, 0, 1e-23\"/>"},
+        {"<rotate x=\"1\" y=\"1\" z=\"0\" angle=\"60\"/>", "<rotate x=\"1e20\" y=\"1e20\" z=\"0\" angle=\"60\"/>"},
+        {"<rotate x=\"0\" y=\"1\" z=\"1\" angle=\"30\"/>", "<rotate x=\"0\" y=\"1e-23\" z=\"1e-23\" angle=\"30\"/>"}};
+    for (int k = 0; k < 4; ++k) {
+        ic_error err;
+        ic_scene *unit = rectangle_under("mts_dir_unit", pairs[k][0], &err);
+        CHECK(unit != NULL, "transform %d with unit directions loads: %s", k, err.message);
+        ic_scene *scaled = rectangle_under("mts_dir_scaled", pairs[k][1], &err);
+        CHECK(scaled != NULL, "transform %d with directions of other lengths loads: %s", k, err.message);
+        if (unit && scaled) {
+            CHECK(scaled->triangle_count == unit->triangle_count && unit->triangle_count == 2,
+                  "transform %d: %u and %u triangles (2)", k, scaled->triangle_count, unit->triangle_count);
+            float worst = 0.0f;
+            for (uint32_t i = 0; i < unit->vertex_count && i < scaled->vertex_count; ++i)
+                worst = fmaxf(worst, v3_len(v3_sub(unit->positions[i], scaled->positions[i])));
+            CHECK(scaled->vertex_count == unit->vertex_count && worst < 1e-5f,
+                  "transform %d: the rectangle where the unit directions put it (off by %g)", k, (double)worst);
+        }
+        ic_scene_free(unit);
+        ic_scene_free(scaled);
+    }
+    ic_error err;
+    ic_scene *s = rectangle_under("mts_lookat_same", "<lookat origin=\"1, 1, 1\" target=\"1, 1, 1\"/>", &err);
+    CHECK(!s && err.code == IC_ERR_INVALID_ARG && strstr(err.message, "mts_lookat_same.xml:3:") &&
+              strstr(err.message, "'origin' and 'target' coincide; move the target") && !strchr(err.message, '\n'),
+          "a lookat at its own origin: refused as that, with the line (%s)", err.message);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_transform_direction_lengths();
     test_conductor_default();
     test_sphere_to_world();
     test_mirrored_sensor();
