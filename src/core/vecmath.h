@@ -9,6 +9,7 @@
 
 #include "irrcache/common.h"
 
+#include <float.h>
 #include <math.h>
 
 #define IC_PI 3.14159265358979323846f
@@ -33,6 +34,24 @@ static inline ic_vec3 v3_norm(ic_vec3 a)
 {
     float l = v3_len(a);
     return l > 0.0f ? v3_scale(a, 1.0f / l) : a;
+}
+/* |a| and a/|a| for a finite vector of any length: where |a|² is a normal float the plain formulas above
+ * (the same bits); where it overflows or underflows (a triangle's cross product with edges beyond about
+ * 4e9, or below about 1e-10) a is divided by its largest component first, so that the length and the
+ * direction survive. A zero (or NaN) vector has length 0 (NaN) and direction 0. */
+static inline float v3_len_any(ic_vec3 a)
+{
+    float l2 = v3_len2(a), big = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
+    if ((l2 >= FLT_MIN && l2 <= FLT_MAX) || !(big > 0.0f))
+        return sqrtf(l2);
+    return big * v3_len(v3(a.x / big, a.y / big, a.z / big));
+}
+static inline ic_vec3 v3_norm_any(ic_vec3 a)
+{
+    float l2 = v3_len2(a), big = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
+    if (l2 >= FLT_MIN && l2 <= FLT_MAX)
+        return v3_norm(a);
+    return big > 0.0f ? v3_norm(v3(a.x / big, a.y / big, a.z / big)) : v3s(0.0f);
 }
 static inline ic_vec3 v3_min(ic_vec3 a, ic_vec3 b) { return v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
 static inline ic_vec3 v3_max(ic_vec3 a, ic_vec3 b) { return v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }

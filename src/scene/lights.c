@@ -264,7 +264,7 @@ static float tri_area(const ic_scene *s, uint32_t t)
 {
     ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
             p2 = s->positions[s->triangles[3 * t + 2]];
-    return 0.5f * v3_len(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    return 0.5f * v3_len_any(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
 }
 
 /* Mean luminance of the environment over the sphere (radiance scale included). */
@@ -324,7 +324,7 @@ static ic_result build_tri_lights(ic_scene *s, double *power, ic_error *err)
                 p2 = s->positions[s->triangles[3 * t + 2]];
         l->centroid = v3_scale(v3_add(v3_add(p0, p1), p2), 1.0f / 3.0f);
         ic_vec3 cr = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
-        l->normal = v3_len2(cr) > 0.0f ? v3_norm(cr) : v3(0.0f, 0.0f, 1.0f);
+        l->normal = v3_len_any(cr) > 0.0f ? v3_norm_any(cr) : v3(0.0f, 0.0f, 1.0f);
         l->radius = sqrtf(fmaxf(v3_len2(v3_sub(p0, l->centroid)),
                                 fmaxf(v3_len2(v3_sub(p1, l->centroid)), v3_len2(v3_sub(p2, l->centroid)))));
         l->two_sided = m->two_sided_emission;
@@ -439,7 +439,7 @@ float ic_scene_light_pdf_triangle_sel(const ic_scene *scene, const ic_light_sele
     const ic_material *m = &scene->materials[scene->triangle_material[tri]];
     ic_vec3 p0 = scene->positions[scene->triangles[3 * tri]], p1 = scene->positions[scene->triangles[3 * tri + 1]],
             p2 = scene->positions[scene->triangles[3 * tri + 2]];
-    ic_vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    ic_vec3 ng = v3_norm_any(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
     float cos_l = -v3_dot(ng, wi);
     if (!m->two_sided_emission && cos_l <= 0.0f)
         return 0.0f;
@@ -524,7 +524,7 @@ static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_
     ls->dist = dist;
     ls->is_delta = 0;
     const ic_material *m = &s->materials[s->triangle_material[t]];
-    ic_vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    ic_vec3 ng = v3_norm_any(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
     float cos_l = -v3_dot(ng, ls->wi);
     if ((!m->two_sided_emission && cos_l <= 0.0f) || cos_l == 0.0f)
         return 0; /* the point sees the back of a one-sided emitter */

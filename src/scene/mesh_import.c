@@ -1088,6 +1088,16 @@ static ic_result check_finite_vertices(const struct aiScene *ai, const char *mes
     return IC_OK;
 }
 
+/* Whether triangle (p0, p1, p2) has no geometric normal, the test ic_scene_surface relies on: its cross
+ * product is zero or not finite. Not its squared length, which overflows a float for edges beyond about
+ * 4e9 (well inside IC_SCENE_MAX_COORD) and underflows below about 1e-10: such a triangle has a normal
+ * (v3_norm_any) and an area (v3_len_any) and is kept. */
+static int is_degenerate(ic_vec3 p0, ic_vec3 p1, ic_vec3 p2)
+{
+    ic_vec3 c = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
+    return v3_is_black(c) || !v3_is_finite(c);
+}
+
 static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
                                const float m4[16], const char *xform_where, uint32_t material_base, int use_tangents,
                                ic_error *err)
@@ -1169,11 +1179,7 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             }
             uint32_t i0 = base + face->mIndices[0], i1 = base + face->mIndices[flip ? 2 : 1],
                      i2 = base + face->mIndices[flip ? 1 : 2];
-            ic_vec3 p0 = s->positions[i0];
-            ic_vec3 c = v3_cross(v3_sub(s->positions[i1], p0), v3_sub(s->positions[i2], p0));
-            float len2 = v3_len2(c);
-            /* the same test ic_scene_surface relies on: a normalizable geometric normal */
-            if (!(len2 > 0.0f) || !isfinite(len2)) {
+            if (is_degenerate(s->positions[i0], s->positions[i1], s->positions[i2])) {
                 ++s->dropped_degenerate;
                 ++b->material_dropped[mat];
                 continue;
@@ -1248,8 +1254,7 @@ ic_result ic_scene_append_triangles(ic_scene_builder *b, const ic_vec3 *p, const
     s->vertex_count += vertex_count;
     for (uint32_t f = 0; f < tri_count; ++f) {
         uint32_t i0 = base + tri[3 * f], i1 = base + tri[3 * f + (flip ? 2 : 1)], i2 = base + tri[3 * f + (flip ? 1 : 2)];
-        ic_vec3 c = v3_cross(v3_sub(s->positions[i1], s->positions[i0]), v3_sub(s->positions[i2], s->positions[i0]));
-        if (!(v3_len2(c) > 0.0f) || !isfinite(v3_len2(c))) {
+        if (is_degenerate(s->positions[i0], s->positions[i1], s->positions[i2])) {
             ++s->dropped_degenerate;
             ++b->material_dropped[material];
             continue;

@@ -8,7 +8,6 @@
 #include "core/error_at.h"
 
 #include <ctype.h>
-#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -342,17 +341,6 @@ static ic_result point3(ic_mts_ctx *c, const xmlNode *k, const char *key, ic_vec
     return IC_OK;
 }
 
-/* The unit vector along a, zero for a zero one. Where its squared length leaves a float's normal range its
- * largest component is divided out first (v3_norm made a zero vector of (1e20, 0, 0) and left (1e-23, 0, 0)
- * as it was); elsewhere it is v3_norm's, bit for bit. */
-static ic_vec3 direction(ic_vec3 a)
-{
-    float l2 = v3_len2(a), big = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
-    if (l2 >= FLT_MIN && l2 <= FLT_MAX)
-        return v3_norm(a);
-    return big > 0.0f ? v3_norm(v3(a.x / big, a.y / big, a.z / big)) : v3s(0.0f);
-}
-
 static ic_result parse_transform(ic_mts_ctx *c, const xmlNode *t, float m[16])
 {
     ic_mat4_identity(m);
@@ -379,8 +367,8 @@ static ic_result parse_transform(ic_mts_ctx *c, const xmlNode *t, float m[16])
             float angle = 0.0f;
             if ((r = ic_mts_vec(c, k, 0.0f, &v)) == IC_OK && ic_mts_numbers(ic_mts_attr(c, k, "angle"), &angle, 1) != 1)
                 r = ic_mts_fail(c, k, IC_ERR_PARSE, "<rotate> needs an angle (degrees)", NULL);
-            if (r == IC_OK && v3_len2(direction(v)) > 0.0f) { /* Rodrigues' formula about the unit axis */
-                ic_vec3 u = direction(v);
+            if (r == IC_OK && v3_len2(v3_norm_any(v)) > 0.0f) { /* Rodrigues' formula about the unit axis */
+                ic_vec3 u = v3_norm_any(v);
                 float th = angle * IC_PI / 180.0f, cs = cosf(th), sn = sinf(th), t1 = 1.0f - cs;
                 float rot[9] = {cs + u.x * u.x * t1,       u.x * u.y * t1 - u.z * sn, u.x * u.z * t1 + u.y * sn,
                                 u.y * u.x * t1 + u.z * sn, cs + u.y * u.y * t1,       u.y * u.z * t1 - u.x * sn,
@@ -399,7 +387,7 @@ static ic_result parse_transform(ic_mts_ctx *c, const xmlNode *t, float m[16])
                 r = point3(c, k, "target", &tg);
             if (r == IC_OK && ic_mts_attr(c, k, "up"))
                 r = point3(c, k, "up", &up);
-            ic_vec3 dir = direction(v3_sub(tg, o)), left = direction(v3_cross(up, dir));
+            ic_vec3 dir = v3_norm_any(v3_sub(tg, o)), left = v3_norm_any(v3_cross(up, dir));
             if (r == IC_OK && !(v3_len2(dir) > 0.0f))
                 r = ic_mts_fail(c, k, IC_ERR_INVALID_ARG, "<lookat>: 'origin' and 'target' coincide; move the target",
                                 NULL);

@@ -262,7 +262,7 @@ ic_result ic_scene_add_portal(ic_scene *s, const ic_vec3 corners[4], ic_error *e
 {
     ic_vec3 e1 = v3_sub(corners[1], corners[0]), e2 = v3_sub(corners[3], corners[0]);
     ic_vec3 c = v3_cross(e1, e2);
-    float area = v3_len(c), scale = v3_len(e1) + v3_len(e2);
+    float area = v3_len_any(c), scale = v3_len(e1) + v3_len(e2); /* |c|² overflows for edges beyond 4e9 */
     if (!(area > 0.0f) || !isfinite(area) || !(area > 1e-6f * scale * scale))
         return ic_error_set(err, IC_ERR_INVALID_ARG,
                             "a portal's corners are degenerate (zero area or not finite); give its four corners "
@@ -287,7 +287,7 @@ ic_result ic_scene_add_portal(ic_scene *s, const ic_vec3 corners[4], ic_error *e
     pt->corner = corners[0];
     pt->edge1 = e1;
     pt->edge2 = e2;
-    pt->normal = v3_scale(c, 1.0f / area);
+    pt->normal = v3_norm_any(c);
     pt->area = area;
     pt->rectangle = fabsf(v3_dot(e1, e2)) <= 1e-4f * v3_len(e1) * v3_len(e2);
     pt->len1 = v3_len(e1);

@@ -97,7 +97,8 @@ void ic_scene_surface(const ic_scene *scene, uint32_t tri, float u, float v, ic_
     s->offset_floor = scene->ray_offset_floor;
     ic_vec3 p0 = scene->positions[idx[0]], p1 = scene->positions[idx[1]], p2 = scene->positions[idx[2]];
     s->p = v3_add(v3_add(v3_scale(p0, w), v3_scale(p1, u)), v3_scale(p2, v));
-    s->ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    /* v3_norm_any: the loaders keep triangles whose |e1 x e2|² leaves a float (edges beyond 4e9 or below 1e-10) */
+    s->ng = v3_norm_any(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
     s->ns = s->ng;
     if (scene->normals) {
         ic_vec3 n0 = scene->normals[idx[0]], n1 = scene->normals[idx[1]], n2 = scene->normals[idx[2]];

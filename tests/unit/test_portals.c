@@ -13,7 +13,7 @@
  *   through no portal come from BSDF sampling under MIS); in the sky-room (two windows) direct light
  *   through portals has the same mean as without them and several times less noise.
  * - Bad portals (three corners, not a parallelogram, degenerate, not an array) are refused with the
- *   scene file's line.
+ *   scene file's line; a portal 1e12 across (|e1 × e2|² beyond a float) is not degenerate.
  */
 #include "core/sampling.h"
 #include "irrcache/points.h"
@@ -278,6 +278,26 @@ static void test_sun_in_portal_plane(void)
     ic_scene_free(s);
 }
 
+/* A portal 1e12 across: |e1 × e2|² overflows a float, and it was refused as degenerate; its area and unit
+ * normal (−y: corners +x then +z) are those of the double-precision cross product. */
+static void test_big_portal(void)
+{
+    ic_error err = {0};
+    ic_scene *s = load_text("portal_big.json",
+                            "{\n \"meshes\": [{\"path\": \"" IC_SOURCE_DIR "/tests/scenes/plain_quad.obj\"}],\n"
+                            " \"environment\": {\"radiance\": [1, 1, 1],\n"
+                            "   \"portals\": [[[0, 3, 0], [2e12, 3, 0], [2e12, 3, 1e12], [0, 3, 1e12]]]}\n}\n",
+                            &err);
+    CHECK(s != NULL, "a 2e12 x 1e12 portal loads: %s", err.message);
+    if (!s)
+        return;
+    const ic_portal *pt = &s->env.portals[0];
+    CHECK(s->env.portal_count == 1 && fabs(pt->area / 2e24 - 1.0) < 1e-6, "its area %g (2e24)", (double)pt->area);
+    CHECK(pt->normal.x == 0.0f && pt->normal.y == -1.0f && pt->normal.z == 0.0f, "its normal (%g %g %g)",
+          (double)pt->normal.x, (double)pt->normal.y, (double)pt->normal.z);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
     test_sun_in_portal_plane();
@@ -285,5 +305,6 @@ int main(void)
     test_mixed_portals();
     test_sky_room();
     test_bad_portals();
+    test_big_portal();
     TEST_MAIN_END();
 }

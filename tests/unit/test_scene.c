@@ -1,12 +1,14 @@
 /*
  * test_scene.c — loading good scenes: the bundled Cornell box, transforms, material overrides, lights,
  * environment and render settings from JSON, fov_x conversion, "shared:" paths, bare meshes with a
- * fitted camera, dropped degenerate triangles, the surface queries (barycentrics, normals, uvs,
+ * fitted camera, dropped degenerate triangles (and kept ones 1e-15 to 1e18 across, whose squared cross
+ * product leaves a float: their normal, area and light pdf, and a ray hitting a 1e12 floor), the surface queries (barycentrics, normals, uvs,
  * bilinear textures, one-sided emission), gzip-compressed meshes (.obj.gz: same triangles, MTL and
  * textures from the folder of the .gz file; a truncated or corrupt file is a one-line error naming it),
  * and a file's parts of one material joined before their vertices are (two OBJ groups sharing an edge:
  * one vertex and one tangent at each place).
  */
+#include "geom/accel.h"
 #include "irrcache/image.h"
 #include "scene/scene.h"
 #include "scene/scene_internal.h" /* ic_scene_texture_load */
@@ -268,6 +270,116 @@ static void test_degenerate_dropped(void)
     s = load(SCENES "degenerate.obj", NULL);
     if (s)
         CHECK(s->dropped_degenerate == 1, "bare mesh too");
+    ic_scene_free(s);
+}
+
+/* Unit geometric normal of triangle t, from its corners in double (no float overflow or underflow). */
+static void exact_normal(const ic_scene *s, uint32_t t, double n[3], double *area)
+{
+    const ic_vec3 *p = s->positions;
+    const uint32_t *i = s->triangles + 3 * t;
+    double e1[3] = {(double)p[i[1]].x - p[i[0]].x, (double)p[i[1]].y - p[i[0]].y, (double)p[i[1]].z - p[i[0]].z};
+    double e2[3] = {(double)p[i[2]].x - p[i[0]].x, (double)p[i[2]].y - p[i[0]].y, (double)p[i[2]].z - p[i[0]].z};
+    double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int k = 0; k < 3; ++k)
+        n[k] = c[k] / len;
+    *area = 0.5 * len;
+}
+
+/* Every kept triangle's geometric normal (ic_scene_surface) is the double-precision one, of unit length. */
+static void check_normals(const ic_scene *s, const char *what)
+{
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        ic_surface srf;
+        ic_scene_surface(s, t, 0.25f, 0.25f, &srf);
+        double n[3], area;
+        exact_normal(s, t, n, &area);
+        double off = fabs(srf.ng.x - n[0]) + fabs(srf.ng.y - n[1]) + fabs(srf.ng.z - n[2]);
+        CHECK(off < 1e-6 && fabs(v3_len(srf.ng) - 1.0) < 1e-6, "%s, triangle %u: ng (%g %g %g), expected (%g %g %g)",
+              what, t, (double)srf.ng.x, (double)srf.ng.y, (double)srf.ng.z, n[0], n[1], n[2]);
+    }
+}
+
+/* Triangles of any size within the largest coordinate keep their normal and area: the drop test and the
+ * normal took the float |e1 × e2|², which overflows for edges beyond about 4e9 (a 1e12 floor vanished as
+ * "zero area", an emitter of 1e18 made the scene fail as all-degenerate) and underflows for edges below
+ * about 1e-10 (a 1e-15 triangle dropped although its normal is well defined). A collinear triangle, whose
+ * cross product is truly zero, is still dropped and counted. Both loaders' paths: assimp (OBJ) and
+ * ic_scene_append_triangles (Radiance polygons). A ray hits the 1e12 floor where it should. */
+static void test_extreme_triangles(void)
+{
+    test_write_text(IC_TEST_TMP "/extreme.mtl", "newmtl ground\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 1 1 1\n");
+    test_write_text(IC_TEST_TMP "/extreme.obj",
+                    "mtllib extreme.mtl\nusemtl ground\n"
+                    "v -1e12 0 -1e12\nv 1e12 0 -1e12\nv 1e12 0 1e12\nv 3e12 0 3e12\n"
+                    "f 1 3 2\nf 1 3 4\n" /* the floor (normal +y) and a collinear one */
+                    "usemtl lamp\nv 1e18 0 0\nv 0 1e18 0\nv 0 0 1e18\nf 5 7 6\n"); /* facing the origin */
+    test_write_text(IC_TEST_TMP "/extreme.json", /* a camera of its own: the fitted one would stand beyond 1e18 */
+                    "{\"camera\": {\"eye\": [0, 1, 5], \"target\": [0, 0, 0], \"up\": [0, 1, 0], \"fov_y\": 60,\n"
+                    "            \"width\": 8, \"height\": 8},\n"
+                    " \"meshes\": [{\"path\": \"extreme.obj\"}]}\n");
+    ic_scene *s = load(IC_TEST_TMP "/extreme.json", NULL);
+    if (s) {
+        CHECK(s->triangle_count == 2 && s->dropped_degenerate == 1,
+              "extreme.obj: the 1e12 floor and the 1e18 lamp kept (%u of 2), the collinear triangle dropped (%u of 1)",
+              s->triangle_count, s->dropped_degenerate);
+        check_normals(s, "extreme.obj");
+        CHECK(s->tri_light_count == 1, "one emitting triangle (%u)", s->tri_light_count);
+        if (s->tri_light_count == 1) {
+            const ic_tri_light *l = &s->tri_lights[0];
+            double n[3], area;
+            exact_normal(s, l->triangle, n, &area);
+            CHECK(fabs(l->area / area - 1.0) < 1e-5, "the lamp's area %g, expected %g", (double)l->area, area);
+            CHECK(fabs(l->normal.x - n[0]) + fabs(l->normal.y - n[1]) + fabs(l->normal.z - n[2]) < 1e-6,
+                  "the lamp's normal (%g %g %g)", (double)l->normal.x, (double)l->normal.y, (double)l->normal.z);
+            /* From the origin straight at the lamp's plane x + y + z = 1e18 (distance 1e18/sqrt 3, cosine 1):
+             * the area pdf turned into solid angle, d²/A = (1e36/3) / (sqrt(3)/2 · 1e36). */
+            ic_vec3 wi = v3_norm(v3(1, 1, 1));
+            float pdf = ic_scene_light_pdf_triangle(s, v3s(0.0f), l->triangle, wi, 1e18f / sqrtf(3.0f));
+            double expect = s->light_select.tri * 2.0 / (3.0 * sqrt(3.0));
+            CHECK(fabs(pdf / expect - 1.0) < 1e-4, "the lamp's pdf %g, expected %g", (double)pdf, expect);
+            ic_light_sample ls;
+            int ok = ic_scene_sample_light(s, v3s(0.0f), 0.5f, 0.3f, 0.4f, &ls);
+            CHECK(ok && isfinite(ls.pdf) && ls.pdf > 0.0f && fabs(v3_len(ls.wi) - 1.0) < 1e-6,
+                  "a sample of the lamp: pdf %g", (double)ls.pdf);
+        }
+        ic_accel *accel = NULL;
+        ic_error err = {0};
+        CHECK(ic_accel_create(s, &accel, &err) == IC_OK, "accel: %s", err.message);
+        if (accel) {
+            ic_ray ray = {v3(0.25f, 1.0f, 0.5f), v3(0.0f, -1.0f, 0.0f), 0.0f, INFINITY};
+            ic_hit hit;
+            ic_accel_intersect1(accel, &ray, &hit);
+            CHECK(hit.triangle != IC_NO_HIT && fabs(hit.t - 1.0) < 1e-6, "a ray down hits the floor at t = 1 (%u, %g)",
+                  hit.triangle, (double)hit.t);
+            if (hit.triangle != IC_NO_HIT) {
+                ic_surface srf;
+                ic_scene_surface(s, hit.triangle, hit.u, hit.v, &srf);
+                printf("1e12 floor: hit at (%g %g %g) for (0.25 0 0.5), ng (%g %g %g)\n", (double)srf.p.x,
+                       (double)srf.p.y, (double)srf.p.z, (double)srf.ng.x, (double)srf.ng.y, (double)srf.ng.z);
+                    /* y is exact (the floor is the plane y = 0); x and z come from float barycentrics times the
+                 * floor's 2e12 edges: within a few of its ulps (2e12 · 2^-22), not of 0.25 and 0.5 */
+                CHECK(srf.p.y == 0.0f && srf.ng.y == 1.0f && fabs(srf.p.x - 0.25) < 5e5 && fabs(srf.p.z - 0.5) < 5e5,
+                      "on the floor, facing up");
+            }
+            ic_accel_destroy(accel);
+        }
+    }
+    ic_scene_free(s);
+    /* Radiance polygons: a 1e-15 triangle (|c|² = 3e-60 underflows), a 1e12 one, a collinear one. */
+    test_write_text(IC_TEST_TMP "/extreme.rad",
+                    "void plastic m 0 0 5 .5 .5 .5 0 0\n"
+                    "m polygon tiny 0 0 9  1e-15 0 0  0 1e-15 0  0 0 1e-15\n"
+                    "m polygon big 0 0 9  1e12 0 0  0 2e12 0  0 0 3e12\n"
+                    "m polygon flat 0 0 9  0 0 0  1e12 1e12 0  2e12 2e12 0\n");
+    s = load(IC_TEST_TMP "/extreme.rad", NULL);
+    if (s) {
+        CHECK(s->triangle_count == 2 && s->dropped_degenerate == 1,
+              "extreme.rad: the 1e-15 and 1e12 triangles kept (%u of 2), the collinear one dropped (%u of 1)",
+              s->triangle_count, s->dropped_degenerate);
+        check_normals(s, "extreme.rad");
+    }
     ic_scene_free(s);
 }
 
@@ -736,6 +848,7 @@ int main(void)
     test_groups_joined();
     test_fov_x_and_shared();
     test_degenerate_dropped();
+    test_extreme_triangles();
     test_bare_mesh_and_queries();
     test_mtl_folder();
     test_texture_bytes();
