@@ -156,8 +156,10 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "N even, at most 512: 786,432 rays) and exact per-texel weights (Castano 2014)") \
     X(ERROR, "--error", NULL, IC_OPT_CHOICE, render.ic.error, 0, 0, "split-sphere|hessian", NAN, "split-sphere", \
       "", IC_SCOPE_IC, "what sets a record's extent: Ward's split sphere (harmonic mean of the hit distances), or " \
-      "the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error reaches --accuracy x E " \
-      "(0.15 x --accuracy with --weight tl) at the record's edge (stratified or hemicube gather)") \
+      "the irradiance Hessian (Schwarzhaupt et al. 2012): records as dense as the square root of its relative " \
+      "curvature, semi-axes a*sqrt(L*l), l = sqrt(2E/|eigenvalue|), L = 1/8 of the scene's diagonal (at most 2.5 " \
+      "x the view's extent), a = " \
+      "--accuracy (0.15 x --accuracy with --weight tl) (stratified or hemicube gather)") \
     X(RECORD_SHAPE, "--record-shape", NULL, IC_OPT_CHOICE, render.ic.record_shape, 0, 0, "round|elliptical", NAN, \
       "round", "", IC_SCOPE_IC, "with --error hessian: round records (the smaller semi-axis everywhere) or " \
       "ellipses along the Hessian's eigenvectors, aspect at most 4") \

@@ -39,11 +39,11 @@
  *
  * WEIGHTS
  *   Ward's weight is the inverse of a first-order error estimate; Tabellion–Lamorlette's falls
- *   linearly to zero. IC_WEIGHT_ERROR follows Schwarzhaupt et al. 2012: a record whose extent was set
- *   where the second-order error ½dᵀHd reaches the allowed error (ic_gather_hessian_extent) errs at
- *   displacement d by about that bound times δ_t², δ_t = |d|_i/(a_i R_i) (1 on the extent's edge); the
- *   weight is one minus the estimated error over the bound, with the normal change δ_r measured like
- *   Ward's, so that a record weighs what its extent promises and reaches zero exactly at its edge.
+ *   linearly to zero. IC_WEIGHT_ERROR follows Schwarzhaupt et al. 2012: a record whose extent follows
+ *   its Hessian (ic_gather_hessian_extent) errs at displacement d by its error at the extent's edge
+ *   times δ_t², δ_t = |d|_i/(a_i R_i) (1 on the edge), the second-order error growing as the square of
+ *   the distance; the weight is one minus that share, with the normal change δ_r measured like Ward's,
+ *   so that a record weighs what its extent promises and reaches zero exactly at its edge.
  *
  * ELLIPTICAL RECORDS
  *   A record may have an elliptical extent in its tangent plane (Schwarzhaupt et al. 2012: the

@@ -82,9 +82,10 @@ typedef struct ic_switched_value {
 /* What sets a record's extent. */
 typedef enum ic_error_metric {
     IC_ERROR_SPLIT_SPHERE = 0, /* Ward's split sphere: R from the harmonic mean of the hit distances */
-    IC_ERROR_HESSIAN = 1       /* the irradiance Hessian (Schwarzhaupt et al. 2012): the second-order error
-                                  ½dᵀHd reaches ε × E at the edge a·R, ε the accuracy a (0.15·a under the
-                                  Tabellion–Lamorlette weight) */
+    IC_ERROR_HESSIAN = 1       /* the irradiance Hessian (Schwarzhaupt et al. 2012): semi-axes ε·√(L·ℓ_k),
+                                  ℓ_k = √(2E/|λ_k|) where the second-order error ½dᵀHd would reach E, L an
+                                  eighth of the scene's diagonal (at most 2.5 times the view's extent), ε the accuracy a (0.15·a under the
+                                  Tabellion–Lamorlette weight): records as dense as √|λ/E| */
 } ic_error_metric;
 
 /* The shape of a record's extent under the Hessian metric. */

@@ -738,16 +738,26 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
                                   ? gr->harmonic_mean_dist
                                   : c->scene_diag;
     if (c->o.error == IC_ERROR_HESSIAN && gr->has_hessian) {
-        /* Schwarzhaupt et al. 2012: first-order extrapolation errs by ½dᵀHd; the record reaches as far
-         * as that stays below ε × E (ic_ic_hessian_error_target): a round record to the smaller semi-axis, an elliptical one
-         * to both (its aspect bounded by IC_MAX_ELLIPSE_ASPECT, so a nearly flat direction does not
-         * stretch it across the scene). The weights accept |p − p_i|_i < a·R_i, so R_i is the (major)
+        /* Schwarzhaupt et al. 2012: first-order extrapolation errs by ½dᵀHd, so along an eigenvector of H
+         * the relative error reaches ε at ℓ_k·√ε, ℓ_k = √(2E/|λ_k|) (ic_gather_hessian_extent). A record
+         * does not reach that far: its semi-axes are ε·√(L·ℓ_k), L an eighth of the work extent, the
+         * spacing that for a given number of records makes the integrated relative error least (the error
+         * over a disc of radius s grows as |λ/E|·s⁴, so the records' density goes as √|λ/E|, the law
+         * behind Radiance's radii ∝ |λ|^(−1/4)), where the pointwise bound ℓ_k·√ε would spend records
+         * in proportion to |λ/E| on the few places of high curvature (BENCHMARKS.md, "The low-record
+         * end"). ε is ic_ic_hessian_error_target's. A round record takes the smaller semi-axis, an
+         * elliptical one both (its aspect bounded by IC_MAX_ELLIPSE_ASPECT, so a nearly flat direction does
+         * not stretch it across the scene). The weights accept |p − p_i|_i < a·R_i, so R_i is the (major)
          * extent over a; the cache's clamps then apply as to the split sphere's R. */
         ic_gather_extent_opts eo = {0};
         eo.rel_error = ic_ic_hessian_error_target(&c->o.cache);
         eo.max_radius = c->scene_diag;
         ic_gather_extent ext;
         if (ic_gather_hessian_extent(gr, &eo, &ext) == IC_OK && ext.radius > 0.0f) {
+            const double eps = eo.rel_error, L = IC_HESSIAN_SPACING_LENGTH * c->work_extent;
+            for (int k = 0; k < 2; ++k)
+                ext.semi_axis[k] = (float)(eps * sqrt(L * (ext.semi_axis[k] / sqrt(eps))));
+            ext.radius = ext.semi_axis[0];
             float major = ext.radius;
             if (c->o.record_shape == IC_SHAPE_ELLIPTICAL) {
                 major = fminf(ext.semi_axis[1], IC_MAX_ELLIPSE_ASPECT * ext.semi_axis[0]);

@@ -27,6 +27,8 @@
 #define MAX_SPECULAR_CHAIN 8
 #define WORLD_SLOTS 4 /* look-up points kept per world-stage eye path */
 #define PAD 8         /* uint64 slots between per-thread counters: no false sharing */
+#define IC_HESSIAN_SPACING_LENGTH 0.125 /* --error hessian: the length L of a record's semi-axes ε·√(L·ℓ), as a share of
+                                           the work extent (ic_ic_record_from_gather) */
 #define LOOKUP_CAPACITY 64 /* contributions read back from one cache look-up (adaptive, amap) */
 #define IC_LEVELS_MAX 16   /* most bounces whose levels records keep apart for hit look-ups (beyond:
                               hemisphere rays are path-traced) */
