@@ -145,9 +145,9 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
     X(ACCURACY, "--accuracy", "-a", IC_OPT_FLOAT, render.ic.cache.accuracy, 0.001, 100, "A", NAN, \
       "0.15 (ward, error), 1 (tl)", "", IC_SCOPE_IC, "error bound a of the weights; smaller means more records") \
     X(WEIGHT, "--weight", NULL, IC_OPT_CHOICE, render.ic.cache.weight, 0, 0, "ward|tl|error", NAN, "ward", "", \
-      IC_SCOPE_IC, "interpolation weights: Ward's, Tabellion-Lamorlette's, or error: one minus the estimated " \
-      "second-order error over its bound, zero at the record's edge (after Schwarzhaupt et al. 2012; for " \
-      "--error hessian)") \
+      IC_SCOPE_IC, "interpolation weights: Ward's, Tabellion-Lamorlette's, or error: one minus the second-order error's " \
+      "share of its value at the record's edge, 1 - delta^2, zero at the edge (after Schwarzhaupt et al. 2012; " \
+      "for --error hessian)") \
     X(RAYS, "--rays", NULL, IC_OPT_RAYS, render.ic.gather, 16, IC_MAX_RECORD_RAYS, "N", IC_DEFAULT_RAYS, "%g", "", IC_SCOPE_IC, \
       "hemisphere rays per record (stratified M x N, N about pi M)") \
     X(GATHER, "--gather", NULL, IC_OPT_CHOICE, render.ic.gather.method, 0, 0, "stratified|progressive|hemicube", \

@@ -694,9 +694,9 @@ ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_
 
 float ic_ic_hessian_error_target(const ic_cache_params *p)
 {
-    /* Ward's and the error weight's a bound the relative error (0.15 by default); Tabellion–Lamorlette's
+    /* Ward's and the error weight's a is the Hessian extent's ε (0.15 by default); Tabellion–Lamorlette's
      * a only scales their acceptance (1 by default, κ = 1/a), so it maps to Ward's in proportion: the
-     * defaults ask the same 15 % of E of either (½dᵀHd = a·E would allow 100 % with T–L's). */
+     * defaults ask the same ε of either (ε = a would give T–L's default records 0.15⁻¹ times as large). */
     return p->weight == IC_WEIGHT_TABELLION ? p->accuracy * (IC_DEFAULT_ACCURACY_WARD / IC_DEFAULT_ACCURACY_TL)
                                             : p->accuracy;
 }
@@ -752,12 +752,20 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
         ic_gather_extent_opts eo = {0};
         eo.rel_error = ic_ic_hessian_error_target(&c->o.cache);
         eo.max_radius = c->scene_diag;
-        ic_gather_extent ext;
-        if (ic_gather_hessian_extent(gr, &eo, &ext) == IC_OK && ext.radius > 0.0f) {
+        ic_gather_extent ext = {0};
+        if (ic_gather_hessian_extent(gr, &eo, &ext) == IC_OK) {
+            /* ℓ_k from the eigenvalues (not from the pointwise semi-axes, which the extent clamps to
+             * max_radius): a flat direction (λ = 0) reaches the scene's diagonal */
             const double eps = eo.rel_error, L = IC_HESSIAN_SPACING_LENGTH * c->work_extent;
-            for (int k = 0; k < 2; ++k)
-                ext.semi_axis[k] = (float)(eps * sqrt(L * (ext.semi_axis[k] / sqrt(eps))));
+            const double E = fmax(v3_lum(gr->irradiance), 0.0);
+            for (int k = 0; k < 2; ++k) {
+                const double lam = fabs((double)ext.eigenvalue[k]);
+                const double s = lam > 0.0 ? eps * sqrt(L * sqrt(2.0 * E / lam)) : INFINITY;
+                ext.semi_axis[k] = (float)fmin(s, (double)c->scene_diag);
+            }
             ext.radius = ext.semi_axis[0];
+        }
+        if (ext.radius > 0.0f) {
             float major = ext.radius;
             if (c->o.record_shape == IC_SHAPE_ELLIPTICAL) {
                 major = fminf(ext.semi_axis[1], IC_MAX_ELLIPSE_ASPECT * ext.semi_axis[0]);

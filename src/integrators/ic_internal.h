@@ -184,8 +184,8 @@ ic_result ic_ic_keep_levels(ic_ctx *c, uint32_t first, uint32_t count, const ic_
  * without levels. */
 ic_result ic_ic_levels_to_payloads(ic_ctx *c, ic_error *err);
 ic_result ic_ic_levels_from_payloads(ic_ctx *c, ic_error *err);
-/* The second-order error a Hessian extent allows, relative to E (Schwarzhaupt et al. 2012), for the cache's
- * weight and accuracy. */
+/* The ε of a Hessian extent's semi-axes ε·√(L·ℓ_k) (ic_ic_record_from_gather; Schwarzhaupt et al. 2012), for
+ * the cache's weight and accuracy. */
 float ic_ic_hessian_error_target(const ic_cache_params *p);
 /* Record for candidate cand from a gather result (gradients dropped with no_gradients). */
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);

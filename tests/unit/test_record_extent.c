@@ -110,6 +110,37 @@ int main(void)
                   cases[k].name, reach / reach_default);
         ic_ic_ctx_destroy(c);
     }
+    /* Nearly flat (the pointwise length beyond the scene's diagonal, the law's extent within it) and flat
+     * (λ = 0: the diagonal). */
+    {
+        ic_render_options opt;
+        memset(&opt, 0, sizeof opt);
+        opt.integrator = IC_INTEGRATOR_IC;
+        opt.spp = 1;
+        opt.ic.error = IC_ERROR_HESSIAN;
+        ic_ctx *c = NULL;
+        if (ic_ic_ctx_create(&tr, &opt, &c, NULL, &err) == IC_OK) {
+            const double a = c->o.cache.accuracy, L = IC_HESSIAN_SPACING_LENGTH * c->work_extent, diag = c->scene_diag;
+            const double lam = 2.0 * E * pow(a * a * L / (diag * diag), 2.0) * 4.0; /* extent = diag / √2 */
+            const ic_candidate cand = {{0.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, 0.0f, 1};
+            ic_record rec;
+            const ic_gather_result flatish = result_with(E, lam, -lam);
+            ic_ic_record_from_gather(c, &cand, &flatish, &rec);
+            const double want = a * sqrt(L * sqrt(2.0 * E / lam));
+            CHECK(sqrt(2.0 * a * E / lam) > diag, "the case is nearly flat: the pointwise length %.4g is beyond the "
+                  "diagonal %.4g", sqrt(2.0 * a * E / lam), diag);
+            CHECK(fabs(a * rec.harmonic_mean_dist / want - 1.0) < 1e-4 && want < diag,
+                  "nearly flat: the extent %.5f is eps*sqrt(L*l) = %.5f (diagonal %.4g)", a * rec.harmonic_mean_dist,
+                  want, diag);
+            const ic_gather_result flat = result_with(E, 0.0, 0.0);
+            ic_ic_record_from_gather(c, &cand, &flat, &rec);
+            CHECK(fabs(a * rec.harmonic_mean_dist / diag - 1.0) < 1e-4, "flat: the extent %.5f is the diagonal %.5f",
+                  a * rec.harmonic_mean_dist, diag);
+            ic_ic_ctx_destroy(c);
+        } else {
+            CHECK(0, "a context: %s", err.message);
+        }
+    }
     ic_accel_destroy(accel);
     ic_scene_free(scene);
     TEST_MAIN_END();
