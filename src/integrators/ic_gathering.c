@@ -741,9 +741,10 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
         /* Schwarzhaupt et al. 2012: first-order extrapolation errs by ½dᵀHd, so along an eigenvector of H
          * the relative error reaches ε at ℓ_k·√ε, ℓ_k = √(2E/|λ_k|) (ic_gather_hessian_extent). A record
          * does not reach that far: its semi-axes are ε·√(L·ℓ_k), L an eighth of the work extent, the
-         * spacing that for a given number of records makes the integrated relative error least (the error
-         * over a disc of radius s grows as |λ/E|·s⁴, so the records' density goes as √|λ/E|, the law
-         * behind Radiance's radii ∝ |λ|^(−1/4)), where the pointwise bound ℓ_k·√ε would spend records
+         * spacing that for a given number of records makes the relative error's L1 norm least (a region
+         * of area A and spacing s holds A/s² records and errs by about |λ/E|·s²: Σ A|λ/E|s² at a fixed
+         * Σ A/s² is least where s⁴ ∝ |E/λ|, records as dense as √|λ/E|, the law behind Radiance's radii
+         * ∝ |λ|^(−1/4); docs/gathering.md), where the pointwise bound ℓ_k·√ε would spend records
          * in proportion to |λ/E| on the few places of high curvature (BENCHMARKS.md, "The low-record
          * end"). ε is ic_ic_hessian_error_target's. A round record takes the smaller semi-axis, an
          * elliptical one both (its aspect bounded by IC_MAX_ELLIPSE_ASPECT, so a nearly flat direction does
