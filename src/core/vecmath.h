@@ -41,16 +41,18 @@ static inline ic_vec3 v3_norm(ic_vec3 a)
  * direction survive. A zero (or NaN) vector has length 0 (NaN) and direction 0. */
 static inline float v3_len_any(ic_vec3 a)
 {
-    float l2 = v3_len2(a), big = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
-    if ((l2 >= FLT_MIN && l2 <= FLT_MAX) || !(big > 0.0f))
+    float l2 = v3_len2(a);
+    if (l2 >= FLT_MIN && l2 <= FLT_MAX)
         return sqrtf(l2);
-    return big * v3_len(v3(a.x / big, a.y / big, a.z / big));
+    float big = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
+    return big > 0.0f ? big * v3_len(v3(a.x / big, a.y / big, a.z / big)) : sqrtf(l2);
 }
 static inline ic_vec3 v3_norm_any(ic_vec3 a)
 {
-    float l2 = v3_len2(a), big = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
-    if (l2 >= FLT_MIN && l2 <= FLT_MAX)
-        return v3_norm(a);
+    float l2 = v3_len2(a);
+    if (l2 >= FLT_MIN && l2 <= FLT_MAX) /* v3_norm's bits, without its second dot product */
+        return v3_scale(a, 1.0f / sqrtf(l2));
+    float big = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
     return big > 0.0f ? v3_norm(v3(a.x / big, a.y / big, a.z / big)) : v3s(0.0f);
 }
 static inline ic_vec3 v3_min(ic_vec3 a, ic_vec3 b) { return v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
