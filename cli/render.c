@@ -332,6 +332,19 @@ static void free_results(ic_image *img, ic_render_aovs *aovs, ic_scene *scene)
     ic_scene_free(scene);
 }
 
+void ic_cli_scene_warnings(const char *who, const ic_scene *scene, const char *path)
+{
+    /* what the loader approximated or left out (a Mitsuba scene's unsupported elements, dropped slivers) */
+    for (const char *w = ic_scene_warnings(scene); *w;) {
+        size_t len = strcspn(w, "\n");
+        fprintf(stderr, "%s: warning: %.*s\n", who, (int)len, w);
+        w += len + (w[len] == '\n');
+    }
+    if (ic_scene_light_count(scene) == 0)
+        fprintf(stderr, "%s: warning: %s has no light (no emitting triangle, light or environment), so every "
+                        "value will be black; add an emitter, a light or an environment\n", who, path);
+}
+
 int ic_cli_render(int argc, char **argv)
 {
     int failed = 0;
@@ -411,15 +424,8 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         return rc;
     }
     t_load = now_seconds() - t_load;
-    /* what the loader approximated or left out (a Mitsuba scene's unsupported elements), one line each */
-    for (const char *w = rank == 0 ? ic_scene_warnings(scene) : ""; *w;) {
-        size_t len = strcspn(w, "\n");
-        fprintf(stderr, "irrcache render: warning: %.*s\n", (int)len, w);
-        w += len + (w[len] == '\n');
-    }
-    if (rank == 0 && ic_scene_light_count(scene) == 0)
-        fprintf(stderr, "irrcache render: warning: %s has no light (no emitting triangle, light or environment), "
-                        "so the image will be black; add an emitter, a light or an environment\n", a.scene);
+    if (rank == 0)
+        ic_cli_scene_warnings("irrcache render", scene, a.scene);
 
     ic_render_options opt = a.render;
     /* The library reads 0 as "the default" and a negative value as "none": --min-radius-px 0 asks for no

@@ -1098,6 +1098,13 @@ static int is_degenerate(ic_vec3 p0, ic_vec3 p1, ic_vec3 p2)
     return v3_is_black(c) || !v3_is_finite(c);
 }
 
+/* Counts a zero-area triangle dropped from `where` (the scene warns once, naming the first place). */
+static void drop_degenerate(ic_scene_builder *b, const char *where)
+{
+    if (b->scene->dropped_degenerate++ == 0)
+        snprintf(b->dropped_where, sizeof b->dropped_where, "%s", where);
+}
+
 static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, const char *mesh_path,
                                const float m4[16], const char *xform_where, uint32_t material_base, int use_tangents,
                                ic_error *err)
@@ -1180,7 +1187,7 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             uint32_t i0 = base + face->mIndices[0], i1 = base + face->mIndices[flip ? 2 : 1],
                      i2 = base + face->mIndices[flip ? 1 : 2];
             if (is_degenerate(s->positions[i0], s->positions[i1], s->positions[i2])) {
-                ++s->dropped_degenerate;
+                drop_degenerate(b, mesh_path);
                 ++b->material_dropped[mat];
                 continue;
             }
@@ -1255,7 +1262,7 @@ ic_result ic_scene_append_triangles(ic_scene_builder *b, const ic_vec3 *p, const
     for (uint32_t f = 0; f < tri_count; ++f) {
         uint32_t i0 = base + tri[3 * f], i1 = base + tri[3 * f + (flip ? 2 : 1)], i2 = base + tri[3 * f + (flip ? 1 : 2)];
         if (is_degenerate(s->positions[i0], s->positions[i1], s->positions[i2])) {
-            ++s->dropped_degenerate;
+            drop_degenerate(b, where);
             ++b->material_dropped[material];
             continue;
         }

@@ -33,6 +33,7 @@ typedef struct ic_scene_builder {
     char roots[IC_SCENE_MAX_ROOTS][IC_SCENE_PATH_MAX];
     int root_count;
     const char *import_where; /* while a mesh is imported: "scene.json:12" (its path's line) or the bare mesh */
+    char dropped_where[IC_SCENE_PATH_MAX + 32]; /* where the first zero-area triangle was dropped ("" if none) */
 } ic_scene_builder;
 
 /* Adds dir's real path to b->roots (nothing if it does not exist or is there already). */

@@ -2,7 +2,8 @@
  * test_cli_points.c — `irrcache points`: results in input order in the three formats, stdin and -o,
  * identical output for 1 and 2 threads, and malformed points files: a one-line error naming the file and
  * line, exit 1, and no output file (nor a temporary one) left behind; --daylight-factor's columns; --grid's
- * rows and its --map (size, and each cell's colour against the scale for its lux); misused grid options.
+ * rows and its --map (size, and each cell's colour against the scale for its lux); misused grid options;
+ * the scene's warnings on stderr.
  */
 #include "test_util.h"
 
@@ -51,7 +52,13 @@ static void test_outputs(void)
                                     "0.7 0.8 0.7   0 1 0   # right\n"
                                     "-0.98 1 0 1 0 0\n");
     CHECK(run("--help", NULL) == 0, "--help exits 0");
-    CHECK(run(SCENE " --points " DIR "/pts.txt --threads 1", DIR "/a.txt") == 0, "text to stdout: %s", err_text);
+    CHECK(run(SCENE " --points " DIR "/pts.txt --threads 1", DIR "/a.txt") == 0 && err_text[0] == '\0',
+          "text to stdout, nothing on stderr: %s", err_text);
+    /* What the loader dropped, and a scene without light, are said on stderr as render says them. */
+    CHECK(run(IC_SOURCE_DIR "/tests/scenes/degenerate.json --points " DIR "/pts.txt", NULL) == 0 &&
+              strstr(err_text, "irrcache points: warning: ") && strstr(err_text, "1 triangle of zero area") &&
+              strstr(err_text, "has no light") && test_line_count(err_text) == 2,
+          "the scene's warnings: %s", err_text);
     char a[4096];
     snprintf(a, sizeof a, "%s", slurp(DIR "/a.txt"));
     CHECK(test_line_count(a) == 3, "one line per point: %d", test_line_count(a));

@@ -70,6 +70,7 @@ static void test_cornell_box(void)
         return;
     CHECK(s->triangle_count == 36, "Cornell box triangles: %u", s->triangle_count);
     CHECK(s->dropped_degenerate == 0, "dropped %u", s->dropped_degenerate);
+    CHECK(!strstr(ic_scene_warnings(s), "zero area"), "no drop warning: %s", ic_scene_warnings(s));
     CHECK(s->normals == NULL && s->uvs == NULL, "the OBJ has no normals or uvs");
     CHECK(s->tri_light_count == 2, "one emissive quad = 2 triangles, got %u", s->tri_light_count);
     /* the MTL's light quad spans x in [-0.24, 0.23], z in [-0.22, 0.16] at y = 1.98 */
@@ -265,11 +266,15 @@ static void test_degenerate_dropped(void)
     if (s) {
         CHECK(s->triangle_count == 2, "kept %u", s->triangle_count);
         CHECK(s->dropped_degenerate == 1, "dropped %u", s->dropped_degenerate);
+        /* the user is told, once, with the file the triangle came from */
+        const char *w = ic_scene_warnings(s);
+        CHECK(strstr(w, "degenerate.obj: 1 triangle of zero area") && !strchr(strchr(w, '\n') + 1, '\n'),
+              "one warning naming the mesh: '%s'", w);
     }
     ic_scene_free(s);
     s = load(SCENES "degenerate.obj", NULL);
     if (s)
-        CHECK(s->dropped_degenerate == 1, "bare mesh too");
+        CHECK(s->dropped_degenerate == 1 && strstr(ic_scene_warnings(s), "zero area"), "bare mesh too");
     ic_scene_free(s);
 }
 
@@ -378,6 +383,8 @@ static void test_extreme_triangles(void)
         CHECK(s->triangle_count == 2 && s->dropped_degenerate == 1,
               "extreme.rad: the 1e-15 and 1e12 triangles kept (%u of 2), the collinear one dropped (%u of 1)",
               s->triangle_count, s->dropped_degenerate);
+        CHECK(strstr(ic_scene_warnings(s), "extreme.rad: 1 triangle of zero area"), "the drop is reported: '%s'",
+              ic_scene_warnings(s));
         check_normals(s, "extreme.rad");
     }
     ic_scene_free(s);
