@@ -3,6 +3,7 @@
 
 #include "core/comm.h"
 #include "core/morton.h"
+#include "core/select.h"
 #include "core/vecmath.h"
 
 #include <stdlib.h>
@@ -20,50 +21,14 @@ uint32_t ic_morton3(ic_vec3 p, ic_vec3 lo, ic_vec3 hi)
     return ic_morton3_cells(q[0], q[1], q[2]);
 }
 
-typedef struct keyed {
-    uint32_t morton;
-    uint64_t key;
-    uint32_t index;
-} keyed;
-
-/* Byte b of the sort key (morton, key): bytes 0–7 the key's, 8–11 the Morton code's, least significant
- * first. */
-static unsigned key_byte(const keyed *k, int b)
-{
-    return b < 8 ? (unsigned)(k->key >> (8 * b)) & 0xffu : (k->morton >> (8 * (b - 8))) & 0xffu;
-}
-
-/* Sorts by (morton, key) ascending: a least-significant-digit radix sort, one stable counting pass per
- * byte, skipping the bytes every entry shares (most of the 64-bit key). The order is total for distinct
- * keys, so it is the one a comparison sort gives. Returns the sorted array: a or tmp. */
-static keyed *radix_sort(keyed *a, keyed *tmp, uint32_t n)
-{
-    for (int b = 0; b < 12; ++b) {
-        uint32_t count[256] = {0};
-        for (uint32_t i = 0; i < n; ++i)
-            ++count[key_byte(&a[i], b)];
-        if (count[key_byte(&a[0], b)] == n)
-            continue; /* every entry has this byte: the pass would not move anything */
-        uint32_t at = 0;
-        for (int v = 0; v < 256; ++v) {
-            uint32_t c = count[v];
-            count[v] = at;
-            at += c;
-        }
-        for (uint32_t i = 0; i < n; ++i)
-            tmp[count[key_byte(&a[i], b)]++] = a[i];
-        keyed *t = a;
-        a = tmp;
-        tmp = t;
-    }
-    return a;
-}
-
+/* Sorts the candidates by (Morton code, key) ascending: three stable radix sorts of their indices
+ * (ic_sort_key_index), by the key's low word, its high word, then the Morton code, least significant
+ * first. The order is total for distinct keys, so it is the one a comparison sort gives. */
 int ic_world_sort(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3 hi)
 {
     if (count < 2)
         return 1;
-    keyed *order = malloc(sizeof *order * count), *spare = malloc(sizeof *spare * count);
+    ic_key_index *order = malloc(sizeof *order * count), *spare = malloc(sizeof *spare * count);
     ic_candidate *copy = malloc(sizeof *copy * count);
     if (!order || !spare || !copy) {
         free(order);
@@ -71,12 +36,16 @@ int ic_world_sort(ic_candidate *cand, uint32_t count, ic_vec3 lo, ic_vec3 hi)
         free(copy);
         return 0;
     }
-    for (uint32_t i = 0; i < count; ++i) {
-        order[i].morton = ic_morton3(cand[i].p, lo, hi);
-        order[i].key = cand[i].key;
-        order[i].index = i;
+    for (uint32_t i = 0; i < count; ++i)
+        order[i] = (ic_key_index){(uint32_t)cand[i].key, i};
+    ic_key_index *by = ic_sort_key_index(order, spare, count);
+    for (int pass = 1; pass < 3; ++pass) {
+        for (uint32_t i = 0; i < count; ++i) {
+            const ic_candidate *k = &cand[by[i].index];
+            by[i].key = pass == 1 ? (uint32_t)(k->key >> 32) : ic_morton3(k->p, lo, hi);
+        }
+        by = ic_sort_key_index(by, by == order ? spare : order, count);
     }
-    const keyed *by = radix_sort(order, spare, count);
     memcpy(copy, cand, sizeof *copy * count);
     for (uint32_t i = 0; i < count; ++i)
         cand[i] = copy[by[i].index];
