@@ -19,6 +19,7 @@
 
 #include "core/sampling.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -319,7 +320,14 @@ static ic_result build_tri_lights(ic_scene *s, double *power, ic_error *err)
         ic_tri_light *l = &s->tri_lights[s->tri_light_count];
         l->triangle = t;
         l->area = tri_area(s, t);
-        l->power = IC_PI * l->area * v3_lum(m->emission) * (m->two_sided_emission ? 2.0f : 1.0f);
+        const double watts = IC_PI * (double)l->area * v3_lum(m->emission) * (m->two_sided_emission ? 2.0 : 1.0);
+        /* the light tables hold powers in float: a lamp some 1e18 across emitting 100 W/(m² sr) is beyond it */
+        if (!(watts + total <= FLT_MAX))
+            return ic_error_set(err, IC_ERR_INVALID_ARG,
+                                "%s: the emitters' power (material '%s': %g, all so far %g) is beyond the float range; "
+                                "scale the scene's size or its emission down",
+                                s->path, m->name, watts, total);
+        l->power = (float)watts;
         ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
                 p2 = s->positions[s->triangles[3 * t + 2]];
         l->centroid = v3_scale(v3_add(v3_add(p0, p1), p2), 1.0f / 3.0f);
@@ -351,6 +359,11 @@ static ic_result build_point_lights(ic_scene *s, double *power, ic_error *err)
         double share = s->point_spots ? fmin(1.0, 0.5 * (1.0 - 0.5 * (s->point_spots[i].cos_inner +
                                                                      s->point_spots[i].cos_outer))) : 1.0;
         point_power += 4.0 * IC_PI * v3_lum(s->point_lights[i].intensity) * share;
+        if (!(point_power <= FLT_MAX))
+            return ic_error_set(err, IC_ERR_INVALID_ARG,
+                                "%s: the point lights' power (%g, light %u) is beyond the float range; give them "
+                                "less intensity",
+                                s->path, point_power, i + 1);
         s->point_light_cdf[i + 1] = (float)point_power;
     }
     normalise_cdf(s->point_light_cdf, s->point_light_count, point_power);
