@@ -26,8 +26,11 @@ the best baseline needs for the same error, interpolated log-log along its lower
 records reaching at most that error), divided into this point's records (below 1: fewer records than the
 best split-sphere setting), once for relMSE and once for the low-pass relMSE; the same for seconds (wall
 time on a possibly shared machine: compare within one run); "-" where the error lies outside the
-baseline's range (no extrapolation). The issue's goal is a records ratio of at most 0.5 on two of three
-scenes.
+baseline's range (no extrapolation). The other reading of the same curves, the error gain: the error the
+best baseline's envelope reaches with as many records as this point has, divided by this point's error
+(above 1: less error at equal records), once for each error; "-" where the records lie outside the
+baseline's range. The issue's goal is a records ratio of at most 0.5, or an error gain of at least 4, on
+two of three scenes.
 
 Runs are cached in --out (a JSON line per run, keyed by the render's arguments and the reference, and
 valid for the binary that made them, or for any with --any-binary), so adding a configuration later
@@ -91,6 +94,17 @@ def records_at(front, err):
             t = (math.log(err) - math.log(e0)) / (math.log(e1) - math.log(e0))
             return math.exp(math.log(r0) + t * (math.log(r1) - math.log(r0)))
     return front[0][0]  # a single-point envelope hit exactly
+
+
+def error_at(front, records):
+    """The error the envelope reaches with `records` records (log-log interpolation); None outside its range."""
+    if not front or records < front[0][0] or records > front[-1][0]:
+        return None
+    for (r0, e0), (r1, e1) in zip(front, front[1:]):
+        if r0 <= records <= r1:
+            t = (math.log(records) - math.log(r0)) / (math.log(r1) - math.log(r0)) if r1 > r0 else 0.0
+            return math.exp(math.log(e0) + t * (math.log(e1) - math.log(e0)))
+    return front[0][1]  # a single-point envelope hit exactly
 
 
 def main():
@@ -216,20 +230,34 @@ def main():
                     if n is not None:
                         need.append(n)
                 row["%s_ratio_%s" % (what, metric)] = row[what] / min(need) if need else None
+        # The other reading of the same curves: the best baseline's error with as many records, divided by
+        # this point's (above 1: less error than the best split-sphere setting at equal records).
+        for metric in ("relmse", "relmse_lowpass"):
+            have = []
+            for b in baselines:
+                front = envelope([(r["records"], r[metric]) for r in rows
+                                  if r["variant"] == row["variant"] and r["config"] == b])
+                e = error_at(front, row["records"])
+                if e is not None:
+                    have.append(e)
+            row["gain_%s" % metric] = min(have) / row[metric] if have and row[metric] > 0 else None
 
     def fmt(x, f):
         return "-" if x is None else f % x
 
     header = ["variant", "config", "accuracy", "records", "seconds", "rays", "relmse", "relmse_lowpass",
-              "records_ratio_relmse", "records_ratio_lowpass", "seconds_ratio_relmse", "seconds_ratio_lowpass"]
+              "records_ratio_relmse", "records_ratio_lowpass", "seconds_ratio_relmse", "seconds_ratio_lowpass",
+              "error_gain_relmse", "error_gain_lowpass"]
     lines = []
     for r in rows:
         lines.append([r["variant"], r["config"], "%g" % r["accuracy"], "%.0f" % r["records"], "%.2f" % r["seconds"],
                       "%.0f" % r["rays"], "%.3g" % r["relmse"], "%.3g" % r["relmse_lowpass"],
                       fmt(r["records_ratio_relmse"], "%.2f"), fmt(r["records_ratio_relmse_lowpass"], "%.2f"),
-                      fmt(r["seconds_ratio_relmse"], "%.2f"), fmt(r["seconds_ratio_relmse_lowpass"], "%.2f")])
+                      fmt(r["seconds_ratio_relmse"], "%.2f"), fmt(r["seconds_ratio_relmse_lowpass"], "%.2f"),
+                      fmt(r["gain_relmse"], "%.2f"), fmt(r["gain_relmse_lowpass"], "%.2f")])
     print()
-    print("baselines (records ratio = records / the best baseline's records at equal error): %s" % ", ".join(baselines))
+    print("baselines (records ratio = records / the best baseline's records at equal error; error gain = the best "
+          "baseline's error at equal records / this error): %s" % ", ".join(baselines))
     widths = [max(len(h), *(len(l[i]) for l in lines)) for i, h in enumerate(header)]
     for l in [header] + lines:
         print("  ".join(c.rjust(w) for c, w in zip(l, widths)))
@@ -244,10 +272,11 @@ def main():
         tmp = args.md + ".tmp"
         with open(tmp, "w") as f:
             f.write("| variant | config | a | records | s | relMSE | low-pass | records / best split sphere's "
-                    "at equal relMSE, low-pass | seconds / its, at equal low-pass |\n|---|---|---|---|---|---|---|---|---|\n")
+                    "at equal relMSE, low-pass | seconds / its, at equal low-pass | its relMSE, low-pass at equal "
+                    "records / this one's |\n|---|---|---|---|---|---|---|---|---|---|\n")
             for l in lines:
-                f.write("| %s | %s | %s | %s | %s | %s | %s | %s, %s | %s |\n" % (
-                    l[0], l[1], l[2], l[3], l[4], l[6], l[7], l[8], l[9], l[11]))
+                f.write("| %s | %s | %s | %s | %s | %s | %s | %s, %s | %s | %s, %s |\n" % (
+                    l[0], l[1], l[2], l[3], l[4], l[6], l[7], l[8], l[9], l[11], l[12], l[13]))
         os.replace(tmp, args.md)
 
 
