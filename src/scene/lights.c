@@ -320,14 +320,16 @@ static ic_result build_tri_lights(ic_scene *s, double *power, ic_error *err)
         ic_tri_light *l = &s->tri_lights[s->tri_light_count];
         l->triangle = t;
         l->area = tri_area(s, t);
-        const double watts = IC_PI * (double)l->area * v3_lum(m->emission) * (m->two_sided_emission ? 2.0 : 1.0);
-        /* the light tables hold powers in float: a lamp some 1e18 across emitting 100 W/(m² sr) is beyond it */
-        if (!(watts + total <= FLT_MAX))
+        l->power = IC_PI * l->area * v3_lum(m->emission) * (m->two_sided_emission ? 2.0f : 1.0f);
+        /* the light tables hold powers in float: a lamp some 1e18 across emitting 100 W/(m² sr) is beyond it
+         * (its power inf here; the message gives it in double) */
+        if (!(total + l->power <= FLT_MAX))
             return ic_error_set(err, IC_ERR_INVALID_ARG,
                                 "%s: the emitters' power (material '%s': %g, all so far %g) is beyond the float range; "
                                 "scale the scene's size or its emission down",
-                                s->path, m->name, watts, total);
-        l->power = (float)watts;
+                                s->path, m->name,
+                                IC_PI * (double)l->area * v3_lum(m->emission) * (m->two_sided_emission ? 2.0 : 1.0),
+                                total);
         ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
                 p2 = s->positions[s->triangles[3 * t + 2]];
         l->centroid = v3_scale(v3_add(v3_add(p0, p1), p2), 1.0f / 3.0f);
