@@ -380,14 +380,17 @@ static void select_light_classes(ic_scene *s, double w_tri, double w_point)
     float radius = 0.5f * v3_len(v3_sub(s->bounds_max, s->bounds_min));
     if (!(radius > 0.0f) || !isfinite(radius))
         radius = 1.0f;
-    double w_sun = s->sun.enabled ? IC_PI * radius * radius * v3_lum(s->sun.irradiance) : 0.0;
+    /* in double: π r² lum(E) in float passed the float range in a scene near the largest coordinate (r beyond
+     * about 1e17 under a sun of 1e4), and the sum's inf left every class a probability of 0 (all black) */
+    const double pi = IC_PI;
+    double w_sun = s->sun.enabled ? pi * radius * radius * v3_lum(s->sun.irradiance) : 0.0;
     double w_env = 0.0;
     if (s->env.enabled && (s->env.image.width <= 0 || s->env.total_weight > 0.0f))
-        w_env = 4.0 * IC_PI * IC_PI * radius * radius * env_mean_lum(&s->env);
+        w_env = 4.0 * pi * pi * radius * radius * env_mean_lum(&s->env);
     if (s->env.enabled && s->env.portal_count) {
         /* Through portals, the power that enters: the sky's over the openings' area (π L̄ A), the sun's
          * over their area facing it. */
-        w_env = IC_PI * s->env.portal_area * env_mean_lum(&s->env);
+        w_env = pi * s->env.portal_area * env_mean_lum(&s->env);
         double facing = 0.0;
         for (uint32_t k = 0; k < s->env.portal_count; ++k)
             facing += s->env.portals[k].area * fabsf(v3_dot(s->env.portals[k].normal, s->sun.direction));

@@ -5,7 +5,8 @@
  *   ic_scene_sample_light matches the point-to-rectangle form factor; for a tilted receiver it matches
  *   brute-force cosine-hemisphere sampling; the back of a one-sided emitter gives nothing.
  * - For every sample, ic_scene_light_pdf_triangle / ic_scene_light_pdf_env return the sampler's pdf,
- *   and light classes are picked with the documented probabilities.
+ *   and light classes are picked with the documented probabilities, also in a scene near the largest
+ *   coordinate, where the classes' weights leave a float.
  * - A local light distribution (ic_scene_local_lights) is a distribution, keeps every emitter's defensive
  *   share, agrees with its pdf, gives the same irradiance as selection by power, and less variance.
  * - An environment image: its pdf integrates to 1 over the sphere, importance sampling integrates the
@@ -374,8 +375,40 @@ static void test_local_lights(void)
     ic_scene_free(s);
 }
 
+/* The light-class weights of a scene near the largest coordinate (1e18): the sun's pi r^2 lum(E) and,
+ * through portals, the sky's pi A lum(L) leave a float although each class's probability is an ordinary
+ * number. By the file comment's formulas the ratios do not depend on the scale: sun over environment
+ * E / (4 pi L) without portals, E / (pi L) through a horizontal portal under a sun overhead. */
+static void test_huge_scene_classes(void)
+{
+    char mesh[512], path[512], text[1024];
+    snprintf(mesh, sizeof mesh, "%s/lights_huge.obj", IC_TEST_TMP);
+    CHECK(test_write_text(mesh, "v -1e18 0 -1e18\nv 1e18 0 -1e18\nv 0 0 1e18\nf 1 3 2\n"), "write %s", mesh);
+    for (int portal = 0; portal < 2; ++portal) {
+        snprintf(path, sizeof path, "%s/lights_huge%d.json", IC_TEST_TMP, portal);
+        snprintf(text, sizeof text,
+                 "{\"camera\": {\"eye\": [0, 1e17, 0], \"target\": [0, 0, 0], \"up\": [0, 0, 1]},\n"
+                 " \"meshes\": [{\"path\": \"%s\"}],\n"
+                 " \"lights\": [{\"type\": \"sun\", \"direction\": [0, 1, 0], \"irradiance\": [1000, 1000, 1000]}],\n"
+                 " \"environment\": {\"radiance\": [1000, 1000, 1000]%s}}\n",
+                 mesh, portal ? ", \"portals\": [[[0, 3, 0], [1e18, 3, 0], [1e18, 3, 1e18], [0, 3, 1e18]]]" : "");
+        CHECK(test_write_text(path, text), "write %s", path);
+        ic_scene *s = load(path);
+        if (!s)
+            continue;
+        const ic_light_selection *sel = &s->light_select;
+        const double want = portal ? 1.0 / IC_PI : 1.0 / (4.0 * IC_PI);
+        CHECK(sel->tri == 0.0f && sel->point == 0.0f && fabs(sel->sun + sel->env - 1.0) < 1e-6 &&
+                  fabs(sel->sun / sel->env - want) < 1e-5 * want,
+              "%s: sun %g, environment %g (their ratio should be %g)", portal ? "through a portal" : "open sky",
+              (double)sel->sun, (double)sel->env, want);
+        ic_scene_free(s);
+    }
+}
+
 int main(void)
 {
+    test_huge_scene_classes();
     test_local_lights();
     test_rectangle_irradiance();
     test_mixed_selection();
