@@ -12,17 +12,24 @@ void ic_tess_sphere(ic_vec3 centre, float radius, ic_vec3 *p, ic_vec3 *n, uint32
     for (int j = 0; j <= IC_TESS_RINGS; ++j)
         for (int i = 0; i <= IC_TESS_SEGMENTS; ++i) {
             float th = IC_PI * j / IC_TESS_RINGS, ph = 2.0f * IC_PI * i / IC_TESS_SEGMENTS;
-            ic_vec3 d = v3(sinf(th) * cosf(ph), sinf(th) * sinf(ph), cosf(th));
+            float st = j == 0 || j == IC_TESS_RINGS ? 0.0f : sinf(th); /* the poles exactly (sinf(π) is not 0) */
+            ic_vec3 d = v3(st * cosf(ph), st * sinf(ph), cosf(th));
             n[nv] = d;
             p[nv++] = v3_add(centre, v3_scale(d, radius));
         }
+    /* Each band is quads of two triangles, but a polar band's quads are triangles: the half with two
+     * corners at the pole has no area and is left out (not a sliver of the user's for the scene to drop). */
     for (int j = 0; j < IC_TESS_RINGS; ++j)
         for (int i = 0; i < IC_TESS_SEGMENTS; ++i) {
             uint32_t a = j * (IC_TESS_SEGMENTS + 1) + i, b = a + IC_TESS_SEGMENTS + 1;
-            uint32_t t[6] = {a, b, a + 1, a + 1, b, b + 1}; /* outward winding */
-            for (int k = 0; k < 6; ++k)
-                tri[3 * nt + k] = t[k];
-            nt += 2;
+            const uint32_t t[2][3] = {{a, b, a + 1}, {a + 1, b, b + 1}}; /* outward winding */
+            for (int h = 0; h < 2; ++h) {
+                if ((h == 0 && j == 0) || (h == 1 && j == IC_TESS_RINGS - 1))
+                    continue;
+                for (int k = 0; k < 3; ++k)
+                    tri[3 * nt + k] = t[h][k];
+                ++nt;
+            }
         }
     *vertex_count = nv;
     *tri_count = nt;

@@ -25,7 +25,8 @@
 #define IC_TESS_MAX_VERTICES ((IC_TESS_RINGS + 1) * (IC_TESS_SEGMENTS + 1))
 #define IC_TESS_MAX_TRIANGLES (2 * IC_TESS_RINGS * IC_TESS_SEGMENTS)
 
-/* A sphere as a latitude-longitude mesh about +z, with outward unit normals in n. */
+/* A sphere as a latitude-longitude mesh about +z, with outward unit normals in n; the polar bands are fans
+ * about the exact poles (no triangle of zero area). */
 void ic_tess_sphere(ic_vec3 centre, float radius, ic_vec3 *p, ic_vec3 *n, uint32_t *tri, uint32_t *vertex_count,
                     uint32_t *tri_count);
 /* A flat ring between radii r0 < r1 about centre in the plane spanned by the orthonormal u, v; facing

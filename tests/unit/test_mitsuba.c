@@ -10,7 +10,7 @@
  *      file:line;
  *   5. what depends on the file's <scene version>: a conductor without a material (copper in 0.6, a perfect
  *      mirror in 2 and 3) and a sphere's centre under toWorld (scaled in 3, not in 0.6), against Mitsuba's
- *      formulas, and which way it faces under a mirror or a negative radius (in, in 2 and 3; 0.6 refuses a
+ *      formulas (a closed surface, nothing dropped), and which way it faces under a mirror or a negative radius (in, in 2 and 3; 0.6 refuses a
  *      radius of 0 or below); a mirroring sensor transform mirrors the image, before the lookat or after it;
  *      roughness above 1 is kept; the major number decides, no version is 0.6's reading, and a malformed
  *      version is an error naming file:line (in an included file too).
@@ -24,6 +24,7 @@
 #include "scene/scene.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 
@@ -360,6 +361,46 @@ static void test_conductor_default(void)
     }
 }
 
+/* A directed edge of a triangle and the x of its midpoint (edges sorted by it, to find their reverses). */
+typedef struct edge {
+    ic_vec3 a, b;
+    float mid_x;
+} edge;
+
+static int cmp_edge(const void *x, const void *y)
+{
+    float u = ((const edge *)x)->mid_x, v = ((const edge *)y)->mid_x;
+    return (u > v) - (u < v);
+}
+
+static int near3(ic_vec3 a, ic_vec3 b, float tol) { return v3_len(v3_sub(a, b)) <= tol; }
+
+/* How many of the scene's directed triangle edges have no reverse edge (b to a) within tol: 0 for a closed
+ * surface whose triangles all wind the same way (a hole, a missing or a doubled triangle leaves some). */
+static int open_edges(const ic_scene *s, float tol)
+{
+    size_t n = 3 * (size_t)s->triangle_count, open = 0;
+    edge *e = malloc(sizeof *e * (n ? n : 1));
+    if (!e)
+        return -1;
+    for (size_t i = 0; i < n; ++i) {
+        e[i].a = s->positions[s->triangles[i]];
+        e[i].b = s->positions[s->triangles[i % 3 == 2 ? i - 2 : i + 1]];
+        e[i].mid_x = 0.5f * (e[i].a.x + e[i].b.x);
+    }
+    qsort(e, n, sizeof *e, cmp_edge);
+    for (size_t i = 0; i < n; ++i) {
+        int found = 0;
+        for (size_t j = i; !found && j-- > 0 && e[i].mid_x - e[j].mid_x <= tol;)
+            found = near3(e[j].a, e[i].b, tol) && near3(e[j].b, e[i].a, tol);
+        for (size_t j = i + 1; !found && j < n && e[j].mid_x - e[i].mid_x <= tol; ++j)
+            found = near3(e[j].a, e[i].b, tol) && near3(e[j].b, e[i].a, tol);
+        open += !found;
+    }
+    free(e);
+    return (int)open;
+}
+
 /* Mitsuba's sphere is a true sphere of radius × the length toWorld gives the x axis, centred at
  * toWorld(center) in Mitsuba 3 but at toWorld(center / that length) in 0.6; every vertex lies on it and
  * every normal points out of it. */
@@ -399,6 +440,12 @@ static void test_sphere_to_world(void)
               "pointing in",
               cases[k].version, cases[k].transform, cases[k].centre.x, cases[k].centre.y, cases[k].centre.z,
               cases[k].radius, worst, inward);
+        /* a closed surface, and no triangle of its tessellation is one of zero area the scene drops and warns
+         * about (at the poles: the user wrote no sliver) */
+        int open = s ? open_edges(s, 1e-5f * cases[k].radius) : -1;
+        CHECK(s && open == 0 && s->dropped_degenerate == 0 && !strstr(ic_scene_warnings(s), "zero area"),
+              "version %s, %s: %d open edges, %u triangles dropped: '%s'", cases[k].version, cases[k].transform,
+              open, s ? s->dropped_degenerate : 0, ic_scene_warnings(s));
         ic_scene_free(s);
     }
 }

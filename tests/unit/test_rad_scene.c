@@ -8,7 +8,8 @@
  *   2. a floor (plastic without specularity, ρ = 0.5) under a 360° glow source of radiance 2 shows ρ·L = 1;
  *      under a small source (the sun), ρ·L·Ω/π; under a light sphere, ρ·L·sin²α (the sphere's irradiance);
  *   3. geometry: a concave polygon keeps its area (ear clipping), sphere vertices lie on the sphere, ring and
- *      cylinder areas are within the tessellation's 0.16 % of the true ones, cones face out and tubes in;
+ *      cylinder areas are within the tessellation's 0.16 % of the true ones, cones face out and tubes in, and
+ *      no shape leaves a triangle of zero area (dropped with a warning);
  *   4. materials and modifiers: plastic, metal, glass, mirror, trans, alias, illum, a mixture, a pattern;
  *      a mesh through its OBJ file with a transform;
  *   5. errors: "!" command lines, instance, undefined modifiers, wrong argument counts, a truncated file and
@@ -305,6 +306,9 @@ static void test_geometry_and_materials(void)
            area[2] / (3.0 * PI_D), area[3] / (8.0 * PI_D), area[4] / (8.0 * PI_D), area[5] / cone_area);
     CHECK(area[5] > 0.99 * cone_area && area[5] < cone_area, "cone: area %g of pi r l = %g", area[5], cone_area);
     CHECK(mesh_tris > 20, "the mesh's OBJ moved by -t 100 0 0: %d triangles", mesh_tris);
+    /* no shape's tessellation has a triangle of zero area for the scene to drop and warn about */
+    CHECK(s->dropped_degenerate == 0 && !strstr(ic_scene_warnings(s), "zero area"), "%u triangles dropped: '%s'",
+          s->dropped_degenerate, ic_scene_warnings(s));
 
     const ic_material *m = material_named(s, "cball");
     CHECK(m && m->type == IC_MAT_PLASTIC && fabsf(m->alpha - 0.1f) < 1e-6f &&
