@@ -263,10 +263,12 @@ static int is_ear(const ic_vec3 *p, const uint32_t *idx, uint32_t count, uint32_
 /* Most vertices of a polygon ear clipping takes (its cost grows as the square); larger ones are fans. */
 #define EAR_CLIP_MAX_VERTICES 4096
 
-/* A polygon of nv vertices as nv − 2 triangles: a fan from the first vertex when it is convex, else ear
- * clipping (Meisters 1975), which keeps a concave outline's shape. tri gets them, idx is scratch. Returns 0
- * if part of a concave polygon had to be a fan (self-intersecting, or too many vertices or ear tests). */
-static int triangulate_polygon(const ic_vec3 *p, uint32_t nv, uint32_t *idx, uint32_t *tri)
+/* A polygon of nv vertices as at most nv − 2 triangles (*nt of them): a fan from the first vertex when it is
+ * convex, else ear clipping (Meisters 1975), which keeps a concave outline's shape. A triangle of zero area
+ * (three vertices on a line, a vertex repeated) is left out of a polygon that has others: it is no sliver
+ * the scene should drop and warn about. tri gets them, idx is scratch. Returns 0 if part of a concave polygon
+ * had to be a fan (self-intersecting, or too many vertices or ear tests). */
+static int triangulate_polygon(const ic_vec3 *p, uint32_t nv, uint32_t *idx, uint32_t *tri, uint32_t *nt_out)
 {
     ic_vec3 nrm = v3s(0.0f); /* Newell's normal: the polygon's area vector */
     for (uint32_t i = 0; i < nv; ++i)
@@ -302,6 +304,15 @@ static int triangulate_polygon(const ic_vec3 *p, uint32_t nv, uint32_t *idx, uin
         tri[3 * nt + 2] = idx[i + 1];
         ++nt;
     }
+    /* the scene's test for a triangle without area (mesh_import.c), on the same corners in the same order; a
+     * polygon all of whose triangles fail it keeps them, for the scene to drop and report */
+    uint32_t kept = 0;
+    for (uint32_t t = 0; t < nt; ++t) {
+        ic_vec3 a = p[tri[3 * t]], cr = v3_cross(v3_sub(p[tri[3 * t + 1]], a), v3_sub(p[tri[3 * t + 2]], a));
+        if (!v3_is_black(cr))
+            memmove(tri + 3 * kept++, tri + 3 * t, 3 * sizeof *tri);
+    }
+    *nt_out = kept ? kept : nt;
     return exact;
 }
 
@@ -336,10 +347,11 @@ static ic_result surface(ic_rad_ctx *c, geometry *g, uint32_t mat)
         if (r == IC_OK) {
             for (uint32_t i = 0; i < nv; ++i)
                 p[i] = real3(c, 3 * i);
-            if (!triangulate_polygon(p, nv, idx, tri))
+            uint32_t nt = 0;
+            if (!triangulate_polygon(p, nv, idx, tri, &nt))
                 ic_rad_warn_once(c, c->prim_line, "a concave polygon that ear clipping could not finish",
                                  "(self-intersecting, or over 4096 vertices) is in part a fan: its outline may not be kept");
-            r = add_triangles(c, g, p, NULL, nv, tri, nv - 2, mat);
+            r = add_triangles(c, g, p, NULL, nv, tri, nt, mat);
         }
         free(p);
         free(idx);

@@ -9,7 +9,8 @@
  *      under a small source (the sun), ρ·L·Ω/π; under a light sphere, ρ·L·sin²α (the sphere's irradiance);
  *   3. geometry: a concave polygon keeps its area (ear clipping), sphere vertices lie on the sphere, ring and
  *      cylinder areas are within the tessellation's 0.16 % of the true ones, cones face out and tubes in, and
- *      no shape leaves a triangle of zero area (dropped with a warning);
+ *      no shape leaves a triangle of zero area (dropped with a warning), nor a polygon with a vertex on an
+ *      edge or one given twice (one on a line is reported);
  *   4. materials and modifiers: plastic, metal, glass, mirror, trans, alias, illum, a mixture, a pattern;
  *      a mesh through its OBJ file with a transform;
  *   5. errors: "!" command lines, instance, undefined modifiers, wrong argument counts, a truncated file and
@@ -405,8 +406,34 @@ static void test_errors(void)
     ic_scene_free(s);
 }
 
+/* A polygon with a vertex on an edge (a wall split where a window meets it) or one vertex given twice is an
+ * ordinary polygon: its triangulation leaves out the pieces of zero area rather than have the scene drop
+ * and report them as slivers; one whose vertices all lie on a line covers nothing and still is reported. */
+static void test_polygon_zero_area_pieces(void)
+{
+    test_write_file(IC_TEST_TMP "/rad_collinear.rad",
+                    "void plastic m 0 0 5 .5 .5 .5 0 0\n"
+                    "m polygon split 0 0 15  0 0 0  1 0 0  2 0 0  2 1 0  0 1 0\n"
+                    "m polygon twice 0 0 15  0 0 5  1 0 5  1 0 5  1 1 5  0 1 5\n"
+                    "m polygon line 0 0 9  0 0 9  1 0 9  2 0 9\n");
+    ic_error err = {0};
+    ic_scene *s = NULL;
+    CHECK(ic_scene_load(IC_TEST_TMP "/rad_collinear.rad", NULL, &s, &err) == IC_OK, "loads: %s", err.message);
+    if (!s)
+        return;
+    double area = 0.0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t)
+        area += triangle_area(s, t);
+    const char *w = ic_scene_warnings(s);
+    CHECK(fabs(area - 3.0) < 1e-6 && s->dropped_degenerate == 1 && strstr(w, "rad_collinear.rad: 1 triangle of zero area"),
+          "the split and doubled polygons keep their areas 2 and 1 (%g), only the line's triangle is dropped (%u): '%s'",
+          area, s->dropped_degenerate, w);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_polygon_zero_area_pieces();
     test_ring_normal_length();
     test_cornell();
     test_analytic();
