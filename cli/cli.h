@@ -23,8 +23,9 @@ int ic_cli_points(int argc, char **argv);
 
 struct ic_scene;
 /* Prints on stderr, as "WHO: warning: ...", what loading the scene at path approximated or left out
- * (ic_scene_warnings, one line each) and that it has no light, if so (render.c). */
-void ic_cli_scene_warnings(const char *who, const struct ic_scene *scene, const char *path);
+ * (ic_scene_warnings, one line each) and that it has no light, if so, with the outcome ("the image will
+ * be black") (render.c). */
+void ic_cli_scene_warnings(const char *who, const struct ic_scene *scene, const char *path, const char *outcome);
 
 /* Flushes standard output and checks it for a write error (a full disk, /dev/full): what was printed
  * there (help, a table, results) is otherwise lost without a word. Returns 0, or 1 (the exit status of a

@@ -492,7 +492,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         return rc;
     }
     if (rank == 0)
-        ic_cli_scene_warnings("irrcache points", scene, scene_path);
+        ic_cli_scene_warnings("irrcache points", scene, scene_path, "every sensor will read 0");
     if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
         if (ranks > 1) {
             /* As in render.c: rank 0 says a failure every rank meets; the others' abort ends the job. */

@@ -332,7 +332,7 @@ static void free_results(ic_image *img, ic_render_aovs *aovs, ic_scene *scene)
     ic_scene_free(scene);
 }
 
-void ic_cli_scene_warnings(const char *who, const ic_scene *scene, const char *path)
+void ic_cli_scene_warnings(const char *who, const ic_scene *scene, const char *path, const char *outcome)
 {
     /* what the loader approximated or left out (a Mitsuba scene's unsupported elements, dropped slivers) */
     for (const char *w = ic_scene_warnings(scene); *w;) {
@@ -341,8 +341,8 @@ void ic_cli_scene_warnings(const char *who, const ic_scene *scene, const char *p
         w += len + (w[len] == '\n');
     }
     if (ic_scene_light_count(scene) == 0)
-        fprintf(stderr, "%s: warning: %s has no light (no emitting triangle, light or environment), so every "
-                        "value will be black; add an emitter, a light or an environment\n", who, path);
+        fprintf(stderr, "%s: warning: %s has no light (no emitting triangle, light or environment), so %s; add "
+                        "an emitter, a light or an environment\n", who, path, outcome);
 }
 
 int ic_cli_render(int argc, char **argv)
@@ -425,7 +425,7 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     }
     t_load = now_seconds() - t_load;
     if (rank == 0)
-        ic_cli_scene_warnings("irrcache render", scene, a.scene);
+        ic_cli_scene_warnings("irrcache render", scene, a.scene, "the image will be black");
 
     ic_render_options opt = a.render;
     /* The library reads 0 as "the default" and a negative value as "none": --min-radius-px 0 asks for no

@@ -503,10 +503,12 @@ ic_result ic_scene_finalize(ic_scene_builder *b, ic_error *err)
     /* not an error (exporters leave such slivers, and they cover nothing), but a count the user should see:
      * a mesh much sparser than expected, or a scale that collapses the geometry, shows here first */
     if (s->dropped_degenerate > 0)
-        ic_scene_warn(s, "%s: %u triangle%s of zero area (collinear or repeated corners) dropped%s: they "
-                         "cover nothing (an image does not change without them)",
+        ic_scene_warn(s, "%s: %u triangle%s of zero area (collinear or repeated corners) dropped%s: %s nothing "
+                         "(an image does not change without %s)",
                       b->dropped_where, s->dropped_degenerate, s->dropped_degenerate == 1 ? "" : "s",
-                      s->dropped_degenerate == 1 ? "" : ", the first here");
+                      s->dropped_degenerate == 1 ? "" : ", the first from here",
+                      s->dropped_degenerate == 1 ? "it covers" : "they cover",
+                      s->dropped_degenerate == 1 ? "it" : "them");
     for (uint32_t m = 0; m < s->material_count; ++m)
         s->has_normal_maps |= s->materials[m].normal_texture > 0;
     /* a rough plastic's diffuse base is scaled by what its coat does not reflect: tabulated once here */

@@ -967,7 +967,8 @@ int main(void)
     expect_error(SCENES "duplicate_section.json", NULL, IC_ERR_PARSE, "duplicate_section.json:5:",
                  "\"render\" given twice (first at line 3)", "merge");
     /* Emitters whose power leaves the float range of the light tables: refused, naming the scene and what
-     * to do (a lamp 1e18 across at 1000 W/(m² sr): π·A·L ≈ 3e39; two point lights of 3e37 W/sr: 8e38). */
+     * to do (a lamp 1e18 across at 1000 W/(m² sr): π·A·L ≈ 3e39; two point lights of 2e37 W/sr, 2.5e38
+     * each, 5e38 together: the second is named). */
     write_tmp("huge_lamp.mtl", "newmtl lamp\nKd 0 0 0\nKe 1000 1000 1000\n", -1);
     expect_error(write_tmp("huge_lamp.obj", "mtllib huge_lamp.mtl\nusemtl lamp\nv 1e18 0 0\nv 0 1e18 0\nv 0 0 1e18\n"
                                             "f 1 3 2\n", -1),
@@ -978,11 +979,11 @@ int main(void)
         char json[1024];
         snprintf(json, sizeof json,
                  "{\"meshes\": [{\"path\": \"%s\"}],\n \"lights\": [\n"
-                 "  {\"type\": \"point\", \"position\": [0, 1, 0], \"intensity\": [3e37, 3e37, 3e37]},\n"
-                 "  {\"type\": \"point\", \"position\": [0, 1, 1], \"intensity\": [3e37, 3e37, 3e37]}]}\n",
+                 "  {\"type\": \"point\", \"position\": [0, 1, 0], \"intensity\": [2e37, 2e37, 2e37]},\n"
+                 "  {\"type\": \"point\", \"position\": [0, 1, 1], \"intensity\": [2e37, 2e37, 2e37]}]}\n",
                  "plain_tri.obj");
         expect_error(write_tmp("huge_points.json", json, -1), NULL, IC_ERR_INVALID_ARG,
-                     "huge_points.json: the point lights' power", "light 1", "less intensity");
+                     "huge_points.json: the point lights' power", "light 2", "less intensity");
     }
     /* an environment map with a negative texel: refused, naming the map and the texel */
     {
