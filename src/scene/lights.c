@@ -363,8 +363,8 @@ static ic_result build_point_lights(ic_scene *s, double *power, ic_error *err)
         point_power += 4.0 * IC_PI * v3_lum(s->point_lights[i].intensity) * share;
         if (!(point_power <= FLT_MAX))
             return ic_error_set(err, IC_ERR_INVALID_ARG,
-                                "%s: the point lights' power (%g with point or spot light %u) is beyond the float range; give them "
-                                "less intensity",
+                                "%s: the point lights' power (%g with point or spot light %u) is beyond the float "
+                                "range; give them less intensity",
                                 s->path, point_power, i + 1);
         s->point_light_cdf[i + 1] = (float)point_power;
     }
