@@ -444,7 +444,8 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
                               &ierr);
         if (r != IC_OK)
             return ic_error_set(c->err, r, "%s: %s", where, ierr.message);
-        if ((r = ic_scene_check_env_map(&s->env.image, file_buf, ic_mts_file(c, n), ic_mts_line(n), c->err)) != IC_OK)
+        if ((r = ic_scene_check_env_map(&s->env.image, v3s(scale), file_buf, ic_mts_file(c, n), ic_mts_line(n),
+                                          c->err)) != IC_OK)
             return r;
         s->env.enabled = 1;
         s->env.radiance = v3s(scale);

@@ -13,6 +13,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -382,19 +383,32 @@ ic_result ic_scene_texture_add(ic_scene_builder *b, const char *path, ic_image *
 /* ------------------------------------------------------------------------------------------------ */
 /* warnings */
 
-ic_result ic_scene_check_env_map(const ic_image *m, const char *name, const char *file, int line, ic_error *err)
+ic_result ic_scene_check_env_map(const ic_image *m, ic_vec3 scale, const char *name, const char *file, int line,
+                                 ic_error *err)
 {
     /* Radiance is never negative: a negative or non-finite texel would give negative pixels and a broken
      * light-sampling distribution, so the map is refused rather than silently clamped. */
     long long bad = first_bad_texel(m, 0);
-    if (bad < 0)
-        return IC_OK;
-    size_t px = (size_t)bad / 3;
-    return ic_error_set_at(err, IC_ERR_INVALID_ARG, file, line,
-                           "environment map '%s': texel (%zu, %zu) has a %s value of %g; radiance must be finite "
-                           "and >= 0, fix the map",
-                           name, px % (size_t)m->width, px / (size_t)m->width, channel_name[bad % 3],
-                           (double)m->rgb[bad]);
+    if (bad >= 0) {
+        size_t px = (size_t)bad / 3;
+        return ic_error_set_at(err, IC_ERR_INVALID_ARG, file, line,
+                               "environment map '%s': texel (%zu, %zu) has a %s value of %g; radiance must be "
+                               "finite and >= 0, fix the map",
+                               name, px % (size_t)m->width, px / (size_t)m->width, channel_name[bad % 3],
+                               (double)m->rgb[bad]);
+    }
+    /* The radiance is the texel times the scale, in float: one beyond the float range would be inf where
+     * the sampling tables give it no weight. */
+    const float sc[3] = {scale.x, scale.y, scale.z};
+    const size_t n = (size_t)m->width * (size_t)m->height * 3;
+    for (size_t i = 0; i < n; ++i)
+        if (!((double)m->rgb[i] * sc[i % 3] <= FLT_MAX))
+            return ic_error_set_at(err, IC_ERR_INVALID_ARG, file, line,
+                                   "environment map '%s': texel (%zu, %zu) times the scale (%g × %g) is beyond the "
+                                   "float range; give a smaller scale",
+                                   name, i / 3 % (size_t)m->width, i / 3 / (size_t)m->width, (double)m->rgb[i],
+                                   (double)sc[i % 3]);
+    return IC_OK;
 }
 
 void ic_scene_warn(ic_scene *s, const char *fmt, ...)

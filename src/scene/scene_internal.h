@@ -46,9 +46,11 @@ int ic_scene_path_allowed(const ic_scene_builder *b, const char *path, char *rea
 ic_result ic_scene_check_path(const ic_scene_builder *b, const char *path, const char *where, const char *desc,
                               ic_error *err);
 
-/* IC_OK if every texel of environment map m (named name in the scene) is finite and >= 0; else the
- * one-line error "file:line: environment map 'name': texel (x, y) has a red value of -2; ...". */
-ic_result ic_scene_check_env_map(const ic_image *m, const char *name, const char *file, int line, ic_error *err);
+/* IC_OK if every texel of environment map m (named name in the scene) is finite and >= 0, and times scale
+ * within the float range; else the one-line error "file:line: environment map 'name': texel (x, y) has a
+ * red value of -2; ..." (or "... times the scale ... is beyond the float range; ..."). */
+ic_result ic_scene_check_env_map(const ic_image *m, ic_vec3 scale, const char *name, const char *file, int line,
+                                 ic_error *err);
 
 /* The limits of opt with their defaults filled in. */
 static inline size_t ic_scene_max_texture_pixels(const ic_scene_load_options *opt)

@@ -108,7 +108,7 @@ ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
                           &ierr);
     if (r != IC_OK)
         return ic_json_fail(c, map_line, r, "environment map: %s", ierr.message);
-    if ((r = ic_scene_check_env_map(&env->image, map, c->path, map_line, c->err)) != IC_OK)
+    if ((r = ic_scene_check_env_map(&env->image, scale, map, c->path, map_line, c->err)) != IC_OK)
         return r;
     env->radiance = scale;
     return IC_OK;

@@ -1019,6 +1019,41 @@ int main(void)
                          NULL);
         }
     }
+    /* a map whose texel times the scale leaves the float range (1e30 × 1e10): refused, in JSON and Mitsuba */
+    {
+        FILE *pf = fopen(IC_TEST_TMP "/scene_errors_bigsky.pfm", "wb");
+        CHECK(pf != NULL, "write the sky");
+        if (pf) {
+            const float px[6] = {1.0f, 1.0f, 1.0f, 1e30f, 1.0f, 1.0f};
+            fputs("PF\n2 1\n-1.0\n", pf);
+            fwrite(px, sizeof px[0], 6, pf);
+            fclose(pf);
+        }
+        write_tmp("scene_errors_bigsky_tri.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n", -1);
+        expect_error(write_tmp("scene_errors_bigsky.json",
+                               "{\n  \"meshes\": [ { \"path\": \"scene_errors_bigsky_tri.obj\" } ],\n"
+                               "  \"environment\": { \"map\": \"scene_errors_bigsky.pfm\", \"scale\": [1e10, 1, 1] }\n}\n",
+                               -1),
+                     NULL, IC_ERR_INVALID_ARG, "scene_errors_bigsky.json:3:",
+                     "'scene_errors_bigsky.pfm': texel (1, 0) times the scale", "give a smaller scale");
+        expect_error(write_tmp("scene_errors_bigsky.xml",
+                               "<scene version=\"0.6.0\">\n  <shape type=\"obj\"><string name=\"filename\" "
+                               "value=\"scene_errors_bigsky_tri.obj\"/></shape>\n  <emitter type=\"envmap\">\n"
+                               "    <string name=\"filename\" value=\"scene_errors_bigsky.pfm\"/>\n"
+                               "    <float name=\"scale\" value=\"1e10\"/>\n  </emitter>\n</scene>\n",
+                               -1),
+                     NULL, IC_ERR_INVALID_ARG, "scene_errors_bigsky.xml:3:", "times the scale", "smaller scale");
+        /* the same map at scale 1 loads */
+        ic_scene *ok = NULL;
+        ic_error e = {0};
+        CHECK(ic_scene_load(write_tmp("scene_errors_bigsky1.json",
+                                      "{\"meshes\": [{\"path\": \"scene_errors_bigsky_tri.obj\"}],\n"
+                                      " \"environment\": {\"map\": \"scene_errors_bigsky.pfm\"}}\n",
+                                      -1),
+                            NULL, &ok, &e) == IC_OK,
+              "the map at scale 1 loads: %s", e.message);
+        ic_scene_free(ok);
+    }
     /* a mesh that does not exist: the line of its "path" and the absolute path it resolved to */
     expect_error(SCENES "missing_mesh.json", NULL, IC_ERR_IO, "missing_mesh.json:5:",
                  "mesh 'does-not-exist.obj' not found", IC_SOURCE_DIR "/tests/scenes/does-not-exist.obj");
