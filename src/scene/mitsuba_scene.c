@@ -87,6 +87,22 @@ static ic_result parse_sensor(ic_mts_ctx *c, const xmlNode *n)
         t *= ah / sqrtf(aw * aw + ah * ah);
     else if (strcmp(axis, "y") && strcmp(axis, "smaller") && strcmp(axis, "larger"))
         return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "unknown fovAxis; use x, y, diagonal, smaller or larger", NULL);
+    /* Mitsuba turns the camera-space ray (u, v, 1) by toWorld's linear part: a scale of the camera's own
+     * axes (before the lookat) stretches the frustum by s_y/s_z vertically and s_x/s_z across, which for
+     * s_x = s_y is another field of view; square pixels cannot show s_x ≠ s_y, nor a shear */
+    const ic_vec3 ax = v3(m[0], m[4], m[8]), ay = v3(m[1], m[5], m[9]), az = v3(m[2], m[6], m[10]); /* its columns */
+    const float lx = v3_len(ax), ly = v3_len(ay), lz = v3_len(az);
+    if (!(lx > 0.0f && ly > 0.0f && lz > 0.0f && isfinite(lx * ly * lz)))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "toWorld collapses or overflows the camera's axes",
+                           "; give a transform of finite, non-zero scale");
+    t *= ly / lz;
+    if (fabsf(lx / ly - 1.0f) > 1e-4f || fabsf(v3_dot(ax, ay)) > 1e-4f * lx * ly ||
+        fabsf(v3_dot(ax, az)) > 1e-4f * lx * lz || fabsf(v3_dot(ay, az)) > 1e-4f * ly * lz)
+        ic_mts_warn_once(c, n, "<sensor> toWorld that stretches the image unevenly or shears it",
+                         "is rendered with square pixels: only its vertical stretch is applied");
+    if (!(t > 0.0f && t < 1e6f))
+        return ic_mts_fail(c, n, IC_ERR_INVALID_ARG, "toWorld's scale makes the field of view 0 or 180 degrees",
+                           "; give a milder scale");
     cam->fov_y_deg = 2.0f * atanf(t) * 180.0f / IC_PI;
     cam->eye = ic_xform_point(m, v3s(0.0f));
     cam->target = v3_add(cam->eye, ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f)));

@@ -484,6 +484,66 @@ static void test_mirrored_sensor(void)
           "the mirrored sensor's rays are the plain one's mirrored left to right (worst difference %g)", worst);
 }
 
+/* A sensor whose toWorld scales the camera's own axes (before the lookat): Mitsuba turns the ray (u, v, 1)
+ * into (s_x u, s_y v, s_z), so s_x = s_y = 2, or s_z = 1/2, is the plain sensor with tan(fov/2) doubled
+ * (the same rays); a uniform scale changes nothing; s_x ≠ s_y, which square pixels cannot show, is said in
+ * a warning; a scale of 0 is refused. */
+static void test_stretched_sensor(void)
+{
+    static const char *const scales[] = {"", "<scale x=\"2\" y=\"2\"/>", "<scale z=\"0.5\"/>",
+                                         "<scale value=\"3\"/>", "<scale x=\"2\"/>"};
+    const double wide = 2.0 * atan(2.0 * tan(25.0 * IC_PI / 180.0)) * 180.0 / IC_PI;
+    ic_camera cams[6];
+    const char *warnings[6] = {0};
+    ic_scene *scenes[6] = {0};
+    for (int k = 0; k < 6; ++k) {
+        char xml[1024];
+        snprintf(xml, sizeof xml,
+                 "  <sensor type=\"perspective\"><float name=\"fov\" value=\"%.9g\"/>\n"
+                 "    <transform name=\"toWorld\">%s<lookat origin=\"1, 2, 5\" target=\"0, 1, 0\" up=\"0, 1, 0\"/>"
+                 "</transform>\n"
+                 "    <film type=\"hdrfilm\"><integer name=\"width\" value=\"40\"/><integer name=\"height\" value=\"30\"/>"
+                 "</film>\n  </sensor>\n"
+                 "  <shape type=\"cube\"/>\n",
+                 k == 5 ? wide : 50.0, k < 5 ? scales[k] : "");
+        scenes[k] = load_xml("mts_stretch.xml", "0.6.0", xml);
+        cams[k] = scenes[k] ? scenes[k]->camera : (ic_camera){0};
+        warnings[k] = scenes[k] ? ic_scene_warnings(scenes[k]) : "";
+    }
+    static const float film[][2] = {{0.5f, 0.5f}, {3.0f, 20.0f}, {20.0f, 15.0f}, {39.5f, 29.5f}, {12.25f, 7.75f}};
+    /* cams[k] against the one whose rays it must have: 1 and 2 against the wide plain sensor (5), 3 the plain */
+    static const int same_as[4][2] = {{1, 5}, {2, 5}, {3, 0}, {0, 0}};
+    for (int j = 0; j < 3; ++j) {
+        double worst = 0.0;
+        for (int i = 0; i < 5; ++i) {
+            ic_ray a, b;
+            if (!ic_camera_ray(&cams[same_as[j][0]], film[i][0], film[i][1], &a) ||
+                !ic_camera_ray(&cams[same_as[j][1]], film[i][0], film[i][1], &b)) {
+                worst = 1e9;
+                continue;
+            }
+            worst = fmax(worst, v3_len(v3_sub(a.dir, b.dir)) + v3_len(v3_sub(a.org, b.org)));
+        }
+        CHECK(worst < 1e-5 && !strstr(warnings[same_as[j][0]], "stretches"),
+              "sensor scaled by '%s' has the rays of the %s sensor, without a warning (worst difference %g)",
+              scales[same_as[j][0]], same_as[j][1] == 5 ? "wider plain" : "plain", worst);
+    }
+    CHECK(strstr(warnings[4], "mts_stretch.xml:2: <sensor> toWorld that stretches the image unevenly") != NULL,
+          "an uneven stretch is said: '%s'", warnings[4]);
+    for (int k = 0; k < 6; ++k)
+        ic_scene_free(scenes[k]);
+    char path[256];
+    snprintf(path, sizeof path, IC_TEST_TMP "/mts_flat.xml");
+    test_write_file(path, "<scene version=\"0.6.0\">\n  <sensor type=\"perspective\">\n"
+                          "    <transform name=\"toWorld\"><scale y=\"0\"/></transform>\n  </sensor>\n"
+                          "  <shape type=\"cube\"/>\n</scene>\n");
+    ic_error err = {0};
+    ic_scene *flat = load(path, &err);
+    CHECK(!flat && strstr(err.message, "mts_flat.xml:2:") && strstr(err.message, "collapses"),
+          "a scale of 0 is refused: %s", err.message);
+    ic_scene_free(flat);
+}
+
 /* Which way a tessellated sphere about centre faces: +1 if every vertex normal and every triangle's winding
  * points out of it, -1 if all point in, 0 if mixed (or no sphere). */
 static int sphere_facing(const ic_scene *s, ic_vec3 centre)
@@ -765,6 +825,7 @@ int main(void)
     test_conductor_default();
     test_sphere_to_world();
     test_mirrored_sensor();
+    test_stretched_sensor();
     test_sensor_world_mirror();
     test_sphere_facing();
     test_version();
