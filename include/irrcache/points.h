@@ -26,7 +26,8 @@
  *                     and emitting surfaces by light sampling, the sky (environment) by a light sample
  *                     (through the portals) and a cosine ray, MIS between them.
  *                     σ adds the interpolation's variance (the records' relative variance, pooled over
- *                     the sensors' records, weighed as the interpolation weighs them) to the direct part's; it
+ *                     the sensors' records, or with fewer than 16 from repeated gathers at them, weighed
+ *                     as the interpolation weighs them) to the direct part's; it
  *                     does not include the interpolation's bias (a record's value moved to a nearby
  *                     point by its gradients), which the cache's accuracy parameter bounds.
  *

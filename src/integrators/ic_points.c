@@ -28,6 +28,11 @@
  * records, and the hit stage's records, which serve the hemisphere rays' hits, never stand in for a
  * sensor's own gather (they have 1/64 of its rays). */
 #define SENSOR_BOUNCE (IC_BOUNCE_RADIANCE - 1u)
+/* Degrees of freedom the records' relative variance rests on at the least, as many as the light samples'
+ * replicates have (IC_POINT_REPLICATES − 1 each); fewer sensor records than this get repeated gathers
+ * (repeat_variance). */
+#define VARIANCE_DOF IC_POINT_REPLICATES
+#define REPEAT_KEY_TAG 0x726570656174ULL /* keys of the repeated gathers, apart from the records' own */
 
 void ic_ic_sensor(const ic_scene *scene, ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b)
 {
@@ -151,6 +156,76 @@ static void grid_add(taken_grid *g, const ic_vec3 *pts, uint32_t i)
     *head = i + 1;
 }
 
+/* The relative variance of a sensor record's E (R, G, B, luminance) from its spread over independent gathers
+ * at the records first … records − 1 themselves: each is gathered again ⌈VARIANCE_DOF / records⌉ times
+ * (keys of its own), and a record with its repeats, m + 1 values of mean Ē, adds Σ (E_j − Ē)² / Ē² and m
+ * degrees of freedom to the pool. With few records their half-set differences (one degree of freedom each)
+ * are too few: a single sideways sensor on an open plane under a uniform sky, whose one record's σ then
+ * set the interpolation's, fell within 2σ of the closed form at 25 of 40 seeds. */
+static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, double rel_var[4], ic_error *err)
+{
+    uint32_t n = records - first, m = (VARIANCE_DOF + n - 1) / n, total = n * m;
+    ic_record *rec = malloc(sizeof *rec * n);
+    ic_gather_point *pts = malloc(sizeof *pts * total);
+    ic_gather_result *res = malloc(sizeof *res * total);
+    uint8_t *gathered = calloc(total, 1);
+    ic_result r = rec && pts && res && gathered ? IC_OK
+                                                : ic_error_set(err, IC_ERR_OOM, "out of memory for %u gathers", total);
+    for (uint32_t k = 0; r == IC_OK && k < n; ++k) {
+        if ((r = ic_cache_get_record(c->cache, first + k, &rec[k])) != IC_OK) {
+            ic_error_set(err, r, "sensor record %u cannot be read", first + k);
+            break;
+        }
+        for (uint32_t j = 0; j < m; ++j) {
+            ic_candidate cd;
+            memset(&cd, 0, sizeof cd);
+            cd.p = rec[k].position;
+            cd.n = rec[k].normal;
+            cd.key = ic_hash4(REPEAT_KEY_TAG, k, j, 0);
+            pts[k * m + j] = ic_ic_gather_point_of(c, &cd);
+        }
+    }
+    if (r == IC_OK) {
+        c->record_bounce = SENSOR_BOUNCE;
+        c->env_mode = IC_ENV_AT_POINT;
+        r = ic_ic_gather_points(c, pts, total, res, NULL, gathered, err);
+        c->record_bounce = 0;
+        c->env_mode = IC_ENV_PORTAL_SAMPLES;
+    }
+    double sum[4] = {0.0, 0.0, 0.0, 0.0}, dof[4] = {0.0, 0.0, 0.0, 0.0};
+    for (uint32_t k = 0; r == IC_OK && k < n; ++k) {
+        double v[IC_POINT_REPLICATES + 1][4], mean[4] = {0.0, 0.0, 0.0, 0.0};
+        uint32_t got = 0;
+        for (uint32_t j = 0; j <= m; ++j) {
+            if (j > 0 && !gathered[k * m + j - 1])
+                continue;
+            ic_vec3 e = j == 0 ? rec[k].irradiance : res[k * m + j - 1].irradiance;
+            double *x = v[got++];
+            x[0] = e.x;
+            x[1] = e.y;
+            x[2] = e.z;
+            x[3] = IC_LUMINANCE_R * e.x + IC_LUMINANCE_G * e.y + IC_LUMINANCE_B * e.z;
+            for (int ch = 0; ch < 4; ++ch)
+                mean[ch] += x[ch];
+        }
+        for (int ch = 0; ch < 4 && got > 1; ++ch) {
+            mean[ch] /= got;
+            if (!(mean[ch] > 0.0))
+                continue;
+            for (uint32_t j = 0; j < got; ++j)
+                sum[ch] += (v[j][ch] - mean[ch]) * (v[j][ch] - mean[ch]) / (mean[ch] * mean[ch]);
+            dof[ch] += got - 1;
+        }
+    }
+    for (int ch = 0; ch < 4 && r == IC_OK; ++ch)
+        rel_var[ch] = dof[ch] > 0.0 ? sum[ch] / dof[ch] : 0.0;
+    free(rec);
+    free(pts);
+    free(res);
+    free(gathered);
+    return r;
+}
+
 ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
                              uint32_t *hit_records, ic_error *err)
 {
@@ -250,6 +325,8 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
     }
     for (int ch = 0; ch < 4; ++ch)
         rel_var[ch] = used[ch] ? sum[ch] / used[ch] : 0.0;
+    if (r == IC_OK && records > first_sensor_record && records - first_sensor_record < VARIANCE_DOF)
+        r = repeat_variance(c, first_sensor_record, records, rel_var, err);
     return r;
 }
 

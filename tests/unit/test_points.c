@@ -3,7 +3,8 @@
  *   1. open plane under a uniform sky of radiance L: a sensor facing up receives E = πL; one facing
  *      sideways sees half the sky and half the ground (radiance ρL), E = πL(1 + ρ)/2, and over 40 seeds
  *      its error stays within 2σ about 94 % of the time (σ from 16 replicates: 15 degrees of freedom;
- *      checked: at least 85 %); facing down, E = πρL; the same with the plane one triangle 2e12 across;
+ *      checked: at least 85 %, for the cache too, whose single record's relative variance then comes from
+ *      repeated gathers); facing down, E = πρL; the same with the plane one triangle 2e12 across;
  *   2. a sensor facing a single emitting rectangle: E by Lambert's polygon formula, both estimators; a
  *      row of sensors under a black square in the open sky, E = L(π − P) with P by Lambert's formula at
  *      each: the sky is sampled at each sensor, never interpolated; sensors in a black cube under a
@@ -119,22 +120,30 @@ static void test_open_plane(const char *name, const char *geometry, int calibrat
         ic_scene_free(scene);
         return;
     }
-    /* σ's calibration: the path tracer's error against the closed form over 40 seeds. */
-    int inside = 0, inside1 = 0, seeds = 40;
+    /* σ's calibration: each estimator's error against the closed form over 40 seeds, the sideways sensor
+     * alone. The cache's σ then rests on a single record: from its half-set difference (one degree of
+     * freedom) it covered the error at 2σ for 25 of 40 seeds; from repeated gathers, 39. */
     double side_lux = 179.0 * PI_D * (1.0 + rho) / 2.0 *
                       (0.265074126 * L[0] + 0.670114631 * L[1] + 0.064811243 * L[2]);
-    for (int k = 0; k < seeds; ++k) {
-        ic_points_options opt = {0};
-        opt.samples = 64;
-        opt.seed = (uint64_t)k + 1;
-        ic_point_result res;
-        if (ic_points_compute(scene, &pts[1], 1, &opt, &res, NULL, &err) != IC_OK)
-            break;
-        inside += fabs(res.illuminance - side_lux) < 2.0 * res.illuminance_sigma;
-        inside1 += fabs(res.illuminance - side_lux) < res.illuminance_sigma;
+    for (int integ = 0; integ < 2; ++integ) {
+        int inside = 0, inside1 = 0, seeds = 40;
+        for (int k = 0; k < seeds; ++k) {
+            ic_points_options opt = {0};
+            opt.integrator = integ ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT;
+            opt.samples = 64;
+            opt.seed = (uint64_t)k + 1;
+            ic_point_result res;
+            if (ic_points_compute(scene, &pts[1], 1, &opt, &res, NULL, &err) != IC_OK)
+                break;
+            inside += fabs(res.illuminance - side_lux) < 2.0 * res.illuminance_sigma;
+            inside1 += fabs(res.illuminance - side_lux) < res.illuminance_sigma;
+        }
+        const char *est = integ ? "ic" : "pt";
+        printf("%s: sideways sensor within 2 sigma for %d of %d seeds, within 1 sigma for %d\n", est, inside, seeds,
+               inside1);
+        CHECK(inside >= (int)(0.85 * seeds), "%s: 2-sigma coverage %d of %d (expected about 94 %%)", est, inside,
+              seeds);
     }
-    printf("pt: sideways sensor within 2 sigma for %d of %d seeds, within 1 sigma for %d\n", inside, seeds, inside1);
-    CHECK(inside >= (int)(0.85 * seeds), "2-sigma coverage %d of %d (expected about 94 %%)", inside, seeds);
     ic_scene_free(scene);
 }
 
