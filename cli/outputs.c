@@ -1,4 +1,4 @@
-/* outputs.c — checking the outputs of a render before it starts (outputs.h). */
+/* outputs.c — checking the outputs of a command before it starts (outputs.h). */
 #include "outputs.h"
 
 #include "core/atomic_file.h"
@@ -10,8 +10,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#define FAIL(o, ...)                                                                                   \
-    (fprintf(stderr, "irrcache render: %s %s: ", (o)->option, (o)->path), fprintf(stderr, __VA_ARGS__), \
+#define FAIL(o, ...)                                                                                  \
+    (fprintf(stderr, "%s: %s %s: ", command, (o)->option, (o)->path), fprintf(stderr, __VA_ARGS__), \
      fputc('\n', stderr), 0)
 
 /* Splits path into its folder ("." when it has none) and its last component. */
@@ -33,7 +33,7 @@ static void split_path(const char *path, char *dir, size_t dir_size, const char 
 /* One output on its own; on success canon holds the canonical folder of path and its name, so that two
  * spellings of one file ("a.exr", "./a.exr", "x/../a.exr", a folder reached through a link) compare
  * equal. */
-static int check_one(const ic_cli_output *o, char *canon, size_t canon_size)
+static int check_one(const char *command, const ic_cli_output *o, char *canon, size_t canon_size)
 {
     const char *base;
     char dir[PATH_MAX];
@@ -45,8 +45,10 @@ static int check_one(const ic_cli_output *o, char *canon, size_t canon_size)
     struct stat st;
     if (stat(o->path, &st) == 0) {
         if (S_ISDIR(st.st_mode))
-            return FAIL(o, "is a folder; give a file name (for example %s/%s)", o->path,
-                        !strcmp(o->option, "--save-cache") ? "records.icc"
+            return FAIL(o, "is a folder; give a file name (for example %s%s%s)", o->path,
+                        o->path[strlen(o->path) - 1] == '/' ? "" : "/",
+                        o->example                         ? o->example
+                        : !strcmp(o->option, "--save-cache") ? "records.icc"
                         : !strcmp(o->option, "-o")         ? "image.exr"
                                                            : "out.json");
         if (!S_ISREG(st.st_mode))
@@ -73,27 +75,31 @@ static int check_one(const ic_cli_output *o, char *canon, size_t canon_size)
     return 1;
 }
 
-int ic_cli_check_outputs(const ic_cli_output *outs, int count, const char *input)
+int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int count, const ic_cli_input *inputs,
+                         int input_count)
 {
     char(*canon)[PATH_MAX + 256] = calloc((size_t)count + 1, sizeof *canon);
     if (!canon) {
-        fprintf(stderr, "irrcache render: out of memory checking the outputs\n");
+        fprintf(stderr, "%s: out of memory checking the outputs\n", command);
         return 0;
     }
     int ok = 1;
     for (int i = 0; i < count && ok; ++i) {
-        ok = check_one(&outs[i], canon[i], sizeof canon[i]);
+        ok = check_one(command, &outs[i], canon[i], sizeof canon[i]);
         for (int j = 0; j < i && ok; ++j)
             if (!strcmp(canon[i], canon[j]))
                 ok = FAIL(&outs[i], "the same file as %s %s; give each output its own name", outs[j].option,
                           outs[j].path);
     }
     char real[PATH_MAX];
-    if (ok && input && realpath(input, real))
+    for (int k = 0; k < input_count && ok; ++k) {
+        const ic_cli_input *in = &inputs[k];
+        if (!in->path || !strcmp(in->path, "-") || !realpath(in->path, real))
+            continue;
         for (int i = 0; i < count && ok; ++i)
             if (!strcmp(canon[i], real))
-                ok = FAIL(&outs[i], "is the scene file %s; writing it would destroy the scene, give another name",
-                          input);
+                ok = FAIL(&outs[i], "is %s %s; writing it would destroy it, give another name", in->what, in->path);
+    }
     free(canon);
     return ok;
 }

@@ -1,4 +1,4 @@
-/* outputs.h — the files a render writes, checked before it starts (render.c). */
+/* outputs.h — the files a command writes, checked before it starts (render.c, points.c). */
 #ifndef IC_CLI_OUTPUTS_H
 #define IC_CLI_OUTPUTS_H
 
@@ -6,12 +6,20 @@
 typedef struct ic_cli_output {
     const char *option;
     const char *path;
+    const char *example;   /* a file name to suggest when path is a folder (NULL: render's, by option) */
 } ic_cli_output;
 
-/* Checks, before any rendering, that every output can be written: not an existing folder or other
- * non-regular file, its folder exists and takes a new file, and no two outputs (nor an output and the
- * scene file `input`, which may be NULL) are the same file. Returns 1, or prints one line naming the
- * option, the path and what to do, and returns 0. */
-int ic_cli_check_outputs(const ic_cli_output *outs, int count, const char *input);
+/* A file the command reads, which no output may overwrite: what it is ("the scene file") and its path
+ * (NULL or "-", standard input: none). */
+typedef struct ic_cli_input {
+    const char *what;
+    const char *path;
+} ic_cli_input;
+
+/* Checks, before any work, that every output can be written: not an existing folder or other non-regular
+ * file, its folder exists and takes a new file, and no two outputs (nor an output and an input) are the
+ * same file. Returns 1, or prints one line, "COMMAND: OPTION PATH: problem; what to do", and returns 0. */
+int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int count, const ic_cli_input *inputs,
+                         int input_count);
 
 #endif

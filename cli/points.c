@@ -1,10 +1,10 @@
 /*
  * points.c — `irrcache points SCENE --points FILE|-`: irradiance and illuminance at sensor points
  * (include/irrcache/points.h). Input lines are `x y z nx ny nz` (the order of Radiance's `rtrace -I`),
- * with `#` comments and blank lines; output is one line per point in input order: irradiance R G B
- * (the scene's radiometric units, W/m²), illuminance (lux, Radiance's 179 lm/W convention) and its
- * one-sigma error (lux), with --daylight-factor the daylight factor (%) and its σ, as text, CSV or JSON,
- * to stdout or atomically to -o FILE.
+ * separated by spaces, tabs or commas, with `#` comments and blank lines; output is one line per point in
+ * input order: irradiance R G B (the scene's radiometric units, W/m²), illuminance (lux, Radiance's
+ * 179 lm/W convention) and its one-sigma error (lux), with --daylight-factor the daylight factor (%) and
+ * its σ, as text, CSV or JSON, to stdout or atomically to -o FILE.
  *
  * Exit status: 0 success, 1 a failure while working (unreadable or malformed points file, scene,
  * output), 2 a usage error. A malformed line is reported as "FILE:LINE: problem; what to do", and then
@@ -14,6 +14,7 @@
 #include "cluster.h"
 #include "json_out.h"
 #include "options.h"
+#include "outputs.h"
 #include "points_grid.h"
 
 #include "core/atomic_file.h"
@@ -50,8 +51,9 @@ static void print_help(FILE *out)
             "       irrcache points SCENE --grid X0 Y0 Z0 X1 Y1 Z1 --spacing S [--map FILE.png] [options]\n"
             "\n"
             "Irradiance and illuminance at sensor points. Each input line is 'x y z nx ny nz' (a point and\n"
-            "the direction its sensor faces, as for Radiance's rtrace -I); '#' starts a comment, blank lines\n"
-            "are skipped. Output: one line per point, in input order:\n"
+            "the direction its sensor faces, as for Radiance's rtrace -I), separated by spaces, tabs or\n"
+            "commas; '#' starts a comment, blank lines are skipped. Output: one line per point, in input\n"
+            "order:\n"
             "  E_r E_g E_b  irradiance (the scene's radiometric units: W/m2)\n"
             "  lux          illuminance, 179 lm/W x (0.265074 E_r + 0.670115 E_g + 0.064811 E_b) (Radiance's\n"
             "               convention, so that numbers compare)\n"
@@ -82,25 +84,53 @@ static void print_markdown(FILE *out)
     fprintf(out, ".\n");
 }
 
-/* The points of one line: 1 if it holds a point, 0 if blank or a comment, -1 if malformed (message in why). */
+/* The first 40 bytes of a token of len bytes, for a message: bytes that are not printable ASCII as \xNN, so that
+ * a byte order mark, a non-breaking space or a typographic minus (U+2212) pasted from a document shows. */
+static void token_text(const char *at, size_t len, char *out, size_t size)
+{
+    size_t o = 0;
+    for (size_t k = 0; k < len && k < 40 && o + 5 < size; ++k) {
+        unsigned char c = (unsigned char)at[k];
+        o += (size_t)snprintf(out + o, size - o, c >= 0x20 && c < 0x7f ? "%c" : "\\x%02X", c);
+    }
+    out[o] = '\0';
+}
+
+/* The points of one line: 1 if it holds a point, 0 if blank or a comment, -1 if malformed (message in why).
+ * Numbers are separated by spaces and tabs, or by commas (CSV, spaces allowed around them); a line that
+ * separates some numbers by a comma and others by spaces alone ('0,5 0,8 1,0': decimal commas) or has an
+ * empty field is refused, as is a number run into more text ('0.8.1'), where reading on would give other
+ * numbers than were meant. */
 static int parse_line(char *line, ic_sensor_point *pt, char *why, size_t why_size)
 {
     char *hash = strchr(line, '#');
     if (hash)
         *hash = '\0';
     double v[6];
-    int count = 0;
+    int count = 0, with_comma = 0, without_comma = 0;
     char *at = line;
     for (;;) {
+        int commas = 0;
         while (*at == ' ' || *at == '\t' || *at == '\r' || *at == '\n' || *at == ',')
-            ++at;
+            commas += *at++ == ',';
         if (*at == '\0')
-            break;
+            break; /* a trailing comma ends the line, as spreadsheets write it */
+        if (commas > (count > 0)) {
+            snprintf(why, why_size, "an empty field %s number %d; give 'x y z nx ny nz'", count ? "after" : "before",
+                     count ? count : 1);
+            return -1;
+        }
+        if (count > 0) {
+            with_comma += commas == 1;
+            without_comma += commas == 0;
+        }
         char *end = NULL;
         double x = strtod(at, &end);
-        if (end == at) {
-            size_t len = strcspn(at, " \t\r\n,");
-            snprintf(why, why_size, "'%.*s' is not a number; give 'x y z nx ny nz'", (int)(len > 40 ? 40 : len), at);
+        size_t len = strcspn(at, " \t\r\n,");
+        if (end == at || end != at + len) {
+            char token[168];
+            token_text(at, len, token, sizeof token);
+            snprintf(why, why_size, "'%s' is not a number; give 'x y z nx ny nz' ('#' starts a comment)", token);
             return -1;
         }
         if (count == 6) {
@@ -113,6 +143,11 @@ static int parse_line(char *line, ic_sensor_point *pt, char *why, size_t why_siz
         }
         v[count++] = x;
         at = end;
+    }
+    if (with_comma && without_comma) {
+        snprintf(why, why_size, "some numbers separated by commas, some by spaces only (a decimal comma?); write "
+                 "decimals with '.' and separate all numbers alike");
+        return -1;
     }
     if (count == 0)
         return 0;
@@ -191,9 +226,11 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
             ok = 0;
             break;
         }
+        /* A UTF-8 byte order mark, which Windows editors and spreadsheets put at the start of a text file. */
+        int bom = line_no == 1 && len >= 3 && memcmp(line, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0;
         ic_sensor_point pt;
-        char why[160];
-        int r = parse_line(line, &pt, why, sizeof why);
+        char why[320];
+        int r = parse_line(line + bom, &pt, why, sizeof why);
         if (r < 0) {
             fprintf(stderr, "irrcache points: %s:%ld: %s\n", name, line_no, why);
             ok = 0;
@@ -221,12 +258,16 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
         pts[n++] = pt;
     }
     if (ok && ferror(f)) {
-        fprintf(stderr, "irrcache points: %s: read error after line %ld: %s\n", name, line_no, strerror(errno));
+        int e = errno;
+        if (e == EISDIR)
+            fprintf(stderr, "irrcache points: %s: is a folder; give the points file\n", name);
+        else
+            fprintf(stderr, "irrcache points: %s: read error after line %ld: %s\n", name, line_no, strerror(e));
         ok = 0;
     }
     if (ok && n == 0) {
-        fprintf(stderr, "irrcache points: %s: no points (only comments or blank lines); give lines 'x y z nx ny nz'\n",
-                name);
+        fprintf(stderr, "irrcache points: %s: no points (%s); give lines 'x y z nx ny nz'\n", name,
+                line_no ? "only comments or blank lines" : "it is empty");
         ok = 0;
     }
     free(line);
@@ -241,6 +282,30 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
     return 1;
 }
 
+/* The shortest decimal of x (6 to 9 significant digits) that reads back as the same float: the results'
+ * float fields (irradiance, the grid's positions) round-trip, and a position 0.8 reads "0.8", not the
+ * 0.800000012 its float is. */
+static const char *float_text(float x, char buf[32])
+{
+    for (int digits = 6; digits <= 9; ++digits) {
+        snprintf(buf, 32, "%.*g", digits, (double)x);
+        if (strtof(buf, NULL) == x)
+            break;
+    }
+    return buf;
+}
+
+/* Three floats as a JSON array of their shortest decimals (float_text). */
+static cJSON *json_floats(ic_vec3 v)
+{
+    const float f[3] = {v.x, v.y, v.z};
+    double d[3];
+    char buf[32];
+    for (int k = 0; k < 3; ++k)
+        d[k] = strtod(float_text(f[k], buf), NULL);
+    return cJSON_CreateDoubleArray(d, 3);
+}
+
 /* df_lux: the daylight factor's reference illuminance (0: no daylight-factor columns); pts: the points, to
  * start each row with (a generated grid), or NULL. */
 static void write_rows(FILE *f, out_format format, const ic_point_result *res, uint32_t count, double df_lux,
@@ -250,13 +315,16 @@ static void write_rows(FILE *f, out_format format, const ic_point_result *res, u
         fprintf(f, "%sirradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux%s\n",
                 pts ? "x,y,z,nx,ny,nz," : "", df_lux > 0.0 ? ",daylight_factor_percent,daylight_factor_sigma_percent" : "");
     const char *sep = format == FORMAT_CSV ? "," : " ";
+    char b[6][32];
     for (uint32_t i = 0; i < count; ++i) {
         if (pts)
-            fprintf(f, "%.7g%s%.7g%s%.7g%s%g%s%g%s%g%s", (double)pts[i].position.x, sep, (double)pts[i].position.y, sep,
-                    (double)pts[i].position.z, sep, (double)pts[i].normal.x, sep, (double)pts[i].normal.y, sep,
-                    (double)pts[i].normal.z, sep);
-        fprintf(f, "%.7g%s%.7g%s%.7g%s%.7g%s%.4g", (double)res[i].irradiance.x, sep, (double)res[i].irradiance.y,
-                sep, (double)res[i].irradiance.z, sep, res[i].illuminance, sep, res[i].illuminance_sigma);
+            fprintf(f, "%s%s%s%s%s%s%s%s%s%s%s%s", float_text(pts[i].position.x, b[0]), sep,
+                    float_text(pts[i].position.y, b[1]), sep, float_text(pts[i].position.z, b[2]), sep,
+                    float_text(pts[i].normal.x, b[3]), sep, float_text(pts[i].normal.y, b[4]), sep,
+                    float_text(pts[i].normal.z, b[5]), sep);
+        fprintf(f, "%s%s%s%s%s%s%.7g%s%.4g", float_text(res[i].irradiance.x, b[0]), sep,
+                float_text(res[i].irradiance.y, b[1]), sep, float_text(res[i].irradiance.z, b[2]), sep,
+                res[i].illuminance, sep, res[i].illuminance_sigma);
         if (df_lux > 0.0)
             fprintf(f, "%s%.6g%s%.4g", sep, 100.0 * res[i].illuminance / df_lux, sep,
                     100.0 * res[i].illuminance_sigma / df_lux);
@@ -278,14 +346,10 @@ static int write_json(const char *path, const ic_points_options *opt, const ic_p
     cJSON *arr = cJSON_AddArrayToObject(root, "points");
     for (uint32_t i = 0; i < count; ++i) {
         cJSON *o = cJSON_CreateObject();
-        if (pts) {
-            double pos[3] = {pts[i].position.x, pts[i].position.y, pts[i].position.z};
-            cJSON_AddItemToObject(o, "position", cJSON_CreateDoubleArray(pos, 3));
-        }
-        double e[3] = {res[i].irradiance.x, res[i].irradiance.y, res[i].irradiance.z};
-        double s[3] = {res[i].irradiance_sigma.x, res[i].irradiance_sigma.y, res[i].irradiance_sigma.z};
-        cJSON_AddItemToObject(o, "irradiance", cJSON_CreateDoubleArray(e, 3));
-        cJSON_AddItemToObject(o, "irradiance_sigma", cJSON_CreateDoubleArray(s, 3));
+        if (pts)
+            cJSON_AddItemToObject(o, "position", json_floats(pts[i].position));
+        cJSON_AddItemToObject(o, "irradiance", json_floats(res[i].irradiance));
+        cJSON_AddItemToObject(o, "irradiance_sigma", json_floats(res[i].irradiance_sigma));
         cJSON_AddNumberToObject(o, "illuminance", res[i].illuminance);
         cJSON_AddNumberToObject(o, "sigma", res[i].illuminance_sigma);
         if (df_lux > 0.0) {
@@ -299,22 +363,21 @@ static int write_json(const char *path, const ic_points_options *opt, const ic_p
 
 static int points_command(int argc, char **argv, ic_comm *comm);
 
-/* Before the work: the output file can be created beside its path, and a --map of cols x rows cells
- * fits the false-colour map's limits. 0 and the one-line message if not. */
-static int preflight(const char *out_path, const char *map_path, uint32_t cols, uint32_t rows, char *message,
-                     size_t size)
+/* Before the work: the outputs can be written (ic_cli_check_outputs: not a folder, a device or a pipe, in a
+ * folder that takes a new file, neither the other output nor an input), and a --map of cols x rows cells
+ * fits the false-colour map's limits. 0 if not, the one-line message printed or in message. */
+static int preflight(const char *scene_path, const char *points_path, const char *out_path, const char *map_path,
+                     uint32_t cols, uint32_t rows, char *message, size_t size)
 {
-    const char *paths[2] = {out_path, map_path};
-    for (int k = 0; k < 2; ++k) {
-        ic_atomic_file f;
-        ic_error err = {0};
-        if (paths[k] && ic_atomic_file_open(&f, paths[k], &err) != IC_OK) {
-            snprintf(message, size, "irrcache points: %s%s", k ? "--map: " : "", err.message);
-            return 0;
-        }
-        if (paths[k])
-            ic_atomic_file_abort(&f);
-    }
+    ic_cli_output outs[2];
+    int n_outs = 0;
+    if (out_path)
+        outs[n_outs++] = (ic_cli_output){"-o", out_path, "results.txt"};
+    if (map_path)
+        outs[n_outs++] = (ic_cli_output){"--map", map_path, "map.png"};
+    const ic_cli_input ins[2] = {{"the scene file", scene_path}, {"the --points file", points_path}};
+    if (!ic_cli_check_outputs("irrcache points", outs, n_outs, ins, 2))
+        return 0;
     if (!map_path)
         return 1;
     size_t n = (size_t)cols * rows;
@@ -444,8 +507,10 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         ic_error gerr = {0};
         ic_result gr = ic_points_grid(&grid, &pts, &cols, &rows, &gerr);
         if (gr != IC_OK) {
+            /* The library's message starts "grid: ": said once, as the option. */
+            const char *what = strncmp(gerr.message, "grid: ", 6) == 0 ? gerr.message + 6 : gerr.message;
             snprintf(message, sizeof message, "irrcache points: %s--grid: %s", ranks > 1 && gr == IC_ERR_OOM ?
-                     "on one rank: " : "", gerr.message);
+                     "on one rank: " : "", what);
             rc = gr == IC_ERR_OOM ? EXIT_WORK : EXIT_USAGE;
         }
         count = cols * rows;
@@ -453,7 +518,8 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         rc = EXIT_WORK;
     }
     /* What would fail only at the end, after all the work, is checked now (rank 0 writes). */
-    if (rc == 0 && rank == 0 && !preflight(out_path, map_path, cols, rows, message, sizeof message))
+    if (rc == 0 && rank == 0 && !preflight(scene_path, points_path, out_path, map_path, cols, rows, message,
+                                           sizeof message))
         rc = EXIT_WORK;
     if ((rc = agree(comm, rc, message)) != 0) {
         free(pts);

@@ -384,19 +384,20 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     char aov_paths[AOV_COUNT][4200];
     int n_outs = 0;
     for (int i = 0; i < a.output_count; ++i)
-        outs[n_outs++] = (ic_cli_output){"-o", a.outputs[i]};
+        outs[n_outs++] = (ic_cli_output){"-o", a.outputs[i], NULL};
     for (int k = 0; k < AOV_COUNT && a.aov; ++k)
         if (strstr(a.aov, aov_files[k].name) && !aov_is_layer(a.outputs[0], k)) {
             aov_path(a.outputs[0], k, aov_paths[k], sizeof aov_paths[k]);
-            outs[n_outs++] = (ic_cli_output){aov_files[k].option, aov_paths[k]};
+            outs[n_outs++] = (ic_cli_output){aov_files[k].option, aov_paths[k], NULL};
         }
     if (a.stats_path)
-        outs[n_outs++] = (ic_cli_output){"--stats", a.stats_path};
+        outs[n_outs++] = (ic_cli_output){"--stats", a.stats_path, NULL};
     if (a.records_json)
-        outs[n_outs++] = (ic_cli_output){"--records-json", a.records_json};
+        outs[n_outs++] = (ic_cli_output){"--records-json", a.records_json, NULL};
     if (a.render.ic.save_cache)
-        outs[n_outs++] = (ic_cli_output){"--save-cache", a.render.ic.save_cache};
-    if (rank == 0 && !ic_cli_check_outputs(outs, n_outs, a.scene))
+        outs[n_outs++] = (ic_cli_output){"--save-cache", a.render.ic.save_cache, NULL};
+    const ic_cli_input scene_in = {"the scene file", a.scene};
+    if (rank == 0 && !ic_cli_check_outputs("irrcache render", outs, n_outs, &scene_in, 1))
         return agree(comm, 2, message);
     /* The library refuses it too, but on every rank at once: said here, it is said once. */
     if (ranks > 1 && a.render.integrator == IC_INTEGRATOR_IC && a.render.ic.strategy == IC_STRATEGY_LAZY) {

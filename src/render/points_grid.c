@@ -28,8 +28,9 @@ ic_result ic_points_grid(const ic_points_grid_spec *g, ic_sensor_point **out, ui
                             (double)g->lo.x, (double)g->lo.y, (double)g->lo.z, (double)g->hi.x, (double)g->hi.y,
                             (double)g->hi.z);
     if (y > (double)g->hi.y)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "grid: the plane at y0 + height = %g lies above the box's top %g",
-                            y, (double)g->hi.y);
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "grid: the plane at y0 + height = %g lies above the box's top "
+                            "%g; give a height of at most %g, or a taller box", y, (double)g->hi.y,
+                            (double)g->hi.y - (double)g->lo.y);
     double nx = cells_along(x0, x1, g->spacing), nz = cells_along(z0, z1, g->spacing);
     if (nx < 1.0 || nz < 1.0)
         return ic_error_set(err, IC_ERR_INVALID_ARG,

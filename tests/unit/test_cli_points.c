@@ -175,6 +175,121 @@ static void test_grid_map(void)
           "--map needs .png: %s", err_text);
     CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 2", NULL) == 2 && strstr(err_text, "no whole"),
           "a grid with no cell: %s", err_text);
+    CHECK(run(SCENE " --grid 0 0 0 1 0.5 1 --spacing 0.5", NULL) == 2 &&
+              strstr(err_text, "irrcache points: --grid: the plane at y0 + height = 0.8 lies above the box's top 0.5; "
+                               "give a height of at most 0.5"),
+          "a plane above the box, said once as --grid, with what to do: %s", err_text);
+}
+
+/* An open ground (Kd 0.5) under a uniform sky, in DIR: cheap to compute. */
+#define PLANE DIR "/plane.json"
+static void write_plane(void)
+{
+    test_write_file(DIR "/plane.mtl", "newmtl ground\nKd 0.5 0.5 0.5\n");
+    test_write_file(DIR "/plane.obj", "mtllib plane.mtl\nusemtl ground\n"
+                                      "v -1000 0 -1000\nv 1000 0 -1000\nv 1000 0 1000\nv -1000 0 1000\nf 1 4 3 2\n");
+    test_write_file(PLANE, "{\"camera\": {\"eye\": [0, 1, 0], \"target\": [0, 0, 0.001], \"up\": [0, 0, -1],\n"
+                           "            \"width\": 16, \"height\": 16},\n"
+                           " \"meshes\": [{\"path\": \"plane.obj\"}], \"environment\": {\"radiance\": [1, 1, 1]}}\n");
+}
+
+/* What a points file from a spreadsheet, a Windows editor or another tool may hold is read as the plain
+ * file: a UTF-8 byte order mark, CRLF line ends, tabs, exponents, CSV with spaces and a trailing comma, a
+ * signed zero, a last line without its newline. */
+static void test_accepted_inputs(void)
+{
+    write_plane();
+    test_write_file(DIR "/plain.txt", "0 1 0 1 0 0\n0.5 0.25 2 0 1 0\n-3 0.8 1 0 0 -1\n1 1 1 3 4 0\n");
+    test_write_file(DIR "/quirky.txt", "\xEF\xBB\xBF# from a spreadsheet\r\n"
+                                       "0\t1\t0\t1\t0\t0\r\n"
+                                       "5e-1, 2.5E-1, 2, 0, 1, 0,\r\n"
+                                       "\r\n"
+                                       "-3,0.8,1,+0,-0,-1 # a comment\r\n"
+                                       "1 1 1 3 4 0");
+    char plain[4096];
+    CHECK(run(PLANE " --points " DIR "/plain.txt --integrator pt --samples 16", DIR "/plain.out") == 0,
+          "plain file: %s", err_text);
+    snprintf(plain, sizeof plain, "%s", slurp(DIR "/plain.out"));
+    CHECK(run(PLANE " --points " DIR "/quirky.txt --integrator pt --samples 16", DIR "/quirky.out") == 0,
+          "BOM, CRLF, tabs, exponents, commas, no final newline: %s", err_text);
+    CHECK(test_line_count(plain) == 4 && strcmp(plain, slurp(DIR "/quirky.out")) == 0,
+          "the same points, the same results:\n%s---\n%s", plain, slurp(DIR "/quirky.out"));
+}
+
+/* The float fields read back as the same floats (shortest decimals, text and JSON agree): a grid at
+ * 0.8 m reads 0.8, not 0.800000012. */
+static void test_round_trip(void)
+{
+    const char *grid = SCENE " --grid -1 0 -1 1 1.9 1 --spacing 0.3 --rays 64 --light-samples 16";
+    char args[1024], text[65536];
+    snprintf(args, sizeof args, "%s", grid);
+    CHECK(run(args, DIR "/rt.txt") == 0, "grid, text: %s", err_text);
+    snprintf(text, sizeof text, "%s", slurp(DIR "/rt.txt"));
+    snprintf(args, sizeof args, "%s --format json", grid);
+    CHECK(run(args, DIR "/rt.json") == 0, "grid, json: %s", err_text);
+    const char *json = slurp(DIR "/rt.json");
+    CHECK(strncmp(text, "-0.75 0.8 -0.75 0 1 0 ", 22) == 0, "text: the first point as given: %.40s", text);
+    CHECK(strstr(json, "\"position\":[-0.75,0.8,-0.75]") != NULL, "json: the first point as given: %.200s", json);
+    int rows = 0, same = 0;
+    const char *row = text, *at = json;
+    while (row && *row && (at = strstr(at, "\"irradiance\":[")) != NULL) {
+        char *end = (char *)row;
+        for (int k = 0; k < 6; ++k)
+            strtod(end, &end);
+        int equal = 1;
+        at += strlen("\"irradiance\":[");
+        for (int c = 0; c < 3; ++c) {
+            float t = strtof(end, &end);
+            char *next;
+            float j = (float)strtod(at, &next);
+            at = next + 1;
+            equal &= t == j;
+        }
+        same += equal;
+        ++rows;
+        row = strchr(row, '\n');
+        row = row ? row + 1 : NULL;
+    }
+    CHECK(rows == 36 && same == rows, "text and json irradiance are the same floats at %d of %d rows", same, rows);
+}
+
+/* Outputs checked before any work: not a folder, a pipe, the other output, the scene or the points file;
+ * nothing is written then, and the inputs are left as they were. */
+static void test_outputs_refused(void)
+{
+    write_plane();
+    const char *pts = "0 1 0 1 0 0\n";
+    test_write_file(DIR "/in.txt", pts);
+    mkdir(DIR "/folder.txt", 0755);
+    CHECK(run(PLANE " --points " DIR "/in.txt -o " DIR "/folder.txt", NULL) == 1 &&
+              strstr(err_text, "-o " DIR "/folder.txt: is a folder; give a file name") &&
+              test_line_count(err_text) == 1,
+          "-o onto a folder: refused before the work: %s", err_text);
+    CHECK(run(PLANE " --points " DIR "/in.txt -o " DIR "/folder.txt/", NULL) == 1 &&
+              strstr(err_text, "is a folder; give a file name (for example " DIR "/folder.txt/results.txt)"),
+          "-o onto a folder/: %s", err_text);
+    unlink(DIR "/fifo.txt");
+    mkfifo(DIR "/fifo.txt", 0644);
+    CHECK(run(PLANE " --points " DIR "/in.txt -o " DIR "/fifo.txt", NULL) == 1 &&
+              strstr(err_text, "not a regular file"),
+          "-o onto a pipe: %s", err_text);
+    unlink(DIR "/fifo.txt");
+    unlink(DIR "/same.png");
+    CHECK(run(PLANE " --grid 0 0 0 1 1 1 --spacing 0.5 --map " DIR "/same.png -o " DIR "/./same.png", NULL) == 1 &&
+              strstr(err_text, "the same file as") && !test_file_exists(DIR "/same.png"),
+          "-o and --map one file: refused, nothing written: %s", err_text);
+    char scene[4096];
+    snprintf(scene, sizeof scene, "%s", slurp(PLANE));
+    CHECK(run(PLANE " --points " DIR "/in.txt -o " PLANE, NULL) == 1 && strstr(err_text, "is the scene file") &&
+              strcmp(slurp(PLANE), scene) == 0,
+          "-o onto the scene: refused, the scene kept: %s", err_text);
+    CHECK(run(PLANE " --points " DIR "/in.txt -o " DIR "/../cli_points/in.txt", NULL) == 1 &&
+              strstr(err_text, "is the --points file") && strcmp(slurp(DIR "/in.txt"), pts) == 0,
+          "-o onto the points file: refused, the points kept: %s", err_text);
+    CHECK(test_count_temporaries(DIR) == 0, "no temporaries left");
+    CHECK(run(PLANE " --points " DIR "/folder.txt", NULL) == 1 &&
+              strstr(err_text, "folder.txt: is a folder; give the points file"),
+          "--points a folder: %s", err_text);
 }
 
 typedef struct bad_case {
@@ -193,7 +308,15 @@ static void test_bad_files(void)
         {"not finite", "0 1 nan 0 1 0\n", "bad.txt:1: number 3 is not finite"},
         {"far away", "1e20 1 0 0 1 0\n", "bad.txt:1: coordinate 1 (1e+20) lies beyond 1e18"},
         {"a normal too small", "0 1 0 0 1 0\n# c\n0 1 0 1e-50 0 0\n", "bad.txt:3: the normal (1e-50 0 0) is zero or too small"},
-        {"no points", "# nothing\n\n", "bad.txt: no points"},
+        {"no points", "# nothing\n\n", "bad.txt: no points (only comments"},
+        {"empty", "", "bad.txt: no points (it is empty)"},
+        {"a number run into more text", "0 0.8.1 0 0 1\n", "bad.txt:1: '0.8.1' is not a number"},
+        {"decimal commas", "# x y z\n0,5 0,8 1,0\n", "bad.txt:2: some numbers separated by commas, some by spaces"},
+        {"an empty CSV field", "0,1,,0,1,0,0\n", "bad.txt:1: an empty field after number 2"},
+        {"a byte order mark within", "0 1 0 0 1 0\n\xEF\xBB\xBF" "0 1 0 0 1 0\n",
+         "bad.txt:2: '\\xEF\\xBB\\xBF0' is not a number"},
+        {"a CSV header", "x,y,z,nx,ny,nz\n0,1,0,0,1,0\n", "bad.txt:1: 'x' is not a number; give 'x y z nx ny nz' "
+                                                          "('#' starts a comment)"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         const bad_case *c = &cases[k];
@@ -269,6 +392,9 @@ int main(void)
 {
     mkdir(DIR, 0755);
     test_outputs();
+    test_accepted_inputs();
+    test_round_trip();
+    test_outputs_refused();
     test_bad_files();
     test_daylight_factor();
     test_grid_map();
