@@ -36,12 +36,18 @@ static void split_path(const char *path, char *dir, size_t dir_size, const char 
 static int check_one(const char *command, const ic_cli_output *o, char *canon, size_t canon_size)
 {
     const char *base;
-    char dir[PATH_MAX];
+    char dir[PATH_MAX], target[PATH_MAX];
     if (!o->path[0])
         return FAIL(o, "empty path; give a file name");
     if (strlen(o->path) >= sizeof dir - 64)
         return FAIL(o, "path too long; use a shorter path");
-    split_path(o->path, dir, sizeof dir, &base);
+    /* A symbolic link is written through (core/atomic_file.h): its target is the file checked. */
+    int e = ic_atomic_target(o->path, target, sizeof target);
+    if (e == ELOOP)
+        return FAIL(o, "is a loop of symbolic links; give a file name");
+    if (e != 0 || strlen(target) >= sizeof dir - 64)
+        snprintf(target, sizeof target, "%s", o->path);
+    split_path(target, dir, sizeof dir, &base);
     struct stat st;
     if (stat(o->path, &st) == 0) {
         if (S_ISDIR(st.st_mode))
@@ -71,7 +77,7 @@ static int check_one(const char *command, const ic_cli_output *o, char *canon, s
     char real[PATH_MAX];
     if (!realpath(dir, real))
         snprintf(real, sizeof real, "%s", dir);
-    snprintf(canon, canon_size, "%s/%s", real, base);
+    snprintf(canon, canon_size, "%s/%.*s", real, NAME_MAX, base); /* a name is at most NAME_MAX bytes */
     return 1;
 }
 

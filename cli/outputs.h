@@ -18,7 +18,8 @@ typedef struct ic_cli_input {
 
 /* Checks, before any work, that every output can be written: not an existing folder or other non-regular
  * file, its folder exists and takes a new file, and no two outputs (nor an output and an input) are the
- * same file. Returns 1, or prints one line, "COMMAND: OPTION PATH: problem; what to do", and returns 0. */
+ * same file, symbolic links followed. Returns 1, or prints one line, "COMMAND: OPTION PATH: problem; what
+ * to do", and returns 0. */
 int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int count, const ic_cli_input *inputs,
                          int input_count);
 

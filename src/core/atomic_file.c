@@ -105,12 +105,58 @@ static void remove_stale_temporaries(const char *path)
     closedir(d);
 }
 
+/* Symbolic links are followed (as a shell's > and fopen do, and git's lock files): renaming the temporary
+ * onto the link itself would replace the link with a file, leaving its target as it was (an output
+ * "latest.exr" linked to this version's file) or, run as root with stdout redirected to a file, turning
+ * /dev/stdout (a link through /proc/self/fd/1) into a plain file for every later process. */
+int ic_atomic_target(const char *path, char *out, size_t out_size)
+{
+    if (snprintf(out, out_size, "%s", path) >= (int)out_size)
+        return ENAMETOOLONG;
+    for (int hops = 0;; ++hops) {
+        struct stat st;
+        if (lstat(out, &st) != 0 || !S_ISLNK(st.st_mode))
+            return 0; /* a file, a folder, or nothing yet: the name to write */
+        if (hops == 40) /* SYMLOOP_MAX's usual value */
+            return ELOOP;
+        char link[4096];
+        ssize_t n = readlink(out, link, sizeof link - 1);
+        if (n < 0)
+            return errno;
+        link[n] = '\0';
+        /* A relative target is relative to the link's folder. */
+        const char *slash = strrchr(out, '/');
+        int dir_len = link[0] == '/' || !slash ? 0 : (int)(slash - out + 1);
+        char next[4096];
+        if (snprintf(next, sizeof next, "%.*s%s", dir_len, out, link) >= (int)sizeof next ||
+            snprintf(out, out_size, "%s", next) >= (int)out_size)
+            return ENAMETOOLONG;
+    }
+}
+
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size)
 {
-    remove_stale_temporaries(path);
+    char target[4096];
+    /* A loop of links or a target too long to name: the link's own name (the open or rename says why it fails). */
+    if (ic_atomic_target(path, target, sizeof target) != 0 || strlen(target) + 32 >= out_size)
+        snprintf(target, sizeof target, "%s", path);
+    remove_stale_temporaries(target);
     unsigned n = atomic_fetch_add(&tmp_counter, 1u);
-    snprintf(out, out_size, "%s.tmp.%ld.%u", path, (long)getpid(), n);
+    snprintf(out, out_size, "%s.tmp.%ld.%u", target, (long)getpid(), n);
     temp_register(out);
+}
+
+/* The file a temporary takes the place of: its name less ".tmp.<pid>.<n>" (ic_atomic_temp_name), which
+ * is path or, when path is a symbolic link, the file it leads to. */
+static void final_name(const char *tmp, const char *path, char *out, size_t out_size)
+{
+    const char *tail = NULL;
+    for (const char *t = strstr(tmp, ".tmp."); t; t = strstr(t + 1, ".tmp."))
+        tail = t;
+    if (tail && temp_pid(tail + 5))
+        snprintf(out, out_size, "%.*s", (int)(tail - tmp), tmp);
+    else
+        snprintf(out, out_size, "%s", path);
 }
 
 /* The temporary's data on disk before it takes the final name, so that a crash soon after the rename
@@ -136,7 +182,9 @@ ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
         ic_atomic_temp_release(tmp);
         return ic_error_set(err, IC_ERR_IO, "%s: write failed (%s); nothing was written", path, strerror(e));
     }
-    if (rename(tmp, path) != 0) {
+    char dest[4096];
+    final_name(tmp, path, dest, sizeof dest);
+    if (rename(tmp, dest) != 0) {
         int e = errno;
         remove(tmp);
         ic_atomic_temp_release(tmp);

@@ -7,7 +7,7 @@
  * ic_atomic_file_abort(&f) (removes the temporary file). While a temporary file exists its name is
  * registered, so that a program's signal handler can remove it (ic_remove_temporary_files). A temporary
  * that a SIGKILL left (no handler runs) is removed by the next write of the same path, once its process
- * is gone.
+ * is gone. A path that is a symbolic link is followed: the file it leads to is written, the link stays.
  */
 #ifndef IC_CORE_ATOMIC_FILE_H
 #define IC_CORE_ATOMIC_FILE_H
@@ -33,8 +33,11 @@ void ic_atomic_file_abort(ic_atomic_file *f);
  * First removes the temporaries of path that dead processes left (<path>.tmp.<pid>.<n> whose pid no
  * process has: a SIGKILL during a write); ic_atomic_file_open does the same. */
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size);
-/* Syncs tmp's data to disk (fsync), then renames tmp to path, removing tmp on failure; either way tmp is
- * released. */
+/* The file that writing path replaces: path with its symbolic links followed (relative ones from the
+ * link's folder), into out; 0, or an errno value (ELOOP, ENAMETOOLONG, readlink's) with out undefined. */
+int ic_atomic_target(const char *path, char *out, size_t out_size);
+/* Syncs tmp's data to disk (fsync), then renames tmp to the file it was named for (path, or the file the
+ * link path leads to), removing tmp on failure; either way tmp is released. path names it in messages. */
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err);
 /* Forgets a temporary name the caller removed itself. */
 void ic_atomic_temp_release(const char *tmp);

@@ -4,6 +4,8 @@
  * through the library's atomic file, through ic_atomic_temp_name (the EXR writer's path), and through the
  * command. A temporary of a live process, of another output, or a name not of the form is left alone.
  *
+ * An output that is a symbolic link is written through it: the link stays.
+ *
  * Every atomic write syncs its temporary (fsync, wrapped here: -Wl,--wrap=fsync) before the rename, so a
  * crash after it cannot leave an empty file under the final name: the atomic file and the EXR writer.
  */
@@ -134,6 +136,38 @@ int main(void)
           err.message);
     check_synced("EXR", "/synced.exr", calls);
     ic_image_free(&img);
+
+    /* A path that is a symbolic link (relative, through a chain, or dangling into an existing folder) is
+     * written through: the link stays, the file it leads to takes the data, the temporary lies beside that
+     * file (the rename had replaced the link with a plain file and left the target as it was). Through the
+     * atomic file and the EXR writer's temporary name. */
+    CHECK(system("mkdir -p '" T "/links/sub' && cd '" T "/links' && echo old > sub/real.pfm && "
+                 "ln -sf sub/real.pfm link.pfm && ln -sf ../link.pfm sub/chain.pfm && ln -sf sub/new.exr new.exr") == 0,
+          "links");
+    CHECK(ic_atomic_file_open(&f, T "/links/sub/chain.pfm", &err) == IC_OK, "open through links: %s", err.message);
+    fputs("new data", f.fp);
+    CHECK(ic_atomic_file_commit(&f, &err) == IC_OK, "commit through links: %s", err.message);
+    struct stat ls;
+    CHECK(lstat(T "/links/link.pfm", &ls) == 0 && S_ISLNK(ls.st_mode) && lstat(T "/links/sub/chain.pfm", &ls) == 0 &&
+              S_ISLNK(ls.st_mode), "the links stay links");
+    char text[64] = "";
+    FILE *rf = fopen(T "/links/sub/real.pfm", "rb");
+    if (rf) {
+        text[fread(text, 1, sizeof text - 1, rf)] = 0;
+        fclose(rf);
+    }
+    CHECK(!strcmp(text, "new data"), "the file the links lead to holds the new data: '%s'", text);
+    ic_image small;
+    CHECK(ic_image_create(&small, 2, 2) == IC_OK, "image");
+    CHECK(ic_image_write(T "/links/new.exr", &small, NULL, &err) == IC_OK, "EXR through a dangling link: %s",
+          err.message);
+    CHECK(lstat(T "/links/new.exr", &ls) == 0 && S_ISLNK(ls.st_mode) && exists(T "/links/sub/new.exr"),
+          "the EXR is written where the dangling link leads, the link stays");
+    ic_image_free(&small);
+    char target[4096];
+    CHECK(ic_atomic_target(T "/links/sub/chain.pfm", target, sizeof target) == 0 &&
+              !strcmp(target, T "/links/sub/../sub/real.pfm"),
+          "the chain's target: %s", target);
 
     /* the command: a rerun after a SIGKILL during its write */
     leave(T "/render.png", dead, stale, keep);

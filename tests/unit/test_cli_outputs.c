@@ -139,6 +139,45 @@ int main(void)
             DIR_ "/good.pfm", "the same file as -o");
     refused("--stats = scene", "--stats " QUAD SMALL, "--stats", QUAD, "scene file");
 
+    /* An output that is a symbolic link is written through it: the link stays and its target takes the
+     * file (the rename had replaced the link with a plain file, leaving the target as it was). Links count
+     * when outputs are compared with each other and with the inputs; a loop of links is refused. */
+    {
+        CHECK(system("mkdir -p '" DIR_ "/links/sub' && cd '" DIR_ "/links' && echo old > sub/real.json && "
+                     "ln -sf sub/real.json link.json && ln -sf ../link.json sub/chain.json && "
+                     "ln -sf loop1 loop2 && ln -sf loop2 loop1 && ln -sf '" QUAD "' scene.obj && "
+                     "ln -sf /proc/self/fd/1 stdout.json") == 0,
+              "links");
+        int rc = run("render " QUAD " -o " DIR_ "/links/img.pfm --stats " DIR_ "/links/sub/chain.json" SMALL);
+        struct stat ls;
+        CHECK(rc == 0 && lstat(DIR_ "/links/link.json", &ls) == 0 && S_ISLNK(ls.st_mode) &&
+                  lstat(DIR_ "/links/sub/chain.json", &ls) == 0 && S_ISLNK(ls.st_mode),
+              "the links stay links (exit %d: %s)", rc, err_text);
+        char text[8192];
+        CHECK(test_read_text(DIR_ "/links/sub/real.json", text, sizeof text) > 10 && text[0] == '{',
+              "the stats are in the file the links lead to");
+        CHECK(test_count_temporaries(DIR_ "/links") == 0 && test_count_temporaries(DIR_ "/links/sub") == 0,
+              "no temporary file left");
+        refused("--stats = --records-json through a link", "--integrator ic --stats " DIR_ "/links/sub/real.json "
+                "--records-json " DIR_ "/links/link.json" SMALL, "--records-json", DIR_ "/links/link.json",
+                "the same file as --stats");
+        refused("--stats linked to the scene", "--stats " DIR_ "/links/scene.obj" SMALL, "--stats",
+                DIR_ "/links/scene.obj", "scene file");
+        refused("--stats a loop of links", "--stats " DIR_ "/links/loop1" SMALL, "--stats", DIR_ "/links/loop1",
+                "loop of symbolic links");
+        /* --stats /dev/stdout with stdout sent to a file: /dev/stdout is a link through /proc/self/fd/1 (run
+         * as root, replacing it broke /dev/stdout for every later process). Here a link of the same kind. */
+        char cmd[2048];
+        snprintf(cmd, sizeof cmd, "%s render %s -o %s/links/img.pfm --stats %s/links/stdout.json%s >%s/links/out.txt "
+                 "2>%s", CLI, QUAD, DIR_, DIR_, SMALL, DIR_, ERR);
+        rc = system(cmd);
+        read_err();
+        CHECK(rc == 0 && lstat(DIR_ "/links/stdout.json", &ls) == 0 && S_ISLNK(ls.st_mode),
+              "a link through /proc/self/fd/1 stays a link (%d: %s)", rc, err_text);
+        CHECK(test_read_text(DIR_ "/links/out.txt", text, sizeof text) > 10 && text[0] == '{',
+              "the stats are in the file stdout was sent to");
+    }
+
     /* A failure at the end costs only that output: the PFM (48x48: 27 kB) exceeds the 16 kB limit, the
      * PNG and the stats (a few kB) are still written; exit 3 (rendered, an output failed) names the failed one. */
     const char *cmd = CLI " render " CORNELL " -o " DIR_ "/end/big.pfm -o " DIR_ "/end/small.png --stats " DIR_
