@@ -103,7 +103,7 @@ int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int cou
         if (!in->path || !strcmp(in->path, "-") || !realpath(in->path, real))
             continue;
         for (int i = 0; i < count && ok; ++i)
-            if (!strcmp(canon[i], real))
+            if (!strcmp(canon[i], real) && !(in->may_rewrite && !strcmp(outs[i].option, in->may_rewrite)))
                 ok = FAIL(&outs[i], "is %s %s; writing it would destroy it, give another name", in->what, in->path);
     }
     free(canon);

@@ -14,6 +14,8 @@ typedef struct ic_cli_output {
 typedef struct ic_cli_input {
     const char *what;
     const char *path;
+    const char *may_rewrite; /* the one output option that may write it (render's --save-cache onto the
+                                --load-cache file: the same records), or NULL */
 } ic_cli_input;
 
 /* Checks, before any work, that every output can be written: not an existing folder or other non-regular

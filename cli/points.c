@@ -375,7 +375,7 @@ static int preflight(const char *scene_path, const char *points_path, const char
         outs[n_outs++] = (ic_cli_output){"-o", out_path, "results.txt"};
     if (map_path)
         outs[n_outs++] = (ic_cli_output){"--map", map_path, "map.png"};
-    const ic_cli_input ins[2] = {{"the scene file", scene_path}, {"the --points file", points_path}};
+    const ic_cli_input ins[2] = {{"the scene file", scene_path, NULL}, {"the --points file", points_path, NULL}};
     if (!ic_cli_check_outputs("irrcache points", outs, n_outs, ins, 2))
         return 0;
     if (!map_path)

@@ -396,8 +396,9 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         outs[n_outs++] = (ic_cli_output){"--records-json", a.records_json, NULL};
     if (a.render.ic.save_cache)
         outs[n_outs++] = (ic_cli_output){"--save-cache", a.render.ic.save_cache, NULL};
-    const ic_cli_input scene_in = {"the scene file", a.scene};
-    if (rank == 0 && !ic_cli_check_outputs("irrcache render", outs, n_outs, &scene_in, 1))
+    const ic_cli_input ins[2] = {{"the scene file", a.scene, NULL},
+                                 {"the --load-cache file", a.render.ic.load_cache, "--save-cache"}};
+    if (rank == 0 && !ic_cli_check_outputs("irrcache render", outs, n_outs, ins, 2))
         return agree(comm, 2, message);
     /* The library refuses it too, but on every rank at once: said here, it is said once. */
     if (ranks > 1 && a.render.integrator == IC_INTEGRATOR_IC && a.render.ic.strategy == IC_STRATEGY_LAZY) {

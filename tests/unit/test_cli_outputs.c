@@ -2,8 +2,8 @@
  * test_cli_outputs.c — every output of `irrcache render` is checked before the render starts (issue
  * "Hardening", item 1): an -o, --aov, --stats, --records-json or --save-cache path that is an existing
  * folder, a device or pipe, has a missing folder, cannot be created, or is the same file as another
- * output (or the scene) is refused with exit 2 and one line naming the option and the path, and nothing
- * is written. When one output fails at the end all the same (here: a file-size limit), the others are
+ * output (or the scene, or the --load-cache file, which only --save-cache may rewrite) is refused with
+ * exit 2 and one line naming the option and the path, and nothing is written. When one output fails at the end all the same (here: a file-size limit), the others are
  * written, the exit status is 1 and the message names the one that failed; no temporary file is left.
  */
 #include "test_util.h"
@@ -138,6 +138,29 @@ int main(void)
     refused("--save-cache = -o", "--integrator ic --save-cache " DIR_ "/good.pfm" SMALL, "--save-cache",
             DIR_ "/good.pfm", "the same file as -o");
     refused("--stats = scene", "--stats " QUAD SMALL, "--stats", QUAD, "scene file");
+
+    /* The cache a render loads is an input: an output other than --save-cache that is that file would
+     * destroy it (the render wrote its stats over the cache it had just read). --save-cache may rewrite it:
+     * the same bytes. */
+    {
+        const char *made = CLI " render " QUAD " --integrator ic --rays 32 -o " DIR_ "/made.pfm --save-cache " DIR_
+                           "/in.icc" SMALL " 2>" ERR;
+        CHECK(system(made) == 0, "a cache to load");
+        static char before[1 << 22], after[1 << 22];
+        size_t n_before = test_read_text(DIR_ "/in.icc", before, sizeof before), n_after;
+        CHECK(n_before > 100 && n_before < sizeof before - 1, "the cache read (%zu bytes)", n_before);
+        refused("--stats = --load-cache", "--integrator ic --rays 32 --load-cache " DIR_ "/in.icc --stats " DIR_
+                "/./in.icc" SMALL, "--stats", DIR_ "/./in.icc", "is the --load-cache file");
+        refused("--records-json = --load-cache", "--integrator ic --rays 32 --load-cache " DIR_ "/in.icc --records-json "
+                DIR_ "/in.icc" SMALL, "--records-json", DIR_ "/in.icc", "is the --load-cache file");
+        n_after = test_read_text(DIR_ "/in.icc", after, sizeof after);
+        CHECK(n_after == n_before && !memcmp(before, after, n_before), "the loaded cache is intact");
+        int rc = run("render " QUAD " --integrator ic --rays 32 -o " DIR_ "/made.pfm --load-cache " DIR_
+                     "/in.icc --save-cache " DIR_ "/in.icc" SMALL);
+        CHECK(rc == 0, "--save-cache onto the --load-cache file is allowed (exit %d: %s)", rc, err_text);
+        n_after = test_read_text(DIR_ "/in.icc", after, sizeof after);
+        CHECK(n_after == n_before && !memcmp(before, after, n_before), "saving the loaded cache again gives the same bytes");
+    }
 
     /* An output that is a symbolic link is written through it: the link stays and its target takes the
      * file (the rename had replaced the link with a plain file, leaving the target as it was). Links count
