@@ -256,7 +256,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       1099511627776.0, "N", IC_DEFAULT_MAX_CACHE_FILE_BYTES, "4294967296 (4G)", "bytes", IC_SCOPE_IC, \
       "largest --load-cache file read, checked before it is read") \
     X(RECORDS_JSON, "--records-json", NULL, IC_OPT_STRING, records_json, 0, 0, "FILE", NAN, "none", "", \
-      IC_SCOPE_IC, "write every record (position, radius, a, image position, visibility) as JSON") \
+      IC_SCOPE_IC, "write the image's records (not the hit stage's) as a JSON list: position, R, a, visibility " \
+      "and, for a record in front of the camera, its image position and a*R in pixels (docs/outputs.md)") \
     X(AOV, "--aov", NULL, IC_OPT_LIST, aov, 0, 0, "indirect,glossy,records,density,amap", NAN, "none", "", \
       IC_SCOPE_IC, "extra images next to the first output: <stem>.indirect.exr, <stem>.glossy.exr (the glossy " \
       "lobe's indirect light from radiance records), <stem>.density.exr (records per pixel) - when the first " \

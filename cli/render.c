@@ -292,9 +292,12 @@ static int write_records_json(const char *path, const ic_render_aovs *aovs)
         cJSON_AddNumberToObject(r, "z", v->position.z);
         cJSON_AddNumberToObject(r, "radius", v->radius);
         cJSON_AddNumberToObject(r, "a", v->accuracy);
-        cJSON_AddNumberToObject(r, "px", v->px);
-        cJSON_AddNumberToObject(r, "py", v->py);
-        cJSON_AddNumberToObject(r, "radius_px", v->radius_px);
+        /* A record behind the camera has no image position: its view's 0, 0 would read as the top-left pixel. */
+        if (v->radius_px > 0.0f) {
+            cJSON_AddNumberToObject(r, "px", v->px);
+            cJSON_AddNumberToObject(r, "py", v->py);
+            cJSON_AddNumberToObject(r, "radius_px", v->radius_px);
+        }
         cJSON_AddBoolToObject(r, "visible", v->visible);
         if (v->is_radiance)
             cJSON_AddBoolToObject(r, "radiance", 1);

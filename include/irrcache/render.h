@@ -172,8 +172,9 @@ typedef struct ic_record_view {
     ic_vec3 position;      /* world space */
     float radius;          /* clamped R_i */
     float accuracy;        /* a_i; the influence radius is a_i·R_i */
-    float px, py;          /* image position in pixels (top-left origin) */
-    float radius_px;       /* influence radius in pixels at the record's depth */
+    float px, py;          /* image position in pixels (top-left origin); 0, 0 behind the camera */
+    float radius_px;       /* influence radius a_i·R_i in pixels at the record's depth; 0 behind the camera
+                              (the camera cannot project the record), positive otherwise */
     int visible;           /* 1 if the record lies on a surface the camera sees directly */
     int is_radiance;       /* 1 for a radiance record (ic_ic_options.radiance_cache), 0 for irradiance */
     float ellipse_ratio;   /* an elliptical record's minor over major semi-axis (0: round) */

@@ -103,6 +103,45 @@ static void odd_path_json(void)
     unlink(ODD_DIR);
 }
 
+/* --records-json gives an image position only to records in front of the camera: a record behind it (the
+ * sky-room's camera stands inside the room, and recursive lazy records lie on every wall) had px = py =
+ * radius_px = 0, as if it sat at the top-left pixel. Which records are in front is decided here from the
+ * scene's eye and target: (p − eye)·forward > 0. */
+#define BEHIND_RECORDS IC_TEST_TMP "/cli_behind_records.json"
+#define BEHIND_CHECK IC_TEST_TMP "/cli_behind_check.py"
+
+static void records_behind_camera(void)
+{
+    remove(BEHIND_RECORDS);
+    int rc = run("render " IC_SOURCE_DIR "/scenes/interiors/sky-room.json -o " OUT " --integrator ic --strategy lazy "
+                 "--recursive --bounces 2 --rays 64 --width 16 --height 12 --spp 1 -q --records-json " BEHIND_RECORDS);
+    CHECK(rc == 0, "sky-room with --records-json (exit %d: %s)", rc, err_text);
+    static char js[1 << 20];
+    size_t n = test_read_text(BEHIND_RECORDS, js, sizeof js);
+    CHECK(n > 0 && n < sizeof js - 1, "the record list read (%zu bytes)", n);
+    CHECK(!strstr(js, "\"radius_px\":\t0,"), "no record with a zero radius in pixels");
+    if (system("python3 -c '' >/dev/null 2>&1") != 0) {
+        printf("python3 not found: the records' sides of the camera are not checked\n");
+        return;
+    }
+    CHECK(test_write_text(BEHIND_CHECK,
+                          "import json, sys\n"
+                          "r = json.load(open(sys.argv[1]))\n"
+                          "eye, target = (0.5, 1.55, 0.45), (3.0, 1.2, 3.6)\n"
+                          "f = [t - e for t, e in zip(target, eye)]\n"
+                          "side = [sum((p - e) * g for p, e, g in zip((x['x'], x['y'], x['z']), eye, f)) for x in r]\n"
+                          "behind = [x for x, s in zip(r, side) if s < -1e-3]\n"
+                          "front = [x for x, s in zip(r, side) if s > 1e-3]\n"
+                          "ok = (len(behind) > 0 and all('px' not in x and 'py' not in x and 'radius_px' not in x\n"
+                          "                              and not x['visible'] for x in behind)\n"
+                          "      and all(x['radius_px'] > 0 for x in front))\n"
+                          "print(len(r), 'records,', len(behind), 'behind the camera')\n"
+                          "sys.exit(0 if ok else 1)\n"),
+          "write the check");
+    CHECK(system("python3 " BEHIND_CHECK " " BEHIND_RECORDS) == 0,
+          "records behind the camera have no image position, those in front a positive radius in pixels");
+}
+
 int main(void)
 {
     const bad_case cases[] = {
@@ -278,6 +317,7 @@ int main(void)
     }
 
     odd_path_json();
+    records_behind_camera();
 
     /* Help lists every option with its default. */
     rc = run("render --help >" IC_TEST_TMP "/cli_help.txt");
