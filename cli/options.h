@@ -251,7 +251,11 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_IC, "keep the records in a versioned, checksummed cache file") \
     X(LOAD_CACHE, "--load-cache", NULL, IC_OPT_STRING, render.ic.load_cache, 0, 0, "FILE", NAN, "none", "", \
       IC_SCOPE_IC, "render from the records in FILE instead of building them; refused if made for another " \
-      "scene or other gathering settings (another --seed, --spp or view is fine)") \
+      "scene or with other settings that shape the records: --strategy, --gather, --rays, --bounces (--max-depth), " \
+      "--recursive, --path-traced-gather, --error, --record-shape, --no-gradients, --record-filter, --record-sets, " \
+      "--record-noise, --large-emitters, --radiance-cache and its options, --weight, --accuracy, the radius bounds, " \
+      "the clamps and --gradient-difference (another --seed, --spp, --threads, view or --final-accuracy-scale is " \
+      "fine; docs/outputs.md)") \
     X(MAX_CACHE_BYTES, "--max-cache-bytes", NULL, IC_OPT_SIZE, render.ic.cache.max_file_bytes, 1, \
       1099511627776.0, "N", IC_DEFAULT_MAX_CACHE_FILE_BYTES, "4294967296 (4G)", "bytes", IC_SCOPE_IC, \
       "largest --load-cache file read, checked before it is read") \

@@ -40,7 +40,11 @@
 #define HEADER_BYTES (24u + PARAM_BYTES + 8u)
 #define RECORD_BYTES 172u
 #define RECORD_BYTES_V2 156u /* versions 1 and 2: no squeeze */
+/* What to do, by what is wrong. A damaged file is rebuilt; a sound one made for other settings is kept (the
+ * settings may be what is wrong); a file that is no cache file at all is the user's, not ours to delete. */
 #define REBUILD_HINT "delete it and build the cache again"
+#define MISMATCH_HINT "use the scene and settings it was made with, or build the cache again"
+#define NOT_CACHE_HINT "give the path of a cache file (ic_cache_save and --save-cache write them)"
 
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
 {
@@ -94,9 +98,10 @@ static float get_f32(const unsigned char *b)
 
 /* Fields of the parameter block, in file order, with their names for mismatch messages. */
 enum { N_PARAM_FIELDS = 14 };
+enum { FIELD_U32, FIELD_FLOAT, FIELD_SWITCH, FIELD_WEIGHT }; /* how a field is stored and said */
 typedef struct param_field {
     const char *name;
-    int is_float;
+    int kind;
     float f;
     uint32_t u;
 } param_field;
@@ -104,20 +109,20 @@ typedef struct param_field {
 static void param_fields(const ic_cache_params *p, param_field out[N_PARAM_FIELDS])
 {
     const param_field f[N_PARAM_FIELDS] = {
-        {"weight", 0, 0.0f, (uint32_t)p->weight},
-        {"accuracy", 1, p->accuracy, 0},
-        {"min_radius", 1, p->min_radius, 0},
-        {"max_radius", 1, p->max_radius, 0},
-        {"min_radius_pixels", 1, p->min_radius_pixels, 0},
-        {"max_radius_pixels", 1, p->max_radius_pixels, 0},
-        {"gradient_clamp", 0, 0.0f, (uint32_t)p->gradient_clamp},
-        {"neighbor_clamp", 0, 0.0f, (uint32_t)p->neighbor_clamp},
-        {"validity_clamp", 0, 0.0f, (uint32_t)p->validity_clamp},
-        {"validity_k", 0, 0.0f, p->validity_k},
-        {"validity_angle_deg", 1, p->validity_angle_deg, 0},
-        {"gradient_difference", 0, 0.0f, (uint32_t)p->gradient_difference},
-        {"gradient_difference_threshold", 1, p->gradient_difference_threshold, 0},
-        {"reserved", 0, 0.0f, 0},
+        {"weight", FIELD_WEIGHT, 0.0f, (uint32_t)p->weight},
+        {"accuracy", FIELD_FLOAT, p->accuracy, 0},
+        {"min_radius", FIELD_FLOAT, p->min_radius, 0},
+        {"max_radius", FIELD_FLOAT, p->max_radius, 0},
+        {"min_radius_pixels", FIELD_FLOAT, p->min_radius_pixels, 0},
+        {"max_radius_pixels", FIELD_FLOAT, p->max_radius_pixels, 0},
+        {"gradient_clamp", FIELD_SWITCH, 0.0f, (uint32_t)p->gradient_clamp},
+        {"neighbor_clamp", FIELD_SWITCH, 0.0f, (uint32_t)p->neighbor_clamp},
+        {"validity_clamp", FIELD_SWITCH, 0.0f, (uint32_t)p->validity_clamp},
+        {"validity_k", FIELD_U32, 0.0f, p->validity_k},
+        {"validity_angle_deg", FIELD_FLOAT, p->validity_angle_deg, 0},
+        {"gradient_difference", FIELD_SWITCH, 0.0f, (uint32_t)p->gradient_difference},
+        {"gradient_difference_threshold", FIELD_FLOAT, p->gradient_difference_threshold, 0},
+        {"reserved", FIELD_U32, 0.0f, 0},
     };
     memcpy(out, f, sizeof f);
 }
@@ -127,7 +132,7 @@ static void encode_params(const ic_cache_params *p, unsigned char *b)
     param_field f[N_PARAM_FIELDS];
     param_fields(p, f);
     for (int k = 0; k < N_PARAM_FIELDS; ++k) {
-        if (f[k].is_float)
+        if (f[k].kind == FIELD_FLOAT)
             put_f32(b + 4 * k, f[k].f);
         else
             put_u32(b + 4 * k, f[k].u);
@@ -317,10 +322,27 @@ static ic_result read_all(const char *path, uint64_t max_bytes, unsigned char **
     char *data = NULL;
     ic_result rc = ic_read_regular_file(path, "cache file", max_bytes ? max_bytes : IC_DEFAULT_MAX_CACHE_FILE_BYTES,
                                         "raise the limit with --max-cache-bytes (max_file_bytes of ic_cache_params) "
-                                        "if the cache is really this large, else " REBUILD_HINT, &data, size, NULL,
+                                        "if the cache is really this large, else " NOT_CACHE_HINT, &data, size, NULL,
                                         err);
     *out = (unsigned char *)data;
     return rc;
+}
+
+/* A field's value as a message says it: a number, a switch's on or off, a weight's name. */
+static void say_value(int kind, uint32_t bits, char *out, size_t size)
+{
+    static const char *const switches[] = {"default", "on", "off"};
+    static const char *const weights[] = {"ward", "tabellion", "error"};
+    float f;
+    memcpy(&f, &bits, 4);
+    if (kind == FIELD_FLOAT)
+        snprintf(out, size, "%g", (double)f);
+    else if (kind == FIELD_SWITCH && bits < 3)
+        snprintf(out, size, "%s", switches[bits]);
+    else if (kind == FIELD_WEIGHT && bits < 3)
+        snprintf(out, size, "%s", weights[bits]);
+    else
+        snprintf(out, size, "%u", bits);
 }
 
 static ic_result check_params(const char *path, const unsigned char *block, const ic_cache_params *p,
@@ -330,18 +352,17 @@ static ic_result check_params(const char *path, const unsigned char *block, cons
     param_fields(p, f);
     for (int k = 0; k < N_PARAM_FIELDS; ++k) {
         uint32_t have = get_u32(block + 4 * k), want;
-        if (f[k].is_float)
+        if (f[k].kind == FIELD_FLOAT)
             memcpy(&want, &f[k].f, 4);
         else
             want = f[k].u;
         if (have == want)
             continue;
-        if (f[k].is_float)
-            return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with other cache parameters (%s %g in the file, "
-                                "%g now); " REBUILD_HINT, path, f[k].name, (double)get_f32(block + 4 * k),
-                                (double)f[k].f);
-        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with other cache parameters (%s %u in the file, %u "
-                            "now); " REBUILD_HINT, path, f[k].name, have, want);
+        char in_file[32], now[32];
+        say_value(f[k].kind, have, in_file, sizeof in_file);
+        say_value(f[k].kind, want, now, sizeof now);
+        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with other cache parameters (%s %s in the file, %s now); "
+                            MISMATCH_HINT, path, f[k].name, in_file, now);
     }
     return IC_OK;
 }
@@ -421,12 +442,16 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
     const unsigned char *data = bytes;
 
     if (size >= 8 && memcmp(data, MAGIC, 8) != 0)
-        rc = ic_error_set(err, IC_ERR_PARSE, "%s: not an irrcache cache file; " REBUILD_HINT, path);
+        rc = ic_error_set(err, IC_ERR_PARSE, "%s: not an irrcache cache file; " NOT_CACHE_HINT, path);
     else if (size < HEADER_BYTES + 8)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: truncated (%zu bytes); " REBUILD_HINT, path, size);
-    else if (get_u32(data + 8) < IC_CACHE_FILE_OLDEST || get_u32(data + 8) > IC_CACHE_FILE_VERSION)
-        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: cache format version %u, this build reads %u to %u; "
-                          REBUILD_HINT, path, get_u32(data + 8), IC_CACHE_FILE_OLDEST, IC_CACHE_FILE_VERSION);
+    else if (get_u32(data + 8) > IC_CACHE_FILE_VERSION)
+        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: cache format version %u, newer than this build reads (%u to %u); "
+                          "load it with the irrcache that wrote it, or build the cache again", path, get_u32(data + 8),
+                          IC_CACHE_FILE_OLDEST, IC_CACHE_FILE_VERSION);
+    else if (get_u32(data + 8) < IC_CACHE_FILE_OLDEST)
+        rc = ic_error_set(err, IC_ERR_MISMATCH, "%s: cache format version %u, this build reads %u to %u; " REBUILD_HINT,
+                          path, get_u32(data + 8), IC_CACHE_FILE_OLDEST, IC_CACHE_FILE_VERSION);
     else if (get_u32(data + 12) != PARAM_BYTES)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: corrupt header; " REBUILD_HINT, path);
     if (rc != IC_OK)
@@ -447,7 +472,7 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
     else if (get_u64(data + 16) != scene_hash)
         rc = ic_error_set(err, IC_ERR_MISMATCH,
                           "%s: made for another scene or settings that change its records (hash %016llx, here "
-                          "%016llx); " REBUILD_HINT, path, (unsigned long long)get_u64(data + 16),
+                          "%016llx); " MISMATCH_HINT, path, (unsigned long long)get_u64(data + 16),
                           (unsigned long long)scene_hash);
     else if (count >= UINT32_MAX)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: too many records", path);

@@ -1550,14 +1550,28 @@ static void test_file(void)
     write_file(bad, d1, s1);
     expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "flipped byte in header");
     d1[20] ^= 0x01;
+    /* What to do follows what is wrong: a damaged file is deleted and rebuilt; a file that is no cache (a
+     * scene or an image given by mistake) or one of a newer format is not the loader's to condemn. */
     d1[0] = 'X';
     write_file(bad, d1, s1);
     expect_refusal(bad, &p, hash, IC_ERR_PARSE, "wrong magic");
+    {
+        ic_cache *x = NULL;
+        ic_cache_load(bad, &p, hash, &x, &err);
+        CHECK(!strstr(err.message, "delete") && strstr(err.message, "give the path of a cache file"),
+              "a file that is no cache is not to be deleted: %s", err.message);
+    }
     d1[0] = 'I';
     const unsigned char version = d1[8];
     d1[8] = 99;
     write_file(bad, d1, s1);
     expect_refusal(bad, &p, hash, IC_ERR_MISMATCH, "other version");
+    {
+        ic_cache *x = NULL;
+        ic_cache_load(bad, &p, hash, &x, &err);
+        CHECK(!strstr(err.message, "delete") && strstr(err.message, "newer"), "a newer format is kept: %s",
+              err.message);
+    }
     d1[8] = version;
     expect_refusal(path, &p, hash ^ 1, IC_ERR_MISMATCH, "other scene");
     /* A valid checksum over values the octree cannot hold (issue "Hardening", item 3): a finite but huge
@@ -1596,8 +1610,9 @@ static void test_file(void)
     {
         ic_cache *x = NULL;
         ic_cache_load(path, &p, hash ^ 1, &x, &err);
-        CHECK(strstr(err.message, "made for another scene") && strstr(err.message, "build the cache again"),
-              "scene message: %s", err.message);
+        CHECK(strstr(err.message, "made for another scene") && strstr(err.message, "build the cache again") &&
+                  strstr(err.message, "settings it was made with") && !strstr(err.message, "delete"),
+              "scene message (a sound file made for other settings is kept): %s", err.message);
     }
     ic_cache_params other = p;
     other.accuracy = 0.3f;
@@ -1605,6 +1620,18 @@ static void test_file(void)
     other = p;
     other.neighbor_clamp = IC_CACHE_OFF;
     expect_refusal(path, &other, hash, IC_ERR_MISMATCH, "other clamp switch");
+    {
+        /* Switches and the weight said by name, not by their enum's number. */
+        ic_cache *x = NULL;
+        ic_cache_load(path, &other, hash, &x, &err);
+        CHECK(strstr(err.message, "neighbor_clamp on in the file, off now") && !strstr(err.message, "delete"),
+              "clamp switch message: %s", err.message);
+        other = p;
+        other.weight = IC_WEIGHT_TABELLION;
+        ic_cache_load(path, &other, hash, &x, &err);
+        CHECK(strstr(err.message, "weight ward in the file, tabellion now") != NULL, "weight message: %s",
+              err.message);
+    }
     /* Look-up-only settings may change. */
     other = p;
     other.final_accuracy_scale = 1.5f;
