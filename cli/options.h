@@ -111,7 +111,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "values up to 65504 (larger ones are clamped to it; Inf and NaN kept)") \
     X(STATS, "--stats", NULL, IC_OPT_STRING, stats_path, 0, 0, "FILE.json", NAN, "none", "", IC_SCOPE_ALL, \
       "write run statistics: the settings, seconds, rays, rays per second, spp, per-phase times and, for " \
-      "ic, records, passes and the records' extents a*R (record_extent: min, mean, max)") \
+      "ic, records, passes and the records' extents a*R (record_extent: min, mean, max); the keys: docs/outputs.md") \
     X(SCENES_DIR, "--scenes-dir", NULL, IC_OPT_STRING, load.shared_scenes_dir, 0, 0, "DIR", NAN, \
       "$IRRCACHE_SCENES, else ../shared/scenes", "", IC_SCOPE_ALL, "where 'shared:' mesh paths of scene files " \
       "resolve") \
@@ -248,7 +248,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_DEFAULT_ADAPTIVE_GROWTH, "%g", "", IC_SCOPE_ADAPTIVE, "a new record starts from the nearest " \
       "record's a times F (at most --accuracy)") \
     X(SAVE_CACHE, "--save-cache", NULL, IC_OPT_STRING, render.ic.save_cache, 0, 0, "FILE", NAN, "none", "", \
-      IC_SCOPE_IC, "keep the records in a versioned, checksummed cache file") \
+      IC_SCOPE_IC, "keep the records in a versioned, checksummed cache file (docs/outputs.md)") \
     X(LOAD_CACHE, "--load-cache", NULL, IC_OPT_STRING, render.ic.load_cache, 0, 0, "FILE", NAN, "none", "", \
       IC_SCOPE_IC, "render from the records in FILE instead of building them; refused if made for another " \
       "scene or with other settings that shape the records: --strategy, --gather, --rays, --bounces (--max-depth), " \

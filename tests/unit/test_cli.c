@@ -142,6 +142,61 @@ static void records_behind_camera(void)
           "records behind the camera have no image position, those in front a positive radius in pixels");
 }
 
+/* Every key --stats and --records-json write is in docs/outputs.md's tables (`key` in a row), so that a
+ * script's author finds each: a batch cache with radiance records, hit records and elliptical records, an
+ * adaptive one with adaptive sampling, the path tracer. Keys inside "settings" (the option table's own
+ * names) and "phases" (described together) are left out. */
+#define DOC_STATS IC_TEST_TMP "/cli_doc_stats_%d.json"
+#define DOC_RECORDS IC_TEST_TMP "/cli_doc_records.json"
+#define DOC_CHECK IC_TEST_TMP "/cli_doc_check.py"
+
+static void output_keys_documented(void)
+{
+    if (system("python3 -c '' >/dev/null 2>&1") != 0) {
+        printf("python3 not found: the documentation of the JSON keys is not checked\n");
+        return;
+    }
+    const char *runs[3] = {
+        "--integrator ic --rays 64 --radiance-cache on --error hessian --record-shape elliptical --min-radius-px 0.5 "
+        "--records-json " DOC_RECORDS, "--integrator ic --rays 64 --strategy adaptive --spp 8", ""};
+    char cmd[2048], files[3][512];
+    for (int k = 0; k < 3; ++k) {
+        snprintf(files[k], sizeof files[k], DOC_STATS, k);
+        snprintf(cmd, sizeof cmd, "render " IC_SOURCE_DIR "/scenes/cornell-box-glossy/cornell-box-glossy-20.json "
+                 "-o " OUT " --width 32 --height 32 --spp 1 -q --stats %s %s", files[k], runs[k]);
+        int rc = run(cmd);
+        CHECK(rc == 0, "render %d for the keys (exit %d: %s)", k, rc, err_text);
+    }
+    CHECK(test_write_text(DOC_CHECK,
+                          "import json, re, sys\n"
+                          "doc = open(sys.argv[1], encoding='utf-8').read()\n"
+                          "rows = set(re.findall(r'`([a-z_]+)`', ''.join(l for l in doc.splitlines(True)\n"
+                          "                                              if l.startswith('|'))))\n"
+                          "keys = set()\n"
+                          "def walk(o):\n"
+                          "    if isinstance(o, dict):\n"
+                          "        for k, v in o.items():\n"
+                          "            keys.add(k)\n"
+                          "            if k not in ('settings', 'phases'):\n"
+                          "                walk(v)\n"
+                          "    elif isinstance(o, list):\n"
+                          "        for v in o:\n"
+                          "            walk(v)\n"
+                          "for f in sys.argv[2:]:\n"
+                          "    walk(json.load(open(f, encoding='utf-8')))\n"
+                          "missing = sorted(keys - rows)\n"
+                          "print('undocumented keys:', missing) if missing else None\n"
+                          "sys.exit(1 if missing else 0)\n"),
+          "write the check");
+    snprintf(cmd, sizeof cmd, "python3 " DOC_CHECK " " IC_SOURCE_DIR "/docs/outputs.md %s %s %s " DOC_RECORDS,
+             files[0], files[1], files[2]);
+    CHECK(system(cmd) == 0, "every key of --stats and --records-json is in docs/outputs.md");
+    static char js[1 << 21];
+    test_read_text(DOC_RECORDS, js, sizeof js);
+    CHECK(strstr(js, "\"radiance\":") && strstr(js, "\"ellipse_ratio\":"),
+          "the record list holds radiance and elliptical records, whose keys are checked too");
+}
+
 int main(void)
 {
     const bad_case cases[] = {
@@ -318,6 +373,7 @@ int main(void)
 
     odd_path_json();
     records_behind_camera();
+    output_keys_documented();
 
     /* Help lists every option with its default. */
     rc = run("render --help >" IC_TEST_TMP "/cli_help.txt");
