@@ -159,6 +159,24 @@ static void final_name(const char *tmp, const char *path, char *out, size_t out_
         snprintf(out, out_size, "%s", path);
 }
 
+/* Refuses to put a file in the place of something that is not one (dest: the name the temporary would take,
+ * path: the caller's, for the message). A rename over a device, pipe or socket replaces the node itself:
+ * run as root, an image or cache written to /dev/null turned it into a plain file for every later process.
+ * A link left at dest is a loop of links, or one too long to follow. */
+static ic_result check_replaceable(const char *dest, const char *path, ic_error *err)
+{
+    struct stat st;
+    if (lstat(dest, &st) != 0 || S_ISREG(st.st_mode))
+        return IC_OK;
+    if (S_ISDIR(st.st_mode))
+        return ic_error_set(err, IC_ERR_IO, "%s: is a folder; give a file name", path);
+    if (S_ISLNK(st.st_mode))
+        return ic_error_set(err, IC_ERR_IO, "%s: is a loop of symbolic links (or one too long to follow); "
+                            "give a file name", path);
+    return ic_error_set(err, IC_ERR_IO, "%s: is not a regular file (a device, pipe or socket); give a file "
+                        "name", path);
+}
+
 /* The temporary's data on disk before it takes the final name, so that a crash soon after the rename
  * leaves the old file or the whole new one, not an empty or truncated one (on ext4 and XFS the rename can
  * reach the disk before the data). A file system without fsync (EINVAL, EROFS) is passed over. */
@@ -184,6 +202,12 @@ ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
     }
     char dest[4096];
     final_name(tmp, path, dest, sizeof dest);
+    ic_result r = check_replaceable(dest, path, err);
+    if (r != IC_OK) {
+        remove(tmp);
+        ic_atomic_temp_release(tmp);
+        return r;
+    }
     if (rename(tmp, dest) != 0) {
         int e = errno;
         remove(tmp);
@@ -203,6 +227,12 @@ ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err
     if (strlen(path) + 32 >= sizeof f->path)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: output path too long", path);
     snprintf(f->path, sizeof f->path, "%s", path);
+    char target[4096];
+    if (ic_atomic_target(path, target, sizeof target) != 0)
+        snprintf(target, sizeof target, "%s", path);
+    ic_result r = check_replaceable(target, path, err);
+    if (r != IC_OK)
+        return r;
     ic_atomic_temp_name(path, f->tmp_path, sizeof f->tmp_path);
     f->fp = fopen(f->tmp_path, "wb");
     if (!f->fp) {

@@ -8,6 +8,7 @@
  * registered, so that a program's signal handler can remove it (ic_remove_temporary_files). A temporary
  * that a SIGKILL left (no handler runs) is removed by the next write of the same path, once its process
  * is gone. A path that is a symbolic link is followed: the file it leads to is written, the link stays.
+ * A path that is a folder, a device, a pipe or a socket is refused (IC_ERR_IO), never replaced.
  */
 #ifndef IC_CORE_ATOMIC_FILE_H
 #define IC_CORE_ATOMIC_FILE_H

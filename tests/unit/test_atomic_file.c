@@ -4,7 +4,8 @@
  * through the library's atomic file, through ic_atomic_temp_name (the EXR writer's path), and through the
  * command. A temporary of a live process, of another output, or a name not of the form is left alone.
  *
- * An output that is a symbolic link is written through it: the link stays.
+ * An output that is a symbolic link is written through it: the link stays; one that is a pipe, a device or a
+ * folder is refused, never replaced.
  *
  * Every atomic write syncs its temporary (fsync, wrapped here: -Wl,--wrap=fsync) before the rename, so a
  * crash after it cannot leave an empty file under the final name: the atomic file and the EXR writer.
@@ -12,6 +13,7 @@
 #include "core/atomic_file.h"
 #include "irrcache/image.h"
 #include "test_util.h"
+#include "test_files.h"
 
 #include <errno.h>
 #include <signal.h>
@@ -168,6 +170,32 @@ int main(void)
     CHECK(ic_atomic_target(T "/links/sub/chain.pfm", target, sizeof target) == 0 &&
               !strcmp(target, T "/links/sub/../sub/real.pfm"),
           "the chain's target: %s", target);
+
+    /* A path that is not a file (a pipe, a device, a folder) is refused, never replaced: the rename put a
+     * plain file in the place of the node (run as root, an image or cache written to /dev/null turned it into
+     * a file for every later process). Through the atomic file (at the open, before anything is written) and
+     * through the EXR writer's temporary name (at the rename); no temporary is left. A device node only
+     * where this user may make one. */
+    CHECK(system("mkdir -p '" T "/nodes/folder.pfm' && mkfifo '" T "/nodes/pipe.pfm' '" T "/nodes/pipe.exr'") == 0,
+          "nodes");
+    const int has_device = system("mknod '" T "/nodes/null.pfm' c 1 3 2>/dev/null") == 0;
+    const char *nodes[4] = {T "/nodes/pipe.pfm", T "/nodes/folder.pfm", T "/nodes/pipe.exr", T "/nodes/null.pfm"};
+    const char *says[4] = {"not a regular file", "is a folder", "not a regular file", "not a regular file"};
+    CHECK(ic_image_create(&small, 2, 2) == IC_OK, "image");
+    for (int k = 0; k < (has_device ? 4 : 3); ++k) {
+        struct stat before, after;
+        lstat(nodes[k], &before);
+        memset(&err, 0, sizeof err);
+        ic_result rc = k == 2 ? ic_image_write(nodes[k], &small, NULL, &err) : ic_atomic_file_open(&f, nodes[k], &err);
+        if (rc == IC_OK && k != 2)
+            ic_atomic_file_commit(&f, &err);
+        CHECK(rc == IC_ERR_IO && strstr(err.message, says[k]) && strstr(err.message, nodes[k]),
+              "%s: refused (%s: %s)", nodes[k], ic_result_name(rc), err.message);
+        CHECK(lstat(nodes[k], &after) == 0 && (after.st_mode & S_IFMT) == (before.st_mode & S_IFMT),
+              "%s: still what it was", nodes[k]);
+    }
+    ic_image_free(&small);
+    CHECK(test_count_temporaries(T "/nodes") == 0, "no temporary left beside the nodes");
 
     /* the command: a rerun after a SIGKILL during its write */
     leave(T "/render.png", dead, stale, keep);
