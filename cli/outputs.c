@@ -45,8 +45,12 @@ static int check_one(const char *command, const ic_cli_output *o, char *canon, s
     int e = ic_atomic_target(o->path, target, sizeof target);
     if (e == ELOOP)
         return FAIL(o, "is a loop of symbolic links; give a file name");
+    if (e == EACCES)
+        return FAIL(o, "is another user's symbolic link in a shared folder, not followed (as the kernel's "
+                    "protected_symlinks would not); give another name");
     if (e != 0 || strlen(target) >= sizeof dir - 64)
-        snprintf(target, sizeof target, "%s", o->path);
+        return FAIL(o, "is a symbolic link that cannot be followed (%s); give a file name",
+                    e ? strerror(e) : "its target's name is too long");
     split_path(target, dir, sizeof dir, &base);
     struct stat st;
     if (stat(o->path, &st) == 0) {

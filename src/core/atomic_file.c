@@ -68,6 +68,18 @@ static long temp_pid(const char *tail)
     return pid > 0 && pid <= INT_MAX ? pid : 0;
 }
 
+/* The folder of path (its text before the last '/'), "." when it has none. */
+static void folder_of(const char *path, char *dir, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(dir, size, ".");
+    else if (slash == path)
+        snprintf(dir, size, "/");
+    else
+        snprintf(dir, size, "%.*s", (int)(slash - path), path);
+}
+
 /* Removes the temporaries of path that a dead process left beside it: a SIGKILL (or a crash, or a power
  * cut) during a write runs no handler, so <path>.tmp.<pid>.<n> stays. One is stale when no process has
  * its pid (kill(pid, 0) fails with ESRCH); a live pid keeps its file, even if the pid was reused, so a
@@ -78,14 +90,9 @@ static void remove_stale_temporaries(const char *path)
     const char *slash = strrchr(path, '/');
     const char *base = slash ? slash + 1 : path;
     char dir[4096];
-    if (!slash)
-        snprintf(dir, sizeof dir, ".");
-    else if (slash == path)
-        snprintf(dir, sizeof dir, "/");
-    else if ((size_t)(slash - path) < sizeof dir)
-        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    else
+    if (strlen(path) >= sizeof dir)
         return;
+    folder_of(path, dir, sizeof dir);
     size_t base_len = strlen(base);
     DIR *d = base_len ? opendir(dir) : NULL;
     if (!d)
@@ -105,6 +112,20 @@ static void remove_stale_temporaries(const char *path)
     closedir(d);
 }
 
+/* Linux's fs.protected_symlinks rule, which the kernel applies when it follows a link itself and which a
+ * link read with readlink would bypass: in a sticky folder anyone may write to (/tmp), a link is followed
+ * only if this process or the folder's owner owns it. Otherwise another user's link /tmp/out.exr ->
+ * /etc/passwd would have a root render replace /etc/passwd. */
+static int may_follow(const char *link_path, const struct stat *link)
+{
+    char dir[4096];
+    struct stat ds;
+    folder_of(link_path, dir, sizeof dir);
+    if (stat(dir, &ds) != 0 || !(ds.st_mode & S_ISVTX) || !(ds.st_mode & S_IWOTH))
+        return 1;
+    return link->st_uid == geteuid() || link->st_uid == ds.st_uid;
+}
+
 /* Symbolic links are followed (as a shell's > and fopen do, and git's lock files): renaming the temporary
  * onto the link itself would replace the link with a file, leaving its target as it was (an output
  * "latest.exr" linked to this version's file) or, run as root with stdout redirected to a file, turning
@@ -119,6 +140,8 @@ int ic_atomic_target(const char *path, char *out, size_t out_size)
             return 0; /* a file, a folder, or nothing yet: the name to write */
         if (hops == 40) /* SYMLOOP_MAX's usual value */
             return ELOOP;
+        if (!may_follow(out, &st))
+            return EACCES;
         char link[4096];
         ssize_t n = readlink(out, link, sizeof link - 1);
         if (n < 0)
@@ -171,8 +194,8 @@ static ic_result check_replaceable(const char *dest, const char *path, ic_error 
     if (S_ISDIR(st.st_mode))
         return ic_error_set(err, IC_ERR_IO, "%s: is a folder; give a file name", path);
     if (S_ISLNK(st.st_mode))
-        return ic_error_set(err, IC_ERR_IO, "%s: is a loop of symbolic links (or one too long to follow); "
-                            "give a file name", path);
+        return ic_error_set(err, IC_ERR_IO, "%s: is a symbolic link that cannot be followed (a loop, a target too "
+                            "long, or another user's link in a shared folder such as /tmp); give a file name", path);
     return ic_error_set(err, IC_ERR_IO, "%s: is not a regular file (a device, pipe or socket); give a file "
                         "name", path);
 }

@@ -42,6 +42,18 @@ static void touch(const char *p)
     }
 }
 
+/* The first bytes of path as text ("" when it cannot be read). */
+static const char *read_small(const char *path, char *text, size_t size)
+{
+    FILE *rf = fopen(path, "rb");
+    text[0] = 0;
+    if (rf) {
+        text[fread(text, 1, size - 1, rf)] = 0;
+        fclose(rf);
+    }
+    return text;
+}
+
 /* The pid of a process that has exited and been reaped: no process has it (until it is reused). */
 static long dead_pid(void)
 {
@@ -152,13 +164,9 @@ int main(void)
     struct stat ls;
     CHECK(lstat(T "/links/link.pfm", &ls) == 0 && S_ISLNK(ls.st_mode) && lstat(T "/links/sub/chain.pfm", &ls) == 0 &&
               S_ISLNK(ls.st_mode), "the links stay links");
-    char text[64] = "";
-    FILE *rf = fopen(T "/links/sub/real.pfm", "rb");
-    if (rf) {
-        text[fread(text, 1, sizeof text - 1, rf)] = 0;
-        fclose(rf);
-    }
-    CHECK(!strcmp(text, "new data"), "the file the links lead to holds the new data: '%s'", text);
+    char text[64];
+    CHECK(!strcmp(read_small(T "/links/sub/real.pfm", text, sizeof text), "new data"),
+          "the file the links lead to holds the new data: '%s'", text);
     ic_image small;
     CHECK(ic_image_create(&small, 2, 2) == IC_OK, "image");
     CHECK(ic_image_write(T "/links/new.exr", &small, NULL, &err) == IC_OK, "EXR through a dangling link: %s",
@@ -170,6 +178,33 @@ int main(void)
     CHECK(ic_atomic_target(T "/links/sub/chain.pfm", target, sizeof target) == 0 &&
               !strcmp(target, T "/links/sub/../sub/real.pfm"),
           "the chain's target: %s", target);
+
+    /* Links are followed as the kernel follows them under fs.protected_symlinks: in a sticky folder anyone
+     * may write to (/tmp), only a link this process or the folder's owner owns; another user's link
+     * /tmp/out.exr -> /etc/passwd must not have a root render replace /etc/passwd (readlink, unlike open,
+     * bypasses the kernel's rule). Another user's link needs root to make (lchown): skipped otherwise. */
+    CHECK(system("mkdir -p '" T "/shared' && chmod 1777 '" T "/shared' && echo secret > '" T "/secret.pfm' && "
+                 "ln -sf ../secret.pfm '" T "/shared/theirs.pfm' && ln -sf ../secret.pfm '" T "/shared/mine.pfm'") == 0,
+          "a shared folder");
+    if (geteuid() == 0 && lchown(T "/shared/theirs.pfm", 12345, 12345) == 0) {
+        memset(&err, 0, sizeof err);
+        ic_result rc = ic_atomic_file_open(&f, T "/shared/theirs.pfm", &err);
+        if (rc == IC_OK)
+            ic_atomic_file_commit(&f, &err);
+        CHECK(rc == IC_ERR_IO && strstr(err.message, "cannot be followed"), "another user's link in a sticky "
+              "folder is not followed (%s: %s)", ic_result_name(rc), err.message);
+        CHECK(!strcmp(read_small(T "/secret.pfm", text, sizeof text), "secret\n"),
+              "the file it leads to is untouched: '%s'", text);
+        CHECK(lstat(T "/shared/theirs.pfm", &ls) == 0 && S_ISLNK(ls.st_mode), "the link stays");
+        CHECK(ic_atomic_target(T "/shared/theirs.pfm", target, sizeof target) == EACCES, "ic_atomic_target: EACCES");
+    } else {
+        printf("not root: another user's link in a sticky folder is not checked\n");
+    }
+    CHECK(ic_atomic_file_open(&f, T "/shared/mine.pfm", &err) == IC_OK, "own link: %s", err.message);
+    fputs("mine", f.fp);
+    CHECK(ic_atomic_file_commit(&f, &err) == IC_OK, "own link: %s", err.message);
+    CHECK(!strcmp(read_small(T "/secret.pfm", text, sizeof text), "mine") && lstat(T "/shared/mine.pfm", &ls) == 0 && S_ISLNK(ls.st_mode),
+          "this process's own link in a sticky folder is followed: '%s'", text);
 
     /* A path that is not a file (a pipe, a device, a folder) is refused, never replaced: the rename put a
      * plain file in the place of the node (run as root, an image or cache written to /dev/null turned it into

@@ -188,6 +188,13 @@ int main(void)
                 DIR_ "/links/scene.obj", "scene file");
         refused("--stats a loop of links", "--stats " DIR_ "/links/loop1" SMALL, "--stats", DIR_ "/links/loop1",
                 "loop of symbolic links");
+        /* Another user's link in a sticky folder anyone may write to is not followed (the kernel's
+         * protected_symlinks rule; test_atomic_file): root is needed to make one. */
+        if (geteuid() == 0 && system("mkdir -p '" DIR_ "/links/shared' && chmod 1777 '" DIR_ "/links/shared' && "
+                                     "ln -sf ../sub/real.json '" DIR_ "/links/shared/theirs.json'") == 0 &&
+            lchown(DIR_ "/links/shared/theirs.json", 12345, 12345) == 0)
+            refused("--stats another user's link", "--stats " DIR_ "/links/shared/theirs.json" SMALL, "--stats",
+                    DIR_ "/links/shared/theirs.json", "another user's symbolic link in a shared folder");
         /* --stats /dev/stdout with stdout sent to a file: /dev/stdout is a link through /proc/self/fd/1 (run
          * as root, replacing it broke /dev/stdout for every later process). Here a link of the same kind. */
         char cmd[2048];
