@@ -189,7 +189,9 @@ static void final_name(const char *tmp, const char *path, char *out, size_t out_
 static ic_result check_replaceable(const char *dest, const char *path, ic_error *err)
 {
     struct stat st;
-    if (lstat(dest, &st) != 0 || S_ISREG(st.st_mode))
+    /* What path leads to as the kernel follows it first: a pipe behind /dev/stdout (/proc/self/fd/1 reads
+     * "pipe:[N]") has no name to resolve to. */
+    if ((stat(path, &st) != 0 || S_ISREG(st.st_mode)) && (lstat(dest, &st) != 0 || S_ISREG(st.st_mode)))
         return IC_OK;
     if (S_ISDIR(st.st_mode))
         return ic_error_set(err, IC_ERR_IO, "%s: is a folder; give a file name", path);

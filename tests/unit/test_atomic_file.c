@@ -231,6 +231,21 @@ int main(void)
     }
     ic_image_free(&small);
     CHECK(test_count_temporaries(T "/nodes") == 0, "no temporary left beside the nodes");
+    /* A link to a pipe through /proc/self/fd (/dev/stdout piped to another program): the link reads
+     * "pipe:[N]", no name, so the pipe is found by following it as the kernel does. */
+    int fds[2];
+    CHECK(pipe(fds) == 0, "pipe");
+    char fd_link[64];
+    snprintf(fd_link, sizeof fd_link, "/proc/self/fd/%d", fds[1]);
+    CHECK(symlink(fd_link, T "/nodes/stdout.pfm") == 0, "a link through /proc/self/fd");
+    memset(&err, 0, sizeof err);
+    ic_result prc = ic_atomic_file_open(&f, T "/nodes/stdout.pfm", &err);
+    if (prc == IC_OK)
+        ic_atomic_file_abort(&f);
+    CHECK(prc == IC_ERR_IO && strstr(err.message, "not a regular file"), "a link to a pipe is refused as one (%s: %s)",
+          ic_result_name(prc), err.message);
+    close(fds[0]);
+    close(fds[1]);
 
     /* the command: a rerun after a SIGKILL during its write */
     leave(T "/render.png", dead, stale, keep);
