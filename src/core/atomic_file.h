@@ -19,8 +19,9 @@
 
 typedef struct ic_atomic_file {
     FILE *fp;              /* write here */
-    char path[4096];       /* final destination */
-    char tmp_path[4096];   /* temporary sibling: <path>.tmp.<pid>.<n> */
+    char path[4096];       /* final destination, as the caller named it (messages say it) */
+    char tmp_path[4096];   /* temporary sibling of the file written: <path>.tmp.<pid>.<n>, or beside the
+                              file a link path leads to */
 } ic_atomic_file;
 
 /* Opens a temporary file beside path for binary writing. */
