@@ -126,12 +126,34 @@ static int may_follow(const char *link_path, const struct stat *link)
     return link->st_uid == geteuid() || link->st_uid == ds.st_uid;
 }
 
+/* The descriptor a link in this process's /proc/<pid>/fd (or a thread's) stands for, or -1: /dev/stdout and
+ * /dev/fd/N lead through one. */
+static int descriptor_of(const char *link_path)
+{
+    char dir[4096], real[4096], own[64];
+    const char *base = strrchr(link_path, '/');
+    folder_of(link_path, dir, sizeof dir);
+    if (!base || !realpath(dir, real))
+        return -1;
+    int len = snprintf(own, sizeof own, "/proc/%ld/", (long)getpid());
+    size_t n = strlen(real);
+    if (strncmp(real, own, (size_t)len) != 0 || n < 3 || strcmp(real + n - 3, "/fd") != 0 ||
+        (n != (size_t)len + 2 && strncmp(real + len, "task/", 5) != 0))
+        return -1;
+    char *end = NULL;
+    long fd = strtol(base + 1, &end, 10);
+    return base[1] >= '0' && base[1] <= '9' && !*end && fd <= INT_MAX ? (int)fd : -1;
+}
+
 /* Symbolic links are followed (as a shell's > and fopen do, and git's lock files): renaming the temporary
  * onto the link itself would replace the link with a file, leaving its target as it was (an output
  * "latest.exr" linked to this version's file) or, run as root with stdout redirected to a file, turning
- * /dev/stdout (a link through /proc/self/fd/1) into a plain file for every later process. */
-int ic_atomic_target(const char *path, char *out, size_t out_size)
+ * /dev/stdout (a link through /proc/self/fd/1) into a plain file for every later process. *descriptor
+ * (if not NULL) is the descriptor of this process the links lead through, or -1. */
+static int follow_links(const char *path, char *out, size_t out_size, int *descriptor)
 {
+    if (descriptor)
+        *descriptor = -1;
     if (snprintf(out, out_size, "%s", path) >= (int)out_size)
         return ENAMETOOLONG;
     for (int hops = 0;; ++hops) {
@@ -142,6 +164,8 @@ int ic_atomic_target(const char *path, char *out, size_t out_size)
             return ELOOP;
         if (!may_follow(out, &st))
             return EACCES;
+        if (descriptor && *descriptor < 0)
+            *descriptor = descriptor_of(out);
         char link[4096];
         ssize_t n = readlink(out, link, sizeof link - 1);
         if (n < 0)
@@ -155,6 +179,11 @@ int ic_atomic_target(const char *path, char *out, size_t out_size)
             snprintf(out, out_size, "%s", next) >= (int)out_size)
             return ENAMETOOLONG;
     }
+}
+
+int ic_atomic_target(const char *path, char *out, size_t out_size)
+{
+    return follow_links(path, out, out_size, NULL);
 }
 
 void ic_atomic_temp_name(const char *path, char *out, size_t out_size)
@@ -202,6 +231,40 @@ static ic_result check_replaceable(const char *dest, const char *path, ic_error 
                         "name", path);
 }
 
+/* tmp's bytes written to descriptor fd at its offset (as a shell's redirection writes them): a file that the
+ * process's own descriptor leads to (/dev/stdout sent to a file) is shared with whoever opened it, who may
+ * have written to it before ('>>', a script's log) and write after; a rename would replace it, losing the
+ * first and sending the second to a file no name leads to. Not atomic: a stream takes what it is given. */
+static ic_result write_to_descriptor(const char *tmp, int fd, const char *path, ic_error *err)
+{
+    int in = open(tmp, O_RDONLY | O_CLOEXEC);
+    if (in < 0)
+        return ic_error_set(err, IC_ERR_IO, "%s: write failed (%s); nothing was written", path, strerror(errno));
+    char buf[65536];
+    unsigned long long done = 0;
+    ic_result r = IC_OK;
+    for (ssize_t got; r == IC_OK && (got = read(in, buf, sizeof buf)) != 0;) {
+        if (got < 0 && errno == EINTR)
+            continue;
+        for (ssize_t at = 0; r == IC_OK && got > 0 && at < got;) {
+            ssize_t put = write(fd, buf + at, (size_t)(got - at));
+            if (put < 0 && errno == EINTR)
+                continue;
+            if (put <= 0)
+                r = ic_error_set(err, IC_ERR_IO, "%s: cannot write through descriptor %d (%s) after %llu bytes; give "
+                                 "a file name", path, fd, put < 0 ? strerror(errno) : "no progress", done);
+            else {
+                at += put;
+                done += (unsigned long long)put;
+            }
+        }
+        if (got < 0)
+            r = ic_error_set(err, IC_ERR_IO, "%s: write failed (%s) after %llu bytes", path, strerror(errno), done);
+    }
+    close(in);
+    return r;
+}
+
 /* The temporary's data on disk before it takes the final name, so that a crash soon after the rename
  * leaves the old file or the whole new one, not an empty or truncated one (on ext4 and XFS the rename can
  * reach the disk before the data). A file system without fsync (EINVAL, EROFS) is passed over. */
@@ -229,6 +292,14 @@ ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
     final_name(tmp, path, dest, sizeof dest);
     ic_result r = check_replaceable(dest, path, err);
     if (r != IC_OK) {
+        remove(tmp);
+        ic_atomic_temp_release(tmp);
+        return r;
+    }
+    char target[4096];
+    int fd = -1;
+    if (follow_links(path, target, sizeof target, &fd) == 0 && fd >= 0) {
+        r = write_to_descriptor(tmp, fd, path, err);
         remove(tmp);
         ic_atomic_temp_release(tmp);
         return r;

@@ -7,7 +7,10 @@
  * ic_atomic_file_abort(&f) (removes the temporary file). While a temporary file exists its name is
  * registered, so that a program's signal handler can remove it (ic_remove_temporary_files). A temporary
  * that a SIGKILL left (no handler runs) is removed by the next write of the same path, once its process
- * is gone. A path that is a symbolic link is followed: the file it leads to is written, the link stays.
+ * is gone. A path that is a symbolic link is followed: the file it leads to is written, the link stays;
+ * one that leads through this process's descriptor of a file (/dev/stdout sent to a file) is written
+ * through that descriptor at its offset, as the shell's redirection writes (so '>>' keeps what the file
+ * held), once the temporary holds all of it.
  * A path that is a folder, a device, a pipe or a socket is refused (IC_ERR_IO), never replaced.
  */
 #ifndef IC_CORE_ATOMIC_FILE_H
@@ -39,7 +42,8 @@ void ic_atomic_temp_name(const char *path, char *out, size_t out_size);
  * link's folder), into out; 0, or an errno value (ELOOP, ENAMETOOLONG, readlink's) with out undefined. */
 int ic_atomic_target(const char *path, char *out, size_t out_size);
 /* Syncs tmp's data to disk (fsync), then renames tmp to the file it was named for (path, or the file the
- * link path leads to), removing tmp on failure; either way tmp is released. path names it in messages. */
+ * link path leads to; its bytes are written through the descriptor when the link leads through one of this
+ * process's), removing tmp on failure; either way tmp is released. path names it in messages. */
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err);
 /* Forgets a temporary name the caller removed itself. */
 void ic_atomic_temp_release(const char *tmp);

@@ -16,6 +16,7 @@
 #include "test_files.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -246,6 +247,40 @@ int main(void)
           ic_result_name(prc), err.message);
     close(fds[0]);
     close(fds[1]);
+    /* A link through this process's descriptor of a file (/dev/stdout with the output sent to a file, here
+     * opened to append, as '>>' opens it) is written through that descriptor, at its offset, as the shell's
+     * redirection writes: renaming onto the file it leads to replaced that file, losing what it held, and
+     * what the descriptor wrote afterwards went to a file no name led to. The atomic file and the EXR writer. */
+    for (int k = 0; k < 2; ++k) {
+        const char *log_path = k ? T "/nodes/log2.txt" : T "/nodes/log.txt";
+        const char *link = k ? T "/nodes/log.exr" : T "/nodes/log.pfm";
+        FILE *lf = fopen(log_path, "w");
+        CHECK(lf && fputs("before\n", lf) >= 0 && fclose(lf) == 0, "a log");
+        int lfd = open(log_path, O_WRONLY | O_APPEND);
+        snprintf(fd_link, sizeof fd_link, "/proc/self/fd/%d", lfd);
+        CHECK(lfd >= 0 && symlink(fd_link, link) == 0, "a link through /proc/self/fd to a file");
+        memset(&err, 0, sizeof err);
+        ic_result lrc = IC_ERR_IO;
+        if (k == 0 && (lrc = ic_atomic_file_open(&f, link, &err)) == IC_OK) {
+            fputs("output\n", f.fp);
+            lrc = ic_atomic_file_commit(&f, &err);
+        }
+        if (k == 1) {
+            CHECK(ic_image_create(&small, 2, 2) == IC_OK, "image");
+            lrc = ic_image_write(link, &small, NULL, &err);
+            ic_image_free(&small);
+        }
+        CHECK(lrc == IC_OK, "%s: written through the descriptor (%s)", link, err.message);
+        CHECK(write(lfd, "after\n", 6) == 6, "the descriptor writes on");
+        close(lfd);
+        char log_text[64];
+        struct stat lst;
+        read_small(log_path, log_text, sizeof log_text);
+        CHECK(k ? strncmp(log_text, "before\nv/1\x01", 11) == 0 && stat(log_path, &lst) == 0 && lst.st_size > 64
+                : strcmp(log_text, "before\noutput\nafter\n") == 0,
+              "%s: what the file held, the output, then what the descriptor wrote after: '%s'", log_path, log_text);
+    }
+    CHECK(test_count_temporaries(T "/nodes") == 0, "no temporary left beside the log");
 
     /* the command: a rerun after a SIGKILL during its write */
     leave(T "/render.png", dead, stale, keep);

@@ -206,6 +206,17 @@ int main(void)
               "a link through /proc/self/fd/1 stays a link (%d: %s)", rc, err_text);
         CHECK(test_read_text(DIR_ "/links/out.txt", text, sizeof text) > 10 && text[0] == '{',
               "the stats are in the file stdout was sent to");
+        /* Sent to append ('>>', a script's log): written through the descriptor, after what the file held
+         * (renaming onto the file replaced it: the log was lost). */
+        CHECK(system("echo 'a line before' > '" DIR_ "/links/log.txt'") == 0, "a log");
+        snprintf(cmd, sizeof cmd, "%s render %s -o %s/links/img.pfm --stats %s/links/stdout.json%s >>%s/links/log.txt "
+                 "2>%s", CLI, QUAD, DIR_, DIR_, SMALL, DIR_, ERR);
+        rc = system(cmd);
+        read_err();
+        CHECK(rc == 0 && test_read_text(DIR_ "/links/log.txt", text, sizeof text) > 24 &&
+                  !strncmp(text, "a line before\n{", 15),
+              "--stats /dev/stdout >> log: the log keeps its line, the stats follow (%d: %s): '%.40s'", rc, err_text,
+              text);
     }
 
     /* A failure at the end costs only that output: the PFM (48x48: 27 kB) exceeds the 16 kB limit, the
