@@ -104,11 +104,16 @@ int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int cou
     char real[PATH_MAX];
     for (int k = 0; k < input_count && ok; ++k) {
         const ic_cli_input *in = &inputs[k];
-        if (!in->path || !strcmp(in->path, "-") || !realpath(in->path, real))
+        /* "-" reads standard input, which may be sent from a file ('--points - < in.txt'). */
+        const int is_stdin = in->path && !strcmp(in->path, "-");
+        if (!in->path || !realpath(is_stdin ? "/dev/stdin" : in->path, real))
             continue;
         for (int i = 0; i < count && ok; ++i)
             if (!strcmp(canon[i], real) && !(in->may_rewrite && !strcmp(outs[i].option, in->may_rewrite)))
-                ok = FAIL(&outs[i], "is %s %s; writing it would destroy it, give another name", in->what, in->path);
+                ok = is_stdin ? FAIL(&outs[i], "is %s - (standard input, sent from %s); writing it would destroy "
+                                     "it, give another name", in->what, real)
+                              : FAIL(&outs[i], "is %s %s; writing it would destroy it, give another name", in->what,
+                                     in->path);
     }
     free(canon);
     return ok;

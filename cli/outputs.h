@@ -10,7 +10,7 @@ typedef struct ic_cli_output {
 } ic_cli_output;
 
 /* A file the command reads, which no output may overwrite: what it is ("the scene file") and its path
- * (NULL or "-", standard input: none). */
+ * (NULL: none; "-": standard input, the file it is sent from, if any). */
 typedef struct ic_cli_input {
     const char *what;
     const char *path;

@@ -286,6 +286,10 @@ static void test_outputs_refused(void)
     CHECK(run(PLANE " --points " DIR "/in.txt -o " DIR "/../cli_points/in.txt", NULL) == 1 &&
               strstr(err_text, "is the --points file") && strcmp(slurp(DIR "/in.txt"), pts) == 0,
           "-o onto the points file: refused, the points kept: %s", err_text);
+    /* The points read from standard input sent from that file ('--points - < in.txt'): the same file. */
+    CHECK(run(PLANE " --points - -o " DIR "/in.txt <" DIR "/in.txt", NULL) == 1 &&
+              strstr(err_text, "is the --points file - (standard input") && strcmp(slurp(DIR "/in.txt"), pts) == 0,
+          "-o onto the file standard input reads: refused, the points kept: %s", err_text);
     CHECK(test_count_temporaries(DIR) == 0, "no temporaries left");
     CHECK(run(PLANE " --points " DIR "/folder.txt", NULL) == 1 &&
               strstr(err_text, "folder.txt: is a folder; give the points file"),
