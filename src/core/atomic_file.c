@@ -186,16 +186,40 @@ int ic_atomic_target(const char *path, char *out, size_t out_size)
     return follow_links(path, out, out_size, NULL);
 }
 
-void ic_atomic_temp_name(const char *path, char *out, size_t out_size)
+/* Names and creates the temporary of path, beside the file it leads to: <target>.tmp.<pid>.<n>, created
+ * exclusively (O_EXCL), so that what already has the name is never opened: the name is predictable, and a
+ * link planted there (another user's, in a shared folder such as /tmp, where fs.protected_symlinks may be
+ * off) would have had the output written into the file it leads to. A name taken is passed over. The
+ * descriptor, or -1 with errno (nothing created, out not registered). */
+static int create_temp(const char *path, char *out, size_t out_size)
 {
     char target[4096];
     /* A loop of links or a target too long to name: the link's own name (the open or rename says why it fails). */
     if (ic_atomic_target(path, target, sizeof target) != 0 || strlen(target) + 32 >= out_size)
         snprintf(target, sizeof target, "%s", path);
     remove_stale_temporaries(target);
-    unsigned n = atomic_fetch_add(&tmp_counter, 1u);
-    snprintf(out, out_size, "%s.tmp.%ld.%u", target, (long)getpid(), n);
-    temp_register(out);
+    for (int tries = 0;; ++tries) {
+        unsigned n = atomic_fetch_add(&tmp_counter, 1u);
+        snprintf(out, out_size, "%s.tmp.%ld.%u", target, (long)getpid(), n);
+        temp_register(out); /* before it exists: a signal from now on removes it */
+        int fd = open(out, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        int e = errno;
+        if (fd >= 0)
+            return fd;
+        ic_atomic_temp_release(out);
+        errno = e;
+        if (e != EEXIST || tries == 63)
+            return -1;
+    }
+}
+
+int ic_atomic_temp_name(const char *path, char *out, size_t out_size)
+{
+    int fd = create_temp(path, out, out_size);
+    if (fd < 0)
+        return errno;
+    close(fd);
+    return 0;
 }
 
 /* The file a temporary takes the place of: its name less ".tmp.<pid>.<n>" (ic_atomic_temp_name), which
@@ -329,11 +353,15 @@ ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err
     ic_result r = check_replaceable(target, path, err);
     if (r != IC_OK)
         return r;
-    ic_atomic_temp_name(path, f->tmp_path, sizeof f->tmp_path);
-    f->fp = fopen(f->tmp_path, "wb");
+    int fd = create_temp(path, f->tmp_path, sizeof f->tmp_path);
+    f->fp = fd >= 0 ? fdopen(fd, "wb") : NULL;
     if (!f->fp) {
         int e = errno;
-        ic_atomic_temp_release(f->tmp_path);
+        if (fd >= 0) {
+            close(fd);
+            remove(f->tmp_path);
+            ic_atomic_temp_release(f->tmp_path);
+        }
         return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
                             path, strerror(e));
     }

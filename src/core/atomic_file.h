@@ -33,11 +33,14 @@ ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err
 ic_result ic_atomic_file_commit(ic_atomic_file *f, ic_error *err);
 /* Closes and removes the temporary file. Safe to call twice. */
 void ic_atomic_file_abort(ic_atomic_file *f);
-/* Builds a temporary sibling name for path (for writers that need a path, not a FILE*) and registers it
- * for ic_remove_temporary_files (irrcache/common.h) until ic_atomic_rename or ic_atomic_temp_release.
- * First removes the temporaries of path that dead processes left (<path>.tmp.<pid>.<n> whose pid no
- * process has: a SIGKILL during a write); ic_atomic_file_open does the same. */
-void ic_atomic_temp_name(const char *path, char *out, size_t out_size);
+/* Builds a temporary sibling name for path (for writers that need a path, not a FILE*), creates it empty
+ * and exclusively (O_EXCL: a link planted at the predictable name is never followed; a name taken is passed
+ * over) and registers it for ic_remove_temporary_files (irrcache/common.h) until ic_atomic_rename or
+ * ic_atomic_temp_release; the caller opens it by name (O_TRUNC is safe: it is this process's file). 0, or
+ * an errno value with nothing created. First removes the temporaries of path that dead processes left
+ * (<path>.tmp.<pid>.<n> whose pid no process has: a SIGKILL during a write); ic_atomic_file_open does the
+ * same. */
+int ic_atomic_temp_name(const char *path, char *out, size_t out_size);
 /* The file that writing path replaces: path with its symbolic links followed (relative ones from the
  * link's folder), into out; 0, or an errno value (ELOOP, ENAMETOOLONG, readlink's) with out undefined. */
 int ic_atomic_target(const char *path, char *out, size_t out_size);

@@ -450,7 +450,10 @@ ic_result ic_image_write_exr(const char *path, const ic_image *img, const ic_ima
     char tmp[4096];
     if (strlen(path) + 32 >= sizeof tmp)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: output path too long; use a shorter path", path);
-    ic_atomic_temp_name(path, tmp, sizeof tmp);
+    int made = ic_atomic_temp_name(path, tmp, sizeof tmp);
+    if (made != 0)
+        return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
+                            path, strerror(made));
 
     int open_errno = 0, ambiguous = 0;
     exr_result_t rv = write_part(tmp, img, opt, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);

@@ -140,8 +140,45 @@ int main(void)
     leave(T "/out.exr", dead, stale, keep);
     char tmp[4096];
     ic_atomic_temp_name(T "/out.exr", tmp, sizeof tmp);
+    remove(tmp);
     ic_atomic_temp_release(tmp);
     check_cleaned("temporary name", stale, keep);
+
+    /* A link planted at the temporary's name, which is predictable (<path>.tmp.<pid>.<n>; another user's, in
+     * a shared folder such as /tmp, where fs.protected_symlinks may be off), is not followed: opened with
+     * O_TRUNC, the output went into the file the link leads to, and the rename left the link as the output.
+     * The temporary is created exclusively (O_EXCL) and a name taken is passed over: the atomic file and the
+     * EXR writer. */
+    for (int k = 0; k < 2; ++k) {
+        const char *out = k ? T "/planted.exr" : T "/planted.pfm";
+        ic_atomic_temp_name(out, tmp, sizeof tmp);
+        remove(tmp);
+        ic_atomic_temp_release(tmp);
+        char planted[4200];
+        const char *dot = strrchr(tmp, '.');
+        snprintf(planted, sizeof planted, "%.*s.%lu", (int)(dot - tmp), tmp, strtoul(dot + 1, NULL, 10) + 1);
+        FILE *vf = fopen(T "/victim.txt", "w");
+        CHECK(vf && fputs("victim\n", vf) >= 0 && fclose(vf) == 0, "a victim");
+        CHECK(symlink(T "/victim.txt", planted) == 0, "a link at the next temporary's name %s", planted);
+        memset(&err, 0, sizeof err);
+        ic_result prc;
+        if (k) {
+            ic_image one;
+            CHECK(ic_image_create(&one, 2, 2) == IC_OK, "image");
+            prc = ic_image_write(out, &one, NULL, &err);
+            ic_image_free(&one);
+        } else if ((prc = ic_atomic_file_open(&f, out, &err)) == IC_OK) {
+            fputs("output", f.fp);
+            prc = ic_atomic_file_commit(&f, &err);
+        }
+        struct stat pst;
+        char victim[64];
+        CHECK(prc == IC_OK && lstat(out, &pst) == 0 && S_ISREG(pst.st_mode), "%s: written as a file (%s)", out,
+              err.message);
+        CHECK(!strcmp(read_small(T "/victim.txt", victim, sizeof victim), "victim\n"),
+              "%s: the file the planted link leads to is untouched: '%s'", out, victim);
+        remove(planted);
+    }
 
     /* the EXR writer (OpenEXR writes and closes the temporary by name) */
     ic_image img;
