@@ -2,6 +2,7 @@
 #include "outputs.h"
 
 #include "core/atomic_file.h"
+#include "core/path.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -14,20 +15,12 @@
     (fprintf(stderr, "%s: %s %s: ", command, (o)->option, (o)->path), fprintf(stderr, __VA_ARGS__), \
      fputc('\n', stderr), 0)
 
-/* Splits path into its folder ("." when it has none) and its last component. */
+/* Splits path into its folder (ic_path_dirname) and its last component. */
 static void split_path(const char *path, char *dir, size_t dir_size, const char **base)
 {
     const char *slash = strrchr(path, '/');
-    if (!slash) {
-        snprintf(dir, dir_size, ".");
-        *base = path;
-    } else if (slash == path) {
-        snprintf(dir, dir_size, "/");
-        *base = slash + 1;
-    } else {
-        snprintf(dir, dir_size, "%.*s", (int)(slash - path), path);
-        *base = slash + 1;
-    }
+    ic_path_dirname(path, dir, dir_size);
+    *base = slash ? slash + 1 : path;
 }
 
 /* One output on its own; on success canon holds the canonical folder of path and its name, so that two

@@ -1,5 +1,6 @@
 /* atomic_file.c — temporary file + rename (atomic_file.h). */
 #include "atomic_file.h"
+#include "path.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -68,18 +69,6 @@ static long temp_pid(const char *tail)
     return pid > 0 && pid <= INT_MAX ? pid : 0;
 }
 
-/* The folder of path (its text before the last '/'), "." when it has none. */
-static void folder_of(const char *path, char *dir, size_t size)
-{
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        snprintf(dir, size, ".");
-    else if (slash == path)
-        snprintf(dir, size, "/");
-    else
-        snprintf(dir, size, "%.*s", (int)(slash - path), path);
-}
-
 /* Removes the temporaries of path that a dead process left beside it: a SIGKILL (or a crash, or a power
  * cut) during a write runs no handler, so <path>.tmp.<pid>.<n> stays. One is stale when no process has
  * its pid (kill(pid, 0) fails with ESRCH); a live pid keeps its file, even if the pid was reused, so a
@@ -92,7 +81,7 @@ static void remove_stale_temporaries(const char *path)
     char dir[4096];
     if (strlen(path) >= sizeof dir)
         return;
-    folder_of(path, dir, sizeof dir);
+    ic_path_dirname(path, dir, sizeof dir);
     size_t base_len = strlen(base);
     DIR *d = base_len ? opendir(dir) : NULL;
     if (!d)
@@ -120,7 +109,7 @@ static int may_follow(const char *link_path, const struct stat *link)
 {
     char dir[4096];
     struct stat ds;
-    folder_of(link_path, dir, sizeof dir);
+    ic_path_dirname(link_path, dir, sizeof dir);
     if (stat(dir, &ds) != 0 || !(ds.st_mode & S_ISVTX) || !(ds.st_mode & S_IWOTH))
         return 1;
     return link->st_uid == geteuid() || link->st_uid == ds.st_uid;
@@ -132,7 +121,7 @@ static int descriptor_of(const char *link_path)
 {
     char dir[4096], real[4096], own[64];
     const char *base = strrchr(link_path, '/');
-    folder_of(link_path, dir, sizeof dir);
+    ic_path_dirname(link_path, dir, sizeof dir);
     if (!base || !realpath(dir, real))
         return -1;
     int len = snprintf(own, sizeof own, "/proc/%ld/", (long)getpid());

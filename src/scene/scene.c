@@ -38,18 +38,6 @@ const char *ic_path_missing(const char *path)
                                                         : "not found";
 }
 
-void ic_path_dirname(const char *path, char *dir, size_t size)
-{
-    const char *slash = strrchr(path, '/');
-    if (!slash) {
-        snprintf(dir, size, ".");
-    } else if (slash == path) {
-        snprintf(dir, size, "/");
-    } else {
-        snprintf(dir, size, "%.*s", (int)(slash - path), path);
-    }
-}
-
 int ic_path_join(const char *dir, const char *rel, char *out, size_t size)
 {
     char fixed[IC_SCENE_PATH_MAX];

@@ -11,6 +11,8 @@
 
 #include "scene/scene.h"
 
+#include "core/path.h"
+
 #include <stddef.h>
 #include <stdio.h>
 
@@ -164,7 +166,6 @@ int ic_path_exists(const char *path);                  /* regular file that can 
 /* Why ic_path_exists(path) is 0, for messages: "not found", or "is not a regular file (a folder, pipe or
  * device)" where something else is there. */
 const char *ic_path_missing(const char *path);
-void ic_path_dirname(const char *path, char *dir, size_t size); /* "." for a bare name */
 /* dir/rel unless rel is absolute; backslashes in rel become slashes. Returns 0 if it does not fit. */
 int ic_path_join(const char *dir, const char *rel, char *out, size_t size);
 /* Absolute form of path for messages (directory part resolved with realpath where it exists). */
