@@ -83,28 +83,25 @@ def envelope(points):
     return front
 
 
+def log_interp(points, x):
+    """y at x along points (x, y) sorted by x, log-log between neighbours; None outside their range."""
+    if not points or x < points[0][0] or x > points[-1][0]:
+        return None
+    for (x0, y0), (x1, y1) in zip(points, points[1:]):
+        if x0 <= x <= x1:
+            t = (math.log(x) - math.log(x0)) / (math.log(x1) - math.log(x0)) if x1 > x0 else 0.0
+            return math.exp(math.log(y0) + t * (math.log(y1) - math.log(y0)))
+    return points[0][1]  # a single point hit exactly
+
+
 def records_at(front, err):
     """Records (or seconds) the envelope needs to reach error `err` (log-log interpolation); None outside its range."""
-    if not front or err > front[0][1] or err < front[-1][1]:
-        return None
-    for (r0, e0), (r1, e1) in zip(front, front[1:]):
-        if e1 <= err <= e0:
-            if e0 == e1:
-                return r0
-            t = (math.log(err) - math.log(e0)) / (math.log(e1) - math.log(e0))
-            return math.exp(math.log(r0) + t * (math.log(r1) - math.log(r0)))
-    return front[0][0]  # a single-point envelope hit exactly
+    return log_interp([(e, r) for r, e in reversed(front)], err)
 
 
 def error_at(front, records):
     """The error the envelope reaches with `records` records (log-log interpolation); None outside its range."""
-    if not front or records < front[0][0] or records > front[-1][0]:
-        return None
-    for (r0, e0), (r1, e1) in zip(front, front[1:]):
-        if r0 <= records <= r1:
-            t = (math.log(records) - math.log(r0)) / (math.log(r1) - math.log(r0)) if r1 > r0 else 0.0
-            return math.exp(math.log(e0) + t * (math.log(e1) - math.log(e0)))
-    return front[0][1]  # a single-point envelope hit exactly
+    return log_interp(front, records)
 
 
 def main():
