@@ -287,6 +287,19 @@ class AccuracySweepTest(unittest.TestCase):
         self.assertIsNone(accuracy_sweep.records_at([], 1.0))
         self.assertEqual(accuracy_sweep.records_at([(100, 2.0)], 2.0), 100)
 
+    def test_error_at_equal_records(self):
+        # the other reading of the same envelope: the error reached with a given number of records, exact on a
+        # power law, the inverse of records_at, and None outside the envelope's records
+        front = accuracy_sweep.envelope([(r, 1e4 / r ** 2) for r in (100, 200, 400, 800)])
+        for records in (100, 150, 333, 800):
+            self.assertAlmostEqual(accuracy_sweep.error_at(front, records), 1e4 / records ** 2, places=9)
+            self.assertAlmostEqual(accuracy_sweep.records_at(front, accuracy_sweep.error_at(front, records)),
+                                   records, places=6)
+        self.assertIsNone(accuracy_sweep.error_at(front, 99))
+        self.assertIsNone(accuracy_sweep.error_at(front, 801))
+        self.assertIsNone(accuracy_sweep.error_at([], 100))
+        self.assertEqual(accuracy_sweep.error_at([(100, 2.0)], 100), 2.0)
+
 
 def oracle_line(mean, strat, unstrat, neyman, alloc25, alloc100, classes, cells=800):
     """One ORACLE line as bench/gather_oracle.patch prints it."""
