@@ -498,7 +498,7 @@ static ic_result add_records(adaptive *A, phase_times *pt, ic_error *err)
     for (uint32_t k = 0; k < n; ++k)
         gp[k] = ic_ic_gather_point_of(c, &A->cand[k]);
     double t0 = ic_seconds();
-    r = ic_ic_gather_points(c, gp, n, gr, levels, gathered, err);
+    r = ic_ic_gather_points(c, gp, n, gr, levels, NULL, gathered, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     if (r != IC_OK)

@@ -164,6 +164,7 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     free(c->cached_pmf);
     free(c->cached_cdf);
     free(c->level_irr);
+    free(c->record_noise);
     free(c);
 }
 

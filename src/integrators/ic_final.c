@@ -58,7 +58,7 @@ static ic_vec3 cached_irradiance(const ic_ctx *c, const ic_surface *s, const ic_
         *from_cache = 1;
         ic_vec3 E;
         if (depth > 0 && c->levels &&
-            ic_ic_level_estimates(c, contrib, e.contributions_written, level > 0 ? level : 0, 1, &E))
+            ic_ic_level_estimates(c, contrib, e.contributions_written, level > 0 ? level : 0, 1, &E, NULL))
             return E;
         if (mapped && e.contributions_written == e.contributor_count)
             return rotate_to_mapped(c, contrib, e.contributions_written, b->cache_n, n, e.irradiance);

@@ -49,7 +49,7 @@ ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *
 }
 
 int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib, uint32_t count, int first,
-                          int levels, ic_vec3 *E)
+                          int levels, ic_vec3 *E, ic_vec3 *last_terms)
 {
     const int B = c->levels;
     for (int k = 0; k < levels; ++k)
@@ -69,11 +69,15 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
                                  tb.z > 0.0f ? ct->weight * ct->value.z / tb.z : 0.0f);
         for (int k = 0; k < levels; ++k)
             E[k] = v3_add(E[k], v3_mul(scale, T[first + k]));
+        if (last_terms)
+            last_terms[i] = v3_mul(scale, T[first + levels - 1]);
         wsum += ct->weight;
     }
     float inv = wsum > 0.0f ? 1.0f / wsum : 0.0f;
     for (int k = 0; k < levels; ++k)
         E[k] = v3_scale(E[k], inv);
+    for (uint32_t i = 0; last_terms && i < count; ++i)
+        last_terms[i] = v3_scale(last_terms[i], inv);
     return 1;
 }
 
@@ -139,7 +143,7 @@ static void add_glossy_lobe(const ic_ctx *c, const ic_surface *s, const ic_bsdf 
 }
 
 static int read_records(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, ic_vec3 wo, int levels,
-                        ic_rng *rng, uint64_t *rays, ic_vec3 *cum)
+                        ic_rng *rng, uint64_t *rays, ic_vec3 *cum, ic_noise_terms *noise)
 {
     /* A glossy lobe is traced on (add_glossy_lobe) where a diffuse one beside it reads the records; a
      * glossy surface without a diffuse lobe is path traced by the caller. */
@@ -157,10 +161,12 @@ static int read_records(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, 
     ic_cache_estimate e;
     if (!ic_cache_query(c->cache, &q, &e))
         return 0;
-    ic_vec3 E[IC_LEVELS_MAX];
-    if (!ic_ic_level_estimates(c, contrib, e.contributions_written, 0, levels, E))
+    ic_vec3 E[IC_LEVELS_MAX], terms[LOOKUP_CAPACITY];
+    if (!ic_ic_level_estimates(c, contrib, e.contributions_written, 0, levels, E, noise ? terms : NULL))
         return 0; /* a contributor without levels: the caller path-traces, no random number drawn */
     ic_vec3 albedo = v3_scale(b->kd, IC_INV_PI);
+    for (uint32_t i = 0; noise && i < e.contributions_written; ++i)
+        ic_ic_noise_add(noise, contrib[i].record, v3_mul(albedo, terms[i]));
     ic_vec3 direct = ic_ic_direct_light_at_hit(c, s, b, wo, glossy ? IC_GLOSSY_NONE : IC_GLOSSY_FULL, rng, rays);
     for (int k = 1; k <= levels; ++k)
         cum[k] = v3_add(direct, v3_mul(albedo, E[k - 1]));
@@ -170,13 +176,13 @@ static int read_records(const ic_ctx *c, const ic_surface *s, const ic_bsdf *b, 
 }
 
 static int hit_from_cache(const ic_ctx *c, const ic_ray *ray, const ic_hit *hit, ic_rng *rng, uint64_t *rays,
-                          ic_vec3 *cum, ic_surface *s, ic_bsdf *b)
+                          ic_vec3 *cum, ic_surface *s, ic_bsdf *b, ic_noise_terms *noise)
 {
     const ic_scene *scene = c->tr->scene;
     ic_scene_surface(scene, hit->triangle, hit->u, hit->v, s);
     ic_vec3 wo = v3_neg(ray->dir);
     ic_bsdf_init(b, scene, s, wo);
-    return read_records(c, s, b, wo, c->levels, rng, rays, cum);
+    return read_records(c, s, b, wo, c->levels, rng, rays, cum, noise);
 }
 
 /* ic_path_start.cached for the path a hemisphere ray traces from a hit that read no records (a glossy or
@@ -195,7 +201,7 @@ static int later_from_cache(void *user, const ic_surface *s, const ic_bsdf *b, i
 {
     const ic_ctx *c = user;
     ic_vec3 cum[IC_LEVELS_MAX + 1];
-    if (remaining > c->levels || !read_records(c, s, b, wo, remaining, rng, rays, cum))
+    if (remaining > c->levels || !read_records(c, s, b, wo, remaining, rng, rays, cum, NULL))
         return 0;
     cum[0] = v3s(0.0f);
     for (int j = 1; j <= remaining; ++j)
@@ -254,6 +260,7 @@ void ic_ic_gather_worker_release(ic_gather_worker *w)
     free(w->replay.dist);
     free(w->replay.removed);
     memset(&w->replay, 0, sizeof w->replay);
+    ic_ic_noise_release(&w->noise);
 }
 
 /* Hemisphere rays of a record: what they return is described in ic.h. The path after the first hit
@@ -315,7 +322,8 @@ void ic_ic_gather_trace(void *user, const ic_vec3 *origins, const ic_vec3 *dirs,
             ic_surface hs;
             ic_bsdf hb;
             const int looked = c->hit_lookups != 0;
-            if (looked && hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, cum, &hs, &hb)) {
+            if (looked && hit_from_cache(c, &rays[i], &hits[i], &rng, &nrays, cum, &hs, &hb,
+                                         c->track_noise ? &w->noise : NULL)) {
                 radiance[j] = cum[B];
             } else {
                 /* The hit is the path's second vertex (the record is the first): depth 1. Its emission
@@ -491,7 +499,13 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
         w->mis_rays = (float)rays;
         w->mis_lights = (float)ic_ic_emitter_light_samples(rays);
     }
+    w->noise.count = 0;
     ic_result r = gather_sets(w, g, pt, out, levels);
+    if (r == IC_OK && c->track_noise) {
+        if (w->noise.failed)
+            return IC_ERR_OOM;
+        w->noise_var = ic_ic_noise_variance(c, &w->noise, out->ray_count ? IC_PI / (double)out->ray_count : 0.0);
+    }
     if (r == IC_OK && w->mis_lights > 0.0f)
         ic_ic_add_cached_emitter_light(w, pt, out, levels);
     if (r == IC_OK && c->env_mode == IC_ENV_PORTAL_SAMPLES)
@@ -510,6 +524,7 @@ typedef struct gather_job {
     const ic_gather_point *pts;
     ic_gather_result *out;
     ic_vec3 *levels;
+    ic_vec3 *noise;              /* with c->track_noise: per point, ic_gather_worker.noise_var */
     uint8_t *gathered;           /* per point: 1 once gathered */
     uint32_t count;
     atomic_int status;           /* first failure, IC_OK if none */
@@ -532,13 +547,15 @@ static void gather_item(void *p, int64_t item, int thread)
             atomic_compare_exchange_strong(&j->status, &expected, (int)r);
             return;
         }
+        if (j->noise)
+            j->noise[i] = j->workers[thread].noise_var;
         j->gathered[i] = 1;
     }
 }
 
 /* Gathers count points on this process's threads. */
 static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
-                             ic_vec3 *levels, uint8_t *gathered, ic_error *err)
+                             ic_vec3 *levels, ic_vec3 *noise, uint8_t *gathered, ic_error *err)
 {
     if (count == 0)
         return IC_OK;
@@ -551,6 +568,7 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
     j.pts = pts;
     j.out = out;
     j.levels = levels;
+    j.noise = noise;
     j.gathered = gathered;
     j.count = count;
     atomic_init(&j.status, IC_OK);
@@ -584,15 +602,16 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
 typedef struct gather_points_job {
     ic_ctx *c;
     uint8_t *gathered;
-    int has_levels;
+    int has_levels, has_noise;
 } gather_points_job;
 
-/* ic_comm_gather_fn of ic_ic_gather_points: n points into out[0] (results) and out[1] (bounce levels, if
- * kept). */
+/* ic_comm_gather_fn of ic_ic_gather_points: n points into out[0] (results), then out[1] (bounce levels, if
+ * kept), then the next (the noise from the records read, if tracked). */
 static ic_result gather_block(void *user, const void *pts, uint64_t n, void *const *out, ic_error *err)
 {
     gather_points_job *u = user;
-    ic_result r = gather_here(u->c, pts, (uint32_t)n, out[0], u->has_levels ? out[1] : NULL, u->gathered, err);
+    ic_result r = gather_here(u->c, pts, (uint32_t)n, out[0], u->has_levels ? out[1] : NULL,
+                              u->has_noise ? out[1 + u->has_levels] : NULL, u->gathered, err);
     /* The counts a result ends its first order with are read by no one after the gather (its records take
      * the values, the statistics count rays as they are traced): zero, so that they need not travel. */
     ic_gather_result *res = out[0];
@@ -608,10 +627,10 @@ static ic_result gather_block(void *user, const void *pts, uint64_t n, void *con
  * every result, bit for bit what one process would have gathered: a point's result depends only on the
  * seed, its key and the records already in the cache, which every process holds alike. */
 ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
-                              ic_vec3 *levels, uint8_t *gathered, ic_error *err)
+                              ic_vec3 *levels, ic_vec3 *noise, uint8_t *gathered, ic_error *err)
 {
     const int shared = ic_comm_size(c->comm) > 1 && count > 0;
-    gather_points_job u = {c, gathered, levels != NULL};
+    gather_points_job u = {c, gathered, levels != NULL, noise != NULL};
     if (shared) {
         /* Shared: never cancelled (ic_ic_cancelled), so every point is gathered; this rank's own flags
          * go to scratch. */
@@ -621,18 +640,20 @@ ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t co
             return ic_error_set(err, IC_ERR_OOM, "out of memory for %u gather results", count);
     }
     size_t stride = (size_t)c->levels + 1;
-    void *const outs[2] = {out, levels};
-    const size_t sizes[2] = {sizeof *out, sizeof *levels * stride};
+    void *const outs[3] = {out, levels ? (void *)levels : (void *)noise, noise};
+    const size_t sizes[3] = {sizeof *out, levels ? sizeof *levels * stride : sizeof *noise, sizeof *noise};
     /* Without a Hessian the gatherers leave a result's second-order fields (its last 64 bytes) zero, and
      * gather_block its ray and hit counts and convergence flag: they stay home (76 of the 180 bytes). */
     _Static_assert(offsetof(ic_gather_result, has_hessian) + sizeof(int) + 2 * sizeof(ic_vec3) + 9 * sizeof(float) ==
                        sizeof(ic_gather_result), "the second-order fields end the result");
     _Static_assert(offsetof(ic_gather_result, ray_count) + 2 * sizeof(uint32_t) + sizeof(int) ==
                        offsetof(ic_gather_result, has_hessian), "the counts come just before them");
-    const size_t sent[2] = {c->o.gather.with_hessian ? sizeof *out : offsetof(ic_gather_result, ray_count), sizes[1]};
+    const size_t sent[3] = {c->o.gather.with_hessian ? sizeof *out : offsetof(ic_gather_result, ray_count), sizes[1],
+                            sizes[2]};
     uint64_t own;
-    ic_result r = ic_comm_share_gather(c->comm, pts, sizeof *pts, count, levels ? 2 : 1, outs, sizes, sent,
-                                       gather_block, &u, "gather results", &own, err);
+    const int arrays = 1 + (levels != NULL) + (noise != NULL);
+    ic_result r = ic_comm_share_gather(c->comm, pts, sizeof *pts, count, arrays, outs, sizes, sent, gather_block, &u,
+                                       "gather results", &own, err);
     if (shared) {
         c->gathered += own;
         free(u.gathered);
@@ -790,6 +811,21 @@ ic_gather_point ic_ic_gather_point_of(const ic_ctx *c, const ic_candidate *cand)
     return gp;
 }
 
+/* Keeps the variance from the records read (noise) of records first … first + count − 1 in
+ * c->record_noise; the records before them that have none get zero. */
+static ic_result keep_noise(ic_ctx *c, uint32_t first, uint32_t count, const ic_vec3 *noise, ic_error *err)
+{
+    void *a = c->record_noise;
+    if (ic_grow(&a, &c->record_noise_capacity, (size_t)first + count, sizeof *c->record_noise) != IC_OK)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for the records' noise from the records they read");
+    c->record_noise = a;
+    for (uint32_t i = c->record_noise_count; i < first; ++i)
+        c->record_noise[i] = v3s(0.0f);
+    memcpy(&c->record_noise[first], noise, sizeof *noise * count);
+    c->record_noise_count = first + count;
+    return IC_OK;
+}
+
 /* Gathers all candidates in parallel and inserts them as one batch. */
 ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt,
                                    ic_error *err)
@@ -801,16 +837,17 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
     ic_gather_result *res = malloc(sizeof *res * count);
     ic_record *recs = malloc(sizeof *recs * count);
     ic_vec3 *levels = c->levels ? malloc(sizeof *levels * stride * count) : NULL;
+    ic_vec3 *noise = c->track_noise ? malloc(sizeof *noise * count) : NULL;
     uint8_t *gathered = malloc(count);
     ic_result r = IC_OK;
-    if (!pts || !res || !recs || !gathered || (c->levels && !levels)) {
+    if (!pts || !res || !recs || !gathered || (c->levels && !levels) || (c->track_noise && !noise)) {
         r = ic_error_set(err, IC_ERR_OOM, "out of memory for %u cache candidates", count);
         goto done;
     }
     for (uint32_t i = 0; i < count; ++i)
         pts[i] = ic_ic_gather_point_of(c, &cand[i]);
     double t0 = ic_seconds();
-    r = ic_ic_gather_points(c, pts, count, res, levels, gathered, err);
+    r = ic_ic_gather_points(c, pts, count, res, levels, noise, gathered, err);
     double t1 = ic_seconds();
     pt->gather += t1 - t0;
     if (r != IC_OK)
@@ -822,18 +859,23 @@ ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t 
         if (!gathered[i])
             continue;
         ic_ic_record_from_gather(c, &cand[i], &res[k], &recs[k]);
+        if (noise)
+            noise[k] = noise[i];
         ++k;
     }
     uint32_t first = 0;
     r = ic_cache_insert_batch(c->cache, recs, kept, &first, err);
     if (r == IC_OK)
         r = ic_ic_keep_levels(c, first, kept, levels, err);
+    if (r == IC_OK && noise)
+        r = keep_noise(c, first, kept, noise, err);
     pt->insert += ic_seconds() - t1;
 done:
     free(pts);
     free(res);
     free(recs);
     free(levels);
+    free(noise);
     free(gathered);
     return r;
 }

@@ -158,6 +158,13 @@ static ic_result probe_pass(ic_ctx *c, probe_job *j, uint32_t probes, ic_candida
     return IC_OK;
 }
 
+/* Fewest θ strata of a hit record that keeps gradients. Its translational gradient is a sum over the
+ * walls between strata, and from two or three rings it came out biased: the sky-room's 20 sensors, whose
+ * rays read such records (800 rays, hit records of 2 × 7 strata), read 2.8 % low on average over eight
+ * seeds; with 4 × 13 strata 0.4 % (within the seeds' spread), and with the gradients left out 0.9 % high
+ * (BENCHMARKS.md, "The sensors' σ and the records they read"). */
+#define HIT_GRADIENT_MIN_THETA 4u
+
 /* A record's rays then read the irradiance at their hits from these records (ic_ic_gather_trace's
  * look-ups) instead of tracing a path each. Each pass traces HIT_PROBES cosine-distributed rays from
  * every point (at most HIT_PROBES_MAX in all, spread evenly over the points); the diffuse hits that no
@@ -213,6 +220,10 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         uint32_t N = keep.phi_strata ? keep.phi_strata : (uint32_t)lround((double)IC_PI * M);
         c->o.gather.theta_strata = (M + strata_div - 1) / strata_div;
         c->o.gather.phi_strata = (N + strata_div - 1) / strata_div;
+        if (gradients && c->o.gather.theta_strata < HIT_GRADIENT_MIN_THETA && M >= HIT_GRADIENT_MIN_THETA) {
+            c->o.gather.theta_strata = HIT_GRADIENT_MIN_THETA;
+            c->o.gather.phi_strata = (uint32_t)lround((double)IC_PI * HIT_GRADIENT_MIN_THETA);
+        }
         c->record_bounce = bounce;
         int keep_no_gradients = c->o.no_gradients;
         c->o.no_gradients = keep_no_gradients || !gradients;

@@ -64,6 +64,12 @@ typedef struct ic_ctx {
     int hit_kind;              /* ≥ 0: hemisphere rays' look-ups that no bounce-0 record accepts take the
                                   records of this bounce field (an image's hit stage; one look-up for both,
                                   ic_cache_lookup.fallback); −1: none */
+    int track_noise;           /* the records gathered now also get the variance their rays take from
+                                  the records they read (ic_record_noise.c) into record_noise */
+    ic_vec3 *record_noise;     /* per record (record_noise_count of them): that variance; zero for records
+                                  gathered without track_noise */
+    uint32_t record_noise_count;
+    size_t record_noise_capacity;
     uint8_t env_mode;          /* how the records gathered now take the environment their rays escape
                                   to: IC_ENV_IN_RAYS, IC_ENV_AT_POINT or IC_ENV_PORTAL_SAMPLES */
     double deadline;           /* ic_seconds() past which batch and adaptive construction stop (a time
@@ -129,6 +135,24 @@ typedef struct ic_gather_replay {
     ic_vec3 *removed;
 } ic_gather_replay;
 
+/* The reads of one record's rays from other records, for the part of its noise that comes from them
+ * (ic_record_noise.c): per read, the record read and how much of its value the ray passed on. */
+typedef struct ic_noise_term {
+    uint32_t record, order;
+    ic_vec3 coef;
+} ic_noise_term;
+typedef struct ic_noise_terms {
+    ic_noise_term *terms;
+    size_t count, capacity;
+    int failed;                /* an allocation failed (reported by ic_ic_gather_one) */
+} ic_noise_terms;
+/* Appends a read of record `record` that added coef ⊙ E_record's relative change to a ray's radiance. */
+void ic_ic_noise_add(ic_noise_terms *t, uint32_t record, ic_vec3 coef);
+/* Var of a record's E from the reads t holds, E = scale · Σ_rays radiance (π/N for N cosine-distributed
+ * rays): Σ_j (scale · Σ coef_j)² (σ_j/E_j)² per channel, σ_j and E_j record j's own. Empties t. */
+ic_vec3 ic_ic_noise_variance(const ic_ctx *c, ic_noise_terms *t, double scale);
+void ic_ic_noise_release(ic_noise_terms *t);
+
 /* What one gathering thread's trace callback needs: the context and, with c->levels, the sums over
  * the current point's rays of their radiance split by bounce level (cumulative: sum[k] holds light of at
  * most k bounces after the record, sum[levels] all of it). The caller zeroes sum before each point. */
@@ -140,6 +164,8 @@ typedef struct ic_gather_worker {
     const ic_gather_point *pt;
     float mis_rays, mis_lights;
     ic_gather_replay replay;
+    ic_noise_terms noise;      /* with c->track_noise: the current point's reads of other records */
+    ic_vec3 noise_var;         /* with c->track_noise: the last point's variance from those reads */
 } ic_gather_worker;
 /* Frees a worker's replay buffers (its other fields are not owned). */
 void ic_ic_gather_worker_release(ic_gather_worker *w);
@@ -168,9 +194,10 @@ uint32_t ic_ic_emitter_light_samples(uint32_t rays);
  * seed and its key, never on the thread count); levels: (c->levels + 1) entries per point, or NULL.
  * gathered[i] is set to 1 for each point gathered; once the render is cancelled (ic_ic_cancelled) or
  * construction's time is up (ic_ic_past_deadline) the points not yet begun are skipped (0), so that an
- * interrupt or the deadline stops a pass within a few gathers. */
+ * interrupt or the deadline stops a pass within a few gathers. With c->track_noise, noise (one entry per
+ * point, else NULL) gets each point's variance from the records its rays read (ic_record_noise.c). */
 ic_result ic_ic_gather_points(ic_ctx *c, const ic_gather_point *pts, uint32_t count, ic_gather_result *out,
-                              ic_vec3 *levels, uint8_t *gathered, ic_error *err);
+                              ic_vec3 *levels, ic_vec3 *noise, uint8_t *gathered, ic_error *err);
 /* Moves the results (and level splits, levels may be NULL) of the points gathered[i] marks to the front,
  * in order; returns how many there are. */
 uint32_t ic_ic_keep_gathered(const ic_ctx *c, const uint8_t *gathered, uint32_t count, ic_gather_result *res,
@@ -324,9 +351,10 @@ ic_vec3 ic_ic_cached_emission(const ic_ctx *c, const ic_ray *ray, const ic_hit *
 /* The interpolation of levels T_first … T_{first+levels−1} (ic_ctx.level_irr) over the contributions of
  * one look-up, into E[0 … levels−1]: each contributor's value scaled per channel by T_k / E_i, with the
  * full estimate's weights. Returns 0 (E unset) when a contributor has no levels (a cache file
- * from before the levels were saved with it). */
+ * from before the levels were saved with it). last_terms (may be NULL): per contributor, its share of
+ * E[levels − 1]. */
 int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib, uint32_t count, int first,
-                          int levels, ic_vec3 *E);
+                          int levels, ic_vec3 *E, ic_vec3 *last_terms);
 /* Chooses the large emitters the records carry (ic_emitters.c): a collective call under several processes. */
 ic_result ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s, ic_error *err);
 /* Hash of everything a record's value depends on besides the cache parameters (the cache file's
@@ -421,18 +449,25 @@ void ic_ic_sensor(const ic_scene *scene, ic_vec3 p, ic_vec3 n, ic_surface *s, ic
 /* A context for sensor points: opt resolved as for a render, lazy, every emitter light-sampled, no record
  * filter, no cache files, and no shading points of the camera. */
 ic_result ic_ic_points_ctx_create(const ic_tracer *tr, const ic_render_options *opt, ic_ctx **out, ic_error *err);
+/* The sensors' records' noise model (ic_ic_points_build): the relative variance (σ_i/E_i)² of R, G, B and
+ * luminance pooled over the records, and the values below which a record is dark and keeps its own σ. */
+typedef struct ic_points_noise {
+    double rel_var[4];
+    double dark[4];
+} ic_points_noise;
+/* The noise model of the sensor records first … records − 1 from their own σ (ic_points.c). */
+ic_result ic_ic_points_pool(const ic_ctx *c, uint32_t first, uint32_t records, ic_points_noise *noise, ic_error *err);
 /* Construction over the sensors (p[i], unit n[i]): first, with hit look-ups, records where the sensors'
  * hemisphere rays land (*hit_records of them, a kind apart from the sensors'); then in passes, the points
  * no sensor record covers, in input order, each unless it lies within reach of one taken before it in the
  * pass; the pass's records gathered in parallel and inserted as one batch (the records do not depend on
- * the thread count); freezes the cache. rel_var gets the sensor records' mean relative variance
- * (σ_i/E_i)² of R, G, B and luminance. */
-ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
+ * the thread count); freezes the cache; fills noise. */
+ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_points_noise *noise,
                              uint32_t *hit_records, ic_error *err);
 /* The interpolated irradiance at (p, n) (environment and indirect light) and the σ of R, G, B and luminance
- * (Radiance's weights), each record's σ being rel_var's relative σ times its value; 0 if no record
- * contributes. */
-int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const double rel_var[4], ic_vec3 *E,
+ * (Radiance's weights): the noise of the records' own rays (noise) and of the records those read
+ * (ic_ctx.record_noise); 0 if no record contributes. */
+int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_points_noise *noise, ic_vec3 *E,
                           double sigma[4]);
 
 #endif

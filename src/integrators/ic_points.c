@@ -10,6 +10,7 @@
 #include "irrcache/points.h"
 
 #include "core/sampling.h"
+#include "core/select.h"
 #include "integrators/ic_world.h"
 
 #include <math.h>
@@ -18,9 +19,10 @@
 #include <string.h>
 
 #define POINT_KEY_TAG 0x73656e736f72ULL /* keys of sensor records, apart from the image's */
-/* The hit records' strata: a sensor record's over this, in θ and in φ (1/64 of its rays). A sensor's
- * rays read hundreds of them, so their noise averages out; measured on the overcast sky-room
- * (BENCHMARKS.md, "A daylit room"), 1/16 and 1/256 of the rays both took longer to a 2 % error. */
+/* The hit records' strata: a sensor record's over this, in θ and in φ (1/64 of its rays; at least 4 × 13,
+ * ic_hit_stage.c). A sensor's rays read hundreds of them, so their noise averages out; measured on the
+ * overcast sky-room (BENCHMARKS.md, "A daylit room"), 1/16 and 1/256 of the rays both took longer to a 2 %
+ * error. */
 #define HIT_STRATA_DIV 8
 #define MAX_ROUNDS 8                    /* most records gathered at one point (neighbour clamping) */
 #define CONTRIBUTION_CAPACITY 256
@@ -33,6 +35,30 @@
  * (repeat_variance). */
 #define VARIANCE_DOF IC_POINT_REPLICATES
 #define REPEAT_KEY_TAG 0x726570656174ULL /* keys of the repeated gathers, apart from the records' own */
+/* Records below this fraction of the median sensor record are left out of the pooled relative variance
+ * and keep their own σ (ic_ic_points_build). Measured on the Cornell box's grids and the sky-room's
+ * (BENCHMARKS.md, "The sensors' σ and the records they read"): the 2σ coverage of 11 × 11 sensors facing
+ * the floor went from 96 % with σ 10 times the seeds' spread to 94.6 % with σ equal to it, the others
+ * unchanged. */
+#define DARK_FRACTION 0.05
+
+/* Record i's irradiance and own σ as R, G, B and luminance; 0 if it cannot be read. A record's channels
+ * share its rays: the σ of its luminance is bounded by the weighted sum. */
+static int sensor_record(const ic_ctx *c, uint32_t i, double e[4], double sg[4])
+{
+    ic_record rec;
+    if (ic_cache_get_record(c->cache, i, &rec) != IC_OK)
+        return 0;
+    e[0] = rec.irradiance.x;
+    e[1] = rec.irradiance.y;
+    e[2] = rec.irradiance.z;
+    e[3] = IC_LUMINANCE_R * e[0] + IC_LUMINANCE_G * e[1] + IC_LUMINANCE_B * e[2];
+    sg[0] = rec.sigma.x;
+    sg[1] = rec.sigma.y;
+    sg[2] = rec.sigma.z;
+    sg[3] = IC_LUMINANCE_R * sg[0] + IC_LUMINANCE_G * sg[1] + IC_LUMINANCE_B * sg[2];
+    return 1;
+}
 
 void ic_ic_sensor(const ic_scene *scene, ic_vec3 p, ic_vec3 n, ic_surface *s, ic_bsdf *b)
 {
@@ -156,13 +182,52 @@ static void grid_add(taken_grid *g, const ic_vec3 *pts, uint32_t i)
     *head = i + 1;
 }
 
+/* A record's own σ is one half-set difference |E − E_half| (one degree of freedom): on its own it is often
+ * far from the truth, and a σ built from it alone covered the error at 2σ for about 80 % of the points.
+ * Records made with the same rays have about the same relative noise, so its mean square over the records
+ * (an unbiased estimate of the relative variance) serves every record; but not over the nearly dark ones
+ * (below DARK_FRACTION of the median record), whose relative noise is of another order and says nothing
+ * of the rest: one sensor inside a box, at 10⁻⁵ of the others and σ/E = 3, had raised every sensor's σ
+ * tenfold. A dark record keeps its own σ (ic_ic_points_indirect). */
+ic_result ic_ic_points_pool(const ic_ctx *c, uint32_t first, uint32_t records, ic_points_noise *noise, ic_error *err)
+{
+    memset(noise, 0, sizeof *noise);
+    const uint32_t sensors = records > first ? records - first : 0;
+    if (sensors == 0)
+        return IC_OK;
+    float *value = malloc(sizeof *value * sensors);
+    if (!value)
+        return ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensor records", sensors);
+    for (int ch = 0; ch < 4; ++ch) {
+        uint32_t lit = 0;
+        for (uint32_t k = first; k < records; ++k) {
+            double e[4], sg[4];
+            if (sensor_record(c, k, e, sg) && e[ch] > 0.0)
+                value[lit++] = (float)e[ch];
+        }
+        noise->dark[ch] = lit ? DARK_FRACTION * ic_kth_smallest(value, lit, lit / 2) : 0.0;
+        double sum = 0.0;
+        uint32_t used = 0;
+        for (uint32_t k = first; k < records; ++k) {
+            double e[4], sg[4];
+            if (sensor_record(c, k, e, sg) && e[ch] > 0.0 && e[ch] >= noise->dark[ch]) {
+                sum += (sg[ch] / e[ch]) * (sg[ch] / e[ch]);
+                ++used;
+            }
+        }
+        noise->rel_var[ch] = used ? sum / used : 0.0;
+    }
+    free(value);
+    return IC_OK;
+}
+
 /* The relative variance of a sensor record's E (R, G, B, luminance) from its spread over independent gathers
  * at the records first … records − 1 themselves: each is gathered again ⌈VARIANCE_DOF / records⌉ times
  * (keys of its own), and a record with its repeats, m + 1 values of mean Ē, adds Σ (E_j − Ē)² / Ē² and m
  * degrees of freedom to the pool. With few records their half-set differences (one degree of freedom each)
  * are too few: a single sideways sensor on an open plane under a uniform sky, whose one record's σ then
  * set the interpolation's, fell within 2σ of the closed form at 25 of 40 seeds. */
-static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, double rel_var[4], ic_error *err)
+static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, ic_points_noise *noise, ic_error *err)
 {
     uint32_t n = records - first, m = (VARIANCE_DOF + n - 1) / n, total = n * m;
     ic_record *rec = malloc(sizeof *rec * n);
@@ -188,7 +253,7 @@ static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, do
     if (r == IC_OK) {
         c->record_bounce = SENSOR_BOUNCE;
         c->env_mode = IC_ENV_AT_POINT;
-        r = ic_ic_gather_points(c, pts, total, res, NULL, gathered, err);
+        r = ic_ic_gather_points(c, pts, total, res, NULL, NULL, gathered, err);
         c->record_bounce = 0;
         c->env_mode = IC_ENV_PORTAL_SAMPLES;
     }
@@ -210,7 +275,7 @@ static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, do
         }
         for (int ch = 0; ch < 4 && got > 1; ++ch) {
             mean[ch] /= got;
-            if (!(mean[ch] > 0.0))
+            if (!(mean[ch] > 0.0) || mean[ch] < noise->dark[ch])
                 continue;
             for (uint32_t j = 0; j < got; ++j)
                 sum[ch] += (v[j][ch] - mean[ch]) * (v[j][ch] - mean[ch]) / (mean[ch] * mean[ch]);
@@ -218,7 +283,7 @@ static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, do
         }
     }
     for (int ch = 0; ch < 4 && r == IC_OK; ++ch)
-        rel_var[ch] = dof[ch] > 0.0 ? sum[ch] / dof[ch] : 0.0;
+        noise->rel_var[ch] = dof[ch] > 0.0 ? sum[ch] / dof[ch] : 0.0;
     free(rec);
     free(pts);
     free(res);
@@ -226,7 +291,7 @@ static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, do
     return r;
 }
 
-ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, double rel_var[4],
+ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_points_noise *noise,
                              uint32_t *hit_records, ic_error *err)
 {
     /* A record accepts a look-up only within a_i·R_i of itself (both weights' distance term), and R_i is at
@@ -290,7 +355,9 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
             break;
         c->record_bounce = SENSOR_BOUNCE;
         c->env_mode = IC_ENV_AT_POINT;
+        c->track_noise = 1;
         r = ic_ic_gather_and_insert(c, cand, taken, &times, err);
+        c->track_noise = 0;
         c->record_bounce = 0;
         c->env_mode = IC_ENV_PORTAL_SAMPLES;
     }
@@ -301,36 +368,16 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
     free(grid.next);
     if (r == IC_OK)
         r = ic_cache_freeze(c->cache, err);
-    /* A record's own σ is one half-set difference |E − E_half| (one degree of freedom): on its own it is
-     * often far from the truth, and a σ built from it alone covered the error at 2σ for about 80 % of the
-     * points. Records made with the same rays have about the same relative noise, so its mean square over
-     * all records (an unbiased estimate of the relative variance) serves every record. */
-    double sum[4] = {0.0, 0.0, 0.0, 0.0};
-    uint32_t used[4] = {0, 0, 0, 0};
     uint32_t records = r == IC_OK ? ic_cache_count(c->cache) : 0;
-    for (uint32_t k = first_sensor_record; k < records; ++k) { /* the sensors' records */
-        ic_record rec;
-        if (ic_cache_get_record(c->cache, k, &rec) != IC_OK)
-            continue;
-        double e[4] = {rec.irradiance.x, rec.irradiance.y, rec.irradiance.z, 0.0};
-        double sg[4] = {rec.sigma.x, rec.sigma.y, rec.sigma.z, 0.0};
-        e[3] = IC_LUMINANCE_R * e[0] + IC_LUMINANCE_G * e[1] + IC_LUMINANCE_B * e[2];
-        /* A record's channels share its rays: the σ of its luminance is bounded by the weighted sum. */
-        sg[3] = IC_LUMINANCE_R * sg[0] + IC_LUMINANCE_G * sg[1] + IC_LUMINANCE_B * sg[2];
-        for (int ch = 0; ch < 4; ++ch)
-            if (e[ch] > 0.0) {
-                sum[ch] += (sg[ch] / e[ch]) * (sg[ch] / e[ch]);
-                ++used[ch];
-            }
-    }
-    for (int ch = 0; ch < 4; ++ch)
-        rel_var[ch] = used[ch] ? sum[ch] / used[ch] : 0.0;
-    if (r == IC_OK && records > first_sensor_record && records - first_sensor_record < VARIANCE_DOF)
-        r = repeat_variance(c, first_sensor_record, records, rel_var, err);
+    const uint32_t sensors = records > first_sensor_record ? records - first_sensor_record : 0;
+    if (r == IC_OK)
+        r = ic_ic_points_pool(c, first_sensor_record, records, noise, err);
+    if (r == IC_OK && sensors > 0 && sensors < VARIANCE_DOF)
+        r = repeat_variance(c, first_sensor_record, records, noise, err);
     return r;
 }
 
-int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const double rel_var[4], ic_vec3 *E,
+int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_points_noise *noise, ic_vec3 *E,
                           double sigma[4])
 {
     ic_cache_contribution contrib[CONTRIBUTION_CAPACITY];
@@ -342,23 +389,32 @@ int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const double re
     if (!ic_cache_query(c->cache, &q, &e))
         return 0;
     *E = e.irradiance;
-    /* The estimate is Σ w_i E_i / Σ w_i over records whose noise is independent (each gathered its own
-     * rays): its variance is Σ w_i² σ_i² / (Σ w_i)², σ_i the record's relative σ (rel_var) times its value.
-     * Only the first CONTRIBUTION_CAPACITY contributors are weighed; the rest, if any, change the weights
-     * little. */
-    double var[4] = {0.0, 0.0, 0.0, 0.0}, wsum = 0.0;
+    /* The estimate is Σ w_i E_i / Σ w_i. A record's noise has two parts. That of its own rays is
+     * independent of its neighbours' (each gathered its own): Σ w_i² σ_i² / (Σ w_i)², σ_i the pooled
+     * relative σ times its value (a dark record's own σ). That of the records its rays read (c->record_noise) is shared
+     * with its neighbours, which read the same ones: taken as fully correlated, its σ is Σ w_i s_i / Σ w_i
+     * (the bound; neighbours 1–2 records apart read mostly the same records). Only the first
+     * CONTRIBUTION_CAPACITY contributors are weighed; the rest, if any, change the weights little. */
+    double var[4] = {0.0, 0.0, 0.0, 0.0}, shared[4] = {0.0, 0.0, 0.0, 0.0}, wsum = 0.0;
     for (uint32_t k = 0; k < e.contributions_written; ++k) {
-        ic_record rec;
-        if (ic_cache_get_record(c->cache, contrib[k].record, &rec) != IC_OK)
+        const uint32_t i = contrib[k].record;
+        double v[4], own[4];
+        if (!sensor_record(c, i, v, own))
             continue;
         double w = contrib[k].weight;
-        double v[4] = {rec.irradiance.x, rec.irradiance.y, rec.irradiance.z, 0.0};
-        v[3] = IC_LUMINANCE_R * v[0] + IC_LUMINANCE_G * v[1] + IC_LUMINANCE_B * v[2];
         for (int ch = 0; ch < 4; ++ch)
-            var[ch] += w * w * rel_var[ch] * v[ch] * v[ch];
+            var[ch] += w * w * (v[ch] < noise->dark[ch] ? own[ch] * own[ch] : noise->rel_var[ch] * v[ch] * v[ch]);
+        if (i < c->record_noise_count) {
+            const ic_vec3 sv = c->record_noise[i];
+            double s[4] = {sqrt(fmax(sv.x, 0.0f)), sqrt(fmax(sv.y, 0.0f)), sqrt(fmax(sv.z, 0.0f)), 0.0};
+            /* The channels read the same records with the same rays: the luminance's σ is their sum. */
+            s[3] = IC_LUMINANCE_R * s[0] + IC_LUMINANCE_G * s[1] + IC_LUMINANCE_B * s[2];
+            for (int ch = 0; ch < 4; ++ch)
+                shared[ch] += w * s[ch];
+        }
         wsum += w;
     }
     for (int ch = 0; ch < 4; ++ch)
-        sigma[ch] = wsum > 0.0 ? sqrt(var[ch]) / wsum : 0.0;
+        sigma[ch] = wsum > 0.0 ? sqrt(var[ch] + shared[ch] * shared[ch]) / wsum : 0.0;
     return 1;
 }

@@ -86,7 +86,7 @@ typedef struct points_job {
     int samples;               /* pt: paths; ic: light samples */
     _Atomic uint32_t uncovered; /* lowest point no record covered, + 1 (0: none); the lowest, so that the
                                    message does not depend on which thread found one first */
-    double rel_var[4];         /* ic: the records' relative variance (R, G, B, luminance) */
+    ic_points_noise noise;     /* ic: the records' pooled relative variance (R, G, B, luminance) */
 } points_job;
 
 /* One sample of E at sensor i (surface s, BSDF b): π times the white receiver's reflected radiance. */
@@ -194,7 +194,7 @@ static void point_ic(void *ctx, int64_t item, int thread)
     uint32_t i = job->first + (uint32_t)item;
     ic_vec3 E_cache;
     double sc[4];
-    if (!ic_ic_points_indirect(job->ic, job->p[i], job->n[i], job->rel_var, &E_cache, sc)) {
+    if (!ic_ic_points_indirect(job->ic, job->p[i], job->n[i], &job->noise, &E_cache, sc)) {
         /* Construction leaves every sensor covered; a point it missed is reported, not guessed. */
         uint32_t seen = atomic_load(&job->uncovered);
         while ((seen == 0 || seen > i + 1) && !atomic_compare_exchange_weak(&job->uncovered, &seen, i + 1)) {
@@ -331,7 +331,7 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
         ro.comm = opt.comm;
         r = ic_ic_points_ctx_create(&tr, &ro, &ic, err);
         if (r == IC_OK)
-            r = ic_ic_points_build(ic, p, n, count, job.rel_var, &st->hit_records, err);
+            r = ic_ic_points_build(ic, p, n, count, &job.noise, &st->hit_records, err);
         if (r == IC_OK) {
             st->records = ic_cache_count(ic->cache) - st->hit_records;
             gather_rays = (uint64_t)atomic_load(&ic->rays);

@@ -82,7 +82,7 @@ static int gather(ic_ctx *c, const ic_gather_point *at, int mis, int threads, do
     c->emitter_mis = mis;
     c->threads = threads;
     ic_error err = {0};
-    ok = ok && ic_ic_gather_points(c, pts, KEYS, res, NULL, done, &err) == IC_OK;
+    ok = ok && ic_ic_gather_points(c, pts, KEYS, res, NULL, NULL, done, &err) == IC_OK;
     for (uint32_t k = 0; ok && k < KEYS; ++k)
         out[k] = done[k] ? v3_lum(res[k].irradiance) : NAN;
     if (ok && keep)
