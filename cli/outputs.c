@@ -69,7 +69,10 @@ static int check_one(const char *command, const ic_cli_output *o, char *canon, s
     ic_atomic_file f;
     ic_error err;
     if (ic_atomic_file_open(&f, o->path, &err) != IC_OK)
-        return FAIL(o, "cannot create a file in folder %s (%s); choose a writable folder", dir, strerror(errno));
+        return errno == ENAMETOOLONG
+                   ? FAIL(o, "file name too long for folder %s (most file systems take a name of up to %d bytes); "
+                          "use a shorter name", dir, NAME_MAX)
+                   : FAIL(o, "cannot create a file in folder %s (%s); choose a writable folder", dir, strerror(errno));
     ic_atomic_file_abort(&f);
     char real[PATH_MAX];
     if (!realpath(dir, real))

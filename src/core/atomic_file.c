@@ -8,6 +8,7 @@
 #include <limits.h>
 #include <signal.h>
 #include <stdatomic.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -69,19 +70,74 @@ static long temp_pid(const char *tail)
     return pid > 0 && pid <= INT_MAX ? pid : 0;
 }
 
-/* Removes the temporaries of path that a dead process left beside it: a SIGKILL (or a crash, or a power
- * cut) during a write runs no handler, so <path>.tmp.<pid>.<n> stays. One is stale when no process has
- * its pid (kill(pid, 0) fails with ESRCH); a live pid keeps its file, even if the pid was reused, so a
- * concurrent writer of the same output on this machine is never disturbed. Only regular files named
- * exactly so are removed. */
-static void remove_stale_temporaries(const char *path)
+/* The longest tail a temporary's name adds: ".tmp." and a pid and a counter of up to 10 digits each. */
+#define TEMP_TAIL_MAX 26
+/* What a shortened name ends in: "~" and 16 hex digits of a hash of the whole name. */
+#define SHORT_MARK 17
+
+/* The longest name a file in dir may have: its file system's (pathconf; eCryptfs takes 143 bytes), at most
+ * NAME_MAX (255 bytes), NAME_MAX where the folder cannot say. */
+static size_t name_max_in(const char *dir)
 {
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
+    long n = pathconf(dir, _PC_NAME_MAX);
+    return n > 0 && n < NAME_MAX ? (size_t)n : NAME_MAX;
+}
+
+/* The temporaries' names of the file target are <stem>.tmp.<pid>.<n>; the stem is target itself or, where
+ * its name and that tail could exceed the longest name its folder takes (a legal 240-byte name: the open
+ * failed with ENAMETOOLONG, so the file could not be written at all), target's folder and its name cut at a
+ * UTF-8 character's start, then "~" and 16 hex digits of a hash (FNV-1a) of the whole name, so that two long
+ * names that begin alike keep apart. The folder stays (the rename must stay on one file system); only target
+ * decides the stem, never the process, so the temporaries a dead process left are found by it. 0, or
+ * ENAMETOOLONG when target's own name is too long for its folder: refused now, not at the rename after all
+ * the work. */
+static int temp_stem(const char *target, char *out, size_t out_size)
+{
+    const char *slash = strrchr(target, '/');
+    const char *base = slash ? slash + 1 : target;
+    size_t base_len = strlen(base), name_max;
     char dir[4096];
-    if (strlen(path) >= sizeof dir)
+    ic_path_dirname(target, dir, sizeof dir);
+    name_max = name_max_in(dir);
+    if (base_len > name_max)
+        return ENAMETOOLONG;
+    if (base_len + TEMP_TAIL_MAX <= name_max || name_max <= TEMP_TAIL_MAX + SHORT_MARK)
+        return snprintf(out, out_size, "%s", target) < (int)out_size ? 0 : ENAMETOOLONG;
+    size_t keep = name_max - TEMP_TAIL_MAX - SHORT_MARK;
+    while (keep > 0 && ((unsigned char)base[keep] & 0xC0) == 0x80) /* a UTF-8 continuation byte */
+        --keep;
+    uint64_t hash = 14695981039346656037u;
+    for (size_t i = 0; i < base_len; ++i)
+        hash = (hash ^ (unsigned char)base[i]) * 1099511628211u;
+    return snprintf(out, out_size, "%.*s%.*s~%016llx", (int)(base - target), target, (int)keep, base,
+                    (unsigned long long)hash) < (int)out_size ? 0 : ENAMETOOLONG;
+}
+
+/* Whether stem is a shortened one (temp_stem): it ends in "~" and 16 lower-case hex digits. */
+static int is_shortened(const char *stem)
+{
+    size_t n = strlen(stem);
+    if (n < SHORT_MARK || stem[n - SHORT_MARK] != '~')
+        return 0;
+    for (const char *c = stem + n - SHORT_MARK + 1; *c; ++c)
+        if (!((*c >= '0' && *c <= '9') || (*c >= 'a' && *c <= 'f')))
+            return 0;
+    return 1;
+}
+
+/* Removes the temporaries of the file whose stem (temp_stem) is stem that a dead process left beside it: a
+ * SIGKILL (or a crash, or a power cut) during a write runs no handler, so <stem>.tmp.<pid>.<n> stays. One is
+ * stale when no process has its pid (kill(pid, 0) fails with ESRCH); a live pid keeps its file, even if the
+ * pid was reused, so a concurrent writer of the same output on this machine is never disturbed. Only regular
+ * files named exactly so are removed: a shortened stem finds the shortened names it gave. */
+static void remove_stale_temporaries(const char *stem)
+{
+    const char *slash = strrchr(stem, '/');
+    const char *base = slash ? slash + 1 : stem;
+    char dir[4096];
+    if (strlen(stem) >= sizeof dir)
         return;
-    ic_path_dirname(path, dir, sizeof dir);
+    ic_path_dirname(stem, dir, sizeof dir);
     size_t base_len = strlen(base);
     DIR *d = base_len ? opendir(dir) : NULL;
     if (!d)
@@ -175,23 +231,39 @@ int ic_atomic_target(const char *path, char *out, size_t out_size)
     return follow_links(path, out, out_size, NULL);
 }
 
-/* Names and creates the temporary of path, beside the file it leads to: <target>.tmp.<pid>.<n>, created
- * exclusively (O_EXCL), so that what already has the name is never opened: the name is predictable, and a
- * link planted there (another user's, in a shared folder such as /tmp, where fs.protected_symlinks may be
- * off) would have had the output written into the file it leads to. A name taken is passed over. The
+/* The file writing path replaces, into target (4096 bytes): a loop of links or a target too long to name
+ * gives the link's own name (the open or rename says why it fails). */
+static void temp_target(const char *path, char *target)
+{
+    if (ic_atomic_target(path, target, 4096) != 0 || strlen(target) + 32 >= 4096)
+        snprintf(target, 4096, "%s", path);
+}
+
+/* Names and creates the temporary of path, beside the file it leads to: <stem>.tmp.<pid>.<n> (temp_stem),
+ * created exclusively (O_EXCL), so that what already has the name is never opened: the name is predictable,
+ * and a link planted there (another user's, in a shared folder such as /tmp, where fs.protected_symlinks may
+ * be off) would have had the output written into the file it leads to. A name taken is passed over. The
  * descriptor, or -1 with errno (nothing created, out not registered). */
 static int create_temp(const char *path, char *out, size_t out_size)
 {
-    char target[4096];
-    /* A loop of links or a target too long to name: the link's own name (the open or rename says why it fails). */
-    if (ic_atomic_target(path, target, sizeof target) != 0 || strlen(target) + 32 >= out_size)
-        snprintf(target, sizeof target, "%s", path);
-    remove_stale_temporaries(target);
+    char target[4096], stem[4096];
+    temp_target(path, target);
+    int e = temp_stem(target, stem, sizeof stem);
+    if (e != 0) {
+        errno = e;
+        return -1;
+    }
+    remove_stale_temporaries(stem);
+    /* Replacing a file, the temporary is its owner's alone until it takes that file's permissions
+     * (keep_permissions): created readable by others, it could be opened by someone the file kept out, who
+     * would then read what is written. A new file takes 0666 & ~umask, as fopen gives. */
+    struct stat old;
+    mode_t mode = lstat(target, &old) == 0 && S_ISREG(old.st_mode) ? 0600 : 0666;
     for (int tries = 0;; ++tries) {
         unsigned n = atomic_fetch_add(&tmp_counter, 1u);
-        snprintf(out, out_size, "%s.tmp.%ld.%u", target, (long)getpid(), n);
+        snprintf(out, out_size, "%s.tmp.%ld.%u", stem, (long)getpid(), n);
         temp_register(out); /* before it exists: a signal from now on removes it */
-        int fd = open(out, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        int fd = open(out, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
         int e = errno;
         if (fd >= 0)
             return fd;
@@ -212,16 +284,27 @@ int ic_atomic_temp_name(const char *path, char *out, size_t out_size)
 }
 
 /* The file a temporary takes the place of: its name less ".tmp.<pid>.<n>" (ic_atomic_temp_name), which
- * is path or, when path is a symbolic link, the file it leads to. */
-static void final_name(const char *tmp, const char *path, char *out, size_t out_size)
+ * is path or, when path is a symbolic link, the file it led to when the write began. A shortened name
+ * (temp_stem) cannot say its file: that is the one path leads to now, whose stem it must be. 0, or -1 when
+ * it is not (path's link was changed during the write to lead elsewhere). */
+static int final_name(const char *tmp, const char *path, char *out, size_t out_size)
 {
     const char *tail = NULL;
     for (const char *t = strstr(tmp, ".tmp."); t; t = strstr(t + 1, ".tmp."))
         tail = t;
-    if (tail && temp_pid(tail + 5))
-        snprintf(out, out_size, "%.*s", (int)(tail - tmp), tmp);
-    else
+    if (!tail || !temp_pid(tail + 5)) {
         snprintf(out, out_size, "%s", path);
+        return 0;
+    }
+    snprintf(out, out_size, "%.*s", (int)(tail - tmp), tmp);
+    if (!is_shortened(out))
+        return 0;
+    char target[4096], stem[4096];
+    temp_target(path, target);
+    if (temp_stem(target, stem, sizeof stem) != 0 || strcmp(stem, out) != 0)
+        return -1;
+    snprintf(out, out_size, "%s", target);
+    return 0;
 }
 
 /* Refuses to put a file in the place of something that is not one (dest: the name the temporary would take,
@@ -278,54 +361,107 @@ static ic_result write_to_descriptor(const char *tmp, int fd, const char *path, 
     return r;
 }
 
-/* The temporary's data on disk before it takes the final name, so that a crash soon after the rename
- * leaves the old file or the whole new one, not an empty or truncated one (on ext4 and XFS the rename can
- * reach the disk before the data). A file system without fsync (EINVAL, EROFS) is passed over. */
-static int sync_file(const char *tmp)
+/* Gives the temporary (descriptor fd) the permissions of the file old it replaces, as sed -i and editors
+ * keep them (a private 0600 output became 0666 & ~umask): its mode less setuid and setgid (a copy must not
+ * run as another's program) and, where this process may (root; a group it is in), its owner and group. A
+ * temporary left with this process's owner is no more open than the file (the owner's bits reach the writer
+ * alone); one left with this process's group would hand the old group's access to another group's members,
+ * so the group's bits are cut to what the file gave everyone. Anything the mode still grants beyond that (a
+ * file system that ignored fchmod) is an error: the file would be more open than the one it replaces.
+ * Access control lists and extended attributes are not copied. 0, or -1 with errno. */
+static int keep_permissions(int fd, const struct stat *old)
+{
+    struct stat now;
+    if (fstat(fd, &now) != 0)
+        return -1;
+    if ((now.st_uid != old->st_uid || now.st_gid != old->st_gid) && fchown(fd, old->st_uid, old->st_gid) != 0)
+        (void)fchown(fd, (uid_t)-1, old->st_gid); /* not root: the group, if this process is in it */
+    if (fstat(fd, &now) != 0)
+        return -1;
+    mode_t mode = old->st_mode & (S_ISVTX | S_IRWXU | S_IRWXG | S_IRWXO);
+    if (now.st_gid != old->st_gid)
+        mode &= ~(mode_t)S_IRWXG | (mode & S_IRWXO) << 3;
+    int e = fchmod(fd, mode) != 0 ? errno : EPERM;
+    if (fstat(fd, &now) != 0)
+        return -1;
+    if (now.st_mode & (S_IRWXU | S_IRWXG | S_IRWXO) & ~mode) {
+        errno = e;
+        return -1;
+    }
+    return 0;
+}
+
+/* The temporary made ready to take the final name: the permissions of the file it replaces (old, NULL for
+ * a new file), then its data and those on disk (fsync), so that a crash soon after the rename leaves the old
+ * file or the whole new one, not an empty or truncated one (on ext4 and XFS the rename can reach the disk
+ * before the data). A file system without fsync (EINVAL, EROFS) is passed over. 0; 1 when it cannot be
+ * synced, 2 when it cannot take old's permissions, with errno. */
+static int finish_file(const char *tmp, const struct stat *old)
 {
     int fd = open(tmp, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
-        return -1;
-    int r = fsync(fd);
+        return 1;
+    int r = old && keep_permissions(fd, old) != 0 ? 2 : 0;
+    if (r == 0 && fsync(fd) != 0 && errno != EINVAL && errno != EROFS)
+        r = 1;
     int e = errno;
     close(fd);
     errno = e;
-    return r == 0 || e == EINVAL || e == EROFS ? 0 : -1;
+    return r;
+}
+
+/* Removes the temporary tmp and forgets its name. */
+static void discard(const char *tmp)
+{
+    remove(tmp);
+    ic_atomic_temp_release(tmp);
 }
 
 ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
 {
-    if (sync_file(tmp) != 0) {
-        int e = errno;
-        remove(tmp);
-        ic_atomic_temp_release(tmp);
-        return ic_error_set(err, IC_ERR_IO, "%s: write failed (%s); nothing was written", path, strerror(e));
-    }
     char dest[4096];
-    final_name(tmp, path, dest, sizeof dest);
+    if (final_name(tmp, path, dest, sizeof dest) != 0) {
+        discard(tmp);
+        return ic_error_set(err, IC_ERR_IO, "%s: its symbolic link was changed during the write; nothing was "
+                            "written; write it again", path);
+    }
     ic_result r = check_replaceable(dest, path, err);
     if (r != IC_OK) {
-        remove(tmp);
-        ic_atomic_temp_release(tmp);
+        discard(tmp);
         return r;
     }
     char target[4096];
     int fd = -1;
     if (follow_links(path, target, sizeof target, &fd) == 0 && fd >= 0) {
         r = write_to_descriptor(tmp, fd, path, err);
-        remove(tmp);
-        ic_atomic_temp_release(tmp);
+        discard(tmp);
         return r;
     }
+    struct stat old;
+    int failed = finish_file(tmp, lstat(dest, &old) == 0 && S_ISREG(old.st_mode) ? &old : NULL);
+    int e = errno;
+    if (failed) {
+        discard(tmp);
+        return ic_error_set(err, IC_ERR_IO, failed == 2 ? "%s: cannot give the new file the old one's permissions "
+                            "(%s); nothing was written; remove the old file or write to a file system that keeps "
+                            "permissions" : "%s: write failed (%s); nothing was written", path, strerror(e));
+    }
     if (rename(tmp, dest) != 0) {
-        int e = errno;
-        remove(tmp);
-        ic_atomic_temp_release(tmp);
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
-                            path, strerror(e));
+        e = errno;
+        discard(tmp);
+        return ic_atomic_write_error(path, e, err);
     }
     ic_atomic_temp_release(tmp);
     return IC_OK;
+}
+
+ic_result ic_atomic_write_error(const char *path, int e, ic_error *err)
+{
+    if (e == ENAMETOOLONG)
+        return ic_error_set(err, IC_ERR_IO, "%s: file name too long (most file systems take a name of up to %d "
+                            "bytes, a path of up to %d); use a shorter name", path, NAME_MAX, PATH_MAX - 1);
+    return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable", path,
+                        strerror(e));
 }
 
 ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err)
@@ -348,11 +484,11 @@ ic_result ic_atomic_file_open(ic_atomic_file *f, const char *path, ic_error *err
         int e = errno;
         if (fd >= 0) {
             close(fd);
-            remove(f->tmp_path);
-            ic_atomic_temp_release(f->tmp_path);
+            discard(f->tmp_path);
         }
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
-                            path, strerror(e));
+        ic_atomic_write_error(path, e, err);
+        errno = e; /* the command's output check says it its own way */
+        return IC_ERR_IO;
     }
     return IC_OK;
 }
@@ -366,8 +502,7 @@ ic_result ic_atomic_file_commit(ic_atomic_file *f, ic_error *err)
         bad = 1;
     f->fp = NULL;
     if (bad) {
-        remove(f->tmp_path);
-        ic_atomic_temp_release(f->tmp_path);
+        discard(f->tmp_path);
         return ic_error_set(err, IC_ERR_IO, "%s: write failed (disk full?); nothing was written", f->path);
     }
     return ic_atomic_rename(f->tmp_path, f->path, err);
@@ -378,7 +513,6 @@ void ic_atomic_file_abort(ic_atomic_file *f)
     if (f->fp) {
         fclose(f->fp);
         f->fp = NULL;
-        remove(f->tmp_path);
-        ic_atomic_temp_release(f->tmp_path);
+        discard(f->tmp_path);
     }
 }

@@ -452,8 +452,7 @@ ic_result ic_image_write_exr(const char *path, const ic_image *img, const ic_ima
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: output path too long; use a shorter path", path);
     int made = ic_atomic_temp_name(path, tmp, sizeof tmp);
     if (made != 0)
-        return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
-                            path, strerror(made));
+        return ic_atomic_write_error(path, made, err);
 
     int open_errno = 0, ambiguous = 0;
     exr_result_t rv = write_part(tmp, img, opt, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);
@@ -464,9 +463,11 @@ ic_result ic_image_write_exr(const char *path, const ic_image *img, const ic_ima
     if (rv != EXR_ERR_SUCCESS) {
         remove(tmp); /* the library deletes it on most errors; make sure */
         ic_atomic_temp_release(tmp);
+        if (rv == EXR_ERR_FILE_ACCESS && open_errno)
+            return ic_atomic_write_error(path, open_errno, err);
         if (rv == EXR_ERR_FILE_ACCESS)
             return ic_error_set(err, IC_ERR_IO, "%s: cannot write (%s); check that the folder exists and is writable",
-                                path, open_errno ? strerror(open_errno) : exr_get_default_error_message(rv));
+                                path, exr_get_default_error_message(rv));
         if (rv == EXR_ERR_OUT_OF_MEMORY)
             return ic_error_set(err, IC_ERR_OOM, "%s: out of memory writing OpenEXR; free memory and retry", path);
         return ic_error_set(err, IC_ERR_IO, "%s: writing OpenEXR failed (%s); check free disk space and retry", path,

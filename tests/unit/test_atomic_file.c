@@ -9,6 +9,13 @@
  *
  * Every atomic write syncs its temporary (fsync, wrapped here: -Wl,--wrap=fsync) before the rename, so a
  * crash after it cannot leave an empty file under the final name: the atomic file and the EXR writer.
+ *
+ * A file replaced keeps its permission bits (less setuid and setgid) and, where the writer may, its owner
+ * and group, as sed -i and editors keep them: a private 0600 output took 0666 & ~umask from its
+ * replacement. A new file takes 0666 & ~umask.
+ *
+ * A file whose name is legal but too long for the temporary's tail (a 250-byte name: NAME_MAX is 255) is
+ * written through a shortened temporary beside it; the stale ones a dead process left are still found.
  */
 #include "core/atomic_file.h"
 #include "irrcache/image.h"
@@ -17,6 +24,8 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <grp.h>
+#include <limits.h>
 #include <signal.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -115,6 +124,202 @@ static void check_synced(const char *what, const char *out, int calls_before)
     CHECK(fsync_calls == calls_before + 1 && strstr(fsync_path, out) && strstr(fsync_path, ".tmp."),
           "%s: the temporary is synced before the rename (%d fsync, last %s)", what, fsync_calls - calls_before,
           fsync_path);
+}
+
+
+/* The permission bits of path (-1 when it cannot be read). */
+static int mode_of(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (int)(st.st_mode & 07777) : -1;
+}
+
+/* Writes text to path through the atomic file, or a 2x2 image through the EXR writer for a .exr path. */
+static ic_result write_out(const char *path, const char *text, ic_error *err)
+{
+    memset(err, 0, sizeof *err);
+    size_t n = strlen(path);
+    if (n > 4 && !strcmp(path + n - 4, ".exr")) {
+        ic_image img;
+        ic_result r = ic_image_create(&img, 2, 2);
+        if (r == IC_OK)
+            r = ic_image_write(path, &img, NULL, err);
+        ic_image_free(&img);
+        return r;
+    }
+    ic_atomic_file f;
+    ic_result r = ic_atomic_file_open(&f, path, err);
+    if (r == IC_OK) {
+        fputs(text, f.fp);
+        r = ic_atomic_file_commit(&f, err);
+    }
+    return r;
+}
+
+/* Writes name (relative to folder) as user uid, group gid and, when group is not 0, that group too: a child
+ * that drops root's rights; 0 when written. Relative names: the user may not search the folders above. */
+static int write_as(const char *folder, const char *name, uid_t uid, gid_t gid, gid_t group)
+{
+    pid_t child = fork();
+    if (child == 0) {
+        ic_error err;
+        if (chdir(folder) != 0 || setgroups(group ? 1 : 0, &group) != 0 || setgid(gid) != 0 || setuid(uid) != 0)
+            _exit(3);
+        _exit(write_out(name, "theirs", &err) == IC_OK ? 0 : 4);
+    }
+    int status = -1;
+    return child > 0 && waitpid(child, &status, 0) == child && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/* A replaced file keeps its mode (setuid and setgid dropped) and, as root, its owner and group; a link's
+ * target keeps its own; a new file takes 0666 & ~umask. Through the atomic file and the EXR writer. */
+static void check_permissions(void)
+{
+    CHECK(system("mkdir -p '" T "/perm'") == 0, "a folder");
+    ic_error err;
+    mode_t old_mask = umask(027);
+    const char *news[2] = {T "/perm/new.pfm", T "/perm/new.exr"};
+    for (int k = 0; k < 2; ++k)
+        CHECK(write_out(news[k], "new", &err) == IC_OK && mode_of(news[k]) == (0666 & ~027),
+              "%s: a new file takes 0666 & ~umask (umask 027): %o (%s)", news[k], mode_of(news[k]), err.message);
+    umask(022);
+    const char *olds[5] = {T "/perm/group.pfm", T "/perm/private.pfm", T "/perm/setid.pfm", T "/perm/private.exr",
+                           T "/perm/read_only.pfm"};
+    const int modes[5] = {0640, 0600, 06750, 0640, 0400}, kept[5] = {0640, 0600, 0750, 0640, 0400};
+    for (int k = 0; k < 5; ++k) {
+        touch(olds[k]);
+        CHECK(chmod(olds[k], (mode_t)modes[k]) == 0, "chmod %s", olds[k]);
+        CHECK(write_out(olds[k], "replaced", &err) == IC_OK, "%s: written (%s)", olds[k], err.message);
+        CHECK(mode_of(olds[k]) == kept[k], "%s: mode %o kept as %o: %o", olds[k], modes[k], kept[k], mode_of(olds[k]));
+    }
+    char text[64];
+    CHECK(!strcmp(read_small(T "/perm/read_only.pfm", text, sizeof text), "replaced"), "0400: replaced: '%s'", text);
+    /* through a link: the mode of the file it leads to, the link stays */
+    touch(T "/perm/target.pfm");
+    CHECK(chmod(T "/perm/target.pfm", 0600) == 0 && symlink("target.pfm", T "/perm/link.pfm") == 0, "a link");
+    struct stat ls;
+    CHECK(write_out(T "/perm/link.pfm", "through", &err) == IC_OK && mode_of(T "/perm/target.pfm") == 0600 &&
+              lstat(T "/perm/link.pfm", &ls) == 0 && S_ISLNK(ls.st_mode),
+          "through a link: the target keeps 0600: %o (%s)", mode_of(T "/perm/target.pfm"), err.message);
+    CHECK(test_count_temporaries(T "/perm") == 0, "no temporary left");
+    if (geteuid() != 0) {
+        printf("not root: owners and groups are not checked\n");
+        umask(old_mask);
+        return;
+    }
+    /* As root, the owner and group are kept too. */
+    struct stat st;
+    touch(T "/perm/theirs.pfm");
+    CHECK(chown(T "/perm/theirs.pfm", 12345, 12346) == 0 && chmod(T "/perm/theirs.pfm", 0640) == 0, "chown");
+    CHECK(write_out(T "/perm/theirs.pfm", "root", &err) == IC_OK && stat(T "/perm/theirs.pfm", &st) == 0 &&
+              st.st_uid == 12345 && st.st_gid == 12346 && (st.st_mode & 07777) == 0640,
+          "as root: owner, group and mode kept: %ld:%ld %o (%s)", (long)st.st_uid, (long)st.st_gid,
+          (unsigned)(st.st_mode & 07777), err.message);
+    /* Another user (not root) who may write the folder: the owner becomes the writer, who holds the owner's
+     * bits alone. In the file's group, the writer keeps the group (0660 stays 0660, group 12346); not in it,
+     * the writer's own group must not get the old group's access: it gets what the file gave everyone,
+     * nothing here (0660 becomes 0600; 0664, 0644). */
+    CHECK(system("mkdir -p '" T "/perm/open' && chmod 0777 '" T "/perm/open'") == 0, "an open folder");
+    const char *shared[3] = {"member.pfm", "outsider.pfm", "outsider_r.pfm"};
+    const int shared_mode[3] = {0660, 0660, 0664}, shared_kept[3] = {0660, 0600, 0644};
+    const gid_t shared_gid[3] = {12346, 23457, 23457};
+    for (int k = 0; k < 3; ++k) {
+        char p[512];
+        snprintf(p, sizeof p, T "/perm/open/%s", shared[k]);
+        touch(p);
+        CHECK(chown(p, 12345, 12346) == 0 && chmod(p, (mode_t)shared_mode[k]) == 0, "chown");
+        int status = write_as(T "/perm/open", shared[k], 23456, 23457, k == 0 ? 12346 : 0);
+        CHECK(status == 0, "%s: another user writes (status %d)", shared[k], status);
+        CHECK(stat(p, &st) == 0 && st.st_uid == 23456 && st.st_gid == shared_gid[k] &&
+                  (st.st_mode & 07777) == (mode_t)shared_kept[k],
+              "%s: %o by another user: %ld:%ld %o, expected 23456:%ld %o", shared[k], shared_mode[k], (long)st.st_uid,
+              (long)st.st_gid, (unsigned)(st.st_mode & 07777), (long)shared_gid[k], shared_kept[k]);
+    }
+    umask(old_mask);
+}
+
+/* A name of 250 bytes (legal: NAME_MAX is 255) is written although "<name>.tmp.<pid>.<n>" is longer than a
+ * name may be: the temporary's name is shortened, beside the file. Through the atomic file and the EXR
+ * writer; no temporary is left, and a dead process's shortened temporary is removed by the next write of the
+ * same file, not of another long name that begins alike. A name over NAME_MAX is refused at the open. */
+static void check_long_names(long dead)
+{
+    CHECK(system("mkdir -p '" T "/long'") == 0, "a folder");
+    char names[3][512];
+    for (int k = 0; k < 3; ++k) {
+        char base[256];
+        memset(base, 'a' + k, sizeof base);
+        snprintf(base + 246, 10, k == 2 ? "b.exr" : "b.pfm");
+        if (k == 1)
+            base[245] = 'c'; /* begins as names[0] does */
+        memset(base, 'a', 240);
+        snprintf(names[k], sizeof names[k], T "/long/%s", base);
+    }
+    CHECK(strlen(strrchr(names[0], '/') + 1) == 251, "a 251-byte name: %zu", strlen(strrchr(names[0], '/') + 1));
+    ic_error err;
+    char text[64];
+    for (int k = 0; k < 3; ++k) {
+        CHECK(write_out(names[k], "long", &err) == IC_OK, "a 251-byte name is written (%s)", err.message);
+        if (k < 2)
+            CHECK(!strcmp(read_small(names[k], text, sizeof text), "long"), "and reads back: '%s'", text);
+        else
+            CHECK(mode_of(names[k]) >= 0, "the EXR is there");
+    }
+    CHECK(test_count_temporaries(T "/long") == 0, "no temporary left: %d", test_count_temporaries(T "/long"));
+    /* The shortened temporaries of the two .pfm names, as a dead process would have left them. */
+    char tmp[2][4096], stale[2][4200];
+    for (int k = 0; k < 2; ++k) {
+        CHECK(ic_atomic_temp_name(names[k], tmp[k], sizeof tmp[k]) == 0, "a temporary name");
+        remove(tmp[k]);
+        ic_atomic_temp_release(tmp[k]);
+        const char *tmp_base = strrchr(tmp[k], '/') + 1;
+        CHECK(strlen(tmp_base) <= NAME_MAX && strstr(tmp_base, ".tmp."), "a temporary name of at most NAME_MAX: %s",
+              tmp_base);
+        char *tail = strstr(tmp[k], ".tmp.");
+        snprintf(stale[k], sizeof stale[k], "%.*s.tmp.%ld.3", (int)(tail - tmp[k]), tmp[k], dead);
+        touch(stale[k]);
+    }
+    ic_result r;
+    CHECK(strcmp(tmp[0], tmp[1]) != 0, "two long names that begin alike have distinct temporaries");
+    CHECK(write_out(names[0], "again", &err) == IC_OK, "rewrite (%s)", err.message);
+    CHECK(!exists(stale[0]) && exists(stale[1]), "the dead process's temporary of this name is removed, the other "
+          "name's is kept");
+    CHECK(write_out(names[1], "again", &err) == IC_OK && !exists(stale[1]), "and the other's by its own write");
+    /* A shortened temporary cannot say its file: that is the one the path leads to at the rename. A link
+     * changed during the write to lead to another file is refused, nothing written; a name that fits still
+     * says its file, the one the link led to when the write began (as before). */
+    CHECK(symlink(names[0], T "/long/relink.pfm") == 0, "a link to a long name");
+    ic_atomic_file lf;
+    CHECK(ic_atomic_file_open(&lf, T "/long/relink.pfm", &err) == IC_OK, "open through the link (%s)", err.message);
+    if (lf.fp)
+        fputs("relinked", lf.fp);
+    CHECK(remove(T "/long/relink.pfm") == 0 && symlink(names[1], T "/long/relink.pfm") == 0, "the link changed");
+    memset(&err, 0, sizeof err);
+    r = ic_atomic_file_commit(&lf, &err);
+    CHECK(r == IC_ERR_IO && strstr(err.message, "changed during the write"), "refused: %s", err.message);
+    CHECK(!strcmp(read_small(names[0], text, sizeof text), "again") &&
+              !strcmp(read_small(names[1], text, sizeof text), "again"), "neither file is written");
+    touch(T "/long/short_a.pfm");
+    CHECK(remove(T "/long/relink.pfm") == 0 && symlink("short_a.pfm", T "/long/relink.pfm") == 0, "a short link");
+    CHECK(ic_atomic_file_open(&lf, T "/long/relink.pfm", &err) == IC_OK, "open through the link (%s)", err.message);
+    if (lf.fp)
+        fputs("relinked", lf.fp);
+    CHECK(remove(T "/long/relink.pfm") == 0 && symlink("short_b.pfm", T "/long/relink.pfm") == 0, "the link changed");
+    CHECK(ic_atomic_file_commit(&lf, &err) == IC_OK && !strcmp(read_small(T "/long/short_a.pfm", text, sizeof text),
+          "relinked") && !exists(T "/long/short_b.pfm"), "the file the link led to is written: '%s'", text);
+    /* 256 bytes: no file may have that name; refused before anything is written. */
+    char over[600];
+    snprintf(over, sizeof over, "%s", names[0]);
+    char *base = strrchr(over, '/') + 1;
+    memset(base, 'z', 256);
+    base[256] = 0;
+    ic_atomic_file f;
+    memset(&err, 0, sizeof err);
+    r = ic_atomic_file_open(&f, over, &err);
+    if (r == IC_OK)
+        ic_atomic_file_abort(&f);
+    CHECK(r == IC_ERR_IO && strstr(err.message, "too long"), "a 256-byte name is refused: %s", err.message);
+    CHECK(test_count_temporaries(T "/long") == 0, "no temporary left");
 }
 
 int main(void)
@@ -318,6 +523,9 @@ int main(void)
               "%s: what the file held, the output, then what the descriptor wrote after: '%s'", log_path, log_text);
     }
     CHECK(test_count_temporaries(T "/nodes") == 0, "no temporary left beside the log");
+
+    check_permissions();
+    check_long_names(dead);
 
     /* the command: a rerun after a SIGKILL during its write */
     leave(T "/render.png", dead, stale, keep);

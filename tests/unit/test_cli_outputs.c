@@ -130,6 +130,27 @@ int main(void)
             DIR_ "/no/c.icc", "does not exist");
     refused("--records-json unwritable", "--integrator ic --records-json /proc/self/r.json" SMALL,
             "--records-json", "/proc/self/r.json", "cannot create");
+    /* A name no file may have (256 bytes; NAME_MAX is 255) is refused as too long, not as an unwritable
+     * folder; one of 250 bytes (and its --stats, 255) is written, although its temporary's name
+     * "<name>.tmp.<pid>.<n>" is too long to be one: the temporary's is shortened. */
+    {
+        char name[300], args[2048], path[600];
+        memset(name, 'n', 256);
+        snprintf(name + 252, sizeof name - 252, ".pfm");
+        snprintf(path, sizeof path, DIR_ "/%s", name);
+        snprintf(args, sizeof args, "-o %s" SMALL, path);
+        refused("-o name too long", args, "-o", path, "file name too long");
+        CHECK(strstr(err_text, "shorter name") != NULL, "says what to do: %s", err_text);
+        snprintf(name + 246, sizeof name - 246, ".pfm");
+        snprintf(path, sizeof path, DIR_ "/%s", name);
+        snprintf(args, sizeof args, "render %s -o %s --stats %s.json" SMALL, QUAD, path, path);
+        int rc = run(args);
+        CHECK(rc == 0 && exists(path), "a 250-byte -o and a 255-byte --stats are written (exit %d): %s", rc, err_text);
+        CHECK(test_count_temporaries(DIR_) == 0, "no temporary left beside it");
+        remove(path);
+        strcat(path, ".json");
+        remove(path);
+    }
     /* Two outputs that are one file, however spelled; an output that is the scene. */
     refused("-o twice", "-o " DIR_ "/../cli_outputs/good.pfm" SMALL, "-o", DIR_ "/../cli_outputs/good.pfm",
             "the same file as -o " DIR_ "/good.pfm");
