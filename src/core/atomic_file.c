@@ -394,14 +394,21 @@ static int keep_permissions(int fd, const struct stat *old)
 /* The temporary made ready to take the final name: the permissions of the file it replaces (old, NULL for
  * a new file), then its data and those on disk (fsync), so that a crash soon after the rename leaves the old
  * file or the whole new one, not an empty or truncated one (on ext4 and XFS the rename can reach the disk
- * before the data). A file system without fsync (EINVAL, EROFS) is passed over. 0; 1 when it cannot be
- * synced, 2 when it cannot take old's permissions, with errno. */
+ * before the data). A file system without fsync (EINVAL, EROFS) is passed over. It is opened again by name,
+ * so what has the name must still be a file of one link, not followed: in a folder others may write (not
+ * sticky), one could have put a link to their victim in its place (another member's file in a group's
+ * folder; as root, any file), which would have taken old's owner and mode (keep_permissions), or a pipe,
+ * whose open would wait (O_NONBLOCK). 0; 1 when it cannot be synced, 2 when it cannot take old's
+ * permissions, with errno; 3 when it is not a file of one link. */
 static int finish_file(const char *tmp, const struct stat *old)
 {
-    int fd = open(tmp, O_RDONLY | O_CLOEXEC);
+    int fd = open(tmp, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
     if (fd < 0)
-        return 1;
-    int r = old && keep_permissions(fd, old) != 0 ? 2 : 0;
+        return errno == ELOOP ? 3 : 1;
+    struct stat st;
+    int r = fstat(fd, &st) != 0 ? 1 : !S_ISREG(st.st_mode) || st.st_nlink != 1 ? 3 : 0;
+    if (r == 0 && old && keep_permissions(fd, old) != 0)
+        r = 2;
     if (r == 0 && fsync(fd) != 0 && errno != EINVAL && errno != EROFS)
         r = 1;
     int e = errno;
@@ -442,6 +449,9 @@ ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
     int e = errno;
     if (failed) {
         discard(tmp);
+        if (failed == 3)
+            return ic_error_set(err, IC_ERR_IO, "%s: its temporary file was replaced during the write (a link put "
+                                "in its place); nothing was written; write it in a folder only you may write", path);
         return ic_error_set(err, IC_ERR_IO, failed == 2 ? "%s: cannot give the new file the old one's permissions "
                             "(%s); nothing was written; remove the old file or write to a file system that keeps "
                             "permissions" : "%s: write failed (%s); nothing was written", path, strerror(e));

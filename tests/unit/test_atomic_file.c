@@ -202,15 +202,15 @@ static void check_permissions(void)
               lstat(T "/perm/link.pfm", &ls) == 0 && S_ISLNK(ls.st_mode),
           "through a link: the target keeps 0600: %o (%s)", mode_of(T "/perm/target.pfm"), err.message);
     CHECK(test_count_temporaries(T "/perm") == 0, "no temporary left");
-    if (geteuid() != 0) {
-        printf("not root: owners and groups are not checked\n");
+    /* As root, the owner and group are kept too (root in a container may lack the right to give files away). */
+    touch(T "/perm/theirs.pfm");
+    if (geteuid() != 0 || chown(T "/perm/theirs.pfm", 12345, 12346) != 0) {
+        printf("not root (or may not give files away): owners and groups are not checked\n");
         umask(old_mask);
         return;
     }
-    /* As root, the owner and group are kept too. */
     struct stat st;
-    touch(T "/perm/theirs.pfm");
-    CHECK(chown(T "/perm/theirs.pfm", 12345, 12346) == 0 && chmod(T "/perm/theirs.pfm", 0640) == 0, "chown");
+    CHECK(chmod(T "/perm/theirs.pfm", 0640) == 0, "chmod");
     CHECK(write_out(T "/perm/theirs.pfm", "root", &err) == IC_OK && stat(T "/perm/theirs.pfm", &st) == 0 &&
               st.st_uid == 12345 && st.st_gid == 12346 && (st.st_mode & 07777) == 0640,
           "as root: owner, group and mode kept: %ld:%ld %o (%s)", (long)st.st_uid, (long)st.st_gid,
@@ -236,6 +236,39 @@ static void check_permissions(void)
               (long)st.st_gid, (unsigned)(st.st_mode & 07777), (long)shared_gid[k], shared_kept[k]);
     }
     umask(old_mask);
+}
+
+/* The temporary is opened again by name at the rename, to take the old file's permissions: one that someone
+ * who may write the folder replaced meanwhile with a link (symbolic or hard) to another file is refused, and
+ * that file keeps its mode (given the old file's 0666 before) and its bytes; a pipe put there does not hold
+ * the write up. The output is left as it was, no temporary stays. */
+static void check_replaced_temporary(void)
+{
+    CHECK(system("mkdir -p '" T "/swap'") == 0, "a folder");
+    const char *out = T "/swap/out.pfm", *victim = T "/swap/victim.txt";
+    ic_error err;
+    char tmp[4096], text[64];
+    CHECK(write_out(out, "old", &err) == IC_OK && chmod(out, 0666) == 0, "the output (%s)", err.message);
+    touch(victim);
+    CHECK(chmod(victim, 0600) == 0, "chmod %s", victim);
+    const char *how[3] = {"a symbolic link", "a hard link", "a pipe"};
+    for (int k = 0; k < 3; ++k) {
+        CHECK(ic_atomic_temp_name(out, tmp, sizeof tmp) == 0 && remove(tmp) == 0, "a temporary");
+        CHECK((k == 0 ? symlink(victim, tmp) : k == 1 ? link(victim, tmp) : mkfifo(tmp, 0600)) == 0, "%s: %s",
+              how[k], strerror(errno));
+        memset(&err, 0, sizeof err);
+        alarm(10); /* a pipe opened for reading would wait for a writer */
+        ic_result r = ic_atomic_rename(tmp, out, &err);
+        alarm(0);
+        struct stat st;
+        CHECK(r == IC_ERR_IO && strstr(err.message, "replaced during the write"), "%s in its place: refused: %s",
+              how[k], err.message);
+        CHECK(mode_of(victim) == 0600 && !strcmp(read_small(victim, text, sizeof text), "half-written"),
+              "%s in its place: the file it leads to keeps its mode 0600: %o", how[k], mode_of(victim));
+        CHECK(lstat(out, &st) == 0 && S_ISREG(st.st_mode) && !strcmp(read_small(out, text, sizeof text), "old"),
+              "%s in its place: the output is not replaced: '%s'", how[k], text);
+    }
+    CHECK(test_count_temporaries(T "/swap") == 0, "no temporary left");
 }
 
 /* A name of 250 bytes (legal: NAME_MAX is 255) is written although "<name>.tmp.<pid>.<n>" is longer than a
@@ -318,7 +351,8 @@ static void check_long_names(long dead)
     r = ic_atomic_file_open(&f, over, &err);
     if (r == IC_OK)
         ic_atomic_file_abort(&f);
-    CHECK(r == IC_ERR_IO && strstr(err.message, "too long"), "a 256-byte name is refused: %s", err.message);
+    CHECK(r == IC_ERR_IO && strstr(err.message, "too long") && strstr(err.message, "use a shorter name"),
+          "a 256-byte name is refused, saying what to do: %s", err.message);
     CHECK(test_count_temporaries(T "/long") == 0, "no temporary left");
 }
 
@@ -525,6 +559,7 @@ int main(void)
     CHECK(test_count_temporaries(T "/nodes") == 0, "no temporary left beside the log");
 
     check_permissions();
+    check_replaced_temporary();
     check_long_names(dead);
 
     /* the command: a rerun after a SIGKILL during its write */
