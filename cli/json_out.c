@@ -4,40 +4,12 @@
 #include "cli.h"
 
 #include "core/atomic_file.h"
+#include "core/text.h"
 
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* Length of the well-formed UTF-8 sequence at s (RFC 3629: no overlong forms, no surrogates, at most
- * U+10FFFF), or 0 if s does not start one. s is NUL-terminated, so a cut sequence fails on the NUL. */
-static size_t utf8_sequence(const unsigned char *s)
-{
-    unsigned char c = s[0];
-    if (c < 0x80)
-        return 1;
-    unsigned char lo = 0x80, hi = 0xBF;
-    size_t n;
-    if (c >= 0xC2 && c <= 0xDF) {
-        n = 2;
-    } else if (c >= 0xE0 && c <= 0xEF) {
-        n = 3;
-        lo = c == 0xE0 ? 0xA0 : 0x80;
-        hi = c == 0xED ? 0x9F : 0xBF;
-    } else if (c >= 0xF0 && c <= 0xF4) {
-        n = 4;
-        lo = c == 0xF0 ? 0x90 : 0x80;
-        hi = c == 0xF4 ? 0x8F : 0xBF;
-    } else {
-        return 0;
-    }
-    if (s[1] < lo || s[1] > hi)
-        return 0;
-    for (size_t i = 2; i < n; ++i)
-        if (s[i] < 0x80 || s[i] > 0xBF)
-            return 0;
-    return n;
-}
 
 /* s with every byte that is not part of well-formed UTF-8 replaced by U+FFFD (allocated with
  * cJSON_malloc), or NULL when s is already well-formed (or out of memory: *oom set). */
@@ -45,7 +17,7 @@ static char *utf8_repaired(const char *s, int *oom)
 {
     const unsigned char *p = (const unsigned char *)s;
     size_t n;
-    while (*p && (n = utf8_sequence(p)) > 0)
+    while (*p && (n = ic_utf8_sequence(p, SIZE_MAX)) > 0)
         p += n;
     if (!*p)
         return NULL;
@@ -55,7 +27,7 @@ static char *utf8_repaired(const char *s, int *oom)
         return NULL;
     }
     for (p = (const unsigned char *)s; *p;) {
-        n = utf8_sequence(p);
+        n = ic_utf8_sequence(p, SIZE_MAX);
         if (n) {
             memcpy(q, p, n);
             q += n;

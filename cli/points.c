@@ -18,6 +18,7 @@
 #include "points_grid.h"
 
 #include "core/atomic_file.h"
+#include "core/text.h"
 #include "irrcache/image.h"
 #include "irrcache/points.h"
 
@@ -282,27 +283,14 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
     return 1;
 }
 
-/* The shortest decimal of x (6 to 9 significant digits) that reads back as the same float: the results'
- * float fields (irradiance, the grid's positions) round-trip, and a position 0.8 reads "0.8", not the
- * 0.800000012 its float is. */
-static const char *float_text(float x, char buf[32])
-{
-    for (int digits = 6; digits <= 9; ++digits) {
-        snprintf(buf, 32, "%.*g", digits, (double)x);
-        if (strtof(buf, NULL) == x)
-            break;
-    }
-    return buf;
-}
-
-/* Three floats as a JSON array of their shortest decimals (float_text). */
+/* Three floats as a JSON array of their shortest decimals (ic_float_text). */
 static cJSON *json_floats(ic_vec3 v)
 {
     const float f[3] = {v.x, v.y, v.z};
     double d[3];
     char buf[32];
     for (int k = 0; k < 3; ++k)
-        d[k] = strtod(float_text(f[k], buf), NULL);
+        d[k] = strtod(ic_float_text(f[k], buf), NULL);
     return cJSON_CreateDoubleArray(d, 3);
 }
 
@@ -318,12 +306,12 @@ static void write_rows(FILE *f, out_format format, const ic_point_result *res, u
     char b[6][32];
     for (uint32_t i = 0; i < count; ++i) {
         if (pts)
-            fprintf(f, "%s%s%s%s%s%s%s%s%s%s%s%s", float_text(pts[i].position.x, b[0]), sep,
-                    float_text(pts[i].position.y, b[1]), sep, float_text(pts[i].position.z, b[2]), sep,
-                    float_text(pts[i].normal.x, b[3]), sep, float_text(pts[i].normal.y, b[4]), sep,
-                    float_text(pts[i].normal.z, b[5]), sep);
-        fprintf(f, "%s%s%s%s%s%s%.7g%s%.4g", float_text(res[i].irradiance.x, b[0]), sep,
-                float_text(res[i].irradiance.y, b[1]), sep, float_text(res[i].irradiance.z, b[2]), sep,
+            fprintf(f, "%s%s%s%s%s%s%s%s%s%s%s%s", ic_float_text(pts[i].position.x, b[0]), sep,
+                    ic_float_text(pts[i].position.y, b[1]), sep, ic_float_text(pts[i].position.z, b[2]), sep,
+                    ic_float_text(pts[i].normal.x, b[3]), sep, ic_float_text(pts[i].normal.y, b[4]), sep,
+                    ic_float_text(pts[i].normal.z, b[5]), sep);
+        fprintf(f, "%s%s%s%s%s%s%.7g%s%.4g", ic_float_text(res[i].irradiance.x, b[0]), sep,
+                ic_float_text(res[i].irradiance.y, b[1]), sep, ic_float_text(res[i].irradiance.z, b[2]), sep,
                 res[i].illuminance, sep, res[i].illuminance_sigma);
         if (df_lux > 0.0)
             fprintf(f, "%s%.6g%s%.4g", sep, 100.0 * res[i].illuminance / df_lux, sep,
