@@ -27,7 +27,9 @@
  *      Many points at once (a row of pixels, a light map's texels): ic_cache_query_batch with an
  *      ic_cache_hint, the same answers at a lower cost per look-up on a frozen cache.
  *   5. Optionally ic_cache_save(cache, path, scene_hash, &err); later ic_cache_load(path, &params,
- *      scene_hash, &cache, &err) refuses files made for another scene or other parameters.
+ *      scene_hash, &cache, &err) refuses files made for another scene or other parameters. With
+ *      ic_cache_save_with_settings and ic_cache_load_with_settings the file also keeps the text of the
+ *      settings behind scene_hash, and a refusal names the one that differs (SETTINGS TEXT below).
  *   6. ic_cache_destroy(cache).
  *
  * OWNERSHIP AND THREADS
@@ -367,7 +369,8 @@ uint32_t ic_cache_knn(const ic_cache *cache, ic_vec3 p, uint32_t k, uint32_t *in
 uint32_t ic_cache_radius_query(const ic_cache *cache, ic_vec3 p, float radius, uint32_t *indices,
                                uint32_t capacity);
 
-/* Writes the cache to path atomically: magic, version, parameters, scene hash, records, checksum. */
+/* Writes the cache to path atomically: magic, version, parameters, scene hash, records, checksum
+ * (docs/outputs.md; ic_cache_save_with_settings below adds the settings text). */
 ic_result ic_cache_save(const ic_cache *cache, const char *path, uint64_t scene_hash, ic_error *err);
 /* Reads a cache file. Refuses (with a one-line message naming the file): wrong magic (IC_ERR_PARSE),
  * other format version or other scene hash or other parameters (IC_ERR_MISMATCH), truncation or a
@@ -383,6 +386,32 @@ ic_result ic_cache_read_file(const char *path, const ic_cache_params *params, vo
                              ic_error *err);
 ic_result ic_cache_load_memory(const char *name, const void *data, size_t size, const ic_cache_params *params,
                                uint64_t scene_hash, ic_cache **out, ic_error *err);
+
+/* SETTINGS TEXT
+ *   scene_hash stands for everything besides the cache parameters that shaped the records; a hash alone
+ *   cannot say which of those differs when a file is refused. The _with_settings calls keep, next to the
+ *   hash, the caller's text of what went into it, and compare the file's with the caller's when the
+ *   hashes differ (only then: a text is never a reason to refuse on its own):
+ *     - lines "key=value", each ended by '\n'; a key is not empty and has no '='; the text is well-formed
+ *       UTF-8 without control characters (but the line ends), at most IC_CACHE_MAX_SETTINGS_BYTES;
+ *     - the first key whose value differs, or that one text has and the other lacks (the file's lines in
+ *       their order first), is named with both values: "made with --rays 800, this run has --rays 102;
+ *       rerun with --rays 800, or build the cache again instead of loading it". A key that starts with
+ *       "--" reads as an option the user gives (an empty value: a flag), so the message says to rerun
+ *       with it; any other key is said as a fact ("made with KEY: VALUE, this run's: VALUE");
+ *     - key "scene" holds a digest of the scene's content (a difference: "made for another scene"), key
+ *       "scene file" the scene's name for that message (never compared: a moved scene keeps its cache);
+ *     - a NULL or empty text on either side, or texts that agree, leave the hashes alone to say it.
+ *   The cache never reads the keys otherwise: they are the caller's words (irrcache's renderer uses its
+ *   command-line options). ic_cache_save and ic_cache_load are these calls with no text. */
+#define IC_CACHE_MAX_SETTINGS_BYTES 65536u
+ic_result ic_cache_save_with_settings(const ic_cache *cache, const char *path, uint64_t scene_hash,
+                                      const char *settings, ic_error *err);
+ic_result ic_cache_load_with_settings(const char *path, const ic_cache_params *params, uint64_t scene_hash,
+                                      const char *settings, ic_cache **out, ic_error *err);
+ic_result ic_cache_load_memory_with_settings(const char *name, const void *data, size_t size,
+                                             const ic_cache_params *params, uint64_t scene_hash,
+                                             const char *settings, ic_cache **out, ic_error *err);
 
 /* FNV-1a 64-bit hash of bytes, continuing from h (start with IC_FNV64_OFFSET); for scene hashes too. */
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size);

@@ -11,7 +11,10 @@
  *                bounds, clamp switches and their parameters); look-up-only settings (final
  *                acceptance, behind tolerance, octree shape, threads) are free to change
  *   80  u64      record count N
- *   88  N × 172  records: p (3f), R, n (3f), a, E (3f), ∇r E (9f), ∇t E (9f), tangent (3f), σ (3f),
+ *   88  u32      (version 4) bytes L of the settings text, at most IC_CACHE_MAX_SETTINGS_BYTES
+ *   92  L bytes  (version 4) the settings text (cache.h: SETTINGS TEXT; empty from ic_cache_save); the
+ *                records follow it (at 88 before version 4)
+ *   …   N × 172  records: p (3f), R, n (3f), a, E (3f), ∇r E (9f), ∇t E (9f), tangent (3f), σ (3f),
  *                harmonic-mean distance, pixel footprint, change count (u32), bounce (u8), flags (u8),
  *                2 zero bytes, then (version 3) the elliptical extent's squeeze k (3f) and ratio ρ
  *                (cache.h: ELLIPTICAL RECORDS; 0, 0, 0, 1 for a round record); 156 bytes before version 3
@@ -19,13 +22,15 @@
  *   …   N × u32  (version 2) each record's payload length (0: none; cache.h ic_cache_set_payload)
  *   …   P × f32  (version 2) the payloads in record order
  *   end u64      FNV-1a 64 of every byte before it
- * Version 1 files (no payload section) and version 2 files (no ellipses: every record round) still load.
+ * Version 1 files (no payload section), version 2 files (no ellipses: every record round) and version 3
+ * files (no settings text: a refusal for another scene or settings gives the two hashes) still load.
  * The octree is not stored: loading rebuilds it from the records.
  */
 #include "cache_store.h"
 
 #include "core/atomic_file.h"
 #include "core/read_file.h"
+#include "core/text.h"
 
 #include <errno.h>
 #include <math.h>
@@ -33,7 +38,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define IC_CACHE_FILE_VERSION 3u
+#define IC_CACHE_FILE_VERSION 4u
 #define IC_CACHE_FILE_OLDEST 1u /* the oldest version still read */
 #define MAGIC "IRRCACHE"
 #define PARAM_BYTES 56u
@@ -44,6 +49,10 @@
  * settings may be what is wrong); a file that is no cache file at all is the user's, not ours to delete. */
 #define REBUILD_HINT "delete it and build the cache again"
 #define MISMATCH_HINT "use the scene and settings it was made with, or build the cache again"
+#define REBUILD_INSTEAD "or build the cache again instead of loading it"
+#define SCENE_KEY "scene"
+#define SCENE_NAME_KEY "scene file"
+#define SAID_BYTES 96 /* most bytes of a key or value a message quotes (three options fit one message) */
 #define NOT_CACHE_HINT "give the path of a cache file (ic_cache_save and --save-cache write them)"
 
 uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
@@ -220,6 +229,158 @@ static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b, int ha
            cd->pixel_footprint >= 0.0f;
 }
 
+/* ---- settings text (cache.h: SETTINGS TEXT) ------------------------------------------------------ */
+
+/* What is wrong with a settings text of len bytes (said after "the settings text"), or NULL. Every byte
+ * read lies below len. */
+static const char *settings_problem(const unsigned char *t, size_t len)
+{
+    if (len > IC_CACHE_MAX_SETTINGS_BYTES)
+        return "is longer than IC_CACHE_MAX_SETTINGS_BYTES";
+    if (len && t[len - 1] != '\n')
+        return "does not end its last line";
+    size_t line = 0; /* where the current line starts */
+    int has_key = 0;
+    for (size_t k = 0; k < len;) {
+        unsigned char c = t[k];
+        if (c == '\n') {
+            if (!has_key)
+                return "has a line that is not key=value";
+            line = ++k;
+            has_key = 0;
+            continue;
+        }
+        if (c == '=' && !has_key) {
+            if (k == line)
+                return "has a line with an empty key";
+            has_key = 1;
+        }
+        if (c < 0x20 || c == 0x7f)
+            return "holds a control character";
+        size_t n = ic_utf8_sequence(t + k, len - k);
+        if (!n)
+            return "is not well-formed UTF-8";
+        k += n;
+    }
+    return NULL;
+}
+
+typedef struct setting {
+    const char *key, *value;
+    size_t key_len, value_len;
+} setting;
+
+/* The line of a well-formed text (len bytes) at *at, which moves past it; 0 past the last line. */
+static int next_setting(const char *text, size_t len, size_t *at, setting *out)
+{
+    if (*at >= len)
+        return 0;
+    const char *line = text + *at, *end = memchr(line, '\n', len - *at), *eq = memchr(line, '=', (size_t)(end - line));
+    *out = (setting){line, eq + 1, (size_t)(eq - line), (size_t)(end - eq - 1)};
+    *at = (size_t)(end - text) + 1;
+    return 1;
+}
+
+/* The first line of text whose key is key (key_len bytes), or 0. */
+static int find_setting(const char *text, size_t len, const char *key, size_t key_len, setting *out)
+{
+    size_t at = 0;
+    while (next_setting(text, len, &at, out))
+        if (out->key_len == key_len && memcmp(out->key, key, key_len) == 0)
+            return 1;
+    return 0;
+}
+
+static int has_key(const setting *s, const char *key)
+{
+    return s->key_len == strlen(key) && memcmp(s->key, key, s->key_len) == 0;
+}
+
+/* How many of the len bytes at s a message quotes: at most SAID_BYTES, cut before a character. */
+static int said(const char *s, size_t len)
+{
+    if (len <= SAID_BYTES)
+        return (int)len;
+    len = SAID_BYTES;
+    while (len && ((unsigned char)s[len] & 0xC0) == 0x80)
+        --len;
+    return (int)len;
+}
+
+/* An option as the user gives it: "--rays 800", a flag (empty value) alone. */
+static void say_option(const setting *s, char *out, size_t size)
+{
+    snprintf(out, size, "%.*s%s%.*s", said(s->key, s->key_len), s->key, s->value_len ? " " : "",
+             said(s->value, s->value_len), s->value);
+}
+
+/* The refusal for one setting: the file's (made, NULL if it has none) against this run's (now, NULL if
+ * none). file and run: the two texts, for the scene's name. */
+static ic_result say_difference(const char *path, const setting *made, const setting *now, const char *file,
+                                size_t file_len, const char *run, size_t run_len, ic_error *err)
+{
+    const setting *k = made ? made : now;
+    if (has_key(k, SCENE_KEY)) {
+        setting fs, rs;
+        const size_t nk = strlen(SCENE_NAME_KEY);
+        int has_file = find_setting(file, file_len, SCENE_NAME_KEY, nk, &fs),
+            has_run = find_setting(run, run_len, SCENE_NAME_KEY, nk, &rs);
+        if (has_file && has_run && (fs.value_len != rs.value_len || memcmp(fs.value, rs.value, fs.value_len)))
+            return ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (saved for %.*s, this run's is "
+                                "%.*s); render the scene it was made for, " REBUILD_INSTEAD, path,
+                                said(fs.value, fs.value_len), fs.value, said(rs.value, rs.value_len), rs.value);
+        const setting *name = has_run ? &rs : has_file ? &fs : NULL;
+        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (%.*s%s changed since the cache was "
+                            "saved); render the scene as it was, " REBUILD_INSTEAD, path,
+                            name ? said(name->value, name->value_len) : 9, name ? name->value : "the scene",
+                            name ? ", or a file it names," : "");
+    }
+    if (k->key_len > 2 && memcmp(k->key, "--", 2) == 0) {
+        char was[2 * SAID_BYTES + 2], is[2 * SAID_BYTES + 2];
+        say_option(k, is, sizeof is); /* a missing one: its key alone */
+        if (made)
+            say_option(made, was, sizeof was);
+        if (now)
+            say_option(now, is, sizeof is);
+        if (made && now)
+            return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with %s, this run has %s; rerun with %s, "
+                                REBUILD_INSTEAD, path, was, is, was);
+        if (made)
+            return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with %s, which this run does not give; rerun "
+                                "with %s, " REBUILD_INSTEAD, path, was, was);
+        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made without %.*s, this run has %s; rerun without %.*s, "
+                            REBUILD_INSTEAD, path, said(k->key, k->key_len), k->key, is,
+                            said(k->key, k->key_len), k->key);
+    }
+    return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with %.*s: %.*s, this run's: %.*s; use the settings it "
+                        "was made with, " REBUILD_INSTEAD, path, said(k->key, k->key_len), k->key,
+                        made ? said(made->value, made->value_len) : 4, made ? made->value : "none",
+                        now ? said(now->value, now->value_len) : 4, now ? now->value : "none");
+}
+
+/* After the hashes differ: the first setting of the file's text (in its order), then of this run's, that
+ * the other lacks or gives another value, said in *err (IC_ERR_MISMATCH); IC_OK when a text is empty or
+ * they agree, for the hashes to say it. */
+static ic_result check_settings(const char *path, const char *file, size_t file_len, const char *run,
+                                size_t run_len, ic_error *err)
+{
+    if (!file_len || !run_len)
+        return IC_OK;
+    setting a, b;
+    size_t at = 0;
+    while (next_setting(file, file_len, &at, &a)) {
+        if (has_key(&a, SCENE_NAME_KEY))
+            continue;
+        int has = find_setting(run, run_len, a.key, a.key_len, &b);
+        if (!has || b.value_len != a.value_len || memcmp(a.value, b.value, a.value_len) != 0)
+            return say_difference(path, &a, has ? &b : NULL, file, file_len, run, run_len, err);
+    }
+    for (at = 0; next_setting(run, run_len, &at, &b);)
+        if (!has_key(&b, SCENE_NAME_KEY) && !find_setting(file, file_len, b.key, b.key_len, &a))
+            return say_difference(path, NULL, &b, file, file_len, run, run_len, err);
+    return IC_OK;
+}
+
 /* ---- save ------------------------------------------------------------------------------------- */
 
 typedef struct writer {
@@ -242,6 +403,10 @@ static void w_bytes(writer *w, const unsigned char *b, size_t n)
     w->hash = ic_fnv1a64(w->hash, b, n);
     if (w->len + n > sizeof w->buf)
         w_flush(w);
+    if (n > sizeof w->buf) {
+        (void)fwrite(b, 1, n, w->fp);
+        return;
+    }
     memcpy(w->buf + w->len, b, n);
     w->len += n;
 }
@@ -276,10 +441,30 @@ static void write_payloads(writer *w, const ic_cache *c)
 
 ic_result ic_cache_save(const ic_cache *c, const char *path, uint64_t scene_hash, ic_error *err)
 {
+    return ic_cache_save_with_settings(c, path, scene_hash, NULL, err);
+}
+
+/* A caller's settings text, checked as a file's is: IC_ERR_INVALID_ARG naming what is wrong. */
+static ic_result check_caller_settings(const char *settings, const char *what, ic_error *err)
+{
+    const char *problem = settings_problem((const unsigned char *)settings, strlen(settings));
+    return problem ? ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the settings text %s; give lines key=value, each "
+                                  "ended by a line break (irrcache/cache.h: SETTINGS TEXT)", what, problem)
+                   : IC_OK;
+}
+
+ic_result ic_cache_save_with_settings(const ic_cache *c, const char *path, uint64_t scene_hash,
+                                      const char *settings, ic_error *err)
+{
     if (!c || !path)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no cache or no path to save to");
+    if (!settings)
+        settings = "";
+    ic_result rc = check_caller_settings(settings, path, err);
+    if (rc != IC_OK)
+        return rc;
     ic_atomic_file f;
-    ic_result rc = ic_atomic_file_open(&f, path, err);
+    rc = ic_atomic_file_open(&f, path, err);
     if (rc != IC_OK)
         return rc;
     writer *w = malloc(sizeof *w);
@@ -299,6 +484,10 @@ ic_result ic_cache_save(const ic_cache *c, const char *path, uint64_t scene_hash
     encode_params(&c->params, head + 24);
     put_u64(head + 24 + PARAM_BYTES, c->count);
     w_bytes(w, head, sizeof head);
+    unsigned char len[4];
+    put_u32(len, (uint32_t)strlen(settings));
+    w_bytes(w, len, 4);
+    w_bytes(w, (const unsigned char *)settings, strlen(settings));
     unsigned char rec[RECORD_BYTES];
     for (uint32_t i = 0; i < c->count; ++i) {
         encode_record(c, i, rec);
@@ -417,6 +606,12 @@ ic_result ic_cache_read_file(const char *path, const ic_cache_params *params, vo
 ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_t scene_hash, ic_cache **out,
                         ic_error *err)
 {
+    return ic_cache_load_with_settings(path, params, scene_hash, NULL, out, err);
+}
+
+ic_result ic_cache_load_with_settings(const char *path, const ic_cache_params *params, uint64_t scene_hash,
+                                      const char *settings, ic_cache **out, ic_error *err)
+{
     if (!path || !out)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no path or no output handle");
     *out = NULL;
@@ -424,7 +619,7 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
     size_t size = 0;
     ic_result rc = ic_cache_read_file(path, params, &data, &size, err);
     if (rc == IC_OK)
-        rc = ic_cache_load_memory(path, data, size, params, scene_hash, out, err);
+        rc = ic_cache_load_memory_with_settings(path, data, size, params, scene_hash, settings, out, err);
     free(data);
     return rc;
 }
@@ -432,11 +627,22 @@ ic_result ic_cache_load(const char *path, const ic_cache_params *params, uint64_
 ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size, const ic_cache_params *params,
                                uint64_t scene_hash, ic_cache **out, ic_error *err)
 {
+    return ic_cache_load_memory_with_settings(path, bytes, size, params, scene_hash, NULL, out, err);
+}
+
+ic_result ic_cache_load_memory_with_settings(const char *path, const void *bytes, size_t size,
+                                             const ic_cache_params *params, uint64_t scene_hash,
+                                             const char *settings, ic_cache **out, ic_error *err)
+{
     if (!path || !out || (!bytes && size))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: no name, no bytes or no output handle");
     *out = NULL;
+    if (!settings)
+        settings = "";
     ic_cache_params p;
-    ic_result rc = ic_cache_params_resolve(params, &p, err);
+    ic_result rc = check_caller_settings(settings, path, err);
+    if (rc == IC_OK)
+        rc = ic_cache_params_resolve(params, &p, err);
     if (rc != IC_OK)
         return rc;
     const unsigned char *data = bytes;
@@ -456,25 +662,45 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: corrupt header; " REBUILD_HINT, path);
     if (rc != IC_OK)
         return rc;
+    const uint32_t version = get_u32(data + 8);
+    /* The settings text (version 4): its length bounded by the file's before anything past it is read. */
+    const int has_settings = version >= 4;
+    const uint64_t text_at = HEADER_BYTES + 4;
+    uint64_t text_len = 0;
+    if (has_settings && size < text_at + 8)
+        return ic_error_set(err, IC_ERR_CORRUPT, "%s: truncated (%zu bytes); " REBUILD_HINT, path, size);
+    if (has_settings)
+        text_len = get_u32(data + HEADER_BYTES);
+    if (has_settings && (text_len > IC_CACHE_MAX_SETTINGS_BYTES || text_len > size - text_at - 8))
+        return ic_error_set(err, IC_ERR_CORRUPT, "%s: a settings text of %llu bytes, %s; " REBUILD_HINT, path,
+                            (unsigned long long)text_len, text_len > IC_CACHE_MAX_SETTINGS_BYTES ?
+                            "more than a cache file holds" : "past the end of the file");
+    const uint64_t records_at = has_settings ? text_at + text_len : HEADER_BYTES;
     uint64_t count = get_u64(data + 24 + PARAM_BYTES);
-    const int has_payloads = get_u32(data + 8) >= 2, has_squeeze = get_u32(data + 8) >= 3;
+    const int has_payloads = version >= 2, has_squeeze = version >= 3;
     const uint64_t rec_bytes = has_squeeze ? RECORD_BYTES : RECORD_BYTES_V2;
-    const uint64_t per_record = rec_bytes + (has_payloads ? 4u : 0u), fixed = HEADER_BYTES + 8 + (has_payloads ? 8u : 0u);
+    const uint64_t per_record = rec_bytes + (has_payloads ? 4u : 0u), fixed = records_at + 8 + (has_payloads ? 8u : 0u);
     uint64_t max_count = size >= fixed ? (size - fixed) / per_record : 0, payload_floats = 0;
     if (has_payloads && count <= max_count)
-        payload_floats = get_u64(data + HEADER_BYTES + count * rec_bytes);
+        payload_floats = get_u64(data + records_at + count * rec_bytes);
+    const char *problem = NULL;
     if (count > max_count || size < fixed ||
         payload_floats != (size - fixed - count * per_record) / 4 || size != fixed + count * per_record + 4 * payload_floats)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: %s (%zu bytes for %llu records); " REBUILD_HINT, path,
                           count > max_count || size < fixed ? "truncated" : "wrong length", size, (unsigned long long)count);
     else if (ic_fnv1a64(IC_FNV64_OFFSET, data, size - 8) != get_u64(data + size - 8))
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: checksum mismatch, the file is corrupt; " REBUILD_HINT, path);
-    else if (get_u64(data + 16) != scene_hash)
-        rc = ic_error_set(err, IC_ERR_MISMATCH,
-                          "%s: made for another scene or settings that change its records (hash %016llx, here "
-                          "%016llx); " MISMATCH_HINT, path, (unsigned long long)get_u64(data + 16),
-                          (unsigned long long)scene_hash);
-    else if (count >= UINT32_MAX)
+    else if ((problem = settings_problem(data + text_at, text_len)) != NULL)
+        rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: the settings text %s; " REBUILD_HINT, path, problem);
+    else if (get_u64(data + 16) != scene_hash) {
+        /* Which setting differs, where both texts say; else the hashes alone. */
+        rc = check_settings(path, (const char *)data + text_at, text_len, settings, strlen(settings), err);
+        if (rc == IC_OK)
+            rc = ic_error_set(err, IC_ERR_MISMATCH,
+                              "%s: made for another scene or settings that change its records (hash %016llx, here "
+                              "%016llx%s); " MISMATCH_HINT, path, (unsigned long long)get_u64(data + 16),
+                              (unsigned long long)scene_hash, text_len ? "" : "; the file keeps no settings to say which");
+    } else if (count >= UINT32_MAX)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: too many records", path);
     else
         rc = check_params(path, data + 24, &p, err);
@@ -486,7 +712,7 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
     if (rc == IC_OK && ic_cache_reserve(c, (uint32_t)count) != IC_OK)
         rc = ic_error_set(err, IC_ERR_OOM, "%s: out of memory for %llu records", path, (unsigned long long)count);
     for (uint32_t i = 0; rc == IC_OK && i < count; ++i) {
-        if (!decode_record(c, i, data + HEADER_BYTES + (size_t)i * rec_bytes, has_squeeze)) {
+        if (!decode_record(c, i, data + records_at + (size_t)i * rec_bytes, has_squeeze)) {
             rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: record %u is invalid; " REBUILD_HINT, path, i);
             break;
         }
@@ -502,7 +728,7 @@ ic_result ic_cache_load_memory(const char *path, const void *bytes, size_t size,
     if (rc == IC_OK) {
         c->count = (uint32_t)count;
         if (has_payloads)
-            rc = read_payloads(c, path, data + HEADER_BYTES + count * rec_bytes + 8, payload_floats, err);
+            rc = read_payloads(c, path, data + records_at + count * rec_bytes + 8, payload_floats, err);
     }
     if (rc == IC_OK) {
         ic_octree_items pts = ic_cache_point_items(c), sph = ic_cache_tree_items(c);

@@ -6,11 +6,16 @@
 #include "ic_internal.h"
 
 #include "core/threads.h"
+#include "core/text.h"
 #include "film/film.h"
 #include "irrcache/defaults.h"
 
+#include <stdarg.h>
 #include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 void ic_ic_report(const ic_render_options *opt, const char *phase, double f)
 {
@@ -168,12 +173,9 @@ void ic_ic_ctx_destroy(ic_ctx *c)
     free(c);
 }
 
-/* Hash of everything a record's value depends on besides the cache parameters (which the cache file
- * records itself): geometry, materials, textures' sizes, lights, environment, and how records gather. */
-uint64_t ic_ic_records_hash(const ic_ctx *c)
+/* The scene's part of the records' hash, continuing h: geometry, materials, textures, lights, environment. */
+static uint64_t scene_digest(const ic_scene *s, uint64_t h)
 {
-    const ic_scene *s = c->tr->scene;
-    uint64_t h = IC_FNV64_OFFSET;
     h = ic_fnv1a64(h, s->positions, sizeof *s->positions * s->vertex_count);
     h = ic_fnv1a64(h, s->triangles, sizeof *s->triangles * 3 * (size_t)s->triangle_count);
     h = ic_fnv1a64(h, s->triangle_material, sizeof *s->triangle_material * s->triangle_count);
@@ -215,6 +217,14 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
         h = ic_fnv1a64(h, &s->sun.angular_radius, sizeof s->sun.angular_radius);
     if (s->env.image.rgb)
         h = ic_fnv1a64(h, s->env.image.rgb, sizeof(float) * 3 * (size_t)s->env.image.width * s->env.image.height);
+    return h;
+}
+
+/* The records' hash continued from the scene's digest: how records gather (records_settings says the same
+ * in words: a change here is a change there). */
+static uint64_t records_hash(const ic_ctx *c, uint64_t h)
+{
+    const ic_scene *s = c->tr->scene;
     h = ic_fnv1a64(h, &c->cached_emitters, sizeof c->cached_emitters);
     if (c->direct_pmf)
         h = ic_fnv1a64(h, c->direct_pmf, sizeof *c->direct_pmf * s->tri_light_count);
@@ -240,4 +250,117 @@ uint64_t ic_ic_records_hash(const ic_ctx *c)
         h = ic_fnv1a64(h, rad, sizeof rad);
     }
     return h;
+}
+
+/* ---- the same in words ------------------------------------------------------------------------------ */
+
+/* Appends the line "key=value" (value from fmt) to out, whole or not at all. */
+static void add_setting(char *out, size_t size, const char *key, const char *fmt, ...)
+{
+    size_t len = strlen(out);
+    int n = snprintf(out + len, size - len, "%s=", key);
+    va_list ap;
+    va_start(ap, fmt);
+    int m = n < 0 || (size_t)n >= size - len ? -1 : vsnprintf(out + len + n, size - len - (size_t)n, fmt, ap);
+    va_end(ap);
+    if (m < 0 || len + (size_t)n + (size_t)m + 1 >= size) {
+        out[len] = '\0';
+        return;
+    }
+    memcpy(out + len + n + m, "\n", 2);
+}
+
+static const char *on_off(int on)
+{
+    return on ? "on" : "off";
+}
+
+/* The settings text of ic_ic_records_identity, the scene's digest given. */
+static void records_settings(const ic_ctx *c, uint64_t scene, char *out, size_t size)
+{
+    static const char *const strategies[] = {"batch", "lazy", "adaptive"}, *const methods[] = {"stratified",
+        "progressive", "hemicube"}, *const errors[] = {"split-sphere", "hessian"}, *const shapes[] = {"round",
+        "elliptical"}, *const tgrads[] = {"improved", "ward-heckbert"};
+#define SAY(names, v) ((unsigned)(v) < sizeof names / sizeof names[0] ? names[v] : "?")
+    const ic_ic_options *o = &c->o;
+    const ic_scene *s = c->tr->scene;
+    char f[32];
+    out[0] = '\0';
+    add_setting(out, size, "scene", "%016llx", (unsigned long long)scene);
+    /* The name only for the message (the cache never compares it): a settings text is UTF-8 without
+     * control characters, so any other byte of the path becomes '?'. */
+    char name[sizeof s->path];
+    size_t n = 0;
+    for (const unsigned char *p = (const unsigned char *)s->path; *p && n + 1 < sizeof name;) {
+        size_t k = *p >= 0x20 && *p != 0x7f ? ic_utf8_sequence(p, SIZE_MAX) : 0;
+        if (k && n + k < sizeof name) {
+            memcpy(name + n, p, k);
+            n += k;
+            p += k;
+        } else {
+            name[n++] = '?';
+            p += k ? k : 1;
+        }
+    }
+    name[n] = '\0';
+    if (n)
+        add_setting(out, size, "scene file", "%s", name);
+    add_setting(out, size, "--strategy", "%s", SAY(strategies, o->strategy));
+    if (o->gather.method == IC_GATHER_HEMICUBE && o->gather.hemicube_resolution)
+        add_setting(out, size, "--gather", "hemicube (%u x %u texels on top)", o->gather.hemicube_resolution,
+                    o->gather.hemicube_resolution);
+    else
+        add_setting(out, size, "--gather", "%s", SAY(methods, o->gather.method));
+    /* Strata left at 0 (no --rays) hash apart from the same strata given: said as no --rays. */
+    if (o->gather.theta_strata && o->gather.phi_strata)
+        add_setting(out, size, "--rays", "%u (%u x %u strata)", o->gather.theta_strata * o->gather.phi_strata,
+                    o->gather.theta_strata, o->gather.phi_strata);
+    else if (o->gather.theta_strata || o->gather.phi_strata)
+        add_setting(out, size, "gather strata", "%u x %u (0: the default)", o->gather.theta_strata,
+                    o->gather.phi_strata);
+    if (o->gather.max_rays)
+        add_setting(out, size, "gather max_rays", "%u", o->gather.max_rays);
+    if (o->gather.tgrad)
+        add_setting(out, size, "gather tgrad", "%s", SAY(tgrads, o->gather.tgrad));
+    add_setting(out, size, "--bounces", "%d", o->bounces);
+    /* --recursive and --path-traced-gather count where they change the levels and hit look-ups. */
+    if (o->recursive && o->bounces <= IC_LEVELS_MAX)
+        add_setting(out, size, "--recursive", "");
+    if (o->path_traced_gather && !o->recursive && o->bounces > 1 && o->bounces <= IC_LEVELS_MAX)
+        add_setting(out, size, "--path-traced-gather", "");
+    add_setting(out, size, "--error", "%s", SAY(errors, o->error));
+    add_setting(out, size, "--record-shape", "%s", SAY(shapes, o->record_shape));
+    if (o->no_gradients)
+        add_setting(out, size, "--no-gradients", "");
+    add_setting(out, size, "--record-filter", "%s",
+                o->record_filter.mode == IC_CACHE_OFF ? "off" : ic_float_text(o->record_filter.value, f));
+    add_setting(out, size, "--record-sets", "%d", o->record_sets);
+    if (o->record_sets > 1)
+        add_setting(out, size, "--record-noise", "%s", ic_float_text(o->record_noise, f));
+    /* Which emitters the records carry: --large-emitters measured at the view's shading points. */
+    if (c->cached_emitters || c->direct_pmf)
+        add_setting(out, size, "emitters lit through the records (--large-emitters and the view decide)",
+                    "%u triangles (choice %08x)", c->cached_emitters,
+                    c->direct_pmf ? (unsigned)ic_fnv1a64(IC_FNV64_OFFSET, c->direct_pmf,
+                                                         sizeof *c->direct_pmf * s->tri_light_count)
+                                  : 0u);
+    /* Radiance records last: on with no material to serve, they leave the hash alone. */
+    add_setting(out, size, "--radiance-cache", "%s", on_off(o->radiance_cache == IC_CACHE_ON));
+    if (c->rad) {
+        add_setting(out, size, "--hsh-order", "%d", o->hsh_order);
+        add_setting(out, size, "--radiance-max-exponent", "%s", ic_float_text(o->radiance_max_exponent, f));
+        if (o->radiance_rays)
+            add_setting(out, size, "--radiance-rays", "%d", o->radiance_rays);
+    } else if (o->radiance_cache == IC_CACHE_ON) {
+        add_setting(out, size, "--radiance-max-exponent", "%s (serves no material here)",
+                    ic_float_text(o->radiance_max_exponent, f));
+    }
+#undef SAY
+}
+
+uint64_t ic_ic_records_identity(const ic_ctx *c, char *settings, size_t size)
+{
+    uint64_t scene = scene_digest(c->tr->scene, IC_FNV64_OFFSET);
+    records_settings(c, scene, settings, size);
+    return records_hash(c, scene);
 }

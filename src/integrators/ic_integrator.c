@@ -73,8 +73,10 @@ typedef struct ic_state {
  * checked by every rank alike; rank 0's error, when it cannot read the file, becomes every rank's. */
 static ic_result load_records(ic_ctx *c, ic_cache **out, ic_error *err)
 {
+    char settings[IC_RECORDS_SETTINGS_BYTES];
+    uint64_t hash = ic_ic_records_identity(c, settings, sizeof settings);
     if (!ic_comm_is_shared(c->comm))
-        return ic_cache_load(c->o.load_cache, &c->o.cache, ic_ic_records_hash(c), out, err);
+        return ic_cache_load_with_settings(c->o.load_cache, &c->o.cache, hash, settings, out, err);
     struct {
         int64_t result;
         uint64_t size;
@@ -99,9 +101,19 @@ static ic_result load_records(ic_ctx *c, ic_cache **out, ic_error *err)
                             (unsigned long long)head.size, c->o.load_cache);
     r = ic_comm_broadcast(c->comm, data, head.size, 0, err);
     if (r == IC_OK)
-        r = ic_cache_load_memory(c->o.load_cache, data, head.size, &c->o.cache, ic_ic_records_hash(c), out, err);
+        r = ic_cache_load_memory_with_settings(c->o.load_cache, data, head.size, &c->o.cache, hash, settings, out,
+                                               err);
     free(data);
     return r;
+}
+
+/* The records to the cache file, with the settings that shaped them (a later load that refuses it names the
+ * one that differs). */
+static ic_result save_records(const ic_ctx *c, ic_error *err)
+{
+    char settings[IC_RECORDS_SETTINGS_BYTES];
+    uint64_t hash = ic_ic_records_identity(c, settings, sizeof settings);
+    return ic_cache_save_with_settings(c->cache, c->o.save_cache, hash, settings, err);
 }
 
 /* The records: loaded (refused, with the cache library's message, when made for another scene, other
@@ -185,7 +197,7 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
                  "was being built, so it is incomplete", c->o.save_cache);
     else if (c->o.save_cache && (ic_ic_levels_to_payloads(c, &save_err) != IC_OK ||
                             (ic_comm_rank(c->comm) == 0 &&
-                             ic_cache_save(c->cache, c->o.save_cache, ic_ic_records_hash(c), &save_err) != IC_OK)))
+                             save_records(c, &save_err) != IC_OK)))
         snprintf(st->save_error, sizeof st->save_error, "%s", save_err.message);
     st->records = ic_cache_count(c->cache);
     st->radiance_records = 0;

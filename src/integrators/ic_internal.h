@@ -357,9 +357,14 @@ int ic_ic_level_estimates(const ic_ctx *c, const ic_cache_contribution *contrib,
                           int levels, ic_vec3 *E, ic_vec3 *last_terms);
 /* Chooses the large emitters the records carry (ic_emitters.c): a collective call under several processes. */
 ic_result ic_ic_select_large_emitters(ic_ctx *c, const ic_scene *s, ic_error *err);
-/* Hash of everything a record's value depends on besides the cache parameters (the cache file's
- * identity check). */
-uint64_t ic_ic_records_hash(const ic_ctx *c);
+/* A cache file's identity: returns the hash of everything a record's value depends on besides the cache
+ * parameters (which the file keeps apart), and writes the same as a settings text (irrcache/cache.h: SETTINGS
+ * TEXT) to settings, so that a refusal names what differs: the scene's digest and name, then the options
+ * behind the hash by their command-line names with their resolved values (an option at a default the hash
+ * keeps apart from its value left out). IC_RECORDS_SETTINGS_BYTES holds any (the scene's name is at most
+ * 1023 bytes). */
+#define IC_RECORDS_SETTINGS_BYTES 4096
+uint64_t ic_ic_records_identity(const ic_ctx *c, char *settings, size_t size);
 
 /* The final render's state shared by its threads. */
 typedef struct ic_final_ctx {

@@ -3,15 +3,17 @@
  *
  * A mutated file would almost never pass the loader's checks before record decoding, so the harness
  * "re-signs" every input of at least a header's length first, by the layout of the version its header
- * names: version 1, the record count from the length (a partial last record cut off); versions 2 and 3
+ * names: version 1, the record count from the length (a partial last record cut off); versions 2 to 4
  * (records of 156 and 172 bytes, then the payload section: a float total, a length per record, the
  * floats), the header's count kept where the length holds that many records and their lengths (else the
  * most it holds), the float total from the bytes left, and the records' lengths, in order, cut so that
- * they add up to it (the last one takes the rest). Then the trailing FNV-1a 64 checksum is recomputed,
- * and the scene hash and the cache parameters the load asks for are those the file's header holds.
- * Magic, version, parameter values, record fields and payload contents stay as mutated, so their checks
- * are fuzzed too. A loaded cache is then looked up at each of its first records, which reads the octree
- * and the frozen layout built from the file's values.
+ * they add up to it (the last one takes the rest); version 4's settings text keeps its bytes, its length
+ * cut to what the file holds. Then the trailing FNV-1a 64 checksum is recomputed, and the scene hash and
+ * the cache parameters the load asks for are those the file's header holds. Magic, version, parameter
+ * values, record fields, the settings text and payload contents stay as mutated, so their checks are
+ * fuzzed too. A loaded cache is then looked up at each of its first records, which reads the octree and
+ * the frozen layout built from the file's values; and the file is loaded again for another hash with a
+ * settings text of its own, which compares the two texts (cache.h: SETTINGS TEXT).
  */
 #include "fuzz_util.h"
 
@@ -24,6 +26,10 @@
 #define RECORD_BYTES_V1 156u /* versions 1 and 2 */
 #define RECORD_BYTES_V3 172u
 #define MAX_QUERIES 64u
+#define SETTINGS_MAX IC_CACHE_MAX_SETTINGS_BYTES
+/* The text of the second load: what irrcache's renderer writes, with values no file is likely to hold. */
+#define RUN_SETTINGS "scene=0000000000000000\nscene file=fuzz.json\n--strategy=lazy\n--rays=52 (4 x 13 strata)\n" \
+                     "--no-gradients=\nemitters=none\n"
 
 static uint32_t get_u32(const unsigned char *b)
 {
@@ -56,20 +62,32 @@ static void put_u64(unsigned char *b, uint64_t v)
 static size_t resign(unsigned char *buf, size_t size)
 {
     uint32_t version = get_u32(buf + VERSION_OFFSET);
-    uint64_t body = size - HEADER_BYTES - 8;
-    if (version != 2 && version != 3) {
+    uint64_t records_at = HEADER_BYTES; /* version 4: past the settings text */
+    if (version == 4) {
+        if (size < HEADER_BYTES + 4 + 8)
+            return size; /* no room for the text's length: the loader says "truncated" */
+        uint64_t text = get_u32(buf + HEADER_BYTES), room = size - HEADER_BYTES - 4 - 8;
+        if (text > room && text <= SETTINGS_MAX)
+            text = room; /* a length over the limit stays, for the loader to refuse */
+        if (text > room)
+            return size;
+        put_u32(buf + HEADER_BYTES, (uint32_t)text);
+        records_at = HEADER_BYTES + 4 + text;
+    }
+    uint64_t body = size - records_at - 8;
+    if (version < 2 || version > 4) {
         uint64_t count = body / RECORD_BYTES_V1;
         put_u64(buf + COUNT_OFFSET, count);
-        size = HEADER_BYTES + 8 + count * RECORD_BYTES_V1;
+        size = records_at + 8 + count * RECORD_BYTES_V1;
     } else {
-        uint64_t rec = version == 3 ? RECORD_BYTES_V3 : RECORD_BYTES_V1;
+        uint64_t rec = version >= 3 ? RECORD_BYTES_V3 : RECORD_BYTES_V1;
         uint64_t most = body >= 8 ? (body - 8) / (rec + 4) : 0, count = get_u64(buf + COUNT_OFFSET);
         if (body < 8)
             return size; /* no room for the payload total: the loader says "truncated" */
         if (count > most)
             count = most;
         uint64_t floats = (body - 8 - count * (rec + 4)) / 4, left = floats;
-        unsigned char *lengths = buf + HEADER_BYTES + count * rec + 8;
+        unsigned char *lengths = buf + records_at + count * rec + 8;
         for (uint64_t i = 0; i < count; ++i) {
             uint64_t n = i + 1 == count ? left : get_u32(lengths + 4 * i);
             n = n < left ? n : left;
@@ -79,8 +97,8 @@ static size_t resign(unsigned char *buf, size_t size)
         if (count == 0)
             floats = 0;
         put_u64(buf + COUNT_OFFSET, count);
-        put_u64(buf + HEADER_BYTES + count * rec, floats);
-        size = HEADER_BYTES + count * rec + 8 + 4 * count + 4 * floats + 8;
+        put_u64(buf + records_at + count * rec, floats);
+        size = records_at + count * rec + 8 + 4 * count + 4 * floats + 8;
     }
     put_u64(buf + size - 8, ic_fnv1a64(IC_FNV64_OFFSET, buf, size - 8));
     return size;
@@ -152,6 +170,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             (void)ic_cache_knn(cache, r.position, 8, idx, d2);
         }
     }
+    ic_cache_destroy(cache);
+    cache = NULL;
+    if (ic_cache_load_with_settings(path, &params, scene_hash ^ 1, RUN_SETTINGS, &cache, &err) == IC_OK)
+        abort(); /* a file is never taken for another hash */
     ic_cache_destroy(cache);
     return 0;
 }

@@ -32,13 +32,16 @@
 #include "core/rng.h"
 #include "core/threads.h"
 #include "core/vecmath.h"
+#include "test_files.h"
 #include "test_util.h"
 
 #include <dirent.h>
 #include <stdint.h>
 #include <string.h>
 #include <sys/stat.h>
-#define FILE_RECORD_BYTES 172 /* bytes of a record in a version-3 cache file */
+#define FILE_RECORD_BYTES 172 /* bytes of a record in a version-3 or 4 cache file */
+#define FILE_HEADER_BYTES 88  /* the header, up to the record count */
+#define FILE_RECORDS_AT 92    /* records of a version-4 file with no settings text (its length: 0) */
 #include <unistd.h>
 
 #include <time.h>
@@ -1532,8 +1535,9 @@ static void test_file(void)
     size_t s1 = 0, s2 = 0;
     CHECK(read_file(path, &d1, &s1) && read_file(path2, &d2, &s2), "read back");
     CHECK(s1 == s2 && memcmp(d1, d2, s1) == 0, "second save is not bit-identical (%zu vs %zu bytes)", s1, s2);
-    /* Version 2: header, records, the payload section (total, per-record lengths, no floats here), checksum. */
-    CHECK(s1 == 88 + (size_t)n * FILE_RECORD_BYTES + 8 + 4 * (size_t)n + 8, "file size %zu", s1);
+    /* Version 4: header, settings length (0), records, the payload section (total, per-record lengths, no
+     * floats here), checksum. */
+    CHECK(s1 == FILE_RECORDS_AT + (size_t)n * FILE_RECORD_BYTES + 8 + 4 * (size_t)n + 8, "file size %zu", s1);
 
     /* Truncated, corrupted, foreign files. */
     write_file(bad, d1, s1 - 10);
@@ -1581,7 +1585,7 @@ static void test_file(void)
         for (int k = 0; k < 4; ++k) {
             unsigned char *d = malloc(s1);
             memcpy(d, d1, s1);
-            size_t rec = 88 + 3 * FILE_RECORD_BYTES; /* record 3: x at +0, R at +12 */
+            size_t rec = FILE_RECORDS_AT + 3 * FILE_RECORD_BYTES; /* record 3: x at +0, R at +12 */
             if (huge[k][0] != 0.0f)
                 put_f32_le(d + rec, huge[k][0]);
             if (huge[k][1] != 0.0f)
@@ -1599,7 +1603,7 @@ static void test_file(void)
         /* Far but representable: accepted. */
         unsigned char *d = malloc(s1);
         memcpy(d, d1, s1);
-        put_f32_le(d + 88 + 3 * FILE_RECORD_BYTES, 1e20f);
+        put_f32_le(d + FILE_RECORDS_AT + 3 * FILE_RECORD_BYTES, 1e20f);
         resign(d, s1);
         write_file(bad, d, s1);
         ic_cache *x = NULL;
@@ -1898,7 +1902,7 @@ static void test_payloads(void)
     size_t size = 0;
     CHECK(read_file(path, &d, &size), "read back");
     /* Record 0's payload length raised by one: the lengths no longer add up. */
-    size_t lengths = 88 + (size_t)n * FILE_RECORD_BYTES + 8;
+    size_t lengths = FILE_RECORDS_AT + (size_t)n * FILE_RECORD_BYTES + 8;
     d[lengths] += 1;
     resign(d, size);
     write_file(bad, d, size);
@@ -1911,11 +1915,11 @@ static void test_payloads(void)
     write_file(bad, d, size);
     expect_refusal(bad, &p, hash, IC_ERR_CORRUPT, "a NaN in a payload");
     /* The same records as a version-1 file: no payload section, no ellipse (156 bytes a record). */
-    size_t v1 = 88 + (size_t)n * 156 + 8;
+    size_t v1 = FILE_HEADER_BYTES + (size_t)n * 156 + 8;
     unsigned char *o = malloc(v1);
-    memcpy(o, d, 88);
+    memcpy(o, d, FILE_HEADER_BYTES);
     for (uint32_t i = 0; i < n; ++i)
-        memcpy(o + 88 + (size_t)i * 156, d + 88 + (size_t)i * FILE_RECORD_BYTES, 156);
+        memcpy(o + FILE_HEADER_BYTES + (size_t)i * 156, d + FILE_RECORDS_AT + (size_t)i * FILE_RECORD_BYTES, 156);
     o[8] = 1;
     resign(o, v1);
     write_file(bad, o, v1);
@@ -1926,6 +1930,231 @@ static void test_payloads(void)
     ic_cache_destroy(l);
     free(o);
     free(d);
+    ic_cache_destroy(c);
+    free(recs);
+}
+
+/* The message of loading path with settings (the caller's text) and hash; IC_OK leaves it empty. */
+static ic_result load_says(const char *path, const ic_cache_params *p, uint64_t hash, const char *settings,
+                           ic_error *err)
+{
+    ic_cache *x = NULL;
+    memset(err, 0, sizeof *err);
+    ic_result rc = ic_cache_load_with_settings(path, p, hash, settings, &x, err);
+    ic_cache_destroy(x);
+    return rc;
+}
+
+/* Loads the bytes from a buffer of exactly their size (so that a sanitizer sees any read past them): the
+ * result, its message in err. */
+static ic_result load_exact(const unsigned char *d, size_t size, const ic_cache_params *p, uint64_t hash,
+                            const char *settings, ic_error *err)
+{
+    unsigned char *b = malloc(size ? size : 1);
+    memcpy(b, d, size);
+    ic_cache *x = NULL;
+    memset(err, 0, sizeof *err);
+    ic_result rc = ic_cache_load_memory_with_settings("exact.icc", b, size, p, hash, settings, &x, err);
+    ic_cache_destroy(x);
+    free(b);
+    return rc;
+}
+
+/* Format version 4's settings text (cache.h: SETTINGS TEXT): a file refused for its hash names the first
+ * setting that differs, with both values; a scene that differs is said as such; version-3 files (no text)
+ * still load and are refused by their hashes alone; a damaged text is refused as a damaged file, its length
+ * bounded by the file's. */
+static void test_file_settings(void)
+{
+    const char *path = IC_TEST_TMP "/test_cache_settings.icc", *bad = IC_TEST_TMP "/test_cache_settings_bad.icc";
+    const uint64_t hash_a = 0x1111, hash_b = 0x2222;
+    const uint32_t n = 400;
+    ic_record *recs = make_records(n, 9);
+    ic_cache_params p = {0};
+    ic_cache *c = build_cache(&p, recs, n);
+    const char *a = "scene=0123456789abcdef\nscene file=scene.json\n--strategy=batch\n--rays=4096\n--bounces=2\n";
+    ic_error err;
+    CHECK(ic_cache_save_with_settings(c, path, hash_a, a, &err) == IC_OK, "save: %s", err.message);
+    CHECK(load_says(path, &p, hash_a, a, &err) == IC_OK, "same hash, same text: %s", err.message);
+    /* The text never refuses on its own: with the hash equal, another text loads. */
+    CHECK(load_says(path, &p, hash_a, "--rays=1\n", &err) == IC_OK, "same hash, other text: %s", err.message);
+    CHECK(load_says(path, &p, hash_a, NULL, &err) == IC_OK, "same hash, no text: %s", err.message);
+    {
+        ic_cache *x = NULL;
+        CHECK(ic_cache_load(path, &p, hash_a, &x, &err) == IC_OK && ic_cache_count(x) == n, "ic_cache_load: %s",
+              err.message);
+        ic_cache_destroy(x);
+    }
+
+    /* One option differs: named with both values and what to do; the file is sound (not "delete"). */
+    const struct {
+        const char *run, *says;
+    } cases[] = {
+        {"scene=0123456789abcdef\nscene file=scene.json\n--strategy=batch\n--rays=2048\n--bounces=2\n",
+         "made with --rays 4096, this run has --rays 2048; rerun with --rays 4096, or build the cache again "
+         "instead of loading it"},
+        /* The order of the lines is not compared, and the scene's name is never. */
+        {"--bounces=2\n--rays=2048\nscene file=elsewhere/scene.json\n--strategy=batch\nscene=0123456789abcdef\n",
+         "made with --rays 4096, this run has --rays 2048"},
+        /* The file's keys in its order: the first that differs is named. */
+        {"scene=0123456789abcdef\n--strategy=lazy\n--rays=2048\n--bounces=2\n",
+         "made with --strategy batch, this run has --strategy lazy"},
+        {"scene=0123456789abcdef\n--strategy=batch\n--bounces=2\n",
+         "made with --rays 4096, which this run does not give; rerun with --rays 4096"},
+        /* A flag (empty value) this run gives and the file's run did not. */
+        {"scene=0123456789abcdef\n--strategy=batch\n--rays=4096\n--bounces=2\n--no-gradients=\n",
+         "made without --no-gradients, this run has --no-gradients; rerun without --no-gradients"},
+        /* A key that is no option is said as a fact. */
+        {"scene=0123456789abcdef\n--strategy=batch\n--rays=4096\n--bounces=2\ncached emitters=2\n",
+         "made with cached emitters: none, this run's: 2; use the settings it was made with"},
+        /* The scene: first in the file, so said first, whatever else differs. */
+        {"scene=fedcba9876543210\nscene file=scene.json\n--strategy=batch\n--rays=2048\n--bounces=2\n",
+         "made for another scene (scene.json, or a file it names, changed since the cache was saved); render the "
+         "scene as it was, or build the cache again instead of loading it"},
+        {"scene=fedcba9876543210\nscene file=other.json\n--strategy=batch\n--rays=4096\n--bounces=2\n",
+         "made for another scene (saved for scene.json, this run's is other.json); render the scene it was made "
+         "for"},
+        {"scene=fedcba9876543210\n--strategy=batch\n--rays=4096\n--bounces=2\n",
+         "made for another scene (scene.json, or a file it names, changed since"},
+        /* Texts that agree (the caller's hash holds more than its text), or no text: the hashes say it. */
+        {a, "made for another scene or settings that change its records (hash 0000000000001111, here "
+            "0000000000002222); use the scene and settings it was made with"},
+        {"", "(hash 0000000000001111, here 0000000000002222); use"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        ic_result rc = load_says(path, &p, hash_b, cases[k].run, &err);
+        CHECK(rc == IC_ERR_MISMATCH && strstr(err.message, path) && strstr(err.message, cases[k].says) &&
+                  !strchr(err.message, '\n') && !strstr(err.message, "delete"),
+              "case %zu: got %s \"%s\", expected \"%s\"", k, ic_result_name(rc), err.message, cases[k].says);
+    }
+    CHECK(load_says(path, &p, hash_b, NULL, &err) == IC_ERR_MISMATCH && strstr(err.message, "hash 0000000000001111"),
+          "no text: %s", err.message);
+    /* A file saved without a text is refused by its hashes, saying it has no text to name the setting. */
+    CHECK(ic_cache_save(c, bad, hash_a, &err) == IC_OK, "save without a text: %s", err.message);
+    CHECK(load_says(bad, &p, hash_b, a, &err) == IC_ERR_MISMATCH && strstr(err.message, "keeps no settings"),
+          "a file without a text: %s", err.message);
+    /* Quoted keys and values are bounded: a message stays one line within its buffer, naming the file. */
+    {
+        char *big = malloc(3 * 600 + 64), *run = malloc(3 * 600 + 64);
+        char v[601];
+        memset(v, 'x', 600);
+        v[600] = '\0';
+        snprintf(big, 3 * 600 + 64, "--%s=%s\n", v, v);
+        snprintf(run, 3 * 600 + 64, "--%s=%sy\n", v, v);
+        CHECK(ic_cache_save_with_settings(c, bad, hash_a, big, &err) == IC_OK, "save a long text: %s", err.message);
+        CHECK(load_says(bad, &p, hash_b, run, &err) == IC_ERR_MISMATCH && strstr(err.message, bad) &&
+                  strstr(err.message, "made with --xxx") && strlen(err.message) < sizeof err.message - 1,
+              "long key and value: %s", err.message);
+        free(big);
+        free(run);
+    }
+
+    /* The caller's text is checked as a file's: refused before anything is written or read. */
+    const char *wrong[] = {"--rays=4096", "--rays\n", "=4096\n", "--rays=40\x01" "96\n", "--rays=\xff\xfe\n",
+                           "--rays=\xc3\n"};
+    for (size_t k = 0; k < sizeof wrong / sizeof wrong[0]; ++k) {
+        remove(bad);
+        CHECK(ic_cache_save_with_settings(c, bad, hash_a, wrong[k], &err) == IC_ERR_INVALID_ARG &&
+                  strstr(err.message, "the settings text") && !test_file_exists(bad),
+              "text %zu refused on save: %s", k, err.message);
+        CHECK(load_says(path, &p, hash_a, wrong[k], &err) == IC_ERR_INVALID_ARG, "text %zu refused on load: %s", k,
+              err.message);
+    }
+    {
+        size_t len = IC_CACHE_MAX_SETTINGS_BYTES + 1;
+        char *huge = malloc(len + 1);
+        memset(huge, 'v', len);
+        memcpy(huge, "k=", 2);
+        huge[len - 1] = '\n';
+        huge[len] = '\0';
+        CHECK(ic_cache_save_with_settings(c, bad, hash_a, huge, &err) == IC_ERR_INVALID_ARG &&
+                  strstr(err.message, "longer"), "a text over IC_CACHE_MAX_SETTINGS_BYTES refused: %s", err.message);
+        huge[len - 2] = '\n';
+        huge[len - 1] = '\0'; /* exactly the limit: saved and loaded */
+        CHECK(ic_cache_save_with_settings(c, bad, hash_a, huge, &err) == IC_OK &&
+                  load_says(bad, &p, hash_a, NULL, &err) == IC_OK, "a text at the limit: %s", err.message);
+        free(huge);
+    }
+
+    /* The file's bytes: header, settings length, text, records, payload section, checksum. */
+    unsigned char *d = NULL;
+    size_t size = 0;
+    CHECK(read_file(path, &d, &size), "read back");
+    const size_t text_len = strlen(a);
+    CHECK(size == FILE_RECORDS_AT + text_len + (size_t)n * FILE_RECORD_BYTES + 8 + 4 * (size_t)n + 8 &&
+              d[8] == 4 && d[FILE_HEADER_BYTES] == text_len && memcmp(d + FILE_RECORDS_AT, a, text_len) == 0,
+          "version-4 layout (%zu bytes)", size);
+
+    /* Version 3: the same file without the settings length and text still loads, refused by hash alone. */
+    size_t v3 = size - 4 - text_len;
+    unsigned char *o = malloc(v3);
+    memcpy(o, d, FILE_HEADER_BYTES);
+    memcpy(o + FILE_HEADER_BYTES, d + FILE_RECORDS_AT + text_len, size - FILE_RECORDS_AT - text_len);
+    o[8] = 3;
+    resign(o, v3);
+    write_file(bad, o, v3);
+    {
+        ic_cache *x = NULL, *y = NULL;
+        CHECK(ic_cache_load_with_settings(bad, &p, hash_a, a, &x, &err) == IC_OK && ic_cache_count(x) == n,
+              "a version-3 file loads: %s", err.message);
+        CHECK(ic_cache_load(path, &p, hash_a, &y, &err) == IC_OK, "load: %s", err.message);
+        uint32_t differ = 0;
+        for (uint32_t i = 0; x && y && i < n; ++i) {
+            ic_record ra, rb;
+            ic_cache_get_record(x, i, &ra);
+            ic_cache_get_record(y, i, &rb);
+            differ += memcmp(&ra, &rb, sizeof ra) != 0;
+        }
+        CHECK(x && y && differ == 0, "%u records of the version-3 file differ from the version-4 file's", differ);
+        ic_cache_destroy(x);
+        ic_cache_destroy(y);
+    }
+    CHECK(load_says(bad, &p, hash_b, a, &err) == IC_ERR_MISMATCH && strstr(err.message, "hash 0000000000001111") &&
+              strstr(err.message, "keeps no settings"), "a version-3 file refused by its hashes: %s", err.message);
+    free(o);
+
+    /* A damaged text, checksum valid: refused as a damaged file (delete and rebuild), never read past the
+     * file (load_exact's buffer ends with it). */
+    unsigned char *e = malloc(size);
+    const struct {
+        size_t at;      /* byte of the text changed (from its start) */
+        unsigned char to;
+        const char *says;
+    } damage[] = {
+        {text_len - 1, 'x', "does not end its last line"},
+        {3, 0xff, "not well-formed UTF-8"},
+        {3, 0xc3, "not well-formed UTF-8"}, /* a sequence cut by the next byte */
+        {3, 0x00, "control character"},
+        {5, '\n', "not key=value"},
+        {0, '=', "empty key"},
+    };
+    for (size_t k = 0; k < sizeof damage / sizeof damage[0]; ++k) {
+        memcpy(e, d, size);
+        e[FILE_RECORDS_AT + damage[k].at] = damage[k].to;
+        resign(e, size);
+        ic_result rc = load_exact(e, size, &p, hash_a, a, &err);
+        CHECK(rc == IC_ERR_CORRUPT && strstr(err.message, damage[k].says) && strstr(err.message, "delete it"),
+              "damage %zu: %s \"%s\"", k, ic_result_name(rc), err.message);
+    }
+    /* Lengths: absurd, past the end, one byte off either way, above the limit in a file long enough. */
+    const uint32_t lengths[] = {0xffffffffu, 0x80000000u, (uint32_t)size, (uint32_t)(size - FILE_RECORDS_AT - 7),
+                                (uint32_t)text_len + 1, (uint32_t)text_len - 1, IC_CACHE_MAX_SETTINGS_BYTES + 1};
+    for (size_t k = 0; k < sizeof lengths / sizeof lengths[0]; ++k) {
+        memcpy(e, d, size);
+        for (int b = 0; b < 4; ++b)
+            e[FILE_HEADER_BYTES + b] = (unsigned char)(lengths[k] >> (8 * b));
+        resign(e, size);
+        ic_result rc = load_exact(e, size, &p, hash_a, a, &err);
+        CHECK(rc == IC_ERR_CORRUPT && strstr(err.message, "delete it"), "settings length %u: %s \"%s\"", lengths[k],
+              ic_result_name(rc), err.message);
+    }
+    /* Cut inside the text, and anywhere up to it: truncated, nothing read past the cut. */
+    for (size_t cut = FILE_HEADER_BYTES; cut <= FILE_RECORDS_AT + text_len + 8; ++cut)
+        CHECK(load_exact(d, cut, &p, hash_a, a, &err) == IC_ERR_CORRUPT, "cut at %zu: %s", cut, err.message);
+    free(e);
+    free(d);
+    remove(path);
+    remove(bad);
     ic_cache_destroy(c);
     free(recs);
 }
@@ -2293,6 +2522,7 @@ int main(void)
     RUN(test_point_queries);
     RUN(test_file);
     RUN(test_payloads);
+    RUN(test_file_settings);
     RUN(test_freeze_lifecycle);
     RUN(test_frozen_threads);
     RUN(test_frozen_bounce_levels);

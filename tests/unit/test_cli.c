@@ -44,6 +44,15 @@ static void check_bad(const bad_case *c)
     CHECK(!test_file_exists(OUT), "%s: no output written", c->what);
 }
 
+/* cmd (a render that loads a cache file) is refused before rendering: exit 1, one line that says `says`, no
+ * output. */
+static void check_refusal(const char *cmd, const char *says)
+{
+    remove(OUT);
+    CHECK(run(cmd) == 1 && strstr(err_text, says) && test_line_count(err_text) == 1 && !test_file_exists(OUT),
+          "refused saying \"%s\": %s", says, err_text);
+}
+
 /* The JSON files (--stats, --records-json) go through cJSON's writer (the record list leaves out the hit
  * stage's records, which the stats count apart): a scene path with a double quote,
  * a backslash, control characters, non-ASCII UTF-8 and a byte that is not UTF-8 (written as U+FFFD)
@@ -334,9 +343,40 @@ int main(void)
     if (fc)
         fclose(fc);
     remove(OUT);
+    /* The refusal names the setting that differs, both values (--rays 100 is 6 x 17 strata), what to do. */
     snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic.icc --rays 100", ic, OUT, IC_TEST_TMP);
-    CHECK(run(cmd) == 1 && strstr(err_text, "ic.icc") && test_line_count(err_text) == 1 && !test_file_exists(OUT),
-          "cache made with other settings refused: %s", err_text);
+    check_refusal(cmd, "ic.icc: made without --rays, this run has --rays 102 (6 x 17 strata); rerun without --rays, "
+                       "or build the cache again instead of loading it");
+    snprintf(cmd, sizeof cmd, "%s -o %s --save-cache %s/ic_rays.icc --rays 300 --no-gradients", ic, OUT, IC_TEST_TMP);
+    CHECK(run(cmd) == 0, "save with --rays 300: %s", err_text);
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic_rays.icc --rays 200 --no-gradients", ic, OUT, IC_TEST_TMP);
+    check_refusal(cmd, "ic_rays.icc: made with --rays 300 (10 x 30 strata), this run has --rays 200 (8 x 25 strata); "
+                       "rerun with --rays 300 (10 x 30 strata), or build");
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic_rays.icc --rays 300", ic, OUT, IC_TEST_TMP);
+    check_refusal(cmd, "made with --no-gradients, which this run does not give; rerun with --no-gradients,");
+    snprintf(cmd, sizeof cmd, "%s -o %s --load-cache %s/ic_rays.icc --rays 300 --no-gradients", ic, OUT, IC_TEST_TMP);
+    CHECK(run(cmd) == 0 && test_file_exists(OUT), "rerun as the message says: loads (%s)", err_text);
+    /* The scene changed since the cache was saved (the floor moved): said so, naming the scene file. */
+    {
+        const char *mtl = "newmtl emitter\nKd 0 0 0\nKe 10 10 10\nnewmtl grey\nKd 0.5 0.5 0.5\n";
+        const char *obj = "mtllib cli_moved.mtl\nv -0.5 1 0.25\nv 0.5 1 0.25\nv 0.5 1 -0.25\nv -0.5 1 -0.25\n"
+                          "v -2 %s -2\nv -2 %s 2\nv 2 %s 2\nv 2 %s -2\nusemtl emitter\nf 4 3 2 1\nusemtl grey\n"
+                          "f 5 6 7 8\n";
+        char text[512];
+        snprintf(text, sizeof text, obj, "0", "0", "0", "0");
+        CHECK(test_write_text(IC_TEST_TMP "/cli_moved.mtl", mtl) && test_write_text(IC_TEST_TMP "/cli_moved.obj", text),
+              "scene files");
+        const char *moved = "render " IC_TEST_TMP "/cli_moved.obj --integrator ic --width 16 --height 16 --spp 1 "
+                            "--rays 64 -q -o " OUT " ";
+        snprintf(cmd, sizeof cmd, "%s --save-cache %s/ic_moved.icc", moved, IC_TEST_TMP);
+        CHECK(run(cmd) == 0, "save for the first floor: %s", err_text);
+        snprintf(text, sizeof text, obj, "-0.1", "-0.1", "-0.1", "-0.1");
+        CHECK(test_write_text(IC_TEST_TMP "/cli_moved.obj", text), "move the floor");
+        snprintf(cmd, sizeof cmd, "%s --load-cache %s/ic_moved.icc", moved, IC_TEST_TMP);
+        check_refusal(cmd, "ic_moved.icc: made for another scene (" IC_TEST_TMP "/cli_moved.obj, or a file it names, "
+                           "changed since the cache was saved); render the scene as it was, or build the cache again");
+    }
+    remove(OUT);
     FILE *full = fopen(IC_TEST_TMP "/ic.icc", "rb"), *cut = fopen(IC_TEST_TMP "/ic_cut.icc", "wb");
     if (full && cut) {
         char chunk[512];

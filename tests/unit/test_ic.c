@@ -20,6 +20,9 @@
  *      time budget stops batch and adaptive construction early and is reported (cut_by_time);
  *   7. the records AOV's background has the same median luminance, 0.18, whether the scene's light is
  *      10⁻³, 10³ or 10⁻⁴⁰ (a factor beyond a float's range, still finite pixels).
+ *   8. a cache file refused for its hash names the option that differs (every option the hash holds,
+ *      each changed alone), and the settings it may not hold (seed, final accuracy) still load it; test 5
+ *      checks the same for the emitters the records carry.
  * Test 1 also compares the samplers and adaptive against uniform sampling, for both integrators.
  * The reference images are rendered here with the path tracer at high sample counts.
  */
@@ -41,6 +44,24 @@ static ic_render_options ic_options(void)
     o.integrator = IC_INTEGRATOR_IC;
     o.spp = 16;
     return o;
+}
+
+/* Renders scene with o; the result, and the library's message in err. */
+static ic_result render_says(const char *scene_path, int width, int height, const ic_render_options *o, ic_error *err)
+{
+    ic_scene *scene = NULL;
+    ic_scene_load_options lo = {0};
+    lo.width = width;
+    lo.height = height;
+    memset(err, 0, sizeof *err);
+    ic_result r = ic_scene_load(scene_path, &lo, &scene, err);
+    ic_image img = {0};
+    ic_render_stats st;
+    if (r == IC_OK)
+        r = ic_render(scene, o, &img, &st, err);
+    ic_image_free(&img);
+    ic_scene_free(scene);
+    return r;
 }
 
 static void compare(const ic_image *img, const ic_image *ref, ic_image_metrics *m)
@@ -464,7 +485,9 @@ static void test_window(void)
     /* The choice is made serially on the shading points: one thread gives the same image. */
     ic_image one = {0};
     o.threads = 1;
+    o.ic.save_cache = IC_TEST_TMP "/window_cached.icc"; /* for the refusal below */
     ok &= test_render(scene, W, H, &o, &one, NULL);
+    o.ic.save_cache = NULL;
     CHECK(ok && memcmp(on.rgb, one.rgb, sizeof(float) * 3 * W * H) == 0,
           "window: 1 and 2 threads give the same image with the emitter cached");
     ic_image_free(&one);
@@ -542,6 +565,20 @@ static void test_window(void)
               cached[5] == cached[0] && cached[0] != UINT32_MAX && loads == 5,
           "the large-emitter choice is the same for seeds 1-6 (%u %u %u %u %u %u triangles), and seed 1's cache "
           "loads with the others (%d of 5)", cached[0], cached[1], cached[2], cached[3], cached[4], cached[5], loads);
+    /* A load with --large-emitters off, whose records would carry none of them, is refused saying so. */
+    {
+        ic_error err;
+        ic_render_options lo = ic_options();
+        lo.spp = 1;
+        lo.ic.load_cache = IC_TEST_TMP "/window_cached.icc";
+        CHECK(render_says(scene, W, H, &lo, &err) == IC_OK, "the cache with the emitter cached loads: %s", err.message);
+        lo.ic.large_emitters.mode = IC_CACHE_OFF;
+        ic_result r = render_says(scene, W, H, &lo, &err);
+        CHECK(r == IC_ERR_MISMATCH && strstr(err.message, "made with emitters lit through the records (--large-emitters "
+                                                          "and the view decide): 2 triangles (choice ") &&
+                  strstr(err.message, "this run's: none; use the settings it was made with"),
+              "large emitters off against a cache that carries them: %s \"%s\"", ic_result_name(r), err.message);
+    }
     ic_image_free(&ref);
     ic_image_free(&on);
     ic_image_free(&off);
@@ -779,6 +816,62 @@ static void test_records_background(void)
           "the beauty images differ by the lamp's scale: medians %g and %g", beauty_median[0], beauty_median[1]);
 }
 
+/* The cache file's settings text (ic_context.c: ic_ic_records_identity) says what its hash holds: a file
+ * refused for its hash names the one option changed, not two hashes. */
+static void test_cache_settings(void)
+{
+    const char *path = IC_TEST_TMP "/ic_settings.irc";
+    ic_render_options base = ic_options();
+    base.spp = 1;
+    base.ic.gather.theta_strata = 4;
+    base.ic.gather.phi_strata = 13;
+    base.ic.save_cache = path;
+    ic_error err;
+    CHECK(render_says(CORNELL, 12, 12, &base, &err) == IC_OK, "save: %s", err.message);
+    base.ic.save_cache = NULL;
+    base.ic.load_cache = path;
+    CHECK(render_says(CORNELL, 12, 12, &base, &err) == IC_OK, "load: %s", err.message);
+    enum { RAYS, GATHER, BOUNCES, MAX_DEPTH, NO_GRADIENTS, FILTER, SETS, PATH_TRACED, ERROR, STRATEGY, TGRAD, N_CASES };
+    const char *says[N_CASES] = {
+        [RAYS] = "made with --rays 52 (4 x 13 strata), this run has --rays 80 (5 x 16 strata); rerun with --rays 52",
+        [GATHER] = "made with --gather stratified, this run has --gather hemicube (4 x 4 texels on top)",
+        [BOUNCES] = "made with --bounces 7, this run has --bounces 2",
+        [MAX_DEPTH] = "made with --bounces 7, this run has --bounces 3",
+        [NO_GRADIENTS] = "made without --no-gradients, this run has --no-gradients",
+        [FILTER] = "made with --record-filter 3, this run has --record-filter off",
+        [SETS] = "made with --record-sets 1, this run has --record-sets 4",
+        [PATH_TRACED] = "made without --path-traced-gather, this run has --path-traced-gather",
+        [ERROR] = "made with --error split-sphere, this run has --error hessian",
+        [STRATEGY] = "made with --strategy batch, this run has --strategy adaptive",
+        [TGRAD] = "made with gather tgrad: none, this run's: ward-heckbert",
+    };
+    for (int k = 0; k < N_CASES; ++k) {
+        ic_render_options o = base;
+        switch (k) {
+        case RAYS: o.ic.gather.theta_strata = 5, o.ic.gather.phi_strata = 16; break;
+        case GATHER: o.ic.gather.method = IC_GATHER_HEMICUBE; break;
+        case BOUNCES: o.ic.bounces = 2; break;
+        case MAX_DEPTH: o.max_depth = 4; break;
+        case NO_GRADIENTS: o.ic.no_gradients = 1; break;
+        case FILTER: o.ic.record_filter.mode = IC_CACHE_OFF; break;
+        case SETS: o.ic.record_sets = 4; break;
+        case PATH_TRACED: o.ic.path_traced_gather = 1; break;
+        case ERROR: o.ic.error = IC_ERROR_HESSIAN; break;
+        case STRATEGY: o.ic.strategy = IC_STRATEGY_ADAPTIVE; break;
+        case TGRAD: o.ic.gather.tgrad = IC_GATHER_TGRAD_WARD_HECKBERT; break;
+        }
+        ic_result r = render_says(CORNELL, 12, 12, &o, &err);
+        CHECK(r == IC_ERR_MISMATCH && strstr(err.message, says[k]) && !strstr(err.message, "hash"),
+              "case %d: %s \"%s\", expected \"%s\"", k, ic_result_name(r), err.message, says[k]);
+    }
+    /* What the records do not depend on: another seed, a looser final acceptance. */
+    ic_render_options o = base;
+    o.seed = 99;
+    o.ic.cache.final_accuracy_scale = 2.0f;
+    CHECK(render_says(CORNELL, 12, 12, &o, &err) == IC_OK, "another seed and final accuracy: %s", err.message);
+    remove(path);
+}
+
 int main(void)
 {
     test_cornell();
@@ -788,6 +881,7 @@ int main(void)
     test_window();
     test_panel();
     test_records_background();
+    test_cache_settings();
     test_convergence();
     TEST_MAIN_END();
 }
