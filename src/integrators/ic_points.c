@@ -182,6 +182,87 @@ static void grid_add(taken_grid *g, const ic_vec3 *pts, uint32_t i)
     *head = i + 1;
 }
 
+/* The ray from sensor point p (facing n) to the sensor record rec (a sensor's own point); 0 if the two are
+ * one point (nothing can lie between). The weights alone would let a record serve a point on the far side
+ * of a thin surface (a sensor under a desk top read the record above it), as in Ward's and Radiance's
+ * caches. Both ends are moved off any surface they lie on, towards the other. */
+static int ray_to_record(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_record *rec, ic_ray *r)
+{
+    ic_vec3 d = v3_sub(rec->position, p);
+    float len = v3_len(d);
+    if (!(len > 0.0f))
+        return 0;
+    d = v3_scale(d, 1.0f / len);
+    const float floor = c->tr->scene->ray_offset_floor;
+    ic_vec3 a = ic_offset_ray_origin_floor(p, n, d, floor), b = ic_offset_ray_origin_floor(rec->position, rec->normal,
+                                                                                          v3_neg(d), floor);
+    ic_vec3 ab = v3_sub(b, a);
+    float dist = v3_len(ab);
+    if (!(dist > 0.0f) || v3_dot(ab, d) <= 0.0f)
+        return 0; /* the offsets met */
+    r->org = a;
+    r->dir = v3_scale(ab, 1.0f / dist);
+    r->tnear = 0.0f;
+    r->tfar = dist * (1.0f - 1e-4f);
+    return 1;
+}
+
+/* The sensors' look-up at (p, n): the sensor records the weights accept (acceptance), those out of view
+ * left out (record_in_view). contrib (CONTRIBUTION_CAPACITY entries) gets the ones kept, *kept their
+ * count and *E their interpolation. Returns 0 if none is kept. With `any`, stops at the first kept one
+ * (construction asks only whether a point is covered; *E is then not set). */
+static int sensor_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_cache_acceptance acceptance, int any,
+                         ic_cache_contribution *contrib, uint32_t *kept, ic_vec3 *E)
+{
+    ic_cache_lookup q = ic_cache_lookup_at(p, n, acceptance);
+    q.bounce = SENSOR_BOUNCE;
+    q.contributions = contrib;
+    q.contribution_capacity = CONTRIBUTION_CAPACITY;
+    ic_cache_estimate e;
+    *kept = 0;
+    if (!ic_cache_query(c->cache, &q, &e))
+        return 0;
+    /* The records' rays, traced together (a ray stream); without a ray (the point itself) a record is in view. */
+    ic_ray rays[CONTRIBUTION_CAPACITY];
+    uint8_t blocked[CONTRIBUTION_CAPACITY];
+    uint32_t traced = 0;
+    int16_t ray_of[CONTRIBUTION_CAPACITY];
+    for (uint32_t k = 0; k < e.contributions_written; ++k) {
+        ic_record rec;
+        ray_of[k] = -1;
+        if (ic_cache_get_record(c->cache, contrib[k].record, &rec) != IC_OK)
+            ray_of[k] = -2;
+        else if (ray_to_record(c, p, n, &rec, &rays[traced])) {
+            if (any && !ic_accel_occluded1(c->tr->accel, &rays[traced]))
+                return *kept = 1;
+            ray_of[k] = (int16_t)traced++;
+        } else if (any) {
+            return *kept = 1;
+        }
+    }
+    if (any)
+        return 0;
+    ic_accel_occluded_n(c->tr->accel, rays, blocked, traced, 0);
+    double sum[3] = {0.0, 0.0, 0.0}, wsum = 0.0;
+    for (uint32_t k = 0; k < e.contributions_written; ++k) {
+        if (ray_of[k] == -2 || (ray_of[k] >= 0 && blocked[ray_of[k]]))
+            continue;
+        const ic_cache_contribution ct = contrib[k];
+        contrib[(*kept)++] = ct;
+        sum[0] += (double)ct.weight * ct.value.x;
+        sum[1] += (double)ct.weight * ct.value.y;
+        sum[2] += (double)ct.weight * ct.value.z;
+        wsum += ct.weight;
+    }
+    if (*kept == 0)
+        return 0;
+    /* All in view (the usual case): the cache's own estimate, which also counts contributors beyond the
+     * buffer, if any. */
+    *E = *kept == e.contributions_written ? e.irradiance
+                                          : v3((float)(sum[0] / wsum), (float)(sum[1] / wsum), (float)(sum[2] / wsum));
+    return 1;
+}
+
 /* A record's own σ is one half-set difference |E − E_half| (one degree of freedom): on its own it is often
  * far from the truth, and a σ built from it alone covered the error at 2σ for about 80 % of the points.
  * Records made with the same rays have about the same relative noise, so its mean square over the records
@@ -327,6 +408,7 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
      * are gathered in parallel and inserted as one batch. What is taken depends only on the points and the
      * records, never on the thread count. A point is gathered at most MAX_ROUNDS times (a later record's
      * neighbour clamping can take its cover away, as in lazy construction). */
+    ic_cache_contribution contrib[CONTRIBUTION_CAPACITY];
     while (r == IC_OK) {
         uint32_t taken = 0;
         if (bounded)
@@ -334,10 +416,8 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
         for (uint32_t i = 0; i < count; ++i) {
             if (gathered[i] >= MAX_ROUNDS)
                 continue;
-            ic_cache_lookup q = ic_cache_lookup_at(p[i], n[i], IC_ACCEPT_CONSTRUCTION);
-            q.bounce = SENSOR_BOUNCE;
-            ic_cache_estimate e;
-            if (ic_cache_query(c->cache, &q, &e))
+            uint32_t kept;
+            if (sensor_lookup(c, p[i], n[i], IC_ACCEPT_CONSTRUCTION, 1, contrib, &kept, NULL))
                 continue;
             if (bounded ? grid_near(&grid, p, p[i]) : taken > 0)
                 continue;
@@ -381,14 +461,9 @@ int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_points
                           double sigma[4])
 {
     ic_cache_contribution contrib[CONTRIBUTION_CAPACITY];
-    ic_cache_lookup q = ic_cache_lookup_at(p, n, IC_ACCEPT_FINAL);
-    q.bounce = SENSOR_BOUNCE;
-    q.contributions = contrib;
-    q.contribution_capacity = CONTRIBUTION_CAPACITY;
-    ic_cache_estimate e;
-    if (!ic_cache_query(c->cache, &q, &e))
+    uint32_t kept;
+    if (!sensor_lookup(c, p, n, IC_ACCEPT_FINAL, 0, contrib, &kept, E))
         return 0;
-    *E = e.irradiance;
     /* The estimate is Σ w_i E_i / Σ w_i. A record's noise has two parts. That of its own rays is
      * independent of its neighbours' (each gathered its own): Σ w_i² σ_i² / (Σ w_i)², σ_i the pooled
      * relative σ times its value (a dark record's own σ). That of the records its rays read (c->record_noise) is shared
@@ -396,7 +471,7 @@ int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_points
      * (the bound; neighbours 1–2 records apart read mostly the same records). Only the first
      * CONTRIBUTION_CAPACITY contributors are weighed; the rest, if any, change the weights little. */
     double var[4] = {0.0, 0.0, 0.0, 0.0}, shared[4] = {0.0, 0.0, 0.0, 0.0}, wsum = 0.0;
-    for (uint32_t k = 0; k < e.contributions_written; ++k) {
+    for (uint32_t k = 0; k < kept; ++k) {
         const uint32_t i = contrib[k].record;
         double v[4], own[4];
         if (!sensor_record(c, i, v, own))

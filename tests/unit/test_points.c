@@ -547,6 +547,34 @@ static void test_grid(void)
     }
 }
 
+/* A record is not read through a surface: sensors half a millimetre under the Cornell box's floor (facing
+ * up, at its underside: no light reaches them) read the records of the sensors half a millimetre above it,
+ * which the weights accept (10.96 and 14.30 lux where the path tracer gives 0), until the look-up tested
+ * that each record is in view of the point. */
+static void test_thin_surface(void)
+{
+    ic_scene *scene = load(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json");
+    if (!scene)
+        return;
+    enum { N = 4 };
+    const ic_sensor_point pts[N] = {sensor(0.0f, 5e-4f, 0.8f, 0, 1, 0), sensor(0.0f, -5e-4f, 0.8f, 0, 1, 0),
+                                    sensor(-0.7f, 5e-4f, 0.0f, 0, 1, 0), sensor(-0.7f, -5e-4f, 0.0f, 0, 1, 0)};
+    ic_point_result res[N];
+    ic_points_options opt = {0};
+    opt.integrator = IC_INTEGRATOR_IC;
+    ic_error err = {0};
+    int ok = ic_points_compute(scene, pts, N, &opt, res, NULL, &err) == IC_OK;
+    CHECK(ok, "thin surface: %s", err.message);
+    for (int i = 0; ok && i < N; i += 2) {
+        printf("thin surface: above the floor %.4g lux, under it %.4g lux\n", res[i].illuminance,
+               res[i + 1].illuminance);
+        CHECK(res[i].illuminance > 5.0, "sensor %d above the floor is lit (%.4g lux)", i, res[i].illuminance);
+        CHECK(res[i + 1].illuminance < 1e-3 * res[i].illuminance, "sensor %d under the floor reads %.4g lux (the "
+              "path tracer: 0)", i + 1, res[i + 1].illuminance);
+    }
+    ic_scene_free(scene);
+}
+
 int main(void)
 {
     test_grid();
@@ -560,6 +588,7 @@ int main(void)
     test_furnace();
     test_cornell();
     test_cornell_grid();
+    test_thin_surface();
     test_bad_points();
     TEST_MAIN_END();
 }

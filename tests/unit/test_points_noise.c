@@ -14,7 +14,7 @@
  */
 #include "test_util.h"
 
-#include "integrators/ic_internal.h"
+#include "test_tracer.h"
 #include "irrcache/points.h"
 #include "irrcache/render.h"
 
@@ -36,11 +36,17 @@ static void put(ic_cache *c, float x, float e, float sigma)
     CHECK(ic_cache_insert(c, &r, NULL, &err) == IC_OK, "insert: %s", err.message);
 }
 
-/* A context with an empty cache and nothing else: what the noise model reads. */
+/* The Cornell box's tracer: a look-up tests the records' view of the point through it. */
+static ic_scene *box;
+static ic_accel *box_accel;
+static ic_tracer box_tr;
+
+/* A context with an empty cache and the tracer: what the noise model reads. */
 static int ctx_with_cache(ic_ctx *c)
 {
     ic_error err = {0};
     memset(c, 0, sizeof *c);
+    c->tr = &box_tr;
     CHECK(ic_cache_create(NULL, &c->cache, &err) == IC_OK, "cache: %s", err.message);
     return c->cache != NULL;
 }
@@ -168,8 +174,15 @@ static void test_daylit_room(void)
 
 int main(void)
 {
+    ic_error err = {0};
+    if (!test_tracer_load(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", 0, &box, &box_accel, &box_tr, &err)) {
+        CHECK(0, "Cornell box: %s", err.message);
+        TEST_MAIN_END();
+    }
     test_pool();
     test_noise_variance();
     test_daylit_room();
+    ic_accel_destroy(box_accel);
+    ic_scene_free(box);
     TEST_MAIN_END();
 }
