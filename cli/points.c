@@ -58,9 +58,10 @@ static void print_help(FILE *out)
             "  E_r E_g E_b  irradiance (the scene's radiometric units: W/m2)\n"
             "  lux          illuminance, 179 lm/W x (0.265074 E_r + 0.670115 E_g + 0.064811 E_b) (Radiance's\n"
             "               convention, so that numbers compare)\n"
-            "  sigma        one-sigma Monte Carlo error of the illuminance (lux), from 16 independent\n"
-            "               replicates per point; for the cache it leaves out the interpolation's bias,\n"
-            "               which --accuracy bounds\n"
+            "  sigma        one-sigma Monte Carlo error of the illuminance (lux): pt, from 16 independent\n"
+            "               replicates per point; ic, those of the direct light with the records' noise\n"
+            "               (their own rays' and that of the records those read), without the\n"
+            "               interpolation's bias, which --accuracy bounds\n"
             "Options take their value as --name VALUE or --name=VALUE (--grid: six arguments).\n"
             "\n"
             "options:\n");
