@@ -49,10 +49,12 @@ static int by_record(const void *a, const void *b)
 ic_vec3 ic_ic_noise_variance(const ic_ctx *c, ic_noise_terms *t, double scale)
 {
     double var[3] = {0.0, 0.0, 0.0};
-    /* Entries of one record are summed in the order the rays read them: a stable sort by index first. */
+    /* Entries of one record are summed in the order the rays read them: a stable sort by index first
+     * (none read: no array to sort, and qsort must not be given a null one). */
     for (size_t i = 0; i < t->count; ++i)
         t->terms[i].order = (uint32_t)i;
-    qsort(t->terms, t->count, sizeof *t->terms, by_record);
+    if (t->count > 1)
+        qsort(t->terms, t->count, sizeof *t->terms, by_record);
     for (size_t i = 0; i < t->count;) {
         const uint32_t rec = t->terms[i].record;
         double d[3] = {0.0, 0.0, 0.0};
