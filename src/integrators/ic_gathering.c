@@ -584,7 +584,8 @@ static ic_result gather_here(ic_ctx *c, const ic_gather_point *pts, uint32_t cou
         if (r != IC_OK)
             ic_error_set(err, r, "could not start %d gathering threads", threads);
         else if ((r = (ic_result)atomic_load(&j.status)) == IC_ERR_OOM)
-            ic_error_set(err, r, "out of memory keeping a record's rays for its Hessian");
+            ic_error_set(err, r, "out of memory keeping a record's rays for its Hessian, or the records "
+                         "they read for its sigma");
         else if (r != IC_OK)
             ic_error_set(err, r, "gathering a record failed (%s): a shading point with a zero normal or a "
                          "non-finite position", ic_result_name(r));

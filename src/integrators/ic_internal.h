@@ -136,17 +136,23 @@ typedef struct ic_gather_replay {
 } ic_gather_replay;
 
 /* The reads of one record's rays from other records, for the part of its noise that comes from them
- * (ic_record_noise.c): per read, the record read and how much of its value the ray passed on. */
+ * (ic_record_noise.c): per record read, in the order first read, how much of its value the rays passed on
+ * (the reads summed as they come: the memory is that of the records read, not of the reads, which were up
+ * to LOOKUP_CAPACITY per ray). */
 typedef struct ic_noise_term {
-    uint32_t record, order;
-    ic_vec3 coef;
+    uint32_t record;
+    size_t slot;               /* its slot in ic_noise_terms.slot */
+    double coef[3];
 } ic_noise_term;
 typedef struct ic_noise_terms {
     ic_noise_term *terms;
     size_t count, capacity;
+    uint32_t *slot;            /* open addressing by record: 1 + its entry in terms, 0 empty; slots a power
+                                  of two, at least twice count */
+    size_t slots;
     int failed;                /* an allocation failed (reported by ic_ic_gather_one) */
 } ic_noise_terms;
-/* Appends a read of record `record` that added coef ⊙ E_record's relative change to a ray's radiance. */
+/* Adds a read of record `record` that added coef ⊙ E_record's relative change to a ray's radiance. */
 void ic_ic_noise_add(ic_noise_terms *t, uint32_t record, ic_vec3 coef);
 /* Var of a record's E from the reads t holds, E = scale · Σ_rays radiance (π/N for N cosine-distributed
  * rays): Σ_j (scale · Σ coef_j)² (σ_j/E_j)² per channel, σ_j and E_j record j's own. Empties t. */

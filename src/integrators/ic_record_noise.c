@@ -17,54 +17,66 @@
 #include "ic_internal.h"
 
 #include "core/grow.h"
+#include "core/rng.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+/* The slot of record `record` in t's table: its own, or the empty one where it would go. */
+static size_t noise_slot(const ic_noise_terms *t, uint32_t record)
+{
+    const size_t mask = t->slots - 1;
+    for (size_t s = (size_t)ic_mix64(record) & mask;; s = (s + 1) & mask)
+        if (t->slot[s] == 0 || t->terms[t->slot[s] - 1].record == record)
+            return s;
+}
+
 void ic_ic_noise_add(ic_noise_terms *t, uint32_t record, ic_vec3 coef)
 {
     if (t->failed)
         return;
-    void *a = t->terms;
-    if (ic_grow(&a, &t->capacity, t->count + 1, sizeof *t->terms) != IC_OK) {
-        t->failed = 1;
-        return;
+    if (2 * (t->count + 1) > t->slots) { /* a table twice as large, the entries hashed again */
+        size_t slots = t->slots ? 2 * t->slots : 64;
+        uint32_t *slot = calloc(slots, sizeof *slot);
+        if (!slot) {
+            t->failed = 1;
+            return;
+        }
+        free(t->slot);
+        t->slot = slot;
+        t->slots = slots;
+        for (size_t i = 0; i < t->count; ++i) {
+            t->terms[i].slot = noise_slot(t, t->terms[i].record);
+            t->slot[t->terms[i].slot] = (uint32_t)i + 1;
+        }
     }
-    t->terms = a;
-    t->terms[t->count].record = record;
-    t->terms[t->count].coef = coef;
-    ++t->count;
-}
-
-static int by_record(const void *a, const void *b)
-{
-    const ic_noise_term *x = a, *y = b;
-    if (x->record != y->record)
-        return x->record < y->record ? -1 : 1;
-    /* Equal records: the order they were added in (their sum's bits must not depend on qsort). */
-    return x->order < y->order ? -1 : x->order > y->order;
+    const size_t s = noise_slot(t, record);
+    if (t->slot[s] == 0) {
+        void *a = t->terms;
+        if (ic_grow(&a, &t->capacity, t->count + 1, sizeof *t->terms) != IC_OK) {
+            t->failed = 1;
+            return;
+        }
+        t->terms = a;
+        t->terms[t->count] = (ic_noise_term){record, s, {0.0, 0.0, 0.0}};
+        t->slot[s] = (uint32_t)++t->count;
+    }
+    /* A record's reads are summed in the order the rays make them: the same bits whatever the thread. */
+    ic_noise_term *e = &t->terms[t->slot[s] - 1];
+    e->coef[0] += coef.x;
+    e->coef[1] += coef.y;
+    e->coef[2] += coef.z;
 }
 
 ic_vec3 ic_ic_noise_variance(const ic_ctx *c, ic_noise_terms *t, double scale)
 {
     double var[3] = {0.0, 0.0, 0.0};
-    /* Entries of one record are summed in the order the rays read them: a stable sort by index first
-     * (none read: no array to sort, and qsort must not be given a null one). */
-    for (size_t i = 0; i < t->count; ++i)
-        t->terms[i].order = (uint32_t)i;
-    if (t->count > 1)
-        qsort(t->terms, t->count, sizeof *t->terms, by_record);
-    for (size_t i = 0; i < t->count;) {
-        const uint32_t rec = t->terms[i].record;
-        double d[3] = {0.0, 0.0, 0.0};
-        for (; i < t->count && t->terms[i].record == rec; ++i) {
-            d[0] += t->terms[i].coef.x;
-            d[1] += t->terms[i].coef.y;
-            d[2] += t->terms[i].coef.z;
-        }
+    /* Over the records in the order first read (the point's rays alone decide it). */
+    for (size_t i = 0; i < t->count; ++i) {
+        const double *d = t->terms[i].coef;
         ic_record r;
-        if (ic_cache_get_record(c->cache, rec, &r) != IC_OK)
+        if (ic_cache_get_record(c->cache, t->terms[i].record, &r) != IC_OK)
             continue;
         /* The coefficients carry the read record's value: its relative σ scales them. */
         const double e[3] = {r.irradiance.x, r.irradiance.y, r.irradiance.z};
@@ -73,6 +85,8 @@ ic_vec3 ic_ic_noise_variance(const ic_ctx *c, ic_noise_terms *t, double scale)
             if (e[ch] > 0.0)
                 var[ch] += (scale * d[ch] * s[ch] / e[ch]) * (scale * d[ch] * s[ch] / e[ch]);
     }
+    for (size_t i = 0; i < t->count; ++i) /* the table emptied at the cost of the records read */
+        t->slot[t->terms[i].slot] = 0;
     t->count = 0;
     return v3((float)var[0], (float)var[1], (float)var[2]);
 }
@@ -80,5 +94,6 @@ ic_vec3 ic_ic_noise_variance(const ic_ctx *c, ic_noise_terms *t, double scale)
 void ic_ic_noise_release(ic_noise_terms *t)
 {
     free(t->terms);
+    free(t->slot);
     memset(t, 0, sizeof *t);
 }

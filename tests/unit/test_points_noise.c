@@ -5,7 +5,8 @@
  *      sensor's σ tenfold) and keeping its own σ at its own sensor; records before `first` (the hit
  *      stage's) are not sensors';
  *   2. a record's variance from the records its rays read (ic_ic_noise_variance): Σ_j (scale·Σ coef_j)²
- *      (σ_j/E_j)², reads of one record summed before squaring, whatever their order;
+ *      (σ_j/E_j)², reads of one record summed before squaring, whatever their order, in memory that
+ *      grows with the records read, not with the reads;
  *   3. the daylit room's 20 sensors (the overcast sky-room, 1 m apart, the defaults) over twelve seeds
  *      against a path-traced reference: the errors are what σ says (mean z² 1.24; 1.69 with σ leaving out
  *      the noise of the hit records the sensors' rays read), the seeds' spread is the variance σ claims,
@@ -105,6 +106,15 @@ static void test_noise_variance(void)
     CHECK(fabsf(var.x - 0.040625f) < 1e-6f && var.x == var.y && var.y == var.z, "variance %.6g, expected 0.040625",
           var.x);
     CHECK(t.count == 0, "the terms are emptied (%zu left)", t.count);
+    /* The memory is that of the records read, not of the reads (a ray reads up to LOOKUP_CAPACITY records,
+     * and a record may have 10^7 rays): a million reads of the two records keep two entries. */
+    for (int i = 0; i < 1000000; ++i)
+        ic_ic_noise_add(&t, (uint32_t)(i & 1), v3s(0.25f));
+    CHECK(!t.failed && t.count == 2 && t.capacity <= 64, "a million reads of two records keep %zu entries (room for "
+          "%zu)", t.count, t.capacity);
+    var = ic_ic_noise_variance(&c, &t, 1e-5);
+    /* (1e-5 · 125000)² · (0.1² + 0.05²) = 1.5625 · 0.0125 */
+    CHECK(fabsf(var.x - 0.01953125f) < 1e-7f, "variance of the million reads %.8g, expected 0.01953125", var.x);
     ic_ic_noise_release(&t);
     ic_cache_destroy(cache);
 }
