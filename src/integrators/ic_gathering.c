@@ -803,10 +803,15 @@ void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const i
     rec->pixel_footprint = cand->footprint;
 }
 
+ic_vec3 ic_ic_gather_origin(const ic_ctx *c, ic_vec3 p, ic_vec3 n)
+{
+    return ic_offset_ray_origin_floor(p, n, n, c->tr->scene->ray_offset_floor);
+}
+
 ic_gather_point ic_ic_gather_point_of(const ic_ctx *c, const ic_candidate *cand)
 {
     ic_gather_point gp;
-    gp.position = ic_offset_ray_origin_floor(cand->p, cand->n, cand->n, c->tr->scene->ray_offset_floor);
+    gp.position = ic_ic_gather_origin(c, cand->p, cand->n);
     gp.normal = cand->n;
     gp.key = cand->key;
     return gp;

@@ -224,6 +224,9 @@ float ic_ic_hessian_error_target(const ic_cache_params *p);
 void ic_ic_record_from_gather(const ic_ctx *c, const ic_candidate *cand, const ic_gather_result *gr, ic_record *rec);
 /* Gather point (offset origin, normal, key) of a candidate. */
 ic_gather_point ic_ic_gather_point_of(const struct ic_ctx *c, const ic_candidate *cand);
+/* Where the hemisphere rays of a record at p (unit normal n) start: p moved off any surface it lies on,
+ * to the side n faces. */
+ic_vec3 ic_ic_gather_origin(const struct ic_ctx *c, ic_vec3 p, ic_vec3 n);
 /* Gathers count candidates in parallel and inserts them as one batch (those gathered, when the render
  * is cancelled during the gathers). */
 ic_result ic_ic_gather_and_insert(ic_ctx *c, const ic_candidate *cand, uint32_t count, phase_times *pt, ic_error *err);

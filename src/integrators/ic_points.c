@@ -182,24 +182,19 @@ static void grid_add(taken_grid *g, const ic_vec3 *pts, uint32_t i)
     *head = i + 1;
 }
 
-/* The ray from sensor point p (facing n) to the sensor record rec (a sensor's own point); 0 if the two are
- * one point (nothing can lie between). The weights alone would let a record serve a point on the far side
- * of a thin surface (a sensor under a desk top read the record above it), as in Ward's and Radiance's
- * caches. Both ends are moved off any surface they lie on, towards the other. */
+/* The ray from sensor point p (facing n) to the sensor record rec; 0 if the two are one point (nothing can
+ * lie between). The weights alone would let a record serve a point on the far side of a thin surface (a
+ * sensor under a desk top read the record above it), as in Ward's and Radiance's caches. The ray joins
+ * where the two points' hemisphere rays start (ic_ic_gather_origin: each moved off any surface it lies
+ * on, to the side its normal faces), so that it tests what the two gathers see: moved towards each other
+ * instead, a record lying on the floor itself was moved under it, to the side of a sensor under the floor,
+ * and served it. */
 static int ray_to_record(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_record *rec, ic_ray *r)
 {
-    ic_vec3 d = v3_sub(rec->position, p);
-    float len = v3_len(d);
-    if (!(len > 0.0f))
+    const ic_vec3 a = ic_ic_gather_origin(c, p, n), ab = v3_sub(ic_ic_gather_origin(c, rec->position, rec->normal), a);
+    const float dist = v3_len(ab);
+    if (!(dist > 0.0f))
         return 0;
-    d = v3_scale(d, 1.0f / len);
-    const float floor = c->tr->scene->ray_offset_floor;
-    ic_vec3 a = ic_offset_ray_origin_floor(p, n, d, floor), b = ic_offset_ray_origin_floor(rec->position, rec->normal,
-                                                                                          v3_neg(d), floor);
-    ic_vec3 ab = v3_sub(b, a);
-    float dist = v3_len(ab);
-    if (!(dist > 0.0f) || v3_dot(ab, d) <= 0.0f)
-        return 0; /* the offsets met */
     r->org = a;
     r->dir = v3_scale(ab, 1.0f / dist);
     r->tnear = 0.0f;
@@ -208,7 +203,7 @@ static int ray_to_record(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_record 
 }
 
 /* The sensors' look-up at (p, n): the sensor records the weights accept (acceptance), those out of view
- * left out (record_in_view). contrib (CONTRIBUTION_CAPACITY entries) gets the ones kept, *kept their
+ * left out (ray_to_record). contrib (CONTRIBUTION_CAPACITY entries) gets the ones kept, *kept their
  * count and *E their interpolation. Returns 0 if none is kept. With `any`, stops at the first kept one
  * (construction asks only whether a point is covered; *E is then not set). */
 static int sensor_lookup(const ic_ctx *c, ic_vec3 p, ic_vec3 n, ic_cache_acceptance acceptance, int any,

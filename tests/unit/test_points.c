@@ -548,29 +548,35 @@ static void test_grid(void)
 }
 
 /* A record is not read through a surface: sensors half a millimetre under the Cornell box's floor (facing
- * up, at its underside: no light reaches them) read the records of the sensors half a millimetre above it,
- * which the weights accept (10.96 and 14.30 lux where the path tracer gives 0), until the look-up tested
- * that each record is in view of the point. */
+ * up, at its underside: no light reaches them) read the records of the sensors above it, which the weights
+ * accept, until the look-up tested that each record is in view of the point: those half a millimetre above
+ * the floor gave 10.96 and 14.30 lux (the path tracer: 0); and those on the floor itself (y = 0, a
+ * calculation grid at floor level) 10.28 and 15.74 lux while the ray's ends were moved off the floor
+ * towards each other, which took the record's end under the floor. */
 static void test_thin_surface(void)
 {
     ic_scene *scene = load(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json");
     if (!scene)
         return;
     enum { N = 4 };
-    const ic_sensor_point pts[N] = {sensor(0.0f, 5e-4f, 0.8f, 0, 1, 0), sensor(0.0f, -5e-4f, 0.8f, 0, 1, 0),
-                                    sensor(-0.7f, 5e-4f, 0.0f, 0, 1, 0), sensor(-0.7f, -5e-4f, 0.0f, 0, 1, 0)};
-    ic_point_result res[N];
-    ic_points_options opt = {0};
-    opt.integrator = IC_INTEGRATOR_IC;
-    ic_error err = {0};
-    int ok = ic_points_compute(scene, pts, N, &opt, res, NULL, &err) == IC_OK;
-    CHECK(ok, "thin surface: %s", err.message);
-    for (int i = 0; ok && i < N; i += 2) {
-        printf("thin surface: above the floor %.4g lux, under it %.4g lux\n", res[i].illuminance,
-               res[i + 1].illuminance);
-        CHECK(res[i].illuminance > 5.0, "sensor %d above the floor is lit (%.4g lux)", i, res[i].illuminance);
-        CHECK(res[i + 1].illuminance < 1e-3 * res[i].illuminance, "sensor %d under the floor reads %.4g lux (the "
-              "path tracer: 0)", i + 1, res[i + 1].illuminance);
+    const float above[2] = {5e-4f, 0.0f};
+    for (int a = 0; a < 2; ++a) {
+        const ic_sensor_point pts[N] = {sensor(0.0f, above[a], 0.8f, 0, 1, 0), sensor(0.0f, -5e-4f, 0.8f, 0, 1, 0),
+                                        sensor(-0.7f, above[a], 0.0f, 0, 1, 0), sensor(-0.7f, -5e-4f, 0.0f, 0, 1, 0)};
+        ic_point_result res[N];
+        ic_points_options opt = {0};
+        opt.integrator = IC_INTEGRATOR_IC;
+        ic_error err = {0};
+        int ok = ic_points_compute(scene, pts, N, &opt, res, NULL, &err) == IC_OK;
+        CHECK(ok, "thin surface: %s", err.message);
+        for (int i = 0; ok && i < N; i += 2) {
+            printf("thin surface: at y = %g %.4g lux, under the floor %.4g lux\n", (double)above[a], res[i].illuminance,
+                   res[i + 1].illuminance);
+            CHECK(res[i].illuminance > 5.0, "sensor %d at y = %g is lit (%.4g lux)", i, (double)above[a],
+                  res[i].illuminance);
+            CHECK(res[i + 1].illuminance < 1e-3 * res[i].illuminance, "sensor %d under the floor reads %.4g lux from "
+                  "y = %g (the path tracer: 0)", i + 1, res[i + 1].illuminance, (double)above[a]);
+        }
     }
     ic_scene_free(scene);
 }
