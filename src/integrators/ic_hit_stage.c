@@ -220,7 +220,8 @@ ic_result ic_ic_hit_stage(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_
         uint32_t N = keep.phi_strata ? keep.phi_strata : (uint32_t)lround((double)IC_PI * M);
         c->o.gather.theta_strata = (M + strata_div - 1) / strata_div;
         c->o.gather.phi_strata = (N + strata_div - 1) / strata_div;
-        if (gradients && c->o.gather.theta_strata < HIT_GRADIENT_MIN_THETA && M >= HIT_GRADIENT_MIN_THETA) {
+        const int with_gradients = gradients && !c->o.no_gradients;
+        if (with_gradients && c->o.gather.theta_strata < HIT_GRADIENT_MIN_THETA && M >= HIT_GRADIENT_MIN_THETA) {
             c->o.gather.theta_strata = HIT_GRADIENT_MIN_THETA;
             c->o.gather.phi_strata = (uint32_t)lround((double)IC_PI * HIT_GRADIENT_MIN_THETA);
         }

@@ -10,7 +10,7 @@
  *   3. the daylit room's 20 sensors (the overcast sky-room, 1 m apart, the defaults) over twelve seeds
  *      against a path-traced reference: the errors are what σ says (mean z² 1.24; 1.69 with σ leaving out
  *      the noise of the hit records the sensors' rays read), the seeds' spread is the variance σ claims,
- *      and the errors' mean is unbiased within its spread (−3.1 % when the hit records' gradients rested
+ *      and the errors' mean is unbiased within its spread (−3.0 % when the hit records' gradients rested
  *      on two rings of strata).
  */
 #include "test_util.h"
