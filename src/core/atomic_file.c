@@ -327,13 +327,30 @@ static ic_result check_replaceable(const char *dest, const char *path, ic_error 
                         "name", path);
 }
 
+/* The refusal when what has the temporary's name is no longer the file written (finish_file's 3). */
+static ic_result replaced_error(const char *path, ic_error *err)
+{
+    return ic_error_set(err, IC_ERR_IO, "%s: its temporary file was replaced during the write (a link put in its "
+                        "place); nothing was written; write it in a folder only you may write", path);
+}
+
 /* tmp's bytes written to descriptor fd at its offset (as a shell's redirection writes them): a file that the
  * process's own descriptor leads to (/dev/stdout sent to a file) is shared with whoever opened it, who may
  * have written to it before ('>>', a script's log) and write after; a rename would replace it, losing the
  * first and sending the second to a file no name leads to. Not atomic: a stream takes what it is given. */
 static ic_result write_to_descriptor(const char *tmp, int fd, const char *path, ic_error *err)
 {
-    int in = open(tmp, O_RDONLY | O_CLOEXEC);
+    /* Read back by name, so guarded as finish_file is: a link put in the temporary's place would have sent
+     * the file it leads to (another user's, or any file for root) to the descriptor. */
+    int in = open(tmp, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+    struct stat st;
+    if (in >= 0 && (fstat(in, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1)) {
+        close(in);
+        in = -1;
+        errno = ELOOP;
+    }
+    if (in < 0 && errno == ELOOP)
+        return replaced_error(path, err);
     if (in < 0)
         return ic_error_set(err, IC_ERR_IO, "%s: write failed (%s); nothing was written", path, strerror(errno));
     char buf[65536];
@@ -450,8 +467,7 @@ ic_result ic_atomic_rename(const char *tmp, const char *path, ic_error *err)
     if (failed) {
         discard(tmp);
         if (failed == 3)
-            return ic_error_set(err, IC_ERR_IO, "%s: its temporary file was replaced during the write (a link put "
-                                "in its place); nothing was written; write it in a folder only you may write", path);
+            return replaced_error(path, err);
         return ic_error_set(err, IC_ERR_IO, failed == 2 ? "%s: cannot give the new file the old one's permissions "
                             "(%s); nothing was written; remove the old file or write to a file system that keeps "
                             "permissions" : "%s: write failed (%s); nothing was written", path, strerror(e));

@@ -268,6 +268,24 @@ static void check_replaced_temporary(void)
         CHECK(lstat(out, &st) == 0 && S_ISREG(st.st_mode) && !strcmp(read_small(out, text, sizeof text), "old"),
               "%s in its place: the output is not replaced: '%s'", how[k], text);
     }
+    /* The same through a descriptor (/dev/stdout sent to a file): the temporary is read back by name and its
+     * bytes written to the descriptor, so a link in its place sent the victim's contents there. */
+    const char *log_path = T "/swap/log.txt", *fd_out = T "/swap/log.pfm";
+    FILE *lf = fopen(log_path, "w");
+    CHECK(lf && fclose(lf) == 0, "a log");
+    int lfd = open(log_path, O_WRONLY | O_APPEND);
+    char fd_link[64];
+    snprintf(fd_link, sizeof fd_link, "/proc/self/fd/%d", lfd);
+    CHECK(lfd >= 0 && symlink(fd_link, fd_out) == 0, "a link through /proc/self/fd to a file");
+    CHECK(ic_atomic_temp_name(fd_out, tmp, sizeof tmp) == 0 && remove(tmp) == 0, "a temporary");
+    CHECK(symlink(victim, tmp) == 0, "a symbolic link in its place: %s", strerror(errno));
+    memset(&err, 0, sizeof err);
+    ic_result r = ic_atomic_rename(tmp, fd_out, &err);
+    close(lfd);
+    CHECK(r == IC_ERR_IO && strstr(err.message, "replaced during the write"), "through a descriptor, a link in "
+          "the temporary's place: refused: %s", err.message);
+    CHECK(!strcmp(read_small(log_path, text, sizeof text), ""), "the descriptor's file got nothing: '%s'", text);
+    remove(fd_out);
     CHECK(test_count_temporaries(T "/swap") == 0, "no temporary left");
 }
 
