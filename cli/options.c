@@ -648,6 +648,14 @@ void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width)
     print_row(f, &options[id], left_width);
 }
 
+void ic_cli_print_option_default(FILE *f, ic_arg_id id, double value, int left_width)
+{
+    opt_def o = options[id];
+    o.def = value;
+    o.default_text = "%g";
+    print_row(f, &o, left_width);
+}
+
 void ic_cli_print_command_options(FILE *f, ic_cli_command cmd, int left_width)
 {
     for (int i = 0; i < tables[cmd].count; ++i)

@@ -304,6 +304,8 @@ int ic_cli_parse_shared_option(int argc, char **argv, int *i, ic_cli_args *a, co
     IC_ARG_MAX_TEXTURE_PIXELS, IC_ARG_MAX_MESH_ELEMENTS, IC_ARG_MAX_SCENE_BYTES, IC_ARG_ALLOW_OUTSIDE_PATHS
 /* One option's line of --help, as render's: its name from column 2, its help (wrapped) from left_width. */
 void ic_cli_print_option(FILE *f, ic_arg_id id, int left_width);
+/* The same row with another default (a command that takes the option with a default of its own). */
+void ic_cli_print_option_default(FILE *f, ic_arg_id id, double value, int left_width);
 /* --help and --help-markdown. */
 void ic_cli_print_help(FILE *f);
 void ic_cli_print_markdown(FILE *f);

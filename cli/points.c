@@ -68,8 +68,12 @@ static void print_help(FILE *out)
     ic_cli_print_command_options(out, IC_CLI_POINTS, 21);
     fprintf(out, "options as for irrcache render (the sensor is the first scattering event; ic needs --max-depth 2\n"
                  "or more):\n");
+    /* Sensors use Ward's weights (no --weight): only their accuracy default applies. */
     for (size_t k = 0; k < sizeof shared_ids / sizeof shared_ids[0]; ++k)
-        ic_cli_print_option(out, shared_ids[k], 21);
+        if (shared_ids[k] == IC_ARG_ACCURACY)
+            ic_cli_print_option_default(out, shared_ids[k], IC_DEFAULT_ACCURACY_WARD, 21);
+        else
+            ic_cli_print_option(out, shared_ids[k], 21);
     fprintf(out, "\nexit status: 0 success, 1 unreadable or malformed points file, scene or output, 2 usage error\n");
 }
 

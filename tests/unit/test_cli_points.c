@@ -51,7 +51,13 @@ static void test_outputs(void)
                                     "\n"
                                     "0.7 0.8 0.7   0 1 0   # right\n"
                                     "-0.98 1 0 1 0 0\n");
-    CHECK(run("--help", NULL) == 0, "--help exits 0");
+    CHECK(run("--help", DIR "/help.txt") == 0, "--help exits 0");
+    /* Sensors take Ward's weights only: their accuracy's default alone, not render's per weight. */
+    const char *acc = strstr(slurp(DIR "/help.txt"), "--accuracy A");
+    const char *acc_end = acc ? strstr(acc, "\n  -") : NULL;
+    CHECK(acc && acc_end && strstr(acc, "[default: 0.15]") && strstr(acc, "[default: 0.15]") < acc_end &&
+              !strstr(acc, "(tl)"),
+          "--help: the accuracy's default is 0.15, without tl's");
     CHECK(run(SCENE " --points " DIR "/pts.txt --threads 1", DIR "/a.txt") == 0 && err_text[0] == '\0',
           "text to stdout, nothing on stderr: %s", err_text);
     /* What the loader dropped, and a scene without light, are said on stderr as render says them. */
