@@ -499,8 +499,7 @@ ic_result ic_ic_gather_one(ic_gather_worker *w, ic_gatherer *g, const ic_gather_
         w->mis_rays = (float)rays;
         w->mis_lights = (float)ic_ic_emitter_light_samples(rays);
     }
-    w->noise.count = 0;
-    ic_result r = gather_sets(w, g, pt, out, levels);
+    ic_result r = gather_sets(w, g, pt, out, levels); /* w->noise: empty (ic_ic_noise_variance empties it) */
     if (r == IC_OK && c->track_noise) {
         if (w->noise.failed)
             return IC_ERR_OOM;

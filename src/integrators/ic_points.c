@@ -42,21 +42,24 @@
  * unchanged. */
 #define DARK_FRACTION 0.05
 
-/* Record i's irradiance and own σ as R, G, B and luminance; 0 if it cannot be read. A record's channels
- * share its rays: the σ of its luminance is bounded by the weighted sum. */
+/* v's R, G, B and, in v[3], their luminance (Radiance's weights). For σs of channels that share their rays
+ * the weighted sum is the luminance's σ at full correlation, its upper bound. */
+static void rgb_lum(double r, double g, double b, double v[4])
+{
+    v[0] = r;
+    v[1] = g;
+    v[2] = b;
+    v[3] = IC_LUMINANCE_R * v[0] + IC_LUMINANCE_G * v[1] + IC_LUMINANCE_B * v[2];
+}
+
+/* Record i's irradiance and own σ as R, G, B and luminance; 0 if it cannot be read. */
 static int sensor_record(const ic_ctx *c, uint32_t i, double e[4], double sg[4])
 {
     ic_record rec;
     if (ic_cache_get_record(c->cache, i, &rec) != IC_OK)
         return 0;
-    e[0] = rec.irradiance.x;
-    e[1] = rec.irradiance.y;
-    e[2] = rec.irradiance.z;
-    e[3] = IC_LUMINANCE_R * e[0] + IC_LUMINANCE_G * e[1] + IC_LUMINANCE_B * e[2];
-    sg[0] = rec.sigma.x;
-    sg[1] = rec.sigma.y;
-    sg[2] = rec.sigma.z;
-    sg[3] = IC_LUMINANCE_R * sg[0] + IC_LUMINANCE_G * sg[1] + IC_LUMINANCE_B * sg[2];
+    rgb_lum(rec.irradiance.x, rec.irradiance.y, rec.irradiance.z, e);
+    rgb_lum(rec.sigma.x, rec.sigma.y, rec.sigma.z, sg);
     return 1;
 }
 
@@ -271,29 +274,38 @@ ic_result ic_ic_points_pool(const ic_ctx *c, uint32_t first, uint32_t records, i
     const uint32_t sensors = records > first ? records - first : 0;
     if (sensors == 0)
         return IC_OK;
+    /* Each record read once: its four values and σs (a record that cannot be read counts as dark, 0). */
     float *value = malloc(sizeof *value * sensors);
-    if (!value)
+    double *e = malloc(sizeof *e * 4 * sensors), *sg = malloc(sizeof *sg * 4 * sensors);
+    if (!value || !e || !sg) {
+        free(value);
+        free(e);
+        free(sg);
         return ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensor records", sensors);
+    }
+    for (uint32_t k = 0; k < sensors; ++k)
+        if (!sensor_record(c, first + k, &e[4 * k], &sg[4 * k]))
+            memset(&e[4 * k], 0, sizeof *e * 4);
     for (int ch = 0; ch < 4; ++ch) {
         uint32_t lit = 0;
-        for (uint32_t k = first; k < records; ++k) {
-            double e[4], sg[4];
-            if (sensor_record(c, k, e, sg) && e[ch] > 0.0)
-                value[lit++] = (float)e[ch];
-        }
+        for (uint32_t k = 0; k < sensors; ++k)
+            if (e[4 * k + ch] > 0.0)
+                value[lit++] = (float)e[4 * k + ch];
         noise->dark[ch] = lit ? DARK_FRACTION * ic_kth_smallest(value, lit, lit / 2) : 0.0;
         double sum = 0.0;
         uint32_t used = 0;
-        for (uint32_t k = first; k < records; ++k) {
-            double e[4], sg[4];
-            if (sensor_record(c, k, e, sg) && e[ch] > 0.0 && e[ch] >= noise->dark[ch]) {
-                sum += (sg[ch] / e[ch]) * (sg[ch] / e[ch]);
+        for (uint32_t k = 0; k < sensors; ++k) {
+            const double ek = e[4 * k + ch], sk = sg[4 * k + ch];
+            if (ek > 0.0 && ek >= noise->dark[ch]) {
+                sum += (sk / ek) * (sk / ek);
                 ++used;
             }
         }
         noise->rel_var[ch] = used ? sum / used : 0.0;
     }
     free(value);
+    free(e);
+    free(sg);
     return IC_OK;
 }
 
@@ -476,9 +488,8 @@ int ic_ic_points_indirect(const ic_ctx *c, ic_vec3 p, ic_vec3 n, const ic_points
             var[ch] += w * w * (v[ch] < noise->dark[ch] ? own[ch] * own[ch] : noise->rel_var[ch] * v[ch] * v[ch]);
         if (i < c->record_noise_count) {
             const ic_vec3 sv = c->record_noise[i];
-            double s[4] = {sqrt(fmax(sv.x, 0.0f)), sqrt(fmax(sv.y, 0.0f)), sqrt(fmax(sv.z, 0.0f)), 0.0};
-            /* The channels read the same records with the same rays: the luminance's σ is their sum. */
-            s[3] = IC_LUMINANCE_R * s[0] + IC_LUMINANCE_G * s[1] + IC_LUMINANCE_B * s[2];
+            double s[4]; /* the channels read the same records with the same rays */
+            rgb_lum(sqrt(fmax(sv.x, 0.0f)), sqrt(fmax(sv.y, 0.0f)), sqrt(fmax(sv.z, 0.0f)), s);
             for (int ch = 0; ch < 4; ++ch)
                 shared[ch] += w * s[ch];
         }
