@@ -4,7 +4,7 @@
 #     bin/irrcache                                   the command
 #     include/irrcache/*.h                           the public headers (nothing from src/)
 #     lib/libic_core.a, libirrcache_cache.a, …       the libraries (static; shared with -DBUILD_SHARED_LIBS=ON)
-#     lib/cmake/irrcache/irrcacheConfig*.cmake       find_package(irrcache 0.2 REQUIRED [COMPONENTS cache render])
+#     lib/cmake/irrcache/irrcacheConfig*.cmake       find_package(irrcache 0.5 REQUIRED [COMPONENTS cache render])
 #     lib/pkgconfig/irrcache.pc, irrcache-cache.pc   pkg-config --cflags --libs irrcache-cache
 #     share/man/man1/irrcache.1                      the manual page, made from the command's --help texts
 #     share/doc/irrcache/README.md, docs/*.md        the documentation

@@ -16,7 +16,7 @@ extern "C" {
 #endif
 
 #define IRRCACHE_VERSION_MAJOR 0
-#define IRRCACHE_VERSION_MINOR 4
+#define IRRCACHE_VERSION_MINOR 5
 #define IRRCACHE_VERSION_PATCH 0
 
 /* One comparable number per version: major·10000 + minor·100 + patch. */

@@ -58,12 +58,12 @@ int main(void)
         {"ic_points_grid_spec", sizeof(ic_points_grid_spec), 40},
         {"ic_comm", sizeof(ic_comm), 88},
     };
-    const int same_version = IRRCACHE_VERSION_NUMBER == IRRCACHE_MAKE_VERSION(0, 4, 0);
-    CHECK(same_version, "the table below is 0.4.0's; version.h says %s: update it for the new version",
+    const int same_version = IRRCACHE_VERSION_NUMBER == IRRCACHE_MAKE_VERSION(0, 5, 0);
+    CHECK(same_version, "the table below is 0.5.0's; version.h says %s: update it for the new version",
           IRRCACHE_VERSION_STRING);
     for (size_t i = 0; same_version && i < sizeof structs / sizeof structs[0]; ++i)
         CHECK(structs[i].size == structs[i].expected,
-              "%s is %zu bytes, %zu in 0.4.0: a public struct changed within a release; bump the minor version "
+              "%s is %zu bytes, %zu in 0.5.0: a public struct changed within a release; bump the minor version "
               "and update this table", structs[i].name, structs[i].size, structs[i].expected);
 #else
     printf("not a 64-bit Linux build: the sizes are not checked\n");
