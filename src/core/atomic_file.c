@@ -57,9 +57,64 @@ void ic_remove_temporary_files(void)
             (void)unlink(slot_name[k]);
 }
 
-/* The pid in a temporary name's tail "<pid>.<n>" (digits only), or 0 if the tail is not of that form. */
+/* The tag in a temporary's name: TAG_LEN lower-case hex digits that say which machine (boot) and pid
+ * namespace wrote it, so that its pid is read where it means something (machine_tag). */
+#define TAG_LEN 8
+/* The longest tail a temporary's name adds: ".tmp.", the tag, ".", a pid and ".", a counter (up to 10 digits
+ * each). */
+#define TEMP_TAIL_MAX (5 + TAG_LEN + 1 + 10 + 1 + 10)
+/* What a shortened name ends in: "~" and 16 hex digits of a hash of the whole name. */
+#define SHORT_MARK 17
+
+/* FNV-1a over n bytes, continuing from hash (14695981039346656037 to begin). */
+static uint64_t fnv1a(uint64_t hash, const char *bytes, size_t n)
+{
+    for (size_t i = 0; i < n; ++i)
+        hash = (hash ^ (unsigned char)bytes[i]) * 1099511628211u;
+    return hash;
+}
+
+/* Whether the n bytes at s are all lower-case hex digits. */
+static int is_hex(const char *s, size_t n)
+{
+    for (size_t i = 0; i < n; ++i)
+        if (!((s[i] >= '0' && s[i] <= '9') || (s[i] >= 'a' && s[i] <= 'f')))
+            return 0;
+    return 1;
+}
+
+/* This process's tag (TAG_LEN hex digits and a NUL, into tag): a hash of this boot of this machine's kernel
+ * (/proc/sys/kernel/random/boot_id, random at each boot) and of this process's pid namespace
+ * (/proc/self/ns/pid, "pid:[inode]", unique within that boot). A pid means a process only there: another
+ * machine sharing the folder (NFS) or a container with its own pid namespace has pids this process cannot
+ * see, so their temporaries must never be judged by kill(pid, 0). 1 when both were read; 0 when one could not
+ * be (no /proc): the tag is then a hash of the host name, which two machines or containers may share, so no
+ * temporary can be known to be this namespace's, and none is removed. */
+static int machine_tag(char tag[TAG_LEN + 1])
+{
+    char boot[64], ns[64], host[256];
+    int fd = open("/proc/sys/kernel/random/boot_id", O_RDONLY | O_CLOEXEC);
+    ssize_t boot_len = fd >= 0 ? read(fd, boot, sizeof boot) : -1;
+    if (fd >= 0)
+        close(fd);
+    ssize_t ns_len = readlink("/proc/self/ns/pid", ns, sizeof ns);
+    int known = boot_len > 0 && ns_len > 0;
+    uint64_t hash = 14695981039346656037u;
+    if (known)
+        hash = fnv1a(fnv1a(hash, boot, (size_t)boot_len), ns, (size_t)ns_len);
+    else if (gethostname(host, sizeof host) == 0)
+        hash = fnv1a(hash, host, strnlen(host, sizeof host));
+    snprintf(tag, TAG_LEN + 1, "%08x", (unsigned)(hash ^ hash >> 32));
+    return known;
+}
+
+/* The pid in a temporary name's tail "<tag>.<pid>.<n>" (a tag, then digits only), or 0 if the tail is not of
+ * that form (an older "<pid>.<n>" is not). */
 static long temp_pid(const char *tail)
 {
+    if (!is_hex(tail, TAG_LEN) || tail[TAG_LEN] != '.')
+        return 0;
+    tail += TAG_LEN + 1;
     const char *dot = strchr(tail, '.');
     if (!dot || dot == tail || dot - tail > 10 || !dot[1])
         return 0;
@@ -70,11 +125,6 @@ static long temp_pid(const char *tail)
     return pid > 0 && pid <= INT_MAX ? pid : 0;
 }
 
-/* The longest tail a temporary's name adds: ".tmp." and a pid and a counter of up to 10 digits each. */
-#define TEMP_TAIL_MAX 26
-/* What a shortened name ends in: "~" and 16 hex digits of a hash of the whole name. */
-#define SHORT_MARK 17
-
 /* The longest name a file in dir may have: its file system's (pathconf; eCryptfs takes 143 bytes), at most
  * NAME_MAX (255 bytes), NAME_MAX where the folder cannot say. */
 static size_t name_max_in(const char *dir)
@@ -83,7 +133,7 @@ static size_t name_max_in(const char *dir)
     return n > 0 && n < NAME_MAX ? (size_t)n : NAME_MAX;
 }
 
-/* The temporaries' names of the file target are <stem>.tmp.<pid>.<n>; the stem is target itself or, where
+/* The temporaries' names of the file target are <stem>.tmp.<tag>.<pid>.<n>; the stem is target itself or, where
  * its name and that tail could exceed the longest name its folder takes (a legal 240-byte name: the open
  * failed with ENAMETOOLONG, so the file could not be written at all), target's folder and its name cut at a
  * UTF-8 character's start, then "~" and 16 hex digits of a hash (FNV-1a) of the whole name, so that two long
@@ -106,9 +156,7 @@ static int temp_stem(const char *target, char *out, size_t out_size)
     size_t keep = name_max - TEMP_TAIL_MAX - SHORT_MARK;
     while (keep > 0 && ((unsigned char)base[keep] & 0xC0) == 0x80) /* a UTF-8 continuation byte */
         --keep;
-    uint64_t hash = 14695981039346656037u;
-    for (size_t i = 0; i < base_len; ++i)
-        hash = (hash ^ (unsigned char)base[i]) * 1099511628211u;
+    uint64_t hash = fnv1a(14695981039346656037u, base, base_len);
     return snprintf(out, out_size, "%.*s%.*s~%016llx", (int)(base - target), target, (int)keep, base,
                     (unsigned long long)hash) < (int)out_size ? 0 : ENAMETOOLONG;
 }
@@ -117,20 +165,19 @@ static int temp_stem(const char *target, char *out, size_t out_size)
 static int is_shortened(const char *stem)
 {
     size_t n = strlen(stem);
-    if (n < SHORT_MARK || stem[n - SHORT_MARK] != '~')
-        return 0;
-    for (const char *c = stem + n - SHORT_MARK + 1; *c; ++c)
-        if (!((*c >= '0' && *c <= '9') || (*c >= 'a' && *c <= 'f')))
-            return 0;
-    return 1;
+    return n >= SHORT_MARK && stem[n - SHORT_MARK] == '~' && is_hex(stem + n - SHORT_MARK + 1, SHORT_MARK - 1);
 }
 
-/* Removes the temporaries of the file whose stem (temp_stem) is stem that a dead process left beside it: a
- * SIGKILL (or a crash, or a power cut) during a write runs no handler, so <stem>.tmp.<pid>.<n> stays. One is
- * stale when no process has its pid (kill(pid, 0) fails with ESRCH); a live pid keeps its file, even if the
- * pid was reused, so a concurrent writer of the same output on this machine is never disturbed. Only regular
- * files named exactly so are removed: a shortened stem finds the shortened names it gave. */
-static void remove_stale_temporaries(const char *stem)
+/* Removes the temporaries of the file whose stem (temp_stem) is stem that a dead process of this machine and
+ * pid namespace (tag, machine_tag) left beside it: a SIGKILL (or a crash) during a write runs no handler, so
+ * <stem>.tmp.<tag>.<pid>.<n> stays. One is stale when it has this tag and no process has its pid (kill(pid, 0)
+ * fails with ESRCH); a live pid keeps its file, even if the pid was reused, so a concurrent writer of the same
+ * output in this namespace is never disturbed. Another tag's temporaries are left alone: their pids are another
+ * machine's (a folder shared over NFS) or another pid namespace's (a container), which kill cannot see, so
+ * they cannot be known dead; their writer may be writing them now. So are temporaries of the older form
+ * <stem>.tmp.<pid>.<n>, which say no machine, and those a boot before this one left (its boot id is gone).
+ * Only regular files named exactly so are removed: a shortened stem finds the shortened names it gave. */
+static void remove_stale_temporaries(const char *stem, const char *tag)
 {
     const char *slash = strrchr(stem, '/');
     const char *base = slash ? slash + 1 : stem;
@@ -143,7 +190,8 @@ static void remove_stale_temporaries(const char *stem)
     if (!d)
         return;
     for (struct dirent *e; (e = readdir(d)) != NULL;) {
-        if (strncmp(e->d_name, base, base_len) != 0 || strncmp(e->d_name + base_len, ".tmp.", 5) != 0)
+        if (strncmp(e->d_name, base, base_len) != 0 || strncmp(e->d_name + base_len, ".tmp.", 5) != 0 ||
+            strncmp(e->d_name + base_len + 5, tag, TAG_LEN) != 0)
             continue;
         long pid = temp_pid(e->d_name + base_len + 5);
         if (pid == 0 || pid == (long)getpid() || kill((pid_t)pid, 0) == 0 || errno != ESRCH)
@@ -235,15 +283,15 @@ int ic_atomic_target(const char *path, char *out, size_t out_size)
  * gives the link's own name (the open or rename says why it fails). */
 static void temp_target(const char *path, char *target)
 {
-    if (ic_atomic_target(path, target, 4096) != 0 || strlen(target) + 32 >= 4096)
+    if (ic_atomic_target(path, target, 4096) != 0 || strlen(target) + TEMP_TAIL_MAX >= 4096)
         snprintf(target, 4096, "%s", path);
 }
 
-/* Names and creates the temporary of path, beside the file it leads to: <stem>.tmp.<pid>.<n> (temp_stem),
- * created exclusively (O_EXCL), so that what already has the name is never opened: the name is predictable,
- * and a link planted there (another user's, in a shared folder such as /tmp, where fs.protected_symlinks may
- * be off) would have had the output written into the file it leads to. A name taken is passed over. The
- * descriptor, or -1 with errno (nothing created, out not registered). */
+/* Names and creates the temporary of path, beside the file it leads to: <stem>.tmp.<tag>.<pid>.<n>
+ * (temp_stem, machine_tag), created exclusively (O_EXCL), so that what already has the name is never opened:
+ * the name is predictable, and a link planted there (another user's, in a shared folder such as /tmp, where
+ * fs.protected_symlinks may be off) would have had the output written into the file it leads to. A name taken
+ * is passed over. The descriptor, or -1 with errno (nothing created, out not registered). */
 static int create_temp(const char *path, char *out, size_t out_size)
 {
     char target[4096], stem[4096];
@@ -253,7 +301,9 @@ static int create_temp(const char *path, char *out, size_t out_size)
         errno = e;
         return -1;
     }
-    remove_stale_temporaries(stem);
+    char tag[TAG_LEN + 1];
+    if (machine_tag(tag))
+        remove_stale_temporaries(stem, tag);
     /* Replacing a file, the temporary is its owner's alone until it takes that file's permissions
      * (keep_permissions): created readable by others, it could be opened by someone the file kept out, who
      * would then read what is written. A new file takes 0666 & ~umask, as fopen gives. */
@@ -261,7 +311,10 @@ static int create_temp(const char *path, char *out, size_t out_size)
     mode_t mode = lstat(target, &old) == 0 && S_ISREG(old.st_mode) ? 0600 : 0666;
     for (int tries = 0;; ++tries) {
         unsigned n = atomic_fetch_add(&tmp_counter, 1u);
-        snprintf(out, out_size, "%s.tmp.%ld.%u", stem, (long)getpid(), n);
+        if (snprintf(out, out_size, "%s.tmp.%s.%ld.%u", stem, tag, (long)getpid(), n) >= (int)out_size) {
+            errno = ENAMETOOLONG;
+            return -1;
+        }
         temp_register(out); /* before it exists: a signal from now on removes it */
         int fd = open(out, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
         int e = errno;
@@ -283,7 +336,7 @@ int ic_atomic_temp_name(const char *path, char *out, size_t out_size)
     return 0;
 }
 
-/* The file a temporary takes the place of: its name less ".tmp.<pid>.<n>" (ic_atomic_temp_name), which
+/* The file a temporary takes the place of: its name less ".tmp.<tag>.<pid>.<n>" (ic_atomic_temp_name), which
  * is path or, when path is a symbolic link, the file it led to when the write began. A shortened name
  * (temp_stem) cannot say its file: that is the one path leads to now, whose stem it must be. 0, or -1 when
  * it is not (path's link was changed during the write to lead elsewhere). */

@@ -7,10 +7,12 @@
  * ic_atomic_file_abort(&f) (removes the temporary file). While a temporary file exists its name is
  * registered, so that a program's signal handler can remove it (ic_remove_temporary_files). A temporary
  * that a SIGKILL left (no handler runs) is removed by the next write of the same path, once its process
- * is gone. A path that is a symbolic link is followed: the file it leads to is written, the link stays;
- * one that leads through this process's descriptor of a file (/dev/stdout sent to a file) is written
- * through that descriptor at its offset, as the shell's redirection writes (so '>>' keeps what the file
- * held), once the temporary holds all of it.
+ * is gone, by a process of the same machine (this boot) and pid namespace only: its name has a tag that
+ * says which, because another machine's pids (a folder shared over NFS) or another container's cannot be
+ * seen from here, and one that looks dead may be writing now. A path that is a symbolic link is
+ * followed: the file it leads to is written, the link stays; one that leads through this process's
+ * descriptor of a file (/dev/stdout sent to a file) is written through that descriptor at its offset, as the
+ * shell's redirection writes (so '>>' keeps what the file held), once the temporary holds all of it.
  * A path that is a folder, a device, a pipe or a socket is refused (IC_ERR_IO), never replaced.
  * A file replaced keeps its permission bits (less setuid and setgid) and, where the process may, its owner and
  * group, as sed -i keeps them; the temporary is the owner's alone until then. A new file takes 0666 & ~umask.
@@ -26,8 +28,9 @@
 typedef struct ic_atomic_file {
     FILE *fp;              /* write here */
     char path[4096];       /* final destination, as the caller named it (messages say it) */
-    char tmp_path[4096];   /* temporary sibling of the file written: <path>.tmp.<pid>.<n> (the name shortened
-                              where that would be too long), or beside the file a link path leads to */
+    char tmp_path[4096];   /* temporary sibling of the file written: <path>.tmp.<tag>.<pid>.<n> (tag: 8 hex
+                              digits for this machine's boot and pid namespace; the name shortened where
+                              that would be too long), or beside the file a link path leads to */
 } ic_atomic_file;
 
 /* Opens a temporary file beside path for binary writing. */
@@ -41,8 +44,10 @@ void ic_atomic_file_abort(ic_atomic_file *f);
  * over) and registers it for ic_remove_temporary_files (irrcache/common.h) until ic_atomic_rename or
  * ic_atomic_temp_release; the caller opens it by name (O_TRUNC is safe: it is this process's file). 0, or
  * an errno value with nothing created (ENAMETOOLONG for a name no file may have). First removes the
- * temporaries of path that dead processes left (<path>.tmp.<pid>.<n> whose pid no process has: a SIGKILL
- * during a write); ic_atomic_file_open does the same. */
+ * temporaries of path that dead processes left (<path>.tmp.<tag>.<pid>.<n> of this process's tag whose pid no
+ * process has: a SIGKILL during a write); those of another tag or of the older form <path>.tmp.<pid>.<n> are
+ * kept (their pid cannot be judged here), and all are kept when the tag cannot be known (no /proc);
+ * ic_atomic_file_open does the same. */
 int ic_atomic_temp_name(const char *path, char *out, size_t out_size);
 /* The file that writing path replaces: path with its symbolic links followed (relative ones from the
  * link's folder), into out; 0, or an errno value (ELOOP, ENAMETOOLONG, readlink's) with out undefined. */

@@ -1,8 +1,11 @@
 /*
- * test_atomic_file.c — a temporary left by a SIGKILL during a write (<out>.tmp.<pid>.<n>, no handler ran) is
- * removed by the next write of the same output, once its process is gone (issue "Hardening", Signals):
- * through the library's atomic file, through ic_atomic_temp_name (the EXR writer's path), and through the
- * command. A temporary of a live process, of another output, or a name not of the form is left alone.
+ * test_atomic_file.c — a temporary left by a SIGKILL during a write (<out>.tmp.<tag>.<pid>.<n>, no handler
+ * ran) is removed by the next write of the same output, once its process is gone (issue "Hardening",
+ * Signals): through the library's atomic file, through ic_atomic_temp_name (the EXR writer's path), and
+ * through the command. A temporary of a live process, of another output, or a name not of the form is left
+ * alone; so is one whose tag is another machine's or pid namespace's (its pid is not one this process can
+ * see: a folder shared over NFS, two containers), one of the older form without a tag, and any when the tag
+ * cannot be known (no /proc).
  *
  * An output that is a symbolic link is written through it: the link stays; one that is a pipe, a device or a
  * folder is refused, never replaced.
@@ -77,26 +80,87 @@ static long dead_pid(void)
     return (long)p;
 }
 
-/* Leaves the temporaries of out: a dead process's (two), a live one's, another output's, odd names. */
-static void leave(const char *out, long dead, char stale[2][512], char keep[4][512])
+/* readlink, which plays another pid namespace (1: /proc/self/ns/pid reads another inode) or one without /proc
+ * (2: it cannot be read) when fake_pid_ns says so. */
+ssize_t __real_readlink(const char *path, char *buf, size_t size);
+ssize_t __wrap_readlink(const char *path, char *buf, size_t size);
+static int fake_pid_ns;
+
+ssize_t __wrap_readlink(const char *path, char *buf, size_t size)
 {
-    snprintf(stale[0], 512, "%s.tmp.%ld.0", out, dead);
-    snprintf(stale[1], 512, "%s.tmp.%ld.17", out, dead);
-    snprintf(keep[0], 512, "%s.tmp.%ld.0", out, (long)getppid()); /* alive: the test's parent */
-    snprintf(keep[1], 512, "%s.other.tmp.%ld.0", out, dead);       /* another output's */
-    snprintf(keep[2], 512, "%s.tmp.%ldx.0", out, dead);            /* not <pid>.<n> */
-    snprintf(keep[3], 512, "%s.tmp.%ld", out, dead);               /* no counter */
+    if (fake_pid_ns && !strcmp(path, "/proc/self/ns/pid")) {
+        if (fake_pid_ns == 2) {
+            errno = ENOENT;
+            return -1;
+        }
+        static const char other[] = "pid:[0]"; /* no namespace has inode 0 */
+        size_t n = sizeof other - 1 < size ? sizeof other - 1 : size;
+        memcpy(buf, other, n);
+        return (ssize_t)n;
+    }
+    return __real_readlink(path, buf, size);
+}
+
+/* The tag of the temporary name tmp (<stem>.tmp.<tag>.<pid>.<n>) into tag (9 bytes), "" when tmp is not of
+ * that form or its pid is not pid. */
+static const char *tag_of(const char *tmp, long pid, char tag[9])
+{
+    const char *tail = NULL;
+    for (const char *t = strstr(tmp, ".tmp."); t; t = strstr(t + 1, ".tmp."))
+        tail = t + 5;
+    char *end = NULL;
+    tag[0] = 0;
+    if (tail && strlen(tail) > 9 && tail[8] == '.' && strspn(tail, "0123456789abcdef") == 8 &&
+        strtol(tail + 9, &end, 10) == pid && *end == '.')
+        snprintf(tag, 9, "%.8s", tail);
+    return tag;
+}
+
+/* This process's tag, read from the name ic_atomic_temp_name gives (the temporary removed again). */
+static const char *own_tag(char tag[9])
+{
+    char tmp[4096];
+    CHECK(ic_atomic_temp_name(IC_TEST_TMP "/atomic_file/tag.pfm", tmp, sizeof tmp) == 0, "a temporary name");
+    remove(tmp);
+    ic_atomic_temp_release(tmp);
+    CHECK(*tag_of(tmp, (long)getpid(), tag), "the temporary's name is <out>.tmp.<8 hex digits>.<pid>.<n>: %s", tmp);
+    return tag;
+}
+
+/* A tag not this process's: its first digit changed. */
+static const char *other_tag(const char *tag, char other[9])
+{
+    snprintf(other, 9, "%c%s", tag[0] == 'f' ? '0' : 'f', tag + 1);
+    return other;
+}
+
+#define KEEP 6
+/* Leaves the temporaries of out: a dead process's of this tag (two), a live one's, another output's, odd
+ * names, a dead pid of another tag (another machine's or pid namespace's: alive there, perhaps) and one of the
+ * older form without a tag (which says no machine). */
+static void leave(const char *out, long dead, char stale[2][512], char keep[KEEP][512])
+{
+    char tag[9], other[9];
+    own_tag(tag);
+    snprintf(stale[0], 512, "%s.tmp.%s.%ld.0", out, tag, dead);
+    snprintf(stale[1], 512, "%s.tmp.%s.%ld.17", out, tag, dead);
+    snprintf(keep[0], 512, "%s.tmp.%s.%ld.0", out, tag, (long)getppid()); /* alive: the test's parent */
+    snprintf(keep[1], 512, "%s.other.tmp.%s.%ld.0", out, tag, dead);       /* another output's */
+    snprintf(keep[2], 512, "%s.tmp.%s.%ldx.0", out, tag, dead);            /* not <pid>.<n> */
+    snprintf(keep[3], 512, "%s.tmp.%s.%ld", out, tag, dead);               /* no counter */
+    snprintf(keep[4], 512, "%s.tmp.%s.%ld.0", out, other_tag(tag, other), dead); /* another namespace's */
+    snprintf(keep[5], 512, "%s.tmp.%ld.0", out, dead);                     /* the older form, no tag */
     for (int i = 0; i < 2; ++i)
         touch(stale[i]);
-    for (int i = 0; i < 4; ++i)
+    for (int i = 0; i < KEEP; ++i)
         touch(keep[i]);
 }
 
-static void check_cleaned(const char *what, char stale[2][512], char keep[4][512])
+static void check_cleaned(const char *what, char stale[2][512], char keep[KEEP][512])
 {
     for (int i = 0; i < 2; ++i)
         CHECK(!exists(stale[i]), "%s: the dead process's %s is removed", what, stale[i]);
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < KEEP; ++i) {
         CHECK(exists(keep[i]), "%s: %s is kept", what, keep[i]);
         remove(keep[i]);
     }
@@ -289,14 +353,16 @@ static void check_replaced_temporary(void)
     CHECK(test_count_temporaries(T "/swap") == 0, "no temporary left");
 }
 
-/* A name of 250 bytes (legal: NAME_MAX is 255) is written although "<name>.tmp.<pid>.<n>" is longer than a
- * name may be: the temporary's name is shortened, beside the file. Through the atomic file and the EXR
+/* A name of 250 bytes (legal: NAME_MAX is 255) is written although "<name>.tmp.<tag>.<pid>.<n>" is longer
+ * than a name may be: the temporary's name is shortened, beside the file. Through the atomic file and the EXR
  * writer; no temporary is left, and a dead process's shortened temporary is removed by the next write of the
  * same file, not of another long name that begins alike. A name over NAME_MAX is refused at the open. */
 static void check_long_names(long dead)
 {
     CHECK(system("mkdir -p '" T "/long'") == 0, "a folder");
-    char names[3][512];
+    char names[3][512], tag[9], other[9];
+    own_tag(tag);
+    other_tag(tag, other);
     for (int k = 0; k < 3; ++k) {
         char base[256];
         memset(base, 'a' + k, sizeof base);
@@ -317,8 +383,9 @@ static void check_long_names(long dead)
             CHECK(mode_of(names[k]) >= 0, "the EXR is there");
     }
     CHECK(test_count_temporaries(T "/long") == 0, "no temporary left: %d", test_count_temporaries(T "/long"));
-    /* The shortened temporaries of the two .pfm names, as a dead process would have left them. */
-    char tmp[2][4096], stale[2][4200];
+    /* The shortened temporaries of the two .pfm names, as a dead process would have left them; and one of
+     * another tag (a dead pid here, perhaps a live one where it was written), which stays. */
+    char tmp[2][4096], stale[2][4200], foreign[4200];
     for (int k = 0; k < 2; ++k) {
         CHECK(ic_atomic_temp_name(names[k], tmp[k], sizeof tmp[k]) == 0, "a temporary name");
         remove(tmp[k]);
@@ -327,14 +394,20 @@ static void check_long_names(long dead)
         CHECK(strlen(tmp_base) <= NAME_MAX && strstr(tmp_base, ".tmp."), "a temporary name of at most NAME_MAX: %s",
               tmp_base);
         char *tail = strstr(tmp[k], ".tmp.");
-        snprintf(stale[k], sizeof stale[k], "%.*s.tmp.%ld.3", (int)(tail - tmp[k]), tmp[k], dead);
+        CHECK(!strcmp(tag_of(tmp[k], (long)getpid(), text), tag), "the shortened name has the tag: %s", tmp_base);
+        snprintf(stale[k], sizeof stale[k], "%.*s.tmp.%s.%ld.3", (int)(tail - tmp[k]), tmp[k], tag, dead);
         touch(stale[k]);
+        if (k == 0) {
+            snprintf(foreign, sizeof foreign, "%.*s.tmp.%s.%ld.3", (int)(tail - tmp[k]), tmp[k], other, dead);
+            touch(foreign);
+        }
     }
     ic_result r;
     CHECK(strcmp(tmp[0], tmp[1]) != 0, "two long names that begin alike have distinct temporaries");
     CHECK(write_out(names[0], "again", &err) == IC_OK, "rewrite (%s)", err.message);
     CHECK(!exists(stale[0]) && exists(stale[1]), "the dead process's temporary of this name is removed, the other "
           "name's is kept");
+    CHECK(exists(foreign) && remove(foreign) == 0, "another tag's temporary of this name is kept");
     CHECK(write_out(names[1], "again", &err) == IC_OK && !exists(stale[1]), "and the other's by its own write");
     /* A shortened temporary cannot say its file: that is the one the path leads to at the rename. A link
      * changed during the write to lead to another file is refused, nothing written; a name that fits still
@@ -374,11 +447,74 @@ static void check_long_names(long dead)
     CHECK(test_count_temporaries(T "/long") == 0, "no temporary left");
 }
 
+/* Two writers of one output that cannot see each other's pids: another machine sharing the folder (NFS) or
+ * another pid namespace (a container), played by a child whose /proc/self/ns/pid reads another inode. Its
+ * temporary, under a pid that is dead here, survives this process's write of the output (which deleted it,
+ * and so the other writer's output, when a pid alone judged it), and its rename still succeeds. A child
+ * without /proc (the namespace cannot be known) removes nothing, not even a dead pid's of its own tag. */
+static void check_other_namespace(long dead)
+{
+    const char *out = T "/shared.pfm";
+    char tmp[4096], tag[9], theirs[9], text[64];
+    own_tag(tag);
+    int fds[2];
+    CHECK(pipe(fds) == 0, "pipe");
+    pid_t child = fork();
+    if (child == 0) { /* the other writer: creates its temporary, writes, and is gone from this namespace */
+        close(fds[0]);
+        fake_pid_ns = 1;
+        int made = ic_atomic_temp_name(out, tmp, sizeof tmp);
+        FILE *tf = made == 0 ? fopen(tmp, "wb") : NULL;
+        int ok = tf && fputs("theirs", tf) >= 0 && fclose(tf) == 0;
+        _exit(ok && write(fds[1], tmp, strlen(tmp) + 1) == (ssize_t)strlen(tmp) + 1 ? 0 : 1);
+    }
+    close(fds[1]);
+    memset(tmp, 0, sizeof tmp);
+    ssize_t got = child > 0 ? read(fds[0], tmp, sizeof tmp - 1) : -1;
+    close(fds[0]);
+    int status = -1;
+    CHECK(child > 0 && waitpid(child, &status, 0) == child && WIFEXITED(status) && WEXITSTATUS(status) == 0 &&
+              got > 0, "the other namespace's writer made its temporary");
+    CHECK(*tag_of(tmp, (long)child, theirs) && strcmp(theirs, tag) != 0, "another pid namespace has another tag: "
+          "%s (this one's %s)", tmp, tag);
+    CHECK(kill(child, 0) != 0 && errno == ESRCH, "its pid %ld is dead here", (long)child);
+    ic_error err;
+    CHECK(write_out(out, "ours", &err) == IC_OK, "this process writes the output (%s)", err.message);
+    CHECK(exists(tmp), "the other namespace's temporary is kept: %s", tmp);
+    memset(&err, 0, sizeof err);
+    CHECK(ic_atomic_rename(tmp, out, &err) == IC_OK && !strcmp(read_small(out, text, sizeof text), "theirs"),
+          "and its rename succeeds: '%s' (%s)", text, err.message);
+
+    /* No /proc: the tag says the host only, so even a dead pid of the same tag may be another container's. */
+    child = fork();
+    if (child == 0) {
+        fake_pid_ns = 2;
+        char mine[4096], fallback[9], left[4200];
+        ic_error cerr;
+        if (ic_atomic_temp_name(out, mine, sizeof mine) != 0 || !*tag_of(mine, (long)getpid(), fallback))
+            _exit(1);
+        remove(mine);
+        ic_atomic_temp_release(mine);
+        snprintf(left, sizeof left, "%s.tmp.%s.%ld.0", out, fallback, dead);
+        touch(left);
+        if (write_out(out, "no proc", &cerr) != IC_OK)
+            _exit(2);
+        int kept = exists(left);
+        remove(left);
+        _exit(kept ? 0 : 3);
+    }
+    CHECK(child > 0 && waitpid(child, &status, 0) == child && WIFEXITED(status) && WEXITSTATUS(status) == 0,
+          "without /proc, a dead pid's temporary of the same tag is kept (status %d)",
+          WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    CHECK(!strcmp(read_small(out, text, sizeof text), "no proc"), "and the output is written: '%s'", text);
+    CHECK(test_count_temporaries(T) == 0, "no temporary left");
+}
+
 int main(void)
 {
     CHECK(system("rm -rf '" T "' && mkdir -p '" T "'") == 0, "make %s", T);
     long dead = dead_pid();
-    char stale[2][512], keep[4][512];
+    char stale[2][512], keep[KEEP][512];
 
     /* the atomic file (PNG, PFM, HDR, the cache file, the JSON outputs) */
     leave(T "/out.pfm", dead, stale, keep);
@@ -401,7 +537,7 @@ int main(void)
     ic_atomic_temp_release(tmp);
     check_cleaned("temporary name", stale, keep);
 
-    /* A link planted at the temporary's name, which is predictable (<path>.tmp.<pid>.<n>; another user's, in
+    /* A link planted at the temporary's name, which is predictable (<path>.tmp.<tag>.<pid>.<n>; another user's, in
      * a shared folder such as /tmp, where fs.protected_symlinks may be off), is not followed: opened with
      * O_TRUNC, the output went into the file the link leads to, and the rename left the link as the output.
      * The temporary is created exclusively (O_EXCL) and a name taken is passed over: the atomic file and the
@@ -579,6 +715,7 @@ int main(void)
     check_permissions();
     check_replaced_temporary();
     check_long_names(dead);
+    check_other_namespace(dead);
 
     /* the command: a rerun after a SIGKILL during its write */
     leave(T "/render.png", dead, stale, keep);

@@ -132,7 +132,7 @@ int main(void)
             "--records-json", "/proc/self/r.json", "cannot create");
     /* A name no file may have (256 bytes; NAME_MAX is 255) is refused as too long, not as an unwritable
      * folder; one of 250 bytes (and its --stats, 255) is written, although its temporary's name
-     * "<name>.tmp.<pid>.<n>" is too long to be one: the temporary's is shortened. */
+     * "<name>.tmp.<tag>.<pid>.<n>" is too long to be one: the temporary's is shortened. */
     {
         char name[300], args[2048], path[600];
         memset(name, 'n', 256);
