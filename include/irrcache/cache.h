@@ -393,16 +393,21 @@ ic_result ic_cache_load_memory(const char *name, const void *data, size_t size, 
  *   cannot say which of those differs when a file is refused. The _with_settings calls keep, next to the
  *   hash, the caller's text of what went into it, and compare the file's with the caller's when the
  *   hashes differ (only then: a text is never a reason to refuse on its own):
- *     - lines "key=value", each ended by '\n'; a key is not empty and has no '='; the text is well-formed
- *       UTF-8 without control characters (but the line ends), at most IC_CACHE_MAX_SETTINGS_BYTES;
+ *     - lines "key=value", each ended by '\n' (not "\r\n"); a key is not empty, has no '=' and is given
+ *       once; the text is well-formed UTF-8 without control characters (but the line ends), at most
+ *       IC_CACHE_MAX_SETTINGS_BYTES; a caller's text that is not is refused (IC_ERR_INVALID_ARG), a file's
+ *       is a damaged file (IC_ERR_CORRUPT);
  *     - the first key whose value differs, or that one text has and the other lacks (the file's lines in
  *       their order first), is named with both values: "made with --rays 800, this run has --rays 102;
  *       rerun with --rays 800, or build the cache again instead of loading it". A key that starts with
  *       "--" reads as an option the user gives (an empty value: a flag), so the message says to rerun
- *       with it; any other key is said as a fact ("made with KEY: VALUE, this run's: VALUE");
+ *       with it; any other key is said as a fact ("made with KEY: VALUE, this run's: VALUE"). A key or
+ *       value over 96 bytes is quoted by 96 of them, "..." where cut: two values from where they part,
+ *       the scene's name by its end;
  *     - key "scene" holds a digest of the scene's content (a difference: "made for another scene"), key
  *       "scene file" the scene's name for that message (never compared: a moved scene keeps its cache);
- *     - a NULL or empty text on either side, or texts that agree, leave the hashes alone to say it.
+ *     - a NULL or empty text on either side, or texts that agree, leave the hashes alone to say it (the
+ *       message then says which: no text, or texts that agree, so that what differs is not in them).
  *   The cache never reads the keys otherwise: they are the caller's words (irrcache's renderer uses its
  *   command-line options). ic_cache_save and ic_cache_load are these calls with no text. */
 #define IC_CACHE_MAX_SETTINGS_BYTES 65536u

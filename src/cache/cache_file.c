@@ -231,40 +231,6 @@ static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b, int ha
 
 /* ---- settings text (cache.h: SETTINGS TEXT) ------------------------------------------------------ */
 
-/* What is wrong with a settings text of len bytes (said after "the settings text"), or NULL. Every byte
- * read lies below len. */
-static const char *settings_problem(const unsigned char *t, size_t len)
-{
-    if (len > IC_CACHE_MAX_SETTINGS_BYTES)
-        return "is longer than IC_CACHE_MAX_SETTINGS_BYTES";
-    if (len && t[len - 1] != '\n')
-        return "does not end its last line";
-    size_t line = 0; /* where the current line starts */
-    int has_key = 0;
-    for (size_t k = 0; k < len;) {
-        unsigned char c = t[k];
-        if (c == '\n') {
-            if (!has_key)
-                return "has a line that is not key=value";
-            line = ++k;
-            has_key = 0;
-            continue;
-        }
-        if (c == '=' && !has_key) {
-            if (k == line)
-                return "has a line with an empty key";
-            has_key = 1;
-        }
-        if (c < 0x20 || c == 0x7f)
-            return "holds a control character";
-        size_t n = ic_utf8_sequence(t + k, len - k);
-        if (!n)
-            return "is not well-formed UTF-8";
-        k += n;
-    }
-    return NULL;
-}
-
 typedef struct setting {
     const char *key, *value;
     size_t key_len, value_len;
@@ -291,27 +257,94 @@ static int find_setting(const char *text, size_t len, const char *key, size_t ke
     return 0;
 }
 
+/* What is wrong with a settings text of len bytes (said after "the settings text"), or NULL. Every byte
+ * read lies below len. A key given twice would make a text differ from itself (the comparison takes each
+ * key's first line): a filter of the keys' hashes sends only a possible repeat to a look-up among the lines
+ * before it, so a long text of distinct keys costs about one pass. */
+static const char *settings_problem(const unsigned char *t, size_t len)
+{
+    if (len > IC_CACHE_MAX_SETTINGS_BYTES)
+        return "is longer than IC_CACHE_MAX_SETTINGS_BYTES";
+    if (len && t[len - 1] != '\n')
+        return "does not end its last line";
+    unsigned char seen[8192] = {0}; /* one bit per 16-bit hash of a key met */
+    size_t line = 0;                /* where the current line starts */
+    int has_key = 0;
+    for (size_t k = 0; k < len;) {
+        unsigned char c = t[k];
+        if (c == '\n') {
+            if (!has_key)
+                return "has a line that is not key=value";
+            line = ++k;
+            has_key = 0;
+            continue;
+        }
+        if (c == '=' && !has_key) {
+            if (k == line)
+                return "has a line with an empty key";
+            has_key = 1;
+            /* The lines before this one are whole and well-formed: find_setting may read them. */
+            unsigned bit = (unsigned)ic_fnv1a64(IC_FNV64_OFFSET, t + line, k - line) & 0xffffu;
+            setting before;
+            if (seen[bit >> 3] & (1u << (bit & 7)) &&
+                find_setting((const char *)t, line, (const char *)t + line, k - line, &before))
+                return "gives a key twice";
+            seen[bit >> 3] |= (unsigned char)(1u << (bit & 7));
+        }
+        if (c == '\r')
+            return "holds a carriage return (end each line with \\n alone)";
+        if (c < 0x20 || c == 0x7f)
+            return "holds a control character";
+        size_t n = ic_utf8_sequence(t + k, len - k);
+        if (!n)
+            return "is not well-formed UTF-8";
+        k += n;
+    }
+    return NULL;
+}
+
 static int has_key(const setting *s, const char *key)
 {
     return s->key_len == strlen(key) && memcmp(s->key, key, s->key_len) == 0;
 }
 
-/* How many of the len bytes at s a message quotes: at most SAID_BYTES, cut before a character. */
-static int said(const char *s, size_t len)
+/* How many leading bytes a and b share. */
+static size_t common_prefix(const char *a, size_t a_len, const char *b, size_t b_len)
 {
-    if (len <= SAID_BYTES)
-        return (int)len;
-    len = SAID_BYTES;
-    while (len && ((unsigned char)s[len] & 0xC0) == 0x80)
-        --len;
-    return (int)len;
+    size_t n = 0;
+    while (n < a_len && n < b_len && a[n] == b[n])
+        ++n;
+    return n;
 }
 
-/* An option as the user gives it: "--rays 800", a flag (empty value) alone. */
-static void say_option(const setting *s, char *out, size_t size)
+/* The len bytes at s as a message quotes them (out: QUOTE_BYTES): whole up to SAID_BYTES, else SAID_BYTES of
+ * them around byte `from` (where two values part; len: the end, where a path names its file), "..." where
+ * cut, and cut only between characters. */
+#define QUOTE_BYTES (SAID_BYTES + 7)
+static const char *quote(const char *s, size_t len, size_t from, char out[QUOTE_BYTES])
 {
-    snprintf(out, size, "%.*s%s%.*s", said(s->key, s->key_len), s->key, s->value_len ? " " : "",
-             said(s->value, s->value_len), s->value);
+    size_t start = 0, end = len;
+    if (len > SAID_BYTES) {
+        start = from > SAID_BYTES / 2 ? from - SAID_BYTES / 2 : 0;
+        if (start > len - SAID_BYTES)
+            start = len - SAID_BYTES;
+        while (start < len && ((unsigned char)s[start] & 0xC0) == 0x80)
+            ++start;
+        end = start + SAID_BYTES < len ? start + SAID_BYTES : len;
+        while (end < len && end > start && ((unsigned char)s[end] & 0xC0) == 0x80)
+            --end;
+    }
+    snprintf(out, QUOTE_BYTES, "%s%.*s%s", start ? "..." : "", (int)(end - start), s + start, end < len ? "..." : "");
+    return out;
+}
+
+/* An option as the user gives it: "--rays 800", a flag (empty value) alone; its value quoted around from. */
+static const char *say_option(const setting *s, size_t from, char out[2 * QUOTE_BYTES])
+{
+    char key[QUOTE_BYTES], value[QUOTE_BYTES];
+    snprintf(out, 2 * QUOTE_BYTES, "%s%s%s", quote(s->key, s->key_len, 0, key), s->value_len ? " " : "",
+             quote(s->value, s->value_len, from, value));
+    return out;
 }
 
 /* The refusal for one setting: the file's (made, NULL if it has none) against this run's (now, NULL if
@@ -320,42 +353,45 @@ static ic_result say_difference(const char *path, const setting *made, const set
                                 size_t file_len, const char *run, size_t run_len, ic_error *err)
 {
     const setting *k = made ? made : now;
+    /* Both values are quoted from where they part. */
+    const size_t from = made && now ? common_prefix(made->value, made->value_len, now->value, now->value_len) : 0;
+    char key[QUOTE_BYTES], was[2 * QUOTE_BYTES], is[2 * QUOTE_BYTES];
     if (has_key(k, SCENE_KEY)) {
         setting fs, rs;
         const size_t nk = strlen(SCENE_NAME_KEY);
         int has_file = find_setting(file, file_len, SCENE_NAME_KEY, nk, &fs),
             has_run = find_setting(run, run_len, SCENE_NAME_KEY, nk, &rs);
-        if (has_file && has_run && (fs.value_len != rs.value_len || memcmp(fs.value, rs.value, fs.value_len)))
-            return ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (saved for %.*s, this run's is "
-                                "%.*s); render the scene it was made for, " REBUILD_INSTEAD, path,
-                                said(fs.value, fs.value_len), fs.value, said(rs.value, rs.value_len), rs.value);
+        if (has_file && has_run && (fs.value_len != rs.value_len || memcmp(fs.value, rs.value, fs.value_len))) {
+            const size_t at = common_prefix(fs.value, fs.value_len, rs.value, rs.value_len);
+            return ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (saved for %s, this run's is %s); "
+                                "render the scene it was made for, " REBUILD_INSTEAD, path,
+                                quote(fs.value, fs.value_len, at, was), quote(rs.value, rs.value_len, at, is));
+        }
         const setting *name = has_run ? &rs : has_file ? &fs : NULL;
-        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (%.*s%s changed since the cache was "
+        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made for another scene (%s%s changed since the cache was "
                             "saved); render the scene as it was, " REBUILD_INSTEAD, path,
-                            name ? said(name->value, name->value_len) : 9, name ? name->value : "the scene",
+                            name ? quote(name->value, name->value_len, name->value_len, was) : "the scene",
                             name ? ", or a file it names," : "");
     }
     if (k->key_len > 2 && memcmp(k->key, "--", 2) == 0) {
-        char was[2 * SAID_BYTES + 2], is[2 * SAID_BYTES + 2];
-        say_option(k, is, sizeof is); /* a missing one: its key alone */
         if (made)
-            say_option(made, was, sizeof was);
+            say_option(made, from, was);
         if (now)
-            say_option(now, is, sizeof is);
+            say_option(now, from, is);
         if (made && now)
             return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with %s, this run has %s; rerun with %s, "
                                 REBUILD_INSTEAD, path, was, is, was);
         if (made)
             return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with %s, which this run does not give; rerun "
                                 "with %s, " REBUILD_INSTEAD, path, was, was);
-        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made without %.*s, this run has %s; rerun without %.*s, "
-                            REBUILD_INSTEAD, path, said(k->key, k->key_len), k->key, is,
-                            said(k->key, k->key_len), k->key);
+        quote(k->key, k->key_len, 0, key);
+        return ic_error_set(err, IC_ERR_MISMATCH, "%s: made without %s, this run has %s; rerun without %s, "
+                            REBUILD_INSTEAD, path, key, is, key);
     }
-    return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with %.*s: %.*s, this run's: %.*s; use the settings it "
-                        "was made with, " REBUILD_INSTEAD, path, said(k->key, k->key_len), k->key,
-                        made ? said(made->value, made->value_len) : 4, made ? made->value : "none",
-                        now ? said(now->value, now->value_len) : 4, now ? now->value : "none");
+    return ic_error_set(err, IC_ERR_MISMATCH, "%s: made with %s: %s, this run's: %s; use the settings it "
+                        "was made with, " REBUILD_INSTEAD, path, quote(k->key, k->key_len, 0, key),
+                        made ? quote(made->value, made->value_len, from, was) : "none",
+                        now ? quote(now->value, now->value_len, from, is) : "none");
 }
 
 /* After the hashes differ: the first setting of the file's text (in its order), then of this run's, that
@@ -449,7 +485,7 @@ static ic_result check_caller_settings(const char *settings, const char *what, i
 {
     const char *problem = settings_problem((const unsigned char *)settings, strlen(settings));
     return problem ? ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the settings text %s; give lines key=value, each "
-                                  "ended by a line break (irrcache/cache.h: SETTINGS TEXT)", what, problem)
+                                  "key once, each line ended by a line break (irrcache/cache.h: SETTINGS TEXT)", what, problem)
                    : IC_OK;
 }
 
@@ -699,7 +735,10 @@ ic_result ic_cache_load_memory_with_settings(const char *path, const void *bytes
             rc = ic_error_set(err, IC_ERR_MISMATCH,
                               "%s: made for another scene or settings that change its records (hash %016llx, here "
                               "%016llx%s); " MISMATCH_HINT, path, (unsigned long long)get_u64(data + 16),
-                              (unsigned long long)scene_hash, text_len ? "" : "; the file keeps no settings to say which");
+                              (unsigned long long)scene_hash,
+                              !text_len ? "; the file keeps no settings to say which"
+                              : !*settings ? "; this run gives no settings to compare with the file's"
+                                           : "; the settings it keeps agree with this run's");
     } else if (count >= UINT32_MAX)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: too many records", path);
     else

@@ -13,7 +13,8 @@
  * values, record fields, the settings text and payload contents stay as mutated, so their checks are
  * fuzzed too. A loaded cache is then looked up at each of its first records, which reads the octree and
  * the frozen layout built from the file's values; and the file is loaded again for another hash with a
- * settings text of its own, which compares the two texts (cache.h: SETTINGS TEXT).
+ * settings text of its own, which compares the two texts (cache.h: SETTINGS TEXT), and once more for
+ * another hash with the file's own text, which must never be said to differ from itself.
  */
 #include "fuzz_util.h"
 
@@ -64,9 +65,10 @@ static size_t resign(unsigned char *buf, size_t size)
     uint32_t version = get_u32(buf + VERSION_OFFSET);
     uint64_t records_at = HEADER_BYTES; /* version 4: past the settings text */
     if (version == 4) {
-        if (size < HEADER_BYTES + 4 + 8)
-            return size; /* no room for the text's length: the loader says "truncated" */
-        uint64_t text = get_u32(buf + HEADER_BYTES), room = size - HEADER_BYTES - 4 - 8;
+        if (size < HEADER_BYTES + 4 + 8 + 8)
+            return size; /* no room for the text's length and the payload total: the loader says "truncated" */
+        /* Room for the text that leaves the payload total and the checksum, so a cut text is still read. */
+        uint64_t text = get_u32(buf + HEADER_BYTES), room = size - HEADER_BYTES - 4 - 8 - 8;
         if (text > room && text <= SETTINGS_MAX)
             text = room; /* a length over the limit stays, for the loader to refuse */
         if (text > room)
@@ -140,6 +142,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         scene_hash = get_u64(buf + 16);
         decode_params(buf + PARAM_OFFSET, &params);
     }
+    /* The file's own settings text (version 4, within the file, no NUL), for the third load below. */
+    char *own = NULL;
+    if (size >= HEADER_BYTES + 4 + 8 && get_u32(buf + VERSION_OFFSET) == 4) {
+        uint64_t text = get_u32(buf + HEADER_BYTES);
+        if (text <= size - HEADER_BYTES - 4 - 8 && !memchr(buf + HEADER_BYTES + 4, 0, (size_t)text) &&
+            (own = malloc((size_t)text + 1)) != NULL) {
+            memcpy(own, buf + HEADER_BYTES + 4, (size_t)text);
+            own[text] = '\0';
+        }
+    }
     char path[1024];
     fuzz_write("cache.irc", buf, size, path, sizeof path);
     free(buf);
@@ -175,5 +187,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (ic_cache_load_with_settings(path, &params, scene_hash ^ 1, RUN_SETTINGS, &cache, &err) == IC_OK)
         abort(); /* a file is never taken for another hash */
     ic_cache_destroy(cache);
+    cache = NULL;
+    /* A text never differs from itself: refused for another hash with the file's own text, the message
+     * names no setting (the texts agree), or the text is refused as damaged. */
+    if (own && *own) {
+        ic_result rc = ic_cache_load_with_settings(path, &params, scene_hash ^ 1, own, &cache, &err);
+        if (rc == IC_OK || (rc == IC_ERR_MISMATCH && !strstr(err.message, "the settings it keeps agree with this run's")))
+            abort();
+        ic_cache_destroy(cache);
+    }
+    free(own);
     return 0;
 }

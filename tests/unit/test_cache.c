@@ -30,6 +30,7 @@
 
 #include "cache/cache_store.h" /* ic_cache_set_lookup_path */
 #include "core/rng.h"
+#include "core/text.h"
 #include "core/threads.h"
 #include "core/vecmath.h"
 #include "test_files.h"
@@ -2018,8 +2019,10 @@ static void test_file_settings(void)
          "made for another scene (scene.json, or a file it names, changed since"},
         /* Texts that agree (the caller's hash holds more than its text), or no text: the hashes say it. */
         {a, "made for another scene or settings that change its records (hash 0000000000001111, here "
-            "0000000000002222); use the scene and settings it was made with"},
-        {"", "(hash 0000000000001111, here 0000000000002222); use"},
+            "0000000000002222; the settings it keeps agree with this run's); use the scene and settings it was "
+            "made with"},
+        {"", "(hash 0000000000001111, here 0000000000002222; this run gives no settings to compare with the "
+             "file's); use"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         ic_result rc = load_says(path, &p, hash_b, cases[k].run, &err);
@@ -2155,6 +2158,136 @@ static void test_file_settings(void)
     free(d);
     remove(path);
     remove(bad);
+    ic_cache_destroy(c);
+    free(recs);
+}
+
+/* Well-formed UTF-8 throughout (a message quotes keys and values cut to a length, never inside a character). */
+static int is_utf8(const char *s)
+{
+    for (const unsigned char *p = (const unsigned char *)s; *p;) {
+        size_t n = ic_utf8_sequence(p, SIZE_MAX);
+        if (!n)
+            return 0;
+        p += n;
+    }
+    return 1;
+}
+
+/* The settings text's edges (cache.h: SETTINGS TEXT): a key given twice is refused (identical texts would
+ * otherwise be said to differ), a text never differs from itself, long values are quoted with their cut
+ * marked and the part that differs shown, a carriage return is named. */
+static void test_file_settings_edges(void)
+{
+    const char *path = IC_TEST_TMP "/test_cache_settings_edges.icc";
+    const uint64_t hash_a = 0x1111, hash_b = 0x2222;
+    const uint32_t n = 8;
+    ic_record *recs = make_records(n, 3);
+    ic_cache_params p = {0};
+    ic_cache *c = build_cache(&p, recs, n);
+    ic_error err;
+
+    /* A key twice: refused from the caller on save and on load, before anything is written. */
+    const char *twice[] = {"--a=1\n--a=2\n", "--a=1\n--b=2\n--a=1\n", "scene=1\nscene=2\n"};
+    for (size_t k = 0; k < sizeof twice / sizeof twice[0]; ++k) {
+        remove(path);
+        CHECK(ic_cache_save_with_settings(c, path, hash_a, twice[k], &err) == IC_ERR_INVALID_ARG &&
+                  strstr(err.message, "twice") && !test_file_exists(path),
+              "text %zu with a key twice refused on save: %s", k, err.message);
+    }
+    CHECK(ic_cache_save_with_settings(c, path, hash_a, "--a=1\n--b=2\n", &err) == IC_OK, "save: %s", err.message);
+    CHECK(load_says(path, &p, hash_b, twice[0], &err) == IC_ERR_INVALID_ARG && strstr(err.message, "twice"),
+          "a key twice refused on load: %s", err.message);
+    /* ... and in a file (checksum valid): a damaged file. */
+    {
+        unsigned char *d = NULL;
+        size_t size = 0;
+        CHECK(read_file(path, &d, &size), "read back");
+        CHECK(d && d[FILE_RECORDS_AT + 8] == 'b', "the second key where expected");
+        if (d) {
+            d[FILE_RECORDS_AT + 8] = 'a'; /* "--a=1\n--a=2\n" */
+            resign(d, size);
+            CHECK(load_exact(d, size, &p, hash_b, "--a=1\n", &err) == IC_ERR_CORRUPT &&
+                      strstr(err.message, "twice") && strstr(err.message, "delete it"),
+                  "a file with a key twice: %s", err.message);
+        }
+        free(d);
+    }
+
+    /* A text never differs from itself: refused for its hash, the message names no setting but says that
+     * the texts agree (what differs is something they leave out). */
+    const char *own[] = {"--a=1\n--b=2\n", "scene=00ff\nscene file=x.json\n--rays=8\n--flag=\n", "k=v=w\n"};
+    for (size_t k = 0; k < sizeof own / sizeof own[0]; ++k) {
+        CHECK(ic_cache_save_with_settings(c, path, hash_a, own[k], &err) == IC_OK, "save %zu: %s", k, err.message);
+        ic_result rc = load_says(path, &p, hash_b, own[k], &err);
+        CHECK(rc == IC_ERR_MISMATCH && strstr(err.message, "hash 0000000000001111, here 0000000000002222") &&
+                  strstr(err.message, "the settings it keeps agree with this run's") &&
+                  !strstr(err.message, "made with -"),
+              "text %zu against itself: %s \"%s\"", k, ic_result_name(rc), err.message);
+    }
+
+    /* Long values: cut with the cut marked, at the part that differs, never inside a character. */
+    {
+        char dir[161], a[512], b[512];
+        memset(dir, 'd', sizeof dir - 1);
+        dir[sizeof dir - 1] = '\0';
+        snprintf(a, sizeof a, "scene=1\nscene file=/%s/one.json\n", dir);
+        snprintf(b, sizeof b, "scene=2\nscene file=/%s/two.json\n", dir);
+        CHECK(ic_cache_save_with_settings(c, path, hash_a, a, &err) == IC_OK, "save: %s", err.message);
+        ic_result rc = load_says(path, &p, hash_b, b, &err);
+        CHECK(rc == IC_ERR_MISMATCH && strstr(err.message, "d/one.json, this run's is ...") &&
+                  strstr(err.message, "d/two.json)") && strstr(err.message, "saved for ...") &&
+                  !strchr(err.message, '\n') && strlen(err.message) < 400,
+              "two long scene names that differ at their ends: \"%s\"", err.message);
+        /* One long name (the other run named none): its end, where the file's name is. */
+        snprintf(b, sizeof b, "scene=2\n");
+        rc = load_says(path, &p, hash_b, b, &err);
+        CHECK(rc == IC_ERR_MISMATCH && strstr(err.message, "made for another scene (...") &&
+                  strstr(err.message, "d/one.json, or a file it names"),
+              "a long scene name alone: \"%s\"", err.message);
+        /* Option values that differ past the quoted length, and in their middle. */
+        const char *tails[][2] = {{"1", "2"}, {"1xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+                                              "2xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx"}};
+        for (size_t k = 0; k < 2; ++k) {
+            snprintf(a, sizeof a, "--opt=%s%s\n", dir, tails[k][0]);
+            snprintf(b, sizeof b, "--opt=%s%s\n", dir, tails[k][1]);
+            CHECK(ic_cache_save_with_settings(c, path, hash_a, a, &err) == IC_OK, "save: %s", err.message);
+            rc = load_says(path, &p, hash_b, b, &err);
+            char made[32], now[32];
+            snprintf(made, sizeof made, "dddd%s", tails[k][0]);
+            snprintf(now, sizeof now, "dddd%s", tails[k][1]);
+            made[5] = now[5] = '\0'; /* "dddd1" and "dddd2": where the values part */
+            CHECK(rc == IC_ERR_MISMATCH && strstr(err.message, "made with --opt ...") && strstr(err.message, made) &&
+                      strstr(err.message, "this run has --opt ...") && strstr(err.message, now) &&
+                      !strchr(err.message, '\n') && strlen(err.message) < 600,
+                  "long values %zu: \"%s\"", k, err.message);
+        }
+        /* Two-byte characters: cut between them, so the message stays UTF-8 (the values part inside the
+         * last character, so the quote's start falls inside one; one value alone is quoted from its start,
+         * its end falling inside one). */
+        char u[2 * 150 + 1];
+        for (int k = 0; k < 150; ++k)
+            memcpy(u + 2 * k, "\xc3\xa9", 2);
+        u[300] = '\0';
+        snprintf(a, sizeof a, "--opt=%s1\n", u);
+        snprintf(b, sizeof b, "--opt=%.298s\xc3\xa8" "2\n", u);
+        CHECK(ic_cache_save_with_settings(c, path, hash_a, a, &err) == IC_OK, "save: %s", err.message);
+        rc = load_says(path, &p, hash_b, b, &err);
+        CHECK(rc == IC_ERR_MISMATCH && is_utf8(err.message) && strstr(err.message, "\xc3\xa9" "1, this run has") &&
+                  strstr(err.message, "\xc3\xa8" "2; rerun with"),
+              "long UTF-8 values that part inside a character: \"%s\"", err.message);
+        snprintf(a, sizeof a, "--opt=x%s\n", u);
+        CHECK(ic_cache_save_with_settings(c, path, hash_a, a, &err) == IC_OK, "save: %s", err.message);
+        rc = load_says(path, &p, hash_b, "--other=1\n", &err);
+        CHECK(rc == IC_ERR_MISMATCH && is_utf8(err.message) && strstr(err.message, "made with --opt x\xc3\xa9") &&
+                  strstr(err.message, "..., which this run does not give"),
+              "a long UTF-8 value alone: \"%s\"", err.message);
+    }
+
+    /* A carriage return (a text with CRLF line ends) is named as such. */
+    CHECK(ic_cache_save_with_settings(c, path, hash_a, "--a=1\r\n", &err) == IC_ERR_INVALID_ARG &&
+              strstr(err.message, "carriage return"), "CRLF: %s", err.message);
+    remove(path);
     ic_cache_destroy(c);
     free(recs);
 }
@@ -2523,6 +2656,7 @@ int main(void)
     RUN(test_file);
     RUN(test_payloads);
     RUN(test_file_settings);
+    RUN(test_file_settings_edges);
     RUN(test_freeze_lifecycle);
     RUN(test_frozen_threads);
     RUN(test_frozen_bounce_levels);
