@@ -151,7 +151,8 @@ typedef struct ic_cache_params {
     float validity_angle_deg;         /* minimum angle between taken directions; default 30 */
     ic_cache_switch gradient_difference; /* Castaño 2014; default off */
     float gradient_difference_threshold; /* τ of the criterion (see cache_clamp.c); default 0.1 × a / 0.15
-                                            (T–L's a as 0.15·a): 0.1 at either default accuracy */
+                                            (T–L's a as 0.15·a; 0.1 at either default accuracy) with
+                                            gradient_difference on, 0.1 (unused) with it off */
     uint32_t leaf_capacity;           /* octree: split leaves holding more refs than this; default 12 */
     uint32_t max_depth;               /* octree depth limit, ≤ 32; default 20 */
     ic_cache_switch freeze;           /* ic_cache_rebuild_index and ic_cache_load freeze the cache; default on */

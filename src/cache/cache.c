@@ -40,16 +40,6 @@ ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *ou
         p.validity_k = 6;
     if (p.validity_angle_deg == 0.0f)
         p.validity_angle_deg = 30.0f;
-    if (p.gradient_difference_threshold == 0.0f) {
-        /* τ in proportion to the accuracy (T–L's a read on Ward's scale, so that either default gives
-         * 0.1): Δ is a relative error between two records' first-order predictions, the kind of error a
-         * bounds. A fixed τ turned a looser accuracy into more records, not fewer: larger records meet
-         * farther neighbours, Δ grows with the distance, and every pass's records shrank their neighbours
-         * again (the Cornell box at a = 1: 22,486 records in 31 passes against 9,520 at a = 0.15). */
-        float a = p.weight == IC_WEIGHT_TABELLION ? p.accuracy * (IC_DEFAULT_ACCURACY_WARD / IC_DEFAULT_ACCURACY_TL)
-                                                  : p.accuracy;
-        p.gradient_difference_threshold = GRADIENT_DIFFERENCE_THRESHOLD * (a / IC_DEFAULT_ACCURACY_WARD);
-    }
     if (p.leaf_capacity == 0)
         p.leaf_capacity = 12;
     if (p.max_depth == 0)
@@ -64,6 +54,18 @@ ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *ou
         p.gradient_difference = IC_CACHE_OFF;
     if (p.freeze == IC_CACHE_DEFAULT)
         p.freeze = IC_CACHE_ON;
+    if (p.gradient_difference_threshold == 0.0f) {
+        /* In proportion to the accuracy (T–L's a read on Ward's scale, so that either default gives 0.1):
+         * Δ is a relative error between two records' first-order predictions, the kind of error a bounds.
+         * A fixed τ turned a looser accuracy into more records, not fewer: larger records meet farther
+         * neighbours, Δ grows with the distance, and every pass's records shrank their neighbours again
+         * (the Cornell box at a = 1: 22,486 records in 31 passes against 9,520 at a = 0.15). Unused with
+         * the scaling off, where it stays 0.1, as cache files made then keep it. */
+        float a = p.weight == IC_WEIGHT_TABELLION ? p.accuracy * (IC_DEFAULT_ACCURACY_WARD / IC_DEFAULT_ACCURACY_TL)
+                                                  : p.accuracy;
+        p.gradient_difference_threshold =
+            GRADIENT_DIFFERENCE_THRESHOLD * (p.gradient_difference == IC_CACHE_ON ? a / IC_DEFAULT_ACCURACY_WARD : 1.0f);
+    }
 
     if (!(p.accuracy > 0.0f && isfinite(p.accuracy)))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: accuracy %g must be positive", (double)p.accuracy);

@@ -1083,6 +1083,32 @@ static void test_gradient_clamps(void)
           (double)(o[1].accuracy * o[1].radius));
     CHECK(o[2].radius == 2.0f && o[3].radius == 2.0f, "gradient difference shrank equal-gradient records");
     ic_cache_destroy(c);
+
+    /* Its default τ follows the accuracy, 0.1 × a / 0.15: the first pair above (Δ = |g_0 − g_1|·d/Y = 0.18)
+     * is scaled at a = 0.25 (τ = 1/6) and left alone at a = 0.5 (τ = 1/3); a fixed τ made looser accuracies
+     * place more records. With the scaling off τ stays 0.1, as cache files made so keep it. */
+    for (int k = 0; k < 2; ++k) {
+        const float a = k ? 0.5f : 0.25f;
+        p = no_clamps(IC_WEIGHT_WARD, a);
+        p.gradient_difference = IC_CACHE_ON;
+        ic_cache_create(&p, &c, &err);
+        ic_record wide[2] = {pair[0], pair[1]};
+        wide[0].harmonic_mean_dist = wide[1].harmonic_mean_dist = 4.0f; /* R: within reach, a·R > 0.6 */
+        ic_cache_insert_batch(c, wide, 2, NULL, &err);
+        ic_cache_get_record(c, 0, &o[0]);
+        CHECK(k ? o[0].radius == 4.0f : o[0].radius < 4.0f,
+              "gradient difference at a = %g with the default threshold: R %g", (double)a, (double)o[0].radius);
+        ic_cache_destroy(c);
+    }
+    ic_cache_params resolved;
+    p = no_clamps(IC_WEIGHT_WARD, 0.5f);
+    CHECK(ic_cache_params_resolve(&p, &resolved, &err) == IC_OK && resolved.gradient_difference_threshold == 0.1f,
+          "gradient difference off: the threshold stays 0.1 (%g)", (double)resolved.gradient_difference_threshold);
+    p = no_clamps(IC_WEIGHT_TABELLION, 1.0f);
+    p.gradient_difference = IC_CACHE_ON;
+    CHECK(ic_cache_params_resolve(&p, &resolved, &err) == IC_OK && resolved.gradient_difference_threshold == 0.1f,
+          "Tabellion-Lamorlette's default accuracy gives the default threshold (%g)",
+          (double)resolved.gradient_difference_threshold);
 }
 
 /* Neighbour clamping against its definition, run by brute force: a label-correcting pass that pops the
