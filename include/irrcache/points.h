@@ -138,7 +138,7 @@ typedef struct ic_points_grid_spec {
 /* The sensors of a grid, row by row: row r (0 … *rows−1) at z = z_0 + r·spacing, column c at x = x_0 +
  * c·spacing, point index r·cols + c; *out is malloc'd (free() it). Fails with IC_ERR_INVALID_ARG (the
  * message says which value) for a box, spacing or height that gives no cell, more than IC_MAX_GRID_POINTS,
- * or a plane outside the box. */
+ * or a plane outside the box, and for a NULL spec or result. */
 ic_result ic_points_grid(const ic_points_grid_spec *spec, ic_sensor_point **out, uint32_t *cols, uint32_t *rows,
                          ic_error *err);
 

@@ -5,16 +5,26 @@
  */
 #include "irrcache/points.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 
-/* Whole cells of side s along [lo, hi]: at least 1 when the side is at least one cell long. The 1e-9
- * keeps a side that is an exact multiple of s (4 m at 1 m) from losing a cell to rounding. */
-static double cells_along(double lo, double hi, double s) { return floor((hi - lo) / s + 1e-9); }
+/* Whole cells of side s along [lo, hi]: at least 1 when the side is at least one cell long. A side that is
+ * a whole number of cells as the user wrote it must not lose one to rounding: the corners are floats (0.7
+ * is stored as 0.69999999, seven cells of 0.1 less 1.2e-8; it once made a 0.7 m side at 0.1 m six cells),
+ * so the side is lengthened by the most their rounding can have taken (half an ulp each, at most
+ * 2^-24 |corner|; twice that here), and the 1e-9 covers the division's own rounding (4 m at 1 m). */
+static double cells_along(float lo, float hi, double s)
+{
+    double slack = FLT_EPSILON * (fabs((double)lo) + fabs((double)hi));
+    return floor(((double)hi - (double)lo + slack) / s + 1e-9);
+}
 
 ic_result ic_points_grid(const ic_points_grid_spec *g, ic_sensor_point **out, uint32_t *cols, uint32_t *rows,
                          ic_error *err)
 {
+    if (!g || !out || !cols || !rows)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "grid: NULL spec or result");
     *out = NULL;
     *cols = *rows = 0;
     if (!(g->spacing > 0.0) || !isfinite(g->spacing))
@@ -27,11 +37,13 @@ ic_result ic_points_grid(const ic_points_grid_spec *g, ic_sensor_point **out, ui
                             "grid: the box (%g %g %g) - (%g %g %g) is empty; give x0 < x1, y0 <= y1, z0 < z1",
                             (double)g->lo.x, (double)g->lo.y, (double)g->lo.z, (double)g->hi.x, (double)g->hi.y,
                             (double)g->hi.z);
-    if (y > (double)g->hi.y)
+    /* Compared as stored: the sensors' height is a float, as is the box's top (y0 0 and 1.9 m, the box's
+     * 1.9 stored as 1.89999998, were once refused as "1.9 lies above 1.9"). */
+    if ((float)y > g->hi.y)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "grid: the plane at y0 + height = %g lies above the box's top "
                             "%g; give a height of at most %g, or a taller box", y, (double)g->hi.y,
                             (double)g->hi.y - (double)g->lo.y);
-    double nx = cells_along(x0, x1, g->spacing), nz = cells_along(z0, z1, g->spacing);
+    double nx = cells_along(g->lo.x, g->hi.x, g->spacing), nz = cells_along(g->lo.z, g->hi.z, g->spacing);
     if (nx < 1.0 || nz < 1.0)
         return ic_error_set(err, IC_ERR_INVALID_ARG,
                             "grid: no whole %g cell fits in %g x %g; give a smaller spacing", g->spacing, x1 - x0,

@@ -181,6 +181,12 @@ static void test_grid_map(void)
           "--map needs .png: %s", err_text);
     CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 2", NULL) == 2 && strstr(err_text, "no whole"),
           "a grid with no cell: %s", err_text);
+    /* A side of whole cells as written keeps them all (0.7 m at 0.1 m: 7, though 0.7 is a float short of
+     * it), and a plane at the box's top is in the box. */
+    CHECK(run(SCENE " --grid 0 0 -0.7 0.7 1.9 0 --spacing 0.1 --height 1.9 --integrator pt --samples 16",
+              DIR "/whole.txt") == 0 && test_line_count(slurp(DIR "/whole.txt")) == 49,
+          "0.7 x 0.7 m at 0.1 m, at the box's top: 49 rows (%d): %s", test_line_count(slurp(DIR "/whole.txt")),
+          err_text);
     CHECK(run(SCENE " --grid 0 0 0 1 0.5 1 --spacing 0.5", NULL) == 2 &&
               strstr(err_text, "irrcache points: --grid: the plane at y0 + height = 0.8 lies above the box's top 0.5; "
                                "give a height of at most 0.5"),

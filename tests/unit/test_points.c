@@ -532,6 +532,32 @@ static void test_grid(void)
               fabsf(p[0].position.z - 0.55f) < 1e-5f,
           "centred: first x 0.6, last 3.6, z 0.55");
     free(p);
+    /* Sides that are whole numbers of cells as written, whose float corners fall short of it (0.7 is
+     * 0.69999999 as a float): every cell counted, e.g. 7 x 7 at 0.1 m over 0.7 x 0.7 m, not 6 x 6. */
+    int short_sides = 0;
+    for (int k = 1; k <= 60; ++k) {
+        ic_points_grid_spec gk = {{0.0f, 0.0f, -1.3f}, {(float)(k / 10.0), 3.0f, (float)(-1.3 + k / 10.0)}, 0.1, 0.8};
+        short_sides += (double)gk.hi.x < k / 10.0;
+        p = NULL;
+        int ok = ic_points_grid(&gk, &p, &cols, &rows, &err) == IC_OK && cols == (uint32_t)k && rows == (uint32_t)k;
+        CHECK(ok, "%.1f x %.1f m at 0.1 m: %d x %d cells (%u x %u)", k / 10.0, k / 10.0, k, k, cols, rows);
+        /* centred: the first and last centres half a cell from the sides */
+        CHECK(p && fabsf(p[0].position.x - 0.05f) < 1e-5f && fabsf(p[cols - 1].position.x - (float)(k / 10.0 - 0.05)) < 1e-5f,
+              "%.1f m: centres half a cell in", k / 10.0);
+        free(p);
+    }
+    CHECK(short_sides > 10, "the case is tested: %d of the sides fall short as floats", short_sides);
+    /* The plane at the box's top is in the box (y0 + height <= y1), as written: 1.9 m in a box 1.9 m high
+     * (the float top 1.89999998 once refused the double 1.9). */
+    ic_points_grid_spec top = {{-1.0f, 0.0f, -1.0f}, {1.0f, 1.9f, 1.0f}, 0.5, 1.9};
+    p = NULL;
+    CHECK(ic_points_grid(&top, &p, &cols, &rows, &err) == IC_OK && cols == 4 && rows == 4 && p &&
+              p[0].position.y == 1.9f,
+          "a plane at the box's top: %s", err.message);
+    free(p);
+    CHECK(ic_points_grid(NULL, &p, &cols, &rows, &err) == IC_ERR_INVALID_ARG &&
+              ic_points_grid(&top, NULL, &cols, &rows, &err) == IC_ERR_INVALID_ARG,
+          "NULL spec or result refused, not a crash");
     ic_points_grid_spec bad_specs[] = {
         {{0, 0, 0}, {4, 3, 4}, 0.0, 0.8},   /* zero spacing */
         {{0, 0, 0}, {4, 3, 4}, 5.0, 0.8},   /* no whole cell */
