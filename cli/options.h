@@ -334,7 +334,7 @@ const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id);
     X(POINTS, "--points", NULL, IC_OPT_STRING, points, 0, 0, "FILE", NAN, "none", "", IC_SCOPE_ALL, \
       "the points, one 'x y z nx ny nz' a line ('-': standard input); required unless --grid") \
     X(OUTPUT, "--output", "-o", IC_OPT_OUT_FILE, output, 0, 0, "FILE", NAN, "standard output", "", IC_SCOPE_ALL, \
-      "write the results there, atomically") \
+      "write the results there, atomically ('-': standard output)") \
     X(FORMAT, "--format", NULL, IC_OPT_CHOICE, format, 0, 0, "text|csv|json", NAN, "text", "", IC_SCOPE_ALL, \
       "text (space-separated), csv (with a header line) or json") \
     X(GRID, "--grid", NULL, IC_OPT_NUMBERS, grid, -1e18, 1e18, "X0 Y0 Z0 X1 Y1 Z1", NAN, "none", "", IC_SCOPE_ALL, \

@@ -184,13 +184,17 @@ static int parse_line(char *line, ic_sensor_point *pt, char *why, size_t why_siz
 }
 
 /* The next line of f into buf (MAX_POINT_LINE + 1 bytes; its newline dropped), *len its length: 1, 0 at
- * the end, -1 if it is longer than MAX_POINT_LINE (the rest is not read), -2 if it holds a NUL byte. */
+ * the end, -1 if it is longer than MAX_POINT_LINE (the rest is not read), -2 if it holds a NUL byte. A
+ * Windows line end's CR is the line end's, not the line's: a line of MAX_POINT_LINE bytes ends in CRLF. */
 static int next_line(FILE *f, char *buf, ssize_t *len)
 {
     int c, n = 0, nul = 0;
     while ((c = getc(f)) != EOF && c != '\n') {
-        if (n == MAX_POINT_LINE)
+        if (n == MAX_POINT_LINE) {
+            if (c == '\r' && ((c = getc(f)) == '\n' || c == EOF))
+                break;
             return -1;
+        }
         nul |= c == '\0';
         buf[n++] = (char)c;
     }
@@ -443,6 +447,8 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         }
     }
     const char *points_path = own.points, *out_path = own.output, *map_path = own.map;
+    if (out_path && strcmp(out_path, "-") == 0)
+        out_path = NULL; /* standard output, as '--points -' reads standard input */
     out_format format = (out_format)own.format;
     int has_grid = own.given[IC_POINTS_ARG_GRID] != NULL, has_spacing = own.given[IC_POINTS_ARG_SPACING] != NULL,
         has_height = own.given[IC_POINTS_ARG_HEIGHT] != NULL, has_map_max = own.given[IC_POINTS_ARG_MAP_MAX] != NULL;

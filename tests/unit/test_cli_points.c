@@ -77,6 +77,15 @@ static void test_outputs(void)
     CHECK(run(SCENE " --points - --threads 2 -o " DIR "/b.txt < " DIR "/pts.txt", NULL) == 0, "stdin and -o: %s",
           err_text);
     CHECK(strcmp(a, slurp(DIR "/b.txt")) == 0, "1 and 2 threads, file and stdin: identical output");
+    /* '-o -' is standard output, as '--points -' is standard input (it once wrote a file named '-'). */
+    {
+        char cmd[4096];
+        unlink(DIR "/-");
+        snprintf(cmd, sizeof cmd, "cd " DIR " && %s points " SCENE " --points pts.txt --threads 1 -o - >dash.txt", CLI);
+        CHECK(test_run_capture(cmd, ERR, err_text, sizeof err_text) == 0 && strcmp(a, slurp(DIR "/dash.txt")) == 0 &&
+                  !test_file_exists(DIR "/-"),
+              "-o -: the results on standard output, no file '-': %s", err_text);
+    }
     CHECK(run(SCENE " --points " DIR "/pts.txt --format csv --integrator pt --samples 256 -o " DIR "/c.csv", NULL) == 0,
           "csv: %s", err_text);
     const char *csv = slurp(DIR "/c.csv");
@@ -373,6 +382,22 @@ static void test_bad_files(void)
         test_write_file(DIR "/long.txt", line);
         CHECK(run(SCENE " --points " DIR "/long.txt", NULL) == 1 && strstr(err_text, "long.txt:1: a line longer"),
               "a 5000-byte line: exit 1: %s", err_text);
+    }
+    /* The limit's edge: a line of 4096 bytes is read, with a Unix or a Windows line end (its CR is the line
+     * end's: such a line was refused as longer than 4096 bytes); one of 4097 bytes is not. */
+    {
+        static char line[4200];
+        const char *ends[3] = {"\n", "\r\n", "\n"};
+        const int lengths[3] = {4096, 4096, 4097};
+        for (int k = 0; k < 3; ++k) {
+            memset(line, ' ', sizeof line);
+            memcpy(line, "0 1 0 0 1 0", 11);
+            snprintf(line + lengths[k], sizeof line - (size_t)lengths[k], "%s", ends[k]);
+            test_write_file(DIR "/edge.txt", line);
+            int st = run(SCENE " --points " DIR "/edge.txt --integrator pt --samples 16", NULL);
+            CHECK(k < 2 ? st == 0 : st == 1 && strstr(err_text, "edge.txt:1: a line longer than 4096 bytes"),
+                  "a line of %d bytes and %s: exit %d: %s", lengths[k], k == 1 ? "CRLF" : "LF", st, err_text);
+        }
     }
     test_write_file(DIR "/three.txt", "0 1 0 0 1 0\n0 1 0 0 1 0\n0 1 0 0 1 0\n");
     CHECK(run(SCENE " --points " DIR "/three.txt --max-points 2", NULL) == 1 &&
