@@ -99,7 +99,7 @@ void ic_falsecolor_scale(double t, uint8_t rgb[3]);
 typedef struct ic_falsecolor_options {
     double max;            /* the value at the top of the scale [the largest value; 1 if none is > 0] */
     int cell_px;           /* pixels per cell side [480 / the larger grid side, clamped to 4–48] */
-    const char *unit;      /* the legend's title, drawn in the built-in font: digits, '.', '-', a–z, space
+    const char *unit;      /* the legend's title, drawn in the built-in font: digits, '.', '-', '+', '/', '%', a–z, space
                               ["lux"] */
 } ic_falsecolor_options;
 

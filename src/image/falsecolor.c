@@ -61,6 +61,8 @@ static unsigned short glyph(char ch)
         return G(0, 0, 0, 0, 2);
     case '-':
         return G(0, 0, 7, 0, 0);
+    case '+':
+        return G(0, 2, 7, 2, 0);
     case '/':
         return G(1, 1, 2, 4, 4);
     case '%':
@@ -107,11 +109,17 @@ static void text(canvas *cv, int x, int y, const char *s)
     }
 }
 
-/* A tick's label: as many decimals as the scale needs to tell five ticks apart. */
+/* A tick's label: as many decimals as the scale needs to tell five ticks apart, the top's leading digit and
+ * two more (below 1 the labels once kept three decimals, so a scale to 0.0004 read 0.000 at every tick);
+ * below 10^-4 and from 10^9 on, three significant digits in exponent form, which stay short. */
 static void label(double v, double max, char *out, size_t size)
 {
-    int decimals = max >= 100.0 ? 0 : max >= 10.0 ? 1 : max >= 1.0 ? 2 : 3;
-    snprintf(out, size, "%.*f", decimals, v);
+    if (max < 1e-4 || max >= 1e9) {
+        snprintf(out, size, "%.3g", v);
+        return;
+    }
+    int lead = (int)floor(log10(max)); /* the place of the top's leading digit */
+    snprintf(out, size, "%.*f", lead >= 2 ? 0 : 2 - lead, v);
 }
 
 ic_result ic_falsecolor_render(const double *values, int cols, int rows, const ic_falsecolor_options *opt,

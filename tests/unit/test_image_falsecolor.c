@@ -5,7 +5,8 @@
  *   2. a 4 × 3 map written as PNG decodes to the layout's size; every pixel of each cell has the scale's
  *      colour for the cell's value over the maximum; the bar runs from the top colour down to the bottom
  *      one; the legend has ink (its labels) and the page is white;
- *   3. the maximum defaults to the largest value; empty grids and negative maxima are refused.
+ *   3. the maximum defaults to the largest value; empty grids and negative maxima are refused;
+ *   4. the five tick labels tell the ticks apart at any scale, 3e-12 to 4.2e12.
  */
 #include "test_util.h"
 
@@ -119,8 +120,45 @@ static void test_defaults_and_errors(void)
     CHECK(ic_falsecolor_render(v, 0, 1, NULL, &rgb, &lay, &err) == IC_ERR_INVALID_ARG && !rgb, "empty grid refused");
 }
 
+/* The five tick labels differ from each other whatever the scale's top (a scale to 0.0004 once read 0.000 at
+ * every tick): each label's band of rows beside its tick, compared pixel by pixel. */
+static void test_labels(void)
+{
+    const double tops[] = {0.0004, 4e-6, 3e-12, 0.037, 0.7, 7.5, 75.0, 750.0, 4.2e12};
+    for (size_t t = 0; t < sizeof tops / sizeof tops[0]; ++t) {
+        double v[2] = {0.0, tops[t]};
+        uint8_t *rgb = NULL;
+        ic_falsecolor_layout lay;
+        ic_error err = {0};
+        if (ic_falsecolor_render(v, 2, 1, NULL, &rgb, &lay, &err) != IC_OK) {
+            CHECK(0, "top %g: %s", tops[t], err.message);
+            continue;
+        }
+        const int x0 = lay.bar_x + lay.bar_w + 5, band = 10; /* past the tick; the glyphs' height */
+        int y[5], ink[5] = {0}, same = 0;
+        for (int k = 0; k < 5; ++k)
+            y[k] = lay.bar_y + (int)lround((1.0 - k / 4.0) * (lay.bar_h - 1)) - band / 2;
+        for (int k = 0; k < 5; ++k)
+            for (int r = 0; r < band; ++r)
+                for (int x = x0; x < lay.width; ++x)
+                    ink[k] += rgb[3 * ((size_t)(y[k] + r) * (size_t)lay.width + (size_t)x)] == 0;
+        for (int a = 0; a < 5; ++a)
+            for (int b = a + 1; b < 5; ++b) {
+                int differ = 0;
+                for (int r = 0; r < band && !differ; ++r)
+                    differ = memcmp(rgb + 3 * ((size_t)(y[a] + r) * (size_t)lay.width + (size_t)x0),
+                                    rgb + 3 * ((size_t)(y[b] + r) * (size_t)lay.width + (size_t)x0),
+                                    3 * (size_t)(lay.width - x0)) != 0;
+                same += !differ;
+            }
+        CHECK(same == 0 && ink[0] > 0 && ink[4] > 0, "top %g: the five labels differ (%d pairs alike)", tops[t], same);
+        free(rgb);
+    }
+}
+
 int main(void)
 {
+    test_labels();
     test_scale();
     test_map();
     test_defaults_and_errors();
