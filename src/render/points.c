@@ -234,15 +234,18 @@ static ic_result resolve_options(const ic_scene *scene, ic_points_options *o, ic
         o->samples = IC_DEFAULT_POINT_SAMPLES;
     if (o->light_samples == 0)
         o->light_samples = IC_DEFAULT_POINT_LIGHT_SAMPLES;
+    const int depth_from_scene = o->max_depth == 0 && scene->settings.max_depth > 0;
     if (o->max_depth == 0)
-        o->max_depth = scene->settings.max_depth > 0 ? scene->settings.max_depth : IC_DEFAULT_MAX_DEPTH;
+        o->max_depth = depth_from_scene ? scene->settings.max_depth : IC_DEFAULT_MAX_DEPTH;
     if (!o->has_seed && o->seed == 0)
         o->seed = scene->settings.seed ? scene->settings.seed : IC_DEFAULT_SEED;
-    /* A record's hemisphere rays return at least their hit's direct light: one bounce at the least. */
+    /* A record's hemisphere rays return at least their hit's direct light: one bounce at the least. Where the
+     * depth is the scene file's, the message says so (a render of that scene takes it). */
     if (o->integrator == IC_INTEGRATOR_IC && o->max_depth < 2)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "max depth %d (direct light only) with the cache: its records "
-                            "carry at least one bounce; use the path tracer, or a max depth of 2 or more",
-                            o->max_depth);
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "max depth %d (direct light only%s%s) with the cache: its "
+                            "records carry at least one bounce; use the path tracer, or a max depth of 2 or more",
+                            o->max_depth, depth_from_scene ? ", from the \"render\" settings of " : "",
+                            depth_from_scene ? scene->path : "");
     return IC_OK;
 }
 

@@ -362,6 +362,17 @@ static void test_bad_files(void)
     CHECK(run(SCENE " --points " DIR "/pts.txt --max-depth 1", NULL) == 2 && strstr(err_text, "max depth 1") &&
               !strstr(err_text, "pts.txt:"),
           "the cache at --max-depth 1: usage error, not blamed on the points file: %s", err_text);
+    /* The depth a scene file sets (a render of it takes 1, direct light only): the cache's refusal says where
+     * the 1 came from, which the user did not type; --max-depth overrides it. */
+    write_plane();
+    test_write_file(DIR "/depth1.json", "{\"meshes\": [{\"path\": \"plane.obj\"}], \"environment\": {\"radiance\": "
+                                        "[1, 1, 1]}, \"render\": {\"max_depth\": 1}}\n");
+    CHECK(run(DIR "/depth1.json --points " DIR "/pts.txt", NULL) == 2 &&
+              strstr(err_text, "max depth 1 (direct light only, from the \"render\" settings of ") &&
+              strstr(err_text, "depth1.json") && test_line_count(err_text) == 1,
+          "the scene file's max depth 1 with the cache: named: %s", err_text);
+    CHECK(run(DIR "/depth1.json --points " DIR "/pts.txt --max-depth 2 --rays 64", NULL) == 0,
+          "--max-depth 2 overrides it: %s", err_text);
     /* What would fail at the end is found first: an output that cannot be written, a map too large. */
     test_write_file(DIR "/one.txt", "0 1 0 0 1 0\n");
     CHECK(run(SCENE " --points " DIR "/one.txt -o " DIR "/no/such/folder/out.txt", NULL) == 1 &&
