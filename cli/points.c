@@ -488,6 +488,8 @@ static int points_command(int argc, char **argv, ic_comm *comm)
                          : !has_grid && (has_spacing || has_height || map_path)
                              ? "--spacing, --height and --map apply to a --grid"
                          : has_map_max && !map_path           ? "--map-max applies to a --map"
+                         : has_grid && own.given[IC_POINTS_ARG_MAX_POINTS]
+                             ? "--max-points applies to a --points file; a --grid's size is set by its --spacing"
                                                               : NULL;
     if (misuse) {
         fprintf(stderr, "irrcache points: %s; usage: irrcache points SCENE --points FILE|- [options] or irrcache "

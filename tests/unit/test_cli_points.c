@@ -186,6 +186,10 @@ static void test_grid_map(void)
           "--spacing=0 (the lower end excluded): %s", err_text);
     CHECK(run(SCENE " --points " DIR "/pts.txt --map " DIR "/x.png", NULL) == 2 && strstr(err_text, "--grid"),
           "--map without a grid: %s", err_text);
+    /* --max-points bounds a --points file; with a grid it was ignored without a word (16 points made). */
+    CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 0.25 --max-points 2", NULL) == 2 &&
+              strstr(err_text, "--max-points applies to a --points file") && test_line_count(err_text) == 1,
+          "--max-points with a grid: %s", err_text);
     CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 0.5 --map " DIR "/x.jpg", NULL) == 2 && strstr(err_text, ".png"),
           "--map needs .png: %s", err_text);
     CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 2", NULL) == 2 && strstr(err_text, "no whole"),
