@@ -481,7 +481,20 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     }
     if (args.given[IC_ARG_ACCURACY])
         opt.ic.cache.accuracy = args.render.ic.cache.accuracy;
+    /* An option of the other estimator did nothing, without a word (--samples with the default cache: the
+     * user thought 4096 paths ran); refused as render refuses cache options without the cache. */
+    const int is_ic = own.integrator == IC_INTEGRATOR_IC;
+    const char *other_estimator =
+        is_ic && own.given[IC_POINTS_ARG_SAMPLES] ? "--samples is the path tracer's; add --integrator pt, or give the "
+                                                    "cache --light-samples (its direct light) or --rays (its records)"
+        : !is_ic && own.given[IC_POINTS_ARG_LIGHT_SAMPLES] ? "--light-samples is the cache's; add --integrator ic, or "
+                                                             "give the path tracer --samples"
+        : !is_ic && args.given[IC_ARG_ACCURACY] ? "--accuracy is the cache's; add --integrator ic"
+        : !is_ic && args.given[IC_ARG_RAYS]     ? "--rays is the cache's; add --integrator ic, or give the path tracer "
+                                                  "--samples"
+                                                : NULL;
     const char *misuse = !scene_path                          ? "no scene given"
+                         : other_estimator                    ? other_estimator
                          : has_grid && points_path            ? "--grid and --points both given; give one"
                          : !has_grid && !points_path          ? "no --points FILE given ('-' reads standard input) and no --grid"
                          : has_grid && !has_spacing           ? "--grid needs --spacing S (the distance between sensors)"

@@ -419,7 +419,7 @@ static void test_bad_files(void)
               strstr(err_text, "three.txt:3: more than 2 points (--max-points)"),
           "--max-points 2 with three points: exit 1 naming the line: %s", err_text);
     /* --max-points takes the suffixes of render's limits, either case, its range kept. */
-    CHECK(run(SCENE " --points " DIR "/three.txt --max-points 1k --rays 64 --integrator pt --samples 16", NULL) == 0,
+    CHECK(run(SCENE " --points " DIR "/three.txt --max-points 1k --integrator pt --samples 16", NULL) == 0,
           "--max-points 1k: %s", err_text);
     CHECK(run(SCENE " --points " DIR "/three.txt --max-points 4g", NULL) == 2 &&
               strstr(err_text, "--max-points 4g: expected a whole number from 1 to 4294967295") &&
@@ -432,6 +432,20 @@ static void test_bad_files(void)
     CHECK(run(SCENE " --points " DIR "/three.txt --max-mesh-elements", NULL) == 2 &&
               strstr(err_text, "irrcache points: --max-mesh-elements needs a value"),
           "--max-mesh-elements without a value: usage error of points: %s", err_text);
+    /* An option of the other estimator is refused, not ignored: --samples with the cache (the default) ran
+     * 256 light samples while the user asked for 4096 paths. */
+    static const char *const other[][2] = {
+        {"--samples 4096", "--samples is the path tracer's; add --integrator pt"},
+        {"--integrator pt --light-samples 64", "--light-samples is the cache's; add --integrator ic"},
+        {"--integrator pt --accuracy 0.1", "--accuracy is the cache's; add --integrator ic"},
+        {"--integrator pt --rays=64", "--rays is the cache's; add --integrator ic"},
+    };
+    for (size_t k = 0; k < sizeof other / sizeof other[0]; ++k) {
+        char args[1024];
+        snprintf(args, sizeof args, SCENE " --points " DIR "/three.txt %s", other[k][0]);
+        CHECK(run(args, NULL) == 2 && strstr(err_text, other[k][1]) && test_line_count(err_text) == 1,
+              "%s: usage error: %s", other[k][0], err_text);
+    }
     /* The options shared with render take render's values and checks, named by this command. */
     CHECK(run(SCENE " --points " DIR "/three.txt --accuracy 0", NULL) == 2 &&
               strstr(err_text, "irrcache points: --accuracy 0: expected a number from 0.001 to 100"),
