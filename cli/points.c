@@ -136,7 +136,10 @@ static int parse_line(char *line, ic_sensor_point *pt, char *why, size_t why_siz
         if (end == at || end != at + len) {
             char token[168];
             token_text(at, len, token, sizeof token);
-            snprintf(why, why_size, "'%s' is not a number; give 'x y z nx ny nz' ('#' starts a comment)", token);
+            /* A JSON, XML or Radiance scene given as the points (the two swapped) says so. */
+            snprintf(why, why_size, "'%s' is not a number; give 'x y z nx ny nz' ('#' starts a comment)%s", token,
+                     strchr("{<", *at) ? "; is this the scene? the scene comes first: irrcache points SCENE --points "
+                                         "FILE" : "");
             return -1;
         }
         if (count == 6) {
@@ -426,7 +429,8 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         int shared = 0, rc;
         if (arg[0] != '-' || arg[1] == '\0') {
             if (scene_path) {
-                fprintf(stderr, "irrcache points: %s: unexpected extra argument; give one scene\n", arg);
+                fprintf(stderr, "irrcache points: %s: unexpected extra argument; give one scene, and a points file "
+                        "after --points (--points %s)\n", arg, arg);
                 return EXIT_USAGE;
             }
             scene_path = arg;

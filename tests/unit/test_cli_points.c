@@ -361,6 +361,12 @@ static void test_bad_files(void)
     CHECK(run(SCENE " --points " DIR "/missing.txt", NULL) == 1 && strstr(err_text, "missing.txt"),
           "a missing file: exit 1 naming it: %s", err_text);
     CHECK(run(SCENE, NULL) == 2, "no --points: usage error");
+    /* The points file given without --points, or the two swapped: the message says what to do. */
+    CHECK(run(SCENE " " DIR "/pts.txt", NULL) == 2 && strstr(err_text, "(--points " DIR "/pts.txt)"),
+          "a points file without --points: %s", err_text);
+    CHECK(run(DIR "/pts.txt --points " SCENE, NULL) == 1 && strstr(err_text, "cornell-box.json:1: '{' is not a number") &&
+              strstr(err_text, "the scene comes first") && test_line_count(err_text) == 1,
+          "scene and points swapped: %s", err_text);
     CHECK(run(SCENE " --points " DIR "/pts.txt --format xml", NULL) == 2, "unknown format: usage error");
     CHECK(run(SCENE " --points " DIR "/pts.txt --samples 0", NULL) == 2, "--samples 0: usage error");
     CHECK(run(SCENE " --points " DIR "/pts.txt --max-depth 1", NULL) == 2 && strstr(err_text, "max depth 1") &&
