@@ -234,7 +234,8 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
         if (got < 0) {
             fprintf(stderr, got == -1 ? "irrcache points: %s:%ld: a line longer than %d bytes; give one point 'x y z "
                                         "nx ny nz' a line\n"
-                                      : "irrcache points: %s:%ld: a NUL byte; give a text file\n",
+                                      : "irrcache points: %s:%ld: a NUL byte: not a text file, or UTF-16 text (as "
+                                        "spreadsheets save 'Unicode text'); save it as UTF-8 or ASCII text\n",
                     name, line_no, MAX_POINT_LINE);
             ok = 0;
             break;

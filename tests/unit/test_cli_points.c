@@ -358,6 +358,18 @@ static void test_bad_files(void)
         CHECK(!test_file_exists(DIR "/bad-out.txt"), "%s: no output file", c->what);
     }
     CHECK(test_count_temporaries(DIR) == 0, "no temporaries left");
+    /* A spreadsheet's 'Unicode text' is UTF-16 (little-endian, a byte order mark, tabs): said so. */
+    {
+        const char *text = "0\t1\t0\t0\t1\t0\r\n";
+        FILE *f = fopen(DIR "/utf16.txt", "wb");
+        fputc(0xFF, f), fputc(0xFE, f);
+        for (const char *c = text; *c; ++c)
+            fputc(*c, f), fputc(0, f);
+        fclose(f);
+        CHECK(run(SCENE " --points " DIR "/utf16.txt", NULL) == 1 && strstr(err_text, "utf16.txt:1: a NUL byte") &&
+                  strstr(err_text, "UTF-16") && strstr(err_text, "save it as UTF-8") && test_line_count(err_text) == 1,
+              "UTF-16 text: %s", err_text);
+    }
     CHECK(run(SCENE " --points " DIR "/missing.txt", NULL) == 1 && strstr(err_text, "missing.txt"),
           "a missing file: exit 1 naming it: %s", err_text);
     CHECK(run(SCENE, NULL) == 2, "no --points: usage error");
