@@ -6,6 +6,7 @@
 #include <stddef.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 #include <signal.h>
 
@@ -38,6 +39,14 @@ static inline int ic_cli_flush_stdout(const char *who)
         return 0;
     fprintf(stderr, "%s: standard output: write error%s%s%s\n", who, e ? " (" : "", e ? strerror(e) : "", e ? ")" : "");
     return 1;
+}
+
+/* Seconds on the monotonic clock (the progress lines' elapsed time). */
+static inline double ic_cli_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 #endif

@@ -30,6 +30,7 @@
 #include <string.h>
 #include <strings.h>
 #include <time.h>
+#include <unistd.h>
 
 #define EXIT_WORK 1
 #define EXIT_USAGE 2
@@ -43,7 +44,31 @@ typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON } out_format;
 
 /* The options points takes from render's table: their names, values, checks and help are render's. */
 static const ic_arg_id shared_ids[] = {IC_ARG_ACCURACY, IC_ARG_RAYS, IC_ARG_MAX_DEPTH, IC_ARG_SEED, IC_ARG_THREADS,
-                                       IC_CLI_LOAD_OPTION_IDS};
+                                       IC_ARG_QUIET, IC_CLI_LOAD_OPTION_IDS};
+
+/* The progress line on stderr (a terminal's, rank 0's, without --quiet): the phase, its share ('-' where the
+ * library cannot say) and the elapsed time, redrawn at most ten times a second; cleared at the end. */
+typedef struct points_progress {
+    double start, last;
+    const char *phase;
+    int shown;
+} points_progress;
+
+static void on_progress(void *user, const char *phase, double fraction)
+{
+    points_progress *p = user;
+    double t = ic_cli_seconds();
+    if (p->phase == phase && t - p->last < 0.1 && fraction < 1.0)
+        return;
+    p->last = t;
+    p->phase = phase;
+    p->shown = 1;
+    char share[16] = "-";
+    if (fraction >= 0.0)
+        snprintf(share, sizeof share, "%5.1f%%", 100.0 * fmin(fraction, 1.0));
+    fprintf(stderr, "\r%-16s %6s  elapsed %6.1fs ", phase, share, t - p->start);
+    fflush(stderr);
+}
 
 static void print_help(FILE *out)
 {
@@ -578,7 +603,15 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     }
     if (rank == 0)
         ic_cli_scene_warnings("irrcache points", scene, scene_path, "every sensor will read 0");
-    if (ic_points_compute(scene, pts, count, &opt, res, &st, &err) != IC_OK) {
+    points_progress prog = {ic_cli_seconds(), 0.0, NULL, 0};
+    if (rank == 0 && !args.quiet && isatty(fileno(stderr))) {
+        opt.progress = on_progress;
+        opt.progress_user = &prog;
+    }
+    ic_result computed = ic_points_compute(scene, pts, count, &opt, res, &st, &err);
+    if (prog.shown)
+        fprintf(stderr, "\r%48s\r", "");
+    if (computed != IC_OK) {
         if (ranks > 1) {
             /* As in render.c: rank 0 says a failure every rank meets; the others' abort ends the job. */
             if (rank != 0)

@@ -38,13 +38,6 @@ typedef struct progress_state {
     const char *last_phase;
 } progress_state;
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* The progress line: the phase and its share, the render's elapsed time and the whole render's time left
  * ('-' while the library cannot estimate it: cache construction without --time). */
 static void on_progress(void *user, const ic_render_progress *r)
@@ -52,7 +45,7 @@ static void on_progress(void *user, const ic_render_progress *r)
     progress_state *p = user;
     if (!p->enabled)
         return;
-    double t = now_seconds();
+    double t = ic_cli_seconds();
     int new_phase = p->last_phase != r->phase;
     if (!new_phase && t - p->last < 0.1 && r->fraction < 1.0)
         return;
@@ -416,7 +409,7 @@ static int render_command(int argc, char **argv, ic_comm *comm)
 
     ic_error err = {0};
     ic_scene *scene = NULL;
-    double t_load = now_seconds();
+    double t_load = ic_cli_seconds();
     if (ic_scene_load(a.scene, &a.load, &scene, &err) != IC_OK) {
         if (ranks > 1)
             snprintf(message, sizeof message, "irrcache render: rank %d of %d: %s", rank, ranks, err.message);
@@ -428,7 +421,7 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         ic_scene_free(scene);
         return rc;
     }
-    t_load = now_seconds() - t_load;
+    t_load = ic_cli_seconds() - t_load;
     if (rank == 0)
         ic_cli_scene_warnings("irrcache render", scene, a.scene, "the image will be black");
 

@@ -93,6 +93,12 @@ typedef struct ic_points_options {
     ic_comm *comm;         /* the processes sharing the computation (irrcache/comm.h): each gathers a share of
                               the records and estimates a share of the points, and every one returns all the
                               results, the same bits as one process; NULL: one process */
+    ic_progress_fn progress; /* each phase's share done (may be NULL), from one thread at a time: integrator IC
+                              "hit records" (share unknown: −1), then "sensor records" (the share of the
+                              sensors a record already serves, at each pass), then "sensors" (the share
+                              estimated; with several processes, of this process's own); results do not depend
+                              on it */
+    void *progress_user;
 } ic_points_options;
 
 /* One point's result. */

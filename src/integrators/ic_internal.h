@@ -476,8 +476,8 @@ ic_result ic_ic_points_pool(const ic_ctx *c, uint32_t first, uint32_t records, i
  * no sensor record covers, in input order, each unless it lies within reach of one taken before it in the
  * pass; the pass's records gathered in parallel and inserted as one batch (the records do not depend on
  * the thread count); freezes the cache; fills noise. */
-ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_points_noise *noise,
-                             uint32_t *hit_records, ic_error *err);
+ic_result ic_ic_points_build(ic_ctx *c, const ic_render_options *opt, const ic_vec3 *p, const ic_vec3 *n,
+                             uint32_t count, ic_points_noise *noise, uint32_t *hit_records, ic_error *err);
 /* The interpolated irradiance at (p, n) (environment and indirect light) and the σ of R, G, B and luminance
  * (Radiance's weights): the noise of the records' own rays (noise) and of the records those read
  * (ic_ctx.record_noise); 0 if no record contributes. */

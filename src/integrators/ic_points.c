@@ -379,8 +379,8 @@ static ic_result repeat_variance(ic_ctx *c, uint32_t first, uint32_t records, ic
     return r;
 }
 
-ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint32_t count, ic_points_noise *noise,
-                             uint32_t *hit_records, ic_error *err)
+ic_result ic_ic_points_build(ic_ctx *c, const ic_render_options *opt, const ic_vec3 *p, const ic_vec3 *n,
+                             uint32_t count, ic_points_noise *noise, uint32_t *hit_records, ic_error *err)
 {
     /* A record accepts a look-up only within a_i·R_i of itself (both weights' distance term), and R_i is at
      * most the larger of the radius bounds: sensors farther apart than that can never share a record, so
@@ -406,6 +406,8 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
                       ? IC_OK
                       : ic_error_set(err, IC_ERR_OOM, "out of memory for %u sensors", count);
     phase_times times = {0};
+    if (r == IC_OK && c->hit_lookups)
+        ic_ic_report(opt, "hit records", -1.0);
     if (r == IC_OK)
         r = ic_ic_hit_stage(c, p, n, count, POINT_KEY_TAG, 0, HIT_STRATA_DIV, 1, &times, err);
     const uint32_t first_sensor_record = r == IC_OK ? ic_cache_count(c->cache) : 0;
@@ -417,15 +419,17 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
      * neighbour clamping can take its cover away, as in lazy construction). */
     ic_cache_contribution contrib[CONTRIBUTION_CAPACITY];
     while (r == IC_OK) {
-        uint32_t taken = 0;
+        uint32_t taken = 0, served = 0;
         if (bounded)
             memset(grid.key, 0, sizeof *grid.key * slots);
         for (uint32_t i = 0; i < count; ++i) {
             if (gathered[i] >= MAX_ROUNDS)
                 continue;
             uint32_t kept;
-            if (sensor_lookup(c, p[i], n[i], IC_ACCEPT_CONSTRUCTION, 1, contrib, &kept, NULL))
+            if (sensor_lookup(c, p[i], n[i], IC_ACCEPT_CONSTRUCTION, 1, contrib, &kept, NULL)) {
+                ++served;
                 continue;
+            }
             if (bounded ? grid_near(&grid, p, p[i]) : taken > 0)
                 continue;
             if (bounded)
@@ -438,6 +442,7 @@ ic_result ic_ic_points_build(ic_ctx *c, const ic_vec3 *p, const ic_vec3 *n, uint
             ++taken;
             ++gathered[i];
         }
+        ic_ic_report(opt, "sensor records", (double)served / (double)count);
         if (taken == 0)
             break;
         c->record_bounce = SENSOR_BOUNCE;

@@ -87,7 +87,19 @@ typedef struct points_job {
     _Atomic uint32_t uncovered; /* lowest point no record covered, + 1 (0: none); the lowest, so that the
                                    message does not depend on which thread found one first */
     ic_points_noise noise;     /* ic: the records' pooled relative variance (R, G, B, luminance) */
+    _Atomic uint32_t done;     /* points estimated so far (progress) */
+    uint32_t own;              /* this process's points */
+    ic_progress_fn progress;
+    void *progress_user;
 } points_job;
+
+/* One point estimated: the share done, reported by thread 0 alone (one thread at a time, as promised). */
+static void point_done(points_job *job, int thread)
+{
+    uint32_t done = atomic_fetch_add(&job->done, 1) + 1;
+    if (thread == 0 && job->progress)
+        job->progress(job->progress_user, "sensors", (double)done / (double)job->own);
+}
 
 /* One sample of E at sensor i (surface s, BSDF b): π times the white receiver's reflected radiance. */
 typedef ic_vec3 (*point_sample_fn)(const points_job *job, uint32_t i, const ic_surface *s, const ic_bsdf *b,
@@ -175,7 +187,6 @@ static void store(ic_point_result *r, const double e[4], const double sg[4])
 
 static void point_pt(void *ctx, int64_t item, int thread)
 {
-    (void)thread;
     points_job *job = ctx;
     uint32_t i = job->first + (uint32_t)item;
     double mean[4], sigma[4];
@@ -183,13 +194,13 @@ static void point_pt(void *ctx, int64_t item, int thread)
     estimate_point(job, i, STREAM_PT, sample_pt, mean, sigma, &rays);
     store(&job->out[i], mean, sigma);
     job->rays[i] = rays;
+    point_done(job, thread);
 }
 
 /* The cache's estimate at one sensor: the records' interpolation plus the light samples; the two errors
  * are independent, so their variances add. */
 static void point_ic(void *ctx, int64_t item, int thread)
 {
-    (void)thread;
     points_job *job = ctx;
     uint32_t i = job->first + (uint32_t)item;
     ic_vec3 E_cache;
@@ -199,6 +210,7 @@ static void point_ic(void *ctx, int64_t item, int thread)
         uint32_t seen = atomic_load(&job->uncovered);
         while ((seen == 0 || seen > i + 1) && !atomic_compare_exchange_weak(&job->uncovered, &seen, i + 1)) {
         }
+        point_done(job, thread);
         return;
     }
     double mean[4], sigma[4];
@@ -213,6 +225,7 @@ static void point_ic(void *ctx, int64_t item, int thread)
     }
     store(&job->out[i], e, sg);
     job->rays[i] = rays;
+    point_done(job, thread);
 }
 
 static int finite3(ic_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
@@ -308,6 +321,9 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
     points_job job;
     memset(&job, 0, sizeof job);
     atomic_init(&job.uncovered, 0);
+    atomic_init(&job.done, 0);
+    job.progress = opt.progress;
+    job.progress_user = opt.progress_user;
     job.tr = &tr;
     job.p = p;
     job.n = n;
@@ -317,6 +333,7 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
     uint64_t first, own;
     ic_comm_block(count, ic_comm_size(opt.comm), ic_comm_rank(opt.comm), &first, &own);
     job.first = (uint32_t)first;
+    job.own = (uint32_t)own;
     uint64_t gather_rays = 0;
     if (opt.integrator == IC_INTEGRATOR_PT) {
         job.samples = opt.samples;
@@ -332,9 +349,11 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
         ro.has_seed = 1;
         ro.ic = opt.ic;
         ro.comm = opt.comm;
+        ro.progress = opt.progress;
+        ro.progress_user = opt.progress_user;
         r = ic_ic_points_ctx_create(&tr, &ro, &ic, err);
         if (r == IC_OK)
-            r = ic_ic_points_build(ic, p, n, count, &job.noise, &st->hit_records, err);
+            r = ic_ic_points_build(ic, &ro, p, n, count, &job.noise, &st->hit_records, err);
         if (r == IC_OK) {
             st->records = ic_cache_count(ic->cache) - st->hit_records;
             gather_rays = (uint64_t)atomic_load(&ic->rays);
@@ -348,6 +367,8 @@ ic_result ic_points_compute(const ic_scene *scene, const ic_sensor_point *points
             r = ic_error_set(err, IC_ERR_INTERNAL, "sensor points[%u] (0-based): no cache record covers it after "
                              "construction", uncovered - 1);
     }
+    if (r == IC_OK && opt.progress)
+        opt.progress(opt.progress_user, "sensors", 1.0);
     /* Every process's block of results to every process; the rays of all. */
     if (r == IC_OK)
         r = ic_comm_allgather_blocks(opt.comm, out, count, sizeof *out, "exchanging sensor results", err);

@@ -52,7 +52,7 @@ int main(void)
         {"ic_gather_extent", sizeof(ic_gather_extent), 44},
         {"ic_gather_radiance_result", sizeof(ic_gather_radiance_result), 104},
         {"ic_sensor_point", sizeof(ic_sensor_point), 24},
-        {"ic_points_options", sizeof(ic_points_options), 352},
+        {"ic_points_options", sizeof(ic_points_options), 368},
         {"ic_point_result", sizeof(ic_point_result), 40},
         {"ic_points_stats", sizeof(ic_points_stats), 32},
         {"ic_points_grid_spec", sizeof(ic_points_grid_spec), 40},

@@ -347,6 +347,44 @@ static void test_furnace(void)
     ic_scene_free(scene);
 }
 
+/* What the progress callback saw: the phases in the order first seen, every share, the last call. */
+typedef struct progress_log {
+    const char *phases[8];
+    int n_phases, calls, bad_share;
+    const char *last_phase;
+    double last_share;
+} progress_log;
+
+static void log_progress(void *user, const char *phase, double fraction)
+{
+    progress_log *l = user;
+    if (!l->last_phase || strcmp(l->last_phase, phase) != 0) {
+        int seen = 0;
+        for (int k = 0; k < l->n_phases; ++k)
+            seen |= strcmp(l->phases[k], phase) == 0;
+        if (!seen && l->n_phases < 8)
+            l->phases[l->n_phases++] = phase;
+    }
+    /* a share in [0, 1], or −1 where the library cannot say (the hit stage) */
+    if (!((fraction >= 0.0 && fraction <= 1.0) || (fraction == -1.0 && strcmp(phase, "hit records") == 0)))
+        l->bad_share = 1;
+    ++l->calls;
+    l->last_phase = phase;
+    l->last_share = fraction;
+}
+
+/* Progress reports change nothing and end with every sensor estimated: the phases in their order. */
+static void check_progress(const char *what, const progress_log *l, const char *const *want, int n_want)
+{
+    int order = l->n_phases == n_want;
+    for (int k = 0; order && k < n_want; ++k)
+        order = strcmp(l->phases[k], want[k]) == 0;
+    CHECK(order && !l->bad_share && l->last_phase && strcmp(l->last_phase, "sensors") == 0 && l->last_share == 1.0,
+          "%s progress: %d phases (first %s), %d calls, a share out of range %d, last %s %g", what, l->n_phases,
+          l->n_phases ? l->phases[0] : "none", l->calls, l->bad_share, l->last_phase ? l->last_phase : "none",
+          l->last_share);
+}
+
 static void test_cornell(void)
 {
     ic_scene *scene = load(IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json");
@@ -367,15 +405,27 @@ static void test_cornell(void)
     int ok = ic_points_compute(scene, pts, N, &opt, pt, &st_pt, &err) == IC_OK;
     CHECK(ok, "Cornell pt: %s", err.message);
     opt.threads = 2;
+    progress_log pt_log = {0};
+    opt.progress = log_progress;
+    opt.progress_user = &pt_log;
     ok = ok && ic_points_compute(scene, pts, N, &opt, pt2, NULL, &err) == IC_OK;
     CHECK(ok && memcmp(pt, pt2, sizeof pt) == 0, "pt: 1 and 2 threads identical");
+    const char *const pt_phases[] = {"sensors"};
+    check_progress("pt", &pt_log, pt_phases, 1);
+    opt.progress = NULL;
     opt.integrator = IC_INTEGRATOR_IC;
     opt.threads = 1;
     ok = ok && ic_points_compute(scene, pts, N, &opt, ic, &st_ic, &err) == IC_OK;
     CHECK(ok, "Cornell ic: %s", err.message);
     opt.threads = 2;
+    progress_log ic_log = {0};
+    opt.progress = log_progress;
+    opt.progress_user = &ic_log;
     ok = ok && ic_points_compute(scene, pts, N, &opt, ic2, NULL, &err) == IC_OK;
     CHECK(ok && memcmp(ic, ic2, sizeof ic) == 0, "ic: 1 and 2 threads identical");
+    const char *const ic_phases[] = {"hit records", "sensor records", "sensors"};
+    check_progress("ic", &ic_log, ic_phases, 3);
+    opt.progress = NULL;
     /* The default gathering grid given as zero (above) and spelled out are one grid: the hit records get
      * the same fraction of it (they once took the sensors' whole grid when it was left at zero). */
     ic_gather_opts grid;
