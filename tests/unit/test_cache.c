@@ -1100,6 +1100,26 @@ static void test_gradient_clamps(void)
               "gradient difference at a = %g with the default threshold: R %g", (double)a, (double)o[0].radius);
         ic_cache_destroy(c);
     }
+    /* However many neighbours scale it, a record keeps a quarter of the radius it was inserted with: here
+     * R = 4 at a = 0.5; the first neighbour (d = 0.5, its own R 4) takes it to 1 (f floored at 0.25), the
+     * second (d = 0.3) would take it to 0.25, and so on without end in lazy construction. */
+    p = no_clamps(IC_WEIGHT_WARD, 0.5f);
+    p.gradient_difference = IC_CACHE_ON;
+    p.gradient_difference_threshold = 0.01f;
+    ic_cache_create(&p, &c, &err);
+    const float at[3] = {0.0f, 0.5f, -0.3f};
+    for (int k = 0; k < 3; ++k) {
+        ic_record r = plane_record(v3(at[k], 0, 0), 4.0f);
+        r.irradiance = v3s(1.0f);
+        for (int ch = 0; ch < 3; ++ch)
+            r.grad_trans[ch] = k == 0 ? v3(0.0f, 0.05f, 0) : v3(0.3f * (float)k, 0, 0);
+        ic_cache_insert_batch(c, &r, 1, NULL, &err);
+    }
+    ic_cache_get_record(c, 0, &o[0]);
+    CHECK(o[0].radius == 1.0f, "gradient difference, two neighbours in turn: R %g, a quarter of 4 expected",
+          (double)o[0].radius);
+    ic_cache_destroy(c);
+
     ic_cache_params resolved;
     p = no_clamps(IC_WEIGHT_WARD, 0.5f);
     CHECK(ic_cache_params_resolve(&p, &resolved, &err) == IC_OK && resolved.gradient_difference_threshold == 0.1f,
