@@ -23,9 +23,20 @@ static void split_path(const char *path, char *dir, size_t dir_size, const char 
     *base = slash ? slash + 1 : path;
 }
 
-/* One output on its own; on success canon holds the canonical folder of path and its name, so that two
- * spellings of one file ("a.exr", "./a.exr", "x/../a.exr", a folder reached through a link) compare
- * equal. */
+/* The canonical path of the file target (an output's path, its symbolic links followed): its folder's real
+ * path and its name, so that two spellings of one file ("a.exr", "./a.exr", "x/../a.exr", a folder reached
+ * through a link) compare equal. */
+static void canonical(const char *target, char *canon, size_t canon_size)
+{
+    const char *base;
+    char dir[PATH_MAX], real[PATH_MAX];
+    split_path(target, dir, sizeof dir, &base);
+    if (!realpath(dir, real))
+        snprintf(real, sizeof real, "%s", dir);
+    snprintf(canon, canon_size, "%s/%.*s", real, NAME_MAX, base); /* a name is at most NAME_MAX bytes */
+}
+
+/* One output on its own; on success canon holds its canonical path (canonical). */
 static int check_one(const char *command, const ic_cli_output *o, char *canon, size_t canon_size)
 {
     const char *base;
@@ -74,11 +85,37 @@ static int check_one(const char *command, const ic_cli_output *o, char *canon, s
                           "use a shorter name", dir, NAME_MAX)
                    : FAIL(o, "cannot create a file in folder %s (%s); choose a writable folder", dir, strerror(errno));
     ic_atomic_file_abort(&f);
-    char real[PATH_MAX];
-    if (!realpath(dir, real))
-        snprintf(real, sizeof real, "%s", dir);
-    snprintf(canon, canon_size, "%s/%.*s", real, NAME_MAX, base); /* a name is at most NAME_MAX bytes */
+    canonical(target, canon, canon_size);
     return 1;
+}
+
+/* No output is one of the inputs (the same real path, or the same device and inode: a hard link), but the
+ * one each may let rewrite it. canon: the outputs' canonical paths (canonical). Returns 1, or prints the
+ * line and returns 0. */
+static int check_inputs(const char *command, const ic_cli_output *outs, char (*canon)[PATH_MAX + 256], int count,
+                        const ic_cli_input *inputs, int input_count)
+{
+    char real[PATH_MAX];
+    int ok = 1;
+    for (int k = 0; k < input_count && ok; ++k) {
+        const ic_cli_input *in = &inputs[k];
+        /* "-" reads standard input, which may be sent from a file ('--points - < in.txt'). */
+        const int is_stdin = in->path && !strcmp(in->path, "-");
+        if (!in->path || !realpath(is_stdin ? "/dev/stdin" : in->path, real))
+            continue;
+        struct stat is, os;
+        const int has_inode = stat(real, &is) == 0;
+        for (int i = 0; i < count && ok; ++i) {
+            const int same = !strcmp(canon[i], real) || (has_inode && stat(outs[i].path, &os) == 0 &&
+                                                         os.st_dev == is.st_dev && os.st_ino == is.st_ino);
+            if (same && !(in->may_rewrite && !strcmp(outs[i].option, in->may_rewrite)))
+                ok = is_stdin ? FAIL(&outs[i], "is %s - (standard input, sent from %s); writing it would destroy "
+                                     "it, give another name", in->what, real)
+                              : FAIL(&outs[i], "is %s %s; writing it would destroy it, give another name", in->what,
+                                     in->path);
+        }
+    }
+    return ok;
 }
 
 int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int count, const ic_cli_input *inputs,
@@ -97,20 +134,30 @@ int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int cou
                 ok = FAIL(&outs[i], "the same file as %s %s; give each output its own name", outs[j].option,
                           outs[j].path);
     }
-    char real[PATH_MAX];
-    for (int k = 0; k < input_count && ok; ++k) {
-        const ic_cli_input *in = &inputs[k];
-        /* "-" reads standard input, which may be sent from a file ('--points - < in.txt'). */
-        const int is_stdin = in->path && !strcmp(in->path, "-");
-        if (!in->path || !realpath(is_stdin ? "/dev/stdin" : in->path, real))
-            continue;
-        for (int i = 0; i < count && ok; ++i)
-            if (!strcmp(canon[i], real) && !(in->may_rewrite && !strcmp(outs[i].option, in->may_rewrite)))
-                ok = is_stdin ? FAIL(&outs[i], "is %s - (standard input, sent from %s); writing it would destroy "
-                                     "it, give another name", in->what, real)
-                              : FAIL(&outs[i], "is %s %s; writing it would destroy it, give another name", in->what,
-                                     in->path);
+    ok = ok && check_inputs(command, outs, canon, count, inputs, input_count);
+    free(canon);
+    return ok;
+}
+
+int ic_cli_check_scene_files(const char *command, const ic_cli_output *outs, int count, const ic_scene *scene)
+{
+    const uint32_t n = ic_scene_file_count(scene);
+    char(*canon)[PATH_MAX + 256] = calloc((size_t)count + 1, sizeof *canon);
+    ic_cli_input *ins = calloc((size_t)n + 1, sizeof *ins);
+    int ok = canon && ins;
+    if (!ok)
+        fprintf(stderr, "%s: out of memory checking the outputs\n", command);
+    for (int i = 0; i < count && ok; ++i) {
+        char target[PATH_MAX];
+        /* checked before the scene was loaded: a link that cannot be followed now is compared as written */
+        if (ic_atomic_target(outs[i].path, target, sizeof target) != 0)
+            snprintf(target, sizeof target, "%s", outs[i].path);
+        canonical(target, canon[i], sizeof canon[i]);
     }
+    for (uint32_t k = 0; k < n && ok; ++k)
+        ins[k] = (ic_cli_input){"a file the scene reads,", ic_scene_file(scene, k), NULL};
+    ok = ok && check_inputs(command, outs, canon, count, ins, (int)n);
+    free(ins);
     free(canon);
     return ok;
 }

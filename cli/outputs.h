@@ -2,6 +2,8 @@
 #ifndef IC_CLI_OUTPUTS_H
 #define IC_CLI_OUTPUTS_H
 
+#include "irrcache/render.h"
+
 /* One file the command will write: the option that named it ("-o", "--stats", …) and its path. */
 typedef struct ic_cli_output {
     const char *option;
@@ -24,5 +26,11 @@ typedef struct ic_cli_input {
  * to do", and returns 0. */
 int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int count, const ic_cli_input *inputs,
                          int input_count);
+
+/* Checks, once the scene is loaded and before the work, that no output is one of the files it read
+ * (ic_scene_file: its meshes, material libraries, buffers, textures, environment maps, ...): the same real
+ * path, or the same device and inode. Returns 1, or prints the line as ic_cli_check_outputs does and
+ * returns 0. */
+int ic_cli_check_scene_files(const char *command, const ic_cli_output *outs, int count, const ic_scene *scene);
 
 #endif

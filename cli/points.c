@@ -392,15 +392,22 @@ static int points_command(int argc, char **argv, ic_comm *comm);
 /* Before the work: the outputs can be written (ic_cli_check_outputs: not a folder, a device or a pipe, in a
  * folder that takes a new file, neither the other output nor an input), and a --map of cols x rows cells
  * fits the false-colour map's limits. 0 if not, the one-line message printed or in message. */
-static int preflight(const char *scene_path, const char *points_path, const char *out_path, const char *map_path,
-                     uint32_t cols, uint32_t rows, char *message, size_t size)
+/* The files the command writes (-o, --map; NULL: not given), into outs; returns their count. */
+static int list_outputs(const char *out_path, const char *map_path, ic_cli_output outs[2])
 {
-    ic_cli_output outs[2];
     int n_outs = 0;
     if (out_path)
         outs[n_outs++] = (ic_cli_output){"-o", out_path, "results.txt"};
     if (map_path)
         outs[n_outs++] = (ic_cli_output){"--map", map_path, "map.png"};
+    return n_outs;
+}
+
+static int preflight(const char *scene_path, const char *points_path, const char *out_path, const char *map_path,
+                     uint32_t cols, uint32_t rows, char *message, size_t size)
+{
+    ic_cli_output outs[2];
+    int n_outs = list_outputs(out_path, map_path, outs);
     const ic_cli_input ins[2] = {{"the scene file", scene_path, NULL}, {"the --points file", points_path, NULL}};
     if (!ic_cli_check_outputs("irrcache points", outs, n_outs, ins, 2))
         return 0;
@@ -595,7 +602,12 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         snprintf(message, sizeof message, "irrcache points: %s", err.message);
     else if (own.daylight_factor && ic_points_daylight_reference(scene, &df_lux, &err) != IC_OK)
         snprintf(message, sizeof message, "irrcache points: --daylight-factor: %s", err.message);
-    if ((rc = agree(comm, message[0] ? EXIT_WORK : 0, message)) != 0) {
+    /* The files the scene read (its meshes, textures, ...) are known now: no output may be one of them. */
+    ic_cli_output outs[2];
+    const int n_outs = list_outputs(out_path, map_path, outs);
+    const int overwrites = !message[0] && rank == 0 &&
+                           !ic_cli_check_scene_files("irrcache points", outs, n_outs, scene);
+    if ((rc = agree(comm, message[0] || overwrites ? EXIT_WORK : 0, message)) != 0) {
         ic_scene_free(scene);
         free(res);
         free(pts);

@@ -417,7 +417,9 @@ static int render_command(int argc, char **argv, ic_comm *comm)
             snprintf(message, sizeof message, "irrcache render: %s", err.message);
         return agree(comm, 1, message);
     }
-    if ((rc = agree(comm, 0, message)) != 0) {
+    /* The files the scene read (its meshes, textures, ...) are known now: no output may be one of them. */
+    const int overwrites = rank == 0 && !ic_cli_check_scene_files("irrcache render", outs, n_outs, scene);
+    if ((rc = agree(comm, overwrites ? 2 : 0, message)) != 0) {
         ic_scene_free(scene);
         return rc;
     }

@@ -346,6 +346,12 @@ unsigned ic_scene_light_count(const ic_scene *scene);
 /* What loading approximated or left out, one line per kind ("scene.xml:12: ... is not supported; ..."),
  * "" if nothing (a Mitsuba scene's unsupported elements). Owned by the scene. */
 const char *ic_scene_warnings(const ic_scene *scene);
+/* The files loading read, as real paths (symbolic links resolved), each once: the scene file, then its
+ * meshes, material libraries, buffers, textures, environment maps, included and view files. A caller that
+ * writes files checks it overwrites none of them. index < ic_scene_file_count (else NULL); owned by the
+ * scene. */
+uint32_t ic_scene_file_count(const ic_scene *scene);
+const char *ic_scene_file(const ic_scene *scene, uint32_t index);
 
 #ifdef __cplusplus
 }

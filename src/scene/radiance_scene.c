@@ -786,8 +786,10 @@ ic_result ic_scene_load_radiance(ic_scene_builder *b, const char *path, const ic
         r = ic_scene_finalize_and_fit(b, has_view, err);
     if (r != IC_OK)
         return r;
-    if (has_view)
+    if (has_view) {
+        ic_scene_note_file(b->scene, opt->view);
         return ic_rad_read_view(opt->view, opt, b->scene, err);
+    }
     /* no view: the fitted camera turned to Radiance's default orientation (-vd 0 1 0 -vu 0 0 1), at the
      * same distance, which frames the bounding sphere from any side */
     ic_camera *cam = &b->scene->camera;

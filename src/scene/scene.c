@@ -136,6 +136,33 @@ static int path_below(const char *real, const char *root)
     return real[n] == '\0' || real[n] == '/' || (n > 0 && root[n - 1] == '/');
 }
 
+void ic_scene_note_file(ic_scene *s, const char *path)
+{
+    char real[PATH_MAX];
+    if (!realpath(path, real))
+        return; /* nothing there: nothing read, nothing to keep from being overwritten */
+    for (uint32_t k = 0; k < s->file_count; ++k)
+        if (!strcmp(s->files[k], real))
+            return;
+    char **grown = realloc(s->files, sizeof *grown * (s->file_count + 1));
+    char *copy = strdup(real);
+    if (grown)
+        s->files = grown;
+    if (!grown || !copy) {
+        free(copy);
+        s->files_lost = 1;
+        return;
+    }
+    s->files[s->file_count++] = copy;
+}
+
+uint32_t ic_scene_file_count(const ic_scene *scene) { return scene ? scene->file_count : 0; }
+
+const char *ic_scene_file(const ic_scene *scene, uint32_t index)
+{
+    return scene && index < scene->file_count ? scene->files[index] : NULL;
+}
+
 int ic_scene_path_allowed(const ic_scene_builder *b, const char *path, char *real, size_t size)
 {
     char buf[PATH_MAX];
@@ -144,6 +171,7 @@ int ic_scene_path_allowed(const ic_scene_builder *b, const char *path, char *rea
     if (!realpath(path, buf))
         return b->opt->allow_outside_paths;
     snprintf(real, size, "%s", buf);
+    ic_scene_note_file(b->scene, buf); /* asked for before it is read: one of the scene's files */
     if (b->opt->allow_outside_paths)
         return 1;
     for (int k = 0; k < b->root_count; ++k)
@@ -608,6 +636,9 @@ void ic_scene_free(ic_scene *s)
     free(s->point_light_cdf);
     free(s->point_spots);
     free(s->warnings);
+    for (uint32_t i = 0; i < s->file_count; ++i)
+        free(s->files[i]);
+    free(s->files);
     ic_image_free(&s->env.image);
     free(s->env.marginal_cdf);
     free(s->env.conditional_cdf);

@@ -264,6 +264,9 @@ struct ic_scene {
     ic_camera camera;
     ic_scene_settings settings;
     char *warnings;        /* what loading approximated or left out, lines; NULL if nothing */
+    char **files;          /* the real path of every file loading read (ic_scene_file), each once */
+    uint32_t file_count;
+    int files_lost;        /* 1 if a path could not be kept (out of memory): the list is incomplete */
 };
 
 /* Loading (ic_scene_load, ic_scene_load_options, ic_scene_free) is declared in irrcache/render.h. */

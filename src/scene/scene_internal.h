@@ -41,8 +41,13 @@ typedef struct ic_scene_builder {
 /* Adds dir's real path to b->roots (nothing if it does not exist or is there already). */
 void ic_scene_add_root(ic_scene_builder *b, const char *dir);
 /* 1 if path may be read: allow_outside_paths is set, or its real path lies in one of b->roots. *real gets
- * the real path ("" where realpath fails: then 0 unless allowed, as nothing is there to read). */
+ * the real path ("" where realpath fails: then 0 unless allowed, as nothing is there to read). A path that
+ * exists is noted among the scene's files (ic_scene_note_file): every file a loader reads is asked for here
+ * first (the scene file and a Radiance view file excepted, noted by their loaders). */
 int ic_scene_path_allowed(const ic_scene_builder *b, const char *path, char *real, size_t size);
+/* Adds the real path of path to s->files (ic_scene_file: the files an output must not overwrite), once;
+ * nothing if it does not exist; s->files_lost when memory runs out (ic_scene_load then fails). */
+void ic_scene_note_file(ic_scene *s, const char *path);
 /* IC_OK if path may be read; else the one-line error "where: desc is REAL, outside the scene's folder ...;
  * ... --allow-outside-paths ...". desc names the path as the scene gave it ("mesh '../a.obj'"). */
 ic_result ic_scene_check_path(const ic_scene_builder *b, const char *path, const char *where, const char *desc,

@@ -124,6 +124,7 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
     if (!s)
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory", path);
     snprintf(s->path, sizeof s->path, "%s", path);
+    ic_scene_note_file(s, path);
     ic_scene_builder b;
     memset(&b, 0, sizeof b);
     b.scene = s;
@@ -169,6 +170,8 @@ ic_result ic_scene_load(const char *path, const ic_scene_load_options *opt, ic_s
     ic_scene_builder_release(&b);
     if (r == IC_OK)
         r = check_camera_and_lights(s, path, err);
+    if (r == IC_OK && s->files_lost) /* an incomplete list would let an output overwrite a file left out */
+        r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory listing the files the scene reads", path);
     if (r != IC_OK) {
         ic_scene_free(s);
         return r;

@@ -2,8 +2,9 @@
  * test_cli_outputs.c — every output of `irrcache render` is checked before the render starts (issue
  * "Hardening", item 1): an -o, --aov, --stats, --records-json or --save-cache path that is an existing
  * folder, a device or pipe, has a missing folder, cannot be created, or is the same file as another
- * output (or the scene, or the --load-cache file, which only --save-cache may rewrite) is refused with
- * exit 2 and one line naming the option and the path, and nothing is written. When one output fails at the end all the same (here: a file-size limit), the others are
+ * output (or the scene, a file the scene reads — a mesh, its MTL file, a texture —, or the --load-cache
+ * file, which only --save-cache may rewrite) is refused with exit 2 and one line naming the option and the
+ * path, and nothing is written. When one output fails at the end all the same (here: a file-size limit), the others are
  * written, the exit status is 1 and the message names the one that failed; no temporary file is left.
  */
 #include "test_util.h"
@@ -64,12 +65,21 @@ static int lines(const char *s)
 }
 
 
-/* A refused command line: exit 2, one line naming option and path (and `what`), no image written. */
-static void refused(const char *label, const char *args, const char *option, const char *path, const char *what)
+/* 1 if files a and b hold the same bytes (up to 1 MiB each). */
+static int same_bytes(const char *a, const char *b)
+{
+    static char ta[1 << 20], tb[1 << 20];
+    size_t na = test_read_text(a, ta, sizeof ta), nb = test_read_text(b, tb, sizeof tb);
+    return na > 0 && na == nb && !memcmp(ta, tb, na);
+}
+
+/* A refused command line of scene: exit 2, one line naming option and path (and `what`), no image written. */
+static void refused_in(const char *scene, const char *label, const char *args, const char *option, const char *path,
+                       const char *what)
 {
     remove(DIR_ "/good.pfm");
     char cmd[4096];
-    snprintf(cmd, sizeof cmd, "render %s -o %s/good.pfm %s", QUAD, DIR_, args);
+    snprintf(cmd, sizeof cmd, "render %s -o %s/good.pfm %s", scene, DIR_, args);
     int rc = run(cmd);
     CHECK(rc == 2, "%s: exit %d, expected 2 (%s)", label, rc, err_text);
     CHECK(lines(err_text) == 1, "%s: one line: %s", label, err_text);
@@ -79,6 +89,11 @@ static void refused(const char *label, const char *args, const char *option, con
     CHECK(strstr(err_text, what) != NULL, "%s: says '%s': %s", label, what, err_text);
     CHECK(!exists(DIR_ "/good.pfm"), "%s: nothing rendered or written", label);
     CHECK(test_count_temporaries(DIR_) == 0, "%s: no temporary file left", label);
+}
+
+static void refused(const char *label, const char *args, const char *option, const char *path, const char *what)
+{
+    refused_in(QUAD, label, args, option, path, what);
 }
 
 /* Runs the command with a file-size limit and SIGXFSZ ignored, so that a write beyond the limit fails
@@ -159,6 +174,44 @@ int main(void)
     refused("--save-cache = -o", "--integrator ic --save-cache " DIR_ "/good.pfm" SMALL, "--save-cache",
             DIR_ "/good.pfm", "the same file as -o");
     refused("--stats = scene", "--stats " QUAD SMALL, "--stats", QUAD, "scene file");
+
+    /* Nor an output that is a file the scene reads: its mesh, material library or texture (one named only
+     * by the mesh's MTL file, or by the scene file), whether as written, as another spelling or as a hard
+     * link. Each is refused once the scene is loaded, before the render, and left byte for byte. */
+    {
+        CHECK(system("mkdir -p '" DIR_ "/read' && cp '" QUAD "' '" IC_SOURCE_DIR "/tests/scenes/quad_light.mtl' '"
+                     DIR_ "/read/'") == 0,
+              "a scene folder");
+        CHECK(run("render " QUAD " -o " DIR_ "/read/wood.png" SMALL) == 0, "a texture (%s)", err_text);
+        CHECK(test_write_text(DIR_ "/read/scene.json", "{\n  \"meshes\": [ { \"path\": \"quad_light.obj\" } ],\n"
+                              "  \"materials\": { \"grey\": { \"kd_texture\": \"wood.png\" } }\n}\n"),
+              "the scene file");
+        CHECK(system("cd '" DIR_ "/read' && cp quad_light.obj mesh.keep && cp quad_light.mtl mtl.keep && "
+                     "cp wood.png wood.keep && ln -f quad_light.obj hard.obj") == 0,
+              "copies to compare with, a hard link");
+        const char *scene = DIR_ "/read/scene.json";
+        refused_in(scene, "-o = texture", "-o " DIR_ "/read/wood.png" SMALL, "-o", DIR_ "/read/wood.png",
+                   "is a file the scene reads");
+        CHECK(strstr(err_text, "give another name") != NULL, "says what to do: %s", err_text);
+        refused_in(scene, "--stats = mesh", "--stats " DIR_ "/read/quad_light.obj" SMALL, "--stats",
+                   DIR_ "/read/quad_light.obj", "is a file the scene reads");
+        refused_in(scene, "--records-json = MTL", "--integrator ic --records-json " DIR_ "/read/../read/quad_light.mtl"
+                   SMALL, "--records-json", DIR_ "/read/../read/quad_light.mtl", "is a file the scene reads");
+        refused_in(scene, "--save-cache = mesh's hard link", "--integrator ic --save-cache " DIR_ "/read/hard.obj"
+                   SMALL, "--save-cache", DIR_ "/read/hard.obj", "is a file the scene reads");
+        refused_in(DIR_ "/read/quad_light.obj", "a bare mesh's MTL", "--stats " DIR_ "/read/quad_light.mtl" SMALL,
+                   "--stats", DIR_ "/read/quad_light.mtl", "is a file the scene reads");
+        CHECK(same_bytes(DIR_ "/read/quad_light.obj", DIR_ "/read/mesh.keep") &&
+                  same_bytes(DIR_ "/read/quad_light.mtl", DIR_ "/read/mtl.keep") &&
+                  same_bytes(DIR_ "/read/wood.png", DIR_ "/read/wood.keep"),
+              "the mesh, its MTL file and the texture are intact");
+        CHECK(test_count_temporaries(DIR_ "/read") == 0, "no temporary file left beside them");
+        /* Outputs of other names in the same folder are written. */
+        int rc = run("render " DIR_ "/read/scene.json -o " DIR_ "/read/image.png --stats " DIR_ "/read/stats.json"
+                     SMALL);
+        CHECK(rc == 0 && exists(DIR_ "/read/image.png") && exists(DIR_ "/read/stats.json"),
+              "other outputs beside the scene's files are written (exit %d: %s)", rc, err_text);
+    }
 
     /* The cache a render loads is an input: an output other than --save-cache that is that file would
      * destroy it (the render wrote its stats over the cache it had just read). --save-cache may rewrite it:

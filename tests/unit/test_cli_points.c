@@ -315,6 +315,37 @@ static void test_outputs_refused(void)
     CHECK(run(PLANE " --points - -o " DIR "/in.txt <" DIR "/in.txt", NULL) == 1 &&
               strstr(err_text, "is the --points file - (standard input") && strcmp(slurp(DIR "/in.txt"), pts) == 0,
           "-o onto the file standard input reads: refused, the points kept: %s", err_text);
+    /* Nor a file the scene reads: its mesh, its MTL file, a texture (found once the scene is loaded, before
+     * the work); each is left byte for byte, and a result of another name is written. */
+    char mesh[4096], mtl[4096];
+    snprintf(mesh, sizeof mesh, "%s", slurp(DIR "/plane.obj"));
+    snprintf(mtl, sizeof mtl, "%s", slurp(DIR "/plane.mtl"));
+    CHECK(run(PLANE " --points " DIR "/in.txt -o " DIR "/plane.obj", NULL) == 1 &&
+              strstr(err_text, "-o " DIR "/plane.obj: is a file the scene reads") && test_line_count(err_text) == 1 &&
+              strcmp(slurp(DIR "/plane.obj"), mesh) == 0,
+          "-o onto the scene's mesh: refused, the mesh kept: %s", err_text);
+    CHECK(run(PLANE " --points " DIR "/in.txt -o " DIR "/./plane.mtl", NULL) == 1 &&
+              strstr(err_text, "is a file the scene reads") && strcmp(slurp(DIR "/plane.mtl"), mtl) == 0,
+          "-o onto the mesh's MTL file: refused, kept: %s", err_text);
+    /* A texture: a map made here (a PNG), then given as the ground's colour. */
+    remove(DIR "/texture.png");
+    CHECK(run(PLANE " --grid 0 0 0 1 1 1 --spacing 0.5 --map " DIR "/texture.png", NULL) == 0, "a PNG: %s", err_text);
+    test_write_file(DIR "/textured.json", "{\"meshes\": [{\"path\": \"plane.obj\"}], \"environment\": {\"radiance\": "
+                                          "[1, 1, 1]},\n \"materials\": {\"ground\": {\"kd_texture\": \"texture.png\"}}}\n");
+    static char png[1 << 16], after[1 << 16];
+    size_t n_png = test_read_text(DIR "/texture.png", png, sizeof png);
+    CHECK(run(DIR "/textured.json --grid 0 0 0 1 1 1 --spacing 0.5 --map " DIR "/texture.png", NULL) == 1 &&
+              strstr(err_text, "--map " DIR "/texture.png: is a file the scene reads"),
+          "--map onto the scene's texture: refused: %s", err_text);
+    CHECK(run(DIR "/textured.json --points " DIR "/in.txt -o " DIR "/texture.png", NULL) == 1 &&
+              strstr(err_text, "-o " DIR "/texture.png: is a file the scene reads"),
+          "-o onto the scene's texture: refused: %s", err_text);
+    CHECK(n_png > 8 && test_read_text(DIR "/texture.png", after, sizeof after) == n_png && !memcmp(png, after, n_png),
+          "the texture is kept byte for byte");
+    remove(DIR "/textured.txt");
+    CHECK(run(DIR "/textured.json --points " DIR "/in.txt -o " DIR "/textured.txt", NULL) == 0 &&
+              test_line_count(slurp(DIR "/textured.txt")) == 1,
+          "a result of another name beside them is written: %s", err_text);
     CHECK(test_count_temporaries(DIR) == 0, "no temporaries left");
     CHECK(run(PLANE " --points " DIR "/folder.txt", NULL) == 1 &&
               strstr(err_text, "folder.txt: is a folder; give the points file"),

@@ -5,7 +5,8 @@
  * texture and an environment map outside (JSON; a Mitsuba envmap, a Radiance mesh) are refused with one
  * line naming the scene file (and line), the
  * file and the option; a symbolic link inside that points outside is refused (real paths are compared);
- * the same scenes load with the option; "shared:" paths still load.
+ * the same scenes load with the option; "shared:" paths still load. The files a scene read are listed
+ * (ic_scene_file), each once, for the command to keep its outputs off them.
  *
  * Everything is written under IC_TEST_TMP/scene_paths:
  *   outside.obj outside.mtl x.bin outside.pfm     the files outside
@@ -17,6 +18,8 @@
 #include "test_util.h"
 
 #include <errno.h>
+#include <limits.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -119,6 +122,34 @@ static void expect_loads(const char *path, const char *shared)
     ic_error err;
     ic_result r = try_load(path, 0, shared, &err);
     CHECK(r == IC_OK, "%s: loads: %s", path, err.message);
+}
+
+/* Loads path (allowed outside its folder, with the view file view or NULL) and checks that the files it
+ * read (ic_scene_file) are exactly those of want (NULL-terminated, compared as real paths), each once. */
+static void expect_files(const char *path, const char *view, const char *const *want)
+{
+    ic_scene_load_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.allow_outside_paths = 1;
+    opt.view = view;
+    ic_scene *s = NULL;
+    ic_error err;
+    CHECK(ic_scene_load(path, &opt, &s, &err) == IC_OK, "%s loads: %s", path, err.message);
+    uint32_t n = 0;
+    for (; want[n]; ++n) {
+        char real[PATH_MAX] = "";
+        CHECK(realpath(want[n], real) != NULL, "%s exists", want[n]);
+        int found = 0;
+        for (uint32_t k = 0; k < ic_scene_file_count(s); ++k)
+            found += !strcmp(ic_scene_file(s, k), real);
+        CHECK(found == 1, "%s: %s is among the files it read, once (%d)", path, real, found);
+    }
+    CHECK(ic_scene_file_count(s) == n, "%s: %u files read, expected %u", path, ic_scene_file_count(s), n);
+    char scene_real[PATH_MAX] = "";
+    CHECK(realpath(path, scene_real) && ic_scene_file(s, 0) && !strcmp(ic_scene_file(s, 0), scene_real) &&
+              ic_scene_file(s, n) == NULL,
+          "%s: the scene file first, no file past the count", path);
+    ic_scene_free(s);
 }
 
 /* The command: refused with exit 1 and the option named, rendered with --allow-outside-paths. */
@@ -232,6 +263,24 @@ int main(void)
         CHECK(r == IC_ERR_INVALID_ARG && strstr(err.message, "transformed.json:3:"),
               "transformed.json needs the option: %s", err.message);
     }
+
+    /* The files each scene read, which the command keeps its outputs off: the scene file, its meshes, their
+     * MTL files and buffers, textures (named by an MTL file or by the scene), environment maps, a view file. */
+    expect_files(T "/scene/kd.json", NULL,
+                 (const char *const[]){T "/scene/kd.json", T "/scene/plain_quad.obj", T "/scene/plain_quad.mtl",
+                                       T "/scene/checker2x2.pfm", T "/outside.pfm", NULL});
+    expect_files(T "/scene/m/inside.gltf", NULL,
+                 (const char *const[]){T "/scene/m/inside.gltf", T "/scene/m/inside.bin", NULL});
+    expect_files(T "/scene/env.json", NULL,
+                 (const char *const[]){T "/scene/env.json", T "/scene/m/inside.gltf", T "/scene/m/inside.bin",
+                                       T "/outside.pfm", NULL});
+    expect_files(T "/scene/env.xml", NULL,
+                 (const char *const[]){T "/scene/env.xml", T "/scene/plain_quad.obj", T "/scene/plain_quad.mtl",
+                                       T "/scene/checker2x2.pfm", T "/outside.pfm", NULL});
+    write_text(T "/scene/view.vf", "rvu -vtv -vp 0 -5 0 -vd 0 1 0 -vu 0 0 1 -vh 45 -vv 45\n");
+    expect_files(T "/scene/mesh.rad", T "/scene/view.vf",
+                 (const char *const[]){T "/scene/mesh.rad", T "/outside.obj", T "/quad_light.mtl", T "/scene/view.vf",
+                                       NULL});
 
     check_cli();
     TEST_MAIN_END();
