@@ -157,6 +157,10 @@ static ic_result take_light(gltf_walk *w, const cJSON *node, int index, const fl
         return ic_error_set(w->err, IC_ERR_PARSE, "%s: light %d: a negative colour or intensity; give values >= 0",
                             w->path, li->valueint);
     ic_vec3 power = v3_scale(v3(rgb[0], rgb[1], rgb[2]), intensity);
+    if (ic_radiance_too_large(power))
+        return ic_error_set(w->err, IC_ERR_INVALID_ARG, "%s: light %d: its colour times its intensity is "
+                            IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX, w->path, li->valueint,
+                            IC_RADIANCE_LIMIT_ARGS(power));
     ic_vec3 pos = ic_xform_point(m, v3s(0.0f)), axis = ic_xform_dir(m, v3(0.0f, 0.0f, -1.0f));
     ic_scene *s = w->b->scene;
     ic_result r = IC_OK;

@@ -61,6 +61,8 @@ ic_result ic_json_read_int(json_ctx *c, const cJSON *it, int line, double lo, do
 ic_result ic_json_read_vec3(json_ctx *c, const cJSON *it, int line, ic_vec3 *out);
 /* A colour: one non-negative number (grey) or [r, g, b]. */
 ic_result ic_json_read_color(json_ctx *c, const cJSON *it, int line, ic_vec3 *out);
+/* A colour that is a radiance, irradiance or intensity: at most IC_SCENE_MAX_RADIANCE. */
+ic_result ic_json_read_radiance(json_ctx *c, const cJSON *it, int line, ic_vec3 *out);
 ic_result ic_json_read_string(json_ctx *c, const cJSON *it, int line, const char **out);
 ic_result ic_json_expect_object(json_ctx *c, const cJSON *it, int line);
 

@@ -22,6 +22,7 @@
  *   (found by the fuzzer: `o r` then `l 4`).
  */
 #include "scene/mesh_check.h"
+#include "scene/scene_internal.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -338,6 +339,12 @@ ic_result ic_mtl_check(const char *mtl_path, ic_error *err)
                                      "%s:%ld: material '%s': %s has a negative or non-finite value (%.*s); give "
                                      "values >= 0",
                                      mtl_path, line_no, material, what, (int)strcspn(c + 3, "\r\n"), c + 3);
+                    break;
+                }
+                if (c[1] == 'e' && ic_radiance_too_large(v3s(f))) {
+                    r = ic_error_set(err, IC_ERR_INVALID_ARG,
+                                     "%s:%ld: material '%s': %s is " IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX,
+                                     mtl_path, line_no, material, what, (double)f, IC_SCENE_MAX_RADIANCE);
                     break;
                 }
                 v = end;

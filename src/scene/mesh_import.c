@@ -747,6 +747,10 @@ static ic_result convert_material(ic_scene_builder *b, const struct aiScene *ai,
         convert_gltf(am, *gltf_strength, m);
     else
         convert_phong(am, m);
+    /* (an MTL file's Ke was checked with its line; a glTF emissiveFactor times its strength is checked here) */
+    if (ic_radiance_too_large(m->emission))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: material '%s': its emission is " IC_RADIANCE_LIMIT_FMT "; "
+                            IC_RADIANCE_LIMIT_FIX, mesh_path, m->name, IC_RADIANCE_LIMIT_ARGS(m->emission));
     m->kd = clamp_color(m->kd);
     m->ks = clamp_color(m->ks);
     m->emission = clamp_color(m->emission);

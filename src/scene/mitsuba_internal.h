@@ -66,6 +66,8 @@ ic_result ic_mts_texture(ic_mts_ctx *c, const xmlNode *k, int is_data, int32_t *
 /* A colour (rgb, srgb, spectrum, float); a bitmap texture goes to *texture (when not NULL), colour 1. */
 ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec3 fallback, ic_vec3 *out,
                        int32_t *texture);
+/* ic_mts_color (fallback 1, no texture) for a radiance, irradiance or intensity: at most IC_SCENE_MAX_RADIANCE. */
+ic_result ic_mts_radiance(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec3 *out);
 /* A point or vector element's x, y, z attributes or its value (one number for all three). */
 ic_result ic_mts_vec(ic_mts_ctx *c, const xmlNode *k, float fallback, ic_vec3 *out);
 /* The element's toWorld transform, row-major (identity without one). */

@@ -145,7 +145,7 @@ static ic_result shape_material(ic_mts_ctx *c, const xmlNode *n, ic_material *m,
             const char *type = ic_mts_attr_copy(c, k, "type", type_buf, sizeof type_buf);
             if (!type || strcmp(type, "area"))
                 return ic_mts_fail(c, k, IC_ERR_UNSUPPORTED, "a shape's emitter must be of type \"area\"", NULL);
-            r = ic_mts_color(c, k, "radiance", v3s(1.0f), &m->emission, NULL);
+            r = ic_mts_radiance(c, k, "radiance", &m->emission);
         }
     }
     snprintf(m->name, sizeof m->name, "%.100s:%d", ic_mts_attr(c, n, "id") ? ic_mts_attr(c, n, "id") : "shape", ic_mts_line(n));
@@ -394,7 +394,7 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
         xmlNode *pk = ic_mts_child(c, n, "point", "position");
         if (pk && (r = ic_mts_vec(c, pk, 0.0f, &pos)) != IC_OK)
             return r;
-        if ((r = ic_mts_color(c, n, "intensity", v3s(1.0f), &intensity, NULL)) != IC_OK)
+        if ((r = ic_mts_radiance(c, n, "intensity", &intensity)) != IC_OK)
             return r;
         if (!strcmp(type, "point"))
             return ic_scene_add_point_light(s, pos, intensity, NULL) == IC_OK
@@ -417,7 +417,7 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
     }
     if (!strcmp(type, "constant")) {
         s->env.enabled = 1;
-        return ic_mts_color(c, n, "radiance", v3s(1.0f), &s->env.radiance, NULL);
+        return ic_mts_radiance(c, n, "radiance", &s->env.radiance);
     }
     if (!strcmp(type, "directional")) {
         ic_vec3 d = ic_xform_dir(m, v3(0.0f, 0.0f, 1.0f));
@@ -430,7 +430,7 @@ static ic_result parse_emitter(ic_mts_ctx *c, const xmlNode *n)
             return ic_mts_fail(c, n, IC_ERR_UNSUPPORTED, "a second directional emitter; irrcache renders one sun", NULL);
         s->sun.enabled = 1;
         s->sun.direction = v3_neg(v3_norm(d));
-        return ic_mts_color(c, n, "irradiance", v3s(1.0f), &s->sun.irradiance, NULL);
+        return ic_mts_radiance(c, n, "irradiance", &s->sun.irradiance);
     }
     if (!strcmp(type, "sun") || !strcmp(type, "sky") || !strcmp(type, "sunsky"))
         return parse_daylight(c, n, type);

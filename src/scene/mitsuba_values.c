@@ -309,6 +309,16 @@ ic_result ic_mts_color(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec
     return IC_OK;
 }
 
+ic_result ic_mts_radiance(ic_mts_ctx *c, const xmlNode *n, const char *name, ic_vec3 *out)
+{
+    ic_result r = ic_mts_color(c, n, name, v3s(1.0f), out, NULL);
+    if (r != IC_OK || !ic_radiance_too_large(*out))
+        return r;
+    const xmlNode *k = ic_mts_child(c, n, NULL, name);
+    return ic_error_set_at(c->err, IC_ERR_INVALID_ARG, ic_mts_file(c, k), ic_mts_line(k),
+                           "'%s' is " IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX, name, IC_RADIANCE_LIMIT_ARGS(*out));
+}
+
 /* ---- transforms (row-major 4×4; each operation applies after the ones before it) ---- */
 
 ic_result ic_mts_vec(ic_mts_ctx *c, const xmlNode *k, float fallback, ic_vec3 *out)

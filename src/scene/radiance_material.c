@@ -79,11 +79,21 @@ static ic_result specular_material(ic_rad_ctx *c, ic_vec3 col, double spec, doub
     return IC_OK;
 }
 
+/* A light's radiance: at most IC_SCENE_MAX_RADIANCE. */
+static ic_result radiance_limit(ic_rad_ctx *c, ic_vec3 radiance)
+{
+    if (!ic_radiance_too_large(radiance))
+        return IC_OK;
+    return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG, "%s '%s': its radiance is " IC_RADIANCE_LIMIT_FMT "; "
+                       IC_RADIANCE_LIMIT_FIX, c->type, c->id, IC_RADIANCE_LIMIT_ARGS(radiance));
+}
+
 static ic_result emitter(ic_rad_ctx *c, ic_material *m)
 {
     m->type = IC_MAT_DIFFUSE;
     m->kd = v3s(0.0f);
-    return colour(c, &m->emission);
+    ic_result r = colour(c, &m->emission);
+    return r == IC_OK ? radiance_limit(c, m->emission) : r;
 }
 
 /* The modifier another one names (alias, illum's alternate, a mixture's first): copied into out. */
@@ -149,7 +159,7 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
         r = copy_named(c, c->string_count >= 1 ? c->strings[0] : "void", out);
         out->is_illum = 1;
         out->source_radiance = v3((float)c->reals[0], (float)c->reals[1], (float)c->reals[2]);
-        return r;
+        return r == IC_OK ? radiance_limit(c, out->source_radiance) : r;
     }
     if (!strcmp(t, "mist") || !strcmp(t, "antimatter")) {
         out->kind = IC_RAD_INVISIBLE;

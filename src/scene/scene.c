@@ -13,7 +13,6 @@
 
 #include <errno.h>
 #include <limits.h>
-#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -414,16 +413,16 @@ ic_result ic_scene_check_env_map(const ic_image *m, ic_vec3 scale, const char *n
                                (double)m->rgb[bad]);
     }
     /* The radiance is the texel times the scale, in float: one beyond the float range would be inf where
-     * the sampling tables give it no weight. */
+     * the sampling tables give it no weight, and one near it overflows the estimates (IC_SCENE_MAX_RADIANCE). */
     const float sc[3] = {scale.x, scale.y, scale.z};
     const size_t n = (size_t)m->width * (size_t)m->height * 3;
     for (size_t i = 0; i < n; ++i)
-        if (!((double)m->rgb[i] * sc[i % 3] <= FLT_MAX))
+        if (!((double)m->rgb[i] * sc[i % 3] <= (float)IC_SCENE_MAX_RADIANCE))
             return ic_error_set_at(err, IC_ERR_INVALID_ARG, file, line,
-                                   "environment map '%s': texel (%zu, %zu) times the scale (%g × %g) is beyond the "
-                                   "float range; give a smaller scale",
+                                   "environment map '%s': texel (%zu, %zu) times the scale (%g × %g) is " IC_RADIANCE_LIMIT_FMT
+                                   "; give a smaller scale",
                                    name, i / 3 % (size_t)m->width, i / 3 / (size_t)m->width, (double)m->rgb[i],
-                                   (double)sc[i % 3]);
+                                   (double)sc[i % 3], (double)m->rgb[i] * sc[i % 3], IC_SCENE_MAX_RADIANCE);
     return IC_OK;
 }
 

@@ -113,6 +113,27 @@ ic_result ic_gltf_read_scene(ic_scene_builder *b, const char *path, const char *
 /* Releases the builder's own arrays (not the scene). */
 void ic_scene_builder_release(ic_scene_builder *b);
 
+/* The largest radiance (W/(m²·sr)), irradiance (W/m²) or radiant intensity (W/sr) a scene may give, per
+ * colour component: an emission, a constant environment, an environment map's texel times its scale, a
+ * sky's zenith radiance and irradiances, a point, spot or sun light. The estimators multiply such a value
+ * by 1/pdf, an inverse squared distance or a BSDF and sum samples in float: near FLT_MAX (3.4e38) a sample
+ * overflowed and was dropped as not finite (a constant environment of 3e38 read 0, one of 1e38 gave half
+ * its irradiance). A value is compared as a float, so 1e30 as written passes. */
+#define IC_SCENE_MAX_RADIANCE 1e30
+/* 1 if a component of v is above IC_SCENE_MAX_RADIANCE (or not a number). */
+static inline int ic_radiance_too_large(ic_vec3 v)
+{
+    const float cap = (float)IC_SCENE_MAX_RADIANCE;
+    return !(v.x <= cap && v.y <= cap && v.z <= cap);
+}
+/* A message on such a value: "... is " IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX with the arguments
+ * IC_RADIANCE_LIMIT_ARGS(v) ("... is 2e+31, above 1e+30, the largest ...; scale the scene's lights down ..."). */
+#define IC_RADIANCE_LIMIT_FMT                                                                                    \
+    "%g, above %g, the largest radiance, irradiance or intensity a scene may give (beyond it the estimates "     \
+    "overflow)"
+#define IC_RADIANCE_LIMIT_ARGS(v) (double)v3_maxc(v), IC_SCENE_MAX_RADIANCE
+#define IC_RADIANCE_LIMIT_FIX "scale the scene's lights down alike (--exposure brightens the image back)"
+
 /* Largest world coordinate accepted: twice its square, a triangle's cross product, stays finite in float. */
 #define IC_SCENE_MAX_COORD 1e18f
 

@@ -65,7 +65,7 @@ ic_result ic_json_parse_environment(json_ctx *c, const cJSON *obj, int line)
         if (ic_json_is_comment(it->string))
             continue;
         if (!strcmp(it->string, "radiance")) {
-            r = ic_json_read_color(c, it, kl, &radiance);
+            r = ic_json_read_radiance(c, it, kl, &radiance);
             has_radiance = 1;
         } else if (!strcmp(it->string, "map")) {
             r = ic_json_read_string(c, it, kl, &map);
@@ -133,7 +133,7 @@ static ic_result parse_spot(json_ctx *c, const cJSON *obj, int index, int line)
         if (!strcmp(it->string, "position"))
             r = ic_json_read_vec3(c, it, kl, &pos), has |= 1;
         else if (!strcmp(it->string, "intensity"))
-            r = ic_json_read_color(c, it, kl, &intensity), has |= 2;
+            r = ic_json_read_radiance(c, it, kl, &intensity), has |= 2;
         else if (!strcmp(it->string, "direction"))
             r = ic_json_read_vec3(c, it, kl, &dir), has |= 4;
         else if (!strcmp(it->string, "cone_inner"))
@@ -193,7 +193,7 @@ static ic_result parse_light(json_ctx *c, const cJSON *obj, int index)
             r = ic_json_read_vec3(c, it, kl, &a);
             has_a = 1;
         } else if (!strcmp(it->string, is_point ? "intensity" : "irradiance")) {
-            r = ic_json_read_color(c, it, kl, &e);
+            r = ic_json_read_radiance(c, it, kl, &e);
             has_e = 1;
         } else if (is_sun && !strcmp(it->string, "angular_radius_deg")) {
             r = ic_json_read_float(c, it, kl, &radius_deg);

@@ -114,7 +114,7 @@ static ic_result read_override_key(json_ctx *c, const cJSON *it, int kl, materia
             return ic_json_fail(c, kl, IC_ERR_INVALID_ARG, "'ns' must be > 0 (a Phong exponent)");
         o->has_ns = 1;
     } else if (!strcmp(it->string, "emission")) {
-        r = ic_json_read_color(c, it, kl, &o->m.emission);
+        r = ic_json_read_radiance(c, it, kl, &o->m.emission);
         o->has_em = 1;
     } else if (!strcmp(it->string, "two_sided")) {
         if (!cJSON_IsBool(it))

@@ -16,7 +16,7 @@ static ic_result read_ranged(json_ctx *c, const cJSON *it, int line, double lo, 
     ic_result r = ic_json_read_float(c, it, line, &f);
     if (r != IC_OK)
         return r;
-    /* Compared as written (a double): the float nearest 1e30 is above 1e30. */
+    /* Compared as written (a double): the float nearest IC_SCENE_MAX_RADIANCE (1e30) is above it. */
     if (!(it->valuedouble >= lo && it->valuedouble <= hi))
         return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "environment '%s' is %g, outside [%g, %g]; %s", it->string,
                             it->valuedouble, lo, hi, hint);
@@ -68,14 +68,16 @@ static ic_result read_keys(json_ctx *c, const cJSON *obj, ic_sky_params *p, unsi
             }
             break;
         case K_ZRAD:
-            r = read_ranged(c, it, kl, 1e-30, 1e30, "give the zenith radiance in W/(m2 sr), > 0", &p->zenith_radiance);
+            r = read_ranged(c, it, kl, 1e-30, IC_SCENE_MAX_RADIANCE, "give the zenith radiance in W/(m2 sr), > 0",
+                            &p->zenith_radiance);
             break;
         case K_ZLUM:
-            r = read_ranged(c, it, kl, 1e-30, 1e30, "give the zenith luminance in cd/m2, > 0", &lum);
+            r = read_ranged(c, it, kl, 1e-30, IC_SCENE_MAX_RADIANCE, "give the zenith luminance in cd/m2, > 0", &lum);
             p->zenith_radiance = lum / IC_SKY_EFFICACY;
             break;
         case K_DH:
-            r = read_ranged(c, it, kl, 1e-30, 1e30, "give the diffuse horizontal irradiance in W/m2, > 0",
+            r = read_ranged(c, it, kl, 1e-30, IC_SCENE_MAX_RADIANCE,
+                            "give the diffuse horizontal irradiance in W/m2, > 0",
                             &p->diffuse_horizontal);
             break;
         case K_DN:
@@ -83,7 +85,8 @@ static ic_result read_keys(json_ctx *c, const cJSON *obj, ic_sky_params *p, unsi
                 p->direct_normal_gensky = 1;
                 break;
             }
-            r = read_ranged(c, it, kl, 0.0, 1e30, "give the direct normal irradiance in W/m2, >= 0 (or \"gensky\")",
+            r = read_ranged(c, it, kl, 0.0, IC_SCENE_MAX_RADIANCE,
+                            "give the direct normal irradiance in W/m2, >= 0 (or \"gensky\")",
                             &p->direct_normal);
             break;
         case K_SUNDIR:

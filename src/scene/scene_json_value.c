@@ -274,6 +274,15 @@ ic_result ic_json_read_color(json_ctx *c, const cJSON *it, int line, ic_vec3 *ou
     return IC_OK;
 }
 
+ic_result ic_json_read_radiance(json_ctx *c, const cJSON *it, int line, ic_vec3 *out)
+{
+    ic_result r = ic_json_read_color(c, it, line, out);
+    if (r == IC_OK && ic_radiance_too_large(*out))
+        return ic_json_fail(c, line, IC_ERR_INVALID_ARG, "'%s' is " IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX,
+                            it->string, IC_RADIANCE_LIMIT_ARGS(*out));
+    return r;
+}
+
 ic_result ic_json_read_string(json_ctx *c, const cJSON *it, int line, const char **out)
 {
     if (!cJSON_IsString(it) || !it->valuestring)

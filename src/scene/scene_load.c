@@ -90,6 +90,25 @@ static ic_result check_camera_and_lights(const ic_scene *s, const char *path, ic
                            !v3_is_finite(s->sun.irradiance)))
         return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the sun's direction is zero or not finite, or its irradiance "
                             "is not finite; fix it", path);
+    /* Every light at most IC_SCENE_MAX_RADIANCE: the loaders say so where the file gives the value; what they
+     * derive (a Radiance scene's wide sources summed into the environment, a glTF file's second sun made a
+     * point light far away) is checked here. A map's texels and a sky were checked with their scale. */
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        if (ic_radiance_too_large(s->materials[m].emission))
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: material '%s' emits a radiance of " IC_RADIANCE_LIMIT_FMT
+                                "; " IC_RADIANCE_LIMIT_FIX, path, s->materials[m].name,
+                                IC_RADIANCE_LIMIT_ARGS(s->materials[m].emission));
+    for (uint32_t k = 0; k < s->point_light_count; ++k)
+        if (ic_radiance_too_large(s->point_lights[k].intensity))
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: point light %u's intensity is " IC_RADIANCE_LIMIT_FMT
+                                "; " IC_RADIANCE_LIMIT_FIX, path, k + 1,
+                                IC_RADIANCE_LIMIT_ARGS(s->point_lights[k].intensity));
+    if (s->sun.enabled && ic_radiance_too_large(s->sun.irradiance))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the sun's irradiance is " IC_RADIANCE_LIMIT_FMT "; "
+                            IC_RADIANCE_LIMIT_FIX, path, IC_RADIANCE_LIMIT_ARGS(s->sun.irradiance));
+    if (s->env.enabled && s->env.image.width == 0 && ic_radiance_too_large(s->env.radiance))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: the environment's radiance is " IC_RADIANCE_LIMIT_FMT "; "
+                            IC_RADIANCE_LIMIT_FIX, path, IC_RADIANCE_LIMIT_ARGS(s->env.radiance));
     return IC_OK;
 }
 

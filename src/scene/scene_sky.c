@@ -5,6 +5,7 @@
  */
 #include "scene/scene_internal.h"
 
+#include <math.h>
 #include <stdio.h>
 
 ic_result ic_scene_install_sky(ic_scene *s, const ic_sky_params *p, int with_sky, int with_sun, float scale,
@@ -18,6 +19,12 @@ ic_result ic_scene_install_sky(ic_scene *s, const ic_sky_params *p, int with_sky
     sky.horizontal *= scale;
     sky.ground_radiance *= scale;
     sky.direct_normal *= scale;
+    const double most = fmax(sky.zenith_radiance, sky.direct_normal);
+    if (!(most <= (float)IC_SCENE_MAX_RADIANCE)) {
+        snprintf(why, why_size, "its zenith radiance or its sun's irradiance (times the scale %g) is " IC_RADIANCE_LIMIT_FMT
+                 "; give a smaller scale or a dimmer sky", (double)scale, most, IC_SCENE_MAX_RADIANCE);
+        return IC_ERR_INVALID_ARG;
+    }
     int sun = with_sun && sky.direct_normal > 0.0;
     if (sun && s->sun.enabled) {
         snprintf(why, why_size, "the sky's sun and a sun light: give only one");

@@ -13,6 +13,7 @@
  *      image of the file's, alone and composed with a parent's mirror and the JSON scene's matrix; one
  *      mesh in several nodes is placed once per node.
  */
+#include "test_render_util.h"
 #include "test_util.h"
 
 #include "irrcache/image.h"
@@ -472,8 +473,56 @@ static void test_mirrored_nodes(void)
     ic_scene_free(s);
 }
 
+/* An emission (emissiveFactor times KHR_materials_emissive_strength) or a light (colour times intensity)
+ * above IC_SCENE_MAX_RADIANCE (1e30) is refused naming the file and the material or light (the emission's
+ * product overflowed to infinity and was read as 0); 1e29 loads and renders finite, the emitting floor seen
+ * directly at its radiance. */
+static void test_radiance_limit(void)
+{
+    char cam[256];
+    snprintf(cam, sizeof cam, "{\"name\": \"cam\", \"camera\": 0, \"translation\": [0, %g, 0], " DOWN_ROTATION "}",
+             (double)H);
+    static const char *const lamp = ",\n{\"name\": \"lamp\", \"translation\": [0, 1, 0], " DOWN_ROTATION
+                                    ", \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}}";
+    static const struct {
+        const char *name, *light, *material, *says;
+        double brightest; /* over the value (0: not checked) */
+    } cases[] = {
+        {"limit_emissive", "",
+         "{\"name\": \"hot\", \"emissiveFactor\": [1, 1, 1], \"extensions\": {\"KHR_materials_emissive_strength\": "
+         "{\"emissiveStrength\": %s}}}",
+         "material 'hot': its emission is 1e+31, above 1e+30", 1.0},
+        {"limit_point", "{\"type\": \"point\", \"intensity\": %s}", NULL,
+         "light 0: its colour times its intensity is 1e+31, above 1e+30", 0.0},
+        {"limit_directional", "{\"type\": \"directional\", \"color\": [1, 0.5, 1], \"intensity\": %s}", NULL,
+         "light 0: its colour times its intensity is 1e+31, above 1e+30", 0.0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k)
+        for (int ok = 0; ok < 2; ++ok) {
+            const char *v = ok ? "1e29" : "1e31";
+            char light[256], material[512], nodes[512], name[64];
+            snprintf(light, sizeof light, cases[k].light, v);
+            snprintf(material, sizeof material, cases[k].material ? cases[k].material : "%s", cases[k].material ? v : grey);
+            snprintf(nodes, sizeof nodes, "%s%s", cam, light[0] ? lamp : "");
+            snprintf(name, sizeof name, "%s%s", cases[k].name, ok ? "_ok" : "");
+            const char *path = write_gltf(name, nodes, light[0] ? "1, 2" : "1", down_camera, light, material);
+            ic_scene *s = NULL;
+            ic_error err = {0};
+            test_load_scene(path, NULL, 16, 16, 0, &s, &err);
+            if (ok) {
+                CHECK(s != NULL, "%s loads: %s", name, err.message);
+                test_check_renders_finite(name, s, cases[k].brightest * 1e29);
+                continue;
+            }
+            char where[96];
+            snprintf(where, sizeof where, "%s.gltf: ", name);
+            test_check_refused(name, s, &err, (const char *[]){where, cases[k].says, "; ", NULL});
+        }
+}
+
 int main(void)
 {
+    test_radiance_limit();
     test_mirrored_nodes();
     test_emissive_strength_order();
     test_embedded_texture();

@@ -819,8 +819,62 @@ static void test_transform_direction_lengths(void)
     ic_scene_free(s);
 }
 
+/* A radiance, irradiance or intensity above IC_SCENE_MAX_RADIANCE (1e30) is refused with the line that gives
+ * it (samples that overflowed were dropped: a constant emitter of 3e38 read 0); below it the scene loads and
+ * renders finite, the brightest pixel its analytic value where there is one. The area, constant, point,
+ * spot and directional emitters, and a sky's scale. */
+static void test_radiance_limit(void)
+{
+    /* the rectangle [-1, 1]² facing +z (the fitted camera's side), diffuse 0.5 */
+    static const char *const grey = "  <shape type=\"rectangle\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" "
+                                    "value=\"0.5\"/></bsdf></shape>\n";
+    static const struct {
+        const char *name, *emitter, *bad, *good, *says;
+        double brightest; /* the brightest pixel over the good value (0: not checked) */
+    } cases[] = {
+        {"mts_limit_area", "<shape type=\"rectangle\"><transform name=\"toWorld\"><translate z=\"0.5\"/></transform>"
+                           "<emitter type=\"area\"><rgb name=\"radiance\" value=\"%s\"/></emitter></shape>", "1e31",
+         "1e29", "'radiance' is 1e+31, above 1e+30", 1.0},
+        {"mts_limit_constant", "<emitter type=\"constant\"><rgb name=\"radiance\" value=\"1, %s, 1\"/></emitter>",
+         "1e31", "1e29", "'radiance' is 1e+31, above 1e+30", 1.0},
+        {"mts_limit_point", "<emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"0\" z=\"1\"/>"
+                            "<spectrum name=\"intensity\" value=\"%s\"/></emitter>", "1e31", "1e29",
+         "'intensity' is 1e+31, above 1e+30", 0.0},
+        {"mts_limit_spot", "<emitter type=\"spot\"><transform name=\"toWorld\"><lookat origin=\"0, 0, 1\" "
+                           "target=\"0, 0, 0\"/></transform><rgb name=\"intensity\" value=\"%s\"/></emitter>",
+         "1e31", "1e29", "'intensity' is 1e+31, above 1e+30", 0.0},
+        /* albedo 0.5 lit along its normal: 0.5 E / pi */
+        {"mts_limit_directional", "<emitter type=\"directional\"><vector name=\"direction\" x=\"0\" y=\"0\" "
+                                  "z=\"-1\"/><rgb name=\"irradiance\" value=\"%s\"/></emitter>", "1e31", "1e29",
+         "'irradiance' is 1e+31, above 1e+30", 0.5 / 3.14159265358979},
+        /* gensky's zenith radiance is about 400 W/(m² sr): 1e26 times it is within the limit */
+        {"mts_limit_sky", "<emitter type=\"sky\"><float name=\"scale\" value=\"%s\"/></emitter>", "1e31", "1e26",
+         "(times the scale 1e+31) is", 0.0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k)
+        for (int ok = 0; ok < 2; ++ok) {
+            char emitter[512], xml[2048], path[256], where[96];
+            snprintf(emitter, sizeof emitter, cases[k].emitter, ok ? cases[k].good : cases[k].bad);
+            snprintf(xml, sizeof xml, "<scene version=\"0.6.0\">\n%s  %s\n</scene>\n", grey, emitter);
+            snprintf(path, sizeof path, IC_TEST_TMP "/%s%s.xml", cases[k].name, ok ? "_ok" : "");
+            test_write_file(path, xml);
+            ic_scene *s = NULL;
+            ic_error err = {0};
+            test_load_scene(path, NULL, 16, 16, 1, &s, &err);
+            if (ok) {
+                CHECK(s != NULL, "%s loads: %s", path, err.message);
+                test_check_renders_finite(path, s, cases[k].brightest * atof(cases[k].good));
+                continue;
+            }
+            snprintf(where, sizeof where, "%s.xml:3:", cases[k].name);
+            test_check_refused(cases[k].name, s, &err,
+                               (const char *[]){where, cases[k].says, "above 1e+30", "; ", NULL});
+        }
+}
+
 int main(void)
 {
+    test_radiance_limit();
     test_transform_direction_lengths();
     test_conductor_default();
     test_sphere_to_world();

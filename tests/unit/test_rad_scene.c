@@ -431,8 +431,60 @@ static void test_polygon_zero_area_pieces(void)
     ic_scene_free(s);
 }
 
+/* A light's radiance above IC_SCENE_MAX_RADIANCE (1e30) is refused with its line (samples that overflowed were
+ * dropped: a light of 3e38 read 0); 1e29 loads and renders finite, its brightest pixel the radiance seen
+ * directly. light, glow, spotlight and illum; wide sources summed into one environment are checked as the
+ * sum. */
+static void test_radiance_limit(void)
+{
+    static const char *const view = "rview -vtv -vp 0 0 3 -vd 0 0 -1 -vu 0 1 0 -vh 60 -vv 60\n";
+    /* the square [-1, 1]² facing +z, the camera's side, made of the modifier named first */
+    static const char *const square = "\n%s polygon p\n0\n0\n12 -1 -1 0 1 -1 0 1 1 0 -1 1 0\n";
+    static const struct {
+        const char *name, *modifier, *type, *first, *says;
+    } cases[] = {
+        {"rad_limit_light", "void light hot\n0\n0\n3 1 %s 1\n", "hot", "", "light 'hot': its radiance is 1e+31"},
+        {"rad_limit_glow", "void glow hot\n0\n0\n4 %s 1 1 0\n", "hot", "", "glow 'hot': its radiance is 1e+31"},
+        {"rad_limit_spot", "void spotlight hot\n0\n0\n7 %s %s %s 90 0 0 -1\n", "hot", "",
+         "spotlight 'hot': its radiance is 1e+31"},
+        /* an illum seen as a 360-degree source: the environment, of its radiance */
+        {"rad_limit_illum", "void illum hot\n0\n0\n3 %s 1 1\nhot source sky\n0\n0\n4 0 0 1 360\n", "grey",
+         "void plastic grey\n0\n0\n5 .5 .5 .5 0 0\n", "illum 'hot': its radiance is 1e+31"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k)
+        for (int ok = 0; ok < 2; ++ok) {
+            const char *v = ok ? "1e29" : "1e31";
+            char modifier[256], geometry[256], rad[1024], name[64];
+            snprintf(modifier, sizeof modifier, cases[k].modifier, v, v, v);
+            snprintf(geometry, sizeof geometry, square, cases[k].type);
+            snprintf(rad, sizeof rad, "%s%s%s", cases[k].first, modifier, geometry);
+            snprintf(name, sizeof name, "%s%s", cases[k].name, ok ? "_ok" : "");
+            ic_error err = {0};
+            ic_scene *sc = test_load_rad_text(name, rad, view, 16, 1, &err);
+            if (ok) {
+                CHECK(sc != NULL, "%s loads: %s", name, err.message);
+                test_check_renders_finite(name, sc, 1e29);
+                continue;
+            }
+            char where[96];
+            snprintf(where, sizeof where, "%s.rad:%d:", name, cases[k].first[0] ? 5 : 1);
+            test_check_refused(name, sc, &err, (const char *[]){where, cases[k].says, "above 1e+30", "; ", NULL});
+        }
+    /* Two sources of 9e29 each, within the limit alone, make an environment of 1.8e30 together. */
+    ic_error err = {0};
+    ic_scene *sc = test_load_rad_text("rad_limit_sum", "void glow sky\n0\n0\n4 9e29 9e29 9e29 0\n"
+                                      "sky source a\n0\n0\n4 0 0 1 360\nsky source b\n0\n0\n4 0 0 1 360\n"
+                                      "void plastic grey\n0\n0\n5 .5 .5 .5 0 0\n"
+                                      "grey polygon p\n0\n0\n12 -1 -1 0 1 -1 0 1 1 0 -1 1 0\n",
+                                      view, 16, 1, &err);
+    test_check_refused("rad_limit_sum", sc, &err,
+                       (const char *[]){"rad_limit_sum.rad: the environment's radiance is 1.8e+30, above 1e+30", "; ",
+                                        NULL});
+}
+
 int main(void)
 {
+    test_radiance_limit();
     test_polygon_zero_area_pieces();
     test_ring_normal_length();
     test_cornell();

@@ -171,6 +171,32 @@ static inline double test_image_mean(const ic_image *img, int *finite)
     return s / (double)n;
 }
 
+/* Renders scene (a light near the radiance limit, IC_SCENE_MAX_RADIANCE) with the path tracer and with the
+ * cache, one sample a pixel: every pixel finite and some lit (a sample that overflowed was dropped, and read
+ * 0), and, when want_max > 0, the brightest pixel want_max within 0.1 % (a light seen directly, or a surface
+ * lit evenly: an analytic value). name labels the checks; the scene is freed. */
+static inline void test_check_renders_finite(const char *name, ic_scene *scene, double want_max)
+{
+    CHECK(scene != NULL, "%s loads", name);
+    for (int k = 0; scene && k < 2; ++k) {
+        ic_render_options opt = test_seeded_options(1, 2, 5);
+        opt.integrator = k ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT;
+        ic_image img = {0};
+        int finite = 0;
+        const int ok = test_render_loaded(scene, &opt, &img);
+        const double mean = ok ? test_image_mean(&img, &finite) : 0.0;
+        double most = 0.0;
+        for (size_t i = 0; ok && i < (size_t)img.width * img.height * 3; ++i)
+            most = fmax(most, img.rgb[i]);
+        CHECK(ok && finite && mean > 0.0, "%s (%s): renders finite and lit (mean %g)", name, k ? "ic" : "pt", mean);
+        if (want_max > 0.0)
+            CHECK(fabs(most - want_max) <= 1e-3 * want_max, "%s (%s): brightest pixel %g, expected %g", name,
+                  k ? "ic" : "pt", most, want_max);
+        ic_image_free(&img);
+    }
+    ic_scene_free(scene);
+}
+
 /* A sphere of radius r about the origin as an OBJ with its faces turned inwards (nu × nv quads, split
  * into triangles at the poles), using material `usemtl` of `mtllib`: a closed furnace room. */
 static inline void test_write_inward_sphere(const char *path, const char *mtllib, const char *usemtl, float r, int nu,

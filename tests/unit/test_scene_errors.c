@@ -6,6 +6,7 @@
 #include "irrcache/image.h"
 #include "scene/mesh_check.h"
 #include "scene/scene.h"
+#include "test_render_util.h"
 #include "test_util.h"
 
 #include <ctype.h>
@@ -949,8 +950,88 @@ static void test_cameras_lights_and_paths(void)
                  IC_ERR_IO, "errors_no_mesh.rad:2", "'nofile.obj' not found", NULL);
 }
 
+/* Writes the 2x1 environment map px (RGB, left to right) as a little-endian PFM at path. */
+static void write_map(const char *path, const float px[6])
+{
+    FILE *pf = fopen(path, "wb");
+    CHECK(pf != NULL, "write %s", path);
+    if (!pf)
+        return;
+    fputs("PF\n2 1\n-1.0\n", pf);
+    fwrite(px, sizeof px[0], 6, pf);
+    fclose(pf);
+}
+
+/* A radiance, irradiance or intensity above IC_SCENE_MAX_RADIANCE (1e30) is refused with the line that
+ * gives it (a constant environment of 3e38 read 0, one of 1e38 half its irradiance: the samples that
+ * overflowed were dropped); 1e29 loads and renders finite, the brightest pixel its analytic value. JSON's
+ * emission, environment, point, spot and sun lights, an MTL file's Ke, an environment map times its scale. */
+static void test_radiance_limit(void)
+{
+    static const char *const mesh = "mtllib limit_quad.mtl\nusemtl grey\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                    "f 1 2 3 4\n"; /* the unit square facing +z, the fitted camera's side */
+    write_tmp("limit_quad.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n", -1);
+    write_tmp("limit_quad.obj", mesh, -1);
+    static const struct {
+        const char *name, *section, *key;
+        double brightest; /* the brightest pixel over the value given (0: not checked) */
+    } cases[] = {
+        {"limit_emission", "\"materials\": {\"grey\": {\"emission\": %s}}", "'emission'", 1.0},
+        {"limit_env", "\"environment\": {\"radiance\": [1, %s, 1]}", "'radiance'", 1.0},
+        {"limit_point", "\"lights\": [{\"type\": \"point\", \"position\": [0.5, 0.5, 1], \"intensity\": %s}]",
+         "'intensity'", 0.0},
+        {"limit_spot", "\"lights\": [{\"type\": \"spot\", \"position\": [0.5, 0.5, 1], \"direction\": [0, 0, -1], "
+                       "\"intensity\": %s}]", "'intensity'", 0.0},
+        /* a Lambertian square of albedo 0.5 lit along its normal: 0.5 E / pi */
+        {"limit_sun", "\"lights\": [{\"type\": \"sun\", \"direction\": [0, 0, 1], \"irradiance\": %s}]",
+         "'irradiance'", 0.5 / 3.14159265358979},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k)
+        for (int ok = 0; ok < 2; ++ok) {
+            char section[512], json[1024], file[64], where[80], what[80];
+            snprintf(section, sizeof section, cases[k].section, ok ? "1e29" : "1e31");
+            snprintf(json, sizeof json, "{\"meshes\": [{\"path\": \"limit_quad.obj\"}],\n %s}\n", section);
+            snprintf(file, sizeof file, "%s%s.json", cases[k].name, ok ? "_ok" : "");
+            const char *path = write_tmp(file, json, -1);
+            if (!ok) {
+                snprintf(where, sizeof where, "%s:2:", file);
+                snprintf(what, sizeof what, "%s is 1e+31, above 1e+30", cases[k].key);
+                expect_error(path, NULL, IC_ERR_INVALID_ARG, where, what, "scale the scene's lights down");
+                continue;
+            }
+            ic_scene *sc = NULL;
+            ic_error e = {0};
+            CHECK(test_load_scene(path, NULL, 16, 16, 0, &sc, &e) == IC_OK, "%s loads: %s", file, e.message);
+            test_check_renders_finite(file, sc, cases[k].brightest * 1e29);
+        }
+    /* an MTL file's emission, with its line */
+    write_tmp("limit_hot.obj", "mtllib limit_hot.mtl\nusemtl grey\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", -1);
+    write_tmp("limit_hot.mtl", "newmtl grey\nKd 0.5 0.5 0.5\nKe 1 1e31 1\n", -1);
+    expect_error(IC_TEST_TMP "/limit_hot.obj", NULL, IC_ERR_INVALID_ARG, "limit_hot.mtl:3:",
+                 "material 'grey': Ke (emission) is 1e+31, above 1e+30", "scale the scene's lights down");
+    write_tmp("limit_hot.mtl", "newmtl grey\nKd 0.5 0.5 0.5\nKe 1e29 1e29 1e29\n", -1);
+    ic_scene *sc = NULL;
+    ic_error e = {0};
+    CHECK(test_load_scene(IC_TEST_TMP "/limit_hot.obj", NULL, 16, 16, 0, &sc, &e) == IC_OK, "Ke 1e29 loads: %s",
+          e.message);
+    test_check_renders_finite("Ke 1e29", sc, 1e29);
+    /* an environment map's texels times its scale: 1e20 × 1e11 (within the float range) is refused */
+    write_map(IC_TEST_TMP "/limit_map.pfm", (const float[6]){1e20f, 1e20f, 1e20f, 1e20f, 1e20f, 1e20f});
+    expect_error(write_tmp("limit_map.json", "{\"meshes\": [{\"path\": \"limit_quad.obj\"}],\n"
+                                             " \"environment\": {\"map\": \"limit_map.pfm\", \"scale\": [1, 1e11, 1]}}\n",
+                           -1),
+                 NULL, IC_ERR_INVALID_ARG, "limit_map.json:2:", "times the scale (1e+20 × 1e+11) is 1e+31, above 1e+30",
+                 "give a smaller scale");
+    const char *map_ok = write_tmp("limit_map_ok.json", "{\"meshes\": [{\"path\": \"limit_quad.obj\"}],\n"
+                                                        " \"environment\": {\"map\": \"limit_map.pfm\", \"scale\": 1e9}}\n",
+                                   -1);
+    CHECK(test_load_scene(map_ok, NULL, 16, 16, 0, &sc, &e) == IC_OK, "the map times 1e9 loads: %s", e.message);
+    test_check_renders_finite("a map of 1e20 times 1e9", sc, 1e29);
+}
+
 int main(void)
 {
+    test_radiance_limit();
     test_obj_numbers_against_strtod();
     test_cameras_lights_and_paths();
 #ifdef IC_TEST_WRAP_ASSIMP
@@ -967,8 +1048,8 @@ int main(void)
     expect_error(SCENES "duplicate_section.json", NULL, IC_ERR_PARSE, "duplicate_section.json:5:",
                  "\"render\" given twice (first at line 3)", "merge");
     /* Emitters whose power leaves the float range of the light tables: refused, naming the scene and what
-     * to do (a lamp 1e18 across at 1000 W/(m² sr): π·A·L ≈ 3e39; two point lights of 2e37 W/sr, 2.5e38
-     * each, 5e38 together: the second is named). */
+     * to do (a lamp 1e18 across at 1000 W/(m² sr): π·A·L ≈ 3e39). Two point lights of 2e37 W/sr (2.5e38
+     * each, 5e38 together) are refused before, the first one as above the radiance limit (1e30). */
     write_tmp("huge_lamp.mtl", "newmtl lamp\nKd 0 0 0\nKe 1000 1000 1000\n", -1);
     expect_error(write_tmp("huge_lamp.obj", "mtllib huge_lamp.mtl\nusemtl lamp\nv 1e18 0 0\nv 0 1e18 0\nv 0 0 1e18\n"
                                             "f 1 3 2\n", -1),
@@ -983,7 +1064,7 @@ int main(void)
                  "  {\"type\": \"point\", \"position\": [0, 1, 1], \"intensity\": [2e37, 2e37, 2e37]}]}\n",
                  "plain_tri.obj");
         expect_error(write_tmp("huge_points.json", json, -1), NULL, IC_ERR_INVALID_ARG,
-                     "huge_points.json: the point lights' power", "light 2", "less intensity");
+                     "huge_points.json:3: 'intensity' is 2e+37, above 1e+30", "scale the scene's lights down", NULL);
     }
     /* an environment map with a negative texel: refused, naming the map and the texel */
     {
@@ -1021,14 +1102,7 @@ int main(void)
     }
     /* a map whose texel times the scale leaves the float range (1e30 × 1e10): refused, in JSON and Mitsuba */
     {
-        FILE *pf = fopen(IC_TEST_TMP "/scene_errors_bigsky.pfm", "wb");
-        CHECK(pf != NULL, "write the sky");
-        if (pf) {
-            const float px[6] = {1.0f, 1.0f, 1.0f, 1e30f, 1.0f, 1.0f};
-            fputs("PF\n2 1\n-1.0\n", pf);
-            fwrite(px, sizeof px[0], 6, pf);
-            fclose(pf);
-        }
+        write_map(IC_TEST_TMP "/scene_errors_bigsky.pfm", (const float[6]){1.0f, 1.0f, 1.0f, 1e30f, 1.0f, 1.0f});
         write_tmp("scene_errors_bigsky_tri.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n", -1);
         expect_error(write_tmp("scene_errors_bigsky.json",
                                "{\n  \"meshes\": [ { \"path\": \"scene_errors_bigsky_tri.obj\" } ],\n"
