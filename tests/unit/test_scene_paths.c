@@ -177,9 +177,26 @@ static void check_cli(void)
     CHECK(access(T "/out.pfm", F_OK) == 0, "CLI wrote the image");
 }
 
+/* A file name with a newline, a carriage return and an escape in it: the message quoting it stays on one
+ * line (the control bytes written as \xNN), so that "file:line: what; what to do" is still one line. */
+static void test_control_bytes_in_name(void)
+{
+    const char *path = T "/bad\nname\r\x1b.json";
+    write_text(path, "{\n  \"meshes\": [ { \"path\": 7 } ]\n}\n");
+    ic_scene *scene = NULL;
+    ic_scene_load_options lo = {0};
+    ic_error err = {0};
+    ic_result r = ic_scene_load(path, &lo, &scene, &err);
+    CHECK(r != IC_OK && !strchr(err.message, '\n') && !strchr(err.message, '\r') && !strchr(err.message, 0x1b) &&
+              strstr(err.message, "bad\\x0aname\\x0d\\x1b.json:2:"),
+          "a file name with control bytes: \"%s\"", err.message);
+    ic_scene_free(scene);
+}
+
 int main(void)
 {
     CHECK(system("rm -rf '" T "' && mkdir -p '" T "/scene/m' '" T "/shared'") == 0, "make %s", T);
+    test_control_bytes_in_name();
 
     /* the files outside the scene's folder */
     copy_file(SCENES "quad_light.obj", T "/outside.obj"); /* mtllib quad_light.mtl */
