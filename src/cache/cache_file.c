@@ -55,16 +55,6 @@
 #define SAID_BYTES 96 /* most bytes of a key or value a message quotes (three options fit one message) */
 #define NOT_CACHE_HINT "give the path of a cache file (ic_cache_save and --save-cache write them)"
 
-uint64_t ic_fnv1a64(uint64_t h, const void *data, size_t size)
-{
-    const unsigned char *p = data;
-    for (size_t k = 0; k < size; ++k) {
-        h ^= p[k];
-        h *= 0x100000001b3ULL;
-    }
-    return h;
-}
-
 /* ---- little-endian encoding ------------------------------------------------------------------- */
 
 static void put_u32(unsigned char *b, uint32_t v)

@@ -1,6 +1,7 @@
 /* atomic_file.c — temporary file + rename (atomic_file.h). */
 #include "atomic_file.h"
 #include "path.h"
+#include "hash.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -66,14 +67,6 @@ void ic_remove_temporary_files(void)
 /* What a shortened name ends in: "~" and 16 hex digits of a hash of the whole name. */
 #define SHORT_MARK 17
 
-/* FNV-1a over n bytes, continuing from hash (14695981039346656037 to begin). */
-static uint64_t fnv1a(uint64_t hash, const char *bytes, size_t n)
-{
-    for (size_t i = 0; i < n; ++i)
-        hash = (hash ^ (unsigned char)bytes[i]) * 1099511628211u;
-    return hash;
-}
-
 /* Whether the n bytes at s are all lower-case hex digits. */
 static int is_hex(const char *s, size_t n)
 {
@@ -99,11 +92,11 @@ static int machine_tag(char tag[TAG_LEN + 1])
         close(fd);
     ssize_t ns_len = readlink("/proc/self/ns/pid", ns, sizeof ns);
     int known = boot_len > 0 && ns_len > 0;
-    uint64_t hash = 14695981039346656037u;
+    uint64_t hash = IC_FNV64_OFFSET;
     if (known)
-        hash = fnv1a(fnv1a(hash, boot, (size_t)boot_len), ns, (size_t)ns_len);
+        hash = ic_fnv1a64(ic_fnv1a64(hash, boot, (size_t)boot_len), ns, (size_t)ns_len);
     else if (gethostname(host, sizeof host) == 0)
-        hash = fnv1a(hash, host, strnlen(host, sizeof host));
+        hash = ic_fnv1a64(hash, host, strnlen(host, sizeof host));
     snprintf(tag, TAG_LEN + 1, "%08x", (unsigned)(hash ^ hash >> 32));
     return known;
 }
@@ -156,7 +149,7 @@ static int temp_stem(const char *target, char *out, size_t out_size)
     size_t keep = name_max - TEMP_TAIL_MAX - SHORT_MARK;
     while (keep > 0 && ((unsigned char)base[keep] & 0xC0) == 0x80) /* a UTF-8 continuation byte */
         --keep;
-    uint64_t hash = fnv1a(14695981039346656037u, base, base_len);
+    uint64_t hash = ic_fnv1a64(IC_FNV64_OFFSET, base, base_len);
     return snprintf(out, out_size, "%.*s%.*s~%016llx", (int)(base - target), target, (int)keep, base,
                     (unsigned long long)hash) < (int)out_size ? 0 : ENAMETOOLONG;
 }

@@ -135,11 +135,9 @@ static int path_below(const char *real, const char *root)
     return real[n] == '\0' || real[n] == '/' || (n > 0 && root[n - 1] == '/');
 }
 
-void ic_scene_note_file(ic_scene *s, const char *path)
+/* Adds real (a real path) to s->files, once. */
+static void note_real(ic_scene *s, const char *real)
 {
-    char real[PATH_MAX];
-    if (!realpath(path, real))
-        return; /* nothing there: nothing read, nothing to keep from being overwritten */
     for (uint32_t k = 0; k < s->file_count; ++k)
         if (!strcmp(s->files[k], real))
             return;
@@ -153,6 +151,13 @@ void ic_scene_note_file(ic_scene *s, const char *path)
         return;
     }
     s->files[s->file_count++] = copy;
+}
+
+void ic_scene_note_file(ic_scene *s, const char *path)
+{
+    char real[PATH_MAX];
+    if (realpath(path, real)) /* nothing there: nothing read, nothing to keep from being overwritten */
+        note_real(s, real);
 }
 
 uint32_t ic_scene_file_count(const ic_scene *scene) { return scene ? scene->file_count : 0; }
@@ -170,7 +175,7 @@ int ic_scene_path_allowed(const ic_scene_builder *b, const char *path, char *rea
     if (!realpath(path, buf))
         return b->opt->allow_outside_paths;
     snprintf(real, size, "%s", buf);
-    ic_scene_note_file(b->scene, buf); /* asked for before it is read: one of the scene's files */
+    note_real(b->scene, buf); /* asked for before it is read: one of the scene's files */
     if (b->opt->allow_outside_paths)
         return 1;
     for (int k = 0; k < b->root_count; ++k)
