@@ -241,17 +241,39 @@ static ic_result add_triangles(ic_rad_ctx *c, geometry *g, const ic_vec3 *p, con
     return IC_OK;
 }
 
+/* 1 if r lies strictly inside the angle of triangle corner x, between its edges to the next corner n and
+ * from the previous corner pv, about the normal nrm: an edge leaving x towards r enters the triangle. */
+static int enters_corner(ic_vec3 pv, ic_vec3 x, ic_vec3 n, ic_vec3 r, ic_vec3 nrm)
+{
+    ic_vec3 d = v3_sub(r, x);
+    return v3_dot(v3_cross(v3_sub(n, x), d), nrm) > 0.0f && v3_dot(v3_cross(v3_sub(x, pv), d), nrm) > 0.0f;
+}
+
 /* 1 if vertex b of the polygon turn a→b→c is convex about the polygon's normal nrm and no other vertex
- * lies in the triangle abc (an ear; Meisters 1975). */
+ * lies in the triangle abc (an ear; Meisters 1975). A vertex at one of the corners is the outline passing
+ * through that point again, as it does at both ends of the seam that joins a hole to the outline (the way
+ * Radiance polygons have holes): it is no obstacle unless one of its two edges enters the triangle there. */
 static int is_ear(const ic_vec3 *p, const uint32_t *idx, uint32_t count, uint32_t k, ic_vec3 nrm)
 {
     ic_vec3 a = p[idx[(k + count - 1) % count]], b = p[idx[k]], cc = p[idx[(k + 1) % count]];
     if (!(v3_dot(v3_cross(v3_sub(b, a), v3_sub(cc, b)), nrm) > 0.0f))
         return 0;
+    const ic_vec3 corner[3] = {a, b, cc};
     for (uint32_t j = 0; j < count; ++j) {
         if (j == k || j == (k + 1) % count || j == (k + count - 1) % count)
             continue;
         ic_vec3 q = p[idx[j]];
+        int at = -1;
+        for (int m = 0; m < 3; ++m)
+            if (q.x == corner[m].x && q.y == corner[m].y && q.z == corner[m].z)
+                at = m;
+        if (at >= 0) {
+            ic_vec3 pv = corner[(at + 2) % 3], x = corner[at], n = corner[(at + 1) % 3];
+            if (enters_corner(pv, x, n, p[idx[(j + count - 1) % count]], nrm) ||
+                enters_corner(pv, x, n, p[idx[(j + 1) % count]], nrm))
+                return 0;
+            continue;
+        }
         if (v3_dot(v3_cross(v3_sub(b, a), v3_sub(q, a)), nrm) >= 0.0f &&
             v3_dot(v3_cross(v3_sub(cc, b), v3_sub(q, b)), nrm) >= 0.0f &&
             v3_dot(v3_cross(v3_sub(a, cc), v3_sub(q, cc)), nrm) >= 0.0f)
