@@ -57,6 +57,14 @@ typedef struct ic_rad_ctx {
     int warned_count;
 } ic_rad_ctx;
 
+/* 3 if text starts with the UTF-8 byte-order mark (EF BB BF) that some editors write first, else 0. */
+static inline size_t ic_utf8_bom_length(const char *text, size_t len)
+{
+    return len >= 3 && (unsigned char)text[0] == 0xEF && (unsigned char)text[1] == 0xBB && (unsigned char)text[2] == 0xBF
+               ? 3
+               : 0;
+}
+
 /* Sets the error "file:line: message" and returns r. */
 ic_result ic_rad_fail(ic_rad_ctx *c, int line, ic_result r, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
 /* Adds "file:line: kind what" to the scene's warnings, once per kind. */

@@ -110,6 +110,8 @@ static ic_result copy_named(ic_rad_ctx *c, const char *name, ic_rad_modifier *ou
                            name);
     out->kind = t->kind;
     out->material = t->material;
+    out->is_illum = t->is_illum; /* an alias of an illum is one: a source it modifies emits its colour */
+    out->source_radiance = t->source_radiance;
     snprintf(out->material.name, sizeof out->material.name, "%.127s", c->id);
     return IC_OK;
 }
@@ -130,7 +132,9 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
     const char *t = c->type;
     char kind[96];
     snprintf(kind, sizeof kind, "%.40s", t);
-    if (strcmp(c->modifier, "void") && !ic_rad_find(c, c->modifier))
+    /* "inherit alias new original": the new name takes the original's modifier too (Radiance 5) */
+    const int inherit = !strcmp(c->modifier, "inherit") && !strcmp(t, "alias");
+    if (strcmp(c->modifier, "void") && !inherit && !ic_rad_find(c, c->modifier))
         return ic_rad_fail(c, c->prim_line, IC_ERR_PARSE,
                            "%s '%s' is modified by '%s', which is not defined above; define it before this line", t,
                            c->id, c->modifier);

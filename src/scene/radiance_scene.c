@@ -662,9 +662,23 @@ static ic_result primitive(ic_rad_ctx *c, geometry *g, int *has_sun, int *done)
                            "the file",
                            (int)(end - c->pos > 120 ? 120 : end - c->pos), c->text + c->pos);
     }
+    char before[2 * IC_RAD_WORD_MAX + 64] = ""; /* the primitive before, for a message about a stray word */
+    if (c->id[0])
+        snprintf(before, sizeof before, "%s '%s' (line %d)", c->type, c->id, c->prim_line);
     c->type[0] = c->id[0] = '\0';
     c->prim_line = c->line;
     ic_result r = word(c, c->modifier, sizeof c->modifier, "a modifier");
+    char *end;
+    if (r == IC_OK && (strtod(c->modifier, &end), *end == '\0' && end != c->modifier) && !ic_rad_find(c, c->modifier))
+        /* a number where a primitive starts: most likely an argument its list's count leaves out */
+        return before[0] ? ic_rad_fail(c, c->prim_line, IC_ERR_PARSE,
+                                       "'%s' stands where a primitive should start (modifier type identifier): the "
+                                       "argument lists of %s hold more words than their counts say; fix the counts",
+                                       c->modifier, before)
+                         : ic_rad_fail(c, c->prim_line, IC_ERR_PARSE,
+                                       "'%s' stands where the first primitive should start (modifier type "
+                                       "identifier); remove it",
+                                       c->modifier);
     if (r == IC_OK)
         r = word(c, c->type, sizeof c->type, "the type");
     if (r == IC_OK)
@@ -789,6 +803,7 @@ ic_result ic_scene_load_radiance(ic_scene_builder *b, const char *path, const ic
     c->text = text;
     c->len = len;
     c->line = 1;
+    c->pos = ic_utf8_bom_length(text, len); /* a byte-order mark some editors put first is no word */
     ic_path_dirname(path, c->dir, sizeof c->dir);
     int has_sun = 0, done = 0;
     while (r == IC_OK && !done)

@@ -134,7 +134,7 @@ ic_result ic_rad_read_view(const char *path, const ic_scene_load_options *opt, i
     view v = {v3s(0.0f), v3(0.0f, 1.0f, 0.0f), v3(0.0f, 0.0f, 1.0f), 45.0, 45.0, 0.0, 0.0, 0.0, 0.0, 'v'};
     int found = 0, line = 0, last_line = 0;
     char *words[256];
-    for (char *s = text, *next; r == IC_OK && s && s < text + len; s = next) {
+    for (char *s = text + ic_utf8_bom_length(text, len), *next; r == IC_OK && s && s < text + len; s = next) {
         ++line;
         next = memchr(s, '\n', (size_t)(text + len - s));
         if (next)

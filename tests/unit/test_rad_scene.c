@@ -173,6 +173,15 @@ static void test_analytic(void)
                                4);
     CHECK(fabs(illum - 1.0) < 0.03 && fabs(bare - 1.0) < 0.03,
           "floor under a 360-degree illum source, with and without an alternate: %g, %g, expected rho L = 1", illum, bare);
+    /* An alias of an illum is one (it was refused as a source's modifier: "needs a light, glow or illum"), and
+     * Radiance 5's "inherit alias" is an alias (it was refused: "modified by 'inherit', which is not defined"). */
+    double aliased = floor_centre("rad_illum_alias", "void illum skyillum\n0\n0\n3 2 2 2\nvoid alias sky2 skyillum\n"
+                                                     "sky2 source sky\n0\n0\n4 0 0 1 360\n", 4);
+    double inherited = floor_centre("rad_inherit", "void glow skyglow\n0\n0\n4 2 2 2 0\ninherit alias sky2 skyglow\n"
+                                                   "sky2 source sky\n0\n0\n4 0 0 1 360\n", 4);
+    CHECK(fabs(aliased - 1.0) < 0.03 && fabs(inherited - 1.0) < 0.03,
+          "floor under a 360-degree source of an alias of an illum, and of an inherit alias of a glow: %g, %g, expected "
+          "rho L = 1", aliased, inherited);
     /* the sun: 0.5° across, radiance 1e5: irradiance L Ω */
     double omega = 2.0 * PI_D * (1.0 - cos(0.25 * PI_D / 180.0));
     double sun = floor_centre("rad_sun", "void light sunlight\n0\n0\n3 1e5 1e5 1e5\nsunlight source sun\n0\n0\n4 0 0 1 0.5\n", 4);
@@ -373,6 +382,14 @@ static void test_errors(void)
                  (const char *[]){"rad_fisheye.vf:1:", "-vh", "angular fisheye", NULL});
     expect_error("rad_noview", good, "just words\n", (const char *[]){"rad_noview.vf", "no view", NULL});
 
+    /* a word too many in a list: the next primitive would start with it; the message names the word's line and
+     * the primitive it follows (it had named the following line, with the words shifted: "the number of string
+     * arguments of l 'polygon' is 'p'") */
+    expect_error("rad_stray", "void light l\n0\n0\n3 1 1 1 1\n\nl polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n", NULL,
+                 (const char *[]){"rad_stray.rad:4:", "'1' stands where a primitive should start",
+                                  "light 'l' (line 1) hold more words than their counts say", NULL});
+    expect_error("rad_lead", "# a count without its primitive\n3\nvoid light l 0 0 3 1 1 1\n", NULL,
+                 (const char *[]){"rad_lead.rad:2:", "'3' stands where the first primitive should start", NULL});
     expect_error("rad_word", "void plastic p 0 0 5 .5 .5 .5 0 0\n\nvoid\n", NULL,
                  (const char *[]){"rad_word.rad:3:", "the type of this primitive", NULL});
     FILE *f = fopen(IC_TEST_TMP "/rad_nul.rad", "wb"); /* a NUL byte is no white space, nor the end */
@@ -404,6 +421,22 @@ static void test_errors(void)
         CHECK(pf && !strstr(pf + 1, "plasfunc") && strstr(w, "rad_warn.rad:2: plasfunc"), "plasfunc once: %s", w);
         CHECK(pr && !strstr(pr + 1, "prism1") && strstr(w, "rad_warn.rad:5: prism1"), "prism1 once: %s", w);
     }
+    ic_scene_free(s);
+}
+
+/* A scene and a view file saved with a UTF-8 byte-order mark first (as some Windows editors do) load as without
+ * it: the scene's first modifier had been "\xEF\xBB\xBFvoid" (not defined), the view file had "no view". */
+static void test_byte_order_mark(void)
+{
+    ic_error err = {0};
+    ic_scene *s = test_load_rad_text("rad_bom", "\xEF\xBB\xBFvoid light l 0 0 3 1 1 1\nl polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n",
+                                     "\xEF\xBB\xBFrview -vtv -vp 0.25 0.25 3 -vd 0 0 -1 -vu 0 1 0 -vh 20 -vv 20\n", 16, 1,
+                                     &err);
+    CHECK(s != NULL, "a scene and view with byte-order marks load: %s", err.message);
+    if (s)
+        CHECK(s->triangle_count == 1 && s->camera.eye.x == 0.25f && s->camera.eye.z == 3.0f,
+              "the triangle (%u) and the view's eye (%g %g %g)", s->triangle_count, (double)s->camera.eye.x,
+              (double)s->camera.eye.y, (double)s->camera.eye.z);
     ic_scene_free(s);
 }
 
@@ -563,6 +596,7 @@ int main(void)
     test_radiance_limit();
     test_polygon_zero_area_pieces();
     test_polygon_holes();
+    test_byte_order_mark();
     test_ring_normal_length();
     test_cornell();
     test_analytic();
