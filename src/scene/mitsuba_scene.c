@@ -22,6 +22,7 @@
 
 #include <libxml/parser.h>
 
+#include <ctype.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -545,18 +546,58 @@ static ic_result parse_include(ic_mts_ctx *c, const xmlNode *n)
     return r;
 }
 
+/* An error naming the first attribute in n or below that holds a $name no <default> defines (Mitsuba takes it
+ * from its command line, -Dname=value, which irrcache has not): left as it is, the text "$name" had been read
+ * as a number (an error about the value, not the name) or a type (the shape left out with a warning). */
+static ic_result check_parameters(ic_mts_ctx *c, const xmlNode *n)
+{
+    for (; n; n = n->next) {
+        if (n->type != XML_ELEMENT_NODE)
+            continue;
+        for (const xmlAttr *a = n->properties; a; a = a->next) {
+            xmlChar *raw = xmlNodeGetContent((const xmlNode *)a);
+            for (const char *s = raw ? strchr((const char *)raw, '$') : NULL; s; s = strchr(s + 1, '$')) {
+                size_t len = 0;
+                while (isalnum((unsigned char)s[1 + len]) || s[1 + len] == '_')
+                    ++len;
+                int known = len == 0;
+                for (int d = 0; d < c->def_count && !known; ++d)
+                    known = strlen(c->def_name[d]) == len && !strncmp(c->def_name[d], s + 1, len);
+                if (!known) {
+                    char detail[160];
+                    snprintf(detail, sizeof detail, "'$%.*s' in attribute '%s' has no <default name=\"%.*s\" value=\"...\"/>; "
+                             "add one (Mitsuba would take it from -D%.*s=... on its command line)",
+                             (int)(len > 32 ? 32 : len), s + 1, (const char *)a->name, (int)(len > 32 ? 32 : len), s + 1,
+                             (int)(len > 32 ? 32 : len), s + 1);
+                    xmlFree(raw);
+                    return ic_mts_fail(c, n, IC_ERR_PARSE, detail, NULL);
+                }
+            }
+            xmlFree(raw);
+        }
+        ic_result r = check_parameters(c, n->children);
+        if (r != IC_OK)
+            return r;
+    }
+    return IC_OK;
+}
+
 static ic_result parse_scene(ic_mts_ctx *c, const xmlNode *root)
 {
     ic_result r = IC_OK;
     for (xmlNode *n = root->children; n; n = n->next)
-        if (ic_mts_is_element(n, "default") && c->def_count < MAX_DEFAULTS) {
+        if (ic_mts_is_element(n, "default")) {
             const char *name = ic_mts_attr(c, n, "name"), *value = ic_mts_attr(c, n, "value");
             if (!name || !value)
                 return ic_mts_fail(c, n, IC_ERR_PARSE, "<default> needs name and value", NULL);
+            if (c->def_count == MAX_DEFAULTS)
+                return ic_mts_fail(c, n, IC_ERR_UNSUPPORTED, "more than 64 <default> elements; merge some", NULL);
             snprintf(c->def_name[c->def_count], sizeof c->def_name[0], "%s", name);
             snprintf(c->def_value[c->def_count], sizeof c->def_value[0], "%s", ic_mts_attr(c, n, "value"));
             ++c->def_count;
         }
+    if ((r = check_parameters(c, root->children)) != IC_OK)
+        return r;
     for (xmlNode *n = root->children; n && r == IC_OK; n = n->next) {
         if (!ic_mts_is_element(n, NULL) || ic_mts_is_element(n, "default") || ic_mts_is_element(n, "bsdf") || ic_mts_is_element(n, "texture") ||
             ic_mts_is_element(n, "integrator"))

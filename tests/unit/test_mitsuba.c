@@ -263,6 +263,49 @@ static void test_dropped_without_a_word(void)
     ic_scene_free(s);
 }
 
+/* A $name that no <default> defines (Mitsuba takes it from -Dname=... on its command line) is an error naming
+ * the element's file:line and the parameter: left as the text "$shape", a shape's type had left the shape out
+ * with a warning (the scene black), and a value had been refused as "expected one or three numbers"; a defined
+ * one is substituted; more than 64 defaults (the 65th had been ignored) are refused. */
+static void test_undefined_parameter(void)
+{
+    static const char *const rect = "  <shape type=\"%s\"><transform name=\"toWorld\"><scale value=\"%s\"/></transform>"
+                                    "<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n";
+    static const struct {
+        const char *name, *type, *scale, *says;
+    } cases[] = {
+        {"mts_param_type", "$shape", "2", "mts_param_type.xml:3: '$shape' in attribute 'type' has no <default name=\"shape\""},
+        {"mts_param_value", "rectangle", "$width", "mts_param_value.xml:3: '$width' in attribute 'value' has no <default"},
+        {"mts_param_ok", "$shape2", "$size", NULL},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        char xml[1024], shape[512], path[256];
+        snprintf(shape, sizeof shape, rect, cases[k].type, cases[k].scale);
+        snprintf(xml, sizeof xml, "<scene version=\"0.6.0\">\n  <default name=\"shape2\" value=\"rectangle\"/>"
+                 "<default name=\"size\" value=\"2\"/>\n%s</scene>\n", shape);
+        snprintf(path, sizeof path, IC_TEST_TMP "/%s.xml", cases[k].name);
+        test_write_file(path, xml);
+        ic_error err = {0};
+        ic_scene *s = load(path, &err);
+        if (cases[k].says) {
+            test_check_refused(cases[k].name, s, &err, (const char *[]){cases[k].says, "-D", NULL});
+            continue;
+        }
+        CHECK(s != NULL && s->triangle_count == 2 && fabsf(s->positions[s->triangles[0]].x) == 2.0f,
+              "%s: the defaults substituted: %s", cases[k].name, s ? "" : err.message);
+        ic_scene_free(s);
+    }
+    char xml[8192];
+    size_t o = (size_t)snprintf(xml, sizeof xml, "<scene version=\"0.6.0\">\n");
+    for (int d = 0; d < 65; ++d)
+        o += (size_t)snprintf(xml + o, sizeof xml - o, "<default name=\"p%d\" value=\"1\"/>\n", d);
+    snprintf(xml + o, sizeof xml - o, "</scene>\n");
+    test_write_file(IC_TEST_TMP "/mts_param_many.xml", xml);
+    ic_error err = {0};
+    ic_scene *s = load(IC_TEST_TMP "/mts_param_many.xml", &err);
+    test_check_refused("mts_param_many", s, &err, (const char *[]){"mts_param_many.xml:66:", "more than 64 <default>", NULL});
+}
+
 /* A focal length is Mitsuba's field of view across the 35 mm frame's diagonal (36 x 24 mm), 50 mm when
  * no fov is given: on a square 512 x 512 film 28 mm is a vertical 57.30°, the default 34.03° (the
  * horizontal 2 atan(18 / f) had given 65.5° and 39.3°). */
@@ -875,6 +918,7 @@ static void test_radiance_limit(void)
 int main(void)
 {
     test_radiance_limit();
+    test_undefined_parameter();
     test_transform_direction_lengths();
     test_conductor_default();
     test_sphere_to_world();
