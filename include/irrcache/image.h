@@ -86,7 +86,8 @@ ic_result ic_image_read_layer(const char *path, const char *layer, ic_image *out
  * always terminated): IC_OK, IC_ERR_INVALID_ARG when the file has no such text attribute, or the reader's
  * error for a file that is not a readable OpenEXR. */
 ic_result ic_image_exr_attribute(const char *path, const char *name, char *value, size_t cap, ic_error *err);
-/* Writes width×height 8-bit RGB bytes (row-major, top row first) as a PNG, as given (no curve); atomic. */
+/* Writes width×height 8-bit RGB bytes (row-major, top row first) as a PNG, as given (no curve) and tagged as sRGB
+ * (its sRGB, gAMA and cHRM chunks); atomic. */
 ic_result ic_image_write_png8(const char *path, const uint8_t *rgb, int width, int height, ic_error *err);
 
 /* --- false-colour maps (falsecolor.c): a grid of values as coloured cells with a legend --- */

@@ -1,7 +1,7 @@
 /*
  * ldr.c — 8-bit images: reading PNG through stb_image (8- or 16-bit sRGB, converted to linear) and JPEG
  * through jpeg.c (libjpeg), told apart by their first bytes, and writing 8-bit sRGB PNG through
- * stb_image_write (from linear images, or bytes as given).
+ * stb_image_write (from linear images, or bytes as given), tagged as sRGB (sRGB, gAMA and cHRM chunks).
  *
  * Alpha is dropped on read and grey images are replicated to RGB. PNG output applies the exposure
  * (2^stops), then the sRGB curve, clamped to [0, 255]; NaN becomes 0. stb_image is compiled without its
@@ -98,6 +98,26 @@ static size_t png_chunk_overrun(const unsigned char *b, size_t n)
     return 0;
 }
 
+/* The CRC-32 of PNG chunks (ISO/IEC 15948 §5.3 and Annex D): its table, and the CRC of n bytes (a chunk's
+ * type and data). */
+static void png_crc_table(uint32_t table[256])
+{
+    for (uint32_t v = 0; v < 256; ++v) {
+        uint32_t c = v;
+        for (int k = 0; k < 8; ++k)
+            c = c & 1u ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+        table[v] = c;
+    }
+}
+
+static uint32_t png_crc(const uint32_t table[256], const unsigned char *b, size_t n)
+{
+    uint32_t crc = 0xFFFFFFFFu;
+    for (size_t k = 0; k < n; ++k)
+        crc = table[(crc ^ b[k]) & 0xFFu] ^ (crc >> 8);
+    return crc ^ 0xFFFFFFFFu;
+}
+
 /* The first critical PNG chunk, up to IEND, whose CRC-32 (ISO/IEC 15948 §5.3 and Annex D: over its type
  * and data) does not match: its offset in *at and 1; 2 with *at = n when the chunks end without IEND; 0 when all
  * match or the data is not a PNG. stb_image checks neither (nor the zlib stream's Adler-32), so a flipped
@@ -109,22 +129,14 @@ static int png_bad_chunk(const unsigned char *b, size_t n, size_t *at)
     if (n < 8 || memcmp(b, signature, 8) != 0)
         return 0;
     uint32_t table[256];
-    for (uint32_t v = 0; v < 256; ++v) {
-        uint32_t c = v;
-        for (int k = 0; k < 8; ++k)
-            c = c & 1u ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-        table[v] = c;
-    }
+    png_crc_table(table);
     for (size_t i = 8; i + 12 <= n;) {
         uint32_t len = be32(b + i);
         if (len > n - i - 12)
             break;
-        uint32_t crc = 0xFFFFFFFFu;
-        for (size_t k = i + 4; k < i + 8 + (size_t)len; ++k)
-            crc = table[(crc ^ b[k]) & 0xFFu] ^ (crc >> 8);
         /* As libpng does: a critical chunk (its type's first letter upper case) must match; an ancillary
          * one that does not is metadata the decoder skips anyway. */
-        if ((crc ^ 0xFFFFFFFFu) != be32(b + i + 8 + len) && !(b[i + 4] & 0x20)) {
+        if (png_crc(table, b + i + 4, 4 + (size_t)len) != be32(b + i + 8 + len) && !(b[i + 4] & 0x20)) {
             *at = i;
             return 1;
         }
@@ -320,11 +332,62 @@ ic_result ic_image_decode_ldr(const unsigned char *bytes, size_t n, const char *
     return IC_OK;
 }
 
-/* stb_image_write callback: append to the temporary file; errors surface through ferror. */
+static void put_be32(unsigned char *b, uint32_t v)
+{
+    b[0] = (unsigned char)(v >> 24);
+    b[1] = (unsigned char)(v >> 16);
+    b[2] = (unsigned char)(v >> 8);
+    b[3] = (unsigned char)v;
+}
+
+/* The colour chunks of every PNG written, after IHDR (ISO/IEC 15948 §5.6: before IDAT): the bytes are sRGB
+ * (the curve of IEC 61966-2-1 over Rec. 709 primaries, D65 white), so an sRGB chunk says so (rendering intent
+ * 0, perceptual) and, for decoders that do not read it, the gAMA and cHRM chunks hold the values §11.3.3.5
+ * prescribes beside it: gamma 45455 (1/2.2) and the sRGB chromaticities, times 100000. Without them a
+ * reader is left to guess the colour space (stb_image_write writes none). cHRM, gAMA, sRGB: 73 bytes
+ * into out. */
+#define PNG_COLOUR_CHUNK_BYTES (12 + 32 + 12 + 4 + 12 + 1)
+static void png_colour_chunks(unsigned char out[PNG_COLOUR_CHUNK_BYTES])
+{
+    static const uint32_t chrm[8] = {31270, 32900, 64000, 33000, 30000, 60000, 15000, 6000}; /* white, r, g, b */
+    uint32_t table[256];
+    png_crc_table(table);
+    unsigned char *o = out;
+    put_be32(o, 32);
+    memcpy(o + 4, "cHRM", 4);
+    for (int k = 0; k < 8; ++k)
+        put_be32(o + 8 + 4 * k, chrm[k]);
+    put_be32(o + 40, png_crc(table, o + 4, 36));
+    o += 44;
+    put_be32(o, 4);
+    memcpy(o + 4, "gAMA", 4);
+    put_be32(o + 8, 45455);
+    put_be32(o + 12, png_crc(table, o + 4, 8));
+    o += 16;
+    put_be32(o, 1);
+    memcpy(o + 4, "sRGB", 4);
+    o[8] = 0;
+    put_be32(o + 9, png_crc(table, o + 4, 5));
+}
+
+/* stb_image_write callback: append to the temporary file, the colour chunks after the signature and IHDR
+ * (stb_image_write hands over the whole PNG at once); errors surface through ferror. */
 static void write_to_file(void *context, void *data, int size)
 {
-    if (size > 0)
-        fwrite(data, 1, (size_t)size, (FILE *)context);
+    FILE *fp = context;
+    const unsigned char *b = data;
+    const size_t head = 8 + 12 + 13; /* the signature and IHDR (13 bytes of data) */
+    if (size <= 0)
+        return;
+    if ((size_t)size > head && be32(b + 8) == 13 && memcmp(b + 12, "IHDR", 4) == 0) {
+        unsigned char colour[PNG_COLOUR_CHUNK_BYTES];
+        png_colour_chunks(colour);
+        fwrite(b, 1, head, fp);
+        fwrite(colour, 1, sizeof colour, fp);
+        fwrite(b + head, 1, (size_t)size - head, fp);
+    } else {
+        fwrite(b, 1, (size_t)size, fp);
+    }
 }
 
 ic_result ic_image_write_png8(const char *path, const uint8_t *rgb, int width, int height, ic_error *err)

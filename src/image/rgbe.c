@@ -6,7 +6,7 @@
  * 1/128 of the pixel's largest channel. Scanlines are written flat (not run-length encoded), which
  * every reader accepts: a flat pixel can never look like the RLE marker (2, 2, <128) because the
  * largest mantissa is always ≥ 128. Negative, NaN and infinite values are written as 0 (as the
- * metrics count them), values above 1e38 as 1e38.
+ * metrics count them), values above 1e38 as 1e38. The header names the pixels' primaries (PRIMARIES=).
  *
  * The reader (ours rather than stb_image's, so that a truncated or corrupt file is an error instead of
  * black rows) accepts flat, old-style and new-style run-length encoded scanlines, the standard
@@ -26,6 +26,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* The primaries and white of the pixels (ITU-R BT.709, D65, as the EXR outputs' chromaticities say), in the
+ * header line Radiance's tools read (ra_xyze, pcond): without it a picture is taken to be in Radiance's own
+ * standard primaries, whose green (0.290, 0.600) and equal-energy white (1/3, 1/3) are not sRGB's. */
+#define RGBE_PRIMARIES "PRIMARIES= 0.6400 0.3300 0.3000 0.6000 0.1500 0.0600 0.3127 0.3290"
 
 /* Largest value written; keeps the exponent byte (e + 128) within 255. */
 #define RGBE_MAX 1e38f
@@ -61,8 +66,8 @@ ic_result ic_image_write_hdr(const char *path, const ic_image *img, ic_error *er
     ic_result r = ic_atomic_file_open(&f, path, err);
     if (r != IC_OK)
         return r;
-    fprintf(f.fp, "#?RADIANCE\n# written by irrcache\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n", img->height,
-            img->width);
+    fprintf(f.fp, "#?RADIANCE\n# written by irrcache\nFORMAT=32-bit_rle_rgbe\n%s\n\n-Y %d +X %d\n", RGBE_PRIMARIES,
+            img->height, img->width);
     const size_t row_bytes = (size_t)img->width * 4;
     unsigned char *row = malloc(row_bytes);
     if (!row) {

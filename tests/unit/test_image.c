@@ -914,6 +914,133 @@ static void test_png_chunk_overrun(void)
           "an IDAT declaring 1 GB: %s", err.message);
 }
 
+static uint32_t be32_at(const unsigned char *b)
+{
+    return (uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | b[3];
+}
+
+/* Every PNG written (a rendered image through ic_image_write, the false-colour and record maps through
+ * ic_image_write_png8) holds sRGB-encoded bytes and says so as ISO/IEC 15948 asks: an sRGB chunk (rendering
+ * intent 0..3) and, beside it for readers that know only those, gAMA 45455 and the sRGB cHRM (§11.3.3.5), all
+ * before IDAT; each chunk's CRC is right (checked here bit by bit, not with the writer's table) and the pixels
+ * read back the same. Without them (stb_image_write writes none) a reader guessed the colour space. */
+static void test_png_colour_chunks(void)
+{
+    ic_image img;
+    CHECK(ic_image_create(&img, 5, 3) == IC_OK, "create");
+    uint8_t bytes[5 * 3 * 3];
+    for (int i = 0; i < 5 * 3 * 3; ++i) {
+        img.rgb[i] = (float)i / 45.0f;
+        bytes[i] = (uint8_t)(17 * i);
+    }
+    ic_error err;
+    CHECK(ic_image_write_png8(SCRATCH "/colour8.png", bytes, 5, 3, &err) == IC_OK, "write png8: %s", err.message);
+    const char *paths[2] = {SCRATCH "/colour.png", SCRATCH "/colour8.png"};
+    for (int k = 0; k < 2; ++k) {
+        unsigned char png[4096];
+        size_t n = 0;
+        if (k == 0)
+            png_with_idat(paths[0], &img, png, &n);
+        else {
+            FILE *f = fopen(paths[1], "rb");
+            n = f ? fread(png, 1, sizeof png, f) : 0;
+            if (f)
+                fclose(f);
+        }
+        long at_srgb = -1, at_gama = -1, at_chrm = -1, at_idat = -1;
+        int crcs_ok = 1, iend = 0;
+        uint32_t gamma = 0, chrm[8] = {0};
+        int intent = -1;
+        for (size_t at = 8; at + 12 <= n && !iend;) {
+            const uint32_t len = be32_at(png + at);
+            if (len > n - at - 12)
+                break;
+            const unsigned char *type = png + at + 4, *data = png + at + 8;
+            crcs_ok &= crc32_png(type, 4 + (size_t)len) == be32_at(data + len);
+            if (!memcmp(type, "sRGB", 4) && len == 1) {
+                at_srgb = (long)at;
+                intent = data[0];
+            } else if (!memcmp(type, "gAMA", 4) && len == 4) {
+                at_gama = (long)at;
+                gamma = be32_at(data);
+            } else if (!memcmp(type, "cHRM", 4) && len == 32) {
+                at_chrm = (long)at;
+                for (int c = 0; c < 8; ++c)
+                    chrm[c] = be32_at(data + 4 * c);
+            } else if (!memcmp(type, "IDAT", 4) && at_idat < 0) {
+                at_idat = (long)at;
+            }
+            iend = !memcmp(type, "IEND", 4);
+            at += 12 + (size_t)len;
+        }
+        CHECK(iend && crcs_ok, "%s: chunks end with IEND and every CRC matches", paths[k]);
+        CHECK(at_srgb > 0 && at_srgb < at_idat && intent >= 0 && intent <= 3, "%s: an sRGB chunk before IDAT",
+              paths[k]);
+        CHECK(at_gama > 0 && at_gama < at_idat && gamma == 45455, "%s: gAMA 45455 before IDAT (%u)", paths[k],
+              gamma);
+        const uint32_t srgb_chrm[8] = {31270, 32900, 64000, 33000, 30000, 60000, 15000, 6000};
+        CHECK(at_chrm > 0 && at_chrm < at_idat && !memcmp(chrm, srgb_chrm, sizeof chrm),
+              "%s: cHRM with the sRGB white and primaries before IDAT", paths[k]);
+        ic_image back;
+        CHECK(ic_image_read(paths[k], &back, &err) == IC_OK && back.width == 5 && back.height == 3,
+              "%s reads back: %s", paths[k], err.message);
+        int same = back.rgb != NULL;
+        for (int i = 0; same && i < 5 * 3 * 3; ++i)
+            same = ic_linear_to_srgb8(back.rgb[i]) == (k ? bytes[i] : ic_linear_to_srgb8(img.rgb[i]));
+        CHECK(same, "%s: the same pixels", paths[k]);
+        ic_image_free(&back);
+    }
+    ic_image_free(&img);
+}
+
+/* A Radiance picture names its primaries (PRIMARIES= line of the header, rx ry gx gy bx by wx wy): without
+ * one, Radiance's tools take its own standard (green at 0.290 0.600, equal-energy white), not the Rec. 709 /
+ * D65 the pixels are in. The line agrees with the chromaticities the same image's EXR header carries. */
+static void test_hdr_primaries(void)
+{
+    ic_image img = constant(3, 2, 0.5f);
+    ic_error err;
+    CHECK(ic_image_write(SCRATCH "/prims.hdr", &img, NULL, &err) == IC_OK, "write hdr: %s", err.message);
+    CHECK(ic_image_write(SCRATCH "/prims.exr", &img, NULL, &err) == IC_OK, "write exr: %s", err.message);
+    ic_image_free(&img);
+    FILE *f = fopen(SCRATCH "/prims.hdr", "rb");
+    char line[256];
+    float prims[8];
+    int found = 0, format = 0;
+    while (f && fgets(line, sizeof line, f) && strcmp(line, "\n") != 0) {
+        format |= !strcmp(line, "FORMAT=32-bit_rle_rgbe\n");
+        if (!strncmp(line, "PRIMARIES=", 10))
+            found += sscanf(line + 10, "%f %f %f %f %f %f %f %f", &prims[0], &prims[1], &prims[2], &prims[3],
+                            &prims[4], &prims[5], &prims[6], &prims[7]) == 8;
+    }
+    if (f)
+        fclose(f);
+    CHECK(format && found == 1, "the HDR header has its FORMAT and one PRIMARIES line of 8 numbers");
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    exr_context_t ctxt = NULL;
+    exr_attr_chromaticities_t chr;
+    const exr_attribute_t *attr = NULL;
+    int read = exr_start_read(&ctxt, SCRATCH "/prims.exr", &init) == EXR_ERR_SUCCESS &&
+               exr_get_attribute_by_name(ctxt, 0, "chromaticities", &attr) == EXR_ERR_SUCCESS && attr &&
+               attr->type == EXR_ATTR_CHROMATICITIES;
+    if (read)
+        chr = *attr->chromaticities;
+    exr_finish(&ctxt);
+    CHECK(read, "the EXR has chromaticities");
+    if (read && found == 1) {
+        const float want[8] = {chr.red_x, chr.red_y, chr.green_x, chr.green_y, chr.blue_x, chr.blue_y,
+                               chr.white_x, chr.white_y};
+        int agree = 1;
+        for (int c = 0; c < 8; ++c)
+            agree &= fabsf(prims[c] - want[c]) < 1e-4f;
+        CHECK(agree, "HDR PRIMARIES %g %g %g %g %g %g %g %g agree with the EXR's chromaticities", prims[0], prims[1],
+              prims[2], prims[3], prims[4], prims[5], prims[6], prims[7]);
+    }
+    CHECK(ic_image_read(SCRATCH "/prims.hdr", &img, &err) == IC_OK && img.width == 3 && fabsf(img.rgb[0] - 0.5f) < 0.004f,
+          "the HDR with its PRIMARIES line reads back: %s", err.message);
+    ic_image_free(&img);
+}
+
 /* Tiled OpenEXR (environment maps are often tiled) reads as the same pixels as it was written, float and
  * half, with partial tiles at the right and bottom edges. */
 static void test_tiled_exr(void)
@@ -1211,6 +1338,8 @@ int main(void)
     test_ldr_header_first();
     test_png_empty_idat();
     test_png_chunk_overrun();
+    test_png_colour_chunks();
+    test_hdr_primaries();
     test_damaged_files();
     test_texture_bytes();
     TEST_MAIN_END();
