@@ -1,6 +1,8 @@
 /* exr_meta.c — the EXR header attributes of a render's outputs (exr_meta.h). */
 #include "exr_meta.h"
 
+#include "json_out.h"
+
 #include "core/read_file.h"
 #include "irrcache/cache.h"
 #include "irrcache/version.h"
@@ -24,7 +26,11 @@ void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cl
 {
     memset(m, 0, sizeof *m);
     add(m, "irrcache:version", ic_version());
-    add(m, "irrcache:scene", a->scene);
+    /* Text attributes in UTF-8, as the JSON outputs are (OpenImageIO's Python binding, for one, fails on other
+     * bytes): a byte of the scene's path that is not UTF-8 is written as U+FFFD, in :scene and :settings. */
+    int oom = 0;
+    m->scene = a->scene ? ic_cli_utf8_repaired(a->scene, &oom) : NULL;
+    add(m, "irrcache:scene", oom ? NULL : m->scene ? m->scene : a->scene);
     /* The scene file's own bytes identify it (its meshes and textures are not hashed here). */
     char *data = NULL;
     size_t size = 0;
@@ -42,7 +48,7 @@ void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cl
     snprintf(m->text[3], sizeof m->text[3], "%014.3f", st->seconds);
     add(m, "irrcache:seconds", m->text[3]);
     cJSON *settings = ic_cli_settings_json(a);
-    m->settings = settings ? cJSON_PrintUnformatted(settings) : NULL;
+    m->settings = settings && ic_cli_json_utf8(settings) ? cJSON_PrintUnformatted(settings) : NULL;
     cJSON_Delete(settings);
     add(m, "irrcache:settings", m->settings);
     /* An interrupted render's image is partial: how much of the final render it holds. */
@@ -60,4 +66,6 @@ void ic_cli_exr_meta_free(ic_cli_exr_meta *m)
 {
     free(m->settings);
     m->settings = NULL;
+    cJSON_free(m->scene);
+    m->scene = NULL;
 }

@@ -11,9 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* s with every byte that is not part of well-formed UTF-8 replaced by U+FFFD (allocated with
- * cJSON_malloc), or NULL when s is already well-formed (or out of memory: *oom set). */
-static char *utf8_repaired(const char *s, int *oom)
+char *ic_cli_utf8_repaired(const char *s, int *oom)
 {
     const unsigned char *p = (const unsigned char *)s;
     size_t n;
@@ -44,14 +42,13 @@ static char *utf8_repaired(const char *s, int *oom)
 
 /* cJSON escapes quotes, backslashes and control characters but copies other bytes as they are, and
  * JSON text must be UTF-8: a path in another encoding (a Latin-1 file name) would make the whole file
- * unreadable to a strict parser. Repairs every string value and key of the tree in place (the repaired
- * text replaces the old, owned or not, and is freed by cJSON_Delete); 0 if out of memory. */
-static int repair_strings(cJSON *item)
+ * unreadable to a strict parser. */
+int ic_cli_json_utf8(cJSON *item)
 {
     for (; item; item = item->next) {
         int oom = 0;
         if (cJSON_IsString(item) && item->valuestring) {
-            char *fixed = utf8_repaired(item->valuestring, &oom);
+            char *fixed = ic_cli_utf8_repaired(item->valuestring, &oom);
             if (fixed) {
                 if (!(item->type & cJSON_IsReference))
                     cJSON_free(item->valuestring);
@@ -60,7 +57,7 @@ static int repair_strings(cJSON *item)
             }
         }
         if (!oom && item->string) {
-            char *fixed = utf8_repaired(item->string, &oom);
+            char *fixed = ic_cli_utf8_repaired(item->string, &oom);
             if (fixed) {
                 if (!(item->type & cJSON_StringIsConst))
                     cJSON_free(item->string);
@@ -68,7 +65,7 @@ static int repair_strings(cJSON *item)
                 item->string = fixed;
             }
         }
-        if (oom || !repair_strings(item->child))
+        if (oom || !ic_cli_json_utf8(item->child))
             return 0;
     }
     return 1;
@@ -76,7 +73,7 @@ static int repair_strings(cJSON *item)
 
 int ic_cli_write_json(const char *cmd, const char *path, cJSON *root, int pretty)
 {
-    char *text = !root || !repair_strings(root) ? NULL : pretty ? cJSON_Print(root) : cJSON_PrintUnformatted(root);
+    char *text = !root || !ic_cli_json_utf8(root) ? NULL : pretty ? cJSON_Print(root) : cJSON_PrintUnformatted(root);
     cJSON_Delete(root);
     if (!text) {
         fprintf(stderr, "irrcache %s: out of memory writing %s\n", cmd, path ? path : "JSON");

@@ -5,11 +5,15 @@
  * line on stderr that names the file (and line where there is one), no crash, and no output file;
  * an existing output is left untouched. Also: degenerate triangles are dropped (not an error), a
  * good render writes every requested output and the stats JSON, and the JSON files stay valid JSON
- * whatever bytes the scene path holds.
+ * whatever bytes the scene path holds, as do the EXR's text attributes.
  */
 #include "test_util.h"
 #include "test_files.h"
 
+#include "core/text.h"
+#include "irrcache/image.h"
+
+#include <stdint.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -71,7 +75,8 @@ static void odd_path_json(void)
     remove(ODD_RECORDS);
     CHECK(symlink(IC_SOURCE_DIR "/scenes/cornell-box", ODD_DIR) == 0, "symlink to the odd folder");
     int rc = run("render '" ODD_DIR "/cornell-box.json' -o " OUT " --integrator ic --width 16 --height 16 --spp 2 "
-                 "--rays 64 --hit-records on -q --stats " ODD_STATS " --records-json " ODD_RECORDS);
+                 "--rays 64 --hit-records on -q --stats " ODD_STATS " --records-json " ODD_RECORDS
+                 " --scenes-dir '" ODD_DIR "'");
     CHECK(rc == 0, "render through the odd path (exit %d: %s)", rc, err_text);
     static char js[1 << 15];
     FILE *f = fopen(ODD_STATS, "rb");
@@ -84,6 +89,20 @@ static void odd_path_json(void)
     CHECK(rays && strspn(rays + 8, "0123456789") > 0 && rays[8 + strspn(rays + 8, "0123456789")] == ',',
           "rays is a plain integer: %.40s", rays ? rays : "(none)");
     CHECK(js[0] == '{' && strstr(js, "\n\t\"spp\":\t2,\n"), "pretty-printed, one key a line: %.120s", js);
+    /* The EXR's text attributes are UTF-8 as well (OpenImageIO's Python binding refused the raw byte): the
+     * scene's path, and the settings with --scenes-dir's. */
+    static char attr[1 << 15];
+    const char *names[2] = {"irrcache:scene", "irrcache:settings"};
+    for (int k = 0; k < 2; ++k) {
+        ic_error err;
+        CHECK(ic_image_exr_attribute(OUT, names[k], attr, sizeof attr, &err) == IC_OK, "%s: %s", names[k],
+              err.message);
+        size_t at = 0, step = 1;
+        while (attr[at] && (step = ic_utf8_sequence((const unsigned char *)attr + at, SIZE_MAX)) > 0)
+            at += step;
+        CHECK(!attr[at] && strstr(attr, "e_\xc3\xa9_\xef\xbf\xbd"),
+              "%s is UTF-8, the byte that is not written as U+FFFD: %.200s", names[k], attr);
+    }
 
     if (system("python3 -c '' >/dev/null 2>&1") != 0) {
         printf("python3 not found: the strict JSON parse of the odd-path outputs is skipped\n");
