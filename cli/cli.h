@@ -28,6 +28,16 @@ struct ic_scene;
  * be black") (render.c). */
 void ic_cli_scene_warnings(const char *who, const struct ic_scene *scene, const char *path, const char *outcome);
 
+/* Prints a message on stderr like fprintf, with every control byte the formatted text holds written as
+ * \xNN, but for a newline that ends it: a file name that holds a newline, a carriage return or an escape
+ * sequence cannot split the message over lines or drive the terminal (message.c). The progress lines,
+ * whose carriage returns are meant, are printed directly. */
+void ic_cli_eprintf(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+
 /* Flushes standard output and checks it for a write error (a full disk, /dev/full): what was printed
  * there (help, a table, results) is otherwise lost without a word. Returns 0, or 1 (the exit status of a
  * failure while working) after the line "WHO: standard output: write error (reason)" on stderr. Inline

@@ -6,6 +6,7 @@
  * that called ic_render, never from its worker threads.
  */
 #include "cluster.h"
+#include "cli.h"
 
 #include <fcntl.h>
 #include <stdio.h>
@@ -265,12 +266,12 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
         return NULL;
     int provided = 0;
     if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
-        fprintf(stderr, "irrcache: MPI could not start; check the launcher (mpirun) and its hostfile\n");
+        ic_cli_eprintf("irrcache: MPI could not start; check the launcher (mpirun) and its hostfile\n");
         *failed = 1;
         return NULL;
     }
     if (provided < MPI_THREAD_FUNNELED) {
-        fprintf(stderr, "irrcache: this MPI library cannot be called from one thread of a threaded program "
+        ic_cli_eprintf("irrcache: this MPI library cannot be called from one thread of a threaded program "
                         "(MPI_THREAD_FUNNELED); use an MPI built with thread support, or run the plain build\n");
         MPI_Abort(MPI_COMM_WORLD, 1);
         return NULL;
@@ -286,7 +287,7 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
         m->scratch = malloc(SMALL_LIMIT);
     }
     if (!m || !m->counts || !m->displs || !m->scounts || !m->sdispls || !m->scratch) {
-        fprintf(stderr, "irrcache: out of memory starting %d MPI ranks\n", size);
+        ic_cli_eprintf("irrcache: out of memory starting %d MPI ranks\n", size);
         MPI_Abort(MPI_COMM_WORLD, 1);
         return NULL;
     }
@@ -302,7 +303,7 @@ ic_comm *ic_cli_cluster_start(int *argc, char ***argv, int *failed)
     }
     const char *trace_path = getenv("IRRCACHE_MPI_TRACE");
     if (trace_path && *trace_path && m->comm.rank == 0 && !(m->trace = fopen(trace_path, "w")))
-        fprintf(stderr, "irrcache: cannot write IRRCACHE_MPI_TRACE file %s; going on without it\n", trace_path);
+        ic_cli_eprintf("irrcache: cannot write IRRCACHE_MPI_TRACE file %s; going on without it\n", trace_path);
     m->comm.allgather = mpi_allgather;
     m->comm.sum = mpi_sum;
     m->comm.broadcast = mpi_broadcast;
@@ -430,9 +431,9 @@ int ic_cli_cluster_agree(ic_comm *comm, int status, const char *message, const c
     if (first < 0)
         return 0;
     if (first == ic_cli_cluster_rank(comm) && message[0])
-        fprintf(stderr, "%s\n", message);
+        ic_cli_eprintf("%s\n", message);
     else if (command && first == ic_cli_cluster_rank(comm) && first != 0)
-        fprintf(stderr, "%s: rank %d of %d: its command line is invalid; run it alone to see why\n", command, first,
+        ic_cli_eprintf("%s: rank %d of %d: its command line is invalid; run it alone to see why\n", command, first,
                 ic_cli_cluster_size(comm));
     return status ? status : 1;
 }

@@ -104,7 +104,7 @@ static int map_path_ok(const char *what, const char *value)
 {
     if (!value || ic_image_is_writable_format(value))
         return 1;
-    fprintf(stderr, "irrcache diff: %s: unknown %s format; name it .png (or .exr, .pfm, .hdr)\n", value, what);
+    ic_cli_eprintf("irrcache diff: %s: unknown %s format; name it .png (or .exr, .pfm, .hdr)\n", value, what);
     return 0;
 }
 
@@ -169,7 +169,7 @@ int ic_cli_diff(int argc, char **argv)
         int rc;
         if (options_done || arg[0] != '-' || arg[1] == '\0') {
             if (npaths == 2) {
-                fprintf(stderr, "irrcache diff: %s: unexpected extra argument; give exactly two images (A and the "
+                ic_cli_eprintf("irrcache diff: %s: unexpected extra argument; give exactly two images (A and the "
                         "reference B)\n", arg);
                 return EXIT_USAGE;
             }
@@ -193,7 +193,7 @@ int ic_cli_diff(int argc, char **argv)
     heat_scale scale = {opt.max_error, opt.max_error == 0.0f}; /* 0: --max-error auto */
     blotch_opts blotch = {opt.blotch_map, opt.blotch_max_error};
     if (npaths != 2) {
-        fprintf(stderr, "irrcache diff: expected two images (A and the reference B), got %d; see irrcache diff "
+        ic_cli_eprintf("irrcache diff: expected two images (A and the reference B), got %d; see irrcache diff "
                 "--help\n", npaths);
         return EXIT_USAGE;
     }
@@ -211,25 +211,25 @@ int ic_cli_diff(int argc, char **argv)
                             : k == 1 && maps[0] && same_file(maps[1], maps[0]) ? "--heatmap"
                                                                     : NULL;
         if (clash) {
-            fprintf(stderr, "irrcache diff: %s %s: the same file as %s; give the map its own name\n",
+            ic_cli_eprintf("irrcache diff: %s %s: the same file as %s; give the map its own name\n",
                     k ? "--blotch-map" : "--heatmap", maps[k], clash);
             return EXIT_USAGE;
         }
     }
     if (ic_image_read(paths[0], &img, &err) != IC_OK || ic_image_read(paths[1], &ref, &err) != IC_OK) {
-        fprintf(stderr, "irrcache diff: %s\n", err.message);
+        ic_cli_eprintf("irrcache diff: %s\n", err.message);
     } else if (img.width != ref.width || img.height != ref.height) {
-        fprintf(stderr, "irrcache diff: %s: size %dx%d differs from the reference %s (%dx%d); compare images of the "
+        ic_cli_eprintf("irrcache diff: %s: size %dx%d differs from the reference %s (%dx%d); compare images of the "
                 "same size\n", paths[0], img.width, img.height, paths[1], ref.width, ref.height);
     } else if (ic_image_compare(&img, &ref, &metrics, &err) != IC_OK) {
-        fprintf(stderr, "irrcache diff: %s: %s\n", paths[0], err.message);
+        ic_cli_eprintf("irrcache diff: %s: %s\n", paths[0], err.message);
     } else if (heatmap && (!heat_scale_resolve(&scale, &img, &ref, &err) ||
                            ic_image_heatmap(&img, &ref, scale.max_error, &heat, &err) != IC_OK ||
                            ic_image_write(heatmap, &heat, NULL, &err) != IC_OK)) {
-        fprintf(stderr, "irrcache diff: %s\n", err.message);
+        ic_cli_eprintf("irrcache diff: %s\n", err.message);
     } else if (blotch.path && (ic_image_blotch_map(&img, &ref, blotch.max_error, &blot, &err) != IC_OK ||
                                ic_image_write(blotch.path, &blot, NULL, &err) != IC_OK)) {
-        fprintf(stderr, "irrcache diff: %s\n", err.message);
+        ic_cli_eprintf("irrcache diff: %s\n", err.message);
     } else {
         status = 0;
         if (json && !print_json(&img, &metrics, heatmap, &scale, &blotch))

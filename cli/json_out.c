@@ -76,7 +76,7 @@ int ic_cli_write_json(const char *cmd, const char *path, cJSON *root, int pretty
     char *text = !root || !ic_cli_json_utf8(root) ? NULL : pretty ? cJSON_Print(root) : cJSON_PrintUnformatted(root);
     cJSON_Delete(root);
     if (!text) {
-        fprintf(stderr, "irrcache %s: out of memory writing %s\n", cmd, path ? path : "JSON");
+        ic_cli_eprintf("irrcache %s: out of memory writing %s\n", cmd, path ? path : "JSON");
         return 0;
     }
     int ok = 1;
@@ -89,13 +89,13 @@ int ic_cli_write_json(const char *cmd, const char *path, cJSON *root, int pretty
         ic_atomic_file f;
         ic_error err;
         if (ic_atomic_file_open(&f, path, &err) != IC_OK) {
-            fprintf(stderr, "irrcache %s: %s\n", cmd, err.message);
+            ic_cli_eprintf("irrcache %s: %s\n", cmd, err.message);
             ok = 0;
         } else {
             fputs(text, f.fp);
             fputc('\n', f.fp);
             if (ic_atomic_file_commit(&f, &err) != IC_OK) {
-                fprintf(stderr, "irrcache %s: %s\n", cmd, err.message);
+                ic_cli_eprintf("irrcache %s: %s\n", cmd, err.message);
                 ok = 0;
             }
         }

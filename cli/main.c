@@ -96,6 +96,6 @@ int main(int argc, char **argv)
             printf("irrcache %s\n", ic_version());
         return ic_cli_flush_stdout("irrcache");
     }
-    fprintf(stderr, "irrcache: unknown command '%s'; use 'render', 'diff' or 'points' (see irrcache --help)\n", cmd);
+    ic_cli_eprintf("irrcache: unknown command '%s'; use 'render', 'diff' or 'points' (see irrcache --help)\n", cmd);
     return 2;
 }

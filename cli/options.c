@@ -58,7 +58,7 @@ static const opt_table tables[] = {
 
 /* The command named in messages: render, or another while its options (or render's it shares) are parsed. */
 static const char *err_command = "render";
-#define ERR(...) (fprintf(stderr, "irrcache %s: ", err_command), fprintf(stderr, __VA_ARGS__), fputc('\n', stderr), 2)
+#define ERR(...) (ic_cli_eprintf("irrcache %s: ", err_command), ic_cli_eprintf(__VA_ARGS__), fputc('\n', stderr), 2)
 
 static const char *scope_prefix(ic_opt_scope s)
 {

@@ -1,5 +1,6 @@
 /* outputs.c — checking the outputs of a command before it starts (outputs.h). */
 #include "outputs.h"
+#include "cli.h"
 
 #include "core/atomic_file.h"
 #include "core/path.h"
@@ -12,7 +13,7 @@
 #include <sys/stat.h>
 
 #define FAIL(o, ...)                                                                                  \
-    (fprintf(stderr, "%s: %s %s: ", command, (o)->option, (o)->path), fprintf(stderr, __VA_ARGS__), \
+    (ic_cli_eprintf("%s: %s %s: ", command, (o)->option, (o)->path), ic_cli_eprintf(__VA_ARGS__), \
      fputc('\n', stderr), 0)
 
 /* Splits path into its folder (ic_path_dirname) and its last component. */
@@ -123,7 +124,7 @@ int ic_cli_check_outputs(const char *command, const ic_cli_output *outs, int cou
 {
     char(*canon)[PATH_MAX + 256] = calloc((size_t)count + 1, sizeof *canon);
     if (!canon) {
-        fprintf(stderr, "%s: out of memory checking the outputs\n", command);
+        ic_cli_eprintf("%s: out of memory checking the outputs\n", command);
         return 0;
     }
     int ok = 1;
@@ -146,7 +147,7 @@ int ic_cli_check_scene_files(const char *command, const ic_cli_output *outs, int
     ic_cli_input *ins = calloc((size_t)n + 1, sizeof *ins);
     int ok = canon && ins;
     if (!ok)
-        fprintf(stderr, "%s: out of memory checking the outputs\n", command);
+        ic_cli_eprintf("%s: out of memory checking the outputs\n", command);
     for (int i = 0; i < count && ok; ++i) {
         char target[PATH_MAX];
         /* checked before the scene was loaded: a link that cannot be followed now is compared as written */

@@ -239,7 +239,7 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
     const char *name = is_stdin ? "<stdin>" : path;
     FILE *f = is_stdin ? stdin : fopen(path, "r");
     if (!f) {
-        fprintf(stderr, "irrcache points: %s: cannot open: %s; check the path\n", path, strerror(errno));
+        ic_cli_eprintf("irrcache points: %s: cannot open: %s; check the path\n", path, strerror(errno));
         return 0;
     }
     ic_sensor_point *pts = NULL;
@@ -250,14 +250,14 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
     ssize_t len;
     line = malloc(MAX_POINT_LINE + 1);
     if (!line) {
-        fprintf(stderr, "irrcache points: out of memory\n");
+        ic_cli_eprintf("irrcache points: out of memory\n");
         ok = 0;
     }
     int got;
     while (line && (got = next_line(f, line, &len)) != 0) {
         ++line_no;
         if (got < 0) {
-            fprintf(stderr, got == -1 ? "irrcache points: %s:%ld: a line longer than %d bytes; give one point 'x y z "
+            ic_cli_eprintf(got == -1 ? "irrcache points: %s:%ld: a line longer than %d bytes; give one point 'x y z "
                                         "nx ny nz' a line\n"
                                       : "irrcache points: %s:%ld: a NUL byte: not a text file, or UTF-16 text (as "
                                         "spreadsheets save 'Unicode text'); save it as UTF-8 or ASCII text\n",
@@ -271,14 +271,14 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
         char why[320];
         int r = parse_line(line + bom, &pt, why, sizeof why);
         if (r < 0) {
-            fprintf(stderr, "irrcache points: %s:%ld: %s\n", name, line_no, why);
+            ic_cli_eprintf("irrcache points: %s:%ld: %s\n", name, line_no, why);
             ok = 0;
             break;
         }
         if (r == 0)
             continue;
         if (n == max_points) {
-            fprintf(stderr, "irrcache points: %s:%ld: more than %u points (--max-points); raise it if the memory is "
+            ic_cli_eprintf("irrcache points: %s:%ld: more than %u points (--max-points); raise it if the memory is "
                     "there, or split the file\n", name, line_no, max_points);
             ok = 0;
             break;
@@ -287,7 +287,7 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
             size_t nc = cap ? 2 * cap : 256;
             ic_sensor_point *np = realloc(pts, nc * sizeof *np);
             if (!np) {
-                fprintf(stderr, "irrcache points: %s:%ld: out of memory for the points\n", name, line_no);
+                ic_cli_eprintf("irrcache points: %s:%ld: out of memory for the points\n", name, line_no);
                 ok = 0;
                 break;
             }
@@ -299,13 +299,13 @@ static int read_points(const char *path, uint32_t max_points, ic_sensor_point **
     if (ok && ferror(f)) {
         int e = errno;
         if (e == EISDIR)
-            fprintf(stderr, "irrcache points: %s: is a folder; give the points file\n", name);
+            ic_cli_eprintf("irrcache points: %s: is a folder; give the points file\n", name);
         else
-            fprintf(stderr, "irrcache points: %s: read error after line %ld: %s\n", name, line_no, strerror(e));
+            ic_cli_eprintf("irrcache points: %s: read error after line %ld: %s\n", name, line_no, strerror(e));
         ok = 0;
     }
     if (ok && n == 0) {
-        fprintf(stderr, "irrcache points: %s: no points (%s); give lines 'x y z nx ny nz'\n", name,
+        ic_cli_eprintf("irrcache points: %s: no points (%s); give lines 'x y z nx ny nz'\n", name,
                 line_no ? "only comments or blank lines" : "it is empty");
         ok = 0;
     }
@@ -462,7 +462,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         int shared = 0, rc;
         if (arg[0] != '-' || arg[1] == '\0') {
             if (scene_path) {
-                fprintf(stderr, "irrcache points: %s: unexpected extra argument; give one scene, and a points file "
+                ic_cli_eprintf("irrcache points: %s: unexpected extra argument; give one scene, and a points file "
                         "after --points (--points %s)\n", arg, arg);
                 return EXIT_USAGE;
             }
@@ -491,7 +491,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         has_height = own.given[IC_POINTS_ARG_HEIGHT] != NULL, has_map_max = own.given[IC_POINTS_ARG_MAP_MAX] != NULL;
     size_t map_len = map_path ? strlen(map_path) : 0;
     if (map_path && (map_len < 4 || strcasecmp(map_path + map_len - 4, ".png") != 0)) {
-        fprintf(stderr, "irrcache points: --map %s: the map is a PNG; give a path ending in .png\n", map_path);
+        ic_cli_eprintf("irrcache points: --map %s: the map is a PNG; give a path ending in .png\n", map_path);
         return EXIT_USAGE;
     }
     ic_points_grid_spec grid = {0};
@@ -542,7 +542,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
                              ? "--max-points applies to a --points file; a --grid's size is set by its --spacing"
                                                               : NULL;
     if (misuse) {
-        fprintf(stderr, "irrcache points: %s; usage: irrcache points SCENE --points FILE|- [options] or irrcache "
+        ic_cli_eprintf("irrcache points: %s; usage: irrcache points SCENE --points FILE|- [options] or irrcache "
                         "points SCENE --grid x0 y0 z0 x1 y1 z1 --spacing S [options]\n",
                 misuse);
         return EXIT_USAGE;
@@ -581,7 +581,7 @@ static int points_command(int argc, char **argv, ic_comm *comm)
         ic_cli_cluster_broadcast(comm, &n, sizeof n);
         count = (uint32_t)n;
         if (rank != 0 && !(pts = malloc(sizeof *pts * (count ? count : 1)))) {
-            fprintf(stderr, "irrcache points: rank %d of %d: out of memory for %u points\n", rank, ranks, count);
+            ic_cli_eprintf("irrcache points: rank %d of %d: out of memory for %u points\n", rank, ranks, count);
             ic_cli_cluster_abort(comm, EXIT_WORK);
         }
         ic_cli_cluster_broadcast(comm, pts, sizeof *pts * count);
@@ -628,16 +628,16 @@ static int points_command(int argc, char **argv, ic_comm *comm)
             /* As in render.c: rank 0 says a failure every rank meets; the others' abort ends the job. */
             if (rank != 0)
                 nanosleep(&(struct timespec){1, 0}, NULL);
-            fprintf(stderr, "irrcache points: rank %d of %d: %s: %s; stopping all ranks\n", rank, ranks,
+            ic_cli_eprintf("irrcache points: rank %d of %d: %s: %s; stopping all ranks\n", rank, ranks,
                     has_grid ? "--grid" : points_path, err.message);
             ic_cli_cluster_abort(comm, EXIT_WORK);
         }
         if (err.code == IC_ERR_INVALID_ARG) {
             /* an option the scene's settings make impossible (the points themselves were checked here) */
-            fprintf(stderr, "irrcache points: %s\n", err.message);
+            ic_cli_eprintf("irrcache points: %s\n", err.message);
             status = EXIT_USAGE;
         } else {
-            fprintf(stderr, "irrcache points: %s: %s\n", has_grid ? "--grid" : points_path, err.message);
+            ic_cli_eprintf("irrcache points: %s: %s\n", has_grid ? "--grid" : points_path, err.message);
         }
     } else if (rank != 0) {
         status = 0; /* rank 0 writes the results */
@@ -651,11 +651,11 @@ static int points_command(int argc, char **argv, ic_comm *comm)
     } else {
         ic_atomic_file f;
         if (ic_atomic_file_open(&f, out_path, &err) != IC_OK) {
-            fprintf(stderr, "irrcache points: %s\n", err.message);
+            ic_cli_eprintf("irrcache points: %s\n", err.message);
         } else {
             write_rows(f.fp, format, res, count, df_lux, prefix);
             if (ic_atomic_file_commit(&f, &err) != IC_OK)
-                fprintf(stderr, "irrcache points: %s\n", err.message);
+                ic_cli_eprintf("irrcache points: %s\n", err.message);
             else
                 status = 0;
         }

@@ -4,6 +4,7 @@
  * its row in options.h).
  */
 #include "points_grid.h"
+#include "cli.h"
 
 #include "irrcache/image.h"
 
@@ -17,7 +18,7 @@ int ic_cli_grid_map(const char *path, const ic_point_result *res, uint32_t cols,
     size_t n = (size_t)cols * rows;
     double *values = malloc(sizeof *values * (n ? n : 1));
     if (!values) {
-        fprintf(stderr, "irrcache points: %s: out of memory for the map\n", path);
+        ic_cli_eprintf("irrcache points: %s: out of memory for the map\n", path);
         return 0;
     }
     for (size_t k = 0; k < n; ++k)
@@ -32,7 +33,7 @@ int ic_cli_grid_map(const char *path, const ic_point_result *res, uint32_t cols,
     if (r == IC_OK)
         r = ic_image_write_png8(path, rgb, lay.width, lay.height, &err);
     if (r != IC_OK)
-        fprintf(stderr, "irrcache points: --map %s: %s\n", path, err.message);
+        ic_cli_eprintf("irrcache points: --map %s: %s\n", path, err.message);
     free(rgb);
     free(values);
     return r == IC_OK;

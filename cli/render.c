@@ -217,7 +217,7 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
             wo_k.exposure = 0.0f;
         ic_error err;
         if (ic_image_write(path, imgs[k], &wo_k, &err) != IC_OK) {
-            fprintf(stderr, "irrcache render: %s %s\n", aov_files[k].option, err.message);
+            ic_cli_eprintf("irrcache render: %s %s\n", aov_files[k].option, err.message);
             ++failed;
         }
     }
@@ -240,7 +240,7 @@ static int write_outputs(const render_args *a, const ic_image *img, const ic_ima
         ic_error err;
         if (ic_image_write(a->outputs[i], img, &wo_i, &err) == IC_OK)
             continue;
-        fprintf(stderr, "irrcache render: %s %s\n", what, err.message);
+        ic_cli_eprintf("irrcache render: %s %s\n", what, err.message);
         if (failed)
             snprintf(failed + strlen(failed), size - strlen(failed), "%s-o %s", failed[0] ? ", " : "",
                      a->outputs[i]);
@@ -333,11 +333,11 @@ void ic_cli_scene_warnings(const char *who, const ic_scene *scene, const char *p
     /* what the loader approximated or left out (a Mitsuba scene's unsupported elements, dropped slivers) */
     for (const char *w = ic_scene_warnings(scene); *w;) {
         size_t len = strcspn(w, "\n");
-        fprintf(stderr, "%s: warning: %.*s\n", who, (int)len, w);
+        ic_cli_eprintf("%s: warning: %.*s\n", who, (int)len, w);
         w += len + (w[len] == '\n');
     }
     if (ic_scene_light_count(scene) == 0)
-        fprintf(stderr, "%s: warning: %s has no light (no emitting triangle, light or environment), so %s; add "
+        ic_cli_eprintf("%s: warning: %s has no light (no emitting triangle, light or environment), so %s; add "
                         "an emitter, a light or an environment\n", who, path, outcome);
 }
 
@@ -476,18 +476,18 @@ static int render_command(int argc, char **argv, ic_comm *comm)
              * others within the pause they take before speaking; a failure of one rank alone is said by it. */
             if (rank != 0)
                 nanosleep(&(struct timespec){1, 0}, NULL);
-            fprintf(stderr, "irrcache render: rank %d of %d: %s: %s; stopping all ranks\n", rank, ranks, a.scene,
+            ic_cli_eprintf("irrcache render: rank %d of %d: %s: %s; stopping all ranks\n", rank, ranks, a.scene,
                     err.message);
             ic_cli_cluster_abort(comm, 1);
         }
-        fprintf(stderr, "irrcache render: %s: %s\n", a.scene, err.message);
+        ic_cli_eprintf("irrcache render: %s: %s\n", a.scene, err.message);
         ic_scene_free(scene);
         return 1;
     }
     double figures[RANK_FIGURES], *per_rank = malloc(sizeof *per_rank * RANK_FIGURES * (size_t)ranks);
     rank_figures(&st, figures);
     if (!per_rank) {
-        fprintf(stderr, "irrcache render: out of memory for %d ranks' statistics\n", ranks);
+        ic_cli_eprintf("irrcache render: out of memory for %d ranks' statistics\n", ranks);
         ic_cli_cluster_abort(comm, 1);
         ic_scene_free(scene);
         return 1;
@@ -533,7 +533,7 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     if (a.records_json && !write_records_json(a.records_json, &aovs))
         FAILED("--records-json", a.records_json);
     if (st.save_error[0]) {
-        fprintf(stderr, "irrcache render: --save-cache %s\n", st.save_error);
+        ic_cli_eprintf("irrcache render: --save-cache %s\n", st.save_error);
         if (!st.cancelled) /* an interrupted render leaves its cache unwritten on purpose; 130/143 says why */
             FAILED("--save-cache", a.render.ic.save_cache);
     }
@@ -543,28 +543,28 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         const char *sig = ic_cli_stop_signal == SIGTERM ? "SIGTERM" : "SIGINT";
         const int budget = opt.time_budget > 0.0;
         if (st.completed > 0.0 && budget && st.spp_min == st.spp_max)
-            fprintf(stderr, "irrcache render: interrupted by %s between passes of the --time budget: the outputs "
+            ic_cli_eprintf("irrcache render: interrupted by %s between passes of the --time budget: the outputs "
                             "hold the image so far, %d samples per pixel\n", sig, st.spp_max);
         else if (st.completed > 0.0 && st.spp_min > 0 && st.spp_min < st.spp_max) /* a later pass cut short */
-            fprintf(stderr, "irrcache render: interrupted by %s: the outputs hold the image so far (the tiles its last "
+            ic_cli_eprintf("irrcache render: interrupted by %s: the outputs hold the image so far (the tiles its last "
                             "pass finished at %s%d samples per pixel, the others at the %d of the passes before)\n",
                     sig, budget ? "" : "up to ", st.spp_max, st.spp_min);
         else if (st.completed > 0.0)
-            fprintf(stderr, "irrcache render: interrupted by %s: the outputs hold the image so far (%.0f %% of the "
+            ic_cli_eprintf("irrcache render: interrupted by %s: the outputs hold the image so far (%.0f %% of the "
                             "final render; the other tiles are black)\n", sig, 100.0 * st.completed);
         else
-            fprintf(stderr, "irrcache render: interrupted by %s during cache construction: the outputs hold a "
+            ic_cli_eprintf("irrcache render: interrupted by %s during cache construction: the outputs hold a "
                             "preview of one sample per pixel from the %u records made so far\n", sig, st.records);
     } else if (st.cut_by_time)
-        fprintf(stderr, "irrcache render: warning: cache construction stopped at its share of the --time budget "
+        ic_cli_eprintf("irrcache render: warning: cache construction stopped at its share of the --time budget "
                         "(%d passes) before it converged; give more time for a converged cache\n", st.passes);
     else if (st.cut_short && opt.ic.strategy == IC_STRATEGY_BATCH)
         /* The limit counts the passes after pass 0 (the geometry's candidates); the stats' passes count it too. */
-        fprintf(stderr, "irrcache render: warning: cache construction stopped at its pass limit, --max-passes %d "
+        ic_cli_eprintf("irrcache render: warning: cache construction stopped at its pass limit, --max-passes %d "
                         "(after the geometry pass 0: %d passes in the stats), before it converged; raise "
                         "--max-passes\n", opt.ic.max_passes > 0 ? opt.ic.max_passes : IC_DEFAULT_MAX_PASSES, st.passes);
     else if (st.cut_short)
-        fprintf(stderr, "irrcache render: warning: cache construction stopped at its bound of %d passes before it "
+        ic_cli_eprintf("irrcache render: warning: cache construction stopped at its bound of %d passes before it "
                         "converged\n", st.passes);
     if (a.stats_path && !write_stats(a.stats_path, &a, w, h, &st, per_rank))
         FAILED("--stats", a.stats_path);
@@ -576,24 +576,24 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     const int n_outputs = a.output_count + (opt.aovs && a.aov) + (a.records_json != NULL) +
                           (a.render.ic.save_cache != NULL && !st.cancelled) + (a.stats_path != NULL);
     if (!ok)
-        fprintf(stderr, "irrcache render: the render finished but %d output%s could not be written (%s)%s: free "
+        ic_cli_eprintf("irrcache render: the render finished but %d output%s could not be written (%s)%s: free "
                         "disk space or fix the paths and run again\n", n_failed, n_failed == 1 ? "" : "s", failed,
                 n_failed < n_outputs ? "; the other outputs were written" : "");
     if (ok && !a.quiet) {
-        fprintf(stderr, "irrcache: %dx%d, %d spp", w, h, st.spp);
+        ic_cli_eprintf("irrcache: %dx%d, %d spp", w, h, st.spp);
         if (ranks > 1)
-            fprintf(stderr, ", %d ranks x %d threads", ranks, st.threads);
+            ic_cli_eprintf(", %d ranks x %d threads", ranks, st.threads);
         if (st.spp_max != st.spp)
-            fprintf(stderr, " (adaptive, up to %d in a pixel)", st.spp_max);
-        fprintf(stderr, ", %.2fs, %.2f Mrays/s", st.seconds, st.rays_per_second * 1e-6);
+            ic_cli_eprintf(" (adaptive, up to %d in a pixel)", st.spp_max);
+        ic_cli_eprintf(", %.2fs, %.2f Mrays/s", st.seconds, st.rays_per_second * 1e-6);
         if (opt.integrator == IC_INTEGRATOR_IC)
-            fprintf(stderr, ", %u records in %d passes", st.records, st.passes);
+            ic_cli_eprintf(", %u records in %d passes", st.records, st.passes);
         if (st.radiance_records)
-            fprintf(stderr, " (%u of them radiance records)", st.radiance_records);
+            ic_cli_eprintf(" (%u of them radiance records)", st.radiance_records);
         if (st.hit_records)
-            fprintf(stderr, " (%u of them where hemisphere rays land)", st.hit_records);
+            ic_cli_eprintf(" (%u of them where hemisphere rays land)", st.hit_records);
         if (st.cached_emitters)
-            fprintf(stderr, ", %u emitting triangles lit through the records", st.cached_emitters);
+            ic_cli_eprintf(", %u emitting triangles lit through the records", st.cached_emitters);
         fputc('\n', stderr);
     }
     /* An interrupted render whose outputs were written ends as the signal asked: 128 + its number. */

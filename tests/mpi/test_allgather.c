@@ -7,6 +7,7 @@
  * found; tests/mpi/test_allgather.sh runs it at 2 to 9 ranks.
  */
 #include "../../cli/cluster.c"
+#include "../../cli/message.c"
 
 #include <stdint.h>
 

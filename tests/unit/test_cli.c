@@ -278,9 +278,19 @@ int main(void)
         {"empty --stats", SCENES "plain_quad.obj -o " OUT " --stats=", 2, "--stats '': the value is empty"},
         {"unwritable output", SCENES "plain_quad.obj -o " IC_TEST_TMP "/no/such/dir/x.exr", 2, "no/such/dir/x.exr"},
         {"no output", SCENES "plain_quad.obj", 2, "-o"},
+        /* the command's own messages keep to one line whatever a path holds (a newline as \x0a) */
+        {"output path with a newline", SCENES "plain_quad.obj -o '" IC_TEST_TMP "/no/such/dir/a\nb.exr'", 2,
+         "/no/such/dir/a\\x0ab.exr"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i)
         check_bad(&cases[i]);
+
+    /* A points file whose name holds an escape sequence and a carriage return: named with them as \xNN, on one
+     * line, and nothing sent to the terminal that would clear it. */
+    int prc = run("points " SCENES "plain_quad.obj --points '" IC_TEST_TMP "/no_such\x1b[2J\rpoints.txt'");
+    CHECK(prc == 1 && test_line_count(err_text) == 1 && strstr(err_text, "no_such\\x1b[2J\\x0dpoints.txt") &&
+              !strchr(err_text, '\x1b') && !strchr(err_text, '\r'),
+          "a points file's odd name is escaped (exit %d): %s", prc, err_text);
 
     /* Nothing lost: a failed render leaves an existing output as it was. */
     FILE *f = fopen(OUT, "w");

@@ -10,6 +10,7 @@
 #include "../../cli/diff.c"
 #include "../../cli/json_out.c"
 #include "../../cli/options.c"
+#include "../../cli/message.c"
 
 #include "test_util.h"
 
