@@ -41,3 +41,27 @@ const char *ic_float_text(float x, char buf[32])
     }
     return buf;
 }
+
+void ic_text_one_line(char *text, size_t size)
+{
+    size_t n = 0;
+    while (n < size && text[n] != '\0' && !((unsigned char)text[n] < 0x20 || text[n] == 0x7f))
+        ++n;
+    if (n == size || text[n] == '\0')
+        return;
+    char out[IC_TEXT_ONE_LINE_MAX];
+    const size_t room = size < sizeof out ? size : sizeof out;
+    size_t o = 0;
+    for (size_t i = 0; i < size && text[i] != '\0' && o + 1 < room; ++i) {
+        unsigned char c = (unsigned char)text[i];
+        if (c < 0x20 || c == 0x7f) {
+            if (o + 5 >= room)
+                break;
+            o += (size_t)snprintf(out + o, room - o, "\\x%02x", c);
+        } else {
+            out[o++] = (char)c;
+        }
+    }
+    out[o] = '\0';
+    snprintf(text, size, "%s", out);
+}

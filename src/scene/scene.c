@@ -9,6 +9,7 @@
 #include "scene/scene_internal.h"
 
 #include "core/error_at.h"
+#include "core/text.h"
 #include "core/vecmath.h"
 
 #include <errno.h>
@@ -438,6 +439,7 @@ void ic_scene_warn(ic_scene *s, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
+    ic_text_one_line(line, sizeof line); /* one warning a line, whatever a file's name holds */
     size_t old = s->warnings ? strlen(s->warnings) : 0, add = strlen(line);
     char *grown = realloc(s->warnings, old + add + 2);
     if (!grown)

@@ -191,6 +191,18 @@ static void test_control_bytes_in_name(void)
               strstr(err.message, "bad\\x0aname\\x0d\\x1b.json:2:"),
           "a file name with control bytes: \"%s\"", err.message);
     ic_scene_free(scene);
+
+    /* A warning quoting such a name is one line as well (the warnings are one a line). */
+    const char *obj = T "/bad\nwarn\x1b.obj";
+    write_text(obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n");
+    scene = NULL;
+    r = ic_scene_load(obj, &lo, &scene, &err);
+    const char *w = r == IC_OK ? ic_scene_warnings(scene) : "";
+    const char *nl = strchr(w, '\n');
+    CHECK(r == IC_OK && nl && nl[1] == '\0' && !strchr(w, 0x1b) && strstr(w, "bad\\x0awarn\\x1b.obj") &&
+              strstr(w, "zero area"),
+          "a warning naming a file with control bytes is one line (%s): \"%s\"", err.message, w);
+    ic_scene_free(scene);
 }
 
 int main(void)
