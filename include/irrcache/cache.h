@@ -185,7 +185,8 @@ typedef struct ic_record {
     ic_vec3 grad_rot[3];              /* ∇r E_i per channel (R, G, B): world-space vectors */
     ic_vec3 grad_trans[3];            /* ∇t E_i per channel (R, G, B): world-space vectors */
     ic_vec3 sigma;                    /* Monte Carlo σ of E_i per channel (Křivánek et al. 2006 §4.3), 0 if unknown */
-    float harmonic_mean_dist;         /* R from hemisphere sampling (> 0): input of the clamps */
+    float harmonic_mean_dist;         /* R from hemisphere sampling (> 0): input of the clamps; +inf (no ray
+                                         hit, gather.h) inserts where clamp step 1 bounds R, and saves and loads */
     float radius;                     /* R_i after clamping: output (ignored on insertion) */
     float accuracy;                   /* a_i; 0 on insertion means params.accuracy */
     float pixel_footprint;            /* world size of one pixel at the primary hit; 0 = unknown */
@@ -252,7 +253,7 @@ ic_result ic_cache_create(const ic_cache_params *params, ic_cache **out, ic_erro
 /* Frees a cache and everything it owns; NULL is a no-op. */
 void ic_cache_destroy(ic_cache *cache);
 
-/* The resolved parameters the cache runs with. */
+/* The resolved parameters the cache runs with (NULL for a NULL cache). */
 const ic_cache_params *ic_cache_get_params(const ic_cache *cache);
 /* Number of records. */
 uint32_t ic_cache_count(const ic_cache *cache);
@@ -283,9 +284,9 @@ typedef struct ic_cache_index_stats {
 void ic_cache_get_index_stats(const ic_cache *cache, ic_cache_index_stats *out);
 
 /* Inserts one record (clamps as documented above); its index goes to *out_index (may be NULL).
- * IC_ERR_INVALID_ARG for a record that a cache file could not hold: non-finite fields, R ≤ 0, or a
- * sphere |p_i| + R_i + a_i·R_i·max(1, final_accuracy_scale) (after clamp step 1) reaching 1e30 on an
- * axis. */
+ * IC_ERR_INVALID_ARG for a record that a cache file could not hold: non-finite fields (but an infinite
+ * harmonic_mean_dist whose R clamp step 1 bounds), R ≤ 0, or a sphere |p_i| + R_i +
+ * a_i·R_i·max(1, final_accuracy_scale) (after clamp step 1) reaching 1e30 on an axis. */
 ic_result ic_cache_insert(ic_cache *cache, const ic_record *record, uint32_t *out_index, ic_error *err);
 /* Inserts count records as one batch; they get indices first…first+count−1 in array order.
  * All-or-nothing: an invalid record leaves the records unchanged; an insertion that fails later (out
@@ -306,7 +307,8 @@ static inline ic_cache_lookup ic_cache_lookup_at(ic_vec3 p, ic_vec3 n, ic_cache_
     return q;
 }
 
-/* Interpolates at q->position; returns 1 if at least one record contributes, else 0. */
+/* Interpolates at q->position; returns 1 if at least one record contributes, else 0 (always 0, with a zero
+ * estimate, at a non-finite position or normal: the look-ups below and ic_cache_record_weight alike). */
 int ic_cache_query(const ic_cache *cache, const ic_cache_lookup *q, ic_cache_estimate *out);
 /* ic_cache_query with a caller-owned hint (one per thread; NULL = none) that it reads and updates:
  * the same result, faster for coherent look-ups on a frozen cache. */
@@ -364,10 +366,11 @@ void ic_cache_thaw(ic_cache *cache);
 int ic_cache_is_frozen(const ic_cache *cache);
 
 /* k nearest record positions to p, nearest first (ties by index); returns how many (≤ k) were
- * written to indices and (if non-NULL) squared distances; with dist2 NULL, k is capped at 256. */
+ * written to indices and (if non-NULL) squared distances; with dist2 NULL, k is capped at 256. None
+ * for a non-finite p. */
 uint32_t ic_cache_knn(const ic_cache *cache, ic_vec3 p, uint32_t k, uint32_t *indices, float *dist2);
-/* Records with |p_i − p| < radius; writes up to capacity indices and returns the total number
- * (call again with a larger buffer when the result exceeds capacity). */
+/* Records with |p_i − p| < radius; writes up to capacity indices (none when indices is NULL) and returns the
+ * total number (call again with a larger buffer when the result exceeds capacity). */
 uint32_t ic_cache_radius_query(const ic_cache *cache, ic_vec3 p, float radius, uint32_t *indices,
                                uint32_t capacity);
 

@@ -145,7 +145,7 @@ void ic_cache_destroy(ic_cache *c)
     free(c);
 }
 
-const ic_cache_params *ic_cache_get_params(const ic_cache *c) { return &c->params; }
+const ic_cache_params *ic_cache_get_params(const ic_cache *c) { return c ? &c->params : NULL; }
 uint32_t ic_cache_count(const ic_cache *c) { return c ? c->count : 0; }
 void ic_cache_set_comm(ic_cache *c, ic_comm *comm)
 {
@@ -157,6 +157,8 @@ uint32_t ic_cache_ellipse_count(const ic_cache *c) { return c ? c->ellipse_count
 
 size_t ic_cache_memory_bytes(const ic_cache *c)
 {
+    if (!c)
+        return 0;
     return sizeof *c + (size_t)c->cap * ic_cache_bytes_per_record() + ic_octree_bytes(&c->tree) +
            ic_octree_bytes(&c->points) + (size_t)c->scratch_cap * sizeof(uint32_t) + ic_frozen_bytes(&c->frozen) +
            ic_cache_payload_bytes(c);
@@ -185,6 +187,8 @@ static void index_walk(const ic_octree *t, uint32_t node, uint32_t depth, uint64
 
 void ic_cache_get_index_stats(const ic_cache *c, ic_cache_index_stats *out)
 {
+    if (!out)
+        return;
     memset(out, 0, sizeof *out);
     if (!c || !c->tree.has_root || c->count == 0)
         return;
@@ -424,7 +428,8 @@ static ic_result insert_records(ic_cache *c, const ic_record *recs, uint32_t n, 
 
 ic_result ic_cache_insert(ic_cache *c, const ic_record *record, uint32_t *out_index, ic_error *err)
 {
-    return insert_records(c, record, record ? 1 : 0, out_index, err);
+    /* One record or an error: a NULL record is not an empty batch (its index would name no record). */
+    return insert_records(c, record, 1, out_index, err);
 }
 
 ic_result ic_cache_insert_batch(ic_cache *c, const ic_record *records, uint32_t count, uint32_t *out_first,

@@ -176,15 +176,20 @@ static void encode_record(const ic_cache *c, uint32_t i, unsigned char *b)
     put_f32(b + 168, e->w);
 }
 
-/* Returns 1 if the decoded record is usable (finite, positive radius and accuracy, unit-ish normal, a
- * ratio in (0, 1] and a squeeze that matches it). has_squeeze: the file's records carry one. */
+/* The harmonic-mean distance's place among a record's 37 floats: the one field that may be +inf (a record
+ * whose rays all missed, gather.h, inserts when max_radius or the pixel bounds make its R finite). */
+#define HARMONIC_MEAN_FIELD 35
+
+/* Returns 1 if the decoded record is usable (finite but for an infinite harmonic-mean distance, positive
+ * radius and accuracy, unit-ish normal, a ratio in (0, 1] and a squeeze that matches it). has_squeeze: the
+ * file's records carry one. */
 static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b, int has_squeeze)
 {
     float f[37];
     for (int k = 0; k < 37; ++k)
         f[k] = get_f32(b + 4 * k);
     for (int k = 0; k < 37; ++k)
-        if (!isfinite(f[k]))
+        if (!isfinite(f[k]) && !(k == HARMONIC_MEAN_FIELD && f[k] == INFINITY))
             return 0;
     c->sphere[i] = (ic_float4){f[0], f[1], f[2], f[3]};
     c->normal[i] = (ic_float4){f[4], f[5], f[6], f[7]};
@@ -198,7 +203,7 @@ static int decode_record(ic_cache *c, uint32_t i, const unsigned char *b, int ha
         cd->grad_trans[ch] = v3(f[k], f[k + 1], f[k + 2]);
     cd->tangent = v3(f[k], f[k + 1], f[k + 2]);
     cd->sigma = v3(f[k + 3], f[k + 4], f[k + 5]);
-    cd->harmonic_mean_dist = f[k + 6];
+    cd->harmonic_mean_dist = f[k + 6]; /* k + 6 == HARMONIC_MEAN_FIELD */
     cd->pixel_footprint = f[k + 7];
     cd->change_count = get_u32(b + 148);
     cd->bounce = b[152];
@@ -673,7 +678,7 @@ ic_result ic_cache_load_memory_with_settings(const char *path, const void *bytes
         return rc;
     const unsigned char *data = bytes;
 
-    if (size >= 8 && memcmp(data, MAGIC, 8) != 0)
+    if (size && memcmp(data, MAGIC, size < 8 ? size : 8) != 0) /* shorter than the magic: no cache file either */
         rc = ic_error_set(err, IC_ERR_PARSE, "%s: not an irrcache cache file; " NOT_CACHE_HINT, path);
     else if (size < HEADER_BYTES + 8)
         rc = ic_error_set(err, IC_ERR_CORRUPT, "%s: truncated (%zu bytes); " REBUILD_HINT, path, size);

@@ -549,7 +549,7 @@ static IC_TARGET_AVX2 size_t query_batch_avx2(const ic_cache *c, const ic_cache_
             ring[k % AHEAD] = batch_leaf(f, q[k + AHEAD].position, &lo, &hi, cur);
             cur = ring[k % AHEAD] ? ring[k % AHEAD] : cur;
         }
-        if (query_leaf_avx2(c, &q[k], leaf, &out[k])) {
+        if (query_leaf_avx2(c, &q[k], ic_lookup_is_finite(&q[k]) ? leaf : NULL, &out[k])) {
             ++found;
         } else if (q[k].fallback) { /* rare: the fallback level's look-up, as ic_cache_query_hinted makes it */
             ic_cache_lookup q2 = q[k];

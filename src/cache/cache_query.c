@@ -119,6 +119,10 @@ static int query_octree(const ic_cache *c, const ic_cache_lookup *q, ic_cache_es
 
 int ic_cache_query_hinted(const ic_cache *c, const ic_cache_lookup *q, ic_cache_hint *hint, ic_cache_estimate *out)
 {
+    if (!ic_lookup_is_finite(q)) {
+        memset(out, 0, sizeof *out);
+        return 0;
+    }
     if (!c->frozen.is_valid)
         return query_octree(c, q, out);
     /* The frozen layout's lists filter one level: the fallback is a second look-up. */
@@ -147,6 +151,10 @@ static int query_linear_level(const ic_cache *c, const ic_cache_lookup *q, ic_ca
 
 int ic_cache_query_linear(const ic_cache *c, const ic_cache_lookup *q, ic_cache_estimate *out)
 {
+    if (!ic_lookup_is_finite(q)) {
+        memset(out, 0, sizeof *out);
+        return 0;
+    }
     if (query_linear_level(c, q, out) || !q->fallback)
         return out->contributor_count > 0;
     ic_cache_lookup q2 = *q;
@@ -159,7 +167,8 @@ int ic_cache_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, 
 {
     float w = 0.0f, s = acceptance == IC_ACCEPT_FINAL ? c->params.final_accuracy_scale : 1.0f;
     ic_vec3 dp;
-    int ok = i < c->count && ic_record_weight(c, i, p, n, s, &w, &dp);
+    ic_cache_lookup q = ic_cache_lookup_at(p, n, acceptance);
+    int ok = i < c->count && ic_lookup_is_finite(&q) && ic_record_weight(c, i, p, n, s, &w, &dp);
     if (weight)
         *weight = ok ? w : 0.0f;
     return ok;
@@ -167,7 +176,7 @@ int ic_cache_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_vec3 n, 
 
 uint32_t ic_cache_knn(const ic_cache *c, ic_vec3 p, uint32_t k, uint32_t *indices, float *dist2)
 {
-    if (!c || !indices || k == 0)
+    if (!c || !indices || k == 0 || !isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z))
         return 0;
     if (dist2) {
         ic_octree_items it = ic_cache_point_items(c);
@@ -186,5 +195,5 @@ uint32_t ic_cache_radius_query(const ic_cache *c, ic_vec3 p, float radius, uint3
     if (!c)
         return 0;
     ic_octree_items it = ic_cache_point_items(c);
-    return ic_octree_radius(&c->points, &it, p, radius, indices, capacity);
+    return ic_octree_radius(&c->points, &it, p, radius, indices, indices ? capacity : 0);
 }

@@ -225,6 +225,15 @@ static inline int ic_record_weight(const ic_cache *c, uint32_t i, ic_vec3 p, ic_
                           s, w, dp);
 }
 
+/* 0 for a look-up at a non-finite position or normal, which finds no record (cache.h): a NaN normal would
+ * pass every rejection test of ic_weight_test (a comparison with NaN is false) and every record in reach
+ * would give E = 0, a black estimate reported as covered. */
+static inline int ic_lookup_is_finite(const ic_cache_lookup *q)
+{
+    return isfinite(q->position.x) && isfinite(q->position.y) && isfinite(q->position.z) &&
+           isfinite(q->normal.x) && isfinite(q->normal.y) && isfinite(q->normal.z);
+}
+
 /* The estimate's irradiance from the weighted sums acc[c] = Σ w_i E_i(p) of channel c and
  * e->weight_sum; returns 1 if any record contributed. Shared by the octree look-ups (cache_query.c)
  * and the frozen ones (cache_frozen_query.c). */

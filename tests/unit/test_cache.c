@@ -2441,6 +2441,83 @@ static void test_api_edges(void)
     ic_cache_destroy(c);
 }
 
+/* What an embedding program may hand the cache at its edges: a record whose rays all missed (harmonic-mean
+ * distance +inf, gather.h) under max_radius saves and loads; a NULL record is an error, not an empty
+ * insertion; a look-up at a non-finite point or normal finds nothing on every path (a NaN normal passed
+ * every rejection test and answered "covered" with E = 0); a few bytes that are no cache file are
+ * IC_ERR_PARSE, not a truncated cache to delete; NULL buffers and handles where a count or nothing is
+ * the answer. */
+static void test_embedder_edges(void)
+{
+    const char *path = IC_TEST_TMP "/test_cache_no_hit.icc";
+    ic_error err;
+    ic_cache_params p = {0};
+    p.max_radius = 2.0f;
+    ic_cache *c = NULL;
+    CHECK(ic_cache_create(&p, &c, &err) == IC_OK, "create: %s", err.message);
+    ic_record r[3] = {plane_record(v3(0, 0, 0), INFINITY), plane_record(v3(0.1f, 0, 0), 1.0f),
+                      plane_record(v3(0, 0.1f, 0), 1.0f)};
+    uint32_t first = 99;
+    CHECK(ic_cache_insert_batch(c, r, 3, &first, &err) == IC_OK && first == 0, "a sky-only record: %s", err.message);
+    CHECK(ic_cache_insert(c, NULL, &first, &err) == IC_ERR_INVALID_ARG && ic_cache_count(c) == 3,
+          "a NULL record inserted (%u records)", ic_cache_count(c));
+    CHECK(ic_cache_save(c, path, 5, &err) == IC_OK, "save: %s", err.message);
+    ic_cache *l = NULL;
+    CHECK(ic_cache_load(path, &p, 5, &l, &err) == IC_OK, "a saved sky-only record does not load: %s", err.message);
+    ic_record a, b;
+    if (l && ic_cache_get_record(c, 0, &a) == IC_OK && ic_cache_get_record(l, 0, &b) == IC_OK)
+        CHECK(b.harmonic_mean_dist == INFINITY && b.radius == a.radius && a.radius <= p.max_radius,
+              "loaded harmonic-mean distance %g, radius %g (saved %g)", (double)b.harmonic_mean_dist,
+              (double)b.radius, (double)a.radius);
+    ic_cache_destroy(l);
+    remove(path);
+
+    /* Non-finite look-ups: none covered, the estimate zero, thawed and frozen, single and batched. */
+    const float nan = NAN, inf = INFINITY;
+    ic_cache_lookup bad[4] = {ic_cache_lookup_at(v3(0, 0, 0), v3(nan, nan, nan), IC_ACCEPT_CONSTRUCTION),
+                              ic_cache_lookup_at(v3(0, 0, 0), v3(0, 0, inf), IC_ACCEPT_FINAL),
+                              ic_cache_lookup_at(v3(nan, 0, 0), v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION),
+                              ic_cache_lookup_at(v3(0, 0, 0), v3(nan, 0, 1), IC_ACCEPT_FINAL)};
+    ic_cache_lookup good = ic_cache_lookup_at(v3(0, 0, 0), v3(0, 0, 1), IC_ACCEPT_CONSTRUCTION);
+    for (int frozen = 0; frozen < 2; ++frozen) {
+        if (frozen)
+            CHECK(ic_cache_rebuild_index(c, &err) == IC_OK && ic_cache_is_frozen(c), "freeze: %s", err.message);
+        ic_cache_estimate e, eb[4];
+        CHECK(ic_cache_query(c, &good, &e) == 1 && e.irradiance.x > 0.0f, "a finite look-up (frozen %d)", frozen);
+        for (int k = 0; k < 4; ++k) {
+            memset(&e, 0x55, sizeof e);
+            int covered = ic_cache_query(c, &bad[k], &e);
+            CHECK(!covered && e.contributor_count == 0 && e.weight_sum == 0.0f,
+                  "non-finite look-up %d (frozen %d) covered by %u records, E = %g", k, frozen, e.contributor_count,
+                  (double)e.irradiance.x);
+            CHECK(!ic_cache_query_linear(c, &bad[k], &e) && e.contributor_count == 0, "linear look-up %d", k);
+            float w = 1.0f;
+            CHECK(!ic_cache_record_weight(c, 0, bad[k].position, bad[k].normal, bad[k].acceptance, &w) && w == 0.0f,
+                  "record weight %g at non-finite look-up %d", (double)w, k);
+        }
+        ic_cache_hint hint = {0};
+        CHECK(ic_cache_query_batch(c, bad, 4, &hint, eb) == 0 && eb[0].contributor_count == 0 &&
+              eb[1].contributor_count == 0 && eb[2].contributor_count == 0 && eb[3].contributor_count == 0,
+              "a batch of non-finite look-ups (frozen %d)",
+              frozen);
+    }
+    uint32_t idx[4];
+    float d2[4];
+    CHECK(ic_cache_knn(c, v3(nan, 0, 0), 4, idx, d2) == 0, "nearest records to a NaN point");
+    CHECK(ic_cache_radius_query(c, v3(0, 0, 0), 1.0f, NULL, 4) == 3, "radius query counting with no buffer");
+
+    /* A few bytes of something else: not a cache file (IC_ERR_PARSE), whatever its length. */
+    ic_cache *m = NULL;
+    CHECK(ic_cache_load_memory("notes.txt", "hi\n", 3, NULL, 0, &m, &err) == IC_ERR_PARSE && !m,
+          "3 bytes of text: %s (%s)", ic_result_name(err.code), err.message);
+    CHECK(ic_cache_load_memory("cut.icc", "IRRC", 4, NULL, 0, &m, &err) == IC_ERR_CORRUPT,
+          "a cut-off cache file: %s", ic_result_name(err.code));
+
+    CHECK(ic_cache_get_params(NULL) == NULL && ic_cache_memory_bytes(NULL) == 0, "NULL cache getters");
+    ic_cache_get_index_stats(c, NULL);
+    ic_cache_destroy(c);
+}
+
 #define RUN(f) do { double t0 = now(); f(); printf("%-28s %.2f s\n", #f, now() - t0); fflush(stdout); } while (0)
 
 /* Hundreds of records overlapping one spot: look-ups with far more contributors than one block of eight
@@ -2690,6 +2767,7 @@ static void test_index_stats(void)
 int main(void)
 {
     RUN(test_api_edges);
+    RUN(test_embedder_edges);
     RUN(test_weights);
     RUN(test_ellipses);
     RUN(test_linear_field);
