@@ -47,8 +47,12 @@ static ic_result resolve_opts(const ic_gather_opts *in, ic_gather_opts *o, ic_er
     *o = in ? *in : d;
     if (!o->theta_strata)
         o->theta_strata = d.theta_strata;
-    if (!o->phi_strata)
-        o->phi_strata = (uint32_t)lround((double)IC_PI * o->theta_strata);
+    if (!o->phi_strata) {
+        /* round(π·M) past 2^32 would wrap (to 0 for M = 1367130513, an empty grid the size check passes):
+         * any M above the ray limit is refused below, so saturate. */
+        long long phi = llround((double)IC_PI * o->theta_strata);
+        o->phi_strata = phi > (long long)UINT32_MAX ? UINT32_MAX : (uint32_t)phi;
+    }
     if (!o->first_round_rays)
         o->first_round_rays = d.first_round_rays;
     if (!o->max_rays)

@@ -447,6 +447,16 @@ static void test_bad_input(void)
     CHECK(ic_gatherer_create(&o, trace_scene, &s, &g, &err) == IC_ERR_INVALID_ARG, "max < first rejected");
     o = (ic_gather_opts){.theta_strata = 5000, .phi_strata = 5000};
     CHECK(ic_gatherer_create(&o, trace_scene, &s, &g, &err) == IC_ERR_INVALID_ARG, "huge grid rejected");
+    /* M strata in θ with the default N = round(π·M): for these M, π·M lies within 0.5 of 2^32, 2·2^32 and
+     * 3·2^32, where a 32-bit N wrapped to 0, 2 and 2 (an empty or tiny grid; the first passed the size
+     * check and the gather then overran its buffers). Every one is far past the ray limit. */
+    const uint32_t wrapping_m[3] = {1367130513u, 2734261027u, 4101391540u};
+    for (int k = 0; k < 3; ++k) {
+        o = (ic_gather_opts){.theta_strata = wrapping_m[k]};
+        g = (ic_gatherer *)&s;
+        CHECK(ic_gatherer_create(&o, trace_scene, &s, &g, &err) == IC_ERR_INVALID_ARG && g == NULL,
+              "%u x default strata accepted", wrapping_m[k]);
+    }
     CHECK(ic_gatherer_create(NULL, NULL, &s, &g, &err) == IC_ERR_INVALID_ARG, "NULL trace rejected");
     CHECK(ic_gatherer_create(NULL, trace_scene, &s, &g, &err) == IC_OK, "defaults");
     const ic_gather_opts *eff = ic_gatherer_opts(g);
