@@ -78,7 +78,9 @@ ic_result ic_image_read_texture(const char *path, size_t max_pixels, const char 
  * messages), with the pixel limit of ic_image_read_max. */
 ic_result ic_image_decode_memory(const void *data, size_t size, const char *name, size_t max_pixels, const char *raise,
                                  ic_image *out, ic_error *err);
-/* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. */
+/* Writes by extension (.exr .pfm .hdr .png); atomic. opt may be NULL. IC_ERR_INVALID_ARG for an EXR whose
+ * layers or attributes OpenEXR refuses (a layer given twice, an attribute named like a header field of
+ * another type: "channels", "compression" …). */
 ic_result ic_image_write(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err);
 /* Reads layer `layer` (channels "<layer>.R", ".G", ".B") of a multi-layer OpenEXR file as linear RGB. */
 ic_result ic_image_read_layer(const char *path, const char *layer, ic_image *out, ic_error *err);
@@ -87,7 +89,8 @@ ic_result ic_image_read_layer(const char *path, const char *layer, ic_image *out
  * error for a file that is not a readable OpenEXR. */
 ic_result ic_image_exr_attribute(const char *path, const char *name, char *value, size_t cap, ic_error *err);
 /* Writes width×height 8-bit RGB bytes (row-major, top row first) as a PNG, as given (no curve) and tagged as sRGB
- * (its sRGB, gAMA and cHRM chunks); atomic. */
+ * (its sRGB, gAMA and cHRM chunks); atomic. IC_ERR_INVALID_ARG for no bytes or a size ic_image_create refuses
+ * (a side of 0 or over IC_IMAGE_MAX_SIDE…). */
 ic_result ic_image_write_png8(const char *path, const uint8_t *rgb, int width, int height, ic_error *err);
 
 /* --- false-colour maps (falsecolor.c): a grid of values as coloured cells with a legend --- */

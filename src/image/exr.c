@@ -337,9 +337,13 @@ static const ic_image *channel_source(const char *name, const ic_image *img, con
 
 static float half_range(float v) { return isfinite(v) ? fminf(fmaxf(v, -HALF_MAX), HALF_MAX) : v; }
 
+/* Writes the image and opt's layers and attributes as one part. *by_options: 1 when the failure came from
+ * the caller's layers or attributes (a layer given twice, an attribute name OpenEXR keeps for a field of
+ * another type: "channels", "compression" …), not from the file or memory. */
 static exr_result_t write_part(const char *file, const ic_image *img, const ic_image_write_options *opt,
-                               exr_compression_t compression, int *ambiguous, int *open_errno)
+                               exr_compression_t compression, int *ambiguous, int *open_errno, int *by_options)
 {
+    *by_options = 0;
     const int is_half = opt->exr_half;
     const float *rgb = img->rgb;
     exr_context_initializer_t init = context_initializer();
@@ -365,9 +369,12 @@ static exr_result_t write_part(const char *file, const ic_image *img, const ic_i
             char name[300];
             snprintf(name, sizeof name, "%s.%s", opt->layers[l].name, names[c]);
             rv = exr_add_channel(ctxt, part, name, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+            *by_options = rv != EXR_ERR_SUCCESS && rv != EXR_ERR_OUT_OF_MEMORY;
         }
-    if (rv == EXR_ERR_SUCCESS)
+    if (rv == EXR_ERR_SUCCESS) {
         rv = write_attributes(ctxt, part, opt->meta, opt->meta_count);
+        *by_options = rv != EXR_ERR_SUCCESS && rv != EXR_ERR_OUT_OF_MEMORY;
+    }
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_write_header(ctxt);
 
@@ -434,6 +441,9 @@ static exr_result_t write_part(const char *file, const ic_image *img, const ic_i
 
 ic_result ic_image_write_exr(const char *path, const ic_image *img, const ic_image_write_options *opt, ic_error *err)
 {
+    if ((opt->meta_count && !opt->meta) || (opt->layer_count && !opt->layers))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: %u EXR attributes and %u layers, but no array of %s", path,
+                            opt->meta_count, opt->layer_count, opt->meta_count && !opt->meta ? "attributes" : "layers");
     for (uint32_t i = 0; i < opt->meta_count; ++i)
         if (!opt->meta[i].name || !*opt->meta[i].name || strlen(opt->meta[i].name) >= 256)
             return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: EXR attribute %u has an empty or too long name", path,
@@ -454,15 +464,19 @@ ic_result ic_image_write_exr(const char *path, const ic_image *img, const ic_ima
     if (made != 0)
         return ic_atomic_write_error(path, made, err);
 
-    int open_errno = 0, ambiguous = 0;
-    exr_result_t rv = write_part(tmp, img, opt, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno);
+    int open_errno = 0, ambiguous = 0, by_options = 0;
+    exr_result_t rv = write_part(tmp, img, opt, EXR_COMPRESSION_ZIP, &ambiguous, &open_errno, &by_options);
     if (rv == EXR_ERR_SUCCESS && ambiguous) {
         remove(tmp);
-        rv = write_part(tmp, img, opt, EXR_COMPRESSION_NONE, &ambiguous, &open_errno);
+        rv = write_part(tmp, img, opt, EXR_COMPRESSION_NONE, &ambiguous, &open_errno, &by_options);
     }
     if (rv != EXR_ERR_SUCCESS) {
         remove(tmp); /* the library deletes it on most errors; make sure */
         ic_atomic_temp_release(tmp);
+        if (by_options)
+            return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: OpenEXR refuses the layers or attributes given (%s): "
+                                "give each layer once, and attributes names other than the header's own fields "
+                                "(channels, compression, dataWindow, …)", path, exr_get_default_error_message(rv));
         if (rv == EXR_ERR_FILE_ACCESS && open_errno)
             return ic_atomic_write_error(path, open_errno, err);
         if (rv == EXR_ERR_FILE_ACCESS)

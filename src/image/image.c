@@ -10,8 +10,7 @@
 #include <string.h>
 
 
-/* 1 for a size an image may have (IC_IMAGE_MAX_SIDE, IC_IMAGE_MAX_PIXELS). */
-static int size_allowed(int width, int height)
+int ic_image_size_allowed(int width, int height)
 {
     return width > 0 && height > 0 && width <= IC_IMAGE_MAX_SIDE && height <= IC_IMAGE_MAX_SIDE &&
            (size_t)width * (size_t)height <= IC_IMAGE_MAX_PIXELS;
@@ -22,7 +21,7 @@ ic_result ic_image_create(ic_image *img, int width, int height)
     if (!img)
         return IC_ERR_INVALID_ARG;
     memset(img, 0, sizeof *img);
-    if (!size_allowed(width, height))
+    if (!ic_image_size_allowed(width, height))
         return IC_ERR_INVALID_ARG;
     img->rgb = calloc((size_t)width * (size_t)height * 3, sizeof(float));
     if (!img->rgb)
@@ -67,7 +66,7 @@ ic_result ic_image_create_for_file(const char *path, ic_image *img, int width, i
         return r;
     if (lim && lim->srgb8) {
         memset(img, 0, sizeof *img);
-        if (!size_allowed(width, height))
+        if (!ic_image_size_allowed(width, height))
             r = IC_ERR_INVALID_ARG;
         else if (!(*lim->srgb8 = malloc((size_t)width * (size_t)height * 3)))
             r = IC_ERR_OOM;

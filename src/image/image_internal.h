@@ -18,6 +18,8 @@ typedef struct ic_image_limit {
                               first; free()), the image then holding its size and no pixels (ic_image_read_texture) */
 } ic_image_limit;
 
+/* 1 for a size an image may have: sides 1 … IC_IMAGE_MAX_SIDE, at most IC_IMAGE_MAX_PIXELS. */
+int ic_image_size_allowed(int width, int height);
 /* IC_OK if width x height is within lim (may be NULL); else reports it against path, naming the limit. */
 ic_result ic_image_check_size(const char *path, int width, int height, const ic_image_limit *lim, ic_error *err);
 /* ic_image_create for a reader: reports a bad size, one over lim (may be NULL) or a failed allocation

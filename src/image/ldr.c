@@ -392,6 +392,13 @@ static void write_to_file(void *context, void *data, int size)
 
 ic_result ic_image_write_png8(const char *path, const uint8_t *rgb, int width, int height, ic_error *err)
 {
+    if (!path || !*path)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "empty output path; give a file name");
+    /* stb_image_write sizes its buffers in int: a side of 0 overran them, a large one overflowed. */
+    if (!rgb || !ic_image_size_allowed(width, height))
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "%s: a PNG of %d x %d%s; give 1 to %d pixels a side and at most %zu "
+                            "in all", path, width, height, rgb ? "" : " with no pixels", IC_IMAGE_MAX_SIDE,
+                            IC_IMAGE_MAX_PIXELS);
     ic_atomic_file f;
     ic_result r = ic_atomic_file_open(&f, path, err);
     if (r != IC_OK)

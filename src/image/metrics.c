@@ -168,6 +168,8 @@ ic_result ic_image_compare(const ic_image *img, const ic_image *ref, ic_image_me
     ic_result r = check_pair(img, ref, err);
     if (r != IC_OK)
         return r;
+    if (!m)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "image comparison: no metrics to fill");
     memset(m, 0, sizeof *m);
     const size_t pixels = (size_t)img->width * (size_t)img->height, count = pixels * 3;
 

@@ -822,6 +822,54 @@ static void test_exr_metadata(void)
     ic_image_free(&img);
 }
 
+/* What an embedding program may pass at the edges of the writers: 8-bit PNG sizes stb_image_write cannot
+ * hold (a side of 0 overran its buffers and was reported written; a side over IC_IMAGE_MAX_SIDE was
+ * written though no ic_image may have it), no pixels, no metrics to fill, arrays NULL with a count, and
+ * EXR layers or attributes OpenEXR refuses (reported as an I/O failure, "check free disk space"): each is
+ * IC_ERR_INVALID_ARG and writes nothing. */
+static void test_writer_arguments(void)
+{
+    ic_error err;
+    const char *png = SCRATCH "/arguments.png", *exr = SCRATCH "/arguments.exr";
+    remove(png);
+    remove(exr);
+    const int wide = IC_IMAGE_MAX_SIDE + 1;
+    uint8_t *bytes = calloc((size_t)wide * 3, 1);
+    CHECK(ic_image_write_png8(png, bytes, 0, 2, &err) == IC_ERR_INVALID_ARG, "a PNG 0 pixels wide: %s",
+          ic_result_name(err.code));
+    CHECK(ic_image_write_png8(png, bytes, wide, 1, &err) == IC_ERR_INVALID_ARG, "a PNG %d pixels wide: %s", wide,
+          ic_result_name(err.code));
+    CHECK(ic_image_write_png8(png, NULL, 2, 2, &err) == IC_ERR_INVALID_ARG, "a PNG without pixels");
+    CHECK(access(png, F_OK) != 0, "a refused PNG was written");
+    CHECK(ic_image_write_png8(png, bytes, 4, 2, &err) == IC_OK, "a 4 x 2 PNG: %s", err.message);
+    free(bytes);
+
+    ic_image img = {0};
+    CHECK(ic_image_create(&img, 4, 3) == IC_OK, "create");
+    CHECK(ic_image_compare(&img, &img, NULL, &err) == IC_ERR_INVALID_ARG, "metrics into NULL");
+    ic_image_write_options wo = {0};
+    wo.meta_count = 1;
+    CHECK(ic_image_write(exr, &img, &wo, &err) == IC_ERR_INVALID_ARG, "one attribute and no array");
+    wo.meta_count = 0;
+    wo.layer_count = 2;
+    CHECK(ic_image_write(exr, &img, &wo, &err) == IC_ERR_INVALID_ARG, "two layers and no array");
+    const ic_image_layer twice[2] = {{"indirect", &img}, {"indirect", &img}};
+    wo.layers = twice;
+    CHECK(ic_image_write(exr, &img, &wo, &err) == IC_ERR_INVALID_ARG, "a layer given twice: %s (%s)",
+          ic_result_name(err.code), err.message);
+    wo.layer_count = 0;
+    const char *fields[3] = {"channels", "compression", "dataWindow"};
+    for (int k = 0; k < 3; ++k) {
+        const ic_image_meta field = {fields[k], "text"};
+        wo.meta = &field;
+        wo.meta_count = 1;
+        CHECK(ic_image_write(exr, &img, &wo, &err) == IC_ERR_INVALID_ARG, "a text attribute named %s: %s (%s)",
+              fields[k], ic_result_name(err.code), err.message);
+    }
+    CHECK(access(exr, F_OK) != 0, "a refused EXR was written");
+    ic_image_free(&img);
+}
+
 static uint32_t crc32_png(const unsigned char *b, size_t n)
 {
     uint32_t c = 0xFFFFFFFFu;
@@ -1333,6 +1381,7 @@ int main(void)
     test_heatmap_fixed_scale();
     test_bad_input();
     test_exr_metadata();
+    test_writer_arguments();
     test_tiled_exr();
     test_exr_extra_channels();
     test_ldr_header_first();
