@@ -332,11 +332,11 @@ typedef struct ic_render_stats {
 } ic_render_stats;
 
 /* Renders scene with opt into out (allocated here; on failure nothing is left allocated in it). stats may
- * be NULL. */
+ * be NULL; a NULL scene or out is IC_ERR_INVALID_ARG. */
 ic_result ic_render(const ic_scene *scene, const ic_render_options *opt, ic_image *out, ic_render_stats *stats,
                     ic_error *err);
 
-/* Camera resolution of a loaded scene. */
+/* Camera resolution of a loaded scene (0 x 0 for NULL; either pointer may be NULL). */
 void ic_scene_resolution(const ic_scene *scene, int *width, int *height);
 /* Exposure (stops) the scene file asks for LDR outputs, 0 if none. */
 float ic_scene_exposure(const ic_scene *scene);

@@ -20,11 +20,16 @@
 
 void ic_scene_resolution(const ic_scene *scene, int *width, int *height)
 {
-    *width = scene->camera.width;
-    *height = scene->camera.height;
+    if (width)
+        *width = scene ? scene->camera.width : 0;
+    if (height)
+        *height = scene ? scene->camera.height : 0;
 }
 
-float ic_scene_exposure(const ic_scene *scene) { return scene->settings.has_exposure ? scene->settings.exposure : 0.0f; }
+float ic_scene_exposure(const ic_scene *scene)
+{
+    return scene && scene->settings.has_exposure ? scene->settings.exposure : 0.0f;
+}
 
 /* Where the render is, for the whole-render estimates of the progress reports. */
 typedef enum render_stage { STAGE_PREPARE, STAGE_IMAGE, STAGE_AOVS } render_stage;
@@ -103,8 +108,9 @@ static const ic_integrator_create_fn integrators[] = {
 /* Checks opt and fills its zero fields from the scene file and the defaults. */
 static ic_result resolve_options(const ic_scene *scene, ic_render_options *opt, ic_error *err)
 {
-    if (opt->spp < 0 || opt->max_depth < 0 || opt->threads < 0 || opt->time_budget < 0.0)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "negative --spp, --max-depth, --threads or --time; give values >= 0");
+    if (opt->spp < 0 || opt->max_depth < 0 || opt->threads < 0 || !(opt->time_budget >= 0.0)) /* NaN too */
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "negative --spp, --max-depth, --threads or --time (or a time "
+                            "that is not a number); give values >= 0");
     if (opt->spp > IC_MAX_SPP || opt->max_depth > IC_MAX_MAX_DEPTH || opt->ic.light_samples > IC_MAX_LIGHT_SAMPLES)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "--spp %d, --max-depth %d or --light-samples %d is above its limit "
                             "(%d, %d, %d); give smaller values", opt->spp, opt->max_depth, opt->ic.light_samples,
@@ -159,6 +165,8 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
     ic_render_stats local;
     ic_render_stats *st = stats ? stats : &local;
     memset(st, 0, sizeof *st);
+    if (!scene || !out)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_render: no scene or no output image given");
     ic_result r = resolve_options(scene, &opt, err);
     if (r != IC_OK)
         return r;

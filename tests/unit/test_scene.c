@@ -430,6 +430,19 @@ static void test_render_caps(void)
     opt.max_image_pixels = (uint64_t)IC_IMAGE_MAX_PIXELS + 1;
     CHECK(ic_render(s, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "268435457 is above"),
           "max_image_pixels above IC_IMAGE_MAX_PIXELS: %s", err.message);
+    /* An embedder's slips: no scene or no image (dereferenced), a time budget that is not a number (taken as
+     * none), NULL-safe getters like ic_scene_light_count's. */
+    opt.max_image_pixels = 0;
+    opt.integrator = IC_INTEGRATOR_PT;
+    CHECK(ic_render(NULL, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG, "a NULL scene rendered");
+    CHECK(ic_render(s, &opt, NULL, NULL, &err) == IC_ERR_INVALID_ARG, "a render into NULL");
+    opt.time_budget = NAN;
+    CHECK(ic_render(s, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG && !img.rgb, "a time budget of NaN: %s",
+          ic_result_name(err.code));
+    int w = 1, h = 1;
+    ic_scene_resolution(NULL, &w, &h);
+    CHECK(w == 0 && h == 0 && ic_scene_exposure(NULL) == 0.0f, "NULL scene getters");
+    ic_scene_resolution(s, NULL, NULL);
     ic_image_free(&img);
     ic_scene_free(s);
 }
