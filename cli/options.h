@@ -93,7 +93,7 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       IC_SCOPE_ALL, "pt: path-traced reference; ic: irradiance caching (indirect diffuse from the cache)") \
     X(MAX_DEPTH, "--max-depth", NULL, IC_OPT_INT, render.max_depth, 1, IC_MAX_MAX_DEPTH, "N", IC_DEFAULT_MAX_DEPTH, \
       "scene file, else %g", "", IC_SCOPE_ALL, "maximum number of scattering events (direct light is 1)") \
-    X(THREADS, "--threads", NULL, IC_OPT_INT, render.threads, 0, 4096, "N", NAN, "0 (all cores)", "", IC_SCOPE_ALL, \
+    X(THREADS, "--threads", NULL, IC_OPT_INT, render.threads, 0, IC_MAX_THREADS, "N", NAN, "0 (all cores)", "", IC_SCOPE_ALL, \
       "worker threads; no result depends on it: same seed, same image or values") \
     X(SEED, "--seed", NULL, IC_OPT_SEED, render.seed, 0, 18446744073709551615.0, "N", IC_DEFAULT_SEED, \
       "scene file, else %g", "", IC_SCOPE_ALL, "random seed") \

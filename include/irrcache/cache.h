@@ -156,7 +156,7 @@ typedef struct ic_cache_params {
     uint32_t leaf_capacity;           /* octree: split leaves holding more refs than this; default 12 */
     uint32_t max_depth;               /* octree depth limit, ≤ 32; default 20 */
     ic_cache_switch freeze;           /* ic_cache_rebuild_index and ic_cache_load freeze the cache; default on */
-    int threads;                      /* threads for batch insertion and freezing; default all cores */
+    int threads;                      /* threads for batch insertion and freezing, ≤ IC_MAX_THREADS; default all cores */
     uint64_t max_file_bytes;          /* largest file ic_cache_load reads, checked with fstat before reading;
                                          default IC_DEFAULT_MAX_CACHE_FILE_BYTES (4 GiB) */
 } ic_cache_params;

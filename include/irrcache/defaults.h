@@ -22,6 +22,8 @@
 #define IC_MAX_SPP (1 << 24)             /* samples per pixel */
 #define IC_MAX_LIGHT_SAMPLES (1 << 16)   /* light samples per shading point (cache render) */
 #define IC_MAX_MAX_DEPTH 1024            /* scattering events */
+#define IC_MAX_THREADS 4096              /* worker threads (ic_render_options, ic_points_options, ic_cache_params):
+                                            per-thread buffers are sized by it, and no result depends on it */
 /* The largest image rendered unless ic_render_options.max_image_pixels (--max-image-pixels) says more:
  * 16384 x 8192. The film takes about 32 bytes a pixel, a cache render about 80 (its screen maps and
  * passes; measured on the Cornell box at 2048 x 2048: 165 and 372 MB), so about 11 GB at the limit. */

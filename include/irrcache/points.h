@@ -84,7 +84,7 @@ typedef struct ic_points_options {
     int max_depth;         /* scattering events, the sensor being the first; the light a sensor receives has
                               bounced at most max_depth − 1 times; IC needs 2 or more (its records carry at
                               least one bounce) [scene file, else 8] */
-    int threads;           /* 0 = all cores (results do not depend on it) */
+    int threads;           /* 0 = all cores, at most IC_MAX_THREADS (results do not depend on it) */
     uint64_t seed;         /* random seed [scene file, else 1] */
     int has_seed;          /* 1: use `seed` even if it is 0 */
     ic_ic_options ic;      /* the cache (integrator IC): accuracy, gathering, bounces, …; the strategy is

@@ -235,7 +235,7 @@ typedef struct ic_render_options {
     ic_integrator integrator;
     int spp;               /* samples per pixel (default: scene file, else 16; 64 for integrator IC) */
     int max_depth;         /* max scattering events (default: scene file, else 8) */
-    int threads;           /* 0 = all cores */
+    int threads;           /* 0 = all cores; at most IC_MAX_THREADS */
     uint64_t seed;         /* random seed (default: scene file, else 1) */
     int has_seed;          /* 1: use `seed` even if it is 0 */
     double time_budget;    /* seconds; > 0 renders progressive passes until the budget is spent (the budget

@@ -98,8 +98,8 @@ ic_result ic_cache_params_resolve(const ic_cache_params *in, ic_cache_params *ou
     if (p.max_depth > IC_OCTREE_MAX_DEPTH)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: max_depth %u exceeds %d", p.max_depth,
                             IC_OCTREE_MAX_DEPTH);
-    if (p.threads < 0)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: threads %d must not be negative", p.threads);
+    if (p.threads < 0 || p.threads > IC_MAX_THREADS)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "cache: threads %d must be in 0…%d", p.threads, IC_MAX_THREADS);
     *out = p;
     return IC_OK;
 }

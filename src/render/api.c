@@ -111,10 +111,12 @@ static ic_result resolve_options(const ic_scene *scene, ic_render_options *opt, 
     if (opt->spp < 0 || opt->max_depth < 0 || opt->threads < 0 || !(opt->time_budget >= 0.0)) /* NaN too */
         return ic_error_set(err, IC_ERR_INVALID_ARG, "negative --spp, --max-depth, --threads or --time (or a time "
                             "that is not a number); give values >= 0");
-    if (opt->spp > IC_MAX_SPP || opt->max_depth > IC_MAX_MAX_DEPTH || opt->ic.light_samples > IC_MAX_LIGHT_SAMPLES)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "--spp %d, --max-depth %d or --light-samples %d is above its limit "
-                            "(%d, %d, %d); give smaller values", opt->spp, opt->max_depth, opt->ic.light_samples,
-                            IC_MAX_SPP, IC_MAX_MAX_DEPTH, IC_MAX_LIGHT_SAMPLES);
+    if (opt->spp > IC_MAX_SPP || opt->max_depth > IC_MAX_MAX_DEPTH || opt->ic.light_samples > IC_MAX_LIGHT_SAMPLES ||
+        opt->threads > IC_MAX_THREADS)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "--spp %d, --max-depth %d, --light-samples %d or --threads %d is "
+                            "above its limit (%d, %d, %d, %d); give smaller values", opt->spp, opt->max_depth,
+                            opt->ic.light_samples, opt->threads, IC_MAX_SPP, IC_MAX_MAX_DEPTH, IC_MAX_LIGHT_SAMPLES,
+                            IC_MAX_THREADS);
     if (opt->adaptive_sampling != IC_CACHE_DEFAULT && opt->adaptive_sampling != IC_CACHE_ON &&
         opt->adaptive_sampling != IC_CACHE_OFF)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "adaptive_sampling %d: use IC_CACHE_ON, IC_CACHE_OFF or "

@@ -239,10 +239,11 @@ static ic_result resolve_options(const ic_scene *scene, ic_points_options *o, ic
         return ic_error_set(err, IC_ERR_INVALID_ARG, "negative samples, light samples, max depth or threads; give "
                             "values >= 0");
     if (o->samples > IC_MAX_POINT_SAMPLES || o->light_samples > IC_MAX_POINT_SAMPLES ||
-        o->max_depth > IC_MAX_MAX_DEPTH)
-        return ic_error_set(err, IC_ERR_INVALID_ARG, "samples %d, light samples %d or max depth %d is above its "
-                            "limit (%d, %d, %d); give smaller values", o->samples, o->light_samples, o->max_depth,
-                            IC_MAX_POINT_SAMPLES, IC_MAX_POINT_SAMPLES, IC_MAX_MAX_DEPTH);
+        o->max_depth > IC_MAX_MAX_DEPTH || o->threads > IC_MAX_THREADS)
+        return ic_error_set(err, IC_ERR_INVALID_ARG, "samples %d, light samples %d, max depth %d or threads %d is above "
+                            "its limit (%d, %d, %d, %d); give smaller values", o->samples, o->light_samples,
+                            o->max_depth, o->threads, IC_MAX_POINT_SAMPLES, IC_MAX_POINT_SAMPLES, IC_MAX_MAX_DEPTH,
+                            IC_MAX_THREADS);
     if (o->samples == 0)
         o->samples = IC_DEFAULT_POINT_SAMPLES;
     if (o->light_samples == 0)

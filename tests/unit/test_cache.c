@@ -2514,6 +2514,9 @@ static void test_embedder_edges(void)
           "a cut-off cache file: %s", ic_result_name(err.code));
 
     CHECK(ic_cache_get_params(NULL) == NULL && ic_cache_memory_bytes(NULL) == 0, "NULL cache getters");
+    ic_cache_params many = {0};
+    many.threads = IC_MAX_THREADS + 1;
+    CHECK(ic_cache_create(&many, &m, &err) == IC_ERR_INVALID_ARG && !m, "threads above IC_MAX_THREADS");
     ic_cache_get_index_stats(c, NULL);
     ic_cache_destroy(c);
 }

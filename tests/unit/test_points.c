@@ -544,6 +544,11 @@ static void test_bad_points(void)
     ic_points_options opt = {0};
     opt.samples = -1;
     CHECK(ic_points_compute(scene, pts, 1, &opt, res, NULL, &err) == IC_ERR_INVALID_ARG, "negative samples refused");
+    opt.samples = 16;
+    opt.threads = IC_MAX_THREADS + 1;
+    CHECK(ic_points_compute(scene, pts, 1, &opt, res, NULL, &err) == IC_ERR_INVALID_ARG,
+          "threads above IC_MAX_THREADS: %s", ic_result_name(err.code));
+    opt.threads = 0;
     CHECK(ic_points_compute(scene, pts, 0, NULL, NULL, NULL, &err) == IC_OK, "no points: nothing to do");
     opt.samples = 0;
     opt.integrator = IC_INTEGRATOR_IC;

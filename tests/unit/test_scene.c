@@ -443,6 +443,12 @@ static void test_render_caps(void)
     ic_scene_resolution(NULL, &w, &h);
     CHECK(w == 0 && h == 0 && ic_scene_exposure(NULL) == 0.0f, "NULL scene getters");
     ic_scene_resolution(s, NULL, NULL);
+    /* Threads beyond IC_MAX_THREADS (the command's cap too): the per-thread buffers were sized by the count
+     * asked for and a billion threads ran out of memory instead of being refused. */
+    opt.time_budget = 0.0;
+    opt.threads = IC_MAX_THREADS + 1;
+    CHECK(ic_render(s, &opt, &img, NULL, &err) == IC_ERR_INVALID_ARG && strstr(err.message, "--threads 4097"),
+          "threads above IC_MAX_THREADS: %s", err.message);
     ic_image_free(&img);
     ic_scene_free(s);
 }
