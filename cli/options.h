@@ -335,8 +335,9 @@ const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id);
       "the points, one 'x y z nx ny nz' a line ('-': standard input); required unless --grid") \
     X(OUTPUT, "--output", "-o", IC_OPT_OUT_FILE, output, 0, 0, "FILE", NAN, "standard output", "", IC_SCOPE_ALL, \
       "write the results there, atomically ('-': standard output)") \
-    X(FORMAT, "--format", NULL, IC_OPT_CHOICE, format, 0, 0, "text|csv|json", NAN, "text", "", IC_SCOPE_ALL, \
-      "text (space-separated), csv (with a header line) or json") \
+    X(FORMAT, "--format", NULL, IC_OPT_CHOICE, format, 0, 0, "text|csv|json|rtrace", NAN, "text", "", IC_SCOPE_ALL, \
+      "text (space-separated), csv (with a header line), json, or rtrace: the irradiance alone, 'E_r E_g E_b' " \
+      "a line, each %e and a tab, as Radiance's rtrace -I -h- prints it, for the scripts that read its output") \
     X(GRID, "--grid", NULL, IC_OPT_NUMBERS, grid, -1e18, 1e18, "X0 Y0 Z0 X1 Y1 Z1", NAN, "none", "", IC_SCOPE_ALL, \
       "instead of --points: a work-plane grid over the floor x0..x1, z0..z1 of that box (the room's floor " \
       "corner and the opposite top corner, +y up), one upward sensor at the centre of each whole cell, " \

@@ -36,7 +36,7 @@
 #define EXIT_USAGE 2
 
 /* --format's values, in the order of its declaration (options.h). */
-typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON } out_format;
+typedef enum out_format { FORMAT_TEXT, FORMAT_CSV, FORMAT_JSON, FORMAT_RTRACE } out_format;
 
 /* The points file's limits: lines (a sensor's six numbers and a comment fit many times over) and, as
  * --max-points, their count, so that neither /dev/zero nor a runaway generator grows memory unbounded. */
@@ -337,6 +337,13 @@ static cJSON *json_floats(ic_vec3 v)
 static void write_rows(FILE *f, out_format format, const ic_point_result *res, uint32_t count, double df_lux,
                        const ic_sensor_point *pts)
 {
+    if (format == FORMAT_RTRACE) {
+        /* rtrace's ASCII output (its puta): every value as %e followed by a tab, a newline after each ray */
+        for (uint32_t i = 0; i < count; ++i)
+            fprintf(f, "%e\t%e\t%e\t\n", (double)res[i].irradiance.x, (double)res[i].irradiance.y,
+                    (double)res[i].irradiance.z);
+        return;
+    }
     if (format == FORMAT_CSV)
         fprintf(f, "%sirradiance_r,irradiance_g,irradiance_b,illuminance_lux,sigma_lux%s\n",
                 pts ? "x,y,z,nx,ny,nz," : "", df_lux > 0.0 ? ",daylight_factor_percent,daylight_factor_sigma_percent" : "");
@@ -538,6 +545,9 @@ static int points_command(int argc, char **argv, ic_comm *comm)
                          : !has_grid && (has_spacing || has_height || map_path)
                              ? "--spacing, --height and --map apply to a --grid"
                          : has_map_max && !map_path           ? "--map-max applies to a --map"
+                         : format == FORMAT_RTRACE && (has_grid || own.daylight_factor)
+                             ? "--format rtrace prints the irradiance alone, as rtrace -I does, without a --grid's "
+                               "points or --daylight-factor's columns; give text, csv or json"
                          : has_grid && own.given[IC_POINTS_ARG_MAX_POINTS]
                              ? "--max-points applies to a --points file; a --grid's size is set by its --spacing"
                                                               : NULL;

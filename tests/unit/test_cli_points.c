@@ -96,6 +96,29 @@ static void test_outputs(void)
     const char *json = slurp(DIR "/d.json");
     CHECK(strstr(json, "\"points\":[") && strstr(json, "\"illuminance\":") && strstr(json, "\"sigma\":"),
           "json has the points: %s", json);
+    /* rtrace: what Radiance's rtrace -I -h- prints, "%e\t%e\t%e\t\n" a point, the text format's irradiance */
+    CHECK(run(SCENE " --points " DIR "/pts.txt --threads 1 --format rtrace -o " DIR "/r.txt", NULL) == 0, "rtrace: %s",
+          err_text);
+    const char *rt = slurp(DIR "/r.txt"), *tx = a;
+    int rows = 0;
+    for (; *rt && rows < 3; ++rows) {
+        double e[3], t[3];
+        char again[128];
+        CHECK(sscanf(rt, "%lf%lf%lf", &e[0], &e[1], &e[2]) == 3, "rtrace row %d: three numbers: %.80s", rows, rt);
+        snprintf(again, sizeof again, "%e\t%e\t%e\t\n", e[0], e[1], e[2]);
+        CHECK(strncmp(rt, again, strlen(again)) == 0, "rtrace row %d is each number as %%e and a tab, then a newline: "
+              "%.80s", rows, rt);
+        CHECK(sscanf(tx, "%lf %lf %lf", &t[0], &t[1], &t[2]) == 3, "text row %d", rows);
+        for (int k = 0; k < 3; ++k)
+            CHECK(fabs(e[k] - t[k]) <= 1e-6 * fabs(t[k]), "rtrace row %d channel %d: %g, the text format %g", rows, k,
+                  e[k], t[k]);
+        rt += strlen(again);
+        tx = strchr(tx, '\n') ? strchr(tx, '\n') + 1 : "";
+    }
+    CHECK(rows == 3 && *rt == '\0', "rtrace: one row per point (%d), nothing else: %.80s", rows, rt);
+    CHECK(run(SCENE " --grid 0 0 0 1 1 1 --spacing 0.5 --format rtrace", NULL) == 2 && strstr(err_text, "rtrace") &&
+              test_line_count(err_text) == 1,
+          "rtrace with a grid's points: a usage error: %s", err_text);
 }
 
 /* --daylight-factor: two more columns, 100 × lux / (179 × 7π/9 × L_z); refused (exit 1, no output) without
