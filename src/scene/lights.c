@@ -58,7 +58,7 @@ ic_vec3 ic_scene_env_radiance(const ic_scene *scene, ic_vec3 d)
     if (!env->enabled)
         return v3s(0.0f);
     if (env->sky.model != IC_SKY_NONE)
-        return v3s((float)ic_sky_radiance(&env->sky, d));
+        return ic_sky_radiance(&env->sky, d);
     if (env->image.width <= 0)
         return env->radiance;
     float u, v;
@@ -102,7 +102,10 @@ static ic_result tabulate_sky(ic_scene *scene, ic_error *err)
         for (int x = 0; x < SKY_TABLE_W; ++x) {
             ic_vec3 d = env_uv_to_dir(env, ((float)x + 0.5f) / SKY_TABLE_W, ((float)y + 0.5f) / SKY_TABLE_H);
             float *t = env->image.rgb + 3 * ((size_t)y * SKY_TABLE_W + (size_t)x);
-            t[0] = t[1] = t[2] = (float)ic_sky_radiance(&env->sky, d);
+            ic_vec3 L = ic_sky_radiance(&env->sky, d);
+            t[0] = L.x;
+            t[1] = L.y;
+            t[2] = L.z;
         }
     env->radiance = v3s(1.0f);
     return IC_OK;

@@ -32,6 +32,11 @@ typedef struct ic_rad_modifier {
     int is_illum;         /* an illum: `source_radiance` is its own colour, which a source it modifies emits
                              (the surfaces it modifies show its alternate material) */
     ic_vec3 source_radiance;
+    int is_emitter;       /* a light, glow or spotlight (of any radiance, 0 too) */
+    int has_sky;          /* a sky function (a brightfunc of skybright.cal or perezlum.cal: `sky`), or an emitter
+                             or illum it modifies, whose sources then take the sky's distribution */
+    ic_sky_cal sky;
+    int sky_line;         /* where the sky function was defined */
 } ic_rad_modifier;
 
 typedef struct ic_rad_ctx {

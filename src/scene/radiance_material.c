@@ -15,6 +15,10 @@
  *   specular reflection left out, warned). glass: irrcache's thin pane, of the colour's
  *   transmissivity and the index (1.52 by default), as Radiance's glass computes it. dielectric: irrcache's
  *   refracting dielectric. mirror: a mirror. light, glow, spotlight: area emitters of that radiance.
+ *
+ *   A brightfunc of skybright.cal or perezlum.cal is the sky gensky or gendaylit wrote (sky.h, ic_sky_cal):
+ *   it is read here and passed on to the light, glow or illum it modifies, whose distant sources then
+ *   carry the sky's distribution (radiance_scene.c).
  */
 #include "scene/radiance_internal.h"
 
@@ -88,8 +92,10 @@ static ic_result radiance_limit(ic_rad_ctx *c, ic_vec3 radiance)
                        IC_RADIANCE_LIMIT_FIX, c->type, c->id, IC_RADIANCE_LIMIT_ARGS(radiance));
 }
 
-static ic_result emitter(ic_rad_ctx *c, ic_material *m)
+static ic_result emitter(ic_rad_ctx *c, ic_rad_modifier *out)
 {
+    ic_material *m = &out->material;
+    out->is_emitter = 1;
     m->type = IC_MAT_DIFFUSE;
     m->kd = v3s(0.0f);
     ic_result r = colour(c, &m->emission);
@@ -112,11 +118,73 @@ static ic_result copy_named(ic_rad_ctx *c, const char *name, ic_rad_modifier *ou
     out->material = t->material;
     out->is_illum = t->is_illum; /* an alias of an illum is one: a source it modifies emits its colour */
     out->source_radiance = t->source_radiance;
+    out->is_emitter = t->is_emitter;
+    out->has_sky = t->has_sky;
+    out->sky = t->sky;
+    out->sky_line = t->sky_line;
     snprintf(out->material.name, sizeof out->material.name, "%.127s", c->id);
     return IC_OK;
 }
 
+/* A brightfunc of Radiance's skybright.cal or perezlum.cal (gensky's and gendaylit's sky): *is_sky 1 and out's
+ * sky read from its arguments. Any other brightfunc is a pattern like the others (*is_sky 0). Another function
+ * of those files, a transform or arguments the file would misread are refused: the sky would be wrong by the
+ * ratio of its brightness to the glow's colour, tens of times. */
+static ic_result sky_function(ic_rad_ctx *c, ic_rad_modifier *out, int *is_sky)
+{
+    *is_sky = 0;
+    if (strcmp(c->type, "brightfunc") || c->string_count < 2)
+        return IC_OK;
+    const char *file = c->strings[1], *base = file;
+    for (const char *p = file; *p; ++p)
+        if (*p == '/' || *p == '\\')
+            base = p + 1;
+    const int perez = !strcmp(base, "perezlum.cal");
+    if (!perez && strcmp(base, "skybright.cal"))
+        return IC_OK;
+    *is_sky = 1;
+    const char *function = perez ? "skybright" : "skybr", *generator = perez ? "gendaylit" : "gensky";
+    if (strcmp(c->strings[0], function))
+        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
+                           "brightfunc '%s': irrcache evaluates %s's function '%s' (as %s writes it), not '%s'; paste "
+                           "the output of a current %s",
+                           c->id, base, function, generator, c->strings[0], generator);
+    if (c->string_count > 2)
+        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
+                           "brightfunc '%s': the sky function's transform ('%s' ...) is not supported; give %s the sun "
+                           "position you want instead",
+                           c->id, c->strings[2], generator);
+    char why[256];
+    if (!ic_sky_cal_init(&out->sky, perez ? IC_SKY_FUNCTION_PEREZLUM : IC_SKY_FUNCTION_SKYBRIGHT, c->reals,
+                         c->real_count, why, sizeof why))
+        return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG, "brightfunc '%s' (%s of %s) %s%s; fix it or paste %s's "
+                           "output again", c->id, function, base, strncmp(why, "has ", 4) ? ": " : "", why, generator);
+    out->has_sky = 1;
+    out->sky_line = c->prim_line;
+    return IC_OK;
+}
+
+static ic_result define_modifier(ic_rad_ctx *c, ic_rad_modifier *out);
+
 ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
+{
+    /* looked up before the definition: a name may be defined again, modified by its earlier self */
+    const ic_rad_modifier *by = strcmp(c->modifier, "void") ? ic_rad_find(c, c->modifier) : NULL;
+    ic_result r = define_modifier(c, out);
+    if (r != IC_OK || !by || !by->has_sky || out->has_sky)
+        return r;
+    if (out->is_emitter || out->is_illum) { /* its sources take the sky's distribution, its colour the scale */
+        out->has_sky = 1;
+        out->sky = by->sky;
+        out->sky_line = by->sky_line;
+    } else {
+        ic_rad_warn_once(c, c->prim_line, "a sky function (skybright.cal, perezlum.cal) modifying no light, glow or "
+                         "illum", "is applied to sources only: what it modifies is used without it");
+    }
+    return IC_OK;
+}
+
+static ic_result define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
 {
     memset(out, 0, sizeof *out);
     snprintf(out->name, sizeof out->name, "%s", c->id);
@@ -140,6 +208,10 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
                            c->id, c->modifier);
     if (IN_LIST(t, pattern_types)) {
         out->kind = IC_RAD_PATTERN;
+        int is_sky;
+        ic_result r = sky_function(c, out, &is_sky);
+        if (r != IC_OK || is_sky)
+            return r;
         ic_rad_warn_once(c, c->prim_line, kind, "(a pattern or texture) is not supported: the materials it modifies are "
                                                 "rendered without it");
         return IC_OK;
@@ -229,14 +301,14 @@ ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
             m->type = IC_MAT_MIRROR;
     } else if (!strcmp(t, "light")) {
         if ((r = need_reals(c, 3, 3, "red green blue")) == IC_OK)
-            r = emitter(c, m);
+            r = emitter(c, out);
     } else if (!strcmp(t, "glow")) {
         if ((r = need_reals(c, 4, 4, "red green blue maximum-radius")) == IC_OK)
-            r = emitter(c, m);
+            r = emitter(c, out);
     } else if (!strcmp(t, "spotlight")) {
         ic_rad_warn_once(c, c->prim_line, kind, "is rendered as a light: its cone is not applied");
         if ((r = need_reals(c, 7, 7, "red green blue angle x-direction y-direction z-direction")) == IC_OK)
-            r = emitter(c, m);
+            r = emitter(c, out);
     } else {
         ic_rad_warn_once(c, c->prim_line, kind, "is not supported: a diffuse grey 0.5 is used");
     }

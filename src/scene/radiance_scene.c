@@ -4,7 +4,8 @@
  *
  *   surfaces polygon, sphere / bubble, ring, cone / cup, cylinder / tube (tessellate.h), mesh through the
  *   OBJ file it names; modifiers by name as Radiance chains them (radiance_material.c); source as the sun
- *   (small angles) or a uniform environment of the same power; the camera of a view file (radiance_view.c).
+ *   (small angles) or a uniform environment of the same power, or, when a sky function of gensky or gendaylit
+ *   modifies its glow, a cone of that sky (sky.h); the camera of a view file (radiance_view.c).
  *
  * Refused with a one-line error naming file:line: "!" command lines (no shell is ever run), instance
  * (compiled octrees), malformed primitives, names used before they are defined. Every other primitive
@@ -444,6 +445,14 @@ static ic_result surface(ic_rad_ctx *c, geometry *g, uint32_t mat)
 /* The scene material index of modifier m, added to the scene the first time a surface uses it. */
 static ic_result material_index(ic_rad_ctx *c, ic_rad_modifier *m, uint32_t *index)
 {
+    /* a glow of the sky's distribution: its colour alone would be tens of times too dim (an illum's surfaces
+     * show its alternate, which the function does not change) */
+    if (m->has_sky && !m->is_illum)
+        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
+                           "%s '%s' is made of '%s', which the sky function of line %d modifies; irrcache applies a sky "
+                           "function to distant sources only, as gensky's and gendaylit's output does: make it a source "
+                           "('%s source sky 0 0 4 0 0 1 180') or give the surface a plain glow",
+                           c->type, c->id, m->name, m->sky_line, m->name);
     if (m->index < 0) {
         uint32_t i;
         ic_result r = ic_scene_add_material(c->b, &m->material, c->path, &i, c->err);
@@ -594,7 +603,48 @@ static ic_result mesh(ic_rad_ctx *c)
     return IC_OK;
 }
 
-/* A distant source: small ones (up to 5°) the sun, wider ones a uniform environment of the same power. */
+/* A distant source whose glow or light a sky function modifies (gensky's sky and ground): one more cone of
+ * the environment's Radiance sky (sky.h), of the sky function times the colour. */
+static ic_result sky_source(ic_rad_ctx *c, const ic_rad_modifier *m, ic_vec3 colour, ic_vec3 d, double angle)
+{
+    ic_environment *env = &c->b->scene->env;
+    if (env->enabled && env->sky.model != IC_SKY_RADIANCE)
+        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
+                           "source '%s' of the sky function of line %d comes after a plain source wider than 5 degrees, "
+                           "which irrcache made a uniform environment: it renders one environment; leave the plain one "
+                           "out or give it the sky function too",
+                           c->id, m->sky_line);
+    if (env->sky.glow_count == IC_SKY_MAX_GLOWS)
+        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
+                           "source '%s': more than %d sources of sky functions (gensky writes two, the sky and the "
+                           "ground); merge them",
+                           c->id, IC_SKY_MAX_GLOWS);
+    ic_sky_glow *g = &env->sky.glows[env->sky.glow_count];
+    g->cal = m->sky;
+    g->direction = v3_norm(d);
+    /* a hemisphere's rim is exactly its plane (cos 90° would be 6e-17 in double) */
+    g->cos_half_angle = angle == 180.0 ? 0.0 : cos(0.5 * angle * 3.14159265358979323846 / 180.0);
+    g->colour = colour;
+    /* the brightest it gets: at the sun (the clear, intermediate and Perez skies), the zenith or the ground */
+    const ic_vec3 sun = v3((float)g->cal.sun[0], (float)g->cal.sun[1], (float)g->cal.sun[2]);
+    const ic_vec3 probes[4] = {sun, v3(0.0f, 0.0f, 1.0f), v3(0.0f, 0.0f, -1.0f), g->direction};
+    for (int k = 0; k < 4; ++k) {
+        ic_vec3 L = v3_scale(colour, (float)ic_sky_cal_value(&g->cal, probes[k]));
+        if (ic_radiance_too_large(L))
+            return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
+                               "source '%s': its sky (the function of line %d times the colour) reaches a radiance of "
+                               IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX, c->id, m->sky_line,
+                               IC_RADIANCE_LIMIT_ARGS(L));
+    }
+    ++env->sky.glow_count;
+    env->sky.model = IC_SKY_RADIANCE;
+    env->enabled = 1;
+    env->radiance = v3s(1.0f);
+    return IC_OK;
+}
+
+/* A distant source: small ones (up to 5°) the sun, wider ones a uniform environment of the same power, those
+ * a sky function modifies a cone of that sky. */
 static ic_result source(ic_rad_ctx *c, int *has_sun)
 {
     ic_result r = need(c, 4, "x-direction y-direction z-direction angle");
@@ -603,7 +653,7 @@ static ic_result source(ic_rad_ctx *c, int *has_sun)
     ic_rad_modifier *m = ic_rad_find(c, c->modifier);
     /* an illum's own colour is the source's radiance (its alternate material is for surfaces) */
     const int illum = m && m->is_illum && !v3_is_black(m->source_radiance);
-    if (!m || (!illum && (m->kind != IC_RAD_MATERIAL || v3_is_black(m->material.emission))))
+    if (!m || (!illum && (m->kind != IC_RAD_MATERIAL || !m->is_emitter)))
         return ic_rad_fail(c, c->prim_line, IC_ERR_PARSE,
                            "source '%s' needs a light, glow or illum material defined above (not '%s')", c->id,
                            c->modifier);
@@ -613,9 +663,19 @@ static ic_result source(ic_rad_ctx *c, int *has_sun)
     if (!(v3_len2(d) > 0.0f) || !(angle > 0.0 && angle <= 360.0))
         return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
                            "source '%s' needs a non-zero direction and an angle in (0, 360] degrees", c->id);
+    if (v3_is_black(radiance)) /* emits nothing, as in Radiance (gendaylit's sun under an overcast sky: 0 0 0) */
+        return IC_OK;
+    if (m->has_sky)
+        return sky_source(c, m, radiance, d, angle);
     double solid_angle = 2.0 * 3.14159265358979323846 * (1.0 - cos(0.5 * angle * 3.14159265358979323846 / 180.0));
     ic_vec3 power = v3_scale(radiance, (float)solid_angle); /* radiance × solid angle */
     ic_scene *s = c->b->scene;
+    if (angle > 5.0 && s->env.sky.model == IC_SKY_RADIANCE)
+        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
+                           "source '%s' (of '%s', wider than 5 degrees, without a sky function) comes after the "
+                           "sources of a sky function, which make the environment: irrcache renders one; leave it out "
+                           "or give it the sky function too",
+                           c->id, c->modifier);
     if (angle <= 5.0) {
         if (*has_sun)
             return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,

@@ -17,6 +17,13 @@
  *
  * The sun's disc (its radius, radiance and sampling) is the scene's sun light (scene.h, lights.c); here
  * only its direct normal irradiance, given or gensky's default.
+ *
+ * Radiance's own sky functions, which gensky and gendaylit write into a scene (ic_sky_cal), are evaluated
+ * as their files define them (Radiance's skybright.cal and perezlum.cal): the same CIE and Perez formulas
+ * as above, but scaled by the arguments given (a zenith brightness and gensky's normalisation A4, or
+ * gendaylit's diffuse normalisation), evaluated below the horizon too, and blended into the ground
+ * brightness near the horizon by the weights (Dz + 1.01)^±10; skybright.cal adds the uniform sky and the
+ * CIE intermediate sky (gensky -u, -i).
  */
 #include "scene/sky.h"
 
@@ -234,11 +241,115 @@ int ic_sky_init(ic_sky *s, const ic_sky_params *p, char *why, size_t why_size)
     return 1;
 }
 
-double ic_sky_radiance(const ic_sky *s, ic_vec3 d)
+/* ---- Radiance's sky functions (skybright.cal, perezlum.cal) ---- */
+
+int ic_sky_cal_init(ic_sky_cal *cal, ic_sky_function function, const double *a, size_t count, char *why,
+                    size_t why_size)
 {
+    memset(cal, 0, sizeof *cal);
+    cal->function = function;
+    const int perez = function == IC_SKY_FUNCTION_PEREZLUM;
+    const int type = perez || count == 0 ? 0 : (a[0] >= 1.0 && a[0] <= 4.0 && a[0] == floor(a[0])) ? (int)a[0] : -1;
+    if (type < 0) {
+        snprintf(why, why_size, "its first argument, the sky type, must be 1 (clear), 2 (overcast), 3 (uniform) or 4 "
+                 "(intermediate)");
+        return 0;
+    }
+    /* the overcast and uniform skies have no sun: gensky writes them 3 arguments */
+    const int sunless = type == IC_SKY_TYPE_OVERCAST || type == IC_SKY_TYPE_UNIFORM;
+    if (perez ? count != 10 : !(count == 7 || (sunless && count == 3))) {
+        snprintf(why, why_size, "has %zu real arguments; %s", count,
+                 perez  ? "perezlum.cal takes 10 (diffuse normalisation, ground brightness, Perez a b c d e, sun x y z)"
+                 : sunless ? "skybright.cal takes 3 for the overcast and uniform skies (type, zenith brightness, ground "
+                             "brightness) or 7"
+                 : type ? "skybright.cal takes 7 for the clear and intermediate skies (type, zenith brightness, ground "
+                          "brightness, normalisation, sun x y z)"
+                        : "skybright.cal takes 3 (type, zenith brightness, ground brightness) or 7 (and normalisation, "
+                          "sun x y z)");
+        return 0;
+    }
+    for (size_t i = 0; i < count; ++i)
+        if (!isfinite(a[i])) {
+            snprintf(why, why_size, "argument A%zu is not a finite number", i + 1);
+            return 0;
+        }
+    cal->type = type;
+    cal->brightness = perez ? a[0] : a[1];
+    cal->ground = perez ? a[1] : a[2];
+    if (!(cal->brightness >= 0.0 && cal->ground >= 0.0)) {
+        snprintf(why, why_size, "its %s (A%d) and ground brightness (A%d) must be >= 0 (given %g and %g)",
+                 perez ? "diffuse normalisation" : "zenith brightness", perez ? 1 : 2, perez ? 2 : 3, cal->brightness,
+                 cal->ground);
+        return 0;
+    }
+    if (perez)
+        memcpy(cal->perez, a + 2, sizeof cal->perez);
+    else if (!sunless && !(a[3] > 0.0)) {
+        snprintf(why, why_size, "its normalisation A4 must be > 0 (given %g)", a[3]);
+        return 0;
+    }
+    cal->norm = perez || sunless ? 1.0 : a[3];
+    if (count >= 7) {
+        const double *sun = a + (perez ? 7 : 4);
+        double len = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
+        if (!(fabs(len - 1.0) <= 0.01)) {
+            snprintf(why, why_size, "its sun direction (A%d–A%d) has length %g; give the unit vector towards the sun, "
+                     "as gensky and gendaylit write it", perez ? 8 : 5, perez ? 10 : 7, len);
+            return 0;
+        }
+        memcpy(cal->sun, sun, sizeof cal->sun); /* as given, as Radiance uses it (gensky writes 6 decimals) */
+        cal->sun_zenith = acos(fmin(fmax(cal->sun[2], -1.0), 1.0));
+    }
+    return 1;
+}
+
+/* The sky's value above the horizon (where the ground is blended in below), as the .cal files define it. */
+static double cal_sky(const ic_sky_cal *c, double dz, double cos_gamma)
+{
+    double cg = fmin(fmax(cos_gamma, -1.0), 1.0), gamma = acos(cg); /* Radiance's Acos clamps */
+    if (c->function == IC_SKY_FUNCTION_PEREZLUM) {
+        /* perezlum.cal: cos θ held at 0.01 or more, as the module's Perez sky; Exp(x) is 0 below x = −100 */
+        const double *p = c->perez;
+        double x = p[1] / fmax(dz, 0.01), y = p[3] * gamma;
+        double gradation = 1.0 + p[0] * (x < -100.0 ? 0.0 : exp(x));
+        return c->brightness * gradation * (1.0 + p[2] * (y < -100.0 ? 0.0 : exp(y)) + p[4] * cg * cg);
+    }
+    switch (c->type) {
+    case IC_SKY_TYPE_CLEAR: /* Kittler's f(γ) and, above 0.01, φ(θ) (1 below); normalised by A4 */
+        return c->brightness * clear_f(gamma) * (dz > 0.01 ? clear_phi(dz) : 1.0) / c->norm;
+    case IC_SKY_TYPE_OVERCAST:
+        return c->brightness * (1.0 + 2.0 * dz) / 3.0;
+    case IC_SKY_TYPE_UNIFORM:
+        return c->brightness;
+    default: { /* the CIE intermediate sky: η the direction's zenith angle, zt the sun's */
+        double eta = acos(fmin(fmax(dz, -1.0), 1.0)), zt = c->sun_zenith;
+        return c->brightness * ((1.35 * sin(5.631 - 3.59 * eta) + 3.12) * sin(4.396 - 2.6 * zt) + 6.37 - eta) / 2.326 *
+               exp(gamma * -0.563 * ((2.629 - eta) * (1.562 - zt) + 0.812)) / c->norm;
+    }
+    }
+}
+
+double ic_sky_cal_value(const ic_sky_cal *c, ic_vec3 d)
+{
+    double dz = (double)d.z, cos_gamma = (double)d.x * c->sun[0] + (double)d.y * c->sun[1] + dz * c->sun[2];
+    /* Both files blend the ground in by the weights (Dz + 1.01)^±10: at the horizon the sky has 55 % of the
+     * weight, 5° below it 17 %, 10° below 3 %, 5° above 86 %. */
+    double w_sky = pow(dz + 1.01, 10.0), w_ground = 1.0 / w_sky;
+    double v = (w_sky * cal_sky(c, dz, cos_gamma) + w_ground * c->ground) / (w_sky + w_ground);
+    return v > 0.0 ? v : 0.0;
+}
+
+ic_vec3 ic_sky_radiance(const ic_sky *s, ic_vec3 d)
+{
+    if (s->model == IC_SKY_RADIANCE) {
+        for (int k = s->glow_count; k-- > 0;) /* the last source defined that holds d, as Radiance finds it */
+            if ((double)v3_dot(d, s->glows[k].direction) >= s->glows[k].cos_half_angle)
+                return v3_scale(s->glows[k].colour, (float)ic_sky_cal_value(&s->glows[k].cal, d));
+        return v3s(0.0f);
+    }
     double cos_theta = (double)v3_dot(d, s->up);
     if (cos_theta <= 0.0)
-        return s->ground_radiance;
-    return s->zenith_radiance *
-           ic_sky_relative(s->model, s->perez, s->sun_zenith, cos_theta, (double)v3_dot(d, s->sun));
+        return v3s((float)s->ground_radiance);
+    return v3s((float)(s->zenith_radiance *
+                       ic_sky_relative(s->model, s->perez, s->sun_zenith, cos_theta, (double)v3_dot(d, s->sun))));
 }

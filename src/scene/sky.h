@@ -12,7 +12,11 @@
  * The sun of a clear or Perez sky is a disc of angular radius IC_SKY_SUN_RADIUS_DEG and uniform radiance
  * E_dn / (π sin² radius), so that a surface facing it receives the direct normal irradiance E_dn; the
  * scene makes it its sun light (scene_json_sky.c, lights.c). The sky's own distribution is evaluated
- * everywhere, inside the disc too (the disc adds to it, as Radiance's solar source does to its sky). Radiances are the scene's radiometric units, W/(m²·sr); a luminance
+ * everywhere, inside the disc too (the disc adds to it, as Radiance's solar source does to its sky).
+ *
+ * A Radiance scene's sky is what gensky or gendaylit wrote into it: its sky function (ic_sky_cal) on the
+ * distant sources whose glow it modifies (ic_sky_glow), in the file's frame (+z up), with no sky frame of
+ * its own. Radiances are the scene's radiometric units, W/(m²·sr); a luminance
  * L_v (cd/m²) is L_v / 179 W/(m²·sr) of white light (the 179 lm/W convention of docs/points.md).
  */
 #ifndef IC_SCENE_SKY_H
@@ -32,8 +36,44 @@ typedef enum ic_sky_model {
     IC_SKY_NONE = 0,
     IC_SKY_CIE_OVERCAST,   /* L(θ) = L_z (1 + 2 cos θ)/3 */
     IC_SKY_CIE_CLEAR,      /* L(θ, γ) = L_z f(γ) φ(θ) / (f(Z_s) φ(0)) */
-    IC_SKY_PEREZ           /* L(θ, γ) ∝ (1 + a e^{b/cos θ})(1 + c e^{dγ} + e cos² γ) */
+    IC_SKY_PEREZ,          /* L(θ, γ) ∝ (1 + a e^{b/cos θ})(1 + c e^{dγ} + e cos² γ) */
+    IC_SKY_RADIANCE        /* a Radiance scene's sky glows (ic_sky.glows): gensky's or gendaylit's output */
 } ic_sky_model;
+
+/* Radiance's sky functions, as gensky and gendaylit write them into a scene: the brightfunc `skybr` of
+ * skybright.cal and `skybright` of perezlum.cal, evaluated as Radiance defines them for a direction
+ * (Dx, Dy, Dz) of the scene's own frame, +z up (docs/scene-format.md, "Radiance scene files"). */
+typedef enum ic_sky_function {
+    IC_SKY_FUNCTION_SKYBRIGHT = 1, /* gensky: A1 the sky type, A2 the zenith brightness, A3 the ground
+                                      brightness, A4 the normalisation, A5–A7 the sun direction */
+    IC_SKY_FUNCTION_PEREZLUM       /* gendaylit: A1 the diffuse normalisation, A2 the ground brightness,
+                                      A3–A7 the Perez coefficients a–e, A8–A10 the sun direction */
+} ic_sky_function;
+
+/* skybright.cal's sky types (its A1, gensky's -s/+s, -c, -u, -i/+i). */
+enum { IC_SKY_TYPE_CLEAR = 1, IC_SKY_TYPE_OVERCAST, IC_SKY_TYPE_UNIFORM, IC_SKY_TYPE_INTERMEDIATE };
+
+typedef struct ic_sky_cal {
+    ic_sky_function function;
+    int type;             /* skybright.cal's sky type (IC_SKY_TYPE_*) */
+    double brightness;    /* skybright.cal: the zenith brightness; perezlum.cal: the diffuse normalisation */
+    double ground;        /* the ground brightness */
+    double norm;          /* skybright.cal's normalisation of the clear and intermediate skies */
+    double perez[5];      /* perezlum.cal's a–e */
+    double sun[3];        /* towards the sun (+z up), as given: of length 1 within 1 % */
+    double sun_zenith;    /* acos(sun[2]) */
+} ic_sky_cal;
+
+/* A distant source whose glow a sky function modifies (gensky's "skyfunc glow sky_glow ... / sky_glow
+ * source sky 0 0 4 0 0 1 180"): a direction within half its angle of `direction` sees colour × the
+ * function there. */
+#define IC_SKY_MAX_GLOWS 8
+typedef struct ic_sky_glow {
+    ic_sky_cal cal;
+    ic_vec3 direction;     /* unit, the cone's axis */
+    double cos_half_angle;
+    ic_vec3 colour;        /* the glow's radiance, which the function multiplies */
+} ic_sky_glow;
 
 /* What a scene file gives (zero means "not given" except where noted). */
 typedef struct ic_sky_params {
@@ -72,6 +112,8 @@ typedef struct ic_sky {
     double ground_radiance;    /* radiance below the horizon: ρ_g (E_sky + E_sun,h) / π */
     double direct_normal;      /* the sun's normal irradiance (0: no sun) */
     double clearness, brightness; /* Perez ε and Δ (Perez et al. 1990), for the record */
+    ic_sky_glow glows[IC_SKY_MAX_GLOWS]; /* IC_SKY_RADIANCE: the sky's sources, in the file's order */
+    int glow_count;
 } ic_sky;
 
 /* Solar position by the approximations Radiance's gensky uses (declination, equation of time): altitude and
@@ -100,7 +142,18 @@ void ic_sky_perez_coefficients(double clearness, double brightness, double sun_z
  * prefixes where). */
 int ic_sky_init(ic_sky *sky, const ic_sky_params *p, char *why, size_t why_size);
 
-/* Radiance arriving from unit direction d (pointing away from the scene), W/(m²·sr), white. */
-double ic_sky_radiance(const ic_sky *sky, ic_vec3 d);
+/* Radiance arriving from unit direction d (pointing away from the scene), W/(m²·sr): white but for a
+ * Radiance scene's glows, where the last source (in the file's order) whose cone holds d gives it, as
+ * Radiance picks the distant source an escaping ray finds; none: black. */
+ic_vec3 ic_sky_radiance(const ic_sky *sky, ic_vec3 d);
+
+/* Reads a sky function's real arguments a[0..count): 1, or 0 with a message in why (what is wrong and
+ * what to do; the caller prefixes where). skybright.cal takes 3 arguments for the overcast and uniform
+ * skies (gensky -c, -u) or 7 (any type), perezlum.cal 10; every one finite, the brightnesses >= 0, the
+ * normalisation > 0, the sun direction of length 1 within 1 % (used as given, as Radiance does). */
+int ic_sky_cal_init(ic_sky_cal *cal, ic_sky_function function, const double *a, size_t count, char *why,
+                    size_t why_size);
+/* The function's value for unit direction d (+z up), clamped at 0 (perezlum.cal's fit can dip below). */
+double ic_sky_cal_value(const ic_sky_cal *cal, ic_vec3 d);
 
 #endif
