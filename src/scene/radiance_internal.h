@@ -58,6 +58,10 @@ typedef struct ic_rad_ctx {
     /* the modifiers defined so far, in order (a later definition of a name hides the earlier one) */
     ic_rad_modifier *mods;
     size_t mod_count, mod_capacity;
+    /* where each name's latest definition is: an open-addressed table of mod indices + 1 (0: empty), a
+     * power of two at least twice the modifiers, so that a surface finds its modifier in constant time */
+    uint32_t *mod_slots;
+    size_t slot_count;
     char warned[IC_RAD_MAX_WARNED][96]; /* kinds already warned about */
     int warned_count;
 } ic_rad_ctx;
@@ -76,6 +80,8 @@ ic_result ic_rad_fail(ic_rad_ctx *c, int line, ic_result r, const char *fmt, ...
 void ic_rad_warn_once(ic_rad_ctx *c, int line, const char *kind, const char *what);
 /* The modifier named name as the scene stands now (the latest definition), or NULL. */
 ic_rad_modifier *ic_rad_find(ic_rad_ctx *c, const char *name);
+/* Appends a modifier's definition; a later definition of a name hides the earlier one. */
+ic_result ic_rad_add_modifier(ic_rad_ctx *c, const ic_rad_modifier *def);
 /* Defines the current primitive, a modifier (any type that is no surface), into *out: its name, kind and
  * material. A type irrcache does not know is warned about and becomes a diffuse grey. */
 ic_result ic_rad_define_modifier(ic_rad_ctx *c, ic_rad_modifier *out);

@@ -19,6 +19,7 @@
 #include "scene/tessellate.h"
 
 #include "core/error_at.h"
+#include "core/hash.h"
 #include "core/read_file.h"
 #include "irrcache/defaults.h"
 
@@ -56,12 +57,49 @@ void ic_rad_warn_once(ic_rad_ctx *c, int line, const char *kind, const char *wha
     ic_scene_warn(c->b->scene, "%s:%d: %s %s", c->path, line, kind, what);
 }
 
+/* The slot of name in the table: the one that holds it, or the empty one where it would go. */
+static size_t mod_slot(const ic_rad_ctx *c, const char *name)
+{
+    size_t mask = c->slot_count - 1, i = (size_t)ic_fnv1a64(IC_FNV64_OFFSET, name, strlen(name)) & mask;
+    while (c->mod_slots[i] && strcmp(c->mods[c->mod_slots[i] - 1].name, name))
+        i = (i + 1) & mask;
+    return i;
+}
+
 ic_rad_modifier *ic_rad_find(ic_rad_ctx *c, const char *name)
 {
-    for (size_t i = c->mod_count; i-- > 0;)
-        if (!strcmp(c->mods[i].name, name))
-            return &c->mods[i];
-    return NULL;
+    if (!c->slot_count)
+        return NULL;
+    uint32_t k = c->mod_slots[mod_slot(c, name)];
+    return k ? &c->mods[k - 1] : NULL;
+}
+
+ic_result ic_rad_add_modifier(ic_rad_ctx *c, const ic_rad_modifier *def)
+{
+    if (c->mod_count >= UINT32_MAX - 1)
+        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED, "more than %u modifiers", UINT32_MAX - 2);
+    if (c->mod_count == c->mod_capacity) {
+        size_t cap = c->mod_capacity ? 2 * c->mod_capacity : 64;
+        ic_rad_modifier *grown = realloc(c->mods, sizeof *grown * cap);
+        if (!grown)
+            return ic_rad_fail(c, c->prim_line, IC_ERR_OOM, "out of memory for the modifiers");
+        c->mods = grown;
+        c->mod_capacity = cap;
+    }
+    if (2 * (c->mod_count + 1) > c->slot_count) {
+        size_t slots = c->slot_count ? 2 * c->slot_count : 128;
+        uint32_t *table = calloc(slots, sizeof *table);
+        if (!table)
+            return ic_rad_fail(c, c->prim_line, IC_ERR_OOM, "out of memory for the modifiers' names");
+        free(c->mod_slots);
+        c->mod_slots = table;
+        c->slot_count = slots;
+        for (size_t i = 0; i < c->mod_count; ++i) /* in order: a later definition takes its name's slot */
+            c->mod_slots[mod_slot(c, c->mods[i].name)] = (uint32_t)i + 1;
+    }
+    c->mods[c->mod_count] = *def;
+    c->mod_slots[mod_slot(c, def->name)] = (uint32_t)(++c->mod_count);
+    return IC_OK;
 }
 
 /* ---- words ---- */
@@ -768,17 +806,9 @@ static ic_result primitive(ic_rad_ctx *c, geometry *g, int *has_sun, int *done)
             return r;
         return surface(c, g, mat);
     }
-    if (c->mod_count == c->mod_capacity) {
-        size_t cap = c->mod_capacity ? 2 * c->mod_capacity : 64;
-        ic_rad_modifier *grown = realloc(c->mods, sizeof *grown * cap);
-        if (!grown)
-            return ic_rad_fail(c, c->prim_line, IC_ERR_OOM, "out of memory for the modifiers");
-        c->mods = grown;
-        c->mod_capacity = cap;
-    }
     ic_rad_modifier def;
     if ((r = ic_rad_define_modifier(c, &def)) == IC_OK)
-        c->mods[c->mod_count++] = def;
+        r = ic_rad_add_modifier(c, &def);
     return r;
 }
 
@@ -876,6 +906,7 @@ ic_result ic_scene_load_radiance(ic_scene_builder *b, const char *path, const ic
     free(g.tri_material);
     free(c->reals);
     free(c->mods);
+    free(c->mod_slots);
     free(c);
     free(text);
     const int has_view = opt->view && opt->view[0];

@@ -591,8 +591,50 @@ static void test_radiance_limit(void)
                                         NULL});
 }
 
+/* Many modifiers (their names found through a hash table): each surface takes the latest definition of its
+ * modifier's name read so far, as in Radiance, whatever the names' hashes. 3000 plastics m0 … m2999 of
+ * reflectance 0.1 + k/4000, a square of each at x = k; then m1500 defined again (0.95) and one more square
+ * at x = 3000 made of it: it has 0.95, the square at x = 1500 keeps the first definition's. */
+static void test_many_modifiers(void)
+{
+    const char *path = IC_TEST_TMP "/rad_many.rad";
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL, "write %s", path);
+    if (!f)
+        return;
+    fputs("void light lamp\n0\n0\n3 1 1 1\nlamp polygon top\n0\n0\n12 0 0 5  3001 0 5  3001 1 5  0 1 5\n", f);
+    for (int k = 0; k < 3000; ++k)
+        fprintf(f, "void plastic m%d\n0\n0\n5 %.6f %.6f %.6f 0 0\n", k, 0.1 + k / 4000.0, 0.1 + k / 4000.0,
+                0.1 + k / 4000.0);
+    for (int k = 0; k < 3000; ++k)
+        fprintf(f, "m%d polygon p%d\n0\n0\n12 %d 0 0  %d 0 0  %d 1 0  %d 1 0\n", k, k, k, k + 1, k + 1, k);
+    fputs("void plastic m1500\n0\n0\n5 0.95 0.95 0.95 0 0\nm1500 polygon late\n0\n0\n12 3000 0 0  3001 0 0  "
+          "3001 1 0  3000 1 0\n", f);
+    fclose(f);
+    ic_error err = {0};
+    ic_scene *s = load_view(path, NULL, 16, &err);
+    CHECK(s != NULL, "3000 modifiers load: %s", err.message);
+    if (!s)
+        return;
+    int wrong = 0, floor_tris = 0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        ic_vec3 a = s->positions[s->triangles[3 * t]], b = s->positions[s->triangles[3 * t + 1]],
+                c = s->positions[s->triangles[3 * t + 2]];
+        if (a.z != 0.0f)
+            continue;
+        ++floor_tris;
+        int k = (int)floorf((a.x + b.x + c.x) / 3.0f);
+        double want = k == 3000 ? 0.95 : 0.1 + k / 4000.0;
+        wrong += fabs(s->materials[s->triangle_material[t]].kd.y - want) > 1e-5;
+    }
+    CHECK(floor_tris == 2 * 3001 && wrong == 0, "each square has its modifier's reflectance (%d triangles, %d wrong)",
+          floor_tris, wrong);
+    ic_scene_free(s);
+}
+
 int main(void)
 {
+    test_many_modifiers();
     test_radiance_limit();
     test_polygon_zero_area_pieces();
     test_polygon_holes();
