@@ -2,8 +2,9 @@
  * mesh_import.c — mesh files (OBJ+MTL, glTF 2.0 / .glb, PLY, anything assimp reads) into the scene.
  *
  * assimp pre-transforms the node hierarchy (merging the meshes of one material and vertex format, each
- * placed once per node that holds it), triangulates and joins identical vertices, so each file arrives as
- * flat meshes in file space; we apply the scene's transform and append to the world-space triangle soup.
+ * placed once per node that holds it) and joins identical vertices, so each file arrives as flat meshes in
+ * file space; we apply the scene's transform, triangulate polygons (ic_tess_polygon: assimp 5.2's own step
+ * gets concave ones wrong) and append to the world-space triangle soup.
  * PreTransformVertices keeps the winding of a mesh under a mirroring node (a negative determinant, e.g. a
  * glTF node scaled by -1 on one axis), which would turn it inside out: we swap the winding of those
  * placements in the merged meshes before the other steps run (collect_instances, flip_mirrored). Normals
@@ -39,6 +40,7 @@
 #include "core/read_file.h"
 
 #include "scene/mesh_check.h"
+#include "scene/tessellate.h"
 
 #include "core/vecmath.h"
 
@@ -1053,6 +1055,37 @@ static ic_result flip_mirrored(const struct aiScene *ai, const mesh_instance *in
     return IC_OK;
 }
 
+/* assimp's tangent step takes a polygon's tangent from its first three corners: a polygon whose first three
+ * lie on a line (a corner on an edge, a corner repeated) has its corners rotated, in place, to start with the
+ * corner of the largest area, so that the tangent comes from a triangle of the polygon's plane. */
+static void lead_with_corner(const struct aiScene *ai)
+{
+    for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
+        const struct aiMesh *mesh = ai->mMeshes[i];
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            const struct aiFace *face = &mesh->mFaces[f];
+            unsigned n = face->mNumIndices, best = 0;
+            float best_area = 0.0f;
+            for (unsigned k = 0; n > 3 && k < n; ++k) {
+                struct aiVector3D a = mesh->mVertices[face->mIndices[k]], b = mesh->mVertices[face->mIndices[(k + 1) % n]],
+                                  c = mesh->mVertices[face->mIndices[(k + 2) % n]];
+                float area = v3_len(v3_cross(v3(b.x - a.x, b.y - a.y, b.z - a.z), v3(c.x - a.x, c.y - a.y, c.z - a.z)));
+                if (k == 0 && area > 0.0f)
+                    break; /* the first corner will do: leave the polygon as the file gives it */
+                if (area > best_area) {
+                    best_area = area;
+                    best = k;
+                }
+            }
+            for (unsigned turn = 0; turn < best; ++turn) { /* rotate left by best: small polygons, rare */
+                unsigned first = face->mIndices[0];
+                memmove(face->mIndices, face->mIndices + 1, sizeof *face->mIndices * (n - 1));
+                face->mIndices[n - 1] = first;
+            }
+        }
+    }
+}
+
 static int finite3(struct aiVector3D a)
 {
     return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
@@ -1114,12 +1147,17 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
                                ic_error *err)
 {
     ic_scene *s = b->scene;
-    size_t add_vertices = 0, add_faces = 0;
+    size_t add_vertices = 0, add_faces = 0; /* faces: the triangles the polygons make, and points and lines */
+    unsigned max_corners = 0;
     int any_normals = 0, any_uvs = 0, any_tangents = 0;
     for (unsigned i = 0; i < ai->mNumMeshes; ++i) {
         const struct aiMesh *mesh = ai->mMeshes[i];
         add_vertices += mesh->mNumVertices;
-        add_faces += mesh->mNumFaces;
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            unsigned n = mesh->mFaces[f].mNumIndices;
+            add_faces += n > 3 ? n - 2 : 1;
+            max_corners = n > max_corners ? n : max_corners;
+        }
         any_normals |= mesh->mNormals != NULL;
         any_uvs |= mesh->mTextureCoords[0] != NULL;
         any_tangents |= use_tangents && mesh->mTangents != NULL;
@@ -1143,6 +1181,16 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
         !grow((void **)&s->triangle_material, sizeof *s->triangle_material, s->triangle_count + add_faces))
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its geometry", mesh_path);
 
+    /* a polygon's corners (positions and indices) and the triangles ic_tess_polygon makes of it */
+    ic_vec3 *corner = NULL;
+    uint32_t *scratch = NULL, *poly_tri = NULL;
+    if (max_corners > 3 && (!(corner = malloc(sizeof *corner * max_corners)) ||
+                            !(scratch = malloc(sizeof *scratch * max_corners)) ||
+                            !(poly_tri = malloc(sizeof *poly_tri * 3 * (max_corners - 2))))) {
+        free(corner);
+        free(scratch);
+        return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its polygons", mesh_path);
+    }
     float nm[9];
     float det = normal_matrix(m4, nm);
     int flip = det < 0.0f; /* a mirroring transform reverses winding: swap to keep the front side */
@@ -1158,6 +1206,9 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
             ic_vec3 q = xform_point(m4, p);
             if (!(fabsf(q.x) <= IC_SCENE_MAX_COORD && fabsf(q.y) <= IC_SCENE_MAX_COORD &&
                   fabsf(q.z) <= IC_SCENE_MAX_COORD)) {
+                free(corner);
+                free(scratch);
+                free(poly_tri);
                 if (xform_where)
                     return ic_error_set(err, IC_ERR_INVALID_ARG,
                                         "%s: the transform of '%s' takes its vertex %u (%g, %g, %g) to (%g, %g, %g), "
@@ -1184,25 +1235,40 @@ static ic_result append_meshes(ic_scene_builder *b, const struct aiScene *ai, co
         uint32_t mat = material_base + mesh->mMaterialIndex;
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const struct aiFace *face = &mesh->mFaces[f];
-            if (face->mNumIndices != 3) { /* points and lines have no surface */
+            unsigned n = face->mNumIndices;
+            if (n < 3) { /* points and lines have no surface */
                 ++b->material_dropped[mat];
                 continue;
             }
-            uint32_t i0 = base + face->mIndices[0], i1 = base + face->mIndices[flip ? 2 : 1],
-                     i2 = base + face->mIndices[flip ? 1 : 2];
-            if (is_degenerate(s->positions[i0], s->positions[i1], s->positions[i2])) {
-                drop_degenerate(b, mesh_path);
-                ++b->material_dropped[mat];
-                continue;
+            static const uint32_t one[3] = {0, 1, 2};
+            const uint32_t *tri = one;
+            uint32_t nt = 1;
+            if (n > 3) { /* a polygon: triangles that keep its outline, concave or not */
+                for (unsigned k = 0; k < n; ++k)
+                    corner[k] = s->positions[base + face->mIndices[k]];
+                ic_tess_polygon(corner, n, scratch, poly_tri, &nt);
+                tri = poly_tri;
             }
-            uint32_t t = s->triangle_count++;
-            s->triangles[3 * t + 0] = i0;
-            s->triangles[3 * t + 1] = i1;
-            s->triangles[3 * t + 2] = i2;
-            s->triangle_material[t] = mat;
-            ++b->material_tris[mat];
+            for (uint32_t j = 0; j < nt; ++j) {
+                uint32_t i0 = base + face->mIndices[tri[3 * j]], i1 = base + face->mIndices[tri[3 * j + (flip ? 2 : 1)]],
+                         i2 = base + face->mIndices[tri[3 * j + (flip ? 1 : 2)]];
+                if (is_degenerate(s->positions[i0], s->positions[i1], s->positions[i2])) {
+                    drop_degenerate(b, mesh_path);
+                    ++b->material_dropped[mat];
+                    continue;
+                }
+                uint32_t t = s->triangle_count++;
+                s->triangles[3 * t + 0] = i0;
+                s->triangles[3 * t + 1] = i1;
+                s->triangles[3 * t + 2] = i2;
+                s->triangle_material[t] = mat;
+                ++b->material_tris[mat];
+            }
         }
     }
+    free(corner);
+    free(scratch);
+    free(poly_tri);
     return IC_OK;
 }
 
@@ -1353,7 +1419,10 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         return r;
     }
     free(inst);
-    if (!ai || !(ai = aiApplyPostProcessing(ai, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices))) {
+    /* no aiProcess_Triangulate: assimp 5.2's ear clipping turns concave polygons of five or more corners into
+     * triangles that leave the outline and overlap (an L-shaped hexagon of area 3 covered 4); append_meshes
+     * triangulates polygons itself (ic_tess_polygon) */
+    if (!ai || !(ai = aiApplyPostProcessing(ai, aiProcess_JoinIdenticalVertices))) {
         free(src.data);
         return ic_error_set(err, IC_ERR_OOM, "%s: out of memory for assimp's processing of the mesh", mesh_path);
     }
@@ -1365,6 +1434,8 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
     /* A failed step has released the scene and leaves aiGetErrorString() as it was: the last failed import's
      * text, another file's or none, so it is not quoted. The tangent step fails only when memory runs out:
      * missing normals or texture coordinates, or degenerate ones, it answers with no or default tangents. */
+    if (normal_mapped)
+        lead_with_corner(ai);
     if (normal_mapped && !(ai = aiApplyPostProcessing(ai, aiProcess_CalcTangentSpace))) {
         free(src.data);
         return ic_error_set(err, IC_ERR_OOM,

@@ -1,6 +1,7 @@
 /*
  * tessellate.h — the analytic shapes scene files name (spheres, disks and rings, cones and cylinders) as
- * triangles, for a scene that holds only triangles. Shared by the Mitsuba and Radiance readers.
+ * triangles, for a scene that holds only triangles, shared by the Mitsuba and Radiance readers; and polygons
+ * as triangles that keep their outline (mesh files' faces of more than three vertices).
  *
  * Accuracy: IC_TESS_SEGMENTS segments around every circle and IC_TESS_RINGS latitude bands on a sphere,
  * vertices on the true surface. The chord then departs from the circle by at most r·(1 − cos(π/64)) =
@@ -39,6 +40,15 @@ void ic_tess_cone(ic_vec3 p0, ic_vec3 p1, float r0, float r1, ic_vec3 *p, ic_vec
                   uint32_t *vertex_count, uint32_t *tri_count);
 /* An orthonormal u, v with u × v = the unit vector a. */
 void ic_tess_basis(ic_vec3 a, ic_vec3 *u, ic_vec3 *v);
+/* A simple polygon of nv vertices p (planar or nearly so, either winding) as at most nv − 2 triangles (*tri_count
+ * of them) that keep its outline: a fan from the first vertex when it is convex, else ear clipping (Meisters
+ * 1975). A vertex met twice (the seam that joins a hole to the outline) is handled. Triangles of zero area (a
+ * vertex on an edge, one repeated) are left out of a polygon that has others; a polygon with no other keeps
+ * them, for the scene to drop and report. tri (3·(nv − 2) indices into p) gets them, idx (nv) is scratch.
+ * Returns 0 if part of a concave polygon had to be a fan (self-intersecting, or over IC_TESS_EAR_MAX_VERTICES
+ * vertices). */
+#define IC_TESS_EAR_MAX_VERTICES 4096
+int ic_tess_polygon(const ic_vec3 *p, uint32_t nv, uint32_t *idx, uint32_t *tri, uint32_t *tri_count);
 /* Turns every triangle over (and the normals, when n is not NULL). */
 void ic_tess_flip(ic_vec3 *n, uint32_t vertex_count, uint32_t *tri, uint32_t tri_count);
 

@@ -185,6 +185,21 @@ static void test_transformed(void)
     ic_scene_free(s);
 }
 
+/* A 1×1 normal map of the unperturbed normal at map_path, and an MTL file of one material 'm' (grey, with
+ * that map as its `norm`) at mtl_path, in the same folder. */
+static void write_flat_normal_map(const char *map_path, const char *mtl_path)
+{
+    ic_image img = {0};
+    ic_error err = {0};
+    CHECK(ic_image_create(&img, 1, 1) == IC_OK, "normal map image");
+    img.rgb[0] = 0.5f, img.rgb[1] = 0.5f, img.rgb[2] = 1.0f;
+    CHECK(ic_image_write(map_path, &img, NULL, &err) == IC_OK, "normal map: %s", err.message);
+    ic_image_free(&img);
+    char mtl[600];
+    snprintf(mtl, sizeof mtl, "newmtl m\nKd 0.5 0.5 0.5\nnorm %s\n", strrchr(map_path, '/') + 1);
+    test_write_text(mtl_path, mtl);
+}
+
 /* The parts of a mesh file with one material are merged into one mesh before identical vertices are
  * joined and tangents computed (assimp's PreTransformVertices, JoinIdenticalVertices, CalcTangentSpace):
  * two OBJ groups (`o`, then `g`) of one material, squares sharing the edge x = 1, are 6 vertices, not
@@ -193,13 +208,8 @@ static void test_transformed(void)
  * its texture coordinates run at another rate). */
 static void test_groups_joined(void)
 {
-    ic_image img = {0};
     ic_error err = {0};
-    CHECK(ic_image_create(&img, 1, 1) == IC_OK, "normal map image");
-    img.rgb[0] = 0.5f, img.rgb[1] = 0.5f, img.rgb[2] = 1.0f;
-    CHECK(ic_image_write(IC_TEST_TMP "/seam_n.pfm", &img, NULL, &err) == IC_OK, "normal map: %s", err.message);
-    ic_image_free(&img);
-    test_write_text(IC_TEST_TMP "/seam.mtl", "newmtl m\nKd 0.5 0.5 0.5\nnorm seam_n.pfm\n");
+    write_flat_normal_map(IC_TEST_TMP "/seam_n.pfm", IC_TEST_TMP "/seam.mtl");
     const char *group[2] = {"o", "g"};
     for (int k = 0; k < 2; ++k) {
         char obj[1024];
@@ -866,12 +876,111 @@ static void test_texture_storage(void)
     ic_scene_free(s);
 }
 
+/* 1 if (x, y) lies inside the polygon of n corners xy (even-odd rule). */
+static int inside_polygon(const float *xy, int n, float x, float y)
+{
+    int in = 0;
+    for (int i = 0, j = n - 1; i < n; j = i++)
+        if ((xy[2 * i + 1] > y) != (xy[2 * j + 1] > y) &&
+            x < xy[2 * j] + (y - xy[2 * j + 1]) * (xy[2 * i] - xy[2 * j]) / (xy[2 * i + 1] - xy[2 * j + 1]))
+            in = !in;
+    return in;
+}
+
+/* Concave polygons of five or more corners (an OBJ face, a PLY face) keep their outline: the triangles cover
+ * the polygon's area exactly (its shoelace area), each lies inside it and faces the side its winding gives.
+ * assimp 5.2's ear clipping, which irrcache used, covered an L-shaped hexagon of area 3 with triangles of
+ * area 4, one of them outside the L and facing the other way. A mirroring transform keeps the front side. A
+ * normal-mapped polygon whose first three corners lie on a line still gets the tangent of its texture
+ * coordinates (+x, and a bitangent −y where v runs down), not the arbitrary one assimp's tangent step takes from a line. */
+static void test_concave_polygons(void)
+{
+    /* an L and a comb with two teeth (8 corners), counter-clockwise seen from +z, in the plane z = 0 */
+    static const float l_xy[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
+    static const float comb_xy[] = {0, 0, 3, 0, 3, 2, 2, 2, 2, 1, 1, 1, 1, 2, 0, 2};
+    const struct {
+        const float *xy;
+        int n;
+    } polys[2] = {{l_xy, 6}, {comb_xy, 8}};
+    for (int k = 0; k < 2; ++k) {
+        const float *xy = polys[k].xy;
+        int n = polys[k].n;
+        double area = 0.0;
+        for (int i = 0; i < n; ++i)
+            area += 0.5 * (xy[2 * i] * xy[2 * ((i + 1) % n) + 1] - xy[2 * ((i + 1) % n)] * xy[2 * i + 1]);
+        char obj[1024], ply[1024], face[256] = "f", ply_face[256];
+        size_t used = 0, pused = 0;
+        used += (size_t)snprintf(obj + used, sizeof obj - used, "# a concave polygon\n");
+        pused += (size_t)snprintf(ply + pused, sizeof ply - pused,
+                                  "ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+                                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                  "end_header\n", n);
+        snprintf(ply_face, sizeof ply_face, "%d", n);
+        for (int i = 0; i < n; ++i) {
+            used += (size_t)snprintf(obj + used, sizeof obj - used, "v %g %g 0\n", xy[2 * i], xy[2 * i + 1]);
+            pused += (size_t)snprintf(ply + pused, sizeof ply - pused, "%g %g 0\n", xy[2 * i], xy[2 * i + 1]);
+            size_t fl = strlen(face), pl = strlen(ply_face);
+            snprintf(face + fl, sizeof face - fl, " %d", i - n); /* negative (relative) indices */
+            snprintf(ply_face + pl, sizeof ply_face - pl, " %d", i);
+        }
+        snprintf(obj + used, sizeof obj - used, "%s\n", face);
+        snprintf(ply + pused, sizeof ply - pused, "%s\n", ply_face);
+        test_write_text(IC_TEST_TMP "/concave.obj", obj);
+        test_write_text(IC_TEST_TMP "/concave.ply", ply);
+        test_write_text(IC_TEST_TMP "/concave_mirror.json",
+                        "{\"meshes\": [{\"path\": \"concave.obj\", \"transform\": {\"scale\": [-1, 1, 1]}}]}\n");
+        const char *files[3] = {IC_TEST_TMP "/concave.obj", IC_TEST_TMP "/concave.ply",
+                                IC_TEST_TMP "/concave_mirror.json"};
+        for (int f = 0; f < 3; ++f) {
+            ic_scene *s = load(files[f], NULL);
+            if (!s)
+                continue;
+            float sx = f == 2 ? -1.0f : 1.0f; /* the mirror: x → −x, the front stays +z */
+            double covered = 0.0;
+            int outside = 0, backwards = 0;
+            for (uint32_t t = 0; t < s->triangle_count; ++t) {
+                ic_vec3 p0 = s->positions[s->triangles[3 * t]], p1 = s->positions[s->triangles[3 * t + 1]],
+                        p2 = s->positions[s->triangles[3 * t + 2]];
+                ic_vec3 c = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
+                covered += 0.5 * fabs((double)c.z);
+                backwards += c.z <= 0.0f;
+                ic_vec3 centroid = v3_scale(v3_add(v3_add(p0, p1), p2), 1.0f / 3.0f);
+                outside += !inside_polygon(xy, n, sx * centroid.x, centroid.y);
+            }
+            CHECK(s->triangle_count == (uint32_t)n - 2, "%s (%d corners): %u triangles, want %d", files[f], n,
+                  s->triangle_count, n - 2);
+            CHECK(fabs(covered - area) < 1e-5, "%s (%d corners): the triangles cover %g, the polygon %g", files[f], n,
+                  covered, area);
+            CHECK(outside == 0 && backwards == 0, "%s (%d corners): %d triangles outside the polygon, %d facing -z",
+                  files[f], n, outside, backwards);
+            ic_scene_free(s);
+        }
+    }
+
+    /* a normal-mapped pentagon starting with three corners on the line y = 0, u = x and v = 1 − y: a texture
+     * laid out upside down, whose bitangent (+v) is −y, the opposite of n × t = +y (sign −1) */
+    write_flat_normal_map(IC_TEST_TMP "/pent_n.pfm", IC_TEST_TMP "/pent.mtl");
+    test_write_text(IC_TEST_TMP "/pent.obj", "mtllib pent.mtl\nv 0 0 0\nv 1 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\n"
+                                             "vt 0 1\nvt 1 1\nvt 2 1\nvt 2 0\nvt 0 0\nvn 0 0 1\nusemtl m\n"
+                                             "f 1/1/1 2/2/1 3/3/1 4/4/1 5/5/1\n");
+    ic_scene *s = load(IC_TEST_TMP "/pent.obj", NULL);
+    if (s) {
+        int good = s->tangents != NULL && s->triangle_count == 2; /* the corner on the edge adds none */
+        for (uint32_t v = 0; good && v < s->vertex_count; ++v)
+            good = fabsf(s->tangents[4 * v] - 1.0f) < 1e-4f && s->tangents[4 * v + 3] == -1.0f;
+        CHECK(good, "normal-mapped pentagon (first three corners on a line): tangent +x, bitangent sign -1 at every "
+                    "vertex (%u triangles)", s->triangle_count);
+        ic_scene_free(s);
+    }
+}
+
 int main(void)
 {
     test_cornell_box();
     test_transformed();
     test_mirrored_normals();
     test_groups_joined();
+    test_concave_polygons();
     test_fov_x_and_shared();
     test_degenerate_dropped();
     test_extreme_triangles();
