@@ -13,6 +13,7 @@
 #define IC_SCENE_MESH_CHECK_H
 
 #include "irrcache/common.h"
+#include "irrcache/render.h" /* ic_scene */
 
 #include <stddef.h>
 #include <stdio.h>
@@ -27,8 +28,10 @@ ic_result ic_ply_check(FILE *fp, const char *path, unsigned long long max_elemen
  * before assimp reads the file). */
 ic_result ic_obj_check(FILE *fp, const char *path, unsigned long long max_elements, ic_error *err);
 /* An MTL file's Kd, Ks and Ke colours: negative or non-finite values are an error naming the MTL file, its
- * line and the material (mesh_check_obj.c). A file that cannot be opened is IC_OK (assimp warns). */
-ic_result ic_mtl_check(const char *mtl_path, ic_error *err);
+ * line and the material (mesh_check_obj.c). A file that cannot be opened is IC_OK (assimp warns). What the
+ * import does not apply is warned into s (when not NULL), with the line: a texture map's options -s, -o, -t
+ * other than their defaults and -clamp on (assimp drops the first three; irrcache repeats every texture). */
+ic_result ic_mtl_check(const char *mtl_path, ic_scene *s, ic_error *err);
 /* 1 if v is negative or not a number: no meaning as an albedo or a radiance. */
 int ic_bad_color_component(float v);
 

@@ -308,7 +308,48 @@ int ic_bad_color_component(float v)
     return !(v >= 0.0f) || !isfinite(v);
 }
 
-ic_result ic_mtl_check(const char *mtl_path, ic_error *err)
+/* The warning for a texture line c (`map_Kd -s 2 2 1 wood.png`) of an MTL file whose options the import would
+ * not apply (ic_mtl_check), or none. */
+static void warn_map_options(ic_scene *s, const char *mtl_path, long line_no, const char *material, const char *c)
+{
+    size_t key_len = strcspn(c, " \t\r\n");
+    if (!s || (strncmp(c, "map_", 4) && strncmp(c, "norm", 4) && strncmp(c, "bump", 4) && strncmp(c, "disp", 4)))
+        return;
+    char unapplied[64] = ""; /* the options given other than their defaults, "-s -clamp" */
+    for (const char *v = c + key_len; *v && *v != '\r' && *v != '\n';) {
+        while (*v == ' ' || *v == '\t')
+            ++v;
+        size_t n = strcspn(v, " \t\r\n");
+        int is_uvw = n == 2 && v[0] == '-' && (v[1] == 's' || v[1] == 'o' || v[1] == 't');
+        int is_clamp = n == 6 && !strncmp(v, "-clamp", 6);
+        const char *w = v + n;
+        int differs = 0;
+        if (is_clamp) { /* -clamp on|off */
+            while (*w == ' ' || *w == '\t')
+                ++w;
+            differs = !strncmp(w, "on", 2);
+        }
+        for (int k = 0; is_uvw && k < 3; ++k) { /* -s u [v [w]] (default 1), -o and -t u [v [w]] (default 0) */
+            char *end;
+            float f = strtof(w, &end);
+            if (end == w)
+                break;
+            differs |= f != (v[1] == 's' ? 1.0f : 0.0f);
+            w = end;
+        }
+        size_t used = strlen(unapplied);
+        if (differs)
+            snprintf(unapplied + used, sizeof unapplied - used, "%s%.*s", used ? " " : "", (int)n, v);
+        v += n;
+    }
+    if (unapplied[0])
+        ic_scene_warn(s, "%s:%ld: material '%s': the texture options %s of %.*s are not applied: the OBJ's texture "
+                      "coordinates are used as they are, and textures repeat beyond [0, 1]; scale or offset the vt "
+                      "coordinates instead (and keep them within [0, 1] for a clamped texture)",
+                      mtl_path, line_no, material, unapplied, (int)key_len, c);
+}
+
+ic_result ic_mtl_check(const char *mtl_path, ic_scene *s, ic_error *err)
 {
     FILE *fp = fopen(mtl_path, "rb");
     if (!fp)
@@ -326,6 +367,8 @@ ic_result ic_mtl_check(const char *mtl_path, ic_error *err)
             while (*c == ' ' || *c == '\t')
                 ++c;
             snprintf(material, sizeof material, "%.*s", (int)strcspn(c, "\r\n"), c);
+        } else if (c[0] == 'm' || c[0] == 'n' || c[0] == 'b' || c[0] == 'd') {
+            warn_map_options(s, mtl_path, line_no, material, c);
         } else if (c[0] == 'K' && (c[1] == 'd' || c[1] == 's' || c[1] == 'e') && (c[2] == ' ' || c[2] == '\t')) {
             const char *what = c[1] == 'd' ? "Kd (diffuse)" : c[1] == 's' ? "Ks (specular)" : "Ke (emission)";
             const char *v = c + 3;

@@ -389,7 +389,7 @@ static ic_result check_obj_materials(const ic_scene_builder *b, const mesh_sourc
             if (access(mtl, F_OK) == 0) /* a missing one is assimp's warning; one outside is refused */
                 r = check_named_file(b, src->path, "MTL file", mtl, err);
             if (r == IC_OK)
-                r = ic_mtl_check(mtl, err);
+                r = ic_mtl_check(mtl, b->scene, err);
         }
     }
     fclose(fp);
@@ -788,6 +788,56 @@ static ic_result convert_material(ic_scene_builder *b, const struct aiScene *ai,
         }
     }
     return rc;
+}
+
+/* What a material's textures ask for that the import does not apply: an emission texture (any format), and in a
+ * glTF file a texture read through a second set of texture coordinates (texCoord), a sampler that clamps or
+ * mirrors instead of repeating, or a KHR_texture_transform. A bit of UNREAD_* each. */
+enum { UNREAD_EMISSION = 1, UNREAD_UV_SET = 2, UNREAD_WRAP = 4, UNREAD_TRANSFORM = 8, UNREAD_KINDS = 4 };
+
+static unsigned unread_texture_features(const struct aiMaterial *am, int is_gltf)
+{
+    unsigned found = aiGetMaterialTextureCount(am, aiTextureType_EMISSIVE) > 0 ? UNREAD_EMISSION : 0;
+    /* the textures convert_material reads: base colour, normal map, metallic-roughness */
+    static const enum aiTextureType read[] = {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE, aiTextureType_NORMALS,
+                                              aiTextureType_UNKNOWN, aiTextureType_METALNESS};
+    for (size_t k = 0; is_gltf && k < sizeof read / sizeof read[0]; ++k) {
+        if (aiGetMaterialTextureCount(am, read[k]) == 0)
+            continue;
+        int v;
+        unsigned n = 1;
+        if (aiGetMaterialIntegerArray(am, "$tex.uvwsrc", read[k], 0, &v, &n) == aiReturn_SUCCESS && n == 1 && v != 0)
+            found |= UNREAD_UV_SET;
+        for (int axis = 0; axis < 2; ++axis) {
+            n = 1;
+            if (aiGetMaterialIntegerArray(am, axis ? "$tex.mapmodev" : "$tex.mapmodeu", read[k], 0, &v, &n) ==
+                    aiReturn_SUCCESS && n == 1 && v != aiTextureMapMode_Wrap)
+                found |= UNREAD_WRAP;
+        }
+        ai_real t[5]; /* aiUVTransform: translation, scaling, rotation */
+        n = 5;
+        if (aiGetMaterialFloatArray(am, "$tex.uvtrafo", read[k], 0, t, &n) == aiReturn_SUCCESS && n == 5 &&
+            (t[0] != 0.0f || t[1] != 0.0f || t[2] != 1.0f || t[3] != 1.0f || t[4] != 0.0f))
+            found |= UNREAD_TRANSFORM;
+    }
+    return found;
+}
+
+/* One warning per kind of unread texture feature of a mesh file, naming the first material that has it. */
+static void warn_unread_texture_features(ic_scene *s, const char *mesh_path, const char first[UNREAD_KINDS][128])
+{
+    static const char *const what[UNREAD_KINDS] = {
+        "has an emission texture (emissiveTexture, map_Ke), which is not read: it emits its emission colour "
+        "uniformly; split the emitter into materials of their own colours",
+        "reads a texture through a second set of texture coordinates (texCoord 1 or more), which is not read: the "
+        "first set (TEXCOORD_0) is used; export the texture on the first set",
+        "has a sampler that clamps or mirrors its texture, which is not applied: textures repeat beyond [0, 1]; "
+        "keep the texture coordinates within [0, 1]",
+        "has a texture transform (KHR_texture_transform), which is not applied: the texture coordinates are used as "
+        "the file gives them; bake the transform into them"};
+    for (int k = 0; k < UNREAD_KINDS; ++k)
+        if (first[k][0])
+            ic_scene_warn(s, "%s: material '%s' (and any other of the file's alike) %s", mesh_path, first[k], what[k]);
 }
 
 static int grow(void **p, size_t elem, size_t count)
@@ -1469,6 +1519,7 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
         r = ic_error_set(err, IC_ERR_OOM, "%s: out of memory for its materials", mesh_path);
         goto done;
     }
+    char unread_first[UNREAD_KINDS][128] = {{0}}; /* the first material with each unread texture feature */
     for (uint32_t i = 0; i < nmat; ++i) {
         ic_material *m = &s->materials[material_base + i];
         b->material_dropped[material_base + i] = 0;
@@ -1486,9 +1537,14 @@ ic_result ic_mesh_import(ic_scene_builder *b, const char *mesh_path, const float
             r = convert_material(b, ai, ai->mMaterials[i], strength, mesh_path, dir, tex_dir, m, err);
             if (r != IC_OK)
                 goto done;
+            unsigned found = unread_texture_features(ai->mMaterials[i], is_gltf);
+            for (int k = 0; k < UNREAD_KINDS; ++k)
+                if ((found >> k & 1) && !unread_first[k][0])
+                    snprintf(unread_first[k], sizeof unread_first[k], "%s", m->name[0] ? m->name : "(unnamed)");
         }
         ++s->material_count;
     }
+    warn_unread_texture_features(s, mesh_path, (const char(*)[128])unread_first);
 
     float identity[16];
     ic_mat4_identity(identity);

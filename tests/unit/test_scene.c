@@ -974,6 +974,43 @@ static void test_concave_polygons(void)
     }
 }
 
+/* What a mesh file's materials ask for that the import does not apply is warned, not dropped without a word:
+ * an MTL texture's -s, -o, -t and -clamp on (assimp drops the first three; irrcache repeats every texture), with
+ * the MTL file's line, options at their defaults excepted; and in a glTF file an emission texture, a texture
+ * read through TEXCOORD_1, a clamping sampler and a KHR_texture_transform, each once per file. */
+static void test_unread_texture_features(void)
+{
+    test_write_text(IC_TEST_TMP "/mapopt.mtl", "newmtl a\nKd 1 1 1\nmap_Kd -s 2 2 1 -o 0 0 0 mapopt.pfm\n"
+                                               "newmtl b\nKd 1 1 1\nmap_Kd -o 0 0 0 -s 1 1 1 -clamp off mapopt.pfm\n");
+    test_write_text(IC_TEST_TMP "/mapopt.obj", "mtllib mapopt.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 2 0 0\nvt 0 0\nvt 1 0\n"
+                                               "vt 1 1\nusemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 2/1 4/2 3/3\n");
+    ic_image img = {0};
+    ic_error err = {0};
+    CHECK(ic_image_create(&img, 1, 1) == IC_OK, "texture");
+    CHECK(ic_image_write(IC_TEST_TMP "/mapopt.pfm", &img, NULL, &err) == IC_OK, "texture: %s", err.message);
+    ic_image_free(&img);
+    ic_scene *s = load(IC_TEST_TMP "/mapopt.obj", NULL);
+    if (s) {
+        const char *w = ic_scene_warnings(s);
+        CHECK(strstr(w, "mapopt.mtl:3: material 'a': the texture options -s of map_Kd are not applied") &&
+                  !strstr(w, "'b'"),
+              "MTL -s warned with its line, defaults (-o 0 0 0, -s 1 1 1, -clamp off) not: %s", w);
+        ic_scene_free(s);
+    }
+    s = load(SCENES "unread_texture_features.gltf", NULL);
+    if (s) {
+        const char *w = ic_scene_warnings(s), *kinds[4] = {"emission texture", "second set of texture coordinates",
+                                                            "clamps or mirrors", "KHR_texture_transform"};
+        for (int k = 0; k < 4; ++k)
+            CHECK(strstr(w, kinds[k]) && strstr(w, "material 'decal'"), "glTF: '%s' warned: %s", kinds[k], w);
+        ic_scene_free(s);
+    }
+    s = load(SCENES "triangle.gltf", NULL);
+    if (s)
+        CHECK(!strstr(ic_scene_warnings(s), "material"), "a plain glTF file: no warning: %s", ic_scene_warnings(s));
+    ic_scene_free(s);
+}
+
 int main(void)
 {
     test_cornell_box();
@@ -981,6 +1018,7 @@ int main(void)
     test_mirrored_normals();
     test_groups_joined();
     test_concave_polygons();
+    test_unread_texture_features();
     test_fov_x_and_shared();
     test_degenerate_dropped();
     test_extreme_triangles();
