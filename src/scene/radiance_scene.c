@@ -280,103 +280,6 @@ static ic_result add_triangles(ic_rad_ctx *c, geometry *g, const ic_vec3 *p, con
     return IC_OK;
 }
 
-/* 1 if r lies strictly inside the angle of triangle corner x, between its edges to the next corner n and
- * from the previous corner pv, about the normal nrm: an edge leaving x towards r enters the triangle. */
-static int enters_corner(ic_vec3 pv, ic_vec3 x, ic_vec3 n, ic_vec3 r, ic_vec3 nrm)
-{
-    ic_vec3 d = v3_sub(r, x);
-    return v3_dot(v3_cross(v3_sub(n, x), d), nrm) > 0.0f && v3_dot(v3_cross(v3_sub(x, pv), d), nrm) > 0.0f;
-}
-
-/* 1 if vertex b of the polygon turn a→b→c is convex about the polygon's normal nrm and no other vertex
- * lies in the triangle abc (an ear; Meisters 1975). A vertex at one of the corners is the outline passing
- * through that point again, as it does at both ends of the seam that joins a hole to the outline (the way
- * Radiance polygons have holes): it is no obstacle unless one of its two edges enters the triangle there. */
-static int is_ear(const ic_vec3 *p, const uint32_t *idx, uint32_t count, uint32_t k, ic_vec3 nrm)
-{
-    ic_vec3 a = p[idx[(k + count - 1) % count]], b = p[idx[k]], cc = p[idx[(k + 1) % count]];
-    if (!(v3_dot(v3_cross(v3_sub(b, a), v3_sub(cc, b)), nrm) > 0.0f))
-        return 0;
-    const ic_vec3 corner[3] = {a, b, cc};
-    for (uint32_t j = 0; j < count; ++j) {
-        if (j == k || j == (k + 1) % count || j == (k + count - 1) % count)
-            continue;
-        ic_vec3 q = p[idx[j]];
-        int at = -1;
-        for (int m = 0; m < 3; ++m)
-            if (q.x == corner[m].x && q.y == corner[m].y && q.z == corner[m].z)
-                at = m;
-        if (at >= 0) {
-            ic_vec3 pv = corner[(at + 2) % 3], x = corner[at], n = corner[(at + 1) % 3];
-            if (enters_corner(pv, x, n, p[idx[(j + count - 1) % count]], nrm) ||
-                enters_corner(pv, x, n, p[idx[(j + 1) % count]], nrm))
-                return 0;
-            continue;
-        }
-        if (v3_dot(v3_cross(v3_sub(b, a), v3_sub(q, a)), nrm) >= 0.0f &&
-            v3_dot(v3_cross(v3_sub(cc, b), v3_sub(q, b)), nrm) >= 0.0f &&
-            v3_dot(v3_cross(v3_sub(a, cc), v3_sub(q, cc)), nrm) >= 0.0f)
-            return 0;
-    }
-    return 1;
-}
-
-/* Most vertices of a polygon ear clipping takes (its cost grows as the square); larger ones are fans. */
-#define EAR_CLIP_MAX_VERTICES 4096
-
-/* A polygon of nv vertices as at most nv − 2 triangles (*nt of them): a fan from the first vertex when it is
- * convex, else ear clipping (Meisters 1975), which keeps a concave outline's shape. A triangle of zero area
- * (three vertices on a line, a vertex repeated) is left out of a polygon that has others: it is no sliver
- * the scene should drop and warn about. tri gets them, idx is scratch. Returns 0 if part of a concave polygon
- * had to be a fan (self-intersecting, or too many vertices or ear tests). */
-static int triangulate_polygon(const ic_vec3 *p, uint32_t nv, uint32_t *idx, uint32_t *tri, uint32_t *nt_out)
-{
-    ic_vec3 nrm = v3s(0.0f); /* Newell's normal: the polygon's area vector */
-    for (uint32_t i = 0; i < nv; ++i)
-        nrm = v3_add(nrm, v3_cross(p[i], p[(i + 1) % nv]));
-    int convex = 1;
-    for (uint32_t i = 0; i < nv && convex; ++i)
-        convex = v3_dot(v3_cross(v3_sub(p[(i + 1) % nv], p[i]), v3_sub(p[(i + 2) % nv], p[(i + 1) % nv])), nrm) >= 0.0f;
-    uint32_t nt = 0, count = nv;
-    for (uint32_t i = 0; i < nv; ++i)
-        idx[i] = i;
-    uint32_t k = 1, misses = 0;
-    uint64_t budget = 16u * (uint64_t)nv; /* ear tests, each O(nv): O(nv²) in all */
-    while (!convex && nv <= EAR_CLIP_MAX_VERTICES && count > 3 && misses < count && budget > 0) {
-        --budget; /* ears from the second vertex on */
-        k %= count;
-        if (!is_ear(p, idx, count, k, nrm)) {
-            ++k;
-            ++misses;
-            continue;
-        }
-        tri[3 * nt] = idx[(k + count - 1) % count];
-        tri[3 * nt + 1] = idx[k];
-        tri[3 * nt + 2] = idx[(k + 1) % count];
-        ++nt;
-        memmove(idx + k, idx + k + 1, sizeof *idx * (count - k - 1));
-        --count;
-        misses = 0;
-    }
-    int exact = convex || count == 3;
-    for (uint32_t i = 1; i + 1 < count; ++i) { /* a convex polygon, or what ears could not take */
-        tri[3 * nt] = idx[0];
-        tri[3 * nt + 1] = idx[i];
-        tri[3 * nt + 2] = idx[i + 1];
-        ++nt;
-    }
-    /* the scene's test for a triangle without area (mesh_import.c), on the same corners in the same order; a
-     * polygon all of whose triangles fail it keeps them, for the scene to drop and report */
-    uint32_t kept = 0;
-    for (uint32_t t = 0; t < nt; ++t) {
-        ic_vec3 a = p[tri[3 * t]], cr = v3_cross(v3_sub(p[tri[3 * t + 1]], a), v3_sub(p[tri[3 * t + 2]], a));
-        if (!v3_is_black(cr))
-            memmove(tri + 3 * kept++, tri + 3 * t, 3 * sizeof *tri);
-    }
-    *nt_out = kept ? kept : nt;
-    return exact;
-}
-
 static ic_vec3 real3(const ic_rad_ctx *c, size_t i)
 {
     return v3((float)c->reals[i], (float)c->reals[i + 1], (float)c->reals[i + 2]);
@@ -409,9 +312,12 @@ static ic_result surface(ic_rad_ctx *c, geometry *g, uint32_t mat)
             for (uint32_t i = 0; i < nv; ++i)
                 p[i] = real3(c, 3 * i);
             uint32_t nt = 0;
-            if (!triangulate_polygon(p, nv, idx, tri, &nt))
-                ic_rad_warn_once(c, c->prim_line, "a concave polygon that ear clipping could not finish",
-                                 "(self-intersecting, or over 4096 vertices) is in part a fan: its outline may not be kept");
+            if (!ic_tess_polygon(p, nv, idx, tri, &nt)) {
+                char what[128];
+                snprintf(what, sizeof what, "(self-intersecting, or over %d vertices) is in part a fan: its outline may "
+                         "not be kept", IC_TESS_EAR_MAX_VERTICES);
+                ic_rad_warn_once(c, c->prim_line, "a concave polygon that ear clipping could not finish", what);
+            }
             r = add_triangles(c, g, p, NULL, nv, tri, nt, mat);
         }
         free(p);
