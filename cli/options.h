@@ -354,7 +354,7 @@ const char *ic_cli_choice(const ic_cli_args *a, ic_arg_id id);
     X(DAYLIGHT_FACTOR, "--daylight-factor", NULL, IC_OPT_FLAG, daylight_factor, 0, 0, "", NAN, "off", "", \
       IC_SCOPE_ALL, "two more columns: the daylight factor (%), 100 x lux / (the unobstructed horizontal " \
       "illuminance of the scene's sky, 179 x 7 pi/9 x L_z), and its sigma; the scene must be lit by a " \
-      "cie-overcast sky alone") \
+      "cie-overcast sky alone (or, in a Radiance scene, gensky -c's)") \
     X(INTEGRATOR, "--integrator", NULL, IC_OPT_CHOICE, integrator, 0, 0, "pt|ic", NAN, "ic", "", IC_SCOPE_ALL, \
       "ic: irradiance cache, records gathered at the sensors and shared by neighbours, direct light sampled " \
       "at every point; pt: path-traced reference") \

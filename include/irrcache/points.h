@@ -125,8 +125,11 @@ double ic_illuminance(ic_vec3 irradiance);
 /* Daylight factor (BS 8206-2; CIBSE LG10): a point's illuminance under the CIE standard overcast sky as a
  * percentage of the illuminance the same sky gives an unobstructed horizontal plane outdoors,
  * DF = 100 % × E_v / E_v,h. *lux gets E_v,h = 179 lm/W × 7π/9 × L_z (the sky's zenith radiance) for a scene
- * whose environment is a "cie-overcast" sky (docs/scene-format.md, "Skies") and that has no other light;
- * fails with IC_ERR_INVALID_ARG for any other scene (the daylight factor is defined for that sky alone). */
+ * whose environment is a "cie-overcast" sky (docs/scene-format.md, "Skies"), or, for a Radiance scene lit
+ * by gensky -c's sky (skybright.cal's overcast type, +z up), the illuminance that sky gives a plane facing
+ * +z (its integral, which skybright.cal's blending into the ground near the horizon makes 0.14 % less than
+ * 7π/9 × L_z), and that has no other light; fails with IC_ERR_INVALID_ARG for any other scene (the daylight
+ * factor is defined for that sky alone). */
 ic_result ic_points_daylight_reference(const ic_scene *scene, double *lux, ic_error *err);
 
 /* A horizontal work-plane grid (+y up): cells of side `spacing` over the floor area x0…x1, z0…z1 of a box

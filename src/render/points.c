@@ -29,15 +29,52 @@ double ic_illuminance(ic_vec3 E)
     return IC_LUMINOUS_EFFICACY * (IC_LUMINANCE_R * E.x + IC_LUMINANCE_G * E.y + IC_LUMINANCE_B * E.z);
 }
 
+/* 1 if every glow of a Radiance scene's sky is gensky -c's (skybright.cal's overcast type). */
+static int is_radiance_overcast(const ic_sky *sky)
+{
+    if (sky->model != IC_SKY_RADIANCE || sky->glow_count == 0)
+        return 0;
+    for (int k = 0; k < sky->glow_count; ++k)
+        if (sky->glows[k].cal.function != IC_SKY_FUNCTION_SKYBRIGHT || sky->glows[k].cal.type != IC_SKY_TYPE_OVERCAST)
+            return 0;
+    return 1;
+}
+
+/* The illuminance a Radiance scene's sky gives an unobstructed plane facing +z (up, as gensky writes the
+ * sky): ∫ L cos θ dω over the upper hemisphere, as ½ ∫∫ L d(sin²θ) dφ by the midpoint rule. Not 7π/9·L_z:
+ * skybright.cal blends the sky into the ground near the horizon (0.14 % less for the overcast sky), and an
+ * unobstructed point should read 100 %. 2048 × 64 cells: the overcast sky has no azimuth, and the sum
+ * changes by less than 1e-6 from half as many. */
+static double radiance_sky_horizontal_lux(const ic_sky *sky)
+{
+    enum { RINGS = 2048, SECTORS = 64 };
+    const double pi = 3.14159265358979323846;
+    double E[3] = {0.0, 0.0, 0.0};
+    for (int i = 0; i < RINGS; ++i) {
+        const double s2 = (i + 0.5) / RINGS, sin_t = sqrt(s2), cos_t = sqrt(1.0 - s2);
+        for (int j = 0; j < SECTORS; ++j) {
+            const double phi = 2.0 * pi * (j + 0.5) / SECTORS;
+            const ic_vec3 L = ic_sky_radiance(sky, v3((float)(sin_t * cos(phi)), (float)(sin_t * sin(phi)), (float)cos_t));
+            E[0] += L.x;
+            E[1] += L.y;
+            E[2] += L.z;
+        }
+    }
+    const double cell = 0.5 * (1.0 / RINGS) * (2.0 * pi / SECTORS);
+    return ic_illuminance(v3((float)(E[0] * cell), (float)(E[1] * cell), (float)(E[2] * cell)));
+}
+
 ic_result ic_points_daylight_reference(const ic_scene *scene, double *lux, ic_error *err)
 {
     if (!scene || !lux)
         return ic_error_set(err, IC_ERR_INVALID_ARG, "ic_points_daylight_reference: NULL scene or result");
     const ic_sky *sky = &scene->env.sky;
-    if (!scene->env.enabled || sky->model != IC_SKY_CIE_OVERCAST)
+    const int radiance_overcast = scene->env.enabled && is_radiance_overcast(sky);
+    if (!scene->env.enabled || (sky->model != IC_SKY_CIE_OVERCAST && !radiance_overcast))
         return ic_error_set(err, IC_ERR_INVALID_ARG,
                             "%s: the daylight factor needs a CIE overcast sky; give the scene \"environment\": "
-                            "{\"sky\": \"cie-overcast\", \"zenith_luminance\": 10000}",
+                            "{\"sky\": \"cie-overcast\", \"zenith_luminance\": 10000} (a Radiance scene: "
+                            "gensky's -c output)",
                             scene->path);
     if (scene->sun.enabled || scene->point_light_count > 0 || scene->tri_light_count > 0)
         return ic_error_set(err, IC_ERR_INVALID_ARG,
@@ -45,7 +82,7 @@ ic_result ic_points_daylight_reference(const ic_scene *scene, double *lux, ic_er
                             "other lights (sun, point lights, emitting surfaces)",
                             scene->path);
     /* a white sky: its luminance-weighted irradiance is its irradiance */
-    *lux = IC_LUMINOUS_EFFICACY * sky->horizontal;
+    *lux = radiance_overcast ? radiance_sky_horizontal_lux(sky) : IC_LUMINOUS_EFFICACY * sky->horizontal;
     return IC_OK;
 }
 

@@ -78,6 +78,19 @@ static void test_pasted_gensky(void)
         CHECK(fabs(rad[k] - json[k] - blend) <= 3.0 * sigma + 1e-4 * json[k],
               "%s: the pasted sky reads the JSON sky but for the horizon blending, within 3 sigma", k ? "down" : "up");
     }
+    /* --daylight-factor under the pasted sky (it was refused: "needs a CIE overcast sky"): the open upward
+     * sensor reads 100 % within 3 sigma, its lux over the sky's unobstructed horizontal illuminance */
+    const char *out = IC_TEST_TMP "/cli_rad_df.txt";
+    rc = test_run_quiet(ERR, err_text, sizeof err_text,
+                        "%s points %s --points %s --integrator pt --samples 4096 --threads 2 --daylight-factor -o %s", CLI,
+                        IC_TEST_TMP "/cli_rad_sky.rad", IC_TEST_TMP "/cli_rad_sky.pts", out);
+    char df_text[1024];
+    test_read_text(out, df_text, sizeof df_text);
+    double v[7] = {0};
+    CHECK(rc == 0 && sscanf(df_text, "%lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6]) == 7 &&
+              fabs(v[5] - 100.0) <= 3.0 * v[6] + 1e-3,
+          "--daylight-factor under gensky -c's sky: the open sensor reads %g +- %g %% (exit %d, %s)", v[5], v[6], rc,
+          err_text);
 }
 
 int main(void)

@@ -111,6 +111,18 @@ static void test_overcast(void)
           "down: pi L_ground and the blending within 3 sigma");
     CHECK(fabs(d.irradiance.y - ground) <= 5e-3 * ground, "down: pi L_ground within the blending's 0.5 %%");
     CHECK(!s->sun.enabled, "no sun");
+    /* The daylight factor's reference under gensky -c's sky is what that sky gives an unobstructed plane (the
+     * blending included: 7π/9 L_z alone would make the open sensor read 100.14 %), and the sensor reads 100 %. */
+    double ref = 0.0;
+    ic_error err = {0};
+    CHECK(ic_points_daylight_reference(s, &ref, &err) == IC_OK, "gensky -c: a daylight factor reference (%s)",
+          err.message);
+    CHECK(fabs(ref - IC_LUMINOUS_EFFICACY * (closed + up_blend)) <= 1e-5 * ref,
+          "the reference %.4f lux is 179 x the sky's horizontal irradiance %.4f", ref,
+          IC_LUMINOUS_EFFICACY * (closed + up_blend));
+    double df = 100.0 * u.illuminance / ref, df_sigma = 100.0 * u.illuminance_sigma / ref;
+    printf("overcast: the open sensor's daylight factor %.3f +- %.3f %%\n", df, df_sigma);
+    CHECK(fabs(df - 100.0) <= 3.0 * df_sigma + 1e-3, "the open sensor's daylight factor is 100 %% within 3 sigma");
     ic_scene_free(s);
 }
 
@@ -174,7 +186,13 @@ static void test_other_skies(void)
     /* gensky -u (uniform) and -i (intermediate), pointwise */
     const double U[8] = {0, 3, 10.0, 2.0}, I[8] = {0, 4, 12.0, 6.0, 0.8, 0.5, 0.5, 0.707107};
     test_gensky_text(text, sizeof text, "", "skybr skybright.cal", "3 3 10 2", "1 1 1", "1 1 1");
-    ic_scene_free(load_sky("rad_sky_uniform", text, test_skybr, U, 1.0, 1.0));
+    ic_scene *uniform = load_sky("rad_sky_uniform", text, test_skybr, U, 1.0, 1.0);
+    double ref = 0.0;
+    ic_error err = {0};
+    CHECK(!uniform || (ic_points_daylight_reference(uniform, &ref, &err) == IC_ERR_INVALID_ARG &&
+                       strstr(err.message, "gensky's -c")),
+          "no daylight factor under gensky -u's sky: %s", err.message);
+    ic_scene_free(uniform);
     test_gensky_text(text, sizeof text, "", "skybr skybright.cal", "7 4 12 6 0.8 0.5 0.5 0.707107", "1 1 1", "1 1 1");
     ic_scene_free(load_sky("rad_sky_inter", text, test_skybr, I, 1.0, 1.0));
     /* gendaylit under an overcast sky writes a black sun: it emits nothing (it was refused as "needs a light") */
