@@ -7,6 +7,7 @@
 
 #include "test_util.h"
 
+#include "irrcache/points.h"
 #include "irrcache/render.h"
 
 #include <math.h>
@@ -224,6 +225,27 @@ static inline void test_write_inward_sphere(const char *path, const char *mtllib
                 fprintf(f, "f %d %d %d\n", b, c, d);
         }
     fclose(f);
+}
+
+/* The irradiance (green) and its σ at one sensor (position p, normal n) by the integrator, with `samples`
+ * path-traced samples (pt) and two threads; 0 (a failed check) when computing fails. */
+static inline int test_sensor_irradiance(const ic_scene *s, ic_vec3 p, ic_vec3 n, ic_integrator integrator,
+                                         uint32_t samples, double *E, double *sigma)
+{
+    ic_sensor_point pt = {p, n};
+    ic_points_options opt = {0};
+    opt.integrator = integrator;
+    opt.samples = samples;
+    opt.threads = 2;
+    ic_point_result r;
+    ic_error err = {0};
+    if (ic_points_compute(s, &pt, 1, &opt, &r, NULL, &err) != IC_OK) {
+        CHECK(0, "sensor: %s", err.message);
+        return 0;
+    }
+    *E = r.irradiance.y;
+    *sigma = r.irradiance_sigma.y;
+    return 1;
 }
 
 #endif

@@ -6,7 +6,14 @@
  *   2. a Radiance `glass` pane in front of a glowing wall, seen at normal and at 60° incidence: the image is
  *      the pane's transmittance times the wall's radiance (the analytic series), path tracer and cache;
  *   3. a JSON `thin_glass` sheet in a uniform sky (nothing else): every pixel on it is the sky's radiance,
- *      both integrators; a JSON pane with transmissivity 0.8 shows the same transmittance as the Radiance one.
+ *      both integrators; a JSON pane with transmissivity 0.8 shows the same transmittance as the Radiance one;
+ *   4. a skylight: an upward sensor 1 m under a horizontal pane 2 km wide (transmissivity 0.96, n = 1.52:
+ *      Radiance's 88 % clear glass) over a black ground, under a uniform sky, the CIE overcast sky (JSON, no
+ *      ground glow) and gensky -c's sky pasted into a .rad file (its ground brightness 0): E is the sky's
+ *      radiance times the pane's transmittance, integrated over the hemisphere by quadrature (Radiance's
+ *      formula, written out again here), for the path tracer and the cache, each within 3 of its σ and the
+ *      two within 3 combined σ; the daylight factor under the overcast sky is the cosine- and
+ *      sky-weighted mean transmittance (82.9 %, not the 88 % at normal incidence).
  */
 #include "test_util.h"
 #include "test_render_util.h"
@@ -209,11 +216,113 @@ static void test_json(void)
     }
 }
 
+/* ---- a skylight over a sensor ---- */
+
+/* The pane's transmittance at cos θ = ci, Radiance's glass: the series of test 1, in closed form. */
+static double pane_T(double ci, double n, double tn)
+{
+    double ct = sqrt(1.0 - (1.0 - ci * ci) / (n * n)), d = pow(tn, 1.0 / ct), T = 0.0;
+    for (int p = 0; p < 2; ++p) {
+        double r = fresnel(ci, n, p);
+        T += 0.5 * (1.0 - r) * (1.0 - r) * d / (1.0 - r * r * d * d);
+    }
+    return T;
+}
+
+/* The sky's radiance at zenith angle θ (cos θ = c): 0 uniform (1), 1 CIE overcast (L_z = 1), 2 gensky -c's
+ * skybright.cal with ground brightness 0 (its horizon blending, weights (c + 1.01)^±10). */
+static double sky_L(int kind, double c)
+{
+    if (kind == 0)
+        return 1.0;
+    double L = (1.0 + 2.0 * c) / 3.0, w = pow(c + 1.01, 10.0);
+    return kind == 1 ? L : w * L / (w + 1.0 / w);
+}
+
+/* E at an upward sensor h = 1 under the pane (half-width 1000, taken as a disc: the square's corners add 1e-7),
+ * by the midpoint rule in θ; with pane 0, the open sky. */
+static double skylight_E(int kind, int pane, double scale)
+{
+    const int N = 200000;
+    const double th0 = atan(1000.0), dth = 0.5 * PI_D / N;
+    double sum = 0.0;
+    for (int i = 0; i < N; ++i) {
+        double th = (i + 0.5) * dth, c = cos(th);
+        sum += sky_L(kind, c) * (pane && th < th0 ? pane_T(c, 1.52, 0.96) : 1.0) * c * sin(th);
+    }
+    return 2.0 * PI_D * sum * dth * scale;
+}
+
+static void test_skylight(void)
+{
+    test_write_file(IC_TEST_TMP "/skylight.mtl", "newmtl pane\nKd 0 0 0\nnewmtl ground\nKd 0 0 0\n");
+    test_write_file(IC_TEST_TMP "/skylight.obj", "mtllib skylight.mtl\nusemtl pane\n"
+                                                 "v -1000 1 -1000\nv 1000 1 -1000\nv 1000 1 1000\nv -1000 1 1000\n"
+                                                 "v -1000 -0.01 -1000\nv 1000 -0.01 -1000\nv 1000 -0.01 1000\n"
+                                                 "v -1000 -0.01 1000\nf 1 4 3\nf 1 3 2\nusemtl ground\nf 5 8 7\nf 5 7 6\n");
+    /* L_z = 10 000 cd/m² is 10000/179 W/(m² sr) */
+    const double Lz = 10000.0 / 179.0;
+    static const char *const env[2] = {"{\"radiance\": 1}",
+                                       "{\"sky\": \"cie-overcast\", \"zenith_luminance\": 10000, \"ground_reflectance\": 0}"};
+    static const char *const rad =
+        "void glass pane\n0\n0\n3 .96 .96 .96\npane polygon skylight\n0\n0\n12 -1000 -1000 1 1000 -1000 1 "
+        "1000 1000 1 -1000 1000 1\nvoid plastic black\n0\n0\n5 0 0 0 0 0\nblack polygon ground\n0\n0\n12 "
+        "-1000 -1000 -0.01 1000 -1000 -0.01 1000 1000 -0.01 -1000 1000 -0.01\n"
+        "void brightfunc skyfunc\n2 skybr skybright.cal\n0\n3 2 55.8659 0\n"
+        "skyfunc glow sky_glow\n0\n0\n4 1 1 1 0\nsky_glow source sky\n0\n0\n4 0 0 1 180\n";
+    for (int k = 0; k < 3; ++k) {
+        ic_scene *s = NULL;
+        ic_error err = {0};
+        ic_vec3 up = k < 2 ? v3(0.0f, 1.0f, 0.0f) : v3(0.0f, 0.0f, 1.0f);
+        if (k < 2) {
+            char json[1024];
+            snprintf(json, sizeof json,
+                     "{\"meshes\": [{\"path\": \"skylight.obj\"}],\n \"materials\": {\"pane\": {\"type\": \"thin_glass\","
+                     " \"ks\": 0.96, \"ior\": 1.52}},\n \"environment\": %s}\n", env[k]);
+            test_write_file(IC_TEST_TMP "/skylight.json", json);
+            test_load_scene(IC_TEST_TMP "/skylight.json", NULL, 16, 16, 0, &s, &err);
+        } else {
+            s = test_load_rad_text("skylight", rad, NULL, 16, 0, &err);
+        }
+        CHECK(s != NULL, "skylight %d loads: %s", k, err.message);
+        if (!s)
+            continue;
+        const double scale = k == 0 ? 1.0 : k == 1 ? Lz : 55.8659;
+        const double want = skylight_E(k, 1, scale), open = skylight_E(k, 0, scale);
+        static const char *const what[3] = {"uniform sky (JSON)", "CIE overcast (JSON)", "gensky -c (.rad)"};
+        double E[2], sg[2];
+        for (int i = 0; i < 2; ++i) {
+            if (!test_sensor_irradiance(s, v3(0.0f, 0.0f, 0.0f), up, i ? IC_INTEGRATOR_IC : IC_INTEGRATOR_PT, 2048,
+                                        &E[i], &sg[i]))
+                continue;
+            printf("skylight, %s, %s: E %.5g +- %.3g, quadrature %.5g (%.2f sigma; %.2f %% of the open sky's %.5g)\n",
+                   what[k], i ? "cache" : "path tracer", E[i], sg[i], want, (E[i] - want) / sg[i],
+                   100.0 * want / open, open);
+            CHECK(fabs(E[i] - want) <= 3.0 * sg[i], "skylight, %s, %s: E %g +- %g, expected %g", what[k],
+                  i ? "cache" : "path tracer", E[i], sg[i], want);
+        }
+        CHECK(fabs(E[0] - E[1]) <= 3.0 * sqrt(sg[0] * sg[0] + sg[1] * sg[1]),
+              "skylight, %s: path tracer %g and cache %g agree within their sigma", what[k], E[0], E[1]);
+        if (k == 1) { /* the daylight factor: the mean transmittance over the overcast sky, weighted by cos θ */
+            double ref = 0.0;
+            CHECK(ic_points_daylight_reference(s, &ref, &err) == IC_OK, "daylight reference: %s", err.message);
+            const double df = 100.0 * 179.0 * E[0] / ref, df_sigma = 100.0 * 179.0 * sg[0] / ref;
+            const double df_want = 100.0 * want / (7.0 * PI_D / 9.0 * Lz);
+            printf("skylight daylight factor: %.3f +- %.3f %%, quadrature %.3f %% (normal incidence: %.2f %%)\n", df,
+                   df_sigma, df_want, 100.0 * pane_T(1.0, 1.52, 0.96));
+            CHECK(fabs(df - df_want) <= 3.0 * df_sigma && fabs(df_want - 82.88) < 0.01,
+                  "daylight factor under the pane %g +- %g %%, expected %g %%", df, df_sigma, df_want);
+        }
+        ic_scene_free(s);
+    }
+}
+
 int main(void)
 {
     test_bsdf();
     pane_in_front_of_light(0.0);
     pane_in_front_of_light(60.0);
     test_json();
+    test_skylight();
     TEST_MAIN_END();
 }
