@@ -184,6 +184,10 @@ static uint64_t scene_digest(const ic_scene *s, uint64_t h)
         float f[14] = {m->kd.x, m->kd.y, m->kd.z, m->ks.x, m->ks.y, m->ks.z, m->ns, m->emission.x, m->emission.y,
                        m->emission.z, m->ior, (float)m->type, (float)m->kd_texture, (float)m->two_sided_emission};
         h = ic_fnv1a64(h, f, sizeof f);
+        if (m->emission_cone) { /* a spotlight's cone (other materials' hashes stay as they were) */
+            float cone[4] = {m->emission_axis.x, m->emission_axis.y, m->emission_axis.z, m->emission_cos_cone};
+            h = ic_fnv1a64(h, cone, sizeof cone);
+        }
         if (m->type == IC_MAT_TRANSLUCENT) { /* (other materials' hashes stay as they were) */
             float t[6] = {m->kt.x, m->kt.y, m->kt.z, m->kt_specular.x, m->kt_specular.y, m->kt_specular.z};
             h = ic_fnv1a64(h, t, sizeof t);

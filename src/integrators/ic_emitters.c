@@ -151,7 +151,7 @@ static int pilot(const ic_ctx *c, const ic_scene *s, uint32_t m, size_t stride, 
             float cos_p = v3_dot(d, n), cos_l = -v3_dot(d, l->normal);
             if (l->two_sided)
                 cos_l = fabsf(cos_l);
-            if (cos_p <= 0.0f || cos_l <= 0.0f)
+            if (cos_p <= 0.0f || cos_l <= 0.0f || !ic_material_emits_towards(&s->materials[m], v3_neg(d)))
                 continue;
             ic_ray r = ic_shadow_ray_to(p, n, d, dist, 1e-3f, c->tr->scene->ray_offset_floor);
             if (ic_accel_occluded1(c->tr->accel, &r))

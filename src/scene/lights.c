@@ -549,6 +549,8 @@ static int sample_triangle(const ic_scene *s, const ic_light_selection *sel, ic_
     float cos_l = -v3_dot(ng, ls->wi);
     if ((!m->two_sided_emission && cos_l <= 0.0f) || cos_l == 0.0f)
         return 0; /* the point sees the back of a one-sided emitter */
+    if (!ic_material_emits_towards(m, v3_neg(ls->wi)))
+        return 0; /* outside a spotlight's cone */
     float select = sel->tri * (sel->tri_pmf ? sel->tri_pmf[li] : l->power / s->tri_light_power);
     ls->pdf = select * dist2 / (l->area * fabsf(cos_l));
     ls->radiance = m->emission;

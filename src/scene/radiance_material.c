@@ -14,7 +14,8 @@
  *   colour·(1 − spec)·trans·(1 − tspec), straight-through transmission colour·(1 − spec)·trans·tspec (its
  *   specular reflection left out, warned). glass: irrcache's thin pane, of the colour's
  *   transmissivity and the index (1.52 by default), as Radiance's glass computes it. dielectric: irrcache's
- *   refracting dielectric. mirror: a mirror. light, glow, spotlight: area emitters of that radiance.
+ *   refracting dielectric. mirror: a mirror. light, glow: area emitters of that radiance; spotlight: the same
+ *   within its cone (half its angle about its direction), dark outside.
  *
  *   A brightfunc of skybright.cal or perezlum.cal is the sky gensky or gendaylit wrote (sky.h, ic_sky_cal):
  *   it is read here and passed on to the light, glow or illum it modifies, whose distant sources then
@@ -306,9 +307,22 @@ static ic_result define_modifier(ic_rad_ctx *c, ic_rad_modifier *out)
         if ((r = need_reals(c, 4, 4, "red green blue maximum-radius")) == IC_OK)
             r = emitter(c, out);
     } else if (!strcmp(t, "spotlight")) {
-        ic_rad_warn_once(c, c->prim_line, kind, "is rendered as a light: its cone is not applied");
-        if ((r = need_reals(c, 7, 7, "red green blue angle x-direction y-direction z-direction")) == IC_OK)
-            r = emitter(c, out);
+        if ((r = need_reals(c, 7, 7, "red green blue angle x-direction y-direction z-direction")) == IC_OK &&
+            (r = emitter(c, out)) == IC_OK) {
+            /* Radiance's spotlight: the light's radiance towards directions within half the (full) cone angle of
+             * the direction, none outside (a hard edge); the direction's length, a focal distance, matters
+             * only for Radiance's virtual sources */
+            const double angle = c->reals[3];
+            const ic_vec3 axis = v3((float)c->reals[4], (float)c->reals[5], (float)c->reals[6]);
+            if (!(angle > 0.0 && angle <= 360.0) || !(v3_len2(axis) > 0.0f) || !v3_is_finite(axis))
+                return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
+                                   "spotlight '%s' needs a cone angle in (0, 360] degrees and a non-zero direction "
+                                   "(given %g and %g %g %g)",
+                                   c->id, angle, c->reals[4], c->reals[5], c->reals[6]);
+            m->emission_cone = 1;
+            m->emission_axis = v3_norm(axis);
+            m->emission_cos_cone = (float)cos(0.5 * angle * 3.14159265358979323846 / 180.0);
+        }
     } else {
         ic_rad_warn_once(c, c->prim_line, kind, "is not supported: a diffuse grey 0.5 is used");
     }

@@ -71,6 +71,10 @@ typedef struct ic_material {
     ic_vec3 emission;      /* emitted radiance (one-sided, along the geometric normal's side the
                               triangle's winding gives; see `two_sided_emission`) */
     int two_sided_emission;/* 1: emits from both sides */
+    int emission_cone;     /* 1: emits only towards directions within the cone below (Radiance's spotlight) */
+    ic_vec3 emission_axis; /* the cone's unit axis, the direction the light points to */
+    float emission_cos_cone; /* cos of the cone's half angle: a direction d from the surface gets the emission
+                              when d · emission_axis ≥ it, else nothing (a hard edge, as Radiance's spotout) */
     float ior;             /* index of refraction (glass, plastic's coat), default 1.5 */
     float alpha;           /* GGX roughness α of conductor, plastic and rough glass (glTF's roughness squared) */
     ic_vec3 eta, k;        /* conductor: complex index of refraction (k all 0: use ks as F0) */
@@ -90,6 +94,12 @@ typedef struct ic_material {
                               IC_COAT_TABLE + 1 floats (E(μ) then its mean) at roughness j/(steps−1);
                               owned by the scene, filled at load */
 } ic_material;
+
+/* 1 when material m emits towards unit direction d (from its surface): inside its emission cone, or it has none. */
+static inline int ic_material_emits_towards(const ic_material *m, ic_vec3 d)
+{
+    return !m->emission_cone || v3_dot(d, m->emission_axis) >= m->emission_cos_cone;
+}
 
 /* Roughness steps of a textured plastic's coat tables (the nearest is used). */
 #define IC_COAT_ROUGH_STEPS 32

@@ -223,7 +223,7 @@ ic_vec3 ic_scene_emission(const ic_scene *scene, const ic_surface *s, ic_vec3 wo
     const ic_material *m = &scene->materials[s->material];
     if (v3_is_black(m->emission))
         return m->emission;
-    if (!m->two_sided_emission && v3_dot(s->ng, wo) <= 0.0f)
+    if ((!m->two_sided_emission && v3_dot(s->ng, wo) <= 0.0f) || !ic_material_emits_towards(m, wo))
         return v3s(0.0f);
     return m->emission;
 }

@@ -554,7 +554,8 @@ static void test_radiance_limit(void)
     } cases[] = {
         {"rad_limit_light", "void light hot\n0\n0\n3 1 %s 1\n", "hot", "", "light 'hot': its radiance is 1e+31"},
         {"rad_limit_glow", "void glow hot\n0\n0\n4 %s 1 1 0\n", "hot", "", "glow 'hot': its radiance is 1e+31"},
-        {"rad_limit_spot", "void spotlight hot\n0\n0\n7 %s %s %s 90 0 0 -1\n", "hot", "",
+        /* pointing at the camera (+z): outside its cone a spotlight is dark */
+        {"rad_limit_spot", "void spotlight hot\n0\n0\n7 %s %s %s 90 0 0 1\n", "hot", "",
          "spotlight 'hot': its radiance is 1e+31"},
         /* an illum seen as a 360-degree source: the environment, of its radiance */
         {"rad_limit_illum", "void illum hot\n0\n0\n3 %s 1 1\nhot source sky\n0\n0\n4 0 0 1 360\n", "grey",
