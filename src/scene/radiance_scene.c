@@ -4,8 +4,8 @@
  *
  *   surfaces polygon, sphere / bubble, ring, cone / cup, cylinder / tube (tessellate.h), mesh through the
  *   OBJ file it names; modifiers by name as Radiance chains them (radiance_material.c); source as the sun
- *   (small angles) or a uniform environment of the same power, or, when a sky function of gensky or gendaylit
- *   modifies its glow, a cone of that sky (sky.h); the camera of a view file (radiance_view.c).
+ *   (small angles), a cone of the environment of its radiance (wider), or, when a sky function of gensky or
+ *   gendaylit modifies its glow, a cone of that sky (sky.h); the camera of a view file (radiance_view.c).
  *
  * Refused with a one-line error naming file:line: "!" command lines (no shell is ever run), instance
  * (compiled octrees), malformed primitives, names used before they are defined. Every other primitive
@@ -547,24 +547,29 @@ static ic_result mesh(ic_rad_ctx *c)
     return IC_OK;
 }
 
-/* A distant source whose glow or light a sky function modifies (gensky's sky and ground): one more cone of
- * the environment's Radiance sky (sky.h), of the sky function times the colour. */
-static ic_result sky_source(ic_rad_ctx *c, const ic_rad_modifier *m, ic_vec3 colour, ic_vec3 d, double angle)
+/* A distant source wider than the sun: one more cone of the environment's Radiance sky (sky.h), of the colour
+ * times the sky function cal (gensky's sky and ground: the function of line sky_line that modifies its glow;
+ * a plain source: IC_SKY_FUNCTION_CONSTANT, sky_line 0). */
+static ic_result cone_source(ic_rad_ctx *c, const ic_sky_cal *cal, int sky_line, ic_vec3 colour, ic_vec3 d,
+                             double angle)
 {
     ic_environment *env = &c->b->scene->env;
-    if (env->enabled && env->sky.model != IC_SKY_RADIANCE)
-        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
-                           "source '%s' of the sky function of line %d comes after a plain source wider than 5 degrees, "
-                           "which irrcache made a uniform environment: it renders one environment; leave the plain one "
-                           "out or give it the sky function too",
-                           c->id, m->sky_line);
+    if (env->enabled && env->sky.model != IC_SKY_RADIANCE) { /* the 360° sources above: the first cone, all round */
+        ic_sky_glow *all = &env->sky.glows[0];
+        memset(all, 0, sizeof *all);
+        all->cal.function = IC_SKY_FUNCTION_CONSTANT;
+        all->direction = v3(0.0f, 0.0f, 1.0f);
+        all->cos_half_angle = -1.0;
+        all->colour = env->radiance;
+        env->sky.glow_count = 1;
+    }
     if (env->sky.glow_count == IC_SKY_MAX_GLOWS)
         return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
-                           "source '%s': more than %d sources of sky functions (gensky writes two, the sky and the "
-                           "ground); merge them",
+                           "source '%s': more than %d sources wider than 5 degrees (gensky writes two, the sky and "
+                           "the ground); merge them",
                            c->id, IC_SKY_MAX_GLOWS);
     ic_sky_glow *g = &env->sky.glows[env->sky.glow_count];
-    g->cal = m->sky;
+    g->cal = *cal;
     g->direction = v3_norm(d);
     /* a hemisphere's rim is exactly its plane (cos 90° would be 6e-17 in double) */
     g->cos_half_angle = angle == 180.0 ? 0.0 : cos(0.5 * angle * 3.14159265358979323846 / 180.0);
@@ -575,10 +580,13 @@ static ic_result sky_source(ic_rad_ctx *c, const ic_rad_modifier *m, ic_vec3 col
     for (int k = 0; k < 4; ++k) {
         ic_vec3 L = v3_scale(colour, (float)ic_sky_cal_value(&g->cal, probes[k]));
         if (ic_radiance_too_large(L))
-            return ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
-                               "source '%s': its sky (the function of line %d times the colour) reaches a radiance of "
-                               IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX, c->id, m->sky_line,
-                               IC_RADIANCE_LIMIT_ARGS(L));
+            return sky_line ? ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
+                                          "source '%s': its sky (the function of line %d times the colour) reaches a "
+                                          "radiance of " IC_RADIANCE_LIMIT_FMT "; " IC_RADIANCE_LIMIT_FIX,
+                                          c->id, sky_line, IC_RADIANCE_LIMIT_ARGS(L))
+                            : ic_rad_fail(c, c->prim_line, IC_ERR_INVALID_ARG,
+                                          "source '%s': its radiance is " IC_RADIANCE_LIMIT_FMT "; "
+                                          IC_RADIANCE_LIMIT_FIX, c->id, IC_RADIANCE_LIMIT_ARGS(L));
     }
     ++env->sky.glow_count;
     env->sky.model = IC_SKY_RADIANCE;
@@ -587,8 +595,8 @@ static ic_result sky_source(ic_rad_ctx *c, const ic_rad_modifier *m, ic_vec3 col
     return IC_OK;
 }
 
-/* A distant source: small ones (up to 5°) the sun, wider ones a uniform environment of the same power, those
- * a sky function modifies a cone of that sky. */
+/* A distant source: small ones (up to 5°) the sun; wider ones a cone of the environment of their radiance, or
+ * of the sky function that modifies their glow; a 360° one without a sky function a uniform environment. */
 static ic_result source(ic_rad_ctx *c, int *has_sun)
 {
     ic_result r = need(c, 4, "x-direction y-direction z-direction angle");
@@ -610,16 +618,15 @@ static ic_result source(ic_rad_ctx *c, int *has_sun)
     if (v3_is_black(radiance)) /* emits nothing, as in Radiance (gendaylit's sun under an overcast sky: 0 0 0) */
         return IC_OK;
     if (m->has_sky)
-        return sky_source(c, m, radiance, d, angle);
+        return cone_source(c, &m->sky, m->sky_line, radiance, d, angle);
+    ic_scene *s = c->b->scene;
+    const ic_sky_cal constant = {.function = IC_SKY_FUNCTION_CONSTANT};
+    if (angle > 5.0 && angle < 360.0) /* its radiance within its cone, nothing outside, as in Radiance */
+        return cone_source(c, &constant, 0, radiance, d, angle);
     double solid_angle = 2.0 * 3.14159265358979323846 * (1.0 - cos(0.5 * angle * 3.14159265358979323846 / 180.0));
     ic_vec3 power = v3_scale(radiance, (float)solid_angle); /* radiance × solid angle */
-    ic_scene *s = c->b->scene;
-    if (angle > 5.0 && s->env.sky.model == IC_SKY_RADIANCE)
-        return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
-                           "source '%s' (of '%s', wider than 5 degrees, without a sky function) comes after the "
-                           "sources of a sky function, which make the environment: irrcache renders one; leave it out "
-                           "or give it the sky function too",
-                           c->id, c->modifier);
+    if (angle > 5.0 && s->env.sky.model == IC_SKY_RADIANCE) /* after cones: one more, all round */
+        return cone_source(c, &constant, 0, radiance, d, angle);
     if (angle <= 5.0) {
         if (*has_sun)
             return ic_rad_fail(c, c->prim_line, IC_ERR_UNSUPPORTED,
@@ -630,10 +637,7 @@ static ic_result source(ic_rad_ctx *c, int *has_sun)
         s->sun.irradiance = power;
         return IC_OK;
     }
-    if (angle < 360.0)
-        ic_rad_warn_once(c, c->prim_line, "a source wider than 5 degrees",
-                         "is rendered as a uniform environment of the same power (radiance x solid angle / 4 pi)");
-    s->env.enabled = 1;
+    s->env.enabled = 1; /* 360°: the whole sphere; two of them add up */
     s->env.radiance = v3_add(s->env.radiance, v3_scale(power, (float)(1.0 / (4.0 * 3.14159265358979323846))));
     return IC_OK;
 }

@@ -331,6 +331,8 @@ static double cal_sky(const ic_sky_cal *c, double dz, double cos_gamma)
 
 double ic_sky_cal_value(const ic_sky_cal *c, ic_vec3 d)
 {
+    if (c->function == IC_SKY_FUNCTION_CONSTANT)
+        return 1.0;
     double dz = (double)d.z, cos_gamma = (double)d.x * c->sun[0] + (double)d.y * c->sun[1] + dz * c->sun[2];
     /* Both files blend the ground in by the weights (Dz + 1.01)^±10: at the horizon the sky has 55 % of the
      * weight, 5° below it 17 %, 10° below 3 %, 5° above 86 %. */

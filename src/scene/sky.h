@@ -46,8 +46,10 @@ typedef enum ic_sky_model {
 typedef enum ic_sky_function {
     IC_SKY_FUNCTION_SKYBRIGHT = 1, /* gensky: A1 the sky type, A2 the zenith brightness, A3 the ground
                                       brightness, A4 the normalisation, A5–A7 the sun direction */
-    IC_SKY_FUNCTION_PEREZLUM       /* gendaylit: A1 the diffuse normalisation, A2 the ground brightness,
+    IC_SKY_FUNCTION_PEREZLUM,      /* gendaylit: A1 the diffuse normalisation, A2 the ground brightness,
                                       A3–A7 the Perez coefficients a–e, A8–A10 the sun direction */
+    IC_SKY_FUNCTION_CONSTANT       /* no function: 1 everywhere (a plain source wider than the sun: its glow's
+                                      radiance within its cone, as Radiance renders it) */
 } ic_sky_function;
 
 /* skybright.cal's sky types (its A1, gensky's -s/+s, -c, -u, -i/+i). */

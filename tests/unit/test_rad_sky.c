@@ -14,8 +14,8 @@
  *      sky (`3 0.0 0.0 0.0`) load;
  *   5. malformed skies are refused with one line naming file:line: a wrong argument count, a NaN, a sun
  *      direction of zero length, a sky type out of range, another function of skybright.cal, a transform,
- *      a surface made of a sky glow, a plain wide source beside the sky; a sky function modifying a plastic
- *      is warned about.
+ *      a surface made of a sky glow; a sky function modifying a plastic is warned about; a plain wide source
+ *      beside the sky is one more cone of it (the last defined gives a direction its radiance).
  * `irrcache points` on the pasted overcast sky against the JSON scene's cie-overcast: test_cli_rad.c.
  */
 #include "test_util.h"
@@ -250,12 +250,22 @@ static void test_errors(void)
     expect_error("rad_sky_surface", more,
                  (const char *[]){"rad_sky_surface.rad:28:", "'sky_glow'", "sky function of line 3", "sources only",
                                   NULL});
-    snprintf(more, sizeof more, "%s\nvoid glow plain\n0\n0\n4 1 1 1 0\nplain source extra\n0\n0\n4 0 1 0 90\n", text);
-    expect_error("rad_sky_plain_after", more,
-                 (const char *[]){"rad_sky_plain_after.rad:32:", "source 'extra'", "one", NULL});
-    snprintf(more, sizeof more, "void glow plain\n0\n0\n4 1 1 1 0\nplain source extra\n0\n0\n4 0 1 0 90\n%s", text);
-    expect_error("rad_sky_plain_before", more,
-                 (const char *[]){"rad_sky_plain_before.rad:", "source 'sky'", "sky function of line", NULL});
+    /* a plain wide source beside the sky is one more cone of it, of its glow's radiance (7 here): where it
+     * overlaps the sky, the source defined last gives a direction its radiance, as the sky's own do */
+    const ic_vec3 in_cone = v3(0.0f, 0.8f, 0.6f), zenith = v3(0.0f, 0.0f, 1.0f); /* 36.9° from +y; outside */
+    for (int after = 0; after < 2; ++after) {
+        static const char plain[] = "void glow plain\n0\n0\n4 7 7 7 0\nplain source extra\n0\n0\n4 0 1 0 90\n";
+        snprintf(more, sizeof more, "%s\n%s", after ? text : plain, after ? plain : text);
+        ic_scene *s = load_text(after ? "rad_sky_plain_after" : "rad_sky_plain_before", more);
+        if (!s)
+            continue;
+        const double A[8] = {0, 2, 10, 2, 1, 0, 0, 1}, sky_in = test_skybr(A, 0.0, 0.8, 0.6), sky_zen = test_skybr(A, 0.0, 0.0, 1.0);
+        const double got_in = ic_scene_env_radiance(s, in_cone).y, got_zen = ic_scene_env_radiance(s, zenith).y;
+        CHECK(fabs(got_in - (after ? 7.0 : sky_in)) < 1e-4 * got_in && fabs(got_zen - sky_zen) < 1e-4 * sky_zen,
+              "a plain 90-degree source %s the sky: %g in its cone (expected %g), %g at the zenith (expected %g)",
+              after ? "after" : "before", got_in, after ? 7.0 : sky_in, got_zen, sky_zen);
+        ic_scene_free(s);
+    }
     /* a sky function modifying a plastic is warned about, and the plastic used without it */
     ic_error err = {0};
     ic_scene *s = test_load_rad_text("rad_sky_plastic",

@@ -10,6 +10,9 @@
  *      whole disc;
  *   3. a `source` of 0.533° (the sun) of radiance L from 36.9° off the zenith: E = L Ω cos θ on an upward
  *      sensor, Ω = 2π(1 − cos 0.2665°), and L Ω facing it;
+ *   4. a `source` of 180° (a hemisphere) of a glow of radiance L: an upward sensor reads πL, a sideways one
+ *      πL/2, a downward one nothing, as in Radiance (a source is its radiance within its cone); a 90° source
+ *      about the zenith gives an upward sensor πL sin² 45° and a sideways one the integral over its cone.
  * Each estimate lies within 3 of its σ of the closed form and the two estimators within 3 combined σ (the
  * sun, a directional light here, has σ 0: within 1e-5; Radiance's disc of the same radiance gives
  * L π sin² a cos θ, 5e-6 less).
@@ -99,9 +102,41 @@ static void test_sun(void)
     ic_scene_free(s);
 }
 
+/* The irradiance of a sideways sensor (normal +x) from radiance L within the cone of half angle a about +z:
+ * ∫ L max(D·x, 0) dω over the cone, by the midpoint rule. */
+static double cone_sideways(double L, double a)
+{
+    const int NT = 2000, NP = 2000;
+    double sum = 0.0;
+    for (int i = 0; i < NT; ++i) {
+        double th = (i + 0.5) * a / NT;
+        for (int j = 0; j < NP; ++j) {
+            double phi = (j + 0.5) * 2.0 * PI_D / NP, dx = sin(th) * cos(phi);
+            sum += dx > 0.0 ? dx * sin(th) : 0.0;
+        }
+    }
+    return L * sum * (a / NT) * (2.0 * PI_D / NP);
+}
+
+static void test_wide_sources(void)
+{
+    const double L = 2.0;
+    const ic_vec3 o = v3(0.0f, 0.0f, 0.0f);
+    ic_scene *s = load("src_hemi", "void glow skyglow\n0\n0\n4 2 2 2 0\nskyglow source sky\n0\n0\n4 0 0 1 180\n");
+    expect(s, "180-degree source, upward sensor", o, v3(0.0f, 0.0f, 1.0f), PI_D * L);
+    expect(s, "180-degree source, sideways sensor", o, v3(1.0f, 0.0f, 0.0f), 0.5 * PI_D * L);
+    expect(s, "180-degree source, downward sensor", o, v3(0.0f, 0.0f, -1.0f), 0.0);
+    ic_scene_free(s);
+    s = load("src_cone90", "void light skylight\n0\n0\n3 2 2 2\nskylight source sky\n0\n0\n4 0 0 1 90\n");
+    expect(s, "90-degree source, upward sensor", o, v3(0.0f, 0.0f, 1.0f), PI_D * L * 0.5);
+    expect(s, "90-degree source, sideways sensor", o, v3(1.0f, 0.0f, 0.0f), cone_sideways(L, 0.25 * PI_D));
+    ic_scene_free(s);
+}
+
 int main(void)
 {
     test_disc_and_spotlight();
     test_sun();
+    test_wide_sources();
     TEST_MAIN_END();
 }
