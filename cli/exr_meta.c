@@ -51,8 +51,9 @@ void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cl
     m->settings = settings && ic_cli_json_utf8(settings) ? cJSON_PrintUnformatted(settings) : NULL;
     cJSON_Delete(settings);
     add(m, "irrcache:settings", m->settings);
-    /* An interrupted render's image is partial: how much of the final render it holds. */
-    if (st->cancelled)
+    /* An interrupted render's image is partial: how much of the final render it holds. Interrupted after a
+     * whole final render (during the AOVs' renders), the image is whole: the AOVs are marked (render.c). */
+    if (st->cancelled && st->completed < 1.0)
         ic_cli_exr_meta_partial(m, "interrupted", st->completed);
 }
 

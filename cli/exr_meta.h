@@ -20,7 +20,7 @@ typedef struct ic_cli_exr_meta {
 /* Fills m from the render's arguments and what it cost: irrcache:version, :scene, :scene_fnv1a64 (of the
  * scene file's bytes; absent if it cannot be read), :integrator, :seed, :spp, :seconds (fixed width),
  * :settings (the options as the stats JSON echoes them; both texts UTF-8, U+FFFD for a byte of a path that is
- * not) and, for an interrupted render, :partial. Never
+ * not) and, for an interrupted render whose final render was cut short, :partial. Never
  * fails: what cannot be made is left out. */
 void ic_cli_exr_meta_make(const ic_cli_args *a, const ic_render_stats *st, ic_cli_exr_meta *m);
 /* Adds irrcache:partial, "WHY; F of the final render" (why: "interrupted", "checkpoint"; completed: the

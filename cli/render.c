@@ -224,16 +224,19 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
     return failed;
 }
 
-/* Writes img to every -o output, the first with `layers` (its EXR layers); returns how many failed, each
- * said on stderr after `what`, and named in `failed` (may be NULL) after a comma. */
+/* Writes img to every -o output, the first with `layers` (its EXR layers) and then wo_layers' attributes;
+ * returns how many failed, each said on stderr after `what`, and named in `failed` (may be NULL) after a
+ * comma. */
 static int write_outputs(const render_args *a, const ic_image *img, const ic_image_write_options *wo,
-                         const ic_image_layer *layers, uint32_t layer_count, const char *what, char *failed,
-                         size_t size)
+                         const ic_image_layer *layers, uint32_t layer_count, const ic_image_write_options *wo_layers,
+                         const char *what, char *failed, size_t size)
 {
     int n = 0;
     for (int i = 0; i < a->output_count; ++i) {
         ic_image_write_options wo_i = *wo;
-        if (i == 0) {
+        if (i == 0 && layer_count) {
+            wo_i.meta = wo_layers->meta;
+            wo_i.meta_count = wo_layers->meta_count;
             wo_i.layers = layers;
             wo_i.layer_count = layer_count;
         }
@@ -270,7 +273,7 @@ static void on_checkpoint(void *user, const ic_render_checkpoint *cp)
     ic_image_write_options wo = k->wo;
     wo.meta = meta.items;
     wo.meta_count = meta.count;
-    write_outputs(k->a, cp->image, &wo, NULL, 0, "--checkpoint: -o", NULL, 0);
+    write_outputs(k->a, cp->image, &wo, NULL, 0, NULL, "--checkpoint: -o", NULL, 0);
     ic_cli_exr_meta_free(&meta);
 }
 
@@ -507,10 +510,21 @@ static int render_command(int argc, char **argv, ic_comm *comm)
         ++st.phase_count;
     }
     int w = img.width, h = img.height;
-    ic_cli_exr_meta meta;
+    ic_cli_exr_meta meta, aov_meta;
     ic_cli_exr_meta_make(&a, &st, &meta);
     wo.meta = meta.items;
     wo.meta_count = meta.count;
+    /* The images that hold the AOVs (their files, the first output's layers) are marked partial too when
+     * an interrupt cut the AOVs' renders after a whole final render. */
+    const int aovs_cut = st.cancelled && st.completed >= 1.0;
+    ic_image_write_options wo_aovs = wo;
+    memset(&aov_meta, 0, sizeof aov_meta);
+    if (aovs_cut) {
+        ic_cli_exr_meta_make(&a, &st, &aov_meta);
+        ic_cli_exr_meta_partial(&aov_meta, "interrupted during the --aov renders", st.completed);
+        wo_aovs.meta = aov_meta.items;
+        wo_aovs.meta_count = aov_meta.count;
+    }
     /* One failed output does not cost the others: each is written, and the failures are named. */
     char failed[1024] = "";
     int n_failed = 0;
@@ -524,9 +538,9 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     for (int k = 0; k < AOV_COUNT && opt.aovs && a.aov; ++k)
         if (aov_imgs[k]->rgb && aov_is_layer(a.outputs[0], k))
             layers[layer_count++] = (ic_image_layer){aov_files[k].name, aov_imgs[k]};
-    n_failed += write_outputs(&a, &img, &wo, layers, layer_count, "-o", failed, sizeof failed);
+    n_failed += write_outputs(&a, &img, &wo, layers, layer_count, &wo_aovs, "-o", failed, sizeof failed);
     if (opt.aovs && a.aov) {
-        int n = write_aovs(a.outputs[0], &aovs, &wo);
+        int n = write_aovs(a.outputs[0], &aovs, &wo_aovs);
         if (n)
             FAILED("--aov", a.aov);
     }
@@ -538,11 +552,15 @@ static int render_command(int argc, char **argv, ic_comm *comm)
             FAILED("--save-cache", a.render.ic.save_cache);
     }
     ic_cli_exr_meta_free(&meta);
+    ic_cli_exr_meta_free(&aov_meta);
     free_results(&img, &aovs, scene);
     if (st.cancelled) {
         const char *sig = ic_cli_stop_signal == SIGTERM ? "SIGTERM" : "SIGINT";
         const int budget = opt.time_budget > 0.0;
-        if (st.completed > 0.0 && budget && st.spp_min == st.spp_max)
+        if (aovs_cut)
+            ic_cli_eprintf("irrcache render: interrupted by %s during the --aov renders: the image is whole; the "
+                            "--aov indirect and glossy images hold the tiles they finished, the others black\n", sig);
+        else if (st.completed > 0.0 && budget && st.spp_min == st.spp_max)
             ic_cli_eprintf("irrcache render: interrupted by %s between passes of the --time budget: the outputs "
                             "hold the image so far, %d samples per pixel\n", sig, st.spp_max);
         else if (st.completed > 0.0 && st.spp_min > 0 && st.spp_min < st.spp_max) /* a later pass cut short */

@@ -262,7 +262,9 @@ typedef struct ic_render_options {
                               tile its last pass did not reach keeps the earlier passes' samples); a render
                               stopped before its final render began renders one sample per pixel from the
                               records it has. The render then returns IC_OK with stats.cancelled set and the
-                              image it has: tiles with no samples are black. Ignored with a shared comm */
+                              image it has: tiles with no samples are black. The AOVs rendered after the image
+                              (indirect, glossy) stop at their next tile too (stats.cancelled, completed 1).
+                              Ignored with a shared comm */
     ic_render_progress_fn progress_detail; /* progress's reports with the whole render's elapsed time and
                               estimated time left (may be NULL); called from one thread at a time */
     double checkpoint_seconds; /* > 0 with checkpoint: every this many seconds of the final render's wall time
@@ -288,7 +290,9 @@ typedef struct ic_render_stats {
     int spp_min;           /* the fewest (adaptive sampling, or an interrupt; else spp) */
     int threads;           /* threads used */
     uint64_t seed;         /* the seed the render used (the option's, else the scene file's, else the default) */
-    int cancelled;         /* 1: opt.cancel stopped the render early; the image is partial */
+    int cancelled;         /* 1: opt.cancel stopped the render early; the image is partial, or, with
+                              completed 1, the image is whole and the AOVs rendered after it (indirect,
+                              glossy) are: their tiles not begun are black */
     double completed;      /* share of the final render's samples taken (with a time budget, of those of
                               the passes it began): 1 for a complete image; a one-sample preview after an
                               interrupted construction counts 0 */

@@ -233,7 +233,7 @@ static ic_result ic_prepare(void *self, ic_render_stats *st, ic_error *err)
 }
 
 static ic_result ic_aovs(void *self, const ic_image *beauty, const ic_image_loop *loop_in,
-                         const ic_image_loop_result *lr, ic_render_aovs *a, ic_error *err)
+                         const ic_image_loop_result *lr, ic_render_aovs *a, int *cancelled, ic_error *err)
 {
     ic_state *s = self;
     const ic_ctx *c = s->c;
@@ -257,6 +257,8 @@ static ic_result ic_aovs(void *self, const ic_image *beauty, const ic_image_loop
         *modes[k] = 0;
         if (r != IC_OK)
             return r;
+        if (lr2.cancelled)
+            *cancelled = 1;
     }
     ic_result r;
     if (a->want_records && (r = ic_ic_records_image(c, beauty, &a->records)) != IC_OK)

@@ -29,9 +29,10 @@ typedef struct ic_integrator_ops {
     ic_result (*prepare)(void *self, ic_render_stats *st, ic_error *err);
     ic_sample_fn sample;       /* ctx = self */
     /* beauty: the image just rendered; loop and lr: how it was rendered (an AOV rendered by the film
-     * takes the same samples). */
+     * takes the same samples). *cancelled: 1 when loop.cancel cut an AOV the film renders short (its
+     * tiles not begun are black), else left alone. */
     ic_result (*aovs)(void *self, const ic_image *beauty, const ic_image_loop *loop, const ic_image_loop_result *lr,
-                      ic_render_aovs *out, ic_error *err);
+                      ic_render_aovs *out, int *cancelled, ic_error *err);
     void (*destroy)(void *self);
 } ic_integrator_ops;
 

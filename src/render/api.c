@@ -256,8 +256,10 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         st->completed = lr.completed;
         st->rank_pixel_samples = lr.samples;
         st->rank_render_seconds = lr.busy_seconds;
+        /* An interrupt during the AOVs' own renders (after a complete final render) leaves them partial:
+         * said as an interrupted render whose final render completed. */
         if (opt.aovs && it.ops->aovs)
-            r = it.ops->aovs(it.self, out, &loop, &lr, opt.aovs, err);
+            r = it.ops->aovs(it.self, out, &loop, &lr, opt.aovs, &st->cancelled, err);
     }
     ic_integrator_destroy(&it);
     ic_accel_destroy(accel);

@@ -11,7 +11,8 @@
  *   - an interrupt during cache construction: every strategy stops before its next gather and renders a
  *     complete one-sample preview from the records it has (none, when the flag is set at its start);
  *   - an interrupt during a pass under a time budget (the film itself, ic_render_image): the pass skips its
- *     tiles not begun, each of which keeps its earlier passes' samples and is their mean.
+ *     tiles not begun, each of which keeps its earlier passes' samples and is their mean;
+ *   - an interrupt during the AOVs rendered after a whole image: the stats say the render was interrupted.
  */
 #include "film/film.h"
 #include "irrcache/render.h"
@@ -221,6 +222,51 @@ static void check_interrupted_construction(void)
     }
 }
 
+/* An interrupt during the indirect AOV's render, after a whole final render: the image is the one an
+ * uninterrupted render gives, the AOV stops at its next tile (tiles black), and the stats say the render
+ * was interrupted (it returned exit status 0 and an unmarked AOV with black tiles when they did not). */
+static void check_interrupted_aov(void)
+{
+    ic_render_options o = {0};
+    o.integrator = IC_INTEGRATOR_IC;
+    o.spp = 4;
+    o.adaptive_sampling = IC_CACHE_OFF;
+    o.ic.gather.theta_strata = 8;
+    o.ic.gather.phi_strata = 25;
+    ic_image img[2], aov[2];
+    ic_render_stats st[2];
+    for (int k = 0; k < 2; ++k) {
+        ic_render_aovs aovs;
+        memset(&aovs, 0, sizeof aovs);
+        aovs.want_indirect = 1;
+        ic_render_options ok = o;
+        ok.aovs = &aovs;
+        canceller c = {0, "indirect AOV"};
+        if (k == 1) { /* the flag set by the AOV's first report (one thread: after its first tile) */
+            ok.progress = cancel_at;
+            ok.progress_user = &c;
+            ok.cancel = &c.flag;
+        }
+        CHECK(render(ok, 1, NULL, &img[k], &st[k]), "AOV render %d returns", k);
+        aov[k] = aovs.indirect;
+    }
+    int black[2] = {0, 0};
+    for (int k = 0; k < 2; ++k)
+        for (int i = 0; aov[k].rgb && i < W * H; ++i)
+            black[k] += aov[k].rgb[3 * i] + aov[k].rgb[3 * i + 1] + aov[k].rgb[3 * i + 2] == 0.0f;
+    CHECK(!st[0].cancelled && st[1].cancelled && st[1].completed == 1.0,
+          "interrupted in the AOV: cancelled (%d, uninterrupted %d), the final render whole (completed %g)",
+          st[1].cancelled, st[0].cancelled, st[1].completed);
+    CHECK(img[0].rgb && img[1].rgb && same_pixels(&img[0], &img[1]), "interrupted in the AOV: the image is whole");
+    CHECK(aov[1].rgb && black[1] >= 16 * 16 && black[0] < black[1],
+          "interrupted in the AOV: its tiles not begun are black (%d black pixels, %d uninterrupted)", black[1],
+          black[0]);
+    for (int k = 0; k < 2; ++k) {
+        ic_image_free(&img[k]);
+        ic_image_free(&aov[k]);
+    }
+}
+
 /* Every sample 1, and the cancel flag set by sample number `at` (one thread: a fixed point of the render). */
 typedef struct counting {
     volatile sig_atomic_t flag;
@@ -359,5 +405,6 @@ int main(void)
 
     check_reports();
     check_interrupted_construction();
+    check_interrupted_aov();
     TEST_MAIN_END();
 }
