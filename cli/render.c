@@ -594,8 +594,9 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     const int n_outputs = a.output_count + (opt.aovs && a.aov) + (a.records_json != NULL) +
                           (a.render.ic.save_cache != NULL && !st.cancelled) + (a.stats_path != NULL);
     if (!ok)
-        ic_cli_eprintf("irrcache render: the render finished but %d output%s could not be written (%s)%s: free "
-                        "disk space or fix the paths and run again\n", n_failed, n_failed == 1 ? "" : "s", failed,
+        ic_cli_eprintf("irrcache render: the render %s but %d output%s could not be written (%s)%s: free "
+                        "disk space or fix the paths and run again\n", st.cancelled ? "was interrupted" : "finished",
+                n_failed, n_failed == 1 ? "" : "s", failed,
                 n_failed < n_outputs ? "; the other outputs were written" : "");
     if (ok && !a.quiet) {
         ic_cli_eprintf("irrcache: %dx%d, %d spp", w, h, st.spp);
@@ -614,8 +615,9 @@ static int render_command(int argc, char **argv, ic_comm *comm)
             ic_cli_eprintf(", %u emitting triangles lit through the records", st.cached_emitters);
         fputc('\n', stderr);
     }
-    /* An interrupted render whose outputs were written ends as the signal asked: 128 + its number. */
-    if (ok && st.cancelled)
+    /* An interrupted render ends as the signal asked, 128 + its number, an output that failed or not (said
+     * above): a caller that sent SIGTERM, or a shell loop stopped by Ctrl-C, learns of the signal. */
+    if (st.cancelled)
         return 128 + (int)ic_cli_stop_signal;
     return ok ? 0 : EXIT_OUTPUT_FAILED;
 }

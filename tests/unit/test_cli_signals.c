@@ -159,6 +159,9 @@ static int wait_bounded(pid_t pid, double limit, double *waited)
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+/* A file-size limit for the renders start_render starts (0: none), their writes past it failing with EFBIG. */
+static rlim_t render_file_limit;
+
 /* Starts `irrcache render ARGS… -o DIR_/int.exr -o DIR_/int.png --stats DIR_/int.json` in a child with
  * SIGINT and SIGTERM at their default (so the command installs its handler); stderr goes to
  * DIR_/int.err. */
@@ -168,6 +171,11 @@ static pid_t start_render(const char *const *args)
     if (pid == 0) {
         signal(SIGINT, SIG_DFL);
         signal(SIGTERM, SIG_DFL);
+        if (render_file_limit) {
+            struct rlimit rl = {render_file_limit, render_file_limit};
+            setrlimit(RLIMIT_FSIZE, &rl);
+            signal(SIGXFSZ, SIG_IGN);
+        }
         int fd = open(DIR_ "/int.err", O_WRONLY | O_CREAT | O_TRUNC, 0644);
         dup2(fd, 2);
         const char *argv[32] = {"irrcache", "render", IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", "-q",
@@ -257,6 +265,29 @@ static void test_interrupted_render(void)
           err.message);
     ic_image_free(&img);
     CHECK(test_count_temporaries(DIR_) == 0, "no temporary file left");
+}
+
+/* SIGTERM during a render whose PFM then exceeds a 16 kB file-size limit (a full disk): the stats are
+ * written, the image named as not written, and the exit status is still 143, with no claim that the
+ * render finished (it exited 3, 'the render finished but 1 output could not be written'). */
+static void test_interrupted_output_failed(void)
+{
+    const char *final[] = {"--width", "256", "--height", "256", "--spp", "4096", "--adaptive-sampling", "off", "-o",
+                           DIR_ "/int.pfm", NULL}; /* the PFM: 786 kB whatever the image */
+    remove(DIR_ "/int.json");
+    render_file_limit = 16384;
+    int rc = interrupt_render(SIGTERM, 1.5, final);
+    render_file_limit = 0;
+    char err_text[2048], json[8192] = "";
+    test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
+    test_read_text(DIR_ "/int.json", json, sizeof json);
+    CHECK(rc == 143, "SIGTERM, outputs failing: exit 143 (got %d: %s)", rc, err_text);
+    CHECK(strstr(err_text, "interrupted by SIGTERM") && strstr(err_text, "was interrupted but") &&
+              strstr(err_text, "could not be written (") && strstr(err_text, "-o " DIR_ "/int.pfm") &&
+              !strstr(err_text, "finished"),
+          "SIGTERM, outputs failing: says the render was interrupted and names the failures: %s", err_text);
+    CHECK(strstr(json, "\"interrupted\"") != NULL, "SIGTERM, outputs failing: the stats are written");
+    CHECK(test_count_temporaries(DIR_) == 0, "SIGTERM, outputs failing: no temporary file left");
 }
 
 /* SIGTERM during a render under --time: its passes double, so the one running lasts about as long as all
@@ -465,6 +496,7 @@ int main(void)
     CHECK(test_count_temporaries(DIR_) == 0, "SIGXFSZ: the command left no temporary file");
     CHECK(!exists(DIR_ "/big.pfm"), "SIGXFSZ: no output");
     test_interrupted_render();
+    test_interrupted_output_failed();
     test_interrupted_budget();
     test_interrupted_construction();
     test_checkpoints();
