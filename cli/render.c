@@ -225,11 +225,12 @@ static int write_aovs(const char *first, const ic_render_aovs *aovs, const ic_im
 }
 
 /* Writes img to every -o output, the first with `layers` (its EXR layers) and then wo_layers' attributes;
- * returns how many failed, each said on stderr after `what`, and named in `failed` (may be NULL) after a
- * comma. */
+ * returns how many failed, each said on stderr after `what` (unless its entry of `failing` says it failed
+ * last time: said once), and named in `failed` (may be NULL) after a comma. failing (may be NULL): per
+ * output, 1 if its write failed, updated. */
 static int write_outputs(const render_args *a, const ic_image *img, const ic_image_write_options *wo,
                          const ic_image_layer *layers, uint32_t layer_count, const ic_image_write_options *wo_layers,
-                         const char *what, char *failed, size_t size)
+                         const char *what, char *failed, size_t size, int *failing)
 {
     int n = 0;
     for (int i = 0; i < a->output_count; ++i) {
@@ -241,9 +242,15 @@ static int write_outputs(const render_args *a, const ic_image *img, const ic_ima
             wo_i.layer_count = layer_count;
         }
         ic_error err;
+        const int failed_before = failing && failing[i];
+        if (failing)
+            failing[i] = 0;
         if (ic_image_write(a->outputs[i], img, &wo_i, &err) == IC_OK)
             continue;
-        ic_cli_eprintf("irrcache render: %s %s\n", what, err.message);
+        if (failing)
+            failing[i] = 1;
+        if (!failed_before)
+            ic_cli_eprintf("irrcache render: %s %s\n", what, err.message);
         if (failed)
             snprintf(failed + strlen(failed), size - strlen(failed), "%s-o %s", failed[0] ? ", " : "",
                      a->outputs[i]);
@@ -253,15 +260,18 @@ static int write_outputs(const render_args *a, const ic_image *img, const ic_ima
 }
 
 /* --checkpoint: the final render's image so far into every -o output, marked partial. A write that fails
- * is said and the render goes on (the next checkpoint, or the final image, tries again). */
+ * is said (once, until one succeeds: a full disk would say it at every checkpoint of a long render) and the
+ * render goes on (the next checkpoint, or the final image, tries again). */
 typedef struct checkpoint_state {
     const render_args *a;
     ic_image_write_options wo; /* exposure and half floats of the final outputs */
+    int failing[IC_CLI_MAX_OUTPUTS]; /* 1: the output's last checkpoint could not be written */
+    double held[IC_CLI_MAX_OUTPUTS]; /* share of the final render in the checkpoint the output holds; 0: none */
 } checkpoint_state;
 
 static void on_checkpoint(void *user, const ic_render_checkpoint *cp)
 {
-    const checkpoint_state *k = user;
+    checkpoint_state *k = user;
     ic_render_stats st;
     memset(&st, 0, sizeof st);
     st.seed = cp->seed;
@@ -273,8 +283,22 @@ static void on_checkpoint(void *user, const ic_render_checkpoint *cp)
     ic_image_write_options wo = k->wo;
     wo.meta = meta.items;
     wo.meta_count = meta.count;
-    write_outputs(k->a, cp->image, &wo, NULL, 0, NULL, "--checkpoint: -o", NULL, 0);
+    write_outputs(k->a, cp->image, &wo, NULL, 0, NULL, "--checkpoint: -o", NULL, 0, k->failing);
+    for (int i = 0; i < k->a->output_count; ++i)
+        if (!k->failing[i])
+            k->held[i] = fmax(cp->completed, 1e-9); /* a checkpoint before the first tile holds one too */
     ic_cli_exr_meta_free(&meta);
+}
+
+/* After the final write: an output that failed but holds a checkpoint of this render is not the file it was
+ * before the run, nor the final image; said, so that its partial image (only an EXR is marked) is not
+ * taken for either. */
+static void say_checkpoints_held(const checkpoint_state *k, const int *failing)
+{
+    for (int i = 0; i < k->a->output_count; ++i)
+        if (failing[i] && k->held[i] > 0.0)
+            ic_cli_eprintf("irrcache render: -o %s holds this run's last checkpoint (%.0f %% of the final render, "
+                            "the other tiles black), not the final image\n", k->a->outputs[i], 100.0 * k->held[i]);
 }
 
 static int write_records_json(const char *path, const ic_render_aovs *aovs)
@@ -441,7 +465,7 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     ic_image_write_options wo = {0};
     wo.exposure = a.given[IC_ARG_EXPOSURE] ? (float)a.exposure : ic_scene_exposure(scene);
     wo.exr_half = a.exr_half;
-    checkpoint_state checkpoints = {&a, wo};
+    checkpoint_state checkpoints = {&a, wo, {0}, {0}};
     if (rank == 0 && opt.checkpoint_seconds > 0.0) { /* one process writes (the library ignores a shared comm) */
         opt.checkpoint = on_checkpoint;
         opt.checkpoint_user = &checkpoints;
@@ -538,7 +562,10 @@ static int render_command(int argc, char **argv, ic_comm *comm)
     for (int k = 0; k < AOV_COUNT && opt.aovs && a.aov; ++k)
         if (aov_imgs[k]->rgb && aov_is_layer(a.outputs[0], k))
             layers[layer_count++] = (ic_image_layer){aov_files[k].name, aov_imgs[k]};
-    n_failed += write_outputs(&a, &img, &wo, layers, layer_count, &wo_aovs, "-o", failed, sizeof failed);
+    int final_failing[IC_CLI_MAX_OUTPUTS] = {0};
+    n_failed += write_outputs(&a, &img, &wo, layers, layer_count, &wo_aovs, "-o", failed, sizeof failed,
+                              final_failing);
+    say_checkpoints_held(&checkpoints, final_failing);
     if (opt.aovs && a.aov) {
         int n = write_aovs(a.outputs[0], &aovs, &wo_aovs);
         if (n)

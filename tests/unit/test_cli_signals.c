@@ -456,6 +456,46 @@ static void test_checkpoints(void)
     CHECK(same, "--checkpoint (2 threads) gives the bytes of the render without it (1 thread)");
 }
 
+/* --checkpoint with the final images over a 16 kB file-size limit (a disk that fills): a mostly black
+ * checkpoint fits, the final image does not. The output keeps the last checkpoint, a complete partial image,
+ * and the command says so instead of leaving it to pass for the final image ('nothing was written' alone);
+ * each output's failing checkpoints are said once, not at every checkpoint. */
+static void test_checkpoint_held(void)
+{
+    remove(DIR_ "/int.exr");
+    remove(DIR_ "/int.png");
+    const char *args[] = {"--width", "128", "--height", "128", "--spp", "256", "--threads", "2", "--checkpoint",
+                          "0.02", NULL};
+    render_file_limit = 16384;
+    double waited;
+    int rc = wait_bounded(start_render(args), 300.0, &waited);
+    render_file_limit = 0;
+    char err_text[8192];
+    test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
+    CHECK(rc == 3, "--checkpoint, final images over the limit: exit 3 (got %d: %s)", rc, err_text);
+    int said = 0, held = 0, whole = 1;
+    for (const char *p = err_text; (p = strstr(p, "--checkpoint: -o")) != NULL; ++p)
+        ++said;
+    const char *paths[] = {DIR_ "/int.exr", DIR_ "/int.png"};
+    for (int k = 0; k < 2; ++k) {
+        char line[256];
+        snprintf(line, sizeof line, "-o %s holds this run's last checkpoint", paths[k]);
+        if (!strstr(err_text, line))
+            continue;
+        ++held;
+        ic_image img;
+        ic_error err;
+        int ok = ic_image_read(paths[k], &img, &err) == IC_OK && img.width == 128 && img.height == 128;
+        if (ok)
+            ic_image_free(&img);
+        whole &= ok;
+    }
+    CHECK(held > 0 && whole, "--checkpoint: an output left with a checkpoint is named (%d) and whole: %s", held,
+          err_text);
+    CHECK(said <= 2, "--checkpoint: a failing output's checkpoints are said once each (%d lines)", said);
+    CHECK(test_count_temporaries(DIR_) == 0, "--checkpoint over the limit: no temporary file left");
+}
+
 int main(void)
 {
     CHECK(system("rm -rf '" DIR_ "' && mkdir -p '" DIR_ "'") == 0, "scratch folder");
@@ -500,5 +540,6 @@ int main(void)
     test_interrupted_budget();
     test_interrupted_construction();
     test_checkpoints();
+    test_checkpoint_held();
     TEST_MAIN_END();
 }
