@@ -348,11 +348,14 @@ static void records_settings(const ic_ctx *c, uint64_t scene, char *out, size_t 
                     c->direct_pmf ? (unsigned)ic_fnv1a64(IC_FNV64_OFFSET, c->direct_pmf,
                                                          sizeof *c->direct_pmf * s->tri_light_count)
                                   : 0u);
-    /* Radiance records last: on with no material to serve, they leave the hash alone. */
+    /* Radiance records last: on with no material to serve, they leave the hash alone. The exponent that
+     * decides whether any material is served comes before the settings that count only then, so that a
+     * file whose records served one, refused by a run whose exponent serves none, names the exponent (it
+     * named --hsh-order, which this run had not changed, and asked for it). */
     add_setting(out, size, "--radiance-cache", "%s", on_off(o->radiance_cache == IC_CACHE_ON));
     if (c->rad) {
-        add_setting(out, size, "--hsh-order", "%d", o->hsh_order);
         add_setting(out, size, "--radiance-max-exponent", "%s", ic_float_text(o->radiance_max_exponent, f));
+        add_setting(out, size, "--hsh-order", "%d", o->hsh_order);
         if (o->radiance_rays)
             add_setting(out, size, "--radiance-rays", "%d", o->radiance_rays);
     } else if (o->radiance_cache == IC_CACHE_ON) {

@@ -206,6 +206,22 @@ static void test_determinism(void)
     o.ic.radiance_cache = IC_CACHE_OFF;
     CHECK(!test_render(GLOSSY20, W, H, &o, &img[2], NULL),
           "a cache with radiance records is refused by a render without them");
+    /* Nor by one whose --radiance-max-exponent serves no material (the floor's 20 and the sphere's 32 above
+     * 10): the message names the exponent, not --hsh-order, which is the same in both. */
+    o.ic.radiance_cache = IC_CACHE_ON;
+    o.ic.radiance_max_exponent = 10.0f;
+    ic_scene *scene = NULL;
+    ic_error err = {0};
+    ic_scene_load_options lo = {0};
+    lo.width = W;
+    lo.height = H;
+    ic_result r = ic_scene_load(GLOSSY20, &lo, &scene, &err);
+    if (r == IC_OK)
+        r = ic_render(scene, &o, &img[2], NULL, &err);
+    CHECK(r == IC_ERR_MISMATCH && strstr(err.message, "made with --radiance-max-exponent 40, this run has "
+                                                      "--radiance-max-exponent 10") && !strstr(err.message, "hsh"),
+          "an exponent that serves no material is named: %s", err.message);
+    ic_scene_free(scene);
     ic_image_free(&img[0]);
     ic_image_free(&img[1]);
     ic_image_free(&img[2]);
