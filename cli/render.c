@@ -626,10 +626,12 @@ static int render_command(int argc, char **argv, ic_comm *comm)
                 n_failed, n_failed == 1 ? "" : "s", failed,
                 n_failed < n_outputs ? "; the other outputs were written" : "");
     if (ok && !a.quiet) {
-        ic_cli_eprintf("irrcache: %dx%d, %d spp", w, h, st.spp);
+        /* Interrupted, the pixels hold from spp_min to spp_max samples (the line above says how), spp their mean. */
+        ic_cli_eprintf("irrcache: %dx%d, %d spp%s", w, h, st.spp,
+                       st.cancelled && st.spp_min != st.spp_max ? " (mean)" : "");
         if (ranks > 1)
             ic_cli_eprintf(", %d ranks x %d threads", ranks, st.threads);
-        if (st.spp_max != st.spp)
+        if (st.spp_max != st.spp && !st.cancelled)
             ic_cli_eprintf(" (adaptive, up to %d in a pixel)", st.spp_max);
         ic_cli_eprintf(", %.2fs, %.2f Mrays/s", st.seconds, st.rays_per_second * 1e-6);
         if (opt.integrator == IC_INTEGRATOR_IC)

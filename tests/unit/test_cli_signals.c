@@ -161,8 +161,10 @@ static int wait_bounded(pid_t pid, double limit, double *waited)
 
 /* A file-size limit for the renders start_render starts (0: none), their writes past it failing with EFBIG. */
 static rlim_t render_file_limit;
+/* 1: start_render's renders print their summary line (no -q). */
+static int render_summary;
 
-/* Starts `irrcache render ARGS… -o DIR_/int.exr -o DIR_/int.png --stats DIR_/int.json` in a child with
+/* Starts `irrcache render -o DIR_/int.exr -o DIR_/int.png --stats DIR_/int.json -q ARGS…` in a child with
  * SIGINT and SIGTERM at their default (so the command installs its handler); stderr goes to
  * DIR_/int.err. */
 static pid_t start_render(const char *const *args)
@@ -178,9 +180,11 @@ static pid_t start_render(const char *const *args)
         }
         int fd = open(DIR_ "/int.err", O_WRONLY | O_CREAT | O_TRUNC, 0644);
         dup2(fd, 2);
-        const char *argv[32] = {"irrcache", "render", IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", "-q",
-                                "-o", DIR_ "/int.exr", "-o", DIR_ "/int.png", "--stats", DIR_ "/int.json"};
-        int n = 10;
+        const char *argv[32] = {"irrcache", "render", IC_SOURCE_DIR "/scenes/cornell-box/cornell-box.json", "-o",
+                                DIR_ "/int.exr", "-o", DIR_ "/int.png", "--stats", DIR_ "/int.json"};
+        int n = 9;
+        if (!render_summary)
+            argv[n++] = "-q";
         for (int k = 0; args[k] && n < 31; ++k)
             argv[n++] = args[k];
         argv[n] = NULL;
@@ -224,11 +228,17 @@ static void test_interrupted_render(void)
     if (old)
         fputs("an older output", old), fclose(old);
     const char *final[] = {"--width", "256", "--height", "256", "--spp", "4096", "--adaptive-sampling", "off", NULL};
+    render_summary = 1;
     int rc = interrupt_render(SIGINT, 1.5, final);
+    render_summary = 0;
     char err_text[2048];
     test_read_text(DIR_ "/int.err", err_text, sizeof err_text);
     CHECK(rc == 130, "SIGINT: exit 130 (got %d: %s)", rc, err_text);
     CHECK(strstr(err_text, "interrupted by SIGINT") != NULL, "SIGINT: says so: %s", err_text);
+    /* The summary line is there; its sample count is the mean the tiles hold, and the render is not called
+     * adaptive (it said '(adaptive, up to 4096 in a pixel)' of a render with --adaptive-sampling off). */
+    CHECK(strstr(err_text, "irrcache: 256x256") && !strstr(err_text, "adaptive"),
+          "SIGINT: the summary does not call the render adaptive: %s", err_text);
     ic_image img;
     ic_error err;
     CHECK(ic_image_read(DIR_ "/int.exr", &img, &err) == IC_OK && img.width == 256, "the partial EXR reads: %s",
