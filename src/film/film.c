@@ -286,6 +286,8 @@ static void render_tile(void *p, int64_t item, int thread)
     }
     if (c->checkpointing && atomic_load(&c->pause))
         return; /* a checkpoint is due: this tile waits for the next round */
+    if (c->loop->tile_begin)
+        c->loop->tile_begin(c->user, thread);
     uint64_t rays = 0, samples = 0;
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {

@@ -45,6 +45,11 @@ typedef struct ic_image_loop {
     double checkpoint_seconds;
     void (*checkpoint)(void *user, const ic_image *image, double completed);
     void *checkpoint_user;
+    /* Called (NULL: not) with the sample function's ctx on the thread about to render a tile, before its
+     * first sample: what the sample function keeps per thread from one pixel to the next starts afresh,
+     * so that what it traces and counts is a function of the tile, not of the tiles that thread rendered
+     * before (which depends on scheduling, the thread count and the passes). */
+    void (*tile_begin)(void *ctx, int thread);
 } ic_image_loop;
 
 typedef struct ic_image_loop_result {

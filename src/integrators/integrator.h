@@ -8,6 +8,8 @@
  *            loading a cache file), adding its phases and counts to the statistics;
  *   sample   one pixel sample along a camera ray, called by the film's image loop from many threads
  *            (film.h: ic_sample_fn; it must depend only on the pixel and its random stream);
+ *   tile_begin  (may be NULL) before a tile's samples, on its thread: forget what sample keeps per thread
+ *            (film.h: ic_image_loop.tile_begin), so that the rays it counts depend on the tile alone;
  *   aovs     extra images after the beauty image (may be NULL: none);
  *   destroy  frees it all (NULL-safe through ic_integrator_destroy).
  *
@@ -28,6 +30,7 @@ typedef struct ic_integrator_ops {
                                   budget); otherwise only when asked for */
     ic_result (*prepare)(void *self, ic_render_stats *st, ic_error *err);
     ic_sample_fn sample;       /* ctx = self */
+    void (*tile_begin)(void *self, int thread);
     /* beauty: the image just rendered; loop and lr: how it was rendered (an AOV rendered by the film
      * takes the same samples). *cancelled: 1 when loop.cancel cut an AOV the film renders short (its
      * tiles not begun are black), else left alone. */

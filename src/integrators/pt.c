@@ -240,6 +240,12 @@ uint32_t ic_pixel_lights_anchor(const ic_pixel_lights *pl, uint32_t pixel)
     return ay * (uint32_t)pl->width + ax;
 }
 
+void ic_pixel_lights_forget(const ic_pixel_lights *pl, int thread)
+{
+    if (pl->count && thread >= 0 && thread < pl->threads)
+        memset(pl->key + (size_t)thread * IC_LIGHT_SLOTS, 0, sizeof *pl->key * IC_LIGHT_SLOTS);
+}
+
 int ic_pixel_lights_need_point(const ic_pixel_lights *pl, int thread, uint32_t pixel)
 {
     if (!pl->count || thread < 0 || thread >= pl->threads)

@@ -50,6 +50,8 @@ ic_result ic_pixel_lights_init(ic_pixel_lights *pl, const ic_scene *scene, ic_li
 void ic_pixel_lights_free(ic_pixel_lights *pl);
 /* Where the distribution of pixel's block is built: the block's centre pixel. */
 uint32_t ic_pixel_lights_anchor(const ic_pixel_lights *pl, uint32_t pixel);
+/* Forgets the blocks this thread keeps: each is built again, its anchor ray traced again, when next needed. */
+void ic_pixel_lights_forget(const ic_pixel_lights *pl, int thread);
 /* 1 if the block of `pixel` needs its anchor point in this thread (call ic_pixel_lights_get next with it). */
 int ic_pixel_lights_need_point(const ic_pixel_lights *pl, int thread, uint32_t pixel);
 /* The selection for `pixel` in `thread`, built at (p, n) — the anchor's surface — when the block is not

@@ -62,6 +62,15 @@ static ic_vec3 pt_sample(void *self, const ic_ray *ray, uint32_t pixel, ic_rng *
     return ic_pt_li(p->tr, *ray, sel, rng, rays);
 }
 
+/* A tile builds its blocks' distributions afresh (one anchor ray each), even those its thread still holds
+ * from an earlier pass over the same tile: how many rays a tile traces depends on it alone, not on which
+ * thread rendered it before (the distributions are the same either way). */
+static void pt_tile_begin(void *self, int thread)
+{
+    pt_state *p = self;
+    ic_pixel_lights_forget(&p->lights, thread);
+}
+
 static void pt_destroy(void *self)
 {
     pt_state *p = self;
@@ -75,6 +84,7 @@ static const ic_integrator_ops pt_ops = {
     .adaptive_by_default = 0, /* the reference samples evenly unless asked */
     .prepare = pt_prepare,
     .sample = pt_sample,
+    .tile_begin = pt_tile_begin,
     .aovs = NULL,
     .destroy = pt_destroy,
 };

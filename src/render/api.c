@@ -233,6 +233,7 @@ ic_result ic_render(const ic_scene *scene, const ic_render_options *opt_in, ic_i
         loop.progress_user = opt.progress_user;
         loop.comm = opt.comm;
         loop.cancel = opt.cancel;
+        loop.tile_begin = it.ops->tile_begin;
         if (opt.checkpoint && opt.checkpoint_seconds > 0.0) {
             loop.checkpoint_seconds = opt.checkpoint_seconds;
             loop.checkpoint = checkpoint;
