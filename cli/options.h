@@ -83,7 +83,8 @@ typedef enum ic_opt_scope { IC_SCOPE_ALL, IC_SCOPE_IC, IC_SCOPE_BATCH, IC_SCOPE_
       "several MPI processes at the end of the pass; lazy: after that shading point; a warning and " \
       "cut_by_time in the stats say so); the final render takes progressive passes until the " \
       "rest is spent, at least one sample per pixel. Radiance records and the --aov indirect and glossy " \
-      "re-renders come on top") \
+      "re-renders come on top. A budget that runs out makes the result depend on the wall clock (the " \
+      "machine, its load, the threads and ranks): same seed, same image only while it does not") \
     X(CHECKPOINT, "--checkpoint", NULL, IC_OPT_DOUBLE, render.checkpoint_seconds, 0, 1e9, "SECONDS", NAN, "none", \
       "s", IC_SCOPE_ALL, "every SECONDS of the final render's wall time, write every -o output with the image " \
       "so far (unrendered tiles black; atomically; EXR marked irrcache:partial \"checkpoint\"); the final " \
