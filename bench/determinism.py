@@ -189,7 +189,8 @@ def points_file(path):
                                                rng.uniform(-0.9, 0.9)))
 
 
-VARIANTS = {'t1': (0, 1), 't2': (0, 2), 't3': (0, 3), 'np2': (2, 1), 'np3': (3, 2)}
+VARIANTS = {'t1': (0, 1), 't2': (0, 2), 't3': (0, 3), 'np2': (2, 1), 'np3': (3, 2),
+            't8': (0, 8), 'np5': (5, 1)}  # the last two on request (--variants)
 VOLATILE = ('seconds', 'rays_per_second', 'phases', 'threads', 'ranks', 'per_rank')
 
 
