@@ -278,7 +278,7 @@ def main():
         ['ldd', binary], stdout=subprocess.PIPE, stderr=subprocess.STDOUT).stdout
     variants = [v for v in args.variants.split(',') if v]
     root = args.keep or tempfile.mkdtemp(prefix='irrcache-determinism.')
-    failed = 0
+    failed = ran = 0
     cases = [('render',) + c for c in render_cases()] + [('points',) + c for c in points_cases()]
     for kind, name, scene, opts in cases:
         if not re.search(args.only, name):
@@ -308,11 +308,16 @@ def main():
                 if d:
                     results.append('%s: %s' % (v, '; '.join(d)))
         failed += bool(results)
+        ran += 1
         print('%-44s %s' % (name, 'same' if not results else ' | '.join(results)), flush=True)
         if not args.keep:
             shutil.rmtree(folder, ignore_errors=True)
+    if not args.keep:
+        shutil.rmtree(root, ignore_errors=True)
     print('%d case(s) differed' % failed)
-    return 1 if failed else 0
+    if not ran:
+        print('no case ran: --only %r matched none whose scene is here' % args.only)
+    return 1 if failed or not ran else 0
 
 
 if __name__ == '__main__':
